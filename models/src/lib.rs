@@ -1,0 +1,127 @@
+//! # svi-models — the model zoo of `svi`
+//!
+//! Classical test problems for structure-preserving integrators, each written once against
+//! `svi`'s public traits (a user's model looks exactly the same):
+//!
+//! | name | model | N | symmetry | invariants | exact solution |
+//! | --- | --- | --- | --- | --- | --- |
+//! | `oscillator` | [`HarmonicOscillator`] | 1 | — | — | yes |
+//! | `pendulum` | [`Pendulum`] | 1 | — | — | yes (Jacobi elliptic) |
+//! | `spring-pendulum` | [`SpringPendulum`] | 2 | — | — | — |
+//! | `kepler` | [`Kepler`] | 2 | rotation | Runge–Lenz | yes (Kepler's equation) |
+//! | `double-pendulum` | [`DoublePendulum`] | 2 | — | — | — |
+//!
+//! Every model implements [`Lagrangian`], [`Symmetries`], [`Invariants`],
+//! [`ExactSolution`] and [`Defaults`] (together: [`ZooModel`]), with literature defaults for
+//! parameters, initial state, step and horizon.
+//!
+//! A model chosen by name at run time is handed, as its concrete type, to a
+//! [`ModelVisitor`] by [`visit_model`]: no trait objects, so everything stays monomorphised
+//! (the model dimension `N` is a const generic).
+//!
+//! ```
+//! use svi::Defaults;
+//! use svi_models::{ModelVisitor, ZooModel, visit_model};
+//!
+//! /// Reports a model's name and dimension.
+//! struct Describe;
+//!
+//! impl ModelVisitor for Describe {
+//!     type Output = String;
+//!     fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> String {
+//!         format!("{} (N = {N})", model.name())
+//!     }
+//! }
+//!
+//! assert_eq!(visit_model("kepler", Describe).unwrap(), "kepler (N = 2)");
+//! assert!(visit_model("pendulm", Describe).is_err());
+//! ```
+
+mod elliptic;
+mod params;
+
+pub mod double_pendulum;
+pub mod kepler;
+pub mod oscillator;
+pub mod pendulum;
+pub mod spring_pendulum;
+
+pub use double_pendulum::DoublePendulum;
+pub use kepler::{Kepler, KeplerOrbit};
+pub use oscillator::HarmonicOscillator;
+pub use pendulum::Pendulum;
+pub use spring_pendulum::SpringPendulum;
+
+use svi::{Defaults, ExactSolution, Invariants, Lagrangian, Symmetries};
+
+/// Everything a zoo model implements (blanket impl for any type with all the bounds).
+pub trait ZooModel<const N: usize>:
+    Lagrangian<N>
+    + Symmetries<N>
+    + Invariants<N>
+    + ExactSolution<N>
+    + Defaults<N>
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
+{
+}
+
+impl<T, const N: usize> ZooModel<N> for T where
+    T: Lagrangian<N>
+        + Symmetries<N>
+        + Invariants<N>
+        + ExactSolution<N>
+        + Defaults<N>
+        + Clone
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + 'static
+{
+}
+
+/// Receives a concrete model chosen by name at run time (see [`visit_model`]).
+pub trait ModelVisitor {
+    /// What the visit produces.
+    type Output;
+
+    /// Called once with the model, as its concrete type and dimension.
+    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> Self::Output;
+}
+
+/// Names of all models, in a stable order (each equals the model's [`Defaults::name`]).
+pub const MODEL_NAMES: &[&str] = &[
+    HarmonicOscillator::NAME,
+    Pendulum::NAME,
+    SpringPendulum::NAME,
+    Kepler::NAME,
+    DoublePendulum::NAME,
+];
+
+/// Build the named model with its defaults and hand it to the visitor.
+///
+/// # Errors
+/// [`UnknownModel`] if `name` is not one of [`MODEL_NAMES`].
+pub fn visit_model<V: ModelVisitor>(name: &str, visitor: V) -> Result<V::Output, UnknownModel> {
+    match name {
+        HarmonicOscillator::NAME => Ok(visitor.visit(HarmonicOscillator::default())),
+        Pendulum::NAME => Ok(visitor.visit(Pendulum::default())),
+        SpringPendulum::NAME => Ok(visitor.visit(SpringPendulum::default())),
+        Kepler::NAME => Ok(visitor.visit(Kepler::default())),
+        DoublePendulum::NAME => Ok(visitor.visit(DoublePendulum::default())),
+        _ => Err(UnknownModel {
+            name: name.to_owned(),
+        }),
+    }
+}
+
+/// A model name that is not in [`MODEL_NAMES`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("unknown model '{name}' (known: {})", MODEL_NAMES.join(", "))]
+pub struct UnknownModel {
+    /// The name that was asked for.
+    pub name: String,
+}

@@ -1,0 +1,372 @@
+//! Spectral collocation (SC) of the Euler–Lagrange equations.
+//!
+//! # Discrete equations
+//! The Euler–Lagrange equations are solved for the acceleration, q̈ = f(t, q, q̇) with
+//! f = L_vv⁻¹ (L_q − L_vq q̇ − L_vt) (derived from L by automatic differentiation,
+//! [`crate::LagrangianExt::acceleration`]), and written as the first-order system
+//! q̇ = y, ẏ = f(t, q, y) (Li, Wu, Leok 2018, eqs. 12, 19). On each step both q and y are
+//! polynomials of degree s through the s + 1 CGL nodes c_0, …, c_s of [t, t + h], with
+//! q(c_0) = q_k, y(c_0) = q̇_k, and the equations are collocated at c_1, …, c_s
+//! (eqs. 20–23): with Λ = (2/h) D̃⁽¹⁾(1:s, 0:s) = [λ_0, Λ*] (eq. 21),
+//!
+//! Λ*Q* + λ_0 q_k = Y*,   Λ*Y* + λ_0 q̇_k = F(t, Q*, Y*).
+//!
+//! Eliminating Y* gives eq. (24)–(25) for the s·N unknowns Q*, solved by Newton's method with
+//! the exact Jacobian (Λ*)² ⊗ I − diag(∂f/∂q) − diag(∂f/∂q̇)(Λ* ⊗ I), where ∂f/∂q and ∂f/∂q̇
+//! come from nested dual numbers. Then q_{k+1} = qˢ and q̇_{k+1} = yˢ.
+//! The differentiation matrix D̃⁽¹⁾ is built from barycentric formulas for ascending nodes
+//! ([`crate::basis::LagrangeBasis::differentiation_matrix`]); eq. (17) of the paper is
+//! quoted for descending nodes.
+//!
+//! # Properties
+//! - an s-stage collocation method with nodes c_1, …, c_s; its order is the order of the
+//!   interpolatory quadrature on those nodes (s for even s and s + 1 for odd s: the CGL nodes
+//!   without their first point are not symmetric);
+//! - symmetric: no; symplectic: no (energy and momenta drift, Figs. 14–15 of the paper).
+//!
+//! # References
+//! Li, Wu, Leok (2018), §3, eqs. (12)–(25).
+
+use crate::basis::LagrangeBasis;
+use crate::derived::{AccelerationJacobian, LagrangianExt};
+use crate::error::StepFailure;
+use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::newton::Newton;
+use crate::quadrature::GaussLegendre;
+use crate::starting_values::StartingValues;
+use crate::spectral_variational::MAX_POINTS;
+use crate::{Error, Lagrangian, Method};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+/// Options of the spectral collocation method.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct SpectralCollocation {
+    /// Number of Chebyshev–Gauss–Lobatto points s + 1 (polynomial degree s), at least 2.
+    pub points: usize,
+    /// Cap on Newton iterations per step.
+    pub max_iterations: usize,
+}
+
+impl Default for SpectralCollocation {
+    fn default() -> Self {
+        SpectralCollocation {
+            points: 6,
+            max_iterations: 50,
+        }
+    }
+}
+
+impl SpectralCollocation {
+    /// SC with `points` CGL points.
+    pub fn new(points: usize) -> Self {
+        SpectralCollocation {
+            points,
+            ..SpectralCollocation::default()
+        }
+    }
+
+    /// Cap Newton iterations per step.
+    pub fn with_max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+
+    fn validate(&self) -> Result<(), Error> {
+        if self.points < 2 || self.points > MAX_POINTS {
+            return Err(Error::invalid(
+                "points",
+                format!("{} CGL points; need 2 to {MAX_POINTS}", self.points),
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err(Error::invalid("max_iterations", "must be at least 1"));
+        }
+        Ok(())
+    }
+
+    /// Order of the collocation method: the order of the interpolatory quadrature on the
+    /// collocation nodes c_1, …, c_s (Hairer, Nørsett, Wanner I, Thm. II.7.9).
+    fn order(&self) -> usize {
+        let Ok(nodes) = crate::basis::chebyshev_gauss_lobatto(self.points) else {
+            return 0;
+        };
+        let collocation: Vec<f64> = nodes[1..].iter().map(|x| 0.5 * (x + 1.0)).collect();
+        let Ok(basis) = LagrangeBasis::new(collocation.clone()) else {
+            return 0;
+        };
+        let Ok(gauss) = GaussLegendre::new(self.points + 1) else {
+            return 0;
+        };
+        let mut values = vec![0.0; basis.len()];
+        let mut weights = vec![0.0; basis.len()];
+        for (x, w) in gauss.nodes().iter().zip(gauss.weights()) {
+            basis.values_into(0.5 * (x + 1.0), &mut values);
+            for (b, l) in weights.iter_mut().zip(&values) {
+                *b += 0.5 * w * l;
+            }
+        }
+        (0..2 * self.points)
+            .find(|&k| {
+                let sum: f64 = weights.iter().zip(&collocation).map(|(b, c)| b * c.powi(k as i32)).sum();
+                (sum - 1.0 / (k as f64 + 1.0)).abs() > 1e-10
+            })
+            .unwrap_or(2 * self.points)
+    }
+}
+
+/// Tables of one SC configuration, scaled for the current step size.
+#[derive(Debug, Clone)]
+struct Tables {
+    degree: usize,
+    h: f64,
+    /// CGL nodes on [−1, 1].
+    nodes: Vec<f64>,
+    /// D̃⁽¹⁾ at the nodes (unscaled).
+    differentiation: DMatrix<f64>,
+    /// Λ* = (2/h) D̃(1:s, 1:s).
+    lambda: DMatrix<f64>,
+    /// (Λ*)².
+    lambda_squared: DMatrix<f64>,
+    /// λ_0 = (2/h) D̃(1:s, 0).
+    lambda0: DVector<f64>,
+    /// Λ* λ_0.
+    lambda_lambda0: DVector<f64>,
+}
+
+impl Tables {
+    fn new(basis: &LagrangeBasis, h: f64) -> Self {
+        let s = basis.len() - 1;
+        let mut tables = Tables {
+            degree: s,
+            h: f64::NAN,
+            nodes: basis.nodes().to_vec(),
+            differentiation: basis.differentiation_matrix(),
+            lambda: DMatrix::zeros(s, s),
+            lambda_squared: DMatrix::zeros(s, s),
+            lambda0: DVector::zeros(s),
+            lambda_lambda0: DVector::zeros(s),
+        };
+        tables.rescale(h);
+        tables
+    }
+
+    fn rescale(&mut self, h: f64) {
+        let s = self.degree;
+        self.h = h;
+        self.lambda = self.differentiation.view((1, 1), (s, s)) * (2.0 / h);
+        self.lambda0 = self.differentiation.view((1, 0), (s, 1)).column(0) * (2.0 / h);
+        self.lambda_squared = &self.lambda * &self.lambda;
+        self.lambda_lambda0 = &self.lambda * &self.lambda0;
+    }
+
+    fn time(&self, t: f64, i: usize) -> f64 {
+        t + 0.5 * self.h * (self.nodes[i] + 1.0)
+    }
+
+    /// y at collocation node i (1-based) from node offsets z: Σ_j Λ*_ij z_j.
+    fn velocity<const N: usize>(&self, i: usize, z: &DVector<f64>) -> SVector<f64, N> {
+        let mut y = SVector::zeros();
+        for j in 1..=self.degree {
+            y += z.fixed_rows::<N>((j - 1) * N) * self.lambda[(i - 1, j - 1)];
+        }
+        y
+    }
+}
+
+/// Buffers of an SC run.
+#[derive(Debug, Clone)]
+pub struct CollocationWorkspace<const N: usize> {
+    tables: Tables,
+    /// Node offsets qⁱ − q_k, i = 1..s, stacked.
+    offsets: DVector<f64>,
+    start: StartingValues,
+    /// Acceleration and its Jacobian at the collocation nodes.
+    nodes: Vec<AccelerationJacobian<N>>,
+    newton: Newton,
+}
+
+/// Acceleration data at every collocation node; `false` if the mass matrix is singular
+/// somewhere.
+fn evaluate_nodes<L: Lagrangian<N>, const N: usize>(
+    model: &L,
+    tables: &Tables,
+    nodes: &mut [AccelerationJacobian<N>],
+    t: f64,
+    state: &State<N>,
+    z: &DVector<f64>,
+) -> bool {
+    for (index, node) in nodes.iter_mut().enumerate() {
+        let i = index + 1;
+        let q = state.q + z.fixed_rows::<N>(index * N);
+        let y = tables.velocity::<N>(i, z);
+        match model.acceleration_jacobian(tables.time(t, i), &q, &y) {
+            Some(value) => *node = value,
+            None => return false,
+        }
+    }
+    true
+}
+
+/// Assemble the residual of eq. (25) in offsets and its Jacobian.
+fn assemble<const N: usize>(
+    tables: &Tables,
+    nodes: &[AccelerationJacobian<N>],
+    state: &State<N>,
+    z: &DVector<f64>,
+    jacobian: &mut DMatrix<f64>,
+    residual: &mut DVector<f64>,
+) {
+    let s = tables.degree;
+    for i in 0..s {
+        let mut r = state.y * tables.lambda0[i] - nodes[i].value;
+        for j in 0..s {
+            r += z.fixed_rows::<N>(j * N) * tables.lambda_squared[(i, j)];
+            let mut block = -nodes[i].v * tables.lambda[(i, j)];
+            if i == j {
+                block -= nodes[i].q;
+            }
+            for d in 0..N {
+                block[(d, d)] += tables.lambda_squared[(i, j)];
+            }
+            jacobian.fixed_view_mut::<N, N>(i * N, j * N).copy_from(&block);
+        }
+        residual.fixed_rows_mut::<N>(i * N).copy_from(&r);
+    }
+}
+
+impl<const N: usize> Method<N> for SpectralCollocation {
+    type Workspace = CollocationWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            name: "sc",
+            order: self.order(),
+            symmetric: false,
+            symplectic: false,
+            coordinates: Coordinates::Velocity,
+        }
+    }
+
+    fn workspace<L: Lagrangian<N>>(
+        &self,
+        _model: &L,
+        h: f64,
+    ) -> Result<CollocationWorkspace<N>, Error> {
+        self.validate()?;
+        crate::error::require_positive("h", h)?;
+        let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
+        let s = self.points - 1;
+        let zero = AccelerationJacobian {
+            value: SVector::zeros(),
+            q: SMatrix::zeros(),
+            v: SMatrix::zeros(),
+        };
+        Ok(CollocationWorkspace {
+            tables: Tables::new(&basis, h),
+            offsets: DVector::zeros(s * N),
+            start: StartingValues::new(&basis, N),
+            nodes: vec![zero; s],
+            newton: Newton::new(s * N, self.max_iterations),
+        })
+    }
+
+    fn step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut CollocationWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        if workspace.tables.h != h {
+            workspace.tables.rescale(h);
+            workspace.start.invalidate();
+        }
+        if workspace.start.has_previous() {
+            workspace.start.extrapolate::<N>(&mut workspace.offsets);
+        } else {
+            let a = model.acceleration(t, &state.q, &state.y).ok_or(StepFailure::SingularMatrix)?;
+            workspace
+                .start
+                .taylor(h, &state.y, &a, &mut workspace.offsets);
+        }
+        let CollocationWorkspace {
+            tables,
+            offsets,
+            nodes,
+            newton,
+            start,
+        } = workspace;
+        let mut singular = false;
+        let iterations = newton.solve(offsets, |z, jacobian, residual| {
+            if evaluate_nodes(model, tables, nodes, t, state, z) {
+                assemble(tables, nodes, state, z, jacobian, residual);
+            } else {
+                singular = true;
+                residual.fill(f64::NAN);
+            }
+        });
+        if singular {
+            return Err(StepFailure::SingularMatrix);
+        }
+        let iterations = iterations?;
+        let s = tables.degree;
+        increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
+        increment.y = tables.velocity::<N>(s, offsets) - state.y;
+        start.remember(offsets);
+        Ok(StepReport {
+            iterations,
+            evaluations: s * iterations,
+        })
+    }
+
+    fn tangent_map<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut CollocationWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let mut increment = State::zeros();
+        self.step(model, workspace, t, h, state, &mut increment)?;
+        let ws = &mut *workspace;
+        let s = ws.tables.degree;
+        if !evaluate_nodes(model, &ws.tables, &mut ws.nodes, t, state, &ws.offsets) {
+            return Err(StepFailure::SingularMatrix);
+        }
+        let size = s * N;
+        let mut lu = crate::linalg::DenseLu::new(size);
+        let mut residual = DVector::zeros(size);
+        assemble(&ws.tables, &ws.nodes, state, &ws.offsets, lu.matrix_mut(), &mut residual);
+        lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
+        // Columns: −∂R/∂q_k (N), then −∂R/∂q̇_k (N).
+        let mut sensitivity = DMatrix::zeros(size, 2 * N);
+        for i in 0..s {
+            let from_q = ws.nodes[i].v * ws.tables.lambda0[i]
+                - SMatrix::<f64, N, N>::identity() * ws.tables.lambda_lambda0[i];
+            sensitivity.fixed_view_mut::<N, N>(i * N, 0).copy_from(&from_q);
+            for d in 0..N {
+                sensitivity[(i * N + d, N + d)] = -ws.tables.lambda0[i];
+            }
+        }
+        lu.solve_columns_in_place(&mut sensitivity);
+        let last = sensitivity.view(((s - 1) * N, 0), (N, 2 * N));
+        let mut velocity = DMatrix::zeros(N, 2 * N);
+        for j in 0..s {
+            velocity += sensitivity.view((j * N, 0), (N, 2 * N)) * ws.tables.lambda[(s - 1, j)];
+        }
+        for d in 0..N {
+            velocity[(d, d)] += ws.tables.lambda0[s - 1];
+        }
+        let tangent = TangentMap {
+            qq: last.fixed_view::<N, N>(0, 0).into_owned(),
+            qy: last.fixed_view::<N, N>(0, N).into_owned(),
+            yq: velocity.fixed_view::<N, N>(0, 0).into_owned(),
+            yy: velocity.fixed_view::<N, N>(0, N).into_owned(),
+        };
+        Ok((increment, tangent))
+    }
+}

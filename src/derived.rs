@@ -1,0 +1,345 @@
+//! Quantities derived from a [`Lagrangian`] by automatic differentiation.
+//!
+//! Nothing here is written per model: every quantity comes from the one generic function
+//! [`Lagrangian::lagrangian`] evaluated with num-dual's dual numbers.
+//!
+//! - first derivatives ∂L/∂q and p = ∂L/∂q̇ (two gradient sweeps with `DualSVec64<N>`);
+//! - the Hessian blocks L_qq, L_qv, L_vv (`hessian` in q, `hessian` in q̇ and one
+//!   `partial_hessian`: `2N` is not a const expression on stable Rust, so the full
+//!   second derivative is assembled from three N-sized sweeps);
+//! - the energy E = p·q̇ − L and the inverse Legendre map q̇(q, p) (Newton with L_vv);
+//! - the Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt) (Li–Wu–Leok eq. 2
+//!   solved for q̈, the right-hand side f of eq. 12) and its exact Jacobian in (q, q̇),
+//!   obtained by evaluating the acceleration itself with dual numbers (third derivatives of
+//!   L through nested duals). L_vt is computed only for time-dependent Lagrangians.
+//!
+//! The methods live on the blanket extension trait [`LagrangianExt`], implemented for every
+//! [`Lagrangian`].
+
+use crate::linalg::solve_small;
+use crate::model::{Lagrangian, Symmetries};
+use crate::{Error, Scalar};
+use nalgebra::{Const, SMatrix, SVector};
+use num_dual::{
+    Dual2Vec, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian,
+    partial_hessian,
+};
+
+/// Value and first derivatives of L at one point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FirstDerivatives<const N: usize> {
+    /// L(t, q, q̇).
+    pub value: f64,
+    /// ∂L/∂q.
+    pub q: SVector<f64, N>,
+    /// ∂L/∂q̇ (the momentum p).
+    pub v: SVector<f64, N>,
+}
+
+/// Value, first and second derivatives of L at one point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SecondDerivatives<const N: usize> {
+    /// L(t, q, q̇).
+    pub value: f64,
+    /// ∂L/∂q.
+    pub q: SVector<f64, N>,
+    /// ∂L/∂q̇ (the momentum p).
+    pub v: SVector<f64, N>,
+    /// ∂²L/∂q∂q.
+    pub qq: SMatrix<f64, N, N>,
+    /// ∂²L/∂q∂q̇: entry (i, j) is ∂²L/∂qᵢ∂q̇ⱼ.
+    pub qv: SMatrix<f64, N, N>,
+    /// ∂²L/∂q̇∂q̇ (the mass matrix of a mechanical Lagrangian).
+    pub vv: SMatrix<f64, N, N>,
+}
+
+/// The Euler–Lagrange acceleration and its Jacobian.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AccelerationJacobian<const N: usize> {
+    /// q̈ = f(t, q, q̇).
+    pub value: SVector<f64, N>,
+    /// ∂q̈/∂q.
+    pub q: SMatrix<f64, N, N>,
+    /// ∂q̈/∂q̇.
+    pub v: SMatrix<f64, N, N>,
+}
+
+/// Iteration cap of the inverse Legendre map.
+const LEGENDRE_MAX_ITERATIONS: usize = 50;
+
+/// Derived quantities of a Lagrangian, by automatic differentiation.
+///
+/// Implemented for every [`Lagrangian`]; the methods are provided defaults. All arguments
+/// are `f64` time, configuration q and velocity q̇.
+pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
+    /// L(t, q, q̇).
+    fn value(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
+        self.lagrangian(t, q, v)
+    }
+
+    /// L, ∂L/∂q and p = ∂L/∂q̇.
+    fn first_derivatives(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> FirstDerivatives<N> {
+        let (value, dq) = gradient(
+            |x: SVector<DualSVec64<N>, N>| {
+                self.lagrangian(DualVec::from_re(t), &x, &v.map(DualVec::from_re))
+            },
+            q,
+        );
+        let (_, dv) = gradient(
+            |y: SVector<DualSVec64<N>, N>| {
+                self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
+            },
+            v,
+        );
+        FirstDerivatives { value, q: dq, v: dv }
+    }
+
+    /// The canonical momentum p = ∂L/∂q̇.
+    fn momentum(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
+        gradient(
+            |y: SVector<DualSVec64<N>, N>| {
+                self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
+            },
+            v,
+        )
+        .1
+    }
+
+    /// L, its gradients and its Hessian blocks.
+    fn second_derivatives(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> SecondDerivatives<N> {
+        second_derivatives_generic(self, t, q, v).into()
+    }
+
+    /// The mass matrix ∂²L/∂q̇².
+    fn mass_matrix(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SMatrix<f64, N, N> {
+        hessian(
+            |y: SVector<Dual2Vec<f64, Const<N>>, N>| {
+                self.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
+            },
+            v,
+        )
+        .2
+    }
+
+    /// The energy E = p·q̇ − L.
+    fn energy(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
+        let (value, p) = gradient(
+            |y: SVector<DualSVec64<N>, N>| {
+                self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
+            },
+            v,
+        );
+        p.dot(v) - value
+    }
+
+    /// The inverse Legendre map: the velocity q̇ with ∂L/∂q̇(t, q, q̇) = p, by Newton's method
+    /// started at `guess` (for a Lagrangian quadratic in q̇ one iteration is exact).
+    fn velocity(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        p: &SVector<f64, N>,
+        guess: &SVector<f64, N>,
+    ) -> Result<SVector<f64, N>, Error> {
+        let mut v = *guess;
+        let mut last = f64::INFINITY;
+        for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
+            let (_, momentum, mass) = hessian(
+                |y: SVector<Dual2Vec<f64, Const<N>>, N>| {
+                    self.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
+                },
+                &v,
+            );
+            let delta = solve_small(mass, p - momentum).ok_or(Error::LegendreMap {
+                t,
+                iterations: iteration,
+                residual: f64::INFINITY,
+            })?;
+            v += delta;
+            let size = delta.amax();
+            if !size.is_finite() {
+                break;
+            }
+            let scale = 1.0 + v.amax();
+            // Converged: at round-off, or the increment stopped decreasing near it.
+            if size <= f64::EPSILON * scale || (size >= last && size <= 1e-10 * scale) {
+                return Ok(v);
+            }
+            last = size;
+        }
+        Err(Error::LegendreMap {
+            t,
+            iterations: LEGENDRE_MAX_ITERATIONS,
+            residual: last,
+        })
+    }
+
+    /// The Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt), or `None` where
+    /// the mass matrix L_vv is singular.
+    fn acceleration(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> Option<SVector<f64, N>> {
+        acceleration_generic(self, t, q, v)
+    }
+
+    /// The acceleration and its exact Jacobian ∂q̈/∂q, ∂q̈/∂q̇ (third derivatives of L by
+    /// nested dual numbers), or `None` where L_vv is singular.
+    fn acceleration_jacobian(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> Option<AccelerationJacobian<N>> {
+        let (value, dq) = jacobian(
+            |x: SVector<DualSVec64<N>, N>| {
+                acceleration_generic(self, DualVec::from_re(t), &x, &v.map(DualVec::from_re))
+                    .unwrap_or_else(|| SVector::from_element(DualVec::from_re(f64::NAN)))
+            },
+            q,
+        );
+        let (_, dv) = jacobian(
+            |y: SVector<DualSVec64<N>, N>| {
+                acceleration_generic(self, DualVec::from_re(t), &q.map(DualVec::from_re), &y)
+                    .unwrap_or_else(|| SVector::from_element(DualVec::from_re(f64::NAN)))
+            },
+            v,
+        );
+        value.iter().all(|a| a.is_finite()).then_some(AccelerationJacobian {
+            value,
+            q: dq,
+            v: dv,
+        })
+    }
+
+    /// The Noether momentum Jᵢ = p·ξᵢ(q) of symmetry generator `index`.
+    fn noether_momentum(
+        &self,
+        index: usize,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> f64
+    where
+        Self: Symmetries<N>,
+    {
+        self.momentum(t, q, v).dot(&self.generator(index, q))
+    }
+}
+
+impl<L: Lagrangian<N> + ?Sized, const N: usize> LagrangianExt<N> for L {}
+
+/// Value, gradients and Hessian blocks of L in any scalar type (three N-sized sweeps).
+fn second_derivatives_generic<L, D, const N: usize>(
+    model: &L,
+    t: D,
+    q: &SVector<D, N>,
+    v: &SVector<D, N>,
+) -> SecondDerivativesOf<D, N>
+where
+    L: Lagrangian<N> + ?Sized,
+    D: Scalar,
+{
+    let (value, dq, dv, qv) = partial_hessian(
+        |(x, y): (
+            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
+            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
+        )| model.lagrangian(HyperDualVec::from_re(t), &x, &y),
+        (q, v),
+    );
+    let (_, _, qq) = hessian(
+        |x: SVector<Dual2Vec<D, Const<N>>, N>| {
+            model.lagrangian(Dual2Vec::from_re(t), &x, &v.map(Dual2Vec::from_re))
+        },
+        q,
+    );
+    let (_, _, vv) = hessian(
+        |y: SVector<Dual2Vec<D, Const<N>>, N>| {
+            model.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
+        },
+        v,
+    );
+    SecondDerivativesOf {
+        value,
+        q: dq,
+        v: dv,
+        qq,
+        qv,
+        vv,
+    }
+}
+
+/// [`SecondDerivatives`] in a generic scalar type.
+struct SecondDerivativesOf<D: Scalar, const N: usize> {
+    value: D,
+    q: SVector<D, N>,
+    v: SVector<D, N>,
+    qq: SMatrix<D, N, N>,
+    qv: SMatrix<D, N, N>,
+    vv: SMatrix<D, N, N>,
+}
+
+impl<const N: usize> From<SecondDerivativesOf<f64, N>> for SecondDerivatives<N> {
+    fn from(d: SecondDerivativesOf<f64, N>) -> Self {
+        SecondDerivatives {
+            value: d.value,
+            q: d.q,
+            v: d.v,
+            qq: d.qq,
+            qv: d.qv,
+            vv: d.vv,
+        }
+    }
+}
+
+/// ∂²L/∂q̇∂t in any scalar type.
+fn velocity_time_derivative<L, D, const N: usize>(
+    model: &L,
+    t: D,
+    q: &SVector<D, N>,
+    v: &SVector<D, N>,
+) -> SVector<D, N>
+where
+    L: Lagrangian<N> + ?Sized,
+    D: Scalar,
+{
+    let (_, _, _, vt) = partial_hessian(
+        |(y, s): (
+            SVector<HyperDualVec<D, Const<N>, Const<1>>, N>,
+            SVector<HyperDualVec<D, Const<N>, Const<1>>, 1>,
+        )| model.lagrangian(s[0], &q.map(HyperDualVec::from_re), &y),
+        (v, &SVector::from([t])),
+    );
+    vt.column(0).into_owned()
+}
+
+/// The Euler–Lagrange acceleration in any scalar type.
+fn acceleration_generic<L, D, const N: usize>(
+    model: &L,
+    t: D,
+    q: &SVector<D, N>,
+    v: &SVector<D, N>,
+) -> Option<SVector<D, N>>
+where
+    L: Lagrangian<N> + ?Sized,
+    D: Scalar,
+{
+    let d = second_derivatives_generic(model, t, q, v);
+    let mut rhs = d.q - d.qv.transpose() * v;
+    if L::TIME_DEPENDENT {
+        rhs -= velocity_time_derivative(model, t, q, v);
+    }
+    solve_small(d.vv, rhs)
+}

@@ -1,0 +1,131 @@
+//! The one error type of the library.
+//!
+//! A normal end of a run (horizon reached, an observer asked to stop) is not an error. Every
+//! failure carries the context needed to act on it: which parameter, which step, which time.
+
+use thiserror::Error as ThisError;
+
+/// Everything that can go wrong in `svi`.
+#[derive(Debug, Clone, PartialEq, ThisError)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter, option or input value is out of its allowed range.
+    #[error("invalid {name}: {reason}")]
+    InvalidParameter {
+        /// Name of the offending parameter (as the user spells it).
+        name: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The nonlinear solve of a step did not converge.
+    #[error(
+        "nonlinear solve did not converge at step {step} (t = {t}): {iterations} iterations, residual {residual:e}"
+    )]
+    NonConvergence {
+        /// Index of the failing step (the step from `t` to `t + h`), counted from 0.
+        step: usize,
+        /// Time at the start of the failing step.
+        t: f64,
+        /// Iterations performed.
+        iterations: usize,
+        /// Infinity norm of the last residual (or increment).
+        residual: f64,
+    },
+    /// The Newton matrix of a step was singular.
+    #[error("singular Newton matrix at step {step} (t = {t})")]
+    SingularMatrix {
+        /// Index of the failing step.
+        step: usize,
+        /// Time at the start of the failing step.
+        t: f64,
+    },
+    /// The inverse Legendre map q̇(q, p) did not converge (or met a singular mass matrix).
+    #[error("inverse Legendre map did not converge at t = {t}: {iterations} iterations, last increment {residual:e}")]
+    LegendreMap {
+        /// Time of the state being converted.
+        t: f64,
+        /// Iterations performed.
+        iterations: usize,
+        /// Infinity norm of the last Newton increment.
+        residual: f64,
+    },
+    /// A state or an intermediate value became NaN or infinite.
+    #[error("non-finite {what} at step {step} (t = {t})")]
+    NonFinite {
+        /// What became non-finite (for example "state" or "initial momentum").
+        what: String,
+        /// Index of the step in which it happened.
+        step: usize,
+        /// Time at the start of that step.
+        t: f64,
+    },
+}
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn invalid(name: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Why one step failed, without the step's context (the [`crate::Integrator`] adds it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StepFailure {
+    /// The nonlinear iteration reached its cap.
+    NonConvergence {
+        /// Iterations performed.
+        iterations: usize,
+        /// Infinity norm of the last increment.
+        residual: f64,
+    },
+    /// The Newton matrix was singular.
+    SingularMatrix,
+    /// A value became NaN or infinite.
+    NonFinite,
+}
+
+impl StepFailure {
+    /// Attach the step index and start time.
+    pub fn at(self, step: usize, t: f64) -> Error {
+        match self {
+            StepFailure::NonConvergence {
+                iterations,
+                residual,
+            } => Error::NonConvergence {
+                step,
+                t,
+                iterations,
+                residual,
+            },
+            StepFailure::SingularMatrix => Error::SingularMatrix { step, t },
+            StepFailure::NonFinite => Error::NonFinite {
+                what: "state".into(),
+                step,
+                t,
+            },
+        }
+    }
+}
+
+/// Check that `value` is finite and strictly positive.
+pub(crate) fn require_positive(name: &str, value: f64) -> Result<(), Error> {
+    if !value.is_finite() {
+        return Err(Error::invalid(name, format!("{value} is not finite")));
+    }
+    if value <= 0.0 {
+        return Err(Error::invalid(name, format!("{value} must be positive")));
+    }
+    Ok(())
+}
+
+/// Check that `value` is finite.
+pub(crate) fn require_finite(name: &str, value: f64) -> Result<(), Error> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, format!("{value} is not finite")))
+    }
+}

@@ -1,0 +1,219 @@
+//! Small dense linear solves without allocation.
+//!
+//! - [`solve_small`]: Gaussian elimination with partial pivoting on a fixed-size N×N system,
+//!   generic over [`Scalar`] so it also runs on dual numbers (nalgebra's `.lu()` needs
+//!   `RealField` and `DimMin` bounds that nested duals and generic code do not have).
+//! - [`DenseLu`]: an LU factorisation with partial pivoting of a runtime-sized matrix held in
+//!   a buffer allocated once per run; factor and solve allocate nothing. The Newton systems of
+//!   the spectral methods are (N·s)-sized, with s chosen at run time.
+
+use crate::Scalar;
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+/// Solve A x = b for a small fixed-size system; `None` if A is singular (a zero pivot) or the
+/// result is not finite.
+pub fn solve_small<D: Scalar, const N: usize>(
+    mut a: SMatrix<D, N, N>,
+    mut b: SVector<D, N>,
+) -> Option<SVector<D, N>> {
+    for k in 0..N {
+        let mut pivot = k;
+        let mut largest = a[(k, k)].re().abs();
+        for i in k + 1..N {
+            let size = a[(i, k)].re().abs();
+            if size > largest {
+                largest = size;
+                pivot = i;
+            }
+        }
+        if largest == 0.0 || !largest.is_finite() {
+            return None;
+        }
+        if pivot != k {
+            a.swap_rows(k, pivot);
+            b.swap_rows(k, pivot);
+        }
+        let inverse = a[(k, k)].recip();
+        for i in k + 1..N {
+            let factor = a[(i, k)] * inverse;
+            for j in k + 1..N {
+                let update = factor * a[(k, j)];
+                a[(i, j)] -= update;
+            }
+            let update = factor * b[k];
+            b[i] -= update;
+        }
+    }
+    for k in (0..N).rev() {
+        let mut sum = b[k];
+        for j in k + 1..N {
+            sum -= a[(k, j)] * b[j];
+        }
+        b[k] = sum / a[(k, k)];
+    }
+    b.iter().all(|x| x.re().is_finite()).then_some(b)
+}
+
+/// The matrix was singular to working precision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Singular;
+
+/// LU factorisation with partial pivoting of a square runtime-sized matrix, in place.
+#[derive(Debug, Clone)]
+pub struct DenseLu {
+    factors: DMatrix<f64>,
+    pivots: Vec<usize>,
+}
+
+impl DenseLu {
+    /// Workspace for `size`×`size` systems.
+    pub fn new(size: usize) -> Self {
+        DenseLu {
+            factors: DMatrix::zeros(size, size),
+            pivots: vec![0; size],
+        }
+    }
+
+    /// Size of the systems this workspace solves.
+    pub fn size(&self) -> usize {
+        self.pivots.len()
+    }
+
+    /// The matrix to be factored; fill it, then call [`DenseLu::factor`].
+    pub fn matrix_mut(&mut self) -> &mut DMatrix<f64> {
+        &mut self.factors
+    }
+
+    /// Factor the matrix previously written through [`DenseLu::matrix_mut`].
+    pub fn factor(&mut self) -> Result<(), Singular> {
+        let n = self.size();
+        let a = &mut self.factors;
+        for k in 0..n {
+            let mut pivot = k;
+            let mut largest = a[(k, k)].abs();
+            for i in k + 1..n {
+                let size = a[(i, k)].abs();
+                if size > largest {
+                    largest = size;
+                    pivot = i;
+                }
+            }
+            if largest == 0.0 || !largest.is_finite() {
+                return Err(Singular);
+            }
+            self.pivots[k] = pivot;
+            if pivot != k {
+                a.swap_rows(k, pivot);
+            }
+            let inverse = 1.0 / a[(k, k)];
+            for i in k + 1..n {
+                a[(i, k)] *= inverse;
+            }
+            for j in k + 1..n {
+                let akj = a[(k, j)];
+                if akj != 0.0 {
+                    for i in k + 1..n {
+                        a[(i, j)] -= a[(i, k)] * akj;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Solve A x = b in place (`b` becomes x) with the current factors.
+    pub fn solve_in_place(&self, b: &mut DVector<f64>) {
+        let n = self.size();
+        let a = &self.factors;
+        for k in 0..n {
+            b.swap_rows(k, self.pivots[k]);
+        }
+        for j in 0..n {
+            let bj = b[j];
+            if bj != 0.0 {
+                for i in j + 1..n {
+                    b[i] -= a[(i, j)] * bj;
+                }
+            }
+        }
+        for j in (0..n).rev() {
+            b[j] /= a[(j, j)];
+            let bj = b[j];
+            for i in 0..j {
+                b[i] -= a[(i, j)] * bj;
+            }
+        }
+    }
+
+    /// Solve A X = B in place for every column of `b`.
+    pub fn solve_columns_in_place(&self, b: &mut DMatrix<f64>) {
+        let mut column = DVector::zeros(self.size());
+        for j in 0..b.ncols() {
+            column.copy_from(&b.column(j));
+            self.solve_in_place(&mut column);
+            b.set_column(j, &column);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use num_dual::{DualNum, DualSVec64, jacobian};
+
+    #[test]
+    fn small_solve_matches_known_solution_and_needs_pivoting() {
+        // First pivot is zero: partial pivoting is required.
+        let a = SMatrix::<f64, 3, 3>::new(0.0, 2.0, 1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 3.0);
+        let x = SVector::from([1.0, -2.0, 3.0]);
+        let solved = solve_small(a, a * x).unwrap();
+        assert_relative_eq!(solved, x, epsilon = 1e-14);
+        assert!(solve_small(SMatrix::<f64, 2, 2>::zeros(), SVector::from([1.0, 1.0])).is_none());
+    }
+
+    #[test]
+    fn small_solve_propagates_derivatives() {
+        // d/dθ of A(θ)⁻¹ b equals −A⁻¹ A' A⁻¹ b.
+        let theta = SVector::from([0.3]);
+        let (_, derivative) = jacobian(
+            |p: SVector<DualSVec64<1>, 1>| {
+                let s = p[0];
+                let a = SMatrix::<DualSVec64<1>, 2, 2>::new(
+                    s.cos() + 2.0,
+                    s,
+                    s.sin(),
+                    (s * s) + 3.0,
+                );
+                solve_small(a, SVector::from([1.0.into(), 2.0.into()])).unwrap()
+            },
+            &theta,
+        );
+        let s: f64 = 0.3;
+        let a = SMatrix::<f64, 2, 2>::new(s.cos() + 2.0, s, s.sin(), s * s + 3.0);
+        let da = SMatrix::<f64, 2, 2>::new(-s.sin(), 1.0, s.cos(), 2.0 * s);
+        let ai = a.try_inverse().unwrap();
+        let expected = -ai * da * ai * SVector::from([1.0, 2.0]);
+        assert_relative_eq!(derivative.column(0).into_owned(), expected, epsilon = 1e-14);
+    }
+
+    #[test]
+    fn dense_lu_solves_random_systems() {
+        let n = 12;
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let a = DMatrix::from_fn(n, n, |_, _| next());
+        let x = DVector::from_fn(n, |_, _| next());
+        let mut lu = DenseLu::new(n);
+        lu.matrix_mut().copy_from(&a);
+        lu.factor().unwrap();
+        let mut b = &a * &x;
+        lu.solve_in_place(&mut b);
+        assert_relative_eq!(b, x, epsilon = 1e-12);
+        lu.matrix_mut().fill(0.0);
+        assert_eq!(lu.factor(), Err(Singular));
+    }
+}

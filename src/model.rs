@@ -1,0 +1,101 @@
+//! What a user writes: a Lagrangian, and optional companions.
+//!
+//! The only required piece is [`Lagrangian::lagrangian`], one function generic over
+//! [`Scalar`]. Everything an integrator needs (∂L/∂q, p = ∂L/∂q̇, the Hessian blocks, the
+//! energy, the Euler–Lagrange acceleration and its Jacobian) is derived from it by automatic
+//! differentiation in [`crate::derived`].
+//!
+//! Companion traits, each optional and small:
+//! - [`Symmetries`]: infinitesimal generators ξ(q) of symmetries of L; the Noether momenta
+//!   J = p·ξ(q) follow automatically ([`crate::derived::LagrangianExt::noether_momentum`]).
+//! - [`Invariants`]: other known conserved quantities (as functions of t, q, q̇).
+//! - [`ExactSolution`]: a closed-form solution, for error measurements.
+//! - [`Defaults`]: named parameters, a default initial state, step and horizon.
+//!
+//! # Example
+//! ```
+//! use nalgebra::SVector;
+//! use svi::{Lagrangian, Scalar};
+//!
+//! /// A particle in a quartic well: L = q̇²/2 − q⁴/4.
+//! struct Quartic;
+//!
+//! impl Lagrangian<1> for Quartic {
+//!     const TIME_DEPENDENT: bool = false;
+//!     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+//!         v[0] * v[0] * 0.5 - q[0].powi(4) * 0.25
+//!     }
+//! }
+//! ```
+
+use crate::Scalar;
+use nalgebra::SVector;
+
+/// A Lagrangian L(t, q, q̇) on ℝᴺ, written once, generic over the scalar type.
+pub trait Lagrangian<const N: usize> {
+    /// Whether L depends explicitly on t.
+    ///
+    /// The default (`true`) is always correct; a model that sets it to `false` lets the
+    /// integrators skip ∂/∂t (for example the ∂²L/∂q̇∂t term of the Euler–Lagrange
+    /// acceleration).
+    const TIME_DEPENDENT: bool = true;
+
+    /// The value L(t, q, q̇).
+    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D;
+}
+
+/// Infinitesimal symmetry generators of a Lagrangian.
+///
+/// Generator `i` is the vector field ξᵢ(q) of a one-parameter group acting on configurations
+/// that leaves L invariant. By Noether's theorem the momentum Jᵢ = p·ξᵢ(q) is conserved, and
+/// variational integrators conserve it exactly (to round-off).
+pub trait Symmetries<const N: usize>: Lagrangian<N> {
+    /// Number of generators.
+    fn generator_count(&self) -> usize;
+    /// Names of the momenta, one per generator (for reports).
+    fn momentum_name(&self, index: usize) -> &'static str;
+    /// The generator ξᵢ(q); `index < generator_count()`.
+    fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N>;
+}
+
+/// Other known conserved quantities of a model (besides energy and Noether momenta).
+pub trait Invariants<const N: usize>: Lagrangian<N> {
+    /// Number of invariants.
+    fn invariant_count(&self) -> usize;
+    /// Name of invariant `index`.
+    fn invariant_name(&self, index: usize) -> &'static str;
+    /// Value of invariant `index` at (t, q, q̇).
+    fn invariant(&self, index: usize, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64;
+}
+
+/// A closed-form solution of the Euler–Lagrange equations.
+pub trait ExactSolution<const N: usize>: Lagrangian<N> {
+    /// The state (q(t), q̇(t)) of the solution through (q0, q̇0) at time t0, or `None` when
+    /// no closed form is available for that initial state (for example an unbound orbit).
+    fn exact_solution(
+        &self,
+        t0: f64,
+        q0: &SVector<f64, N>,
+        v0: &SVector<f64, N>,
+        t: f64,
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)>;
+}
+
+/// Named parameters and literature defaults of a model.
+pub trait Defaults<const N: usize>: Lagrangian<N> {
+    /// Short name (as used by the CLI, e.g. `"kepler"`).
+    fn name(&self) -> &'static str;
+    /// Names of the configuration coordinates.
+    fn coordinate_names(&self) -> [&'static str; N];
+    /// Current parameter values, by name.
+    fn parameters(&self) -> Vec<(&'static str, f64)>;
+    /// Set one parameter; an unknown name or an out-of-range value is an
+    /// [`crate::Error::InvalidParameter`].
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), crate::Error>;
+    /// Default initial state (t0, q0, q̇0) for the current parameters.
+    fn initial_state(&self) -> (f64, SVector<f64, N>, SVector<f64, N>);
+    /// Default step size.
+    fn default_step(&self) -> f64;
+    /// Default final time.
+    fn default_horizon(&self) -> f64;
+}

@@ -1,0 +1,227 @@
+//! Observers: opt-in diagnostics and output of a run.
+//!
+//! An observer sees the initial point (step 0) and the points after the steps it asks for
+//! ([`Observer::wants`]). The stepping loop completes a [`PhasePoint`] (q, q̇ and p) only when
+//! some observer wants the step, so a run with no observer (`&mut ()`) computes nothing
+//! beyond the steps. Observers compose as tuples, switch on and off as `Option`, thin out with
+//! [`Every`], and may stop a run by returning [`ControlFlow::Break`].
+//!
+//! Provided: [`Trajectory`] (store points), [`EnergyError`] (max |E − E₀|), [`MomentumError`]
+//! (max |J − J₀| over the Noether momenta), [`InvariantError`] (max over known invariants),
+//! [`SolutionError`] (max position error against the exact solution).
+
+use crate::derived::LagrangianExt;
+use crate::method::PhasePoint;
+use crate::model::{ExactSolution, Invariants, Lagrangian, Symmetries};
+use std::ops::ControlFlow;
+
+/// Receives points of a run.
+pub trait Observer<L: ?Sized, const N: usize> {
+    /// Whether the point after step `step` (0 = initial point) is wanted.
+    fn wants(&self, step: usize) -> bool {
+        let _ = step;
+        true
+    }
+
+    /// Receive the point after step `step`; `Break` stops the run.
+    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()>;
+}
+
+impl<L: ?Sized, const N: usize> Observer<L, N> for () {
+    fn wants(&self, _step: usize) -> bool {
+        false
+    }
+    fn observe(&mut self, _: &L, _: usize, _: &PhasePoint<N>) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+}
+
+impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for Option<O> {
+    fn wants(&self, step: usize) -> bool {
+        self.as_ref().is_some_and(|o| o.wants(step))
+    }
+    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        match self {
+            Some(o) if o.wants(step) => o.observe(model, step, point),
+            _ => ControlFlow::Continue(()),
+        }
+    }
+}
+
+impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for &mut O {
+    fn wants(&self, step: usize) -> bool {
+        (**self).wants(step)
+    }
+    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        (**self).observe(model, step, point)
+    }
+}
+
+macro_rules! tuple_observer {
+    ($($name:ident),+) => {
+        impl<L: ?Sized, const N: usize, $($name: Observer<L, N>),+> Observer<L, N> for ($($name,)+) {
+            fn wants(&self, step: usize) -> bool {
+                #[allow(non_snake_case)]
+                let ($($name,)+) = self;
+                false $(|| $name.wants(step))+
+            }
+            fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+                #[allow(non_snake_case)]
+                let ($($name,)+) = self;
+                let mut flow = ControlFlow::Continue(());
+                $(
+                    if $name.wants(step) && $name.observe(model, step, point).is_break() {
+                        flow = ControlFlow::Break(());
+                    }
+                )+
+                flow
+            }
+        }
+    };
+}
+
+tuple_observer!(A);
+tuple_observer!(A, B);
+tuple_observer!(A, B, C);
+tuple_observer!(A, B, C, D);
+tuple_observer!(A, B, C, D, E);
+tuple_observer!(A, B, C, D, E, F);
+
+/// Pass every `every`-th step (and the initial point) to the inner observer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Every<O> {
+    /// Thinning factor (0 and 1 both mean every step).
+    pub every: usize,
+    /// The observer that receives the thinned points.
+    pub inner: O,
+}
+
+impl<O> Every<O> {
+    /// Thin `inner` to every `every`-th step.
+    pub fn new(every: usize, inner: O) -> Self {
+        Every { every, inner }
+    }
+}
+
+impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for Every<O> {
+    fn wants(&self, step: usize) -> bool {
+        step % self.every.max(1) == 0 && self.inner.wants(step)
+    }
+    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        self.inner.observe(model, step, point)
+    }
+}
+
+/// Stores the observed points.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Trajectory<const N: usize> {
+    /// The points, in order.
+    pub points: Vec<PhasePoint<N>>,
+}
+
+impl<const N: usize> Trajectory<N> {
+    /// An empty trajectory.
+    pub fn new() -> Self {
+        Trajectory { points: Vec::new() }
+    }
+}
+
+impl<L: ?Sized, const N: usize> Observer<L, N> for Trajectory<N> {
+    fn observe(&mut self, _: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        self.points.push(*point);
+        ControlFlow::Continue(())
+    }
+}
+
+/// Largest deviation |E(t) − E(t₀)| of the energy E = p·q̇ − L over the observed points.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EnergyError {
+    /// Energy at the first observed point.
+    pub initial: Option<f64>,
+    /// Largest deviation seen.
+    pub max: f64,
+}
+
+impl<L: Lagrangian<N>, const N: usize> Observer<L, N> for EnergyError {
+    fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
+        let initial = *self.initial.get_or_insert(energy);
+        self.max = self.max.max((energy - initial).abs());
+        ControlFlow::Continue(())
+    }
+}
+
+/// Largest deviation of the Noether momenta Jᵢ = p·ξᵢ(q) over the observed points (the
+/// maximum over all generators).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MomentumError {
+    /// Momenta at the first observed point.
+    pub initial: Vec<f64>,
+    /// Largest deviation seen.
+    pub max: f64,
+}
+
+impl<L: Symmetries<N>, const N: usize> Observer<L, N> for MomentumError {
+    fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        let count = model.generator_count();
+        let first = self.initial.is_empty();
+        for i in 0..count {
+            let momentum = point.p.dot(&model.generator(i, &point.q));
+            if first {
+                self.initial.push(momentum);
+            } else {
+                self.max = self.max.max((momentum - self.initial[i]).abs());
+            }
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// Largest deviation of the model's known invariants over the observed points.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct InvariantError {
+    /// Invariants at the first observed point.
+    pub initial: Vec<f64>,
+    /// Largest deviation seen.
+    pub max: f64,
+}
+
+impl<L: Invariants<N>, const N: usize> Observer<L, N> for InvariantError {
+    fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        let first = self.initial.is_empty();
+        for i in 0..model.invariant_count() {
+            let value = model.invariant(i, point.t, &point.q, &point.v);
+            if first {
+                self.initial.push(value);
+            } else {
+                self.max = self.max.max((value - self.initial[i]).abs());
+            }
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// Largest Euclidean position error ‖q − q_exact‖ over the observed points, against the exact
+/// solution through the first observed point. `max` stays `None` when the model has no
+/// closed form for that initial state.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SolutionError<const N: usize> {
+    /// The first observed point.
+    pub initial: Option<PhasePoint<N>>,
+    /// Largest error seen, if the exact solution exists.
+    pub max: Option<f64>,
+    /// Error at the last observed point.
+    pub last: Option<f64>,
+}
+
+impl<L: ExactSolution<N>, const N: usize> Observer<L, N> for SolutionError<N> {
+    fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        let start = *self.initial.get_or_insert(*point);
+        if let Some((q, _)) = model.exact_solution(start.t, &start.q, &start.v, point.t) {
+            let error = (point.q - q).norm();
+            self.max = Some(self.max.unwrap_or(0.0).max(error));
+            self.last = Some(error);
+        }
+        ControlFlow::Continue(())
+    }
+}

@@ -1,0 +1,413 @@
+//! Galerkin spectral variational integrators (SVI).
+//!
+//! # Discrete equations
+//! On each step [t, t + h] the curve is a polynomial of degree s through s + 1
+//! Chebyshev–Gauss–Lobatto (CGL) nodes, q(τ) = Σ_ν qᵛ l_ν(τ), τ ∈ [−1, 1], and the action is
+//! approximated by m-point Gauss–Legendre quadrature (Li, Wu, Leok 2018, eq. 6):
+//!
+//! L_d(q⁰, …, qˢ) = (h/2) Σ_μ w_μ L(t_μ, Σ_ν qᵛ l_ν(τ_μ), (2/h) Σ_ν qᵛ l̇_ν(τ_μ)).
+//!
+//! With g_ν = ∂L_d/∂qᵛ = Σ_μ w_μ [(h/2) l_ν(τ_μ) ∂L/∂q + l̇_ν(τ_μ) ∂L/∂q̇] the step
+//! (q_k, p_k) ↦ (q_{k+1}, p_{k+1}) solves (eqs. 8a–8c)
+//!
+//! −p_k = g_0,  0 = g_ν (ν = 1, …, s − 1),  p_{k+1} = g_s,  with q⁰ = q_k, q_{k+1} = qˢ.
+//!
+//! The unknowns q¹, …, qˢ (s·N numbers) are found by Newton's method with the exact Jacobian
+//! ∂g_ν/∂qʲ, assembled from the per-point Hessian blocks L_qq, L_qv, L_vv of L (never from
+//! (s·N)-sized dual numbers). The iteration starts from the previous step's polynomial
+//! extrapolated to the new nodes and runs to round-off. The unknowns are kept as offsets
+//! qᵛ − q_k and the momentum update as p_{k+1} − p_k = g_0 + g_s, so that the stepping loop
+//! can add both increments with compensated summation.
+//!
+//! # Properties
+//! - order min(2s, 2m) (Galerkin variational error analysis; with m = s Gauss points the SVI
+//!   is the s-stage Gauss–Legendre collocation method, order 2s);
+//! - symmetric: yes (symmetric nodes and quadrature);
+//! - symplectic: yes (a variational integrator), and it conserves the Noether momenta of
+//!   symmetries of L that act linearly on q (discrete Noether theorem).
+//!
+//! # References
+//! Li, Wu, Leok, *Construction and comparison of multidimensional spectral variational
+//! integrators and spectral collocation methods* (2018), §2, eqs. (6)–(11); Hall & Leok,
+//! *Spectral variational integrators* (2015).
+
+use crate::basis::LagrangeBasis;
+use crate::derived::{FirstDerivatives, LagrangianExt, SecondDerivatives};
+use crate::error::StepFailure;
+use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::newton::Newton;
+use crate::quadrature::GaussLegendre;
+use crate::starting_values::StartingValues;
+use crate::{Error, Lagrangian, Method};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+/// Largest number of CGL points or Gauss points accepted.
+pub const MAX_POINTS: usize = 256;
+
+/// Options of the spectral variational integrator.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct Svi {
+    /// Number of Chebyshev–Gauss–Lobatto points s + 1 (polynomial degree s), at least 2.
+    pub points: usize,
+    /// Number of Gauss–Legendre points m, at least 1; `None` means 2 · `points`, as in the
+    /// paper's experiments.
+    pub quadrature: Option<usize>,
+    /// Cap on Newton iterations per step.
+    pub max_iterations: usize,
+}
+
+impl Default for Svi {
+    fn default() -> Self {
+        Svi {
+            points: 6,
+            quadrature: None,
+            max_iterations: 50,
+        }
+    }
+}
+
+impl Svi {
+    /// SVI with `points` CGL points and the default quadrature (2 · `points` Gauss points).
+    pub fn new(points: usize) -> Self {
+        Svi {
+            points,
+            ..Svi::default()
+        }
+    }
+
+    /// Use `quadrature` Gauss–Legendre points.
+    pub fn with_quadrature(mut self, quadrature: usize) -> Self {
+        self.quadrature = Some(quadrature);
+        self
+    }
+
+    /// Cap Newton iterations per step.
+    pub fn with_max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+
+    /// The number of Gauss–Legendre points in use.
+    pub fn quadrature_points(&self) -> usize {
+        self.quadrature.unwrap_or(2 * self.points)
+    }
+
+    fn validate(&self) -> Result<(), Error> {
+        if self.points < 2 || self.points > MAX_POINTS {
+            return Err(Error::invalid(
+                "points",
+                format!("{} CGL points; need 2 to {MAX_POINTS}", self.points),
+            ));
+        }
+        let m = self.quadrature_points();
+        if m < 1 || m > MAX_POINTS {
+            return Err(Error::invalid(
+                "quadrature",
+                format!("{m} Gauss points; need 1 to {MAX_POINTS}"),
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err(Error::invalid("max_iterations", "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+/// Tables of one SVI configuration, scaled for the current step size.
+#[derive(Debug, Clone)]
+struct Tables {
+    degree: usize,
+    h: f64,
+    /// Gauss nodes τ_μ on [−1, 1].
+    nodes: Vec<f64>,
+    /// Gauss weights w_μ.
+    reference_weights: Vec<f64>,
+    /// (h/2) w_μ.
+    weights: Vec<f64>,
+    /// l_ν(τ_μ), m × (s + 1).
+    values: DMatrix<f64>,
+    /// l̇_ν(τ_μ), m × (s + 1).
+    reference_derivatives: DMatrix<f64>,
+    /// (2/h) l̇_ν(τ_μ), m × (s + 1).
+    derivatives: DMatrix<f64>,
+}
+
+impl Tables {
+    fn new(basis: &LagrangeBasis, quadrature: usize, h: f64) -> Result<Self, Error> {
+        let points = basis.len();
+        let gauss = GaussLegendre::new(quadrature)?;
+        let mut tables = Tables {
+            degree: points - 1,
+            h: f64::NAN,
+            nodes: gauss.nodes().to_vec(),
+            reference_weights: gauss.weights().to_vec(),
+            weights: vec![0.0; quadrature],
+            values: basis.value_matrix(gauss.nodes()),
+            reference_derivatives: basis.derivative_matrix(gauss.nodes()),
+            derivatives: DMatrix::zeros(quadrature, points),
+        };
+        tables.rescale(h);
+        Ok(tables)
+    }
+
+    fn rescale(&mut self, h: f64) {
+        self.h = h;
+        for (w, r) in self.weights.iter_mut().zip(&self.reference_weights) {
+            *w = 0.5 * h * r;
+        }
+        self.derivatives
+            .zip_apply(&self.reference_derivatives, |d, r| *d = 2.0 / h * r);
+    }
+
+    fn time(&self, t: f64, mu: usize) -> f64 {
+        t + 0.5 * self.h * (self.nodes[mu] + 1.0)
+    }
+
+    /// q and q̇ at quadrature point μ for node offsets z (q⁰ = q_k implicit).
+    fn point<const N: usize>(
+        &self,
+        mu: usize,
+        q0: &SVector<f64, N>,
+        z: &DVector<f64>,
+    ) -> (SVector<f64, N>, SVector<f64, N>) {
+        let mut q = *q0;
+        let mut v = SVector::zeros();
+        for nu in 1..=self.degree {
+            let node = z.fixed_rows::<N>((nu - 1) * N);
+            q += node * self.values[(mu, nu)];
+            v += node * self.derivatives[(mu, nu)];
+        }
+        (q, v)
+    }
+}
+
+/// Buffers of an SVI run.
+#[derive(Debug, Clone)]
+pub struct SviWorkspace<const N: usize> {
+    tables: Tables,
+    /// Node offsets qᵛ − q_k, ν = 1..s, stacked.
+    offsets: DVector<f64>,
+    /// Warm start from the previous step.
+    start: StartingValues,
+    /// Second derivatives of L at the quadrature points.
+    points: Vec<SecondDerivatives<N>>,
+    newton: Newton,
+}
+
+impl<const N: usize> SviWorkspace<N> {
+    /// Rebuild scaled tables for a new step size; the warm start is dropped (its polynomial
+    /// lives on a differently scaled interval).
+    fn set_step(&mut self, h: f64) {
+        if self.tables.h != h {
+            self.tables.rescale(h);
+            self.start.invalidate();
+        }
+    }
+
+    /// Starting values: the previous step's polynomial extrapolated to the new nodes, or at
+    /// the first step the Taylor polynomial with q̇ from the inverse Legendre map.
+    fn start<L: Lagrangian<N>>(&mut self, model: &L, t: f64, state: &State<N>) {
+        if self.start.has_previous() {
+            self.start.extrapolate::<N>(&mut self.offsets);
+        } else {
+            let v = model
+                .velocity(t, &state.q, &state.y, &state.y)
+                .unwrap_or_else(|_| SVector::zeros());
+            let a = model.acceleration(t, &state.q, &v).unwrap_or_else(SVector::zeros);
+            self.start.taylor(self.tables.h, &v, &a, &mut self.offsets);
+        }
+    }
+}
+
+/// Assemble the residual of (8a)–(8b) and its Jacobian with respect to the offsets.
+fn assemble<L: Lagrangian<N>, const N: usize>(
+    model: &L,
+    tables: &Tables,
+    points: &mut [SecondDerivatives<N>],
+    t: f64,
+    state: &State<N>,
+    z: &DVector<f64>,
+    jacobian: &mut DMatrix<f64>,
+    residual: &mut DVector<f64>,
+) {
+    let s = tables.degree;
+    for (mu, point) in points.iter_mut().enumerate() {
+        let (q, v) = tables.point(mu, &state.q, z);
+        *point = model.second_derivatives(tables.time(t, mu), &q, &v);
+    }
+    residual.fill(0.0);
+    jacobian.fill(0.0);
+    residual.fixed_rows_mut::<N>(0).copy_from(&state.y);
+    for (mu, d) in points.iter().enumerate() {
+        let w = tables.weights[mu];
+        let qv_t = d.qv.transpose();
+        for nu in 0..s {
+            let b = tables.values[(mu, nu)];
+            let c = tables.derivatives[(mu, nu)];
+            let mut row = residual.fixed_rows_mut::<N>(nu * N);
+            row += (d.q * b + d.v * c) * w;
+        }
+        for j in 1..=s {
+            let bj = tables.values[(mu, j)];
+            let cj = tables.derivatives[(mu, j)];
+            let from_q: SMatrix<f64, N, N> = (d.qq * bj + d.qv * cj) * w;
+            let from_v: SMatrix<f64, N, N> = (qv_t * bj + d.vv * cj) * w;
+            for nu in 0..s {
+                let block = from_q * tables.values[(mu, nu)] + from_v * tables.derivatives[(mu, nu)];
+                let mut target = jacobian.fixed_view_mut::<N, N>(nu * N, (j - 1) * N);
+                target += block;
+            }
+        }
+    }
+}
+
+impl<const N: usize> Method<N> for Svi {
+    type Workspace = SviWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        let degree = self.points.saturating_sub(1);
+        MethodInfo {
+            name: "svi",
+            order: 2 * degree.min(self.quadrature_points()),
+            symmetric: true,
+            symplectic: true,
+            coordinates: Coordinates::Momentum,
+        }
+    }
+
+    fn workspace<L: Lagrangian<N>>(&self, _model: &L, h: f64) -> Result<SviWorkspace<N>, Error> {
+        self.validate()?;
+        crate::error::require_positive("h", h)?;
+        let m = self.quadrature_points();
+        let size = (self.points - 1) * N;
+        let zero = SecondDerivatives {
+            value: 0.0,
+            q: SVector::zeros(),
+            v: SVector::zeros(),
+            qq: SMatrix::zeros(),
+            qv: SMatrix::zeros(),
+            vv: SMatrix::zeros(),
+        };
+        let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
+        Ok(SviWorkspace {
+            tables: Tables::new(&basis, m, h)?,
+            offsets: DVector::zeros(size),
+            start: StartingValues::new(&basis, N),
+            points: vec![zero; m],
+            newton: Newton::new(size, self.max_iterations),
+        })
+    }
+
+    fn step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut SviWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        let iterations = solve(model, workspace, t, h, state)?;
+        let ws = &mut *workspace;
+        let s = ws.tables.degree;
+        let mut dp = SVector::<f64, N>::zeros();
+        for mu in 0..ws.tables.nodes.len() {
+            let (q, v) = ws.tables.point(mu, &state.q, &ws.offsets);
+            let FirstDerivatives { q: lq, v: lv, .. } =
+                model.first_derivatives(ws.tables.time(t, mu), &q, &v);
+            let b = ws.tables.values[(mu, 0)] + ws.tables.values[(mu, s)];
+            let c = ws.tables.derivatives[(mu, 0)] + ws.tables.derivatives[(mu, s)];
+            dp += (lq * b + lv * c) * ws.tables.weights[mu];
+        }
+        increment.q = ws.offsets.fixed_rows::<N>((s - 1) * N).into_owned();
+        increment.y = dp;
+        ws.start.remember(&ws.offsets);
+        let m = ws.tables.nodes.len();
+        Ok(StepReport {
+            iterations,
+            evaluations: m * (iterations + 1),
+        })
+    }
+
+    fn tangent_map<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut SviWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let mut increment = State::zeros();
+        self.step(model, workspace, t, h, state, &mut increment)?;
+        let ws = &*workspace;
+        let tables = &ws.tables;
+        let s = tables.degree;
+        // Full block Hessian H_{νj} = ∂g_ν/∂qʲ, ν, j = 0..s, at the converged nodes.
+        let size = (s + 1) * N;
+        let mut hessian = DMatrix::zeros(size, size);
+        for mu in 0..tables.nodes.len() {
+            let (q, v) = tables.point(mu, &state.q, &ws.offsets);
+            let d = model.second_derivatives(tables.time(t, mu), &q, &v);
+            let w = tables.weights[mu];
+            for j in 0..=s {
+                let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
+                let from_q = (d.qq * bj + d.qv * cj) * w;
+                let from_v = (d.qv.transpose() * bj + d.vv * cj) * w;
+                for nu in 0..=s {
+                    let block =
+                        from_q * tables.values[(mu, nu)] + from_v * tables.derivatives[(mu, nu)];
+                    let mut target = hessian.fixed_view_mut::<N, N>(nu * N, j * N);
+                    target += block;
+                }
+            }
+        }
+        let inner = s * N;
+        let mut lu = crate::linalg::DenseLu::new(inner);
+        lu.matrix_mut()
+            .copy_from(&hessian.view((0, N), (inner, inner)));
+        lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
+        // Columns: d/dq_k (N), then d/dp_k (N).
+        let mut sensitivity = DMatrix::zeros(inner, 2 * N);
+        sensitivity
+            .view_mut((0, 0), (inner, N))
+            .copy_from(&(-hessian.view((0, 0), (inner, N))));
+        for i in 0..N {
+            sensitivity[(i, N + i)] = -1.0;
+        }
+        lu.solve_columns_in_place(&mut sensitivity);
+        let last = sensitivity.view(((s - 1) * N, 0), (N, 2 * N));
+        let mut momentum = hessian.view((s * N, N), (N, inner)) * &sensitivity;
+        let mut from_q0 = momentum.view_mut((0, 0), (N, N));
+        from_q0 += hessian.view((s * N, 0), (N, N));
+        let tangent = TangentMap {
+            qq: last.fixed_view::<N, N>(0, 0).into_owned(),
+            qy: last.fixed_view::<N, N>(0, N).into_owned(),
+            yq: momentum.fixed_view::<N, N>(0, 0).into_owned(),
+            yy: momentum.fixed_view::<N, N>(0, N).into_owned(),
+        };
+        Ok((increment, tangent))
+    }
+}
+
+/// Solve (8a)–(8b) for the node offsets; returns the Newton iterations.
+fn solve<L: Lagrangian<N>, const N: usize>(
+    model: &L,
+    workspace: &mut SviWorkspace<N>,
+    t: f64,
+    h: f64,
+    state: &State<N>,
+) -> Result<usize, StepFailure> {
+    workspace.set_step(h);
+    workspace.start(model, t, state);
+    let SviWorkspace {
+        tables,
+        offsets,
+        points,
+        newton,
+        ..
+    } = workspace;
+    newton.solve(offsets, |z, jacobian, residual| {
+        assemble(model, tables, points, t, state, z, jacobian, residual)
+    })
+}
