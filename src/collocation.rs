@@ -31,7 +31,7 @@ use crate::basis::LagrangeBasis;
 use crate::derived::{AccelerationJacobian, LagrangianExt};
 use crate::error::StepFailure;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::newton::Newton;
+use crate::iteration::Newton;
 use crate::quadrature::GaussLegendre;
 use crate::starting_values::StartingValues;
 use crate::spectral_variational::MAX_POINTS;

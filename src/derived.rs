@@ -99,6 +99,17 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         FirstDerivatives { value, q: dq, v: dv }
     }
 
+    /// The generalised force ∂L/∂q alone (one gradient sweep).
+    fn force(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
+        gradient(
+            |x: SVector<DualSVec64<N>, N>| {
+                self.lagrangian(DualVec::from_re(t), &x, &v.map(DualVec::from_re))
+            },
+            q,
+        )
+        .1
+    }
+
     /// The canonical momentum p = ∂L/∂q̇.
     fn momentum(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
         gradient(

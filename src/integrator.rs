@@ -12,7 +12,7 @@ use crate::derived::LagrangianExt;
 use crate::error::{require_finite, require_positive};
 use crate::method::{Coordinates, PhasePoint, State, TangentMap};
 use crate::observer::Observer;
-use crate::{Error, Lagrangian, Method};
+use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::SVector;
 use std::ops::ControlFlow;
 
@@ -133,6 +133,30 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         Ok(state)
     }
 
+    /// Check a [`Structure::ConstantMass`] declaration at the initial state: L_qv must vanish
+    /// and L_vv must not change with q̇ (a necessary condition, checked once per run).
+    fn check_structure(&self, t: f64, state: &State<N>) -> Result<(), Error> {
+        if L::STRUCTURE != Structure::ConstantMass {
+            return Ok(());
+        }
+        let shifted = state.y * 2.0 + SVector::repeat(1.0);
+        let first = self.model.second_derivatives(t, &state.q, &state.y);
+        let second = self.model.second_derivatives(t, &state.q, &shifted);
+        let scale = 1.0 + first.vv.amax() + first.qq.amax();
+        let coupling = first.qv.amax().max(second.qv.amax());
+        let change = (first.vv - second.vv).amax();
+        if coupling > 1e-12 * scale || change > 1e-12 * scale {
+            return Err(Error::invalid(
+                "structure",
+                format!(
+                    "the model declares a constant mass matrix, but ∂²L/∂q∂q̇ = {coupling:e} and \
+                     ∂²L/∂q̇² changes by {change:e} with q̇"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Integrate from `t0` to `t_end` with step `h`, reporting to `observer`.
     pub fn run<O: Observer<L, N>>(
         &self,
@@ -154,6 +178,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         let steps = step_count(t_end - t0, h)?;
         let mut workspace = self.method.workspace(&self.model, h)?;
         let mut state = self.initial_state(t0, &initial)?;
+        self.check_structure(t0, &state)?;
         let mut guess = match initial {
             Initial::Velocity { v, .. } => v,
             Initial::Momentum { p, .. } => p,

@@ -54,6 +54,26 @@ pub fn solve_small<D: Scalar, const N: usize>(
     b.iter().all(|x| x.re().is_finite()).then_some(b)
 }
 
+/// The inverse of a small fixed-size matrix, or `None` if it is singular.
+pub fn invert_small<const N: usize>(a: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
+    let mut inverse = SMatrix::<f64, N, N>::zeros();
+    for j in 0..N {
+        let column = solve_small(*a, SVector::<f64, N>::from_fn(|i, _| f64::from(i == j)))?;
+        inverse.set_column(j, &column);
+    }
+    Some(inverse)
+}
+
+/// The inverse of a square runtime-sized matrix (set-up work, not for inner loops).
+pub fn invert(a: &DMatrix<f64>) -> Result<DMatrix<f64>, Singular> {
+    let mut lu = DenseLu::new(a.nrows());
+    lu.matrix_mut().copy_from(a);
+    lu.factor()?;
+    let mut inverse = DMatrix::identity(a.nrows(), a.nrows());
+    lu.solve_columns_in_place(&mut inverse);
+    Ok(inverse)
+}
+
 /// The matrix was singular to working precision.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Singular;
@@ -215,5 +235,13 @@ mod tests {
         assert_relative_eq!(b, x, epsilon = 1e-12);
         lu.matrix_mut().fill(0.0);
         assert_eq!(lu.factor(), Err(Singular));
+        let inverse = invert(&a).unwrap();
+        assert_relative_eq!(&a * inverse, DMatrix::identity(n, n), epsilon = 1e-12);
+        let small = SMatrix::<f64, 2, 2>::new(2.0, 1.0, 1.0, 3.0);
+        assert_relative_eq!(
+            small * invert_small(&small).unwrap(),
+            SMatrix::identity(),
+            epsilon = 1e-15
+        );
     }
 }

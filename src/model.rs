@@ -40,8 +40,24 @@ pub trait Lagrangian<const N: usize> {
     /// acceleration).
     const TIME_DEPENDENT: bool = true;
 
+    /// Structure the integrators may exploit. The default ([`Structure::General`]) is always
+    /// correct; [`Structure::ConstantMass`] lets the spectral methods replace Newton's method
+    /// by a fixed-point iteration that needs only ∂L/∂q (no Hessian at all). The stepping
+    /// loop checks the declaration at the initial state and rejects a model that breaks it.
+    const STRUCTURE: Structure = Structure::General;
+
     /// The value L(t, q, q̇).
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D;
+}
+
+/// Structure of a Lagrangian that integrators may exploit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Structure {
+    /// No assumption beyond regularity (L_vv invertible).
+    General,
+    /// L(t, q, q̇) = ½ q̇ᵀ M q̇ − V(t, q) with a constant symmetric positive-definite mass
+    /// matrix M: p = M q̇, ∂L/∂q = −∂V/∂q does not depend on q̇, and q̈ = M⁻¹ ∂L/∂q.
+    ConstantMass,
 }
 
 /// Infinitesimal symmetry generators of a Lagrangian.

@@ -16,8 +16,14 @@
 //! ∂g_ν/∂qʲ, assembled from the per-point Hessian blocks L_qq, L_qv, L_vv of L (never from
 //! (s·N)-sized dual numbers). The iteration starts from the previous step's polynomial
 //! extrapolated to the new nodes and runs to round-off. The unknowns are kept as offsets
-//! qᵛ − q_k and the momentum update as p_{k+1} − p_k = g_0 + g_s, so that the stepping loop
-//! can add both increments with compensated summation.
+//! qᵛ − q_k so that the stepping loop can add the increment with compensated summation.
+//! The momentum increment is computed without cancellation: summing all g_ν and using
+//! Σ_ν l_ν = 1, Σ_ν l̇_ν = 0 and the internal-stage conditions (8b),
+//!
+//! p_{k+1} − p_k = g_s + g_0 = Σ_μ (h/2) w_μ ∂L/∂q(τ_μ)
+//!
+//! (the discrete momentum balance; for m = s it is the Nyström update of Gauss–Legendre),
+//! whereas g_0 + g_s term by term cancels O(|p|) contributions every step.
 //!
 //! # Properties
 //! - order min(2s, 2m) (Galerkin variational error analysis; with m = s Gauss points the SVI
@@ -32,13 +38,14 @@
 //! *Spectral variational integrators* (2015).
 
 use crate::basis::LagrangeBasis;
-use crate::derived::{FirstDerivatives, LagrangianExt, SecondDerivatives};
+use crate::derived::{LagrangianExt, SecondDerivatives};
 use crate::error::StepFailure;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::newton::Newton;
+use crate::iteration::{FixedPoint, Newton};
+use crate::linalg::{invert, invert_small};
 use crate::quadrature::GaussLegendre;
 use crate::starting_values::StartingValues;
-use crate::{Error, Lagrangian, Method};
+use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// Largest number of CGL points or Gauss points accepted.
@@ -182,6 +189,51 @@ impl Tables {
     }
 }
 
+/// Tables and buffers of the fixed-point iteration for [`Structure::ConstantMass`]
+/// Lagrangians, L = ½ q̇ᵀMq̇ − V(t, q).
+///
+/// Then g_ν = Σ_j K_νj M qʲ + Σ_μ (h/2) w_μ l_ν(τ_μ) ∂L/∂q(τ_μ) with the stiffness matrix
+/// K = (2/h) K̃, K̃_νj = Σ_μ w_μ l̇_ν(τ_μ) l̇_j(τ_μ), and (8a)–(8b) become the fixed point
+/// Z = −(h/2) (K̃* ⊗ M)⁻¹ [G(Z) + p_k e_0] for the offsets Z, where K̃* keeps rows 0..s−1
+/// and columns 1..s of K̃ and G_ν = Σ_μ (h/2) w_μ l_ν(τ_μ) ∂L/∂q(τ_μ): only the force
+/// ∂L/∂q is evaluated, never a Hessian (the Nyström form of Gauss–Legendre when m = s).
+#[derive(Debug, Clone)]
+struct ConstantMass<const N: usize> {
+    /// (K̃*)⁻¹, s × s: entry (j − 1, ν) multiplies load ν in offset j.
+    stiffness_inverse: DMatrix<f64>,
+    /// M and M⁻¹, from the first step.
+    mass: Option<(SMatrix<f64, N, N>, SMatrix<f64, N, N>)>,
+    /// ∂L/∂q at the quadrature points.
+    forces: Vec<SVector<f64, N>>,
+    /// G_ν + δ_ν0 p_k, ν = 0..s−1.
+    loads: Vec<SVector<f64, N>>,
+}
+
+impl<const N: usize> ConstantMass<N> {
+    /// `None` when K̃* is singular (too few Gauss points): Newton's method is used instead.
+    fn new(tables: &Tables) -> Option<Self> {
+        let s = tables.degree;
+        let m = tables.nodes.len();
+        let d = &tables.reference_derivatives;
+        let stiffness = DMatrix::from_fn(s + 1, s + 1, |nu, j| {
+            (0..m)
+                .map(|mu| tables.reference_weights[mu] * d[(mu, nu)] * d[(mu, j)])
+                .sum::<f64>()
+        });
+        let inner = stiffness.view((0, 1), (s, s)).into_owned();
+        let stiffness_inverse = invert(&inner).ok()?;
+        if !stiffness_inverse.iter().all(|x| x.is_finite()) {
+            return None;
+        }
+        Some(ConstantMass {
+            stiffness_inverse,
+            mass: None,
+            forces: vec![SVector::zeros(); m],
+            loads: vec![SVector::zeros(); s],
+        })
+    }
+}
+
 /// Buffers of an SVI run.
 #[derive(Debug, Clone)]
 pub struct SviWorkspace<const N: usize> {
@@ -193,6 +245,8 @@ pub struct SviWorkspace<const N: usize> {
     /// Second derivatives of L at the quadrature points.
     points: Vec<SecondDerivatives<N>>,
     newton: Newton,
+    /// Fixed-point data, for constant-mass Lagrangians.
+    constant_mass: Option<ConstantMass<N>>,
 }
 
 impl<const N: usize> SviWorkspace<N> {
@@ -290,12 +344,19 @@ impl<const N: usize> Method<N> for Svi {
             vv: SMatrix::zeros(),
         };
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
+        let tables = Tables::new(&basis, m, h)?;
+        let constant_mass = match L::STRUCTURE {
+            Structure::ConstantMass => ConstantMass::new(&tables),
+            Structure::General => None,
+        };
+        let points = if constant_mass.is_some() { 0 } else { m };
         Ok(SviWorkspace {
-            tables: Tables::new(&basis, m, h)?,
+            tables,
             offsets: DVector::zeros(size),
             start: StartingValues::new(&basis, N),
-            points: vec![zero; m],
+            points: vec![zero; points],
             newton: Newton::new(size, self.max_iterations),
+            constant_mass,
         })
     }
 
@@ -308,17 +369,16 @@ impl<const N: usize> Method<N> for Svi {
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
+        if workspace.constant_mass.is_some() {
+            return fixed_point_step(model, self.max_iterations, workspace, t, h, state, increment);
+        }
         let iterations = solve(model, workspace, t, h, state)?;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
         let mut dp = SVector::<f64, N>::zeros();
         for mu in 0..ws.tables.nodes.len() {
             let (q, v) = ws.tables.point(mu, &state.q, &ws.offsets);
-            let FirstDerivatives { q: lq, v: lv, .. } =
-                model.first_derivatives(ws.tables.time(t, mu), &q, &v);
-            let b = ws.tables.values[(mu, 0)] + ws.tables.values[(mu, s)];
-            let c = ws.tables.derivatives[(mu, 0)] + ws.tables.derivatives[(mu, s)];
-            dp += (lq * b + lv * c) * ws.tables.weights[mu];
+            dp += model.force(ws.tables.time(t, mu), &q, &v) * ws.tables.weights[mu];
         }
         increment.q = ws.offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = dp;
@@ -388,6 +448,82 @@ impl<const N: usize> Method<N> for Svi {
         };
         Ok((increment, tangent))
     }
+}
+
+/// One step of a constant-mass Lagrangian by fixed-point iteration (no Hessian).
+fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
+    model: &L,
+    max_iterations: usize,
+    workspace: &mut SviWorkspace<N>,
+    t: f64,
+    h: f64,
+    state: &State<N>,
+    increment: &mut State<N>,
+) -> Result<StepReport, StepFailure> {
+    workspace.set_step(h);
+    workspace.start(model, t, state);
+    let SviWorkspace {
+        tables,
+        offsets,
+        start,
+        constant_mass,
+        ..
+    } = workspace;
+    let Some(data) = constant_mass.as_mut() else {
+        return Err(StepFailure::SingularMatrix);
+    };
+    let (_, mass_inverse) = match data.mass {
+        Some(mass) => mass,
+        None => {
+            let mass = model.mass_matrix(t, &state.q, &state.y);
+            let inverse = invert_small(&mass).ok_or(StepFailure::SingularMatrix)?;
+            *data.mass.insert((mass, inverse))
+        }
+    };
+    let s = tables.degree;
+    let half = 0.5 * h;
+    let mut control = FixedPoint::new(max_iterations);
+    loop {
+        for (mu, force) in data.forces.iter_mut().enumerate() {
+            let mut q = state.q;
+            for j in 1..=s {
+                q += offsets.fixed_rows::<N>((j - 1) * N) * tables.values[(mu, j)];
+            }
+            *force = model.force(tables.time(t, mu), &q, &state.y);
+        }
+        for (nu, load) in data.loads.iter_mut().enumerate() {
+            *load = if nu == 0 { state.y } else { SVector::zeros() };
+            for (mu, force) in data.forces.iter().enumerate() {
+                *load += force * (tables.weights[mu] * tables.values[(mu, nu)]);
+            }
+        }
+        let mut change: f64 = 0.0;
+        for j in 1..=s {
+            let mut momentum = SVector::<f64, N>::zeros();
+            for (nu, load) in data.loads.iter().enumerate() {
+                momentum -= load * data.stiffness_inverse[(j - 1, nu)];
+            }
+            let offset = mass_inverse * momentum * half;
+            let mut target = offsets.fixed_rows_mut::<N>((j - 1) * N);
+            change = change.max((offset - &target).amax());
+            target.copy_from(&offset);
+        }
+        if control.converged(change, offsets.amax() + state.q.amax())? {
+            break;
+        }
+    }
+    let mut dp = SVector::<f64, N>::zeros();
+    for (mu, force) in data.forces.iter().enumerate() {
+        dp += force * tables.weights[mu];
+    }
+    increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
+    increment.y = dp;
+    start.remember(offsets);
+    let iterations = control.iterations();
+    Ok(StepReport {
+        iterations,
+        evaluations: tables.nodes.len() * iterations,
+    })
 }
 
 /// Solve (8a)–(8b) for the node offsets; returns the Newton iterations.

@@ -33,7 +33,9 @@
 //! Introduction to the Mathematics and Methods of Astrodynamics* (1999), ch. 4–5.
 
 use nalgebra::SVector;
-use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Symmetries};
+use svi::{
+    Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
+};
 
 use crate::params;
 
@@ -96,6 +98,7 @@ impl Default for Kepler {
 
 impl Lagrangian<2> for Kepler {
     const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
 
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         v.dot(v) * 0.5 + q.dot(q).sqrt().recip()

@@ -23,7 +23,9 @@
 //! eq. (26) and §5.1.
 
 use nalgebra::SVector;
-use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Symmetries};
+use svi::{
+    Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
+};
 
 use crate::params;
 
@@ -57,6 +59,7 @@ impl Default for HarmonicOscillator {
 
 impl Lagrangian<1> for HarmonicOscillator {
     const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
 
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
         (v[0] * v[0] - q[0] * q[0] * (self.sigma * self.sigma)) * 0.5

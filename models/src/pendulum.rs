@@ -36,7 +36,9 @@
 use std::f64::consts::TAU;
 
 use nalgebra::SVector;
-use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Symmetries};
+use svi::{
+    Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
+};
 
 use crate::{elliptic, params};
 
@@ -76,6 +78,7 @@ impl Default for Pendulum {
 
 impl Lagrangian<1> for Pendulum {
     const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
 
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
         let (m, l, g) = (self.m, self.l, self.g);
