@@ -290,9 +290,10 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     }
 }
 
-/// Number of steps of size at most `h` covering `span`; a span within round-off of a whole
-/// number of steps is not given an extra sliver step.
-fn step_count(span: f64, h: f64) -> Result<usize, Error> {
+/// Number of steps [`Integrator::run`] takes to cover `span` with steps of size at most `h`:
+/// a span within round-off of a whole number of steps gets no extra sliver step, otherwise
+/// the last step is shortened.
+pub fn step_count(span: f64, h: f64) -> Result<usize, Error> {
     let ratio = span / h;
     if !ratio.is_finite() || ratio > 1e12 {
         return Err(Error::invalid(

@@ -50,8 +50,13 @@ pub mod verify;
 pub use collocation::SpectralCollocation;
 pub use derived::LagrangianExt;
 pub use error::Error;
-pub use integrator::{Integrator, Run, Statistics};
+pub use integrator::{Initial, Integrator, Run, Statistics, step_count};
 pub use method::{Coordinates, Method, MethodInfo, PhasePoint, State, TangentMap};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;
 pub use spectral_variational::Svi;
+
+/// The README's examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

@@ -97,7 +97,7 @@ impl Svi {
 
     /// The number of Gauss–Legendre points in use.
     pub fn quadrature_points(&self) -> usize {
-        self.quadrature.unwrap_or(2 * self.points)
+        self.quadrature.unwrap_or(self.points.saturating_mul(2))
     }
 
     fn validate(&self) -> Result<(), Error> {
@@ -194,19 +194,27 @@ impl Tables {
 ///
 /// Then g_ν = Σ_j K_νj M qʲ + Σ_μ (h/2) w_μ l_ν(τ_μ) ∂L/∂q(τ_μ) with the stiffness matrix
 /// K = (2/h) K̃, K̃_νj = Σ_μ w_μ l̇_ν(τ_μ) l̇_j(τ_μ), and (8a)–(8b) become the fixed point
-/// Z = −(h/2) (K̃* ⊗ M)⁻¹ [G(Z) + p_k e_0] for the offsets Z, where K̃* keeps rows 0..s−1
-/// and columns 1..s of K̃ and G_ν = Σ_μ (h/2) w_μ l_ν(τ_μ) ∂L/∂q(τ_μ): only the force
-/// ∂L/∂q is evaluated, never a Hessian (the Nyström form of Gauss–Legendre when m = s).
+///
+/// Z_j = c_j h M⁻¹p_k + h² M⁻¹ Σ_μ P_jμ ∂L/∂q(τ_μ, q_k + Σ_i l_i(τ_μ) Z_i),  j = 1, …, s,
+///
+/// for the offsets Z_j = qʲ − q_k, with c_j = −½ (K̃*⁻¹)_j0 and
+/// P_jμ = −¼ Σ_ν (K̃*⁻¹)_jν w_μ l_ν(τ_μ), where K̃* keeps rows 0..s−1 and columns 1..s of K̃.
+/// Only the force ∂L/∂q is evaluated, never a Hessian: for m = s this is the Nyström form
+/// of the Gauss–Legendre method.
 #[derive(Debug, Clone)]
 struct ConstantMass<const N: usize> {
-    /// (K̃*)⁻¹, s × s: entry (j − 1, ν) multiplies load ν in offset j.
-    stiffness_inverse: DMatrix<f64>,
-    /// M and M⁻¹, from the first step.
-    mass: Option<(SMatrix<f64, N, N>, SMatrix<f64, N, N>)>,
+    /// c_j, j = 1..s.
+    velocity_coefficients: Vec<f64>,
+    /// P_jμ, row-major s × m.
+    propagation: Vec<f64>,
+    /// l_j(τ_μ), row-major m × s (j = 1..s).
+    stage_values: Vec<f64>,
+    /// M⁻¹, from the first step.
+    mass_inverse: Option<SMatrix<f64, N, N>>,
     /// ∂L/∂q at the quadrature points.
     forces: Vec<SVector<f64, N>>,
-    /// G_ν + δ_ν0 p_k, ν = 0..s−1.
-    loads: Vec<SVector<f64, N>>,
+    /// Offsets Z_j during the iteration.
+    stages: Vec<SVector<f64, N>>,
 }
 
 impl<const N: usize> ConstantMass<N> {
@@ -215,21 +223,36 @@ impl<const N: usize> ConstantMass<N> {
         let s = tables.degree;
         let m = tables.nodes.len();
         let d = &tables.reference_derivatives;
-        let stiffness = DMatrix::from_fn(s + 1, s + 1, |nu, j| {
+        let stiffness = DMatrix::from_fn(s, s, |nu, j| {
             (0..m)
-                .map(|mu| tables.reference_weights[mu] * d[(mu, nu)] * d[(mu, j)])
+                .map(|mu| tables.reference_weights[mu] * d[(mu, nu)] * d[(mu, j + 1)])
                 .sum::<f64>()
         });
-        let inner = stiffness.view((0, 1), (s, s)).into_owned();
-        let stiffness_inverse = invert(&inner).ok()?;
-        if !stiffness_inverse.iter().all(|x| x.is_finite()) {
+        let inverse = invert(&stiffness).ok()?;
+        if !inverse.iter().all(|x| x.is_finite()) {
             return None;
         }
+        let mut propagation = vec![0.0; s * m];
+        for j in 0..s {
+            for mu in 0..m {
+                propagation[j * m + mu] = -0.25
+                    * (0..s)
+                        .map(|nu| {
+                            inverse[(j, nu)] * tables.reference_weights[mu] * tables.values[(mu, nu)]
+                        })
+                        .sum::<f64>();
+            }
+        }
         Some(ConstantMass {
-            stiffness_inverse,
-            mass: None,
+            velocity_coefficients: (0..s).map(|j| -0.5 * inverse[(j, 0)]).collect(),
+            propagation,
+            stage_values: (0..m)
+                .flat_map(|mu| (1..=s).map(move |j| (mu, j)))
+                .map(|(mu, j)| tables.values[(mu, j)])
+                .collect(),
+            mass_inverse: None,
             forces: vec![SVector::zeros(); m],
-            loads: vec![SVector::zeros(); s],
+            stages: vec![SVector::zeros(); s],
         })
     }
 }
@@ -472,43 +495,47 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
-    let (_, mass_inverse) = match data.mass {
-        Some(mass) => mass,
+    let mass_inverse = match data.mass_inverse {
+        Some(inverse) => inverse,
         None => {
             let mass = model.mass_matrix(t, &state.q, &state.y);
-            let inverse = invert_small(&mass).ok_or(StepFailure::SingularMatrix)?;
-            *data.mass.insert((mass, inverse))
+            *data
+                .mass_inverse
+                .insert(invert_small(&mass).ok_or(StepFailure::SingularMatrix)?)
         }
     };
     let s = tables.degree;
-    let half = 0.5 * h;
+    let m = tables.nodes.len();
+    let velocity = mass_inverse * state.y * h;
+    let h2 = h * h;
+    for (j, stage) in data.stages.iter_mut().enumerate() {
+        *stage = offsets.fixed_rows::<N>(j * N).into_owned();
+    }
+    let position_scale = state.q.amax();
     let mut control = FixedPoint::new(max_iterations);
     loop {
         for (mu, force) in data.forces.iter_mut().enumerate() {
             let mut q = state.q;
-            for j in 1..=s {
-                q += offsets.fixed_rows::<N>((j - 1) * N) * tables.values[(mu, j)];
+            let values = &data.stage_values[mu * s..(mu + 1) * s];
+            for (value, stage) in values.iter().zip(&data.stages) {
+                q += stage * *value;
             }
             *force = model.force(tables.time(t, mu), &q, &state.y);
         }
-        for (nu, load) in data.loads.iter_mut().enumerate() {
-            *load = if nu == 0 { state.y } else { SVector::zeros() };
-            for (mu, force) in data.forces.iter().enumerate() {
-                *load += force * (tables.weights[mu] * tables.values[(mu, nu)]);
-            }
-        }
         let mut change: f64 = 0.0;
-        for j in 1..=s {
-            let mut momentum = SVector::<f64, N>::zeros();
-            for (nu, load) in data.loads.iter().enumerate() {
-                momentum -= load * data.stiffness_inverse[(j - 1, nu)];
+        let mut size: f64 = 0.0;
+        for (j, stage) in data.stages.iter_mut().enumerate() {
+            let row = &data.propagation[j * m..(j + 1) * m];
+            let mut sum = SVector::<f64, N>::zeros();
+            for (p, force) in row.iter().zip(&data.forces) {
+                sum += force * *p;
             }
-            let offset = mass_inverse * momentum * half;
-            let mut target = offsets.fixed_rows_mut::<N>((j - 1) * N);
-            change = change.max((offset - &target).amax());
-            target.copy_from(&offset);
+            let next = velocity * data.velocity_coefficients[j] + mass_inverse * sum * h2;
+            change = change.max((next - *stage).amax());
+            size = size.max(next.amax());
+            *stage = next;
         }
-        if control.converged(change, offsets.amax() + state.q.amax())? {
+        if control.converged(change, size + position_scale)? {
             break;
         }
     }
@@ -516,13 +543,16 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     for (mu, force) in data.forces.iter().enumerate() {
         dp += force * tables.weights[mu];
     }
-    increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
+    for (j, stage) in data.stages.iter().enumerate() {
+        offsets.fixed_rows_mut::<N>(j * N).copy_from(stage);
+    }
+    increment.q = data.stages[s - 1];
     increment.y = dp;
     start.remember(offsets);
     let iterations = control.iterations();
     Ok(StepReport {
         iterations,
-        evaluations: tables.nodes.len() * iterations,
+        evaluations: m * iterations,
     })
 }
 

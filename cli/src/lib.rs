@@ -1,0 +1,1392 @@
+//! # svi-cli — scenes for the `svi` command-line tool
+//!
+//! A [`Scene`] says what to simulate: a model of the zoo and its parameters, an initial
+//! state, a method and its options, the step and horizon, and the outputs wanted. Scenes are
+//! TOML files; the built-in ones ([`BUILTIN_SCENES`]) reproduce the experiments of Li, Wu,
+//! Leok (2018) and run each zoo model with its defaults. Command-line flags ([`Overrides`])
+//! are applied on top of a scene, and [`Scene::run`] integrates it and returns a [`Summary`].
+//!
+//! ```toml
+//! model = "kepler"
+//!
+//! [parameters]          # model parameters, name = value (absent: the model's defaults)
+//! e = 0.5
+//!
+//! [initial]             # optional; absent fields come from the model's default state
+//! t0 = 0.0
+//! q = [0.5, 0.0]
+//! v = [0.0, 1.7320508075688772]   # or p = [...], not both
+//!
+//! [method]
+//! name = "svi"          # "svi" (default) or "sc"
+//! points = 6            # Chebyshev–Gauss–Lobatto points (default 6)
+//! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
+//!
+//! [run]                 # absent: the model's default step and horizon
+//! h = 0.2
+//! t_end = 2000.0
+//!
+//! [output]
+//! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
+//! every = 10                  # every 10th step (default 1)
+//! diagnostics = ["energy", "momentum", "solution"]   # the default: all three
+//! ```
+//!
+//! A built-in name wins over a file of the same name (write `./kepler` for the file). Paths in
+//! a scene (the trajectory file) are relative to the working directory.
+//!
+//! The model, chosen by name at run time, reaches the one generic runner as its concrete
+//! type through [`svi_models::visit_model`]; the method is a `match` on [`MethodKind`]
+//! calling the same generic function with [`Svi`] or [`SpectralCollocation`]. Observers are
+//! built only for the diagnostics and outputs asked for.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::ops::ControlFlow;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::SVector;
+use serde::{Deserialize, Serialize};
+use svi::Initial;
+use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
+use svi::{Integrator, LagrangianExt, Method, PhasePoint, SpectralCollocation, Svi};
+use svi_models::{MODEL_NAMES, ModelVisitor, UnknownModel, ZooModel, visit_model};
+
+/// The built-in scenes, as (name, TOML text).
+pub const BUILTIN_SCENES: &[(&str, &str)] = &[
+    ("oscillator", include_str!("../scenes/oscillator.toml")),
+    ("kepler", include_str!("../scenes/kepler.toml")),
+    ("pendulum", include_str!("../scenes/pendulum.toml")),
+    (
+        "spring-pendulum",
+        include_str!("../scenes/spring-pendulum.toml"),
+    ),
+    (
+        "double-pendulum",
+        include_str!("../scenes/double-pendulum.toml"),
+    ),
+];
+
+/// The scene `svi run` runs when none is named.
+pub const DEFAULT_SCENE: &str = "kepler";
+
+/// Runs with at least this many steps show a progress bar (on a terminal).
+pub const PROGRESS_MIN_STEPS: usize = 10_000;
+
+/// Names of the built-in scenes.
+pub fn builtin_scene_names() -> Vec<&'static str> {
+    BUILTIN_SCENES.iter().map(|(name, _)| *name).collect()
+}
+
+/// The TOML text of a built-in scene.
+pub fn builtin_scene(name: &str) -> Option<&'static str> {
+    BUILTIN_SCENES
+        .iter()
+        .find(|(scene, _)| *scene == name)
+        .map(|(_, text)| *text)
+}
+
+/// Everything that can go wrong between reading a scene and writing its outputs.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The scene is not valid TOML or does not fit the scene format (the source names the
+    /// line and column).
+    #[error("cannot parse scene {origin}")]
+    Parse {
+        /// Where the text came from (a file path or `built-in scene 'name'`).
+        origin: String,
+        /// The TOML parser's message.
+        #[source]
+        source: toml::de::Error,
+    },
+    /// Neither a built-in scene name nor an existing file.
+    #[error(
+        "no built-in scene or scene file named '{name}' (built-in scenes: {})",
+        builtin_scene_names().join(", ")
+    )]
+    UnknownScene {
+        /// The name asked for.
+        name: String,
+    },
+    /// A scene file that cannot be read.
+    #[error("cannot read scene file '{}'", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A model name that is not in the zoo.
+    #[error(transparent)]
+    UnknownModel(#[from] UnknownModel),
+    /// A method name other than `svi` and `sc`.
+    #[error("unknown method '{name}' (known: {})", MethodKind::NAMES.join(", "))]
+    UnknownMethod {
+        /// The name asked for.
+        name: String,
+    },
+    /// An initial-state vector whose length is not the model dimension.
+    #[error("initial.{field} has {found} components, but model '{model}' has dimension {expected}")]
+    Dimension {
+        /// The model.
+        model: String,
+        /// `q`, `v` or `p`.
+        field: &'static str,
+        /// The model dimension.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// An initial state with both a velocity and a momentum.
+    #[error("the initial state gives both v and p: give one of them")]
+    VelocityAndMomentum,
+    /// A diagnostic other than `energy`, `momentum` and `solution`.
+    #[error("unknown diagnostic '{name}' (known: {})", Diagnostic::NAMES.join(", "))]
+    UnknownDiagnostic {
+        /// The name asked for.
+        name: String,
+    },
+    /// A `--param` that is not `NAME=VALUE` with a number as value.
+    #[error("malformed parameter '{text}': {reason}")]
+    MalformedParameter {
+        /// The argument as given.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A method option given to a method that does not have it.
+    #[error("{option} is an option of svi, not of {method}")]
+    OptionNotForMethod {
+        /// The option.
+        option: &'static str,
+        /// The method in use.
+        method: MethodKind,
+    },
+    /// A trajectory thinning factor without a file to write the trajectory to.
+    #[error("output.every is set but no trajectory file is (give --out FILE or output.trajectory)")]
+    EveryWithoutOutput,
+    /// The trajectory file cannot be written.
+    #[error("cannot write trajectory '{}'", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Everything the library rejects: parameters, step, horizon, method options, initial
+    /// state, nonlinear solves.
+    #[error(transparent)]
+    Svi(#[from] svi::Error),
+}
+
+/// The integration methods a scene can choose.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
+#[serde(try_from = "String")]
+pub enum MethodKind {
+    /// Spectral variational integrator ([`Svi`]).
+    #[default]
+    Svi,
+    /// Spectral collocation ([`SpectralCollocation`]).
+    Sc,
+}
+
+impl MethodKind {
+    /// The names, as written in scenes and on the command line.
+    pub const NAMES: [&'static str; 2] = ["svi", "sc"];
+
+    /// The name, as written in scenes and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            MethodKind::Svi => "svi",
+            MethodKind::Sc => "sc",
+        }
+    }
+
+    /// Default number of CGL points.
+    pub fn default_points(self) -> usize {
+        match self {
+            MethodKind::Svi => Svi::default().points,
+            MethodKind::Sc => SpectralCollocation::default().points,
+        }
+    }
+}
+
+impl fmt::Display for MethodKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for MethodKind {
+    type Err = SceneError;
+    fn from_str(name: &str) -> Result<Self, SceneError> {
+        match name {
+            "svi" => Ok(MethodKind::Svi),
+            "sc" => Ok(MethodKind::Sc),
+            _ => Err(SceneError::UnknownMethod { name: name.into() }),
+        }
+    }
+}
+
+impl TryFrom<String> for MethodKind {
+    type Error = SceneError;
+    fn try_from(name: String) -> Result<Self, SceneError> {
+        name.parse()
+    }
+}
+
+/// A diagnostic evaluated at every step point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(try_from = "String")]
+pub enum Diagnostic {
+    /// Largest energy deviation |E − E₀|.
+    Energy,
+    /// Largest deviation of the Noether momenta.
+    Momentum,
+    /// Largest position error against the exact solution.
+    Solution,
+}
+
+impl Diagnostic {
+    /// The names, as written in scenes and on the command line.
+    pub const NAMES: [&'static str; 3] = ["energy", "momentum", "solution"];
+}
+
+impl FromStr for Diagnostic {
+    type Err = SceneError;
+    fn from_str(name: &str) -> Result<Self, SceneError> {
+        match name {
+            "energy" => Ok(Diagnostic::Energy),
+            "momentum" => Ok(Diagnostic::Momentum),
+            "solution" => Ok(Diagnostic::Solution),
+            _ => Err(SceneError::UnknownDiagnostic { name: name.into() }),
+        }
+    }
+}
+
+impl TryFrom<String> for Diagnostic {
+    type Error = SceneError;
+    fn try_from(name: String) -> Result<Self, SceneError> {
+        name.parse()
+    }
+}
+
+/// A scene: what to simulate and what to report. Absent fields fall back to the model's
+/// [`svi::Defaults`] and the method's defaults.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Zoo model name (see [`svi_models::MODEL_NAMES`]).
+    pub model: String,
+    /// Model parameters, name → value, applied on top of the model's defaults.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, f64>,
+    /// Initial state; absent fields come from the model's default state.
+    #[serde(default)]
+    pub initial: InitialSection,
+    /// Method and options.
+    #[serde(default)]
+    pub method: MethodSection,
+    /// Step and horizon.
+    #[serde(default)]
+    pub run: RunSection,
+    /// Outputs.
+    #[serde(default)]
+    pub output: OutputSection,
+}
+
+/// `[initial]`: t0, q and one of v, p.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSection {
+    /// Initial time.
+    pub t0: Option<f64>,
+    /// Initial configuration.
+    pub q: Option<Vec<f64>>,
+    /// Initial velocity (excludes `p`).
+    pub v: Option<Vec<f64>>,
+    /// Initial momentum (excludes `v`).
+    pub p: Option<Vec<f64>>,
+}
+
+/// `[method]`: name and options.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MethodSection {
+    /// `svi` (default) or `sc`.
+    #[serde(default)]
+    pub name: MethodKind,
+    /// Chebyshev–Gauss–Lobatto points (default: [`MethodKind::default_points`]).
+    pub points: Option<usize>,
+    /// Gauss–Legendre points of svi (default 2 × points); ignored by sc.
+    pub quadrature: Option<usize>,
+}
+
+/// `[run]`: step and horizon.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSection {
+    /// Step size (default: the model's default step).
+    pub h: Option<f64>,
+    /// Final time (default: the model's default horizon).
+    pub t_end: Option<f64>,
+}
+
+/// `[output]`: trajectory file and diagnostics.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSection {
+    /// Write every `every`-th step of the trajectory (default 1; needs `trajectory`).
+    pub every: Option<usize>,
+    /// CSV file for the trajectory (absent: no trajectory is kept).
+    pub trajectory: Option<PathBuf>,
+    /// Diagnostics to compute (default: all of [`Diagnostic::NAMES`]).
+    pub diagnostics: Option<Vec<Diagnostic>>,
+}
+
+/// Scene fields set from the command line.
+#[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+pub struct Overrides {
+    /// Integration method.
+    #[arg(long, value_enum)]
+    pub method: Option<MethodKind>,
+    /// Number of Chebyshev–Gauss–Lobatto points.
+    #[arg(long, value_name = "N")]
+    pub points: Option<usize>,
+    /// Number of Gauss–Legendre quadrature points (svi only).
+    #[arg(long, value_name = "M")]
+    pub quadrature: Option<usize>,
+    /// Step size.
+    #[arg(long = "h", value_name = "H", allow_negative_numbers = true)]
+    pub h: Option<f64>,
+    /// Final time.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+    /// Model parameter (repeatable), e.g. `--param e=0.9`.
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
+    pub parameters: Vec<(String, f64)>,
+    /// Keep every K-th step of the trajectory (with --out; default 1).
+    #[arg(long, value_name = "K")]
+    pub every: Option<usize>,
+    /// Write the trajectory as CSV to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Diagnostics to compute, comma-separated (default: energy,momentum,solution).
+    #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
+    pub diagnostics: Option<Vec<Diagnostic>>,
+}
+
+/// Parse `NAME=VALUE` (the argument of `--param`).
+pub fn parse_parameter(text: &str) -> Result<(String, f64), SceneError> {
+    let malformed = |reason: &str| SceneError::MalformedParameter {
+        text: text.into(),
+        reason: reason.into(),
+    };
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| malformed("expected NAME=VALUE"))?;
+    let name = name.trim();
+    if name.is_empty() {
+        return Err(malformed("the name is empty (expected NAME=VALUE)"));
+    }
+    let value = value
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| malformed(&format!("'{}' is not a number", value.trim())))?;
+    Ok((name.into(), value))
+}
+
+impl Scene {
+    /// Parse a scene from TOML; `origin` names the source in error messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|source| SceneError::Parse {
+            origin: origin.into(),
+            source,
+        })?;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// A built-in scene by name.
+    pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+        builtin_scene(name).map(|text| Scene::from_toml(text, &format!("built-in scene '{name}'")))
+    }
+
+    /// A built-in scene if `name_or_path` names one, else the scene file at that path.
+    pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        if let Some(scene) = Scene::builtin(name_or_path) {
+            return scene;
+        }
+        let path = Path::new(name_or_path);
+        match std::fs::read_to_string(path) {
+            Ok(text) => Scene::from_toml(&text, &format!("'{}'", path.display())),
+            Err(error)
+                if error.kind() == std::io::ErrorKind::NotFound
+                    && path.extension().is_none()
+                    && path.components().count() == 1 =>
+            {
+                Err(SceneError::UnknownScene {
+                    name: name_or_path.into(),
+                })
+            }
+            Err(source) => Err(SceneError::Read {
+                path: path.into(),
+                source,
+            }),
+        }
+    }
+
+    /// Consistency checks that need no model: one of v and p, `every` only with a file.
+    pub fn check(&self) -> Result<(), SceneError> {
+        if self.initial.v.is_some() && self.initial.p.is_some() {
+            return Err(SceneError::VelocityAndMomentum);
+        }
+        match (self.output.every, &self.output.trajectory) {
+            (Some(_), None) => Err(SceneError::EveryWithoutOutput),
+            (Some(0), Some(_)) => {
+                Err(svi::Error::invalid("every", "0 steps; need at least 1").into())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Apply command-line overrides.
+    pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
+        let Overrides {
+            method,
+            points,
+            quadrature,
+            h,
+            t_end,
+            parameters,
+            every,
+            out,
+            diagnostics,
+        } = overrides;
+        if let Some(method) = method {
+            self.method.name = *method;
+        }
+        if self.method.name != MethodKind::Svi && quadrature.is_some() {
+            return Err(SceneError::OptionNotForMethod {
+                option: "quadrature",
+                method: self.method.name,
+            });
+        }
+        set(&mut self.method.points, points);
+        set(&mut self.method.quadrature, quadrature);
+        set(&mut self.run.h, h);
+        set(&mut self.run.t_end, t_end);
+        for (name, value) in parameters {
+            self.parameters.insert(name.clone(), *value);
+        }
+        set(&mut self.output.every, every);
+        set(&mut self.output.trajectory, out);
+        set(&mut self.output.diagnostics, diagnostics);
+        self.check()
+    }
+
+    /// The number of CGL points in use.
+    pub fn points(&self) -> usize {
+        self.method
+            .points
+            .unwrap_or_else(|| self.method.name.default_points())
+    }
+
+    /// The number of Gauss–Legendre points in use (`None` for sc).
+    pub fn quadrature(&self) -> Option<usize> {
+        match self.method.name {
+            MethodKind::Svi => Some(
+                self.method
+                    .quadrature
+                    .unwrap_or_else(|| self.points().saturating_mul(2)),
+            ),
+            MethodKind::Sc => None,
+        }
+    }
+
+    /// Whether `diagnostic` is asked for.
+    pub fn wants(&self, diagnostic: Diagnostic) -> bool {
+        self.output
+            .diagnostics
+            .as_ref()
+            .is_none_or(|wanted| wanted.contains(&diagnostic))
+    }
+
+    /// Integrate the scene, write its trajectory if asked, and summarise. `progress` allows a
+    /// progress bar on stderr for runs of at least [`PROGRESS_MIN_STEPS`] steps.
+    pub fn run(&self, progress: bool) -> Result<Summary, SceneError> {
+        self.check()?;
+        visit_model(
+            &self.model,
+            RunScene {
+                scene: self,
+                progress,
+            },
+        )?
+    }
+}
+
+/// `target = value` if a value is given.
+fn set<T: Clone>(target: &mut Option<T>, value: &Option<T>) {
+    if let Some(value) = value {
+        *target = Some(value.clone());
+    }
+}
+
+/// Receives the model of a scene and runs it.
+struct RunScene<'a> {
+    scene: &'a Scene,
+    progress: bool,
+}
+
+/// A scene resolved for a model of dimension `N`.
+struct Setup<const N: usize> {
+    t0: f64,
+    initial: Initial<N>,
+    h: f64,
+    t_end: f64,
+    energy: bool,
+    momentum: bool,
+    solution: bool,
+    trajectory: Option<(PathBuf, usize)>,
+    progress: bool,
+    kind: MethodKind,
+    points: usize,
+    quadrature: Option<usize>,
+}
+
+impl ModelVisitor for RunScene<'_> {
+    type Output = Result<Summary, SceneError>;
+
+    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+        let scene = self.scene;
+        for (name, value) in &scene.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let (default_t0, default_q, default_v) = model.initial_state();
+        let vector = |field: &'static str, values: &Option<Vec<f64>>| {
+            values
+                .as_ref()
+                .map(|values| {
+                    if values.len() == N {
+                        Ok(SVector::<f64, N>::from_iterator(values.iter().copied()))
+                    } else {
+                        Err(SceneError::Dimension {
+                            model: model.name().into(),
+                            field,
+                            expected: N,
+                            found: values.len(),
+                        })
+                    }
+                })
+                .transpose()
+        };
+        let q = vector("q", &scene.initial.q)?.unwrap_or(default_q);
+        let initial = match (
+            vector("v", &scene.initial.v)?,
+            vector("p", &scene.initial.p)?,
+        ) {
+            (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
+            (Some(v), None) => Initial::Velocity { q, v },
+            (None, Some(p)) => Initial::Momentum { q, p },
+            (None, None) => Initial::Velocity { q, v: default_v },
+        };
+        let setup = Setup {
+            t0: scene.initial.t0.unwrap_or(default_t0),
+            initial,
+            h: scene.run.h.unwrap_or_else(|| model.default_step()),
+            t_end: scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
+            energy: scene.wants(Diagnostic::Energy),
+            momentum: scene.wants(Diagnostic::Momentum),
+            solution: scene.wants(Diagnostic::Solution),
+            trajectory: scene
+                .output
+                .trajectory
+                .clone()
+                .map(|path| (path, scene.output.every.unwrap_or(1))),
+            progress: self.progress,
+            kind: scene.method.name,
+            points: scene.points(),
+            quadrature: scene.quadrature(),
+        };
+        let points = setup.points;
+        match scene.method.name {
+            MethodKind::Svi => {
+                let mut svi = Svi::new(points);
+                if let Some(quadrature) = scene.method.quadrature {
+                    svi = svi.with_quadrature(quadrature);
+                }
+                run_with(model, svi, &setup)
+            }
+            MethodKind::Sc => run_with(model, SpectralCollocation::new(points), &setup),
+        }
+    }
+}
+
+/// Run `model` with `method`, observing only what `setup` asks for.
+fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
+    model: M,
+    method: Me,
+    setup: &Setup<N>,
+) -> Result<Summary, SceneError> {
+    let integrator = Integrator::new(model, method);
+    let model = integrator.model();
+    let mut observers = (
+        setup.energy.then(EnergyError::default),
+        (setup.momentum && model.generator_count() > 0).then(MomentumError::default),
+        setup.solution.then(SolutionError::<N>::default),
+        setup
+            .trajectory
+            .as_ref()
+            .map(|(_, every)| Every::new(*every, Trajectory::<N>::new())),
+        setup
+            .progress
+            .then(|| Progress::for_run(setup.t0, setup.h, setup.t_end))
+            .flatten(),
+    );
+    let start = Instant::now();
+    let run = integrator.run(
+        setup.t0,
+        setup.initial,
+        setup.h,
+        setup.t_end,
+        &mut observers,
+    );
+    let seconds = start.elapsed().as_secs_f64();
+    if let Some(progress) = &observers.4 {
+        progress.finish();
+    }
+    let run = run?;
+    let (energy, momentum, solution, trajectory, _) = observers;
+
+    let guess = match setup.initial {
+        Initial::Velocity { v, .. } => v,
+        Initial::Momentum { p, .. } => p,
+    };
+    let first = integrator.initial_state(setup.t0, &setup.initial)?;
+    let first = integrator.phase_point(setup.t0, &first, &guess)?;
+    let last = run.last;
+
+    let trajectory = match (trajectory, &setup.trajectory) {
+        (Some(Every { every, inner }), Some((path, _))) => {
+            let mut rows = inner.points;
+            if !run.statistics.steps.is_multiple_of(every.max(1)) {
+                rows.push(last);
+            }
+            write_trajectory(path, model, &rows)?;
+            Some(TrajectoryOutput {
+                path: path.display().to_string(),
+                every,
+                rows: rows.len(),
+            })
+        }
+        _ => None,
+    };
+
+    let info = integrator.method().info();
+    Ok(Summary {
+        model: model.name().into(),
+        parameters: Parameters(model.parameters()),
+        coordinates: model.coordinate_names().iter().map(|&n| n.into()).collect(),
+        method: setup.kind.name().into(),
+        points: setup.points,
+        quadrature: setup.quadrature,
+        order: info.order,
+        symmetric: info.symmetric,
+        symplectic: info.symplectic,
+        h: setup.h,
+        t0: setup.t0,
+        t_end: last.t,
+        steps: run.statistics.steps,
+        q: last.q.iter().copied().collect(),
+        v: last.v.iter().copied().collect(),
+        p: last.p.iter().copied().collect(),
+        energy_initial: model.energy(first.t, &first.q, &first.v),
+        energy_final: model.energy(last.t, &last.q, &last.v),
+        energy_error_max: energy.map(|e| e.max),
+        momentum_error_max: momentum.map(|m| m.max),
+        solution_error_max: solution.and_then(|s| s.max),
+        iterations: run.statistics.iterations,
+        evaluations: run.statistics.evaluations,
+        seconds,
+        trajectory,
+    })
+}
+
+/// Write `rows` as CSV: `t,q_<name>…,v_<name>…,p_<name>…,energy`, full precision.
+fn write_trajectory<M: ZooModel<N>, const N: usize>(
+    path: &Path,
+    model: &M,
+    rows: &[PhasePoint<N>],
+) -> Result<(), SceneError> {
+    let write = || -> std::io::Result<()> {
+        let mut out = BufWriter::new(File::create(path)?);
+        out.write_all(csv_header(&model.coordinate_names()).as_bytes())?;
+        for point in rows {
+            let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
+            write!(out, "{}", Float(point.t))?;
+            for x in point.q.iter().chain(&point.v).chain(&point.p) {
+                write!(out, ",{}", Float(*x))?;
+            }
+            writeln!(out, ",{}", Float(energy))?;
+        }
+        out.flush()
+    };
+    write().map_err(|source| SceneError::Write {
+        path: path.into(),
+        source,
+    })
+}
+
+/// The CSV header line (with its newline) for the given coordinate names.
+pub fn csv_header(names: &[&str]) -> String {
+    let mut header = String::from("t");
+    for prefix in ["q", "v", "p"] {
+        for name in names {
+            header.push_str(&format!(",{prefix}_{name}"));
+        }
+    }
+    header.push_str(",energy\n");
+    header
+}
+
+/// An `f64` printed so that it reads back exactly: shortest decimal, in exponent form when
+/// very large or small.
+#[derive(Debug, Clone, Copy)]
+pub struct Float(pub f64);
+
+impl fmt::Display for Float {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&x.abs()) {
+            write!(f, "{x}")
+        } else {
+            write!(f, "{x:e}")
+        }
+    }
+}
+
+/// A progress bar on stderr, updated about every 1 % of the steps.
+#[derive(Debug)]
+pub struct Progress {
+    bar: ProgressBar,
+    stride: usize,
+}
+
+impl Progress {
+    /// A progress bar for `steps` steps.
+    pub fn new(steps: usize) -> Self {
+        let bar = ProgressBar::new(steps as u64);
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} steps, {elapsed} (eta {eta})")
+        {
+            bar.set_style(style);
+        }
+        Progress {
+            bar,
+            stride: (steps / 100).max(1),
+        }
+    }
+
+    /// A progress bar for a run from `t0` to `t_end` with step `h`, or `None` if the run has
+    /// fewer than [`PROGRESS_MIN_STEPS`] steps (or invalid inputs, which the run rejects).
+    pub fn for_run(t0: f64, h: f64, t_end: f64) -> Option<Self> {
+        let steps = svi::step_count(t_end - t0, h).ok()?;
+        (steps >= PROGRESS_MIN_STEPS).then(|| Progress::new(steps))
+    }
+
+    /// Remove the bar.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+impl<L: ?Sized, const N: usize> Observer<L, N> for Progress {
+    fn wants(&self, step: usize) -> bool {
+        step > 0 && step.is_multiple_of(self.stride)
+    }
+
+    fn observe(&mut self, _: &L, step: usize, _: &PhasePoint<N>) -> ControlFlow<()> {
+        self.bar.set_position(step as u64);
+        ControlFlow::Continue(())
+    }
+}
+
+/// Model parameters in the model's order (serialised as a JSON object).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameters(pub Vec<(&'static str, f64)>);
+
+impl Serialize for Parameters {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+/// Where the trajectory went.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrajectoryOutput {
+    /// The CSV file.
+    pub path: String,
+    /// Thinning factor.
+    pub every: usize,
+    /// Data rows written (the initial point, every `every`-th step, and the last point).
+    pub rows: usize,
+}
+
+/// The result of running a scene (`svi run --json` prints it as one JSON object).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// Model name.
+    pub model: String,
+    /// Model parameters in effect.
+    pub parameters: Parameters,
+    /// Names of the configuration coordinates (the order of `q`, `v`, `p`).
+    pub coordinates: Vec<String>,
+    /// `svi` or `sc`.
+    pub method: String,
+    /// Chebyshev–Gauss–Lobatto points.
+    pub points: usize,
+    /// Gauss–Legendre points (`None` for sc).
+    pub quadrature: Option<usize>,
+    /// Classical order of the method.
+    pub order: usize,
+    /// Whether the method is symmetric.
+    pub symmetric: bool,
+    /// Whether the method is symplectic.
+    pub symplectic: bool,
+    /// Step size.
+    pub h: f64,
+    /// Initial time.
+    pub t0: f64,
+    /// Final time reached.
+    pub t_end: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// Final configuration.
+    pub q: Vec<f64>,
+    /// Final velocity.
+    pub v: Vec<f64>,
+    /// Final momentum.
+    pub p: Vec<f64>,
+    /// Energy of the initial state.
+    pub energy_initial: f64,
+    /// Energy of the final state.
+    pub energy_final: f64,
+    /// Largest |E − E₀| over the step points (`None` if not asked for).
+    pub energy_error_max: Option<f64>,
+    /// Largest deviation of the Noether momenta (`None` if the model has no symmetry or it
+    /// was not asked for).
+    pub momentum_error_max: Option<f64>,
+    /// Largest position error against the exact solution (`None` if there is none or it was
+    /// not asked for).
+    pub solution_error_max: Option<f64>,
+    /// Nonlinear iterations, summed over all steps.
+    pub iterations: usize,
+    /// Points at which derivatives of the Lagrangian were evaluated.
+    pub evaluations: usize,
+    /// Wall time of the integration, in seconds.
+    pub seconds: f64,
+    /// The trajectory file, if one was written.
+    pub trajectory: Option<TrajectoryOutput>,
+}
+
+/// Comma-separated shortest round-trip values in brackets.
+fn vector(values: &[f64]) -> String {
+    let items: Vec<String> = values.iter().map(|x| Float(*x).to_string()).collect();
+    format!("[{}]", items.join(", "))
+}
+
+/// `{:.3e}`, or `n/a` when absent.
+fn error(value: Option<f64>) -> String {
+    value.map_or_else(|| "n/a".into(), |x| format!("{x:.3e}"))
+}
+
+impl fmt::Display for Summary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let parameters: Vec<String> = self
+            .parameters
+            .0
+            .iter()
+            .map(|(name, value)| format!("{name} = {value}"))
+            .collect();
+        let mut method = format!("{}, {} CGL points", self.method, self.points);
+        if let Some(quadrature) = self.quadrature {
+            method.push_str(&format!(", {quadrature} Gauss points"));
+        }
+        method.push_str(&format!("; order {}", self.order));
+        if self.symmetric {
+            method.push_str(", symmetric");
+        }
+        if self.symplectic {
+            method.push_str(", symplectic");
+        }
+        let coordinates = self.coordinates.join(", ");
+        let rows = [
+            (
+                "model",
+                format!("{} ({})", self.model, parameters.join(", ")),
+            ),
+            ("method", method),
+            ("step h", Float(self.h).to_string()),
+            (
+                "time",
+                format!(
+                    "{} to {} in {} steps",
+                    Float(self.t0),
+                    Float(self.t_end),
+                    self.steps
+                ),
+            ),
+            ("wall time", format!("{:.3} s", self.seconds)),
+            (
+                "work",
+                format!(
+                    "{} Newton iterations, {} evaluations",
+                    self.iterations, self.evaluations
+                ),
+            ),
+            ("coordinates", coordinates),
+            ("final q", vector(&self.q)),
+            ("final v", vector(&self.v)),
+            ("final p", vector(&self.p)),
+            (
+                "energy",
+                format!(
+                    "{} to {}",
+                    Float(self.energy_initial),
+                    Float(self.energy_final)
+                ),
+            ),
+            ("energy error", error(self.energy_error_max)),
+            ("momentum error", error(self.momentum_error_max)),
+            ("solution error", error(self.solution_error_max)),
+        ];
+        for (label, value) in rows {
+            writeln!(f, "{label:<16}{value}")?;
+        }
+        if let Some(trajectory) = &self.trajectory {
+            writeln!(
+                f,
+                "{:<16}{} ({} rows, every {} steps)",
+                "trajectory", trajectory.path, trajectory.rows, trajectory.every
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// A zoo model's name, dimension, coordinates, parameters and defaults (for `svi list`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelDescription {
+    /// Name.
+    pub name: &'static str,
+    /// Configuration coordinate names.
+    pub coordinates: Vec<&'static str>,
+    /// Default parameters.
+    pub parameters: Parameters,
+    /// Default step.
+    pub h: f64,
+    /// Default horizon.
+    pub t_end: f64,
+    /// Number of Noether momenta.
+    pub momenta: usize,
+    /// Whether an exact solution is known for the default initial state.
+    pub exact_solution: bool,
+}
+
+/// Describes a model.
+struct Describe;
+
+impl ModelVisitor for Describe {
+    type Output = ModelDescription;
+
+    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> ModelDescription {
+        let (t0, q0, v0) = model.initial_state();
+        ModelDescription {
+            name: model.name(),
+            coordinates: model.coordinate_names().to_vec(),
+            parameters: Parameters(model.parameters()),
+            h: model.default_step(),
+            t_end: model.default_horizon(),
+            momenta: model.generator_count(),
+            exact_solution: model.exact_solution(t0, &q0, &v0, t0).is_some(),
+        }
+    }
+}
+
+/// Descriptions of all zoo models, in [`MODEL_NAMES`] order.
+pub fn describe_models() -> Vec<ModelDescription> {
+    MODEL_NAMES
+        .iter()
+        .filter_map(|name| visit_model(name, Describe).ok())
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(name: &str) -> Scene {
+        Scene::builtin(name).expect("built-in").expect("parses")
+    }
+
+    fn overrides() -> Overrides {
+        Overrides::default()
+    }
+
+    #[test]
+    fn every_builtin_scene_parses_and_names_a_zoo_model() {
+        assert_eq!(
+            builtin_scene_names(),
+            [
+                "oscillator",
+                "kepler",
+                "pendulum",
+                "spring-pendulum",
+                "double-pendulum"
+            ]
+        );
+        for name in builtin_scene_names() {
+            let scene = scene(name);
+            assert!(MODEL_NAMES.contains(&scene.model.as_str()), "{name}");
+            assert_eq!(scene.model, name);
+            assert_eq!(scene.method.name, MethodKind::Svi);
+        }
+        assert!(Scene::builtin("kepler2").is_none());
+    }
+
+    #[test]
+    fn oscillator_scene_is_the_papers_setting() {
+        let scene = scene("oscillator");
+        assert_eq!(scene.parameters["sigma"], 1.0);
+        assert_eq!(scene.initial.t0, Some(0.0));
+        assert_eq!(scene.initial.q, Some(vec![0.0]));
+        assert_eq!(scene.initial.p, Some(vec![1.0]));
+        assert_eq!(scene.initial.v, None);
+        assert_eq!(scene.run.h, Some(1.0));
+        assert_eq!(scene.run.t_end, Some(100.0));
+        assert_eq!(scene.points(), 9);
+        assert_eq!(scene.quadrature(), Some(18));
+        assert!(scene.output.trajectory.is_none());
+        for diagnostic in [
+            Diagnostic::Energy,
+            Diagnostic::Momentum,
+            Diagnostic::Solution,
+        ] {
+            assert!(scene.wants(diagnostic));
+        }
+    }
+
+    #[test]
+    fn kepler_scene_is_the_papers_setting() {
+        let scene = scene("kepler");
+        assert_eq!(scene.parameters["e"], 0.5);
+        assert_eq!(scene.initial, InitialSection::default());
+        assert_eq!(scene.run.h, Some(0.2));
+        assert_eq!(scene.run.t_end, Some(2000.0));
+        assert_eq!(scene.points(), 6);
+        assert_eq!(scene.quadrature(), Some(12));
+        assert_eq!(DEFAULT_SCENE, "kepler");
+    }
+
+    #[test]
+    fn the_other_scenes_use_the_model_defaults() {
+        for name in ["pendulum", "spring-pendulum", "double-pendulum"] {
+            let scene = scene(name);
+            assert!(scene.parameters.is_empty(), "{name}");
+            assert_eq!(scene.initial, InitialSection::default(), "{name}");
+            assert_eq!(scene.run, RunSection::default(), "{name}");
+            assert_eq!(scene.points(), 6, "{name}");
+        }
+    }
+
+    #[test]
+    fn a_minimal_scene_falls_back_to_defaults() {
+        let scene = Scene::from_toml("model = \"pendulum\"\n", "test").unwrap();
+        assert_eq!(scene.method.name, MethodKind::Svi);
+        assert_eq!(scene.points(), Svi::default().points);
+        assert_eq!(scene.quadrature(), Some(2 * Svi::default().points));
+        assert_eq!(scene.output, OutputSection::default());
+    }
+
+    #[test]
+    fn overrides_replace_scene_fields() {
+        let mut scene = scene("kepler");
+        scene
+            .apply(&Overrides {
+                method: Some(MethodKind::Svi),
+                points: Some(5),
+                quadrature: Some(7),
+                h: Some(0.05),
+                t_end: Some(10.0),
+                parameters: vec![("e".into(), 0.9)],
+                every: Some(10),
+                out: Some("x.csv".into()),
+                diagnostics: Some(vec![Diagnostic::Energy]),
+            })
+            .unwrap();
+        assert_eq!(scene.points(), 5);
+        assert_eq!(scene.quadrature(), Some(7));
+        assert_eq!(scene.run.h, Some(0.05));
+        assert_eq!(scene.run.t_end, Some(10.0));
+        assert_eq!(scene.parameters["e"], 0.9);
+        assert_eq!(scene.output.every, Some(10));
+        assert_eq!(scene.output.trajectory, Some("x.csv".into()));
+        assert!(scene.wants(Diagnostic::Energy));
+        assert!(!scene.wants(Diagnostic::Momentum));
+        assert!(!scene.wants(Diagnostic::Solution));
+    }
+
+    #[test]
+    fn points_without_quadrature_keep_the_papers_rule() {
+        let mut scene = scene("oscillator");
+        scene
+            .apply(&Overrides {
+                points: Some(4),
+                ..overrides()
+            })
+            .unwrap();
+        assert_eq!(scene.quadrature(), Some(8));
+    }
+
+    #[test]
+    fn switching_to_sc_drops_the_quadrature_and_rejects_it_as_a_flag() {
+        let mut scene = scene("kepler");
+        scene
+            .apply(&Overrides {
+                method: Some(MethodKind::Sc),
+                ..overrides()
+            })
+            .unwrap();
+        assert_eq!(scene.quadrature(), None);
+        let error = scene
+            .apply(&Overrides {
+                quadrature: Some(12),
+                ..overrides()
+            })
+            .unwrap_err();
+        assert!(matches!(
+            error,
+            SceneError::OptionNotForMethod {
+                option: "quadrature",
+                method: MethodKind::Sc
+            }
+        ));
+    }
+
+    #[test]
+    fn parameters_parse_as_name_equals_number() {
+        assert_eq!(parse_parameter("e=0.9").unwrap(), ("e".into(), 0.9));
+        assert_eq!(parse_parameter(" g = 9.81 ").unwrap(), ("g".into(), 9.81));
+        assert_eq!(parse_parameter("k=1e4").unwrap(), ("k".into(), 1e4));
+        for bad in ["e", "e=", "=1", "e=abc", "e:1"] {
+            let error = parse_parameter(bad).unwrap_err();
+            assert!(
+                matches!(&error, SceneError::MalformedParameter { text, .. } if text == bad),
+                "{bad}: {error}"
+            );
+        }
+    }
+
+    #[test]
+    fn scene_format_errors_name_the_line() {
+        let text = "model = \"kepler\"\n[run]\nh = 0.1\nstep = 3\n";
+        let error = Scene::from_toml(text, "'test.toml'").unwrap_err();
+        let SceneError::Parse { origin, source } = &error else {
+            panic!("{error}")
+        };
+        assert_eq!(origin, "'test.toml'");
+        let message = source.to_string();
+        assert!(message.contains("line 4"), "{message}");
+        assert!(message.contains("step"), "{message}");
+    }
+
+    #[test]
+    fn unknown_method_and_diagnostic_names_are_listed() {
+        let error =
+            Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk4\"\n", "t").unwrap_err();
+        let SceneError::Parse { source, .. } = &error else {
+            panic!("{error}")
+        };
+        assert!(
+            source
+                .to_string()
+                .contains("unknown method 'rk4' (known: svi, sc)")
+        );
+        let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
+        let SceneError::Parse { source, .. } = Scene::from_toml(text, "t").unwrap_err() else {
+            panic!()
+        };
+        let message = source.to_string();
+        assert!(
+            message.contains("unknown diagnostic 'angular'"),
+            "{message}"
+        );
+        assert!(message.contains("line 3"), "{message}");
+    }
+
+    #[test]
+    fn both_velocity_and_momentum_are_rejected() {
+        let text = "model = \"kepler\"\n[initial]\nq = [1, 0]\nv = [0, 1]\np = [0, 1]\n";
+        assert!(matches!(
+            Scene::from_toml(text, "t"),
+            Err(SceneError::VelocityAndMomentum)
+        ));
+    }
+
+    #[test]
+    fn every_needs_a_file_and_a_positive_count() {
+        let text = "model = \"kepler\"\n[output]\nevery = 10\n";
+        assert!(matches!(
+            Scene::from_toml(text, "t"),
+            Err(SceneError::EveryWithoutOutput)
+        ));
+        let text = "model = \"kepler\"\n[output]\nevery = 0\ntrajectory = \"x.csv\"\n";
+        assert!(matches!(
+            Scene::from_toml(text, "t"),
+            Err(SceneError::Svi(svi::Error::InvalidParameter { name, .. })) if name == "every"
+        ));
+    }
+
+    #[test]
+    fn wrong_dimension_names_field_and_sizes() {
+        let text = "model = \"kepler\"\n[initial]\nq = [1, 0, 0]\n";
+        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
+        assert!(matches!(
+            &error,
+            SceneError::Dimension {
+                field: "q",
+                expected: 2,
+                found: 3,
+                ..
+            }
+        ));
+        assert_eq!(
+            error.to_string(),
+            "initial.q has 3 components, but model 'kepler' has dimension 2"
+        );
+        let text = "model = \"oscillator\"\n[initial]\np = []\n";
+        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
+        assert!(matches!(
+            error,
+            SceneError::Dimension {
+                field: "p",
+                expected: 1,
+                found: 0,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn an_unknown_model_lists_the_known_ones() {
+        let error = Scene::from_toml("model = \"kepler3\"\n", "t")
+            .unwrap()
+            .run(false)
+            .unwrap_err();
+        assert!(matches!(error, SceneError::UnknownModel(_)));
+        assert!(error.to_string().contains("known: oscillator, pendulum"));
+    }
+
+    #[test]
+    fn a_missing_bare_name_is_an_unknown_scene_and_a_missing_path_a_read_error() {
+        let error = Scene::load("keppler").unwrap_err();
+        assert!(matches!(error, SceneError::UnknownScene { .. }));
+        assert!(error.to_string().contains("oscillator, kepler"), "{error}");
+        let path = std::env::temp_dir().join("svi-cli-no-such-dir/scene.toml");
+        let error = Scene::load(path.to_str().unwrap()).unwrap_err();
+        assert!(matches!(error, SceneError::Read { .. }), "{error}");
+    }
+
+    #[test]
+    fn a_run_that_asks_for_nothing_reports_no_errors() {
+        let mut scene = scene("oscillator");
+        scene.output.diagnostics = Some(vec![]);
+        let summary = scene.run(false).unwrap();
+        assert_eq!(summary.steps, 100);
+        assert_eq!(summary.energy_error_max, None);
+        assert_eq!(summary.momentum_error_max, None);
+        assert_eq!(summary.solution_error_max, None);
+        // q(100) = sin(100) for q0 = 0, p0 = 1.
+        assert!(
+            (summary.q[0] - 100f64.sin()).abs() < 1e-10,
+            "{:?}",
+            summary.q
+        );
+    }
+
+    #[test]
+    fn the_summary_reports_the_initial_and_final_energy() {
+        let mut scene = scene("kepler");
+        scene.run.t_end = Some(2.0);
+        let summary = scene.run(false).unwrap();
+        assert_eq!(summary.steps, 10);
+        assert!((summary.energy_initial + 0.5).abs() < 1e-15);
+        assert!(
+            (summary.energy_final + 0.5).abs() < 1e-9,
+            "{}",
+            summary.energy_final
+        );
+        assert_eq!(summary.parameters, Parameters(vec![("e", 0.5)]));
+        assert_eq!(summary.coordinates, ["q1", "q2"]);
+        assert!(summary.to_string().contains("kepler (e = 0.5)"));
+    }
+
+    #[test]
+    fn csv_header_prefixes_the_coordinate_names() {
+        assert_eq!(
+            csv_header(&["q1", "q2"]),
+            "t,q_q1,q_q2,v_q1,v_q2,p_q1,p_q2,energy\n"
+        );
+        assert_eq!(csv_header(&["q"]), "t,q_q,v_q,p_q,energy\n");
+    }
+
+    #[test]
+    fn floats_print_to_round_trip() {
+        for x in [
+            0.0,
+            1.0,
+            -0.5,
+            0.1,
+            1.0 / 3.0,
+            2000.0,
+            1e-300,
+            -2.5e-17,
+            1e20,
+            123456.789,
+        ] {
+            let text = Float(x).to_string();
+            assert_eq!(text.parse::<f64>().unwrap(), x, "{text}");
+            assert!(text.len() < 26, "{text}");
+        }
+        assert_eq!(Float(0.2).to_string(), "0.2");
+        assert_eq!(Float(1e-300).to_string(), "1e-300");
+    }
+
+    #[test]
+    fn progress_is_only_for_long_runs() {
+        assert!(Progress::for_run(0.0, 0.2, 2000.0).is_some());
+        assert!(Progress::for_run(0.0, 1.0, 100.0).is_none());
+        assert!(Progress::for_run(0.0, 0.0, 100.0).is_none());
+        assert!(Progress::for_run(0.0, -1.0, 100.0).is_none());
+        let progress = Progress::new(10_000);
+        assert_eq!(progress.stride, 100);
+        let wants = |step| Observer::<(), 1>::wants(&progress, step);
+        assert!(!wants(0));
+        assert!(!wants(150));
+        assert!(wants(200));
+    }
+}

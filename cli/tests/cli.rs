@@ -1,0 +1,491 @@
+//! The `svi` binary end to end: built-in scenes, overrides, JSON summary, CSV trajectory,
+//! and error messages. References: the oscillator's exact solution q(t) = sin t (q0 = 0,
+//! p0 = 1, σ = 1) and the Kepler orbit's energy −1/2 and angular momentum √(1 − e²) (the
+//! default state is the pericentre of an orbit with semi-major axis 1).
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+/// Run `svi` with `args`.
+fn svi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_svi"))
+        .args(args)
+        .output()
+        .expect("the svi binary runs")
+}
+
+/// Run `svi` with `args`, expect success, and parse stdout as JSON.
+fn json(args: &[&str]) -> Value {
+    let output = svi(args);
+    assert!(
+        output.status.success(),
+        "svi {args:?} failed: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
+}
+
+/// Run `svi` with `args`, expect failure (not a panic), and return stderr.
+fn failure(args: &[&str]) -> String {
+    let output = svi(args);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(!output.status.success(), "svi {args:?} succeeded");
+    assert!(output.stdout.is_empty(), "svi {args:?} printed to stdout");
+    assert!(
+        !stderr.contains("panicked"),
+        "svi {args:?} panicked: {stderr}"
+    );
+    assert!(stderr.contains("error"), "svi {args:?}: {stderr}");
+    stderr
+}
+
+/// A fresh scratch directory for this test process, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("svi-cli-test-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn join(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// A scene file in its own scratch directory.
+struct SceneFile {
+    path: String,
+    _dir: Scratch,
+}
+
+/// Write a scene file.
+fn scene_file(name: &str, text: &str) -> SceneFile {
+    let dir = Scratch::new(name);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    SceneFile {
+        path: path.to_str().unwrap().to_owned(),
+        _dir: dir,
+    }
+}
+
+fn number(summary: &Value, field: &str) -> f64 {
+    summary[field]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{field} is not a number: {summary}"))
+}
+
+fn vector(summary: &Value, field: &str) -> Vec<f64> {
+    summary[field]
+        .as_array()
+        .unwrap_or_else(|| panic!("{field} is not an array: {summary}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+const REQUIRED: [&str; 14] = [
+    "model",
+    "method",
+    "h",
+    "steps",
+    "t_end",
+    "q",
+    "v",
+    "p",
+    "energy_error_max",
+    "momentum_error_max",
+    "solution_error_max",
+    "iterations",
+    "seconds",
+    "evaluations",
+];
+
+#[test]
+fn oscillator_svi_is_spectrally_accurate() {
+    let summary = json(&["run", "oscillator", "--json"]);
+    for field in REQUIRED {
+        assert!(summary.get(field).is_some(), "missing {field}: {summary}");
+    }
+    assert_eq!(summary["model"], "oscillator");
+    assert_eq!(summary["method"], "svi");
+    assert_eq!(summary["points"], 9);
+    assert_eq!(summary["quadrature"], 18);
+    assert_eq!(summary["parameters"]["sigma"], 1.0);
+    assert_eq!(summary["steps"], 100);
+    assert_eq!(number(&summary, "h"), 1.0);
+    assert_eq!(number(&summary, "t0"), 0.0);
+    assert_eq!(number(&summary, "t_end"), 100.0);
+    assert!(summary["momentum_error_max"].is_null(), "no symmetry");
+    let energy = number(&summary, "energy_error_max");
+    let solution = number(&summary, "solution_error_max");
+    assert!(energy < 1e-12, "energy error {energy:e}");
+    assert!(solution < 1e-10, "solution error {solution:e}");
+    let q = vector(&summary, "q");
+    let p = vector(&summary, "p");
+    assert!((q[0] - 100f64.sin()).abs() < 1e-10);
+    assert!((p[0] - 100f64.cos()).abs() < 1e-10);
+    assert!(summary["iterations"].as_u64().unwrap() >= 100);
+    assert!(number(&summary, "seconds") >= 0.0);
+}
+
+#[test]
+fn oscillator_sc_runs_with_velocity_coordinates() {
+    let summary = json(&["run", "oscillator", "--method", "sc", "--json"]);
+    for field in REQUIRED {
+        assert!(summary.get(field).is_some(), "missing {field}: {summary}");
+    }
+    assert_eq!(summary["method"], "sc");
+    assert_eq!(summary["points"], 9);
+    assert!(summary["quadrature"].is_null());
+    assert_eq!(summary["symplectic"], false);
+    assert_eq!(summary["steps"], 100);
+    assert!(summary["momentum_error_max"].is_null());
+    let energy = number(&summary, "energy_error_max");
+    let solution = number(&summary, "solution_error_max");
+    assert!(energy.is_finite() && solution.is_finite());
+    // SC drifts, but 9 CGL points at h = 1 are still far below 1e-3 over 100 periods/2π.
+    assert!(energy < 1e-3 && solution < 1e-3, "{energy:e} {solution:e}");
+}
+
+#[test]
+fn short_kepler_run_conserves_angular_momentum() {
+    let summary = json(&["run", "kepler", "--t-end", "20", "--json"]);
+    assert_eq!(summary["model"], "kepler");
+    assert_eq!(summary["steps"], 100);
+    assert_eq!(summary["points"], 6);
+    assert_eq!(summary["quadrature"], 12);
+    assert_eq!(number(&summary, "h"), 0.2);
+    let momentum = number(&summary, "momentum_error_max");
+    assert!(momentum < 1e-12, "momentum error {momentum:e}");
+    let solution = number(&summary, "solution_error_max");
+    assert!(solution < 1e-6, "solution error {solution:e}");
+    assert!(number(&summary, "energy_error_max") < 1e-9);
+}
+
+#[test]
+fn the_default_scene_is_kepler_with_svi() {
+    let summary = json(&["run", "--t-end", "2", "--json"]);
+    assert_eq!(summary["model"], "kepler");
+    assert_eq!(summary["method"], "svi");
+    assert_eq!(summary["parameters"]["e"], 0.5);
+    assert_eq!(summary["steps"], 10);
+}
+
+#[test]
+fn overrides_reach_the_run() {
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--param",
+        "e=0.9",
+        "--h",
+        "0.05",
+        "--t-end",
+        "10",
+        "--points",
+        "5",
+        "--quadrature",
+        "7",
+        "--json",
+    ]);
+    assert_eq!(number(&summary, "h"), 0.05);
+    assert_eq!(number(&summary, "t_end"), 10.0);
+    assert_eq!(summary["points"], 5);
+    assert_eq!(summary["quadrature"], 7);
+    assert_eq!(summary["steps"], 200);
+    assert_eq!(summary["parameters"]["e"], 0.9);
+    // Pericentre of the e = 0.9 orbit: q0 = (0.1, 0), E = −1/2, M = √(1 − e²).
+    assert_eq!(number(&summary, "energy_initial"), -0.5);
+    let (q, v, p) = (
+        vector(&summary, "q"),
+        vector(&summary, "v"),
+        vector(&summary, "p"),
+    );
+    let energy = 0.5 * (v[0] * v[0] + v[1] * v[1]) - 1.0 / q[0].hypot(q[1]);
+    // h = 0.05 is coarse at the e = 0.9 pericentre (r = 0.1): the energy error is
+    // truncation, 8.1e-4 here, 4.7e-6 at h = 0.025 (order 8), not drift.
+    assert!((energy + 0.5).abs() < 2e-3, "final energy {energy}");
+    assert!((energy - number(&summary, "energy_final")).abs() < 1e-12);
+    assert!(number(&summary, "energy_error_max") < 2e-3);
+    let angular = q[0] * p[1] - q[1] * p[0];
+    assert!(
+        (angular - (1.0f64 - 0.81).sqrt()).abs() < 1e-12,
+        "M = {angular}"
+    );
+    assert!(
+        (p[0] - v[0]).abs() < 1e-12 && (p[1] - v[1]).abs() < 1e-12,
+        "p = v"
+    );
+}
+
+#[test]
+fn diagnostics_can_be_switched_off() {
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--t-end",
+        "2",
+        "--diagnostics",
+        "energy",
+        "--json",
+    ]);
+    assert!(summary["energy_error_max"].is_number());
+    assert!(summary["momentum_error_max"].is_null());
+    assert!(summary["solution_error_max"].is_null());
+}
+
+#[test]
+fn trajectory_csv_has_the_header_and_every_kth_step() {
+    let dir = Scratch::new("csv");
+    let path = dir.join("oscillator.csv");
+    let path_text = path.to_str().unwrap();
+    let summary = json(&[
+        "run",
+        "oscillator",
+        "--out",
+        path_text,
+        "--every",
+        "10",
+        "--json",
+    ]);
+    assert_eq!(summary["trajectory"]["rows"], 11);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "t,q_q,v_q,p_q,energy");
+    assert_eq!(lines.len(), 1 + 100 / 10 + 1);
+    let row = |i: usize| -> Vec<f64> { lines[i].split(',').map(|x| x.parse().unwrap()).collect() };
+    assert_eq!(row(1), [0.0, 0.0, 1.0, 1.0, 0.5]);
+    for i in 1..lines.len() {
+        let values = row(i);
+        let t = 10.0 * (i - 1) as f64;
+        assert_eq!(values[0], t);
+        assert!((values[1] - t.sin()).abs() < 1e-10, "row {i}: {values:?}");
+        assert!((values[4] - 0.5).abs() < 1e-12, "row {i}: {values:?}");
+    }
+    assert_eq!(row(lines.len() - 1)[1], vector(&summary, "q")[0]);
+}
+
+#[test]
+fn a_trajectory_ends_with_the_last_point_when_steps_are_not_a_multiple_of_every() {
+    let dir = Scratch::new("csv-tail");
+    let path = dir.join("kepler.csv");
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--t-end",
+        "2.2",
+        "--every",
+        "5",
+        "--out",
+        path.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(summary["steps"], 11);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "t,q_q1,q_q2,v_q1,v_q2,p_q1,p_q2,energy");
+    let times: Vec<f64> = lines[1..]
+        .iter()
+        .map(|line| line.split(',').next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(times, [0.0, 1.0, 2.0, 2.2]);
+}
+
+#[test]
+fn a_scene_file_sets_everything() {
+    let dir = Scratch::new("file");
+    let csv = dir.join("out.csv");
+    let text = format!(
+        "model = \"pendulum\"\n\
+         [parameters]\ng = 2.0\n\
+         [initial]\nt0 = 1.0\nq = [0.5]\nv = [0.0]\n\
+         [method]\nname = \"sc\"\npoints = 7\n\
+         [run]\nh = 0.25\nt_end = 6.0\n\
+         [output]\nevery = 4\ntrajectory = \"{}\"\ndiagnostics = [\"energy\", \"solution\"]\n",
+        csv.display()
+    );
+    let scene = scene_file("file-scene", &text);
+    let summary = json(&["run", &scene.path, "--json"]);
+    assert_eq!(summary["model"], "pendulum");
+    assert_eq!(summary["method"], "sc");
+    assert_eq!(summary["points"], 7);
+    assert_eq!(summary["parameters"]["g"], 2.0);
+    assert_eq!(number(&summary, "t0"), 1.0);
+    assert_eq!(summary["steps"], 20);
+    assert!(number(&summary, "solution_error_max") < 1e-6);
+    assert_eq!(summary["trajectory"]["rows"], 6);
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 7);
+}
+
+#[test]
+fn the_human_summary_is_a_short_aligned_block() {
+    let output = svi(&["run", "oscillator"]);
+    assert!(output.status.success());
+    let text = String::from_utf8(output.stdout).unwrap();
+    for label in [
+        "model",
+        "method",
+        "step h",
+        "time",
+        "wall time",
+        "work",
+        "final q",
+        "final v",
+        "final p",
+        "energy error",
+        "momentum error",
+        "solution error",
+    ] {
+        assert!(
+            text.lines()
+                .any(|line| line.starts_with(label) && line.len() > 16),
+            "{label}: {text}"
+        );
+    }
+    assert!(
+        text.contains("svi, 9 CGL points, 18 Gauss points; order 16"),
+        "{text}"
+    );
+    assert!(text.contains("momentum error  n/a"), "{text}");
+}
+
+#[test]
+fn list_names_scenes_and_models() {
+    let output = svi(&["list"]);
+    assert!(output.status.success());
+    let text = String::from_utf8(output.stdout).unwrap();
+    for name in [
+        "oscillator",
+        "kepler",
+        "pendulum",
+        "spring-pendulum",
+        "double-pendulum",
+    ] {
+        assert!(text.contains(name), "{name}: {text}");
+    }
+    assert!(text.contains("e = 0.5"), "{text}");
+}
+
+#[test]
+fn plain_svi_prints_help() {
+    let output = svi(&[]);
+    let text = String::from_utf8_lossy(&output.stderr).into_owned()
+        + &String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("Usage"), "{text}");
+    assert!(text.contains("run"), "{text}");
+}
+
+#[test]
+fn unknown_scenes_and_models_are_named() {
+    let stderr = failure(&["run", "keppler"]);
+    assert!(
+        stderr.contains("'keppler'") && stderr.contains("oscillator, kepler"),
+        "{stderr}"
+    );
+    let missing = std::env::temp_dir().join("svi-cli-no-such-dir/scene.toml");
+    let stderr = failure(&["run", missing.to_str().unwrap()]);
+    assert!(stderr.contains("cannot read scene file"), "{stderr}");
+    let scene = scene_file("unknown-model", "model = \"kepler3\"\n");
+    let stderr = failure(&["run", &scene.path]);
+    assert!(stderr.contains("unknown model 'kepler3'"), "{stderr}");
+    assert!(stderr.contains("double-pendulum"), "{stderr}");
+}
+
+#[test]
+fn malformed_toml_names_the_line() {
+    let scene = scene_file(
+        "malformed",
+        "model = \"kepler\"\n[run]\nh = 0.1\nt_end = \n",
+    );
+    let stderr = failure(&["run", &scene.path]);
+    assert!(stderr.contains("cannot parse scene"), "{stderr}");
+    assert!(stderr.contains("line 4"), "{stderr}");
+    let scene = scene_file("unknown-field", "model = \"kepler\"\nsteps = 3\n");
+    let stderr = failure(&["run", &scene.path]);
+    assert!(
+        stderr.contains("line 2") && stderr.contains("steps"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn invalid_step_horizon_and_options_are_rejected() {
+    for (args, needle) in [
+        (&["--h", "0"][..], "invalid h: 0 must be positive"),
+        (&["--h", "-1"], "invalid h: -1 must be positive"),
+        (&["--h", "nan"], "invalid h"),
+        (&["--points", "1"], "invalid points"),
+        (&["--quadrature", "0"], "invalid quadrature"),
+        (
+            &["--t-end", "0"],
+            "invalid t_end: the horizon 0 is not after the start 0",
+        ),
+        (&["--every", "0", "--out", "x.csv"], "invalid every"),
+        (&["--every", "3"], "no trajectory file"),
+        (
+            &["--method", "sc", "--quadrature", "7"],
+            "quadrature is an option of svi",
+        ),
+    ] {
+        let mut all = vec!["run", "oscillator"];
+        all.extend_from_slice(args);
+        let stderr = failure(&all);
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn invalid_parameters_are_rejected() {
+    let stderr = failure(&["run", "kepler", "--param", "e=1.5"]);
+    assert!(
+        stderr.contains("invalid e") && stderr.contains("[0, 1)"),
+        "{stderr}"
+    );
+    let stderr = failure(&["run", "kepler", "--param", "bogus=1"]);
+    assert!(
+        stderr.contains("invalid bogus") && stderr.contains("known: e"),
+        "{stderr}"
+    );
+    let stderr = failure(&["run", "kepler", "--param", "e"]);
+    assert!(stderr.contains("malformed parameter 'e'"), "{stderr}");
+    let stderr = failure(&["run", "kepler", "--param", "e=x"]);
+    assert!(stderr.contains("'x' is not a number"), "{stderr}");
+    let stderr = failure(&["run", "kepler", "--method", "rk4"]);
+    assert!(stderr.contains("rk4"), "{stderr}");
+}
+
+#[test]
+fn invalid_initial_states_are_rejected() {
+    let scene = scene_file("dimension", "model = \"kepler\"\n[initial]\nq = [1.0]\n");
+    let stderr = failure(&["run", &scene.path]);
+    assert!(
+        stderr.contains("initial.q has 1 components, but model 'kepler' has dimension 2"),
+        "{stderr}"
+    );
+    let scene = scene_file(
+        "nan",
+        "model = \"oscillator\"\n[initial]\nq = [nan]\np = [1.0]\n",
+    );
+    let stderr = failure(&["run", &scene.path]);
+    assert!(
+        stderr.contains("initial position[0]") && stderr.contains("NaN"),
+        "{stderr}"
+    );
+    let scene = scene_file(
+        "both",
+        "model = \"oscillator\"\n[initial]\nq = [0.0]\nv = [1.0]\np = [1.0]\n",
+    );
+    let stderr = failure(&["run", &scene.path]);
+    assert!(stderr.contains("both v and p"), "{stderr}");
+}
