@@ -30,11 +30,11 @@
 use crate::basis::LagrangeBasis;
 use crate::derived::{AccelerationJacobian, LagrangianExt};
 use crate::error::StepFailure;
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::iteration::Newton;
+use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
-use crate::starting_values::StartingValues;
 use crate::spectral_variational::MAX_POINTS;
+use crate::starting_values::StartingValues;
 use crate::{Error, Lagrangian, Method};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
@@ -108,7 +108,11 @@ impl SpectralCollocation {
         }
         (0..2 * self.points)
             .find(|&k| {
-                let sum: f64 = weights.iter().zip(&collocation).map(|(b, c)| b * c.powi(k as i32)).sum();
+                let sum: f64 = weights
+                    .iter()
+                    .zip(&collocation)
+                    .map(|(b, c)| b * c.powi(k as i32))
+                    .sum();
                 (sum - 1.0 / (k as f64 + 1.0)).abs() > 1e-10
             })
             .unwrap_or(2 * self.points)
@@ -229,7 +233,9 @@ fn assemble<const N: usize>(
             for d in 0..N {
                 block[(d, d)] += tables.lambda_squared[(i, j)];
             }
-            jacobian.fixed_view_mut::<N, N>(i * N, j * N).copy_from(&block);
+            jacobian
+                .fixed_view_mut::<N, N>(i * N, j * N)
+                .copy_from(&block);
         }
         residual.fixed_rows_mut::<N>(i * N).copy_from(&r);
     }
@@ -287,7 +293,9 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         if workspace.start.has_previous() {
             workspace.start.extrapolate::<N>(&mut workspace.offsets);
         } else {
-            let a = model.acceleration(t, &state.q, &state.y).ok_or(StepFailure::SingularMatrix)?;
+            let a = model
+                .acceleration(t, &state.q, &state.y)
+                .ok_or(StepFailure::SingularMatrix)?;
             workspace
                 .start
                 .taylor(h, &state.y, &a, &mut workspace.offsets);
@@ -340,14 +348,23 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         let size = s * N;
         let mut lu = crate::linalg::DenseLu::new(size);
         let mut residual = DVector::zeros(size);
-        assemble(&ws.tables, &ws.nodes, state, &ws.offsets, lu.matrix_mut(), &mut residual);
+        assemble(
+            &ws.tables,
+            &ws.nodes,
+            state,
+            &ws.offsets,
+            lu.matrix_mut(),
+            &mut residual,
+        );
         lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
         // Columns: −∂R/∂q_k (N), then −∂R/∂q̇_k (N).
         let mut sensitivity = DMatrix::zeros(size, 2 * N);
         for i in 0..s {
             let from_q = ws.nodes[i].v * ws.tables.lambda0[i]
                 - SMatrix::<f64, N, N>::identity() * ws.tables.lambda_lambda0[i];
-            sensitivity.fixed_view_mut::<N, N>(i * N, 0).copy_from(&from_q);
+            sensitivity
+                .fixed_view_mut::<N, N>(i * N, 0)
+                .copy_from(&from_q);
             for d in 0..N {
                 sensitivity[(i * N + d, N + d)] = -ws.tables.lambda0[i];
             }

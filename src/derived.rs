@@ -21,8 +21,7 @@ use crate::model::{Lagrangian, Symmetries};
 use crate::{Error, Scalar};
 use nalgebra::{Const, SMatrix, SVector};
 use num_dual::{
-    Dual2Vec, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian,
-    partial_hessian,
+    Dual2Vec, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian, partial_hessian,
 };
 
 /// Value and first derivatives of L at one point.
@@ -96,7 +95,11 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
             },
             v,
         );
-        FirstDerivatives { value, q: dq, v: dv }
+        FirstDerivatives {
+            value,
+            q: dq,
+            v: dv,
+        }
     }
 
     /// The generalised force ∂L/∂q alone (one gradient sweep).
@@ -228,11 +231,14 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
             },
             v,
         );
-        value.iter().all(|a| a.is_finite()).then_some(AccelerationJacobian {
-            value,
-            q: dq,
-            v: dv,
-        })
+        value
+            .iter()
+            .all(|a| a.is_finite())
+            .then_some(AccelerationJacobian {
+                value,
+                q: dq,
+                v: dv,
+            })
     }
 
     /// The Noether momentum Jᵢ = p·ξᵢ(q) of symmetry generator `index`.

@@ -40,7 +40,9 @@ pub enum Error {
         t: f64,
     },
     /// The inverse Legendre map q̇(q, p) did not converge (or met a singular mass matrix).
-    #[error("inverse Legendre map did not converge at t = {t}: {iterations} iterations, last increment {residual:e}")]
+    #[error(
+        "inverse Legendre map did not converge at t = {t}: {iterations} iterations, last increment {residual:e}"
+    )]
     LegendreMap {
         /// Time of the state being converted.
         t: f64,

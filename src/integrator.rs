@@ -201,7 +201,14 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             let step_size = if k + 1 == steps { t_end - t } else { h };
             let report = self
                 .method
-                .step(&self.model, &mut workspace, t, step_size, &state, &mut increment)
+                .step(
+                    &self.model,
+                    &mut workspace,
+                    t,
+                    step_size,
+                    &state,
+                    &mut increment,
+                )
                 .map_err(|failure| failure.at(k, t))?;
             compensated_add(&mut state.q, &mut compensation.q, &increment.q);
             compensated_add(&mut state.y, &mut compensation.y, &increment.y);
@@ -215,7 +222,11 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             statistics.steps += 1;
             statistics.iterations += report.iterations;
             statistics.evaluations += report.evaluations;
-            t = if k + 1 == steps { t_end } else { t0 + (k + 1) as f64 * h };
+            t = if k + 1 == steps {
+                t_end
+            } else {
+                t0 + (k + 1) as f64 * h
+            };
             if observer.wants(k + 1) {
                 let point = self.phase_point(t, &state, &guess)?;
                 guess = point.v;

@@ -39,7 +39,11 @@ impl Newton {
 
     /// Solve F(z) = 0 starting from `z`. `assemble(z, jacobian, residual)` writes F(z) and
     /// F'(z). Returns the number of iterations.
-    pub(crate) fn solve<F>(&mut self, z: &mut DVector<f64>, mut assemble: F) -> Result<usize, StepFailure>
+    pub(crate) fn solve<F>(
+        &mut self,
+        z: &mut DVector<f64>,
+        mut assemble: F,
+    ) -> Result<usize, StepFailure>
     where
         F: FnMut(&DVector<f64>, &mut DMatrix<f64>, &mut DVector<f64>),
     {
@@ -57,7 +61,10 @@ impl Newton {
                 return Err(StepFailure::NonFinite);
             }
             let scale = z.amax();
-            if size <= CONVERGED * scale || size == 0.0 || (size >= previous && size <= STALLED * scale) {
+            if size <= CONVERGED * scale
+                || size == 0.0
+                || (size >= previous && size <= STALLED * scale)
+            {
                 return Ok(iteration);
             }
             previous = size;

@@ -36,15 +36,15 @@ pub mod collocation;
 pub mod derived;
 pub mod error;
 pub mod integrator;
+mod iteration;
 pub mod linalg;
 pub mod method;
 pub mod model;
-mod iteration;
-mod starting_values;
 pub mod observer;
 pub mod quadrature;
 pub mod scalar;
 pub mod spectral_variational;
+mod starting_values;
 pub mod verify;
 
 pub use collocation::SpectralCollocation;

@@ -199,12 +199,8 @@ mod tests {
         let (_, derivative) = jacobian(
             |p: SVector<DualSVec64<1>, 1>| {
                 let s = p[0];
-                let a = SMatrix::<DualSVec64<1>, 2, 2>::new(
-                    s.cos() + 2.0,
-                    s,
-                    s.sin(),
-                    (s * s) + 3.0,
-                );
+                let a =
+                    SMatrix::<DualSVec64<1>, 2, 2>::new(s.cos() + 2.0, s, s.sin(), (s * s) + 3.0);
                 solve_small(a, SVector::from([1.0.into(), 2.0.into()])).unwrap()
             },
             &theta,
@@ -222,7 +218,9 @@ mod tests {
         let n = 12;
         let mut seed = 7u64;
         let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         let a = DMatrix::from_fn(n, n, |_, _| next());

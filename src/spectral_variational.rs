@@ -40,9 +40,9 @@
 use crate::basis::LagrangeBasis;
 use crate::derived::{LagrangianExt, SecondDerivatives};
 use crate::error::StepFailure;
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::iteration::{FixedPoint, Newton};
 use crate::linalg::{invert, invert_small};
+use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
 use crate::starting_values::StartingValues;
 use crate::{Error, Lagrangian, Method, Structure};
@@ -238,7 +238,9 @@ impl<const N: usize> ConstantMass<N> {
                 propagation[j * m + mu] = -0.25
                     * (0..s)
                         .map(|nu| {
-                            inverse[(j, nu)] * tables.reference_weights[mu] * tables.values[(mu, nu)]
+                            inverse[(j, nu)]
+                                * tables.reference_weights[mu]
+                                * tables.values[(mu, nu)]
                         })
                         .sum::<f64>();
             }
@@ -291,7 +293,9 @@ impl<const N: usize> SviWorkspace<N> {
             let v = model
                 .velocity(t, &state.q, &state.y, &state.y)
                 .unwrap_or_else(|_| SVector::zeros());
-            let a = model.acceleration(t, &state.q, &v).unwrap_or_else(SVector::zeros);
+            let a = model
+                .acceleration(t, &state.q, &v)
+                .unwrap_or_else(SVector::zeros);
             self.start.taylor(self.tables.h, &v, &a, &mut self.offsets);
         }
     }
@@ -331,7 +335,8 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
             let from_q: SMatrix<f64, N, N> = (d.qq * bj + d.qv * cj) * w;
             let from_v: SMatrix<f64, N, N> = (qv_t * bj + d.vv * cj) * w;
             for nu in 0..s {
-                let block = from_q * tables.values[(mu, nu)] + from_v * tables.derivatives[(mu, nu)];
+                let block =
+                    from_q * tables.values[(mu, nu)] + from_v * tables.derivatives[(mu, nu)];
                 let mut target = jacobian.fixed_view_mut::<N, N>(nu * N, (j - 1) * N);
                 target += block;
             }
@@ -393,7 +398,15 @@ impl<const N: usize> Method<N> for Svi {
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         if workspace.constant_mass.is_some() {
-            return fixed_point_step(model, self.max_iterations, workspace, t, h, state, increment);
+            return fixed_point_step(
+                model,
+                self.max_iterations,
+                workspace,
+                t,
+                h,
+                state,
+                increment,
+            );
         }
         let iterations = solve(model, workspace, t, h, state)?;
         let ws = &mut *workspace;

@@ -26,7 +26,10 @@ pub fn observed_order(steps: &[f64], errors: &[f64], floor: f64) -> Result<f64, 
     if points.len() < 2 {
         return Err(Error::invalid(
             "errors",
-            format!("only {} points above the round-off floor {floor:e}", points.len()),
+            format!(
+                "only {} points above the round-off floor {floor:e}",
+                points.len()
+            ),
         ));
     }
     let n = points.len() as f64;

@@ -13,7 +13,14 @@ use svi_models::{HarmonicOscillator, Kepler};
 fn oscillator_error<M: Method<1>>(method: M, h: f64) -> f64 {
     let integrator = Integrator::new(HarmonicOscillator::default(), method);
     let run = integrator
-        .run_from_velocity(0.0, SVector::from([0.0]), SVector::from([1.0]), h, 10.0, &mut ())
+        .run_from_velocity(
+            0.0,
+            SVector::from([0.0]),
+            SVector::from([1.0]),
+            h,
+            10.0,
+            &mut (),
+        )
         .unwrap();
     (run.last.q[0] - 10f64.sin()).abs()
 }
@@ -44,10 +51,16 @@ fn svi_with_paper_quadrature_reaches_its_declared_order() {
     let steps = [2.0, 1.0, 0.5, 0.25];
     for points in [3usize, 4] {
         let method = Svi::new(points);
-        let errors: Vec<f64> = steps.iter().map(|&h| oscillator_error(method.clone(), h)).collect();
+        let errors: Vec<f64> = steps
+            .iter()
+            .map(|&h| oscillator_error(method.clone(), h))
+            .collect();
         let order = observed_order(&steps, &errors, 1e-12).unwrap();
         let declared = Method::<1>::info(&method).order as f64;
-        assert!((order - declared).abs() < 0.3, "points {points}: {order} vs {declared}");
+        assert!(
+            (order - declared).abs() < 0.3,
+            "points {points}: {order} vs {declared}"
+        );
     }
 }
 
@@ -56,7 +69,10 @@ fn collocation_reaches_its_declared_order() {
     let steps = [0.5, 0.25, 0.125, 0.0625];
     for points in 3..=7usize {
         let method = SpectralCollocation::new(points);
-        let errors: Vec<f64> = steps.iter().map(|&h| oscillator_error(method.clone(), h)).collect();
+        let errors: Vec<f64> = steps
+            .iter()
+            .map(|&h| oscillator_error(method.clone(), h))
+            .collect();
         let order = observed_order(&steps, &errors, 1e-12).unwrap();
         let declared = Method::<1>::info(&method).order as f64;
         assert!(
@@ -71,7 +87,14 @@ fn oscillator_max_error<M: Method<1>>(method: M) -> f64 {
     let integrator = Integrator::new(HarmonicOscillator::default(), method);
     let mut error = SolutionError::default();
     integrator
-        .run_from_velocity(0.0, SVector::from([0.0]), SVector::from([1.0]), 1.0, 100.0, &mut error)
+        .run_from_velocity(
+            0.0,
+            SVector::from([0.0]),
+            SVector::from([1.0]),
+            1.0,
+            100.0,
+            &mut error,
+        )
         .unwrap();
     error.max.unwrap()
 }
@@ -82,10 +105,17 @@ fn both_methods_converge_geometrically_in_the_number_of_points() {
     // CGL points until round-off. Two more points must buy at least a factor 20 while the
     // error is above 1e-11, and both methods must reach 1e-11 by 12 points.
     for (name, errors) in [
-        ("svi", (3..=12).map(|n| oscillator_max_error(Svi::new(n))).collect::<Vec<_>>()),
+        (
+            "svi",
+            (3..=12)
+                .map(|n| oscillator_max_error(Svi::new(n)))
+                .collect::<Vec<_>>(),
+        ),
         (
             "sc",
-            (3..=12).map(|n| oscillator_max_error(SpectralCollocation::new(n))).collect(),
+            (3..=12)
+                .map(|n| oscillator_max_error(SpectralCollocation::new(n)))
+                .collect(),
         ),
     ] {
         for pair in errors.windows(3) {
@@ -106,7 +136,9 @@ fn svi_converges_geometrically_on_kepler() {
     for points in [3usize, 5, 7, 9] {
         let integrator = Integrator::new(model, Svi::new(points));
         let mut error = SolutionError::default();
-        integrator.run_from_velocity(t0, q0, v0, 0.2, 20.0, &mut error).unwrap();
+        integrator
+            .run_from_velocity(t0, q0, v0, 0.2, 20.0, &mut error)
+            .unwrap();
         errors.push(error.max.unwrap());
     }
     for pair in errors.windows(2) {

@@ -21,16 +21,26 @@ fn bad_steps_and_spans_are_rejected() {
     let q = SVector::from([0.0]);
     let v = SVector::from([1.0]);
     for h in [0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let error = integrator.run_from_velocity(0.0, q, v, h, 1.0, &mut ()).unwrap_err();
+        let error = integrator
+            .run_from_velocity(0.0, q, v, h, 1.0, &mut ())
+            .unwrap_err();
         assert_eq!(invalid_name(error), "h");
     }
-    let error = integrator.run_from_velocity(0.0, q, v, 0.1, 0.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(0.0, q, v, 0.1, 0.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "t_end");
-    let error = integrator.run_from_velocity(1.0, q, v, 0.1, -1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(1.0, q, v, 0.1, -1.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "t_end");
-    let error = integrator.run_from_velocity(f64::NAN, q, v, 0.1, 1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(f64::NAN, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "t0");
-    let error = integrator.run_from_velocity(0.0, q, v, 1e-20, 1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(0.0, q, v, 1e-20, 1.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "h");
 }
 
@@ -39,10 +49,14 @@ fn non_finite_initial_states_are_rejected() {
     let integrator = Integrator::new(Kepler::default(), Svi::default());
     let (q, v) = kepler_start();
     let bad = SVector::from([f64::NAN, 0.0]);
-    let error = integrator.run_from_velocity(0.0, bad, v, 0.1, 1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(0.0, bad, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "initial position[0]");
     let bad = SVector::from([0.0, f64::INFINITY]);
-    let error = integrator.run_from_momentum(0.0, q, bad, 0.1, 1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_momentum(0.0, q, bad, 0.1, 1.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "initial momentum[1]");
 }
 
@@ -51,14 +65,20 @@ fn out_of_range_options_are_rejected() {
     let (q, v) = kepler_start();
     for points in [0usize, 1, 100_000] {
         let integrator = Integrator::new(Kepler::default(), Svi::new(points));
-        let error = integrator.run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ()).unwrap_err();
+        let error = integrator
+            .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+            .unwrap_err();
         assert_eq!(invalid_name(error), "points");
         let integrator = Integrator::new(Kepler::default(), SpectralCollocation::new(points));
-        let error = integrator.run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ()).unwrap_err();
+        let error = integrator
+            .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+            .unwrap_err();
         assert_eq!(invalid_name(error), "points");
     }
     let integrator = Integrator::new(Kepler::default(), Svi::new(4).with_quadrature(0));
-    let error = integrator.run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
     assert_eq!(invalid_name(error), "quadrature");
 }
 
@@ -67,8 +87,16 @@ fn newton_failure_is_reported_with_step_time_and_residual() {
     // One Newton iteration cannot converge on Kepler's nonlinear step.
     let (q, v) = kepler_start();
     let integrator = Integrator::new(Kepler::default(), Svi::new(5).with_max_iterations(1));
-    match integrator.run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ()).unwrap_err() {
-        Error::NonConvergence { step, t, iterations, residual } => {
+    match integrator
+        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err()
+    {
+        Error::NonConvergence {
+            step,
+            t,
+            iterations,
+            residual,
+        } => {
             assert_eq!((step, t, iterations), (0, 0.0, 1));
             assert!(residual > 0.0 && residual.is_finite());
         }
@@ -90,12 +118,19 @@ fn singular_systems_are_reported_not_panicked_on() {
     let q = SVector::from([1.0]);
     let v = SVector::from([0.0]);
     let integrator = Integrator::new(Degenerate, SpectralCollocation::new(4));
-    let error = integrator.run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ()).unwrap_err();
+    let error = integrator
+        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
     assert_eq!(error, Error::SingularMatrix { step: 0, t: 0.0 });
     // The SVI step itself is solvable here (the action is a quadratic form in the nodes),
     // but the final (q, p) cannot be completed with a velocity: the inverse Legendre map
     // reports the singular mass matrix at the final time.
     let integrator = Integrator::new(Degenerate, Svi::new(4));
-    let error = integrator.run_from_momentum(0.0, q, v, 0.1, 1.0, &mut ()).unwrap_err();
-    assert!(matches!(error, Error::LegendreMap { t, .. } if t == 1.0), "{error:?}");
+    let error = integrator
+        .run_from_momentum(0.0, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
+    assert!(
+        matches!(error, Error::LegendreMap { t, .. } if t == 1.0),
+        "{error:?}"
+    );
 }

@@ -48,30 +48,52 @@ fn tangent_against_differences<L: Lagrangian<N> + Clone, M: Method<N> + Clone, c
 fn svi_tangent_map_is_symplectic_and_matches_differences() {
     let svi = Svi::new(5);
     let pendulum = Pendulum::default();
-    let state = State { q: SVector::from([1.2]), y: SVector::from([0.3]) };
+    let state = State {
+        q: SVector::from([1.2]),
+        y: SVector::from([0.3]),
+    };
     let (symplectic, difference) = tangent_against_differences(&pendulum, &svi, state, 0.3);
     assert!(symplectic < 1e-12, "pendulum: {symplectic:e}");
     assert!(difference < 1e-6, "pendulum: {difference:e}");
 
     let kepler = Kepler::default();
-    let state = State { q: SVector::from([0.5, 0.1]), y: SVector::from([-0.2, 1.6]) };
+    let state = State {
+        q: SVector::from([0.5, 0.1]),
+        y: SVector::from([-0.2, 1.6]),
+    };
     let (symplectic, difference) = tangent_against_differences(&kepler, &svi, state, 0.2);
     assert!(symplectic < 1e-12, "kepler: {symplectic:e}");
     assert!(difference < 1e-6, "kepler: {difference:e}");
 
     let double = DoublePendulum::default();
-    let state = State { q: SVector::from([1.0, 0.5]), y: SVector::from([0.4, -0.3]) };
-    for method in [Svi::new(5), Svi::new(4).with_quadrature(3), Svi::new(7).with_quadrature(5)] {
+    let state = State {
+        q: SVector::from([1.0, 0.5]),
+        y: SVector::from([0.4, -0.3]),
+    };
+    for method in [
+        Svi::new(5),
+        Svi::new(4).with_quadrature(3),
+        Svi::new(7).with_quadrature(5),
+    ] {
         let (symplectic, difference) = tangent_against_differences(&double, &method, state, 0.1);
-        assert!(symplectic < 1e-12, "double pendulum {method:?}: {symplectic:e}");
-        assert!(difference < 1e-6, "double pendulum {method:?}: {difference:e}");
+        assert!(
+            symplectic < 1e-12,
+            "double pendulum {method:?}: {symplectic:e}"
+        );
+        assert!(
+            difference < 1e-6,
+            "double pendulum {method:?}: {difference:e}"
+        );
     }
 }
 
 #[test]
 fn collocation_tangent_map_matches_differences_and_is_not_symplectic() {
     let kepler = Kepler::default();
-    let state = State { q: SVector::from([0.5, 0.1]), y: SVector::from([-0.2, 1.6]) };
+    let state = State {
+        q: SVector::from([0.5, 0.1]),
+        y: SVector::from([-0.2, 1.6]),
+    };
     let (symplectic, difference) =
         tangent_against_differences(&kepler, &SpectralCollocation::new(5), state, 0.2);
     assert!(difference < 1e-6, "{difference:e}");
@@ -88,7 +110,14 @@ fn kepler_run<M: Method<2>>(method: M) -> (f64, f64, f64) {
     let mut momentum = MomentumError::default();
     let mut energy = EnergyError::default();
     integrator
-        .run_from_velocity(t0, q0, v0, 0.2, 2000.0, &mut (&mut trajectory, &mut momentum, &mut energy))
+        .run_from_velocity(
+            t0,
+            q0,
+            v0,
+            0.2,
+            2000.0,
+            &mut (&mut trajectory, &mut momentum, &mut energy),
+        )
         .unwrap();
     let e0 = -0.5;
     let half = trajectory.points.len() / 2;
@@ -111,7 +140,10 @@ fn kepler_svi_conserves_angular_momentum_and_bounds_energy() {
     let (first, second, momentum) = kepler_run(Svi::new(6).with_quadrature(12));
     assert!(momentum <= 1e-12, "angular momentum error {momentum:e}");
     // Bounded, no drift: the second half is no worse than the first (up to round-off noise).
-    assert!(second < 2.0 * first + 1e-13, "energy error {first:e} then {second:e}");
+    assert!(
+        second < 2.0 * first + 1e-13,
+        "energy error {first:e} then {second:e}"
+    );
     assert!(second < 1e-8, "{second:e}");
 }
 
@@ -119,6 +151,9 @@ fn kepler_svi_conserves_angular_momentum_and_bounds_energy() {
 fn kepler_collocation_drifts() {
     // Figs. 14–15: SC's energy and angular momentum drift.
     let (first, second, momentum) = kepler_run(SpectralCollocation::new(6));
-    assert!(second > 1.5 * first, "energy error {first:e} then {second:e}");
+    assert!(
+        second > 1.5 * first,
+        "energy error {first:e} then {second:e}"
+    );
     assert!(momentum > 1e-6, "angular momentum error {momentum:e}");
 }

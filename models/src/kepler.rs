@@ -33,9 +33,7 @@
 //! Introduction to the Mathematics and Methods of Astrodynamics* (1999), ch. 4–5.
 
 use nalgebra::SVector;
-use svi::{
-    Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
-};
+use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::params;
 

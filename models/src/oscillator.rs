@@ -23,9 +23,7 @@
 //! eq. (26) and §5.1.
 
 use nalgebra::SVector;
-use svi::{
-    Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
-};
+use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::params;
 

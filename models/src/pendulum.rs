@@ -36,9 +36,7 @@
 use std::f64::consts::TAU;
 
 use nalgebra::SVector;
-use svi::{
-    Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
-};
+use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::{elliptic, params};
 
