@@ -30,12 +30,13 @@
 use crate::basis::LagrangeBasis;
 use crate::derived::{AccelerationJacobian, LagrangianExt};
 use crate::error::StepFailure;
-use crate::iteration::Newton;
+use crate::iteration::{FixedPoint, Newton};
+use crate::linalg::{invert, invert_small};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
 use crate::spectral_variational::MAX_POINTS;
 use crate::starting_values::StartingValues;
-use crate::{Error, Lagrangian, Method};
+use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// Options of the spectral collocation method.
@@ -88,34 +89,84 @@ impl SpectralCollocation {
     /// Order of the collocation method: the order of the interpolatory quadrature on the
     /// collocation nodes c_1, …, c_s (Hairer, Nørsett, Wanner I, Thm. II.7.9).
     fn order(&self) -> usize {
-        let Ok(nodes) = crate::basis::chebyshev_gauss_lobatto(self.points) else {
+        let Some((nodes, weights)) = collocation_quadrature(self.points) else {
             return 0;
         };
-        let collocation: Vec<f64> = nodes[1..].iter().map(|x| 0.5 * (x + 1.0)).collect();
-        let Ok(basis) = LagrangeBasis::new(collocation.clone()) else {
-            return 0;
-        };
-        let Ok(gauss) = GaussLegendre::new(self.points + 1) else {
-            return 0;
-        };
-        let mut values = vec![0.0; basis.len()];
-        let mut weights = vec![0.0; basis.len()];
-        for (x, w) in gauss.nodes().iter().zip(gauss.weights()) {
-            basis.values_into(0.5 * (x + 1.0), &mut values);
-            for (b, l) in weights.iter_mut().zip(&values) {
-                *b += 0.5 * w * l;
-            }
-        }
-        (0..2 * self.points)
+        let limit = self.points.saturating_mul(2);
+        (0..limit)
             .find(|&k| {
                 let sum: f64 = weights
                     .iter()
-                    .zip(&collocation)
+                    .zip(&nodes)
                     .map(|(b, c)| b * c.powi(k as i32))
                     .sum();
                 (sum - 1.0 / (k as f64 + 1.0)).abs() > 1e-10
             })
-            .unwrap_or(2 * self.points)
+            .unwrap_or(limit)
+    }
+}
+
+/// The collocation nodes c_1, …, c_s on [0, 1] and the weights b_i = ∫₀¹ ℓ_i of the
+/// interpolatory quadrature on them; `None` for an invalid number of points.
+fn collocation_quadrature(points: usize) -> Option<(Vec<f64>, Vec<f64>)> {
+    let nodes = crate::basis::chebyshev_gauss_lobatto(points).ok()?;
+    let collocation: Vec<f64> = nodes[1..].iter().map(|x| 0.5 * (x + 1.0)).collect();
+    let basis = LagrangeBasis::new(collocation.clone()).ok()?;
+    let gauss = GaussLegendre::new(points + 1).ok()?;
+    let mut values = vec![0.0; basis.len()];
+    let mut weights = vec![0.0; basis.len()];
+    for (x, w) in gauss.nodes().iter().zip(gauss.weights()) {
+        basis.values_into(0.5 * (x + 1.0), &mut values);
+        for (b, l) in weights.iter_mut().zip(&values) {
+            *b += 0.5 * w * l;
+        }
+    }
+    Some((collocation, weights))
+}
+
+/// Tables and buffers of the fixed-point iteration for [`Structure::ConstantMass`]
+/// Lagrangians, where f(t, q, q̇) = M⁻¹ ∂L/∂q(t, q) does not depend on q̇.
+///
+/// With Λ* = (2/h) D* and λ_0 = (2/h) d_0, eq. (24) becomes the fixed point
+///
+/// Z_i = h e_i q̇_k + (h²/4) Σ_j E_ij M⁻¹ ∂L/∂q(t_j, q_k + Z_j),  E = (D*)⁻², e = −½ E d_0,
+///
+/// for the offsets Z_i = qⁱ − q_k, and the velocity update is the collocation quadrature
+/// q̇_{k+1} − q̇_k = ∫ y′ = h Σ_i b_i f_i (y′ interpolates f at c_1..c_s), which, unlike
+/// yˢ − q̇_k, has no cancellation.
+#[derive(Debug, Clone)]
+struct ConstantMass<const N: usize> {
+    /// E = (D*)⁻², row-major s × s.
+    inverse: Vec<f64>,
+    /// e_i.
+    velocity_coefficients: Vec<f64>,
+    /// Quadrature weights b_i on the collocation nodes.
+    weights: Vec<f64>,
+    /// M⁻¹, from the first step.
+    mass_inverse: Option<SMatrix<f64, N, N>>,
+    /// f at the collocation nodes.
+    accelerations: Vec<SVector<f64, N>>,
+    /// Offsets Z_i during the iteration.
+    stages: Vec<SVector<f64, N>>,
+}
+
+impl<const N: usize> ConstantMass<N> {
+    fn new(tables: &Tables, points: usize) -> Option<Self> {
+        let s = tables.degree;
+        let d = &tables.differentiation;
+        let star = d.view((1, 1), (s, s)).into_owned();
+        let inverse = invert(&(&star * &star)).ok()?;
+        let (_, weights) = collocation_quadrature(points)?;
+        let velocity_coefficients =
+            (0..s).map(|i| -0.5 * (0..s).map(|j| inverse[(i, j)] * d[(j + 1, 0)]).sum::<f64>());
+        Some(ConstantMass {
+            inverse: (0..s * s).map(|k| inverse[(k / s, k % s)]).collect(),
+            velocity_coefficients: velocity_coefficients.collect(),
+            weights,
+            mass_inverse: None,
+            accelerations: vec![SVector::zeros(); s],
+            stages: vec![SVector::zeros(); s],
+        })
     }
 }
 
@@ -178,6 +229,15 @@ impl Tables {
     }
 }
 
+/// Placeholder node data before the first evaluation.
+const fn zero_node<const N: usize>() -> AccelerationJacobian<N> {
+    AccelerationJacobian {
+        value: SVector::from_array_storage(nalgebra::ArrayStorage([[0.0; N]; 1])),
+        q: SMatrix::from_array_storage(nalgebra::ArrayStorage([[0.0; N]; N])),
+        v: SMatrix::from_array_storage(nalgebra::ArrayStorage([[0.0; N]; N])),
+    }
+}
+
 /// Buffers of an SC run.
 #[derive(Debug, Clone)]
 pub struct CollocationWorkspace<const N: usize> {
@@ -188,6 +248,8 @@ pub struct CollocationWorkspace<const N: usize> {
     /// Acceleration and its Jacobian at the collocation nodes.
     nodes: Vec<AccelerationJacobian<N>>,
     newton: Newton,
+    /// Fixed-point data, for constant-mass Lagrangians.
+    constant_mass: Option<ConstantMass<N>>,
 }
 
 /// Acceleration data at every collocation node; `false` if the mass matrix is singular
@@ -241,6 +303,83 @@ fn assemble<const N: usize>(
     }
 }
 
+/// One step of a constant-mass Lagrangian by fixed-point iteration (no Jacobian).
+fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
+    model: &L,
+    max_iterations: usize,
+    workspace: &mut CollocationWorkspace<N>,
+    t: f64,
+    h: f64,
+    state: &State<N>,
+    increment: &mut State<N>,
+) -> Result<StepReport, StepFailure> {
+    let CollocationWorkspace {
+        tables,
+        offsets,
+        start,
+        constant_mass,
+        ..
+    } = workspace;
+    let Some(data) = constant_mass.as_mut() else {
+        return Err(StepFailure::SingularMatrix);
+    };
+    let mass_inverse = match data.mass_inverse {
+        Some(inverse) => inverse,
+        None => {
+            let mass = model.mass_matrix(t, &state.q, &state.y);
+            *data
+                .mass_inverse
+                .insert(invert_small(&mass).ok_or(StepFailure::SingularMatrix)?)
+        }
+    };
+    let s = tables.degree;
+    let quarter = 0.25 * h * h;
+    for (i, stage) in data.stages.iter_mut().enumerate() {
+        *stage = offsets.fixed_rows::<N>(i * N).into_owned();
+    }
+    let position_scale = state.q.amax();
+    let mut control = FixedPoint::new(max_iterations);
+    loop {
+        for (i, (acceleration, stage)) in
+            data.accelerations.iter_mut().zip(&data.stages).enumerate()
+        {
+            let force = model.force(tables.time(t, i + 1), &(state.q + stage), &state.y);
+            *acceleration = mass_inverse * force;
+        }
+        let mut change: f64 = 0.0;
+        let mut size: f64 = 0.0;
+        for (i, stage) in data.stages.iter_mut().enumerate() {
+            let row = &data.inverse[i * s..(i + 1) * s];
+            let mut sum = SVector::<f64, N>::zeros();
+            for (e, acceleration) in row.iter().zip(&data.accelerations) {
+                sum += acceleration * *e;
+            }
+            let next = state.y * (h * data.velocity_coefficients[i]) + sum * quarter;
+            change = change.max((next - *stage).amax());
+            size = size.max(next.amax());
+            *stage = next;
+        }
+        if control.converged(change, size + position_scale)? {
+            break;
+        }
+    }
+    let mut dv = SVector::<f64, N>::zeros();
+    for (b, acceleration) in data.weights.iter().zip(&data.accelerations) {
+        dv += acceleration * (h * b);
+    }
+    for (i, stage) in data.stages.iter().enumerate() {
+        offsets.fixed_rows_mut::<N>(i * N).copy_from(stage);
+    }
+    increment.q = data.stages[s - 1];
+    increment.y = dv;
+    start.remember(offsets);
+    let iterations = control.iterations();
+    Ok(StepReport {
+        iterations,
+        evaluations: s * iterations,
+    })
+}
+
 impl<const N: usize> Method<N> for SpectralCollocation {
     type Workspace = CollocationWorkspace<N>;
 
@@ -263,17 +402,19 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         crate::error::require_positive("h", h)?;
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
         let s = self.points - 1;
-        let zero = AccelerationJacobian {
-            value: SVector::zeros(),
-            q: SMatrix::zeros(),
-            v: SMatrix::zeros(),
+        let tables = Tables::new(&basis, h);
+        let constant_mass = match L::STRUCTURE {
+            Structure::ConstantMass => ConstantMass::new(&tables, self.points),
+            Structure::General => None,
         };
+        let nodes = if constant_mass.is_some() { 0 } else { s };
         Ok(CollocationWorkspace {
-            tables: Tables::new(&basis, h),
+            tables,
             offsets: DVector::zeros(s * N),
             start: StartingValues::new(&basis, N),
-            nodes: vec![zero; s],
+            nodes: vec![zero_node(); nodes],
             newton: Newton::new(s * N, self.max_iterations),
+            constant_mass,
         })
     }
 
@@ -300,12 +441,24 @@ impl<const N: usize> Method<N> for SpectralCollocation {
                 .start
                 .taylor(h, &state.y, &a, &mut workspace.offsets);
         }
+        if workspace.constant_mass.is_some() {
+            return fixed_point_step(
+                model,
+                self.max_iterations,
+                workspace,
+                t,
+                h,
+                state,
+                increment,
+            );
+        }
         let CollocationWorkspace {
             tables,
             offsets,
             nodes,
             newton,
             start,
+            ..
         } = workspace;
         let mut singular = false;
         let iterations = newton.solve(offsets, |z, jacobian, residual| {
@@ -342,6 +495,8 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         self.step(model, workspace, t, h, state, &mut increment)?;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
+        // The fixed-point path keeps no Jacobians: evaluate them at the converged nodes.
+        ws.nodes.resize(s, zero_node());
         if !evaluate_nodes(model, &ws.tables, &mut ws.nodes, t, state, &ws.offsets) {
             return Err(StepFailure::SingularMatrix);
         }

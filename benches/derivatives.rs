@@ -1,0 +1,189 @@
+//! The AD tax: what each derived quantity of a Lagrangian costs, per model and per dual type.
+//!
+//! For every zoo model, at one fixed generic state (no symmetric or zero components), this
+//! times the methods of [`LagrangianExt`]:
+//!
+//! | id | work | num-dual type |
+//! | --- | --- | --- |
+//! | `value` | L itself | `f64` (the baseline) |
+//! | `force_ad` | ∂L/∂q, one gradient sweep | `DualSVec64<N>` |
+//! | `first_derivatives` | L, ∂L/∂q, ∂L/∂q̇: two gradient sweeps | `DualSVec64<N>` |
+//! | `second_derivatives` | L, gradients, L_qq, L_qv, L_vv: three sweeps | `HyperDualVec`, 2 × `Dual2Vec` |
+//! | `acceleration` | q̈ = L_vv⁻¹(L_q − L_vq q̇): second derivatives + a small solve | as above |
+//! | `acceleration_jacobian` | q̈, ∂q̈/∂q, ∂q̈/∂q̇: the acceleration on nested duals | `DualSVec64` over `HyperDualVec`/`Dual2Vec` |
+//!
+//! For Kepler (L = |v|²/2 + 1/|q|) the same quantities are also written by hand, so the ratio
+//! `force_ad / force_hand` is the price of never writing a derivative:
+//! `force_hand` (−q/|q|³), `second_derivatives_hand` (the same [`SecondDerivatives`] struct,
+//! with L_qq = −I/|q|³ + 3qqᵀ/|q|⁵) and `acceleration_jacobian_hand` (q̈ = −q/|q|³ with
+//! ∂q̈/∂q = L_qq, ∂q̈/∂q̇ = 0). The hand-written results are checked against AD before timing.
+//!
+//! Every input goes through [`std::hint::black_box`], and so does every output.
+//! Benchmark ids are `derivatives/<model>/<quantity>`.
+//!
+//! Run with `cargo bench --bench derivatives` (add a filter such as `-- kepler` to run one
+//! model). Timings are short on purpose (2 s measurement, 0.5 s warm-up, 20 samples); the
+//! medians are in `target/criterion/derivatives_<model>/<quantity>/new/estimates.json`.
+
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
+use nalgebra::{SMatrix, SVector};
+use std::hint::black_box;
+use std::time::Duration;
+use svi::derived::{AccelerationJacobian, SecondDerivatives};
+use svi::{Lagrangian, LagrangianExt};
+use svi_models::{DoublePendulum, HarmonicOscillator, Kepler, Pendulum, SpringPendulum};
+
+/// Time of the fixed evaluation point (no model here depends on it).
+const T: f64 = 0.3;
+
+/// Open the group `derivatives/<name>` and time the six AD quantities of `model` at (q, v).
+/// The group is returned so that a caller can add hand-written variants before finishing it.
+fn model_group<'a, L: Lagrangian<N>, const N: usize>(
+    c: &'a mut Criterion,
+    name: &str,
+    model: L,
+    q: SVector<f64, N>,
+    v: SVector<f64, N>,
+) -> BenchmarkGroup<'a, WallTime> {
+    let mut group = c.benchmark_group(format!("derivatives/{name}"));
+    group.bench_function("value", |b| {
+        b.iter(|| black_box(&model).value(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("force_ad", |b| {
+        b.iter(|| black_box(&model).force(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("first_derivatives", |b| {
+        b.iter(|| black_box(&model).first_derivatives(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("second_derivatives", |b| {
+        b.iter(|| black_box(&model).second_derivatives(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("acceleration", |b| {
+        b.iter(|| black_box(&model).acceleration(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("acceleration_jacobian", |b| {
+        b.iter(|| {
+            black_box(&model).acceleration_jacobian(black_box(T), black_box(&q), black_box(&v))
+        })
+    });
+    group
+}
+
+/// Kepler's ∂L/∂q = −q/|q|³, by hand.
+fn kepler_force_hand(q: &SVector<f64, 2>) -> SVector<f64, 2> {
+    let inverse_radius = q.dot(q).sqrt().recip();
+    q * -(inverse_radius * inverse_radius * inverse_radius)
+}
+
+/// Kepler's L_qq = −I/|q|³ + 3 q qᵀ/|q|⁵, by hand.
+fn kepler_hessian_hand(q: &SVector<f64, 2>) -> SMatrix<f64, 2, 2> {
+    let inverse_radius = q.dot(q).sqrt().recip();
+    let inverse_radius2 = inverse_radius * inverse_radius;
+    let inverse_radius3 = inverse_radius2 * inverse_radius;
+    (q * q.transpose()) * (3.0 * inverse_radius3 * inverse_radius2)
+        - SMatrix::identity() * inverse_radius3
+}
+
+/// Everything [`LagrangianExt::second_derivatives`] returns for Kepler, by hand.
+fn kepler_second_derivatives_hand(
+    q: &SVector<f64, 2>,
+    v: &SVector<f64, 2>,
+) -> SecondDerivatives<2> {
+    let inverse_radius = q.dot(q).sqrt().recip();
+    let inverse_radius2 = inverse_radius * inverse_radius;
+    let inverse_radius3 = inverse_radius2 * inverse_radius;
+    SecondDerivatives {
+        value: 0.5 * v.dot(v) + inverse_radius,
+        q: q * -inverse_radius3,
+        v: *v,
+        qq: (q * q.transpose()) * (3.0 * inverse_radius3 * inverse_radius2)
+            - SMatrix::identity() * inverse_radius3,
+        qv: SMatrix::zeros(),
+        vv: SMatrix::identity(),
+    }
+}
+
+/// Everything [`LagrangianExt::acceleration_jacobian`] returns for Kepler, by hand.
+fn kepler_acceleration_jacobian_hand(q: &SVector<f64, 2>) -> AccelerationJacobian<2> {
+    AccelerationJacobian {
+        value: kepler_force_hand(q),
+        q: kepler_hessian_hand(q),
+        v: SMatrix::zeros(),
+    }
+}
+
+/// The hand-written Kepler derivatives agree with AD at (q, v).
+fn check_kepler_hand(model: &Kepler, q: &SVector<f64, 2>, v: &SVector<f64, 2>) {
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-13 * (1.0 + b.abs());
+    let ad = model.second_derivatives(T, q, v);
+    let hand = kepler_second_derivatives_hand(q, v);
+    let pairs = [
+        (hand.value, ad.value),
+        (hand.q[0], ad.q[0]),
+        (hand.q[1], ad.q[1]),
+        (hand.v[0], ad.v[0]),
+        (hand.v[1], ad.v[1]),
+    ];
+    assert!(pairs.iter().all(|&(a, b)| close(a, b)), "Kepler gradients");
+    for (a, b) in [(hand.qq, ad.qq), (hand.qv, ad.qv), (hand.vv, ad.vv)] {
+        assert!(
+            a.iter().zip(b.iter()).all(|(&x, &y)| close(x, y)),
+            "Kepler Hessian"
+        );
+    }
+    let force = model.force(T, q, v);
+    let by_hand = kepler_force_hand(q);
+    assert!(
+        close(force[0], by_hand[0]) && close(force[1], by_hand[1]),
+        "Kepler force"
+    );
+    let ad = model
+        .acceleration_jacobian(T, q, v)
+        .expect("regular mass matrix");
+    let hand = kepler_acceleration_jacobian_hand(q);
+    for (a, b) in [(hand.q, ad.q), (hand.v, ad.v)] {
+        assert!(
+            a.iter().zip(b.iter()).all(|(&x, &y)| close(x, y)),
+            "Kepler ∂q̈"
+        );
+    }
+}
+
+fn derivatives(c: &mut Criterion) {
+    // One-dimensional models: a generic angle and rate.
+    let q1 = SVector::from([0.6]);
+    let v1 = SVector::from([-0.8]);
+    // Two-dimensional models: no zero, equal or symmetric components.
+    let q2 = SVector::from([0.7, -0.4]);
+    let v2 = SVector::from([0.3, 1.1]);
+
+    model_group(c, "oscillator", HarmonicOscillator::default(), q1, v1).finish();
+    model_group(c, "pendulum", Pendulum::default(), q1, v1).finish();
+    model_group(c, "spring-pendulum", SpringPendulum::default(), q2, v2).finish();
+    model_group(c, "double-pendulum", DoublePendulum::default(), q2, v2).finish();
+
+    let kepler = Kepler::default();
+    check_kepler_hand(&kepler, &q2, &v2);
+    let mut group = model_group(c, "kepler", kepler, q2, v2);
+    group.bench_function("force_hand", |b| {
+        b.iter(|| kepler_force_hand(black_box(&q2)))
+    });
+    group.bench_function("second_derivatives_hand", |b| {
+        b.iter(|| kepler_second_derivatives_hand(black_box(&q2), black_box(&v2)))
+    });
+    group.bench_function("acceleration_jacobian_hand", |b| {
+        b.iter(|| kepler_acceleration_jacobian_hand(black_box(&q2)))
+    });
+    group.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .measurement_time(Duration::from_secs(2))
+        .warm_up_time(Duration::from_millis(500))
+        .sample_size(20);
+    targets = derivatives
+}
+criterion_main!(benches);
