@@ -72,11 +72,13 @@ const LEGENDRE_MAX_ITERATIONS: usize = 50;
 /// are `f64` time, configuration q and velocity q̇.
 pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     /// L(t, q, q̇).
+    #[inline]
     fn value(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
         self.lagrangian(t, q, v)
     }
 
     /// L, ∂L/∂q and p = ∂L/∂q̇.
+    #[inline]
     fn first_derivatives(
         &self,
         t: f64,
@@ -103,6 +105,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     }
 
     /// The generalised force ∂L/∂q alone (one gradient sweep).
+    #[inline]
     fn force(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
         gradient(
             |x: SVector<DualSVec64<N>, N>| {
@@ -114,6 +117,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     }
 
     /// The canonical momentum p = ∂L/∂q̇.
+    #[inline]
     fn momentum(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
         gradient(
             |y: SVector<DualSVec64<N>, N>| {
@@ -125,6 +129,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     }
 
     /// L, its gradients and its Hessian blocks.
+    #[inline]
     fn second_derivatives(
         &self,
         t: f64,
@@ -135,6 +140,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     }
 
     /// The mass matrix ∂²L/∂q̇².
+    #[inline]
     fn mass_matrix(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SMatrix<f64, N, N> {
         hessian(
             |y: SVector<Dual2Vec<f64, Const<N>>, N>| {
@@ -146,6 +152,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     }
 
     /// The energy E = p·q̇ − L.
+    #[inline]
     fn energy(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
         let (value, p) = gradient(
             |y: SVector<DualSVec64<N>, N>| {
@@ -200,6 +207,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
 
     /// The Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt), or `None` where
     /// the mass matrix L_vv is singular.
+    #[inline]
     fn acceleration(
         &self,
         t: f64,

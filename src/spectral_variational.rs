@@ -193,13 +193,17 @@ impl Tables {
 /// Lagrangians, L = ½ q̇ᵀMq̇ − V(t, q).
 ///
 /// Then g_ν = Σ_j K_νj M qʲ + Σ_μ (h/2) w_μ l_ν(τ_μ) ∂L/∂q(τ_μ) with the stiffness matrix
-/// K = (2/h) K̃, K̃_νj = Σ_μ w_μ l̇_ν(τ_μ) l̇_j(τ_μ), and (8a)–(8b) become the fixed point
+/// K = (2/h) K̃, K̃_νj = Σ_μ w_μ l̇_ν(τ_μ) l̇_j(τ_μ), and (8a)–(8b) solve to
 ///
-/// Z_j = c_j h M⁻¹p_k + h² M⁻¹ Σ_μ P_jμ ∂L/∂q(τ_μ, q_k + Σ_i l_i(τ_μ) Z_i),  j = 1, …, s,
+/// Z_j = h c_j M⁻¹p_k + h² Σ_μ P_jμ M⁻¹ ∂L/∂q(τ_μ),  j = 1, …, s,
 ///
 /// for the offsets Z_j = qʲ − q_k, with c_j = −½ (K̃*⁻¹)_j0 and
 /// P_jμ = −¼ Σ_ν (K̃*⁻¹)_jν w_μ l_ν(τ_μ), where K̃* keeps rows 0..s−1 and columns 1..s of K̃.
-/// Only the force ∂L/∂q is evaluated, never a Hessian: for m = s this is the Nyström form
+/// The iteration runs on the positions at the quadrature points, Q_μ = q_k + Σ_j l_j(τ_μ) Z_j:
+///
+/// Q_μ ← q_k + h c'_μ M⁻¹p_k + h² Σ_ν A_μν M⁻¹ ∂L/∂q(t_ν, Q_ν),  c' = l c,  A = l P,
+///
+/// so only the force ∂L/∂q is evaluated, never a Hessian: for m = s this is the Nyström form
 /// of the Gauss–Legendre method.
 #[derive(Debug, Clone)]
 struct ConstantMass<const N: usize> {
@@ -207,14 +211,20 @@ struct ConstantMass<const N: usize> {
     velocity_coefficients: Vec<f64>,
     /// P_jμ, row-major s × m.
     propagation: Vec<f64>,
+    /// c'_μ.
+    stage_velocity: Vec<f64>,
+    /// A_μν, row-major m × m.
+    stage_matrix: Vec<f64>,
     /// l_j(τ_μ), row-major m × s (j = 1..s).
     stage_values: Vec<f64>,
     /// M⁻¹, from the first step.
     mass_inverse: Option<SMatrix<f64, N, N>>,
     /// ∂L/∂q at the quadrature points.
     forces: Vec<SVector<f64, N>>,
-    /// Offsets Z_j during the iteration.
-    stages: Vec<SVector<f64, N>>,
+    /// M⁻¹ ∂L/∂q at the quadrature points.
+    accelerations: Vec<SVector<f64, N>>,
+    /// Positions Q_μ at the quadrature points.
+    positions: Vec<SVector<f64, N>>,
 }
 
 impl<const N: usize> ConstantMass<N> {
@@ -232,29 +242,44 @@ impl<const N: usize> ConstantMass<N> {
         if !inverse.iter().all(|x| x.is_finite()) {
             return None;
         }
-        let mut propagation = vec![0.0; s * m];
-        for j in 0..s {
-            for mu in 0..m {
-                propagation[j * m + mu] = -0.25
-                    * (0..s)
-                        .map(|nu| {
-                            inverse[(j, nu)]
-                                * tables.reference_weights[mu]
-                                * tables.values[(mu, nu)]
-                        })
-                        .sum::<f64>();
-            }
-        }
+        let velocity_coefficients: Vec<f64> = (0..s).map(|j| -0.5 * inverse[(j, 0)]).collect();
+        let propagation: Vec<f64> = (0..s * m)
+            .map(|k| {
+                let (j, mu) = (k / m, k % m);
+                let load: f64 = (0..s)
+                    .map(|nu| inverse[(j, nu)] * tables.values[(mu, nu)])
+                    .sum();
+                -0.25 * tables.reference_weights[mu] * load
+            })
+            .collect();
+        let stage_values: Vec<f64> = (0..m * s)
+            .map(|k| tables.values[(k / s, k % s + 1)])
+            .collect();
+        let stage_velocity = (0..m)
+            .map(|mu| {
+                (0..s)
+                    .map(|j| stage_values[mu * s + j] * velocity_coefficients[j])
+                    .sum()
+            })
+            .collect();
+        let stage_matrix = (0..m * m)
+            .map(|k| {
+                let (mu, nu) = (k / m, k % m);
+                (0..s)
+                    .map(|j| stage_values[mu * s + j] * propagation[j * m + nu])
+                    .sum()
+            })
+            .collect();
         Some(ConstantMass {
-            velocity_coefficients: (0..s).map(|j| -0.5 * inverse[(j, 0)]).collect(),
+            velocity_coefficients,
             propagation,
-            stage_values: (0..m)
-                .flat_map(|mu| (1..=s).map(move |j| (mu, j)))
-                .map(|(mu, j)| tables.values[(mu, j)])
-                .collect(),
+            stage_velocity,
+            stage_matrix,
+            stage_values,
             mass_inverse: None,
             forces: vec![SVector::zeros(); m],
-            stages: vec![SVector::zeros(); s],
+            accelerations: vec![SVector::zeros(); m],
+            positions: vec![SVector::zeros(); m],
         })
     }
 }
@@ -521,34 +546,37 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let m = tables.nodes.len();
     let velocity = mass_inverse * state.y * h;
     let h2 = h * h;
-    for (j, stage) in data.stages.iter_mut().enumerate() {
-        *stage = offsets.fixed_rows::<N>(j * N).into_owned();
+    for (mu, position) in data.positions.iter_mut().enumerate() {
+        *position = state.q;
+        let values = &data.stage_values[mu * s..(mu + 1) * s];
+        for (value, offset) in values.iter().zip(offsets.as_slice().chunks_exact(N)) {
+            *position += SVector::<f64, N>::from_column_slice(offset) * *value;
+        }
     }
-    let position_scale = state.q.amax();
     let mut control = FixedPoint::new(max_iterations);
     loop {
-        for (mu, force) in data.forces.iter_mut().enumerate() {
-            let mut q = state.q;
-            let values = &data.stage_values[mu * s..(mu + 1) * s];
-            for (value, stage) in values.iter().zip(&data.stages) {
-                q += stage * *value;
-            }
-            *force = model.force(tables.time(t, mu), &q, &state.y);
+        for (mu, (force, acceleration)) in data
+            .forces
+            .iter_mut()
+            .zip(data.accelerations.iter_mut())
+            .enumerate()
+        {
+            *force = model.force(tables.time(t, mu), &data.positions[mu], &state.y);
+            *acceleration = mass_inverse * *force * h2;
         }
         let mut change: f64 = 0.0;
         let mut size: f64 = 0.0;
-        for (j, stage) in data.stages.iter_mut().enumerate() {
-            let row = &data.propagation[j * m..(j + 1) * m];
-            let mut sum = SVector::<f64, N>::zeros();
-            for (p, force) in row.iter().zip(&data.forces) {
-                sum += force * *p;
+        for (mu, position) in data.positions.iter_mut().enumerate() {
+            let row = &data.stage_matrix[mu * m..(mu + 1) * m];
+            let mut next = state.q + velocity * data.stage_velocity[mu];
+            for (a, acceleration) in row.iter().zip(&data.accelerations) {
+                next += acceleration * *a;
             }
-            let next = velocity * data.velocity_coefficients[j] + mass_inverse * sum * h2;
-            change = change.max((next - *stage).amax());
+            change = change.max((next - *position).amax());
             size = size.max(next.amax());
-            *stage = next;
+            *position = next;
         }
-        if control.converged(change, size + position_scale)? {
+        if control.converged(change, size)? {
             break;
         }
     }
@@ -556,10 +584,15 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     for (mu, force) in data.forces.iter().enumerate() {
         dp += force * tables.weights[mu];
     }
-    for (j, stage) in data.stages.iter().enumerate() {
-        offsets.fixed_rows_mut::<N>(j * N).copy_from(stage);
+    for (j, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
+        let row = &data.propagation[j * m..(j + 1) * m];
+        let mut offset = velocity * data.velocity_coefficients[j];
+        for (p, acceleration) in row.iter().zip(&data.accelerations) {
+            offset += acceleration * *p;
+        }
+        target.copy_from_slice(offset.as_slice());
     }
-    increment.q = data.stages[s - 1];
+    increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
     increment.y = dp;
     start.remember(offsets);
     let iterations = control.iterations();

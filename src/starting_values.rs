@@ -9,15 +9,16 @@
 //! Node values are stored as offsets qᵛ − q_k (ν = 1, …, s; q⁰ − q_k = 0 is implicit).
 
 use crate::basis::LagrangeBasis;
-use nalgebra::{DMatrix, DVector, SVector};
+use nalgebra::{DVector, SVector};
 
 /// Extrapolation table and the previous step's node offsets.
 #[derive(Debug, Clone)]
 pub(crate) struct StartingValues {
     /// CGL nodes x_ν on [−1, 1].
     nodes: Vec<f64>,
-    /// l_j(x_ν + 2).
-    extrapolation: DMatrix<f64>,
+    /// X_νj = l_j(x_ν + 2) − δ_js, ν, j = 1..s, row-major: by Σ_j l_j = 1 the new offsets
+    /// are Σ_j X_νj Z_j from the previous offsets Z_j.
+    extrapolation: Vec<f64>,
     /// Node offsets of the previous step (ν = 1..s, stacked).
     previous: DVector<f64>,
     /// Whether `previous` belongs to a step of the current size.
@@ -27,9 +28,17 @@ pub(crate) struct StartingValues {
 impl StartingValues {
     pub(crate) fn new(basis: &LagrangeBasis, dimension: usize) -> Self {
         let shifted: Vec<f64> = basis.nodes().iter().map(|x| x + 2.0).collect();
+        let values = basis.value_matrix(&shifted);
+        let s = basis.len() - 1;
+        let extrapolation = (0..s * s)
+            .map(|k| {
+                let (nu, j) = (k / s + 1, k % s + 1);
+                values[(nu, j)] - f64::from(j == s)
+            })
+            .collect();
         StartingValues {
             nodes: basis.nodes().to_vec(),
-            extrapolation: basis.value_matrix(&shifted),
+            extrapolation,
             previous: DVector::zeros((basis.len() - 1) * dimension),
             valid: false,
         }
@@ -54,14 +63,15 @@ impl StartingValues {
     /// Offsets from the previous step's polynomial, relative to the new start q_{k+1}.
     pub(crate) fn extrapolate<const N: usize>(&self, offsets: &mut DVector<f64>) {
         let s = self.nodes.len() - 1;
-        let last = self.previous.fixed_rows::<N>((s - 1) * N).into_owned();
-        for nu in 1..=s {
-            let mut guess = -last * self.extrapolation[(nu, 0)];
-            for j in 1..=s {
-                let offset = self.previous.fixed_rows::<N>((j - 1) * N) - last;
-                guess += offset * self.extrapolation[(nu, j)];
+        let previous = self.previous.as_slice();
+        for (nu, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
+            let row = &self.extrapolation[nu * s..(nu + 1) * s];
+            target.fill(0.0);
+            for (x, node) in row.iter().zip(previous.chunks_exact(N)) {
+                for (t, z) in target.iter_mut().zip(node) {
+                    *t += x * z;
+                }
             }
-            offsets.fixed_rows_mut::<N>((nu - 1) * N).copy_from(&guess);
         }
     }
 

@@ -90,6 +90,7 @@ impl Lagrangian<2> for SpringPendulum {
     const TIME_DEPENDENT: bool = false;
 
     /// Written as in §5.7.2, through the Cartesian position and velocity of the bob.
+    #[inline]
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         let (a, theta) = (q[0], q[1]);
         let (a_dot, theta_dot) = (v[0], v[1]);
