@@ -2,8 +2,10 @@
 //!
 //! # Discrete equations
 //! The Euler–Lagrange equations are solved for the acceleration, q̈ = f(t, q, q̇) with
-//! f = L_vv⁻¹ (L_q − L_vq q̇ − L_vt) (derived from L by automatic differentiation,
-//! [`crate::LagrangianExt::acceleration`]), and written as the first-order system
+//! f = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L) (derived from L by automatic differentiation,
+//! [`crate::LagrangianExt::acceleration`]; the external force f_L of the Lagrange–d'Alembert
+//! principle only for [`crate::Lagrangian::FORCED`] models, and its Jacobian comes with the
+//! acceleration's), and written as the first-order system
 //! q̇ = y, ẏ = f(t, q, y) (Li, Wu, Leok 2018, eqs. 12, 19). On each step both q and y are
 //! polynomials of degree s through the s + 1 CGL nodes c_0, …, c_s of [t, t + h], with
 //! q(c_0) = q_k, y(c_0) = q̇_k, and the equations are collocated at c_1, …, c_s
@@ -125,13 +127,18 @@ fn collocation_quadrature(points: usize) -> Option<(Vec<f64>, Vec<f64>)> {
 }
 
 /// Tables and buffers of the fixed-point iteration for [`Structure::ConstantMass`]
-/// Lagrangians, where f(t, q, q̇) = M⁻¹ ∂L/∂q(t, q) does not depend on q̇.
+/// Lagrangians, where f(t, q, q̇) = M⁻¹ (∂L/∂q(t, q) + f_L(t, q, q̇)) depends on q̇ only
+/// through the external force f_L of a forced model.
 ///
 /// With Λ* = (2/h) D* and λ_0 = (2/h) d_0, eq. (24) becomes the fixed point
 ///
 /// Z_i = h e_i q̇_k + (h²/4) Σ_j E_ij M⁻¹ ∂L/∂q(t_j, q_k + Z_j),  E = (D*)⁻², e = −½ E d_0,
 ///
-/// for the offsets Z_i = qⁱ − q_k, and the velocity update is the collocation quadrature
+/// for the offsets Z_i = qⁱ − q_k (with an external force, f_L is evaluated at the node
+/// velocities Y_i = Σ_j Λ*_ij Z_j of the current iterate; a velocity-dependent force makes
+/// the iteration contract only by a factor O(h ‖M⁻¹ ∂f_L/∂q̇‖), so a forced model that does
+/// not converge falls back to Newton's method for the rest of the run), and the velocity
+/// update is the collocation quadrature
 /// q̇_{k+1} − q̇_k = ∫ y′ = h Σ_i b_i f_i (y′ interpolates f at c_1..c_s), which, unlike
 /// yˢ − q̇_k, has no cancellation.
 #[derive(Debug, Clone)]
@@ -250,6 +257,9 @@ pub struct CollocationWorkspace<const N: usize> {
     newton: Newton,
     /// Fixed-point data, for constant-mass Lagrangians.
     constant_mass: Option<ConstantMass<N>>,
+    /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
+    /// the run takes Newton's method.
+    newton_only: bool,
 }
 
 /// Acceleration data at every collocation node; `false` if the mass matrix is singular
@@ -343,7 +353,16 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         for (i, (acceleration, stage)) in
             data.accelerations.iter_mut().zip(&data.stages).enumerate()
         {
-            let force = model.force(tables.time(t, i + 1), &(state.q + stage), &state.y);
+            let time = tables.time(t, i + 1);
+            let position = state.q + stage;
+            let mut force = model.force(time, &position, &state.y);
+            if L::FORCED {
+                let mut velocity = SVector::<f64, N>::zeros();
+                for (j, other) in data.stages.iter().enumerate() {
+                    velocity += other * tables.lambda[(i, j)];
+                }
+                force += model.external_force(time, &position, &velocity);
+            }
             *acceleration = mass_inverse * force;
         }
         let mut change: f64 = 0.0;
@@ -407,7 +426,12 @@ impl<const N: usize> Method<N> for SpectralCollocation {
             Structure::ConstantMass => ConstantMass::new(&tables, self.points),
             Structure::General => None,
         };
-        let nodes = if constant_mass.is_some() { 0 } else { s };
+        // A forced constant-mass model keeps Newton's buffers for its fallback.
+        let nodes = if constant_mass.is_some() && !L::FORCED {
+            0
+        } else {
+            s
+        };
         Ok(CollocationWorkspace {
             tables,
             offsets: DVector::zeros(s * N),
@@ -415,6 +439,7 @@ impl<const N: usize> Method<N> for SpectralCollocation {
             nodes: vec![zero_node(); nodes],
             newton: Newton::new(s * N, self.max_iterations),
             constant_mass,
+            newton_only: false,
         })
     }
 
@@ -441,8 +466,9 @@ impl<const N: usize> Method<N> for SpectralCollocation {
                 .start
                 .taylor(h, &state.y, &a, &mut workspace.offsets);
         }
-        if workspace.constant_mass.is_some() {
-            return fixed_point_step(
+        let mut spent = 0;
+        if workspace.constant_mass.is_some() && !workspace.newton_only {
+            let result = fixed_point_step(
                 model,
                 self.max_iterations,
                 workspace,
@@ -451,6 +477,17 @@ impl<const N: usize> Method<N> for SpectralCollocation {
                 state,
                 increment,
             );
+            match result {
+                // A velocity-dependent force makes the fixed point contract only by a factor
+                // O(h ‖M⁻¹ ∂f_L/∂q̇‖): strong friction falls back to Newton's method (from
+                // the same starting values, which the failed iteration left in place).
+                Err(StepFailure::NonConvergence { iterations, .. }) if L::FORCED => {
+                    spent = iterations;
+                    workspace.newton_only = true;
+                }
+                Err(StepFailure::NonFinite) if L::FORCED => workspace.newton_only = true,
+                result => return result,
+            }
         }
         let CollocationWorkspace {
             tables,
@@ -472,7 +509,7 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         if singular {
             return Err(StepFailure::SingularMatrix);
         }
-        let iterations = iterations?;
+        let iterations = iterations? + spent;
         let s = tables.degree;
         increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = tables.velocity::<N>(s, offsets) - state.y;

@@ -8,10 +8,13 @@
 //!   `partial_hessian`: `2N` is not a const expression on stable Rust, so the full
 //!   second derivative is assembled from three N-sized sweeps);
 //! - the energy E = p·q̇ − L and the inverse Legendre map q̇(q, p) (Newton with L_vv);
-//! - the Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt) (Li–Wu–Leok eq. 2
-//!   solved for q̈, the right-hand side f of eq. 12) and its exact Jacobian in (q, q̇),
-//!   obtained by evaluating the acceleration itself with dual numbers (third derivatives of
-//!   L through nested duals). L_vt is computed only for time-dependent Lagrangians.
+//! - the Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L) (Li–Wu–Leok
+//!   eq. 2 solved for q̈, the right-hand side f of eq. 12; the external force f_L of the
+//!   Lagrange–d'Alembert principle enters only for [`Lagrangian::FORCED`] models) and its
+//!   exact Jacobian in (q, q̇), obtained by evaluating the acceleration itself with dual
+//!   numbers (third derivatives of L, and first derivatives of f_L, through nested duals).
+//!   L_vt is computed only for time-dependent Lagrangians;
+//! - the external force f_L and its Jacobian ∂f_L/∂q, ∂f_L/∂q̇ (two N-sized sweeps).
 //!
 //! The methods live on the blanket extension trait [`LagrangianExt`], implemented for every
 //! [`Lagrangian`].
@@ -61,6 +64,28 @@ pub struct AccelerationJacobian<const N: usize> {
     pub q: SMatrix<f64, N, N>,
     /// ∂q̈/∂q̇.
     pub v: SMatrix<f64, N, N>,
+}
+
+/// The external force f_L of a [`Lagrangian::FORCED`] model and its Jacobian.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForceJacobian<const N: usize> {
+    /// f_L(t, q, q̇).
+    pub value: SVector<f64, N>,
+    /// ∂f_L/∂q: entry (i, j) is ∂f_i/∂q_j.
+    pub q: SMatrix<f64, N, N>,
+    /// ∂f_L/∂q̇: entry (i, j) is ∂f_i/∂q̇_j.
+    pub v: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> ForceJacobian<N> {
+    /// The zero force (the value for unforced models).
+    pub fn zeros() -> Self {
+        ForceJacobian {
+            value: SVector::zeros(),
+            q: SMatrix::zeros(),
+            v: SMatrix::zeros(),
+        }
+    }
 }
 
 /// Iteration cap of the inverse Legendre map.
@@ -205,8 +230,8 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         })
     }
 
-    /// The Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt), or `None` where
-    /// the mass matrix L_vv is singular.
+    /// The Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L), or `None`
+    /// where the mass matrix L_vv is singular (f_L only for [`Lagrangian::FORCED`] models).
     #[inline]
     fn acceleration(
         &self,
@@ -215,6 +240,37 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         v: &SVector<f64, N>,
     ) -> Option<SVector<f64, N>> {
         acceleration_generic(self, t, q, v)
+    }
+
+    /// The external force f_L and its Jacobian ∂f_L/∂q, ∂f_L/∂q̇ (two N-sized dual sweeps);
+    /// all zero, without evaluating anything, unless the model is [`Lagrangian::FORCED`].
+    #[inline]
+    fn external_force_jacobian(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> ForceJacobian<N> {
+        if !Self::FORCED {
+            return ForceJacobian::zeros();
+        }
+        let (value, dq) = jacobian(
+            |x: SVector<DualSVec64<N>, N>| {
+                self.external_force(DualVec::from_re(t), &x, &v.map(DualVec::from_re))
+            },
+            q,
+        );
+        let (_, dv) = jacobian(
+            |y: SVector<DualSVec64<N>, N>| {
+                self.external_force(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
+            },
+            v,
+        );
+        ForceJacobian {
+            value,
+            q: dq,
+            v: dv,
+        }
     }
 
     /// The acceleration and its exact Jacobian ∂q̈/∂q, ∂q̈/∂q̇ (third derivatives of L by
@@ -350,7 +406,7 @@ where
     vt.column(0).into_owned()
 }
 
-/// The Euler–Lagrange acceleration in any scalar type.
+/// The (forced) Euler–Lagrange acceleration in any scalar type.
 fn acceleration_generic<L, D, const N: usize>(
     model: &L,
     t: D,
@@ -365,6 +421,9 @@ where
     let mut rhs = d.q - d.qv.transpose() * v;
     if L::TIME_DEPENDENT {
         rhs -= velocity_time_derivative(model, t, q, v);
+    }
+    if L::FORCED {
+        rhs += model.external_force(t, q, v);
     }
     solve_small(d.vv, rhs)
 }

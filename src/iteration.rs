@@ -106,9 +106,7 @@ impl FixedPoint {
         if !size.is_finite() {
             return Err(StepFailure::NonFinite);
         }
-        if size <= 2.0 * f64::EPSILON * scale
-            || (size >= self.previous && size <= FIXED_POINT_NOISE * scale)
-        {
+        if size == 0.0 || (size >= self.previous && size <= FIXED_POINT_NOISE * scale) {
             return Ok(true);
         }
         if self.iterations >= self.max_iterations {

@@ -34,6 +34,7 @@
 pub mod basis;
 pub mod collocation;
 pub mod derived;
+pub mod discrete_lagrangian;
 pub mod error;
 pub mod integrator;
 mod iteration;
@@ -44,17 +45,25 @@ pub mod observer;
 pub mod quadrature;
 pub mod scalar;
 pub mod spectral_variational;
+pub mod stability;
 mod starting_values;
+pub mod stormer_verlet;
+pub mod variational_integrator;
 pub mod verify;
 
 pub use collocation::SpectralCollocation;
 pub use derived::LagrangianExt;
+pub use discrete_lagrangian::{
+    AdjointSymplecticEuler, DiscreteLagrangian, Midpoint, SymplecticEuler, Trapezoid,
+};
 pub use error::Error;
 pub use integrator::{Initial, Integrator, Run, Statistics, step_count};
 pub use method::{Coordinates, Method, MethodInfo, PhasePoint, State, TangentMap};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;
 pub use spectral_variational::Svi;
+pub use stormer_verlet::StormerVerlet;
+pub use variational_integrator::VariationalIntegrator;
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

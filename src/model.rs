@@ -5,6 +5,12 @@
 //! energy, the Euler–Lagrange acceleration and its Jacobian) is derived from it by automatic
 //! differentiation in [`crate::derived`].
 //!
+//! A non-conservative force f_L(t, q, q̇) (friction, actuation, driving) is part of the model
+//! too: [`Lagrangian::external_force`], switched on by [`Lagrangian::FORCED`]. It lives on the
+//! `Lagrangian` trait rather than a companion trait so that every generic integrator can see
+//! it (a separate trait could not be detected without specialisation), and a model without
+//! force pays nothing for it.
+//!
 //! Companion traits, each optional and small:
 //! - [`Symmetries`]: infinitesimal generators ξ(q) of symmetries of L; the Noether momenta
 //!   J = p·ξ(q) follow automatically ([`crate::derived::LagrangianExt::noether_momentum`]).
@@ -46,12 +52,71 @@ pub trait Lagrangian<const N: usize> {
     /// loop checks the declaration at the initial state and rejects a model that breaks it.
     const STRUCTURE: Structure = Structure::General;
 
+    /// Whether the model has a non-conservative force ([`Lagrangian::external_force`]).
+    ///
+    /// With the default (`false`) no integrator ever evaluates the force: the unforced code
+    /// paths are compiled without it, at zero cost. With `true`, every integrator solves the
+    /// Lagrange–d'Alembert equations; a model with `FORCED = true` whose force is zero gives
+    /// results equal, bit for bit, to the same model with `FORCED = false`.
+    const FORCED: bool = false;
+
     /// The value L(t, q, q̇).
     ///
     /// Mark it `#[inline]`: the integrators evaluate it (with dual numbers) in their inner
     /// loops, and letting the compiler inline it there is worth a factor of two on small
     /// models.
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D;
+
+    /// The non-conservative generalised force f_L(t, q, q̇) of the Lagrange–d'Alembert
+    /// principle
+    ///
+    /// δ∫ L(t, q, q̇) dt + ∫ f_L(t, q, q̇)·δq dt = 0,
+    ///
+    /// whose Euler–Lagrange equations are d/dt ∂L/∂q̇ − ∂L/∂q = f_L (friction, actuation,
+    /// time-dependent driving; Porcù–Penati, *Spectral variational integrators*, "Forced
+    /// mechanics"; Marsden & West 2001, §3.2). Read only when [`Lagrangian::FORCED`] is
+    /// `true`; the default is zero. Like the Lagrangian it is written once, generic over
+    /// [`Scalar`]: the integrators differentiate it (∂f_L/∂q, ∂f_L/∂q̇) by automatic
+    /// differentiation. It may depend on t even when L does not
+    /// ([`Lagrangian::TIME_DEPENDENT`] is about L only), and [`Structure`] is about L only:
+    /// a constant-mass model may have a velocity-dependent force.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::SVector;
+    /// use svi::{Lagrangian, Scalar};
+    ///
+    /// /// A damped oscillator: L = q̇²/2 − q²/2 with friction f = −c q̇.
+    /// struct Damped {
+    ///     c: f64,
+    /// }
+    ///
+    /// impl Lagrangian<1> for Damped {
+    ///     const TIME_DEPENDENT: bool = false;
+    ///     const FORCED: bool = true;
+    ///     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+    ///         (v[0] * v[0] - q[0] * q[0]) * 0.5
+    ///     }
+    ///     fn external_force<D: Scalar>(
+    ///         &self,
+    ///         _t: D,
+    ///         _q: &SVector<D, 1>,
+    ///         v: &SVector<D, 1>,
+    ///     ) -> SVector<D, 1> {
+    ///         v.map(|x| x * (-self.c))
+    ///     }
+    /// }
+    /// ```
+    #[inline]
+    fn external_force<D: Scalar>(
+        &self,
+        t: D,
+        q: &SVector<D, N>,
+        v: &SVector<D, N>,
+    ) -> SVector<D, N> {
+        let _ = (t, q, v);
+        SVector::zeros()
+    }
 }
 
 /// Structure of a Lagrangian that integrators may exploit.

@@ -12,15 +12,21 @@
 //!
 //! −p_k = g_0,  0 = g_ν (ν = 1, …, s − 1),  p_{k+1} = g_s,  with q⁰ = q_k, q_{k+1} = qˢ.
 //!
+//! With an external force f_L ([`crate::Lagrangian::FORCED`], the Lagrange–d'Alembert
+//! principle) the discrete forces come from the same quadrature, weighted by the basis
+//! functions: f_ν = Σ_μ (h/2) w_μ l_ν(τ_μ) f_L(t_μ, q(τ_μ), q̇(τ_μ)), and the equations read
+//!
+//! −p_k = g_0 + f_0,  0 = g_ν + f_ν,  p_{k+1} = g_s + f_s.
+//!
 //! The unknowns q¹, …, qˢ (s·N numbers) are found by Newton's method with the exact Jacobian
-//! ∂g_ν/∂qʲ, assembled from the per-point Hessian blocks L_qq, L_qv, L_vv of L (never from
-//! (s·N)-sized dual numbers). The iteration starts from the previous step's polynomial
+//! ∂g_ν/∂qʲ (+ ∂f_ν/∂qʲ), assembled from the per-point Hessian blocks L_qq, L_qv, L_vv of L
+//! and the force Jacobian ∂f_L/∂q, ∂f_L/∂q̇ (never from (s·N)-sized dual numbers). The iteration starts from the previous step's polynomial
 //! extrapolated to the new nodes and runs to round-off. The unknowns are kept as offsets
 //! qᵛ − q_k so that the stepping loop can add the increment with compensated summation.
 //! The momentum increment is computed without cancellation: summing all g_ν and using
 //! Σ_ν l_ν = 1, Σ_ν l̇_ν = 0 and the internal-stage conditions (8b),
 //!
-//! p_{k+1} − p_k = g_s + g_0 = Σ_μ (h/2) w_μ ∂L/∂q(τ_μ)
+//! p_{k+1} − p_k = g_s + g_0 = Σ_μ (h/2) w_μ ∂L/∂q(τ_μ)   (+ Σ_μ (h/2) w_μ f_L(τ_μ) when forced)
 //!
 //! (the discrete momentum balance; for m = s it is the Nyström update of Gauss–Legendre),
 //! whereas g_0 + g_s term by term cancels O(|p|) contributions every step.
@@ -30,15 +36,19 @@
 //!   is the s-stage Gauss–Legendre collocation method, order 2s);
 //! - symmetric: yes (symmetric nodes and quadrature);
 //! - symplectic: yes (a variational integrator), and it conserves the Noether momenta of
-//!   symmetries of L that act linearly on q (discrete Noether theorem).
+//!   symmetries of L that act linearly on q (discrete Noether theorem). With an external
+//!   force the step is the discrete Lagrange–d'Alembert map, which is not symplectic (it
+//!   dissipates or injects energy as the force does); its order is unchanged.
 //!
 //! # References
 //! Li, Wu, Leok, *Construction and comparison of multidimensional spectral variational
 //! integrators and spectral collocation methods* (2018), §2, eqs. (6)–(11); Hall & Leok,
-//! *Spectral variational integrators* (2015).
+//! *Spectral variational integrators* (2015); forced systems: Marsden & West, *Discrete
+//! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
+//! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
 use crate::basis::LagrangeBasis;
-use crate::derived::{LagrangianExt, SecondDerivatives};
+use crate::derived::{ForceJacobian, LagrangianExt, SecondDerivatives};
 use crate::error::StepFailure;
 use crate::iteration::{FixedPoint, Newton};
 use crate::linalg::{invert, invert_small};
@@ -138,6 +148,8 @@ struct Tables {
     reference_derivatives: DMatrix<f64>,
     /// (2/h) l̇_ν(τ_μ), m × (s + 1).
     derivatives: DMatrix<f64>,
+    /// CGL nodes x_ν.
+    interpolation_nodes: Vec<f64>,
 }
 
 impl Tables {
@@ -153,6 +165,7 @@ impl Tables {
             values: basis.value_matrix(gauss.nodes()),
             reference_derivatives: basis.derivative_matrix(gauss.nodes()),
             derivatives: DMatrix::zeros(quadrature, points),
+            interpolation_nodes: basis.nodes().to_vec(),
         };
         tables.rescale(h);
         Ok(tables)
@@ -205,18 +218,38 @@ impl Tables {
 ///
 /// so only the force ∂L/∂q is evaluated, never a Hessian: for m = s this is the Nyström form
 /// of the Gauss–Legendre method.
+///
+/// With an external force f_L the discrete forces enter exactly like ∂L/∂q (same weights
+/// l_ν(τ_μ) (h/2) w_μ), so the same iteration holds with ∂L/∂q + f_L(t_μ, Q_μ, V_μ). The
+/// velocities at the quadrature points, V_μ = (2/h) Σ_j l̇_j(τ_μ) Z_j, are linear in the
+/// same data:
+///
+/// V_μ ← c''_μ M⁻¹p_k + h Σ_ν B_μν M⁻¹ (∂L/∂q + f_L)(t_ν, Q_ν, V_ν),
+///
+/// c''_μ = 2 Σ_j l̇_j(τ_μ) c_j, B_μν = 2 Σ_j l̇_j(τ_μ) P_jν, and are updated alongside Q_μ
+/// (the stopping rule stays on Q_μ, so that a zero force reproduces the unforced iteration
+/// bit for bit). The velocity dependence makes the iteration contract only by a factor
+/// O(h ‖M⁻¹ ∂f_L/∂q̇‖) instead of O(h²‖M⁻¹ L_qq‖): a forced model whose iteration does not
+/// converge (strong friction) falls back to Newton's method for the rest of the run.
 #[derive(Debug, Clone)]
 struct ConstantMass<const N: usize> {
     /// c_j, j = 1..s.
     velocity_coefficients: Vec<f64>,
     /// P_jμ, row-major s × m.
     propagation: Vec<f64>,
+    /// P_sμ in closed form, w_μ (1 − τ_μ)/4: the end-point update
+    /// q_{k+1} − q_k = h M⁻¹p_k + h² Σ_μ P_sμ M⁻¹ ∂L/∂q(τ_μ) (the Nyström b̄ weights).
+    end_weights: Vec<f64>,
     /// c'_μ.
     stage_velocity: Vec<f64>,
     /// A_μν, row-major m × m.
     stage_matrix: Vec<f64>,
     /// l_j(τ_μ), row-major m × s (j = 1..s).
     stage_values: Vec<f64>,
+    /// c''_μ (velocities at the quadrature points, forced models).
+    stage_rate: Vec<f64>,
+    /// B_μν, row-major m × m (velocities at the quadrature points, forced models).
+    rate_matrix: Vec<f64>,
     /// M⁻¹, from the first step.
     mass_inverse: Option<SMatrix<f64, N, N>>,
     /// ∂L/∂q at the quadrature points.
@@ -225,6 +258,8 @@ struct ConstantMass<const N: usize> {
     accelerations: Vec<SVector<f64, N>>,
     /// Positions Q_μ at the quadrature points.
     positions: Vec<SVector<f64, N>>,
+    /// Velocities V_μ at the quadrature points (forced models).
+    velocities: Vec<SVector<f64, N>>,
 }
 
 impl<const N: usize> ConstantMass<N> {
@@ -242,7 +277,12 @@ impl<const N: usize> ConstantMass<N> {
         if !inverse.iter().all(|x| x.is_finite()) {
             return None;
         }
-        let velocity_coefficients: Vec<f64> = (0..s).map(|j| -0.5 * inverse[(j, 0)]).collect();
+        // c_j = −½ (K̃*⁻¹)_j0 equals the node position (x_j + 1)/2 (a free particle moves
+        // uniformly); the closed form avoids the inverse's round-off.
+        let velocity_coefficients: Vec<f64> = tables.interpolation_nodes[1..]
+            .iter()
+            .map(|x| 0.5 * (x + 1.0))
+            .collect();
         let propagation: Vec<f64> = (0..s * m)
             .map(|k| {
                 let (j, mu) = (k / m, k % m);
@@ -255,33 +295,88 @@ impl<const N: usize> ConstantMass<N> {
         let stage_values: Vec<f64> = (0..m * s)
             .map(|k| tables.values[(k / s, k % s + 1)])
             .collect();
-        let stage_velocity = (0..m)
+        // c'_μ = Σ_j l_j(τ_μ) c_j is the quadrature node's position (τ_μ + 1)/2.
+        let stage_velocity = tables.nodes.iter().map(|tau| 0.5 * (tau + 1.0)).collect();
+        let stage_matrix = if m == s {
+            gauss_nystrom_matrix(&tables.nodes)?
+        } else {
+            (0..m * m)
+                .map(|k| {
+                    let (mu, nu) = (k / m, k % m);
+                    (0..s)
+                        .map(|j| stage_values[mu * s + j] * propagation[j * m + nu])
+                        .sum()
+                })
+                .collect()
+        };
+        let rate = |mu: usize, j: usize| 2.0 * d[(mu, j + 1)];
+        let stage_rate = (0..m)
             .map(|mu| {
                 (0..s)
-                    .map(|j| stage_values[mu * s + j] * velocity_coefficients[j])
+                    .map(|j| rate(mu, j) * velocity_coefficients[j])
                     .sum()
             })
             .collect();
-        let stage_matrix = (0..m * m)
+        let rate_matrix = (0..m * m)
             .map(|k| {
                 let (mu, nu) = (k / m, k % m);
-                (0..s)
-                    .map(|j| stage_values[mu * s + j] * propagation[j * m + nu])
-                    .sum()
+                (0..s).map(|j| rate(mu, j) * propagation[j * m + nu]).sum()
             })
+            .collect();
+        let end_weights = tables
+            .nodes
+            .iter()
+            .zip(&tables.reference_weights)
+            .map(|(tau, w)| 0.25 * w * (1.0 - tau))
             .collect();
         Some(ConstantMass {
             velocity_coefficients,
+            end_weights,
             propagation,
             stage_velocity,
             stage_matrix,
             stage_values,
+            stage_rate,
+            rate_matrix,
             mass_inverse: None,
             forces: vec![SVector::zeros(); m],
             accelerations: vec![SVector::zeros(); m],
             positions: vec![SVector::zeros(); m],
+            velocities: vec![SVector::zeros(); m],
         })
     }
+}
+
+/// Ā = A² of the Gauss–Legendre collocation method on the nodes c_μ = (τ_μ + 1)/2, with
+/// A_μν = ∫₀^{c_μ} ℓ_ν (ℓ the Lagrange basis on c), row-major.
+///
+/// With m = s the SVI stage map is this Nyström matrix. Computed from its definition it is
+/// accurate to a few ulps, whereas the same matrix obtained through the inverse stiffness
+/// matrix carries ~10⁻¹⁴ relative errors, and coefficient errors of that size, repeated
+/// every step, put a floor near 10⁻¹¹ under long-run errors (Kepler, T = 2000).
+fn gauss_nystrom_matrix(nodes: &[f64]) -> Option<Vec<f64>> {
+    let m = nodes.len();
+    let c: Vec<f64> = nodes.iter().map(|tau| 0.5 * (tau + 1.0)).collect();
+    let basis = LagrangeBasis::new(c.clone()).ok()?;
+    let gauss = GaussLegendre::new(m).ok()?;
+    let mut values = vec![0.0; m];
+    let mut a = vec![0.0; m * m];
+    for (i, ci) in c.iter().enumerate() {
+        for (x, w) in gauss.nodes().iter().zip(gauss.weights()) {
+            basis.values_into(0.5 * ci * (x + 1.0), &mut values);
+            for (target, value) in a[i * m..(i + 1) * m].iter_mut().zip(&values) {
+                *target += 0.5 * ci * w * value;
+            }
+        }
+    }
+    Some(
+        (0..m * m)
+            .map(|k| {
+                let (i, j) = (k / m, k % m);
+                (0..m).map(|l| a[i * m + l] * a[l * m + j]).sum()
+            })
+            .collect(),
+    )
 }
 
 /// Buffers of an SVI run.
@@ -294,9 +389,14 @@ pub struct SviWorkspace<const N: usize> {
     start: StartingValues,
     /// Second derivatives of L at the quadrature points.
     points: Vec<SecondDerivatives<N>>,
+    /// External force and its Jacobian at the quadrature points (forced models).
+    forces: Vec<ForceJacobian<N>>,
     newton: Newton,
     /// Fixed-point data, for constant-mass Lagrangians.
     constant_mass: Option<ConstantMass<N>>,
+    /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
+    /// the run takes Newton's method.
+    newton_only: bool,
 }
 
 impl<const N: usize> SviWorkspace<N> {
@@ -331,6 +431,7 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
     model: &L,
     tables: &Tables,
     points: &mut [SecondDerivatives<N>],
+    forces: &mut [ForceJacobian<N>],
     t: f64,
     state: &State<N>,
     z: &DVector<f64>,
@@ -341,6 +442,9 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
     for (mu, point) in points.iter_mut().enumerate() {
         let (q, v) = tables.point(mu, &state.q, z);
         *point = model.second_derivatives(tables.time(t, mu), &q, &v);
+        if L::FORCED {
+            forces[mu] = model.external_force_jacobian(tables.time(t, mu), &q, &v);
+        }
     }
     residual.fill(0.0);
     jacobian.fill(0.0);
@@ -348,16 +452,23 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
     for (mu, d) in points.iter().enumerate() {
         let w = tables.weights[mu];
         let qv_t = d.qv.transpose();
+        // ∂L/∂q + f_L and its derivatives in q and q̇.
+        let (lq, lqq, lqv) = if L::FORCED {
+            let f = &forces[mu];
+            (d.q + f.value, d.qq + f.q, d.qv + f.v)
+        } else {
+            (d.q, d.qq, d.qv)
+        };
         for nu in 0..s {
             let b = tables.values[(mu, nu)];
             let c = tables.derivatives[(mu, nu)];
             let mut row = residual.fixed_rows_mut::<N>(nu * N);
-            row += (d.q * b + d.v * c) * w;
+            row += (lq * b + d.v * c) * w;
         }
         for j in 1..=s {
             let bj = tables.values[(mu, j)];
             let cj = tables.derivatives[(mu, j)];
-            let from_q: SMatrix<f64, N, N> = (d.qq * bj + d.qv * cj) * w;
+            let from_q: SMatrix<f64, N, N> = (lqq * bj + lqv * cj) * w;
             let from_v: SMatrix<f64, N, N> = (qv_t * bj + d.vv * cj) * w;
             for nu in 0..s {
                 let block =
@@ -402,14 +513,22 @@ impl<const N: usize> Method<N> for Svi {
             Structure::ConstantMass => ConstantMass::new(&tables),
             Structure::General => None,
         };
-        let points = if constant_mass.is_some() { 0 } else { m };
+        // A forced constant-mass model keeps Newton's buffers for its fallback.
+        let points = if constant_mass.is_some() && !L::FORCED {
+            0
+        } else {
+            m
+        };
+        let forces = if L::FORCED { points } else { 0 };
         Ok(SviWorkspace {
             tables,
             offsets: DVector::zeros(size),
             start: StartingValues::new(&basis, N),
             points: vec![zero; points],
+            forces: vec![ForceJacobian::zeros(); forces],
             newton: Newton::new(size, self.max_iterations),
             constant_mass,
+            newton_only: false,
         })
     }
 
@@ -422,8 +541,9 @@ impl<const N: usize> Method<N> for Svi {
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
-        if workspace.constant_mass.is_some() {
-            return fixed_point_step(
+        let mut spent = 0;
+        if workspace.constant_mass.is_some() && !workspace.newton_only {
+            let result = fixed_point_step(
                 model,
                 self.max_iterations,
                 workspace,
@@ -432,14 +552,29 @@ impl<const N: usize> Method<N> for Svi {
                 state,
                 increment,
             );
+            match result {
+                // A velocity-dependent force makes the fixed point contract only by a factor
+                // O(h ‖M⁻¹ ∂f_L/∂q̇‖): strong friction falls back to Newton's method.
+                Err(StepFailure::NonConvergence { iterations, .. }) if L::FORCED => {
+                    spent = iterations;
+                    workspace.newton_only = true;
+                }
+                Err(StepFailure::NonFinite) if L::FORCED => workspace.newton_only = true,
+                result => return result,
+            }
         }
-        let iterations = solve(model, workspace, t, h, state)?;
+        let iterations = solve(model, workspace, t, h, state)? + spent;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
         let mut dp = SVector::<f64, N>::zeros();
         for mu in 0..ws.tables.nodes.len() {
             let (q, v) = ws.tables.point(mu, &state.q, &ws.offsets);
-            dp += model.force(ws.tables.time(t, mu), &q, &v) * ws.tables.weights[mu];
+            let time = ws.tables.time(t, mu);
+            let mut force = model.force(time, &q, &v);
+            if L::FORCED {
+                force += model.external_force(time, &q, &v);
+            }
+            dp += force * ws.tables.weights[mu];
         }
         increment.q = ws.offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = dp;
@@ -464,16 +599,18 @@ impl<const N: usize> Method<N> for Svi {
         let ws = &*workspace;
         let tables = &ws.tables;
         let s = tables.degree;
-        // Full block Hessian H_{νj} = ∂g_ν/∂qʲ, ν, j = 0..s, at the converged nodes.
+        // Full block Hessian H_{νj} = ∂(g_ν + f_ν)/∂qʲ, ν, j = 0..s, at the converged nodes
+        // (the force terms vanish for unforced models).
         let size = (s + 1) * N;
         let mut hessian = DMatrix::zeros(size, size);
         for mu in 0..tables.nodes.len() {
             let (q, v) = tables.point(mu, &state.q, &ws.offsets);
             let d = model.second_derivatives(tables.time(t, mu), &q, &v);
+            let f = model.external_force_jacobian(tables.time(t, mu), &q, &v);
             let w = tables.weights[mu];
             for j in 0..=s {
                 let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
-                let from_q = (d.qq * bj + d.qv * cj) * w;
+                let from_q = ((d.qq + f.q) * bj + (d.qv + f.v) * cj) * w;
                 let from_v = (d.qv.transpose() * bj + d.vv * cj) * w;
                 for nu in 0..=s {
                     let block =
@@ -511,7 +648,8 @@ impl<const N: usize> Method<N> for Svi {
     }
 }
 
-/// One step of a constant-mass Lagrangian by fixed-point iteration (no Hessian).
+/// One step of a constant-mass Lagrangian by fixed-point iteration (no Hessian; an external
+/// force is evaluated at the quadrature points' positions and velocities).
 fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     model: &L,
     max_iterations: usize,
@@ -553,6 +691,15 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             *position += SVector::<f64, N>::from_column_slice(offset) * *value;
         }
     }
+    if L::FORCED {
+        for (mu, rate) in data.velocities.iter_mut().enumerate() {
+            *rate = SVector::zeros();
+            for (j, offset) in offsets.as_slice().chunks_exact(N).enumerate() {
+                let offset = SVector::<f64, N>::from_column_slice(offset);
+                *rate += offset * tables.derivatives[(mu, j + 1)];
+            }
+        }
+    }
     let mut control = FixedPoint::new(max_iterations);
     loop {
         for (mu, (force, acceleration)) in data
@@ -561,7 +708,11 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             .zip(data.accelerations.iter_mut())
             .enumerate()
         {
-            *force = model.force(tables.time(t, mu), &data.positions[mu], &state.y);
+            let time = tables.time(t, mu);
+            *force = model.force(time, &data.positions[mu], &state.y);
+            if L::FORCED {
+                *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
+            }
             *acceleration = mass_inverse * *force * h2;
         }
         let mut change: f64 = 0.0;
@@ -575,6 +726,16 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             change = change.max((next - *position).amax());
             size = size.max(next.amax());
             *position = next;
+        }
+        if L::FORCED {
+            for (mu, rate) in data.velocities.iter_mut().enumerate() {
+                let row = &data.rate_matrix[mu * m..(mu + 1) * m];
+                let mut next = velocity * data.stage_rate[mu];
+                for (b, acceleration) in row.iter().zip(&data.accelerations) {
+                    next += acceleration * *b;
+                }
+                *rate = next / h;
+            }
         }
         if control.converged(change, size)? {
             break;
@@ -592,7 +753,11 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         }
         target.copy_from_slice(offset.as_slice());
     }
-    increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
+    let mut dq = velocity;
+    for (w, acceleration) in data.end_weights.iter().zip(&data.accelerations) {
+        dq += acceleration * *w;
+    }
+    increment.q = dq;
     increment.y = dp;
     start.remember(offsets);
     let iterations = control.iterations();
@@ -616,10 +781,11 @@ fn solve<L: Lagrangian<N>, const N: usize>(
         tables,
         offsets,
         points,
+        forces,
         newton,
         ..
     } = workspace;
     newton.solve(offsets, |z, jacobian, residual| {
-        assemble(model, tables, points, t, state, z, jacobian, residual)
+        assemble(model, tables, points, forces, t, state, z, jacobian, residual)
     })
 }

@@ -18,8 +18,10 @@
 //! v = [0.0, 1.7320508075688772]   # or p = [...], not both
 //!
 //! [method]
-//! name = "svi"          # "svi" (default) or "sc"
-//! points = 6            # Chebyshev–Gauss–Lobatto points (default 6)
+//! name = "svi"          # "svi" (default), "sc", or a classic variational integrator:
+//!                       # "symplectic-euler", "symplectic-euler-adjoint", "midpoint",
+//!                       # "verlet", "trapezoid"
+//! points = 6            # Chebyshev–Gauss–Lobatto points, svi and sc (default 6)
 //! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
 //!
 //! [run]                 # absent: the model's default step and horizon
@@ -35,9 +37,14 @@
 //! A built-in name wins over a file of the same name (write `./kepler` for the file). Paths in
 //! a scene (the trajectory file) are relative to the working directory.
 //!
+//! Forces (friction, driving) are part of a model's definition: the forced zoo models
+//! (`damped-oscillator`, `damped-pendulum`, `driven-oscillator`) are chosen by name like any
+//! other, and their force parameters are ordinary `[parameters]`.
+//!
 //! The model, chosen by name at run time, reaches the one generic runner as its concrete
 //! type through [`svi_models::visit_model`]; the method is a `match` on [`MethodKind`]
-//! calling the same generic function with [`Svi`] or [`SpectralCollocation`]. Observers are
+//! calling the same generic function with [`Svi`], [`SpectralCollocation`], a
+//! [`VariationalIntegrator`] of a discrete Lagrangian or [`StormerVerlet`]. Observers are
 //! built only for the diagnostics and outputs asked for.
 
 use std::collections::BTreeMap;
@@ -52,9 +59,16 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
+pub mod bench;
+pub mod plot;
+pub mod stability;
+
 use svi::Initial;
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
-use svi::{Integrator, LagrangianExt, Method, PhasePoint, SpectralCollocation, Svi};
+use svi::{
+    AdjointSymplecticEuler, Integrator, LagrangianExt, Method, Midpoint, PhasePoint,
+    SpectralCollocation, StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
+};
 use svi_models::{MODEL_NAMES, ModelVisitor, UnknownModel, ZooModel, visit_model};
 
 /// The built-in scenes, as (name, TOML text).
@@ -69,6 +83,18 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     (
         "double-pendulum",
         include_str!("../scenes/double-pendulum.toml"),
+    ),
+    (
+        "damped-oscillator",
+        include_str!("../scenes/damped-oscillator.toml"),
+    ),
+    (
+        "damped-pendulum",
+        include_str!("../scenes/damped-pendulum.toml"),
+    ),
+    (
+        "driven-oscillator",
+        include_str!("../scenes/driven-oscillator.toml"),
     ),
 ];
 
@@ -126,7 +152,7 @@ pub enum SceneError {
     /// A model name that is not in the zoo.
     #[error(transparent)]
     UnknownModel(#[from] UnknownModel),
-    /// A method name other than `svi` and `sc`.
+    /// A method name that is not one of [`MethodKind::NAMES`].
     #[error("unknown method '{name}' (known: {})", MethodKind::NAMES.join(", "))]
     UnknownMethod {
         /// The name asked for.
@@ -162,7 +188,7 @@ pub enum SceneError {
         reason: String,
     },
     /// A method option given to a method that does not have it.
-    #[error("{option} is an option of svi, not of {method}")]
+    #[error("{option} is an option of {}, not of {method}", option_owners(.option))]
     OptionNotForMethod {
         /// The option.
         option: &'static str,
@@ -185,6 +211,20 @@ pub enum SceneError {
     /// state, nonlinear solves.
     #[error(transparent)]
     Svi(#[from] svi::Error),
+    /// A malformed `svi bench` method specification.
+    #[error("unknown bench method '{0}' (expected svi:P, svi:P/M, sc:P, dop853 or dopri5)")]
+    BenchMethod(String),
+    /// A benchmark needs an exact solution as reference.
+    #[error("model '{0}' has no exact solution for this initial state: nothing to measure errors against")]
+    NoReference(String),
+}
+
+/// The methods that have an option, as named in [`SceneError::OptionNotForMethod`].
+fn option_owners(option: &str) -> &'static str {
+    match option {
+        "points" => "svi and sc",
+        _ => "svi",
+    }
 }
 
 /// The integration methods a scene can choose.
@@ -196,25 +236,61 @@ pub enum MethodKind {
     Svi,
     /// Spectral collocation ([`SpectralCollocation`]).
     Sc,
+    /// Symplectic Euler, L_d = h L(q_k, v) ([`SymplecticEuler`]).
+    SymplecticEuler,
+    /// The adjoint symplectic Euler method, L_d = h L(q_{k+1}, v)
+    /// ([`AdjointSymplecticEuler`]).
+    SymplecticEulerAdjoint,
+    /// The midpoint rule ([`Midpoint`]).
+    Midpoint,
+    /// Störmer–Verlet, explicit for constant-mass models ([`StormerVerlet`]).
+    Verlet,
+    /// The trapezoidal discrete Lagrangian, always implicit ([`Trapezoid`]).
+    Trapezoid,
 }
 
 impl MethodKind {
     /// The names, as written in scenes and on the command line.
-    pub const NAMES: [&'static str; 2] = ["svi", "sc"];
+    pub const NAMES: [&'static str; 7] = [
+        "svi",
+        "sc",
+        "symplectic-euler",
+        "symplectic-euler-adjoint",
+        "midpoint",
+        "verlet",
+        "trapezoid",
+    ];
+
+    /// Every method, in the order of [`MethodKind::NAMES`].
+    pub const ALL: [MethodKind; 7] = [
+        MethodKind::Svi,
+        MethodKind::Sc,
+        MethodKind::SymplecticEuler,
+        MethodKind::SymplecticEulerAdjoint,
+        MethodKind::Midpoint,
+        MethodKind::Verlet,
+        MethodKind::Trapezoid,
+    ];
 
     /// The name, as written in scenes and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             MethodKind::Svi => "svi",
             MethodKind::Sc => "sc",
+            MethodKind::SymplecticEuler => "symplectic-euler",
+            MethodKind::SymplecticEulerAdjoint => "symplectic-euler-adjoint",
+            MethodKind::Midpoint => "midpoint",
+            MethodKind::Verlet => "verlet",
+            MethodKind::Trapezoid => "trapezoid",
         }
     }
 
-    /// Default number of CGL points.
-    pub fn default_points(self) -> usize {
+    /// Default number of CGL points (`None` for the classic methods, which have none).
+    pub fn default_points(self) -> Option<usize> {
         match self {
-            MethodKind::Svi => Svi::default().points,
-            MethodKind::Sc => SpectralCollocation::default().points,
+            MethodKind::Svi => Some(Svi::default().points),
+            MethodKind::Sc => Some(SpectralCollocation::default().points),
+            _ => None,
         }
     }
 }
@@ -228,11 +304,10 @@ impl fmt::Display for MethodKind {
 impl FromStr for MethodKind {
     type Err = SceneError;
     fn from_str(name: &str) -> Result<Self, SceneError> {
-        match name {
-            "svi" => Ok(MethodKind::Svi),
-            "sc" => Ok(MethodKind::Sc),
-            _ => Err(SceneError::UnknownMethod { name: name.into() }),
-        }
+        MethodKind::ALL
+            .into_iter()
+            .find(|kind| kind.name() == name)
+            .ok_or_else(|| SceneError::UnknownMethod { name: name.into() })
     }
 }
 
@@ -321,12 +396,13 @@ pub struct InitialSection {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MethodSection {
-    /// `svi` (default) or `sc`.
+    /// `svi` (default), `sc` or a classic method (see [`MethodKind::NAMES`]).
     #[serde(default)]
     pub name: MethodKind,
-    /// Chebyshev–Gauss–Lobatto points (default: [`MethodKind::default_points`]).
+    /// Chebyshev–Gauss–Lobatto points of svi and sc (default:
+    /// [`MethodKind::default_points`]); ignored by the classic methods.
     pub points: Option<usize>,
-    /// Gauss–Legendre points of svi (default 2 × points); ignored by sc.
+    /// Gauss–Legendre points of svi (default 2 × points); ignored by the other methods.
     pub quadrature: Option<usize>,
 }
 
@@ -358,7 +434,7 @@ pub struct Overrides {
     /// Integration method.
     #[arg(long, value_enum)]
     pub method: Option<MethodKind>,
-    /// Number of Chebyshev–Gauss–Lobatto points.
+    /// Number of Chebyshev–Gauss–Lobatto points (svi and sc).
     #[arg(long, value_name = "N")]
     pub points: Option<usize>,
     /// Number of Gauss–Legendre quadrature points (svi only).
@@ -480,6 +556,12 @@ impl Scene {
                 method: self.method.name,
             });
         }
+        if self.method.name.default_points().is_none() && points.is_some() {
+            return Err(SceneError::OptionNotForMethod {
+                option: "points",
+                method: self.method.name,
+            });
+        }
         set(&mut self.method.points, points);
         set(&mut self.method.quadrature, quadrature);
         set(&mut self.run.h, h);
@@ -493,22 +575,21 @@ impl Scene {
         self.check()
     }
 
-    /// The number of CGL points in use.
-    pub fn points(&self) -> usize {
-        self.method
-            .points
-            .unwrap_or_else(|| self.method.name.default_points())
+    /// The number of CGL points in use (`None` for the classic methods).
+    pub fn points(&self) -> Option<usize> {
+        let default = self.method.name.default_points()?;
+        Some(self.method.points.unwrap_or(default))
     }
 
-    /// The number of Gauss–Legendre points in use (`None` for sc).
+    /// The number of Gauss–Legendre points in use (`None` for all methods but svi).
     pub fn quadrature(&self) -> Option<usize> {
         match self.method.name {
-            MethodKind::Svi => Some(
-                self.method
-                    .quadrature
-                    .unwrap_or_else(|| self.points().saturating_mul(2)),
-            ),
-            MethodKind::Sc => None,
+            MethodKind::Svi => Some(self.method.quadrature.unwrap_or_else(|| {
+                self.points()
+                    .unwrap_or(Svi::default().points)
+                    .saturating_mul(2)
+            })),
+            _ => None,
         }
     }
 
@@ -521,6 +602,52 @@ impl Scene {
     }
 
     /// Integrate the scene, write its trajectory if asked, and summarise. `progress` allows a
+    /// Apply the scene's parameters to `model` and resolve the initial time and state, the
+    /// step and the horizon (scene values, else the model's defaults).
+    pub fn resolve<M: ZooModel<N>, const N: usize>(
+        &self,
+        model: &mut M,
+    ) -> Result<(f64, Initial<N>, f64, f64), SceneError> {
+        let scene = self;
+        for (name, value) in &scene.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let (default_t0, default_q, default_v) = model.initial_state();
+        let vector = |field: &'static str, values: &Option<Vec<f64>>| {
+            values
+                .as_ref()
+                .map(|values| {
+                    if values.len() == N {
+                        Ok(SVector::<f64, N>::from_iterator(values.iter().copied()))
+                    } else {
+                        Err(SceneError::Dimension {
+                            model: model.name().into(),
+                            field,
+                            expected: N,
+                            found: values.len(),
+                        })
+                    }
+                })
+                .transpose()
+        };
+        let q = vector("q", &scene.initial.q)?.unwrap_or(default_q);
+        let initial = match (
+            vector("v", &scene.initial.v)?,
+            vector("p", &scene.initial.p)?,
+        ) {
+            (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
+            (Some(v), None) => Initial::Velocity { q, v },
+            (None, Some(p)) => Initial::Momentum { q, p },
+            (None, None) => Initial::Velocity { q, v: default_v },
+        };
+        Ok((
+            scene.initial.t0.unwrap_or(default_t0),
+            initial,
+            scene.run.h.unwrap_or_else(|| model.default_step()),
+            scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
+        ))
+    }
+
     /// progress bar on stderr for runs of at least [`PROGRESS_MIN_STEPS`] steps.
     pub fn run(&self, progress: bool) -> Result<Summary, SceneError> {
         self.check()?;
@@ -559,7 +686,7 @@ struct Setup<const N: usize> {
     trajectory: Option<(PathBuf, usize)>,
     progress: bool,
     kind: MethodKind,
-    points: usize,
+    points: Option<usize>,
     quadrature: Option<usize>,
 }
 
@@ -568,42 +695,12 @@ impl ModelVisitor for RunScene<'_> {
 
     fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
         let scene = self.scene;
-        for (name, value) in &scene.parameters {
-            model.set_parameter(name, *value)?;
-        }
-        let (default_t0, default_q, default_v) = model.initial_state();
-        let vector = |field: &'static str, values: &Option<Vec<f64>>| {
-            values
-                .as_ref()
-                .map(|values| {
-                    if values.len() == N {
-                        Ok(SVector::<f64, N>::from_iterator(values.iter().copied()))
-                    } else {
-                        Err(SceneError::Dimension {
-                            model: model.name().into(),
-                            field,
-                            expected: N,
-                            found: values.len(),
-                        })
-                    }
-                })
-                .transpose()
-        };
-        let q = vector("q", &scene.initial.q)?.unwrap_or(default_q);
-        let initial = match (
-            vector("v", &scene.initial.v)?,
-            vector("p", &scene.initial.p)?,
-        ) {
-            (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
-            (Some(v), None) => Initial::Velocity { q, v },
-            (None, Some(p)) => Initial::Momentum { q, p },
-            (None, None) => Initial::Velocity { q, v: default_v },
-        };
+        let (t0, initial, h, t_end) = scene.resolve(&mut model)?;
         let setup = Setup {
-            t0: scene.initial.t0.unwrap_or(default_t0),
+            t0,
             initial,
-            h: scene.run.h.unwrap_or_else(|| model.default_step()),
-            t_end: scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
+            h,
+            t_end,
             energy: scene.wants(Diagnostic::Energy),
             momentum: scene.wants(Diagnostic::Momentum),
             solution: scene.wants(Diagnostic::Solution),
@@ -617,7 +714,7 @@ impl ModelVisitor for RunScene<'_> {
             points: scene.points(),
             quadrature: scene.quadrature(),
         };
-        let points = setup.points;
+        let points = setup.points.unwrap_or_default();
         match scene.method.name {
             MethodKind::Svi => {
                 let mut svi = Svi::new(points);
@@ -627,6 +724,19 @@ impl ModelVisitor for RunScene<'_> {
                 run_with(model, svi, &setup)
             }
             MethodKind::Sc => run_with(model, SpectralCollocation::new(points), &setup),
+            MethodKind::SymplecticEuler => {
+                run_with(model, VariationalIntegrator::new(SymplecticEuler), &setup)
+            }
+            MethodKind::SymplecticEulerAdjoint => run_with(
+                model,
+                VariationalIntegrator::new(AdjointSymplecticEuler),
+                &setup,
+            ),
+            MethodKind::Midpoint => run_with(model, VariationalIntegrator::new(Midpoint), &setup),
+            MethodKind::Verlet => run_with(model, StormerVerlet::default(), &setup),
+            MethodKind::Trapezoid => {
+                run_with(model, VariationalIntegrator::new(Trapezoid), &setup)
+            }
         }
     }
 }
@@ -855,11 +965,11 @@ pub struct Summary {
     pub parameters: Parameters,
     /// Names of the configuration coordinates (the order of `q`, `v`, `p`).
     pub coordinates: Vec<String>,
-    /// `svi` or `sc`.
+    /// The method's name (see [`MethodKind::NAMES`]).
     pub method: String,
-    /// Chebyshev–Gauss–Lobatto points.
-    pub points: usize,
-    /// Gauss–Legendre points (`None` for sc).
+    /// Chebyshev–Gauss–Lobatto points (`None` for the classic methods).
+    pub points: Option<usize>,
+    /// Gauss–Legendre points (`None` for all methods but svi).
     pub quadrature: Option<usize>,
     /// Classical order of the method.
     pub order: usize,
@@ -922,7 +1032,10 @@ impl fmt::Display for Summary {
             .iter()
             .map(|(name, value)| format!("{name} = {value}"))
             .collect();
-        let mut method = format!("{}, {} CGL points", self.method, self.points);
+        let mut method = self.method.clone();
+        if let Some(points) = self.points {
+            method.push_str(&format!(", {points} CGL points"));
+        }
         if let Some(quadrature) = self.quadrature {
             method.push_str(&format!(", {quadrature} Gauss points"));
         }
@@ -1056,7 +1169,10 @@ mod tests {
                 "kepler",
                 "pendulum",
                 "spring-pendulum",
-                "double-pendulum"
+                "double-pendulum",
+                "damped-oscillator",
+                "damped-pendulum",
+                "driven-oscillator"
             ]
         );
         for name in builtin_scene_names() {
@@ -1078,7 +1194,7 @@ mod tests {
         assert_eq!(scene.initial.v, None);
         assert_eq!(scene.run.h, Some(1.0));
         assert_eq!(scene.run.t_end, Some(100.0));
-        assert_eq!(scene.points(), 9);
+        assert_eq!(scene.points(), Some(9));
         assert_eq!(scene.quadrature(), Some(18));
         assert!(scene.output.trajectory.is_none());
         for diagnostic in [
@@ -1097,7 +1213,7 @@ mod tests {
         assert_eq!(scene.initial, InitialSection::default());
         assert_eq!(scene.run.h, Some(0.2));
         assert_eq!(scene.run.t_end, Some(2000.0));
-        assert_eq!(scene.points(), 6);
+        assert_eq!(scene.points(), Some(6));
         assert_eq!(scene.quadrature(), Some(12));
         assert_eq!(DEFAULT_SCENE, "kepler");
     }
@@ -1109,7 +1225,7 @@ mod tests {
             assert!(scene.parameters.is_empty(), "{name}");
             assert_eq!(scene.initial, InitialSection::default(), "{name}");
             assert_eq!(scene.run, RunSection::default(), "{name}");
-            assert_eq!(scene.points(), 6, "{name}");
+            assert_eq!(scene.points(), Some(6), "{name}");
         }
     }
 
@@ -1117,7 +1233,7 @@ mod tests {
     fn a_minimal_scene_falls_back_to_defaults() {
         let scene = Scene::from_toml("model = \"pendulum\"\n", "test").unwrap();
         assert_eq!(scene.method.name, MethodKind::Svi);
-        assert_eq!(scene.points(), Svi::default().points);
+        assert_eq!(scene.points(), Some(Svi::default().points));
         assert_eq!(scene.quadrature(), Some(2 * Svi::default().points));
         assert_eq!(scene.output, OutputSection::default());
     }
@@ -1138,7 +1254,7 @@ mod tests {
                 diagnostics: Some(vec![Diagnostic::Energy]),
             })
             .unwrap();
-        assert_eq!(scene.points(), 5);
+        assert_eq!(scene.points(), Some(5));
         assert_eq!(scene.quadrature(), Some(7));
         assert_eq!(scene.run.h, Some(0.05));
         assert_eq!(scene.run.t_end, Some(10.0));
@@ -1188,6 +1304,72 @@ mod tests {
     }
 
     #[test]
+    fn classic_methods_have_neither_points_nor_quadrature() {
+        for (kind, name) in MethodKind::ALL.into_iter().zip(MethodKind::NAMES) {
+            assert_eq!(name.parse::<MethodKind>().unwrap(), kind);
+            assert_eq!(kind.name(), name);
+            assert_eq!(
+                clap::ValueEnum::to_possible_value(&kind).unwrap().get_name(),
+                name
+            );
+        }
+        for kind in [
+            MethodKind::SymplecticEuler,
+            MethodKind::SymplecticEulerAdjoint,
+            MethodKind::Midpoint,
+            MethodKind::Verlet,
+            MethodKind::Trapezoid,
+        ] {
+            // The scene's `points = 9` is ignored, a `--points` flag is an error.
+            let mut scene = scene("oscillator");
+            scene
+                .apply(&Overrides {
+                    method: Some(kind),
+                    ..overrides()
+                })
+                .unwrap();
+            assert_eq!((scene.points(), scene.quadrature()), (None, None));
+            let error = scene
+                .apply(&Overrides {
+                    points: Some(4),
+                    ..overrides()
+                })
+                .unwrap_err();
+            assert_eq!(
+                error.to_string(),
+                format!("points is an option of svi and sc, not of {}", kind.name())
+            );
+            let summary = scene.run(false).unwrap();
+            assert_eq!(summary.method, kind.name());
+            assert_eq!((summary.points, summary.quadrature), (None, None));
+            assert!(summary.symplectic && summary.order <= 2);
+            // h = 1 on the oscillator: first- and second-order methods are coarse (the phase
+            // is lost) but stable, with bounded energy error.
+            assert!(summary.energy_error_max.unwrap() <= 0.5, "{kind}");
+            assert!(summary.solution_error_max.unwrap() < 2.0, "{kind}");
+        }
+    }
+
+    #[test]
+    fn the_damped_oscillator_scene_reports_its_solution_error() {
+        let scene = scene("damped-oscillator");
+        assert_eq!(scene.parameters["zeta"], 0.1);
+        assert_eq!((scene.run.h, scene.run.t_end), (Some(0.1), Some(50.0)));
+        let summary = scene.run(false).unwrap();
+        assert_eq!(summary.steps, 500);
+        assert!(summary.solution_error_max.unwrap() < 1e-12);
+        // E(50) = E(0) e^{−5}-ish: the friction removed almost all the energy.
+        assert!(summary.energy_final < 0.01 * summary.energy_initial);
+        let mut verlet = scene.clone();
+        verlet.method.name = MethodKind::Verlet;
+        let summary = verlet.run(false).unwrap();
+        // Second order: 1.6e-3 at h = 0.1.
+        let error = summary.solution_error_max.unwrap();
+        assert!(error > 1e-3 && error < 2e-3, "{error:e}");
+        assert_eq!(summary.evaluations, 501);
+    }
+
+    #[test]
     fn parameters_parse_as_name_equals_number() {
         assert_eq!(parse_parameter("e=0.9").unwrap(), ("e".into(), 0.9));
         assert_eq!(parse_parameter(" g = 9.81 ").unwrap(), ("g".into(), 9.81));
@@ -1224,7 +1406,7 @@ mod tests {
         assert!(
             source
                 .to_string()
-                .contains("unknown method 'rk4' (known: svi, sc)")
+                .contains("unknown method 'rk4' (known: svi, sc, symplectic-euler,")
         );
         let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
         let SceneError::Parse { source, .. } = Scene::from_toml(text, "t").unwrap_err() else {

@@ -21,6 +21,65 @@ enum Command {
     Run(RunArgs),
     /// List the built-in scenes and the models with their parameters.
     List,
+    /// Work–precision sweep: run time and evaluations against error, per method.
+    Bench(BenchArgs),
+    /// Linear stability on the harmonic oscillator: S(z), regions, plots.
+    Stability(StabilityArgs),
+}
+
+#[derive(Debug, Args)]
+struct StabilityArgs {
+    /// Method: svi:P, svi:P/M or sc:P [default: svi:5/4].
+    #[arg(long, default_value = "svi:5/4")]
+    method: String,
+    /// Evaluate exactly these z values (comma-separated) and print CSV to stdout.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    z: Option<Vec<f64>>,
+    /// Lower end of the z range.
+    #[arg(long, default_value_t = 1e-6)]
+    z_min: f64,
+    /// Upper end of the z range.
+    #[arg(long, default_value_t = 900.0)]
+    z_max: f64,
+    /// Grid points on the z range.
+    #[arg(long, default_value_t = 900)]
+    samples: usize,
+    /// The six configurations of the paper's Figs. 3–6 instead of --method.
+    #[arg(long)]
+    figures: bool,
+    /// Directory for `stability.csv` (one method) and `stability.svg`.
+    #[arg(long, default_value = "stability-out")]
+    out_dir: std::path::PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct BenchArgs {
+    /// Built-in scene or scene file; its model needs an exact solution [default: kepler].
+    scene: Option<String>,
+    /// Methods, comma-separated: svi:P, svi:P/M, sc:P, dop853, dopri5.
+    #[arg(long, default_value = svi_cli::bench::DEFAULT_METHODS)]
+    methods: String,
+    /// Model parameter NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = svi_cli::parse_parameter)]
+    parameters: Vec<(String, f64)>,
+    /// Horizon (overrides the scene's).
+    #[arg(long)]
+    t_end: Option<f64>,
+    /// Stop a method's sweep once its final error is below this.
+    #[arg(long, default_value_t = 1e-13)]
+    target: f64,
+    /// Stop a method's sweep after a point whose single run takes longer (seconds).
+    #[arg(long, default_value_t = 2.0)]
+    max_run: f64,
+    /// Timing batches per point (median reported).
+    #[arg(long, default_value_t = 5)]
+    batches: usize,
+    /// Minimum duration of a timing batch (seconds).
+    #[arg(long, default_value_t = 0.2)]
+    min_batch: f64,
+    /// Directory for `<scene>.csv` and `<scene>.svg`.
+    #[arg(long, default_value = "bench-out")]
+    out_dir: std::path::PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -42,6 +101,8 @@ fn main() -> ExitCode {
             list();
             Ok(())
         }
+        Command::Bench(args) => bench(args),
+        Command::Stability(args) => stability(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -64,6 +125,86 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
     } else {
         print!("{summary}");
     }
+    Ok(())
+}
+
+fn bench(args: BenchArgs) -> anyhow::Result<()> {
+    use svi_cli::bench::{BenchOptions, parse_methods, plot, to_csv, work_precision};
+    let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+    let mut scene = Scene::load(name)?;
+    let overrides = Overrides {
+        parameters: args.parameters.clone(),
+        t_end: args.t_end,
+        ..Overrides::default()
+    };
+    scene.apply(&overrides)?;
+    let options = BenchOptions {
+        methods: parse_methods(&args.methods)?,
+        target: args.target,
+        max_run: args.max_run,
+        batches: args.batches,
+        min_batch: args.min_batch,
+        verbose: true,
+    };
+    let records = work_precision(&scene, &options)
+        .with_context(|| format!("benchmark of scene '{name}' failed"))?;
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("cannot create {}", args.out_dir.display()))?;
+    let stem = std::path::Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("bench");
+    let csv = args.out_dir.join(format!("{stem}.csv"));
+    std::fs::write(&csv, to_csv(&records))
+        .with_context(|| format!("cannot write {}", csv.display()))?;
+    let svg = args.out_dir.join(format!("{stem}.svg"));
+    plot(&records, stem, &svg)?;
+    print!("{}", to_csv(&records));
+    eprintln!("wrote {} and {}", csv.display(), svg.display());
+    Ok(())
+}
+
+fn stability(args: StabilityArgs) -> anyhow::Result<()> {
+    use svi_cli::bench::MethodSpec;
+    use svi_cli::stability::{Answer, Request, describe, figure_configurations, plot, run, to_csv};
+    if let Some(values) = args.z {
+        let spec: MethodSpec = args.method.parse()?;
+        if let Answer::Points(points) = run(spec, &Request::Values(values))? {
+            print!("{}", to_csv(&points));
+        }
+        return Ok(());
+    }
+    let request = Request::Range {
+        z_min: args.z_min,
+        z_max: args.z_max,
+        samples: args.samples,
+    };
+    let configurations: Vec<(String, MethodSpec)> = if args.figures {
+        figure_configurations()
+            .into_iter()
+            .map(|(label, spec)| (label.to_string(), spec))
+            .collect()
+    } else {
+        vec![(args.method.clone(), args.method.parse()?)]
+    };
+    let mut reports = Vec::new();
+    for (label, spec) in configurations {
+        if let Answer::Report(report) = run(spec, &request)? {
+            print!("{}", describe(&label, &report));
+            reports.push((label, report));
+        }
+    }
+    std::fs::create_dir_all(&args.out_dir)
+        .with_context(|| format!("cannot create {}", args.out_dir.display()))?;
+    if let [(_, report)] = reports.as_slice() {
+        let csv = args.out_dir.join("stability.csv");
+        std::fs::write(&csv, to_csv(&report.points))
+            .with_context(|| format!("cannot write {}", csv.display()))?;
+        eprintln!("wrote {}", csv.display());
+    }
+    let svg = args.out_dir.join("stability.svg");
+    plot(&reports, &svg)?;
+    eprintln!("wrote {}", svg.display());
     Ok(())
 }
 

@@ -489,3 +489,116 @@ fn invalid_initial_states_are_rejected() {
     let stderr = failure(&["run", &scene.path]);
     assert!(stderr.contains("both v and p"), "{stderr}");
 }
+
+#[test]
+fn classic_methods_are_selected_by_flag() {
+    // The paper's oscillator scene at h = 0.1 (T = 10): q(t) = sin t.
+    for (method, order, bound) in [
+        ("symplectic-euler", 1, 0.1),
+        ("symplectic-euler-adjoint", 1, 0.1),
+        ("midpoint", 2, 1e-2),
+        ("verlet", 2, 1e-2),
+        ("trapezoid", 2, 1e-2),
+    ] {
+        let summary = json(&[
+            "run",
+            "oscillator",
+            "--method",
+            method,
+            "--h",
+            "0.1",
+            "--t-end",
+            "10",
+            "--json",
+        ]);
+        for field in REQUIRED {
+            assert!(summary.get(field).is_some(), "missing {field}: {summary}");
+        }
+        assert_eq!(summary["method"], method);
+        assert!(summary["points"].is_null(), "{summary}");
+        assert!(summary["quadrature"].is_null(), "{summary}");
+        assert_eq!(summary["order"], order);
+        assert_eq!(summary["symplectic"], true);
+        assert_eq!(summary["steps"], 100);
+        let solution = number(&summary, "solution_error_max");
+        assert!(solution < bound, "{method}: {solution:e}");
+        let q = vector(&summary, "q");
+        assert!((q[0] - 10f64.sin()).abs() < bound, "{method}: {q:?}");
+    }
+    // Störmer–Verlet is explicit on the (constant-mass) oscillator.
+    let summary = json(&["run", "oscillator", "--method", "verlet", "--json"]);
+    assert_eq!(summary["iterations"], 0);
+    assert_eq!(summary["evaluations"], 101);
+}
+
+#[test]
+fn a_scene_file_selects_a_classic_method() {
+    let scene = scene_file(
+        "midpoint",
+        "model = \"pendulum\"\n[method]\nname = \"midpoint\"\npoints = 7\n\
+         [run]\nh = 0.05\nt_end = 5\n",
+    );
+    let summary = json(&["run", &scene.path, "--json"]);
+    assert_eq!(summary["method"], "midpoint");
+    // `points` in a scene is ignored by a method without CGL points.
+    assert!(summary["points"].is_null());
+    assert_eq!(summary["steps"], 100);
+    assert!(number(&summary, "solution_error_max") < 1e-3);
+    assert!(number(&summary, "energy_error_max") < 1e-3);
+}
+
+#[test]
+fn the_damped_oscillator_scene_reports_the_solution_error() {
+    let summary = json(&["run", "damped-oscillator", "--json"]);
+    assert_eq!(summary["model"], "damped-oscillator");
+    assert_eq!(summary["parameters"]["zeta"], 0.1);
+    assert_eq!(summary["steps"], 500);
+    assert!(number(&summary, "solution_error_max") < 1e-12);
+    // The friction removes the energy: E(50) ≈ E(0) e^{−5}.
+    let (initial, last) = (
+        number(&summary, "energy_initial"),
+        number(&summary, "energy_final"),
+    );
+    assert_eq!(initial, 0.5);
+    assert!(last < 0.01 * initial && last > 0.0, "{last}");
+    for method in ["verlet", "midpoint", "sc", "symplectic-euler"] {
+        let summary = json(&["run", "damped-oscillator", "--method", method, "--json"]);
+        let solution = number(&summary, "solution_error_max");
+        assert!(solution < 0.05, "{method}: {solution:e}");
+    }
+    // Over-damped by a parameter.
+    let summary = json(&[
+        "run",
+        "damped-oscillator",
+        "--param",
+        "zeta=2",
+        "--method",
+        "trapezoid",
+        "--json",
+    ]);
+    assert!(number(&summary, "solution_error_max") < 1e-3);
+    for scene in ["damped-pendulum", "driven-oscillator"] {
+        let summary = json(&["run", scene, "--t-end", "10", "--json"]);
+        assert_eq!(summary["model"], scene);
+    }
+}
+
+#[test]
+fn classic_methods_reject_spectral_options() {
+    let stderr = failure(&["run", "oscillator", "--method", "verlet", "--points", "4"]);
+    assert!(
+        stderr.contains("points is an option of svi and sc, not of verlet"),
+        "{stderr}"
+    );
+    let stderr = failure(&["run", "kepler", "--method", "midpoint", "--quadrature", "4"]);
+    assert!(
+        stderr.contains("quadrature is an option of svi, not of midpoint"),
+        "{stderr}"
+    );
+    let stderr = failure(&["run", "kepler", "--method", "leapfrog"]);
+    assert!(stderr.contains("verlet"), "{stderr}");
+    let text = String::from_utf8(svi(&["list"]).stdout).unwrap();
+    for name in ["damped-oscillator", "damped-pendulum", "driven-oscillator"] {
+        assert!(text.contains(name), "{name}: {text}");
+    }
+}

@@ -10,6 +10,13 @@
 //! | `spring-pendulum` | [`SpringPendulum`] | 2 | — | — | — |
 //! | `kepler` | [`Kepler`] | 2 | rotation | Runge–Lenz | yes (Kepler's equation) |
 //! | `double-pendulum` | [`DoublePendulum`] | 2 | — | — | — |
+//! | `damped-oscillator` | [`DampedOscillator`] | 1 | — | — | yes |
+//! | `damped-pendulum` | [`DampedPendulum`] | 1 | — | — | only undamped (c = 0) |
+//! | `driven-oscillator` | [`DrivenOscillator`] | 1 | — | — | yes |
+//!
+//! The last three are forced (`Lagrangian::FORCED`): their non-conservative force (friction,
+//! a time-dependent drive) is part of the model, [`svi::Lagrangian::external_force`], and
+//! every integrator of `svi` solves their Lagrange–d'Alembert equations.
 //!
 //! Every model implements [`Lagrangian`], [`Symmetries`], [`Invariants`],
 //! [`ExactSolution`] and [`Defaults`] (together: [`ZooModel`]), with literature defaults for
@@ -40,13 +47,19 @@
 mod elliptic;
 mod params;
 
+pub mod damped_oscillator;
+pub mod damped_pendulum;
 pub mod double_pendulum;
+pub mod driven_oscillator;
 pub mod kepler;
 pub mod oscillator;
 pub mod pendulum;
 pub mod spring_pendulum;
 
+pub use damped_oscillator::DampedOscillator;
+pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
+pub use driven_oscillator::DrivenOscillator;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
@@ -99,6 +112,9 @@ pub const MODEL_NAMES: &[&str] = &[
     SpringPendulum::NAME,
     Kepler::NAME,
     DoublePendulum::NAME,
+    DampedOscillator::NAME,
+    DampedPendulum::NAME,
+    DrivenOscillator::NAME,
 ];
 
 /// Build the named model with its defaults and hand it to the visitor.
@@ -112,6 +128,9 @@ pub fn visit_model<V: ModelVisitor>(name: &str, visitor: V) -> Result<V::Output,
         SpringPendulum::NAME => Ok(visitor.visit(SpringPendulum::default())),
         Kepler::NAME => Ok(visitor.visit(Kepler::default())),
         DoublePendulum::NAME => Ok(visitor.visit(DoublePendulum::default())),
+        DampedOscillator::NAME => Ok(visitor.visit(DampedOscillator::default())),
+        DampedPendulum::NAME => Ok(visitor.visit(DampedPendulum::default())),
+        DrivenOscillator::NAME => Ok(visitor.visit(DrivenOscillator::default())),
         _ => Err(UnknownModel {
             name: name.to_owned(),
         }),

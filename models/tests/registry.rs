@@ -34,7 +34,10 @@ fn every_registered_name_visits_the_model_of_that_name() {
             "pendulum",
             "spring-pendulum",
             "kepler",
-            "double-pendulum"
+            "double-pendulum",
+            "damped-oscillator",
+            "damped-pendulum",
+            "driven-oscillator"
         ]
     );
     for &name in MODEL_NAMES {
@@ -54,7 +57,7 @@ fn an_unknown_name_is_an_error_listing_the_known_ones() {
     assert_eq!(
         error.to_string(),
         "unknown model 'pendulm' (known: oscillator, pendulum, spring-pendulum, kepler, \
-         double-pendulum)"
+         double-pendulum, damped-oscillator, damped-pendulum, driven-oscillator)"
     );
     assert!(visit_model("", Name).is_err());
     assert!(visit_model("Kepler", Name).is_err());
@@ -113,7 +116,7 @@ impl ModelVisitor for CheckContract {
             );
             assert_eq!(changed.parameters(), parameters);
 
-            let may_be_zero = matches!(parameter, "g" | "e");
+            let may_be_zero = matches!(parameter, "g" | "e" | "zeta" | "c" | "amplitude");
             let mut bad = vec![-1.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
             if !may_be_zero {
                 bad.push(0.0);
@@ -161,7 +164,7 @@ fn every_model_honours_the_defaults_contract() {
         .iter()
         .map(|name| visit_model(name, CheckContract).unwrap())
         .collect();
-    assert_eq!(counts, [1, 3, 4, 1, 5]);
+    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4]);
 }
 
 #[test]

@@ -1,0 +1,673 @@
+//! Work–precision harness: run time and cost against error, method by method.
+//!
+//! [`work_precision`] sweeps each method's step (or tolerance) on a scene whose model has an
+//! exact solution, and records for every point the final position error at the horizon, the
+//! largest energy and Noether-momentum errors (measured in a separate, untimed run with
+//! observers), the derivative evaluations, the nonlinear iterations and the wall time of a run
+//! that observes nothing (median over batches, each batch repeating the run for at least
+//! `min_batch` seconds, after a warm-up run).
+//!
+//! Fixed-step methods start from 8 steps, double until the error is below 3·10⁻², then
+//! multiply the step count by 10^(1/order) per point (about a tenfold error reduction).
+//! Adaptive peers (`ode_solvers`' DOP853 and Dopri5 on the first-order form q̇ = v,
+//! v̇ = q̈(t, q, v) derived from the Lagrangian) sweep tol = 10⁻³, 10⁻³·⁵, …, 10⁻¹⁶ with
+//! rtol = atol = tol and sparse output. A sweep stops at the target error, when a single run
+//! takes longer than `max_run`, or when the error has stalled for three points (round-off).
+
+use crate::plot::{Panel, Series, write_svg};
+use crate::{Scene, SceneError};
+use nalgebra::{SMatrix, SVector};
+use ode_solvers::{Dop853, Dopri5, OutputType, System};
+use serde::Serialize;
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+use std::time::Instant;
+use svi::observer::{EnergyError, MomentumError};
+use svi::{
+    Initial, Integrator, LagrangianExt, Method, SpectralCollocation, Structure, Svi,
+    linalg::invert_small,
+};
+use svi_models::{ModelVisitor, ZooModel, visit_model};
+
+/// A method configuration to sweep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MethodSpec {
+    /// SVI with `points` CGL points and `quadrature` Gauss points (default 2·points).
+    Svi {
+        /// CGL points.
+        points: usize,
+        /// Gauss–Legendre points.
+        quadrature: Option<usize>,
+    },
+    /// Spectral collocation with `points` CGL points.
+    Sc {
+        /// CGL points.
+        points: usize,
+    },
+    /// `ode_solvers`' DOP853 (adaptive, order 8).
+    Dop853,
+    /// `ode_solvers`' Dopri5 (adaptive, order 5).
+    Dopri5,
+}
+
+impl fmt::Display for MethodSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            MethodSpec::Svi {
+                points,
+                quadrature: Some(m),
+            } => write!(f, "svi:{points}/{m}"),
+            MethodSpec::Svi {
+                points,
+                quadrature: None,
+            } => write!(f, "svi:{points}"),
+            MethodSpec::Sc { points } => write!(f, "sc:{points}"),
+            MethodSpec::Dop853 => write!(f, "dop853"),
+            MethodSpec::Dopri5 => write!(f, "dopri5"),
+        }
+    }
+}
+
+impl FromStr for MethodSpec {
+    type Err = SceneError;
+
+    /// `svi:P`, `svi:P/M`, `sc:P`, `dop853` or `dopri5`.
+    fn from_str(text: &str) -> Result<Self, SceneError> {
+        let bad = || SceneError::BenchMethod(text.to_string());
+        let number = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
+        match text.trim().split_once(':') {
+            None if text.trim() == "dop853" => Ok(MethodSpec::Dop853),
+            None if text.trim() == "dopri5" => Ok(MethodSpec::Dopri5),
+            Some(("svi", rest)) => match rest.split_once('/') {
+                Some((p, m)) => Ok(MethodSpec::Svi {
+                    points: number(p)?,
+                    quadrature: Some(number(m)?),
+                }),
+                None => Ok(MethodSpec::Svi {
+                    points: number(rest)?,
+                    quadrature: None,
+                }),
+            },
+            Some(("sc", rest)) => Ok(MethodSpec::Sc {
+                points: number(rest)?,
+            }),
+            _ => Err(bad()),
+        }
+    }
+}
+
+/// Parse a comma-separated list of method specifications.
+pub fn parse_methods(text: &str) -> Result<Vec<MethodSpec>, SceneError> {
+    text.split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(str::parse)
+        .collect()
+}
+
+/// Options of a work–precision sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BenchOptions {
+    /// Methods to sweep.
+    pub methods: Vec<MethodSpec>,
+    /// Stop a sweep once the final error is below this.
+    pub target: f64,
+    /// Stop a sweep after a point whose single run takes longer (seconds).
+    pub max_run: f64,
+    /// Timing batches per point (the median is reported).
+    pub batches: usize,
+    /// Minimum duration of one batch (seconds).
+    pub min_batch: f64,
+    /// Print one line per point to stderr.
+    pub verbose: bool,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        BenchOptions {
+            methods: parse_methods(DEFAULT_METHODS).unwrap_or_default(),
+            target: 1e-13,
+            max_run: 2.0,
+            batches: 5,
+            min_batch: 0.2,
+            verbose: false,
+        }
+    }
+}
+
+/// The default method list of `svi bench`.
+pub const DEFAULT_METHODS: &str = "svi:7/6,svi:6/5,svi:9/8,svi:6/12,sc:9,dop853,dopri5";
+
+/// One point of a work–precision curve.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Record {
+    /// The method configuration, e.g. `svi:7/6`.
+    pub method: String,
+    /// Steps (fixed-step methods) or tolerance (adaptive ones).
+    pub parameter: f64,
+    /// Step size, for fixed-step methods.
+    pub h: Option<f64>,
+    /// Steps taken (accepted and rejected, for adaptive methods).
+    pub steps: usize,
+    /// Euclidean position error at the horizon against the exact solution.
+    pub final_error: f64,
+    /// Largest |E − E₀| over the steps.
+    pub energy_error_max: f64,
+    /// Largest Noether-momentum error over the steps (`None` without symmetries).
+    pub momentum_error_max: Option<f64>,
+    /// Derivative (force / right-hand side) evaluations.
+    pub evaluations: usize,
+    /// Nonlinear iterations.
+    pub iterations: usize,
+    /// Median wall time of one run without observers, in seconds.
+    pub seconds: f64,
+}
+
+/// Sweep every method of `options` on `scene`.
+pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Record>, SceneError> {
+    scene.check()?;
+    visit_model(&scene.model, Bench { scene, options })?
+}
+
+/// Receives the scene's model and sweeps the methods on it.
+struct Bench<'a> {
+    scene: &'a Scene,
+    options: &'a BenchOptions,
+}
+
+/// The problem of a sweep: initial state, horizon and the exact final position.
+struct Problem<const N: usize> {
+    t0: f64,
+    q0: SVector<f64, N>,
+    v0: SVector<f64, N>,
+    t_end: f64,
+    exact: SVector<f64, N>,
+}
+
+impl ModelVisitor for Bench<'_> {
+    type Output = Result<Vec<Record>, SceneError>;
+
+    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+        let (t0, initial, _, t_end) = self.scene.resolve(&mut model)?;
+        let (q0, v0) = match initial {
+            Initial::Velocity { q, v } => (q, v),
+            Initial::Momentum { q, p } => (q, model.velocity(t0, &q, &p, &p)?),
+        };
+        let exact = model
+            .exact_solution(t0, &q0, &v0, t_end)
+            .ok_or_else(|| SceneError::NoReference(model.name().into()))?
+            .0;
+        let problem = Problem {
+            t0,
+            q0,
+            v0,
+            t_end,
+            exact,
+        };
+        let mut records = Vec::new();
+        for spec in &self.options.methods {
+            let label = spec.to_string();
+            match *spec {
+                MethodSpec::Svi { points, quadrature } => {
+                    let mut svi = Svi::new(points);
+                    if let Some(m) = quadrature {
+                        svi = svi.with_quadrature(m);
+                    }
+                    sweep_fixed(&model, svi, &label, &problem, self.options, &mut records)?
+                }
+                MethodSpec::Sc { points } => sweep_fixed(
+                    &model,
+                    SpectralCollocation::new(points),
+                    &label,
+                    &problem,
+                    self.options,
+                    &mut records,
+                )?,
+                MethodSpec::Dop853 | MethodSpec::Dopri5 => {
+                    sweep_adaptive(&model, *spec, &problem, self.options, &mut records)
+                }
+            }
+        }
+        Ok(records)
+    }
+}
+
+/// Median per-run time of `run` (see the module docs).
+fn median_seconds(mut run: impl FnMut(), options: &BenchOptions) -> f64 {
+    let start = Instant::now();
+    run();
+    let single = start.elapsed().as_secs_f64();
+    let batches = if single > 1.0 { 3 } else { options.batches.max(1) };
+    let mut times: Vec<f64> = (0..batches)
+        .map(|_| {
+            let start = Instant::now();
+            let mut count = 0u32;
+            loop {
+                run();
+                count += 1;
+                if start.elapsed().as_secs_f64() >= options.min_batch {
+                    break;
+                }
+            }
+            start.elapsed().as_secs_f64() / f64::from(count)
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[times.len() / 2]
+}
+
+/// Tracks when a sweep has stalled at round-off.
+#[derive(Default)]
+struct Stall {
+    best: f64,
+    count: usize,
+}
+
+impl Stall {
+    /// Record an error; `true` once three points in a row failed to halve the best error
+    /// below 1e-7.
+    fn stalled(&mut self, error: f64) -> bool {
+        if self.count == 0 && self.best == 0.0 {
+            self.best = f64::INFINITY;
+        }
+        if error < 1e-7 && error > 0.5 * self.best {
+            self.count += 1;
+        } else {
+            self.count = 0;
+        }
+        self.best = self.best.min(error);
+        self.count >= 3
+    }
+}
+
+fn report(options: &BenchOptions, record: &Record) {
+    if options.verbose {
+        eprintln!(
+            "{:>10} {:>12} error {:.3e} energy {:.3e} evaluations {:>10} time {:.4e} s",
+            record.method,
+            Float(record.parameter),
+            record.final_error,
+            record.energy_error_max,
+            record.evaluations,
+            record.seconds
+        );
+    }
+}
+
+/// Sweep a fixed-step method over step counts.
+fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+    model: &M,
+    method: Me,
+    label: &str,
+    problem: &Problem<N>,
+    options: &BenchOptions,
+    records: &mut Vec<Record>,
+) -> Result<(), SceneError> {
+    let order = method.info().order.max(1) as f64;
+    let integrator = Integrator::new(model.clone(), method);
+    let span = problem.t_end - problem.t0;
+    let initial = Initial::Velocity {
+        q: problem.q0,
+        v: problem.v0,
+    };
+    let final_error = |steps: usize| {
+        integrator
+            .run(problem.t0, initial, span / steps as f64, problem.t_end, &mut ())
+            .map(|run| (run.last.q - problem.exact).norm())
+    };
+    let mut steps = 8usize;
+    while steps < 100_000_000 && !matches!(final_error(steps), Ok(e) if e <= 3e-2) {
+        steps *= 2;
+    }
+    let factor = 10f64.powf(1.0 / order);
+    let mut stall = Stall::default();
+    let mut failures = 0;
+    while steps < 100_000_000 {
+        let h = span / steps as f64;
+        let mut energy = EnergyError::default();
+        let mut momentum = MomentumError::default();
+        let diagnostics = if model.generator_count() > 0 {
+            integrator.run(problem.t0, initial, h, problem.t_end, &mut (&mut energy, &mut momentum))
+        } else {
+            integrator.run(problem.t0, initial, h, problem.t_end, &mut energy)
+        };
+        let run = match diagnostics {
+            Ok(run) => run,
+            Err(_) if failures < 3 => {
+                failures += 1;
+                steps = (steps as f64 * factor).ceil() as usize;
+                continue;
+            }
+            Err(error) => return Err(error.into()),
+        };
+        let seconds = median_seconds(
+            || {
+                let _ = integrator.run(problem.t0, initial, h, problem.t_end, &mut ());
+            },
+            options,
+        );
+        let record = Record {
+            method: label.to_string(),
+            parameter: steps as f64,
+            h: Some(h),
+            steps: run.statistics.steps,
+            final_error: (run.last.q - problem.exact).norm(),
+            energy_error_max: energy.max,
+            momentum_error_max: (model.generator_count() > 0).then_some(momentum.max),
+            evaluations: run.statistics.evaluations,
+            iterations: run.statistics.iterations,
+            seconds,
+        };
+        report(options, &record);
+        let done = record.final_error < options.target
+            || stall.stalled(record.final_error)
+            || seconds > options.max_run;
+        records.push(record);
+        if done {
+            break;
+        }
+        steps = ((steps as f64 * factor).ceil() as usize).max(steps + 1);
+    }
+    Ok(())
+}
+
+/// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers`.
+struct FirstOrder<'a, M, const N: usize> {
+    model: &'a M,
+    /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
+    mass_inverse: Option<SMatrix<f64, N, N>>,
+}
+
+impl<M: ZooModel<N>, const N: usize> System<f64, ode_solvers::DVector<f64>> for FirstOrder<'_, M, N> {
+    fn system(&self, t: f64, y: &ode_solvers::DVector<f64>, dy: &mut ode_solvers::DVector<f64>) {
+        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
+        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+        let a = match self.mass_inverse {
+            Some(inverse) => inverse * self.model.force(t, &q, &v),
+            None => self
+                .model
+                .acceleration(t, &q, &v)
+                .unwrap_or_else(|| SVector::repeat(f64::NAN)),
+        };
+        for i in 0..N {
+            dy[i] = v[i];
+            dy[N + i] = a[i];
+        }
+    }
+}
+
+/// Outcome of one adaptive run: final state, steps, evaluations, stored states.
+type AdaptiveRun = (ode_solvers::DVector<f64>, usize, usize, Vec<ode_solvers::DVector<f64>>);
+
+/// One DOP853 / Dopri5 run to the horizon (`None` if it fails or stops short).
+fn adaptive_run<M: ZooModel<N>, const N: usize>(
+    system: FirstOrder<'_, M, N>,
+    spec: MethodSpec,
+    problem: &Problem<N>,
+    tol: f64,
+) -> Option<AdaptiveRun> {
+    let y0 = ode_solvers::DVector::from_iterator(
+        2 * N,
+        problem.q0.iter().chain(problem.v0.iter()).copied(),
+    );
+    let (t0, t_end, span) = (problem.t0, problem.t_end, problem.t_end - problem.t0);
+    macro_rules! go {
+        ($stepper:expr) => {{
+            let mut stepper = $stepper;
+            let stats = stepper.integrate().ok()?;
+            let last = stepper.y_out().last()?.clone();
+            let reached = *stepper.x_out().last()?;
+            if (reached - t_end).abs() > 1e-9 * t_end.abs().max(1.0) {
+                return None;
+            }
+            let steps = (stats.accepted_steps + stats.rejected_steps) as usize;
+            Some((last, steps, stats.num_eval as usize, stepper.y_out().clone()))
+        }};
+    }
+    // Crate defaults, except sparse output and a high step cap (as the kepler-peers tool).
+    match spec {
+        MethodSpec::Dop853 => go!(Dop853::from_param(
+            system,
+            t0,
+            t_end,
+            span,
+            y0,
+            tol,
+            tol,
+            0.9,
+            0.0,
+            0.333,
+            6.0,
+            span,
+            0.0,
+            2_000_000_000,
+            1000,
+            OutputType::Sparse,
+        )),
+        _ => go!(Dopri5::from_param(
+            system,
+            t0,
+            t_end,
+            span,
+            y0,
+            tol,
+            tol,
+            0.9,
+            0.04,
+            0.2,
+            10.0,
+            span,
+            0.0,
+            2_000_000_000,
+            1000,
+            OutputType::Sparse,
+        )),
+    }
+}
+
+/// Sweep an adaptive `ode_solvers` method over tolerances.
+fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
+    model: &M,
+    spec: MethodSpec,
+    problem: &Problem<N>,
+    options: &BenchOptions,
+    records: &mut Vec<Record>,
+) {
+    let mass_inverse = match M::STRUCTURE {
+        Structure::ConstantMass => {
+            invert_small(&model.mass_matrix(problem.t0, &problem.q0, &problem.v0))
+        }
+        Structure::General => None,
+    };
+    let system = || FirstOrder {
+        model,
+        mass_inverse,
+    };
+    let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);
+    let mut stall = Stall::default();
+    for k in 0..=26 {
+        let tol = 10f64.powf(-3.0 - 0.5 * f64::from(k));
+        let Some((last, steps, evaluations, states)) = adaptive_run(system(), spec, problem, tol)
+        else {
+            break;
+        };
+        let q = SVector::<f64, N>::from_fn(|i, _| last[i]);
+        let energy_error_max = states
+            .iter()
+            .map(|y| {
+                let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
+                let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+                (model.energy(problem.t_end, &q, &v) - energy0).abs()
+            })
+            .fold(0.0, f64::max);
+        let momentum_error_max = (model.generator_count() > 0).then(|| {
+            let initial: Vec<f64> = (0..model.generator_count())
+                .map(|i| model.noether_momentum(i, problem.t0, &problem.q0, &problem.v0))
+                .collect();
+            let mut largest: f64 = 0.0;
+            for y in &states {
+                let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
+                let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+                for (i, start) in initial.iter().enumerate() {
+                    largest = largest.max((model.noether_momentum(i, 0.0, &q, &v) - start).abs());
+                }
+            }
+            largest
+        });
+        let seconds = median_seconds(
+            || {
+                let _ = adaptive_run(system(), spec, problem, tol);
+            },
+            options,
+        );
+        let record = Record {
+            method: spec.to_string(),
+            parameter: tol,
+            h: None,
+            steps,
+            final_error: (q - problem.exact).norm(),
+            energy_error_max,
+            momentum_error_max,
+            evaluations,
+            iterations: 0,
+            seconds,
+        };
+        report(options, &record);
+        let done = record.final_error < options.target
+            || stall.stalled(record.final_error)
+            || seconds > options.max_run;
+        records.push(record);
+        if done {
+            break;
+        }
+    }
+}
+
+/// Round-trip float formatting for CSV.
+struct Float(f64);
+
+impl fmt::Display for Float {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{:e}", self.0)
+    }
+}
+
+/// The records as CSV with a header row.
+pub fn to_csv(records: &[Record]) -> String {
+    let mut text = String::from(
+        "method,parameter,h,steps,final_error,energy_error_max,momentum_error_max,evaluations,iterations,seconds\n",
+    );
+    for r in records {
+        let optional = |x: Option<f64>| x.map(|v| Float(v).to_string()).unwrap_or_default();
+        text.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},{}\n",
+            r.method,
+            Float(r.parameter),
+            optional(r.h),
+            r.steps,
+            Float(r.final_error),
+            Float(r.energy_error_max),
+            optional(r.momentum_error_max),
+            r.evaluations,
+            r.iterations,
+            Float(r.seconds)
+        ));
+    }
+    text
+}
+
+/// Error against time and error against evaluations, one curve per method, as SVG.
+pub fn plot(records: &[Record], title: &str, path: &Path) -> Result<(), crate::plot::PlotError> {
+    let mut labels: Vec<&str> = Vec::new();
+    for r in records {
+        if !labels.contains(&r.method.as_str()) {
+            labels.push(&r.method);
+        }
+    }
+    let series = |x: fn(&Record) -> f64| -> Vec<Series> {
+        labels
+            .iter()
+            .map(|label| Series {
+                label: label.to_string(),
+                points: records
+                    .iter()
+                    .filter(|r| r.method == *label)
+                    .map(|r| (x(r), r.final_error))
+                    .collect(),
+            })
+            .collect()
+    };
+    let panel = |what: &str, x_label: &str, x: fn(&Record) -> f64| Panel {
+        title: format!("{title}: error against {what}"),
+        x_label: x_label.into(),
+        y_label: "final position error".into(),
+        x_log: true,
+        y_log: true,
+        series: series(x),
+    };
+    write_svg(
+        path,
+        &[
+            panel("run time", "seconds per run", |r| r.seconds),
+            panel("evaluations", "derivative evaluations", |r| r.evaluations as f64),
+        ],
+        640,
+        480,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn method_specifications_parse_and_print_back() {
+        for text in ["svi:7/6", "svi:6", "sc:9", "dop853", "dopri5"] {
+            assert_eq!(text.parse::<MethodSpec>().unwrap().to_string(), text);
+        }
+        for bad in ["svi", "svi:x", "sc:", "rk4", "svi:6/"] {
+            assert!(matches!(
+                bad.parse::<MethodSpec>(),
+                Err(SceneError::BenchMethod(_))
+            ));
+        }
+        assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 7);
+    }
+
+    #[test]
+    fn a_short_sweep_converges_at_the_methods_order() {
+        // Oscillator to t = 10: errors must fall by about 10× per point and the times and
+        // counts must be positive; the exact solution is the reference.
+        let mut scene = Scene::builtin("oscillator").unwrap().unwrap();
+        scene.run.t_end = Some(10.0);
+        let options = BenchOptions {
+            methods: vec![
+                MethodSpec::Svi {
+                    points: 3,
+                    quadrature: Some(2),
+                },
+                MethodSpec::Dop853,
+            ],
+            target: 1e-9,
+            max_run: 1.0,
+            batches: 1,
+            min_batch: 0.0,
+            verbose: false,
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        let svi: Vec<&Record> = records.iter().filter(|r| r.method == "svi:3/2").collect();
+        assert!(svi.len() >= 3, "{records:?}");
+        assert!(svi.last().unwrap().final_error < 1e-9);
+        for pair in svi.windows(2) {
+            let ratio = pair[0].final_error / pair[1].final_error;
+            assert!(ratio > 3.0 && ratio < 40.0, "{pair:?}");
+            assert!(pair[1].evaluations > pair[0].evaluations);
+        }
+        let dop: Vec<&Record> = records.iter().filter(|r| r.method == "dop853").collect();
+        assert!(dop.len() >= 3 && dop.iter().all(|r| r.seconds > 0.0 && r.evaluations > 0));
+        assert!(dop.iter().any(|r| r.final_error < 1e-8), "{dop:?}");
+        let csv = to_csv(&records);
+        assert_eq!(csv.lines().count(), records.len() + 1);
+        assert!(csv.starts_with("method,parameter,h,steps,final_error"));
+    }
+}

@@ -1,0 +1,184 @@
+//! Plots a person can open: SVG line charts, drawn with plotters' SVG backend (no font or
+//! system library needed; text is left to the viewer).
+
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One curve: a label and its (x, y) points.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend text.
+    pub label: String,
+    /// Points in drawing order.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// One chart of a figure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel {
+    /// Title above the chart.
+    pub title: String,
+    /// Horizontal axis label.
+    pub x_label: String,
+    /// Vertical axis label.
+    pub y_label: String,
+    /// Logarithmic horizontal axis.
+    pub x_log: bool,
+    /// Logarithmic vertical axis.
+    pub y_log: bool,
+    /// The curves.
+    pub series: Vec<Series>,
+}
+
+/// A plotting failure (file or drawing error), as text.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("cannot draw {path}: {reason}")]
+pub struct PlotError {
+    /// The file being written.
+    pub path: String,
+    /// What went wrong.
+    pub reason: String,
+}
+
+/// Series with at most this many points get a marker at each point.
+const MARKED_POINTS: usize = 60;
+
+/// Tick label: powers of ten on a log axis, short decimals otherwise.
+fn tick(value: f64, log: bool) -> String {
+    if log {
+        format!("{value:.0e}")
+    } else {
+        format!("{}", (value * 1e6).round() / 1e6)
+    }
+}
+
+/// Range of the finite (and, on a log axis, positive) coordinates, padded a little.
+fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
+        low = low.min(v);
+        high = high.max(v);
+    }
+    if !low.is_finite() {
+        return if log { (1e-16, 1.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        (low / 2.0, high * 2.0)
+    } else {
+        let pad = 0.05 * (high - low).max(1e-12);
+        (low - pad, high + pad)
+    }
+}
+
+/// Draw `panels` side by side into an SVG file of `width` × `height` pixels per panel.
+pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Result<(), PlotError> {
+    let error = |reason: String| PlotError {
+        path: path.display().to_string(),
+        reason,
+    };
+    let count = panels.len().max(1) as u32;
+    let root = SVGBackend::new(path, (width * count, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| error(e.to_string()))?;
+    let areas = root.split_evenly((1, count as usize));
+    for (panel, area) in panels.iter().zip(areas.iter()) {
+        draw_panel(panel, area).map_err(error)?;
+    }
+    root.present().map_err(|e| error(e.to_string()))
+}
+
+fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> Result<(), String> {
+    let points = || panel.series.iter().flat_map(|s| s.points.iter());
+    let (x0, x1) = range(points().map(|p| p.0), panel.x_log);
+    let (y0, y1) = range(points().map(|p| p.1), panel.y_log);
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(&panel.title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(70);
+    macro_rules! draw {
+        ($x:expr, $y:expr) => {{
+            let mut chart = builder.build_cartesian_2d($x, $y).map_err(|e| e.to_string())?;
+            chart
+                .configure_mesh()
+                .x_desc(panel.x_label.as_str())
+                .y_desc(panel.y_label.as_str())
+                .x_label_formatter(&|v| tick(*v, panel.x_log))
+                .y_label_formatter(&|v| tick(*v, panel.y_log))
+                .draw()
+                .map_err(|e| e.to_string())?;
+            for (index, series) in panel.series.iter().enumerate() {
+                let color = Palette99::pick(index).to_rgba();
+                let data: Vec<(f64, f64)> = series
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|(x, y)| {
+                        x.is_finite()
+                            && y.is_finite()
+                            && (!panel.x_log || *x > 0.0)
+                            && (!panel.y_log || *y > 0.0)
+                    })
+                    .collect();
+                chart
+                    .draw_series(LineSeries::new(data.clone(), color.stroke_width(2)))
+                    .map_err(|e| e.to_string())?
+                    .label(series.label.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+                if data.len() <= MARKED_POINTS {
+                    chart
+                        .draw_series(data.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+                        .map_err(|e| e.to_string())?;
+                }
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(|e| e.to_string())?;
+        }};
+    }
+    match (panel.x_log, panel.y_log) {
+        (true, true) => draw!((x0..x1).log_scale(), (y0..y1).log_scale()),
+        (true, false) => draw!((x0..x1).log_scale(), y0..y1),
+        (false, true) => draw!(x0..x1, (y0..y1).log_scale()),
+        (false, false) => draw!(x0..x1, y0..y1),
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_an_svg_with_every_series_label() {
+        let path = std::env::temp_dir().join(format!("svi-plot-{}.svg", std::process::id()));
+        let panel = |log| Panel {
+            title: "test".into(),
+            x_label: "x".into(),
+            y_label: "y".into(),
+            x_log: log,
+            y_log: log,
+            series: vec![
+                Series {
+                    label: "first".into(),
+                    points: vec![(1e-3, 1e-2), (1e-2, 1e-6), (0.0, f64::NAN)],
+                },
+                Series {
+                    label: "second".into(),
+                    points: vec![(2e-3, 1e-3), (3e-2, 1e-9)],
+                },
+            ],
+        };
+        write_svg(&path, &[panel(true), panel(false)], 400, 300).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert!(text.starts_with("<svg"));
+        assert_eq!(text.matches(">\nfirst\n<").count(), 2, "{text}");
+        assert_eq!(text.matches(">\nsecond\n<").count(), 2);
+    }
+}

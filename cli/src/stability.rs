@@ -1,0 +1,195 @@
+//! `svi stability`: linear stability of a method on the harmonic oscillator, z = σ²h².
+//!
+//! Evaluates the stability matrix S(z) of [`svi::stability`] (from the method's tangent map)
+//! on a z grid or at listed z values, writes CSV, plots ρ(S), det S, tr(S)² − 4 det S and
+//! |tr S| − det S − 1 against z as SVG (Li, Wu, Leok 2018, Figs. 3–6), and prints the
+//! stability, periodicity and strong-stability regions of Definition 4.1.
+
+use crate::plot::{Panel, Series, write_svg};
+use std::fmt::Write as _;
+use std::path::Path;
+use svi::Method;
+use svi::stability::{Interval, StabilityPoint, StabilityReport, analyse, stability_matrix};
+
+/// The configurations of the paper's Figs. 3–6: (label, method).
+pub fn figure_configurations() -> Vec<(&'static str, crate::bench::MethodSpec)> {
+    use crate::bench::MethodSpec::{Sc, Svi};
+    vec![
+        ("Cheb 5, Gau 4", Svi { points: 5, quadrature: Some(4) }),
+        ("Cheb 5, Gau 10", Svi { points: 5, quadrature: Some(10) }),
+        ("Cheb 9, Gau 8", Svi { points: 9, quadrature: Some(8) }),
+        ("Cheb 9, Gau 18", Svi { points: 9, quadrature: Some(18) }),
+        ("SC, Cheb 5", Sc { points: 5 }),
+        ("SC, Cheb 9", Sc { points: 9 }),
+    ]
+}
+
+/// S(z) diagnostics at each listed z.
+pub fn evaluate<M: Method<1>>(method: &M, values: &[f64]) -> Result<Vec<StabilityPoint>, svi::Error> {
+    values
+        .iter()
+        .map(|&z| stability_matrix(method, z).map(|matrix| StabilityPoint::new(z, matrix)))
+        .collect()
+}
+
+/// CSV with a header row: `z,rho,det,trace,discriminant,strong_margin`.
+pub fn to_csv(points: &[StabilityPoint]) -> String {
+    let mut text = String::from("z,rho,det,trace,discriminant,strong_margin\n");
+    for p in points {
+        let _ = writeln!(
+            text,
+            "{:e},{:e},{:e},{:e},{:e},{:e}",
+            p.z, p.rho, p.det, p.trace, p.discriminant, p.strong_margin
+        );
+    }
+    text
+}
+
+fn intervals(list: &[Interval]) -> String {
+    if list.is_empty() {
+        return "none".into();
+    }
+    list.iter()
+        .map(|i| format!("[{:.10}, {:.10}]", i.lower, i.upper))
+        .collect::<Vec<_>>()
+        .join(" ∪ ")
+}
+
+/// The regions of a report as text.
+pub fn describe(label: &str, report: &StabilityReport) -> String {
+    format!(
+        "{label} on z ∈ [{}, {}]:\n  stable          {}\n  periodic        {}\n  strongly stable {}\n  A-stable: {}, P-stable: {}\n",
+        report.range.lower,
+        report.range.upper,
+        intervals(&report.stable),
+        intervals(&report.periodic),
+        intervals(&report.strongly_stable),
+        if report.a_stable { "yes" } else { "no" },
+        if report.p_stable { "yes" } else { "no" },
+    )
+}
+
+/// The four diagnostics against z, one curve per labelled report, as SVG.
+pub fn plot(reports: &[(String, StabilityReport)], path: &Path) -> Result<(), crate::plot::PlotError> {
+    type Pick = fn(&StabilityPoint) -> f64;
+    let quantities: [(&str, Pick); 4] = [
+        ("spectral radius ρ(S)", |p| p.rho),
+        ("det S", |p| p.det),
+        ("tr(S)² − 4 det S", |p| p.discriminant),
+        ("|tr S| − det S − 1", |p| p.strong_margin),
+    ];
+    let panels: Vec<Panel> = quantities
+        .iter()
+        .map(|(name, pick)| Panel {
+            title: (*name).into(),
+            x_label: "z = σ²h²".into(),
+            y_label: (*name).into(),
+            x_log: false,
+            y_log: false,
+            series: reports
+                .iter()
+                .map(|(label, report)| Series {
+                    label: label.clone(),
+                    points: report.points.iter().map(|p| (p.z, pick(p))).collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    write_svg(path, &panels, 520, 420)
+}
+
+/// Analyse `method` on [z_min, z_max] with `samples` grid points.
+pub fn report<M: Method<1>>(
+    method: &M,
+    z_min: f64,
+    z_max: f64,
+    samples: usize,
+) -> Result<StabilityReport, svi::Error> {
+    analyse(method, z_min, z_max, samples)
+}
+
+/// What to compute for one method.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Request {
+    /// Regions and curves on [z_min, z_max] with `samples` grid points.
+    Range {
+        /// Lower end.
+        z_min: f64,
+        /// Upper end.
+        z_max: f64,
+        /// Grid points.
+        samples: usize,
+    },
+    /// Exactly these z values.
+    Values(Vec<f64>),
+}
+
+/// The answer to a [`Request`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Answer {
+    /// A full report.
+    Report(StabilityReport),
+    /// The listed points.
+    Points(Vec<StabilityPoint>),
+}
+
+/// Run `request` for the method `spec` (one with a tangent map: not the adaptive peers).
+pub fn run(spec: crate::bench::MethodSpec, request: &Request) -> Result<Answer, crate::SceneError> {
+    use crate::bench::MethodSpec;
+    fn with<M: Method<1>>(method: &M, request: &Request) -> Result<Answer, svi::Error> {
+        match request {
+            Request::Range {
+                z_min,
+                z_max,
+                samples,
+            } => report(method, *z_min, *z_max, *samples).map(Answer::Report),
+            Request::Values(values) => evaluate(method, values).map(Answer::Points),
+        }
+    }
+    Ok(match spec {
+        MethodSpec::Svi { points, quadrature } => {
+            let mut svi = svi::Svi::new(points);
+            if let Some(m) = quadrature {
+                svi = svi.with_quadrature(m);
+            }
+            with(&svi, request)?
+        }
+        MethodSpec::Sc { points } => with(&svi::SpectralCollocation::new(points), request)?,
+        MethodSpec::Dop853 | MethodSpec::Dopri5 => {
+            return Err(crate::SceneError::BenchMethod(format!(
+                "{spec} (adaptive peers have no fixed-step stability matrix)"
+            )));
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use svi::Svi;
+
+    #[test]
+    fn csv_lists_the_requested_points_and_linear_svi_is_stable_below_twelve() {
+        let method = Svi::new(2).with_quadrature(2);
+        let points = evaluate(&method, &[0.5, 1.0, 11.0, 13.0]).unwrap();
+        let csv = to_csv(&points);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines[0], "z,rho,det,trace,discriminant,strong_margin");
+        assert_eq!(lines.len(), 5);
+        // tr S = 2 − 6z/(6 + z) for degree 1 with two Gauss points; det S = 1.
+        for p in &points {
+            assert!((p.trace - (2.0 - 6.0 * p.z / (6.0 + p.z))).abs() < 1e-12);
+            assert!((p.det - 1.0).abs() < 1e-12);
+        }
+        assert!((points[2].rho - 1.0).abs() < 1e-12);
+        assert!(points[3].rho > 1.0 + 1e-3);
+    }
+
+    #[test]
+    fn describe_names_the_regions() {
+        let report = report(&Svi::new(2).with_quadrature(2), 1e-6, 20.0, 50).unwrap();
+        let text = describe("Cheb 2, Gau 2", &report);
+        assert!(text.contains("stable          [0.0000010000, 12.0000000000]"), "{text}");
+        assert!(text.contains("A-stable: no"));
+    }
+}

@@ -1,0 +1,193 @@
+//! The planar pendulum damped by friction (the example of the slides' "Forced mechanics").
+//!
+//! # Lagrangian and force
+//!
+//! L(θ, θ̇) = ½ m l² θ̇² + m g l cos θ (the [`crate::Pendulum`]'s) with the friction torque
+//! f_L = −c θ̇, c ≥ 0, of the Lagrange–d'Alembert principle
+//! δ∫L dt + ∫ f_L δθ dt = 0.
+//!
+//! # Equations of motion
+//!
+//! m l² θ̈ = −m g l sin θ − c θ̇; the energy E = ½ m l² θ̇² − m g l cos θ decays as
+//! dE/dt = −c θ̇² towards the rest state θ = 2πj.
+//!
+//! # Exact solution
+//!
+//! None in closed form for c > 0; for c = 0 the undamped pendulum's Jacobi elliptic
+//! solution ([`crate::Pendulum`]).
+//!
+//! # Defaults
+//!
+//! m = l = g = 1, c = 0.1 (the small oscillations decay as e^{−0.05t}), θ₀ = 1, θ̇₀ = 0,
+//! step 0.1, horizon 100.
+//!
+//! # References
+//!
+//! M. Porcù, T. Penati, *Spectral variational integrators* (OctConf 2013), "Forced
+//! mechanics": the simple pendulum damped with friction-type forcing; J. E. Marsden,
+//! M. West, *Discrete mechanics and variational integrators*, Acta Numerica (2001), §3.2.
+
+use nalgebra::SVector;
+use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
+
+use crate::{Pendulum, params};
+
+/// The damped pendulum: L = ½ m l² θ̇² + m g l cos θ, f_L = −c θ̇.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DampedPendulum {
+    /// Mass m (> 0).
+    pub m: f64,
+    /// Rod length l (> 0).
+    pub l: f64,
+    /// Gravitational acceleration g (≥ 0).
+    pub g: f64,
+    /// Friction coefficient c (≥ 0) of the torque −c θ̇.
+    pub c: f64,
+}
+
+impl DampedPendulum {
+    /// Registry name of the model.
+    pub const NAME: &'static str = "damped-pendulum";
+    /// Parameter names, in the order of [`Defaults::parameters`].
+    pub const PARAMETERS: [&'static str; 4] = ["m", "l", "g", "c"];
+
+    /// The undamped pendulum with the same m, l, g.
+    pub fn undamped(&self) -> Pendulum {
+        Pendulum {
+            m: self.m,
+            l: self.l,
+            g: self.g,
+        }
+    }
+}
+
+impl Default for DampedPendulum {
+    /// m = l = g = 1, c = 0.1.
+    fn default() -> Self {
+        Self {
+            m: 1.0,
+            l: 1.0,
+            g: 1.0,
+            c: 0.1,
+        }
+    }
+}
+
+impl Lagrangian<1> for DampedPendulum {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
+    const FORCED: bool = true;
+
+    #[inline]
+    fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+        let (m, l, g) = (self.m, self.l, self.g);
+        v[0] * v[0] * (0.5 * m * l * l) + q[0].cos() * (m * g * l)
+    }
+
+    /// f_L = −c θ̇.
+    #[inline]
+    fn external_force<D: Scalar>(
+        &self,
+        _t: D,
+        _q: &SVector<D, 1>,
+        v: &SVector<D, 1>,
+    ) -> SVector<D, 1> {
+        SVector::from([v[0] * (-self.c)])
+    }
+}
+
+impl Symmetries<1> for DampedPendulum {
+    /// None.
+    fn generator_count(&self) -> usize {
+        0
+    }
+
+    /// # Panics
+    /// Always: there are no generators.
+    fn momentum_name(&self, index: usize) -> &'static str {
+        params::no_such_index("symmetry generator", Self::NAME, index)
+    }
+
+    /// # Panics
+    /// Always: there are no generators.
+    fn generator(&self, index: usize, _q: &SVector<f64, 1>) -> SVector<f64, 1> {
+        params::no_such_index("symmetry generator", Self::NAME, index)
+    }
+}
+
+impl Invariants<1> for DampedPendulum {
+    /// None: the energy decays.
+    fn invariant_count(&self) -> usize {
+        0
+    }
+
+    /// # Panics
+    /// Always: there are no invariants.
+    fn invariant_name(&self, index: usize) -> &'static str {
+        params::no_such_index("invariant", Self::NAME, index)
+    }
+
+    /// # Panics
+    /// Always: there are no invariants.
+    fn invariant(&self, index: usize, _t: f64, _q: &SVector<f64, 1>, _v: &SVector<f64, 1>) -> f64 {
+        params::no_such_index("invariant", Self::NAME, index)
+    }
+}
+
+impl ExactSolution<1> for DampedPendulum {
+    /// The undamped pendulum's solution when c = 0; `None` otherwise.
+    fn exact_solution(
+        &self,
+        t0: f64,
+        q0: &SVector<f64, 1>,
+        v0: &SVector<f64, 1>,
+        t: f64,
+    ) -> Option<(SVector<f64, 1>, SVector<f64, 1>)> {
+        if self.c == 0.0 {
+            self.undamped().exact_solution(t0, q0, v0, t)
+        } else {
+            None
+        }
+    }
+}
+
+impl Defaults<1> for DampedPendulum {
+    fn name(&self) -> &'static str {
+        Self::NAME
+    }
+
+    fn coordinate_names(&self) -> [&'static str; 1] {
+        ["theta"]
+    }
+
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        vec![("m", self.m), ("l", self.l), ("g", self.g), ("c", self.c)]
+    }
+
+    /// `m` and `l` must be finite and positive, `g` and `c` finite and non-negative.
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        match name {
+            "m" => self.m = params::positive(name, value)?,
+            "l" => self.l = params::positive(name, value)?,
+            "g" => self.g = params::non_negative(name, value)?,
+            "c" => self.c = params::non_negative(name, value)?,
+            _ => return Err(params::unknown(Self::NAME, name, &Self::PARAMETERS)),
+        }
+        Ok(())
+    }
+
+    /// t₀ = 0, θ₀ = 1, θ̇₀ = 0 (the undamped pendulum's default).
+    fn initial_state(&self) -> (f64, SVector<f64, 1>, SVector<f64, 1>) {
+        (0.0, SVector::from([1.0]), SVector::from([0.0]))
+    }
+
+    /// h = 0.1.
+    fn default_step(&self) -> f64 {
+        0.1
+    }
+
+    /// T = 100.
+    fn default_horizon(&self) -> f64 {
+        100.0
+    }
+}

@@ -1,0 +1,239 @@
+//! The Störmer–Verlet method: the variational integrator of the trapezoidal discrete
+//! Lagrangian, explicit where the Lagrangian allows it.
+//!
+//! # Discrete equations
+//! The discrete Lagrangian is [`Trapezoid`], L_d = ½h L(t_k, q_k, v) + ½h L(t_k + h, q_{k+1}, v)
+//! with v = (q_{k+1} − q_k)/h, and the discrete forces are f_d⁻ = (h/2) f_L(t_k, q_k, v),
+//! f_d⁺ = (h/2) f_L(t_k + h, q_{k+1}, v) (slides' "Störmer–Verlet"; Marsden & West 2001,
+//! §2.7). For a [`Structure::ConstantMass`] Lagrangian, L = ½ q̇ᵀMq̇ − V(t, q), the implicit
+//! discrete Euler–Lagrange equations solve explicitly (kick–drift–kick):
+//!
+//! p_{k+½} = p_k + (h/2) (∂L/∂q(t_k, q_k) + f_L(t_k, q_k, v)),
+//! q_{k+1} = q_k + h v,  v = M⁻¹ p_{k+½},
+//! p_{k+1} = p_{k+½} + (h/2) (∂L/∂q(t_k + h, q_{k+1}) + f_L(t_k + h, q_{k+1}, v)).
+//!
+//! Without a force this needs no Newton iteration and no Hessian, and one gradient ∂L/∂q
+//! per step: the force at q_{k+1} is kept in the workspace and reused as the force at q_k of
+//! the next step (recognised by position, to within the rounding of the stepping loop's
+//! compensated summation). The momentum increment is (h/2)(F_k + F_{k+1}), free of
+//! cancellation. With a force f_L (which may depend on q̇, like friction) the first kick is
+//! implicit in v only: p_{k+½} = r + (h/2) f_L(t_k, q_k, M⁻¹p_{k+½}), r = p_k + (h/2) ∂L/∂q,
+//! solved by Newton's method on N unknowns with the Jacobian I − (h/2) ∂f_L/∂q̇ M⁻¹ (no
+//! Hessian of L; one iteration when f_L does not depend on q̇, and none of it changes
+//! anything when f_L = 0). Every other Lagrangian takes the implicit path of
+//! [`VariationalIntegrator`]`<`[`Trapezoid`]`>` (the Lobatto IIIA–IIIB pair): the same
+//! discrete equations, solved by Newton's method on q_{k+1}.
+//!
+//! # Properties
+//! Order 2; symmetric; symplectic (without forces). The step equals
+//! `VariationalIntegrator::new(Trapezoid)`'s to round-off.
+//!
+//! # References
+//! Porcù & Penati (OctConf 2013), "Variational integrators" 3) and the Störmer–Verlet
+//! error table on the harmonic oscillator; Hairer, Lubich, Wanner, *Geometric numerical
+//! integration* (2006), §I.3 and eq. VI.6.9; Hairer, Lubich, Wanner, *Geometric numerical
+//! integration illustrated by the Störmer–Verlet method*, Acta Numerica (2003).
+
+use crate::derived::LagrangianExt;
+use crate::discrete_lagrangian::Trapezoid;
+use crate::error::StepFailure;
+use crate::iteration::Newton;
+use crate::linalg::invert_small;
+use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::variational_integrator::{
+    VariationalWorkspace, continuation_tolerance, discrete_tangent_map,
+};
+use crate::{Error, Lagrangian, Method, Structure, VariationalIntegrator};
+use nalgebra::{DVector, SMatrix, SVector};
+
+/// Options of the Störmer–Verlet method.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct StormerVerlet {
+    /// Cap on Newton iterations per step (implicit path and forced kicks only).
+    pub max_iterations: usize,
+}
+
+impl Default for StormerVerlet {
+    fn default() -> Self {
+        StormerVerlet { max_iterations: 50 }
+    }
+}
+
+impl StormerVerlet {
+    /// Cap Newton iterations per step.
+    pub fn with_max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+
+    /// The implicit method with the same discrete equations.
+    fn implicit(&self) -> VariationalIntegrator<Trapezoid> {
+        VariationalIntegrator::new(Trapezoid).with_max_iterations(self.max_iterations)
+    }
+}
+
+/// ∂L/∂q at the end of the previous step.
+#[derive(Debug, Clone, Copy)]
+struct CachedForce<const N: usize> {
+    t: f64,
+    q: SVector<f64, N>,
+    tolerance: f64,
+    force: SVector<f64, N>,
+}
+
+/// Buffers of the explicit kick–drift–kick path.
+#[derive(Debug, Clone)]
+struct Explicit<const N: usize> {
+    /// M⁻¹, from the first step.
+    mass_inverse: Option<SMatrix<f64, N, N>>,
+    cache: Option<CachedForce<N>>,
+    /// Newton on the half-step momentum (forced models).
+    newton: Newton,
+    half: DVector<f64>,
+}
+
+/// Buffers of a Störmer–Verlet run.
+#[derive(Debug, Clone)]
+pub struct StormerVerletWorkspace<const N: usize> {
+    /// The implicit path (Lagrangians without constant mass matrix).
+    implicit: VariationalWorkspace<N>,
+    /// The explicit path ([`Structure::ConstantMass`]).
+    explicit: Option<Explicit<N>>,
+}
+
+impl<const N: usize> Method<N> for StormerVerlet {
+    type Workspace = StormerVerletWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        MethodInfo {
+            name: "verlet",
+            order: 2,
+            symmetric: true,
+            symplectic: true,
+            coordinates: Coordinates::Momentum,
+        }
+    }
+
+    fn workspace<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        h: f64,
+    ) -> Result<StormerVerletWorkspace<N>, Error> {
+        let implicit = self.implicit().workspace(model, h)?;
+        let explicit = (L::STRUCTURE == Structure::ConstantMass).then(|| Explicit {
+            mass_inverse: None,
+            cache: None,
+            newton: Newton::new(N, self.max_iterations),
+            half: DVector::zeros(N),
+        });
+        Ok(StormerVerletWorkspace { implicit, explicit })
+    }
+
+    fn step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut StormerVerletWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        match &mut workspace.explicit {
+            Some(explicit) => kick_drift_kick(model, explicit, t, h, state, increment),
+            None => self
+                .implicit()
+                .step(model, &mut workspace.implicit, t, h, state, increment),
+        }
+    }
+
+    fn tangent_map<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut StormerVerletWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let mut increment = State::zeros();
+        self.step(model, workspace, t, h, state, &mut increment)?;
+        let q1 = state.q + increment.q;
+        let tangent = discrete_tangent_map(&Trapezoid, model, t, h, &state.q, &q1)?;
+        Ok((increment, tangent))
+    }
+}
+
+/// One explicit step of a constant-mass Lagrangian.
+fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
+    model: &L,
+    explicit: &mut Explicit<N>,
+    t: f64,
+    h: f64,
+    state: &State<N>,
+    increment: &mut State<N>,
+) -> Result<StepReport, StepFailure> {
+    let mass_inverse = match explicit.mass_inverse {
+        Some(inverse) => inverse,
+        None => {
+            let mass = model.mass_matrix(t, &state.q, &state.y);
+            *explicit
+                .mass_inverse
+                .insert(invert_small(&mass).ok_or(StepFailure::SingularMatrix)?)
+        }
+    };
+    let half = 0.5 * h;
+    let mut evaluations = 1;
+    let cached = explicit.cache.take().filter(|cache| {
+        (!L::TIME_DEPENDENT || (cache.t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cache.t.abs()))
+            && (state.q - cache.q).amax() <= cache.tolerance
+    });
+    let start_force = match cached {
+        Some(cache) => cache.force,
+        None => {
+            evaluations += 1;
+            model.force(t, &state.q, &(mass_inverse * state.y))
+        }
+    };
+    // Kick: p_{k+½} = p_k + (h/2)(∂L/∂q + f_L) at the start.
+    let mut kick = state.y + start_force * half;
+    let mut start = start_force;
+    let mut iterations = 0;
+    if L::FORCED {
+        let rest = kick;
+        let predicted = rest + model.external_force(t, &state.q, &(mass_inverse * rest)) * half;
+        explicit.half.copy_from_slice(predicted.as_slice());
+        iterations = explicit.newton.solve(&mut explicit.half, |z, matrix, residual| {
+            let momentum = SVector::<f64, N>::from_column_slice(z.as_slice());
+            let force = model.external_force_jacobian(t, &state.q, &(mass_inverse * momentum));
+            let value = momentum - rest - force.value * half;
+            residual.copy_from_slice(value.as_slice());
+            let jacobian = SMatrix::<f64, N, N>::identity() - force.v * mass_inverse * half;
+            matrix.copy_from(&jacobian);
+        })?;
+        kick = SVector::from_column_slice(explicit.half.as_slice());
+        start += model.external_force(t, &state.q, &(mass_inverse * kick));
+    }
+    // Drift.
+    let velocity = mass_inverse * kick;
+    let drift = velocity * h;
+    let end_q = state.q + drift;
+    let end_t = t + h;
+    // Kick: p_{k+1} = p_{k+½} + (h/2)(∂L/∂q + f_L) at the end.
+    let end_force = model.force(end_t, &end_q, &velocity);
+    explicit.cache = Some(CachedForce {
+        t: end_t,
+        q: end_q,
+        tolerance: continuation_tolerance(&state.q, &end_q),
+        force: end_force,
+    });
+    let mut end = end_force;
+    if L::FORCED {
+        end += model.external_force(end_t, &end_q, &velocity);
+    }
+    increment.q = drift;
+    increment.y = (start + end) * half;
+    Ok(StepReport {
+        iterations,
+        evaluations,
+    })
+}

@@ -1,0 +1,80 @@
+//! The stepping loop allocates nothing for fixed-size models: a run of 2000 steps performs
+//! exactly as many heap allocations as a run of 20 (all of them in the set-up: workspace,
+//! tables), for every method and both solver paths (fixed point and Newton).
+
+use nalgebra::SVector;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use svi::{Integrator, Lagrangian, Method, SpectralCollocation, Svi};
+use svi_models::{DoublePendulum, Kepler};
+
+/// Counts the allocations of each thread (the test harness's own threads do not disturb
+/// the count of a test).
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations of a run of `steps` steps of size 0.01.
+fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+    model: &L,
+    method: &M,
+    q: SVector<f64, N>,
+    v: SVector<f64, N>,
+    steps: usize,
+) -> usize {
+    let integrator = Integrator::new(model.clone(), method.clone());
+    let before = count();
+    integrator
+        .run_from_velocity(0.0, q, v, 0.01, 0.01 * steps as f64, &mut ())
+        .unwrap();
+    count() - before
+}
+
+fn assert_loop_allocates_nothing<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+    model: L,
+    method: M,
+    q: SVector<f64, N>,
+    v: SVector<f64, N>,
+) {
+    let short = allocations(&model, &method, q, v, 20);
+    let long = allocations(&model, &method, q, v, 2000);
+    assert_eq!(short, long, "{}: the step loop allocates", method.info().name);
+}
+
+#[test]
+fn fixed_point_paths_do_not_allocate_per_step() {
+    let (q, v) = (SVector::from([0.5, 0.0]), SVector::from([0.0, 3f64.sqrt()]));
+    assert_loop_allocates_nothing(Kepler::default(), Svi::new(7).with_quadrature(6), q, v);
+    assert_loop_allocates_nothing(Kepler::default(), Svi::new(6), q, v);
+    assert_loop_allocates_nothing(Kepler::default(), SpectralCollocation::new(6), q, v);
+}
+
+#[test]
+fn newton_paths_do_not_allocate_per_step() {
+    let (q, v) = (SVector::from([1.0, 0.5]), SVector::from([0.0, 0.0]));
+    assert_loop_allocates_nothing(DoublePendulum::default(), Svi::new(5), q, v);
+    assert_loop_allocates_nothing(DoublePendulum::default(), SpectralCollocation::new(5), q, v);
+}

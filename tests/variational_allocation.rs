@@ -1,0 +1,89 @@
+//! The classic variational integrators and the forced paths of every method allocate
+//! nothing per step: a run of 2000 steps performs exactly as many heap allocations as a run
+//! of 20 (all of them in the set-up).
+
+use nalgebra::SVector;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use svi::{
+    Integrator, Lagrangian, Method, Midpoint, SpectralCollocation, StormerVerlet, Svi,
+    SymplecticEuler, Trapezoid, VariationalIntegrator,
+};
+use svi_models::{DampedPendulum, DoublePendulum, Kepler};
+
+/// Counts the allocations of each thread.
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() -> usize {
+    ALLOCATIONS.with(Cell::get)
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations of a run of `steps` steps of size 0.01.
+fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+    model: &L,
+    method: &M,
+    q: SVector<f64, N>,
+    v: SVector<f64, N>,
+    steps: usize,
+) -> usize {
+    let integrator = Integrator::new(model.clone(), method.clone());
+    let before = count();
+    integrator
+        .run_from_velocity(0.0, q, v, 0.01, 0.01 * steps as f64, &mut ())
+        .unwrap();
+    count() - before
+}
+
+fn assert_loop_allocates_nothing<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+    model: L,
+    method: M,
+    q: SVector<f64, N>,
+    v: SVector<f64, N>,
+) {
+    let short = allocations(&model, &method, q, v, 20);
+    let long = allocations(&model, &method, q, v, 2000);
+    assert_eq!(short, long, "{}: the step loop allocates", method.info().name);
+}
+
+#[test]
+fn classic_methods_do_not_allocate_per_step() {
+    let (q, v) = (SVector::from([0.5, 0.0]), SVector::from([0.0, 3f64.sqrt()]));
+    let kepler = Kepler::default();
+    assert_loop_allocates_nothing(kepler, VariationalIntegrator::new(SymplecticEuler), q, v);
+    assert_loop_allocates_nothing(kepler, VariationalIntegrator::new(Midpoint), q, v);
+    assert_loop_allocates_nothing(kepler, VariationalIntegrator::new(Trapezoid), q, v);
+    assert_loop_allocates_nothing(kepler, StormerVerlet::default(), q, v);
+    let (q, v) = (SVector::from([1.0, 0.5]), SVector::from([0.0, 0.0]));
+    assert_loop_allocates_nothing(DoublePendulum::default(), StormerVerlet::default(), q, v);
+}
+
+#[test]
+fn forced_paths_do_not_allocate_per_step() {
+    let (q, v) = (SVector::from([1.0]), SVector::from([0.0]));
+    let model = DampedPendulum::default();
+    assert_loop_allocates_nothing(model, Svi::new(5), q, v);
+    assert_loop_allocates_nothing(model, SpectralCollocation::new(5), q, v);
+    assert_loop_allocates_nothing(model, VariationalIntegrator::new(Midpoint), q, v);
+    assert_loop_allocates_nothing(model, StormerVerlet::default(), q, v);
+}
