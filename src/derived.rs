@@ -273,8 +273,9 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         }
     }
 
-    /// The acceleration and its exact Jacobian ∂q̈/∂q, ∂q̈/∂q̇ (third derivatives of L by
-    /// nested dual numbers), or `None` where L_vv is singular.
+    /// The acceleration and its exact Jacobian ∂q̈/∂q, ∂q̈/∂q̇ (third derivatives of L, and
+    /// first derivatives of the external force of a [`Lagrangian::FORCED`] model, by nested
+    /// dual numbers), or `None` where L_vv is singular.
     fn acceleration_jacobian(
         &self,
         t: f64,

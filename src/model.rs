@@ -48,8 +48,10 @@ pub trait Lagrangian<const N: usize> {
 
     /// Structure the integrators may exploit. The default ([`Structure::General`]) is always
     /// correct; [`Structure::ConstantMass`] lets the spectral methods replace Newton's method
-    /// by a fixed-point iteration that needs only ∂L/∂q (no Hessian at all). The stepping
-    /// loop checks the declaration at the initial state and rejects a model that breaks it.
+    /// by a fixed-point iteration that needs only ∂L/∂q (no Hessian at all), and
+    /// [`crate::StormerVerlet`] run explicitly (kick–drift–kick). The declaration is about L
+    /// only: a constant-mass model may have any external force. The stepping loop checks the
+    /// declaration at the initial state and rejects a model that breaks it.
     const STRUCTURE: Structure = Structure::General;
 
     /// Whether the model has a non-conservative force ([`Lagrangian::external_force`]).

@@ -311,11 +311,7 @@ impl<const N: usize> ConstantMass<N> {
         };
         let rate = |mu: usize, j: usize| 2.0 * d[(mu, j + 1)];
         let stage_rate = (0..m)
-            .map(|mu| {
-                (0..s)
-                    .map(|j| rate(mu, j) * velocity_coefficients[j])
-                    .sum()
-            })
+            .map(|mu| (0..s).map(|j| rate(mu, j) * velocity_coefficients[j]).sum())
             .collect();
         let rate_matrix = (0..m * m)
             .map(|k| {
@@ -786,6 +782,8 @@ fn solve<L: Lagrangian<N>, const N: usize>(
         ..
     } = workspace;
     newton.solve(offsets, |z, jacobian, residual| {
-        assemble(model, tables, points, forces, t, state, z, jacobian, residual)
+        assemble(
+            model, tables, points, forces, t, state, z, jacobian, residual,
+        )
     })
 }

@@ -184,7 +184,8 @@ fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
     let half = 0.5 * h;
     let mut evaluations = 1;
     let cached = explicit.cache.take().filter(|cache| {
-        (!L::TIME_DEPENDENT || (cache.t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cache.t.abs()))
+        (!L::TIME_DEPENDENT
+            || (cache.t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cache.t.abs()))
             && (state.q - cache.q).amax() <= cache.tolerance
     });
     let start_force = match cached {
@@ -202,14 +203,16 @@ fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
         let rest = kick;
         let predicted = rest + model.external_force(t, &state.q, &(mass_inverse * rest)) * half;
         explicit.half.copy_from_slice(predicted.as_slice());
-        iterations = explicit.newton.solve(&mut explicit.half, |z, matrix, residual| {
-            let momentum = SVector::<f64, N>::from_column_slice(z.as_slice());
-            let force = model.external_force_jacobian(t, &state.q, &(mass_inverse * momentum));
-            let value = momentum - rest - force.value * half;
-            residual.copy_from_slice(value.as_slice());
-            let jacobian = SMatrix::<f64, N, N>::identity() - force.v * mass_inverse * half;
-            matrix.copy_from(&jacobian);
-        })?;
+        iterations = explicit
+            .newton
+            .solve(&mut explicit.half, |z, matrix, residual| {
+                let momentum = SVector::<f64, N>::from_column_slice(z.as_slice());
+                let force = model.external_force_jacobian(t, &state.q, &(mass_inverse * momentum));
+                let value = momentum - rest - force.value * half;
+                residual.copy_from_slice(value.as_slice());
+                let jacobian = SMatrix::<f64, N, N>::identity() - force.v * mass_inverse * half;
+                matrix.copy_from(&jacobian);
+            })?;
         kick = SVector::from_column_slice(explicit.half.as_slice());
         start += model.external_force(t, &state.q, &(mass_inverse * kick));
     }

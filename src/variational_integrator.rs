@@ -145,7 +145,13 @@ impl<const N: usize> VariationalWorkspace<N> {
 
     /// The predicted increment: extrapolated from the previous steps when this step
     /// continues them, else the Taylor polynomial of the continuous flow.
-    fn predict<L: Lagrangian<N>>(&self, model: &L, t: f64, h: f64, state: &State<N>) -> SVector<f64, N> {
+    fn predict<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> SVector<f64, N> {
         if let Some(history) = &self.history
             && history.h == h
             && (state.q - history.end).amax() <= history.tolerance
@@ -168,7 +174,9 @@ impl<const N: usize> VariationalWorkspace<N> {
     pub(crate) fn remember(&mut self, h: f64, state: &State<N>, increment: &SVector<f64, N>) {
         let end = state.q + increment;
         let before = match &self.history {
-            Some(history) if history.h == h && (state.q - history.end).amax() <= history.tolerance => {
+            Some(history)
+                if history.h == h && (state.q - history.end).amax() <= history.tolerance =>
+            {
                 Some(history.last)
             }
             _ => None,
@@ -265,32 +273,34 @@ fn solve_position<Ld: DiscreteLagrangian, L: Lagrangian<N>, const N: usize>(
     let guess = workspace.predict(model, t, h, state);
     workspace.offset.copy_from_slice(guess.as_slice());
     let (q0, p0) = (state.q, state.y);
-    workspace.newton.solve(&mut workspace.offset, |z, matrix, residual| {
-        let q1 = q0 + SVector::<f64, N>::from_column_slice(z.as_slice());
-        let (d1, _, d12) = mixed_derivatives(discrete, model, t, h, &q0, &q1);
-        let mut value = p0 + d1;
-        let mut jacobian_matrix = d12;
-        if L::FORCED {
-            let (minus, d_minus) = jacobian(
-                |y: SVector<DualSVec64<N>, N>| {
-                    discrete
-                        .discrete_forces(
-                            model,
-                            DualVec::from_re(t),
-                            DualVec::from_re(h),
-                            &q0.map(DualVec::from_re),
-                            &y,
-                        )
-                        .minus
-                },
-                &q1,
-            );
-            value += minus;
-            jacobian_matrix += d_minus;
-        }
-        residual.copy_from_slice(value.as_slice());
-        matrix.copy_from(&jacobian_matrix);
-    })
+    workspace
+        .newton
+        .solve(&mut workspace.offset, |z, matrix, residual| {
+            let q1 = q0 + SVector::<f64, N>::from_column_slice(z.as_slice());
+            let (d1, _, d12) = mixed_derivatives(discrete, model, t, h, &q0, &q1);
+            let mut value = p0 + d1;
+            let mut jacobian_matrix = d12;
+            if L::FORCED {
+                let (minus, d_minus) = jacobian(
+                    |y: SVector<DualSVec64<N>, N>| {
+                        discrete
+                            .discrete_forces(
+                                model,
+                                DualVec::from_re(t),
+                                DualVec::from_re(h),
+                                &q0.map(DualVec::from_re),
+                                &y,
+                            )
+                            .minus
+                    },
+                    &q1,
+                );
+                value += minus;
+                jacobian_matrix += d_minus;
+            }
+            residual.copy_from_slice(value.as_slice());
+            matrix.copy_from(&jacobian_matrix);
+        })
 }
 
 /// D1 L_d, D2 L_d and D12 L_d (entry (i, j) = ∂²L_d/∂q0_i∂q1_j) in one sweep.
@@ -325,7 +335,13 @@ pub(crate) fn momentum_increment<Ld: DiscreteLagrangian, L: Lagrangian<N>, const
         |shift: SVector<DualSVec64<N>, N>| {
             let start = q0.map(DualVec::from_re) + shift;
             let end = q1.map(DualVec::from_re) + shift;
-            discrete.discrete_lagrangian(model, DualVec::from_re(t), DualVec::from_re(h), &start, &end)
+            discrete.discrete_lagrangian(
+                model,
+                DualVec::from_re(t),
+                DualVec::from_re(h),
+                &start,
+                &end,
+            )
         },
         &SVector::zeros(),
     );
@@ -360,7 +376,13 @@ pub(crate) fn discrete_tangent_map<Ld: DiscreteLagrangian, L: Lagrangian<N>, con
                 } else {
                     (q0.map(Dual2Vec::from_re), x)
                 };
-                discrete.discrete_lagrangian(model, Dual2Vec::from_re(t), Dual2Vec::from_re(h), &a, &b)
+                discrete.discrete_lagrangian(
+                    model,
+                    Dual2Vec::from_re(t),
+                    Dual2Vec::from_re(h),
+                    &a,
+                    &b,
+                )
             },
             if first { q0 } else { q1 },
         )

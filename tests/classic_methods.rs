@@ -133,7 +133,10 @@ fn stormer_verlet_reproduces_the_slides_error_table() {
     // The implicit trapezoid has the same discrete equations: the same table.
     for (&h, &error) in steps.iter().zip(&errors) {
         let implicit = oscillator_error(VariationalIntegrator::new(Trapezoid), h, 8.0);
-        assert!((implicit - error).abs() < 1e-13, "h = {h}: {implicit:e} vs {error:e}");
+        assert!(
+            (implicit - error).abs() < 1e-13,
+            "h = {h}: {implicit:e} vs {error:e}"
+        );
     }
 }
 

@@ -12,12 +12,12 @@ use svi::observer::Trajectory;
 use svi::verify::observed_order;
 use svi::{
     AdjointSymplecticEuler, Defaults, ExactSolution, Integrator, Lagrangian, Method, Midpoint,
-    Scalar, SpectralCollocation, State, StormerVerlet, Structure, Svi, SymplecticEuler,
-    Trapezoid, VariationalIntegrator,
+    Scalar, SpectralCollocation, State, StormerVerlet, Structure, Svi, SymplecticEuler, Trapezoid,
+    VariationalIntegrator,
 };
 use svi_models::{
-    DampedOscillator, DampedPendulum, DoublePendulum, DrivenOscillator, HarmonicOscillator,
-    Kepler, Pendulum,
+    DampedOscillator, DampedPendulum, DoublePendulum, DrivenOscillator, HarmonicOscillator, Kepler,
+    Pendulum,
 };
 
 /// The same Lagrangian and force declared without structure: the methods take their Newton
@@ -133,7 +133,10 @@ fn same_runs<A: Lagrangian<N>, B: Lagrangian<N>, M: Method<N> + Clone, const N: 
 #[test]
 fn a_zero_force_reproduces_the_unforced_integrators_bit_for_bit() {
     let pendulum = (SVector::from([1.0]), SVector::from([0.2]));
-    let kepler = (SVector::from([0.5, 0.0]), SVector::from([0.0, 1.7320508075688772]));
+    let kepler = (
+        SVector::from([0.5, 0.0]),
+        SVector::from([0.0, 1.7320508075688772]),
+    );
     let double = (SVector::from([1.0, 0.5]), SVector::from([0.0, 0.0]));
     for_each_method!(Svi::new(5), SpectralCollocation::new(5), |name, method| {
         // Constant mass (fixed-point and explicit paths) and general (Newton paths).
@@ -372,14 +375,22 @@ fn forced_tangent_maps_match_central_differences_and_are_not_symplectic() {
     let driven = DrivenOscillator::default();
     for_each_method!(Svi::new(4), SpectralCollocation::new(4), |name, method| {
         for (model, (symplectic, difference)) in [
-            ("damped pendulum", forced_tangent(pendulum, &method, state, 0.2)),
+            (
+                "damped pendulum",
+                forced_tangent(pendulum, &method, state, 0.2),
+            ),
             (
                 "damped pendulum (Newton)",
                 forced_tangent(General(pendulum), &method, state, 0.2),
             ),
-            ("driven oscillator", forced_tangent(driven, &method, state, 0.2)),
+            (
+                "driven oscillator",
+                forced_tangent(driven, &method, state, 0.2),
+            ),
         ] {
-            eprintln!("{name} {model}: symplecticity {symplectic:.1e}, difference {difference:.1e}");
+            eprintln!(
+                "{name} {model}: symplecticity {symplectic:.1e}, difference {difference:.1e}"
+            );
             assert!(difference < 1e-6, "{name} {model}: {difference:e}");
             // Friction contracts phase-space area: det Φ ≈ e^{−c h / (m l²)}, so ΦᵀJΦ ≠ J.
             if model != "driven oscillator" {
@@ -405,7 +416,15 @@ fn forced_fixed_point_and_newton_paths_agree() {
         (
             "sc",
             trajectory(model, SpectralCollocation::new(6), q0, v0, 0.2, 20.0).1,
-            trajectory(General(model), SpectralCollocation::new(6), q0, v0, 0.2, 20.0).1,
+            trajectory(
+                General(model),
+                SpectralCollocation::new(6),
+                q0,
+                v0,
+                0.2,
+                20.0,
+            )
+            .1,
         ),
         (
             "verlet",
@@ -435,7 +454,15 @@ fn strong_friction_falls_back_from_the_fixed_point_to_newton() {
         (
             "sc",
             trajectory(model, SpectralCollocation::new(5), q0, v0, 0.5, 10.0).1,
-            trajectory(General(model), SpectralCollocation::new(5), q0, v0, 0.5, 10.0).1,
+            trajectory(
+                General(model),
+                SpectralCollocation::new(5),
+                q0,
+                v0,
+                0.5,
+                10.0,
+            )
+            .1,
         ),
     ] {
         let difference = (structured.last.q - general.last.q).amax();

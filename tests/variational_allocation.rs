@@ -63,7 +63,12 @@ fn assert_loop_allocates_nothing<L: Lagrangian<N> + Clone, M: Method<N> + Clone,
 ) {
     let short = allocations(&model, &method, q, v, 20);
     let long = allocations(&model, &method, q, v, 2000);
-    assert_eq!(short, long, "{}: the step loop allocates", method.info().name);
+    assert_eq!(
+        short,
+        long,
+        "{}: the step loop allocates",
+        method.info().name
+    );
 }
 
 #[test]

@@ -734,9 +734,7 @@ impl ModelVisitor for RunScene<'_> {
             ),
             MethodKind::Midpoint => run_with(model, VariationalIntegrator::new(Midpoint), &setup),
             MethodKind::Verlet => run_with(model, StormerVerlet::default(), &setup),
-            MethodKind::Trapezoid => {
-                run_with(model, VariationalIntegrator::new(Trapezoid), &setup)
-            }
+            MethodKind::Trapezoid => run_with(model, VariationalIntegrator::new(Trapezoid), &setup),
         }
     }
 }
@@ -1309,7 +1307,9 @@ mod tests {
             assert_eq!(name.parse::<MethodKind>().unwrap(), kind);
             assert_eq!(kind.name(), name);
             assert_eq!(
-                clap::ValueEnum::to_possible_value(&kind).unwrap().get_name(),
+                clap::ValueEnum::to_possible_value(&kind)
+                    .unwrap()
+                    .get_name(),
                 name
             );
         }

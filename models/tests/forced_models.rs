@@ -4,7 +4,9 @@
 
 use nalgebra::SVector;
 use svi::{Defaults, ExactSolution, Lagrangian, LagrangianExt};
-use svi_models::{DampedOscillator, DampedPendulum, DrivenOscillator, HarmonicOscillator, Pendulum};
+use svi_models::{
+    DampedOscillator, DampedPendulum, DrivenOscillator, HarmonicOscillator, Pendulum,
+};
 
 /// Relative residual of q̈ + 2ζσ q̇ + σ² q − drive(t) along the exact solution, by central
 /// differences of the exact position (step 1e-4: truncation ~1e-9 · q''''), and of q̇ against
@@ -52,7 +54,10 @@ fn damped_oscillator_solves_its_equation_in_every_damping_regime() {
             let (q, v) = model
                 .exact_solution(0.5, &SVector::from([0.8]), &SVector::from([-0.4]), 0.5)
                 .unwrap();
-            assert!((q[0] - 0.8).abs() < 1e-15 && (v[0] + 0.4).abs() < 1e-14, "{q} {v}");
+            assert!(
+                (q[0] - 0.8).abs() < 1e-15 && (v[0] + 0.4).abs() < 1e-14,
+                "{q} {v}"
+            );
         }
     }
     // Continuous across critical damping, and equal to the undamped oscillator at ζ = 0.
@@ -106,7 +111,10 @@ fn driven_oscillator_solves_its_equation_and_settles_to_the_steady_state() {
         .map(|k| model.steady_state(k as f64 * 0.01).0.abs())
         .fold(0.0, f64::max);
     let expected = 0.5 / ((1.0f64 - 0.81).powi(2) + 0.18f64.powi(2)).sqrt();
-    assert!((amplitude - expected).abs() < 1e-3 * expected, "{amplitude}");
+    assert!(
+        (amplitude - expected).abs() < 1e-3 * expected,
+        "{amplitude}"
+    );
 }
 
 #[test]
@@ -122,14 +130,20 @@ fn forces_enter_the_derived_euler_lagrange_acceleration() {
     };
     let acceleration = pendulum.acceleration(0.0, &q, &v).unwrap()[0];
     let expected = -(9.81 / 0.5) * 0.7f64.sin() - 0.4 * -0.3 / (2.0 * 0.25);
-    assert!((acceleration - expected).abs() < 1e-13, "{acceleration} vs {expected}");
+    assert!(
+        (acceleration - expected).abs() < 1e-13,
+        "{acceleration} vs {expected}"
+    );
     // ∂q̈/∂q̇ = −c/(m l²) and ∂q̈/∂q = −(g/l) cos θ, through nested duals.
     let jacobian = pendulum.acceleration_jacobian(0.0, &q, &v).unwrap();
     assert!((jacobian.v[(0, 0)] + 0.4 / 0.5).abs() < 1e-13);
     assert!((jacobian.q[(0, 0)] + (9.81 / 0.5) * 0.7f64.cos()).abs() < 1e-12);
     // The force Jacobian by itself.
     let force = pendulum.external_force_jacobian(0.0, &q, &v);
-    assert_eq!((force.value[0], force.q[(0, 0)], force.v[(0, 0)]), (0.4 * 0.3, 0.0, -0.4));
+    assert_eq!(
+        (force.value[0], force.q[(0, 0)], force.v[(0, 0)]),
+        (0.4 * 0.3, 0.0, -0.4)
+    );
     // A time-dependent drive on a time-independent Lagrangian.
     let driven = DrivenOscillator::default();
     let t = 1.3;
@@ -165,7 +179,10 @@ fn forced_model_defaults() {
     let damped = DampedOscillator::default();
     assert_eq!((damped.sigma, damped.zeta), (1.0, 0.1));
     assert_eq!(damped.friction(), 0.2);
-    assert_eq!((damped.default_step(), damped.default_horizon()), (0.1, 50.0));
+    assert_eq!(
+        (damped.default_step(), damped.default_horizon()),
+        (0.1, 50.0)
+    );
     let driven = DrivenOscillator::default();
     assert_eq!(
         (driven.sigma, driven.zeta, driven.amplitude, driven.drive),
