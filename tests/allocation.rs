@@ -1,12 +1,16 @@
 //! The stepping loop allocates nothing for fixed-size models: a run of 2000 steps performs
 //! exactly as many heap allocations as a run of 20 (all of them in the set-up: workspace,
-//! tables), for every method and both solver paths (fixed point and Newton).
+//! tables), for every method, both solver paths (fixed point and Newton) and the forced
+//! paths.
 
 use nalgebra::SVector;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use svi::{Integrator, Lagrangian, Method, SpectralCollocation, Svi};
-use svi_models::{DoublePendulum, Kepler};
+use svi::{
+    Integrator, Lagrangian, Method, Midpoint, SpectralCollocation, StormerVerlet, Svi,
+    SymplecticEuler, Trapezoid, VariationalIntegrator,
+};
+use svi_models::{DampedPendulum, DoublePendulum, Kepler};
 
 /// Counts the allocations of each thread (the test harness's own threads do not disturb
 /// the count of a test).
@@ -61,7 +65,12 @@ fn assert_loop_allocates_nothing<L: Lagrangian<N> + Clone, M: Method<N> + Clone,
 ) {
     let short = allocations(&model, &method, q, v, 20);
     let long = allocations(&model, &method, q, v, 2000);
-    assert_eq!(short, long, "{}: the step loop allocates", method.info().name);
+    assert_eq!(
+        short,
+        long,
+        "{}: the step loop allocates",
+        method.info().name
+    );
 }
 
 #[test]
@@ -77,4 +86,26 @@ fn newton_paths_do_not_allocate_per_step() {
     let (q, v) = (SVector::from([1.0, 0.5]), SVector::from([0.0, 0.0]));
     assert_loop_allocates_nothing(DoublePendulum::default(), Svi::new(5), q, v);
     assert_loop_allocates_nothing(DoublePendulum::default(), SpectralCollocation::new(5), q, v);
+}
+
+#[test]
+fn classic_methods_do_not_allocate_per_step() {
+    let (q, v) = (SVector::from([0.5, 0.0]), SVector::from([0.0, 3f64.sqrt()]));
+    let kepler = Kepler::default();
+    assert_loop_allocates_nothing(kepler, VariationalIntegrator::new(SymplecticEuler), q, v);
+    assert_loop_allocates_nothing(kepler, VariationalIntegrator::new(Midpoint), q, v);
+    assert_loop_allocates_nothing(kepler, VariationalIntegrator::new(Trapezoid), q, v);
+    assert_loop_allocates_nothing(kepler, StormerVerlet::default(), q, v);
+    let (q, v) = (SVector::from([1.0, 0.5]), SVector::from([0.0, 0.0]));
+    assert_loop_allocates_nothing(DoublePendulum::default(), StormerVerlet::default(), q, v);
+}
+
+#[test]
+fn forced_paths_do_not_allocate_per_step() {
+    let (q, v) = (SVector::from([1.0]), SVector::from([0.0]));
+    let model = DampedPendulum::default();
+    assert_loop_allocates_nothing(model, Svi::new(5), q, v);
+    assert_loop_allocates_nothing(model, SpectralCollocation::new(5), q, v);
+    assert_loop_allocates_nothing(model, VariationalIntegrator::new(Midpoint), q, v);
+    assert_loop_allocates_nothing(model, StormerVerlet::default(), q, v);
 }

@@ -15,7 +15,7 @@
 //! takes longer than `max_run`, or when the error has stalled for three points (round-off).
 
 use crate::plot::{Panel, Series, write_svg};
-use crate::{Scene, SceneError};
+use crate::{MethodChoice, MethodKind, MethodVisitor, Scene, SceneError};
 use nalgebra::{SMatrix, SVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
 use serde::Serialize;
@@ -24,27 +24,14 @@ use std::path::Path;
 use std::str::FromStr;
 use std::time::Instant;
 use svi::observer::{EnergyError, MomentumError};
-use svi::{
-    Initial, Integrator, LagrangianExt, Method, SpectralCollocation, Structure, Svi,
-    linalg::invert_small,
-};
+use svi::{Initial, Integrator, LagrangianExt, Method, Structure, linalg::invert_small};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
-/// A method configuration to sweep.
+/// A method configuration to sweep: one of svi's methods, or an `ode_solvers` peer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MethodSpec {
-    /// SVI with `points` CGL points and `quadrature` Gauss points (default 2·points).
-    Svi {
-        /// CGL points.
-        points: usize,
-        /// Gauss–Legendre points.
-        quadrature: Option<usize>,
-    },
-    /// Spectral collocation with `points` CGL points.
-    Sc {
-        /// CGL points.
-        points: usize,
-    },
+    /// An svi method (fixed step).
+    Method(MethodChoice),
     /// `ode_solvers`' DOP853 (adaptive, order 8).
     Dop853,
     /// `ode_solvers`' Dopri5 (adaptive, order 5).
@@ -54,15 +41,13 @@ pub enum MethodSpec {
 impl fmt::Display for MethodSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            MethodSpec::Svi {
-                points,
-                quadrature: Some(m),
-            } => write!(f, "svi:{points}/{m}"),
-            MethodSpec::Svi {
-                points,
-                quadrature: None,
-            } => write!(f, "svi:{points}"),
-            MethodSpec::Sc { points } => write!(f, "sc:{points}"),
+            MethodSpec::Method(choice) => match (choice.kind, choice.quadrature) {
+                (MethodKind::Svi, Some(m)) => write!(f, "svi:{}/{m}", choice.points),
+                (MethodKind::Svi | MethodKind::Sc, _) => {
+                    write!(f, "{}:{}", choice.kind, choice.points)
+                }
+                (kind, _) => write!(f, "{kind}"),
+            },
             MethodSpec::Dop853 => write!(f, "dop853"),
             MethodSpec::Dopri5 => write!(f, "dopri5"),
         }
@@ -72,26 +57,31 @@ impl fmt::Display for MethodSpec {
 impl FromStr for MethodSpec {
     type Err = SceneError;
 
-    /// `svi:P`, `svi:P/M`, `sc:P`, `dop853` or `dopri5`.
+    /// `svi:P`, `svi:P/M`, `sc:P`, a classic method's name (`midpoint`, `verlet`, ...),
+    /// `dop853` or `dopri5`.
     fn from_str(text: &str) -> Result<Self, SceneError> {
+        let text = text.trim();
         let bad = || SceneError::BenchMethod(text.to_string());
         let number = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
-        match text.trim().split_once(':') {
-            None if text.trim() == "dop853" => Ok(MethodSpec::Dop853),
-            None if text.trim() == "dopri5" => Ok(MethodSpec::Dopri5),
-            Some(("svi", rest)) => match rest.split_once('/') {
-                Some((p, m)) => Ok(MethodSpec::Svi {
-                    points: number(p)?,
-                    quadrature: Some(number(m)?),
-                }),
-                None => Ok(MethodSpec::Svi {
-                    points: number(rest)?,
-                    quadrature: None,
-                }),
+        let choice = |kind, points, quadrature| {
+            MethodSpec::Method(MethodChoice {
+                kind,
+                points,
+                quadrature,
+            })
+        };
+        match text.split_once(':') {
+            None if text == "dop853" => Ok(MethodSpec::Dop853),
+            None if text == "dopri5" => Ok(MethodSpec::Dopri5),
+            None => match text.parse::<MethodKind>() {
+                Ok(kind) if kind.default_points().is_none() => Ok(choice(kind, 0, None)),
+                _ => Err(bad()),
             },
-            Some(("sc", rest)) => Ok(MethodSpec::Sc {
-                points: number(rest)?,
-            }),
+            Some(("svi", rest)) => match rest.split_once('/') {
+                Some((p, m)) => Ok(choice(MethodKind::Svi, number(p)?, Some(number(m)?))),
+                None => Ok(choice(MethodKind::Svi, number(rest)?, None)),
+            },
+            Some(("sc", rest)) => Ok(choice(MethodKind::Sc, number(rest)?, None)),
             _ => Err(bad()),
         }
     }
@@ -208,21 +198,13 @@ impl ModelVisitor for Bench<'_> {
         for spec in &self.options.methods {
             let label = spec.to_string();
             match *spec {
-                MethodSpec::Svi { points, quadrature } => {
-                    let mut svi = Svi::new(points);
-                    if let Some(m) = quadrature {
-                        svi = svi.with_quadrature(m);
-                    }
-                    sweep_fixed(&model, svi, &label, &problem, self.options, &mut records)?
-                }
-                MethodSpec::Sc { points } => sweep_fixed(
-                    &model,
-                    SpectralCollocation::new(points),
-                    &label,
-                    &problem,
-                    self.options,
-                    &mut records,
-                )?,
+                MethodSpec::Method(choice) => choice.visit(Sweep {
+                    model: &model,
+                    label: &label,
+                    problem: &problem,
+                    options: self.options,
+                    records: &mut records,
+                })?,
                 MethodSpec::Dop853 | MethodSpec::Dopri5 => {
                     sweep_adaptive(&model, *spec, &problem, self.options, &mut records)
                 }
@@ -232,12 +214,39 @@ impl ModelVisitor for Bench<'_> {
     }
 }
 
+/// Sweeps the visited fixed-step method.
+struct Sweep<'a, M, const N: usize> {
+    model: &'a M,
+    label: &'a str,
+    problem: &'a Problem<N>,
+    options: &'a BenchOptions,
+    records: &'a mut Vec<Record>,
+}
+
+impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for Sweep<'_, M, N> {
+    type Output = Result<(), SceneError>;
+    fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
+        sweep_fixed(
+            self.model,
+            method,
+            self.label,
+            self.problem,
+            self.options,
+            self.records,
+        )
+    }
+}
+
 /// Median per-run time of `run` (see the module docs).
 fn median_seconds(mut run: impl FnMut(), options: &BenchOptions) -> f64 {
     let start = Instant::now();
     run();
     let single = start.elapsed().as_secs_f64();
-    let batches = if single > 1.0 { 3 } else { options.batches.max(1) };
+    let batches = if single > 1.0 {
+        3
+    } else {
+        options.batches.max(1)
+    };
     let mut times: Vec<f64> = (0..batches)
         .map(|_| {
             let start = Instant::now();
@@ -312,7 +321,13 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     };
     let final_error = |steps: usize| {
         integrator
-            .run(problem.t0, initial, span / steps as f64, problem.t_end, &mut ())
+            .run(
+                problem.t0,
+                initial,
+                span / steps as f64,
+                problem.t_end,
+                &mut (),
+            )
             .map(|run| (run.last.q - problem.exact).norm())
     };
     let mut steps = 8usize;
@@ -327,7 +342,13 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         let mut energy = EnergyError::default();
         let mut momentum = MomentumError::default();
         let diagnostics = if model.generator_count() > 0 {
-            integrator.run(problem.t0, initial, h, problem.t_end, &mut (&mut energy, &mut momentum))
+            integrator.run(
+                problem.t0,
+                initial,
+                h,
+                problem.t_end,
+                &mut (&mut energy, &mut momentum),
+            )
         } else {
             integrator.run(problem.t0, initial, h, problem.t_end, &mut energy)
         };
@@ -378,7 +399,9 @@ struct FirstOrder<'a, M, const N: usize> {
     mass_inverse: Option<SMatrix<f64, N, N>>,
 }
 
-impl<M: ZooModel<N>, const N: usize> System<f64, ode_solvers::DVector<f64>> for FirstOrder<'_, M, N> {
+impl<M: ZooModel<N>, const N: usize> System<f64, ode_solvers::DVector<f64>>
+    for FirstOrder<'_, M, N>
+{
     fn system(&self, t: f64, y: &ode_solvers::DVector<f64>, dy: &mut ode_solvers::DVector<f64>) {
         let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
         let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
@@ -397,7 +420,12 @@ impl<M: ZooModel<N>, const N: usize> System<f64, ode_solvers::DVector<f64>> for 
 }
 
 /// Outcome of one adaptive run: final state, steps, evaluations, stored states.
-type AdaptiveRun = (ode_solvers::DVector<f64>, usize, usize, Vec<ode_solvers::DVector<f64>>);
+type AdaptiveRun = (
+    ode_solvers::DVector<f64>,
+    usize,
+    usize,
+    Vec<ode_solvers::DVector<f64>>,
+);
 
 /// One DOP853 / Dopri5 run to the horizon (`None` if it fails or stops short).
 fn adaptive_run<M: ZooModel<N>, const N: usize>(
@@ -421,7 +449,12 @@ fn adaptive_run<M: ZooModel<N>, const N: usize>(
                 return None;
             }
             let steps = (stats.accepted_steps + stats.rejected_steps) as usize;
-            Some((last, steps, stats.num_eval as usize, stepper.y_out().clone()))
+            Some((
+                last,
+                steps,
+                stats.num_eval as usize,
+                stepper.y_out().clone(),
+            ))
         }};
     }
     // Crate defaults, except sparse output and a high step cap (as the kepler-peers tool).
@@ -609,7 +642,9 @@ pub fn plot(records: &[Record], title: &str, path: &Path) -> Result<(), crate::p
         path,
         &[
             panel("run time", "seconds per run", |r| r.seconds),
-            panel("evaluations", "derivative evaluations", |r| r.evaluations as f64),
+            panel("evaluations", "derivative evaluations", |r| {
+                r.evaluations as f64
+            }),
         ],
         640,
         480,
@@ -622,10 +657,12 @@ mod tests {
 
     #[test]
     fn method_specifications_parse_and_print_back() {
-        for text in ["svi:7/6", "svi:6", "sc:9", "dop853", "dopri5"] {
+        for text in [
+            "svi:7/6", "svi:6", "sc:9", "midpoint", "verlet", "dop853", "dopri5",
+        ] {
             assert_eq!(text.parse::<MethodSpec>().unwrap().to_string(), text);
         }
-        for bad in ["svi", "svi:x", "sc:", "rk4", "svi:6/"] {
+        for bad in ["svi", "svi:x", "sc:", "rk4", "svi:6/", "midpoint:3"] {
             assert!(matches!(
                 bad.parse::<MethodSpec>(),
                 Err(SceneError::BenchMethod(_))
@@ -641,13 +678,7 @@ mod tests {
         let mut scene = Scene::builtin("oscillator").unwrap().unwrap();
         scene.run.t_end = Some(10.0);
         let options = BenchOptions {
-            methods: vec![
-                MethodSpec::Svi {
-                    points: 3,
-                    quadrature: Some(2),
-                },
-                MethodSpec::Dop853,
-            ],
+            methods: vec!["svi:3/2".parse().unwrap(), MethodSpec::Dop853],
             target: 1e-9,
             max_run: 1.0,
             batches: 1,

@@ -212,10 +212,14 @@ pub enum SceneError {
     #[error(transparent)]
     Svi(#[from] svi::Error),
     /// A malformed `svi bench` method specification.
-    #[error("unknown bench method '{0}' (expected svi:P, svi:P/M, sc:P, dop853 or dopri5)")]
+    #[error(
+        "unknown method '{0}' (expected svi:P, svi:P/M, sc:P, a classic method's name, dop853 or dopri5)"
+    )]
     BenchMethod(String),
     /// A benchmark needs an exact solution as reference.
-    #[error("model '{0}' has no exact solution for this initial state: nothing to measure errors against")]
+    #[error(
+        "model '{0}' has no exact solution for this initial state: nothing to measure errors against"
+    )]
     NoReference(String),
 }
 
@@ -714,28 +718,73 @@ impl ModelVisitor for RunScene<'_> {
             points: scene.points(),
             quadrature: scene.quadrature(),
         };
-        let points = setup.points.unwrap_or_default();
-        match scene.method.name {
+        let choice = MethodChoice {
+            kind: scene.method.name,
+            points: setup.points.unwrap_or_default(),
+            quadrature: scene.method.quadrature,
+        };
+        choice.visit(RunWith {
+            model,
+            setup: &setup,
+        })
+    }
+}
+
+/// An integration method chosen at run time: its kind and spectral options.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MethodChoice {
+    /// Which method.
+    pub kind: MethodKind,
+    /// CGL points (svi and sc).
+    pub points: usize,
+    /// Gauss points (svi; `None`: 2 · points).
+    pub quadrature: Option<usize>,
+}
+
+/// Receives the concrete method of a [`MethodChoice`].
+pub trait MethodVisitor<const N: usize> {
+    /// What the visit returns.
+    type Output;
+    /// Use `method`.
+    fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output;
+}
+
+impl MethodChoice {
+    /// Build the method and hand it to `visitor`: the one place where a method name becomes
+    /// a type (no trait objects).
+    pub fn visit<V: MethodVisitor<N>, const N: usize>(&self, visitor: V) -> V::Output {
+        match self.kind {
             MethodKind::Svi => {
-                let mut svi = Svi::new(points);
-                if let Some(quadrature) = scene.method.quadrature {
+                let mut svi = Svi::new(self.points);
+                if let Some(quadrature) = self.quadrature {
                     svi = svi.with_quadrature(quadrature);
                 }
-                run_with(model, svi, &setup)
+                visitor.visit(svi)
             }
-            MethodKind::Sc => run_with(model, SpectralCollocation::new(points), &setup),
+            MethodKind::Sc => visitor.visit(SpectralCollocation::new(self.points)),
             MethodKind::SymplecticEuler => {
-                run_with(model, VariationalIntegrator::new(SymplecticEuler), &setup)
+                visitor.visit(VariationalIntegrator::new(SymplecticEuler))
             }
-            MethodKind::SymplecticEulerAdjoint => run_with(
-                model,
-                VariationalIntegrator::new(AdjointSymplecticEuler),
-                &setup,
-            ),
-            MethodKind::Midpoint => run_with(model, VariationalIntegrator::new(Midpoint), &setup),
-            MethodKind::Verlet => run_with(model, StormerVerlet::default(), &setup),
-            MethodKind::Trapezoid => run_with(model, VariationalIntegrator::new(Trapezoid), &setup),
+            MethodKind::SymplecticEulerAdjoint => {
+                visitor.visit(VariationalIntegrator::new(AdjointSymplecticEuler))
+            }
+            MethodKind::Midpoint => visitor.visit(VariationalIntegrator::new(Midpoint)),
+            MethodKind::Verlet => visitor.visit(StormerVerlet::default()),
+            MethodKind::Trapezoid => visitor.visit(VariationalIntegrator::new(Trapezoid)),
         }
+    }
+}
+
+/// Runs a scene's model with the visited method.
+struct RunWith<'a, M, const N: usize> {
+    model: M,
+    setup: &'a Setup<N>,
+}
+
+impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for RunWith<'_, M, N> {
+    type Output = Result<Summary, SceneError>;
+    fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
+        run_with(self.model, method, self.setup)
     }
 }
 

@@ -86,7 +86,10 @@ pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Resu
     root.present().map_err(|e| error(e.to_string()))
 }
 
-fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shift>) -> Result<(), String> {
+fn draw_panel(
+    panel: &Panel,
+    area: &DrawingArea<SVGBackend, plotters::coord::Shift>,
+) -> Result<(), String> {
     let points = || panel.series.iter().flat_map(|s| s.points.iter());
     let (x0, x1) = range(points().map(|p| p.0), panel.x_log);
     let (y0, y1) = range(points().map(|p| p.1), panel.y_log);
@@ -98,7 +101,9 @@ fn draw_panel(panel: &Panel, area: &DrawingArea<SVGBackend, plotters::coord::Shi
         .y_label_area_size(70);
     macro_rules! draw {
         ($x:expr, $y:expr) => {{
-            let mut chart = builder.build_cartesian_2d($x, $y).map_err(|e| e.to_string())?;
+            let mut chart = builder
+                .build_cartesian_2d($x, $y)
+                .map_err(|e| e.to_string())?;
             chart
                 .configure_mesh()
                 .x_desc(panel.x_label.as_str())

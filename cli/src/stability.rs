@@ -13,19 +13,24 @@ use svi::stability::{Interval, StabilityPoint, StabilityReport, analyse, stabili
 
 /// The configurations of the paper's Figs. 3–6: (label, method).
 pub fn figure_configurations() -> Vec<(&'static str, crate::bench::MethodSpec)> {
-    use crate::bench::MethodSpec::{Sc, Svi};
-    vec![
-        ("Cheb 5, Gau 4", Svi { points: 5, quadrature: Some(4) }),
-        ("Cheb 5, Gau 10", Svi { points: 5, quadrature: Some(10) }),
-        ("Cheb 9, Gau 8", Svi { points: 9, quadrature: Some(8) }),
-        ("Cheb 9, Gau 18", Svi { points: 9, quadrature: Some(18) }),
-        ("SC, Cheb 5", Sc { points: 5 }),
-        ("SC, Cheb 9", Sc { points: 9 }),
+    [
+        ("Cheb 5, Gau 4", "svi:5/4"),
+        ("Cheb 5, Gau 10", "svi:5/10"),
+        ("Cheb 9, Gau 8", "svi:9/8"),
+        ("Cheb 9, Gau 18", "svi:9/18"),
+        ("SC, Cheb 5", "sc:5"),
+        ("SC, Cheb 9", "sc:9"),
     ]
+    .into_iter()
+    .filter_map(|(label, spec)| Some((label, spec.parse().ok()?)))
+    .collect()
 }
 
 /// S(z) diagnostics at each listed z.
-pub fn evaluate<M: Method<1>>(method: &M, values: &[f64]) -> Result<Vec<StabilityPoint>, svi::Error> {
+pub fn evaluate<M: Method<1>>(
+    method: &M,
+    values: &[f64],
+) -> Result<Vec<StabilityPoint>, svi::Error> {
     values
         .iter()
         .map(|&z| stability_matrix(method, z).map(|matrix| StabilityPoint::new(z, matrix)))
@@ -70,7 +75,10 @@ pub fn describe(label: &str, report: &StabilityReport) -> String {
 }
 
 /// The four diagnostics against z, one curve per labelled report, as SVG.
-pub fn plot(reports: &[(String, StabilityReport)], path: &Path) -> Result<(), crate::plot::PlotError> {
+pub fn plot(
+    reports: &[(String, StabilityReport)],
+    path: &Path,
+) -> Result<(), crate::plot::PlotError> {
     type Pick = fn(&StabilityPoint) -> f64;
     let quantities: [(&str, Pick); 4] = [
         ("spectral radius ρ(S)", |p| p.rho),
@@ -136,31 +144,27 @@ pub enum Answer {
 /// Run `request` for the method `spec` (one with a tangent map: not the adaptive peers).
 pub fn run(spec: crate::bench::MethodSpec, request: &Request) -> Result<Answer, crate::SceneError> {
     use crate::bench::MethodSpec;
-    fn with<M: Method<1>>(method: &M, request: &Request) -> Result<Answer, svi::Error> {
-        match request {
-            Request::Range {
-                z_min,
-                z_max,
-                samples,
-            } => report(method, *z_min, *z_max, *samples).map(Answer::Report),
-            Request::Values(values) => evaluate(method, values).map(Answer::Points),
+    /// Answers the request for the visited method.
+    struct Answering<'a>(&'a Request);
+    impl crate::MethodVisitor<1> for Answering<'_> {
+        type Output = Result<Answer, svi::Error>;
+        fn visit<M: Method<1> + Clone>(self, method: M) -> Self::Output {
+            match self.0 {
+                Request::Range {
+                    z_min,
+                    z_max,
+                    samples,
+                } => report(&method, *z_min, *z_max, *samples).map(Answer::Report),
+                Request::Values(values) => evaluate(&method, values).map(Answer::Points),
+            }
         }
     }
-    Ok(match spec {
-        MethodSpec::Svi { points, quadrature } => {
-            let mut svi = svi::Svi::new(points);
-            if let Some(m) = quadrature {
-                svi = svi.with_quadrature(m);
-            }
-            with(&svi, request)?
-        }
-        MethodSpec::Sc { points } => with(&svi::SpectralCollocation::new(points), request)?,
-        MethodSpec::Dop853 | MethodSpec::Dopri5 => {
-            return Err(crate::SceneError::BenchMethod(format!(
-                "{spec} (adaptive peers have no fixed-step stability matrix)"
-            )));
-        }
-    })
+    match spec {
+        MethodSpec::Method(choice) => Ok(choice.visit(Answering(request))?),
+        MethodSpec::Dop853 | MethodSpec::Dopri5 => Err(crate::SceneError::BenchMethod(format!(
+            "{spec} (adaptive peers have no fixed-step stability matrix)"
+        ))),
+    }
 }
 
 #[cfg(test)]
@@ -186,10 +190,55 @@ mod tests {
     }
 
     #[test]
+    fn classic_methods_have_their_known_intervals() {
+        // Störmer–Verlet and symplectic Euler on the oscillator: stable exactly for z < 4
+        // (tr S = 2 − z); the variational midpoint rule is the implicit midpoint rule there:
+        // |eigenvalues| = 1 for every z.
+        for name in ["verlet", "symplectic-euler", "trapezoid"] {
+            let Answer::Report(report) = run(
+                name.parse().unwrap(),
+                &Request::Range {
+                    z_min: 1e-6,
+                    z_max: 10.0,
+                    samples: 200,
+                },
+            )
+            .unwrap() else {
+                unreachable!()
+            };
+            assert_eq!(report.stable.len(), 1, "{name}: {:?}", report.stable);
+            assert!(
+                (report.stable[0].upper - 4.0).abs() < 1e-9,
+                "{name}: {:?}",
+                report.stable
+            );
+        }
+        let Answer::Report(midpoint) = run(
+            "midpoint".parse().unwrap(),
+            &Request::Range {
+                z_min: 1e-6,
+                z_max: 900.0,
+                samples: 300,
+            },
+        )
+        .unwrap() else {
+            unreachable!()
+        };
+        assert!(
+            midpoint.a_stable && midpoint.p_stable,
+            "{:?}",
+            midpoint.stable
+        );
+    }
+
+    #[test]
     fn describe_names_the_regions() {
         let report = report(&Svi::new(2).with_quadrature(2), 1e-6, 20.0, 50).unwrap();
         let text = describe("Cheb 2, Gau 2", &report);
-        assert!(text.contains("stable          [0.0000010000, 12.0000000000]"), "{text}");
+        assert!(
+            text.contains("stable          [0.0000010000, 12.0000000000]"),
+            "{text}"
+        );
         assert!(text.contains("A-stable: no"));
     }
 }
