@@ -30,10 +30,10 @@
 //! Li, Wu, Leok (2018), §3, eqs. (12)–(25).
 
 use crate::basis::LagrangeBasis;
-use crate::derived::{AccelerationJacobian, LagrangianExt};
+use crate::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
 use crate::error::StepFailure;
 use crate::iteration::{FixedPoint, Newton};
-use crate::linalg::{invert, invert_small};
+use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
 use crate::spectral_variational::MAX_POINTS;
@@ -333,15 +333,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
-    let mass_inverse = match data.mass_inverse {
-        Some(inverse) => inverse,
-        None => {
-            let mass = model.mass_matrix(t, &state.q, &state.y);
-            *data
-                .mass_inverse
-                .insert(invert_small(&mass).ok_or(StepFailure::SingularMatrix)?)
-        }
-    };
+    let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, state)?;
     let s = tables.degree;
     let quarter = 0.25 * h * h;
     for (i, stage) in data.stages.iter_mut().enumerate() {

@@ -428,3 +428,21 @@ where
     }
     solve_small(d.vv, rhs)
 }
+
+/// M⁻¹ of a [`crate::Structure::ConstantMass`] Lagrangian, computed at the first step (at
+/// the state's (t, q), with its second coordinate standing in for q̇, which M does not depend
+/// on) and cached in `cache`.
+pub(crate) fn cached_mass_inverse<L: Lagrangian<N>, const N: usize>(
+    cache: &mut Option<SMatrix<f64, N, N>>,
+    model: &L,
+    t: f64,
+    state: &crate::State<N>,
+) -> Result<SMatrix<f64, N, N>, crate::error::StepFailure> {
+    if let Some(inverse) = cache {
+        return Ok(*inverse);
+    }
+    let mass = model.mass_matrix(t, &state.q, &state.y);
+    let inverse =
+        crate::linalg::invert_small(&mass).ok_or(crate::error::StepFailure::SingularMatrix)?;
+    Ok(*cache.insert(inverse))
+}

@@ -6,8 +6,10 @@
 //!   size (the next increment would be at round-off), or when the increments stop decreasing
 //!   at a level where only round-off remains.
 //! - [`FixedPoint`] (for non-stiff problems with constant mass matrix, where no Jacobian is
-//!   needed) converges linearly, so it stops only when an increment is below one ulp of the
-//!   unknowns or stops decreasing near round-off.
+//!   needed) converges linearly, so it stops only when an increment is below two ulps of the
+//!   positions it updates, or stops decreasing near round-off. (Iterating further, until the
+//!   increment vanishes, bought no accuracy on Kepler at T = 2000 once the stage tables are
+//!   exact, and cost 15% more force evaluations.)
 
 use crate::error::StepFailure;
 use crate::linalg::DenseLu;
@@ -106,7 +108,9 @@ impl FixedPoint {
         if !size.is_finite() {
             return Err(StepFailure::NonFinite);
         }
-        if size == 0.0 || (size >= self.previous && size <= FIXED_POINT_NOISE * scale) {
+        if size <= 2.0 * f64::EPSILON * scale
+            || (size >= self.previous && size <= FIXED_POINT_NOISE * scale)
+        {
             return Ok(true);
         }
         if self.iterations >= self.max_iterations {

@@ -48,10 +48,10 @@
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
 use crate::basis::LagrangeBasis;
-use crate::derived::{ForceJacobian, LagrangianExt, SecondDerivatives};
+use crate::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::error::StepFailure;
 use crate::iteration::{FixedPoint, Newton};
-use crate::linalg::{invert, invert_small};
+use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
 use crate::starting_values::StartingValues;
@@ -667,15 +667,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
-    let mass_inverse = match data.mass_inverse {
-        Some(inverse) => inverse,
-        None => {
-            let mass = model.mass_matrix(t, &state.q, &state.y);
-            *data
-                .mass_inverse
-                .insert(invert_small(&mass).ok_or(StepFailure::SingularMatrix)?)
-        }
-    };
+    let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, state)?;
     let s = tables.degree;
     let m = tables.nodes.len();
     let velocity = mass_inverse * state.y * h;

@@ -35,10 +35,10 @@
 //! integration illustrated by the Störmer–Verlet method*, Acta Numerica (2003).
 
 use crate::derived::LagrangianExt;
+use crate::derived::cached_mass_inverse;
 use crate::discrete_lagrangian::Trapezoid;
 use crate::error::StepFailure;
 use crate::iteration::Newton;
-use crate::linalg::invert_small;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::variational_integrator::{
     VariationalWorkspace, continuation_tolerance, discrete_tangent_map,
@@ -172,15 +172,7 @@ fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
     state: &State<N>,
     increment: &mut State<N>,
 ) -> Result<StepReport, StepFailure> {
-    let mass_inverse = match explicit.mass_inverse {
-        Some(inverse) => inverse,
-        None => {
-            let mass = model.mass_matrix(t, &state.q, &state.y);
-            *explicit
-                .mass_inverse
-                .insert(invert_small(&mass).ok_or(StepFailure::SingularMatrix)?)
-        }
-    };
+    let mass_inverse = cached_mass_inverse(&mut explicit.mass_inverse, model, t, state)?;
     let half = 0.5 * h;
     let mut evaluations = 1;
     let cached = explicit.cache.take().filter(|cache| {

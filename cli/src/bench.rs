@@ -206,7 +206,7 @@ impl ModelVisitor for Bench<'_> {
                     records: &mut records,
                 })?,
                 MethodSpec::Dop853 | MethodSpec::Dopri5 => {
-                    sweep_adaptive(&model, *spec, &problem, self.options, &mut records)
+                    sweep_adaptive(&model, *spec, &problem, self.options, &mut records)?
                 }
             }
         }
@@ -392,17 +392,24 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     Ok(())
 }
 
-/// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers`.
-struct FirstOrder<'a, M, const N: usize> {
+/// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers`, with a
+/// fixed-size state of S = 2N components (as a user of `ode_solvers` would write it: a
+/// heap-allocated `DVector` state would cost the peers a factor of several).
+struct FirstOrder<'a, M, const N: usize, const S: usize> {
     model: &'a M,
     /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
     mass_inverse: Option<SMatrix<f64, N, N>>,
 }
 
-impl<M: ZooModel<N>, const N: usize> System<f64, ode_solvers::DVector<f64>>
-    for FirstOrder<'_, M, N>
+impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
+    for FirstOrder<'_, M, N, S>
 {
-    fn system(&self, t: f64, y: &ode_solvers::DVector<f64>, dy: &mut ode_solvers::DVector<f64>) {
+    fn system(
+        &self,
+        t: f64,
+        y: &ode_solvers::SVector<f64, S>,
+        dy: &mut ode_solvers::SVector<f64, S>,
+    ) {
         let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
         let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
         let a = match self.mass_inverse {
@@ -420,22 +427,21 @@ impl<M: ZooModel<N>, const N: usize> System<f64, ode_solvers::DVector<f64>>
 }
 
 /// Outcome of one adaptive run: final state, steps, evaluations, stored states.
-type AdaptiveRun = (
-    ode_solvers::DVector<f64>,
+type AdaptiveRun<const S: usize> = (
+    ode_solvers::SVector<f64, S>,
     usize,
     usize,
-    Vec<ode_solvers::DVector<f64>>,
+    Vec<ode_solvers::SVector<f64, S>>,
 );
 
 /// One DOP853 / Dopri5 run to the horizon (`None` if it fails or stops short).
-fn adaptive_run<M: ZooModel<N>, const N: usize>(
-    system: FirstOrder<'_, M, N>,
+fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
+    system: FirstOrder<'_, M, N, S>,
     spec: MethodSpec,
     problem: &Problem<N>,
     tol: f64,
-) -> Option<AdaptiveRun> {
-    let y0 = ode_solvers::DVector::from_iterator(
-        2 * N,
+) -> Option<AdaptiveRun<S>> {
+    let y0 = ode_solvers::SVector::<f64, S>::from_iterator(
         problem.q0.iter().chain(problem.v0.iter()).copied(),
     );
     let (t0, t_end, span) = (problem.t0, problem.t_end, problem.t_end - problem.t0);
@@ -498,21 +504,44 @@ fn adaptive_run<M: ZooModel<N>, const N: usize>(
     }
 }
 
-/// Sweep an adaptive `ode_solvers` method over tolerances.
+/// Sweep an adaptive `ode_solvers` method over tolerances (models with N ≤ 3).
 fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
     model: &M,
     spec: MethodSpec,
     problem: &Problem<N>,
     options: &BenchOptions,
     records: &mut Vec<Record>,
+) -> Result<(), SceneError> {
+    // `2 * N` is not a const expression on stable Rust: dispatch on the size at run time.
+    match N {
+        1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, records),
+        2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, records),
+        3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, records),
+        _ => {
+            return Err(SceneError::BenchMethod(format!(
+                "{spec} (the ode_solvers peers are wired for models of dimension ≤ 3)"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// [`sweep_adaptive`] with the state size S = 2N as a type parameter.
+fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
+    model: &M,
+    spec: MethodSpec,
+    problem: &Problem<N>,
+    options: &BenchOptions,
+    records: &mut Vec<Record>,
 ) {
+    assert_eq!(S, 2 * N, "state size");
     let mass_inverse = match M::STRUCTURE {
         Structure::ConstantMass => {
             invert_small(&model.mass_matrix(problem.t0, &problem.q0, &problem.v0))
         }
         Structure::General => None,
     };
-    let system = || FirstOrder {
+    let system = || FirstOrder::<M, N, S> {
         model,
         mass_inverse,
     };

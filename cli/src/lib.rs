@@ -1114,7 +1114,7 @@ impl fmt::Display for Summary {
             (
                 "work",
                 format!(
-                    "{} Newton iterations, {} evaluations",
+                    "{} nonlinear iterations, {} evaluations",
                     self.iterations, self.evaluations
                 ),
             ),
