@@ -167,13 +167,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     /// The mass matrix ∂²L/∂q̇².
     #[inline]
     fn mass_matrix(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SMatrix<f64, N, N> {
-        hessian(
-            |y: SVector<Dual2Vec<f64, Const<N>>, N>| {
-                self.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
-            },
-            v,
-        )
-        .2
+        velocity_hessian(self, t, q, v)
     }
 
     /// The energy E = p·q̇ − L.
@@ -323,6 +317,47 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
 
 impl<L: Lagrangian<N> + ?Sized, const N: usize> LagrangianExt<N> for L {}
 
+/// L, ∂L/∂q, ∂L/∂q̇ and ∂²L/∂q∂q̇ in any scalar type (one partial-Hessian sweep).
+#[allow(clippy::type_complexity)]
+fn mixed_derivatives<L, D, const N: usize>(
+    model: &L,
+    t: D,
+    q: &SVector<D, N>,
+    v: &SVector<D, N>,
+) -> (D, SVector<D, N>, SVector<D, N>, SMatrix<D, N, N>)
+where
+    L: Lagrangian<N> + ?Sized,
+    D: Scalar,
+{
+    partial_hessian(
+        |(x, y): (
+            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
+            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
+        )| model.lagrangian(HyperDualVec::from_re(t), &x, &y),
+        (q, v),
+    )
+}
+
+/// ∂²L/∂q̇² in any scalar type (one Hessian sweep in q̇).
+fn velocity_hessian<L, D, const N: usize>(
+    model: &L,
+    t: D,
+    q: &SVector<D, N>,
+    v: &SVector<D, N>,
+) -> SMatrix<D, N, N>
+where
+    L: Lagrangian<N> + ?Sized,
+    D: Scalar,
+{
+    hessian(
+        |y: SVector<Dual2Vec<D, Const<N>>, N>| {
+            model.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
+        },
+        v,
+    )
+    .2
+}
+
 /// Value, gradients and Hessian blocks of L in any scalar type (three N-sized sweeps).
 fn second_derivatives_generic<L, D, const N: usize>(
     model: &L,
@@ -334,25 +369,14 @@ where
     L: Lagrangian<N> + ?Sized,
     D: Scalar,
 {
-    let (value, dq, dv, qv) = partial_hessian(
-        |(x, y): (
-            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
-            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
-        )| model.lagrangian(HyperDualVec::from_re(t), &x, &y),
-        (q, v),
-    );
+    let (value, dq, dv, qv) = mixed_derivatives(model, t, q, v);
     let (_, _, qq) = hessian(
         |x: SVector<Dual2Vec<D, Const<N>>, N>| {
             model.lagrangian(Dual2Vec::from_re(t), &x, &v.map(Dual2Vec::from_re))
         },
         q,
     );
-    let (_, _, vv) = hessian(
-        |y: SVector<Dual2Vec<D, Const<N>>, N>| {
-            model.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
-        },
-        v,
-    );
+    let vv = velocity_hessian(model, t, q, v);
     SecondDerivativesOf {
         value,
         q: dq,
@@ -418,15 +442,17 @@ where
     L: Lagrangian<N> + ?Sized,
     D: Scalar,
 {
-    let d = second_derivatives_generic(model, t, q, v);
-    let mut rhs = d.q - d.qv.transpose() * v;
+    // L_q, L_qv from one partial Hessian and L_vv from the Hessian in q̇: L_qq is not needed.
+    let (_, lq, _, qv) = mixed_derivatives(model, t, q, v);
+    let vv = velocity_hessian(model, t, q, v);
+    let mut rhs = lq - qv.transpose() * v;
     if L::TIME_DEPENDENT {
         rhs -= velocity_time_derivative(model, t, q, v);
     }
     if L::FORCED {
         rhs += model.external_force(t, q, v);
     }
-    solve_small(d.vv, rhs)
+    solve_small(vv, rhs)
 }
 
 /// M⁻¹ of a [`crate::Structure::ConstantMass`] Lagrangian, computed at the first step (at
