@@ -294,13 +294,13 @@ fn assemble<const N: usize>(
     residual: &mut DVector<f64>,
 ) {
     let s = tables.degree;
-    for i in 0..s {
-        let mut r = state.y * tables.lambda0[i] - nodes[i].value;
+    for (i, node) in nodes.iter().enumerate().take(s) {
+        let mut r = state.y * tables.lambda0[i] - node.value;
         for j in 0..s {
             r += z.fixed_rows::<N>(j * N) * tables.lambda_squared[(i, j)];
-            let mut block = -nodes[i].v * tables.lambda[(i, j)];
+            let mut block = -node.v * tables.lambda[(i, j)];
             if i == j {
-                block -= nodes[i].q;
+                block -= node.q;
             }
             for d in 0..N {
                 block[(d, d)] += tables.lambda_squared[(i, j)];

@@ -411,6 +411,7 @@ impl<const N: usize> From<SecondDerivativesOf<f64, N>> for SecondDerivatives<N> 
 }
 
 /// ∂²L/∂q̇∂t in any scalar type.
+#[allow(clippy::type_complexity)]
 fn velocity_time_derivative<L, D, const N: usize>(
     model: &L,
     t: D,

@@ -105,7 +105,7 @@ impl<O> Every<O> {
 
 impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for Every<O> {
     fn wants(&self, step: usize) -> bool {
-        step % self.every.max(1) == 0 && self.inner.wants(step)
+        step.is_multiple_of(self.every.max(1)) && self.inner.wants(step)
     }
     fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         self.inner.observe(model, step, point)

@@ -118,7 +118,7 @@ impl Svi {
             ));
         }
         let m = self.quadrature_points();
-        if m < 1 || m > MAX_POINTS {
+        if !(1..=MAX_POINTS).contains(&m) {
             return Err(Error::invalid(
                 "quadrature",
                 format!("{m} Gauss points; need 1 to {MAX_POINTS}"),
@@ -423,6 +423,7 @@ impl<const N: usize> SviWorkspace<N> {
 }
 
 /// Assemble the residual of (8a)–(8b) and its Jacobian with respect to the offsets.
+#[allow(clippy::too_many_arguments)]
 fn assemble<L: Lagrangian<N>, const N: usize>(
     model: &L,
     tables: &Tables,

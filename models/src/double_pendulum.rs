@@ -75,7 +75,6 @@ impl Lagrangian<2> for DoublePendulum {
     const TIME_DEPENDENT: bool = false;
 
     #[inline]
-
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         let Self { m1, m2, d1, d2, g } = *self;
         let (alpha1, alpha2) = (q[0], q[1]);

@@ -99,7 +99,6 @@ impl Lagrangian<2> for Kepler {
     const STRUCTURE: Structure = Structure::ConstantMass;
 
     #[inline]
-
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         v.dot(v) * 0.5 + q.dot(q).sqrt().recip()
     }

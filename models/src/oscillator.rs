@@ -60,7 +60,6 @@ impl Lagrangian<1> for HarmonicOscillator {
     const STRUCTURE: Structure = Structure::ConstantMass;
 
     #[inline]
-
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
         (v[0] * v[0] - q[0] * q[0] * (self.sigma * self.sigma)) * 0.5
     }

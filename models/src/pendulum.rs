@@ -79,7 +79,6 @@ impl Lagrangian<1> for Pendulum {
     const STRUCTURE: Structure = Structure::ConstantMass;
 
     #[inline]
-
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
         let (m, l, g) = (self.m, self.l, self.g);
         v[0] * v[0] * (0.5 * m * l * l) + q[0].cos() * (m * g * l)
