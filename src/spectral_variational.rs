@@ -258,6 +258,8 @@ struct ConstantMass<const N: usize> {
     accelerations: Vec<SVector<f64, N>>,
     /// Positions Q_μ at the quadrature points.
     positions: Vec<SVector<f64, N>>,
+    /// q_k + h c'_μ M⁻¹p_k, the force-free part of Q_μ (fixed within a step).
+    bases: Vec<SVector<f64, N>>,
     /// Velocities V_μ at the quadrature points (forced models).
     velocities: Vec<SVector<f64, N>>,
 }
@@ -338,6 +340,7 @@ impl<const N: usize> ConstantMass<N> {
             forces: vec![SVector::zeros(); m],
             accelerations: vec![SVector::zeros(); m],
             positions: vec![SVector::zeros(); m],
+            bases: vec![SVector::zeros(); m],
             velocities: vec![SVector::zeros(); m],
         })
     }
@@ -689,6 +692,11 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             }
         }
     }
+    let mut size: f64 = 0.0;
+    for (base, c) in data.bases.iter_mut().zip(&data.stage_velocity) {
+        *base = state.q + velocity * *c;
+        size = size.max(base.amax());
+    }
     let mut control = FixedPoint::new(max_iterations);
     loop {
         for (mu, (force, acceleration)) in data
@@ -705,15 +713,13 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             *acceleration = mass_inverse * *force * h2;
         }
         let mut change: f64 = 0.0;
-        let mut size: f64 = 0.0;
-        for (mu, position) in data.positions.iter_mut().enumerate() {
+        for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.stage_matrix[mu * m..(mu + 1) * m];
-            let mut next = state.q + velocity * data.stage_velocity[mu];
+            let mut next = *base;
             for (a, acceleration) in row.iter().zip(&data.accelerations) {
                 next += acceleration * *a;
             }
             change = change.max((next - *position).amax());
-            size = size.max(next.amax());
             *position = next;
         }
         if L::FORCED {
