@@ -137,22 +137,50 @@ pub enum Structure {
 /// that leaves L invariant. By Noether's theorem the momentum Jᵢ = p·ξᵢ(q) is conserved, and
 /// variational integrators conserve it exactly (to round-off).
 pub trait Symmetries<const N: usize>: Lagrangian<N> {
-    /// Number of generators.
-    fn generator_count(&self) -> usize;
+    /// Number of generators (default: none, so a model without symmetries writes
+    /// `impl Symmetries<N> for Model {}`).
+    fn generator_count(&self) -> usize {
+        0
+    }
     /// Names of the momenta, one per generator (for reports).
-    fn momentum_name(&self, index: usize) -> &'static str;
+    ///
+    /// # Panics
+    /// If `index >= generator_count()` (the default panics for every index).
+    fn momentum_name(&self, index: usize) -> &'static str {
+        panic!("no symmetry generator with index {index}")
+    }
     /// The generator ξᵢ(q); `index < generator_count()`.
-    fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N>;
+    ///
+    /// # Panics
+    /// If `index >= generator_count()` (the default panics for every index).
+    fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N> {
+        let _ = q;
+        panic!("no symmetry generator with index {index}")
+    }
 }
 
 /// Other known conserved quantities of a model (besides energy and Noether momenta).
 pub trait Invariants<const N: usize>: Lagrangian<N> {
-    /// Number of invariants.
-    fn invariant_count(&self) -> usize;
+    /// Number of invariants (default: none, so a model without known invariants writes
+    /// `impl Invariants<N> for Model {}`).
+    fn invariant_count(&self) -> usize {
+        0
+    }
     /// Name of invariant `index`.
-    fn invariant_name(&self, index: usize) -> &'static str;
+    ///
+    /// # Panics
+    /// If `index >= invariant_count()` (the default panics for every index).
+    fn invariant_name(&self, index: usize) -> &'static str {
+        panic!("no invariant with index {index}")
+    }
     /// Value of invariant `index` at (t, q, q̇).
-    fn invariant(&self, index: usize, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64;
+    ///
+    /// # Panics
+    /// If `index >= invariant_count()` (the default panics for every index).
+    fn invariant(&self, index: usize, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
+        let _ = (t, q, v);
+        panic!("no invariant with index {index}")
+    }
 }
 
 /// A closed-form solution of the Euler–Lagrange equations.

@@ -136,43 +136,11 @@ pub(crate) fn free_response(sigma: f64, zeta: f64, q0: f64, v0: f64, tau: f64) -
     (q, v)
 }
 
-impl Symmetries<1> for DampedOscillator {
-    /// None.
-    fn generator_count(&self) -> usize {
-        0
-    }
+/// No continuous symmetry: no conserved Noether momentum.
+impl Symmetries<1> for DampedOscillator {}
 
-    /// # Panics
-    /// Always: there are no generators.
-    fn momentum_name(&self, index: usize) -> &'static str {
-        params::no_such_index("symmetry generator", Self::NAME, index)
-    }
-
-    /// # Panics
-    /// Always: there are no generators.
-    fn generator(&self, index: usize, _q: &SVector<f64, 1>) -> SVector<f64, 1> {
-        params::no_such_index("symmetry generator", Self::NAME, index)
-    }
-}
-
-impl Invariants<1> for DampedOscillator {
-    /// None: the energy decays.
-    fn invariant_count(&self) -> usize {
-        0
-    }
-
-    /// # Panics
-    /// Always: there are no invariants.
-    fn invariant_name(&self, index: usize) -> &'static str {
-        params::no_such_index("invariant", Self::NAME, index)
-    }
-
-    /// # Panics
-    /// Always: there are no invariants.
-    fn invariant(&self, index: usize, _t: f64, _q: &SVector<f64, 1>, _v: &SVector<f64, 1>) -> f64 {
-        params::no_such_index("invariant", Self::NAME, index)
-    }
-}
+/// No known invariants besides (possibly) the energy.
+impl Invariants<1> for DampedOscillator {}
 
 impl ExactSolution<1> for DampedOscillator {
     /// The closed form of the module documentation, for every initial state (also backwards

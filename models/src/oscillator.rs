@@ -65,43 +65,11 @@ impl Lagrangian<1> for HarmonicOscillator {
     }
 }
 
-impl Symmetries<1> for HarmonicOscillator {
-    /// None: the oscillator has no continuous symmetry of configuration space.
-    fn generator_count(&self) -> usize {
-        0
-    }
+/// No continuous symmetry: no conserved Noether momentum.
+impl Symmetries<1> for HarmonicOscillator {}
 
-    /// # Panics
-    /// Always: there are no generators.
-    fn momentum_name(&self, index: usize) -> &'static str {
-        params::no_such_index("symmetry generator", Self::NAME, index)
-    }
-
-    /// # Panics
-    /// Always: there are no generators.
-    fn generator(&self, index: usize, _q: &SVector<f64, 1>) -> SVector<f64, 1> {
-        params::no_such_index("symmetry generator", Self::NAME, index)
-    }
-}
-
-impl Invariants<1> for HarmonicOscillator {
-    /// None besides the energy.
-    fn invariant_count(&self) -> usize {
-        0
-    }
-
-    /// # Panics
-    /// Always: there are no invariants besides the energy.
-    fn invariant_name(&self, index: usize) -> &'static str {
-        params::no_such_index("invariant", Self::NAME, index)
-    }
-
-    /// # Panics
-    /// Always: there are no invariants besides the energy.
-    fn invariant(&self, index: usize, _t: f64, _q: &SVector<f64, 1>, _v: &SVector<f64, 1>) -> f64 {
-        params::no_such_index("invariant", Self::NAME, index)
-    }
-}
+/// No known invariants besides (possibly) the energy.
+impl Invariants<1> for HarmonicOscillator {}
 
 impl ExactSolution<1> for HarmonicOscillator {
     /// q(t) = q₀ cos στ + (q̇₀/σ) sin στ, q̇(t) = −σ q₀ sin στ + q̇₀ cos στ, τ = t − t₀;

@@ -105,43 +105,11 @@ impl Lagrangian<2> for SpringPendulum {
     }
 }
 
-impl Symmetries<2> for SpringPendulum {
-    /// None (gravity breaks the rotation symmetry).
-    fn generator_count(&self) -> usize {
-        0
-    }
+/// No continuous symmetry: no conserved Noether momentum.
+impl Symmetries<2> for SpringPendulum {}
 
-    /// # Panics
-    /// Always: there are no generators.
-    fn momentum_name(&self, index: usize) -> &'static str {
-        params::no_such_index("symmetry generator", Self::NAME, index)
-    }
-
-    /// # Panics
-    /// Always: there are no generators.
-    fn generator(&self, index: usize, _q: &SVector<f64, 2>) -> SVector<f64, 2> {
-        params::no_such_index("symmetry generator", Self::NAME, index)
-    }
-}
-
-impl Invariants<2> for SpringPendulum {
-    /// None besides the energy (the elastic pendulum is not integrable).
-    fn invariant_count(&self) -> usize {
-        0
-    }
-
-    /// # Panics
-    /// Always: there are no invariants besides the energy.
-    fn invariant_name(&self, index: usize) -> &'static str {
-        params::no_such_index("invariant", Self::NAME, index)
-    }
-
-    /// # Panics
-    /// Always: there are no invariants besides the energy.
-    fn invariant(&self, index: usize, _t: f64, _q: &SVector<f64, 2>, _v: &SVector<f64, 2>) -> f64 {
-        params::no_such_index("invariant", Self::NAME, index)
-    }
-}
+/// No known invariants besides (possibly) the energy.
+impl Invariants<2> for SpringPendulum {}
 
 impl ExactSolution<2> for SpringPendulum {
     /// Always `None`: the spring pendulum is not integrable.
