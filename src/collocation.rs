@@ -32,7 +32,7 @@
 use crate::basis::LagrangeBasis;
 use crate::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
 use crate::error::StepFailure;
-use crate::iteration::{FixedPoint, Newton};
+use crate::iteration::{FixedPoint, Newton, after_fixed_point};
 use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
@@ -40,6 +40,7 @@ use crate::spectral_variational::MAX_POINTS;
 use crate::starting_values::StartingValues;
 use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use std::ops::ControlFlow;
 
 /// Options of the spectral collocation method.
 #[derive(Debug, Clone, PartialEq)]
@@ -469,16 +470,9 @@ impl<const N: usize> Method<N> for SpectralCollocation {
                 state,
                 increment,
             );
-            match result {
-                // A velocity-dependent force makes the fixed point contract only by a factor
-                // O(h ‖M⁻¹ ∂f_L/∂q̇‖): strong friction falls back to Newton's method (from
-                // the same starting values, which the failed iteration left in place).
-                Err(StepFailure::NonConvergence { iterations, .. }) if L::FORCED => {
-                    spent = iterations;
-                    workspace.newton_only = true;
-                }
-                Err(StepFailure::NonFinite) if L::FORCED => workspace.newton_only = true,
-                result => return result,
+            match after_fixed_point(result, L::FORCED, &mut workspace.newton_only) {
+                ControlFlow::Break(result) => return result,
+                ControlFlow::Continue(iterations) => spent = iterations,
             }
         }
         let CollocationWorkspace {

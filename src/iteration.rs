@@ -13,7 +13,9 @@
 
 use crate::error::StepFailure;
 use crate::linalg::DenseLu;
+use crate::method::StepReport;
 use nalgebra::{DMatrix, DVector};
+use std::ops::ControlFlow;
 
 /// Relative increment below which the iteration is converged.
 const CONVERGED: f64 = 1e-10;
@@ -121,5 +123,30 @@ impl FixedPoint {
         }
         self.previous = size;
         Ok(false)
+    }
+}
+
+/// What a step does after trying the fixed-point iteration: `Break` with the step's result,
+/// or `Continue` with the iterations spent, to go on with Newton's method.
+///
+/// A velocity-dependent force makes the fixed point contract only by a factor
+/// O(h ‖M⁻¹ ∂f_L/∂q̇‖), so for a forced model a non-converging or diverging fixed point
+/// switches the run to Newton's method (`newton_only`), starting from the same starting
+/// values; for an unforced model its failure is the step's failure.
+pub(crate) fn after_fixed_point(
+    result: Result<StepReport, StepFailure>,
+    forced: bool,
+    newton_only: &mut bool,
+) -> ControlFlow<Result<StepReport, StepFailure>, usize> {
+    match result {
+        Err(StepFailure::NonConvergence { iterations, .. }) if forced => {
+            *newton_only = true;
+            ControlFlow::Continue(iterations)
+        }
+        Err(StepFailure::NonFinite) if forced => {
+            *newton_only = true;
+            ControlFlow::Continue(0)
+        }
+        result => ControlFlow::Break(result),
     }
 }

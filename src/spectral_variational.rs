@@ -50,13 +50,14 @@
 use crate::basis::LagrangeBasis;
 use crate::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::error::StepFailure;
-use crate::iteration::{FixedPoint, Newton};
+use crate::iteration::{FixedPoint, Newton, after_fixed_point};
 use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
 use crate::starting_values::StartingValues;
 use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use std::ops::ControlFlow;
 
 /// Largest number of CGL points or Gauss points accepted.
 pub const MAX_POINTS: usize = 256;
@@ -552,15 +553,9 @@ impl<const N: usize> Method<N> for Svi {
                 state,
                 increment,
             );
-            match result {
-                // A velocity-dependent force makes the fixed point contract only by a factor
-                // O(h ‖M⁻¹ ∂f_L/∂q̇‖): strong friction falls back to Newton's method.
-                Err(StepFailure::NonConvergence { iterations, .. }) if L::FORCED => {
-                    spent = iterations;
-                    workspace.newton_only = true;
-                }
-                Err(StepFailure::NonFinite) if L::FORCED => workspace.newton_only = true,
-                result => return result,
+            match after_fixed_point(result, L::FORCED, &mut workspace.newton_only) {
+                ControlFlow::Break(result) => return result,
+                ControlFlow::Continue(iterations) => spent = iterations,
             }
         }
         let iterations = solve(model, workspace, t, h, state)? + spent;
