@@ -400,19 +400,17 @@ pub struct SviWorkspace<const N: usize> {
 }
 
 impl<const N: usize> SviWorkspace<N> {
-    /// Rebuild scaled tables for a new step size; the warm start is dropped (its polynomial
-    /// lives on a differently scaled interval).
+    /// Rescale the tables for a new step size.
     fn set_step(&mut self, h: f64) {
         if self.tables.h != h {
             self.tables.rescale(h);
-            self.start.invalidate();
         }
     }
 
     /// Starting values: the previous step's polynomial extrapolated to the new nodes, or at
     /// the first step the Taylor polynomial with q̇ from the inverse Legendre map.
     fn start<L: Lagrangian<N>>(&mut self, model: &L, t: f64, state: &State<N>) {
-        if self.start.has_previous() {
+        if self.start.prepare(self.tables.h) {
             self.start.extrapolate::<N>(&mut self.offsets);
         } else {
             let v = model
@@ -573,12 +571,51 @@ impl<const N: usize> Method<N> for Svi {
         }
         increment.q = ws.offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = dp;
-        ws.start.remember(&ws.offsets);
+        ws.start.remember(&ws.offsets, h);
         let m = ws.tables.nodes.len();
         Ok(StepReport {
             iterations,
             evaluations: m * (iterations + 1),
         })
+    }
+
+    fn restart(&self, workspace: &mut SviWorkspace<N>) {
+        workspace.start.invalidate();
+    }
+
+    /// q(τ) = q_k + Σ_j l_j(τ) Z_j and q̇(τ) = (2/h) Σ_j l̇_j(τ) Z_j, τ = 2θ − 1.
+    fn dense_output(
+        &self,
+        workspace: &SviWorkspace<N>,
+        state: &State<N>,
+        h: f64,
+        theta: f64,
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        let mut values = [0.0; MAX_POINTS];
+        let (offset, rate) = workspace
+            .start
+            .last_step::<N>(2.0 * theta - 1.0, &mut values)?;
+        Some((state.q + offset, rate * (2.0 / h)))
+    }
+
+    fn points(&self) -> Option<usize> {
+        Some(self.points)
+    }
+
+    /// Keeps an explicit quadrature's offset m − (s + 1) from the number of points.
+    fn with_points(&self, points: usize) -> Option<Self> {
+        let quadrature = self
+            .quadrature
+            .map(|m| (m + points).saturating_sub(self.points).max(1));
+        Some(Svi {
+            points,
+            quadrature,
+            max_iterations: self.max_iterations,
+        })
+    }
+
+    fn node_offsets<'a>(&self, workspace: &'a SviWorkspace<N>) -> Option<&'a [f64]> {
+        workspace.start.last_offsets()
     }
 
     fn tangent_map<L: Lagrangian<N>>(
@@ -749,7 +786,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     }
     increment.q = dq;
     increment.y = dp;
-    start.remember(offsets);
+    start.remember(offsets, h);
     let iterations = control.iterations();
     Ok(StepReport {
         iterations,
