@@ -299,7 +299,7 @@ impl<const N: usize> ConstantMass<N> {
             .map(|k| tables.values[(k / s, k % s + 1)])
             .collect();
         // c'_μ = Σ_j l_j(τ_μ) c_j is the quadrature node's position (τ_μ + 1)/2.
-        let stage_velocity = tables.nodes.iter().map(|tau| 0.5 * (tau + 1.0)).collect();
+        let stage_velocity = unit_nodes(&tables.nodes);
         let stage_matrix = if m == s {
             gauss_nystrom_matrix(&tables.nodes)?
         } else {
@@ -322,11 +322,10 @@ impl<const N: usize> ConstantMass<N> {
                 (0..s).map(|j| rate(mu, j) * propagation[j * m + nu]).sum()
             })
             .collect();
-        let end_weights = tables
-            .nodes
+        let end_weights = unit_nodes(&tables.nodes)
             .iter()
             .zip(&tables.reference_weights)
-            .map(|(tau, w)| 0.25 * w * (1.0 - tau))
+            .map(|(c, w)| 0.5 * w * (1.0 - c))
             .collect();
         Some(ConstantMass {
             velocity_coefficients,
@@ -347,6 +346,23 @@ impl<const N: usize> ConstantMass<N> {
     }
 }
 
+/// The quadrature nodes on [0, 1], c_μ = (τ_μ + 1)/2, with the symmetry c_{m−1−μ} = 1 − c_μ
+/// made exact (rounding (τ + 1)/2 and (1 − τ)/2 separately breaks it by an ulp). A
+/// symmetric method whose coefficients are not symmetric in floating point is not
+/// reversible at round-off: on Kepler (T = 2000, 40 000 steps of SVI 7/6) the energy then
+/// drifted by 6·10⁻¹⁵, and the resulting phase error capped the final error near 10⁻¹¹.
+fn unit_nodes(nodes: &[f64]) -> Vec<f64> {
+    let m = nodes.len();
+    let mut c: Vec<f64> = nodes.iter().map(|tau| 0.5 * (tau + 1.0)).collect();
+    for i in 0..m / 2 {
+        c[m - 1 - i] = 1.0 - c[i];
+    }
+    if m % 2 == 1 {
+        c[m / 2] = 0.5;
+    }
+    c
+}
+
 /// Ā = A² of the Gauss–Legendre collocation method on the nodes c_μ = (τ_μ + 1)/2, with
 /// A_μν = ∫₀^{c_μ} ℓ_ν (ℓ the Lagrange basis on c), row-major.
 ///
@@ -356,7 +372,7 @@ impl<const N: usize> ConstantMass<N> {
 /// every step, put a floor near 10⁻¹¹ under long-run errors (Kepler, T = 2000).
 fn gauss_nystrom_matrix(nodes: &[f64]) -> Option<Vec<f64>> {
     let m = nodes.len();
-    let c: Vec<f64> = nodes.iter().map(|tau| 0.5 * (tau + 1.0)).collect();
+    let c = unit_nodes(nodes);
     let basis = LagrangeBasis::new(c.clone()).ok()?;
     let gauss = GaussLegendre::new(m).ok()?;
     let mut values = vec![0.0; m];
