@@ -38,6 +38,7 @@ pub mod discrete_lagrangian;
 pub mod error;
 pub mod integrator;
 mod iteration;
+pub mod lie_group;
 pub mod linalg;
 pub mod method;
 pub mod model;

@@ -1,0 +1,589 @@
+//! The higher-order Lie-group variational integrator on SO(3) in natural charts (Leok,
+//! *Generalized Variational Integrators*, §5.3), and its reduced Euler–Poincaré form (§5.4).
+//!
+//! # Discrete equations
+//! On a step [t_k, t_k + h] the attitude is interpolated in the Lie algebra, in the natural
+//! chart based at the first point (§5.3.2, Lemma 5.2):
+//!
+//! R(τ) = R_k exp(ξ(τ)),  ξ(τ) = Σ_{ν=0}^{d} ξᵛ l_ν(τ),  ξ⁰ = 0,
+//!
+//! with l_ν the Lagrange basis on the d + 1 Chebyshev–Gauss–Lobatto points (`points` = d + 1)
+//! and τ ∈ [−1, 1]. The body angular velocity along the curve is the left-trivialised
+//! derivative (see [`super::so3`] for the sign)
+//!
+//! Ω(τ) = dexp_{−ξ(τ)} ξ̇(τ),  ξ̇ = (2/h) Σ ξᵛ l̇_ν(τ),
+//!
+//! and the action is approximated by m-point Gauss–Legendre quadrature (nodes τ_μ, weights
+//! w_μ, W_μ = (h/2) w_μ):
+//!
+//! S(R_k; ξ¹, …, ξᵈ) = Σ_μ W_μ L(R_k exp(ξ(τ_μ)), Ω(τ_μ)).
+//!
+//! The discrete Lagrangian is L_d(R_k, R_{k+1}) = ext S over the internal ξ¹…ξᵈ⁻¹ with
+//! R_{k+1} = R_k exp(ξᵈ) (the paper's L_d with ξˢ = ψ_{g₀}(g₁)). Write ℓ(η, a, b) =
+//! L(R_k exp(η) exp(a), dexp_{−a} b) for the Lagrangian at one quadrature point, with the
+//! extra variable η a right perturbation of the base point. Then
+//! - the internal-stage conditions (the paper's implicit equations for ξ¹…ξˢ⁻¹) are
+//!   ∂S/∂ξᵛ = Σ_μ W_μ [l_ν(τ_μ) ∂ℓ/∂a + (2/h) l̇_ν(τ_μ) ∂ℓ/∂b] = 0, ν = 1, …, d − 1;
+//! - the discrete Euler–Lagrange equation D₂L_d(R_{k−1}, R_k) + D₁L_d(R_k, R_{k+1}) = 0 is
+//!   written with the left-trivialised discrete momenta μ_k = −T*L_{R_k} D₁L_d and
+//!   μ_{k+1} = T*L_{R_{k+1}} D₂L_d (the discrete Legendre transforms). Varying R_k ↦ R_k exp(εη)
+//!   with R_{k+1} fixed moves ξᵈ by −dexp_{ξᵈ}⁻¹η; varying R_{k+1} ↦ R_{k+1} exp(εη) moves it by
+//!   dexp_{−ξᵈ}⁻¹η (the internal ξᵛ are stationary, so their variation does not count). With
+//!   P = ∂S/∂ξᵈ and g_R = ∂S/∂η = Σ_μ W_μ ∂ℓ/∂η (η = 0),
+//!
+//!   μ_k = dexp_{ξᵈ}⁻ᵀ P − g_R,  μ_{k+1} = dexp_{−ξᵈ}⁻ᵀ P.
+//!
+//! Since dexp_xᵀ = dexp_{−x}, the step (R_k, μ_k) ↦ (R_{k+1}, μ_{k+1}) solves
+//!
+//! 0 = ∂S/∂ξᵛ (ν = 1, …, d − 1),  0 = P − dexp_{−ξᵈ} (μ_k + g_R)
+//!
+//! for ξ¹…ξᵈ (3d unknowns) by Newton's method with the exact Jacobian (the Hessian of ℓ in
+//! (η, a, b) by num-dual at each quadrature point, and the derivative of dexp_{−x}v in x), and
+//! then, using dexp_x = Ad_{exp x} dexp_{−x} and that dexp_{−x} commutes with exp(x),
+//!
+//! R_{k+1} = R_k F,  μ_{k+1} = Fᵀ (μ_k + g_R),  F = exp(ξᵈ).
+//!
+//! μ is the body angular momentum Π = ∂L/∂Ω in the continuous limit; the update is the
+//! discrete momentum balance "rotate, then add the quadrature of the torque". Both updates
+//! are returned as increments R_k (F − I) and (F − I)ᵀμ_k + Fᵀ g_R with F − I from
+//! [`super::so3::exp_minus_identity`] (no cancellation), and the stepping loop adds them with
+//! compensated summation: R stays orthogonal to round-off without any re-orthonormalisation.
+//!
+//! # Reduced form (§5.4)
+//! For a G-invariant Lagrangian ([`super::RigidBodyLagrangian::G_INVARIANT`]),
+//! L(R, Ω) = l(Ω) and ℓ(η, a, b) = l(dexp_{−a} b) does not depend on η or R_k: g_R = 0, the
+//! reduced discrete Lagrangian l_d(f_{k,k+1}) depends on f_{k,k+1} = R_k⁻¹R_{k+1} = F only,
+//! and the equations above become the higher-order discrete Euler–Poincaré equations
+//!
+//! 0 = Σ_μ W_μ [l_ν ∂l/∂Ω dexp_{−a} + (2/h) l̇_ν ∂(l∘dexp_{−a} b)/∂b],  P = dexp_{−ξᵈ} μ_k,
+//! μ_{k+1} = Fᵀ μ_k,
+//!
+//! that is μ_{k+1} = Ad*_F μ_k with μ_k = dexp_{ξᵈ}⁻ᵀ l_d'·, the paper's
+//! "l_d'(f_{k−1,k}) TR Ad − l_d'(f_{k,k+1}) TR = 0" in left-trivialised form, with R
+//! reconstructed by R_{k+1} = R_k F. [`Form::Reduced`] evaluates only l(Ω) = L(I, Ω) (a
+//! 6-variable Hessian per quadrature point instead of 9).
+//!
+//! # Properties
+//! - order 2·min(d, m) for d = `points` − 1 and m Gauss points (Galerkin variational error
+//!   analysis in the exponential chart; checked against an RK4 reference in the tests);
+//! - symplectic on T*SO(3) (a variational integrator), and it conserves the spatial angular
+//!   momentum about every symmetry axis of L (discrete Noether theorem for the left action):
+//!   a·R_{k+1}μ_{k+1} = a·R_k F Fᵀ(μ_k + g_R) = a·R_kμ_k, because a·R_k g_R is the derivative
+//!   of the action along the symmetry and vanishes at every quadrature point;
+//! - not symmetric: the chart is based at the first point of the step.
+//!
+//! # References
+//! M. Leok, *Generalized Variational Integrators*, chapter 5 of *Foundations of Computational
+//! Geometric Mechanics* (Caltech thesis, 2004), §5.3.2 (natural charts, dexp), §5.4.1–5.4.2
+//! (reduced discrete Lagrangian, discrete Euler–Poincaré equations); Marsden, Pekarsky,
+//! Shkoller, *Discrete Euler–Poincaré and Lie–Poisson equations*, Nonlinearity 12 (1999);
+//! Iserles, Munthe-Kaas, Nørsett, Zanna, *Lie-group methods*, Acta Numerica (2000).
+
+use super::model::{RigidBodyExt, RigidBodyLagrangian};
+use super::so3::{Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log};
+use crate::basis::LagrangeBasis;
+use crate::error::StepFailure;
+use crate::iteration::Newton;
+use crate::method::{MethodInfo, StepReport};
+use crate::quadrature::GaussLegendre;
+use crate::{Coordinates, Error};
+use nalgebra::{Const, DMatrix, DVector, SMatrix, SVector};
+use num_dual::{Dual2Vec, DualSVec64, DualVec, gradient, hessian, jacobian};
+
+/// Largest number of CGL points or Gauss points accepted.
+pub const MAX_POINTS: usize = 64;
+
+/// Which form of the discrete equations a [`LieSvi`] step solves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Form {
+    /// The full Lie-group variational integrator (§5.3): any L(R, Ω).
+    #[default]
+    Full,
+    /// The reduced discrete Euler–Poincaré form (§5.4), for G-invariant Lagrangians only
+    /// ([`RigidBodyLagrangian::G_INVARIANT`]).
+    Reduced,
+}
+
+/// Options of the Lie-group spectral variational integrator on SO(3).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct LieSvi {
+    /// Number of Chebyshev–Gauss–Lobatto points d + 1 (degree d of ξ(τ)), 2 to
+    /// [`MAX_POINTS`].
+    pub points: usize,
+    /// Number of Gauss–Legendre points m, 1 to [`MAX_POINTS`]; `None` means `points` (enough
+    /// for the full order 2d).
+    pub quadrature: Option<usize>,
+    /// Cap on Newton iterations per step.
+    pub max_iterations: usize,
+    /// Full or reduced equations.
+    pub form: Form,
+}
+
+impl Default for LieSvi {
+    fn default() -> Self {
+        LieSvi {
+            points: 3,
+            quadrature: None,
+            max_iterations: 50,
+            form: Form::Full,
+        }
+    }
+}
+
+impl LieSvi {
+    /// `points` CGL points, `points` Gauss points, full form.
+    pub fn new(points: usize) -> Self {
+        LieSvi {
+            points,
+            ..LieSvi::default()
+        }
+    }
+
+    /// Use `quadrature` Gauss–Legendre points.
+    pub fn with_quadrature(mut self, quadrature: usize) -> Self {
+        self.quadrature = Some(quadrature);
+        self
+    }
+
+    /// Cap Newton iterations per step.
+    pub fn with_max_iterations(mut self, max_iterations: usize) -> Self {
+        self.max_iterations = max_iterations;
+        self
+    }
+
+    /// Choose the full or the reduced (Euler–Poincaré) form.
+    pub fn with_form(mut self, form: Form) -> Self {
+        self.form = form;
+        self
+    }
+
+    /// The number of Gauss–Legendre points in use.
+    pub fn quadrature_points(&self) -> usize {
+        self.quadrature.unwrap_or(self.points)
+    }
+
+    /// Name, order and geometric properties (the values documented in the module docs).
+    pub fn info(&self) -> MethodInfo {
+        let degree = self.points.saturating_sub(1);
+        MethodInfo {
+            name: match self.form {
+                Form::Full => "lie-svi",
+                Form::Reduced => "lie-svi-reduced",
+            },
+            order: 2 * degree.min(self.quadrature_points()),
+            symmetric: false,
+            symplectic: true,
+            coordinates: Coordinates::Momentum,
+        }
+    }
+
+    /// Check the options against the model.
+    pub fn validate<L: RigidBodyLagrangian>(&self) -> Result<(), Error> {
+        if self.points < 2 || self.points > MAX_POINTS {
+            return Err(Error::invalid(
+                "points",
+                format!("{} CGL points; need 2 to {MAX_POINTS}", self.points),
+            ));
+        }
+        let m = self.quadrature_points();
+        if !(1..=MAX_POINTS).contains(&m) {
+            return Err(Error::invalid(
+                "quadrature",
+                format!("{m} Gauss points; need 1 to {MAX_POINTS}"),
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err(Error::invalid("max_iterations", "must be at least 1"));
+        }
+        if self.form == Form::Reduced && !L::G_INVARIANT {
+            return Err(Error::invalid(
+                "form",
+                "the reduced Euler–Poincaré form needs a G-invariant Lagrangian \
+                 (RigidBodyLagrangian::G_INVARIANT = true)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Validate the options and build every table and buffer for steps of size `h`.
+    pub fn workspace<L: RigidBodyLagrangian>(&self, h: f64) -> Result<LieWorkspace, Error> {
+        self.validate::<L>()?;
+        crate::error::require_positive("h", h)?;
+        let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
+        let gauss = GaussLegendre::new(self.quadrature_points())?;
+        let degree = self.points - 1;
+        let m = gauss.len();
+        let shifted: Vec<f64> = basis.nodes().iter().map(|x| x + 2.0).collect();
+        let mut workspace = LieWorkspace {
+            degree,
+            h: f64::NAN,
+            reduced: self.form == Form::Reduced,
+            reference_weights: gauss.weights().to_vec(),
+            weights: vec![0.0; m],
+            values: basis.value_matrix(gauss.nodes()),
+            reference_derivatives: basis.derivative_matrix(gauss.nodes()),
+            derivatives: DMatrix::zeros(m, degree + 1),
+            extrapolation: basis.value_matrix(&shifted),
+            nodes: basis.nodes().to_vec(),
+            unknowns: DVector::zeros(3 * degree),
+            previous: DVector::zeros(3 * degree),
+            has_previous: false,
+            points: vec![PointDerivatives::zeros(); m],
+            torque_rates: vec![Matrix3::zeros(); degree],
+            newton: Newton::new(3 * degree, self.max_iterations),
+            velocity_guess: Vector3::zeros(),
+        };
+        workspace.rescale(h);
+        Ok(workspace)
+    }
+
+    /// Advance `state` by one step of size `h`, writing the increments
+    /// (R_{k+1} − R_k, μ_{k+1} − μ_k) into `increment`. Allocates nothing.
+    pub fn step<L: RigidBodyLagrangian>(
+        &self,
+        model: &L,
+        workspace: &mut LieWorkspace,
+        h: f64,
+        state: &RigidState,
+        increment: &mut RigidState,
+    ) -> Result<StepReport, StepFailure> {
+        if workspace.h != h {
+            workspace.rescale(h);
+        }
+        workspace.start(model, h, state);
+        let LieWorkspace {
+            unknowns,
+            newton,
+            points,
+            torque_rates,
+            degree,
+            reduced,
+            weights,
+            values,
+            derivatives,
+            ..
+        } = workspace;
+        let tables = Tables {
+            degree: *degree,
+            reduced: *reduced,
+            weights,
+            values,
+            derivatives,
+        };
+        let iterations = newton.solve(unknowns, |z, jacobian, residual| {
+            assemble(
+                model,
+                &tables,
+                points,
+                torque_rates,
+                state,
+                z,
+                jacobian,
+                residual,
+            )
+        })?;
+        let torque = tables.torque_sum(model, &state.r, unknowns);
+        let end = unknowns.fixed_rows::<3>(3 * (tables.degree - 1)).into_owned();
+        let step_minus_identity = exp_minus_identity(&end);
+        let rotation = step_minus_identity + Matrix3::identity();
+        increment.r = state.r * step_minus_identity;
+        increment.momentum =
+            step_minus_identity.transpose() * state.momentum + rotation.transpose() * torque;
+        if !increment.is_finite() {
+            return Err(StepFailure::NonFinite);
+        }
+        workspace.previous.copy_from(&workspace.unknowns);
+        workspace.has_previous = true;
+        let m = workspace.points.len();
+        Ok(StepReport {
+            iterations,
+            evaluations: m * (iterations + 1),
+        })
+    }
+}
+
+/// The state of a rigid body in the integrator's coordinates: the attitude R (body to
+/// space) and the body angular momentum μ = Π (left-trivialised momentum).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidState {
+    /// Attitude R ∈ SO(3).
+    pub r: Matrix3<f64>,
+    /// Body angular momentum Π.
+    pub momentum: Vector3<f64>,
+}
+
+impl RigidState {
+    /// The zero state (used for increments).
+    pub fn zeros() -> Self {
+        RigidState {
+            r: Matrix3::zeros(),
+            momentum: Vector3::zeros(),
+        }
+    }
+
+    /// Whether every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.r.iter().chain(self.momentum.iter()).all(|x| x.is_finite())
+    }
+}
+
+/// Value, gradient and Hessian of ℓ(η, a, b) at one quadrature point, variables ordered
+/// (η, a, b).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct PointDerivatives {
+    gradient: SVector<f64, 9>,
+    hessian: SMatrix<f64, 9, 9>,
+}
+
+impl PointDerivatives {
+    fn zeros() -> Self {
+        PointDerivatives {
+            gradient: SVector::zeros(),
+            hessian: SMatrix::zeros(),
+        }
+    }
+}
+
+/// Tables, buffers and warm-start data of a [`LieSvi`] run.
+#[derive(Debug, Clone)]
+pub struct LieWorkspace {
+    degree: usize,
+    h: f64,
+    reduced: bool,
+    /// Gauss weights w_μ.
+    reference_weights: Vec<f64>,
+    /// W_μ = (h/2) w_μ.
+    weights: Vec<f64>,
+    /// l_ν(τ_μ), m × (d + 1).
+    values: DMatrix<f64>,
+    /// l̇_ν(τ_μ), m × (d + 1).
+    reference_derivatives: DMatrix<f64>,
+    /// (2/h) l̇_ν(τ_μ), m × (d + 1).
+    derivatives: DMatrix<f64>,
+    /// l_j(x_ν + 2), (d + 1) × (d + 1): the previous step's polynomial at the new nodes.
+    extrapolation: DMatrix<f64>,
+    /// CGL nodes x_ν.
+    nodes: Vec<f64>,
+    /// ξ¹…ξᵈ, stacked.
+    unknowns: DVector<f64>,
+    /// The previous step's ξ¹…ξᵈ.
+    previous: DVector<f64>,
+    has_previous: bool,
+    points: Vec<PointDerivatives>,
+    /// ∂g_R/∂ξʲ, j = 1..d.
+    torque_rates: Vec<Matrix3<f64>>,
+    newton: Newton,
+    /// Last body angular velocity from the inverse Legendre map (its Newton start).
+    velocity_guess: Vector3<f64>,
+}
+
+impl LieWorkspace {
+    fn rescale(&mut self, h: f64) {
+        self.h = h;
+        for (w, r) in self.weights.iter_mut().zip(&self.reference_weights) {
+            *w = 0.5 * h * r;
+        }
+        self.derivatives
+            .zip_apply(&self.reference_derivatives, |d, r| *d = 2.0 / h * r);
+        self.has_previous = false;
+    }
+
+    /// Starting values: the previous step's ξ-polynomial extrapolated to the new nodes and
+    /// moved to the chart at R_k (ξᵛ = log(exp(ξᵈ_prev)ᵀ exp(ζ_ν))), or at the first step the
+    /// uniform rotation ξ(τ) = (τ + 1)(h/2) Ω₀.
+    fn start<L: RigidBodyLagrangian>(&mut self, model: &L, h: f64, state: &RigidState) {
+        let d = self.degree;
+        if self.has_previous {
+            let end = self.previous.fixed_rows::<3>(3 * (d - 1)).into_owned();
+            let back = exp(&end).transpose();
+            for nu in 1..=d {
+                let mut zeta = Vector3::zeros();
+                for j in 1..=d {
+                    zeta += self.previous.fixed_rows::<3>(3 * (j - 1)) * self.extrapolation[(nu, j)];
+                }
+                let guess = log(&(back * exp(&zeta)));
+                self.unknowns.fixed_rows_mut::<3>(3 * (nu - 1)).copy_from(&guess);
+            }
+        } else {
+            let omega = model
+                .velocity(&state.r, &state.momentum, &self.velocity_guess)
+                .unwrap_or_else(|_| Vector3::zeros());
+            self.velocity_guess = omega;
+            for nu in 1..=d {
+                let guess = omega * (0.5 * h * (self.nodes[nu] + 1.0));
+                self.unknowns.fixed_rows_mut::<3>(3 * (nu - 1)).copy_from(&guess);
+            }
+        }
+    }
+}
+
+/// Borrowed tables of one step.
+struct Tables<'a> {
+    degree: usize,
+    reduced: bool,
+    weights: &'a [f64],
+    values: &'a DMatrix<f64>,
+    derivatives: &'a DMatrix<f64>,
+}
+
+impl Tables<'_> {
+    /// a = ξ(τ_μ) and b = ξ̇(τ_μ) for unknowns z.
+    fn point(&self, mu: usize, z: &DVector<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let mut a = Vector3::zeros();
+        let mut b = Vector3::zeros();
+        for nu in 1..=self.degree {
+            let node = z.fixed_rows::<3>(3 * (nu - 1));
+            a += node * self.values[(mu, nu)];
+            b += node * self.derivatives[(mu, nu)];
+        }
+        (a, b)
+    }
+
+    /// g_R = Σ_μ W_μ ∂ℓ/∂η at η = 0 (zero in the reduced form).
+    fn torque_sum<L: RigidBodyLagrangian>(
+        &self,
+        model: &L,
+        r: &Matrix3<f64>,
+        z: &DVector<f64>,
+    ) -> Vector3<f64> {
+        let mut sum = Vector3::zeros();
+        if self.reduced {
+            return sum;
+        }
+        for (mu, w) in self.weights.iter().enumerate() {
+            let (a, b) = self.point(mu, z);
+            let rotation = r * exp(&a);
+            let omega = body_velocity(&a, &b);
+            let (_, g) = gradient(
+                |eta: Vector3<DualSVec64<3>>| {
+                    let moved = rotation.map(DualVec::from_re) * exp(&eta);
+                    model.lagrangian(&moved, &omega.map(DualVec::from_re))
+                },
+                &Vector3::zeros(),
+            );
+            // d/dη L(R_k exp(η) E, Ω) = E · (d/dζ L(R_k E exp(ζ), Ω)), ζ = Eᵀη.
+            sum += exp(&a) * g * *w;
+        }
+        sum
+    }
+}
+
+/// ℓ(η, a, b) and its first two derivatives at (0, a, b).
+fn point_derivatives<L: RigidBodyLagrangian>(
+    model: &L,
+    reduced: bool,
+    r: &Matrix3<f64>,
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+) -> PointDerivatives {
+    if reduced {
+        type D6 = Dual2Vec<f64, Const<6>>;
+        let x = SVector::<f64, 6>::new(a[0], a[1], a[2], b[0], b[1], b[2]);
+        let identity = Matrix3::<D6>::identity();
+        let (_, g, h) = hessian(
+            |y: SVector<D6, 6>| {
+                let a = y.fixed_rows::<3>(0).into_owned();
+                let b = y.fixed_rows::<3>(3).into_owned();
+                model.lagrangian(&identity, &body_velocity(&a, &b))
+            },
+            &x,
+        );
+        let mut out = PointDerivatives::zeros();
+        out.gradient.fixed_rows_mut::<6>(3).copy_from(&g);
+        out.hessian.fixed_view_mut::<6, 6>(3, 3).copy_from(&h);
+        out
+    } else {
+        type D9 = Dual2Vec<f64, Const<9>>;
+        let x = SVector::<f64, 9>::from([0.0, 0.0, 0.0, a[0], a[1], a[2], b[0], b[1], b[2]]);
+        let base = r.map(D9::from_re);
+        let (_, gradient, hessian) = hessian(
+            |y: SVector<D9, 9>| {
+                let eta = y.fixed_rows::<3>(0).into_owned();
+                let a = y.fixed_rows::<3>(3).into_owned();
+                let b = y.fixed_rows::<3>(6).into_owned();
+                let rotation = base * exp(&eta) * exp(&a);
+                model.lagrangian(&rotation, &body_velocity(&a, &b))
+            },
+            &x,
+        );
+        PointDerivatives { gradient, hessian }
+    }
+}
+
+/// Residual of the internal-stage conditions and of the discrete Euler–Lagrange equation in
+/// trivialised form, and its Jacobian in ξ¹…ξᵈ.
+#[allow(clippy::too_many_arguments)]
+fn assemble<L: RigidBodyLagrangian>(
+    model: &L,
+    tables: &Tables<'_>,
+    points: &mut [PointDerivatives],
+    torque_rates: &mut [Matrix3<f64>],
+    state: &RigidState,
+    z: &DVector<f64>,
+    jacobian_out: &mut DMatrix<f64>,
+    residual: &mut DVector<f64>,
+) {
+    let d = tables.degree;
+    for (mu, point) in points.iter_mut().enumerate() {
+        let (a, b) = tables.point(mu, z);
+        *point = point_derivatives(model, tables.reduced, &state.r, &a, &b);
+    }
+    residual.fill(0.0);
+    jacobian_out.fill(0.0);
+    let mut torque = Vector3::zeros();
+    for rate in torque_rates.iter_mut() {
+        *rate = Matrix3::zeros();
+    }
+    for (mu, p) in points.iter().enumerate() {
+        let w = tables.weights[mu];
+        let g = &p.gradient;
+        let hh = &p.hessian;
+        let la = g.fixed_rows::<3>(3);
+        let lb = g.fixed_rows::<3>(6);
+        torque += g.fixed_rows::<3>(0) * w;
+        let haa = hh.fixed_view::<3, 3>(3, 3);
+        let hab = hh.fixed_view::<3, 3>(3, 6);
+        let hba = hh.fixed_view::<3, 3>(6, 3);
+        let hbb = hh.fixed_view::<3, 3>(6, 6);
+        let hea = hh.fixed_view::<3, 3>(0, 3);
+        let heb = hh.fixed_view::<3, 3>(0, 6);
+        for nu in 1..=d {
+            let (l, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+            let mut row = residual.fixed_rows_mut::<3>(3 * (nu - 1));
+            row += (la * l + lb * c) * w;
+        }
+        for j in 1..=d {
+            let (lj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
+            let from_a: Matrix3<f64> = (haa * lj + hab * cj) * w;
+            let from_b: Matrix3<f64> = (hba * lj + hbb * cj) * w;
+            for nu in 1..=d {
+                let (l, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+                let mut target = jacobian_out.fixed_view_mut::<3, 3>(3 * (nu - 1), 3 * (j - 1));
+                target += from_a * l + from_b * c;
+            }
+            if !tables.reduced {
+                torque_rates[j - 1] += (hea * lj + heb * cj) * w;
+            }
+        }
+    }
+    // Last block: P − dexp_{−ξᵈ}(μ_k + g_R).
+    let end = z.fixed_rows::<3>(3 * (d - 1)).into_owned();
+    let load = state.momentum + torque;
+    let (pulled, pulled_rate) = jacobian(
+        |x: Vector3<DualSVec64<3>>| body_velocity(&x, &load.map(DualVec::from_re)),
+        &end,
+    );
+    let mut row = residual.fixed_rows_mut::<3>(3 * (d - 1));
+    row -= pulled;
+    let map = super::so3::dexp(&(-end));
+    for (j, rate) in torque_rates.iter().enumerate() {
+        let mut target = jacobian_out.fixed_view_mut::<3, 3>(3 * (d - 1), 3 * j);
+        if !tables.reduced {
+            target -= map * rate;
+        }
+        if j + 1 == d {
+            target -= pulled_rate;
+        }
+    }
+}
