@@ -8,16 +8,44 @@
 //! far below the errors measured).
 
 use nalgebra::{SMatrix, SVector};
-use svi::lie_group::so3::{exp, log, orthogonality_error};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::ops::ControlFlow;
+use svi::lie_group::so3::{dexp, dexp_inverse, exp, log, orthogonality_error};
 use svi::lie_group::{
-    AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyDefaults,
-    RigidBodyIntegrator, RigidBodyLagrangian, RigidEnergyError, RigidInitial, RigidInvariantError,
-    RigidObserver, RigidPoint, RigidState,
+    AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyDefaults, RigidBodyExt,
+    RigidBodyIntegrator, RigidBodyLagrangian, RigidEnergyError, RigidInitial,
+    RigidInvariantError, RigidObserver, RigidPoint, RigidState, RigidTrajectory,
 };
 use svi::observer::Every;
 use svi::verify::observed_order;
+use svi::{Error, Scalar};
 use svi_models::{FreeRigidBody, HeavyTop, Pendulum3d};
-use std::ops::ControlFlow;
+
+/// Counts the allocations of each thread (the harness's other threads do not disturb a
+/// test's count).
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, size: usize) -> *mut u8 {
+        ALLOCATIONS.with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(ptr, layout, size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
 
 type Matrix3 = SMatrix<f64, 3, 3>;
 type Vector3 = SVector<f64, 3>;
@@ -138,31 +166,446 @@ fn error_at<L: RigidBodyLagrangian + Clone>(
     attitude.max(momentum)
 }
 
-#[test]
-fn explore() {
-    let model = Pendulum3d::default();
-    let (r0, omega0) = model.initial_state();
-    let body = pendulum_body(&model);
-    let p0 = Vector3::from_fn(|i, _| body.inertia[i] * omega0[i]);
+/// Convergence order against the RK4 reference at T = 1, for a step ladder.
+fn order<L: RigidBodyLagrangian + Clone>(
+    model: &L,
+    body: &Body,
+    r0: &Matrix3,
+    omega0: &Vector3,
+    method: LieSvi,
+    steps: &[f64],
+) -> (f64, Vec<f64>) {
     let duration = 1.0;
-    let exact = reference(&body, &r0, &p0, duration, 200_000);
-    for (points, quadrature) in [(2, 1), (2, 2), (3, 2), (3, 3), (4, 3), (4, 4), (5, 5)] {
-        let steps = [0.2, 0.1, 0.05, 0.025];
-        let errors: Vec<f64> = steps
-            .iter()
-            .map(|&h| {
-                error_at(
-                    &model,
-                    LieSvi::new(points).with_quadrature(quadrature),
-                    &r0,
-                    &omega0,
-                    h,
-                    duration,
-                    &exact,
-                )
-            })
-            .collect();
-        let order = observed_order(&steps, &errors, 1e-12).unwrap_or(f64::NAN);
-        println!("{points} {quadrature}: {errors:?} order {order}");
+    let p0 = Vector3::from_fn(|i, _| body.inertia[i] * omega0[i]);
+    let exact = reference(body, r0, &p0, duration, 100_000);
+    let errors: Vec<f64> = steps
+        .iter()
+        .map(|&h| error_at(model, method.clone(), r0, omega0, h, duration, &exact))
+        .collect();
+    (observed_order(steps, &errors, 1e-12).unwrap(), errors)
+}
+
+#[test]
+fn observed_order_matches_the_declared_order() {
+    let steps = [0.2, 0.1, 0.05, 0.025];
+    let pendulum = Pendulum3d::default();
+    let (r0, omega0) = pendulum.initial_state();
+    let top = HeavyTop::default();
+    let (top_r0, _) = top.initial_state();
+    // A slower top than the default keeps the coarsest step in the asymptotic range.
+    let top_omega0 = Vector3::new(0.5, -0.3, 3.0);
+    let free = FreeRigidBody::default();
+    let (free_r0, free_omega0) = free.initial_state();
+    for (points, quadrature) in [(2, 1), (2, 2), (3, 2), (3, 3), (4, 3), (4, 4)] {
+        let method = LieSvi::new(points).with_quadrature(quadrature);
+        let declared = method.info().order as f64;
+        let (observed, errors) =
+            order(&pendulum, &pendulum_body(&pendulum), &r0, &omega0, method.clone(), &steps);
+        assert!(
+            (observed - declared).abs() < 0.3,
+            "3D pendulum, {points} points, {quadrature} Gauss points: observed {observed}, \
+             declared {declared}, errors {errors:?}"
+        );
+        let (observed, errors) =
+            order(&top, &top_body(&top), &top_r0, &top_omega0, method.clone(), &steps);
+        assert!(
+            (observed - declared).abs() < 0.3,
+            "heavy top, {points} points, {quadrature} Gauss points: observed {observed}, \
+             declared {declared}, errors {errors:?}"
+        );
+        let reduced = method.with_form(Form::Reduced);
+        let (observed, errors) =
+            order(&free, &free_body(&free), &free_r0, &free_omega0, reduced, &steps);
+        assert!(
+            (observed - declared).abs() < 0.3,
+            "free body (reduced), {points} points, {quadrature} Gauss points: observed \
+             {observed}, declared {declared}, errors {errors:?}"
+        );
+    }
+}
+
+/// Energy errors over the first and the second half of a run, to detect drift.
+#[derive(Default)]
+struct EnergyHalves {
+    steps: usize,
+    initial: Option<f64>,
+    first: f64,
+    second: f64,
+}
+
+impl<L: RigidBodyLagrangian> RigidObserver<L> for EnergyHalves {
+    fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()> {
+        let energy = model.energy(&point.r, &point.omega);
+        let initial = *self.initial.get_or_insert(energy);
+        let error = (energy - initial).abs();
+        if 2 * step <= self.steps {
+            self.first = self.first.max(error);
+        } else {
+            self.second = self.second.max(error);
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// 10⁵ steps: orthogonality, angular momentum, Casimir and energy of one run.
+fn long_run<L: svi_models::RigidZooModel>(model: L, method: LieSvi, h: f64) -> LongRun {
+    let (r0, omega0) = model.initial_state();
+    let steps = 100_000;
+    let mut observers = (
+        OrthogonalityError::default(),
+        AngularMomentumError::default(),
+        RigidInvariantError::default(),
+        EnergyHalves {
+            steps,
+            ..EnergyHalves::default()
+        },
+        RigidEnergyError::default(),
+    );
+    let run = RigidBodyIntegrator::new(model, method)
+        .run(
+            0.0,
+            RigidInitial::Velocity {
+                r: r0,
+                omega: omega0,
+            },
+            h,
+            h * steps as f64,
+            &mut observers,
+        )
+        .unwrap();
+    assert_eq!(run.statistics.steps, steps);
+    let (orthogonality, momentum, invariants, halves, energy) = observers;
+    assert_eq!(energy.max, halves.first.max(halves.second));
+    LongRun {
+        orthogonality: orthogonality_error(&run.state.r),
+        orthogonality_max: orthogonality.max,
+        momentum: momentum.relative(),
+        invariants: invariants.max,
+        energy_first: halves.first,
+        energy_second: halves.second,
+    }
+}
+
+#[derive(Debug)]
+struct LongRun {
+    orthogonality: f64,
+    orthogonality_max: f64,
+    momentum: f64,
+    invariants: f64,
+    energy_first: f64,
+    energy_second: f64,
+}
+
+impl LongRun {
+    fn check(&self, name: &str) {
+        assert!(self.orthogonality <= 1e-13, "{name}: {self:?}");
+        assert!(self.orthogonality_max <= 1e-13, "{name}: {self:?}");
+        assert!(self.momentum <= 1e-12, "{name}: {self:?}");
+        assert!(
+            self.energy_second <= 2.0 * self.energy_first,
+            "{name}: energy drifts: {self:?}"
+        );
+    }
+}
+
+#[test]
+fn free_rigid_body_over_a_hundred_thousand_steps() {
+    // Reduced (Euler–Poincaré) form, 2 CGL points and 1 Gauss point: the cheap
+    // configuration; T = 5000.
+    let result = long_run(
+        FreeRigidBody::default(),
+        LieSvi::new(2).with_quadrature(1).with_form(Form::Reduced),
+        0.05,
+    );
+    result.check("free rigid body");
+    // The Casimir ‖Π‖² = ‖π‖² is conserved to round-off as well.
+    assert!(result.invariants <= 1e-12 * 5.0, "{result:?}");
+    // Energy error of a second-order method with h = 0.05: small and bounded.
+    assert!(result.energy_first < 1e-3, "{result:?}");
+}
+
+#[test]
+fn heavy_top_over_a_hundred_thousand_steps() {
+    // Full form (the top is not G-invariant), 2 CGL points and 1 Gauss point, h = 0.01,
+    // T = 1000.
+    let result = long_run(HeavyTop::default(), LieSvi::new(2).with_quadrature(1), 0.01);
+    result.check("heavy top");
+    // Lagrange's integral Π₃ (symmetric top) too.
+    assert!(result.invariants <= 1e-12 * 5.0, "{result:?}");
+    assert!(result.energy_first < 1e-2, "{result:?}");
+}
+
+#[test]
+fn pendulum_3d_conserves_vertical_momentum_and_stays_orthogonal() {
+    let model = Pendulum3d::default();
+    let result = {
+        let (r0, omega0) = model.initial_state();
+        let mut observers = (
+            OrthogonalityError::default(),
+            AngularMomentumError::default(),
+            RigidEnergyError::default(),
+        );
+        RigidBodyIntegrator::new(model, LieSvi::new(3))
+            .run(
+                0.0,
+                RigidInitial::Velocity {
+                    r: r0,
+                    omega: omega0,
+                },
+                0.01,
+                100.0,
+                &mut observers,
+            )
+            .unwrap();
+        observers
+    };
+    assert!(result.0.max <= 1e-13, "{result:?}");
+    assert!(result.1.relative() <= 1e-12, "{result:?}");
+    assert!(result.2.max <= 1e-4, "{result:?}");
+}
+
+/// The one-step map in canonical coordinates (η, p) about a base state: R = R_k exp(η),
+/// μ = dexp_η⁻¹ p (p = dexp_{−η}ᵀ μ = dexp_η μ is the momentum conjugate to η); the output
+/// is charted about the image of the base state the same way.
+fn step_in_chart<L: RigidBodyLagrangian + Clone>(
+    integrator: &RigidBodyIntegrator<L>,
+    base: &RigidState,
+    image: &RigidState,
+    h: f64,
+    x: &SVector<f64, 6>,
+) -> SVector<f64, 6> {
+    let eta = x.fixed_rows::<3>(0).into_owned();
+    let p = x.fixed_rows::<3>(3).into_owned();
+    let state = RigidState {
+        r: base.r * exp(&eta),
+        momentum: dexp_inverse(&eta) * p,
+    };
+    let (next, _) = integrator.step(&state, h).unwrap();
+    let eta_next = log(&(image.r.transpose() * next.r));
+    let p_next = dexp(&eta_next) * next.momentum;
+    let mut out = SVector::<f64, 6>::zeros();
+    out.fixed_rows_mut::<3>(0).copy_from(&eta_next);
+    out.fixed_rows_mut::<3>(3).copy_from(&p_next);
+    out
+}
+
+/// ‖ΦᵀJΦ − J‖_max of the one-step map, Φ by fourth-order central differences in (η, p).
+fn symplecticity_error<L: RigidBodyLagrangian + Clone>(
+    model: L,
+    method: LieSvi,
+    state: &RigidState,
+    h: f64,
+) -> f64 {
+    let integrator = RigidBodyIntegrator::new(model, method);
+    let (image, _) = integrator.step(state, h).unwrap();
+    let mut phi = SMatrix::<f64, 6, 6>::zeros();
+    for j in 0..6 {
+        // Steps of 10⁻³ relative to the size of each coordinate.
+        let e = 1e-3 * if j < 3 { 1.0 } else { state.momentum.amax().max(1.0) };
+        let f = |t: f64| {
+            let mut x = SVector::<f64, 6>::zeros();
+            x.fixed_rows_mut::<3>(3).copy_from(&state.momentum);
+            x[j] += t;
+            step_in_chart(&integrator, state, &image, h, &x)
+        };
+        let column = (f(-2.0 * e) - f(-e) * 8.0 + f(e) * 8.0 - f(2.0 * e)) / (12.0 * e);
+        phi.set_column(j, &column);
+    }
+    let mut j = SMatrix::<f64, 6, 6>::zeros();
+    for i in 0..3 {
+        j[(i, 3 + i)] = 1.0;
+        j[(3 + i, i)] = -1.0;
+    }
+    (phi.transpose() * j * phi - j).amax()
+}
+
+#[test]
+fn the_one_step_map_is_symplectic_on_the_cotangent_bundle() {
+    let top = HeavyTop::default();
+    let (r0, omega0) = top.initial_state();
+    let top_state = RigidState {
+        r: r0,
+        momentum: top.momentum(&r0, &Vector3::new(0.7, -0.4, omega0[2] * 0.3)),
+    };
+    let pendulum = Pendulum3d::default();
+    let (r0, omega0) = pendulum.initial_state();
+    let pendulum_state = RigidState {
+        r: r0,
+        momentum: pendulum.momentum(&r0, &omega0),
+    };
+    let free = FreeRigidBody::default();
+    let (r0, omega0) = free.initial_state();
+    let free_state = RigidState {
+        r: exp(&Vector3::new(0.4, 0.1, -0.9)) * r0,
+        momentum: free.momentum(&r0, &omega0),
+    };
+    for (points, quadrature) in [(2, 1), (3, 2), (4, 4)] {
+        let method = LieSvi::new(points).with_quadrature(quadrature);
+        for h in [0.05, 0.2] {
+            let errors = [
+                symplecticity_error(top, method.clone(), &top_state, h),
+                symplecticity_error(pendulum, method.clone(), &pendulum_state, h),
+                symplecticity_error(free, method.clone(), &free_state, h),
+                symplecticity_error(free, method.clone().with_form(Form::Reduced), &free_state, h),
+            ];
+            for error in errors {
+                assert!(error <= 1e-11, "{points} points, {quadrature} Gauss, h = {h}: {errors:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn a_non_canonical_chart_is_not_symplectic() {
+    // Control for the test above: in (η, μ) coordinates (μ not transformed by dexp) the
+    // same map is not symplectic for the constant J, so the test does detect the wrong
+    // form.
+    let pendulum = Pendulum3d::default();
+    let (r0, omega0) = pendulum.initial_state();
+    let state = RigidState {
+        r: r0,
+        momentum: pendulum.momentum(&r0, &omega0),
+    };
+    let integrator = RigidBodyIntegrator::new(pendulum, LieSvi::new(3));
+    let h = 0.2;
+    let (image, _) = integrator.step(&state, h).unwrap();
+    let map = |x: &SVector<f64, 6>| {
+        let eta = x.fixed_rows::<3>(0).into_owned();
+        let s = RigidState {
+            r: state.r * exp(&eta),
+            momentum: x.fixed_rows::<3>(3).into_owned(),
+        };
+        let (next, _) = integrator.step(&s, h).unwrap();
+        let mut out = SVector::<f64, 6>::zeros();
+        out.fixed_rows_mut::<3>(0).copy_from(&log(&(image.r.transpose() * next.r)));
+        out.fixed_rows_mut::<3>(3).copy_from(&next.momentum);
+        out
+    };
+    let mut phi = SMatrix::<f64, 6, 6>::zeros();
+    for j in 0..6 {
+        let e = 1e-4;
+        let mut x = SVector::<f64, 6>::zeros();
+        x.fixed_rows_mut::<3>(3).copy_from(&state.momentum);
+        let mut plus = x;
+        plus[j] += e;
+        let mut minus = x;
+        minus[j] -= e;
+        phi.set_column(j, &((map(&plus) - map(&minus)) / (2.0 * e)));
+    }
+    let mut j = SMatrix::<f64, 6, 6>::zeros();
+    for i in 0..3 {
+        j[(i, 3 + i)] = 1.0;
+        j[(3 + i, i)] = -1.0;
+    }
+    assert!((phi.transpose() * j * phi - j).amax() > 1e-3);
+}
+
+#[test]
+fn reduced_form_agrees_with_the_full_form_on_the_free_rigid_body() {
+    let model = FreeRigidBody::default();
+    let (r0, omega0) = model.initial_state();
+    let initial = RigidInitial::Velocity {
+        r: exp(&Vector3::new(0.2, -0.5, 0.3)) * r0,
+        omega: omega0,
+    };
+    for (points, quadrature) in [(2, 1), (3, 3), (5, 4)] {
+        let method = LieSvi::new(points).with_quadrature(quadrature);
+        let mut full_trajectory = Every::new(100, RigidTrajectory::new());
+        let mut reduced_trajectory = Every::new(100, RigidTrajectory::new());
+        RigidBodyIntegrator::new(model, method.clone())
+            .run(0.0, initial, 0.1, 100.0, &mut full_trajectory)
+            .unwrap();
+        RigidBodyIntegrator::new(model, method.with_form(Form::Reduced))
+            .run(0.0, initial, 0.1, 100.0, &mut reduced_trajectory)
+            .unwrap();
+        let (full, reduced) = (full_trajectory.inner.points, reduced_trajectory.inner.points);
+        assert_eq!(full.len(), 11);
+        for (a, b) in full.iter().zip(&reduced) {
+            assert!((a.r - b.r).amax() <= 1e-12, "{points} points: {a:?} vs {b:?}");
+            assert!((a.momentum - b.momentum).amax() <= 1e-12 * a.momentum.amax());
+            assert!((a.omega - b.omega).amax() <= 1e-12 * a.omega.amax());
+        }
+    }
+}
+
+#[test]
+fn the_step_loop_allocates_nothing() {
+    let allocations = |steps: usize| {
+        let model = HeavyTop::default();
+        let (r, omega) = model.initial_state();
+        let integrator = RigidBodyIntegrator::new(model, LieSvi::new(3));
+        let before = ALLOCATIONS.with(Cell::get);
+        integrator
+            .run(0.0, RigidInitial::Velocity { r, omega }, 0.01, 0.01 * steps as f64, &mut (
+                OrthogonalityError::default(),
+                RigidEnergyError::default(),
+            ))
+            .unwrap();
+        ALLOCATIONS.with(Cell::get) - before
+    };
+    assert_eq!(allocations(20), allocations(500));
+}
+
+/// Declares G-invariance but depends on R.
+struct Liar;
+impl RigidBodyLagrangian for Liar {
+    const G_INVARIANT: bool = true;
+    fn lagrangian<D: Scalar>(&self, r: &SMatrix<D, 3, 3>, w: &SVector<D, 3>) -> D {
+        w.dot(w) * 0.5 - r[(2, 2)]
+    }
+}
+
+#[test]
+fn bad_input_gives_typed_errors() {
+    let model = HeavyTop::default();
+    let (r, omega) = model.initial_state();
+    let initial = RigidInitial::Velocity { r, omega };
+    let run = |method: LieSvi, initial: RigidInitial, h: f64, t_end: f64| {
+        RigidBodyIntegrator::new(model, method).run(0.0, initial, h, t_end, &mut ())
+    };
+    let name = |result: Result<svi::lie_group::RigidRun, Error>| match result {
+        Err(Error::InvalidParameter { name, .. }) => name,
+        other => panic!("expected an invalid parameter, got {other:?}"),
+    };
+    assert_eq!(name(run(LieSvi::new(1), initial, 0.01, 1.0)), "points");
+    assert_eq!(name(run(LieSvi::new(65), initial, 0.01, 1.0)), "points");
+    assert_eq!(name(run(LieSvi::new(3).with_quadrature(0), initial, 0.01, 1.0)), "quadrature");
+    assert_eq!(name(run(LieSvi::new(3).with_max_iterations(0), initial, 0.01, 1.0)), "max_iterations");
+    assert_eq!(name(run(LieSvi::new(3).with_form(Form::Reduced), initial, 0.01, 1.0)), "form");
+    assert_eq!(name(run(LieSvi::new(3), initial, 0.0, 1.0)), "h");
+    assert_eq!(name(run(LieSvi::new(3), initial, -0.1, 1.0)), "h");
+    assert_eq!(name(run(LieSvi::new(3), initial, f64::NAN, 1.0)), "h");
+    assert_eq!(name(run(LieSvi::new(3), initial, 0.01, 0.0)), "t_end");
+    assert_eq!(name(run(LieSvi::new(3), initial, 0.01, f64::INFINITY)), "t_end");
+    let skewed = RigidInitial::Velocity {
+        r: r * 1.001,
+        omega,
+    };
+    assert_eq!(name(run(LieSvi::new(3), skewed, 0.01, 1.0)), "initial attitude");
+    let reflected = RigidInitial::Velocity { r: -r, omega };
+    assert_eq!(name(run(LieSvi::new(3), reflected, 0.01, 1.0)), "initial attitude");
+    let not_finite = RigidInitial::Velocity {
+        r,
+        omega: Vector3::new(0.0, f64::NAN, 1.0),
+    };
+    assert_eq!(name(run(LieSvi::new(3), not_finite, 0.01, 1.0)), "initial angular velocity[1]");
+    let mut r_nan = r;
+    r_nan[(1, 1)] = f64::NAN;
+    let not_finite = RigidInitial::Momentum {
+        r: r_nan,
+        momentum: omega,
+    };
+    assert_eq!(name(run(LieSvi::new(3), not_finite, 0.01, 1.0)), "initial attitude[4]");
+    // A false G-invariance declaration is caught at the initial state.
+    let liar = RigidBodyIntegrator::new(Liar, LieSvi::new(3).with_form(Form::Reduced));
+    let result = liar.run(0.0, RigidInitial::Velocity { r, omega }, 0.01, 1.0, &mut ());
+    assert_eq!(name(result), "G_INVARIANT");
+    // One Newton iteration is not enough: a typed non-convergence with step context.
+    match run(LieSvi::new(3).with_max_iterations(1), initial, 0.1, 1.0) {
+        Err(Error::NonConvergence { step, iterations, .. }) => {
+            assert_eq!(step, 0);
+            assert_eq!(iterations, 1);
+        }
+        other => panic!("expected non-convergence, got {other:?}"),
     }
 }
