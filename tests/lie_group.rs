@@ -201,6 +201,7 @@ fn observed_order_matches_the_declared_order() {
         let declared = method.info().order as f64;
         let (observed, errors) =
             order(&pendulum, &pendulum_body(&pendulum), &r0, &omega0, method.clone(), &steps);
+        eprintln!("3D pendulum ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}");
         assert!(
             (observed - declared).abs() < 0.3,
             "3D pendulum, {points} points, {quadrature} Gauss points: observed {observed}, \
@@ -208,6 +209,7 @@ fn observed_order_matches_the_declared_order() {
         );
         let (observed, errors) =
             order(&top, &top_body(&top), &top_r0, &top_omega0, method.clone(), &steps);
+        eprintln!("heavy top ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}");
         assert!(
             (observed - declared).abs() < 0.3,
             "heavy top, {points} points, {quadrature} Gauss points: observed {observed}, \
@@ -216,6 +218,7 @@ fn observed_order_matches_the_declared_order() {
         let reduced = method.with_form(Form::Reduced);
         let (observed, errors) =
             order(&free, &free_body(&free), &free_r0, &free_omega0, reduced, &steps);
+        eprintln!("free body reduced ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}");
         assert!(
             (observed - declared).abs() < 0.3,
             "free body (reduced), {points} points, {quadrature} Gauss points: observed \
@@ -298,6 +301,7 @@ struct LongRun {
 
 impl LongRun {
     fn check(&self, name: &str) {
+        eprintln!("{name}: {self:?}");
         assert!(self.orthogonality <= 1e-13, "{name}: {self:?}");
         assert!(self.orthogonality_max <= 1e-13, "{name}: {self:?}");
         assert!(self.momentum <= 1e-12, "{name}: {self:?}");
@@ -448,6 +452,7 @@ fn the_one_step_map_is_symplectic_on_the_cotangent_bundle() {
                 symplecticity_error(free, method.clone(), &free_state, h),
                 symplecticity_error(free, method.clone().with_form(Form::Reduced), &free_state, h),
             ];
+            eprintln!("symplecticity ({points}, {quadrature}), h = {h}: {errors:?}");
             for error in errors {
                 assert!(error <= 1e-11, "{points} points, {quadrature} Gauss, h = {h}: {errors:?}");
             }
