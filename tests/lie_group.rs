@@ -14,8 +14,8 @@ use std::ops::ControlFlow;
 use svi::lie_group::so3::{dexp, dexp_inverse, exp, log, orthogonality_error};
 use svi::lie_group::{
     AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyDefaults, RigidBodyExt,
-    RigidBodyIntegrator, RigidBodyLagrangian, RigidEnergyError, RigidInitial,
-    RigidInvariantError, RigidObserver, RigidPoint, RigidState, RigidTrajectory,
+    RigidBodyIntegrator, RigidBodyLagrangian, RigidEnergyError, RigidInitial, RigidInvariantError,
+    RigidObserver, RigidPoint, RigidState, RigidTrajectory,
 };
 use svi::observer::Every;
 use svi::verify::observed_order;
@@ -119,12 +119,23 @@ fn rate(body: &Body, q: &Quaternion, momentum: &Vector3) -> (Quaternion, Vector3
 }
 
 /// Classical RK4 from (R₀, Π₀) over `duration` with `steps` steps.
-fn reference(body: &Body, r0: &Matrix3, p0: &Vector3, duration: f64, steps: usize) -> (Matrix3, Vector3) {
+fn reference(
+    body: &Body,
+    r0: &Matrix3,
+    p0: &Vector3,
+    duration: f64,
+    steps: usize,
+) -> (Matrix3, Vector3) {
     let mut q = svi::lie_group::quaternion(r0);
     let mut p = *p0;
     let h = duration / steps as f64;
     let add = |q: &Quaternion, dq: &Quaternion, s: f64| -> Quaternion {
-        [q[0] + s * dq[0], q[1] + s * dq[1], q[2] + s * dq[2], q[3] + s * dq[3]]
+        [
+            q[0] + s * dq[0],
+            q[1] + s * dq[1],
+            q[2] + s * dq[2],
+            q[3] + s * dq[3],
+        ]
     };
     for _ in 0..steps {
         let (k1q, k1p) = rate(body, &q, &p);
@@ -199,26 +210,50 @@ fn observed_order_matches_the_declared_order() {
     for (points, quadrature) in [(2, 1), (2, 2), (3, 2), (3, 3), (4, 3), (4, 4)] {
         let method = LieSvi::new(points).with_quadrature(quadrature);
         let declared = method.info().order as f64;
-        let (observed, errors) =
-            order(&pendulum, &pendulum_body(&pendulum), &r0, &omega0, method.clone(), &steps);
-        eprintln!("3D pendulum ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}");
+        let (observed, errors) = order(
+            &pendulum,
+            &pendulum_body(&pendulum),
+            &r0,
+            &omega0,
+            method.clone(),
+            &steps,
+        );
+        eprintln!(
+            "3D pendulum ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}"
+        );
         assert!(
             (observed - declared).abs() < 0.3,
             "3D pendulum, {points} points, {quadrature} Gauss points: observed {observed}, \
              declared {declared}, errors {errors:?}"
         );
-        let (observed, errors) =
-            order(&top, &top_body(&top), &top_r0, &top_omega0, method.clone(), &steps);
-        eprintln!("heavy top ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}");
+        let (observed, errors) = order(
+            &top,
+            &top_body(&top),
+            &top_r0,
+            &top_omega0,
+            method.clone(),
+            &steps,
+        );
+        eprintln!(
+            "heavy top ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}"
+        );
         assert!(
             (observed - declared).abs() < 0.3,
             "heavy top, {points} points, {quadrature} Gauss points: observed {observed}, \
              declared {declared}, errors {errors:?}"
         );
         let reduced = method.with_form(Form::Reduced);
-        let (observed, errors) =
-            order(&free, &free_body(&free), &free_r0, &free_omega0, reduced, &steps);
-        eprintln!("free body reduced ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}");
+        let (observed, errors) = order(
+            &free,
+            &free_body(&free),
+            &free_r0,
+            &free_omega0,
+            reduced,
+            &steps,
+        );
+        eprintln!(
+            "free body reduced ({points}, {quadrature}): order {observed:.3} (declared {declared}), errors {errors:?}"
+        );
         assert!(
             (observed - declared).abs() < 0.3,
             "free body (reduced), {points} points, {quadrature} Gauss points: observed \
@@ -405,7 +440,12 @@ fn symplecticity_error<L: RigidBodyLagrangian + Clone>(
     let mut phi = SMatrix::<f64, 6, 6>::zeros();
     for j in 0..6 {
         // Steps of 10⁻³ relative to the size of each coordinate.
-        let e = 1e-3 * if j < 3 { 1.0 } else { state.momentum.amax().max(1.0) };
+        let e = 1e-3
+            * if j < 3 {
+                1.0
+            } else {
+                state.momentum.amax().max(1.0)
+            };
         let f = |t: f64| {
             let mut x = SVector::<f64, 6>::zeros();
             x.fixed_rows_mut::<3>(3).copy_from(&state.momentum);
@@ -450,11 +490,19 @@ fn the_one_step_map_is_symplectic_on_the_cotangent_bundle() {
                 symplecticity_error(top, method.clone(), &top_state, h),
                 symplecticity_error(pendulum, method.clone(), &pendulum_state, h),
                 symplecticity_error(free, method.clone(), &free_state, h),
-                symplecticity_error(free, method.clone().with_form(Form::Reduced), &free_state, h),
+                symplecticity_error(
+                    free,
+                    method.clone().with_form(Form::Reduced),
+                    &free_state,
+                    h,
+                ),
             ];
             eprintln!("symplecticity ({points}, {quadrature}), h = {h}: {errors:?}");
             for error in errors {
-                assert!(error <= 1e-11, "{points} points, {quadrature} Gauss, h = {h}: {errors:?}");
+                assert!(
+                    error <= 1e-11,
+                    "{points} points, {quadrature} Gauss, h = {h}: {errors:?}"
+                );
             }
         }
     }
@@ -482,7 +530,8 @@ fn a_non_canonical_chart_is_not_symplectic() {
         };
         let (next, _) = integrator.step(&s, h).unwrap();
         let mut out = SVector::<f64, 6>::zeros();
-        out.fixed_rows_mut::<3>(0).copy_from(&log(&(image.r.transpose() * next.r)));
+        out.fixed_rows_mut::<3>(0)
+            .copy_from(&log(&(image.r.transpose() * next.r)));
         out.fixed_rows_mut::<3>(3).copy_from(&next.momentum);
         out
     };
@@ -523,10 +572,16 @@ fn reduced_form_agrees_with_the_full_form_on_the_free_rigid_body() {
         RigidBodyIntegrator::new(model, method.with_form(Form::Reduced))
             .run(0.0, initial, 0.1, 100.0, &mut reduced_trajectory)
             .unwrap();
-        let (full, reduced) = (full_trajectory.inner.points, reduced_trajectory.inner.points);
+        let (full, reduced) = (
+            full_trajectory.inner.points,
+            reduced_trajectory.inner.points,
+        );
         assert_eq!(full.len(), 11);
         for (a, b) in full.iter().zip(&reduced) {
-            assert!((a.r - b.r).amax() <= 1e-12, "{points} points: {a:?} vs {b:?}");
+            assert!(
+                (a.r - b.r).amax() <= 1e-12,
+                "{points} points: {a:?} vs {b:?}"
+            );
             assert!((a.momentum - b.momentum).amax() <= 1e-12 * a.momentum.amax());
             assert!((a.omega - b.omega).amax() <= 1e-12 * a.omega.amax());
         }
@@ -541,10 +596,13 @@ fn the_step_loop_allocates_nothing() {
         let integrator = RigidBodyIntegrator::new(model, LieSvi::new(3));
         let before = ALLOCATIONS.with(Cell::get);
         integrator
-            .run(0.0, RigidInitial::Velocity { r, omega }, 0.01, 0.01 * steps as f64, &mut (
-                OrthogonalityError::default(),
-                RigidEnergyError::default(),
-            ))
+            .run(
+                0.0,
+                RigidInitial::Velocity { r, omega },
+                0.01,
+                0.01 * steps as f64,
+                &mut (OrthogonalityError::default(), RigidEnergyError::default()),
+            )
             .unwrap();
         ALLOCATIONS.with(Cell::get) - before
     };
@@ -574,40 +632,76 @@ fn bad_input_gives_typed_errors() {
     };
     assert_eq!(name(run(LieSvi::new(1), initial, 0.01, 1.0)), "points");
     assert_eq!(name(run(LieSvi::new(65), initial, 0.01, 1.0)), "points");
-    assert_eq!(name(run(LieSvi::new(3).with_quadrature(0), initial, 0.01, 1.0)), "quadrature");
-    assert_eq!(name(run(LieSvi::new(3).with_max_iterations(0), initial, 0.01, 1.0)), "max_iterations");
-    assert_eq!(name(run(LieSvi::new(3).with_form(Form::Reduced), initial, 0.01, 1.0)), "form");
+    assert_eq!(
+        name(run(LieSvi::new(3).with_quadrature(0), initial, 0.01, 1.0)),
+        "quadrature"
+    );
+    assert_eq!(
+        name(run(
+            LieSvi::new(3).with_max_iterations(0),
+            initial,
+            0.01,
+            1.0
+        )),
+        "max_iterations"
+    );
+    assert_eq!(
+        name(run(
+            LieSvi::new(3).with_form(Form::Reduced),
+            initial,
+            0.01,
+            1.0
+        )),
+        "form"
+    );
     assert_eq!(name(run(LieSvi::new(3), initial, 0.0, 1.0)), "h");
     assert_eq!(name(run(LieSvi::new(3), initial, -0.1, 1.0)), "h");
     assert_eq!(name(run(LieSvi::new(3), initial, f64::NAN, 1.0)), "h");
     assert_eq!(name(run(LieSvi::new(3), initial, 0.01, 0.0)), "t_end");
-    assert_eq!(name(run(LieSvi::new(3), initial, 0.01, f64::INFINITY)), "t_end");
+    assert_eq!(
+        name(run(LieSvi::new(3), initial, 0.01, f64::INFINITY)),
+        "t_end"
+    );
     let skewed = RigidInitial::Velocity {
         r: r * 1.001,
         omega,
     };
-    assert_eq!(name(run(LieSvi::new(3), skewed, 0.01, 1.0)), "initial attitude");
+    assert_eq!(
+        name(run(LieSvi::new(3), skewed, 0.01, 1.0)),
+        "initial attitude"
+    );
     let reflected = RigidInitial::Velocity { r: -r, omega };
-    assert_eq!(name(run(LieSvi::new(3), reflected, 0.01, 1.0)), "initial attitude");
+    assert_eq!(
+        name(run(LieSvi::new(3), reflected, 0.01, 1.0)),
+        "initial attitude"
+    );
     let not_finite = RigidInitial::Velocity {
         r,
         omega: Vector3::new(0.0, f64::NAN, 1.0),
     };
-    assert_eq!(name(run(LieSvi::new(3), not_finite, 0.01, 1.0)), "initial angular velocity[1]");
+    assert_eq!(
+        name(run(LieSvi::new(3), not_finite, 0.01, 1.0)),
+        "initial angular velocity[1]"
+    );
     let mut r_nan = r;
     r_nan[(1, 1)] = f64::NAN;
     let not_finite = RigidInitial::Momentum {
         r: r_nan,
         momentum: omega,
     };
-    assert_eq!(name(run(LieSvi::new(3), not_finite, 0.01, 1.0)), "initial attitude[4]");
+    assert_eq!(
+        name(run(LieSvi::new(3), not_finite, 0.01, 1.0)),
+        "initial attitude[4]"
+    );
     // A false G-invariance declaration is caught at the initial state.
     let liar = RigidBodyIntegrator::new(Liar, LieSvi::new(3).with_form(Form::Reduced));
     let result = liar.run(0.0, RigidInitial::Velocity { r, omega }, 0.01, 1.0, &mut ());
     assert_eq!(name(result), "G_INVARIANT");
     // One Newton iteration is not enough: a typed non-convergence with step context.
     match run(LieSvi::new(3).with_max_iterations(1), initial, 0.1, 1.0) {
-        Err(Error::NonConvergence { step, iterations, .. }) => {
+        Err(Error::NonConvergence {
+            step, iterations, ..
+        }) => {
             assert_eq!(step, 0);
             assert_eq!(iterations, 1);
         }

@@ -393,7 +393,9 @@ impl RigidModelVisitor for RunRigid<'_> {
         let model = integrator.model();
         let every = scene.output.every.unwrap_or(1);
         let mut observers = (
-            scene.wants(Diagnostic::Energy).then(RigidEnergyError::default),
+            scene
+                .wants(Diagnostic::Energy)
+                .then(RigidEnergyError::default),
             (scene.wants(Diagnostic::Momentum) && model.axis_count() > 0)
                 .then(AngularMomentumError::default),
             (model.invariant_count() > 0).then(RigidInvariantError::default),
@@ -458,7 +460,9 @@ impl RigidModelVisitor for RunRigid<'_> {
             energy_initial: model.energy(&first.r, &first.omega),
             energy_final: model.energy(&last.r, &last.omega),
             energy_error_max: energy.map(|e| e.max),
-            momentum_names: (0..model.axis_count()).map(|i| model.axis_name(i)).collect(),
+            momentum_names: (0..model.axis_count())
+                .map(|i| model.axis_name(i))
+                .collect(),
             momentum_error_max: momentum.as_ref().map(|m| m.max),
             momentum_error_relative: momentum.as_ref().map(AngularMomentumError::relative),
             invariant_names: (0..model.invariant_count())
@@ -702,7 +706,8 @@ pub fn list_lines() -> Vec<String> {
         lines.push(format!("  {name:<18}{description}"));
     }
     lines.push(String::new());
-    lines.push("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):".into());
+    lines
+        .push("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):".into());
     for name in RIGID_MODEL_NAMES {
         if let Some(line) = visit_rigid_model(name, DescribeRigid) {
             lines.push(line);
@@ -726,7 +731,9 @@ impl RigidModelVisitor for DescribeRigid {
         if M::G_INVARIANT {
             facts.push("G-invariant".to_string());
         }
-        let momenta: Vec<&str> = (0..model.axis_count()).map(|i| model.axis_name(i)).collect();
+        let momenta: Vec<&str> = (0..model.axis_count())
+            .map(|i| model.axis_name(i))
+            .collect();
         if !momenta.is_empty() {
             facts.push(format!("conserves {}", momenta.join(", ")));
         }

@@ -31,7 +31,10 @@ fn failure(args: &[&str]) -> String {
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert!(!output.status.success(), "svi {args:?} succeeded");
     assert!(output.stdout.is_empty(), "svi {args:?} printed to stdout");
-    assert!(!stderr.contains("panicked"), "svi {args:?} panicked: {stderr}");
+    assert!(
+        !stderr.contains("panicked"),
+        "svi {args:?} panicked: {stderr}"
+    );
     assert!(stderr.contains("error"), "svi {args:?}: {stderr}");
     stderr
 }
@@ -55,7 +58,8 @@ struct Scratch(PathBuf);
 
 impl Scratch {
     fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("svi-rigid-test-{}-{name}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("svi-rigid-test-{}-{name}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         Scratch(dir)
     }
@@ -79,10 +83,19 @@ fn rigid_body_scene_conserves_momentum_and_orthogonality() {
     assert_eq!(summary["order"], 4);
     assert_eq!(summary["symplectic"], true);
     assert_eq!(summary["steps"], 2000);
-    assert!(number(&summary, "orthogonality_error_max") <= 1e-13, "{summary}");
-    assert!(number(&summary, "momentum_error_relative") <= 1e-12, "{summary}");
+    assert!(
+        number(&summary, "orthogonality_error_max") <= 1e-13,
+        "{summary}"
+    );
+    assert!(
+        number(&summary, "momentum_error_relative") <= 1e-12,
+        "{summary}"
+    );
     assert!(number(&summary, "momentum_error_max") <= 1e-12, "{summary}");
-    assert!(number(&summary, "invariant_error_max") <= 1e-12, "{summary}");
+    assert!(
+        number(&summary, "invariant_error_max") <= 1e-12,
+        "{summary}"
+    );
     assert!(number(&summary, "energy_error_max") <= 1e-8, "{summary}");
     // Default state: Ω₀ = (1, 0.5, −0.4), I = diag(1, 2, 3), R₀ = I: π = (1, 1, −1.2).
     let spatial = vector(&summary, "spatial_momentum");
@@ -95,8 +108,24 @@ fn rigid_body_scene_conserves_momentum_and_orthogonality() {
 
 #[test]
 fn full_and_reduced_forms_agree_on_the_free_body() {
-    let full = json(&["run", "rigid-body", "--json", "--form", "full", "--t-end", "10"]);
-    let reduced = json(&["run", "rigid-body", "--json", "--form", "reduced", "--t-end", "10"]);
+    let full = json(&[
+        "run",
+        "rigid-body",
+        "--json",
+        "--form",
+        "full",
+        "--t-end",
+        "10",
+    ]);
+    let reduced = json(&[
+        "run",
+        "rigid-body",
+        "--json",
+        "--form",
+        "reduced",
+        "--t-end",
+        "10",
+    ]);
     assert_eq!(full["form"], "full");
     assert_eq!(reduced["form"], "reduced");
     for key in ["attitude", "momentum", "omega"] {
@@ -113,13 +142,27 @@ fn heavy_top_and_pendulum_conserve_vertical_momentum() {
         assert_eq!(summary["form"], "full");
         assert_eq!(summary["steps"], 500);
         assert_eq!(summary["momentum_names"][0], "vertical angular momentum");
-        assert!(number(&summary, "momentum_error_relative") <= 1e-12, "{summary}");
-        assert!(number(&summary, "orthogonality_error_max") <= 1e-13, "{summary}");
+        assert!(
+            number(&summary, "momentum_error_relative") <= 1e-12,
+            "{summary}"
+        );
+        assert!(
+            number(&summary, "orthogonality_error_max") <= 1e-13,
+            "{summary}"
+        );
         assert!(number(&summary, "energy_error_max") <= 1e-6, "{summary}");
     }
     // Higher order through the overrides.
     let summary = json(&[
-        "run", "heavy-top", "--json", "--t-end", "1", "--points", "4", "--quadrature", "4",
+        "run",
+        "heavy-top",
+        "--json",
+        "--t-end",
+        "1",
+        "--points",
+        "4",
+        "--quadrature",
+        "4",
     ]);
     assert_eq!(summary["order"], 6);
     assert_eq!(summary["quadrature"], 4);
@@ -188,7 +231,10 @@ t_end = 2.0
     assert_eq!(summary["parameters"]["l"], 0.3);
     assert_eq!(summary["order"], 2);
     assert_eq!(summary["steps"], 100);
-    assert!(number(&summary, "momentum_error_relative") <= 1e-12, "{summary}");
+    assert!(
+        number(&summary, "momentum_error_relative") <= 1e-12,
+        "{summary}"
+    );
     // Body momentum Π₃ = 4 with I₃ = 0.5: spin Ω₃ = 8 throughout.
     assert!((vector(&summary, "omega")[2] - 8.0).abs() < 1e-12);
 }
@@ -218,7 +264,11 @@ fn bad_rigid_scenes_fail_with_messages() {
     .unwrap();
     let stderr = failure(&["run", path.to_str().unwrap()]);
     assert!(stderr.contains("quaternion"), "{stderr}");
-    std::fs::write(&path, "model = \"pendulum-3d\"\n[initial]\nomega = [1.0, 2.0]\n").unwrap();
+    std::fs::write(
+        &path,
+        "model = \"pendulum-3d\"\n[initial]\nomega = [1.0, 2.0]\n",
+    )
+    .unwrap();
     let stderr = failure(&["run", path.to_str().unwrap()]);
     assert!(stderr.contains("omega"), "{stderr}");
 }

@@ -246,7 +246,13 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
             let step_size = if k + 1 == steps { t_end - t } else { h };
             let report = self
                 .method
-                .step(&self.model, &mut workspace, step_size, &state, &mut increment)
+                .step(
+                    &self.model,
+                    &mut workspace,
+                    step_size,
+                    &state,
+                    &mut increment,
+                )
                 .map_err(|failure| failure.at(k, t))?;
             compensated_add(
                 state.r.as_mut_slice(),

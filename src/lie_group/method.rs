@@ -51,17 +51,22 @@
 //!
 //! # Reduced form (§5.4)
 //! For a G-invariant Lagrangian ([`super::RigidBodyLagrangian::G_INVARIANT`]),
-//! L(R, Ω) = l(Ω) and ℓ(η, a, b) = l(dexp_{−a} b) does not depend on η or R_k: g_R = 0, the
-//! reduced discrete Lagrangian l_d(f_{k,k+1}) depends on f_{k,k+1} = R_k⁻¹R_{k+1} = F only,
-//! and the equations above become the higher-order discrete Euler–Poincaré equations
+//! L(R, Ω) = l(Ω) with the reduced Lagrangian l(Ω) = L(I, Ω), so ℓ(η, a, b) = l(dexp_{−a} b)
+//! does not depend on η or R_k: g_R = 0, and the reduced discrete Lagrangian
+//! l_d(f_{k,k+1}) = Σ_μ W_μ l(dexp_{−ξ(τ_μ)} ξ̇(τ_μ)) depends on f_{k,k+1} = R_k⁻¹R_{k+1} = F
+//! only. The equations above become the higher-order discrete Euler–Poincaré equations
 //!
-//! 0 = Σ_μ W_μ [l_ν ∂l/∂Ω dexp_{−a} + (2/h) l̇_ν ∂(l∘dexp_{−a} b)/∂b],  P = dexp_{−ξᵈ} μ_k,
-//! μ_{k+1} = Fᵀ μ_k,
+//! 0 = Σ_μ W_μ [l_ν(τ_μ) ∂ℓ/∂a + (2/h) l̇_ν(τ_μ) dexp_{−a}ᵀ ∂l/∂Ω]  (ν = 1, …, d − 1),
+//! P = dexp_{−ξᵈ} μ_k,  μ_{k+1} = Fᵀ μ_k,  R_{k+1} = R_k F,
 //!
-//! that is μ_{k+1} = Ad*_F μ_k with μ_k = dexp_{ξᵈ}⁻ᵀ l_d'·, the paper's
-//! "l_d'(f_{k−1,k}) TR Ad − l_d'(f_{k,k+1}) TR = 0" in left-trivialised form, with R
-//! reconstructed by R_{k+1} = R_k F. [`Form::Reduced`] evaluates only l(Ω) = L(I, Ω) (a
-//! 6-variable Hessian per quadrature point instead of 9).
+//! where a = ξ(τ_μ), ∂ℓ/∂b = dexp_{−a}ᵀ ∂l/∂Ω, and the stage equation's first term comes
+//! from the dependence of dexp_{−ξ(τ)} on the internal ξᵛ (the extracted text of §5.4 keeps
+//! only the l̇_ν term). μ_{k+1} = Fᵀμ_k = Ad*_{F} μ_k is the discrete Euler–Poincaré
+//! equation of Marsden–Pekarsky–Shkoller (the paper's
+//! "l_d'(f_{k−1,k}) TR Ad − l_d'(f_{k,k+1}) TR = 0") written with the left-trivialised
+//! momenta μ_k, μ_{k+1} defined above; R is reconstructed afterwards.
+//! [`Form::Reduced`] evaluates only l(Ω) = L(I, Ω) (a 6-variable Hessian per quadrature
+//! point instead of 9) and agrees with [`Form::Full`] to round-off on G-invariant models.
 //!
 //! # Properties
 //! - order 2·min(d, m) for d = `points` − 1 and m Gauss points (Galerkin variational error
@@ -70,7 +75,10 @@
 //!   momentum about every symmetry axis of L (discrete Noether theorem for the left action):
 //!   a·R_{k+1}μ_{k+1} = a·R_k F Fᵀ(μ_k + g_R) = a·R_kμ_k, because a·R_k g_R is the derivative
 //!   of the action along the symmetry and vanishes at every quadrature point;
-//! - not symmetric: the chart is based at the first point of the step.
+//! - not declared symmetric: the chart is based at the first point of the step, and for
+//!   d ≥ 2 the curves g₀ exp(ξ(τ)) with polynomial ξ are not the curves g₁ exp(ζ(τ)) with
+//!   polynomial ζ (for d = 1 they coincide, g₀ exp(τξ) = g₁ exp((τ − 1)ξ), but the claim is
+//!   not made without a test).
 //!
 //! # References
 //! M. Leok, *Generalized Variational Integrators*, chapter 5 of *Foundations of Computational
@@ -284,7 +292,9 @@ impl LieSvi {
             )
         })?;
         let torque = tables.torque_sum(model, &state.r, unknowns);
-        let end = unknowns.fixed_rows::<3>(3 * (tables.degree - 1)).into_owned();
+        let end = unknowns
+            .fixed_rows::<3>(3 * (tables.degree - 1))
+            .into_owned();
         let step_minus_identity = exp_minus_identity(&end);
         let rotation = step_minus_identity + Matrix3::identity();
         increment.r = state.r * step_minus_identity;
@@ -324,7 +334,10 @@ impl RigidState {
 
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
-        self.r.iter().chain(self.momentum.iter()).all(|x| x.is_finite())
+        self.r
+            .iter()
+            .chain(self.momentum.iter())
+            .all(|x| x.is_finite())
     }
 }
 
@@ -400,10 +413,13 @@ impl LieWorkspace {
             for nu in 1..=d {
                 let mut zeta = Vector3::zeros();
                 for j in 1..=d {
-                    zeta += self.previous.fixed_rows::<3>(3 * (j - 1)) * self.extrapolation[(nu, j)];
+                    zeta +=
+                        self.previous.fixed_rows::<3>(3 * (j - 1)) * self.extrapolation[(nu, j)];
                 }
                 let guess = log(&(back * exp(&zeta)));
-                self.unknowns.fixed_rows_mut::<3>(3 * (nu - 1)).copy_from(&guess);
+                self.unknowns
+                    .fixed_rows_mut::<3>(3 * (nu - 1))
+                    .copy_from(&guess);
             }
         } else {
             let omega = model
@@ -412,7 +428,9 @@ impl LieWorkspace {
             self.velocity_guess = omega;
             for nu in 1..=d {
                 let guess = omega * (0.5 * h * (self.nodes[nu] + 1.0));
-                self.unknowns.fixed_rows_mut::<3>(3 * (nu - 1)).copy_from(&guess);
+                self.unknowns
+                    .fixed_rows_mut::<3>(3 * (nu - 1))
+                    .copy_from(&guess);
             }
         }
     }
@@ -474,9 +492,11 @@ type D6 = Dual2Vec<f64, Const<6>>;
 type D9 = Dual2Vec<f64, Const<9>>;
 
 /// Value, gradient and Hessian of a second-order dual number.
-fn parts<const K: usize>(x: &Dual2Vec<f64, Const<K>>) -> (f64, SVector<f64, K>, SMatrix<f64, K, K>) {
-    let gradient = x.v1.clone().unwrap_generic(Const::<1>, Const::<K>).transpose();
-    let hessian = x.v2.clone().unwrap_generic(Const::<K>, Const::<K>);
+fn parts<const K: usize>(
+    x: &Dual2Vec<f64, Const<K>>,
+) -> (f64, SVector<f64, K>, SMatrix<f64, K, K>) {
+    let gradient = x.v1.unwrap_generic(Const::<1>, Const::<K>).transpose();
+    let hessian = x.v2.unwrap_generic(Const::<K>, Const::<K>);
     (x.re, gradient, hessian)
 }
 
@@ -518,11 +538,19 @@ fn attitude_duals(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<D9> {
     let x: Vector3<D3> = Vector3::from_fn(|i, _| D3::from_re(a[i]).derivative(i));
     let e = exp(&x);
     // Value, first and second derivatives of E = exp(a), entry by entry.
-    let value = e.map(|z| z.re);
-    let first: [Matrix3<f64>; 3] =
-        std::array::from_fn(|m| e.map(|z| parts(&z).1[m]));
-    let second: [[Matrix3<f64>; 3]; 3] =
-        std::array::from_fn(|m| std::array::from_fn(|n| e.map(|z| parts(&z).2[(m, n)])));
+    let mut value = Matrix3::zeros();
+    let mut first = [Matrix3::zeros(); 3];
+    let mut second = [[Matrix3::zeros(); 3]; 3];
+    for (k, z) in e.iter().enumerate() {
+        let (re, g, h) = parts(z);
+        value[k] = re;
+        for m in 0..3 {
+            first[m][k] = g[m];
+            for n in 0..3 {
+                second[m][n][k] = h[(m, n)];
+            }
+        }
+    }
     let axes: [Matrix3<f64>; 3] =
         std::array::from_fn(|l| r * super::so3::hat(&Vector3::ith(l, 1.0)));
     let base = r * value;
@@ -700,7 +728,10 @@ mod tests {
         let r = exp(&Vector3::new(0.3, -0.7, 1.1));
         for (a, b) in [
             (Vector3::zeros(), Vector3::new(0.1, -0.2, 0.3)),
-            (Vector3::new(1e-4, 2e-4, -1e-4), Vector3::new(0.1, -0.2, 0.3)),
+            (
+                Vector3::new(1e-4, 2e-4, -1e-4),
+                Vector3::new(0.1, -0.2, 0.3),
+            ),
             (Vector3::new(0.2, -0.4, 0.5), Vector3::new(-1.0, 0.4, 2.0)),
         ] {
             let fast = point_derivatives(&Pendulum, false, &r, &a, &b);

@@ -51,10 +51,9 @@ pub mod so3;
 pub use integrator::{RigidBodyIntegrator, RigidInitial, RigidRun};
 pub use method::{Form, LieSvi, LieWorkspace, RigidState};
 pub use model::{
-    RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian,
-    RigidBodySymmetries,
+    RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
 pub use observer::{
-    AngularMomentumError, OrthogonalityError, RigidEnergyError, RigidInvariantError,
-    RigidObserver, RigidPoint, RigidTrajectory, quaternion,
+    AngularMomentumError, OrthogonalityError, RigidEnergyError, RigidInvariantError, RigidObserver,
+    RigidPoint, RigidTrajectory, quaternion,
 };

@@ -245,7 +245,9 @@ mod tests {
     impl RigidBodyLagrangian for Top {
         fn lagrangian<D: Scalar>(&self, r: &Matrix3<D>, omega: &Vector3<D>) -> D {
             let inertia = [1.0, 2.0, 3.0];
-            let kinetic = (0..3).fold(D::from(0.0), |s, i| s + omega[i] * omega[i] * (0.5 * inertia[i]));
+            let kinetic = (0..3).fold(D::from(0.0), |s, i| {
+                s + omega[i] * omega[i] * (0.5 * inertia[i])
+            });
             // V = m g e3·(R χ), χ = (0.1, 0.2, 0.5).
             let height = r[(2, 0)] * 0.1 + r[(2, 1)] * 0.2 + r[(2, 2)] * 0.5;
             kinetic - height * 9.81

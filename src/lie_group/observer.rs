@@ -329,7 +329,10 @@ mod tests {
                 expected.iter_mut().for_each(|c| *c = -*c);
             }
             for i in 0..4 {
-                assert!((q[i] - expected[i]).abs() < 1e-14, "{x:?}: {q:?} vs {expected:?}");
+                assert!(
+                    (q[i] - expected[i]).abs() < 1e-14,
+                    "{x:?}: {q:?} vs {expected:?}"
+                );
             }
         }
     }

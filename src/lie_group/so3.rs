@@ -1,7 +1,7 @@
 //! The rotation group SO(3) and its Lie algebra so(3) ≅ ℝ³, generic over the scalar.
 //!
 //! # Conventions
-//! - The hat map x̂ = [x]× is the skew matrix with x̂ y = x × y; vee is its inverse. The
+//! - The hat map x̂ = \[x\]× is the skew matrix with x̂ y = x × y; vee is its inverse. The
 //!   adjoint action of the algebra on itself is ad_x y = x × y = x̂ y, and the adjoint action
 //!   of the group is Ad_R x = R x.
 //! - [`exp`] is Rodrigues' formula exp(x) = I + A(θ) x̂ + B(θ) x̂², θ = |x|, with
@@ -352,7 +352,11 @@ mod tests {
 
     #[test]
     fn series_and_closed_forms_agree_at_the_branch_point() {
-        for t in [SERIES_THRESHOLD * 0.5, SERIES_THRESHOLD, SERIES_THRESHOLD * 2.0] {
+        for t in [
+            SERIES_THRESHOLD * 0.5,
+            SERIES_THRESHOLD,
+            SERIES_THRESHOLD * 2.0,
+        ] {
             let series = Coefficients::<f64>::series(t);
             let closed = Coefficients::<f64>::closed(t);
             assert!((series.a - closed.a).abs() < 2e-16, "{t}");
@@ -434,8 +438,9 @@ mod tests {
             for j in 0..3 {
                 let mut step = Vector3::zeros();
                 step[j] = e;
-                let column =
-                    (body_velocity(&(x + step), &rate) - body_velocity(&(x - step), &rate)) / (2.0 * e);
+                let column = (body_velocity(&(x + step), &rate)
+                    - body_velocity(&(x - step), &rate))
+                    / (2.0 * e);
                 assert!((jac.column(j) - column).amax() < 1e-8, "{x:?}");
             }
         }
