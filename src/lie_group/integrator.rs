@@ -16,6 +16,7 @@ use crate::error::{require_finite, require_positive};
 use crate::integrator::step_count;
 use crate::method::StepReport;
 use crate::{Error, Statistics};
+use nalgebra::SMatrix;
 use std::ops::ControlFlow;
 
 /// Largest ‖R₀ᵀR₀ − I‖ accepted for an initial attitude.
@@ -199,6 +200,37 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
                 momentum: state.momentum + increment.momentum,
             },
             report,
+        ))
+    }
+
+    /// One step of size `h` from `state` (fresh workspace) and its exact Jacobian in the
+    /// canonical coordinates (η, p) of T*SO(3) about the input and the output (see
+    /// [`LieSvi::tangent_map`]): a symplectic step satisfies ΦᵀJΦ = J with
+    /// J = [[0, I], [−I, 0]].
+    pub fn tangent_map(
+        &self,
+        state: &RigidState,
+        h: f64,
+    ) -> Result<(RigidState, SMatrix<f64, 6, 6>), Error> {
+        require_positive("h", h)?;
+        if !state.is_finite() {
+            return Err(Error::NonFinite {
+                what: "state".into(),
+                step: 0,
+                t: 0.0,
+            });
+        }
+        let mut workspace = self.workspace(h)?;
+        let (increment, tangent) = self
+            .method
+            .tangent_map(&self.model, &mut workspace, h, state)
+            .map_err(|failure| failure.at(0, 0.0))?;
+        Ok((
+            RigidState {
+                r: state.r + increment.r,
+                momentum: state.momentum + increment.momentum,
+            },
+            tangent,
         ))
     }
 
