@@ -147,13 +147,11 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
 
     /// Check a G-invariance declaration at the initial state: L(R, Ω) = L(I, Ω) and a zero
     /// configuration gradient.
-    fn check_invariance(&self, state: &RigidState) -> Result<(), Error> {
+    fn check_invariance(&self, t0: f64, state: &RigidState) -> Result<(), Error> {
         if !L::G_INVARIANT {
             return Ok(());
         }
-        let omega = self
-            .model
-            .velocity(&state.r, &state.momentum, &Vector3::zeros())?;
+        let omega = self.point(t0, state, &Vector3::zeros())?.omega;
         let here = self.model.value(&state.r, &omega);
         let identity = self.model.value(&Matrix3::identity(), &omega);
         let torque = self.model.torque(&state.r, &omega).amax();
@@ -255,7 +253,7 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
         let steps = step_count(t_end - t0, h)?;
         let mut workspace = self.workspace(h)?;
         let mut state = self.initial_state(&initial)?;
-        self.check_invariance(&state)?;
+        self.check_invariance(t0, &state)?;
         let mut guess = match initial {
             RigidInitial::Velocity { omega, .. } => omega,
             RigidInitial::Momentum { .. } => Vector3::zeros(),
