@@ -724,3 +724,45 @@ fn bad_input_gives_typed_errors() {
         other => panic!("expected non-convergence, got {other:?}"),
     }
 }
+
+/// ‖Φ_h(R', −μ') − (R, −μ)‖ with (R', μ') = Φ_h(R, μ): zero for a symmetric method on a
+/// reversible Lagrangian (L(R, −Ω) = L(R, Ω)), since then Φ_h ∘ ρ ∘ Φ_h = ρ with ρ(R, μ) =
+/// (R, −μ).
+fn reversibility_defect<L: RigidBodyLagrangian + RigidBodyDefaults + Clone>(
+    model: L,
+    method: LieSvi,
+    h: f64,
+) -> f64 {
+    let (r0, omega0) = model.initial_state();
+    let state = RigidState {
+        r: r0,
+        momentum: model.momentum(&r0, &omega0),
+    };
+    let integrator = RigidBodyIntegrator::new(model, method);
+    let (next, _) = integrator.step(&state, h).unwrap();
+    let flipped = RigidState {
+        r: next.r,
+        momentum: -next.momentum,
+    };
+    let (back, _) = integrator.step(&flipped, h).unwrap();
+    (back.r - state.r)
+        .amax()
+        .max((back.momentum + state.momentum).amax() / state.momentum.amax())
+}
+
+#[test]
+fn symmetry_as_declared() {
+    for (points, quadrature) in [(2, 1), (2, 2), (3, 2), (3, 3), (4, 4)] {
+        let method = LieSvi::new(points).with_quadrature(quadrature);
+        let defect = reversibility_defect(Pendulum3d::default(), method.clone(), 0.1).max(
+            reversibility_defect(HeavyTop::default(), method.clone(), 0.05),
+        );
+        eprintln!("reversibility ({points}, {quadrature}): {defect:e}");
+        if method.info().symmetric {
+            assert!(defect < 1e-13, "({points}, {quadrature}): {defect:e}");
+        } else {
+            // O(h^(2d+1)) for d ≥ 2, far above round-off.
+            assert!(defect > 1e-12, "({points}, {quadrature}): {defect:e}");
+        }
+    }
+}

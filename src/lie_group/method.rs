@@ -75,10 +75,12 @@
 //!   momentum about every symmetry axis of L (discrete Noether theorem for the left action):
 //!   a·R_{k+1}μ_{k+1} = a·R_k F Fᵀ(μ_k + g_R) = a·R_kμ_k, because a·R_k g_R is the derivative
 //!   of the action along the symmetry and vanishes at every quadrature point;
-//! - not declared symmetric: the chart is based at the first point of the step, and for
-//!   d ≥ 2 the curves g₀ exp(ξ(τ)) with polynomial ξ are not the curves g₁ exp(ζ(τ)) with
-//!   polynomial ζ (for d = 1 they coincide, g₀ exp(τξ) = g₁ exp((τ − 1)ξ), but the claim is
-//!   not made without a test).
+//! - symmetric for d = 1 only: there the curve g₀ exp(τ'ξ) (τ' = (τ + 1)/2) is also
+//!   g₁ exp((τ' − 1)ξ), with constant Ω = ξ/h, so with symmetric Gauss nodes L_d is
+//!   self-adjoint; for d ≥ 2 the chart based at the first point breaks the symmetry (the
+//!   curves g₀ exp(ξ(τ)) with polynomial ξ are not the curves g₁ exp(ζ(τ)) with polynomial
+//!   ζ). The tests check both through reversibility, Φ_h(R', −μ') = (R, −μ) for
+//!   L(R, −Ω) = L(R, Ω).
 //!
 //! # References
 //! M. Leok, *Generalized Variational Integrators*, chapter 5 of *Foundations of Computational
@@ -180,7 +182,7 @@ impl LieSvi {
                 Form::Reduced => "lie-svi-reduced",
             },
             order: 2 * degree.min(self.quadrature_points()),
-            symmetric: false,
+            symmetric: self.points == 2,
             symplectic: true,
             coordinates: Coordinates::Momentum,
         }
