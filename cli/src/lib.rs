@@ -68,6 +68,7 @@ use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 pub mod bench;
 pub mod plot;
+pub mod rigid;
 pub mod stability;
 
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
