@@ -723,7 +723,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let s = tables.degree;
     let m = tables.nodes.len();
     let velocity = mass_inverse * state.y * h;
-    let h2 = h * h;
+    let scaled_inverse = mass_inverse * (h * h);
     for (mu, position) in data.positions.iter_mut().enumerate() {
         *position = state.q;
         let values = &data.stage_values[mu * s..(mu + 1) * s];
@@ -758,8 +758,10 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             if L::FORCED {
                 *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
             }
-            *acceleration = mass_inverse * *force * h2;
+            *acceleration = scaled_inverse * *force;
         }
+        // The largest change by plain comparisons (no NaN-aware max in the hot loop): a NaN
+        // force is caught by the finiteness check of the positions below.
         let mut change: f64 = 0.0;
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.stage_matrix[mu * m..(mu + 1) * m];
@@ -767,8 +769,20 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             for (a, acceleration) in row.iter().zip(&data.accelerations) {
                 next += acceleration * *a;
             }
-            change = change.max((next - *position).amax());
+            for (x, y) in next.iter().zip(position.iter()) {
+                let difference = (x - y).abs();
+                if difference > change {
+                    change = difference;
+                }
+            }
             *position = next;
+        }
+        if !data
+            .positions
+            .iter()
+            .all(|p| p.iter().all(|x| x.is_finite()))
+        {
+            return Err(StepFailure::NonFinite);
         }
         if L::FORCED {
             for (mu, rate) in data.velocities.iter_mut().enumerate() {
