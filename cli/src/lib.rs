@@ -27,6 +27,9 @@
 //! [run]                 # absent: the model's default step and horizon
 //! h = 0.2
 //! t_end = 2000.0
+//! recovery = "none"     # or "halve-step": retry a failed step as two half steps
+//! # max_halvings = 4    # with "halve-step": successive halvings allowed (default 4)
+//! # divergence_limit = 1e6   # stop once |q_i| or |p_i| exceeds this (default: no limit)
 //!
 //! [output]
 //! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
@@ -62,13 +65,14 @@ use serde::{Deserialize, Serialize};
 pub mod bench;
 pub mod plot;
 pub mod stability;
+pub mod stress;
 
-use svi::Initial;
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
 use svi::{
     AdjointSymplecticEuler, Integrator, LagrangianExt, Method, Midpoint, PhasePoint,
     SpectralCollocation, StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
+use svi::{Initial, Recovery, RunFailure, RunOptions};
 use svi_models::{MODEL_NAMES, ModelVisitor, UnknownModel, ZooModel, visit_model};
 
 /// The built-in scenes, as (name, TOML text).
@@ -95,6 +99,29 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     (
         "driven-oscillator",
         include_str!("../scenes/driven-oscillator.toml"),
+    ),
+    (
+        "stiff-spring-pendulum",
+        include_str!("../scenes/stiff-spring-pendulum.toml"),
+    ),
+    (
+        "stiff-spring-pendulum-coarse",
+        include_str!("../scenes/stiff-spring-pendulum-coarse.toml"),
+    ),
+    ("kepler-long", include_str!("../scenes/kepler-long.toml")),
+    ("kepler-e0.9", include_str!("../scenes/kepler-e0.9.toml")),
+    ("kepler-e0.99", include_str!("../scenes/kepler-e0.99.toml")),
+    (
+        "kepler-recovery",
+        include_str!("../scenes/kepler-recovery.toml"),
+    ),
+    (
+        "double-pendulum-chaotic",
+        include_str!("../scenes/double-pendulum-chaotic.toml"),
+    ),
+    (
+        "oscillator-beyond-stability",
+        include_str!("../scenes/oscillator-beyond-stability.toml"),
     ),
 ];
 
@@ -211,6 +238,26 @@ pub enum SceneError {
     /// state, nonlinear solves.
     #[error(transparent)]
     Svi(#[from] svi::Error),
+    /// A run that failed after it started: the summary of the run up to the last good state
+    /// (its trajectory file, if asked for, is written) and the library's error.
+    #[error(
+        "the run failed after {} steps; last good state at t = {}: q = {}, v = {}{}",
+        .partial.steps,
+        Float(.partial.t_end),
+        vector(&.partial.q),
+        vector(&.partial.v),
+        .partial.trajectory.as_ref().map_or_else(String::new, |trajectory| format!(
+            "; the trajectory so far is in '{}'",
+            trajectory.path
+        ))
+    )]
+    RunFailed {
+        /// Summary of the run up to the last good state.
+        partial: Box<Summary>,
+        /// What went wrong, with step index and time.
+        #[source]
+        source: svi::Error,
+    },
     /// A malformed `svi bench` method specification.
     #[error(
         "unknown method '{0}' (expected svi:P, svi:P/M, sc:P, a classic method's name, dop853 or dopri5)"
@@ -410,7 +457,7 @@ pub struct MethodSection {
     pub quadrature: Option<usize>,
 }
 
-/// `[run]`: step and horizon.
+/// `[run]`: step, horizon and failure handling.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunSection {
@@ -418,6 +465,56 @@ pub struct RunSection {
     pub h: Option<f64>,
     /// Final time (default: the model's default horizon).
     pub t_end: Option<f64>,
+    /// What to do when a step fails (default: `none`, stop with the error).
+    pub recovery: Option<RecoveryKind>,
+    /// Successive halvings allowed by `recovery = "halve-step"` (default
+    /// [`DEFAULT_MAX_HALVINGS`]).
+    pub max_halvings: Option<usize>,
+    /// Stop with an error once a state component exceeds this in absolute value (default:
+    /// no limit; NaN and infinity always stop the run).
+    pub divergence_limit: Option<f64>,
+}
+
+/// Successive halvings of a failed step allowed by default under `recovery = "halve-step"`.
+pub const DEFAULT_MAX_HALVINGS: usize = 4;
+
+/// A scene's recovery policy for failed steps (`[run] recovery`, `--recovery`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum RecoveryKind {
+    /// Stop the run with the failed step's error.
+    #[default]
+    None,
+    /// Retry a failed step as two half steps (recursively), then go on with the original
+    /// step ([`Recovery::HalveStep`]).
+    HalveStep,
+}
+
+impl RunSection {
+    /// The library's run options for this section.
+    pub fn options(&self) -> Result<RunOptions, SceneError> {
+        let mut options = RunOptions::default();
+        match (self.recovery.unwrap_or_default(), self.max_halvings) {
+            (RecoveryKind::None, Some(_)) => {
+                return Err(svi::Error::invalid(
+                    "max_halvings",
+                    "set, but recovery is not \"halve-step\"",
+                )
+                .into());
+            }
+            (RecoveryKind::None, None) => {}
+            (RecoveryKind::HalveStep, halvings) => {
+                options = options.with_recovery(Recovery::HalveStep {
+                    max_halvings: halvings.unwrap_or(DEFAULT_MAX_HALVINGS),
+                });
+            }
+        }
+        if let Some(limit) = self.divergence_limit {
+            options = options.with_divergence_limit(limit);
+        }
+        options.validate()?;
+        Ok(options)
+    }
 }
 
 /// `[output]`: trajectory file and diagnostics.
@@ -462,6 +559,12 @@ pub struct Overrides {
     /// Diagnostics to compute, comma-separated (default: energy,momentum,solution).
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub diagnostics: Option<Vec<Diagnostic>>,
+    /// Recovery policy for failed steps.
+    #[arg(long, value_enum)]
+    pub recovery: Option<RecoveryKind>,
+    /// Stop once a state component exceeds this in absolute value.
+    #[arg(long, value_name = "LIMIT")]
+    pub divergence_limit: Option<f64>,
 }
 
 /// Parse `NAME=VALUE` (the argument of `--param`).
@@ -524,11 +627,13 @@ impl Scene {
         }
     }
 
-    /// Consistency checks that need no model: one of v and p, `every` only with a file.
+    /// Consistency checks that need no model: one of v and p, `every` only with a file,
+    /// valid run options.
     pub fn check(&self) -> Result<(), SceneError> {
         if self.initial.v.is_some() && self.initial.p.is_some() {
             return Err(SceneError::VelocityAndMomentum);
         }
+        self.run.options()?;
         match (self.output.every, &self.output.trajectory) {
             (Some(_), None) => Err(SceneError::EveryWithoutOutput),
             (Some(0), Some(_)) => {
@@ -550,6 +655,8 @@ impl Scene {
             every,
             out,
             diagnostics,
+            recovery,
+            divergence_limit,
         } = overrides;
         if let Some(method) = method {
             self.method.name = *method;
@@ -576,6 +683,11 @@ impl Scene {
         set(&mut self.output.every, every);
         set(&mut self.output.trajectory, out);
         set(&mut self.output.diagnostics, diagnostics);
+        if *recovery == Some(RecoveryKind::None) {
+            self.run.max_halvings = None;
+        }
+        set(&mut self.run.recovery, recovery);
+        set(&mut self.run.divergence_limit, divergence_limit);
         self.check()
     }
 
@@ -692,6 +804,7 @@ struct Setup<const N: usize> {
     kind: MethodKind,
     points: Option<usize>,
     quadrature: Option<usize>,
+    options: RunOptions,
 }
 
 impl ModelVisitor for RunScene<'_> {
@@ -717,6 +830,7 @@ impl ModelVisitor for RunScene<'_> {
             kind: scene.method.name,
             points: scene.points(),
             quadrature: scene.quadrature(),
+            options: scene.run.options()?,
         };
         let choice = MethodChoice {
             kind: scene.method.name,
@@ -810,18 +924,30 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
             .flatten(),
     );
     let start = Instant::now();
-    let run = integrator.run(
+    let run = integrator.try_run(
         setup.t0,
         setup.initial,
         setup.h,
         setup.t_end,
+        &setup.options,
         &mut observers,
     );
     let seconds = start.elapsed().as_secs_f64();
     if let Some(progress) = &observers.4 {
         progress.finish();
     }
-    let run = run?;
+    // A failed run still reports (and writes) everything up to its last good state.
+    let (run, failure) = match run {
+        Ok(run) => (run, None),
+        Err(RunFailure {
+            error,
+            partial: Some(run),
+        }) => (run, Some(error)),
+        Err(RunFailure {
+            error,
+            partial: None,
+        }) => return Err(error.into()),
+    };
     let (energy, momentum, solution, trajectory, _) = observers;
 
     let guess = match setup.initial {
@@ -849,7 +975,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
     };
 
     let info = integrator.method().info();
-    Ok(Summary {
+    let summary = Summary {
         model: model.name().into(),
         parameters: Parameters(model.parameters()),
         coordinates: model.coordinate_names().iter().map(|&n| n.into()).collect(),
@@ -873,9 +999,17 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
         solution_error_max: solution.and_then(|s| s.max),
         iterations: run.statistics.iterations,
         evaluations: run.statistics.evaluations,
+        retries: run.statistics.retries,
         seconds,
         trajectory,
-    })
+    };
+    match failure {
+        None => Ok(summary),
+        Some(source) => Err(SceneError::RunFailed {
+            partial: Box::new(summary),
+            source,
+        }),
+    }
 }
 
 /// Write `rows` as CSV: `t,q_<name>…,v_<name>…,p_<name>…,energy`, full precision.
@@ -1054,6 +1188,8 @@ pub struct Summary {
     pub iterations: usize,
     /// Points at which derivatives of the Lagrangian were evaluated.
     pub evaluations: usize,
+    /// Failed steps retried with half the step (`recovery = "halve-step"`).
+    pub retries: usize,
     /// Wall time of the integration, in seconds.
     pub seconds: f64,
     /// The trajectory file, if one was written.
@@ -1114,8 +1250,14 @@ impl fmt::Display for Summary {
             (
                 "work",
                 format!(
-                    "{} nonlinear iterations, {} evaluations",
-                    self.iterations, self.evaluations
+                    "{} nonlinear iterations, {} evaluations{}",
+                    self.iterations,
+                    self.evaluations,
+                    if self.retries > 0 {
+                        format!(", {} steps retried with h/2", self.retries)
+                    } else {
+                        String::new()
+                    }
                 ),
             ),
             ("coordinates", coordinates),
