@@ -154,6 +154,8 @@ pub struct Drift {
     pub amplitude: f64,
     /// Largest |E − E₀|.
     pub max_error: f64,
+    /// max(|E₀|, 1), the scale of the round-off floor.
+    pub energy_scale: f64,
     /// Wall time, in seconds.
     pub seconds: f64,
     /// The windows.
@@ -161,10 +163,25 @@ pub struct Drift {
     pub windows: Vec<Window>,
 }
 
+/// Energy errors below this many ulps of max(|E₀|, 1) are round-off.
+const ROUND_OFF: f64 = 1e3 * f64::EPSILON;
+
 impl Drift {
-    /// Whether the drift over the run exceeds the oscillation amplitude.
+    /// Whether the drift over the run exceeds both the oscillation amplitude and the
+    /// round-off floor 10³·ε·max(|E₀|, 1).
     pub fn drifts(&self) -> bool {
-        self.drift.abs() > self.amplitude
+        self.drift.abs() > self.amplitude && self.drift.abs() > ROUND_OFF * self.energy_scale
+    }
+
+    /// `drifts`, `bounded`, or `round-off` (every error below the round-off floor).
+    pub fn verdict(&self) -> &'static str {
+        if self.max_error <= ROUND_OFF * self.energy_scale {
+            "round-off"
+        } else if self.drifts() {
+            "drifts"
+        } else {
+            "bounded"
+        }
     }
 }
 
@@ -504,6 +521,7 @@ fn drift(
         drift: fit.drift,
         amplitude: fit.amplitude,
         max_error: fit.max_error,
+        energy_scale: windows.initial.map_or(1.0, |e| e.abs().max(1.0)),
         seconds,
         windows: all,
     })
@@ -633,7 +651,7 @@ pub fn to_markdown(records: &[StressRecord]) -> String {
                 d.drift,
                 d.amplitude,
                 d.max_error,
-                if d.drifts() { "drifts" } else { "bounded" }
+                d.verdict()
             ),
             Err(why) => format!("— | — | — | — | — | {why}"),
         };
@@ -655,7 +673,7 @@ pub fn to_markdown(records: &[StressRecord]) -> String {
 /// The stress table as CSV (empty fields where a value does not apply).
 pub fn to_csv(records: &[StressRecord]) -> String {
     let mut out = String::from(
-        "scene,method,h,bounded_h,bounded_beyond,bounded_failure,accurate_h,accurate_beyond,accurate_failure,steps,horizon,slope,drift,amplitude,max_error,drifts,seconds,drift_failure\n",
+        "scene,method,h,bounded_h,bounded_beyond,bounded_failure,accurate_h,accurate_beyond,accurate_failure,steps,horizon,slope,drift,amplitude,max_error,verdict,seconds,drift_failure\n",
     );
     let number = |x: Option<f64>| x.map_or_else(String::new, |x| Float(x).to_string());
     let quote = |s: &str| format!("\"{}\"", s.replace('"', "'"));
@@ -673,7 +691,7 @@ pub fn to_csv(records: &[StressRecord]) -> String {
                 Float(d.drift),
                 Float(d.amplitude),
                 Float(d.max_error),
-                d.drifts(),
+                d.verdict(),
                 Float(d.seconds)
             ),
             Err(why) => format!(",,,,,,,,{}", quote(why)),
