@@ -369,7 +369,7 @@ impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for MethodRunner<'_, M, N>
                 Some(failure) => (false, failure),
                 None => (
                     p.energy_error <= ACCURATE,
-                    format!("energy error {:.2} × max(|E₀|, 1)", p.energy_error),
+                    format!("relative energy error {:.2}", p.energy_error),
                 ),
             }
         });
@@ -465,13 +465,13 @@ fn search(
 fn describe(error: &Error) -> String {
     match error {
         Error::NonConvergence { step, t, .. } => {
-            format!("solve does not converge (step {step}, t = {t:.4})")
+            format!("solve does not converge (step {step} at t = {t:.4})")
         }
         Error::SingularMatrix { step, t } => {
-            format!("singular Newton matrix (step {step}, t = {t:.4})")
+            format!("singular Newton matrix (step {step} at t = {t:.4})")
         }
-        Error::NonFinite { step, t, .. } => format!("non-finite state (step {step}, t = {t:.4})"),
-        Error::Diverged { step, t, .. } => format!("state diverges (step {step}, t = {t:.4})"),
+        Error::NonFinite { step, t, .. } => format!("non-finite state (step {step} at t = {t:.4})"),
+        Error::Diverged { step, t, .. } => format!("state diverges (step {step} at t = {t:.4})"),
         Error::LegendreMap { t, .. } => format!("inverse Legendre map fails (t = {t:.4})"),
         other => other.to_string(),
     }
@@ -670,13 +670,14 @@ pub fn to_markdown(records: &[StressRecord]) -> String {
     out
 }
 
-/// The stress table as CSV (empty fields where a value does not apply).
+/// The stress table as CSV (empty fields where a value does not apply; the failure texts
+/// are quoted and hold no commas).
 pub fn to_csv(records: &[StressRecord]) -> String {
     let mut out = String::from(
         "scene,method,h,bounded_h,bounded_beyond,bounded_failure,accurate_h,accurate_beyond,accurate_failure,steps,horizon,slope,drift,amplitude,max_error,verdict,seconds,drift_failure\n",
     );
     let number = |x: Option<f64>| x.map_or_else(String::new, |x| Float(x).to_string());
-    let quote = |s: &str| format!("\"{}\"", s.replace('"', "'"));
+    let quote = |s: &str| format!("\"{}\"", s.replace('"', "'").replace(',', ";"));
     for r in records {
         let limit = |limit: &Option<Limit>| match limit {
             Some(l) => format!("{},{},{}", number(l.h), number(l.beyond), quote(&l.failure)),
