@@ -1441,8 +1441,19 @@ mod tests {
                 every: Some(10),
                 out: Some("x.csv".into()),
                 diagnostics: Some(vec![Diagnostic::Energy]),
+                recovery: Some(RecoveryKind::HalveStep),
+                divergence_limit: Some(1e9),
             })
             .unwrap();
+        assert_eq!(scene.run.recovery, Some(RecoveryKind::HalveStep));
+        assert_eq!(
+            scene.run.options().unwrap(),
+            RunOptions::default()
+                .with_recovery(Recovery::HalveStep {
+                    max_halvings: DEFAULT_MAX_HALVINGS
+                })
+                .with_divergence_limit(1e9)
+        );
         assert_eq!(scene.points(), Some(5));
         assert_eq!(scene.quadrature(), Some(7));
         assert_eq!(scene.run.h, Some(0.05));
