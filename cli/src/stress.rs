@@ -456,7 +456,12 @@ fn search(
         h: best,
         beyond: beyond.as_ref().map(|(h, _)| *h),
         failure: beyond.map_or_else(
-            || format!("none up to h = {}", best.map_or_else(String::new, |h| format!("{h:.3e}"))),
+            || {
+                format!(
+                    "none up to h = {}",
+                    best.map_or_else(String::new, |h| format!("{h:.3e}"))
+                )
+            },
             |(_, why)| why,
         ),
     }
