@@ -448,11 +448,14 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
                     );
                     progress.statistics.iterations += report.iterations;
                     progress.statistics.evaluations += report.evaluations;
-                    let norm = progress.state.q.amax().max(progress.state.y.amax());
+                    let norm = || progress.state.q.amax().max(progress.state.y.amax());
                     if !progress.state.is_finite() {
                         StepFailure::NonFinite
-                    } else if let Some(limit) = divergence_limit.filter(|limit| norm > *limit) {
-                        StepFailure::Diverged { norm, limit }
+                    } else if let Some(limit) = divergence_limit.filter(|limit| norm() > *limit) {
+                        StepFailure::Diverged {
+                            norm: norm(),
+                            limit,
+                        }
                     } else {
                         return Ok(());
                     }

@@ -255,6 +255,12 @@ fn stability(args: StabilityArgs) -> anyhow::Result<()> {
 
 fn list() {
     println!("Built-in scenes (svi run NAME):");
+    let width = BUILTIN_SCENES
+        .iter()
+        .map(|(name, _)| name.len() + 2)
+        .max()
+        .unwrap_or(0)
+        .max(18);
     for (name, text) in BUILTIN_SCENES {
         let description = text
             .lines()
@@ -262,7 +268,7 @@ fn list() {
             .and_then(|line| line.strip_prefix('#'))
             .unwrap_or("")
             .trim();
-        println!("  {name:<18}{description}");
+        println!("  {name:<width$}{description}");
     }
     println!();
     println!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):");
