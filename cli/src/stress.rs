@@ -744,18 +744,25 @@ pub fn windows_csv(records: &[StressRecord]) -> String {
     out
 }
 
-/// One panel per scene: the largest |E − E₀| in each window against time, per method.
+/// One panel per scene: the largest |E − E₀| in each window against time, per method. Every
+/// panel lists every method in the same order (so a method keeps its colour); a long run that
+/// failed is an empty series labelled "(failed)".
 pub fn plot(records: &[StressRecord], path: &Path) -> Result<(), PlotError> {
     let mut panels: Vec<Panel> = Vec::new();
     for r in records {
-        let Ok(d) = &r.drift else { continue };
-        let series = Series {
-            label: r.method.clone(),
-            points: d
-                .windows
-                .iter()
-                .map(|w| (w.t_end, w.max.abs().max(w.min.abs())))
-                .collect(),
+        let series = match &r.drift {
+            Ok(d) => Series {
+                label: r.method.clone(),
+                points: d
+                    .windows
+                    .iter()
+                    .map(|w| (w.t_end, w.max.abs().max(w.min.abs())))
+                    .collect(),
+            },
+            Err(_) => Series {
+                label: format!("{} (failed)", r.method),
+                points: Vec::new(),
+            },
         };
         match panels.iter_mut().find(|p| p.title == r.scene) {
             Some(panel) => panel.series.push(series),
@@ -769,7 +776,7 @@ pub fn plot(records: &[StressRecord], path: &Path) -> Result<(), PlotError> {
             }),
         }
     }
-    write_svg(path, &panels, 520, 420)
+    write_svg(path, &panels, 480, 400)
 }
 
 /// Write `stress.md`, `stress.csv`, `windows.csv` and `drift.svg` into `dir`.
