@@ -6,7 +6,7 @@
 //! | id | work | num-dual type |
 //! | --- | --- | --- |
 //! | `value` | L itself | `f64` (the baseline) |
-//! | `force_ad` | ∂L/∂q, one gradient sweep | `DualSVec64<N>` |
+//! | `force_ad` | ∂L/∂q: N sweeps for N ≤ 4, else one | `Dual64`, else `DualSVec64<N>` |
 //! | `first_derivatives` | L, ∂L/∂q, ∂L/∂q̇: two gradient sweeps | `DualSVec64<N>` |
 //! | `second_derivatives` | L, gradients, L_qq, L_qv, L_vv: three sweeps | `HyperDualVec`, 2 × `Dual2Vec` |
 //! | `acceleration` | q̈ = L_vv⁻¹(L_q − L_vq q̇): second derivatives + a small solve | as above |
@@ -14,7 +14,9 @@
 //!
 //! For Kepler (L = |v|²/2 + 1/|q|) the same quantities are also written by hand, so the ratio
 //! `force_ad / force_hand` is the price of never writing a derivative:
-//! `force_hand` (−q/|q|³), `second_derivatives_hand` (the same [`SecondDerivatives`] struct,
+//! `force_hand` (−q/|q|³), `force_vector_dual` (one `DualSVec64<2>` sweep, the alternative to
+//! N scalar sweeps that [`svi::derived::SCALAR_SWEEPS_UP_TO`] decides against for N ≤ 4),
+//! `second_derivatives_hand` (the same [`SecondDerivatives`] struct,
 //! with L_qq = −I/|q|³ + 3qqᵀ/|q|⁵) and `acceleration_jacobian_hand` (q̈ = −q/|q|³ with
 //! ∂q̈/∂q = L_qq, ∂q̈/∂q̇ = 0). The hand-written results are checked against AD before timing.
 //!
@@ -28,6 +30,7 @@
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use nalgebra::{SMatrix, SVector};
+use num_dual::{DualSVec64, DualVec};
 use std::hint::black_box;
 use std::time::Duration;
 use svi::derived::{AccelerationJacobian, SecondDerivatives};
@@ -168,6 +171,16 @@ fn derivatives(c: &mut Criterion) {
     let mut group = model_group(c, "kepler", kepler, q2, v2);
     group.bench_function("force_hand", |b| {
         b.iter(|| kepler_force_hand(black_box(&q2)))
+    });
+    group.bench_function("force_vector_dual", |b| {
+        b.iter(|| {
+            let v = black_box(&v2).map(DualVec::from_re);
+            num_dual::gradient(
+                |x: SVector<DualSVec64<2>, 2>| kepler.lagrangian(DualVec::from_re(T), &x, &v),
+                black_box(&q2),
+            )
+            .1
+        })
     });
     group.bench_function("second_derivatives_hand", |b| {
         b.iter(|| kepler_second_derivatives_hand(black_box(&q2), black_box(&v2)))

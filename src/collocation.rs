@@ -384,7 +384,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     }
     increment.q = data.stages[s - 1];
     increment.y = dv;
-    start.remember(offsets);
+    start.remember(offsets, h);
     let iterations = control.iterations();
     Ok(StepReport {
         iterations,
@@ -447,9 +447,8 @@ impl<const N: usize> Method<N> for SpectralCollocation {
     ) -> Result<StepReport, StepFailure> {
         if workspace.tables.h != h {
             workspace.tables.rescale(h);
-            workspace.start.invalidate();
         }
-        if workspace.start.has_previous() {
+        if workspace.start.prepare(h) {
             workspace.start.extrapolate::<N>(&mut workspace.offsets);
         } else {
             let a = model
@@ -499,11 +498,56 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         let s = tables.degree;
         increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = tables.velocity::<N>(s, offsets) - state.y;
-        start.remember(offsets);
+        start.remember(offsets, h);
         Ok(StepReport {
             iterations,
             evaluations: s * iterations,
         })
+    }
+
+    fn restart(&self, workspace: &mut CollocationWorkspace<N>) {
+        workspace.start.invalidate();
+    }
+
+    /// q(τ) = q_k + Σ_j l_j(τ) Z_j, and q̇(τ) from the velocity polynomial
+    /// y(τ) = q̇_k l_0(τ) + Σ_j l_j(τ) yʲ with yʲ = (Λ*Z)_j (eq. 21), τ = 2θ − 1.
+    fn dense_output(
+        &self,
+        workspace: &CollocationWorkspace<N>,
+        state: &State<N>,
+        _h: f64,
+        theta: f64,
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        let mut values = [0.0; MAX_POINTS];
+        let (offset, _) = workspace
+            .start
+            .last_step::<N>(2.0 * theta - 1.0, &mut values)?;
+        let offsets = workspace.start.last_offsets()?;
+        let lambda = &workspace.tables.lambda;
+        let mut v = state.y * values[0];
+        for (j, node) in offsets.chunks_exact(N).enumerate() {
+            // Σ_i l_i(τ) Λ*_ij, i = 1..s: the weight of Z_j in y(τ).
+            let weight: f64 = (0..lambda.nrows())
+                .map(|i| values[i + 1] * lambda[(i, j)])
+                .sum();
+            v += SVector::<f64, N>::from_column_slice(node) * weight;
+        }
+        Some((state.q + offset, v))
+    }
+
+    fn points(&self) -> Option<usize> {
+        Some(self.points)
+    }
+
+    fn with_points(&self, points: usize) -> Option<Self> {
+        Some(SpectralCollocation {
+            points,
+            max_iterations: self.max_iterations,
+        })
+    }
+
+    fn node_offsets<'a>(&self, workspace: &'a CollocationWorkspace<N>) -> Option<&'a [f64]> {
+        workspace.start.last_offsets()
     }
 
     fn tangent_map<L: Lagrangian<N>>(

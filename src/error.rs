@@ -51,6 +51,20 @@ pub enum Error {
         /// Infinity norm of the last Newton increment.
         residual: f64,
     },
+    /// Step-size control could not meet the tolerance with steps above the minimum.
+    #[error(
+        "step size {h:e} at t = {t} is below the minimum {min_step:e} after {rejections} rejected steps: the tolerance cannot be met"
+    )]
+    StepSizeTooSmall {
+        /// Time at which the step was tried.
+        t: f64,
+        /// The step size that would be needed next.
+        h: f64,
+        /// The smallest step allowed.
+        min_step: f64,
+        /// Consecutive rejections at `t`.
+        rejections: usize,
+    },
     /// A state or an intermediate value became NaN or infinite.
     #[error("non-finite {what} at step {step} (t = {t})")]
     NonFinite {

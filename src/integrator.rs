@@ -260,7 +260,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
 
     /// Check a [`Structure::ConstantMass`] declaration at the initial state: L_qv must vanish
     /// and L_vv must not change with q̇ (a necessary condition, checked once per run).
-    fn check_structure(&self, t: f64, state: &State<N>) -> Result<(), Error> {
+    pub(crate) fn check_structure(&self, t: f64, state: &State<N>) -> Result<(), Error> {
         if L::STRUCTURE != Structure::ConstantMass {
             return Ok(());
         }
@@ -593,7 +593,7 @@ pub fn step_count(span: f64, h: f64) -> Result<usize, Error> {
 }
 
 /// Kahan-compensated `sum += increment`.
-fn compensated_add<const N: usize>(
+pub(crate) fn compensated_add<const N: usize>(
     sum: &mut SVector<f64, N>,
     compensation: &mut SVector<f64, N>,
     increment: &SVector<f64, N>,

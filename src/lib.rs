@@ -11,6 +11,12 @@
 //!
 //! Both run through one stepping loop, [`Integrator`], with opt-in [`observer`]s.
 //!
+//! Rigid bodies live on SO(3) instead of ℝᴺ: [`lie_group`] takes a Lagrangian L(R, Ω) on the
+//! group and integrates it with the higher-order Lie-group variational integrator
+//! ([`lie_group::LieSvi`], natural charts and interpolation in the Lie algebra, Leok §5.3;
+//! the reduced discrete Euler–Poincaré form for G-invariant L, §5.4), through its own
+//! stepping loop and observers ([`lie_group::RigidBodyIntegrator`]).
+//!
 //! ```
 //! use nalgebra::SVector;
 //! use svi::{Integrator, Lagrangian, Scalar, Svi};
@@ -39,12 +45,14 @@ pub mod drift;
 pub mod error;
 pub mod integrator;
 mod iteration;
+pub mod lie_group;
 pub mod linalg;
 pub mod method;
 pub mod model;
 pub mod observer;
 pub mod quadrature;
 pub mod scalar;
+pub mod solve;
 pub mod spectral_variational;
 pub mod stability;
 mod starting_values;
@@ -64,6 +72,7 @@ pub use integrator::{
 pub use method::{Coordinates, Method, MethodInfo, PhasePoint, State, TangentMap};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;
+pub use solve::{Adapt, Solution, SolveOptions, Span, solve};
 pub use spectral_variational::Svi;
 pub use stormer_verlet::StormerVerlet;
 pub use variational_integrator::VariationalIntegrator;

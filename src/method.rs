@@ -140,6 +140,49 @@ pub trait Method<const N: usize> {
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure>;
 
+    /// Drop warm-start data: the next step does not continue the last one (it starts
+    /// elsewhere than where the last step ended, as after a rejected adaptive step).
+    fn restart(&self, workspace: &mut Self::Workspace) {
+        let _ = workspace;
+    }
+
+    /// Dense output of the last step taken, from `state` with size `h`: (q, q̇) at t + θh,
+    /// θ ∈ [0, 1], from the step's interpolating polynomial. `None` for methods without a
+    /// step polynomial (callers then interpolate the step's end points).
+    fn dense_output(
+        &self,
+        workspace: &Self::Workspace,
+        state: &State<N>,
+        h: f64,
+        theta: f64,
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        let _ = (workspace, state, h, theta);
+        None
+    }
+
+    /// Number of interpolation points of a spectral method (polynomial degree + 1); `None`
+    /// for methods without a degree.
+    fn points(&self) -> Option<usize> {
+        None
+    }
+
+    /// The same method with `points` interpolation points (degree adaptivity); `None` for
+    /// methods without a degree.
+    fn with_points(&self, points: usize) -> Option<Self>
+    where
+        Self: Sized,
+    {
+        let _ = points;
+        None
+    }
+
+    /// Node values of the last step's polynomial, as offsets qᵛ − q_k at the CGL nodes
+    /// ν = 1, …, s (stacked, N numbers per node); `None` for methods without a degree.
+    fn node_offsets<'a>(&self, workspace: &'a Self::Workspace) -> Option<&'a [f64]> {
+        let _ = workspace;
+        None
+    }
+
     /// Perform the step like [`Method::step`] and return its exact Jacobian with respect to
     /// `state` (implicit function theorem on the converged nonlinear system; derivatives of L
     /// by automatic differentiation).

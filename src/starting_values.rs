@@ -1,9 +1,11 @@
 //! Starting values for the Newton iteration of the spectral methods.
 //!
 //! As in Hairer's GNI codes, step k + 1 starts from the polynomial of step k evaluated at the
-//! new step's nodes: on the reference interval of step k the new nodes sit at x_ν + 2, so the
-//! guess is a fixed matrix l_j(x_ν + 2) applied to the previous node values. The first step
-//! (or the first after a change of step size) starts from the Taylor polynomial
+//! new step's nodes: on the reference interval of step k the new nodes sit at
+//! 1 + ρ (x_ν + 1), with ρ = h_{k+1}/h_k (x_ν + 2 for a constant step), so the guess is a
+//! matrix l_j(1 + ρ (x_ν + 1)) applied to the previous node values; the matrix is rebuilt
+//! only when ρ changes. The first step (or the first after [`StartingValues::invalidate`],
+//! when a step does not continue the previous one) starts from the Taylor polynomial
 //! q_k + q̇ (t − t_k) + q̈ (t − t_k)²/2.
 //!
 //! Node values are stored as offsets qᵛ − q_k (ν = 1, …, s; q⁰ − q_k = 0 is implicit).
@@ -14,55 +16,75 @@ use nalgebra::{DVector, SVector};
 /// Extrapolation table and the previous step's node offsets.
 #[derive(Debug, Clone)]
 pub(crate) struct StartingValues {
-    /// CGL nodes x_ν on [−1, 1].
-    nodes: Vec<f64>,
-    /// X_νj = l_j(x_ν + 2) − δ_js, ν, j = 1..s, row-major: by Σ_j l_j = 1 the new offsets
-    /// are Σ_j X_νj Z_j from the previous offsets Z_j.
+    /// The interpolation basis on the CGL nodes x_ν of [−1, 1].
+    basis: LagrangeBasis,
+    /// X_νj = l_j(1 + ρ (x_ν + 1)) − δ_js, ν, j = 1..s, row-major: by Σ_j l_j = 1 the new
+    /// offsets are Σ_j X_νj Z_j from the previous offsets Z_j.
     extrapolation: Vec<f64>,
+    /// The step ratio ρ the table was built for.
+    ratio: f64,
     /// Node offsets of the previous step (ν = 1..s, stacked).
     previous: DVector<f64>,
-    /// Whether `previous` belongs to a step of the current size.
-    valid: bool,
+    /// Size of the previous step; `None` when there is no previous step to continue.
+    previous_step: Option<f64>,
 }
 
 impl StartingValues {
     pub(crate) fn new(basis: &LagrangeBasis, dimension: usize) -> Self {
-        let shifted: Vec<f64> = basis.nodes().iter().map(|x| x + 2.0).collect();
-        let values = basis.value_matrix(&shifted);
         let s = basis.len() - 1;
-        let extrapolation = (0..s * s)
-            .map(|k| {
-                let (nu, j) = (k / s + 1, k % s + 1);
-                values[(nu, j)] - f64::from(j == s)
-            })
-            .collect();
-        StartingValues {
-            nodes: basis.nodes().to_vec(),
-            extrapolation,
-            previous: DVector::zeros((basis.len() - 1) * dimension),
-            valid: false,
+        let mut start = StartingValues {
+            basis: basis.clone(),
+            extrapolation: vec![0.0; s * s],
+            ratio: f64::NAN,
+            previous: DVector::zeros(s * dimension),
+            previous_step: None,
+        };
+        start.build(1.0);
+        start
+    }
+
+    /// Rebuild the extrapolation table for the step ratio ρ (no allocation).
+    fn build(&mut self, ratio: f64) {
+        let s = self.basis.len() - 1;
+        let mut values = [0.0; crate::spectral_variational::MAX_POINTS];
+        for nu in 1..=s {
+            let x = 1.0 + ratio * (self.basis.nodes()[nu] + 1.0);
+            self.basis.values_into(x, &mut values[..=s]);
+            let row = &mut self.extrapolation[(nu - 1) * s..nu * s];
+            for (j, (target, value)) in row.iter_mut().zip(&values[1..=s]).enumerate() {
+                *target = value - f64::from(j + 1 == s);
+            }
         }
+        self.ratio = ratio;
     }
 
-    /// Forget the previous step (after a change of step size).
+    /// Forget the previous step: the next step does not continue it.
     pub(crate) fn invalidate(&mut self) {
-        self.valid = false;
+        self.previous_step = None;
     }
 
-    /// Whether a previous step is available to extrapolate.
-    pub(crate) fn has_previous(&self) -> bool {
-        self.valid
+    /// Prepare to extrapolate into a step of size `h`; false if there is no previous step.
+    pub(crate) fn prepare(&mut self, h: f64) -> bool {
+        let Some(previous) = self.previous_step else {
+            return false;
+        };
+        let ratio = h / previous;
+        if ratio != self.ratio {
+            self.build(ratio);
+        }
+        true
     }
 
-    /// Remember the converged offsets of this step.
-    pub(crate) fn remember(&mut self, offsets: &DVector<f64>) {
+    /// Remember the converged offsets of a step of size `h`.
+    pub(crate) fn remember(&mut self, offsets: &DVector<f64>, h: f64) {
         self.previous.copy_from(offsets);
-        self.valid = true;
+        self.previous_step = Some(h);
     }
 
-    /// Offsets from the previous step's polynomial, relative to the new start q_{k+1}.
+    /// Offsets from the previous step's polynomial, relative to the new start q_{k+1}, for
+    /// the step size last given to [`StartingValues::prepare`].
     pub(crate) fn extrapolate<const N: usize>(&self, offsets: &mut DVector<f64>) {
-        let s = self.nodes.len() - 1;
+        let s = self.basis.len() - 1;
         let previous = self.previous.as_slice();
         for (nu, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
             let row = &self.extrapolation[nu * s..(nu + 1) * s];
@@ -75,6 +97,35 @@ impl StartingValues {
         }
     }
 
+    /// Node offsets of the remembered step, if any.
+    pub(crate) fn last_offsets(&self) -> Option<&[f64]> {
+        self.previous_step.map(|_| self.previous.as_slice())
+    }
+
+    /// The remembered step's polynomial at τ ∈ [−1, 1] (dense output): the offset
+    /// Σ_j l_j(τ) Z_j from the step's start and its τ-derivative Σ_j l̇_j(τ) Z_j, with the
+    /// basis values l_j(τ) written to `values` (length s + 1). `None` without a remembered
+    /// step.
+    pub(crate) fn last_step<const N: usize>(
+        &self,
+        tau: f64,
+        values: &mut [f64],
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        self.previous_step?;
+        let mut derivatives = [0.0; crate::spectral_variational::MAX_POINTS];
+        let points = self.basis.len();
+        self.basis.values_into(tau, &mut values[..points]);
+        self.basis.derivatives_into(tau, &mut derivatives[..points]);
+        let mut offset = SVector::zeros();
+        let mut rate = SVector::zeros();
+        for (j, node) in self.previous.as_slice().chunks_exact(N).enumerate() {
+            let node = SVector::<f64, N>::from_column_slice(node);
+            offset += node * values[j + 1];
+            rate += node * derivatives[j + 1];
+        }
+        Some((offset, rate))
+    }
+
     /// Offsets of the Taylor polynomial with velocity `v` and acceleration `a`.
     pub(crate) fn taylor<const N: usize>(
         &self,
@@ -83,7 +134,7 @@ impl StartingValues {
         a: &SVector<f64, N>,
         offsets: &mut DVector<f64>,
     ) {
-        for (nu, x) in self.nodes.iter().enumerate().skip(1) {
+        for (nu, x) in self.basis.nodes().iter().enumerate().skip(1) {
             let dt = 0.5 * h * (x + 1.0);
             let guess = v * dt + a * (0.5 * dt * dt);
             offsets.fixed_rows_mut::<N>((nu - 1) * N).copy_from(&guess);

@@ -23,6 +23,8 @@ use std::fmt;
 use std::path::Path;
 use std::str::FromStr;
 use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
 use svi::observer::{EnergyError, MomentumError};
 use svi::{Initial, Integrator, LagrangianExt, Method, Structure, linalg::invert_small};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
@@ -153,16 +155,36 @@ pub struct Record {
     pub seconds: f64,
 }
 
-/// Sweep every method of `options` on `scene`.
+/// Sweep every method of `options` on `scene`. With `verbose`, every point is printed to
+/// stderr under a progress bar over the methods (drawn only on a terminal).
 pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Record>, SceneError> {
     scene.check()?;
-    visit_model(&scene.model, Bench { scene, options })?
+    let progress = if options.verbose {
+        let bar = ProgressBar::new(options.methods.len() as u64);
+        if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} methods {msg}") {
+            bar.set_style(style);
+        }
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let records = visit_model(
+        &scene.model,
+        Bench {
+            scene,
+            options,
+            progress: &progress,
+        },
+    );
+    progress.finish_and_clear();
+    records?
 }
 
 /// Receives the scene's model and sweeps the methods on it.
 struct Bench<'a> {
     scene: &'a Scene,
     options: &'a BenchOptions,
+    progress: &'a ProgressBar,
 }
 
 /// The problem of a sweep: initial state, horizon and the exact final position.
@@ -197,18 +219,25 @@ impl ModelVisitor for Bench<'_> {
         let mut records = Vec::new();
         for spec in &self.options.methods {
             let label = spec.to_string();
+            self.progress.set_message(label.clone());
+            let report = Report {
+                verbose: self.options.verbose,
+                progress: self.progress,
+            };
             match *spec {
                 MethodSpec::Method(choice) => choice.visit(Sweep {
                     model: &model,
                     label: &label,
                     problem: &problem,
                     options: self.options,
+                    report,
                     records: &mut records,
                 })?,
                 MethodSpec::Dop853 | MethodSpec::Dopri5 => {
-                    sweep_adaptive(&model, *spec, &problem, self.options, &mut records)?
+                    sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
                 }
             }
+            self.progress.inc(1);
         }
         Ok(records)
     }
@@ -220,6 +249,7 @@ struct Sweep<'a, M, const N: usize> {
     label: &'a str,
     problem: &'a Problem<N>,
     options: &'a BenchOptions,
+    report: Report<'a>,
     records: &'a mut Vec<Record>,
 }
 
@@ -232,6 +262,7 @@ impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for Sweep<'_, M, N> {
             self.label,
             self.problem,
             self.options,
+            self.report,
             self.records,
         )
     }
@@ -289,17 +320,29 @@ impl Stall {
     }
 }
 
-fn report(options: &BenchOptions, record: &Record) {
-    if options.verbose {
-        eprintln!(
-            "{:>10} {:>12} error {:.3e} energy {:.3e} evaluations {:>10} time {:.4e} s",
-            record.method,
-            Float(record.parameter),
-            record.final_error,
-            record.energy_error_max,
-            record.evaluations,
-            record.seconds
-        );
+/// Where a sweep reports its points.
+#[derive(Clone, Copy)]
+struct Report<'a> {
+    verbose: bool,
+    progress: &'a ProgressBar,
+}
+
+impl Report<'_> {
+    /// Print a measured point (verbose only), above the progress bar.
+    fn record(&self, record: &Record) {
+        if self.verbose {
+            self.progress.suspend(|| {
+                eprintln!(
+                    "{:>10} {:>12} error {:.3e} energy {:.3e} evaluations {:>10} time {:.4e} s",
+                    record.method,
+                    Float(record.parameter),
+                    record.final_error,
+                    record.energy_error_max,
+                    record.evaluations,
+                    record.seconds
+                )
+            });
+        }
     }
 }
 
@@ -310,6 +353,7 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     label: &str,
     problem: &Problem<N>,
     options: &BenchOptions,
+    report: Report<'_>,
     records: &mut Vec<Record>,
 ) -> Result<(), SceneError> {
     let order = method.info().order.max(1) as f64;
@@ -379,7 +423,7 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             iterations: run.statistics.iterations,
             seconds,
         };
-        report(options, &record);
+        report.record(&record);
         let done = record.final_error < options.target
             || stall.stalled(record.final_error)
             || seconds > options.max_run;
@@ -510,13 +554,14 @@ fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
     spec: MethodSpec,
     problem: &Problem<N>,
     options: &BenchOptions,
+    report: Report<'_>,
     records: &mut Vec<Record>,
 ) -> Result<(), SceneError> {
     // `2 * N` is not a const expression on stable Rust: dispatch on the size at run time.
     match N {
-        1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, records),
-        2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, records),
-        3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, records),
+        1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
+        2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
+        3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
         _ => {
             return Err(SceneError::BenchMethod(format!(
                 "{spec} (the ode_solvers peers are wired for models of dimension ≤ 3)"
@@ -532,6 +577,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     spec: MethodSpec,
     problem: &Problem<N>,
     options: &BenchOptions,
+    report: Report<'_>,
     records: &mut Vec<Record>,
 ) {
     assert_eq!(S, 2 * N, "state size");
@@ -594,7 +640,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
             iterations: 0,
             seconds,
         };
-        report(options, &record);
+        report.record(&record);
         let done = record.final_error < options.target
             || stall.stalled(record.final_error)
             || seconds > options.max_run;

@@ -25,8 +25,13 @@
 //! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
 //!
 //! [run]                 # absent: the model's default step and horizon
-//! h = 0.2
+//! h = 0.2               # the step (unused by adapt = "step")
 //! t_end = 2000.0
+//! adapt = "none"        # "none" (default), "step" (step doubling) or "degree" (points per
+//!                       # step, svi and sc), both to meet `tol`
+//! tol = 1e-9            # target final error of the adaptive modes
+//! min_points = 3        # bounds of adapt = "degree" (defaults 3 and 24)
+//! max_points = 24
 //! recovery = "none"     # or "halve-step": retry a failed step as two half steps
 //! # max_halvings = 4    # with "halve-step": successive halvings allowed (default 4)
 //! # divergence_limit = 1e6   # stop once |q_i| or |p_i| exceeds this (default: no limit)
@@ -34,6 +39,8 @@
 //! [output]
 //! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
 //! every = 10                  # every 10th step (default 1)
+//! output_times = [1.0, 2.5]   # report (and write) the states at these times, read off each
+//!                             # step's polynomial (dense output), instead of every step
 //! diagnostics = ["energy", "momentum", "solution"]   # the default: all three
 //! ```
 //!
@@ -64,15 +71,17 @@ use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 pub mod bench;
 pub mod plot;
+pub mod rigid;
 pub mod stability;
 pub mod stress;
 
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
+use svi::solve::{Adapt, SolveOptions, Span};
 use svi::{
     AdjointSymplecticEuler, Integrator, LagrangianExt, Method, Midpoint, PhasePoint,
     SpectralCollocation, StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
-use svi::{Initial, Recovery, RunFailure, RunOptions};
+use svi::{Initial, Recovery, RunFailure, RunOptions, Statistics};
 use svi_models::{MODEL_NAMES, ModelVisitor, UnknownModel, ZooModel, visit_model};
 
 /// The built-in scenes, as (name, TOML text).
@@ -457,14 +466,23 @@ pub struct MethodSection {
     pub quadrature: Option<usize>,
 }
 
-/// `[run]`: step, horizon and failure handling.
+/// `[run]`: step, horizon, adaptivity and failure handling.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunSection {
-    /// Step size (default: the model's default step).
+    /// Step size (default: the model's default step); unused by `adapt = "step"`, which
+    /// chooses its first step from the initial state.
     pub h: Option<f64>,
     /// Final time (default: the model's default horizon).
     pub t_end: Option<f64>,
+    /// Adaptivity (default none).
+    pub adapt: Option<AdaptMode>,
+    /// Target final error of the adaptive modes.
+    pub tol: Option<f64>,
+    /// Fewest CGL points of `adapt = "degree"` (default 3).
+    pub min_points: Option<usize>,
+    /// Most CGL points of `adapt = "degree"` (default 24).
+    pub max_points: Option<usize>,
     /// What to do when a step fails (default: `none`, stop with the error).
     pub recovery: Option<RecoveryKind>,
     /// Successive halvings allowed by `recovery = "halve-step"` (default
@@ -473,6 +491,40 @@ pub struct RunSection {
     /// Stop with an error once a state component exceeds this in absolute value (default:
     /// no limit; NaN and infinity always stop the run).
     pub divergence_limit: Option<f64>,
+}
+
+/// The adaptivity modes of [`svi::solve`], as named in scenes and on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum AdaptMode {
+    /// Fixed step.
+    #[default]
+    None,
+    /// Step doubling to meet `tol`.
+    Step,
+    /// Points per step (svi and sc) to meet `tol`, at fixed step.
+    Degree,
+}
+
+impl AdaptMode {
+    /// The name, as written in scenes and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AdaptMode::None => "none",
+            AdaptMode::Step => "step",
+            AdaptMode::Degree => "degree",
+        }
+    }
+}
+
+impl From<AdaptMode> for Adapt {
+    fn from(mode: AdaptMode) -> Adapt {
+        match mode {
+            AdaptMode::None => Adapt::None,
+            AdaptMode::Step => Adapt::Step,
+            AdaptMode::Degree => Adapt::Degree,
+        }
+    }
 }
 
 /// Successive halvings of a failed step allowed by default under `recovery = "halve-step"`.
@@ -527,6 +579,8 @@ pub struct OutputSection {
     pub trajectory: Option<PathBuf>,
     /// Diagnostics to compute (default: all of [`Diagnostic::NAMES`]).
     pub diagnostics: Option<Vec<Diagnostic>>,
+    /// Report the states at these times (dense output) instead of at every step.
+    pub output_times: Option<Vec<f64>>,
 }
 
 /// Scene fields set from the command line.
@@ -559,6 +613,20 @@ pub struct Overrides {
     /// Diagnostics to compute, comma-separated (default: energy,momentum,solution).
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub diagnostics: Option<Vec<Diagnostic>>,
+    /// Adaptivity: none (fixed step), step (step doubling) or degree (points per step).
+    #[arg(long, value_enum)]
+    pub adapt: Option<AdaptMode>,
+    /// Target final error of the adaptive modes.
+    #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
+    pub tol: Option<f64>,
+    /// Report the states at these times, comma-separated (dense output).
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub output_times: Option<Vec<f64>>,
     /// Recovery policy for failed steps.
     #[arg(long, value_enum)]
     pub recovery: Option<RecoveryKind>,
@@ -628,12 +696,22 @@ impl Scene {
     }
 
     /// Consistency checks that need no model: one of v and p, `every` only with a file,
-    /// valid run options.
+    /// valid run options (recovery and divergence limit only for fixed-step runs).
     pub fn check(&self) -> Result<(), SceneError> {
         if self.initial.v.is_some() && self.initial.p.is_some() {
             return Err(SceneError::VelocityAndMomentum);
         }
-        self.run.options()?;
+        if self.run.options()? != RunOptions::default()
+            && (self.run.adapt.is_some_and(|adapt| adapt != AdaptMode::None)
+                || self.output.output_times.is_some())
+        {
+            return Err(svi::Error::invalid(
+                "recovery",
+                "recovery and divergence_limit apply to fixed-step runs (adapt = \"none\", no \
+                 output_times)",
+            )
+            .into());
+        }
         match (self.output.every, &self.output.trajectory) {
             (Some(_), None) => Err(SceneError::EveryWithoutOutput),
             (Some(0), Some(_)) => {
@@ -655,6 +733,9 @@ impl Scene {
             every,
             out,
             diagnostics,
+            adapt,
+            tol,
+            output_times,
             recovery,
             divergence_limit,
         } = overrides;
@@ -683,6 +764,9 @@ impl Scene {
         set(&mut self.output.every, every);
         set(&mut self.output.trajectory, out);
         set(&mut self.output.diagnostics, diagnostics);
+        set(&mut self.run.adapt, adapt);
+        set(&mut self.run.tol, tol);
+        set(&mut self.output.output_times, output_times);
         if *recovery == Some(RecoveryKind::None) {
             self.run.max_halvings = None;
         }
@@ -805,6 +889,18 @@ struct Setup<const N: usize> {
     points: Option<usize>,
     quadrature: Option<usize>,
     options: RunOptions,
+    adapt: AdaptMode,
+    tol: Option<f64>,
+    points_range: (Option<usize>, Option<usize>),
+    output_times: Option<Vec<f64>>,
+}
+
+impl<const N: usize> Setup<N> {
+    /// Whether the run goes through [`svi::solve`] (adaptivity or output times) rather than
+    /// the plain stepping loop.
+    fn solves(&self) -> bool {
+        self.adapt != AdaptMode::None || self.output_times.is_some()
+    }
 }
 
 impl ModelVisitor for RunScene<'_> {
@@ -830,6 +926,10 @@ impl ModelVisitor for RunScene<'_> {
             kind: scene.method.name,
             points: scene.points(),
             quadrature: scene.quadrature(),
+            adapt: scene.run.adapt.unwrap_or_default(),
+            tol: scene.run.tol,
+            points_range: (scene.run.min_points, scene.run.max_points),
+            output_times: scene.output.output_times.clone(),
             options: scene.run.options()?,
         };
         let choice = MethodChoice {
@@ -902,15 +1002,32 @@ impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for RunWith<'_, M, N> {
     }
 }
 
+/// The diagnostics and outputs a run asked for.
+type Observers<const N: usize> = (
+    Option<EnergyError>,
+    Option<MomentumError>,
+    Option<SolutionError<N>>,
+    Option<Every<Trajectory<N>>>,
+);
+
+/// What a run produced, whichever loop ran it.
+struct Outcome<const N: usize> {
+    statistics: Statistics,
+    last: svi::PhasePoint<N>,
+    adaptivity: Option<AdaptivitySummary>,
+    outputs: Option<Vec<OutputPoint>>,
+    seconds: f64,
+}
+
 /// Run `model` with `method`, observing only what `setup` asks for.
-fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
+fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     model: M,
     method: Me,
     setup: &Setup<N>,
 ) -> Result<Summary, SceneError> {
     let integrator = Integrator::new(model, method);
     let model = integrator.model();
-    let mut observers = (
+    let mut observers: Observers<N> = (
         setup.energy.then(EnergyError::default),
         (setup.momentum && model.generator_count() > 0).then(MomentumError::default),
         setup.solution.then(SolutionError::<N>::default),
@@ -918,37 +1035,52 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
             .trajectory
             .as_ref()
             .map(|(_, every)| Every::new(*every, Trajectory::<N>::new())),
-        setup
+    );
+    let mut failure = None;
+    let outcome = if setup.solves() {
+        solve_scene(&integrator, setup, &mut observers)?
+    } else {
+        let mut progress = setup
             .progress
             .then(|| Progress::for_run(setup.t0, setup.h, setup.t_end))
-            .flatten(),
-    );
-    let start = Instant::now();
-    let run = integrator.try_run(
-        setup.t0,
-        setup.initial,
-        setup.h,
-        setup.t_end,
-        &setup.options,
-        &mut observers,
-    );
-    let seconds = start.elapsed().as_secs_f64();
-    if let Some(progress) = &observers.4 {
-        progress.finish();
-    }
-    // A failed run still reports (and writes) everything up to its last good state.
-    let (run, failure) = match run {
-        Ok(run) => (run, None),
-        Err(RunFailure {
-            error,
-            partial: Some(run),
-        }) => (run, Some(error)),
-        Err(RunFailure {
-            error,
-            partial: None,
-        }) => return Err(error.into()),
+            .flatten();
+        let start = Instant::now();
+        let run = integrator.try_run(
+            setup.t0,
+            setup.initial,
+            setup.h,
+            setup.t_end,
+            &setup.options,
+            &mut (&mut observers, &mut progress),
+        );
+        let seconds = start.elapsed().as_secs_f64();
+        if let Some(progress) = &progress {
+            progress.finish();
+        }
+        // A failed run still reports (and writes) everything up to its last good state.
+        let run = match run {
+            Ok(run) => run,
+            Err(RunFailure {
+                error,
+                partial: Some(run),
+            }) => {
+                failure = Some(error);
+                run
+            }
+            Err(RunFailure {
+                error,
+                partial: None,
+            }) => return Err(error.into()),
+        };
+        Outcome {
+            statistics: run.statistics,
+            last: run.last,
+            adaptivity: None,
+            outputs: None,
+            seconds,
+        }
     };
-    let (energy, momentum, solution, trajectory, _) = observers;
+    let (energy, momentum, solution, trajectory) = observers;
 
     let guess = match setup.initial {
         Initial::Velocity { v, .. } => v,
@@ -956,12 +1088,12 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
     };
     let first = integrator.initial_state(setup.t0, &setup.initial)?;
     let first = integrator.phase_point(setup.t0, &first, &guess)?;
-    let last = run.last;
+    let last = outcome.last;
 
     let trajectory = match (trajectory, &setup.trajectory) {
         (Some(Every { every, inner }), Some((path, _))) => {
             let mut rows = inner.points;
-            if !run.statistics.steps.is_multiple_of(every.max(1)) {
+            if rows.last().is_none_or(|row| row.t != last.t) && setup.output_times.is_none() {
                 rows.push(last);
             }
             write_trajectory(path, model, &rows)?;
@@ -988,7 +1120,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
         h: setup.h,
         t0: setup.t0,
         t_end: last.t,
-        steps: run.statistics.steps,
+        steps: outcome.statistics.steps,
         q: last.q.iter().copied().collect(),
         v: last.v.iter().copied().collect(),
         p: last.p.iter().copied().collect(),
@@ -997,11 +1129,15 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
         energy_error_max: energy.map(|e| e.max),
         momentum_error_max: momentum.map(|m| m.max),
         solution_error_max: solution.and_then(|s| s.max),
-        iterations: run.statistics.iterations,
-        evaluations: run.statistics.evaluations,
-        retries: run.statistics.retries,
-        seconds,
+        iterations: outcome.statistics.iterations,
+        evaluations: outcome.statistics.evaluations,
+        retries: outcome.statistics.retries,
+        seconds: outcome.seconds,
         trajectory,
+        adapt: setup.adapt,
+        tol: setup.tol,
+        adaptivity: outcome.adaptivity,
+        outputs: outcome.outputs,
     };
     match failure {
         None => Ok(summary),
@@ -1010,6 +1146,108 @@ fn run_with<M: ZooModel<N>, Me: Method<N>, const N: usize>(
             source,
         }),
     }
+}
+
+/// Run a scene through [`svi::solve`]: the observers see the initial point and the states
+/// at the output times (every step's end when no output times are given).
+fn solve_scene<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+    integrator: &Integrator<M, Me, N>,
+    setup: &Setup<N>,
+    observers: &mut Observers<N>,
+) -> Result<Outcome<N>, SceneError> {
+    let mut options = SolveOptions::default();
+    options.adapt = setup.adapt.into();
+    // Step control chooses its own first step from the initial state: a default step that is
+    // far too large at a close approach can pass the step-doubling test pre-asymptotically.
+    options.h = (setup.adapt != AdaptMode::Step).then_some(setup.h);
+    options.tol = setup.tol;
+    if let Some(points) = setup.points_range.0 {
+        options.min_points = points;
+    }
+    if let Some(points) = setup.points_range.1 {
+        options.max_points = points;
+    }
+    let span = match &setup.output_times {
+        Some(times) => Span::with_outputs(setup.t0, setup.t_end, times.clone()),
+        None => Span::new(setup.t0, setup.t_end),
+    };
+    let start = Instant::now();
+    let solution = integrator.solve(&span, setup.initial, &options)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let model = integrator.model();
+    let guess = match setup.initial {
+        Initial::Velocity { v, .. } => v,
+        Initial::Momentum { p, .. } => p,
+    };
+    let first = integrator.initial_state(setup.t0, &setup.initial)?;
+    let first = integrator.phase_point(setup.t0, &first, &guess)?;
+    let points = solution.points.iter().filter(|point| point.t > setup.t0);
+    for (index, point) in std::iter::once(&first).chain(points).enumerate() {
+        if Observer::<M, N>::wants(observers, index) {
+            // Observers of a scene never stop a run.
+            let _ = observers.observe(model, index, point);
+        }
+    }
+    let adaptivity = &solution.adaptivity;
+    let outputs = setup.output_times.as_ref().map(|_| {
+        solution
+            .points
+            .iter()
+            .map(|point| OutputPoint {
+                t: point.t,
+                q: point.q.iter().copied().collect(),
+                v: point.v.iter().copied().collect(),
+                p: point.p.iter().copied().collect(),
+            })
+            .collect()
+    });
+    Ok(Outcome {
+        statistics: solution.statistics,
+        last: solution.last,
+        adaptivity: Some(AdaptivitySummary {
+            accepted: adaptivity.accepted,
+            rejected: adaptivity.rejected,
+            min_step: adaptivity.min_step,
+            max_step: adaptivity.max_step,
+            points_used: adaptivity.points.clone(),
+            unmet: adaptivity.unmet,
+            outputs: solution.points.len(),
+        }),
+        outputs,
+        seconds,
+    })
+}
+
+/// A state at a requested output time.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputPoint {
+    /// Time.
+    pub t: f64,
+    /// Configuration.
+    pub q: Vec<f64>,
+    /// Velocity.
+    pub v: Vec<f64>,
+    /// Momentum.
+    pub p: Vec<f64>,
+}
+
+/// What [`svi::solve`] did, for the summary.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AdaptivitySummary {
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Rejected trial steps.
+    pub rejected: usize,
+    /// Smallest accepted step.
+    pub min_step: f64,
+    /// Largest accepted step.
+    pub max_step: f64,
+    /// (CGL points, steps that used them).
+    pub points_used: Vec<(usize, usize)>,
+    /// Steps of `adapt = "degree"` that missed the tolerance at `max_points`.
+    pub unmet: usize,
+    /// States reported at output times.
+    pub outputs: usize,
 }
 
 /// Write `rows` as CSV: `t,q_<name>…,v_<name>…,p_<name>…,energy`, full precision.
@@ -1194,6 +1432,15 @@ pub struct Summary {
     pub seconds: f64,
     /// The trajectory file, if one was written.
     pub trajectory: Option<TrajectoryOutput>,
+    /// Adaptivity mode.
+    pub adapt: AdaptMode,
+    /// Target final error of the adaptive modes.
+    pub tol: Option<f64>,
+    /// What the adaptivity did (runs through `svi::solve` only: adaptive or with output
+    /// times).
+    pub adaptivity: Option<AdaptivitySummary>,
+    /// The states at the requested output times (`None` without output times).
+    pub outputs: Option<Vec<OutputPoint>>,
 }
 
 /// Comma-separated shortest round-trip values in brackets.
@@ -1278,6 +1525,37 @@ impl fmt::Display for Summary {
         ];
         for (label, value) in rows {
             writeln!(f, "{label:<16}{value}")?;
+        }
+        if let Some(a) = &self.adaptivity {
+            let mut line = format!(
+                "{} accepted, {} rejected steps, h from {:.3e} to {:.3e}",
+                a.accepted, a.rejected, a.min_step, a.max_step
+            );
+            if let Some(tol) = self.tol {
+                line = format!("{}, tol {tol:e}: {line}", self.adapt.name());
+            }
+            if self.adapt == AdaptMode::Degree {
+                let used: Vec<String> = a
+                    .points_used
+                    .iter()
+                    .map(|(points, steps)| format!("{points}:{steps}"))
+                    .collect();
+                line.push_str(&format!("; points:steps {}", used.join(" ")));
+                if a.unmet > 0 {
+                    line.push_str(&format!("; {} steps missed tol at max_points", a.unmet));
+                }
+            }
+            writeln!(f, "{:<16}{line}", "adaptivity")?;
+        }
+        for point in self.outputs.iter().flatten() {
+            writeln!(
+                f,
+                "{:<16}q {} v {} p {}",
+                format!("t = {}", Float(point.t)),
+                vector(&point.q),
+                vector(&point.v),
+                vector(&point.p)
+            )?;
         }
         if let Some(trajectory) = &self.trajectory {
             writeln!(
@@ -1454,10 +1732,16 @@ mod tests {
                 every: Some(10),
                 out: Some("x.csv".into()),
                 diagnostics: Some(vec![Diagnostic::Energy]),
+                adapt: Some(AdaptMode::Degree),
+                tol: Some(1e-9),
+                output_times: Some(vec![1.0, 2.0]),
                 recovery: Some(RecoveryKind::HalveStep),
                 divergence_limit: Some(1e9),
             })
             .unwrap();
+        assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
+        assert_eq!(scene.run.tol, Some(1e-9));
+        assert_eq!(scene.output.output_times, Some(vec![1.0, 2.0]));
         assert_eq!(scene.run.recovery, Some(RecoveryKind::HalveStep));
         assert_eq!(
             scene.run.options().unwrap(),

@@ -115,6 +115,9 @@ struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
+    /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
+    #[arg(long, value_name = "FORM")]
+    form: Option<String>,
 }
 
 fn main() -> ExitCode {
@@ -140,8 +143,32 @@ fn main() -> ExitCode {
 
 fn run(args: RunArgs) -> anyhow::Result<()> {
     let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+    if let Some(scene) = svi_cli::rigid::RigidScene::load_if_rigid(name) {
+        return run_rigid(scene?, name, &args);
+    }
+    anyhow::ensure!(
+        args.form.is_none(),
+        "--form applies to rigid-body scenes only (see svi list)"
+    );
     let mut scene = Scene::load(name)?;
     scene.apply(&args.overrides)?;
+    let summary = scene
+        .run(std::io::stderr().is_terminal())
+        .with_context(|| format!("scene '{name}' failed"))?;
+    if args.json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        print!("{summary}");
+    }
+    Ok(())
+}
+
+fn run_rigid(
+    mut scene: svi_cli::rigid::RigidScene,
+    name: &str,
+    args: &RunArgs,
+) -> anyhow::Result<()> {
+    scene.apply(&args.overrides, args.form.as_deref())?;
     let summary = scene
         .run(std::io::stderr().is_terminal())
         .with_context(|| format!("scene '{name}' failed"))?;
@@ -299,5 +326,9 @@ fn list() {
             Float(model.t_end),
             facts.join(", ")
         );
+    }
+    println!();
+    for line in svi_cli::rigid::list_lines() {
+        println!("{line}");
     }
 }

@@ -602,3 +602,94 @@ fn classic_methods_reject_spectral_options() {
         assert!(text.contains(name), "{name}: {text}");
     }
 }
+
+#[test]
+fn output_times_report_dense_states_at_those_times() {
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--t-end",
+        "10",
+        "--h",
+        "0.1",
+        "--points",
+        "7",
+        "--quadrature",
+        "6",
+        "--output-times",
+        "0.05,3.33,9.99,10",
+        "--json",
+    ]);
+    let outputs = summary["outputs"].as_array().unwrap();
+    let times: Vec<f64> = outputs.iter().map(|o| number(o, "t")).collect();
+    assert_eq!(times, [0.05, 3.33, 9.99, 10.0]);
+    // Every state read off a step polynomial lies on the orbit: energy −1/2.
+    for output in outputs {
+        let v = vector(output, "v");
+        let q = vector(output, "q");
+        let energy = 0.5 * (v[0] * v[0] + v[1] * v[1]) - 1.0 / q[0].hypot(q[1]);
+        assert!((energy + 0.5).abs() < 1e-7, "{output}");
+    }
+    assert_eq!(vector(&summary, "q"), vector(&outputs[3], "q"));
+    assert_eq!(number(&summary, "steps"), 100.0);
+    assert!(number(&summary, "solution_error_max") < 1e-8);
+}
+
+#[test]
+fn degree_adaptivity_meets_the_tolerance_with_varying_points() {
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--t-end",
+        "62.83",
+        "--h",
+        "0.5",
+        "--points",
+        "5",
+        "--quadrature",
+        "4",
+        "--adapt",
+        "degree",
+        "--tol",
+        "1e-9",
+        "--json",
+    ]);
+    assert_eq!(summary["adapt"], "degree");
+    assert!(number(&summary, "solution_error_max") < 1e-8, "{summary}");
+    let used = summary["adaptivity"]["points_used"].as_array().unwrap();
+    assert!(used.len() >= 3, "{summary}");
+}
+
+#[test]
+fn step_adaptivity_takes_small_steps_only_at_the_close_approach() {
+    let summary = json(&[
+        "run", "kepler", "--param", "e=0.9", "--t-end", "25.13", "--adapt", "step", "--tol",
+        "1e-10", "--json",
+    ]);
+    assert!(number(&summary, "solution_error_max") < 1e-8, "{summary}");
+    let adaptivity = &summary["adaptivity"];
+    assert!(number(adaptivity, "max_step") > 20.0 * number(adaptivity, "min_step"));
+    // Step doubling conserves the angular momentum step by step.
+    assert!(number(&summary, "momentum_error_max") < 1e-13);
+}
+
+#[test]
+fn bad_tolerances_and_output_times_are_rejected() {
+    for (args, message) in [
+        (&["--adapt", "step", "--tol", "0"][..], "invalid tol"),
+        (&["--adapt", "step", "--tol", "nan"][..], "invalid tol"),
+        (&["--adapt", "degree"][..], "needs a tolerance"),
+        (&["--output-times", "1,0.5"][..], "increase strictly"),
+        (&["--output-times", "0.5,3000"][..], "outside the span"),
+        (
+            &["--adapt", "degree", "--tol", "1e-6", "--method", "verlet"][..],
+            "no polynomial degree",
+        ),
+        (&["--adapt", "sometimes"][..], "invalid value"),
+    ] {
+        let mut all = vec!["run", "kepler"];
+        all.extend_from_slice(args);
+        let stderr = failure(&all);
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+    }
+}

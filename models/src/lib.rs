@@ -56,6 +56,10 @@ pub mod oscillator;
 pub mod pendulum;
 pub mod spring_pendulum;
 
+pub mod heavy_top;
+pub mod pendulum_3d;
+pub mod rigid_body;
+
 pub use damped_oscillator::DampedOscillator;
 pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
@@ -64,6 +68,10 @@ pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use spring_pendulum::SpringPendulum;
+
+pub use heavy_top::HeavyTop;
+pub use pendulum_3d::Pendulum3d;
+pub use rigid_body::FreeRigidBody;
 
 use svi::{Defaults, ExactSolution, Invariants, Lagrangian, Symmetries};
 
@@ -143,4 +151,63 @@ pub fn visit_model<V: ModelVisitor>(name: &str, visitor: V) -> Result<V::Output,
 pub struct UnknownModel {
     /// The name that was asked for.
     pub name: String,
+}
+
+/// Everything a rigid-body zoo model implements (blanket impl for any type with all the
+/// bounds): the models on SO(3), integrated by [`svi::lie_group::LieSvi`].
+pub trait RigidZooModel:
+    svi::lie_group::RigidBodyLagrangian
+    + svi::lie_group::RigidBodySymmetries
+    + svi::lie_group::RigidBodyInvariants
+    + svi::lie_group::RigidBodyDefaults
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
+{
+}
+
+impl<T> RigidZooModel for T where
+    T: svi::lie_group::RigidBodyLagrangian
+        + svi::lie_group::RigidBodySymmetries
+        + svi::lie_group::RigidBodyInvariants
+        + svi::lie_group::RigidBodyDefaults
+        + Clone
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + 'static
+{
+}
+
+/// Receives a concrete rigid-body model chosen by name at run time (see
+/// [`visit_rigid_model`]).
+pub trait RigidModelVisitor {
+    /// What the visit produces.
+    type Output;
+
+    /// Called once with the model, as its concrete type.
+    fn visit<M: RigidZooModel>(self, model: M) -> Self::Output;
+}
+
+/// Names of the rigid-body models on SO(3), in a stable order (each equals the model's
+/// [`svi::lie_group::RigidBodyDefaults::name`]).
+///
+/// | name | model | G-invariant | conserved momenta | invariants |
+/// | --- | --- | --- | --- | --- |
+/// | `rigid-body` | [`FreeRigidBody`] | yes | spatial angular momentum (3) | ‖Π‖² |
+/// | `heavy-top` | [`HeavyTop`] | no | vertical angular momentum | spin Π₃ |
+/// | `pendulum-3d` | [`Pendulum3d`] | no | vertical angular momentum | — |
+pub const RIGID_MODEL_NAMES: &[&str] = &[FreeRigidBody::NAME, HeavyTop::NAME, Pendulum3d::NAME];
+
+/// Build the named rigid-body model with its defaults and hand it to the visitor; `None`
+/// if `name` is not one of [`RIGID_MODEL_NAMES`].
+pub fn visit_rigid_model<V: RigidModelVisitor>(name: &str, visitor: V) -> Option<V::Output> {
+    match name {
+        FreeRigidBody::NAME => Some(visitor.visit(FreeRigidBody::default())),
+        HeavyTop::NAME => Some(visitor.visit(HeavyTop::default())),
+        Pendulum3d::NAME => Some(visitor.visit(Pendulum3d::default())),
+        _ => None,
+    }
 }

@@ -1,0 +1,290 @@
+//! `svi run` on the rigid-body scenes (Lie-group variational integrator on SO(3)): JSON
+//! summaries with the conservation diagnostics, the CSV trajectory, scene files, overrides
+//! and error messages. References: conservation laws (spatial angular momentum of the free
+//! body, vertical angular momentum of the tops, ‖RᵀR − I‖ = 0) and the agreement of the
+//! full and reduced forms on the free body.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn svi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_svi"))
+        .args(args)
+        .output()
+        .expect("the svi binary runs")
+}
+
+fn json(args: &[&str]) -> Value {
+    let output = svi(args);
+    assert!(
+        output.status.success(),
+        "svi {args:?} failed: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
+}
+
+fn failure(args: &[&str]) -> String {
+    let output = svi(args);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(!output.status.success(), "svi {args:?} succeeded");
+    assert!(output.stdout.is_empty(), "svi {args:?} printed to stdout");
+    assert!(
+        !stderr.contains("panicked"),
+        "svi {args:?} panicked: {stderr}"
+    );
+    assert!(stderr.contains("error"), "svi {args:?}: {stderr}");
+    stderr
+}
+
+fn number(value: &Value, key: &str) -> f64 {
+    value[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} is not a number in {value}"))
+}
+
+fn vector(value: &Value, key: &str) -> Vec<f64> {
+    value[key]
+        .as_array()
+        .unwrap_or_else(|| panic!("{key} is not an array in {value}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir =
+            std::env::temp_dir().join(format!("svi-rigid-test-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+    fn join(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+#[test]
+fn rigid_body_scene_conserves_momentum_and_orthogonality() {
+    let summary = json(&["run", "rigid-body", "--json"]);
+    assert_eq!(summary["model"], "rigid-body");
+    assert_eq!(summary["method"], "lie-svi");
+    assert_eq!(summary["form"], "reduced");
+    assert_eq!(summary["order"], 4);
+    assert_eq!(summary["symplectic"], true);
+    assert_eq!(summary["steps"], 2000);
+    assert!(
+        number(&summary, "orthogonality_error_max") <= 1e-13,
+        "{summary}"
+    );
+    assert!(
+        number(&summary, "momentum_error_relative") <= 1e-12,
+        "{summary}"
+    );
+    assert!(number(&summary, "momentum_error_max") <= 1e-12, "{summary}");
+    assert!(
+        number(&summary, "invariant_error_max") <= 1e-12,
+        "{summary}"
+    );
+    assert!(number(&summary, "energy_error_max") <= 1e-8, "{summary}");
+    // Default state: Ω₀ = (1, 0.5, −0.4), I = diag(1, 2, 3), R₀ = I: π = (1, 1, −1.2).
+    let spatial = vector(&summary, "spatial_momentum");
+    for (x, y) in spatial.iter().zip([1.0, 1.0, -1.2]) {
+        assert!((x - y).abs() <= 1e-12, "{spatial:?}");
+    }
+    let q = vector(&summary, "quaternion");
+    assert!((q.iter().map(|c| c * c).sum::<f64>() - 1.0).abs() < 1e-14);
+}
+
+#[test]
+fn full_and_reduced_forms_agree_on_the_free_body() {
+    let full = json(&[
+        "run",
+        "rigid-body",
+        "--json",
+        "--form",
+        "full",
+        "--t-end",
+        "10",
+    ]);
+    let reduced = json(&[
+        "run",
+        "rigid-body",
+        "--json",
+        "--form",
+        "reduced",
+        "--t-end",
+        "10",
+    ]);
+    assert_eq!(full["form"], "full");
+    assert_eq!(reduced["form"], "reduced");
+    for key in ["attitude", "momentum", "omega"] {
+        for (a, b) in vector(&full, key).iter().zip(vector(&reduced, key)) {
+            assert!((a - b).abs() <= 1e-12, "{key}: {a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn heavy_top_and_pendulum_conserve_vertical_momentum() {
+    for scene in ["heavy-top", "pendulum-3d"] {
+        let summary = json(&["run", scene, "--json", "--t-end", "5"]);
+        assert_eq!(summary["form"], "full");
+        assert_eq!(summary["steps"], 500);
+        assert_eq!(summary["momentum_names"][0], "vertical angular momentum");
+        assert!(
+            number(&summary, "momentum_error_relative") <= 1e-12,
+            "{summary}"
+        );
+        assert!(
+            number(&summary, "orthogonality_error_max") <= 1e-13,
+            "{summary}"
+        );
+        assert!(number(&summary, "energy_error_max") <= 1e-6, "{summary}");
+    }
+    // Higher order through the overrides.
+    let summary = json(&[
+        "run",
+        "heavy-top",
+        "--json",
+        "--t-end",
+        "1",
+        "--points",
+        "4",
+        "--quadrature",
+        "4",
+    ]);
+    assert_eq!(summary["order"], 6);
+    assert_eq!(summary["quadrature"], 4);
+}
+
+#[test]
+fn trajectory_csv_has_quaternion_matrix_and_omega() {
+    let scratch = Scratch::new("trajectory");
+    let path = scratch.join("top.csv");
+    let summary = json(&[
+        "run",
+        "heavy-top",
+        "--json",
+        "--t-end",
+        "1",
+        "--every",
+        "10",
+        "--out",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(summary["trajectory"]["rows"], 11);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header[..5], ["t", "qw", "qx", "qy", "qz"]);
+    assert_eq!(header.len(), 22);
+    let rows: Vec<Vec<f64>> = lines
+        .map(|line| line.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 11);
+    let first_energy = rows[0][20];
+    for row in &rows {
+        let norm: f64 = row[1..5].iter().map(|c| c * c).sum();
+        assert!((norm - 1.0).abs() < 1e-14);
+        assert!(row[21] < 1e-13);
+        assert!((row[20] - first_energy).abs() < 1e-6);
+        // Spin Ω₃ = 10 of the symmetric top is constant.
+        assert!((row[16] - 10.0).abs() < 1e-12);
+    }
+    assert!((rows[10][0] - 1.0).abs() < 1e-15);
+}
+
+#[test]
+fn scene_files_with_a_rigid_model_run() {
+    let scratch = Scratch::new("scene");
+    let path = scratch.join("top.toml");
+    std::fs::write(
+        &path,
+        r#"model = "heavy-top"
+[parameters]
+l = 0.3
+[initial]
+quaternion = [1.0, 0.0, 0.0, 0.0]
+momentum = [0.2, 0.0, 4.0]
+[method]
+points = 2
+quadrature = 1
+[run]
+h = 0.02
+t_end = 2.0
+"#,
+    )
+    .unwrap();
+    let summary = json(&["run", path.to_str().unwrap(), "--json"]);
+    assert_eq!(summary["model"], "heavy-top");
+    assert_eq!(summary["parameters"]["l"], 0.3);
+    assert_eq!(summary["order"], 2);
+    assert_eq!(summary["steps"], 100);
+    assert!(
+        number(&summary, "momentum_error_relative") <= 1e-12,
+        "{summary}"
+    );
+    // Body momentum Π₃ = 4 with I₃ = 0.5: spin Ω₃ = 8 throughout.
+    assert!((vector(&summary, "omega")[2] - 8.0).abs() < 1e-12);
+}
+
+#[test]
+fn bad_rigid_scenes_fail_with_messages() {
+    let stderr = failure(&["run", "heavy-top", "--form", "reduced"]);
+    assert!(stderr.contains("G-invariant"), "{stderr}");
+    let stderr = failure(&["run", "heavy-top", "--method", "svi"]);
+    assert!(stderr.contains("lie-svi"), "{stderr}");
+    let stderr = failure(&["run", "heavy-top", "--form", "sideways"]);
+    assert!(stderr.contains("sideways"), "{stderr}");
+    let stderr = failure(&["run", "heavy-top", "--points", "1"]);
+    assert!(stderr.contains("points"), "{stderr}");
+    let stderr = failure(&["run", "heavy-top", "--h", "0"]);
+    assert!(stderr.contains("h"), "{stderr}");
+    let stderr = failure(&["run", "heavy-top", "--param", "m=-1"]);
+    assert!(stderr.contains("m"), "{stderr}");
+    let stderr = failure(&["run", "kepler", "--form", "full"]);
+    assert!(stderr.contains("rigid-body"), "{stderr}");
+    let scratch = Scratch::new("bad");
+    let path = scratch.join("bad.toml");
+    std::fs::write(
+        &path,
+        "model = \"pendulum-3d\"\n[initial]\nquaternion = [1.0, 1.0, 0.0, 0.0]\n",
+    )
+    .unwrap();
+    let stderr = failure(&["run", path.to_str().unwrap()]);
+    assert!(stderr.contains("quaternion"), "{stderr}");
+    std::fs::write(
+        &path,
+        "model = \"pendulum-3d\"\n[initial]\nomega = [1.0, 2.0]\n",
+    )
+    .unwrap();
+    let stderr = failure(&["run", path.to_str().unwrap()]);
+    assert!(stderr.contains("omega"), "{stderr}");
+}
+
+#[test]
+fn list_shows_the_rigid_scenes_and_models() {
+    let output = svi(&["list"]);
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    for name in ["rigid-body", "heavy-top", "pendulum-3d"] {
+        assert!(text.matches(name).count() >= 2, "{name} missing:\n{text}");
+    }
+    // The text summary prints the orthogonality diagnostic.
+    let output = svi(&["run", "pendulum-3d", "--t-end", "0.5"]);
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("|R^T R - I|"), "{text}");
+    assert!(text.contains("vertical angular momentum"), "{text}");
+}

@@ -1,0 +1,327 @@
+//! `svi::solve`: output times, dense output, step and degree adaptivity, typed errors.
+//!
+//! Reference: the exact Kepler solution through Kepler's equation (`svi_models::Kepler`).
+
+use nalgebra::SVector;
+use svi::solve::{Adapt, SolveOptions, Span, solve};
+use svi::{
+    Defaults, Error, ExactSolution, Initial, Integrator, LagrangianExt, Method, Midpoint,
+    SpectralCollocation, Svi, VariationalIntegrator,
+};
+use svi_models::Kepler;
+
+fn kepler(e: f64) -> (Kepler, Initial<2>) {
+    let model = Kepler::new(e).unwrap();
+    let (_, q, v) = model.initial_state();
+    (model, Initial::Velocity { q, v })
+}
+
+/// Position error of a solution point against the exact Kepler orbit.
+fn kepler_error(model: &Kepler, initial: &Initial<2>, t: f64, q: &SVector<f64, 2>) -> f64 {
+    let Initial::Velocity { q: q0, v: v0 } = initial else {
+        unreachable!("the tests start from velocities")
+    };
+    let (exact, _) = model.exact_solution(0.0, q0, v0, t).unwrap();
+    (q - exact).amax()
+}
+
+/// Deterministic pseudo-random numbers in [0, 1) (xorshift).
+fn uniform(count: usize, mut seed: u64) -> Vec<f64> {
+    (0..count)
+        .map(|_| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        })
+        .collect()
+}
+
+fn sorted_times(count: usize, t_end: f64) -> Vec<f64> {
+    let mut times: Vec<f64> = uniform(count, 0x9e37_79b9_7f4a_7c15)
+        .into_iter()
+        .map(|u| u * t_end)
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times.dedup();
+    times
+}
+
+#[test]
+fn fixed_step_output_at_grid_times_is_the_stepping_loops_result() {
+    let (model, initial) = kepler(0.5);
+    let h = 0.1;
+    let times: Vec<f64> = (0..=50).map(|k| k as f64 * h).collect();
+    let span = Span::with_outputs(0.0, 5.0, times.clone());
+    let solution = solve(
+        model,
+        Svi::new(6).with_quadrature(5),
+        &span,
+        initial,
+        &SolveOptions::fixed_step(h),
+    )
+    .unwrap();
+    let run = Integrator::new(model, Svi::new(6).with_quadrature(5))
+        .run(0.0, initial, h, 5.0, &mut ())
+        .unwrap();
+    assert_eq!(solution.points.len(), times.len());
+    let last = solution.points.last().unwrap();
+    assert_eq!(last.q, run.last.q);
+    assert_eq!(last.p, run.last.p);
+    assert_eq!(solution.statistics, run.statistics);
+}
+
+/// Dense output at 1000 random times inside the steps, against the exact solution: its error
+/// is within a small multiple of the error at the step points.
+fn dense_output_check<M: Method<2> + Clone>(method: M, h: f64, t_end: f64, factor: f64) {
+    let (model, initial) = kepler(0.5);
+    let times = sorted_times(1000, t_end);
+    let steps = (t_end / h).round() as usize;
+    let grid: Vec<f64> = (0..=steps).map(|k| k as f64 * h).collect();
+    let options = SolveOptions::fixed_step(h);
+    let dense = solve(
+        model,
+        method.clone(),
+        &Span::with_outputs(0.0, t_end, times.clone()),
+        initial,
+        &options,
+    )
+    .unwrap();
+    let steps = solve(
+        model,
+        method,
+        &Span::with_outputs(0.0, t_end, grid),
+        initial,
+        &options,
+    )
+    .unwrap();
+    let step_error = steps
+        .points
+        .iter()
+        .map(|p| kepler_error(&model, &initial, p.t, &p.q))
+        .fold(0.0, f64::max);
+    let mut dense_error: f64 = 0.0;
+    let mut momentum_error: f64 = 0.0;
+    for (point, &t) in dense.points.iter().zip(&times) {
+        assert_eq!(point.t, t);
+        dense_error = dense_error.max(kepler_error(&model, &initial, t, &point.q));
+        // p at interior times is the Legendre map of the polynomial's (q, q̇).
+        momentum_error =
+            momentum_error.max((point.p - model.momentum(t, &point.q, &point.v)).amax());
+    }
+    eprintln!("h = {h}: step error {step_error:e}, dense error {dense_error:e}");
+    assert_eq!(dense.points.len(), times.len());
+    assert!(momentum_error < 1e-14);
+    assert!(
+        dense_error <= factor * step_error,
+        "dense error {dense_error:e} vs step error {step_error:e}"
+    );
+}
+
+#[test]
+fn svi_dense_output_is_as_accurate_as_the_steps() {
+    // The polynomial is accurate to O(h^(s+1)) inside the step and O(h^(2s)) at its ends, so the
+    // comparison is made where the run's accumulated error matters: the Kepler scene's horizon.
+    dense_output_check(Svi::new(7).with_quadrature(6), 0.2, 2000.0, 3.0);
+}
+
+#[test]
+fn sc_dense_output_is_as_accurate_as_the_steps() {
+    dense_output_check(SpectralCollocation::new(9), 0.1, 200.0, 3.0);
+}
+
+#[test]
+fn classic_methods_interpolate_their_end_points() {
+    dense_output_check(VariationalIntegrator::new(Midpoint), 0.005, 20.0, 3.0);
+}
+
+/// Fewest force evaluations of a fixed-step run of `method` reaching final error ≤ `target`
+/// (a sweep over the number of steps).
+fn best_fixed_step<M: Method<2> + Clone>(
+    model: &Kepler,
+    initial: Initial<2>,
+    method: M,
+    t_end: f64,
+    target: f64,
+) -> (usize, f64) {
+    let mut steps = 16usize;
+    loop {
+        let h = t_end / steps as f64;
+        // Steps too large for the nonlinear solve count as not reaching the target.
+        if let Ok(solution) = solve(
+            *model,
+            method.clone(),
+            &Span::new(0.0, t_end),
+            initial,
+            &SolveOptions::fixed_step(h),
+        ) {
+            let last = solution.points.last().unwrap();
+            let error = kepler_error(model, &initial, t_end, &last.q);
+            if error <= target {
+                return (solution.statistics.evaluations, error);
+            }
+        }
+        steps = steps * 9 / 8 + 1;
+        assert!(steps < 1_000_000, "fixed steps never reached {target:e}");
+    }
+}
+
+#[test]
+fn step_adaptivity_beats_the_best_fixed_step_on_a_close_approach() {
+    let (model, initial) = kepler(0.9);
+    let t_end = 4.0 * std::f64::consts::TAU;
+    let method = Svi::new(6).with_quadrature(5);
+    for tol in [1e-6, 1e-9] {
+        let adaptive = solve(
+            model,
+            method.clone(),
+            &Span::new(0.0, t_end),
+            initial,
+            &SolveOptions::step_adaptive(tol),
+        )
+        .unwrap();
+        let last = adaptive.points.last().unwrap();
+        let error = kepler_error(&model, &initial, t_end, &last.q);
+        let (fixed, fixed_error) = best_fixed_step(&model, initial, method.clone(), t_end, error);
+        let a = &adaptive.adaptivity;
+        eprintln!(
+            "tol {tol:e}: adaptive error {error:e} with {} evaluations ({} accepted, {} rejected, \
+             h in [{:e}, {:e}]); fixed step {fixed_error:e} with {fixed}",
+            adaptive.statistics.evaluations, a.accepted, a.rejected, a.min_step, a.max_step
+        );
+        assert!(error <= 10.0 * tol);
+        assert!(adaptive.statistics.evaluations < fixed);
+        assert!(a.max_step > 10.0 * a.min_step);
+    }
+}
+
+#[test]
+fn degree_adaptivity_meets_its_tolerance_and_varies_the_degree() {
+    let (model, initial) = kepler(0.5);
+    let t_end = 10.0 * std::f64::consts::TAU;
+    for (tol, h) in [(1e-6, 0.5), (1e-9, 0.5), (1e-12, 0.5)] {
+        let solution = solve(
+            model,
+            Svi::new(5).with_quadrature(4),
+            &Span::new(0.0, t_end),
+            initial,
+            &SolveOptions::degree_adaptive(h, tol, 3, 24),
+        )
+        .unwrap();
+        let last = solution.points.last().unwrap();
+        let error = kepler_error(&model, &initial, t_end, &last.q);
+        eprintln!(
+            "tol {tol:e}: error {error:e}, points {:?}, rejected {}, evaluations {}",
+            solution.adaptivity.points,
+            solution.adaptivity.rejected,
+            solution.statistics.evaluations
+        );
+        assert!(error <= 10.0 * tol, "tol {tol:e}: error {error:e}");
+        assert!(solution.adaptivity.points.len() >= 2);
+        assert_eq!(solution.adaptivity.unmet, 0);
+    }
+}
+
+#[test]
+fn bad_tolerances_and_output_times_are_typed_errors() {
+    let (model, initial) = kepler(0.5);
+    let run = |span: Span, options: SolveOptions| {
+        solve(model, Svi::new(4), &span, initial, &options).unwrap_err()
+    };
+    let name = |error: Error| match error {
+        Error::InvalidParameter { name, .. } => name,
+        other => panic!("expected an invalid parameter, got {other}"),
+    };
+    for tol in [0.0, -1e-6, f64::NAN, f64::INFINITY, 1e-20] {
+        assert_eq!(
+            name(run(Span::new(0.0, 1.0), SolveOptions::step_adaptive(tol))),
+            "tol"
+        );
+    }
+    let fixed = SolveOptions::fixed_step(0.1);
+    assert_eq!(
+        name(run(Span::times(&[0.0, 2.0, 1.0]), fixed.clone())),
+        "output_times"
+    );
+    assert_eq!(
+        name(run(Span::times(&[0.0, 1.0, 1.0]), fixed.clone())),
+        "output_times"
+    );
+    assert_eq!(name(run(Span::times(&[]), fixed.clone())), "t0");
+    assert_eq!(
+        name(run(
+            Span::with_outputs(0.0, 1.0, vec![0.5, 1.5]),
+            fixed.clone()
+        )),
+        "output_times"
+    );
+    assert_eq!(
+        name(run(Span::with_outputs(0.0, 1.0, vec![-0.5]), fixed.clone())),
+        "output_times"
+    );
+    assert_eq!(
+        name(run(
+            Span::with_outputs(0.0, 1.0, vec![f64::NAN]),
+            fixed.clone()
+        )),
+        "output_times[0]"
+    );
+    assert_eq!(name(run(Span::new(1.0, 1.0), fixed.clone())), "t_end");
+    assert_eq!(
+        name(run(Span::new(0.0, 1.0), SolveOptions::fixed_step(-0.1))),
+        "h"
+    );
+    let mut no_tol = SolveOptions::degree_adaptive(0.1, 1e-8, 3, 10);
+    no_tol.tol = None;
+    assert_eq!(name(run(Span::new(0.0, 1.0), no_tol)), "tol");
+    assert_eq!(
+        name(run(
+            Span::new(0.0, 1.0),
+            SolveOptions::degree_adaptive(0.1, 1e-8, 1, 10)
+        )),
+        "points"
+    );
+    assert_eq!(
+        name(run(
+            Span::new(0.0, 1.0),
+            SolveOptions::degree_adaptive(0.1, 1e-8, 8, 4)
+        )),
+        "points"
+    );
+    // Classic methods have no degree to adapt.
+    let classic = solve(
+        model,
+        VariationalIntegrator::new(Midpoint),
+        &Span::new(0.0, 1.0),
+        initial,
+        &SolveOptions::degree_adaptive(0.1, 1e-8, 3, 10),
+    )
+    .unwrap_err();
+    assert_eq!(name(classic), "adapt");
+    assert_eq!(
+        "sometimes".parse::<Adapt>().map_err(name),
+        Err("adapt".to_string())
+    );
+}
+
+#[test]
+fn a_tolerance_below_the_minimum_step_ends_in_a_typed_error() {
+    let (model, initial) = kepler(0.99);
+    let mut options = SolveOptions::step_adaptive(1e-12);
+    options.min_step = Some(1e-2);
+    let error = solve(
+        model,
+        Svi::new(3).with_quadrature(2),
+        &Span::new(0.0, 10.0),
+        initial,
+        &options,
+    )
+    .unwrap_err();
+    match error {
+        Error::StepSizeTooSmall { h, min_step, .. } => {
+            assert!(h < min_step);
+            assert_eq!(min_step, 1e-2);
+        }
+        other => panic!("expected StepSizeTooSmall, got {other}"),
+    }
+}
