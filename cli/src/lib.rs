@@ -1735,16 +1735,25 @@ mod tests {
                 adapt: Some(AdaptMode::Degree),
                 tol: Some(1e-9),
                 output_times: Some(vec![1.0, 2.0]),
-                recovery: Some(RecoveryKind::HalveStep),
-                divergence_limit: Some(1e9),
+                recovery: None,
+                divergence_limit: None,
             })
             .unwrap();
         assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
         assert_eq!(scene.run.tol, Some(1e-9));
         assert_eq!(scene.output.output_times, Some(vec![1.0, 2.0]));
-        assert_eq!(scene.run.recovery, Some(RecoveryKind::HalveStep));
+        // Recovery and a divergence limit are for fixed-step runs only.
+        let recovery = Overrides {
+            recovery: Some(RecoveryKind::HalveStep),
+            divergence_limit: Some(1e9),
+            ..Overrides::default()
+        };
+        assert!(scene.clone().apply(&recovery).is_err());
+        let mut fixed = self::scene("kepler");
+        fixed.apply(&recovery).unwrap();
+        assert_eq!(fixed.run.recovery, Some(RecoveryKind::HalveStep));
         assert_eq!(
-            scene.run.options().unwrap(),
+            fixed.run.options().unwrap(),
             RunOptions::default()
                 .with_recovery(Recovery::HalveStep {
                     max_halvings: DEFAULT_MAX_HALVINGS
