@@ -354,7 +354,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         };
         let mut stopped = false;
         if observer.wants(0) {
-            match self.phase_point(t0, &progress.state, &progress.guess) {
+            match self.complete(0, t0, &progress.state, &progress.guess) {
                 Ok(point) => {
                     progress.guess = point.v;
                     stopped = observer.observe(&self.model, 0, &point).is_break();
@@ -391,7 +391,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
                 t0 + (k + 1) as f64 * h
             };
             if observer.wants(k + 1) {
-                match self.phase_point(progress.t, &progress.state, &progress.guess) {
+                match self.complete(k + 1, progress.t, &progress.state, &progress.guess) {
                     Ok(point) => {
                         progress.guess = point.v;
                         if let ControlFlow::Break(()) = observer.observe(&self.model, k + 1, &point)
@@ -405,7 +405,12 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             }
         }
         let last = self
-            .phase_point(progress.t, &progress.state, &progress.guess)
+            .complete(
+                progress.statistics.steps,
+                progress.t,
+                &progress.state,
+                &progress.guess,
+            )
             .map_err(|error| self.failure(error, &progress, stopped))?;
         Ok(Run {
             last,
@@ -413,6 +418,27 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             statistics: progress.statistics,
             stopped,
         })
+    }
+
+    /// [`Integrator::phase_point`], with a non-finite velocity or momentum (from a finite
+    /// state, e.g. an overflowing ∂L/∂q̇) reported as [`Error::NonFinite`] at `step`.
+    fn complete(
+        &self,
+        step: usize,
+        t: f64,
+        state: &State<N>,
+        guess: &SVector<f64, N>,
+    ) -> Result<PhasePoint<N>, Error> {
+        let point = self.phase_point(t, state, guess)?;
+        if point.v.iter().chain(point.p.iter()).all(|x| x.is_finite()) {
+            Ok(point)
+        } else {
+            Err(Error::NonFinite {
+                what: "velocity or momentum".into(),
+                step,
+                t,
+            })
+        }
     }
 
     /// Advance `progress` over [t, t + h]: one step, or (after a failure, while `depth` > 0)

@@ -362,3 +362,38 @@ fn eccentricities_of_unbound_orbits_are_rejected_by_name() {
     let error = pendulum.set_parameter("length", 1.0).unwrap_err();
     assert!(error.to_string().contains("no such parameter"), "{error}");
 }
+
+/// Found by `kepler_runs_never_panic` (SVI_HOSTILE_CASES=10): a finite state whose momentum
+/// overflows (q̇ = f64::MAX, p = ∂L/∂q̇ computed as ½(q̇ + q̇) = ∞) is reported, not returned
+/// as a result with an infinite momentum.
+#[test]
+fn an_overflowing_momentum_is_a_non_finite_error() {
+    let integrator = Integrator::new(Kepler::new(0.0).unwrap(), SpectralCollocation::new(2));
+    let start = Initial::Velocity {
+        q: SVector::from([0.0, -0.30856320533648446]),
+        v: SVector::from([f64::MAX, 0.0]),
+    };
+    let mut trajectory = svi::observer::Trajectory::new();
+    let failure = integrator
+        .try_run(
+            0.0,
+            start,
+            1.0,
+            2.2250738585072014e-308,
+            &RunOptions::default(),
+            &mut trajectory,
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&failure.error, Error::NonFinite { what, step: 0, .. } if what == "velocity or momentum"),
+        "{failure}"
+    );
+    assert!(trajectory.points.is_empty());
+    let failure = integrator
+        .try_run(0.0, start, 1.0, 1e-300, &RunOptions::default(), &mut ())
+        .unwrap_err();
+    assert!(
+        matches!(failure.error, Error::NonFinite { step: 1, .. }),
+        "{failure}"
+    );
+}
