@@ -75,6 +75,21 @@ pub enum Error {
         /// Time at the start of that step.
         t: f64,
     },
+    /// The state left the bound set by [`crate::integrator::RunOptions::divergence_limit`]:
+    /// the signature of a step beyond the method's stability limit.
+    #[error(
+        "state diverged at step {step} (t = {t}): largest component {norm:e} exceeds the limit {limit:e}"
+    )]
+    Diverged {
+        /// Index of the step after which the bound was exceeded.
+        step: usize,
+        /// Time at the start of that step.
+        t: f64,
+        /// Largest absolute component of the state (q, y) after the step.
+        norm: f64,
+        /// The bound that was exceeded.
+        limit: f64,
+    },
 }
 
 impl Error {
@@ -101,6 +116,14 @@ pub enum StepFailure {
     SingularMatrix,
     /// A value became NaN or infinite.
     NonFinite,
+    /// The state after the step exceeds the divergence limit (set by the stepping loop, never
+    /// by a method).
+    Diverged {
+        /// Largest absolute component of the state after the step.
+        norm: f64,
+        /// The bound that was exceeded.
+        limit: f64,
+    },
 }
 
 impl StepFailure {
@@ -121,6 +144,12 @@ impl StepFailure {
                 what: "state".into(),
                 step,
                 t,
+            },
+            StepFailure::Diverged { norm, limit } => Error::Diverged {
+                step,
+                t,
+                norm,
+                limit,
             },
         }
     }

@@ -7,9 +7,14 @@
 //! (Kahan) summation so long runs keep their accuracy. Observers see the initial point and
 //! every step they ask for; a run that observes nothing completes no phase points and
 //! computes no diagnostics. Failures come back with the step index and time.
+//!
+//! [`Integrator::try_run`] is the full form: it takes [`RunOptions`] (a [`Recovery`] policy
+//! for failed steps, a divergence limit on the state) and returns a failure as a
+//! [`RunFailure`], which carries the run up to the last good state besides the typed error.
+//! [`Integrator::run`] is `try_run` with default options, keeping only the error.
 
 use crate::derived::LagrangianExt;
-use crate::error::{require_finite, require_positive};
+use crate::error::{StepFailure, require_finite, require_positive};
 use crate::method::{Coordinates, PhasePoint, State, TangentMap};
 use crate::observer::Observer;
 use crate::{Error, Lagrangian, Method, Structure};
@@ -19,8 +24,10 @@ use std::ops::ControlFlow;
 /// Totals of a run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Statistics {
-    /// Steps taken.
+    /// Steps taken (a step recovered from half steps counts once).
     pub steps: usize,
+    /// Failed steps retried with half the step size ([`Recovery::HalveStep`]), at any depth.
+    pub retries: usize,
     /// Nonlinear (Newton) iterations, summed over all steps.
     pub iterations: usize,
     /// Points at which derivatives of the Lagrangian were evaluated.
@@ -38,6 +45,124 @@ pub struct Run<const N: usize> {
     pub statistics: Statistics,
     /// Whether an observer stopped the run before the horizon.
     pub stopped: bool,
+}
+
+/// What the stepping loop does when a step fails.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Recovery {
+    /// Stop the run with the step's error (the default).
+    #[default]
+    None,
+    /// Retry a failed step as two steps of half the size, each again recoverable, at most
+    /// `max_halvings` times in a row (so the smallest sub-step is h/2^max_halvings); then
+    /// continue with the original step.
+    HalveStep {
+        /// Largest number of successive halvings, at most [`RunOptions::MAX_HALVINGS`].
+        max_halvings: usize,
+    },
+}
+
+/// Options of [`Integrator::try_run`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[non_exhaustive]
+pub struct RunOptions {
+    /// Recovery policy for failed steps (default: none).
+    pub recovery: Recovery,
+    /// Fail with [`Error::Diverged`] as soon as a component of the state (q, y) exceeds this
+    /// in absolute value (default: no limit; NaN and ∞ are always caught).
+    pub divergence_limit: Option<f64>,
+}
+
+impl RunOptions {
+    /// Largest `max_halvings` accepted by [`Recovery::HalveStep`] (2²⁰ sub-steps per step).
+    pub const MAX_HALVINGS: usize = 20;
+
+    /// Set the recovery policy.
+    pub fn with_recovery(mut self, recovery: Recovery) -> Self {
+        self.recovery = recovery;
+        self
+    }
+
+    /// Set the divergence limit.
+    pub fn with_divergence_limit(mut self, limit: f64) -> Self {
+        self.divergence_limit = Some(limit);
+        self
+    }
+
+    /// Check the options: halvings at most [`RunOptions::MAX_HALVINGS`], a positive finite
+    /// divergence limit.
+    pub fn validate(&self) -> Result<(), Error> {
+        if let Recovery::HalveStep { max_halvings } = self.recovery
+            && max_halvings > Self::MAX_HALVINGS
+        {
+            return Err(Error::invalid(
+                "max_halvings",
+                format!(
+                    "{max_halvings} is more than {} successive halvings",
+                    Self::MAX_HALVINGS
+                ),
+            ));
+        }
+        if let Some(limit) = self.divergence_limit {
+            require_positive("divergence_limit", limit)?;
+        }
+        Ok(())
+    }
+}
+
+/// A run that failed: the error, and the run up to the last good state.
+///
+/// Observers passed to [`Integrator::try_run`] keep what they saw before the failure (a
+/// [`crate::observer::Trajectory`] holds the trajectory so far).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunFailure<const N: usize> {
+    /// What went wrong, with step index and time.
+    pub error: Error,
+    /// The run up to the last good state (`last` is that state, at the start of the failing
+    /// step); `None` when the inputs were rejected before the first step.
+    pub partial: Option<Run<N>>,
+}
+
+impl<const N: usize> std::fmt::Display for RunFailure<N> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.error)?;
+        if let Some(run) = &self.partial {
+            write!(
+                f,
+                "; last good state after {} steps at t = {}: q = {:?}, v = {:?}",
+                run.statistics.steps,
+                run.last.t,
+                run.last.q.as_slice(),
+                run.last.v.as_slice()
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl<const N: usize> std::error::Error for RunFailure<N> {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&self.error)
+    }
+}
+
+impl<const N: usize> From<RunFailure<N>> for Error {
+    fn from(failure: RunFailure<N>) -> Error {
+        failure.error
+    }
+}
+
+/// The state of a run between steps.
+struct Progress<const N: usize> {
+    /// Time of `state`.
+    t: f64,
+    state: State<N>,
+    /// Kahan compensation of `state`.
+    compensation: State<N>,
+    /// Newton start of the next inverse Legendre map (the last velocity completed).
+    guess: SVector<f64, N>,
+    statistics: Statistics,
 }
 
 /// An initial state: configuration with either velocity or momentum.
@@ -158,6 +283,10 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     }
 
     /// Integrate from `t0` to `t_end` with step `h`, reporting to `observer`.
+    ///
+    /// The same as [`Integrator::try_run`] with [`RunOptions::default`] (no recovery, no
+    /// divergence limit), keeping only the error of a failed run. The observer still holds
+    /// everything it saw before the failure.
     pub fn run<O: Observer<L, N>>(
         &self,
         t0: f64,
@@ -166,83 +295,251 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         t_end: f64,
         observer: &mut O,
     ) -> Result<Run<N>, Error> {
-        require_finite("t0", t0)?;
-        require_finite("t_end", t_end)?;
-        require_positive("h", h)?;
+        self.try_run(t0, initial, h, t_end, &RunOptions::default(), observer)
+            .map_err(|failure| failure.error)
+    }
+
+    /// Integrate from `t0` to `t_end` with step `h` under `options`, reporting to `observer`;
+    /// a failure comes back with the run up to the last good state.
+    ///
+    /// Every step is checked where it happens: a nonlinear solve that does not converge or
+    /// meets a singular matrix, a non-finite state, and (with
+    /// [`RunOptions::divergence_limit`]) a state beyond a bound. With
+    /// [`Recovery::HalveStep`] a failed step is retried as two steps of half the size
+    /// (recursively, up to the given depth) and the run continues with the original step; the
+    /// time grid t_k = t_0 + k·h is kept and observers see the same step points as without
+    /// recovery.
+    ///
+    /// # Errors
+    /// A [`RunFailure`]: the typed [`Error`] (with step index and time for failures during the
+    /// run) and, unless the inputs were rejected before the first step, the [`Run`] up to the
+    /// last good state (its `last` point, `state` and `statistics`).
+    pub fn try_run<O: Observer<L, N>>(
+        &self,
+        t0: f64,
+        initial: Initial<N>,
+        h: f64,
+        t_end: f64,
+        options: &RunOptions,
+        observer: &mut O,
+    ) -> Result<Run<N>, RunFailure<N>> {
+        let rejected = |error: Error| RunFailure {
+            error,
+            partial: None,
+        };
+        require_finite("t0", t0).map_err(rejected)?;
+        require_finite("t_end", t_end).map_err(rejected)?;
+        require_positive("h", h).map_err(rejected)?;
+        options.validate().map_err(rejected)?;
         if t_end <= t0 {
-            return Err(Error::invalid(
+            return Err(rejected(Error::invalid(
                 "t_end",
                 format!("the horizon {t_end} is not after the start {t0}"),
-            ));
+            )));
         }
-        let steps = step_count(t_end - t0, h)?;
-        let mut workspace = self.method.workspace(&self.model, h)?;
-        let mut state = self.initial_state(t0, &initial)?;
-        self.check_structure(t0, &state)?;
-        let mut guess = match initial {
+        let steps = step_count(t_end - t0, h).map_err(rejected)?;
+        let mut workspace = self.method.workspace(&self.model, h).map_err(rejected)?;
+        let state = self.initial_state(t0, &initial).map_err(rejected)?;
+        self.check_structure(t0, &state).map_err(rejected)?;
+        let guess = match initial {
             Initial::Velocity { v, .. } => v,
             Initial::Momentum { p, .. } => p,
         };
-        let mut statistics = Statistics::default();
+        let mut progress = Progress {
+            t: t0,
+            state,
+            compensation: State::zeros(),
+            guess,
+            statistics: Statistics::default(),
+        };
         let mut stopped = false;
         if observer.wants(0) {
-            let point = self.phase_point(t0, &state, &guess)?;
-            guess = point.v;
-            stopped = observer.observe(&self.model, 0, &point).is_break();
+            match self.complete(0, t0, &progress.state, &progress.guess) {
+                Ok(point) => {
+                    progress.guess = point.v;
+                    stopped = observer.observe(&self.model, 0, &point).is_break();
+                }
+                Err(error) => return Err(self.failure(error, &progress, false)),
+            }
         }
-        let mut compensation = State::zeros();
         let mut increment = State::zeros();
-        let mut t = t0;
         for k in 0..steps {
             if stopped {
                 break;
             }
-            t = t0 + k as f64 * h;
+            let t = t0 + k as f64 * h;
             let step_size = if k + 1 == steps { t_end - t } else { h };
-            let report = self
-                .method
-                .step(
-                    &self.model,
-                    &mut workspace,
-                    t,
-                    step_size,
-                    &state,
-                    &mut increment,
-                )
-                .map_err(|failure| failure.at(k, t))?;
-            compensated_add(&mut state.q, &mut compensation.q, &increment.q);
-            compensated_add(&mut state.y, &mut compensation.y, &increment.y);
-            if !state.is_finite() {
-                return Err(Error::NonFinite {
-                    what: "state".into(),
-                    step: k,
-                    t,
-                });
+            let depth = match options.recovery {
+                Recovery::None => 0,
+                Recovery::HalveStep { max_halvings } => max_halvings,
+            };
+            if let Err(failure) = self.advance(
+                &mut workspace,
+                &mut progress,
+                &mut increment,
+                t,
+                step_size,
+                depth,
+                options.divergence_limit,
+            ) {
+                return Err(self.failure(failure.at(k, t), &progress, false));
             }
-            statistics.steps += 1;
-            statistics.iterations += report.iterations;
-            statistics.evaluations += report.evaluations;
-            t = if k + 1 == steps {
+            progress.statistics.steps += 1;
+            progress.t = if k + 1 == steps {
                 t_end
             } else {
                 t0 + (k + 1) as f64 * h
             };
             if observer.wants(k + 1) {
-                let point = self.phase_point(t, &state, &guess)?;
-                guess = point.v;
-                if let ControlFlow::Break(()) = observer.observe(&self.model, k + 1, &point) {
-                    stopped = k + 1 < steps;
-                    break;
+                match self.complete(k + 1, progress.t, &progress.state, &progress.guess) {
+                    Ok(point) => {
+                        progress.guess = point.v;
+                        if let ControlFlow::Break(()) = observer.observe(&self.model, k + 1, &point)
+                        {
+                            stopped = k + 1 < steps;
+                            break;
+                        }
+                    }
+                    Err(error) => return Err(self.failure(error, &progress, false)),
                 }
             }
         }
-        let last = self.phase_point(t, &state, &guess)?;
+        let last = self
+            .complete(
+                progress.statistics.steps,
+                progress.t,
+                &progress.state,
+                &progress.guess,
+            )
+            .map_err(|error| self.failure(error, &progress, stopped))?;
         Ok(Run {
             last,
-            state,
-            statistics,
+            state: progress.state,
+            statistics: progress.statistics,
             stopped,
         })
+    }
+
+    /// [`Integrator::phase_point`], with a non-finite velocity or momentum (from a finite
+    /// state, e.g. an overflowing ∂L/∂q̇) reported as [`Error::NonFinite`] at `step`.
+    fn complete(
+        &self,
+        step: usize,
+        t: f64,
+        state: &State<N>,
+        guess: &SVector<f64, N>,
+    ) -> Result<PhasePoint<N>, Error> {
+        let point = self.phase_point(t, state, guess)?;
+        if point.v.iter().chain(point.p.iter()).all(|x| x.is_finite()) {
+            Ok(point)
+        } else {
+            Err(Error::NonFinite {
+                what: "velocity or momentum".into(),
+                step,
+                t,
+            })
+        }
+    }
+
+    /// Advance `progress` over [t, t + h]: one step, or (after a failure, while `depth` > 0)
+    /// two half steps, each of them again recoverable with one halving less. On failure the
+    /// state is left as it was at t and the first failure (that of the full step) is returned.
+    #[allow(clippy::too_many_arguments)]
+    fn advance(
+        &self,
+        workspace: &mut M::Workspace,
+        progress: &mut Progress<N>,
+        increment: &mut State<N>,
+        t: f64,
+        h: f64,
+        depth: usize,
+        divergence_limit: Option<f64>,
+    ) -> Result<(), StepFailure> {
+        let saved = (progress.state, progress.compensation);
+        let failure =
+            match self
+                .method
+                .step(&self.model, workspace, t, h, &progress.state, increment)
+            {
+                Ok(report) => {
+                    compensated_add(
+                        &mut progress.state.q,
+                        &mut progress.compensation.q,
+                        &increment.q,
+                    );
+                    compensated_add(
+                        &mut progress.state.y,
+                        &mut progress.compensation.y,
+                        &increment.y,
+                    );
+                    progress.statistics.iterations += report.iterations;
+                    progress.statistics.evaluations += report.evaluations;
+                    let norm = || progress.state.q.amax().max(progress.state.y.amax());
+                    if !progress.state.is_finite() {
+                        StepFailure::NonFinite
+                    } else if let Some(limit) = divergence_limit.filter(|limit| norm() > *limit) {
+                        StepFailure::Diverged {
+                            norm: norm(),
+                            limit,
+                        }
+                    } else {
+                        return Ok(());
+                    }
+                }
+                Err(failure) => failure,
+            };
+        (progress.state, progress.compensation) = saved;
+        if depth == 0 {
+            return Err(failure);
+        }
+        progress.statistics.retries += 1;
+        let half = 0.5 * h;
+        for (start, size) in [(t, half), (t + half, h - half)] {
+            if self
+                .advance(
+                    workspace,
+                    progress,
+                    increment,
+                    start,
+                    size,
+                    depth - 1,
+                    divergence_limit,
+                )
+                .is_err()
+            {
+                (progress.state, progress.compensation) = saved;
+                return Err(failure);
+            }
+        }
+        Ok(())
+    }
+
+    /// A failure during the run, with the run up to the last good state. Should the inverse
+    /// Legendre map fail at that state, its velocity is the last one completed.
+    fn failure(&self, error: Error, progress: &Progress<N>, stopped: bool) -> RunFailure<N> {
+        let last = self
+            .phase_point(progress.t, &progress.state, &progress.guess)
+            .unwrap_or_else(|_| {
+                let (v, p) = match self.method.info().coordinates {
+                    Coordinates::Momentum => (progress.guess, progress.state.y),
+                    Coordinates::Velocity => (progress.state.y, progress.guess),
+                };
+                PhasePoint {
+                    t: progress.t,
+                    q: progress.state.q,
+                    v,
+                    p,
+                }
+            });
+        RunFailure {
+            error,
+            partial: Some(Run {
+                last,
+                state: progress.state,
+                statistics: progress.statistics,
+                stopped,
+            }),
+        }
     }
 
     /// [`Integrator::run`] from (q0, q̇0).

@@ -41,6 +41,7 @@ pub mod basis;
 pub mod collocation;
 pub mod derived;
 pub mod discrete_lagrangian;
+pub mod drift;
 pub mod error;
 pub mod integrator;
 mod iteration;
@@ -65,7 +66,9 @@ pub use discrete_lagrangian::{
     AdjointSymplecticEuler, DiscreteLagrangian, Midpoint, SymplecticEuler, Trapezoid,
 };
 pub use error::Error;
-pub use integrator::{Initial, Integrator, Run, Statistics, step_count};
+pub use integrator::{
+    Initial, Integrator, Recovery, Run, RunFailure, RunOptions, Statistics, step_count,
+};
 pub use method::{Coordinates, Method, MethodInfo, PhasePoint, State, TangentMap};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;

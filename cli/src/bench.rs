@@ -441,10 +441,10 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
 /// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers`, with a
 /// fixed-size state of S = 2N components (as a user of `ode_solvers` would write it: a
 /// heap-allocated `DVector` state would cost the peers a factor of several).
-struct FirstOrder<'a, M, const N: usize, const S: usize> {
-    model: &'a M,
+pub(crate) struct FirstOrder<'a, M, const N: usize, const S: usize> {
+    pub(crate) model: &'a M,
     /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
-    mass_inverse: Option<SMatrix<f64, N, N>>,
+    pub(crate) mass_inverse: Option<SMatrix<f64, N, N>>,
 }
 
 impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>

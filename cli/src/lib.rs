@@ -32,6 +32,9 @@
 //! tol = 1e-9            # target final error of the adaptive modes
 //! min_points = 3        # bounds of adapt = "degree" (defaults 3 and 24)
 //! max_points = 24
+//! recovery = "none"     # or "halve-step": retry a failed step as two half steps
+//! # max_halvings = 4    # with "halve-step": successive halvings allowed (default 4)
+//! # divergence_limit = 1e6   # stop once |q_i| or |p_i| exceeds this (default: no limit)
 //!
 //! [output]
 //! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
@@ -70,6 +73,7 @@ pub mod bench;
 pub mod plot;
 pub mod rigid;
 pub mod stability;
+pub mod stress;
 
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
 use svi::solve::{Adapt, SolveOptions, Span};
@@ -77,7 +81,7 @@ use svi::{
     AdjointSymplecticEuler, Integrator, LagrangianExt, Method, Midpoint, PhasePoint,
     SpectralCollocation, StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
-use svi::{Initial, Statistics};
+use svi::{Initial, Recovery, RunFailure, RunOptions, Statistics};
 use svi_models::{MODEL_NAMES, ModelVisitor, UnknownModel, ZooModel, visit_model};
 
 /// The built-in scenes, as (name, TOML text).
@@ -104,6 +108,29 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     (
         "driven-oscillator",
         include_str!("../scenes/driven-oscillator.toml"),
+    ),
+    (
+        "stiff-spring-pendulum",
+        include_str!("../scenes/stiff-spring-pendulum.toml"),
+    ),
+    (
+        "stiff-spring-pendulum-coarse",
+        include_str!("../scenes/stiff-spring-pendulum-coarse.toml"),
+    ),
+    ("kepler-long", include_str!("../scenes/kepler-long.toml")),
+    ("kepler-e0.9", include_str!("../scenes/kepler-e0.9.toml")),
+    ("kepler-e0.99", include_str!("../scenes/kepler-e0.99.toml")),
+    (
+        "kepler-recovery",
+        include_str!("../scenes/kepler-recovery.toml"),
+    ),
+    (
+        "double-pendulum-chaotic",
+        include_str!("../scenes/double-pendulum-chaotic.toml"),
+    ),
+    (
+        "oscillator-beyond-stability",
+        include_str!("../scenes/oscillator-beyond-stability.toml"),
     ),
 ];
 
@@ -220,6 +247,26 @@ pub enum SceneError {
     /// state, nonlinear solves.
     #[error(transparent)]
     Svi(#[from] svi::Error),
+    /// A run that failed after it started: the summary of the run up to the last good state
+    /// (its trajectory file, if asked for, is written) and the library's error.
+    #[error(
+        "the run failed after {} steps; last good state at t = {}: q = {}, v = {}{}",
+        .partial.steps,
+        Float(.partial.t_end),
+        vector(&.partial.q),
+        vector(&.partial.v),
+        .partial.trajectory.as_ref().map_or_else(String::new, |trajectory| format!(
+            "; the trajectory so far is in '{}'",
+            trajectory.path
+        ))
+    )]
+    RunFailed {
+        /// Summary of the run up to the last good state.
+        partial: Box<Summary>,
+        /// What went wrong, with step index and time.
+        #[source]
+        source: svi::Error,
+    },
     /// A malformed `svi bench` method specification.
     #[error(
         "unknown method '{0}' (expected svi:P, svi:P/M, sc:P, a classic method's name, dop853 or dopri5)"
@@ -419,7 +466,7 @@ pub struct MethodSection {
     pub quadrature: Option<usize>,
 }
 
-/// `[run]`: step, horizon and adaptivity.
+/// `[run]`: step, horizon, adaptivity and failure handling.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunSection {
@@ -436,6 +483,14 @@ pub struct RunSection {
     pub min_points: Option<usize>,
     /// Most CGL points of `adapt = "degree"` (default 24).
     pub max_points: Option<usize>,
+    /// What to do when a step fails (default: `none`, stop with the error).
+    pub recovery: Option<RecoveryKind>,
+    /// Successive halvings allowed by `recovery = "halve-step"` (default
+    /// [`DEFAULT_MAX_HALVINGS`]).
+    pub max_halvings: Option<usize>,
+    /// Stop with an error once a state component exceeds this in absolute value (default:
+    /// no limit; NaN and infinity always stop the run).
+    pub divergence_limit: Option<f64>,
 }
 
 /// The adaptivity modes of [`svi::solve`], as named in scenes and on the command line.
@@ -469,6 +524,48 @@ impl From<AdaptMode> for Adapt {
             AdaptMode::Step => Adapt::Step,
             AdaptMode::Degree => Adapt::Degree,
         }
+    }
+}
+
+/// Successive halvings of a failed step allowed by default under `recovery = "halve-step"`.
+pub const DEFAULT_MAX_HALVINGS: usize = 4;
+
+/// A scene's recovery policy for failed steps (`[run] recovery`, `--recovery`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum RecoveryKind {
+    /// Stop the run with the failed step's error.
+    #[default]
+    None,
+    /// Retry a failed step as two half steps (recursively), then go on with the original
+    /// step ([`Recovery::HalveStep`]).
+    HalveStep,
+}
+
+impl RunSection {
+    /// The library's run options for this section.
+    pub fn options(&self) -> Result<RunOptions, SceneError> {
+        let mut options = RunOptions::default();
+        match (self.recovery.unwrap_or_default(), self.max_halvings) {
+            (RecoveryKind::None, Some(_)) => {
+                return Err(svi::Error::invalid(
+                    "max_halvings",
+                    "set, but recovery is not \"halve-step\"",
+                )
+                .into());
+            }
+            (RecoveryKind::None, None) => {}
+            (RecoveryKind::HalveStep, halvings) => {
+                options = options.with_recovery(Recovery::HalveStep {
+                    max_halvings: halvings.unwrap_or(DEFAULT_MAX_HALVINGS),
+                });
+            }
+        }
+        if let Some(limit) = self.divergence_limit {
+            options = options.with_divergence_limit(limit);
+        }
+        options.validate()?;
+        Ok(options)
     }
 }
 
@@ -530,6 +627,12 @@ pub struct Overrides {
         allow_negative_numbers = true
     )]
     pub output_times: Option<Vec<f64>>,
+    /// Recovery policy for failed steps.
+    #[arg(long, value_enum)]
+    pub recovery: Option<RecoveryKind>,
+    /// Stop once a state component exceeds this in absolute value.
+    #[arg(long, value_name = "LIMIT")]
+    pub divergence_limit: Option<f64>,
 }
 
 /// Parse `NAME=VALUE` (the argument of `--param`).
@@ -592,10 +695,22 @@ impl Scene {
         }
     }
 
-    /// Consistency checks that need no model: one of v and p, `every` only with a file.
+    /// Consistency checks that need no model: one of v and p, `every` only with a file,
+    /// valid run options (recovery and divergence limit only for fixed-step runs).
     pub fn check(&self) -> Result<(), SceneError> {
         if self.initial.v.is_some() && self.initial.p.is_some() {
             return Err(SceneError::VelocityAndMomentum);
+        }
+        if self.run.options()? != RunOptions::default()
+            && (self.run.adapt.is_some_and(|adapt| adapt != AdaptMode::None)
+                || self.output.output_times.is_some())
+        {
+            return Err(svi::Error::invalid(
+                "recovery",
+                "recovery and divergence_limit apply to fixed-step runs (adapt = \"none\", no \
+                 output_times)",
+            )
+            .into());
         }
         match (self.output.every, &self.output.trajectory) {
             (Some(_), None) => Err(SceneError::EveryWithoutOutput),
@@ -621,6 +736,8 @@ impl Scene {
             adapt,
             tol,
             output_times,
+            recovery,
+            divergence_limit,
         } = overrides;
         if let Some(method) = method {
             self.method.name = *method;
@@ -650,6 +767,11 @@ impl Scene {
         set(&mut self.run.adapt, adapt);
         set(&mut self.run.tol, tol);
         set(&mut self.output.output_times, output_times);
+        if *recovery == Some(RecoveryKind::None) {
+            self.run.max_halvings = None;
+        }
+        set(&mut self.run.recovery, recovery);
+        set(&mut self.run.divergence_limit, divergence_limit);
         self.check()
     }
 
@@ -766,6 +888,7 @@ struct Setup<const N: usize> {
     kind: MethodKind,
     points: Option<usize>,
     quadrature: Option<usize>,
+    options: RunOptions,
     adapt: AdaptMode,
     tol: Option<f64>,
     points_range: (Option<usize>, Option<usize>),
@@ -807,6 +930,7 @@ impl ModelVisitor for RunScene<'_> {
             tol: scene.run.tol,
             points_range: (scene.run.min_points, scene.run.max_points),
             output_times: scene.output.output_times.clone(),
+            options: scene.run.options()?,
         };
         let choice = MethodChoice {
             kind: scene.method.name,
@@ -912,6 +1036,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             .as_ref()
             .map(|(_, every)| Every::new(*every, Trajectory::<N>::new())),
     );
+    let mut failure = None;
     let outcome = if setup.solves() {
         solve_scene(&integrator, setup, &mut observers)?
     } else {
@@ -920,18 +1045,33 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             .then(|| Progress::for_run(setup.t0, setup.h, setup.t_end))
             .flatten();
         let start = Instant::now();
-        let run = integrator.run(
+        let run = integrator.try_run(
             setup.t0,
             setup.initial,
             setup.h,
             setup.t_end,
+            &setup.options,
             &mut (&mut observers, &mut progress),
         );
         let seconds = start.elapsed().as_secs_f64();
         if let Some(progress) = &progress {
             progress.finish();
         }
-        let run = run?;
+        // A failed run still reports (and writes) everything up to its last good state.
+        let run = match run {
+            Ok(run) => run,
+            Err(RunFailure {
+                error,
+                partial: Some(run),
+            }) => {
+                failure = Some(error);
+                run
+            }
+            Err(RunFailure {
+                error,
+                partial: None,
+            }) => return Err(error.into()),
+        };
         Outcome {
             statistics: run.statistics,
             last: run.last,
@@ -967,7 +1107,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     };
 
     let info = integrator.method().info();
-    Ok(Summary {
+    let summary = Summary {
         model: model.name().into(),
         parameters: Parameters(model.parameters()),
         coordinates: model.coordinate_names().iter().map(|&n| n.into()).collect(),
@@ -991,13 +1131,21 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         solution_error_max: solution.and_then(|s| s.max),
         iterations: outcome.statistics.iterations,
         evaluations: outcome.statistics.evaluations,
+        retries: outcome.statistics.retries,
         seconds: outcome.seconds,
         trajectory,
         adapt: setup.adapt,
         tol: setup.tol,
         adaptivity: outcome.adaptivity,
         outputs: outcome.outputs,
-    })
+    };
+    match failure {
+        None => Ok(summary),
+        Some(source) => Err(SceneError::RunFailed {
+            partial: Box::new(summary),
+            source,
+        }),
+    }
 }
 
 /// Run a scene through [`svi::solve`]: the observers see the initial point and the states
@@ -1278,6 +1426,8 @@ pub struct Summary {
     pub iterations: usize,
     /// Points at which derivatives of the Lagrangian were evaluated.
     pub evaluations: usize,
+    /// Failed steps retried with half the step (`recovery = "halve-step"`).
+    pub retries: usize,
     /// Wall time of the integration, in seconds.
     pub seconds: f64,
     /// The trajectory file, if one was written.
@@ -1347,8 +1497,14 @@ impl fmt::Display for Summary {
             (
                 "work",
                 format!(
-                    "{} nonlinear iterations, {} evaluations",
-                    self.iterations, self.evaluations
+                    "{} nonlinear iterations, {} evaluations{}",
+                    self.iterations,
+                    self.evaluations,
+                    if self.retries > 0 {
+                        format!(", {} steps retried with h/2", self.retries)
+                    } else {
+                        String::new()
+                    }
                 ),
             ),
             ("coordinates", coordinates),
@@ -1483,14 +1639,27 @@ mod tests {
                 "double-pendulum",
                 "damped-oscillator",
                 "damped-pendulum",
-                "driven-oscillator"
+                "driven-oscillator",
+                "stiff-spring-pendulum",
+                "stiff-spring-pendulum-coarse",
+                "kepler-long",
+                "kepler-e0.9",
+                "kepler-e0.99",
+                "kepler-recovery",
+                "double-pendulum-chaotic",
+                "oscillator-beyond-stability"
             ]
         );
         for name in builtin_scene_names() {
             let scene = scene(name);
             assert!(MODEL_NAMES.contains(&scene.model.as_str()), "{name}");
-            assert_eq!(scene.model, name);
-            assert_eq!(scene.method.name, MethodKind::Svi);
+            if MODEL_NAMES.contains(&name) {
+                assert_eq!(scene.model, name);
+                assert_eq!(scene.method.name, MethodKind::Svi);
+            } else {
+                // The stress scenes are named after their model.
+                assert!(name.contains(&scene.model), "{name}");
+            }
         }
         assert!(Scene::builtin("kepler2").is_none());
     }
@@ -1566,11 +1735,31 @@ mod tests {
                 adapt: Some(AdaptMode::Degree),
                 tol: Some(1e-9),
                 output_times: Some(vec![1.0, 2.0]),
+                recovery: None,
+                divergence_limit: None,
             })
             .unwrap();
         assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
         assert_eq!(scene.run.tol, Some(1e-9));
         assert_eq!(scene.output.output_times, Some(vec![1.0, 2.0]));
+        // Recovery and a divergence limit are for fixed-step runs only.
+        let recovery = Overrides {
+            recovery: Some(RecoveryKind::HalveStep),
+            divergence_limit: Some(1e9),
+            ..Overrides::default()
+        };
+        assert!(scene.clone().apply(&recovery).is_err());
+        let mut fixed = self::scene("kepler");
+        fixed.apply(&recovery).unwrap();
+        assert_eq!(fixed.run.recovery, Some(RecoveryKind::HalveStep));
+        assert_eq!(
+            fixed.run.options().unwrap(),
+            RunOptions::default()
+                .with_recovery(Recovery::HalveStep {
+                    max_halvings: DEFAULT_MAX_HALVINGS
+                })
+                .with_divergence_limit(1e9)
+        );
         assert_eq!(scene.points(), Some(5));
         assert_eq!(scene.quadrature(), Some(7));
         assert_eq!(scene.run.h, Some(0.05));

@@ -25,6 +25,30 @@ enum Command {
     Bench(BenchArgs),
     /// Linear stability on the harmonic oscillator: S(z), regions, plots.
     Stability(StabilityArgs),
+    /// Stress tests: largest stable step, failure mode and long-time energy drift per method.
+    Stress(StressArgs),
+}
+
+#[derive(Debug, Args)]
+struct StressArgs {
+    /// Stress scenes, comma-separated [default: all of them].
+    #[arg(long, value_delimiter = ',')]
+    cases: Vec<String>,
+    /// Methods, comma-separated: svi:P, svi:P/M, sc:P, a classic method's name, dop853.
+    #[arg(long, default_value = svi_cli::stress::DEFAULT_METHODS)]
+    methods: String,
+    /// Steps of the long run of each method.
+    #[arg(long, default_value_t = 1_000_000)]
+    steps: usize,
+    /// Bisections refining each stability boundary.
+    #[arg(long, default_value_t = 5)]
+    bisections: usize,
+    /// DOP853's rtol = atol.
+    #[arg(long, default_value_t = 1e-10)]
+    tolerance: f64,
+    /// Directory for stress.md, stress.csv, windows.csv and drift.svg.
+    #[arg(long, default_value = "stress-out")]
+    out_dir: std::path::PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -106,6 +130,7 @@ fn main() -> ExitCode {
         }
         Command::Bench(args) => bench(args),
         Command::Stability(args) => stability(args),
+        Command::Stress(args) => stress(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -191,6 +216,26 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+fn stress(args: StressArgs) -> anyhow::Result<()> {
+    use svi_cli::stress::{StressOptions, stress, to_markdown, write_outputs};
+    let options = StressOptions {
+        cases: args.cases,
+        methods: svi_cli::bench::parse_methods(&args.methods)?,
+        drift_steps: args.steps,
+        bisections: args.bisections,
+        tolerance: args.tolerance,
+        verbose: true,
+    };
+    let records = stress(&options)?;
+    write_outputs(&records, &args.out_dir)?;
+    print!("{}", to_markdown(&records));
+    eprintln!(
+        "wrote stress.md, stress.csv, windows.csv and drift.svg to {}",
+        args.out_dir.display()
+    );
+    Ok(())
+}
+
 fn stability(args: StabilityArgs) -> anyhow::Result<()> {
     use svi_cli::bench::MethodSpec;
     use svi_cli::stability::{Answer, Request, describe, figure_configurations, plot, run, to_csv};
@@ -237,6 +282,12 @@ fn stability(args: StabilityArgs) -> anyhow::Result<()> {
 
 fn list() {
     println!("Built-in scenes (svi run NAME):");
+    let width = BUILTIN_SCENES
+        .iter()
+        .map(|(name, _)| name.len() + 2)
+        .max()
+        .unwrap_or(0)
+        .max(18);
     for (name, text) in BUILTIN_SCENES {
         let description = text
             .lines()
@@ -244,7 +295,7 @@ fn list() {
             .and_then(|line| line.strip_prefix('#'))
             .unwrap_or("")
             .trim();
-        println!("  {name:<18}{description}");
+        println!("  {name:<width$}{description}");
     }
     println!();
     println!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):");

@@ -1,0 +1,820 @@
+//! `svi stress`: where each method breaks, how it fails, and how its energy behaves over a
+//! long run.
+//!
+//! For every stress case (a built-in scene, [`CASES`]) and method, [`stress`] measures:
+//!
+//! 1. **The largest bounded step**: runs over the case's probe horizon on a geometric ladder
+//!    of steps h_ref·2^(j/4) from the scene's step upwards (downwards if the scene's step
+//!    already fails), refined by bisection between the last good and the first failing step.
+//!    A step is *bounded* if the run completes with no error: every step's nonlinear solve
+//!    converges, the state stays finite and within the divergence limit
+//!    10³·max(1, ‖x₀‖∞). The failure mode beyond it is the error of the smallest failing step
+//!    found (typed, with step index and time). Steps are probed from h_ref/2¹² to 2¹²·h_ref,
+//!    within [T/(2·10⁶), T/8] for a probe horizon T.
+//! 2. **The largest accurate step**: the same search for runs that also keep the energy error
+//!    max |E − E₀| within 10 % of max(|E₀|, 1).
+//! 3. **Long-time energy behaviour**: a run of `drift_steps` steps (default 10⁶) at the
+//!    scene's step, the energy error sampled at up to 10⁵ points in 100 windows
+//!    ([`svi::drift::EnergyWindows`]) and a line fitted through the window means
+//!    ([`svi::drift::DriftFit`]): slope, slope × horizon (the drift), the mean half-range of
+//!    the windows (the oscillation amplitude) and the largest |E − E₀|. DOP853 (ode_solvers,
+//!    rtol = atol = [`StressOptions::tolerance`]) runs the same horizon as a non-geometric
+//!    peer, sampled at up to 10⁵ of its accepted step points.
+//!
+//! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
+//! stability gaps (resonances) is reported at the first failure on the ladder.
+
+use crate::bench::{FirstOrder, MethodSpec, parse_methods};
+use crate::plot::{Panel, PlotError, Series, write_svg};
+use crate::{Float, MethodVisitor, Scene, SceneError};
+use nalgebra::SVector;
+use ode_solvers::{Dop853, OutputType};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+use svi::drift::{DriftFit, EnergyWindows, Window};
+use svi::observer::{EnergyError, Every};
+use svi::{
+    Error, Initial, Integrator, LagrangianExt, Method, RunOptions, Structure, linalg::invert_small,
+};
+use svi_models::{ModelVisitor, ZooModel, visit_model};
+
+/// A stress case: a built-in scene and the horizon of its stability probes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StressCase {
+    /// Built-in scene name.
+    pub scene: &'static str,
+    /// Length of the time interval each stability probe integrates.
+    pub probe_time: f64,
+}
+
+/// The stress cases of `svi stress`, in table order.
+pub const CASES: &[StressCase] = &[
+    StressCase {
+        scene: "oscillator",
+        probe_time: 100.0,
+    },
+    StressCase {
+        scene: "kepler-long",
+        probe_time: 200.0,
+    },
+    StressCase {
+        scene: "kepler-e0.9",
+        probe_time: 63.0,
+    },
+    StressCase {
+        scene: "kepler-e0.99",
+        probe_time: 63.0,
+    },
+    StressCase {
+        scene: "stiff-spring-pendulum",
+        probe_time: 10.0,
+    },
+    StressCase {
+        scene: "stiff-spring-pendulum-coarse",
+        probe_time: 10.0,
+    },
+    StressCase {
+        scene: "double-pendulum-chaotic",
+        probe_time: 20.0,
+    },
+];
+
+/// The default method list of `svi stress`.
+pub const DEFAULT_METHODS: &str = "svi:6,sc:6,midpoint,verlet,dop853";
+
+/// Ladder factor per probe: 2^(1/4).
+const LADDER: f64 = 1.189_207_115_002_721;
+/// Largest number of ladder rungs in either direction (a factor 2^12).
+const RUNGS: i32 = 48;
+/// Energy error, relative to max(|E₀|, 1), above which a step is not accurate.
+const ACCURATE: f64 = 0.1;
+/// Divergence limit relative to max(1, ‖x₀‖∞).
+const DIVERGENCE: f64 = 1e3;
+/// Windows of the drift fit.
+const WINDOWS: usize = 100;
+/// Largest number of energy samples of a drift run.
+const SAMPLES: usize = 100_000;
+
+/// Options of [`stress`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StressOptions {
+    /// Scenes (names from [`CASES`]); empty: all.
+    pub cases: Vec<String>,
+    /// Methods: svi's (`svi:P`, `sc:P`, classic names) and `dop853` (drift only).
+    pub methods: Vec<MethodSpec>,
+    /// Steps of the long run.
+    pub drift_steps: usize,
+    /// Bisections refining each stability boundary.
+    pub bisections: usize,
+    /// DOP853's rtol = atol.
+    pub tolerance: f64,
+    /// Print progress to stderr.
+    pub verbose: bool,
+}
+
+impl Default for StressOptions {
+    fn default() -> Self {
+        StressOptions {
+            cases: Vec::new(),
+            methods: parse_methods(DEFAULT_METHODS).unwrap_or_default(),
+            drift_steps: 1_000_000,
+            bisections: 5,
+            tolerance: 1e-10,
+            verbose: false,
+        }
+    }
+}
+
+/// The largest step meeting a criterion, and what happens just beyond it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Limit {
+    /// Largest step found that meets the criterion (`None`: not even the smallest probed).
+    pub h: Option<f64>,
+    /// Smallest step found that fails it (`None`: none up to the largest probed).
+    pub beyond: Option<f64>,
+    /// What happens at `beyond`.
+    pub failure: String,
+}
+
+/// Energy behaviour of one long run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Drift {
+    /// Steps taken (accepted plus rejected for DOP853).
+    pub steps: usize,
+    /// Step (the scene's; `None` for DOP853).
+    pub h: Option<f64>,
+    /// Horizon of the run.
+    pub horizon: f64,
+    /// Fitted slope of the energy error (per unit time).
+    pub slope: f64,
+    /// Slope × horizon.
+    pub drift: f64,
+    /// Mean half-range of the energy error in the windows.
+    pub amplitude: f64,
+    /// Largest |E − E₀|.
+    pub max_error: f64,
+    /// max(|E₀|, 1), the scale of the round-off floor.
+    pub energy_scale: f64,
+    /// Wall time, in seconds.
+    pub seconds: f64,
+    /// The windows.
+    #[serde(skip)]
+    pub windows: Vec<Window>,
+}
+
+/// Energy errors below this many ulps of max(|E₀|, 1) are round-off.
+const ROUND_OFF: f64 = 1e3 * f64::EPSILON;
+
+impl Drift {
+    /// Whether the drift over the run exceeds both the oscillation amplitude and the
+    /// round-off floor 10³·ε·max(|E₀|, 1).
+    pub fn drifts(&self) -> bool {
+        self.drift.abs() > self.amplitude && self.drift.abs() > ROUND_OFF * self.energy_scale
+    }
+
+    /// `drifts`, `bounded`, or `round-off` (every error below the round-off floor).
+    pub fn verdict(&self) -> &'static str {
+        if self.max_error <= ROUND_OFF * self.energy_scale {
+            "round-off"
+        } else if self.drifts() {
+            "drifts"
+        } else {
+            "bounded"
+        }
+    }
+}
+
+/// One row of the stress table.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StressRecord {
+    /// Scene name.
+    pub scene: String,
+    /// Method specification.
+    pub method: String,
+    /// The scene's step.
+    pub h: f64,
+    /// Largest bounded step (`None` for DOP853).
+    pub bounded: Option<Limit>,
+    /// Largest step with an energy error below 10 % (`None` for DOP853).
+    pub accurate: Option<Limit>,
+    /// The long run, or why it failed.
+    pub drift: Result<Drift, String>,
+}
+
+/// Run every case of `options` (see the module documentation).
+pub fn stress(options: &StressOptions) -> Result<Vec<StressRecord>, SceneError> {
+    for name in &options.cases {
+        if !CASES.iter().any(|case| case.scene == name) {
+            return Err(SceneError::UnknownScene { name: name.clone() });
+        }
+    }
+    if options.drift_steps < 2 * WINDOWS {
+        return Err(svi::Error::invalid(
+            "steps",
+            format!(
+                "{} is fewer than {} steps",
+                options.drift_steps,
+                2 * WINDOWS
+            ),
+        )
+        .into());
+    }
+    if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
+        return Err(svi::Error::invalid(
+            "tolerance",
+            format!("{} must be positive and finite", options.tolerance),
+        )
+        .into());
+    }
+    let mut records = Vec::new();
+    for case in CASES
+        .iter()
+        .filter(|case| options.cases.is_empty() || options.cases.iter().any(|c| c == case.scene))
+    {
+        let scene = Scene::builtin(case.scene).ok_or_else(|| SceneError::UnknownScene {
+            name: case.scene.into(),
+        })??;
+        let rows = visit_model(
+            &scene.model,
+            CaseRunner {
+                scene: &scene,
+                case,
+                options,
+            },
+        )??;
+        records.extend(rows);
+    }
+    Ok(records)
+}
+
+/// Runs one case with the scene's model.
+struct CaseRunner<'a> {
+    scene: &'a Scene,
+    case: &'a StressCase,
+    options: &'a StressOptions,
+}
+
+/// A resolved case.
+struct Setup<'a, const N: usize> {
+    scene: &'a str,
+    probe_time: f64,
+    t0: f64,
+    initial: Initial<N>,
+    h: f64,
+    options: &'a StressOptions,
+}
+
+impl ModelVisitor for CaseRunner<'_> {
+    type Output = Result<Vec<StressRecord>, SceneError>;
+
+    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+        let (t0, initial, h, _) = self.scene.resolve(&mut model)?;
+        let setup = Setup {
+            scene: self.case.scene,
+            probe_time: self.case.probe_time,
+            t0,
+            initial,
+            h,
+            options: self.options,
+        };
+        let mut rows = Vec::new();
+        for spec in &self.options.methods {
+            let label = spec.to_string();
+            let start = Instant::now();
+            let record = match *spec {
+                MethodSpec::Method(choice) => choice.visit(MethodRunner {
+                    model: &model,
+                    setup: &setup,
+                    label: &label,
+                })?,
+                MethodSpec::Dop853 => StressRecord {
+                    scene: setup.scene.into(),
+                    method: label.clone(),
+                    h,
+                    bounded: None,
+                    accurate: None,
+                    drift: dop853_drift(&model, &setup),
+                },
+                MethodSpec::Dopri5 => {
+                    return Err(SceneError::BenchMethod(
+                        "dopri5 (svi stress compares with dop853 only)".into(),
+                    ));
+                }
+            };
+            if self.options.verbose {
+                eprintln!(
+                    "{:<30} {:<10} {:.1} s: {}",
+                    setup.scene,
+                    label,
+                    start.elapsed().as_secs_f64(),
+                    summary_line(&record)
+                );
+            }
+            rows.push(record);
+        }
+        Ok(rows)
+    }
+}
+
+/// Runs one case with the visited method.
+struct MethodRunner<'a, M, const N: usize> {
+    model: &'a M,
+    setup: &'a Setup<'a, N>,
+    label: &'a str,
+}
+
+impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for MethodRunner<'_, M, N> {
+    type Output = Result<StressRecord, SceneError>;
+
+    fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
+        let setup = self.setup;
+        let integrator = Integrator::new(self.model.clone(), method);
+        let first = integrator.initial_state(setup.t0, &setup.initial)?;
+        let start = integrator.phase_point(setup.t0, &first, &first.y)?;
+        let energy0 = integrator.model().energy(setup.t0, &start.q, &start.v);
+        let scale = energy0.abs().max(1.0);
+        let size = first.q.amax().max(first.y.amax()).max(1.0);
+        let options = RunOptions::default().with_divergence_limit(DIVERGENCE * size);
+        let mut probes: Vec<(f64, Probe)> = Vec::new();
+        let mut probe = |h: f64| -> Probe {
+            if let Some((_, p)) = probes.iter().find(|(x, _)| *x == h) {
+                return p.clone();
+            }
+            let mut energy = EnergyError::default();
+            let result = integrator.try_run(
+                setup.t0,
+                setup.initial,
+                h,
+                setup.t0 + setup.probe_time,
+                &options,
+                &mut energy,
+            );
+            let p = Probe {
+                failure: result.err().map(|failure| describe(&failure.error)),
+                energy_error: energy.max / scale,
+            };
+            probes.push((h, p.clone()));
+            p
+        };
+        let range = (setup.probe_time / 2e6, setup.probe_time / 8.0);
+        let bisections = setup.options.bisections;
+        let bounded = search(setup.h, range, bisections, |h| {
+            let p = probe(h);
+            (p.failure.is_none(), p.failure.unwrap_or_default())
+        });
+        let accurate = search(setup.h, range, bisections, |h| {
+            let p = probe(h);
+            match p.failure {
+                Some(failure) => (false, failure),
+                None => (
+                    p.energy_error <= ACCURATE,
+                    format!("relative energy error {:.2}", p.energy_error),
+                ),
+            }
+        });
+        Ok(StressRecord {
+            scene: setup.scene.into(),
+            method: self.label.into(),
+            h: setup.h,
+            bounded: Some(bounded),
+            accurate: Some(accurate),
+            drift: svi_drift(&integrator, setup, &options),
+        })
+    }
+}
+
+/// Outcome of one stability probe.
+#[derive(Debug, Clone, PartialEq)]
+struct Probe {
+    /// Why the run failed, if it did.
+    failure: Option<String>,
+    /// max |E − E₀| / max(|E₀|, 1).
+    energy_error: f64,
+}
+
+/// The largest step in `range` for which `good` holds, searched from `h_ref` (see the module
+/// documentation); `good(h)` returns whether the step is good and, if not, why.
+fn search(
+    h_ref: f64,
+    range: (f64, f64),
+    bisections: usize,
+    mut good: impl FnMut(f64) -> (bool, String),
+) -> Limit {
+    let h_ref = h_ref.clamp(range.0, range.1);
+    let mut best: Option<f64> = None;
+    let mut beyond: Option<(f64, String)> = None;
+    let (ok, why) = good(h_ref);
+    if ok {
+        best = Some(h_ref);
+        for j in 1..=RUNGS {
+            let h = h_ref * LADDER.powi(j);
+            if h > range.1 {
+                break;
+            }
+            match good(h) {
+                (true, _) => best = Some(h),
+                (false, why) => {
+                    beyond = Some((h, why));
+                    break;
+                }
+            }
+        }
+    } else {
+        beyond = Some((h_ref, why));
+        for j in 1..=RUNGS {
+            let h = h_ref / LADDER.powi(j);
+            if h < range.0 {
+                break;
+            }
+            match good(h) {
+                (true, _) => {
+                    best = Some(h);
+                    break;
+                }
+                (false, why) => beyond = Some((h, why)),
+            }
+        }
+    }
+    if let (Some(low), Some((high, _))) = (best, &beyond) {
+        let mut high = *high;
+        let mut low = low;
+        for _ in 0..bisections {
+            let middle = (low * high).sqrt();
+            match good(middle) {
+                (true, _) => low = middle,
+                (false, why) => {
+                    high = middle;
+                    beyond = Some((middle, why));
+                }
+            }
+        }
+        best = Some(low);
+    }
+    Limit {
+        h: best,
+        beyond: beyond.as_ref().map(|(h, _)| *h),
+        failure: beyond.map_or_else(
+            || {
+                format!(
+                    "none up to h = {}",
+                    best.map_or_else(String::new, |h| format!("{h:.3e}"))
+                )
+            },
+            |(_, why)| why,
+        ),
+    }
+}
+
+/// A short description of a run's failure.
+fn describe(error: &Error) -> String {
+    match error {
+        Error::NonConvergence { step, t, .. } => {
+            format!("solve does not converge (step {step} at t = {t:.4})")
+        }
+        Error::SingularMatrix { step, t } => {
+            format!("singular Newton matrix (step {step} at t = {t:.4})")
+        }
+        Error::NonFinite { step, t, .. } => format!("non-finite state (step {step} at t = {t:.4})"),
+        Error::Diverged { step, t, .. } => format!("state diverges (step {step} at t = {t:.4})"),
+        Error::LegendreMap { t, .. } => format!("inverse Legendre map fails (t = {t:.4})"),
+        other => other.to_string(),
+    }
+}
+
+/// The long run of an svi method at the scene's step.
+fn svi_drift<L: ZooModel<N>, Me: Method<N>, const N: usize>(
+    integrator: &Integrator<L, Me, N>,
+    setup: &Setup<'_, N>,
+    options: &RunOptions,
+) -> Result<Drift, String> {
+    let steps = setup.options.drift_steps;
+    let stride = steps.div_ceil(SAMPLES).max(1);
+    let samples = steps / stride + 1;
+    let mut windows = Every::new(stride, EnergyWindows::new(samples.div_ceil(WINDOWS)));
+    let t_end = setup.t0 + steps as f64 * setup.h;
+    let start = Instant::now();
+    let run = integrator
+        .try_run(
+            setup.t0,
+            setup.initial,
+            setup.h,
+            t_end,
+            options,
+            &mut windows,
+        )
+        .map_err(|failure| format!("fails: {}", describe(&failure.error)))?;
+    let seconds = start.elapsed().as_secs_f64();
+    drift(&windows.inner, run.statistics.steps, Some(setup.h), seconds)
+}
+
+/// Fit the drift of collected windows.
+fn drift(
+    windows: &EnergyWindows,
+    steps: usize,
+    h: Option<f64>,
+    seconds: f64,
+) -> Result<Drift, String> {
+    let all = windows.all();
+    let fit: DriftFit = DriftFit::from_windows(&all)
+        .ok_or_else(|| "no fit (too few or non-finite samples)".to_string())?;
+    Ok(Drift {
+        steps,
+        h,
+        horizon: fit.horizon,
+        slope: fit.slope,
+        drift: fit.drift,
+        amplitude: fit.amplitude,
+        max_error: fit.max_error,
+        energy_scale: windows.initial.map_or(1.0, |e| e.abs().max(1.0)),
+        seconds,
+        windows: all,
+    })
+}
+
+/// DOP853 over the horizon of the long run.
+fn dop853_drift<M: ZooModel<N>, const N: usize>(
+    model: &M,
+    setup: &Setup<'_, N>,
+) -> Result<Drift, String> {
+    match N {
+        1 => dop853_drift_sized::<M, N, 2>(model, setup),
+        2 => dop853_drift_sized::<M, N, 4>(model, setup),
+        3 => dop853_drift_sized::<M, N, 6>(model, setup),
+        _ => Err("dop853 is wired for models of dimension ≤ 3".into()),
+    }
+}
+
+/// [`dop853_drift`] with the state size S = 2N as a type parameter.
+fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
+    model: &M,
+    setup: &Setup<'_, N>,
+) -> Result<Drift, String> {
+    let (q0, v0) = match setup.initial {
+        Initial::Velocity { q, v } => (q, v),
+        Initial::Momentum { q, p } => (
+            q,
+            model
+                .velocity(setup.t0, &q, &p, &p)
+                .map_err(|e| e.to_string())?,
+        ),
+    };
+    let mass_inverse = match M::STRUCTURE {
+        Structure::ConstantMass => invert_small(&model.mass_matrix(setup.t0, &q0, &v0)),
+        Structure::General => None,
+    };
+    let system = FirstOrder::<M, N, S> {
+        model,
+        mass_inverse,
+    };
+    let y0 = ode_solvers::SVector::<f64, S>::from_iterator(q0.iter().chain(v0.iter()).copied());
+    let t_end = setup.t0 + setup.options.drift_steps as f64 * setup.h;
+    let span = t_end - setup.t0;
+    let tol = setup.options.tolerance;
+    // The energy at the accepted step points, as for svi's methods (the dense output's
+    // interpolation error would swamp the energy error); ode_solvers stores them all, about
+    // 40 bytes per step for N = 2.
+    let mut stepper = Dop853::from_param(
+        system,
+        setup.t0,
+        t_end,
+        span,
+        y0,
+        tol,
+        tol,
+        0.9,
+        0.0,
+        0.333,
+        6.0,
+        span,
+        0.0,
+        2_000_000_000,
+        1000,
+        OutputType::Sparse,
+    );
+    let start = Instant::now();
+    let stats = stepper.integrate().map_err(|e| format!("fails: {e:?}"))?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (times, states) = (stepper.x_out(), stepper.y_out());
+    let reached = times.last().copied().unwrap_or(setup.t0);
+    if (reached - t_end).abs() > 1e-9 * t_end.abs().max(1.0) {
+        return Err(format!("fails: stops at t = {reached}"));
+    }
+    let stride = times.len().saturating_sub(1).div_ceil(SAMPLES).max(1);
+    let samples = times.len().div_ceil(stride);
+    let mut windows = EnergyWindows::new(samples.div_ceil(WINDOWS));
+    for (t, y) in times.iter().zip(states).step_by(stride) {
+        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
+        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+        windows.push(*t, model.energy(*t, &q, &v));
+    }
+    let steps = (stats.accepted_steps + stats.rejected_steps) as usize;
+    drift(&windows, steps, None, seconds)
+}
+
+/// `1.23e-4`, or `—`.
+fn short(value: Option<f64>) -> String {
+    value.map_or_else(|| "—".into(), |x| format!("{x:.3e}"))
+}
+
+/// One line for the progress log.
+fn summary_line(record: &StressRecord) -> String {
+    let mut line = String::new();
+    if let Some(limit) = &record.bounded {
+        let _ = write!(line, "bounded h ≤ {} ({}); ", short(limit.h), limit.failure);
+    }
+    match &record.drift {
+        Ok(d) => {
+            let _ = write!(
+                line,
+                "drift {:.2e} amplitude {:.2e} max {:.2e}",
+                d.drift, d.amplitude, d.max_error
+            );
+        }
+        Err(why) => line.push_str(why),
+    }
+    line
+}
+
+/// The stress table in Markdown.
+pub fn to_markdown(records: &[StressRecord]) -> String {
+    let mut out = String::from(
+        "| scene | method | h | largest bounded h | beyond it | largest h with \\|ΔE\\| < 10 % | steps | drift slope | drift × T | amplitude | max \\|ΔE\\| | energy |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    for r in records {
+        let (bounded, beyond) = match &r.bounded {
+            Some(limit) => (short(limit.h), limit.failure.clone()),
+            None => ("—".into(), "—".into()),
+        };
+        let accurate = r
+            .accurate
+            .as_ref()
+            .map_or_else(|| "—".into(), |limit| short(limit.h));
+        let drift = match &r.drift {
+            Ok(d) => format!(
+                "{} | {:.2e} | {:.2e} | {:.2e} | {:.2e} | {}",
+                d.steps,
+                d.slope,
+                d.drift,
+                d.amplitude,
+                d.max_error,
+                d.verdict()
+            ),
+            Err(why) => format!("— | — | — | — | — | {why}"),
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            r.scene,
+            r.method,
+            Float(r.h),
+            bounded,
+            beyond,
+            accurate,
+            drift
+        );
+    }
+    out
+}
+
+/// The stress table as CSV (empty fields where a value does not apply; the failure texts
+/// are quoted and hold no commas).
+pub fn to_csv(records: &[StressRecord]) -> String {
+    let mut out = String::from(
+        "scene,method,h,bounded_h,bounded_beyond,bounded_failure,accurate_h,accurate_beyond,accurate_failure,steps,horizon,slope,drift,amplitude,max_error,verdict,seconds,drift_failure\n",
+    );
+    let number = |x: Option<f64>| x.map_or_else(String::new, |x| Float(x).to_string());
+    let quote = |s: &str| format!("\"{}\"", s.replace('"', "'").replace(',', ";"));
+    for r in records {
+        let limit = |limit: &Option<Limit>| match limit {
+            Some(l) => format!("{},{},{}", number(l.h), number(l.beyond), quote(&l.failure)),
+            None => ",,".into(),
+        };
+        let drift = match &r.drift {
+            Ok(d) => format!(
+                "{},{},{},{},{},{},{},{},",
+                d.steps,
+                Float(d.horizon),
+                Float(d.slope),
+                Float(d.drift),
+                Float(d.amplitude),
+                Float(d.max_error),
+                d.verdict(),
+                Float(d.seconds)
+            ),
+            Err(why) => format!(",,,,,,,,{}", quote(why)),
+        };
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            r.scene,
+            r.method,
+            Float(r.h),
+            limit(&r.bounded),
+            limit(&r.accurate),
+            drift
+        );
+    }
+    out
+}
+
+/// The windows of every long run as CSV.
+pub fn windows_csv(records: &[StressRecord]) -> String {
+    let mut out = String::from("scene,method,t_start,t_end,mean,min,max,samples\n");
+    for r in records {
+        if let Ok(d) = &r.drift {
+            for w in &d.windows {
+                let _ = writeln!(
+                    out,
+                    "{},{},{},{},{},{},{},{}",
+                    r.scene,
+                    r.method,
+                    Float(w.t_start),
+                    Float(w.t_end),
+                    Float(w.mean),
+                    Float(w.min),
+                    Float(w.max),
+                    w.samples
+                );
+            }
+        }
+    }
+    out
+}
+
+/// One panel per scene: the largest |E − E₀| in each window against time, per method. Every
+/// panel lists every method in the same order (so a method keeps its colour); a long run that
+/// failed is an empty series labelled "(failed)".
+pub fn plot(records: &[StressRecord], path: &Path) -> Result<(), PlotError> {
+    let mut panels: Vec<Panel> = Vec::new();
+    for r in records {
+        let series = match &r.drift {
+            Ok(d) => Series {
+                label: r.method.clone(),
+                points: d
+                    .windows
+                    .iter()
+                    .map(|w| (w.t_end, w.max.abs().max(w.min.abs())))
+                    .collect(),
+            },
+            Err(_) => Series {
+                label: format!("{} (failed)", r.method),
+                points: Vec::new(),
+            },
+        };
+        match panels.iter_mut().find(|p| p.title == r.scene) {
+            Some(panel) => panel.series.push(series),
+            None => panels.push(Panel {
+                title: r.scene.clone(),
+                x_label: "t".into(),
+                y_label: "max |E − E₀| per window".into(),
+                x_log: false,
+                y_log: true,
+                series: vec![series],
+            }),
+        }
+    }
+    write_svg(path, &panels, 480, 400)
+}
+
+/// Write `stress.md`, `stress.csv`, `windows.csv` and `drift.svg` into `dir`.
+pub fn write_outputs(records: &[StressRecord], dir: &Path) -> Result<(), SceneError> {
+    let write = |name: &str, text: String| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).map_err(|source| SceneError::Write { path, source })
+    };
+    std::fs::create_dir_all(dir).map_err(|source| SceneError::Write {
+        path: dir.into(),
+        source,
+    })?;
+    write("stress.md", to_markdown(records))?;
+    write("stress.csv", to_csv(records))?;
+    write("windows.csv", windows_csv(records))?;
+    plot(records, &dir.join("drift.svg")).map_err(|e| SceneError::Write {
+        path: dir.join("drift.svg"),
+        source: std::io::Error::other(e.to_string()),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn search_finds_a_threshold_from_either_side() {
+        let good = |h: f64| (h < 2.0, format!("fails at {h}"));
+        let up = search(0.5, (1e-6, 100.0), 8, good);
+        let h = up.h.unwrap();
+        let beyond = up.beyond.unwrap();
+        assert!(h < 2.0 && beyond >= 2.0 && beyond / h < 1.002, "{up:?}");
+        assert!(up.failure.starts_with("fails at"));
+        let down = search(10.0, (1e-6, 100.0), 8, good);
+        assert!(down.h.unwrap() < 2.0 && down.h.unwrap() > 1.99, "{down:?}");
+        let never = search(1.0, (1e-6, 100.0), 3, |_| (true, String::new()));
+        assert_eq!(never.beyond, None);
+        assert!(never.failure.starts_with("none up to"));
+        assert!(never.h.unwrap() <= 100.0 && never.h.unwrap() > 100.0 / LADDER);
+    }
+}
