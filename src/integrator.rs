@@ -367,8 +367,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             if stopped {
                 break;
             }
-            let t = t0 + k as f64 * h;
-            let step_size = if k + 1 == steps { t_end - t } else { h };
+            let (t, step_size, end) = grid_step(t0, t_end, h, steps, k);
             let depth = match options.recovery {
                 Recovery::None => 0,
                 Recovery::HalveStep { max_halvings } => max_halvings,
@@ -385,11 +384,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
                 return Err(self.failure(failure.at(k, t), &progress, false));
             }
             progress.statistics.steps += 1;
-            progress.t = if k + 1 == steps {
-                t_end
-            } else {
-                t0 + (k + 1) as f64 * h
-            };
+            progress.t = end;
             if observer.wants(k + 1) {
                 match self.complete(k + 1, progress.t, &progress.state, &progress.guess) {
                     Ok(point) => {
@@ -462,16 +457,9 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
                 .step(&self.model, workspace, t, h, &progress.state, increment)
             {
                 Ok(report) => {
-                    compensated_add(
-                        &mut progress.state.q,
-                        &mut progress.compensation.q,
-                        &increment.q,
-                    );
-                    compensated_add(
-                        &mut progress.state.y,
-                        &mut progress.compensation.y,
-                        &increment.y,
-                    );
+                    progress
+                        .state
+                        .add_compensated(&mut progress.compensation, increment);
                     progress.statistics.iterations += report.iterations;
                     progress.statistics.evaluations += report.evaluations;
                     let norm = || progress.state.q.amax().max(progress.state.y.amax());
@@ -618,17 +606,25 @@ pub fn step_count(span: f64, h: f64) -> Result<usize, Error> {
     Ok((count as usize).max(1))
 }
 
-/// Kahan-compensated `sum += increment`.
-pub(crate) fn compensated_add<const N: usize>(
-    sum: &mut SVector<f64, N>,
-    compensation: &mut SVector<f64, N>,
-    increment: &SVector<f64, N>,
-) {
-    for i in 0..N {
-        let y = increment[i] - compensation[i];
-        let t = sum[i] + y;
-        compensation[i] = (t - sum[i]) - y;
-        sum[i] = t;
+/// Step `k` of the fixed grid t_j = t0 + j·h covering [t0, t_end] in `steps` steps (see
+/// [`step_count`]): (start time, step size, end time). Times are never accumulated, and the
+/// last step is shortened to end exactly at `t_end`.
+pub(crate) fn grid_step(t0: f64, t_end: f64, h: f64, steps: usize, k: usize) -> (f64, f64, f64) {
+    let t = t0 + k as f64 * h;
+    if k + 1 == steps {
+        (t, t_end - t, t_end)
+    } else {
+        (t, h, t0 + (k + 1) as f64 * h)
+    }
+}
+
+/// Kahan-compensated `sum += increment`, entry by entry.
+pub(crate) fn compensated_add(sum: &mut [f64], compensation: &mut [f64], increment: &[f64]) {
+    for ((s, c), i) in sum.iter_mut().zip(compensation.iter_mut()).zip(increment) {
+        let y = i - *c;
+        let t = *s + y;
+        *c = (t - *s) - y;
+        *s = t;
     }
 }
 
@@ -647,10 +643,10 @@ mod tests {
 
     #[test]
     fn compensated_summation_keeps_small_increments() {
-        let mut sum = SVector::from([1.0]);
-        let mut compensation = SVector::zeros();
+        let mut sum = [1.0];
+        let mut compensation = [0.0];
         for _ in 0..1_000_000 {
-            compensated_add(&mut sum, &mut compensation, &SVector::from([1e-16]));
+            compensated_add(&mut sum, &mut compensation, &[1e-16]);
         }
         assert!((sum[0] - (1.0 + 1e-10)).abs() < 1e-15);
     }

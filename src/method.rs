@@ -53,6 +53,21 @@ impl<const N: usize> State<N> {
         }
     }
 
+    /// `self += increment` with Kahan compensation carried in `compensation`.
+    pub(crate) fn add_compensated(&mut self, compensation: &mut State<N>, increment: &State<N>) {
+        use crate::integrator::compensated_add;
+        compensated_add(
+            self.q.as_mut_slice(),
+            compensation.q.as_mut_slice(),
+            increment.q.as_slice(),
+        );
+        compensated_add(
+            self.y.as_mut_slice(),
+            compensation.y.as_mut_slice(),
+            increment.y.as_slice(),
+        );
+    }
+
     /// Whether every component is finite.
     pub fn is_finite(&self) -> bool {
         self.q.iter().chain(self.y.iter()).all(|x| x.is_finite())

@@ -48,7 +48,7 @@
 
 use crate::derived::LagrangianExt;
 use crate::error::{require_finite, require_positive};
-use crate::integrator::compensated_add;
+use crate::integrator::grid_step;
 use crate::method::{PhasePoint, State, StepReport};
 use crate::spectral_variational::MAX_POINTS;
 use crate::{Error, Initial, Integrator, Lagrangian, Method, Statistics, step_count};
@@ -396,8 +396,8 @@ struct Cursor<const N: usize> {
 
 impl<const N: usize> Cursor<N> {
     fn advanced(mut self, increment: &State<N>) -> Self {
-        compensated_add(&mut self.state.q, &mut self.compensation.q, &increment.q);
-        compensated_add(&mut self.state.y, &mut self.compensation.y, &increment.y);
+        self.state
+            .add_compensated(&mut self.compensation, increment);
         self
     }
 }
@@ -659,14 +659,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
         let points = self.method().points();
         let mut stepper = self.stepper(self.method().clone(), h)?;
         for k in 0..steps {
-            let t = span.t0 + k as f64 * h;
-            let last = k + 1 == steps;
-            let end_time = if last {
-                span.t_end
-            } else {
-                span.t0 + (k + 1) as f64 * h
-            };
-            let size = if last { span.t_end - t } else { h };
+            let (t, size, end_time) = grid_step(span.t0, span.t_end, h, steps, k);
             let next = stepper.step(t, size, &cursor, statistics)?;
             stepper.emit(outputs, t, size, &cursor.state, &next.state, end_time)?;
             adaptivity.record(size, points);
@@ -801,15 +794,19 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
         }
         let length = span.t_end - span.t0;
         let steps = step_count(length, h)?;
-        let mut steppers = Vec::with_capacity(high - low + 1);
-        let mut orders = Vec::with_capacity(high - low + 1);
-        for points in low..=high {
-            let method = base.with_points(points).ok_or_else(|| {
-                Error::invalid("adapt", "the method cannot change its number of points")
-            })?;
-            orders.push(f64::from(method.info().order as u32));
-            steppers.push(None);
-        }
+        // One method and workspace per number of points, built once (tables are small).
+        let mut steppers = (low..=high)
+            .map(|points| {
+                let method = base.with_points(points).ok_or_else(|| {
+                    Error::invalid("adapt", "the method cannot change its number of points")
+                })?;
+                self.stepper(method, h)
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        let orders: Vec<f64> = steppers
+            .iter()
+            .map(|stepper| stepper.method.info().order as f64)
+            .collect();
         let mut points = initial_points.clamp(low, high);
         let mut magnitudes = [0.0; MAX_POINTS];
         let mut adaptivity = Adaptivity::default();
@@ -818,26 +815,10 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
         // (points, error estimate) of the last accepted step.
         let mut previous: Option<(usize, f64)> = None;
         for k in 0..steps {
-            let t = span.t0 + k as f64 * h;
-            let last = k + 1 == steps;
-            let end_time = if last {
-                span.t_end
-            } else {
-                span.t0 + (k + 1) as f64 * h
-            };
-            let size = if last { span.t_end - t } else { h };
+            let (t, size, end_time) = grid_step(span.t0, span.t_end, h, steps, k);
             let tol_step = tol * size / length;
             loop {
-                let slot = &mut steppers[points - low];
-                if slot.is_none() {
-                    let method = base.with_points(points).ok_or_else(|| {
-                        Error::invalid("adapt", "the method cannot change its number of points")
-                    })?;
-                    *slot = Some(self.stepper(method, h)?);
-                }
-                let Some(stepper) = slot.as_mut() else {
-                    continue;
-                };
+                let stepper = &mut steppers[points - low];
                 if warm != Some(points) {
                     stepper.method.restart(&mut stepper.workspace);
                 }

@@ -511,24 +511,7 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
     }
     // Crate defaults, except sparse output and a high step cap (as the kepler-peers tool).
     match spec {
-        MethodSpec::Dop853 => go!(Dop853::from_param(
-            system,
-            t0,
-            t_end,
-            span,
-            y0,
-            tol,
-            tol,
-            0.9,
-            0.0,
-            0.333,
-            6.0,
-            span,
-            0.0,
-            2_000_000_000,
-            1000,
-            OutputType::Sparse,
-        )),
+        MethodSpec::Dop853 => go!(dop853(system, t0, t_end, y0, tol)),
         _ => go!(Dopri5::from_param(
             system,
             t0,
@@ -548,6 +531,36 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
             OutputType::Sparse,
         )),
     }
+}
+
+/// `ode_solvers`' DOP853 from `t0` to `t_end` with rtol = atol = `tol`, as the peers run it:
+/// crate defaults except sparse output (the accepted step points only) and a high step cap.
+pub(crate) fn dop853<F: System<f64, ode_solvers::SVector<f64, S>>, const S: usize>(
+    system: F,
+    t0: f64,
+    t_end: f64,
+    y0: ode_solvers::SVector<f64, S>,
+    tol: f64,
+) -> Dop853<f64, ode_solvers::SVector<f64, S>, F> {
+    let span = t_end - t0;
+    Dop853::from_param(
+        system,
+        t0,
+        t_end,
+        span,
+        y0,
+        tol,
+        tol,
+        0.9,
+        0.0,
+        0.333,
+        6.0,
+        span,
+        0.0,
+        2_000_000_000,
+        1000,
+        OutputType::Sparse,
+    )
 }
 
 /// Sweep an adaptive `ode_solvers` method over tolerances (models with N ≤ 3).

@@ -28,7 +28,6 @@ use crate::bench::{FirstOrder, MethodSpec, parse_methods};
 use crate::plot::{Panel, PlotError, Series, write_svg};
 use crate::{Float, MethodVisitor, Scene, SceneError};
 use nalgebra::SVector;
-use ode_solvers::{Dop853, OutputType};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -570,29 +569,11 @@ fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     };
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(q0.iter().chain(v0.iter()).copied());
     let t_end = setup.t0 + setup.options.drift_steps as f64 * setup.h;
-    let span = t_end - setup.t0;
     let tol = setup.options.tolerance;
     // The energy at the accepted step points, as for svi's methods (the dense output's
     // interpolation error would swamp the energy error); ode_solvers stores them all, about
     // 40 bytes per step for N = 2.
-    let mut stepper = Dop853::from_param(
-        system,
-        setup.t0,
-        t_end,
-        span,
-        y0,
-        tol,
-        tol,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        span,
-        0.0,
-        2_000_000_000,
-        1000,
-        OutputType::Sparse,
-    );
+    let mut stepper = crate::bench::dop853(system, setup.t0, t_end, y0, tol);
     let start = Instant::now();
     let stats = stepper.integrate().map_err(|e| format!("fails: {e:?}"))?;
     let seconds = start.elapsed().as_secs_f64();

@@ -3,64 +3,8 @@
 //! p0 = 1, σ = 1) and the Kepler orbit's energy −1/2 and angular momentum √(1 − e²) (the
 //! default state is the pericentre of an orbit with semi-major axis 1).
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-use serde_json::Value;
-
-/// Run `svi` with `args`.
-fn svi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_svi"))
-        .args(args)
-        .output()
-        .expect("the svi binary runs")
-}
-
-/// Run `svi` with `args`, expect success, and parse stdout as JSON.
-fn json(args: &[&str]) -> Value {
-    let output = svi(args);
-    assert!(
-        output.status.success(),
-        "svi {args:?} failed: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
-}
-
-/// Run `svi` with `args`, expect failure (not a panic), and return stderr.
-fn failure(args: &[&str]) -> String {
-    let output = svi(args);
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(!output.status.success(), "svi {args:?} succeeded");
-    assert!(output.stdout.is_empty(), "svi {args:?} printed to stdout");
-    assert!(
-        !stderr.contains("panicked"),
-        "svi {args:?} panicked: {stderr}"
-    );
-    assert!(stderr.contains("error"), "svi {args:?}: {stderr}");
-    stderr
-}
-
-/// A fresh scratch directory for this test process, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("svi-cli-test-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-
-    fn join(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::*;
 
 /// A scene file in its own scratch directory.
 struct SceneFile {
@@ -77,21 +21,6 @@ fn scene_file(name: &str, text: &str) -> SceneFile {
         path: path.to_str().unwrap().to_owned(),
         _dir: dir,
     }
-}
-
-fn number(summary: &Value, field: &str) -> f64 {
-    summary[field]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{field} is not a number: {summary}"))
-}
-
-fn vector(summary: &Value, field: &str) -> Vec<f64> {
-    summary[field]
-        .as_array()
-        .unwrap_or_else(|| panic!("{field} is not an array: {summary}"))
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
 }
 
 const REQUIRED: [&str; 14] = [

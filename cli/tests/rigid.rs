@@ -4,75 +4,8 @@
 //! body, vertical angular momentum of the tops, ‖RᵀR − I‖ = 0) and the agreement of the
 //! full and reduced forms on the free body.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
-
-use serde_json::Value;
-
-fn svi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_svi"))
-        .args(args)
-        .output()
-        .expect("the svi binary runs")
-}
-
-fn json(args: &[&str]) -> Value {
-    let output = svi(args);
-    assert!(
-        output.status.success(),
-        "svi {args:?} failed: {}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
-}
-
-fn failure(args: &[&str]) -> String {
-    let output = svi(args);
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(!output.status.success(), "svi {args:?} succeeded");
-    assert!(output.stdout.is_empty(), "svi {args:?} printed to stdout");
-    assert!(
-        !stderr.contains("panicked"),
-        "svi {args:?} panicked: {stderr}"
-    );
-    assert!(stderr.contains("error"), "svi {args:?}: {stderr}");
-    stderr
-}
-
-fn number(value: &Value, key: &str) -> f64 {
-    value[key]
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} is not a number in {value}"))
-}
-
-fn vector(value: &Value, key: &str) -> Vec<f64> {
-    value[key]
-        .as_array()
-        .unwrap_or_else(|| panic!("{key} is not an array in {value}"))
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .collect()
-}
-
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir =
-            std::env::temp_dir().join(format!("svi-rigid-test-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn join(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod common;
+use common::*;
 
 #[test]
 fn rigid_body_scene_conserves_momentum_and_orthogonality() {

@@ -6,21 +6,13 @@
 //! Case counts are set per test for a short CI run (about 7 000 inputs in all);
 //! `SVI_HOSTILE_CASES=N` multiplies them by N.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
+use common::*;
 
 use clap::Parser;
 use proptest::prelude::*;
 use svi_cli::bench::MethodSpec;
 use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
-
-/// Run `svi` with `args`.
-fn svi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_svi"))
-        .args(args)
-        .output()
-        .expect("the svi binary runs")
-}
 
 /// `base` cases, times `SVI_HOSTILE_CASES` if set.
 fn cases(base: u32) -> ProptestConfig {
@@ -33,24 +25,6 @@ fn cases(base: u32) -> ProptestConfig {
         cases: base.saturating_mul(factor),
         failure_persistence: None,
         ..ProptestConfig::default()
-    }
-}
-
-/// A scratch directory for this test process, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir =
-            std::env::temp_dir().join(format!("svi-stress-test-{}-{name}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
     }
 }
 

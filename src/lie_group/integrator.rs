@@ -13,7 +13,7 @@ use super::model::{RigidBodyExt, RigidBodyLagrangian};
 use super::observer::{RigidObserver, RigidPoint};
 use super::so3::{Matrix3, Vector3, orthogonality_error};
 use crate::error::{require_finite, require_positive};
-use crate::integrator::step_count;
+use crate::integrator::{compensated_add, grid_step, step_count};
 use crate::method::StepReport;
 use crate::{Error, Statistics};
 use nalgebra::SMatrix;
@@ -272,8 +272,8 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
             if stopped {
                 break;
             }
-            t = t0 + k as f64 * h;
-            let step_size = if k + 1 == steps { t_end - t } else { h };
+            let (start, step_size, end) = grid_step(t0, t_end, h, steps, k);
+            t = start;
             let report = self
                 .method
                 .step(
@@ -304,11 +304,7 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
             statistics.steps += 1;
             statistics.iterations += report.iterations;
             statistics.evaluations += report.evaluations;
-            t = if k + 1 == steps {
-                t_end
-            } else {
-                t0 + (k + 1) as f64 * h
-            };
+            t = end;
             if observer.wants(k + 1) {
                 let point = self.point(t, &state, &guess)?;
                 guess = point.omega;
@@ -325,15 +321,5 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
             statistics,
             stopped,
         })
-    }
-}
-
-/// Kahan-compensated `sum += increment`, entry by entry.
-fn compensated_add(sum: &mut [f64], compensation: &mut [f64], increment: &[f64]) {
-    for ((s, c), i) in sum.iter_mut().zip(compensation.iter_mut()).zip(increment) {
-        let y = i - *c;
-        let t = *s + y;
-        *c = (t - *s) - y;
-        *s = t;
     }
 }
