@@ -3,43 +3,15 @@
 //! tables), for every method, both solver paths (fixed point and Newton) and the forced
 //! paths.
 
+#[path = "common/allocations.rs"]
+mod allocations;
+
 use nalgebra::SVector;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use svi::{
     Integrator, Lagrangian, Method, Midpoint, SpectralCollocation, StormerVerlet, Svi,
     SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
 use svi_models::{DampedPendulum, DoublePendulum, Kepler};
-
-/// Counts the allocations of each thread (the test harness's own threads do not disturb
-/// the count of a test).
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn count() -> usize {
-    ALLOCATIONS.with(Cell::get)
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// Allocations of a run of `steps` steps of size 0.01.
 fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
@@ -50,11 +22,11 @@ fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
     steps: usize,
 ) -> usize {
     let integrator = Integrator::new(model.clone(), method.clone());
-    let before = count();
+    let before = allocations::count();
     integrator
         .run_from_velocity(0.0, q, v, 0.01, 0.01 * steps as f64, &mut ())
         .unwrap();
-    count() - before
+    allocations::count() - before
 }
 
 fn assert_loop_allocates_nothing<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(

@@ -7,9 +7,10 @@
 //! hand, with a step 100 times smaller than the smallest step tested (its error, O(h⁴), is
 //! far below the errors measured).
 
+#[path = "common/allocations.rs"]
+mod allocations;
+
 use nalgebra::{SMatrix, SVector};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::ops::ControlFlow;
 use svi::lie_group::so3::{dexp, dexp_inverse, exp, log, orthogonality_error};
 use svi::lie_group::{
@@ -21,31 +22,6 @@ use svi::observer::Every;
 use svi::verify::observed_order;
 use svi::{Error, Scalar};
 use svi_models::{FreeRigidBody, HeavyTop, Pendulum3d};
-
-/// Counts the allocations of each thread (the harness's other threads do not disturb a
-/// test's count).
-struct Counting;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, size: usize) -> *mut u8 {
-        ALLOCATIONS.with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 type Matrix3 = SMatrix<f64, 3, 3>;
 type Vector3 = SVector<f64, 3>;
@@ -610,7 +586,7 @@ fn the_step_loop_allocates_nothing() {
         let model = HeavyTop::default();
         let (r, omega) = model.initial_state();
         let integrator = RigidBodyIntegrator::new(model, LieSvi::new(3));
-        let before = ALLOCATIONS.with(Cell::get);
+        let before = allocations::count();
         integrator
             .run(
                 0.0,
@@ -620,7 +596,7 @@ fn the_step_loop_allocates_nothing() {
                 &mut (OrthogonalityError::default(), RigidEnergyError::default()),
             )
             .unwrap();
-        ALLOCATIONS.with(Cell::get) - before
+        allocations::count() - before
     };
     assert_eq!(allocations(20), allocations(500));
 }
