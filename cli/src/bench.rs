@@ -14,6 +14,8 @@
 //! v̇ = q̈(t, q, v) derived from the Lagrangian) sweep tol = 10⁻³, 10⁻³·⁵, …, 10⁻¹⁶ with
 //! rtol = atol = tol and sparse output. A sweep stops at the target error, when a single run
 //! takes longer than `max_run`, or when the error has stalled for three points (round-off).
+//! Given step counts ([`BenchOptions::steps`]) or tolerances ([`BenchOptions::tolerances`])
+//! replace the sweep: every one of them is measured, and a run that fails is an error.
 
 use crate::plot::{Panel, Series, write_svg};
 use crate::{MethodChoice, MethodKind, MethodVisitor, Scene, SceneError};
@@ -111,6 +113,11 @@ pub struct BenchOptions {
     pub batches: usize,
     /// Minimum duration of one batch (seconds).
     pub min_batch: f64,
+    /// Step counts at which to run the fixed-step methods instead of sweeping them (empty:
+    /// sweep).
+    pub steps: Vec<usize>,
+    /// Tolerances at which to run the adaptive peers instead of sweeping them (empty: sweep).
+    pub tolerances: Vec<f64>,
     /// Print one line per point to stderr.
     pub verbose: bool,
 }
@@ -123,6 +130,8 @@ impl Default for BenchOptions {
             max_run: 2.0,
             batches: 5,
             min_batch: 0.2,
+            steps: Vec::new(),
+            tolerances: Vec::new(),
             verbose: false,
         }
     }
@@ -160,6 +169,20 @@ pub struct Record {
 /// stderr under a progress bar over the methods (drawn only on a terminal).
 pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Record>, SceneError> {
     scene.check()?;
+    if let Some(steps) = options.steps.iter().find(|&&steps| steps == 0) {
+        return Err(SceneError::BenchParameter(format!(
+            "step count {steps} (expected at least 1)"
+        )));
+    }
+    if let Some(tol) = options
+        .tolerances
+        .iter()
+        .find(|tol| !(tol.is_finite() && **tol > 0.0))
+    {
+        return Err(SceneError::BenchParameter(format!(
+            "tolerance {tol} (expected a finite positive number)"
+        )));
+    }
     let progress = if options.verbose {
         let bar = ProgressBar::new(options.methods.len() as u64);
         if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} methods {msg}") {
@@ -375,19 +398,11 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             )
             .map(|run| (run.last.q - problem.exact).norm())
     };
-    let mut steps = 8usize;
-    while steps < 100_000_000 && !matches!(final_error(steps), Ok(e) if e <= 3e-2) {
-        steps *= 2;
-    }
-    // Two points per halving of the error exponent: 10^(1/(2r)) between step counts.
-    let factor = 10f64.powf(0.5 / order);
-    let mut stall = Stall::default();
-    let mut failures = 0;
-    while steps < 100_000_000 {
+    let measure = |steps: usize| -> Result<Record, svi::Error> {
         let h = span / steps as f64;
         let mut energy = EnergyError::default();
         let mut momentum = MomentumError::default();
-        let diagnostics = if model.generator_count() > 0 {
+        let run = if model.generator_count() > 0 {
             integrator.run(
                 problem.t0,
                 initial,
@@ -397,23 +412,14 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             )
         } else {
             integrator.run(problem.t0, initial, h, problem.t_end, &mut energy)
-        };
-        let run = match diagnostics {
-            Ok(run) => run,
-            Err(_) if failures < 3 => {
-                failures += 1;
-                steps = (steps as f64 * factor).ceil() as usize;
-                continue;
-            }
-            Err(error) => return Err(error.into()),
-        };
+        }?;
         let seconds = median_seconds(
             || {
                 let _ = integrator.run(problem.t0, initial, h, problem.t_end, &mut ());
             },
             options,
         );
-        let record = Record {
+        Ok(Record {
             method: label.to_string(),
             parameter: steps as f64,
             h: Some(h),
@@ -424,11 +430,38 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             evaluations: run.statistics.evaluations,
             iterations: run.statistics.iterations,
             seconds,
+        })
+    };
+    if !options.steps.is_empty() {
+        for &steps in &options.steps {
+            let record = measure(steps)?;
+            report.record(&record);
+            records.push(record);
+        }
+        return Ok(());
+    }
+    let mut steps = 8usize;
+    while steps < 100_000_000 && !matches!(final_error(steps), Ok(e) if e <= 3e-2) {
+        steps *= 2;
+    }
+    // Two points per halving of the error exponent: 10^(1/(2r)) between step counts.
+    let factor = 10f64.powf(0.5 / order);
+    let mut stall = Stall::default();
+    let mut failures = 0;
+    while steps < 100_000_000 {
+        let record = match measure(steps) {
+            Ok(record) => record,
+            Err(_) if failures < 3 => {
+                failures += 1;
+                steps = (steps as f64 * factor).ceil() as usize;
+                continue;
+            }
+            Err(error) => return Err(error.into()),
         };
         report.record(&record);
         let done = record.final_error < options.target
             || stall.stalled(record.final_error)
-            || seconds > options.max_run;
+            || record.seconds > options.max_run;
         records.push(record);
         if done {
             break;
@@ -577,13 +610,10 @@ fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
         1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
         2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
         3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
-        _ => {
-            return Err(SceneError::BenchMethod(format!(
-                "{spec} (the ode_solvers peers are wired for models of dimension ≤ 3)"
-            )));
-        }
+        _ => Err(SceneError::BenchMethod(format!(
+            "{spec} (the ode_solvers peers are wired for models of dimension ≤ 3)"
+        ))),
     }
-    Ok(())
 }
 
 /// [`sweep_adaptive`] with the state size S = 2N as a type parameter.
@@ -594,7 +624,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) {
+) -> Result<(), SceneError> {
     assert_eq!(S, 2 * N, "state size");
     let mass_inverse = match M::STRUCTURE {
         Structure::ConstantMass => {
@@ -607,13 +637,8 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
         mass_inverse,
     };
     let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);
-    let mut stall = Stall::default();
-    for k in 0..=26 {
-        let tol = 10f64.powf(-3.0 - 0.5 * f64::from(k));
-        let Some((last, steps, evaluations, states)) = adaptive_run(system(), spec, problem, tol)
-        else {
-            break;
-        };
+    let measure = |tol: f64| -> Option<Record> {
+        let (last, steps, evaluations, states) = adaptive_run(system(), spec, problem, tol)?;
         let q = SVector::<f64, N>::from_fn(|i, _| last[i]);
         let energy_error_max = states
             .iter()
@@ -643,7 +668,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
             },
             options,
         );
-        let record = Record {
+        Some(Record {
             method: spec.to_string(),
             parameter: tol,
             h: None,
@@ -654,16 +679,35 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
             evaluations,
             iterations: 0,
             seconds,
+        })
+    };
+    if !options.tolerances.is_empty() {
+        for &tol in &options.tolerances {
+            let record = measure(tol).ok_or_else(|| {
+                SceneError::BenchParameter(format!(
+                    "{spec} at tolerance {tol:e} did not reach the horizon"
+                ))
+            })?;
+            report.record(&record);
+            records.push(record);
+        }
+        return Ok(());
+    }
+    let mut stall = Stall::default();
+    for k in 0..=26 {
+        let Some(record) = measure(10f64.powf(-3.0 - 0.5 * f64::from(k))) else {
+            break;
         };
         report.record(&record);
         let done = record.final_error < options.target
             || stall.stalled(record.final_error)
-            || seconds > options.max_run;
+            || record.seconds > options.max_run;
         records.push(record);
         if done {
             break;
         }
     }
+    Ok(())
 }
 
 /// Round-trip float formatting for CSV.
@@ -773,7 +817,7 @@ mod tests {
             max_run: 1.0,
             batches: 1,
             min_batch: 0.0,
-            verbose: false,
+            ..BenchOptions::default()
         };
         let records = work_precision(&scene, &options).unwrap();
         let svi: Vec<&Record> = records.iter().filter(|r| r.method == "svi:3/2").collect();
@@ -790,5 +834,46 @@ mod tests {
         let csv = to_csv(&records);
         assert_eq!(csv.lines().count(), records.len() + 1);
         assert!(csv.starts_with("method,parameter,h,steps,final_error"));
+    }
+
+    #[test]
+    fn given_step_counts_and_tolerances_are_measured_exactly() {
+        // svi:3/2 has order 4: doubling the steps divides the error by about 16.
+        let mut scene = Scene::builtin("oscillator").unwrap().unwrap();
+        scene.run.t_end = Some(10.0);
+        let options = BenchOptions {
+            methods: vec!["svi:3/2".parse().unwrap(), MethodSpec::Dop853],
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![20, 40, 80],
+            tolerances: vec![1e-8],
+            ..BenchOptions::default()
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        let steps: Vec<usize> = records
+            .iter()
+            .filter(|r| r.h.is_some())
+            .map(|r| r.steps)
+            .collect();
+        assert_eq!(steps, [20, 40, 80]);
+        for pair in records[..3].windows(2) {
+            let ratio = pair[0].final_error / pair[1].final_error;
+            assert!(ratio > 12.0 && ratio < 20.0, "{pair:?}");
+        }
+        assert_eq!(records.len(), 4);
+        assert_eq!(
+            (records[3].method.as_str(), records[3].parameter),
+            ("dop853", 1e-8)
+        );
+
+        for (steps, tolerances) in [(vec![10, 0], vec![]), (vec![], vec![1e-8, -1.0])] {
+            let options = BenchOptions {
+                steps,
+                tolerances,
+                ..options.clone()
+            };
+            let error = work_precision(&scene, &options).unwrap_err();
+            assert!(matches!(error, SceneError::BenchParameter(_)), "{error}");
+        }
     }
 }

@@ -272,6 +272,9 @@ pub enum SceneError {
         "unknown method '{0}' (expected svi:P, svi:P/M, sc:P, a classic method's name, dop853 or dopri5)"
     )]
     BenchMethod(String),
+    /// A `svi bench` step count or tolerance that is out of range or whose run failed.
+    #[error("svi bench: {0}")]
+    BenchParameter(String),
     /// A benchmark needs an exact solution as reference.
     #[error(
         "model '{0}' has no exact solution for this initial state: nothing to measure errors against"

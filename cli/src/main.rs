@@ -101,6 +101,12 @@ struct BenchArgs {
     /// Minimum duration of a timing batch (seconds).
     #[arg(long, default_value_t = 0.2)]
     min_batch: f64,
+    /// Run the fixed-step methods at these step counts instead of sweeping them.
+    #[arg(long, value_delimiter = ',')]
+    steps: Vec<usize>,
+    /// Run the adaptive peers (dop853, dopri5) at these tolerances instead of sweeping them.
+    #[arg(long, value_delimiter = ',')]
+    tolerances: Vec<f64>,
     /// Directory for `<scene>.csv` and `<scene>.svg`.
     #[arg(long, default_value = "bench-out")]
     out_dir: std::path::PathBuf,
@@ -196,6 +202,8 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         max_run: args.max_run,
         batches: args.batches,
         min_batch: args.min_batch,
+        steps: args.steps,
+        tolerances: args.tolerances,
         verbose: true,
     };
     let records = work_precision(&scene, &options)

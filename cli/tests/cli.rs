@@ -622,3 +622,59 @@ fn bad_tolerances_and_output_times_are_rejected() {
         assert!(stderr.contains(message), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn bench_measures_given_step_counts_and_tolerances() {
+    let dir = Scratch::new("bench-steps");
+    let out = dir.0.to_str().unwrap();
+    let common = [
+        "bench",
+        "oscillator",
+        "--t-end",
+        "10",
+        "--batches",
+        "1",
+        "--min-batch",
+        "0",
+        "--out-dir",
+        out,
+    ];
+    let args: Vec<&str> = common
+        .iter()
+        .copied()
+        .chain([
+            "--methods",
+            "svi:3/2,dop853",
+            "--steps",
+            "20,40",
+            "--tolerances",
+            "1e-8",
+        ])
+        .collect();
+    let output = svi(&args);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("oscillator.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let firsts: Vec<(&str, &str)> = rows.iter().map(|r| (r[0], r[1])).collect();
+    assert_eq!(
+        firsts,
+        [("svi:3/2", "2e1"), ("svi:3/2", "4e1"), ("dop853", "1e-8")]
+    );
+    // Order 4: doubling the steps divides the final error by about 16.
+    let error = |row: &Vec<&str>| row[4].parse::<f64>().unwrap();
+    let ratio = error(&rows[0]) / error(&rows[1]);
+    assert!(ratio > 12.0 && ratio < 20.0, "{ratio}");
+
+    for bad in [["--steps", "0"], ["--tolerances", "0"], ["--steps", "x"]] {
+        let args: Vec<&str> = common.iter().copied().chain(bad).collect();
+        failure(&args);
+    }
+}
