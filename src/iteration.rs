@@ -9,7 +9,11 @@
 //!   needed) converges linearly, so it stops only when an increment is below two ulps of the
 //!   positions it updates, or stops decreasing near round-off. (Iterating further, until the
 //!   increment vanishes, bought no accuracy on Kepler at T = 2000 once the stage tables are
-//!   exact, and cost 15% more force evaluations.)
+//!   exact, and cost 15% more force evaluations. Stopping one iteration earlier, once the
+//!   contraction estimate predicts a next change below two ulps, saves 20% of the
+//!   evaluations but the iteration approaches its fixed point from one side: the leftover
+//!   bias accumulates into a drift of the energy, and the same Kepler run ends 10⁻⁸ off
+//!   instead of 10⁻¹¹.)
 
 use crate::error::StepFailure;
 use crate::linalg::DenseLu;
