@@ -132,7 +132,7 @@ impl EnergyWindows {
     }
 }
 
-impl<L: Lagrangian<N>, const N: usize> Observer<L, N> for EnergyWindows {
+impl<L: Lagrangian<N>, const N: usize> Observer<L, PhasePoint<N>> for EnergyWindows {
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
         self.push(point.t, energy);

@@ -287,7 +287,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     /// The same as [`Integrator::try_run`] with [`RunOptions::default`] (no recovery, no
     /// divergence limit), keeping only the error of a failed run. The observer still holds
     /// everything it saw before the failure.
-    pub fn run<O: Observer<L, N>>(
+    pub fn run<O: Observer<L, PhasePoint<N>>>(
         &self,
         t0: f64,
         initial: Initial<N>,
@@ -314,7 +314,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     /// A [`RunFailure`]: the typed [`Error`] (with step index and time for failures during the
     /// run) and, unless the inputs were rejected before the first step, the [`Run`] up to the
     /// last good state (its `last` point, `state` and `statistics`).
-    pub fn try_run<O: Observer<L, N>>(
+    pub fn try_run<O: Observer<L, PhasePoint<N>>>(
         &self,
         t0: f64,
         initial: Initial<N>,
@@ -531,7 +531,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     }
 
     /// [`Integrator::run`] from (q0, q̇0).
-    pub fn run_from_velocity<O: Observer<L, N>>(
+    pub fn run_from_velocity<O: Observer<L, PhasePoint<N>>>(
         &self,
         t0: f64,
         q0: SVector<f64, N>,
@@ -544,7 +544,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     }
 
     /// [`Integrator::run`] from (q0, p0).
-    pub fn run_from_momentum<O: Observer<L, N>>(
+    pub fn run_from_momentum<O: Observer<L, PhasePoint<N>>>(
         &self,
         t0: f64,
         q0: SVector<f64, N>,

@@ -15,8 +15,9 @@ use crate::method::PhasePoint;
 use crate::model::{ExactSolution, Invariants, Lagrangian, Symmetries};
 use std::ops::ControlFlow;
 
-/// Receives points of a run.
-pub trait Observer<L: ?Sized, const N: usize> {
+/// Receives points of type `P` of a run of model `L`: [`PhasePoint`]s here,
+/// [`RigidPoint`](crate::lie_group::RigidPoint)s on SO(3).
+pub trait Observer<L: ?Sized, P> {
     /// Whether the point after step `step` (0 = initial point) is wanted.
     fn wants(&self, step: usize) -> bool {
         let _ = step;
@@ -24,23 +25,23 @@ pub trait Observer<L: ?Sized, const N: usize> {
     }
 
     /// Receive the point after step `step`; `Break` stops the run.
-    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()>;
+    fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()>;
 }
 
-impl<L: ?Sized, const N: usize> Observer<L, N> for () {
+impl<L: ?Sized, P> Observer<L, P> for () {
     fn wants(&self, _step: usize) -> bool {
         false
     }
-    fn observe(&mut self, _: &L, _: usize, _: &PhasePoint<N>) -> ControlFlow<()> {
+    fn observe(&mut self, _: &L, _: usize, _: &P) -> ControlFlow<()> {
         ControlFlow::Continue(())
     }
 }
 
-impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for Option<O> {
+impl<L: ?Sized, P, O: Observer<L, P>> Observer<L, P> for Option<O> {
     fn wants(&self, step: usize) -> bool {
         self.as_ref().is_some_and(|o| o.wants(step))
     }
-    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+    fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()> {
         match self {
             Some(o) if o.wants(step) => o.observe(model, step, point),
             _ => ControlFlow::Continue(()),
@@ -48,24 +49,24 @@ impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for Option<O> 
     }
 }
 
-impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for &mut O {
+impl<L: ?Sized, P, O: Observer<L, P>> Observer<L, P> for &mut O {
     fn wants(&self, step: usize) -> bool {
         (**self).wants(step)
     }
-    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+    fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()> {
         (**self).observe(model, step, point)
     }
 }
 
 macro_rules! tuple_observer {
     ($($name:ident),+) => {
-        impl<L: ?Sized, const N: usize, $($name: Observer<L, N>),+> Observer<L, N> for ($($name,)+) {
+        impl<L: ?Sized, P, $($name: Observer<L, P>),+> Observer<L, P> for ($($name,)+) {
             fn wants(&self, step: usize) -> bool {
                 #[allow(non_snake_case)]
                 let ($($name,)+) = self;
                 false $(|| $name.wants(step))+
             }
-            fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+            fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()> {
                 #[allow(non_snake_case)]
                 let ($($name,)+) = self;
                 let mut flow = ControlFlow::Continue(());
@@ -103,11 +104,11 @@ impl<O> Every<O> {
     }
 }
 
-impl<L: ?Sized, const N: usize, O: Observer<L, N>> Observer<L, N> for Every<O> {
+impl<L: ?Sized, P, O: Observer<L, P>> Observer<L, P> for Every<O> {
     fn wants(&self, step: usize) -> bool {
         step.is_multiple_of(self.every.max(1)) && self.inner.wants(step)
     }
-    fn observe(&mut self, model: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+    fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()> {
         self.inner.observe(model, step, point)
     }
 }
@@ -126,7 +127,7 @@ impl<const N: usize> Trajectory<N> {
     }
 }
 
-impl<L: ?Sized, const N: usize> Observer<L, N> for Trajectory<N> {
+impl<L: ?Sized, const N: usize> Observer<L, PhasePoint<N>> for Trajectory<N> {
     fn observe(&mut self, _: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         self.points.push(*point);
         ControlFlow::Continue(())
@@ -142,7 +143,7 @@ pub struct EnergyError {
     pub max: f64,
 }
 
-impl<L: Lagrangian<N>, const N: usize> Observer<L, N> for EnergyError {
+impl<L: Lagrangian<N>, const N: usize> Observer<L, PhasePoint<N>> for EnergyError {
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
         let initial = *self.initial.get_or_insert(energy);
@@ -161,7 +162,7 @@ pub struct MomentumError {
     pub max: f64,
 }
 
-impl<L: Symmetries<N>, const N: usize> Observer<L, N> for MomentumError {
+impl<L: Symmetries<N>, const N: usize> Observer<L, PhasePoint<N>> for MomentumError {
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let count = model.generator_count();
         let first = self.initial.is_empty();
@@ -186,7 +187,7 @@ pub struct InvariantError {
     pub max: f64,
 }
 
-impl<L: Invariants<N>, const N: usize> Observer<L, N> for InvariantError {
+impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantError {
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let first = self.initial.is_empty();
         for i in 0..model.invariant_count() {
@@ -214,7 +215,7 @@ pub struct SolutionError<const N: usize> {
     pub last: Option<f64>,
 }
 
-impl<L: ExactSolution<N>, const N: usize> Observer<L, N> for SolutionError<N> {
+impl<L: ExactSolution<N>, const N: usize> Observer<L, PhasePoint<N>> for SolutionError<N> {
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let start = *self.initial.get_or_insert(*point);
         if let Some((q, _)) = model.exact_solution(start.t, &start.q, &start.v, point.t) {

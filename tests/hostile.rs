@@ -70,7 +70,7 @@ struct Cap {
     finite: bool,
 }
 
-impl<L, const N: usize> Observer<L, N> for Cap {
+impl<L, const N: usize> Observer<L, PhasePoint<N>> for Cap {
     fn observe(&mut self, _: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         if self.points == 0 {
             self.finite = true;

@@ -16,9 +16,9 @@ use svi::lie_group::so3::{dexp, dexp_inverse, exp, log, orthogonality_error};
 use svi::lie_group::{
     AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyDefaults, RigidBodyExt,
     RigidBodyIntegrator, RigidBodyLagrangian, RigidEnergyError, RigidInitial, RigidInvariantError,
-    RigidObserver, RigidPoint, RigidState, RigidTrajectory,
+    RigidPoint, RigidState, RigidTrajectory,
 };
-use svi::observer::Every;
+use svi::observer::{Every, Observer};
 use svi::verify::observed_order;
 use svi::{Error, Scalar};
 use svi_models::{FreeRigidBody, HeavyTop, Pendulum3d};
@@ -247,7 +247,7 @@ struct EnergyHalves {
     second: f64,
 }
 
-impl<L: RigidBodyLagrangian> RigidObserver<L> for EnergyHalves {
+impl<L: RigidBodyLagrangian> Observer<L, RigidPoint> for EnergyHalves {
     fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()> {
         let energy = model.energy(&point.r, &point.omega);
         let initial = *self.initial.get_or_insert(energy);

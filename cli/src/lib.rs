@@ -1186,7 +1186,7 @@ fn solve_scene<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     let first = integrator.phase_point(setup.t0, &first, &guess)?;
     let points = solution.points.iter().filter(|point| point.t > setup.t0);
     for (index, point) in std::iter::once(&first).chain(points).enumerate() {
-        if Observer::<M, N>::wants(observers, index) {
+        if Observer::<M, PhasePoint<N>>::wants(observers, index) {
             // Observers of a scene never stop a run.
             let _ = observers.observe(model, index, point);
         }
@@ -1341,12 +1341,12 @@ impl Progress {
     }
 }
 
-impl<L: ?Sized, const N: usize> Observer<L, N> for Progress {
+impl<L: ?Sized, P> Observer<L, P> for Progress {
     fn wants(&self, step: usize) -> bool {
         step > 0 && step.is_multiple_of(self.stride)
     }
 
-    fn observe(&mut self, _: &L, step: usize, _: &PhasePoint<N>) -> ControlFlow<()> {
+    fn observe(&mut self, _: &L, step: usize, _: &P) -> ControlFlow<()> {
         self.bar.set_position(step as u64);
         ControlFlow::Continue(())
     }
@@ -2077,7 +2077,7 @@ mod tests {
         assert!(Progress::for_run(0.0, -1.0, 100.0).is_none());
         let progress = Progress::new(10_000);
         assert_eq!(progress.stride, 100);
-        let wants = |step| Observer::<(), 1>::wants(&progress, step);
+        let wants = |step| Observer::<(), ()>::wants(&progress, step);
         assert!(!wants(0));
         assert!(!wants(150));
         assert!(wants(200));

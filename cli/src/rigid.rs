@@ -41,7 +41,6 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::ops::ControlFlow;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -50,8 +49,7 @@ use serde::{Deserialize, Serialize};
 use svi::lie_group::so3::{exp, orthogonality_error};
 use svi::lie_group::{
     AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyExt, RigidBodyIntegrator,
-    RigidEnergyError, RigidInitial, RigidInvariantError, RigidObserver, RigidPoint,
-    RigidTrajectory,
+    RigidEnergyError, RigidInitial, RigidInvariantError, RigidPoint, RigidTrajectory,
 };
 use svi::observer::Every;
 use svi_models::{RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, visit_rigid_model};
@@ -341,17 +339,6 @@ impl RigidScene {
 struct RunRigid<'a> {
     scene: &'a RigidScene,
     progress: bool,
-}
-
-impl<L: ?Sized> RigidObserver<L> for Progress {
-    fn wants(&self, step: usize) -> bool {
-        step > 0 && step.is_multiple_of(self.stride)
-    }
-
-    fn observe(&mut self, _: &L, step: usize, _: &RigidPoint) -> ControlFlow<()> {
-        self.bar.set_position(step as u64);
-        ControlFlow::Continue(())
-    }
 }
 
 impl RigidModelVisitor for RunRigid<'_> {

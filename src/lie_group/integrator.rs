@@ -4,17 +4,18 @@
 //! inputs (finite values, an orthogonal initial attitude, a positive step, the model's
 //! G-invariance declaration), keeps t_k = t₀ + k·h, shortens the last step to land on the
 //! horizon, adds the increments R_k(F − I) and μ_{k+1} − μ_k with compensated (Kahan)
-//! summation, drives [`RigidObserver`]s, and attaches the step index and time to failures.
+//! summation, drives [`Observer`]s of [`RigidPoint`]s, and attaches the step index and time to failures.
 //! The attitude is never re-orthonormalised: its orthogonality comes from an accurate
 //! exponential and compensated summation, and [`super::OrthogonalityError`] measures it.
 
 use super::method::{LieSvi, LieWorkspace, RigidState};
 use super::model::{RigidBodyExt, RigidBodyLagrangian};
-use super::observer::{RigidObserver, RigidPoint};
+use super::observer::RigidPoint;
 use super::so3::{Matrix3, Vector3, orthogonality_error};
 use crate::error::{require_finite, require_positive};
 use crate::integrator::{compensated_add, grid_step, step_count};
 use crate::method::StepReport;
+use crate::observer::Observer;
 use crate::{Error, Statistics};
 use nalgebra::SMatrix;
 use std::ops::ControlFlow;
@@ -233,7 +234,7 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
     }
 
     /// Integrate from `t0` to `t_end` with step `h`, reporting to `observer`.
-    pub fn run<O: RigidObserver<L>>(
+    pub fn run<O: Observer<L, RigidPoint>>(
         &self,
         t0: f64,
         initial: RigidInitial,

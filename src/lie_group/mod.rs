@@ -54,6 +54,6 @@ pub use model::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
 pub use observer::{
-    AngularMomentumError, OrthogonalityError, RigidEnergyError, RigidInvariantError, RigidObserver,
-    RigidPoint, RigidTrajectory, quaternion,
+    AngularMomentumError, OrthogonalityError, RigidEnergyError, RigidInvariantError, RigidPoint,
+    RigidTrajectory, quaternion,
 };

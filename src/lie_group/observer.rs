@@ -1,9 +1,9 @@
 //! Observers of rigid-body runs: the analogue of [`crate::observer`] on SO(3).
 //!
-//! An observer sees the initial point (step 0) and the points after the steps it asks for;
-//! observers compose as tuples, switch on and off as `Option`, thin out with
-//! [`crate::observer::Every`], and may stop a run with [`ControlFlow::Break`]. A run with no
-//! observer (`&mut ()`) completes no points.
+//! They are [`Observer`]s of [`RigidPoint`]s: they see the initial point (step 0) and the
+//! points after the steps they ask for, compose as tuples, switch on and off as `Option`, thin
+//! out with [`crate::observer::Every`], and may stop a run with [`ControlFlow::Break`]. A run
+//! with no observer (`&mut ()`) completes no points.
 //!
 //! Provided: [`RigidTrajectory`] (rotation matrix, quaternion and Ω per point),
 //! [`RigidEnergyError`], [`AngularMomentumError`] (the spatial angular momenta about the
@@ -12,7 +12,7 @@
 
 use super::model::{RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries};
 use super::so3::{Matrix3, Vector3, orthogonality_error};
-use crate::observer::Every;
+use crate::observer::Observer;
 use std::ops::ControlFlow;
 
 /// A complete rigid-body point: time, attitude, body angular velocity and momentum.
@@ -99,87 +99,6 @@ pub fn quaternion(r: &Matrix3<f64>) -> [f64; 4] {
     q
 }
 
-/// Receives points of a rigid-body run.
-pub trait RigidObserver<L: ?Sized> {
-    /// Whether the point after step `step` (0 = initial point) is wanted.
-    fn wants(&self, step: usize) -> bool {
-        let _ = step;
-        true
-    }
-
-    /// Receive the point after step `step`; `Break` stops the run.
-    fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()>;
-}
-
-impl<L: ?Sized> RigidObserver<L> for () {
-    fn wants(&self, _step: usize) -> bool {
-        false
-    }
-    fn observe(&mut self, _: &L, _: usize, _: &RigidPoint) -> ControlFlow<()> {
-        ControlFlow::Continue(())
-    }
-}
-
-impl<L: ?Sized, O: RigidObserver<L>> RigidObserver<L> for Option<O> {
-    fn wants(&self, step: usize) -> bool {
-        self.as_ref().is_some_and(|o| o.wants(step))
-    }
-    fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()> {
-        match self {
-            Some(o) if o.wants(step) => o.observe(model, step, point),
-            _ => ControlFlow::Continue(()),
-        }
-    }
-}
-
-impl<L: ?Sized, O: RigidObserver<L>> RigidObserver<L> for &mut O {
-    fn wants(&self, step: usize) -> bool {
-        (**self).wants(step)
-    }
-    fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()> {
-        (**self).observe(model, step, point)
-    }
-}
-
-impl<L: ?Sized, O: RigidObserver<L>> RigidObserver<L> for Every<O> {
-    fn wants(&self, step: usize) -> bool {
-        step.is_multiple_of(self.every.max(1)) && self.inner.wants(step)
-    }
-    fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()> {
-        self.inner.observe(model, step, point)
-    }
-}
-
-macro_rules! tuple_observer {
-    ($($name:ident),+) => {
-        impl<L: ?Sized, $($name: RigidObserver<L>),+> RigidObserver<L> for ($($name,)+) {
-            fn wants(&self, step: usize) -> bool {
-                #[allow(non_snake_case)]
-                let ($($name,)+) = self;
-                false $(|| $name.wants(step))+
-            }
-            fn observe(&mut self, model: &L, step: usize, point: &RigidPoint) -> ControlFlow<()> {
-                #[allow(non_snake_case)]
-                let ($($name,)+) = self;
-                let mut flow = ControlFlow::Continue(());
-                $(
-                    if $name.wants(step) && $name.observe(model, step, point).is_break() {
-                        flow = ControlFlow::Break(());
-                    }
-                )+
-                flow
-            }
-        }
-    };
-}
-
-tuple_observer!(A);
-tuple_observer!(A, B);
-tuple_observer!(A, B, C);
-tuple_observer!(A, B, C, D);
-tuple_observer!(A, B, C, D, E);
-tuple_observer!(A, B, C, D, E, F);
-
 /// Stores the observed points.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RigidTrajectory {
@@ -194,7 +113,7 @@ impl RigidTrajectory {
     }
 }
 
-impl<L: ?Sized> RigidObserver<L> for RigidTrajectory {
+impl<L: ?Sized> Observer<L, RigidPoint> for RigidTrajectory {
     fn observe(&mut self, _: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         self.points.push(*point);
         ControlFlow::Continue(())
@@ -210,7 +129,7 @@ pub struct RigidEnergyError {
     pub max: f64,
 }
 
-impl<L: RigidBodyLagrangian> RigidObserver<L> for RigidEnergyError {
+impl<L: RigidBodyLagrangian> Observer<L, RigidPoint> for RigidEnergyError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         let energy = point.momentum.dot(&point.omega) - model.value(&point.r, &point.omega);
         let initial = *self.initial.get_or_insert(energy);
@@ -243,7 +162,7 @@ impl AngularMomentumError {
     }
 }
 
-impl<L: RigidBodySymmetries> RigidObserver<L> for AngularMomentumError {
+impl<L: RigidBodySymmetries> Observer<L, RigidPoint> for AngularMomentumError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         let first = self.initial.is_empty();
         let spatial = point.spatial_momentum();
@@ -272,7 +191,7 @@ pub struct RigidInvariantError {
     pub max: f64,
 }
 
-impl<L: RigidBodyInvariants> RigidObserver<L> for RigidInvariantError {
+impl<L: RigidBodyInvariants> Observer<L, RigidPoint> for RigidInvariantError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         let first = self.initial.is_empty();
         for i in 0..model.invariant_count() {
@@ -296,7 +215,7 @@ pub struct OrthogonalityError {
     pub last: f64,
 }
 
-impl<L: ?Sized> RigidObserver<L> for OrthogonalityError {
+impl<L: ?Sized> Observer<L, RigidPoint> for OrthogonalityError {
     fn observe(&mut self, _: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         self.last = orthogonality_error(&point.r);
         self.max = self.max.max(self.last);
