@@ -328,6 +328,14 @@ struct Stall {
 }
 
 impl Stall {
+    /// Whether a sweep ends after `record`: its error is below the target, its run took
+    /// longer than `max_run`, or the error has stalled.
+    fn ends_after(&mut self, record: &Record, options: &BenchOptions) -> bool {
+        record.final_error < options.target
+            || self.stalled(record.final_error)
+            || record.seconds > options.max_run
+    }
+
     /// Record an error; `true` once three points in a row failed to halve the best error
     /// below 1e-7.
     fn stalled(&mut self, error: f64) -> bool {
@@ -466,9 +474,7 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             Err(error) => return Err(error.into()),
         };
         report.record(&record);
-        let done = record.final_error < options.target
-            || stall.stalled(record.final_error)
-            || record.seconds > options.max_run;
+        let done = stall.ends_after(&record, options);
         records.push(record);
         if done {
             break;
@@ -712,9 +718,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
             continue;
         };
         report.record(&record);
-        let done = record.final_error < options.target
-            || stall.stalled(record.final_error)
-            || record.seconds > options.max_run;
+        let done = stall.ends_after(&record, options);
         records.push(record);
         if done {
             break;
