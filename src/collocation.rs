@@ -36,7 +36,7 @@ use crate::iteration::{FixedPoint, Newton, after_fixed_point};
 use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::quadrature::GaussLegendre;
-use crate::spectral_variational::MAX_POINTS;
+use crate::spectral_variational::{MAX_POINTS, check_options};
 use crate::starting_values::StartingValues;
 use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
@@ -77,16 +77,7 @@ impl SpectralCollocation {
     }
 
     fn validate(&self) -> Result<(), Error> {
-        if self.points < 2 || self.points > MAX_POINTS {
-            return Err(Error::invalid(
-                "points",
-                format!("{} CGL points; need 2 to {MAX_POINTS}", self.points),
-            ));
-        }
-        if self.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", "must be at least 1"));
-        }
-        Ok(())
+        check_options(self.points, None, self.max_iterations, MAX_POINTS)
     }
 
     /// Order of the collocation method: the order of the interpolatory quadrature on the

@@ -112,24 +112,39 @@ impl Svi {
     }
 
     fn validate(&self) -> Result<(), Error> {
-        if self.points < 2 || self.points > MAX_POINTS {
-            return Err(Error::invalid(
-                "points",
-                format!("{} CGL points; need 2 to {MAX_POINTS}", self.points),
-            ));
-        }
-        let m = self.quadrature_points();
-        if !(1..=MAX_POINTS).contains(&m) {
-            return Err(Error::invalid(
-                "quadrature",
-                format!("{m} Gauss points; need 1 to {MAX_POINTS}"),
-            ));
-        }
-        if self.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", "must be at least 1"));
-        }
-        Ok(())
+        check_options(
+            self.points,
+            Some(self.quadrature_points()),
+            self.max_iterations,
+            MAX_POINTS,
+        )
     }
+}
+
+/// The options the spectral methods share: 2 to `max` CGL points, 1 to `max` Gauss points
+/// (for methods with a quadrature) and at least one iteration.
+pub(crate) fn check_options(
+    points: usize,
+    quadrature: Option<usize>,
+    max_iterations: usize,
+    max: usize,
+) -> Result<(), Error> {
+    if !(2..=max).contains(&points) {
+        return Err(Error::invalid(
+            "points",
+            format!("{points} CGL points; need 2 to {max}"),
+        ));
+    }
+    if let Some(m) = quadrature.filter(|m| !(1..=max).contains(m)) {
+        return Err(Error::invalid(
+            "quadrature",
+            format!("{m} Gauss points; need 1 to {max}"),
+        ));
+    }
+    if max_iterations == 0 {
+        return Err(Error::invalid("max_iterations", "must be at least 1"));
+    }
+    Ok(())
 }
 
 /// Tables of one SVI configuration, scaled for the current step size.

@@ -190,22 +190,12 @@ impl LieSvi {
 
     /// Check the options against the model.
     pub fn validate<L: RigidBodyLagrangian>(&self) -> Result<(), Error> {
-        if self.points < 2 || self.points > MAX_POINTS {
-            return Err(Error::invalid(
-                "points",
-                format!("{} CGL points; need 2 to {MAX_POINTS}", self.points),
-            ));
-        }
-        let m = self.quadrature_points();
-        if !(1..=MAX_POINTS).contains(&m) {
-            return Err(Error::invalid(
-                "quadrature",
-                format!("{m} Gauss points; need 1 to {MAX_POINTS}"),
-            ));
-        }
-        if self.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", "must be at least 1"));
-        }
+        crate::spectral_variational::check_options(
+            self.points,
+            Some(self.quadrature_points()),
+            self.max_iterations,
+            MAX_POINTS,
+        )?;
         if self.form == Form::Reduced && !L::G_INVARIANT {
             return Err(Error::invalid(
                 "form",
