@@ -71,18 +71,7 @@ fn quaternion_product(p: &Quaternion, q: &Quaternion) -> Quaternion {
 
 fn rotation(q: &Quaternion) -> Matrix3 {
     let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
-    let [w, x, y, z] = q.map(|c| c / n);
-    Matrix3::new(
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - w * z),
-        2.0 * (x * z + w * y),
-        2.0 * (x * y + w * z),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - w * x),
-        2.0 * (x * z - w * y),
-        2.0 * (y * z + w * x),
-        1.0 - 2.0 * (x * x + y * y),
-    )
+    svi::lie_group::rotation(&q.map(|c| c / n))
 }
 
 /// Right-hand side of the reference ODE in (q, Π).

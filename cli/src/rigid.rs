@@ -171,18 +171,7 @@ fn rotation_from_quaternion(q: &SVector<f64, 4>) -> Result<SMatrix<f64, 3, 3>, S
         )
         .into());
     }
-    let (w, x, y, z) = (q[0], q[1], q[2], q[3]);
-    Ok(SMatrix::<f64, 3, 3>::new(
-        1.0 - 2.0 * (y * y + z * z),
-        2.0 * (x * y - w * z),
-        2.0 * (x * z + w * y),
-        2.0 * (x * y + w * z),
-        1.0 - 2.0 * (x * x + z * z),
-        2.0 * (y * z - w * x),
-        2.0 * (x * z - w * y),
-        2.0 * (y * z + w * x),
-        1.0 - 2.0 * (x * x + y * y),
-    ))
+    Ok(svi::lie_group::rotation(&[q[0], q[1], q[2], q[3]]))
 }
 
 impl RigidScene {

@@ -55,5 +55,5 @@ pub use model::{
 };
 pub use observer::{
     AngularMomentumError, OrthogonalityError, RigidEnergyError, RigidInvariantError, RigidPoint,
-    RigidTrajectory, quaternion,
+    RigidTrajectory, quaternion, rotation,
 };

@@ -99,6 +99,23 @@ pub fn quaternion(r: &Matrix3<f64>) -> [f64; 4] {
     q
 }
 
+/// The rotation matrix of a unit quaternion (w, x, y, z), the inverse of [`quaternion`] (q and
+/// −q give the same rotation).
+pub fn rotation(q: &[f64; 4]) -> Matrix3<f64> {
+    let [w, x, y, z] = *q;
+    Matrix3::new(
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - w * z),
+        2.0 * (x * z + w * y),
+        2.0 * (x * y + w * z),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - w * x),
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    )
+}
+
 /// Stores the observed points.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RigidTrajectory {
@@ -253,6 +270,16 @@ mod tests {
                     "{x:?}: {q:?} vs {expected:?}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn rotation_inverts_quaternion() {
+        for x in [Vector3::new(0.3, -0.2, 0.5), Vector3::new(0.0, 3.0, 0.1)] {
+            let r = exp(&x);
+            assert!((rotation(&quaternion(&r)) - r).amax() < 1e-15);
+            let q = quaternion(&r).map(|c| -c);
+            assert!((rotation(&q) - r).amax() < 1e-15);
         }
     }
 }
