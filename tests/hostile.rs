@@ -23,19 +23,9 @@ use svi_models::{DoublePendulum, Kepler, ModelVisitor, Pendulum, ZooModel, visit
 /// Steps after which every hostile run is stopped.
 const STEP_CAP: usize = 60;
 
-/// `base` cases, times `SVI_HOSTILE_CASES` if set.
-fn cases(base: u32) -> ProptestConfig {
-    let factor = std::env::var("SVI_HOSTILE_CASES")
-        .ok()
-        .and_then(|v| v.parse::<u32>().ok())
-        .unwrap_or(1)
-        .max(1);
-    ProptestConfig {
-        cases: base.saturating_mul(factor),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
+#[path = "common/hostile_cases.rs"]
+mod hostile_cases;
+use hostile_cases::cases;
 
 /// Any f64, biased towards the hostile ones.
 fn hostile() -> impl Strategy<Value = f64> {

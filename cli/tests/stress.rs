@@ -14,19 +14,9 @@ use proptest::prelude::*;
 use svi_cli::bench::MethodSpec;
 use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
 
-/// `base` cases, times `SVI_HOSTILE_CASES` if set.
-fn cases(base: u32) -> ProptestConfig {
-    let factor = std::env::var("SVI_HOSTILE_CASES")
-        .ok()
-        .and_then(|v| v.parse::<u32>().ok())
-        .unwrap_or(1)
-        .max(1);
-    ProptestConfig {
-        cases: base.saturating_mul(factor),
-        failure_persistence: None,
-        ..ProptestConfig::default()
-    }
-}
+#[path = "../../tests/common/hostile_cases.rs"]
+mod hostile_cases;
+use hostile_cases::cases;
 
 #[test]
 fn every_stress_scene_parses_and_a_short_run_of_each_succeeds() {
