@@ -13,7 +13,7 @@ use super::model::{RigidBodyExt, RigidBodyLagrangian};
 use super::observer::RigidPoint;
 use super::so3::{Matrix3, Vector3, orthogonality_error};
 use crate::error::{require_finite, require_positive};
-use crate::integrator::{compensated_add, grid_step, step_count};
+use crate::integrator::{grid_step, step_count};
 use crate::method::StepReport;
 use crate::observer::Observer;
 use crate::{Error, Statistics};
@@ -175,10 +175,8 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
         self.method.workspace::<L>(h)
     }
 
-    /// One step of size `h` from `state` with a fresh workspace (cold start), returning the
-    /// new state without compensated summation: for tangent maps by finite differences and
-    /// for tests.
-    pub fn step(&self, state: &RigidState, h: f64) -> Result<(RigidState, StepReport), Error> {
+    /// A fresh workspace for one step of size `h` from `state`, after checking both.
+    fn cold_workspace(&self, state: &RigidState, h: f64) -> Result<LieWorkspace, Error> {
         require_positive("h", h)?;
         if !state.is_finite() {
             return Err(Error::NonFinite {
@@ -187,19 +185,20 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
                 t: 0.0,
             });
         }
-        let mut workspace = self.workspace(h)?;
+        self.workspace(h)
+    }
+
+    /// One step of size `h` from `state` with a fresh workspace (cold start), returning the
+    /// new state without compensated summation: for tangent maps by finite differences and
+    /// for tests.
+    pub fn step(&self, state: &RigidState, h: f64) -> Result<(RigidState, StepReport), Error> {
+        let mut workspace = self.cold_workspace(state, h)?;
         let mut increment = RigidState::zeros();
         let report = self
             .method
             .step(&self.model, &mut workspace, h, state, &mut increment)
             .map_err(|failure| failure.at(0, 0.0))?;
-        Ok((
-            RigidState {
-                r: state.r + increment.r,
-                momentum: state.momentum + increment.momentum,
-            },
-            report,
-        ))
+        Ok((state.plus(&increment), report))
     }
 
     /// One step of size `h` from `state` (fresh workspace) and its exact Jacobian in the
@@ -211,26 +210,12 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
         state: &RigidState,
         h: f64,
     ) -> Result<(RigidState, SMatrix<f64, 6, 6>), Error> {
-        require_positive("h", h)?;
-        if !state.is_finite() {
-            return Err(Error::NonFinite {
-                what: "state".into(),
-                step: 0,
-                t: 0.0,
-            });
-        }
-        let mut workspace = self.workspace(h)?;
+        let mut workspace = self.cold_workspace(state, h)?;
         let (increment, tangent) = self
             .method
             .tangent_map(&self.model, &mut workspace, h, state)
             .map_err(|failure| failure.at(0, 0.0))?;
-        Ok((
-            RigidState {
-                r: state.r + increment.r,
-                momentum: state.momentum + increment.momentum,
-            },
-            tangent,
-        ))
+        Ok((state.plus(&increment), tangent))
     }
 
     /// Integrate from `t0` to `t_end` with step `h`, reporting to `observer`.
@@ -285,16 +270,7 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
                     &mut increment,
                 )
                 .map_err(|failure| failure.at(k, t))?;
-            compensated_add(
-                state.r.as_mut_slice(),
-                compensation.r.as_mut_slice(),
-                increment.r.as_slice(),
-            );
-            compensated_add(
-                state.momentum.as_mut_slice(),
-                compensation.momentum.as_mut_slice(),
-                increment.momentum.as_slice(),
-            );
+            state.add_compensated(&mut compensation, &increment);
             if !state.is_finite() {
                 return Err(Error::NonFinite {
                     what: "state".into(),

@@ -446,6 +446,33 @@ impl RigidState {
             .chain(self.momentum.iter())
             .all(|x| x.is_finite())
     }
+
+    /// `self + increment`, entry by entry.
+    pub(crate) fn plus(&self, increment: &RigidState) -> RigidState {
+        RigidState {
+            r: self.r + increment.r,
+            momentum: self.momentum + increment.momentum,
+        }
+    }
+
+    /// `self += increment` with Kahan compensation carried in `compensation`.
+    pub(crate) fn add_compensated(
+        &mut self,
+        compensation: &mut RigidState,
+        increment: &RigidState,
+    ) {
+        use crate::integrator::compensated_add;
+        compensated_add(
+            self.r.as_mut_slice(),
+            compensation.r.as_mut_slice(),
+            increment.r.as_slice(),
+        );
+        compensated_add(
+            self.momentum.as_mut_slice(),
+            compensation.momentum.as_mut_slice(),
+            increment.momentum.as_slice(),
+        );
+    }
 }
 
 /// Value, gradient and Hessian of ℓ(η, a, b) at one quadrature point, variables ordered
