@@ -161,12 +161,7 @@ fn run(args: RunArgs) -> anyhow::Result<()> {
     let summary = scene
         .run(std::io::stderr().is_terminal())
         .with_context(|| format!("scene '{name}' failed"))?;
-    if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
-    } else {
-        print!("{summary}");
-    }
-    Ok(())
+    print_summary(&summary, args.json)
 }
 
 fn run_rigid(
@@ -178,8 +173,16 @@ fn run_rigid(
     let summary = scene
         .run(std::io::stderr().is_terminal())
         .with_context(|| format!("scene '{name}' failed"))?;
-    if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+    print_summary(&summary, args.json)
+}
+
+/// Print a run's summary as one JSON object or as text.
+fn print_summary<S: serde::Serialize + std::fmt::Display>(
+    summary: &S,
+    json: bool,
+) -> anyhow::Result<()> {
+    if json {
+        println!("{}", serde_json::to_string(summary)?);
     } else {
         print!("{summary}");
     }
