@@ -174,3 +174,14 @@ pub(crate) fn require_finite(name: &str, value: f64) -> Result<(), Error> {
         Err(Error::invalid(name, format!("{value} is not finite")))
     }
 }
+
+/// Check that every entry of `values` is finite; an error names the entry, `name[i]`.
+pub(crate) fn require_finite_entries<'a>(
+    name: &str,
+    values: impl IntoIterator<Item = &'a f64>,
+) -> Result<(), Error> {
+    for (i, x) in values.into_iter().enumerate() {
+        require_finite(&format!("{name}[{i}]"), *x)?;
+    }
+    Ok(())
+}

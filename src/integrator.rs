@@ -14,7 +14,7 @@
 //! [`Integrator::run`] is `try_run` with default options, keeping only the error.
 
 use crate::derived::LagrangianExt;
-use crate::error::{StepFailure, require_finite, require_positive};
+use crate::error::{StepFailure, require_finite, require_finite_entries, require_positive};
 use crate::method::{Coordinates, PhasePoint, State, TangentMap};
 use crate::observer::Observer;
 use crate::{Error, Lagrangian, Method, Structure};
@@ -233,12 +233,8 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             Initial::Velocity { q, v } => (q, v, "initial velocity"),
             Initial::Momentum { q, p } => (q, p, "initial momentum"),
         };
-        for (i, x) in q.iter().enumerate() {
-            require_finite(&format!("initial position[{i}]"), *x)?;
-        }
-        for (i, x) in second.iter().enumerate() {
-            require_finite(&format!("{name}[{i}]"), *x)?;
-        }
+        require_finite_entries("initial position", q)?;
+        require_finite_entries(name, second)?;
         let y = match (self.method.info().coordinates, initial) {
             (Coordinates::Momentum, Initial::Momentum { p, .. }) => *p,
             (Coordinates::Velocity, Initial::Velocity { v, .. }) => *v,

@@ -12,7 +12,7 @@ use super::method::{LieSvi, LieWorkspace, RigidState};
 use super::model::{RigidBodyExt, RigidBodyLagrangian};
 use super::observer::RigidPoint;
 use super::so3::{Matrix3, Vector3, orthogonality_error};
-use crate::error::{require_finite, require_positive};
+use crate::error::{require_finite, require_finite_entries, require_positive};
 use crate::integrator::{grid_step, step_count};
 use crate::method::StepReport;
 use crate::observer::Observer;
@@ -115,12 +115,8 @@ impl<L: RigidBodyLagrangian> RigidBodyIntegrator<L> {
             RigidInitial::Velocity { r, omega } => (r, omega, "initial angular velocity"),
             RigidInitial::Momentum { r, momentum } => (r, momentum, "initial angular momentum"),
         };
-        for (i, x) in r.iter().enumerate() {
-            require_finite(&format!("initial attitude[{i}]"), *x)?;
-        }
-        for (i, x) in second.iter().enumerate() {
-            require_finite(&format!("{name}[{i}]"), *x)?;
-        }
+        require_finite_entries("initial attitude", r)?;
+        require_finite_entries(name, second)?;
         let error = orthogonality_error(r);
         if error > ORTHOGONALITY_TOLERANCE || r.determinant() <= 0.0 {
             return Err(Error::invalid(
