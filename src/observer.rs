@@ -134,7 +134,8 @@ impl<L: ?Sized, const N: usize> Observer<L, PhasePoint<N>> for Trajectory<N> {
     }
 }
 
-/// Largest deviation |E(t) − E(t₀)| of the energy E = p·q̇ − L over the observed points.
+/// Largest deviation |E(t) − E(t₀)| of the energy E = p·q̇ − L over the observed points
+/// (E = Π·Ω − L for rigid bodies, [`crate::lie_group`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct EnergyError {
     /// Energy at the first observed point.
@@ -178,7 +179,8 @@ impl<L: Symmetries<N>, const N: usize> Observer<L, PhasePoint<N>> for MomentumEr
     }
 }
 
-/// Largest deviation of the model's known invariants over the observed points.
+/// Largest deviation of the model's known invariants over the observed points (for rigid
+/// bodies: [`crate::lie_group::RigidBodyInvariants`]).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct InvariantError {
     /// Invariants at the first observed point.

@@ -15,10 +15,10 @@ use std::ops::ControlFlow;
 use svi::lie_group::so3::{dexp, dexp_inverse, exp, log, orthogonality_error};
 use svi::lie_group::{
     AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyDefaults, RigidBodyExt,
-    RigidBodyIntegrator, RigidBodyLagrangian, RigidEnergyError, RigidInitial, RigidInvariantError,
-    RigidPoint, RigidState, RigidTrajectory,
+    RigidBodyIntegrator, RigidBodyLagrangian, RigidInitial, RigidPoint, RigidState,
+    RigidTrajectory,
 };
-use svi::observer::{Every, Observer};
+use svi::observer::{EnergyError, Every, InvariantError, Observer};
 use svi::verify::observed_order;
 use svi::{Error, Scalar};
 use svi_models::{FreeRigidBody, HeavyTop, Pendulum3d};
@@ -257,12 +257,12 @@ fn long_run<L: svi_models::RigidZooModel>(model: L, method: LieSvi, h: f64) -> L
     let mut observers = (
         OrthogonalityError::default(),
         AngularMomentumError::default(),
-        RigidInvariantError::default(),
+        InvariantError::default(),
         EnergyHalves {
             steps,
             ..EnergyHalves::default()
         },
-        RigidEnergyError::default(),
+        EnergyError::default(),
     );
     let run = RigidBodyIntegrator::new(model, method)
         .run(
@@ -347,7 +347,7 @@ fn pendulum_3d_conserves_vertical_momentum_and_stays_orthogonal() {
         let mut observers = (
             OrthogonalityError::default(),
             AngularMomentumError::default(),
-            RigidEnergyError::default(),
+            EnergyError::default(),
         );
         RigidBodyIntegrator::new(model, LieSvi::new(3))
             .run(
@@ -582,7 +582,7 @@ fn the_step_loop_allocates_nothing() {
                 RigidInitial::Velocity { r, omega },
                 0.01,
                 0.01 * steps as f64,
-                &mut (OrthogonalityError::default(), RigidEnergyError::default()),
+                &mut (OrthogonalityError::default(), EnergyError::default()),
             )
             .unwrap();
         allocations::count() - before

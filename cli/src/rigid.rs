@@ -49,9 +49,9 @@ use serde::{Deserialize, Serialize};
 use svi::lie_group::so3::{exp, orthogonality_error};
 use svi::lie_group::{
     AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyExt, RigidBodyIntegrator,
-    RigidEnergyError, RigidInitial, RigidInvariantError, RigidPoint, RigidTrajectory,
+    RigidInitial, RigidPoint, RigidTrajectory,
 };
-use svi::observer::Every;
+use svi::observer::{EnergyError, Every, InvariantError};
 use svi_models::{RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, visit_rigid_model};
 
 use crate::{Diagnostic, Float, Overrides, Parameters, Progress, SceneError, TrajectoryOutput};
@@ -369,12 +369,10 @@ impl RigidModelVisitor for RunRigid<'_> {
         let model = integrator.model();
         let every = scene.output.every.unwrap_or(1);
         let mut observers = (
-            scene
-                .wants(Diagnostic::Energy)
-                .then(RigidEnergyError::default),
+            scene.wants(Diagnostic::Energy).then(EnergyError::default),
             (scene.wants(Diagnostic::Momentum) && model.axis_count() > 0)
                 .then(AngularMomentumError::default),
-            (model.invariant_count() > 0).then(RigidInvariantError::default),
+            (model.invariant_count() > 0).then(InvariantError::default),
             OrthogonalityError::default(),
             scene
                 .output

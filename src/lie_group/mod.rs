@@ -54,6 +54,5 @@ pub use model::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
 pub use observer::{
-    AngularMomentumError, OrthogonalityError, RigidEnergyError, RigidInvariantError, RigidPoint,
-    RigidTrajectory, quaternion, rotation,
+    AngularMomentumError, OrthogonalityError, RigidPoint, RigidTrajectory, quaternion, rotation,
 };

@@ -6,13 +6,14 @@
 //! with no observer (`&mut ()`) completes no points.
 //!
 //! Provided: [`RigidTrajectory`] (rotation matrix, quaternion and Ω per point),
-//! [`RigidEnergyError`], [`AngularMomentumError`] (the spatial angular momenta about the
-//! model's symmetry axes), [`RigidInvariantError`] (body Casimirs and other invariants) and
+//! [`EnergyError`] and [`InvariantError`] (body Casimirs and other invariants), the observers
+//! of [`crate::observer`] here implemented for rigid bodies, [`AngularMomentumError`] (the
+//! spatial angular momenta about the model's symmetry axes) and
 //! [`OrthogonalityError`] (‖RᵀR − I‖).
 
 use super::model::{RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries};
 use super::so3::{Matrix3, Vector3, orthogonality_error};
-use crate::observer::Observer;
+use crate::observer::{EnergyError, InvariantError, Observer};
 use std::ops::ControlFlow;
 
 /// A complete rigid-body point: time, attitude, body angular velocity and momentum.
@@ -137,16 +138,8 @@ impl<L: ?Sized> Observer<L, RigidPoint> for RigidTrajectory {
     }
 }
 
-/// Largest deviation |E − E₀| of the energy E = Π·Ω − L over the observed points.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RigidEnergyError {
-    /// Energy at the first observed point.
-    pub initial: Option<f64>,
-    /// Largest deviation seen.
-    pub max: f64,
-}
-
-impl<L: RigidBodyLagrangian> Observer<L, RigidPoint> for RigidEnergyError {
+/// The energy E = Π·Ω − L.
+impl<L: RigidBodyLagrangian> Observer<L, RigidPoint> for EnergyError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         let energy = point.momentum.dot(&point.omega) - model.value(&point.r, &point.omega);
         let initial = *self.initial.get_or_insert(energy);
@@ -198,17 +191,8 @@ impl<L: RigidBodySymmetries> Observer<L, RigidPoint> for AngularMomentumError {
     }
 }
 
-/// Largest deviation of the model's known invariants (body Casimirs) over the observed
-/// points.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RigidInvariantError {
-    /// Invariants at the first observed point.
-    pub initial: Vec<f64>,
-    /// Largest deviation seen.
-    pub max: f64,
-}
-
-impl<L: RigidBodyInvariants> Observer<L, RigidPoint> for RigidInvariantError {
+/// The model's known invariants (body Casimirs).
+impl<L: RigidBodyInvariants> Observer<L, RigidPoint> for InvariantError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         let first = self.initial.is_empty();
         for i in 0..model.invariant_count() {
