@@ -75,7 +75,7 @@ pub enum Error {
         /// Time at the start of that step.
         t: f64,
     },
-    /// The state left the bound set by [`crate::integrator::RunOptions::divergence_limit`]:
+    /// The state left the bound set by [`crate::stepping::run::RunOptions::divergence_limit`]:
     /// the signature of a step beyond the method's stability limit.
     #[error(
         "state diverged at step {step} (t = {t}): largest component {norm:e} exceeds the limit {limit:e}"

@@ -37,45 +37,39 @@
 //! assert!((run.last.q[0] - 1f64.cos()).abs() < 1e-12);
 //! ```
 
-pub mod basis;
-pub mod collocation;
-pub mod derived;
-pub mod discrete_lagrangian;
-pub mod drift;
+// The layers, bottom up; each imports only from the ones above it in this list.
+pub mod analysis;
 pub mod error;
-pub mod integrator;
-mod iteration;
 pub mod lie_group;
 pub mod linalg;
 pub mod method;
 pub mod model;
-pub mod observer;
-pub mod quadrature;
+mod nonlinear;
 pub mod scalar;
-pub mod solve;
-pub mod spectral_variational;
-pub mod stability;
-mod starting_values;
-pub mod stormer_verlet;
-pub mod variational_integrator;
-pub mod verify;
+pub mod spectral;
+pub mod stepping;
 
-pub use collocation::SpectralCollocation;
+// Module paths of earlier releases, kept for users' code.
+pub use analysis::{drift, stability, verify};
+pub use model::derived;
+pub use spectral::{basis, quadrature};
+pub use stepping::{observer, solve};
+
 pub use derived::LagrangianExt;
-pub use discrete_lagrangian::{
+pub use error::Error;
+pub use method::collocation::SpectralCollocation;
+pub use method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, DiscreteLagrangian, Midpoint, SymplecticEuler, Trapezoid,
 };
-pub use error::Error;
-pub use integrator::{
-    Initial, Integrator, Recovery, Run, RunFailure, RunOptions, Statistics, step_count,
-};
+pub use method::variational::stormer_verlet::StormerVerlet;
+pub use method::variational::svi::Svi;
+pub use method::variational::variational_integrator::VariationalIntegrator;
 pub use method::{Coordinates, Method, MethodInfo, PhasePoint, State, TangentMap};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;
-pub use solve::{Adapt, Solution, SolveOptions, Span, solve};
-pub use spectral_variational::Svi;
-pub use stormer_verlet::StormerVerlet;
-pub use variational_integrator::VariationalIntegrator;
+pub use stepping::grid::step_count;
+pub use stepping::run::{Initial, Integrator, Recovery, Run, RunFailure, RunOptions, Statistics};
+pub use stepping::solve::{Adapt, Solution, SolveOptions, Span, solve};
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

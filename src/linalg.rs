@@ -3,6 +3,8 @@
 //! - [`solve_small`]: Gaussian elimination with partial pivoting on a fixed-size N×N system,
 //!   generic over [`Scalar`] so it also runs on dual numbers (nalgebra's `.lu()` needs
 //!   `RealField` and `DimMin` bounds that nested duals and generic code do not have).
+//! - [`compensated_add`]: Kahan-compensated accumulation, for the stepping loop's sums of
+//!   increments over long runs.
 //! - [`DenseLu`]: an LU factorisation with partial pivoting of a runtime-sized matrix held in
 //!   a buffer allocated once per run; factor and solve allocate nothing. The Newton systems of
 //!   the spectral methods are (N·s)-sized, with s chosen at run time.
@@ -176,6 +178,16 @@ impl DenseLu {
     }
 }
 
+/// Kahan-compensated `sum += increment`, entry by entry.
+pub fn compensated_add(sum: &mut [f64], compensation: &mut [f64], increment: &[f64]) {
+    for ((s, c), i) in sum.iter_mut().zip(compensation.iter_mut()).zip(increment) {
+        let y = i - *c;
+        let t = *s + y;
+        *c = (t - *s) - y;
+        *s = t;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -241,5 +253,15 @@ mod tests {
             SMatrix::identity(),
             epsilon = 1e-15
         );
+    }
+
+    #[test]
+    fn compensated_summation_keeps_small_increments() {
+        let mut sum = [1.0];
+        let mut compensation = [0.0];
+        for _ in 0..1_000_000 {
+            compensated_add(&mut sum, &mut compensation, &[1e-16]);
+        }
+        assert!((sum[0] - (1.0 + 1e-10)).abs() < 1e-15);
     }
 }

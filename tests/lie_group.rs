@@ -612,7 +612,15 @@ fn bad_input_gives_typed_errors() {
         other => panic!("expected an invalid parameter, got {other:?}"),
     };
     assert_eq!(name(run(LieSvi::new(1), initial, 0.01, 1.0)), "points");
-    assert_eq!(name(run(LieSvi::new(65), initial, 0.01, 1.0)), "points");
+    assert_eq!(
+        name(run(
+            LieSvi::new(svi::spectral::MAX_POINTS + 1),
+            initial,
+            0.01,
+            1.0
+        )),
+        "points"
+    );
     assert_eq!(
         name(run(LieSvi::new(3).with_quadrature(0), initial, 0.01, 1.0)),
         "quadrature"

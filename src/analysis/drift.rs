@@ -23,10 +23,10 @@
 //! assert!(fit.drift.abs() < fit.amplitude);
 //! ```
 
-use crate::derived::LagrangianExt;
 use crate::method::PhasePoint;
 use crate::model::Lagrangian;
-use crate::observer::Observer;
+use crate::model::derived::LagrangianExt;
+use crate::stepping::observer::Observer;
 use std::ops::ControlFlow;
 
 /// Statistics of the energy error over one window of samples.
@@ -79,7 +79,7 @@ impl Window {
 
 /// The energy error E − E₀ collected in windows of `size` samples; an [`Observer`] (it
 /// evaluates the energy at every point it is given: thin it with
-/// [`crate::observer::Every`]), or fed directly with [`EnergyWindows::push`] for methods
+/// [`crate::stepping::observer::Every`]), or fed directly with [`EnergyWindows::push`] for methods
 /// outside `svi`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnergyWindows {

@@ -10,7 +10,7 @@
 //!
 //! Node values are stored as offsets qᵛ − q_k (ν = 1, …, s; q⁰ − q_k = 0 is implicit).
 
-use crate::basis::LagrangeBasis;
+use crate::spectral::basis::LagrangeBasis;
 use nalgebra::{DVector, SVector};
 
 /// Extrapolation table and the previous step's node offsets.
@@ -46,7 +46,7 @@ impl StartingValues {
     /// Rebuild the extrapolation table for the step ratio ρ (no allocation).
     fn build(&mut self, ratio: f64) {
         let s = self.basis.len() - 1;
-        let mut values = [0.0; crate::spectral_variational::MAX_POINTS];
+        let mut values = [0.0; crate::spectral::MAX_POINTS];
         for nu in 1..=s {
             let x = 1.0 + ratio * (self.basis.nodes()[nu] + 1.0);
             self.basis.values_into(x, &mut values[..=s]);
@@ -112,7 +112,7 @@ impl StartingValues {
         values: &mut [f64],
     ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
         self.previous_step?;
-        let mut derivatives = [0.0; crate::spectral_variational::MAX_POINTS];
+        let mut derivatives = [0.0; crate::spectral::MAX_POINTS];
         let points = self.basis.len();
         self.basis.values_into(tau, &mut values[..points]);
         self.basis.derivatives_into(tau, &mut derivatives[..points]);

@@ -3,7 +3,7 @@
 //! The only required piece is [`Lagrangian::lagrangian`], one function generic over
 //! [`Scalar`]. Everything an integrator needs (∂L/∂q, p = ∂L/∂q̇, the Hessian blocks, the
 //! energy, the Euler–Lagrange acceleration and its Jacobian) is derived from it by automatic
-//! differentiation in [`crate::derived`].
+//! differentiation in [`crate::model::derived`].
 //!
 //! A non-conservative force f_L(t, q, q̇) (friction, actuation, driving) is part of the model
 //! too: [`Lagrangian::external_force`], switched on by [`Lagrangian::FORCED`]. It lives on the
@@ -13,7 +13,7 @@
 //!
 //! Companion traits, each optional and small:
 //! - [`Symmetries`]: infinitesimal generators ξ(q) of symmetries of L; the Noether momenta
-//!   J = p·ξ(q) follow automatically ([`crate::derived::LagrangianExt::noether_momentum`]).
+//!   J = p·ξ(q) follow automatically ([`crate::model::derived::LagrangianExt::noether_momentum`]).
 //! - [`Invariants`]: other known conserved quantities (as functions of t, q, q̇).
 //! - [`ExactSolution`]: a closed-form solution, for error measurements.
 //! - [`Defaults`]: named parameters, a default initial state, step and horizon.
@@ -33,6 +33,10 @@
 //!     }
 //! }
 //! ```
+
+pub mod derived;
+pub mod rigid_body;
+pub mod so3;
 
 use crate::Scalar;
 use nalgebra::SVector;

@@ -23,7 +23,7 @@
 //!
 //! and (D1 + D2) L_d is the derivative of ε ↦ L_d(q_k + ε, q_{k+1} + ε), computed by one
 //! gradient sweep in which the discrete velocity carries no derivative at all: for the
-//! segment rules of [`crate::discrete_lagrangian`] it is h Σ_i b_i ∂L/∂q(τ_i), the discrete
+//! segment rules of [`crate::method::variational::discrete_lagrangian`] it is h Σ_i b_i ∂L/∂q(τ_i), the discrete
 //! momentum balance, whereas D2 L_d + D1 L_d term by term cancels O(|p|) each step.
 //!
 //! # Properties
@@ -37,12 +37,12 @@
 //! integrators*, Acta Numerica (2001), §1.2, §2.7 and §3.2; Porcù & Penati (OctConf 2013),
 //! "Discrete mechanics" and "Forced mechanics".
 
-use crate::derived::LagrangianExt;
-use crate::discrete_lagrangian::{DiscreteLagrangian, DiscreteLagrangianInfo};
 use crate::error::StepFailure;
-use crate::iteration::Newton;
 use crate::linalg::invert_small;
+use crate::method::variational::discrete_lagrangian::{DiscreteLagrangian, DiscreteLagrangianInfo};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::derived::LagrangianExt;
+use crate::nonlinear::Newton;
 use crate::{Error, Lagrangian, Method};
 use nalgebra::{Const, DVector, SMatrix, SVector};
 use num_dual::{Dual2Vec, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian};

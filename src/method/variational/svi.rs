@@ -47,20 +47,18 @@
 //! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
-use crate::basis::LagrangeBasis;
-use crate::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::error::StepFailure;
-use crate::iteration::{FixedPoint, Newton, after_fixed_point};
 use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::quadrature::GaussLegendre;
-use crate::starting_values::StartingValues;
+use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
+use crate::nonlinear::{FixedPoint, Newton, after_fixed_point};
+use crate::spectral::basis::LagrangeBasis;
+use crate::spectral::quadrature::GaussLegendre;
+use crate::spectral::starting_values::StartingValues;
+use crate::spectral::{MAX_POINTS, check_options};
 use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::ops::ControlFlow;
-
-/// Largest number of CGL points or Gauss points accepted.
-pub const MAX_POINTS: usize = 256;
 
 /// Options of the spectral variational integrator.
 #[derive(Debug, Clone, PartialEq)]
@@ -116,35 +114,8 @@ impl Svi {
             self.points,
             Some(self.quadrature_points()),
             self.max_iterations,
-            MAX_POINTS,
         )
     }
-}
-
-/// The options the spectral methods share: 2 to `max` CGL points, 1 to `max` Gauss points
-/// (for methods with a quadrature) and at least one iteration.
-pub(crate) fn check_options(
-    points: usize,
-    quadrature: Option<usize>,
-    max_iterations: usize,
-    max: usize,
-) -> Result<(), Error> {
-    if !(2..=max).contains(&points) {
-        return Err(Error::invalid(
-            "points",
-            format!("{points} CGL points; need 2 to {max}"),
-        ));
-    }
-    if let Some(m) = quadrature.filter(|m| !(1..=max).contains(m)) {
-        return Err(Error::invalid(
-            "quadrature",
-            format!("{m} Gauss points; need 1 to {max}"),
-        ));
-    }
-    if max_iterations == 0 {
-        return Err(Error::invalid("max_iterations", "must be at least 1"));
-    }
-    Ok(())
 }
 
 /// Tables of one SVI configuration, scaled for the current step size.

@@ -58,10 +58,8 @@
 
 use nalgebra::DMatrix;
 
-use crate::Error;
-
-/// Largest number of nodes accepted by the constructors of this module.
-pub const MAX_NODES: usize = 1000;
+use crate::error::Error;
+use crate::spectral::MAX_POINTS;
 
 /// Two nodes x, x_k closer than this, relative to the node spread (ρ|x − x_k| < 2⁻³⁰⁰ ≈ 5e−91), are
 /// treated as coincident when evaluating: the error made is O(2⁻³⁰⁰ n²), far below round-off, and
@@ -75,7 +73,7 @@ const COINCIDENT: f64 = 4.909_093_465_297_727e-91; // 2^-300
 ///
 /// # Errors
 ///
-/// [`Error::InvalidParameter`] named `"points"` if `points` < 2 or `points` > [`MAX_NODES`].
+/// [`Error::InvalidParameter`] named `"points"` if `points` < 2 or `points` > [`MAX_POINTS`].
 pub fn chebyshev_gauss_lobatto(points: usize) -> Result<Vec<f64>, Error> {
     if points < 2 {
         return Err(Error::invalid(
@@ -83,11 +81,11 @@ pub fn chebyshev_gauss_lobatto(points: usize) -> Result<Vec<f64>, Error> {
             format!("Chebyshev–Gauss–Lobatto nodes need at least 2 points, got {points}"),
         ));
     }
-    if points > MAX_NODES {
+    if points > MAX_POINTS {
         return Err(Error::invalid(
             "points",
             format!(
-                "{points} Chebyshev–Gauss–Lobatto points requested, at most {MAX_NODES} are supported"
+                "{points} Chebyshev–Gauss–Lobatto points requested, at most {MAX_POINTS} are supported"
             ),
         ));
     }
@@ -129,7 +127,7 @@ pub struct LagrangeBasis {
 
 impl LagrangeBasis {
     /// Basis on arbitrary distinct finite nodes, in any order (at least 1, at most
-    /// [`MAX_NODES`]).
+    /// [`MAX_POINTS`]).
     ///
     /// The weights w_j = 1/Π_{k≠j}(x_j − x_k) are accumulated with a separate binary exponent and
     /// then divided by the largest |w_j|, so they neither overflow nor underflow for any
@@ -138,17 +136,17 @@ impl LagrangeBasis {
     /// # Errors
     ///
     /// [`Error::InvalidParameter`] named `"nodes"` if there are no nodes or more than
-    /// [`MAX_NODES`], if a node is not finite, if two nodes coincide, or if the nodes are so
+    /// [`MAX_POINTS`], if a node is not finite, if two nodes coincide, or if the nodes are so
     /// unevenly spread that their weights exceed the floating-point range.
     pub fn new(nodes: Vec<f64>) -> Result<Self, Error> {
         let n = nodes.len();
         if n == 0 {
             return Err(Error::invalid("nodes", "at least one node is needed"));
         }
-        if n > MAX_NODES {
+        if n > MAX_POINTS {
             return Err(Error::invalid(
                 "nodes",
-                format!("{n} nodes given, at most {MAX_NODES} are supported"),
+                format!("{n} nodes given, at most {MAX_POINTS} are supported"),
             ));
         }
         if let Some(k) = nodes.iter().position(|x| !x.is_finite()) {
@@ -253,7 +251,7 @@ impl LagrangeBasis {
     ///
     /// # Errors
     ///
-    /// [`Error::InvalidParameter`] named `"points"` if `points` < 2 or `points` > [`MAX_NODES`].
+    /// [`Error::InvalidParameter`] named `"points"` if `points` < 2 or `points` > [`MAX_POINTS`].
     pub fn chebyshev_gauss_lobatto(points: usize) -> Result<Self, Error> {
         let mut basis = Self::new(chebyshev_gauss_lobatto(points)?)?;
         let s = points - 1;
@@ -552,7 +550,7 @@ mod tests {
 
     #[test]
     fn cgl_nodes_are_ascending_symmetric_with_exact_ends() {
-        for points in (2..=200).chain([999, MAX_NODES]) {
+        for points in (2..=200).chain([MAX_POINTS - 1, MAX_POINTS]) {
             let x = chebyshev_gauss_lobatto(points).unwrap();
             let s = points - 1;
             assert_eq!(x.len(), points);
@@ -584,7 +582,7 @@ mod tests {
 
     #[test]
     fn invalid_point_counts_are_rejected() {
-        for points in [0, 1, MAX_NODES + 1] {
+        for points in [0, 1, MAX_POINTS + 1] {
             assert_invalid(chebyshev_gauss_lobatto(points), "points");
             assert_invalid(LagrangeBasis::chebyshev_gauss_lobatto(points), "points");
         }
@@ -599,7 +597,7 @@ mod tests {
         assert_invalid(LagrangeBasis::new(vec![0.0, f64::NAN]), "nodes");
         assert_invalid(LagrangeBasis::new(vec![f64::INFINITY, 0.0]), "nodes");
         assert_invalid(LagrangeBasis::new(vec![-f64::MAX, f64::MAX]), "nodes");
-        assert_invalid(LagrangeBasis::new(vec![0.0; MAX_NODES + 1]), "nodes");
+        assert_invalid(LagrangeBasis::new(vec![0.0; MAX_POINTS + 1]), "nodes");
         assert!(LagrangeBasis::new(vec![0.0, 1e-300, 1.0]).is_err());
     }
 
@@ -641,7 +639,7 @@ mod tests {
     /// of rounding the nodes; and they are exactly (anti)symmetric.
     #[test]
     fn cgl_weights_match_closed_form() {
-        for points in [2, 3, 4, 5, 8, 17, 30, 64, 200, MAX_NODES] {
+        for points in [2, 3, 4, 5, 8, 17, 30, 64, 200, MAX_POINTS] {
             let basis = LagrangeBasis::chebyshev_gauss_lobatto(points).unwrap();
             let s = points - 1;
             assert_eq!(basis.rho, 2.0);

@@ -17,7 +17,7 @@
 //! the exact Jacobian (Λ*)² ⊗ I − diag(∂f/∂q) − diag(∂f/∂q̇)(Λ* ⊗ I), where ∂f/∂q and ∂f/∂q̇
 //! come from nested dual numbers. Then q_{k+1} = qˢ and q̇_{k+1} = yˢ.
 //! The differentiation matrix D̃⁽¹⁾ is built from barycentric formulas for ascending nodes
-//! ([`crate::basis::LagrangeBasis::differentiation_matrix`]); eq. (17) of the paper is
+//! ([`crate::spectral::basis::LagrangeBasis::differentiation_matrix`]); eq. (17) of the paper is
 //! quoted for descending nodes.
 //!
 //! # Properties
@@ -29,15 +29,15 @@
 //! # References
 //! Li, Wu, Leok (2018), §3, eqs. (12)–(25).
 
-use crate::basis::LagrangeBasis;
-use crate::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
 use crate::error::StepFailure;
-use crate::iteration::{FixedPoint, Newton, after_fixed_point};
 use crate::linalg::invert;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::quadrature::GaussLegendre;
-use crate::spectral_variational::{MAX_POINTS, check_options};
-use crate::starting_values::StartingValues;
+use crate::model::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
+use crate::nonlinear::{FixedPoint, Newton, after_fixed_point};
+use crate::spectral::basis::LagrangeBasis;
+use crate::spectral::quadrature::GaussLegendre;
+use crate::spectral::starting_values::StartingValues;
+use crate::spectral::{MAX_POINTS, check_options};
 use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::ops::ControlFlow;
@@ -77,7 +77,7 @@ impl SpectralCollocation {
     }
 
     fn validate(&self) -> Result<(), Error> {
-        check_options(self.points, None, self.max_iterations, MAX_POINTS)
+        check_options(self.points, None, self.max_iterations)
     }
 
     /// Order of the collocation method: the order of the interpolatory quadrature on the
@@ -103,7 +103,7 @@ impl SpectralCollocation {
 /// The collocation nodes c_1, …, c_s on [0, 1] and the weights b_i = ∫₀¹ ℓ_i of the
 /// interpolatory quadrature on them; `None` for an invalid number of points.
 fn collocation_quadrature(points: usize) -> Option<(Vec<f64>, Vec<f64>)> {
-    let nodes = crate::basis::chebyshev_gauss_lobatto(points).ok()?;
+    let nodes = crate::spectral::basis::chebyshev_gauss_lobatto(points).ok()?;
     let collocation: Vec<f64> = nodes[1..].iter().map(|x| 0.5 * (x + 1.0)).collect();
     let basis = LagrangeBasis::new(collocation.clone()).ok()?;
     let gauss = GaussLegendre::new(points + 1).ok()?;

@@ -34,15 +34,15 @@
 //! integration* (2006), §I.3 and eq. VI.6.9; Hairer, Lubich, Wanner, *Geometric numerical
 //! integration illustrated by the Störmer–Verlet method*, Acta Numerica (2003).
 
-use crate::derived::LagrangianExt;
-use crate::derived::cached_mass_inverse;
-use crate::discrete_lagrangian::Trapezoid;
 use crate::error::StepFailure;
-use crate::iteration::Newton;
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::variational_integrator::{
+use crate::method::variational::discrete_lagrangian::Trapezoid;
+use crate::method::variational::variational_integrator::{
     VariationalWorkspace, continuation_tolerance, discrete_tangent_map,
 };
+use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::derived::LagrangianExt;
+use crate::model::derived::cached_mass_inverse;
+use crate::nonlinear::Newton;
 use crate::{Error, Lagrangian, Method, Structure, VariationalIntegrator};
 use nalgebra::{DVector, SMatrix, SVector};
 

@@ -1,19 +1,21 @@
-//! Observers of rigid-body runs: the analogue of [`crate::observer`] on SO(3).
+//! Observers of rigid-body runs: the analogue of [`crate::stepping::observer`] on SO(3).
 //!
 //! They are [`Observer`]s of [`RigidPoint`]s: they see the initial point (step 0) and the
 //! points after the steps they ask for, compose as tuples, switch on and off as `Option`, thin
-//! out with [`crate::observer::Every`], and may stop a run with [`ControlFlow::Break`]. A run
+//! out with [`crate::stepping::observer::Every`], and may stop a run with [`ControlFlow::Break`]. A run
 //! with no observer (`&mut ()`) completes no points.
 //!
 //! Provided: [`RigidTrajectory`] (rotation matrix, quaternion and Ω per point),
 //! [`EnergyError`] and [`InvariantError`] (body Casimirs and other invariants), the observers
-//! of [`crate::observer`] here implemented for rigid bodies, [`AngularMomentumError`] (the
+//! of [`crate::stepping::observer`] here implemented for rigid bodies, [`AngularMomentumError`] (the
 //! spatial angular momenta about the model's symmetry axes) and
 //! [`OrthogonalityError`] (‖RᵀR − I‖).
 
-use super::model::{RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries};
-use super::so3::{Matrix3, Vector3, orthogonality_error};
-use crate::observer::{EnergyError, InvariantError, Observer};
+use crate::model::rigid_body::{
+    RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
+};
+use crate::model::so3::{Matrix3, Vector3, orthogonality_error};
+use crate::stepping::observer::{EnergyError, InvariantError, Observer};
 use std::ops::ControlFlow;
 
 /// A complete rigid-body point: time, attitude, body angular velocity and momentum.
@@ -227,7 +229,7 @@ impl<L: ?Sized> Observer<L, RigidPoint> for OrthogonalityError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lie_group::so3::exp;
+    use crate::model::so3::exp;
 
     #[test]
     fn quaternion_matches_the_rotation_vector() {

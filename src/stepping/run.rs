@@ -13,10 +13,11 @@
 //! [`RunFailure`], which carries the run up to the last good state besides the typed error.
 //! [`Integrator::run`] is `try_run` with default options, keeping only the error.
 
-use crate::derived::LagrangianExt;
 use crate::error::{StepFailure, require_finite, require_finite_entries, require_positive};
 use crate::method::{Coordinates, PhasePoint, State, TangentMap};
-use crate::observer::Observer;
+use crate::model::derived::LagrangianExt;
+use crate::stepping::grid::{grid_step, step_count};
+use crate::stepping::observer::Observer;
 use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::SVector;
 use std::ops::ControlFlow;
@@ -114,7 +115,7 @@ impl RunOptions {
 /// A run that failed: the error, and the run up to the last good state.
 ///
 /// Observers passed to [`Integrator::try_run`] keep what they saw before the failure (a
-/// [`crate::observer::Trajectory`] holds the trajectory so far).
+/// [`crate::stepping::observer::Trajectory`] holds the trajectory so far).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunFailure<const N: usize> {
     /// What went wrong, with step index and time.
@@ -579,71 +580,5 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
             y: state.y + increment.y,
         };
         Ok((next, tangent))
-    }
-}
-
-/// Number of steps [`Integrator::run`] takes to cover `span` with steps of size at most `h`:
-/// a span within round-off of a whole number of steps gets no extra sliver step, otherwise
-/// the last step is shortened.
-pub fn step_count(span: f64, h: f64) -> Result<usize, Error> {
-    let ratio = span / h;
-    if !ratio.is_finite() || ratio > 1e12 {
-        return Err(Error::invalid(
-            "h",
-            format!("step {h} is too small for the span {span} (more than 10^12 steps)"),
-        ));
-    }
-    let nearest = ratio.round();
-    let count = if (ratio - nearest).abs() <= 1e-9 * ratio.max(1.0) {
-        nearest
-    } else {
-        ratio.ceil()
-    };
-    Ok((count as usize).max(1))
-}
-
-/// Step `k` of the fixed grid t_j = t0 + j·h covering [t0, t_end] in `steps` steps (see
-/// [`step_count`]): (start time, step size, end time). Times are never accumulated, and the
-/// last step is shortened to end exactly at `t_end`.
-pub(crate) fn grid_step(t0: f64, t_end: f64, h: f64, steps: usize, k: usize) -> (f64, f64, f64) {
-    let t = t0 + k as f64 * h;
-    if k + 1 == steps {
-        (t, t_end - t, t_end)
-    } else {
-        (t, h, t0 + (k + 1) as f64 * h)
-    }
-}
-
-/// Kahan-compensated `sum += increment`, entry by entry.
-pub(crate) fn compensated_add(sum: &mut [f64], compensation: &mut [f64], increment: &[f64]) {
-    for ((s, c), i) in sum.iter_mut().zip(compensation.iter_mut()).zip(increment) {
-        let y = i - *c;
-        let t = *s + y;
-        *c = (t - *s) - y;
-        *s = t;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn step_count_lands_on_the_horizon() {
-        assert_eq!(step_count(100.0, 1.0).unwrap(), 100);
-        assert_eq!(step_count(2000.0, 0.2).unwrap(), 10000);
-        assert_eq!(step_count(1.0, 0.3).unwrap(), 4);
-        assert_eq!(step_count(0.1, 1.0).unwrap(), 1);
-        assert!(step_count(1.0, 1e-300).is_err());
-    }
-
-    #[test]
-    fn compensated_summation_keeps_small_increments() {
-        let mut sum = [1.0];
-        let mut compensation = [0.0];
-        for _ in 0..1_000_000 {
-            compensated_add(&mut sum, &mut compensation, &[1e-16]);
-        }
-        assert!((sum[0] - (1.0 + 1e-10)).abs() < 1e-15);
     }
 }

@@ -1,12 +1,15 @@
 //! Lie-group variational integrators for rigid bodies on SO(3), from one Lagrangian L(R, Ω)
 //! (Leok, *Generalized Variational Integrators*, §5.3–5.4).
 //!
+//! The pieces live in their layers ([`crate::model::so3`], [`crate::model::rigid_body`],
+//! [`crate::method::lie_svi`], [`crate::stepping::rigid_body`]); this module gathers them:
+//!
 //! - [`so3`]: hat/vee, exp, log, Ad, dexp and its inverse, generic over the dual scalar.
-//! - [`model`]: the model trait [`RigidBodyLagrangian`] and its companions, and the derived
-//!   quantities [`RigidBodyExt`] (momentum, Legendre map, energy, torque).
-//! - [`method`]: the integrator [`LieSvi`] (full form §5.3, reduced Euler–Poincaré form §5.4).
-//! - [`integrator`]: the stepping loop [`RigidBodyIntegrator`].
-//! - [`observer`]: energy, spatial angular momentum, Casimirs, orthogonality, trajectories.
+//! - the model trait [`RigidBodyLagrangian`] and its companions, and the derived quantities
+//!   [`RigidBodyExt`] (momentum, Legendre map, energy, torque);
+//! - the integrator [`LieSvi`] (full form §5.3, reduced Euler–Poincaré form §5.4);
+//! - the stepping loop [`RigidBodyIntegrator`];
+//! - observers: energy, spatial angular momentum, Casimirs, orthogonality, trajectories.
 //!
 //! ```
 //! use nalgebra::{SMatrix, SVector};
@@ -42,17 +45,12 @@
 //! assert!(observers.1.max < 1e-14);
 //! ```
 
-pub mod integrator;
-pub mod method;
-pub mod model;
-pub mod observer;
-pub mod so3;
-
-pub use integrator::{RigidBodyIntegrator, RigidInitial, RigidRun};
-pub use method::{Form, LieSvi, LieWorkspace, RigidState};
-pub use model::{
+pub use crate::method::lie_svi::{Form, LieSvi, LieWorkspace, RigidState};
+pub use crate::model::rigid_body::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
-pub use observer::{
+pub use crate::model::so3;
+pub use crate::stepping::rigid_body::{RigidBodyIntegrator, RigidInitial, RigidRun};
+pub use crate::stepping::rigid_observer::{
     AngularMomentumError, OrthogonalityError, RigidPoint, RigidTrajectory, quaternion, rotation,
 };

@@ -6,16 +6,16 @@
 //! horizon, adds the increments R_k(F − I) and μ_{k+1} − μ_k with compensated (Kahan)
 //! summation, drives [`Observer`]s of [`RigidPoint`]s, and attaches the step index and time to failures.
 //! The attitude is never re-orthonormalised: its orthogonality comes from an accurate
-//! exponential and compensated summation, and [`super::OrthogonalityError`] measures it.
+//! exponential and compensated summation, and [`crate::stepping::rigid_observer::OrthogonalityError`] measures it.
 
-use super::method::{LieSvi, LieWorkspace, RigidState};
-use super::model::{RigidBodyExt, RigidBodyLagrangian};
-use super::observer::RigidPoint;
-use super::so3::{Matrix3, Vector3, orthogonality_error};
 use crate::error::{require_finite, require_finite_entries, require_positive};
-use crate::integrator::{grid_step, step_count};
 use crate::method::StepReport;
-use crate::observer::Observer;
+use crate::method::lie_svi::{LieSvi, LieWorkspace, RigidState};
+use crate::model::rigid_body::{RigidBodyExt, RigidBodyLagrangian};
+use crate::model::so3::{Matrix3, Vector3, orthogonality_error};
+use crate::stepping::grid::{grid_step, step_count};
+use crate::stepping::observer::Observer;
+use crate::stepping::rigid_observer::RigidPoint;
 use crate::{Error, Statistics};
 use nalgebra::SMatrix;
 use std::ops::ControlFlow;

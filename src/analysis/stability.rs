@@ -143,11 +143,11 @@
 //! with 2 Gauss points; Lambert, Watson, *Symmetric multistep methods for periodic initial value
 //! problems* (1976), periodicity and P-stability.
 
-use crate::basis::LagrangeBasis;
 use crate::error::require_positive;
 use crate::method::State;
-use crate::quadrature::GaussLegendre;
-use crate::spectral_variational::MAX_POINTS;
+use crate::spectral::MAX_POINTS;
+use crate::spectral::basis::LagrangeBasis;
+use crate::spectral::quadrature::GaussLegendre;
 use crate::{Error, Lagrangian, Method, Scalar};
 use argmin::core::{
     CostFunction, Executor, IterState, Solver, State as _, TerminationReason, TerminationStatus,

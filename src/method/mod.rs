@@ -6,6 +6,10 @@
 //! stepping loop, [`crate::Integrator`], does everything else: validation, time keeping,
 //! compensated summation of the increments, observers and error context.
 
+pub mod collocation;
+pub mod lie_svi;
+pub mod variational;
+
 use crate::error::StepFailure;
 use crate::{Error, Lagrangian};
 use nalgebra::{DMatrix, SMatrix, SVector};
@@ -55,7 +59,7 @@ impl<const N: usize> State<N> {
 
     /// `self += increment` with Kahan compensation carried in `compensation`.
     pub(crate) fn add_compensated(&mut self, compensation: &mut State<N>, increment: &State<N>) {
-        use crate::integrator::compensated_add;
+        use crate::linalg::compensated_add;
         compensated_add(
             self.q.as_mut_slice(),
             compensation.q.as_mut_slice(),

@@ -16,7 +16,7 @@
 //!
 //! [`RigidBodyLagrangian::G_INVARIANT`] declares that L depends on Ω only
 //! (L(R, Ω) = L(I, Ω), invariance under R ↦ QR); it unlocks the reduced Euler–Poincaré form
-//! of [`super::LieSvi`].
+//! of [`crate::method::lie_svi::LieSvi`].
 //!
 //! # Example
 //! ```
@@ -35,8 +35,8 @@
 //! }
 //! ```
 
-use super::so3::{Matrix3, Vector3, exp};
 use crate::linalg::solve_small;
+use crate::model::so3::{Matrix3, Vector3, exp};
 use crate::{Error, Scalar};
 use nalgebra::Const;
 use num_dual::{Dual2Vec, DualSVec64, DualVec, gradient, hessian};
@@ -239,7 +239,7 @@ impl<T: RigidBodyLagrangian + ?Sized> RigidBodyExt for T {}
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lie_group::so3::hat;
+    use crate::model::so3::hat;
 
     struct Top;
     impl RigidBodyLagrangian for Top {
@@ -256,7 +256,7 @@ mod tests {
 
     #[test]
     fn momentum_energy_and_legendre_map() {
-        let r = crate::lie_group::so3::exp(&Vector3::new(0.3, -0.4, 0.2));
+        let r = crate::model::so3::exp(&Vector3::new(0.3, -0.4, 0.2));
         let omega = Vector3::new(0.5, -1.0, 2.0);
         let p = Top.momentum(&r, &omega);
         assert!((p - Vector3::new(0.5, -2.0, 6.0)).amax() < 1e-15);
@@ -270,7 +270,7 @@ mod tests {
     #[test]
     fn torque_is_the_heavy_top_torque() {
         // τ = m g Γ × χ with Γ = Rᵀ e3.
-        let r = crate::lie_group::so3::exp(&Vector3::new(0.3, -0.4, 0.2));
+        let r = crate::model::so3::exp(&Vector3::new(0.3, -0.4, 0.2));
         let chi = Vector3::new(0.1, 0.2, 0.5);
         let gamma = r.transpose() * Vector3::z();
         let expected = gamma.cross(&chi) * 9.81;

@@ -46,12 +46,12 @@
 //!   the choice of map depends on the state, so there is no modified Hamiltonian and no
 //!   bounded-energy guarantee.
 
-use crate::derived::LagrangianExt;
 use crate::error::{require_finite, require_positive};
-use crate::integrator::grid_step;
 use crate::method::{PhasePoint, State, StepReport};
-use crate::spectral_variational::MAX_POINTS;
-use crate::{Error, Initial, Integrator, Lagrangian, Method, Statistics, step_count};
+use crate::model::derived::LagrangianExt;
+use crate::spectral::MAX_POINTS;
+use crate::stepping::grid::{grid_step, step_count};
+use crate::{Error, Initial, Integrator, Lagrangian, Method, Statistics};
 use nalgebra::SVector;
 use std::fmt;
 use std::str::FromStr;

@@ -17,7 +17,6 @@
 
 use crate::error::StepFailure;
 use crate::linalg::DenseLu;
-use crate::method::StepReport;
 use nalgebra::{DMatrix, DVector};
 use std::ops::ControlFlow;
 
@@ -137,11 +136,11 @@ impl FixedPoint {
 /// O(h ‖M⁻¹ ∂f_L/∂q̇‖), so for a forced model a non-converging or diverging fixed point
 /// switches the run to Newton's method (`newton_only`), starting from the same starting
 /// values; for an unforced model its failure is the step's failure.
-pub(crate) fn after_fixed_point(
-    result: Result<StepReport, StepFailure>,
+pub(crate) fn after_fixed_point<T>(
+    result: Result<T, StepFailure>,
     forced: bool,
     newton_only: &mut bool,
-) -> ControlFlow<Result<StepReport, StepFailure>, usize> {
+) -> ControlFlow<Result<T, StepFailure>, usize> {
     match result {
         Err(StepFailure::NonConvergence { iterations, .. }) if forced => {
             *newton_only = true;

@@ -10,8 +10,8 @@
 //! (max |J − J₀| over the Noether momenta), [`InvariantError`] (max over known invariants),
 //! [`SolutionError`] (max position error against the exact solution).
 
-use crate::derived::LagrangianExt;
 use crate::method::PhasePoint;
+use crate::model::derived::LagrangianExt;
 use crate::model::{ExactSolution, Invariants, Lagrangian, Symmetries};
 use std::ops::ControlFlow;
 

@@ -9,7 +9,7 @@
 //!
 //! with l_ν the Lagrange basis on the d + 1 Chebyshev–Gauss–Lobatto points (`points` = d + 1)
 //! and τ ∈ [−1, 1]. The body angular velocity along the curve is the left-trivialised
-//! derivative (see [`super::so3`] for the sign)
+//! derivative (see [`crate::model::so3`] for the sign)
 //!
 //! Ω(τ) = dexp_{−ξ(τ)} ξ̇(τ),  ξ̇ = (2/h) Σ ξᵛ l̇_ν(τ),
 //!
@@ -46,11 +46,11 @@
 //! μ is the body angular momentum Π = ∂L/∂Ω in the continuous limit; the update is the
 //! discrete momentum balance "rotate, then add the quadrature of the torque". Both updates
 //! are returned as increments R_k (F − I) and (F − I)ᵀμ_k + Fᵀ g_R with F − I from
-//! [`super::so3::exp_minus_identity`] (no cancellation), and the stepping loop adds them with
+//! [`crate::model::so3::exp_minus_identity`] (no cancellation), and the stepping loop adds them with
 //! compensated summation: R stays orthogonal to round-off without any re-orthonormalisation.
 //!
 //! # Reduced form (§5.4)
-//! For a G-invariant Lagrangian ([`super::RigidBodyLagrangian::G_INVARIANT`]),
+//! For a G-invariant Lagrangian ([`crate::model::rigid_body::RigidBodyLagrangian::G_INVARIANT`]),
 //! L(R, Ω) = l(Ω) with the reduced Lagrangian l(Ω) = L(I, Ω), so ℓ(η, a, b) = l(dexp_{−a} b)
 //! does not depend on η or R_k: g_R = 0, and the reduced discrete Lagrangian
 //! l_d(f_{k,k+1}) = Σ_μ W_μ l(dexp_{−ξ(τ_μ)} ξ̇(τ_μ)) depends on f_{k,k+1} = R_k⁻¹R_{k+1} = F
@@ -89,19 +89,17 @@
 //! Shkoller, *Discrete Euler–Poincaré and Lie–Poisson equations*, Nonlinearity 12 (1999);
 //! Iserles, Munthe-Kaas, Nørsett, Zanna, *Lie-group methods*, Acta Numerica (2000).
 
-use super::model::{RigidBodyExt, RigidBodyLagrangian};
-use super::so3::{Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log};
-use crate::basis::LagrangeBasis;
 use crate::error::StepFailure;
-use crate::iteration::Newton;
 use crate::method::{MethodInfo, StepReport};
-use crate::quadrature::GaussLegendre;
+use crate::model::rigid_body::{RigidBodyExt, RigidBodyLagrangian};
+use crate::model::so3::{Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log};
+use crate::nonlinear::Newton;
+use crate::spectral::basis::LagrangeBasis;
+use crate::spectral::check_options;
+use crate::spectral::quadrature::GaussLegendre;
 use crate::{Coordinates, Error};
 use nalgebra::{Const, DMatrix, DVector, SMatrix, SVector};
 use num_dual::{Derivative, Dual2Vec, DualSVec64, DualVec, gradient, hessian, jacobian};
-
-/// Largest number of CGL points or Gauss points accepted.
-pub const MAX_POINTS: usize = 64;
 
 /// Which form of the discrete equations a [`LieSvi`] step solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -119,9 +117,9 @@ pub enum Form {
 #[non_exhaustive]
 pub struct LieSvi {
     /// Number of Chebyshev–Gauss–Lobatto points d + 1 (degree d of ξ(τ)), 2 to
-    /// [`MAX_POINTS`].
+    /// [`crate::spectral::MAX_POINTS`].
     pub points: usize,
-    /// Number of Gauss–Legendre points m, 1 to [`MAX_POINTS`]; `None` means `points` (enough
+    /// Number of Gauss–Legendre points m, 1 to [`crate::spectral::MAX_POINTS`]; `None` means `points` (enough
     /// for the full order 2d).
     pub quadrature: Option<usize>,
     /// Cap on Newton iterations per step.
@@ -190,11 +188,10 @@ impl LieSvi {
 
     /// Check the options against the model.
     pub fn validate<L: RigidBodyLagrangian>(&self) -> Result<(), Error> {
-        crate::spectral_variational::check_options(
+        check_options(
             self.points,
             Some(self.quadrature_points()),
             self.max_iterations,
-            MAX_POINTS,
         )?;
         if self.form == Form::Reduced && !L::G_INVARIANT {
             return Err(Error::invalid(
@@ -354,7 +351,7 @@ impl LieSvi {
         lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
         let end = workspace.unknowns.fixed_rows::<3>(3 * (d - 1)).into_owned();
         let rotation = exp(&end);
-        let pull = super::so3::dexp(&(-end));
+        let pull = crate::model::so3::dexp(&(-end));
         // g_R and its derivative in the base point.
         let mut torque = Vector3::zeros();
         let mut torque_base = Matrix3::zeros();
@@ -372,7 +369,7 @@ impl LieSvi {
                 block += (hae * l + hbe * c) * w;
             }
         }
-        torque_base += super::so3::hat(&torque) * 0.5;
+        torque_base += crate::model::so3::hat(&torque) * 0.5;
         {
             let mut block = sensitivity.fixed_view_mut::<3, 3>(3 * (d - 1), 0);
             block -= pull * torque_base;
@@ -397,19 +394,19 @@ impl LieSvi {
             block += rotation.transpose();
         }
         let mut momentum_rate =
-            super::so3::hat(&next_momentum) * end_rate + rotation.transpose() * torque_total;
+            crate::model::so3::hat(&next_momentum) * end_rate + rotation.transpose() * torque_total;
         {
             let mut block = momentum_rate.fixed_view_mut::<3, 3>(0, 3);
             block += rotation.transpose();
         }
         // Canonical coordinates: (η, μ) → (η, p) on input and output.
-        let input = super::so3::hat(&state.momentum) * 0.5;
+        let input = crate::model::so3::hat(&state.momentum) * 0.5;
         let mut phi = SMatrix::<f64, 6, 6>::zeros();
         let eta_from_p = eta_rate.fixed_view::<3, 3>(0, 3).into_owned();
         let eta_from_eta = eta_rate.fixed_view::<3, 3>(0, 0) + eta_from_p * input;
         let mu_from_p = momentum_rate.fixed_view::<3, 3>(0, 3).into_owned();
         let mu_from_eta = momentum_rate.fixed_view::<3, 3>(0, 0) + mu_from_p * input;
-        let output = super::so3::hat(&next_momentum) * 0.5;
+        let output = crate::model::so3::hat(&next_momentum) * 0.5;
         phi.fixed_view_mut::<3, 3>(0, 0).copy_from(&eta_from_eta);
         phi.fixed_view_mut::<3, 3>(0, 3).copy_from(&eta_from_p);
         phi.fixed_view_mut::<3, 3>(3, 0)
@@ -461,7 +458,7 @@ impl RigidState {
         compensation: &mut RigidState,
         increment: &RigidState,
     ) {
-        use crate::integrator::compensated_add;
+        use crate::linalg::compensated_add;
         compensated_add(
             self.r.as_mut_slice(),
             compensation.r.as_mut_slice(),
@@ -685,7 +682,7 @@ fn attitude_duals(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<D9> {
         }
     }
     let axes: [Matrix3<f64>; 3] =
-        std::array::from_fn(|l| r * super::so3::hat(&Vector3::ith(l, 1.0)));
+        std::array::from_fn(|l| r * crate::model::so3::hat(&Vector3::ith(l, 1.0)));
     let base = r * value;
     let base_first: [Matrix3<f64>; 3] = std::array::from_fn(|m| r * first[m]);
     let base_second: [[Matrix3<f64>; 3]; 3] =
@@ -695,7 +692,7 @@ fn attitude_duals(r: &Matrix3<f64>, a: &Vector3<f64>) -> Matrix3<D9> {
         std::array::from_fn(|l| std::array::from_fn(|m| axes[l] * first[m]));
     // ∂²exp(η)/∂η_l∂η_m at 0 = ½(ê_l ê_m + ê_m ê_l).
     let generators: [Matrix3<f64>; 3] =
-        std::array::from_fn(|l| super::so3::hat(&Vector3::ith(l, 1.0)));
+        std::array::from_fn(|l| crate::model::so3::hat(&Vector3::ith(l, 1.0)));
     let curvature: [[Matrix3<f64>; 3]; 3] = std::array::from_fn(|l| {
         std::array::from_fn(|m| {
             r * (generators[l] * generators[m] + generators[m] * generators[l]) * value * 0.5
@@ -839,7 +836,7 @@ fn assemble<L: RigidBodyLagrangian>(
     );
     let mut row = residual.fixed_rows_mut::<3>(3 * (d - 1));
     row -= pulled;
-    let map = super::so3::dexp(&(-end));
+    let map = crate::model::so3::dexp(&(-end));
     for (j, rate) in torque_rates.iter().enumerate() {
         let mut target = jacobian_out.fixed_view_mut::<3, 3>(3 * (d - 1), 3 * j);
         if !tables.reduced {

@@ -1,0 +1,15 @@
+//! Variational integrators: methods defined by a discrete Lagrangian L_d(q_k, q_{k+1}) ≈ ∫ L dt
+//! through the discrete Euler–Lagrange equations (Li–Wu–Leok eq. 5), so every one of them is
+//! symplectic and conserves the Noether momenta of the symmetries of L.
+//!
+//! - [`svi`]: the Galerkin spectral variational integrator (eqs. 6–11), L_d from a polynomial
+//!   on Chebyshev–Gauss–Lobatto points and Gauss–Legendre quadrature.
+//! - [`discrete_lagrangian`]: the classic discrete Lagrangians (symplectic Euler and its
+//!   adjoint, midpoint, trapezoid) as plain data.
+//! - [`variational_integrator`]: one implicit discrete Euler–Lagrange solver for any of them.
+//! - [`stormer_verlet`]: the trapezoidal rule, explicit (kick–drift–kick) for a constant mass.
+
+pub mod discrete_lagrangian;
+pub mod stormer_verlet;
+pub mod svi;
+pub mod variational_integrator;
