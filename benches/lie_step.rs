@@ -13,6 +13,7 @@
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
+use svi::Step;
 use svi::lie_group::{
     Form, LieSvi, LieWorkspace, RigidBodyDefaults, RigidBodyExt, RigidBodyLagrangian, RigidState,
 };
@@ -33,11 +34,11 @@ fn seed<L: RigidBodyLagrangian + RigidBodyDefaults>(
         r,
         momentum: model.momentum(&r, &omega),
     };
-    let mut workspace = method.workspace::<L>(h).expect("valid options");
+    let mut workspace = method.workspace(model, h).expect("valid options");
     let mut increment = RigidState::zeros();
     for _ in 0..PRE_STEPS {
         method
-            .step(model, &mut workspace, h, &state, &mut increment)
+            .step(model, &mut workspace, 0.0, h, &state, &mut increment)
             .expect("step converges");
         state.r += increment.r;
         state.momentum += increment.momentum;
@@ -77,7 +78,7 @@ fn bench_model<L: RigidBodyLagrangian + RigidBodyDefaults>(
                     let start = Instant::now();
                     for _ in 0..count {
                         method
-                            .step(&model, &mut workspace, h, &state, &mut increment)
+                            .step(&model, &mut workspace, 0.0, h, &state, &mut increment)
                             .expect("step converges");
                         state.r += increment.r;
                         state.momentum += increment.momentum;

@@ -64,12 +64,22 @@ pub use method::variational::discrete_lagrangian::{
 pub use method::variational::stormer_verlet::StormerVerlet;
 pub use method::variational::svi::Svi;
 pub use method::variational::variational_integrator::VariationalIntegrator;
-pub use method::{Coordinates, Method, MethodInfo, PhasePoint, State, TangentMap};
+pub use method::{
+    Coordinates, Euclidean, Initial, Method, MethodInfo, PhasePoint, SO3, Space, State, Step,
+    TangentMap,
+};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;
 pub use stepping::grid::step_count;
-pub use stepping::run::{Initial, Integrator, Recovery, Run, RunFailure, RunOptions, Statistics};
-pub use stepping::solve::{Adapt, Solution, SolveOptions, Span, solve};
+pub use stepping::run::{Integrator, Recovery, RunOptions, Statistics};
+pub use stepping::solve::{Adapt, SolveOptions, Span, solve};
+
+/// A run on ℝᴺ: [`stepping::run::Run`] on [`Euclidean<N>`].
+pub type Run<const N: usize> = stepping::run::Run<Euclidean<N>>;
+/// A failed run on ℝᴺ: [`stepping::run::RunFailure`] on [`Euclidean<N>`].
+pub type RunFailure<const N: usize> = stepping::run::RunFailure<Euclidean<N>>;
+/// A solution on ℝᴺ: [`stepping::solve::Solution`] on [`Euclidean<N>`].
+pub type Solution<const N: usize> = stepping::solve::Solution<Euclidean<N>>;
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

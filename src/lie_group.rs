@@ -2,13 +2,13 @@
 //! (Leok, *Generalized Variational Integrators*, §5.3–5.4).
 //!
 //! The pieces live in their layers ([`crate::model::so3`], [`crate::model::rigid_body`],
-//! [`crate::method::lie_svi`], [`crate::stepping::rigid_body`]); this module gathers them:
+//! [`crate::method::lie_svi`], [`crate::stepping::rigid_observer`]); this module gathers them:
 //!
 //! - [`so3`]: hat/vee, exp, log, Ad, dexp and its inverse, generic over the dual scalar.
 //! - the model trait [`RigidBodyLagrangian`] and its companions, and the derived quantities
 //!   [`RigidBodyExt`] (momentum, Legendre map, energy, torque);
 //! - the integrator [`LieSvi`] (full form §5.3, reduced Euler–Poincaré form §5.4);
-//! - the stepping loop [`RigidBodyIntegrator`];
+//! - the stepping loop, [`crate::Integrator`] on [`SO3`] ([`RigidBodyIntegrator`]);
 //! - observers: energy, spatial angular momentum, Casimirs, orthogonality, trajectories.
 //!
 //! ```
@@ -45,12 +45,18 @@
 //! assert!(observers.1.max < 1e-14);
 //! ```
 
-pub use crate::method::lie_svi::{Form, LieSvi, LieWorkspace, RigidState};
+pub use crate::method::lie_svi::{Form, LieSvi, LieWorkspace, ORTHOGONALITY_TOLERANCE};
+pub use crate::method::space::{RigidInitial, RigidPoint, RigidState, SO3};
 pub use crate::model::rigid_body::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
-pub use crate::model::so3;
-pub use crate::stepping::rigid_body::{RigidBodyIntegrator, RigidInitial, RigidRun};
-pub use crate::stepping::rigid_observer::{
-    AngularMomentumError, OrthogonalityError, RigidPoint, RigidTrajectory, quaternion, rotation,
-};
+pub use crate::model::so3::{self, quaternion, rotation};
+pub use crate::stepping::rigid_observer::{AngularMomentumError, OrthogonalityError};
+
+/// A rigid-body model and a [`LieSvi`] method, ready to run: the one
+/// [`crate::Integrator`] on [`SO3`].
+pub type RigidBodyIntegrator<L> = crate::Integrator<L, LieSvi, SO3>;
+/// The result of a rigid-body run.
+pub type RigidRun = crate::stepping::run::Run<SO3>;
+/// Stores the observed points of a rigid-body run.
+pub type RigidTrajectory = crate::stepping::observer::Points<RigidPoint>;

@@ -384,7 +384,7 @@ fn step_in_chart<L: RigidBodyLagrangian + Clone>(
         r: base.r * exp(&eta),
         momentum: dexp_inverse(&eta) * p,
     };
-    let (next, _) = integrator.step(&state, h).unwrap();
+    let (next, _) = integrator.step(0.0, &state, h).unwrap();
     let eta_next = log(&(image.r.transpose() * next.r));
     let p_next = dexp(&eta_next) * next.momentum;
     let mut out = SVector::<f64, 6>::zeros();
@@ -412,7 +412,7 @@ fn symplecticity_error<L: RigidBodyLagrangian + Clone>(
     h: f64,
 ) -> (f64, f64, f64) {
     let integrator = RigidBodyIntegrator::new(model, method);
-    let (image, _) = integrator.step(state, h).unwrap();
+    let (image, _) = integrator.step(0.0, state, h).unwrap();
     let mut phi = SMatrix::<f64, 6, 6>::zeros();
     for j in 0..6 {
         // Steps of 10⁻³ relative to the size of each coordinate.
@@ -432,7 +432,7 @@ fn symplecticity_error<L: RigidBodyLagrangian + Clone>(
         phi.set_column(j, &column);
     }
     let j = symplectic_form();
-    let (next, exact) = integrator.tangent_map(state, h).unwrap();
+    let (next, exact) = integrator.tangent_map(0.0, state, h).unwrap();
     assert_eq!(next, image);
     (
         (phi.transpose() * j * phi - j).amax(),
@@ -502,14 +502,14 @@ fn a_non_canonical_chart_is_not_symplectic() {
     };
     let integrator = RigidBodyIntegrator::new(pendulum, LieSvi::new(3));
     let h = 0.2;
-    let (image, _) = integrator.step(&state, h).unwrap();
+    let (image, _) = integrator.step(0.0, &state, h).unwrap();
     let map = |x: &SVector<f64, 6>| {
         let eta = x.fixed_rows::<3>(0).into_owned();
         let s = RigidState {
             r: state.r * exp(&eta),
             momentum: x.fixed_rows::<3>(3).into_owned(),
         };
-        let (next, _) = integrator.step(&s, h).unwrap();
+        let (next, _) = integrator.step(0.0, &s, h).unwrap();
         let mut out = SVector::<f64, 6>::zeros();
         out.fixed_rows_mut::<3>(0)
             .copy_from(&log(&(image.r.transpose() * next.r)));
@@ -712,12 +712,12 @@ fn reversibility_defect<L: RigidBodyLagrangian + RigidBodyDefaults + Clone>(
         momentum: model.momentum(&r0, &omega0),
     };
     let integrator = RigidBodyIntegrator::new(model, method);
-    let (next, _) = integrator.step(&state, h).unwrap();
+    let (next, _) = integrator.step(0.0, &state, h).unwrap();
     let flipped = RigidState {
         r: next.r,
         momentum: -next.momentum,
     };
-    let (back, _) = integrator.step(&flipped, h).unwrap();
+    let (back, _) = integrator.step(0.0, &flipped, h).unwrap();
     (back.r - state.r)
         .amax()
         .max((back.momentum + state.momentum).amax() / state.momentum.amax())

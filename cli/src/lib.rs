@@ -1154,7 +1154,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
 /// Run a scene through [`svi::solve`]: the observers see the initial point and the states
 /// at the output times (every step's end when no output times are given).
 fn solve_scene<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
-    integrator: &Integrator<M, Me, N>,
+    integrator: &Integrator<M, Me, svi::Euclidean<N>>,
     setup: &Setup<N>,
     observers: &mut Observers<N>,
 ) -> Result<Outcome<N>, SceneError> {

@@ -391,8 +391,8 @@ impl RigidModelVisitor for RunRigid<'_> {
         }
         let run = run?;
         let (energy, momentum, invariants, orthogonality, trajectory, _) = observers;
-        let first = integrator.initial_state(&initial)?;
-        let first = integrator.point(t0, &first, &SVector::zeros())?;
+        let first = integrator.initial_state(t0, &initial)?;
+        let first = integrator.phase_point(t0, &first, &SVector::zeros())?;
         let last = run.last;
 
         let trajectory = match (trajectory, &scene.output.trajectory) {

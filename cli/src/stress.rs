@@ -484,7 +484,7 @@ fn describe(error: &Error) -> String {
 
 /// The long run of an svi method at the scene's step.
 fn svi_drift<L: ZooModel<N>, Me: Method<N>, const N: usize>(
-    integrator: &Integrator<L, Me, N>,
+    integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     setup: &Setup<'_, N>,
     options: &RunOptions,
 ) -> Result<Drift, String> {

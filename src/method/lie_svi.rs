@@ -89,17 +89,23 @@
 //! Shkoller, *Discrete Euler–Poincaré and Lie–Poisson equations*, Nonlinearity 12 (1999);
 //! Iserles, Munthe-Kaas, Nørsett, Zanna, *Lie-group methods*, Acta Numerica (2000).
 
-use crate::error::StepFailure;
-use crate::method::{MethodInfo, StepReport};
+use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
+use crate::method::space::{RigidInitial, RigidPoint, RigidState, SO3};
+use crate::method::step::Step;
+use crate::method::{Coordinates, MethodInfo, StepReport};
 use crate::model::rigid_body::{RigidBodyExt, RigidBodyLagrangian};
-use crate::model::so3::{Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log};
+use crate::model::so3::{
+    Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log, orthogonality_error,
+};
 use crate::nonlinear::Newton;
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::check_options;
 use crate::spectral::quadrature::GaussLegendre;
-use crate::{Coordinates, Error};
 use nalgebra::{Const, DMatrix, DVector, SMatrix, SVector};
 use num_dual::{Derivative, Dual2Vec, DualSVec64, DualVec, gradient, hessian, jacobian};
+
+/// Largest ‖R₀ᵀR₀ − I‖ accepted for an initial attitude.
+pub const ORTHOGONALITY_TOLERANCE: f64 = 1e-10;
 
 /// Which form of the discrete equations a [`LieSvi`] step solves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -187,7 +193,7 @@ impl LieSvi {
     }
 
     /// Check the options against the model.
-    pub fn validate<L: RigidBodyLagrangian>(&self) -> Result<(), Error> {
+    fn validate<L: RigidBodyLagrangian>(&self) -> Result<(), Error> {
         check_options(
             self.points,
             Some(self.quadrature_points()),
@@ -202,11 +208,19 @@ impl LieSvi {
         }
         Ok(())
     }
+}
+
+impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
+    type Workspace = LieWorkspace;
+
+    fn info(&self) -> MethodInfo {
+        LieSvi::info(self)
+    }
 
     /// Validate the options and build every table and buffer for steps of size `h`.
-    pub fn workspace<L: RigidBodyLagrangian>(&self, h: f64) -> Result<LieWorkspace, Error> {
+    fn workspace(&self, _model: &L, h: f64) -> Result<LieWorkspace, Error> {
         self.validate::<L>()?;
-        crate::error::require_positive("h", h)?;
+        require_positive("h", h)?;
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
         let gauss = GaussLegendre::new(self.quadrature_points())?;
         let degree = self.points - 1;
@@ -237,10 +251,11 @@ impl LieSvi {
 
     /// Advance `state` by one step of size `h`, writing the increments
     /// (R_{k+1} − R_k, μ_{k+1} − μ_k) into `increment`. Allocates nothing.
-    pub fn step<L: RigidBodyLagrangian>(
+    fn step(
         &self,
         model: &L,
         workspace: &mut LieWorkspace,
+        _t: f64,
         h: f64,
         state: &RigidState,
         increment: &mut RigidState,
@@ -300,10 +315,8 @@ impl LieSvi {
             evaluations: m * (iterations + 1),
         })
     }
-}
 
-impl LieSvi {
-    /// Perform the step like [`LieSvi::step`] and return its exact Jacobian Φ (6×6) in
+    /// Perform the step like [`Step::step`] and return its exact Jacobian Φ (6×6) in
     /// canonical coordinates of T*SO(3) about the step's input and output.
     ///
     /// The input is charted as R = R_k exp(η), μ = dexp_η⁻¹ p (p = dexp_{−η}ᵀμ is the
@@ -318,15 +331,16 @@ impl LieSvi {
     /// with dξ = −J_N⁻¹ (∂r/∂η dη + ∂r/∂μ dμ) (J_N the Newton matrix),
     /// ∂g_R/∂η = Σ_μ W_μ ∂²ℓ/∂η² + ½ ĝ_R (the ½ from exp(η)exp(ζ) = exp(η + ζ + ½ η × ζ + …)),
     /// dμ = dp + ½ μ̂ dη and dp' = dμ' − ½ (μ_{k+1})^ dη'. Allocates (unlike `step`).
-    pub fn tangent_map<L: RigidBodyLagrangian>(
+    fn tangent_map(
         &self,
         model: &L,
         workspace: &mut LieWorkspace,
+        t: f64,
         h: f64,
         state: &RigidState,
     ) -> Result<(RigidState, SMatrix<f64, 6, 6>), StepFailure> {
         let mut increment = RigidState::zeros();
-        self.step(model, workspace, h, state, &mut increment)?;
+        Step::<L, SO3>::step(self, model, workspace, t, h, state, &mut increment)?;
         let d = workspace.degree;
         let n = 3 * d;
         let tables = Tables {
@@ -415,60 +429,116 @@ impl LieSvi {
             .copy_from(&(mu_from_p - output * eta_from_p));
         Ok((increment, phi))
     }
-}
 
-/// The state of a rigid body in the integrator's coordinates: the attitude R (body to
-/// space) and the body angular momentum μ = Π (left-trivialised momentum).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RigidState {
-    /// Attitude R ∈ SO(3).
-    pub r: Matrix3<f64>,
-    /// Body angular momentum Π.
-    pub momentum: Vector3<f64>,
-}
+    /// Checks the initial condition: finite values and an orthogonal attitude (‖R₀ᵀR₀ − I‖ at
+    /// most [`ORTHOGONALITY_TOLERANCE`], det R₀ > 0).
+    fn initial_state(
+        &self,
+        model: &L,
+        t0: f64,
+        initial: &RigidInitial,
+    ) -> Result<RigidState, Error> {
+        let (r, second, name) = match initial {
+            RigidInitial::Velocity { r, omega } => (r, omega, "initial angular velocity"),
+            RigidInitial::Momentum { r, momentum } => (r, momentum, "initial angular momentum"),
+        };
+        require_finite_entries("initial attitude", r)?;
+        require_finite_entries(name, second)?;
+        let error = orthogonality_error(r);
+        if error > ORTHOGONALITY_TOLERANCE || r.determinant() <= 0.0 {
+            return Err(Error::invalid(
+                "initial attitude",
+                format!(
+                    "not a rotation: ‖RᵀR − I‖ = {error:e}, det R = {}",
+                    r.determinant()
+                ),
+            ));
+        }
+        let momentum = match initial {
+            RigidInitial::Momentum { momentum, .. } => *momentum,
+            RigidInitial::Velocity { r, omega } => model.momentum(r, omega),
+        };
+        let state = RigidState { r: *r, momentum };
+        if !state.is_finite() {
+            return Err(Error::NonFinite {
+                what: "initial state".into(),
+                step: 0,
+                t: t0,
+            });
+        }
+        Ok(state)
+    }
 
-impl RigidState {
-    /// The zero state (used for increments).
-    pub fn zeros() -> Self {
-        RigidState {
-            r: Matrix3::zeros(),
-            momentum: Vector3::zeros(),
+    /// A G-invariance declaration: L(R, Ω) = L(I, Ω) and a zero configuration gradient at the
+    /// initial state.
+    fn check_model(&self, model: &L, t0: f64, state: &RigidState) -> Result<(), Error> {
+        if !L::G_INVARIANT {
+            return Ok(());
+        }
+        let omega = Step::<L, SO3>::complete(self, model, t0, state, &Vector3::zeros())?.omega;
+        let here = model.value(&state.r, &omega);
+        let identity = model.value(&Matrix3::identity(), &omega);
+        let torque = model.torque(&state.r, &omega).amax();
+        let scale = 1.0 + here.abs() + state.momentum.amax() * (1.0 + omega.amax());
+        if (here - identity).abs() > 1e-12 * scale || torque > 1e-12 * scale {
+            return Err(Error::invalid(
+                "G_INVARIANT",
+                format!(
+                    "the model declares L(R, Ω) = L(I, Ω), but the values differ by {:e} and \
+                     the configuration gradient is {torque:e}",
+                    (here - identity).abs()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Ω from Π by the inverse Legendre map started at `guess`.
+    fn complete(
+        &self,
+        model: &L,
+        t: f64,
+        state: &RigidState,
+        guess: &Vector3<f64>,
+    ) -> Result<RigidPoint, Error> {
+        let omega =
+            model
+                .velocity(&state.r, &state.momentum, guess)
+                .map_err(|error| match error {
+                    Error::LegendreMap {
+                        iterations,
+                        residual,
+                        ..
+                    } => Error::LegendreMap {
+                        t,
+                        iterations,
+                        residual,
+                    },
+                    other => other,
+                })?;
+        Ok(RigidPoint {
+            t,
+            r: state.r,
+            omega,
+            momentum: state.momentum,
+        })
+    }
+
+    fn incomplete(&self, t: f64, state: &RigidState, guess: &Vector3<f64>) -> RigidPoint {
+        RigidPoint {
+            t,
+            r: state.r,
+            omega: *guess,
+            momentum: state.momentum,
         }
     }
 
-    /// Whether every component is finite.
-    pub fn is_finite(&self) -> bool {
-        self.r
+    fn point_is_finite(&self, point: &RigidPoint) -> bool {
+        point
+            .omega
             .iter()
-            .chain(self.momentum.iter())
+            .chain(point.momentum.iter())
             .all(|x| x.is_finite())
-    }
-
-    /// `self + increment`, entry by entry.
-    pub(crate) fn plus(&self, increment: &RigidState) -> RigidState {
-        RigidState {
-            r: self.r + increment.r,
-            momentum: self.momentum + increment.momentum,
-        }
-    }
-
-    /// `self += increment` with Kahan compensation carried in `compensation`.
-    pub(crate) fn add_compensated(
-        &mut self,
-        compensation: &mut RigidState,
-        increment: &RigidState,
-    ) {
-        use crate::linalg::compensated_add;
-        compensated_add(
-            self.r.as_mut_slice(),
-            compensation.r.as_mut_slice(),
-            increment.r.as_slice(),
-        );
-        compensated_add(
-            self.momentum.as_mut_slice(),
-            compensation.momentum.as_mut_slice(),
-            increment.momentum.as_slice(),
-        );
     }
 }
 

@@ -1,18 +1,33 @@
-//! The contract between an integration method and the stepping loop.
+//! Integration methods, and their contract with the stepping loop.
 //!
-//! A method is a small options struct plus an implementation of [`Method`]: [`Method::info`]
-//! (name, order, symmetric, symplectic), [`Method::workspace`] (every buffer, sized once per
-//! run) and [`Method::step`] (one step, returning a context-free [`StepFailure`]). The one
-//! stepping loop, [`crate::Integrator`], does everything else: validation, time keeping,
-//! compensated summation of the increments, observers and error context.
+//! A method on ℝᴺ is a small options struct plus an implementation of [`Method`]:
+//! [`Method::info`] (name, order, symmetric, symplectic), [`Method::workspace`] (every buffer,
+//! sized once per run) and [`Method::step`] (one step, returning a context-free
+//! [`StepFailure`]). The one stepping loop, [`crate::Integrator`], does everything else:
+//! validation, time keeping, compensated summation of the increments, observers, recovery and
+//! error context. It drives any method through [`Step`], the space-generic form of the
+//! contract ([`space`]: ℝᴺ and SO(3)); every [`Method`] is a [`Step`] on [`Euclidean`] by a
+//! blanket implementation, and the Lie-group integrator [`lie_svi::LieSvi`] implements
+//! [`Step`] on [`SO3`] directly.
+//!
+//! Families, one folder or file each: [`variational`] (SVI and the classic variational
+//! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)).
 
 pub mod collocation;
 pub mod lie_svi;
+pub mod space;
+pub mod step;
 pub mod variational;
 
-use crate::error::StepFailure;
-use crate::{Error, Lagrangian};
-use nalgebra::{DMatrix, SMatrix, SVector};
+pub use space::{
+    Euclidean, Initial, PhasePoint, RigidInitial, RigidPoint, RigidState, SO3, Space, State,
+    StepState, TangentMap,
+};
+pub use step::Step;
+
+use crate::error::{Error, StepFailure};
+use crate::model::Lagrangian;
+use nalgebra::SVector;
 
 /// Which second coordinate a method carries besides q.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,59 +53,6 @@ pub struct MethodInfo {
     pub coordinates: Coordinates,
 }
 
-/// The state a method advances: configuration `q` and `y`, which is the momentum p for
-/// [`Coordinates::Momentum`] methods and the velocity q̇ for [`Coordinates::Velocity`] ones.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct State<const N: usize> {
-    /// Configuration q.
-    pub q: SVector<f64, N>,
-    /// Momentum p or velocity q̇, according to the method's [`Coordinates`].
-    pub y: SVector<f64, N>,
-}
-
-impl<const N: usize> State<N> {
-    /// The zero state (used for increments).
-    pub fn zeros() -> Self {
-        State {
-            q: SVector::zeros(),
-            y: SVector::zeros(),
-        }
-    }
-
-    /// `self += increment` with Kahan compensation carried in `compensation`.
-    pub(crate) fn add_compensated(&mut self, compensation: &mut State<N>, increment: &State<N>) {
-        use crate::linalg::compensated_add;
-        compensated_add(
-            self.q.as_mut_slice(),
-            compensation.q.as_mut_slice(),
-            increment.q.as_slice(),
-        );
-        compensated_add(
-            self.y.as_mut_slice(),
-            compensation.y.as_mut_slice(),
-            increment.y.as_slice(),
-        );
-    }
-
-    /// Whether every component is finite.
-    pub fn is_finite(&self) -> bool {
-        self.q.iter().chain(self.y.iter()).all(|x| x.is_finite())
-    }
-}
-
-/// A complete phase-space point: time, configuration, velocity and momentum.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PhasePoint<const N: usize> {
-    /// Time t.
-    pub t: f64,
-    /// Configuration q.
-    pub q: SVector<f64, N>,
-    /// Velocity q̇.
-    pub v: SVector<f64, N>,
-    /// Momentum p = ∂L/∂q̇.
-    pub p: SVector<f64, N>,
-}
-
 /// Work reported by one step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct StepReport {
@@ -98,42 +60,6 @@ pub struct StepReport {
     pub iterations: usize,
     /// Points at which derivatives of L were evaluated.
     pub evaluations: usize,
-}
-
-/// The Jacobian Φ of one step (q, y) ↦ (q', y'), in blocks.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TangentMap<const N: usize> {
-    /// ∂q'/∂q.
-    pub qq: SMatrix<f64, N, N>,
-    /// ∂q'/∂y.
-    pub qy: SMatrix<f64, N, N>,
-    /// ∂y'/∂q.
-    pub yq: SMatrix<f64, N, N>,
-    /// ∂y'/∂y.
-    pub yy: SMatrix<f64, N, N>,
-}
-
-impl<const N: usize> TangentMap<N> {
-    /// The full 2N×2N matrix [[qq, qy], [yq, yy]].
-    pub fn matrix(&self) -> DMatrix<f64> {
-        let mut m = DMatrix::zeros(2 * N, 2 * N);
-        m.view_mut((0, 0), (N, N)).copy_from(&self.qq);
-        m.view_mut((0, N), (N, N)).copy_from(&self.qy);
-        m.view_mut((N, 0), (N, N)).copy_from(&self.yq);
-        m.view_mut((N, N), (N, N)).copy_from(&self.yy);
-        m
-    }
-
-    /// ‖ΦᵀJΦ − J‖_max with J = [[0, I], [−I, 0]]: zero for a symplectic map in (q, p).
-    pub fn symplecticity_error(&self) -> f64 {
-        let phi = self.matrix();
-        let mut j = DMatrix::zeros(2 * N, 2 * N);
-        for i in 0..N {
-            j[(i, N + i)] = 1.0;
-            j[(N + i, i)] = -1.0;
-        }
-        (phi.transpose() * &j * &phi - j).amax()
-    }
 }
 
 /// An integration method for Lagrangians on ℝᴺ.

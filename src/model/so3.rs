@@ -301,6 +301,82 @@ pub fn orthogonality_error(r: &Matrix3<f64>) -> f64 {
     (r.transpose() * r - Matrix3::identity()).norm()
 }
 
+/// The unit quaternion (w, x, y, z), w ≥ 0, of a rotation matrix (Shepperd's method: the
+/// largest of the four squared components is taken first, so no division by a small number).
+pub fn quaternion(r: &Matrix3<f64>) -> [f64; 4] {
+    let trace = r[(0, 0)] + r[(1, 1)] + r[(2, 2)];
+    let candidates = [trace, r[(0, 0)], r[(1, 1)], r[(2, 2)]];
+    let mut k = 0;
+    for i in 1..4 {
+        if candidates[i] > candidates[k] {
+            k = i;
+        }
+    }
+    let mut q = match k {
+        0 => {
+            let w = 0.5 * (1.0 + trace).max(0.0).sqrt();
+            let f = 0.25 / w;
+            [
+                w,
+                (r[(2, 1)] - r[(1, 2)]) * f,
+                (r[(0, 2)] - r[(2, 0)]) * f,
+                (r[(1, 0)] - r[(0, 1)]) * f,
+            ]
+        }
+        1 => {
+            let x = 0.5 * (1.0 + 2.0 * r[(0, 0)] - trace).max(0.0).sqrt();
+            let f = 0.25 / x;
+            [
+                (r[(2, 1)] - r[(1, 2)]) * f,
+                x,
+                (r[(0, 1)] + r[(1, 0)]) * f,
+                (r[(0, 2)] + r[(2, 0)]) * f,
+            ]
+        }
+        2 => {
+            let y = 0.5 * (1.0 + 2.0 * r[(1, 1)] - trace).max(0.0).sqrt();
+            let f = 0.25 / y;
+            [
+                (r[(0, 2)] - r[(2, 0)]) * f,
+                (r[(0, 1)] + r[(1, 0)]) * f,
+                y,
+                (r[(1, 2)] + r[(2, 1)]) * f,
+            ]
+        }
+        _ => {
+            let z = 0.5 * (1.0 + 2.0 * r[(2, 2)] - trace).max(0.0).sqrt();
+            let f = 0.25 / z;
+            [
+                (r[(1, 0)] - r[(0, 1)]) * f,
+                (r[(0, 2)] + r[(2, 0)]) * f,
+                (r[(1, 2)] + r[(2, 1)]) * f,
+                z,
+            ]
+        }
+    };
+    if q[0] < 0.0 {
+        q.iter_mut().for_each(|c| *c = -*c);
+    }
+    q
+}
+
+/// The rotation matrix of a unit quaternion (w, x, y, z), the inverse of [`quaternion`] (q and
+/// −q give the same rotation).
+pub fn rotation(q: &[f64; 4]) -> Matrix3<f64> {
+    let [w, x, y, z] = *q;
+    Matrix3::new(
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - w * z),
+        2.0 * (x * z + w * y),
+        2.0 * (x * y + w * z),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - w * x),
+        2.0 * (x * z - w * y),
+        2.0 * (y * z + w * x),
+        1.0 - 2.0 * (x * x + y * y),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -466,6 +542,44 @@ mod tests {
                     / (2.0 * e);
                 assert!((jac.column(j) - column).amax() < 1e-8, "{x:?}");
             }
+        }
+    }
+
+    #[test]
+    fn quaternion_matches_the_rotation_vector() {
+        for x in [
+            Vector3::new(0.3, -0.2, 0.5),
+            Vector3::new(0.0, 3.0, 0.1),
+            Vector3::new(2.9, 0.0, 0.0),
+            Vector3::new(0.0, 0.0, -3.1),
+        ] {
+            let q = quaternion(&exp(&x));
+            let angle = x.norm();
+            let mut expected = [
+                (0.5 * angle).cos(),
+                x[0] / angle * (0.5 * angle).sin(),
+                x[1] / angle * (0.5 * angle).sin(),
+                x[2] / angle * (0.5 * angle).sin(),
+            ];
+            if expected[0] < 0.0 {
+                expected.iter_mut().for_each(|c| *c = -*c);
+            }
+            for i in 0..4 {
+                assert!(
+                    (q[i] - expected[i]).abs() < 1e-14,
+                    "{x:?}: {q:?} vs {expected:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn rotation_inverts_quaternion() {
+        for x in [Vector3::new(0.3, -0.2, 0.5), Vector3::new(0.0, 3.0, 0.1)] {
+            let r = exp(&x);
+            assert!((rotation(&quaternion(&r)) - r).amax() < 1e-15);
+            let q = quaternion(&r).map(|c| -c);
+            assert!((rotation(&q) - r).amax() < 1e-15);
         }
     }
 }

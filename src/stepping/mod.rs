@@ -1,10 +1,10 @@
-//! The one stepping loop and what drives it: the time grid ([`grid`]), runs with recovery and
-//! observers ([`run`], [`rigid_body`]), output times and adaptivity ([`solve`]), and the
-//! observers themselves ([`observer`], [`rigid_observer`]).
+//! The one stepping loop, for every method on every space: the time grid ([`grid`]), runs
+//! with recovery, divergence limit and observers ([`run`]), output times and step or degree
+//! adaptivity on the same loop ([`solve`]), and the observers ([`observer`], with the rigid-body
+//! ones in [`rigid_observer`]).
 
 pub mod grid;
 pub mod observer;
-pub mod rigid_body;
 pub mod rigid_observer;
 pub mod run;
 pub mod solve;

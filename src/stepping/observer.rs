@@ -6,11 +6,11 @@
 //! beyond the steps. Observers compose as tuples, switch on and off as `Option`, thin out with
 //! [`Every`], and may stop a run by returning [`ControlFlow::Break`].
 //!
-//! Provided: [`Trajectory`] (store points), [`EnergyError`] (max |E − E₀|), [`MomentumError`]
+//! Provided: [`Points`] and [`Trajectory`] (store points), [`EnergyError`] (max |E − E₀|), [`MomentumError`]
 //! (max |J − J₀| over the Noether momenta), [`InvariantError`] (max over known invariants),
 //! [`SolutionError`] (max position error against the exact solution).
 
-use crate::method::PhasePoint;
+use crate::method::space::PhasePoint;
 use crate::model::derived::LagrangianExt;
 use crate::model::{ExactSolution, Invariants, Lagrangian, Symmetries};
 use std::ops::ControlFlow;
@@ -113,26 +113,36 @@ impl<L: ?Sized, P, O: Observer<L, P>> Observer<L, P> for Every<O> {
     }
 }
 
-/// Stores the observed points.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Trajectory<const N: usize> {
+/// Stores the observed points, of any space (on ℝᴺ: [`Trajectory`]; on SO(3):
+/// [`crate::lie_group::RigidTrajectory`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Points<P> {
     /// The points, in order.
-    pub points: Vec<PhasePoint<N>>,
+    pub points: Vec<P>,
 }
 
-impl<const N: usize> Trajectory<N> {
-    /// An empty trajectory.
+impl<P> Points<P> {
+    /// An empty record.
     pub fn new() -> Self {
-        Trajectory { points: Vec::new() }
+        Points { points: Vec::new() }
     }
 }
 
-impl<L: ?Sized, const N: usize> Observer<L, PhasePoint<N>> for Trajectory<N> {
-    fn observe(&mut self, _: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
-        self.points.push(*point);
+impl<P> Default for Points<P> {
+    fn default() -> Self {
+        Points::new()
+    }
+}
+
+impl<L: ?Sized, P: Clone> Observer<L, P> for Points<P> {
+    fn observe(&mut self, _: &L, _: usize, point: &P) -> ControlFlow<()> {
+        self.points.push(point.clone());
         ControlFlow::Continue(())
     }
 }
+
+/// Stores the observed phase points of a run on ℝᴺ.
+pub type Trajectory<const N: usize> = Points<PhasePoint<N>>;
 
 /// Largest deviation |E(t) − E(t₀)| of the energy E = p·q̇ − L over the observed points
 /// (E = Π·Ω − L for rigid bodies, [`crate::lie_group`]).

@@ -1,6 +1,7 @@
-//! The one stepping loop, shared by every method.
+//! The one stepping loop, shared by every method on every space.
 //!
-//! [`Integrator::run`] validates its inputs, converts the initial state to the method's
+//! [`Integrator`] pairs a model with a method ([`Step`]) on a [`Space`] — ℝᴺ or SO(3) — and
+//! everything below is written once for all of them. [`Integrator::run`] validates its inputs, converts the initial state to the method's
 //! coordinates, and advances with fixed steps: times are t_k = t_0 + k·h (never accumulated
 //! with `t += h`), the last step is shortened to land on the horizon when (t_end − t_0)/h is
 //! not an integer, and the increments returned by the method are added with compensated
@@ -13,14 +14,14 @@
 //! [`RunFailure`], which carries the run up to the last good state besides the typed error.
 //! [`Integrator::run`] is `try_run` with default options, keeping only the error.
 
-use crate::error::{StepFailure, require_finite, require_finite_entries, require_positive};
-use crate::method::{Coordinates, PhasePoint, State, TangentMap};
-use crate::model::derived::LagrangianExt;
+use crate::error::{Error, StepFailure, require_finite, require_positive};
+use crate::method::space::{Initial, PhasePoint, Space, StepState};
+use crate::method::step::Step;
+use crate::method::{Euclidean, StepReport};
 use crate::stepping::grid::{grid_step, step_count};
 use crate::stepping::observer::Observer;
-use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::SVector;
-use std::ops::ControlFlow;
+use std::marker::PhantomData;
 
 /// Totals of a run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -35,13 +36,13 @@ pub struct Statistics {
     pub evaluations: usize,
 }
 
-/// The result of a run.
+/// The result of a run on the space `S` (on ℝᴺ: [`crate::Run`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Run<const N: usize> {
-    /// The last state reached, completed to (t, q, q̇, p).
-    pub last: PhasePoint<N>,
+pub struct Run<S: Space> {
+    /// The last state reached, completed to a point ((t, q, q̇, p) on ℝᴺ).
+    pub last: S::Point,
     /// The last state in the method's own coordinates.
-    pub state: State<N>,
+    pub state: S::State,
     /// Work done.
     pub statistics: Statistics,
     /// Whether an observer stopped the run before the horizon.
@@ -112,90 +113,105 @@ impl RunOptions {
     }
 }
 
-/// A run that failed: the error, and the run up to the last good state.
+/// A run that failed: the error, and the run up to the last good state (on ℝᴺ:
+/// [`crate::RunFailure`]).
 ///
 /// Observers passed to [`Integrator::try_run`] keep what they saw before the failure (a
 /// [`crate::stepping::observer::Trajectory`] holds the trajectory so far).
 #[derive(Debug, Clone, PartialEq)]
-pub struct RunFailure<const N: usize> {
+pub struct RunFailure<S: Space> {
     /// What went wrong, with step index and time.
     pub error: Error,
     /// The run up to the last good state (`last` is that state, at the start of the failing
     /// step); `None` when the inputs were rejected before the first step.
-    pub partial: Option<Run<N>>,
+    pub partial: Option<Run<S>>,
 }
 
-impl<const N: usize> std::fmt::Display for RunFailure<N> {
+impl<S: Space> RunFailure<S> {
+    /// A failure before the first step: no partial run.
+    pub(crate) fn rejected(error: Error) -> Self {
+        RunFailure {
+            error,
+            partial: None,
+        }
+    }
+}
+
+impl<S: Space> std::fmt::Display for RunFailure<S> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}", self.error)?;
         if let Some(run) = &self.partial {
             write!(
                 f,
-                "; last good state after {} steps at t = {}: q = {:?}, v = {:?}",
+                "; last good state after {} steps at t = {}: {}",
                 run.statistics.steps,
-                run.last.t,
-                run.last.q.as_slice(),
-                run.last.v.as_slice()
+                S::time(&run.last),
+                S::describe(&run.last)
             )?;
         }
         Ok(())
     }
 }
 
-impl<const N: usize> std::error::Error for RunFailure<N> {
+impl<S: Space + std::fmt::Debug> std::error::Error for RunFailure<S> {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         Some(&self.error)
     }
 }
 
-impl<const N: usize> From<RunFailure<N>> for Error {
-    fn from(failure: RunFailure<N>) -> Error {
+impl<S: Space> From<RunFailure<S>> for Error {
+    fn from(failure: RunFailure<S>) -> Error {
         failure.error
     }
 }
 
+/// A state with the compensation of its Kahan sums.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Cursor<S: Space> {
+    pub(crate) state: S::State,
+    pub(crate) compensation: S::State,
+}
+
+impl<S: Space> Cursor<S> {
+    /// A cursor at `state` with no compensation yet.
+    pub(crate) fn new(state: S::State) -> Self {
+        Cursor {
+            state,
+            compensation: S::State::zeros(),
+        }
+    }
+}
+
 /// The state of a run between steps.
-struct Progress<const N: usize> {
-    /// Time of `state`.
-    t: f64,
-    state: State<N>,
-    /// Kahan compensation of `state`.
-    compensation: State<N>,
+pub(crate) struct Progress<S: Space> {
+    /// Time of `cursor`.
+    pub(crate) t: f64,
+    pub(crate) cursor: Cursor<S>,
     /// Newton start of the next inverse Legendre map (the last velocity completed).
-    guess: SVector<f64, N>,
-    statistics: Statistics,
+    pub(crate) guess: S::Velocity,
+    pub(crate) statistics: Statistics,
 }
 
-/// An initial state: configuration with either velocity or momentum.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Initial<const N: usize> {
-    /// (q0, q̇0).
-    Velocity {
-        /// Configuration.
-        q: SVector<f64, N>,
-        /// Velocity.
-        v: SVector<f64, N>,
-    },
-    /// (q0, p0).
-    Momentum {
-        /// Configuration.
-        q: SVector<f64, N>,
-        /// Momentum.
-        p: SVector<f64, N>,
-    },
-}
-
-/// A model and a method, ready to run.
+/// A model and a method on the space `S`, ready to run.
+///
+/// On ℝᴺ, `S` is [`Euclidean<N>`](crate::method::Euclidean) and is inferred from the model:
+/// `Integrator::new(model, Svi::new(6))`. On SO(3) it is
+/// [`crate::lie_group::RigidBodyIntegrator`].
 #[derive(Debug, Clone)]
-pub struct Integrator<L, M, const N: usize> {
+pub struct Integrator<L, M, S> {
     model: L,
     method: M,
+    space: PhantomData<fn() -> S>,
 }
 
-impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
+impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     /// Pair a model with a method.
     pub fn new(model: L, method: M) -> Self {
-        Integrator { model, method }
+        Integrator {
+            model,
+            method,
+            space: PhantomData,
+        }
     }
 
     /// The model.
@@ -208,75 +224,20 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         &self.method
     }
 
-    /// Complete a method state to a phase point (q̇ from p by the inverse Legendre map, or
-    /// p from q̇), with `guess` as the Newton start of the inverse Legendre map.
+    /// Complete a method state to a point (q̇ from p by the inverse Legendre map, or p from
+    /// q̇), with `guess` as the Newton start of the inverse Legendre map.
     pub fn phase_point(
         &self,
         t: f64,
-        state: &State<N>,
-        guess: &SVector<f64, N>,
-    ) -> Result<PhasePoint<N>, Error> {
-        let (v, p) = match self.method.info().coordinates {
-            Coordinates::Momentum => (self.model.velocity(t, &state.q, &state.y, guess)?, state.y),
-            Coordinates::Velocity => (state.y, self.model.momentum(t, &state.q, &state.y)),
-        };
-        Ok(PhasePoint {
-            t,
-            q: state.q,
-            v,
-            p,
-        })
+        state: &S::State,
+        guess: &S::Velocity,
+    ) -> Result<S::Point, Error> {
+        self.method.complete(&self.model, t, state, guess)
     }
 
-    /// The method state for an initial condition.
-    pub fn initial_state(&self, t0: f64, initial: &Initial<N>) -> Result<State<N>, Error> {
-        let (q, second, name) = match initial {
-            Initial::Velocity { q, v } => (q, v, "initial velocity"),
-            Initial::Momentum { q, p } => (q, p, "initial momentum"),
-        };
-        require_finite_entries("initial position", q)?;
-        require_finite_entries(name, second)?;
-        let y = match (self.method.info().coordinates, initial) {
-            (Coordinates::Momentum, Initial::Momentum { p, .. }) => *p,
-            (Coordinates::Velocity, Initial::Velocity { v, .. }) => *v,
-            (Coordinates::Momentum, Initial::Velocity { q, v }) => self.model.momentum(t0, q, v),
-            (Coordinates::Velocity, Initial::Momentum { q, p }) => {
-                self.model.velocity(t0, q, p, p)?
-            }
-        };
-        let state = State { q: *q, y };
-        if !state.is_finite() {
-            return Err(Error::NonFinite {
-                what: "initial state".into(),
-                step: 0,
-                t: t0,
-            });
-        }
-        Ok(state)
-    }
-
-    /// Check a [`Structure::ConstantMass`] declaration at the initial state: L_qv must vanish
-    /// and L_vv must not change with q̇ (a necessary condition, checked once per run).
-    pub(crate) fn check_structure(&self, t: f64, state: &State<N>) -> Result<(), Error> {
-        if L::STRUCTURE != Structure::ConstantMass {
-            return Ok(());
-        }
-        let shifted = state.y * 2.0 + SVector::repeat(1.0);
-        let first = self.model.second_derivatives(t, &state.q, &state.y);
-        let second = self.model.second_derivatives(t, &state.q, &shifted);
-        let scale = 1.0 + first.vv.amax() + first.qq.amax();
-        let coupling = first.qv.amax().max(second.qv.amax());
-        let change = (first.vv - second.vv).amax();
-        if coupling > 1e-12 * scale || change > 1e-12 * scale {
-            return Err(Error::invalid(
-                "structure",
-                format!(
-                    "the model declares a constant mass matrix, but ∂²L/∂q∂q̇ = {coupling:e} and \
-                     ∂²L/∂q̇² changes by {change:e} with q̇"
-                ),
-            ));
-        }
-        Ok(())
+    /// The method state for an initial condition, after checking it.
+    pub fn initial_state(&self, t0: f64, initial: &S::Initial) -> Result<S::State, Error> {
+        self.method.initial_state(&self.model, t0, initial)
     }
 
     /// Integrate from `t0` to `t_end` with step `h`, reporting to `observer`.
@@ -284,14 +245,14 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     /// The same as [`Integrator::try_run`] with [`RunOptions::default`] (no recovery, no
     /// divergence limit), keeping only the error of a failed run. The observer still holds
     /// everything it saw before the failure.
-    pub fn run<O: Observer<L, PhasePoint<N>>>(
+    pub fn run<O: Observer<L, S::Point>>(
         &self,
         t0: f64,
-        initial: Initial<N>,
+        initial: S::Initial,
         h: f64,
         t_end: f64,
         observer: &mut O,
-    ) -> Result<Run<N>, Error> {
+    ) -> Result<Run<S>, Error> {
         self.try_run(t0, initial, h, t_end, &RunOptions::default(), observer)
             .map_err(|failure| failure.error)
     }
@@ -311,102 +272,186 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
     /// A [`RunFailure`]: the typed [`Error`] (with step index and time for failures during the
     /// run) and, unless the inputs were rejected before the first step, the [`Run`] up to the
     /// last good state (its `last` point, `state` and `statistics`).
-    pub fn try_run<O: Observer<L, PhasePoint<N>>>(
+    pub fn try_run<O: Observer<L, S::Point>>(
         &self,
         t0: f64,
-        initial: Initial<N>,
+        initial: S::Initial,
         h: f64,
         t_end: f64,
         options: &RunOptions,
         observer: &mut O,
-    ) -> Result<Run<N>, RunFailure<N>> {
-        let rejected = |error: Error| RunFailure {
-            error,
-            partial: None,
-        };
-        require_finite("t0", t0).map_err(rejected)?;
-        require_finite("t_end", t_end).map_err(rejected)?;
-        require_positive("h", h).map_err(rejected)?;
-        options.validate().map_err(rejected)?;
+    ) -> Result<Run<S>, RunFailure<S>> {
+        require_finite("t0", t0).map_err(RunFailure::rejected)?;
+        require_finite("t_end", t_end).map_err(RunFailure::rejected)?;
+        require_positive("h", h).map_err(RunFailure::rejected)?;
+        options.validate().map_err(RunFailure::rejected)?;
         if t_end <= t0 {
-            return Err(rejected(Error::invalid(
+            return Err(RunFailure::rejected(Error::invalid(
                 "t_end",
                 format!("the horizon {t_end} is not after the start {t0}"),
             )));
         }
-        let steps = step_count(t_end - t0, h).map_err(rejected)?;
-        let mut workspace = self.method.workspace(&self.model, h).map_err(rejected)?;
-        let state = self.initial_state(t0, &initial).map_err(rejected)?;
-        self.check_structure(t0, &state).map_err(rejected)?;
-        let guess = match initial {
-            Initial::Velocity { v, .. } => v,
-            Initial::Momentum { p, .. } => p,
-        };
-        let mut progress = Progress {
-            t: t0,
-            state,
-            compensation: State::zeros(),
-            guess,
-            statistics: Statistics::default(),
-        };
-        let mut stopped = false;
-        if observer.wants(0) {
-            match self.complete(0, t0, &progress.state, &progress.guess) {
-                Ok(point) => {
-                    progress.guess = point.v;
-                    stopped = observer.observe(&self.model, 0, &point).is_break();
-                }
-                Err(error) => return Err(self.failure(error, &progress, false)),
-            }
+        let steps = step_count(t_end - t0, h).map_err(RunFailure::rejected)?;
+        let mut workspace = self
+            .method
+            .workspace(&self.model, h)
+            .map_err(RunFailure::rejected)?;
+        let mut progress = self.start(t0, &initial).map_err(RunFailure::rejected)?;
+        let stopped = self.run_grid(
+            &mut workspace,
+            &mut progress,
+            (t0, t_end, h, steps),
+            options,
+            observer,
+            |_, _, _, _, _| Ok(()),
+        )?;
+        self.finish(progress, stopped)
+    }
+
+    /// One step of size `h` from `state` at `t` with a fresh workspace (a cold start): the
+    /// new state (without compensated summation) and the work done.
+    pub fn step(&self, t: f64, state: &S::State, h: f64) -> Result<(S::State, StepReport), Error> {
+        let mut workspace = self.cold_workspace(t, state, h)?;
+        let mut increment = S::State::zeros();
+        let report = self
+            .method
+            .step(&self.model, &mut workspace, t, h, state, &mut increment)
+            .map_err(|failure| failure.at(0, t))?;
+        Ok((state.plus(&increment), report))
+    }
+
+    /// One step from `state` at time `t` with step `h`, and its exact Jacobian (the tangent
+    /// map) with respect to the method's coordinates.
+    pub fn tangent_map(
+        &self,
+        t: f64,
+        state: &S::State,
+        h: f64,
+    ) -> Result<(S::State, S::Tangent), Error> {
+        let mut workspace = self.cold_workspace(t, state, h)?;
+        let (increment, tangent) = self
+            .method
+            .tangent_map(&self.model, &mut workspace, t, h, state)
+            .map_err(|failure| failure.at(0, t))?;
+        Ok((state.plus(&increment), tangent))
+    }
+
+    /// A fresh workspace for one step of size `h` from `state` at `t`, after checking all
+    /// three.
+    fn cold_workspace(&self, t: f64, state: &S::State, h: f64) -> Result<M::Workspace, Error> {
+        require_finite("t", t)?;
+        require_positive("h", h)?;
+        if !state.is_finite() {
+            return Err(Error::NonFinite {
+                what: "state".into(),
+                step: 0,
+                t,
+            });
         }
-        let mut increment = State::zeros();
+        self.method.workspace(&self.model, h)
+    }
+
+    /// The progress of a run at its start: the initial state in the method's coordinates,
+    /// after the model's declarations are checked.
+    pub(crate) fn start(&self, t0: f64, initial: &S::Initial) -> Result<Progress<S>, Error> {
+        let state = self.initial_state(t0, initial)?;
+        self.method.check_model(&self.model, t0, &state)?;
+        Ok(Progress {
+            t: t0,
+            cursor: Cursor::new(state),
+            guess: S::initial_guess(initial),
+            statistics: Statistics::default(),
+        })
+    }
+
+    /// The fixed-grid loop: `steps` steps of the grid (t0, t_end, h) from `progress`, with
+    /// recovery, divergence limit and observers, calling `after_step(workspace, t, h, start,
+    /// end)` after each step (dense output of the step just taken). Returns whether an
+    /// observer stopped the run.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn run_grid<O: Observer<L, S::Point>>(
+        &self,
+        workspace: &mut M::Workspace,
+        progress: &mut Progress<S>,
+        (t0, t_end, h, steps): (f64, f64, f64, usize),
+        options: &RunOptions,
+        observer: &mut O,
+        mut after_step: impl FnMut(
+            &M::Workspace,
+            f64,
+            f64,
+            &S::State,
+            &Progress<S>,
+        ) -> Result<(), Error>,
+    ) -> Result<bool, RunFailure<S>> {
+        let depth = match options.recovery {
+            Recovery::None => 0,
+            Recovery::HalveStep { max_halvings } => max_halvings,
+        };
+        if observer.wants(0) && self.observe(0, progress, observer)? {
+            return Ok(true);
+        }
+        let mut increment = S::State::zeros();
         for k in 0..steps {
-            if stopped {
-                break;
-            }
             let (t, step_size, end) = grid_step(t0, t_end, h, steps, k);
-            let depth = match options.recovery {
-                Recovery::None => 0,
-                Recovery::HalveStep { max_halvings } => max_halvings,
-            };
+            let start = progress.cursor.state;
             if let Err(failure) = self.advance(
-                &mut workspace,
-                &mut progress,
+                &self.method,
+                workspace,
+                progress,
                 &mut increment,
                 t,
                 step_size,
                 depth,
                 options.divergence_limit,
             ) {
-                return Err(self.failure(failure.at(k, t), &progress, false));
+                return Err(self.failure(failure.at(k, t), progress, false));
             }
             progress.statistics.steps += 1;
             progress.t = end;
-            if observer.wants(k + 1) {
-                match self.complete(k + 1, progress.t, &progress.state, &progress.guess) {
-                    Ok(point) => {
-                        progress.guess = point.v;
-                        if let ControlFlow::Break(()) = observer.observe(&self.model, k + 1, &point)
-                        {
-                            stopped = k + 1 < steps;
-                            break;
-                        }
-                    }
-                    Err(error) => return Err(self.failure(error, &progress, false)),
-                }
+            after_step(workspace, t, step_size, &start, progress)
+                .map_err(|error| self.failure(error, progress, false))?;
+            if observer.wants(k + 1) && self.observe(k + 1, progress, observer)? {
+                return Ok(k + 1 < steps);
             }
         }
+        Ok(false)
+    }
+
+    /// Complete the current point and hand it to `observer` as the point after step `step`;
+    /// whether the observer asked to stop.
+    pub(crate) fn observe<O: Observer<L, S::Point>>(
+        &self,
+        step: usize,
+        progress: &mut Progress<S>,
+        observer: &mut O,
+    ) -> Result<bool, RunFailure<S>> {
+        match self.complete(step, progress.t, &progress.cursor.state, &progress.guess) {
+            Ok(point) => {
+                progress.guess = S::velocity(&point);
+                Ok(observer.observe(&self.model, step, &point).is_break())
+            }
+            Err(error) => Err(self.failure(error, progress, false)),
+        }
+    }
+
+    /// The finished run at `progress`.
+    pub(crate) fn finish(
+        &self,
+        progress: Progress<S>,
+        stopped: bool,
+    ) -> Result<Run<S>, RunFailure<S>> {
         let last = self
             .complete(
                 progress.statistics.steps,
                 progress.t,
-                &progress.state,
+                &progress.cursor.state,
                 &progress.guess,
             )
             .map_err(|error| self.failure(error, &progress, stopped))?;
         Ok(Run {
             last,
-            state: progress.state,
+            state: progress.cursor.state,
             statistics: progress.statistics,
             stopped,
         })
@@ -414,15 +459,15 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
 
     /// [`Integrator::phase_point`], with a non-finite velocity or momentum (from a finite
     /// state, e.g. an overflowing ∂L/∂q̇) reported as [`Error::NonFinite`] at `step`.
-    fn complete(
+    pub(crate) fn complete(
         &self,
         step: usize,
         t: f64,
-        state: &State<N>,
-        guess: &SVector<f64, N>,
-    ) -> Result<PhasePoint<N>, Error> {
+        state: &S::State,
+        guess: &S::Velocity,
+    ) -> Result<S::Point, Error> {
         let point = self.phase_point(t, state, guess)?;
-        if point.v.iter().chain(point.p.iter()).all(|x| x.is_finite()) {
+        if self.method.point_is_finite(&point) {
             Ok(point)
         } else {
             Err(Error::NonFinite {
@@ -433,55 +478,80 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         }
     }
 
+    /// One step of `method` from `from` at `t` with size `h`: the new cursor (the increment
+    /// added with compensated summation), checked for finite values and against the
+    /// divergence limit.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn attempt(
+        &self,
+        method: &M,
+        workspace: &mut M::Workspace,
+        increment: &mut S::State,
+        t: f64,
+        h: f64,
+        from: &Cursor<S>,
+        divergence_limit: Option<f64>,
+        statistics: &mut Statistics,
+    ) -> Result<Cursor<S>, StepFailure> {
+        let report = method.step(&self.model, workspace, t, h, &from.state, increment)?;
+        statistics.iterations += report.iterations;
+        statistics.evaluations += report.evaluations;
+        let mut next = *from;
+        next.state
+            .add_compensated(&mut next.compensation, increment);
+        if !next.state.is_finite() {
+            return Err(StepFailure::NonFinite);
+        }
+        if let Some(limit) = divergence_limit {
+            let norm = next.state.max_abs();
+            if norm > limit {
+                return Err(StepFailure::Diverged { norm, limit });
+            }
+        }
+        Ok(next)
+    }
+
     /// Advance `progress` over [t, t + h]: one step, or (after a failure, while `depth` > 0)
     /// two half steps, each of them again recoverable with one halving less. On failure the
     /// state is left as it was at t and the first failure (that of the full step) is returned.
     #[allow(clippy::too_many_arguments)]
-    fn advance(
+    pub(crate) fn advance(
         &self,
+        method: &M,
         workspace: &mut M::Workspace,
-        progress: &mut Progress<N>,
-        increment: &mut State<N>,
+        progress: &mut Progress<S>,
+        increment: &mut S::State,
         t: f64,
         h: f64,
         depth: usize,
         divergence_limit: Option<f64>,
     ) -> Result<(), StepFailure> {
-        let saved = (progress.state, progress.compensation);
-        let failure =
-            match self
-                .method
-                .step(&self.model, workspace, t, h, &progress.state, increment)
-            {
-                Ok(report) => {
-                    progress
-                        .state
-                        .add_compensated(&mut progress.compensation, increment);
-                    progress.statistics.iterations += report.iterations;
-                    progress.statistics.evaluations += report.evaluations;
-                    let norm = || progress.state.q.amax().max(progress.state.y.amax());
-                    if !progress.state.is_finite() {
-                        StepFailure::NonFinite
-                    } else if let Some(limit) = divergence_limit.filter(|limit| norm() > *limit) {
-                        StepFailure::Diverged {
-                            norm: norm(),
-                            limit,
-                        }
-                    } else {
-                        return Ok(());
-                    }
-                }
-                Err(failure) => failure,
-            };
-        (progress.state, progress.compensation) = saved;
+        let failure = match self.attempt(
+            method,
+            workspace,
+            increment,
+            t,
+            h,
+            &progress.cursor,
+            divergence_limit,
+            &mut progress.statistics,
+        ) {
+            Ok(next) => {
+                progress.cursor = next;
+                return Ok(());
+            }
+            Err(failure) => failure,
+        };
         if depth == 0 {
             return Err(failure);
         }
         progress.statistics.retries += 1;
+        let saved = progress.cursor;
         let half = 0.5 * h;
         for (start, size) in [(t, half), (t + half, h - half)] {
             if self
                 .advance(
+                    method,
                     workspace,
                     progress,
                     increment,
@@ -492,7 +562,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
                 )
                 .is_err()
             {
-                (progress.state, progress.compensation) = saved;
+                progress.cursor = saved;
                 return Err(failure);
             }
         }
@@ -501,32 +571,29 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
 
     /// A failure during the run, with the run up to the last good state. Should the inverse
     /// Legendre map fail at that state, its velocity is the last one completed.
-    fn failure(&self, error: Error, progress: &Progress<N>, stopped: bool) -> RunFailure<N> {
+    pub(crate) fn failure(
+        &self,
+        error: Error,
+        progress: &Progress<S>,
+        stopped: bool,
+    ) -> RunFailure<S> {
+        let state = &progress.cursor.state;
         let last = self
-            .phase_point(progress.t, &progress.state, &progress.guess)
-            .unwrap_or_else(|_| {
-                let (v, p) = match self.method.info().coordinates {
-                    Coordinates::Momentum => (progress.guess, progress.state.y),
-                    Coordinates::Velocity => (progress.state.y, progress.guess),
-                };
-                PhasePoint {
-                    t: progress.t,
-                    q: progress.state.q,
-                    v,
-                    p,
-                }
-            });
+            .phase_point(progress.t, state, &progress.guess)
+            .unwrap_or_else(|_| self.method.incomplete(progress.t, state, &progress.guess));
         RunFailure {
             error,
             partial: Some(Run {
                 last,
-                state: progress.state,
+                state: *state,
                 statistics: progress.statistics,
                 stopped,
             }),
         }
     }
+}
 
+impl<L, M: Step<L, Euclidean<N>>, const N: usize> Integrator<L, M, Euclidean<N>> {
     /// [`Integrator::run`] from (q0, q̇0).
     pub fn run_from_velocity<O: Observer<L, PhasePoint<N>>>(
         &self,
@@ -536,7 +603,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         h: f64,
         t_end: f64,
         observer: &mut O,
-    ) -> Result<Run<N>, Error> {
+    ) -> Result<Run<Euclidean<N>>, Error> {
         self.run(t0, Initial::Velocity { q: q0, v: v0 }, h, t_end, observer)
     }
 
@@ -549,36 +616,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Integrator<L, M, N> {
         h: f64,
         t_end: f64,
         observer: &mut O,
-    ) -> Result<Run<N>, Error> {
+    ) -> Result<Run<Euclidean<N>>, Error> {
         self.run(t0, Initial::Momentum { q: q0, p: p0 }, h, t_end, observer)
-    }
-
-    /// One step from `state` at time `t` with step `h`, and its exact Jacobian (the tangent
-    /// map) with respect to the method's coordinates.
-    pub fn tangent_map(
-        &self,
-        t: f64,
-        state: &State<N>,
-        h: f64,
-    ) -> Result<(State<N>, TangentMap<N>), Error> {
-        require_finite("t", t)?;
-        require_positive("h", h)?;
-        if !state.is_finite() {
-            return Err(Error::NonFinite {
-                what: "state".into(),
-                step: 0,
-                t,
-            });
-        }
-        let mut workspace = self.method.workspace(&self.model, h)?;
-        let (increment, tangent) = self
-            .method
-            .tangent_map(&self.model, &mut workspace, t, h, state)
-            .map_err(|failure| failure.at(0, t))?;
-        let next = State {
-            q: state.q + increment.q,
-            y: state.y + increment.y,
-        };
-        Ok((next, tangent))
     }
 }

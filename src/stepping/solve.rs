@@ -46,13 +46,15 @@
 //!   the choice of map depends on the state, so there is no modified Hamiltonian and no
 //!   bounded-energy guarantee.
 
-use crate::error::{require_finite, require_positive};
-use crate::method::{PhasePoint, State, StepReport};
-use crate::model::derived::LagrangianExt;
+use crate::error::{Error, require_finite, require_positive};
+use crate::method::space::{Space, StepState};
+use crate::method::step::Step;
 use crate::spectral::MAX_POINTS;
 use crate::stepping::grid::{grid_step, step_count};
-use crate::{Error, Initial, Integrator, Lagrangian, Method, Statistics};
-use nalgebra::SVector;
+use crate::stepping::observer::Observer;
+use crate::stepping::run::{
+    Cursor, Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics,
+};
 use std::fmt;
 use std::str::FromStr;
 
@@ -199,6 +201,9 @@ pub struct SolveOptions {
     pub max_points: usize,
     /// Consecutive rejections of one step before the solve gives up.
     pub max_rejections: usize,
+    /// Recovery of failed steps ([`Adapt::None`] only: the adaptive modes retry failed trial
+    /// steps themselves) and the divergence limit on the state.
+    pub run: RunOptions,
 }
 
 impl Default for SolveOptions {
@@ -216,6 +221,7 @@ impl Default for SolveOptions {
             min_points: 3,
             max_points: 24,
             max_rejections: 30,
+            run: RunOptions::default(),
         }
     }
 }
@@ -301,6 +307,17 @@ impl SolveOptions {
         if let Some(h) = self.max_step {
             require_positive("max_step", h)?;
         }
+        self.run.validate()?;
+        if self.adapt != Adapt::None && self.run.recovery != Recovery::None {
+            return Err(Error::invalid(
+                "recovery",
+                format!(
+                    "adapt = {} retries failed steps itself; recovery applies to fixed steps \
+                     (adapt = none)",
+                    self.adapt
+                ),
+            ));
+        }
         Ok(())
     }
 }
@@ -340,17 +357,20 @@ impl Adaptivity {
     }
 }
 
-/// The result of [`solve`].
+/// The result of [`solve`] on the space `S` (on ℝᴺ: [`crate::Solution`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Solution<const N: usize> {
-    /// The phase point at each output time, in order.
-    pub points: Vec<PhasePoint<N>>,
-    /// The phase point at the end of the span (whether or not it is an output time).
-    pub last: PhasePoint<N>,
+pub struct Solution<S: Space> {
+    /// The point at each output time, in order.
+    pub points: Vec<S::Point>,
+    /// The point at the end of the span (whether or not it is an output time), or where an
+    /// observer stopped the solve.
+    pub last: S::Point,
     /// Work done, including rejected trial steps; `steps` counts the method steps taken.
     pub statistics: Statistics,
     /// What the adaptivity did (step sizes, points used, rejections).
     pub adaptivity: Adaptivity,
+    /// Whether an observer stopped the solve before the end of the span.
+    pub stopped: bool,
 }
 
 /// Solve from `initial` over `span` with `method`: the states at the span's output times.
@@ -377,194 +397,53 @@ pub struct Solution<const N: usize> {
 /// }
 /// # Ok::<(), svi::Error>(())
 /// ```
-pub fn solve<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize>(
+pub fn solve<L, M: Step<L, S> + Clone, S: Space>(
     model: L,
     method: M,
     span: &Span,
-    initial: Initial<N>,
+    initial: S::Initial,
     options: &SolveOptions,
-) -> Result<Solution<N>, Error> {
+) -> Result<Solution<S>, Error> {
     Integrator::new(model, method).solve(span, initial, options)
 }
 
-/// The current state, with the compensation of its Kahan sums.
-#[derive(Debug, Clone, Copy)]
-struct Cursor<const N: usize> {
-    state: State<N>,
-    compensation: State<N>,
-}
-
-impl<const N: usize> Cursor<N> {
-    fn advanced(mut self, increment: &State<N>) -> Self {
-        self.state
-            .add_compensated(&mut self.compensation, increment);
-        self
-    }
-}
-
 /// Output times not yet served, and the points produced so far.
-struct Outputs<'a, const N: usize> {
+struct Outputs<'a, S: Space> {
     times: &'a [f64],
-    points: Vec<PhasePoint<N>>,
+    points: Vec<S::Point>,
     /// Last velocity, the Newton start of the next inverse Legendre map.
-    guess: SVector<f64, N>,
+    guess: S::Velocity,
 }
 
-impl<const N: usize> Outputs<'_, N> {
+impl<S: Space> Outputs<'_, S> {
     fn next(&self) -> Option<f64> {
         self.times.get(self.points.len()).copied()
     }
 }
 
-/// A method with its workspace.
-struct Stepper<'a, L, M: Method<N>, const N: usize> {
-    integrator: &'a Integrator<L, M, N>,
-    method: M,
-    workspace: M::Workspace,
-    increment: State<N>,
-}
-
-impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Stepper<'_, L, M, N> {
-    /// Step from `cursor` at `t` with size `h`, counting the work in `statistics`.
-    fn step(
-        &mut self,
-        t: f64,
-        h: f64,
-        cursor: &Cursor<N>,
-        statistics: &mut Statistics,
-    ) -> Result<Cursor<N>, Error> {
-        let index = statistics.steps;
-        let report: StepReport = self
-            .method
-            .step(
-                self.integrator.model(),
-                &mut self.workspace,
-                t,
-                h,
-                &cursor.state,
-                &mut self.increment,
-            )
-            .map_err(|failure| failure.at(index, t))?;
-        statistics.steps += 1;
-        statistics.iterations += report.iterations;
-        statistics.evaluations += report.evaluations;
-        let next = cursor.advanced(&self.increment);
-        if !next.state.is_finite() {
-            return Err(Error::NonFinite {
-                what: "state".into(),
-                step: index,
-                t,
-            });
-        }
-        Ok(next)
-    }
-
-    /// Serve every output time in (t, t + h] (`last`: the step ends the span) from the step
-    /// just taken from `start` to `end`.
-    fn emit(
-        &self,
-        outputs: &mut Outputs<'_, N>,
-        t: f64,
-        h: f64,
-        start: &State<N>,
-        end: &State<N>,
-        end_time: f64,
-    ) -> Result<(), Error> {
-        let integrator = self.integrator;
-        let model = integrator.model();
-        let mut ends: Option<(PhasePoint<N>, PhasePoint<N>)> = None;
-        while let Some(time) = outputs.next() {
-            if time > end_time {
-                break;
-            }
-            let point = if time == end_time {
-                integrator.phase_point(end_time, end, &outputs.guess)?
-            } else {
-                let theta = ((time - t) / h).clamp(0.0, 1.0);
-                let (q, v) = match self.method.dense_output(&self.workspace, start, h, theta) {
-                    Some(dense) => dense,
-                    None => {
-                        let (a, b) = match ends {
-                            Some(known) => known,
-                            None => {
-                                let known = (
-                                    integrator.phase_point(t, start, &outputs.guess)?,
-                                    integrator.phase_point(end_time, end, &outputs.guess)?,
-                                );
-                                ends = Some(known);
-                                known
-                            }
-                        };
-                        hermite(&a, &b, time)
-                    }
-                };
-                PhasePoint {
-                    t: time,
-                    q,
-                    v,
-                    p: model.momentum(time, &q, &v),
-                }
-            };
-            outputs.guess = point.v;
-            outputs.points.push(point);
-        }
-        Ok(())
-    }
-}
-
-/// Cubic Hermite interpolation of (q, q̇) between two phase points.
-fn hermite<const N: usize>(
-    a: &PhasePoint<N>,
-    b: &PhasePoint<N>,
-    time: f64,
-) -> (SVector<f64, N>, SVector<f64, N>) {
-    let h = b.t - a.t;
-    let s = (time - a.t) / h;
-    let (s2, s3) = (s * s, s * s * s);
-    let (h00, h10, h01, h11) = (
-        2.0 * s3 - 3.0 * s2 + 1.0,
-        s3 - 2.0 * s2 + s,
-        -2.0 * s3 + 3.0 * s2,
-        s3 - s2,
-    );
-    let (d00, d10, d01, d11) = (
-        6.0 * s2 - 6.0 * s,
-        3.0 * s2 - 4.0 * s + 1.0,
-        -6.0 * s2 + 6.0 * s,
-        3.0 * s2 - 2.0 * s,
-    );
-    let q = a.q * h00 + a.v * (h * h10) + b.q * h01 + b.v * (h * h11);
-    let v = (a.q * d00 + b.q * d01) / h + a.v * d10 + b.v * d11;
-    (q, v)
-}
-
-/// ‖a − b‖∞ over q and y.
-fn distance<const N: usize>(a: &State<N>, b: &State<N>) -> f64 {
-    (a.q - b.q).amax().max((a.y - b.y).amax())
-}
-
 /// Chebyshev coefficient magnitudes a_k = max over components |c_k| (k = 0..s) of the
-/// polynomial through the CGL node values (offsets: node 0 is zero).
-fn chebyshev_magnitudes<const N: usize>(offsets: &[f64], out: &mut [f64]) {
-    let s = offsets.len() / N;
+/// polynomial through the CGL node values (offsets, `width` numbers per node: node 0 is zero).
+fn chebyshev_magnitudes(offsets: &[f64], width: usize, out: &mut [f64]) {
+    let s = offsets.len() / width;
     for (k, a) in out.iter_mut().enumerate().take(s + 1) {
-        let mut c = [0.0; N];
-        for (nu, node) in offsets.chunks_exact(N).enumerate() {
-            let nu = nu + 1;
-            // x_ν = −cos(νπ/s), so T_k(x_ν) = (−1)^k cos(kνπ/s).
-            let weight = if nu == s { 0.5 } else { 1.0 };
-            let angle = std::f64::consts::PI * ((k * nu) % (2 * s)) as f64 / s as f64;
-            let tk = if k % 2 == 0 {
-                angle.cos()
-            } else {
-                -angle.cos()
-            };
-            for (ci, x) in c.iter_mut().zip(node) {
-                *ci += weight * tk * x;
-            }
-        }
         let scale = if k == 0 || k == s { 1.0 } else { 2.0 } / s as f64;
-        *a = c.iter().fold(0.0f64, |m, ci| m.max((ci * scale).abs()));
+        *a = 0.0;
+        for component in 0..width {
+            let mut c = 0.0;
+            for (nu, node) in offsets.chunks_exact(width).enumerate() {
+                let nu = nu + 1;
+                // x_ν = −cos(νπ/s), so T_k(x_ν) = (−1)^k cos(kνπ/s).
+                let weight = if nu == s { 0.5 } else { 1.0 };
+                let angle = std::f64::consts::PI * ((k * nu) % (2 * s)) as f64 / s as f64;
+                let tk = if k % 2 == 0 {
+                    angle.cos()
+                } else {
+                    -angle.cos()
+                };
+                c += weight * tk * node[component];
+            }
+            *a = a.max((c * scale).abs());
+        }
     }
 }
 
@@ -582,127 +461,239 @@ fn decay(magnitudes: &[f64]) -> (f64, f64) {
     (tail, rho.min(1.0))
 }
 
-impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N> {
+impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// [`solve`] with this integrator's model and method.
     pub fn solve(
         &self,
         span: &Span,
-        initial: Initial<N>,
+        initial: S::Initial,
         options: &SolveOptions,
-    ) -> Result<Solution<N>, Error> {
-        span.validate()?;
-        options.validate()?;
-        let state = self.initial_state(span.t0, &initial)?;
-        self.check_structure(span.t0, &state)?;
-        let guess = match initial {
-            Initial::Velocity { v, .. } => v,
-            Initial::Momentum { p, .. } => p,
-        };
+    ) -> Result<Solution<S>, Error> {
+        self.try_solve(span, initial, options, &mut ())
+            .map_err(|failure| failure.error)
+    }
+
+    /// [`solve`] reporting every accepted step to `observer` (as [`Integrator::try_run`]
+    /// does, with the accepted steps counted from 1); a failure comes back with the run up to
+    /// the last good state, and the observer keeps what it saw.
+    pub fn try_solve<O: Observer<L, S::Point>>(
+        &self,
+        span: &Span,
+        initial: S::Initial,
+        options: &SolveOptions,
+        observer: &mut O,
+    ) -> Result<Solution<S>, RunFailure<S>> {
+        span.validate().map_err(RunFailure::rejected)?;
+        options.validate().map_err(RunFailure::rejected)?;
+        let mut progress = self
+            .start(span.t0, &initial)
+            .map_err(RunFailure::rejected)?;
         let mut outputs = Outputs {
             times: &span.output_times,
             points: Vec::with_capacity(span.output_times.len()),
-            guess,
+            guess: progress.guess,
         };
         if outputs.next() == Some(span.t0) {
-            let point = self.phase_point(span.t0, &state, &guess)?;
-            outputs.guess = point.v;
+            let point = self
+                .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
+                .map_err(RunFailure::rejected)?;
+            outputs.guess = S::velocity(&point);
             outputs.points.push(point);
         }
-        let cursor = Cursor {
-            state,
-            compensation: State::zeros(),
-        };
-        let mut statistics = Statistics::default();
-        let (adaptivity, end) = match options.adapt {
-            Adapt::None => {
-                self.solve_fixed(span, options.step()?, cursor, &mut outputs, &mut statistics)?
-            }
+        let (adaptivity, stopped) = match options.adapt {
+            Adapt::None => self.solve_fixed(span, options, &mut progress, &mut outputs, observer),
             Adapt::Step => {
-                self.solve_step_adaptive(span, options, cursor, &mut outputs, &mut statistics)?
+                self.solve_step_adaptive(span, options, &mut progress, &mut outputs, observer)
             }
             Adapt::Degree => {
-                self.solve_degree_adaptive(span, options, cursor, &mut outputs, &mut statistics)?
+                self.solve_degree_adaptive(span, options, &mut progress, &mut outputs, observer)
             }
-        };
+        }?;
         let last = match outputs.points.last() {
-            Some(point) if point.t == span.t_end => *point,
-            _ => self.phase_point(span.t_end, &end, &outputs.guess)?,
+            Some(point) if !stopped && S::time(point) == span.t_end => *point,
+            _ => self
+                .phase_point(progress.t, &progress.cursor.state, &outputs.guess)
+                .map_err(|error| self.failure(error, &progress, stopped))?,
         };
         Ok(Solution {
             points: outputs.points,
             last,
-            statistics,
+            statistics: progress.statistics,
             adaptivity,
+            stopped,
         })
     }
 
-    fn stepper(&self, method: M, h: f64) -> Result<Stepper<'_, L, M, N>, Error> {
-        let workspace = method.workspace(self.model(), h)?;
-        Ok(Stepper {
-            integrator: self,
-            method,
-            workspace,
-            increment: State::zeros(),
-        })
-    }
-
-    fn solve_fixed(
+    /// Serve every output time in (t, t + h] from the step of `method` just taken from
+    /// `start` at `t` to `end` at `end_time`: at `end_time` itself the completed end point,
+    /// inside the step the method's dense output or, without one, the space's interpolant of
+    /// the completed end points.
+    #[allow(clippy::too_many_arguments)]
+    fn emit(
         &self,
-        span: &Span,
+        method: &M,
+        workspace: &M::Workspace,
+        outputs: &mut Outputs<'_, S>,
+        t: f64,
         h: f64,
-        mut cursor: Cursor<N>,
-        outputs: &mut Outputs<'_, N>,
-        statistics: &mut Statistics,
-    ) -> Result<(Adaptivity, State<N>), Error> {
-        let steps = step_count(span.t_end - span.t0, h)?;
-        let mut adaptivity = Adaptivity::default();
-        let points = self.method().points();
-        let mut stepper = self.stepper(self.method().clone(), h)?;
-        for k in 0..steps {
-            let (t, size, end_time) = grid_step(span.t0, span.t_end, h, steps, k);
-            let next = stepper.step(t, size, &cursor, statistics)?;
-            stepper.emit(outputs, t, size, &cursor.state, &next.state, end_time)?;
-            adaptivity.record(size, points);
-            cursor = next;
+        start: &S::State,
+        end: &S::State,
+        end_time: f64,
+    ) -> Result<(), Error> {
+        let model = self.model();
+        let mut ends: Option<(S::Point, S::Point)> = None;
+        while let Some(time) = outputs.next() {
+            if time > end_time {
+                break;
+            }
+            let point = if time == end_time {
+                self.phase_point(end_time, end, &outputs.guess)?
+            } else if let Some(point) = method.dense_point(model, workspace, t, h, start, time) {
+                point
+            } else {
+                let (a, b) = match ends {
+                    Some(known) => known,
+                    None => {
+                        let known = (
+                            self.phase_point(t, start, &outputs.guess)?,
+                            self.phase_point(end_time, end, &outputs.guess)?,
+                        );
+                        ends = Some(known);
+                        known
+                    }
+                };
+                method.interpolate(model, &a, &b, time).ok_or_else(|| {
+                    Error::invalid(
+                        "output_times",
+                        format!(
+                            "{time} lies inside a step, and {} has neither dense output nor an \
+                             interpolant on its space: ask for output at the ends of the span",
+                            method.info().name
+                        ),
+                    )
+                })?
+            };
+            outputs.guess = S::velocity(&point);
+            outputs.points.push(point);
         }
-        Ok((adaptivity, cursor.state))
+        Ok(())
     }
 
-    fn solve_step_adaptive(
+    /// Fixed steps: the grid loop of [`Integrator::try_run`] (recovery, divergence limit,
+    /// observers), serving the output times after each step.
+    fn solve_fixed<O: Observer<L, S::Point>>(
         &self,
         span: &Span,
         options: &SolveOptions,
-        mut cursor: Cursor<N>,
-        outputs: &mut Outputs<'_, N>,
+        progress: &mut Progress<S>,
+        outputs: &mut Outputs<'_, S>,
+        observer: &mut O,
+    ) -> Result<(Adaptivity, bool), RunFailure<S>> {
+        let h = options.step().map_err(RunFailure::rejected)?;
+        let steps = step_count(span.t_end - span.t0, h).map_err(RunFailure::rejected)?;
+        let mut workspace = self
+            .method()
+            .workspace(self.model(), h)
+            .map_err(RunFailure::rejected)?;
+        let mut adaptivity = Adaptivity::default();
+        let points = self.method().points();
+        let stopped = self.run_grid(
+            &mut workspace,
+            progress,
+            (span.t0, span.t_end, h, steps),
+            &options.run,
+            observer,
+            |workspace, t, size, start, progress| {
+                self.emit(
+                    self.method(),
+                    workspace,
+                    outputs,
+                    t,
+                    size,
+                    start,
+                    &progress.cursor.state,
+                    progress.t,
+                )?;
+                adaptivity.record(size, points);
+                Ok(())
+            },
+        )?;
+        Ok((adaptivity, stopped))
+    }
+
+    /// One trial step of an adaptive mode from `from` at `t` with size `h` (counted in
+    /// `statistics.steps`), with the step's index and time attached to a failure.
+    #[allow(clippy::too_many_arguments)]
+    fn trial(
+        &self,
+        method: &M,
+        workspace: &mut M::Workspace,
+        increment: &mut S::State,
+        t: f64,
+        h: f64,
+        from: &Cursor<S>,
+        divergence_limit: Option<f64>,
         statistics: &mut Statistics,
-    ) -> Result<(Adaptivity, State<N>), Error> {
-        let tol = options.tolerance()?;
+    ) -> Result<Cursor<S>, Error> {
+        let index = statistics.steps;
+        let next = self
+            .attempt(
+                method,
+                workspace,
+                increment,
+                t,
+                h,
+                from,
+                divergence_limit,
+                statistics,
+            )
+            .map_err(|failure| failure.at(index, t))?;
+        statistics.steps += 1;
+        Ok(next)
+    }
+
+    /// Step doubling (see the module docs): two steps of h against one of 2h, accepted when
+    /// the optimal step is not smaller; observers see the points of the accepted steps.
+    fn solve_step_adaptive<O: Observer<L, S::Point>>(
+        &self,
+        span: &Span,
+        options: &SolveOptions,
+        progress: &mut Progress<S>,
+        outputs: &mut Outputs<'_, S>,
+        observer: &mut O,
+    ) -> Result<(Adaptivity, bool), RunFailure<S>> {
+        let rejected = RunFailure::rejected;
+        let tol = options.tolerance().map_err(rejected)?;
         let length = span.t_end - span.t0;
         let min_step = options.min_step.unwrap_or(length * 1e-12);
         let max_step = options.max_step.unwrap_or(length).min(length);
-        let order = self.method().info().order as i32;
+        let method = self.method();
+        let order = method.info().order as i32;
         let numerator = 2.0 * (2f64.powi(order) + 1.0);
         let exponent = 1.0 / (f64::from(order) + 1.0);
         let mut h = match options.h {
             Some(h) => {
-                require_positive("h", h)?;
+                require_positive("h", h).map_err(rejected)?;
                 h
             }
             None => {
-                let point = self.phase_point(span.t0, &cursor.state, &outputs.guess)?;
-                let size = point.q.amax().max(1e-3);
-                let speed = point.v.amax().max(1e-12);
-                0.01 * size / speed
+                let point = self
+                    .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
+                    .map_err(rejected)?;
+                let (size, speed) = S::size_and_speed(&point);
+                0.01 * size.max(1e-3) / speed.max(1e-12)
             }
         }
         .clamp(min_step, max_step);
-        let points = self.method().points();
-        let mut half = self.stepper(self.method().clone(), h)?;
-        let mut full = self.stepper(self.method().clone(), 2.0 * h)?;
+        let points = method.points();
+        let limit = options.run.divergence_limit;
+        let mut half = method.workspace(self.model(), h).map_err(rejected)?;
+        let mut full = method.workspace(self.model(), 2.0 * h).map_err(rejected)?;
+        let mut increment = S::State::zeros();
         let mut adaptivity = Adaptivity::default();
         let mut rejections = 0;
-        let mut t = span.t0;
-        while t < span.t_end {
+        while progress.t < span.t_end {
+            let t = progress.t;
             let remaining = span.t_end - t;
             let last = 2.0 * h >= remaining * (1.0 - 1e-12);
             let end = if last { span.t_end } else { t + 2.0 * h };
@@ -710,28 +701,74 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
             let mid = t + dt;
             let mark = outputs.points.len();
             let guess = outputs.guess;
-            let mut trial = || -> Result<(Cursor<N>, f64), Error> {
-                let x1 = half.step(t, dt, &cursor, statistics)?;
-                half.emit(outputs, t, dt, &cursor.state, &x1.state, mid)?;
-                let x2 = half.step(mid, end - mid, &x1, statistics)?;
-                half.emit(outputs, mid, end - mid, &x1.state, &x2.state, end)?;
-                let w = full.step(t, end - t, &cursor, statistics)?;
-                Ok((x2, distance(&w.state, &x2.state)))
+            let start = progress.cursor;
+            let statistics = &mut progress.statistics;
+            let mut trial = || -> Result<(Cursor<S>, Cursor<S>, f64), Error> {
+                let x1 = self.trial(
+                    method,
+                    &mut half,
+                    &mut increment,
+                    t,
+                    dt,
+                    &start,
+                    limit,
+                    statistics,
+                )?;
+                self.emit(method, &half, outputs, t, dt, &start.state, &x1.state, mid)?;
+                let x2 = self.trial(
+                    method,
+                    &mut half,
+                    &mut increment,
+                    mid,
+                    end - mid,
+                    &x1,
+                    limit,
+                    statistics,
+                )?;
+                self.emit(
+                    method,
+                    &half,
+                    outputs,
+                    mid,
+                    end - mid,
+                    &x1.state,
+                    &x2.state,
+                    end,
+                )?;
+                let w = self.trial(
+                    method,
+                    &mut full,
+                    &mut increment,
+                    t,
+                    end - t,
+                    &start,
+                    limit,
+                    statistics,
+                )?;
+                Ok((x1, x2, w.state.distance(&x2.state)))
             };
             let optimal = match trial() {
-                Ok((x2, error)) => {
+                Ok((x1, x2, error)) => {
                     // The slides' h_opt is the step whose single-step error is tol_step.
                     let tol_step = tol * dt / length;
                     let optimal = dt * (numerator * tol_step / error).powf(exponent);
                     if optimal >= dt {
-                        cursor = x2;
                         adaptivity.record(dt, points);
                         adaptivity.record(end - mid, points);
-                        t = end;
                         rejections = 0;
                         h = (options.safety * optimal)
                             .clamp(dt * options.max_shrink, dt * options.max_growth)
                             .min(max_step);
+                        for (step, cursor, time) in [
+                            (adaptivity.accepted - 1, x1, mid),
+                            (adaptivity.accepted, x2, end),
+                        ] {
+                            progress.cursor = cursor;
+                            progress.t = time;
+                            if observer.wants(step) && self.observe(step, progress, observer)? {
+                                return Ok((adaptivity, time < span.t_end));
+                            }
+                        }
                         continue;
                     }
                     optimal
@@ -741,72 +778,80 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
                 Err(Error::NonConvergence { .. })
                 | Err(Error::SingularMatrix { .. })
                 | Err(Error::NonFinite { .. }) => 0.0,
-                Err(other) => return Err(other),
+                Err(other) => return Err(self.failure(other, progress, false)),
             };
             outputs.points.truncate(mark);
             outputs.guess = guess;
-            half.method.restart(&mut half.workspace);
-            full.method.restart(&mut full.workspace);
+            method.restart(&mut half);
+            method.restart(&mut full);
             adaptivity.rejected += 1;
             rejections += 1;
             h = (options.safety * optimal).max(dt * options.max_shrink);
             if h < min_step || rejections > options.max_rejections {
-                return Err(Error::StepSizeTooSmall {
+                let error = Error::StepSizeTooSmall {
                     t,
                     h,
                     min_step,
                     rejections,
-                });
+                };
+                return Err(self.failure(error, progress, false));
             }
         }
-        Ok((adaptivity, cursor.state))
+        Ok((adaptivity, false))
     }
 
-    fn solve_degree_adaptive(
+    /// Fixed h, the number of points of each step chosen from the decay of the step
+    /// polynomial's Chebyshev coefficients (see the module docs).
+    fn solve_degree_adaptive<O: Observer<L, S::Point>>(
         &self,
         span: &Span,
         options: &SolveOptions,
-        mut cursor: Cursor<N>,
-        outputs: &mut Outputs<'_, N>,
-        statistics: &mut Statistics,
-    ) -> Result<(Adaptivity, State<N>), Error> {
-        let tol = options.tolerance()?;
-        let h = options.step()?;
+        progress: &mut Progress<S>,
+        outputs: &mut Outputs<'_, S>,
+        observer: &mut O,
+    ) -> Result<(Adaptivity, bool), RunFailure<S>> {
+        let rejected = RunFailure::rejected;
+        let tol = options.tolerance().map_err(rejected)?;
+        let h = options.step().map_err(rejected)?;
         let base = self.method();
         let Some(initial_points) = base.points() else {
-            return Err(Error::invalid(
+            return Err(rejected(Error::invalid(
                 "adapt",
                 format!(
                     "method {} has no polynomial degree to adapt",
                     base.info().name
                 ),
-            ));
+            )));
         };
         let (low, high) = (options.min_points, options.max_points);
         if !(2..=MAX_POINTS).contains(&low) || !(low..=MAX_POINTS).contains(&high) {
-            return Err(Error::invalid(
+            return Err(rejected(Error::invalid(
                 "points",
                 format!(
                     "min_points = {low}, max_points = {high}: need 2 ≤ min_points ≤ max_points ≤ \
                      {MAX_POINTS}"
                 ),
-            ));
+            )));
         }
         let length = span.t_end - span.t0;
-        let steps = step_count(length, h)?;
+        let steps = step_count(length, h).map_err(rejected)?;
         // One method and workspace per number of points, built once (tables are small).
         let mut steppers = (low..=high)
             .map(|points| {
                 let method = base.with_points(points).ok_or_else(|| {
                     Error::invalid("adapt", "the method cannot change its number of points")
                 })?;
-                self.stepper(method, h)
+                let workspace = method.workspace(self.model(), h)?;
+                Ok((method, workspace))
             })
-            .collect::<Result<Vec<_>, Error>>()?;
+            .collect::<Result<Vec<_>, Error>>()
+            .map_err(rejected)?;
         let orders: Vec<f64> = steppers
             .iter()
-            .map(|stepper| stepper.method.info().order as f64)
+            .map(|(method, _)| method.info().order as f64)
             .collect();
+        let limit = options.run.divergence_limit;
+        let mut increment = S::State::zeros();
         let mut points = initial_points.clamp(low, high);
         let mut magnitudes = [0.0; MAX_POINTS];
         let mut adaptivity = Adaptivity::default();
@@ -818,11 +863,20 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
             let (t, size, end_time) = grid_step(span.t0, span.t_end, h, steps, k);
             let tol_step = tol * size / length;
             loop {
-                let stepper = &mut steppers[points - low];
+                let (method, workspace) = &mut steppers[points - low];
                 if warm != Some(points) {
-                    stepper.method.restart(&mut stepper.workspace);
+                    method.restart(workspace);
                 }
-                let next = match stepper.step(t, size, &cursor, statistics) {
+                let next = match self.trial(
+                    method,
+                    workspace,
+                    &mut increment,
+                    t,
+                    size,
+                    &progress.cursor,
+                    limit,
+                    &mut progress.statistics,
+                ) {
                     Ok(next) => next,
                     Err(Error::NonConvergence { .. } | Error::NonFinite { .. })
                         if points < high =>
@@ -832,15 +886,15 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
                         points += 1;
                         continue;
                     }
-                    Err(error) => return Err(error),
+                    Err(error) => return Err(self.failure(error, progress, false)),
                 };
                 warm = Some(points);
-                let offsets = stepper
-                    .method
-                    .node_offsets(&stepper.workspace)
-                    .ok_or_else(|| Error::invalid("adapt", "the method has no step polynomial"))?;
-                let s = offsets.len() / N;
-                chebyshev_magnitudes::<N>(offsets, &mut magnitudes[..=s]);
+                let Some(offsets) = method.node_offsets(workspace) else {
+                    let error = Error::invalid("adapt", "the method has no step polynomial");
+                    return Err(self.failure(error, progress, false));
+                };
+                let s = offsets.len() / S::NODE_WIDTH;
+                chebyshev_magnitudes(offsets, S::NODE_WIDTH, &mut magnitudes[..=s]);
                 let (tail, rho) = decay(&magnitudes[..=s]);
                 // a_s ρ^(s' − s) is the tail with s' + 1 points, and the end point of a
                 // method of order r beats it by ρ^((r − s')/2) (measured on Kepler
@@ -861,9 +915,24 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
                 if estimate(points) > tol_step {
                     adaptivity.unmet += 1;
                 }
-                stepper.emit(outputs, t, size, &cursor.state, &next.state, end_time)?;
+                if let Err(error) = self.emit(
+                    method,
+                    workspace,
+                    outputs,
+                    t,
+                    size,
+                    &progress.cursor.state,
+                    &next.state,
+                    end_time,
+                ) {
+                    return Err(self.failure(error, progress, false));
+                }
                 adaptivity.record(size, Some(points));
-                cursor = next;
+                progress.cursor = next;
+                progress.t = end_time;
+                if observer.wants(k + 1) && self.observe(k + 1, progress, observer)? {
+                    return Ok((adaptivity, k + 1 < steps));
+                }
                 // The next step's estimate, extrapolated from the trend of the last two at
                 // the same points, chooses the next points: more before the tolerance is
                 // missed (a rejection costs a whole step), fewer with a margin (hysteresis).
@@ -885,6 +954,6 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, N>
                 break;
             }
         }
-        Ok((adaptivity, cursor.state))
+        Ok((adaptivity, false))
     }
 }

@@ -1,0 +1,386 @@
+//! The phase spaces a method advances on: ℝᴺ ([`Euclidean`]) and the rotation group
+//! ([`SO3`]).
+//!
+//! A method advances a state in its own coordinates ([`Space::State`]: (q, p) or (q, q̇) on
+//! ℝᴺ, (R, Π) on SO(3)); observers and results see completed points ([`Space::Point`]:
+//! (t, q, q̇, p), (t, R, Ω, Π)). The stepping core needs only the operations of
+//! [`StepState`] on states, so one loop ([`crate::stepping::run`]) serves every space.
+//!
+//! Increments, not new states, come back from a step: the core adds them with compensated
+//! (Kahan) summation, so a run of 10⁶ steps keeps the accuracy of its steps (on SO(3) this is
+//! what keeps R orthogonal to round-off without re-orthonormalisation).
+
+use crate::linalg::compensated_add;
+use crate::model::so3::{Matrix3, Vector3};
+use nalgebra::{DMatrix, SMatrix, SVector};
+use std::fmt::Debug;
+
+/// What the stepping core does with a state in a method's coordinates.
+pub trait StepState: Copy + Debug + PartialEq {
+    /// The zero state (increments and compensations start here).
+    fn zeros() -> Self;
+    /// `self + increment`, entry by entry, without compensation.
+    fn plus(&self, increment: &Self) -> Self;
+    /// `self += increment` with the Kahan compensation carried in `compensation`.
+    fn add_compensated(&mut self, compensation: &mut Self, increment: &Self);
+    /// Whether every component is finite.
+    fn is_finite(&self) -> bool;
+    /// The largest absolute component (for the divergence limit).
+    fn max_abs(&self) -> f64;
+    /// ‖self − other‖∞ over all components (for step-doubling error estimates).
+    fn distance(&self, other: &Self) -> f64;
+}
+
+/// A phase space: the types a method and the stepping core exchange on it. Implemented by
+/// marker types ([`Euclidean`], [`SO3`]).
+pub trait Space: Copy + Debug + PartialEq + Default + 'static {
+    /// A state in a method's coordinates.
+    type State: StepState;
+    /// A state completed for observers and results, with its time.
+    type Point: Copy + Debug + PartialEq;
+    /// An initial condition.
+    type Initial: Copy + Debug + PartialEq;
+    /// A velocity, kept from one completed point to the next as the Newton start of the
+    /// inverse Legendre map.
+    type Velocity: Copy + Debug;
+    /// The Jacobian of one step with respect to the state.
+    type Tangent: Clone + Debug;
+    /// Numbers per interpolation node of a step polynomial (N on ℝᴺ, 3 on SO(3)).
+    const NODE_WIDTH: usize;
+
+    /// The time of a point.
+    fn time(point: &Self::Point) -> f64;
+    /// The velocity of a point.
+    fn velocity(point: &Self::Point) -> Self::Velocity;
+    /// The first Newton start of the inverse Legendre map for an initial condition.
+    fn initial_guess(initial: &Self::Initial) -> Self::Velocity;
+    /// The configuration and velocity of a point in words, for error messages.
+    fn describe(point: &Self::Point) -> String;
+    /// The size of a point's configuration and of its velocity (largest components), from
+    /// which a first trial step is guessed.
+    fn size_and_speed(point: &Self::Point) -> (f64, f64);
+}
+
+/// ℝᴺ: configurations q ∈ ℝᴺ, models [`crate::Lagrangian`]`<N>`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Euclidean<const N: usize>;
+
+impl<const N: usize> Space for Euclidean<N> {
+    type State = State<N>;
+    type Point = PhasePoint<N>;
+    type Initial = Initial<N>;
+    type Velocity = SVector<f64, N>;
+    type Tangent = TangentMap<N>;
+    const NODE_WIDTH: usize = N;
+
+    fn time(point: &PhasePoint<N>) -> f64 {
+        point.t
+    }
+
+    fn velocity(point: &PhasePoint<N>) -> SVector<f64, N> {
+        point.v
+    }
+
+    fn initial_guess(initial: &Initial<N>) -> SVector<f64, N> {
+        match initial {
+            Initial::Velocity { v, .. } => *v,
+            Initial::Momentum { p, .. } => *p,
+        }
+    }
+
+    fn describe(point: &PhasePoint<N>) -> String {
+        format!("q = {:?}, v = {:?}", point.q.as_slice(), point.v.as_slice())
+    }
+
+    fn size_and_speed(point: &PhasePoint<N>) -> (f64, f64) {
+        (point.q.amax(), point.v.amax())
+    }
+}
+
+/// The state a method on ℝᴺ advances: configuration `q` and `y`, which is the momentum p for
+/// [`crate::Coordinates::Momentum`] methods and the velocity q̇ for
+/// [`crate::Coordinates::Velocity`] ones.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct State<const N: usize> {
+    /// Configuration q.
+    pub q: SVector<f64, N>,
+    /// Momentum p or velocity q̇, according to the method's [`crate::Coordinates`].
+    pub y: SVector<f64, N>,
+}
+
+impl<const N: usize> State<N> {
+    /// The zero state (used for increments).
+    pub fn zeros() -> Self {
+        State {
+            q: SVector::zeros(),
+            y: SVector::zeros(),
+        }
+    }
+
+    /// Whether every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.q.iter().chain(self.y.iter()).all(|x| x.is_finite())
+    }
+}
+
+impl<const N: usize> StepState for State<N> {
+    fn zeros() -> Self {
+        State::zeros()
+    }
+
+    fn plus(&self, increment: &Self) -> Self {
+        State {
+            q: self.q + increment.q,
+            y: self.y + increment.y,
+        }
+    }
+
+    fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {
+        compensated_add(
+            self.q.as_mut_slice(),
+            compensation.q.as_mut_slice(),
+            increment.q.as_slice(),
+        );
+        compensated_add(
+            self.y.as_mut_slice(),
+            compensation.y.as_mut_slice(),
+            increment.y.as_slice(),
+        );
+    }
+
+    fn is_finite(&self) -> bool {
+        State::is_finite(self)
+    }
+
+    fn max_abs(&self) -> f64 {
+        self.q.amax().max(self.y.amax())
+    }
+
+    fn distance(&self, other: &Self) -> f64 {
+        (self.q - other.q).amax().max((self.y - other.y).amax())
+    }
+}
+
+/// A complete phase-space point on ℝᴺ: time, configuration, velocity and momentum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhasePoint<const N: usize> {
+    /// Time t.
+    pub t: f64,
+    /// Configuration q.
+    pub q: SVector<f64, N>,
+    /// Velocity q̇.
+    pub v: SVector<f64, N>,
+    /// Momentum p = ∂L/∂q̇.
+    pub p: SVector<f64, N>,
+}
+
+/// An initial state on ℝᴺ: configuration with either velocity or momentum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Initial<const N: usize> {
+    /// (q0, q̇0).
+    Velocity {
+        /// Configuration.
+        q: SVector<f64, N>,
+        /// Velocity.
+        v: SVector<f64, N>,
+    },
+    /// (q0, p0).
+    Momentum {
+        /// Configuration.
+        q: SVector<f64, N>,
+        /// Momentum.
+        p: SVector<f64, N>,
+    },
+}
+
+/// The Jacobian Φ of one step (q, y) ↦ (q', y') on ℝᴺ, in blocks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TangentMap<const N: usize> {
+    /// ∂q'/∂q.
+    pub qq: SMatrix<f64, N, N>,
+    /// ∂q'/∂y.
+    pub qy: SMatrix<f64, N, N>,
+    /// ∂y'/∂q.
+    pub yq: SMatrix<f64, N, N>,
+    /// ∂y'/∂y.
+    pub yy: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> TangentMap<N> {
+    /// The full 2N×2N matrix [[qq, qy], [yq, yy]].
+    pub fn matrix(&self) -> DMatrix<f64> {
+        let mut m = DMatrix::zeros(2 * N, 2 * N);
+        m.view_mut((0, 0), (N, N)).copy_from(&self.qq);
+        m.view_mut((0, N), (N, N)).copy_from(&self.qy);
+        m.view_mut((N, 0), (N, N)).copy_from(&self.yq);
+        m.view_mut((N, N), (N, N)).copy_from(&self.yy);
+        m
+    }
+
+    /// ‖ΦᵀJΦ − J‖_max with J = [[0, I], [−I, 0]]: zero for a symplectic map in (q, p).
+    pub fn symplecticity_error(&self) -> f64 {
+        let phi = self.matrix();
+        let mut j = DMatrix::zeros(2 * N, 2 * N);
+        for i in 0..N {
+            j[(i, N + i)] = 1.0;
+            j[(N + i, i)] = -1.0;
+        }
+        (phi.transpose() * &j * &phi - j).amax()
+    }
+}
+
+/// The rotation group SO(3): attitudes R of a rigid body, models
+/// [`crate::lie_group::RigidBodyLagrangian`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SO3;
+
+impl Space for SO3 {
+    type State = RigidState;
+    type Point = RigidPoint;
+    type Initial = RigidInitial;
+    type Velocity = Vector3<f64>;
+    /// The 6×6 Jacobian in the canonical coordinates (η, p) of T*SO(3) about the step's
+    /// input and output (see [`crate::lie_group::LieSvi`]).
+    type Tangent = SMatrix<f64, 6, 6>;
+    const NODE_WIDTH: usize = 3;
+
+    fn time(point: &RigidPoint) -> f64 {
+        point.t
+    }
+
+    fn velocity(point: &RigidPoint) -> Vector3<f64> {
+        point.omega
+    }
+
+    fn initial_guess(initial: &RigidInitial) -> Vector3<f64> {
+        match initial {
+            RigidInitial::Velocity { omega, .. } => *omega,
+            RigidInitial::Momentum { .. } => Vector3::zeros(),
+        }
+    }
+
+    /// An attitude's size is one radian.
+    fn size_and_speed(point: &RigidPoint) -> (f64, f64) {
+        (1.0, point.omega.amax())
+    }
+
+    fn describe(point: &RigidPoint) -> String {
+        format!(
+            "quaternion = {:?}, Ω = {:?}",
+            point.quaternion(),
+            point.omega.as_slice()
+        )
+    }
+}
+
+/// The state of a rigid body in the integrator's coordinates: the attitude R (body to
+/// space) and the body angular momentum μ = Π (left-trivialised momentum).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidState {
+    /// Attitude R ∈ SO(3).
+    pub r: Matrix3<f64>,
+    /// Body angular momentum Π.
+    pub momentum: Vector3<f64>,
+}
+
+impl RigidState {
+    /// The zero state (used for increments).
+    pub fn zeros() -> Self {
+        RigidState {
+            r: Matrix3::zeros(),
+            momentum: Vector3::zeros(),
+        }
+    }
+
+    /// Whether every component is finite.
+    pub fn is_finite(&self) -> bool {
+        self.r
+            .iter()
+            .chain(self.momentum.iter())
+            .all(|x| x.is_finite())
+    }
+}
+
+impl StepState for RigidState {
+    fn zeros() -> Self {
+        RigidState::zeros()
+    }
+
+    fn plus(&self, increment: &Self) -> Self {
+        RigidState {
+            r: self.r + increment.r,
+            momentum: self.momentum + increment.momentum,
+        }
+    }
+
+    fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {
+        compensated_add(
+            self.r.as_mut_slice(),
+            compensation.r.as_mut_slice(),
+            increment.r.as_slice(),
+        );
+        compensated_add(
+            self.momentum.as_mut_slice(),
+            compensation.momentum.as_mut_slice(),
+            increment.momentum.as_slice(),
+        );
+    }
+
+    fn is_finite(&self) -> bool {
+        RigidState::is_finite(self)
+    }
+
+    fn max_abs(&self) -> f64 {
+        self.r.amax().max(self.momentum.amax())
+    }
+
+    fn distance(&self, other: &Self) -> f64 {
+        (self.r - other.r)
+            .amax()
+            .max((self.momentum - other.momentum).amax())
+    }
+}
+
+/// A complete rigid-body point: time, attitude, body angular velocity and momentum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidPoint {
+    /// Time t.
+    pub t: f64,
+    /// Attitude R (body to space).
+    pub r: Matrix3<f64>,
+    /// Body angular velocity Ω.
+    pub omega: Vector3<f64>,
+    /// Body angular momentum Π = ∂L/∂Ω.
+    pub momentum: Vector3<f64>,
+}
+
+impl RigidPoint {
+    /// The spatial angular momentum π = R Π.
+    pub fn spatial_momentum(&self) -> Vector3<f64> {
+        self.r * self.momentum
+    }
+
+    /// The attitude as a unit quaternion (w, x, y, z) with w ≥ 0 (Shepperd's method).
+    pub fn quaternion(&self) -> [f64; 4] {
+        crate::model::so3::quaternion(&self.r)
+    }
+}
+
+/// An initial rigid-body state: attitude with either angular velocity or momentum.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RigidInitial {
+    /// (R₀, Ω₀).
+    Velocity {
+        /// Attitude.
+        r: Matrix3<f64>,
+        /// Body angular velocity.
+        omega: Vector3<f64>,
+    },
+    /// (R₀, Π₀).
+    Momentum {
+        /// Attitude.
+        r: Matrix3<f64>,
+        /// Body angular momentum.
+        momentum: Vector3<f64>,
+    },
+}

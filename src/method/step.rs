@@ -1,0 +1,324 @@
+//! [`Step`]: the one contract between a method and the stepping loop, on any [`Space`].
+//!
+//! The stepping loop ([`crate::stepping::run`]) is generic over the space: it validates the
+//! run, keeps the time grid, adds increments with compensated summation, retries failed steps,
+//! drives observers and attaches context to failures. What depends on the space and the model
+//! comes from here: building the method's state from an initial condition, completing a state
+//! to a point for observers (the inverse Legendre map), checking what the model declares about
+//! itself, and dense output inside a step.
+//!
+//! Methods on ℝᴺ implement the simpler [`Method`] and get [`Step`] on [`Euclidean`] from the
+//! blanket implementation below; the Lie-group integrator implements [`Step`] on
+//! [`crate::method::SO3`] itself ([`crate::lie_group::LieSvi`]).
+
+use crate::error::{Error, StepFailure, require_finite_entries};
+use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, TangentMap};
+use crate::method::{Coordinates, Method, MethodInfo, StepReport};
+use crate::model::derived::LagrangianExt;
+use crate::model::{Lagrangian, Structure};
+use nalgebra::SVector;
+
+/// One step of a method on models `L` in the space `S`, and what the stepping loop needs to
+/// know about states of `S` under `L`.
+pub trait Step<L: ?Sized, S: Space> {
+    /// Buffers and precomputed tables of one run.
+    type Workspace;
+
+    /// Name, order and geometric properties.
+    fn info(&self) -> MethodInfo;
+
+    /// Validate the options against the model and build every buffer and table for steps of
+    /// size `h`.
+    fn workspace(&self, model: &L, h: f64) -> Result<Self::Workspace, Error>;
+
+    /// Advance `state` from `t` to `t + h`, writing the increment into `increment` (the
+    /// stepping loop adds it with compensated summation). Allocates nothing.
+    fn step(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &S::State,
+        increment: &mut S::State,
+    ) -> Result<StepReport, StepFailure>;
+
+    /// Drop warm-start data: the next step does not continue the last one.
+    fn restart(&self, workspace: &mut Self::Workspace) {
+        let _ = workspace;
+    }
+
+    /// Perform the step like [`Step::step`] and return the increment and the step's exact
+    /// Jacobian with respect to `state`.
+    fn tangent_map(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &S::State,
+    ) -> Result<(S::State, S::Tangent), StepFailure>;
+
+    /// The method's state for an initial condition at `t0`, after checking the condition
+    /// (finite values; on SO(3) an orthogonal attitude).
+    fn initial_state(&self, model: &L, t0: f64, initial: &S::Initial) -> Result<S::State, Error>;
+
+    /// Check, once per run at the initial state, what the model declares about itself (a
+    /// constant mass matrix, G-invariance), so a wrong declaration is an error and not a wrong
+    /// result.
+    fn check_model(&self, model: &L, t0: f64, state: &S::State) -> Result<(), Error> {
+        let _ = (model, t0, state);
+        Ok(())
+    }
+
+    /// Complete a state to a point (the inverse Legendre map started at `guess`, or the
+    /// Legendre map, by the method's coordinates).
+    fn complete(
+        &self,
+        model: &L,
+        t: f64,
+        state: &S::State,
+        guess: &S::Velocity,
+    ) -> Result<S::Point, Error>;
+
+    /// The point of a state whose completion failed, with `guess` (the last velocity
+    /// completed) standing in for the velocity: the last good state of a failure report.
+    fn incomplete(&self, t: f64, state: &S::State, guess: &S::Velocity) -> S::Point;
+
+    /// Whether every number of a completed point is finite.
+    fn point_is_finite(&self, point: &S::Point) -> bool;
+
+    /// Dense output of the last step taken (from `start` at `t` with size `h`): the point at
+    /// `time` ∈ [t, t + h] from the step's interpolating polynomial; `None` for methods
+    /// without a step polynomial.
+    fn dense_point(
+        &self,
+        model: &L,
+        workspace: &Self::Workspace,
+        t: f64,
+        h: f64,
+        start: &S::State,
+        time: f64,
+    ) -> Option<S::Point> {
+        let _ = (model, workspace, t, h, start, time);
+        None
+    }
+
+    /// The point at `time` between two completed points `a` and `b` of one step, by an
+    /// interpolant of the space (cubic Hermite on ℝᴺ); `None` where the space has none.
+    fn interpolate(&self, model: &L, a: &S::Point, b: &S::Point, time: f64) -> Option<S::Point> {
+        let _ = (model, a, b, time);
+        None
+    }
+
+    /// Number of interpolation points of a spectral method (polynomial degree + 1); `None`
+    /// for methods without a degree.
+    fn points(&self) -> Option<usize> {
+        None
+    }
+
+    /// The same method with `points` interpolation points (degree adaptivity); `None` for
+    /// methods without a degree.
+    fn with_points(&self, points: usize) -> Option<Self>
+    where
+        Self: Sized,
+    {
+        let _ = points;
+        None
+    }
+
+    /// Node values of the last step's polynomial as offsets from its first node, at the
+    /// nodes ν = 1, …, s ([`Space::NODE_WIDTH`] numbers per node); `None` for methods without a
+    /// degree.
+    fn node_offsets<'a>(&self, workspace: &'a Self::Workspace) -> Option<&'a [f64]> {
+        let _ = workspace;
+        None
+    }
+}
+
+impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M {
+    type Workspace = M::Workspace;
+
+    fn info(&self) -> MethodInfo {
+        Method::info(self)
+    }
+
+    fn workspace(&self, model: &L, h: f64) -> Result<M::Workspace, Error> {
+        Method::workspace(self, model, h)
+    }
+
+    fn step(
+        &self,
+        model: &L,
+        workspace: &mut M::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        Method::step(self, model, workspace, t, h, state, increment)
+    }
+
+    fn restart(&self, workspace: &mut M::Workspace) {
+        Method::restart(self, workspace);
+    }
+
+    fn tangent_map(
+        &self,
+        model: &L,
+        workspace: &mut M::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        Method::tangent_map(self, model, workspace, t, h, state)
+    }
+
+    fn initial_state(&self, model: &L, t0: f64, initial: &Initial<N>) -> Result<State<N>, Error> {
+        let (q, second, name) = match initial {
+            Initial::Velocity { q, v } => (q, v, "initial velocity"),
+            Initial::Momentum { q, p } => (q, p, "initial momentum"),
+        };
+        require_finite_entries("initial position", q)?;
+        require_finite_entries(name, second)?;
+        let y = match (Method::info(self).coordinates, initial) {
+            (Coordinates::Momentum, Initial::Momentum { p, .. }) => *p,
+            (Coordinates::Velocity, Initial::Velocity { v, .. }) => *v,
+            (Coordinates::Momentum, Initial::Velocity { q, v }) => model.momentum(t0, q, v),
+            (Coordinates::Velocity, Initial::Momentum { q, p }) => model.velocity(t0, q, p, p)?,
+        };
+        let state = State { q: *q, y };
+        if !state.is_finite() {
+            return Err(Error::NonFinite {
+                what: "initial state".into(),
+                step: 0,
+                t: t0,
+            });
+        }
+        Ok(state)
+    }
+
+    /// A [`Structure::ConstantMass`] declaration: L_qv must vanish and L_vv must not change
+    /// with q̇ (a necessary condition, checked once per run).
+    fn check_model(&self, model: &L, t: f64, state: &State<N>) -> Result<(), Error> {
+        if L::STRUCTURE != Structure::ConstantMass {
+            return Ok(());
+        }
+        let shifted = state.y * 2.0 + SVector::repeat(1.0);
+        let first = model.second_derivatives(t, &state.q, &state.y);
+        let second = model.second_derivatives(t, &state.q, &shifted);
+        let scale = 1.0 + first.vv.amax() + first.qq.amax();
+        let coupling = first.qv.amax().max(second.qv.amax());
+        let change = (first.vv - second.vv).amax();
+        if coupling > 1e-12 * scale || change > 1e-12 * scale {
+            return Err(Error::invalid(
+                "structure",
+                format!(
+                    "the model declares a constant mass matrix, but ∂²L/∂q∂q̇ = {coupling:e} and \
+                     ∂²L/∂q̇² changes by {change:e} with q̇"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn complete(
+        &self,
+        model: &L,
+        t: f64,
+        state: &State<N>,
+        guess: &SVector<f64, N>,
+    ) -> Result<PhasePoint<N>, Error> {
+        let (v, p) = match Method::info(self).coordinates {
+            Coordinates::Momentum => (model.velocity(t, &state.q, &state.y, guess)?, state.y),
+            Coordinates::Velocity => (state.y, model.momentum(t, &state.q, &state.y)),
+        };
+        Ok(PhasePoint {
+            t,
+            q: state.q,
+            v,
+            p,
+        })
+    }
+
+    fn incomplete(&self, t: f64, state: &State<N>, guess: &SVector<f64, N>) -> PhasePoint<N> {
+        let (v, p) = match Method::info(self).coordinates {
+            Coordinates::Momentum => (*guess, state.y),
+            Coordinates::Velocity => (state.y, *guess),
+        };
+        PhasePoint {
+            t,
+            q: state.q,
+            v,
+            p,
+        }
+    }
+
+    fn point_is_finite(&self, point: &PhasePoint<N>) -> bool {
+        point.v.iter().chain(point.p.iter()).all(|x| x.is_finite())
+    }
+
+    fn dense_point(
+        &self,
+        model: &L,
+        workspace: &M::Workspace,
+        t: f64,
+        h: f64,
+        start: &State<N>,
+        time: f64,
+    ) -> Option<PhasePoint<N>> {
+        let theta = ((time - t) / h).clamp(0.0, 1.0);
+        let (q, v) = Method::dense_output(self, workspace, start, h, theta)?;
+        Some(PhasePoint {
+            t: time,
+            q,
+            v,
+            p: model.momentum(time, &q, &v),
+        })
+    }
+
+    /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map.
+    fn interpolate(
+        &self,
+        model: &L,
+        a: &PhasePoint<N>,
+        b: &PhasePoint<N>,
+        time: f64,
+    ) -> Option<PhasePoint<N>> {
+        let h = b.t - a.t;
+        let s = (time - a.t) / h;
+        let (s2, s3) = (s * s, s * s * s);
+        let (h00, h10, h01, h11) = (
+            2.0 * s3 - 3.0 * s2 + 1.0,
+            s3 - 2.0 * s2 + s,
+            -2.0 * s3 + 3.0 * s2,
+            s3 - s2,
+        );
+        let (d00, d10, d01, d11) = (
+            6.0 * s2 - 6.0 * s,
+            3.0 * s2 - 4.0 * s + 1.0,
+            -6.0 * s2 + 6.0 * s,
+            3.0 * s2 - 2.0 * s,
+        );
+        let q = a.q * h00 + a.v * (h * h10) + b.q * h01 + b.v * (h * h11);
+        let v = (a.q * d00 + b.q * d01) / h + a.v * d10 + b.v * d11;
+        Some(PhasePoint {
+            t: time,
+            q,
+            v,
+            p: model.momentum(time, &q, &v),
+        })
+    }
+
+    fn points(&self) -> Option<usize> {
+        Method::points(self)
+    }
+
+    fn with_points(&self, points: usize) -> Option<Self> {
+        Method::with_points(self, points)
+    }
+
+    fn node_offsets<'a>(&self, workspace: &'a M::Workspace) -> Option<&'a [f64]> {
+        Method::node_offsets(self, workspace)
+    }
+}
