@@ -153,3 +153,192 @@ pub(crate) fn after_fixed_point<T>(
         result => ControlFlow::Break(result),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// F(x) = x ∘ x − 2 (componentwise) and its diagonal Jacobian 2 diag(x).
+    fn square_minus_two(
+        x: &DVector<f64>,
+        jacobian: &mut DMatrix<f64>,
+        residual: &mut DVector<f64>,
+    ) {
+        jacobian.fill(0.0);
+        for i in 0..x.len() {
+            residual[i] = x[i] * x[i] - 2.0;
+            jacobian[(i, i)] = 2.0 * x[i];
+        }
+    }
+
+    #[test]
+    fn newton_converges_quadratically_to_square_root_of_two_in_five_iterations() {
+        // Reference: the root √2 and Newton's iterates from 1 (or 2, whose first iterate is
+        // also 3/2): 3/2, 17/12, 577/408, ... (the Babylonian method), with errors
+        // e_{k+1} = e_k² / (2 x_k) → e_k² / (2√2). The fifth increment, 1.6e-12, is the
+        // first below 1e-10 · √2.
+        let mut newton = Newton::new(3, 20);
+        let mut z = DVector::from_vec(vec![1.0, 1.5, 2.0]);
+        let mut errors = Vec::new();
+        let iterations = newton
+            .solve(&mut z, |x, jacobian, residual| {
+                errors.push((x[0] - std::f64::consts::SQRT_2).abs());
+                square_minus_two(x, jacobian, residual);
+            })
+            .unwrap();
+        assert_eq!(iterations, 5);
+        for x in z.iter() {
+            assert!((x - std::f64::consts::SQRT_2).abs() <= f64::EPSILON, "{x}");
+        }
+        // e_{k+1}/e_k² tends to 1/(2√2) = 0.354 (0.5 and 0.333 on the first two iterates).
+        let ratios: Vec<f64> = errors
+            .windows(2)
+            .filter(|pair| pair[0] > 1e-7)
+            .map(|pair| pair[1] / (pair[0] * pair[0]))
+            .collect();
+        assert_eq!(ratios.len(), 4, "{errors:?}");
+        for ratio in &ratios {
+            assert!((0.3..=0.5).contains(ratio), "{ratios:?}");
+        }
+        assert!((ratios[3] - 0.25 * std::f64::consts::SQRT_2).abs() < 1e-3);
+    }
+
+    #[test]
+    fn newton_capped_returns_non_convergence_with_iterations_and_last_increment() {
+        // From 1 the increments are 1/2, 1/12 and 17/12 − 577/408 = 1/408.
+        let mut newton = Newton::new(2, 3);
+        let mut z = DVector::from_vec(vec![1.0, 1.0]);
+        let result = newton.solve(&mut z, square_minus_two);
+        let Err(StepFailure::NonConvergence {
+            iterations,
+            residual,
+        }) = result
+        else {
+            panic!("expected NonConvergence, got {result:?}");
+        };
+        assert_eq!(iterations, 3);
+        assert!((residual - 1.0 / 408.0).abs() < 1e-15, "{residual}");
+        assert!((z[0] - 577.0 / 408.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn newton_on_a_singular_jacobian_is_a_singular_matrix_failure() {
+        // F'(0) = 0: the first Newton matrix is singular.
+        let mut newton = Newton::new(2, 10);
+        let mut z = DVector::from_vec(vec![0.0, 1.0]);
+        assert_eq!(
+            newton.solve(&mut z, square_minus_two),
+            Err(StepFailure::SingularMatrix)
+        );
+    }
+
+    #[test]
+    fn newton_on_a_nan_residual_is_a_non_finite_failure() {
+        let mut newton = Newton::new(2, 10);
+        let mut z = DVector::from_vec(vec![1.0, 1.0]);
+        let result = newton.solve(&mut z, |x, jacobian, residual| {
+            square_minus_two(x, jacobian, residual);
+            residual[1] = f64::NAN;
+        });
+        assert_eq!(result, Err(StepFailure::NonFinite));
+        // A finite residual whose increment overflows (1e300 / 1e-300) is caught as well.
+        let mut newton = Newton::new(1, 10);
+        let mut z = DVector::from_vec(vec![1.0]);
+        let result = newton.solve(&mut z, |_, jacobian, residual| {
+            jacobian[(0, 0)] = 1e-300;
+            residual[0] = 1e300;
+        });
+        assert_eq!(result, Err(StepFailure::NonFinite));
+    }
+
+    /// Runs x ← cos x from 1 under a [`FixedPoint`] control with cap `max_iterations`;
+    /// returns the last iterate and the control's verdict.
+    fn cosine_fixed_point(max_iterations: usize) -> (f64, Result<usize, StepFailure>) {
+        let mut control = FixedPoint::new(max_iterations);
+        let mut x: f64 = 1.0;
+        loop {
+            let next = x.cos();
+            let change = (next - x).abs();
+            x = next;
+            match control.converged(change, x.abs()) {
+                Ok(true) => return (x, Ok(control.iterations())),
+                Ok(false) => {}
+                Err(failure) => return (x, Err(failure)),
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_point_stops_at_round_off_on_the_dottie_number() {
+        // Reference: the fixed point of cos, 0.73908513321516064166 (the Dottie number),
+        // correctly rounded 0.7390851332151607. The contraction factor is sin x* = 0.674, so
+        // reaching an increment of 2 ulps from |x0 − x*| = 0.26 takes about
+        // ln(3e-16 / 0.26) / ln 0.674 ≈ 87 iterations (91 observed).
+        let (x, iterations) = cosine_fixed_point(500);
+        let iterations = iterations.unwrap();
+        assert!((x - 0.7390851332151607).abs() <= 2.0 * f64::EPSILON, "{x}");
+        assert!((70..=100).contains(&iterations), "{iterations} iterations");
+    }
+
+    #[test]
+    fn fixed_point_capped_returns_non_convergence_with_the_cap() {
+        let (_, result) = cosine_fixed_point(10);
+        let Err(StepFailure::NonConvergence {
+            iterations,
+            residual,
+        }) = result
+        else {
+            panic!("expected NonConvergence, got {result:?}");
+        };
+        assert_eq!(iterations, 10);
+        // The reported residual is the last increment, |x₁₀ − x₉| of x ← cos x from x₀ = 1.
+        let iterates: Vec<f64> = std::iter::successors(Some(1.0f64), |x| Some(x.cos()))
+            .take(11)
+            .collect();
+        assert_eq!(residual, (iterates[10] - iterates[9]).abs());
+    }
+
+    #[test]
+    fn fixed_point_with_a_nan_increment_is_a_non_finite_failure() {
+        let mut control = FixedPoint::new(10);
+        assert_eq!(control.converged(0.5, 1.0), Ok(false));
+        assert_eq!(
+            control.converged(f64::NAN, 1.0),
+            Err(StepFailure::NonFinite)
+        );
+        assert_eq!(control.iterations(), 2);
+    }
+
+    #[test]
+    fn after_fixed_point_switches_to_newton_only_for_forced_models() {
+        let capped = StepFailure::NonConvergence {
+            iterations: 7,
+            residual: 0.1,
+        };
+        // Forced: a capped or diverging fixed point hands over to Newton for the rest of
+        // the run.
+        let mut newton_only = false;
+        let flow = after_fixed_point::<()>(Err(capped), true, &mut newton_only);
+        assert_eq!(flow, ControlFlow::Continue(7));
+        assert!(newton_only);
+        let mut newton_only = false;
+        let flow = after_fixed_point::<()>(Err(StepFailure::NonFinite), true, &mut newton_only);
+        assert_eq!(flow, ControlFlow::Continue(0));
+        assert!(newton_only);
+        // Forced, but success or another failure ends the step.
+        let mut newton_only = false;
+        let flow = after_fixed_point(Ok(3), true, &mut newton_only);
+        assert_eq!(flow, ControlFlow::Break(Ok(3)));
+        let flow =
+            after_fixed_point::<()>(Err(StepFailure::SingularMatrix), true, &mut newton_only);
+        assert_eq!(flow, ControlFlow::Break(Err(StepFailure::SingularMatrix)));
+        assert!(!newton_only);
+        // Unforced: the fixed point's failure is the step's failure.
+        for failure in [capped, StepFailure::NonFinite] {
+            let mut newton_only = false;
+            let flow = after_fixed_point::<()>(Err(failure), false, &mut newton_only);
+            assert_eq!(flow, ControlFlow::Break(Err(failure)));
+            assert!(!newton_only);
+        }
+    }
+}

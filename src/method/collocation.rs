@@ -600,3 +600,347 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         Ok((increment, tangent))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Scalar;
+    use crate::analysis::verify::observed_order;
+    use nalgebra::Complex;
+
+    /// Harmonic oscillator L = q̇²/2 − q²/2, declared [`Structure::ConstantMass`] (fixed-point
+    /// path) or [`Structure::General`] (Newton path).
+    struct Oscillator<const CONSTANT_MASS: bool>;
+    impl<const CONSTANT_MASS: bool> Lagrangian<1> for Oscillator<CONSTANT_MASS> {
+        const TIME_DEPENDENT: bool = false;
+        const STRUCTURE: Structure = if CONSTANT_MASS {
+            Structure::ConstantMass
+        } else {
+            Structure::General
+        };
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (v[0] * v[0] - q[0] * q[0]) * 0.5
+        }
+    }
+
+    /// Hénon–Heiles potential with the constant, non-diagonal mass M = [[2, 1], [1, 3]]:
+    /// L = ½ q̇ᵀMq̇ − ½|q|² − q₀²q₁ + q₁³/3, declared either way.
+    struct HenonHeiles<const CONSTANT_MASS: bool>;
+    impl<const CONSTANT_MASS: bool> Lagrangian<2> for HenonHeiles<CONSTANT_MASS> {
+        const TIME_DEPENDENT: bool = false;
+        const STRUCTURE: Structure = if CONSTANT_MASS {
+            Structure::ConstantMass
+        } else {
+            Structure::General
+        };
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            let kinetic = (v[0] * v[0] * 2.0 + v[0] * v[1] * 2.0 + v[1] * v[1] * 3.0) * 0.5;
+            let potential = q.dot(q) * 0.5 + q[0] * q[0] * q[1] - q[1].powi(3) / 3.0;
+            kinetic - potential
+        }
+    }
+
+    /// Position-dependent mass: L = ½ (1 + q₁²) q̇₀² + ½ q̇₁² − ½ |q|² − ¼ q₀⁴.
+    struct VariableMass;
+    impl Lagrangian<2> for VariableMass {
+        const TIME_DEPENDENT: bool = false;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            let kinetic = (q[1] * q[1] + 1.0) * v[0] * v[0] * 0.5 + v[1] * v[1] * 0.5;
+            kinetic - q.dot(q) * 0.5 - q[0].powi(4) * 0.25
+        }
+    }
+
+    /// Damped oscillator L = q̇²/2 − q²/2 with friction f_L = −c q̇ (Newton path).
+    struct Damped {
+        c: f64,
+    }
+    impl Lagrangian<1> for Damped {
+        const TIME_DEPENDENT: bool = false;
+        const FORCED: bool = true;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (v[0] * v[0] - q[0] * q[0]) * 0.5
+        }
+        fn external_force<D: Scalar>(
+            &self,
+            _t: D,
+            _q: &SVector<D, 1>,
+            v: &SVector<D, 1>,
+        ) -> SVector<D, 1> {
+            v.map(|x| x * (-self.c))
+        }
+    }
+
+    fn state<const N: usize>(q: [f64; N], y: [f64; N]) -> State<N> {
+        State {
+            q: SVector::from(q),
+            y: SVector::from(y),
+        }
+    }
+
+    /// `steps` steps of size `h` from (q, q̇) at t = 0, by the method alone (no stepping loop).
+    fn advance<L: Lagrangian<N>, const N: usize>(
+        method: &SpectralCollocation,
+        model: &L,
+        h: f64,
+        steps: usize,
+        start: State<N>,
+    ) -> (State<N>, CollocationWorkspace<N>) {
+        let mut workspace = method.workspace(model, h).unwrap();
+        let mut current = start;
+        let mut increment = State::zeros();
+        for k in 0..steps {
+            method
+                .step(
+                    model,
+                    &mut workspace,
+                    k as f64 * h,
+                    h,
+                    &current,
+                    &mut increment,
+                )
+                .unwrap();
+            current.q += increment.q;
+            current.y += increment.y;
+        }
+        (current, workspace)
+    }
+
+    fn distance<const N: usize>(a: &State<N>, b: &State<N>) -> f64 {
+        (a.q - b.q).amax().max((a.y - b.y).amax())
+    }
+
+    fn factorial(n: usize) -> f64 {
+        (1..=n).map(|k| k as f64).product()
+    }
+
+    /// The stability function of the collocation method on the nodes c₁, …, c_s of [0, 1]
+    /// (Nørsett; Hairer, Wanner II, Thm. IV.3.10):
+    /// R(z) = Σⱼ M^{(s−j)}(1) zʲ / Σⱼ M^{(s−j)}(0) zʲ with M(x) = Π (x − cᵢ) / s!.
+    fn collocation_stability(nodes: &[f64], z: Complex<f64>) -> Complex<f64> {
+        let s = nodes.len();
+        // Coefficients of M, ascending powers.
+        let mut m = vec![1.0 / factorial(s)];
+        for &c in nodes {
+            let mut next = vec![0.0; m.len() + 1];
+            for (k, a) in m.iter().enumerate() {
+                next[k + 1] += a;
+                next[k] -= c * a;
+            }
+            m = next;
+        }
+        let derivative = |k: usize, x: f64| -> f64 {
+            (k..=s)
+                .map(|n| m[n] * factorial(n) / factorial(n - k) * x.powi((n - k) as i32))
+                .sum()
+        };
+        let polynomial = |x: f64| {
+            (0..=s)
+                .map(|j| z.powu(j as u32) * derivative(s - j, x))
+                .sum::<Complex<f64>>()
+        };
+        polynomial(1.0) / polynomial(0.0)
+    }
+
+    /// The collocation nodes of SC with `points` CGL points: cᵢ = (1 − cos(iπ/s))/2,
+    /// i = 1, …, s (Li, Wu, Leok 2018, x_ν = −cos(νπ/s) mapped to [0, 1]).
+    fn cgl_collocation_nodes(points: usize) -> Vec<f64> {
+        let s = points - 1;
+        (1..=s)
+            .map(|i| 0.5 * (1.0 - (i as f64 * std::f64::consts::PI / s as f64).cos()))
+            .collect()
+    }
+
+    /// One step of the oscillator from (q0, q̇0): on q̇ = y, ẏ = −q the variable w = q − i y
+    /// obeys ẇ = i w, so a collocation step maps w to R(ih) w.
+    fn stability_step(points: usize, h: f64, q0: f64, v0: f64) -> (f64, f64) {
+        let r = collocation_stability(&cgl_collocation_nodes(points), Complex::new(0.0, h));
+        let w = r * Complex::new(q0, -v0);
+        (w.re, -w.im)
+    }
+
+    fn assert_stability_step<L: Lagrangian<1>>(model: &L, points: usize) {
+        let method = SpectralCollocation::new(points);
+        let (q0, v0) = (0.6f64, 0.8);
+        // The fixed-point path updates q̇ by the collocation quadrature h Σ bᵢ fᵢ: a few ulps.
+        // The Newton path takes q̇_{k+1} = Σⱼ Λ*_sj Zⱼ, the derivative of the node polynomial,
+        // which amplifies the round-off of the offsets Zⱼ ≈ h q̇ by ‖Λ*‖ h ~ s²: up to
+        // 4.9e-15 (44 ulps) at 7 points.
+        let velocity_tolerance = match L::STRUCTURE {
+            Structure::ConstantMass => 2e-15,
+            Structure::General => 1e-14,
+        };
+        let mut errors = Vec::new();
+        for h in [0.25f64, 0.125] {
+            let (after, _) = advance(&method, model, h, 1, state([q0], [v0]));
+            let (q, v) = stability_step(points, h, q0, v0);
+            assert!(
+                (after.q[0] - q).abs() <= 2e-15 && (after.y[0] - v).abs() <= velocity_tolerance,
+                "points {points}, h = {h}: step ({}, {}), R(ih) ({q}, {v})",
+                after.q[0],
+                after.y[0]
+            );
+            let exact = [q0 * h.cos() + v0 * h.sin(), -q0 * h.sin() + v0 * h.cos()];
+            errors.push((after.q[0] - exact[0]).hypot(after.y[0] - exact[1]));
+        }
+        // A method of order p has local error C h^{p+1}: halving h divides it by 2^{p+1}.
+        let order = Method::<1>::info(&method).order as f64;
+        let slope = (errors[0] / errors[1]).log2();
+        assert!(
+            (slope - (order + 1.0)).abs() < 0.1,
+            "points {points}: local error slope {slope:.3}, declared order {order}"
+        );
+    }
+
+    #[test]
+    fn one_step_of_the_oscillator_is_the_collocation_stability_function() {
+        for points in 2..=7 {
+            assert_stability_step(&Oscillator::<false>, points);
+            assert_stability_step(&Oscillator::<true>, points);
+        }
+    }
+
+    #[test]
+    fn tangent_map_of_the_oscillator_is_the_stability_matrix_and_not_symplectic() {
+        // Φ = [[a, b], [−b, a]] with a + ib = R(ih); ΦᵀJΦ = det Φ · J, det Φ = |R(ih)|².
+        let h = 0.5;
+        for points in [3, 4, 6] {
+            let method = SpectralCollocation::new(points);
+            let mut workspace = method.workspace(&Oscillator::<false>, h).unwrap();
+            let (_, tangent) = method
+                .tangent_map(
+                    &Oscillator::<false>,
+                    &mut workspace,
+                    0.0,
+                    h,
+                    &state([0.6], [0.8]),
+                )
+                .unwrap();
+            let r = collocation_stability(&cgl_collocation_nodes(points), Complex::new(0.0, h));
+            let expected = SMatrix::<f64, 2, 2>::new(r.re, r.im, -r.im, r.re);
+            let difference = (tangent.matrix() - expected).amax();
+            // Round-off amplified by ‖Λ*‖ h ~ s², as in the velocity update: 7e-15 at 6 points.
+            assert!(difference <= 2e-14, "points {points}: {difference:e}");
+            let determinant = r.norm_sqr();
+            assert!((tangent.symplecticity_error() - (determinant - 1.0).abs()).abs() <= 1e-14);
+            // |R(ih)|² − 1 = O(h^{p+1}): from −4e-3 (3 points) to −1e-7 (6 points).
+            assert!((determinant - 1.0).abs() > 1e-8, "points {points}: |R| = 1");
+        }
+    }
+
+    /// Observed order (least-squares slope) of `method` on the oscillator from (q, q̇) = (0, 1)
+    /// over [0, 4], against the exact solution (sin t, cos t).
+    fn oscillator_order<L: Lagrangian<1>>(method: &SpectralCollocation, model: &L) -> f64 {
+        let steps = [0.5, 0.25, 0.125, 0.0625];
+        let errors: Vec<f64> = steps
+            .iter()
+            .map(|&h| {
+                let n = (4.0 / h) as usize;
+                let (end, _) = advance(method, model, h, n, state([0.0], [1.0]));
+                distance(&end, &state([4f64.sin()], [4f64.cos()]))
+            })
+            .collect();
+        observed_order(&steps, &errors, 1e-12).unwrap()
+    }
+
+    #[test]
+    fn observed_order_on_the_oscillator_equals_declared_order() {
+        for points in 3..=6 {
+            let method = SpectralCollocation::new(points);
+            let declared = Method::<1>::info(&method).order as f64;
+            for order in [
+                oscillator_order(&method, &Oscillator::<false>),
+                oscillator_order(&method, &Oscillator::<true>),
+            ] {
+                assert!(
+                    (order - declared).abs() < 0.15,
+                    "points {points}: observed {order:.3}, declared {declared}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_point_and_newton_paths_agree_on_a_constant_mass_problem() {
+        let start = state([0.3, -0.2], [0.1, 0.4]);
+        for method in [SpectralCollocation::new(4), SpectralCollocation::new(6)] {
+            let (fixed, workspace) = advance(&method, &HenonHeiles::<true>, 0.2, 20, start);
+            assert!(workspace.constant_mass.is_some());
+            let (newton, workspace) = advance(&method, &HenonHeiles::<false>, 0.2, 20, start);
+            assert!(workspace.constant_mass.is_none());
+            let difference = distance(&fixed, &newton);
+            assert!(
+                difference <= 1e-13,
+                "{method:?}: paths differ by {difference:e}"
+            );
+        }
+    }
+
+    /// Central differences of the step map with δ = 1e-6 (each evaluation from a fresh
+    /// workspace, converged to round-off): truncation δ² |Φ'''| ≈ 1e-12 and round-off
+    /// ε/δ ≈ 1e-10, so the tangent map must agree to 1e-8.
+    fn assert_tangent_matches_central_differences<L: Lagrangian<N>, const N: usize>(
+        method: &SpectralCollocation,
+        model: &L,
+        start: State<N>,
+    ) {
+        let (h, delta) = (0.3, 1e-6);
+        let end = |x: State<N>| {
+            let (after, _) = advance(method, model, h, 1, x);
+            DVector::from_iterator(2 * N, after.q.iter().chain(after.y.iter()).copied())
+        };
+        let mut workspace = method.workspace(model, h).unwrap();
+        let (_, tangent) = method
+            .tangent_map(model, &mut workspace, 0.0, h, &start)
+            .unwrap();
+        let phi = tangent.matrix();
+        for j in 0..2 * N {
+            let (mut plus, mut minus) = (start, start);
+            if j < N {
+                plus.q[j] += delta;
+                minus.q[j] -= delta;
+            } else {
+                plus.y[j - N] += delta;
+                minus.y[j - N] -= delta;
+            }
+            let column = (end(plus) - end(minus)) / (2.0 * delta);
+            let error = (phi.column(j) - &column).amax();
+            assert!(error <= 1e-8, "column {j}: {} vs {column}", phi.column(j));
+        }
+    }
+
+    #[test]
+    fn tangent_map_matches_central_differences_of_the_step_map() {
+        let method = SpectralCollocation::new(5);
+        let start = state([0.5, -0.3], [0.4, 0.6]);
+        assert_tangent_matches_central_differences(&method, &VariableMass, start);
+        // The fixed-point path keeps no Jacobians: the tangent map evaluates them itself.
+        assert_tangent_matches_central_differences(&method, &HenonHeiles::<true>, start);
+        assert_tangent_matches_central_differences(
+            &method,
+            &Damped { c: 0.7 },
+            state([1.0], [-0.5]),
+        );
+    }
+
+    #[test]
+    fn invalid_options_are_invalid_parameters_named_after_the_option() {
+        let cases = [
+            (SpectralCollocation::new(1), "points"),
+            (SpectralCollocation::new(MAX_POINTS + 1), "points"),
+            (
+                SpectralCollocation::new(4).with_max_iterations(0),
+                "max_iterations",
+            ),
+        ];
+        for (method, expected) in cases {
+            match method.workspace(&Oscillator::<false>, 0.1) {
+                Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, expected),
+                other => panic!("{method:?}: expected InvalidParameter, got {other:?}"),
+            }
+        }
+        assert!(matches!(
+            SpectralCollocation::new(4).workspace(&Oscillator::<false>, -0.1),
+            Err(Error::InvalidParameter { name, .. }) if name == "h"
+        ));
+    }
+}

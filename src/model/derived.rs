@@ -498,3 +498,396 @@ pub(crate) fn cached_mass_inverse<L: Lagrangian<N>, const N: usize>(
         crate::linalg::invert_small(&mass).ok_or(crate::error::StepFailure::SingularMatrix)?;
     Ok(*cache.insert(inverse))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Structure;
+
+    /// Harmonic oscillator L = q̇²/2 − q²/2.
+    struct Oscillator;
+    impl Lagrangian<1> for Oscillator {
+        const TIME_DEPENDENT: bool = false;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (v[0] * v[0] - q[0] * q[0]) * 0.5
+        }
+    }
+
+    /// Position-dependent mass: L = ½ (1 + q₁²) q̇₀² + ½ q̇₁² − V(q),
+    /// V = ½ q₀² + ½ q₁² + ¼ q₀⁴.
+    struct VariableMass;
+    impl Lagrangian<2> for VariableMass {
+        const TIME_DEPENDENT: bool = false;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            let kinetic = (q[1] * q[1] + 1.0) * v[0] * v[0] * 0.5 + v[1] * v[1] * 0.5;
+            let potential = (q[0] * q[0] + q[1] * q[1]) * 0.5 + q[0].powi(4) * 0.25;
+            kinetic - potential
+        }
+    }
+
+    /// The closed forms of [`VariableMass`], derived by hand.
+    mod variable_mass {
+        use nalgebra::{SMatrix, SVector};
+        pub fn value(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> f64 {
+            0.5 * (1.0 + q[1] * q[1]) * v[0] * v[0] + 0.5 * v[1] * v[1]
+                - 0.5 * (q[0] * q[0] + q[1] * q[1])
+                - 0.25 * q[0].powi(4)
+        }
+        /// ∂L/∂q = (−q₀ − q₀³, q₁ q̇₀² − q₁).
+        pub fn lq(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
+            SVector::from([-q[0] - q[0].powi(3), q[1] * v[0] * v[0] - q[1]])
+        }
+        /// p = ((1 + q₁²) q̇₀, q̇₁).
+        pub fn momentum(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
+            SVector::from([(1.0 + q[1] * q[1]) * v[0], v[1]])
+        }
+        /// L_qq = diag(−1 − 3q₀², q̇₀² − 1).
+        pub fn lqq(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SMatrix<f64, 2, 2> {
+            SMatrix::<f64, 2, 2>::new(-1.0 - 3.0 * q[0] * q[0], 0.0, 0.0, v[0] * v[0] - 1.0)
+        }
+        /// (L_qv)_ij = ∂²L/∂qᵢ∂q̇ⱼ: only (1, 0) = 2 q₁ q̇₀.
+        pub fn lqv(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SMatrix<f64, 2, 2> {
+            SMatrix::<f64, 2, 2>::new(0.0, 0.0, 2.0 * q[1] * v[0], 0.0)
+        }
+        /// L_vv = diag(1 + q₁², 1).
+        pub fn lvv(q: &SVector<f64, 2>) -> SMatrix<f64, 2, 2> {
+            SMatrix::<f64, 2, 2>::new(1.0 + q[1] * q[1], 0.0, 0.0, 1.0)
+        }
+        /// E = T + V.
+        pub fn energy(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> f64 {
+            0.5 * (1.0 + q[1] * q[1]) * v[0] * v[0]
+                + 0.5 * v[1] * v[1]
+                + 0.5 * (q[0] * q[0] + q[1] * q[1])
+                + 0.25 * q[0].powi(4)
+        }
+        /// Euler–Lagrange: d/dt[(1 + q₁²) q̇₀] = −q₀ − q₀³ gives
+        /// q̈₀ = (−q₀ − q₀³ − 2 q₁ q̇₁ q̇₀) / (1 + q₁²), and q̈₁ = q₁ q̇₀² − q₁.
+        pub fn acceleration(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
+            SVector::from([
+                (-q[0] - q[0].powi(3) - 2.0 * q[1] * v[1] * v[0]) / (1.0 + q[1] * q[1]),
+                q[1] * v[0] * v[0] - q[1],
+            ])
+        }
+    }
+
+    /// Time-dependent mass: L = ½ (2 + sin t) q̇² − ½ q², whose Euler–Lagrange equation
+    /// (2 + sin t) q̈ + cos t · q̇ = −q needs the L_vt term.
+    struct TimeDependentMass;
+    impl Lagrangian<1> for TimeDependentMass {
+        fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (t.sin() + 2.0) * v[0] * v[0] * 0.5 - q[0] * q[0] * 0.5
+        }
+    }
+
+    /// Forced oscillator: L = q̇²/2 − q²/2, f_L = −c q̇ − b q³ + a cos t.
+    struct Forced;
+    const DAMPING: f64 = 0.3;
+    const CUBIC: f64 = 0.2;
+    const DRIVE: f64 = 0.5;
+    impl Lagrangian<1> for Forced {
+        const TIME_DEPENDENT: bool = false;
+        const FORCED: bool = true;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (v[0] * v[0] - q[0] * q[0]) * 0.5
+        }
+        fn external_force<D: Scalar>(
+            &self,
+            t: D,
+            q: &SVector<D, 1>,
+            v: &SVector<D, 1>,
+        ) -> SVector<D, 1> {
+            SVector::from([v[0] * (-DAMPING) - q[0].powi(3) * CUBIC + t.cos() * DRIVE])
+        }
+    }
+
+    /// Relativistic particle in a well: L = −√(1 − q̇²) − q²/2, p = q̇/√(1 − q̇²), whose
+    /// inverse Legendre map q̇ = p/√(1 + p²) needs several Newton iterations.
+    struct Relativistic;
+    impl Lagrangian<1> for Relativistic {
+        const TIME_DEPENDENT: bool = false;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            -(-(v[0] * v[0]) + 1.0).sqrt() - q[0] * q[0] * 0.5
+        }
+    }
+
+    /// Singular mass matrix: L = ½ q̇₀² − ½ q₀² − ½ q₁² (q₁ has no kinetic term).
+    struct Degenerate;
+    impl Lagrangian<2> for Degenerate {
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            (v[0] * v[0] - q[0] * q[0] - q[1] * q[1]) * 0.5
+        }
+    }
+
+    /// Planar isotropic oscillator L = ½|q̇|² − ½|q|², invariant under rotations
+    /// ξ(q) = (−q₁, q₀): the Noether momentum is the angular momentum q₀ q̇₁ − q₁ q̇₀.
+    struct Planar;
+    impl Lagrangian<2> for Planar {
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            (v.dot(v) - q.dot(q)) * 0.5
+        }
+    }
+    impl Symmetries<2> for Planar {
+        fn generator_count(&self) -> usize {
+            1
+        }
+        fn momentum_name(&self, _index: usize) -> &'static str {
+            "angular momentum"
+        }
+        fn generator(&self, _index: usize, q: &SVector<f64, 2>) -> SVector<f64, 2> {
+            SVector::from([-q[1], q[0]])
+        }
+    }
+
+    /// Constant, non-diagonal mass M = [[2, 1], [1, 3]]: L = ½ q̇ᵀMq̇ − ½|q|².
+    struct ConstantMass;
+    impl Lagrangian<2> for ConstantMass {
+        const STRUCTURE: Structure = Structure::ConstantMass;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            (v[0] * v[0] * 2.0 + v[0] * v[1] * 2.0 + v[1] * v[1] * 3.0 - q.dot(q)) * 0.5
+        }
+    }
+
+    /// A few (q, q̇) points, away from any symmetry of the closed forms.
+    fn points() -> [(SVector<f64, 2>, SVector<f64, 2>); 3] {
+        [
+            (SVector::from([0.3, -0.7]), SVector::from([1.1, 0.4])),
+            (SVector::from([-1.2, 0.5]), SVector::from([-0.3, 2.0])),
+            (SVector::from([2.0, 1.5]), SVector::from([0.8, -1.3])),
+        ]
+    }
+
+    /// |a − b| ≤ tolerance · max(1, |b|), entry by entry.
+    fn assert_close<const R: usize, const C: usize>(
+        a: &SMatrix<f64, R, C>,
+        b: &SMatrix<f64, R, C>,
+        tolerance: f64,
+    ) {
+        for (x, y) in a.iter().zip(b.iter()) {
+            assert!(
+                (x - y).abs() <= tolerance * y.abs().max(1.0),
+                "{a} differs from {b} by more than {tolerance:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn first_derivatives_match_hand_derived_gradients() {
+        let model = VariableMass;
+        for (q, v) in points() {
+            let first = model.first_derivatives(0.0, &q, &v);
+            let expected = variable_mass::value(&q, &v);
+            assert!((first.value - expected).abs() <= 1e-15 * expected.abs().max(1.0));
+            assert!((model.value(0.0, &q, &v) - expected).abs() <= 1e-15 * expected.abs().max(1.0));
+            assert_close(&first.q, &variable_mass::lq(&q, &v), 1e-15);
+            assert_close(&first.v, &variable_mass::momentum(&q, &v), 1e-15);
+            // The scalar-sweep paths of the force and the momentum.
+            assert_close(&model.force(0.0, &q, &v), &variable_mass::lq(&q, &v), 1e-15);
+            assert_close(
+                &model.momentum(0.0, &q, &v),
+                &variable_mass::momentum(&q, &v),
+                1e-15,
+            );
+        }
+    }
+
+    #[test]
+    fn hessian_blocks_match_hand_derived_second_derivatives() {
+        let model = VariableMass;
+        for (q, v) in points() {
+            let second = model.second_derivatives(0.0, &q, &v);
+            assert!((second.value - variable_mass::value(&q, &v)).abs() <= 1e-14);
+            assert_close(&second.q, &variable_mass::lq(&q, &v), 1e-15);
+            assert_close(&second.v, &variable_mass::momentum(&q, &v), 1e-15);
+            assert_close(&second.qq, &variable_mass::lqq(&q, &v), 1e-15);
+            assert_close(&second.qv, &variable_mass::lqv(&q, &v), 1e-15);
+            assert_close(&second.vv, &variable_mass::lvv(&q), 1e-15);
+            assert_close(
+                &model.mass_matrix(0.0, &q, &v),
+                &variable_mass::lvv(&q),
+                1e-15,
+            );
+        }
+    }
+
+    #[test]
+    fn energy_is_kinetic_plus_potential() {
+        for (q, v) in [(0.0, 1.0), (0.6, -0.8), (-2.5, 3.25)] {
+            let energy = Oscillator.energy(0.0, &SVector::from([q]), &SVector::from([v]));
+            assert!(
+                (energy - 0.5 * (v * v + q * q)).abs() <= 1e-15 * energy,
+                "{energy}"
+            );
+        }
+        for (q, v) in points() {
+            let expected = variable_mass::energy(&q, &v);
+            let energy = VariableMass.energy(0.0, &q, &v);
+            assert!(
+                (energy - expected).abs() <= 1e-15 * expected,
+                "{energy} {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn acceleration_solves_the_hand_derived_euler_lagrange_equations() {
+        for (q, v) in points() {
+            let a = VariableMass.acceleration(0.0, &q, &v).unwrap();
+            assert_close(&a, &variable_mass::acceleration(&q, &v), 1e-14);
+        }
+        // (2 + sin t) q̈ + cos t · q̇ + q = 0: the ∂²L/∂q̇∂t term.
+        for (t, q, v) in [(0.0, 0.5, 1.0), (1.3, -0.4, 0.7), (4.0, 2.0, -1.5)] {
+            let a = TimeDependentMass
+                .acceleration(t, &SVector::from([q]), &SVector::from([v]))
+                .unwrap()[0];
+            let expected = (-q - t.cos() * v) / (2.0 + t.sin());
+            assert!(
+                (a - expected).abs() <= 1e-15 * expected.abs().max(1.0),
+                "{a}"
+            );
+        }
+        // q̈ = −q + f_L(t, q, q̇).
+        for (t, q, v) in [(0.0, 0.5, 1.0), (2.1, -0.4, 0.7)] {
+            let a = Forced
+                .acceleration(t, &SVector::from([q]), &SVector::from([v]))
+                .unwrap()[0];
+            let expected = -q - DAMPING * v - CUBIC * q * q * q + DRIVE * t.cos();
+            assert!(
+                (a - expected).abs() <= 1e-15 * expected.abs().max(1.0),
+                "{a}"
+            );
+        }
+    }
+
+    /// Central differences of the acceleration in q and q̇ with step δ = 1e-5: truncation
+    /// error δ²/6 · |f'''| ≈ 1e-10 and round-off ε |f| / δ ≈ 1e-11 for these O(1) states,
+    /// so the Jacobian must agree to 1e-8 (relative to max(1, |entry|)).
+    fn assert_jacobian_matches_central_differences<L: Lagrangian<N>, const N: usize>(
+        model: &L,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) {
+        let delta = 1e-5;
+        let jacobian = model.acceleration_jacobian(t, q, v).unwrap();
+        assert_close(
+            &jacobian.value,
+            &model.acceleration(t, q, v).unwrap(),
+            1e-15,
+        );
+        let mut dq = SMatrix::<f64, N, N>::zeros();
+        let mut dv = SMatrix::<f64, N, N>::zeros();
+        for j in 0..N {
+            let mut e = SVector::<f64, N>::zeros();
+            e[j] = delta;
+            let column = (model.acceleration(t, &(q + e), v).unwrap()
+                - model.acceleration(t, &(q - e), v).unwrap())
+                / (2.0 * delta);
+            dq.set_column(j, &column);
+            let column = (model.acceleration(t, q, &(v + e)).unwrap()
+                - model.acceleration(t, q, &(v - e)).unwrap())
+                / (2.0 * delta);
+            dv.set_column(j, &column);
+        }
+        assert_close(&jacobian.q, &dq, 1e-8);
+        assert_close(&jacobian.v, &dv, 1e-8);
+    }
+
+    #[test]
+    fn acceleration_jacobian_matches_central_differences() {
+        for (q, v) in points() {
+            assert_jacobian_matches_central_differences(&VariableMass, 0.0, &q, &v);
+        }
+        for (t, q, v) in [(0.4, 0.5, 1.0), (3.0, -1.1, 0.3)] {
+            let (q, v) = (SVector::from([q]), SVector::from([v]));
+            assert_jacobian_matches_central_differences(&TimeDependentMass, t, &q, &v);
+            assert_jacobian_matches_central_differences(&Forced, t, &q, &v);
+        }
+    }
+
+    #[test]
+    fn velocity_inverts_momentum_to_round_off() {
+        // Quadratic in q̇: one Newton step from a zero guess is exact.
+        for (q, v) in points() {
+            let p = variable_mass::momentum(&q, &v);
+            let inverse = VariableMass
+                .velocity(0.0, &q, &p, &SVector::zeros())
+                .unwrap();
+            assert_close(&inverse, &v, 2.0 * f64::EPSILON);
+        }
+        // Relativistic: q̇ = p/√(1 + p²) in closed form, several Newton iterations. The
+        // guess 0.99 sign(p) lies beyond the root on the branch where p(q̇) is convex (concave
+        // for p < 0), so Newton converges monotonically without leaving |q̇| < 1.
+        for p in [0.3f64, -1.7, 4.0] {
+            let q = SVector::from([0.2]);
+            let guess = SVector::from([0.99 * p.signum()]);
+            let v = Relativistic
+                .velocity(0.0, &q, &SVector::from([p]), &guess)
+                .unwrap()[0];
+            let expected = p / (1.0 + p * p).sqrt();
+            assert!(
+                (v - expected).abs() <= 2.0 * f64::EPSILON,
+                "{v} vs {expected}"
+            );
+            let back = Relativistic.momentum(0.0, &q, &SVector::from([v]))[0];
+            assert!(
+                (back - p).abs() <= 8.0 * f64::EPSILON * p.abs(),
+                "{back} vs {p}"
+            );
+        }
+    }
+
+    #[test]
+    fn external_force_jacobian_matches_hand_derived_derivatives() {
+        let (t, q, v) = (0.7, SVector::from([0.9]), SVector::from([-0.4]));
+        let force = Forced.external_force_jacobian(t, &q, &v);
+        let expected = -DAMPING * v[0] - CUBIC * q[0].powi(3) + DRIVE * t.cos();
+        assert!((force.value[0] - expected).abs() <= 1e-15);
+        assert!((force.q[(0, 0)] + 3.0 * CUBIC * q[0] * q[0]).abs() <= 1e-15);
+        assert!((force.v[(0, 0)] + DAMPING).abs() <= 1e-15);
+        // Unforced models report an exact zero without evaluating anything.
+        assert_eq!(
+            Oscillator.external_force_jacobian(t, &q, &v),
+            ForceJacobian::zeros()
+        );
+    }
+
+    #[test]
+    fn singular_mass_matrix_gives_no_acceleration_and_a_legendre_map_error() {
+        let (q, v) = (SVector::from([0.1, 0.2]), SVector::from([0.3, 0.4]));
+        assert!(Degenerate.acceleration(0.0, &q, &v).is_none());
+        assert!(Degenerate.acceleration_jacobian(0.0, &q, &v).is_none());
+        assert!(matches!(
+            Degenerate.velocity(0.5, &q, &v, &v),
+            Err(Error::LegendreMap {
+                t: 0.5,
+                iterations: 1,
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn noether_momentum_of_rotations_is_the_angular_momentum() {
+        let (q, v) = (SVector::from([0.3, -1.2]), SVector::from([0.7, 0.25]));
+        let expected = q[0] * v[1] - q[1] * v[0];
+        assert!((Planar.noether_momentum(0, 0.0, &q, &v) - expected).abs() <= 1e-15);
+    }
+
+    #[test]
+    fn cached_mass_inverse_is_the_inverse_and_is_computed_once() {
+        // M = [[2, 1], [1, 3]], M⁻¹ = [[3, −1], [−1, 2]] / 5.
+        let expected = SMatrix::<f64, 2, 2>::new(0.6, -0.2, -0.2, 0.4);
+        let mut cache = None;
+        let state = crate::State {
+            q: SVector::from([0.3, 0.1]),
+            y: SVector::from([1.0, -2.0]),
+        };
+        let inverse = cached_mass_inverse(&mut cache, &ConstantMass, 0.0, &state).unwrap();
+        assert_close(&inverse, &expected, 1e-15);
+        // A cached value is returned as is: a stale cache proves no recomputation.
+        let stale = SMatrix::<f64, 2, 2>::identity();
+        cache = Some(stale);
+        let again = cached_mass_inverse(&mut cache, &ConstantMass, 1.0, &state).unwrap();
+        assert_eq!(again, stale);
+    }
+}

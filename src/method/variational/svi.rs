@@ -834,3 +834,419 @@ fn solve<L: Lagrangian<N>, const N: usize>(
         )
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Scalar;
+    use crate::analysis::verify::observed_order;
+    use nalgebra::Complex;
+
+    /// Harmonic oscillator L = q̇²/2 − q²/2, declared [`Structure::ConstantMass`] (fixed-point
+    /// path) or [`Structure::General`] (Newton path).
+    struct Oscillator<const CONSTANT_MASS: bool>;
+    impl<const CONSTANT_MASS: bool> Lagrangian<1> for Oscillator<CONSTANT_MASS> {
+        const TIME_DEPENDENT: bool = false;
+        const STRUCTURE: Structure = if CONSTANT_MASS {
+            Structure::ConstantMass
+        } else {
+            Structure::General
+        };
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (v[0] * v[0] - q[0] * q[0]) * 0.5
+        }
+    }
+
+    /// Hénon–Heiles potential with the constant, non-diagonal mass M = [[2, 1], [1, 3]]:
+    /// L = ½ q̇ᵀMq̇ − ½|q|² − q₀²q₁ + q₁³/3, declared either way.
+    struct HenonHeiles<const CONSTANT_MASS: bool>;
+    impl<const CONSTANT_MASS: bool> Lagrangian<2> for HenonHeiles<CONSTANT_MASS> {
+        const TIME_DEPENDENT: bool = false;
+        const STRUCTURE: Structure = if CONSTANT_MASS {
+            Structure::ConstantMass
+        } else {
+            Structure::General
+        };
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            let kinetic = (v[0] * v[0] * 2.0 + v[0] * v[1] * 2.0 + v[1] * v[1] * 3.0) * 0.5;
+            let potential = q.dot(q) * 0.5 + q[0] * q[0] * q[1] - q[1].powi(3) / 3.0;
+            kinetic - potential
+        }
+    }
+
+    /// Position-dependent mass: L = ½ (1 + q₁²) q̇₀² + ½ q̇₁² − ½ |q|² − ¼ q₀⁴.
+    struct VariableMass;
+    impl Lagrangian<2> for VariableMass {
+        const TIME_DEPENDENT: bool = false;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            let kinetic = (q[1] * q[1] + 1.0) * v[0] * v[0] * 0.5 + v[1] * v[1] * 0.5;
+            kinetic - q.dot(q) * 0.5 - q[0].powi(4) * 0.25
+        }
+    }
+
+    /// The hand-derived Euler–Lagrange equations of [`VariableMass`]:
+    /// q̈₀ = (−q₀ − q₀³ − 2 q₁ q̇₁ q̇₀) / (1 + q₁²), q̈₁ = q₁ q̇₀² − q₁.
+    fn variable_mass_acceleration(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
+        SVector::from([
+            (-q[0] - q[0].powi(3) - 2.0 * q[1] * v[1] * v[0]) / (1.0 + q[1] * q[1]),
+            q[1] * v[0] * v[0] - q[1],
+        ])
+    }
+
+    /// p = ((1 + q₁²) q̇₀, q̇₁) of [`VariableMass`].
+    fn variable_mass_momentum(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
+        SVector::from([(1.0 + q[1] * q[1]) * v[0], v[1]])
+    }
+
+    /// Damped oscillator L = q̇²/2 − q²/2 with friction f_L = −c q̇, declared either way.
+    struct Damped<const CONSTANT_MASS: bool> {
+        c: f64,
+    }
+    impl<const CONSTANT_MASS: bool> Lagrangian<1> for Damped<CONSTANT_MASS> {
+        const TIME_DEPENDENT: bool = false;
+        const FORCED: bool = true;
+        const STRUCTURE: Structure = if CONSTANT_MASS {
+            Structure::ConstantMass
+        } else {
+            Structure::General
+        };
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            (v[0] * v[0] - q[0] * q[0]) * 0.5
+        }
+        fn external_force<D: Scalar>(
+            &self,
+            _t: D,
+            _q: &SVector<D, 1>,
+            v: &SVector<D, 1>,
+        ) -> SVector<D, 1> {
+            v.map(|x| x * (-self.c))
+        }
+    }
+
+    fn state<const N: usize>(q: [f64; N], y: [f64; N]) -> State<N> {
+        State {
+            q: SVector::from(q),
+            y: SVector::from(y),
+        }
+    }
+
+    /// `steps` steps of size `h` from (q, p) at t = 0, by the method alone (no stepping loop).
+    fn advance<L: Lagrangian<N>, const N: usize>(
+        method: &Svi,
+        model: &L,
+        h: f64,
+        steps: usize,
+        start: State<N>,
+    ) -> (State<N>, SviWorkspace<N>) {
+        let mut workspace = method.workspace(model, h).unwrap();
+        let mut current = start;
+        let mut increment = State::zeros();
+        for k in 0..steps {
+            method
+                .step(
+                    model,
+                    &mut workspace,
+                    k as f64 * h,
+                    h,
+                    &current,
+                    &mut increment,
+                )
+                .unwrap();
+            current.q += increment.q;
+            current.y += increment.y;
+        }
+        (current, workspace)
+    }
+
+    fn distance<const N: usize>(a: &State<N>, b: &State<N>) -> f64 {
+        (a.q - b.q).amax().max((a.y - b.y).amax())
+    }
+
+    fn factorial(n: usize) -> f64 {
+        (1..=n).map(|k| k as f64).product()
+    }
+
+    /// The (s, s) Padé approximant of eᶻ, P(z)/P(−z) with
+    /// P(z) = Σⱼ (2s − j)! s! / ((2s)! j! (s − j)!) zʲ: the stability function of the
+    /// s-stage Gauss method (Hairer, Wanner II, §IV.3).
+    fn pade(s: usize, z: Complex<f64>) -> Complex<f64> {
+        let numerator = |z: Complex<f64>| {
+            (0..=s)
+                .map(|j| {
+                    let c = factorial(2 * s - j) * factorial(s)
+                        / (factorial(2 * s) * factorial(j) * factorial(s - j));
+                    z.powu(j as u32) * c
+                })
+                .sum::<Complex<f64>>()
+        };
+        numerator(z) / numerator(-z)
+    }
+
+    fn assert_pade_step<L: Lagrangian<1>>(model: &L, s: usize) {
+        // SVI with s + 1 CGL points and m = s Gauss points is the s-stage Gauss method. On
+        // q̇ = p, ṗ = −q the variable w = q − i p obeys ẇ = i w, so one step maps w to
+        // R(ih) w with R the (s, s) Padé approximant, and the local error is
+        // |R(ih) − e^{ih}| |w| = C_s h^{2s+1} (1 + O(h²)), C_s = (s!)² / ((2s)! (2s + 1)!).
+        let method = Svi::new(s + 1).with_quadrature(s);
+        assert_eq!(Method::<1>::info(&method).order, 2 * s);
+        let (h, q0, p0) = (0.5f64, 0.6, 0.8);
+        let (after, _) = advance(&method, model, h, 1, state([q0], [p0]));
+        let w = pade(s, Complex::new(0.0, h)) * Complex::new(q0, -p0);
+        assert!(
+            (after.q[0] - w.re).abs() <= 2e-15 && (after.y[0] + w.im).abs() <= 2e-15,
+            "s = {s}: step ({}, {}), Padé ({}, {})",
+            after.q[0],
+            after.y[0],
+            w.re,
+            -w.im
+        );
+        let exact = state(
+            [q0 * h.cos() + p0 * h.sin()],
+            [-q0 * h.sin() + p0 * h.cos()],
+        );
+        let error = (after.q[0] - exact.q[0]).hypot(after.y[0] - exact.y[0]);
+        let bound = factorial(s).powi(2) / (factorial(2 * s) * factorial(2 * s + 1))
+            * h.powi(2 * s as i32 + 1);
+        // At h = 0.5 the O(h²) correction lowers the error by 1.5% to 3.6%.
+        assert!(
+            error <= bound && error >= 0.95 * bound,
+            "s = {s}: error {error:e}, leading term {bound:e}"
+        );
+    }
+
+    #[test]
+    fn gauss_quadrature_step_of_the_oscillator_is_the_diagonal_pade_map() {
+        for s in 1..=4 {
+            assert_pade_step(&Oscillator::<false>, s);
+            assert_pade_step(&Oscillator::<true>, s);
+        }
+    }
+
+    /// Observed order (least-squares slope) of `method` on the oscillator from (q, p) = (0, 1)
+    /// over [0, 4], against the exact solution (sin t, cos t).
+    fn oscillator_order<L: Lagrangian<1>>(method: &Svi, model: &L) -> f64 {
+        let steps = [1.0, 0.5, 0.25, 0.125];
+        let errors: Vec<f64> = steps
+            .iter()
+            .map(|&h| {
+                let n = (4.0 / h) as usize;
+                let (end, _) = advance(method, model, h, n, state([0.0], [1.0]));
+                distance(&end, &state([4f64.sin()], [4f64.cos()]))
+            })
+            .collect();
+        observed_order(&steps, &errors, 1e-13).unwrap()
+    }
+
+    #[test]
+    fn observed_order_on_the_oscillator_equals_declared_order() {
+        for (points, quadrature, declared) in [(3, Some(2), 4), (4, Some(3), 6), (4, None, 6)] {
+            let mut method = Svi::new(points);
+            method.quadrature = quadrature;
+            assert_eq!(Method::<1>::info(&method).order, declared);
+            for order in [
+                oscillator_order(&method, &Oscillator::<false>),
+                oscillator_order(&method, &Oscillator::<true>),
+            ] {
+                assert!(
+                    (order - declared as f64).abs() < 0.1,
+                    "{points}/{quadrature:?}: observed {order:.3}, declared {declared}"
+                );
+            }
+        }
+    }
+
+    /// The state of [`VariableMass`] at t = 2 from q = (0.5, −0.3), q̇ = (0.4, 0.6), by
+    /// classical Runge–Kutta on the hand-derived equations with h = 1/2000 (global error
+    /// about 1e-14).
+    fn variable_mass_reference() -> State<2> {
+        let f = |x: &SVector<f64, 4>| {
+            let (q, v) = (
+                x.fixed_rows::<2>(0).into_owned(),
+                x.fixed_rows::<2>(2).into_owned(),
+            );
+            let a = variable_mass_acceleration(&q, &v);
+            SVector::<f64, 4>::from([v[0], v[1], a[0], a[1]])
+        };
+        let h = 1.0 / 2000.0;
+        let mut x = SVector::<f64, 4>::from([0.5, -0.3, 0.4, 0.6]);
+        for _ in 0..4000 {
+            let k1 = f(&x);
+            let k2 = f(&(x + k1 * (0.5 * h)));
+            let k3 = f(&(x + k2 * (0.5 * h)));
+            let k4 = f(&(x + k3 * h));
+            x += (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0);
+        }
+        let (q, v) = (
+            x.fixed_rows::<2>(0).into_owned(),
+            x.fixed_rows::<2>(2).into_owned(),
+        );
+        State {
+            q,
+            y: variable_mass_momentum(&q, &v),
+        }
+    }
+
+    #[test]
+    fn newton_path_with_position_dependent_mass_reaches_declared_order() {
+        let reference = variable_mass_reference();
+        let q0 = SVector::from([0.5, -0.3]);
+        let start = State {
+            q: q0,
+            y: variable_mass_momentum(&q0, &SVector::from([0.4, 0.6])),
+        };
+        let steps = [0.4f64, 0.2, 0.1, 0.05];
+        for (points, quadrature) in [(3, 2), (4, 3)] {
+            let method = Svi::new(points).with_quadrature(quadrature);
+            let errors: Vec<f64> = steps
+                .iter()
+                .map(|&h| {
+                    let n = (2.0 / h).round() as usize;
+                    let (end, workspace) = advance(&method, &VariableMass, h, n, start);
+                    assert!(workspace.constant_mass.is_none());
+                    distance(&end, &reference)
+                })
+                .collect();
+            let order = observed_order(&steps, &errors, 1e-11).unwrap();
+            let declared = Method::<2>::info(&method).order as f64;
+            assert!(
+                (order - declared).abs() < 0.2,
+                "{points}/{quadrature}: observed {order:.3}, declared {declared}, {errors:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn fixed_point_and_newton_paths_agree_on_a_constant_mass_problem() {
+        let start = state([0.3, -0.2], [0.1, 0.4]);
+        for method in [Svi::new(4).with_quadrature(3), Svi::new(5)] {
+            let (fixed, workspace) = advance(&method, &HenonHeiles::<true>, 0.2, 20, start);
+            assert!(workspace.constant_mass.is_some());
+            let (newton, workspace) = advance(&method, &HenonHeiles::<false>, 0.2, 20, start);
+            assert!(workspace.constant_mass.is_none());
+            let difference = distance(&fixed, &newton);
+            assert!(
+                difference <= 1e-13,
+                "{method:?}: paths differ by {difference:e}"
+            );
+        }
+    }
+
+    #[test]
+    fn forced_fixed_point_falls_back_to_newton_only_when_it_fails() {
+        let method = Svi::new(4).with_quadrature(3);
+        let start = state([1.0], [0.0]);
+        // Weak friction (h c = 0.025): the fixed point converges and matches Newton.
+        let (fixed, workspace) = advance(&method, &Damped::<true> { c: 0.1 }, 0.25, 8, start);
+        assert!(!workspace.newton_only);
+        let (newton, _) = advance(&method, &Damped::<false> { c: 0.1 }, 0.25, 8, start);
+        assert!(distance(&fixed, &newton) <= 1e-14, "{fixed:?} {newton:?}");
+        // Strong friction (h c = 20): the fixed point diverges, the step is redone by Newton
+        // from the same starting values, and the run stays on Newton.
+        let (fallback, workspace) = advance(&method, &Damped::<true> { c: 40.0 }, 0.5, 4, start);
+        assert!(workspace.newton_only);
+        let (newton, _) = advance(&method, &Damped::<false> { c: 40.0 }, 0.5, 4, start);
+        assert!(
+            distance(&fallback, &newton) <= 1e-14,
+            "{fallback:?} {newton:?}"
+        );
+    }
+
+    fn assert_symplectic<L: Lagrangian<2>>(method: &Svi, model: &L, start: State<2>) {
+        let h = 0.3;
+        let mut workspace = method.workspace(model, h).unwrap();
+        let (_, tangent) = method
+            .tangent_map(model, &mut workspace, 0.0, h, &start)
+            .unwrap();
+        let error = tangent.symplecticity_error();
+        assert!(error <= 1e-13, "{method:?}: ‖ΦᵀJΦ − J‖ = {error:e}");
+    }
+
+    #[test]
+    fn tangent_map_is_symplectic() {
+        let start = state([0.5, -0.3], [0.4, 0.6]);
+        for method in [Svi::new(3).with_quadrature(2), Svi::default()] {
+            assert_symplectic(&method, &VariableMass, start);
+            assert_symplectic(&method, &HenonHeiles::<true>, start);
+            assert_symplectic(&method, &HenonHeiles::<false>, start);
+        }
+    }
+
+    /// Central differences of the step map with δ = 1e-6 (each evaluation from a fresh
+    /// workspace, converged to round-off): truncation δ² |Φ'''| ≈ 1e-12 and round-off
+    /// ε/δ ≈ 1e-10, so the tangent map must agree to 1e-8.
+    fn assert_tangent_matches_central_differences<L: Lagrangian<N>, const N: usize>(
+        method: &Svi,
+        model: &L,
+        start: State<N>,
+    ) {
+        let (h, delta) = (0.3, 1e-6);
+        let end = |x: State<N>| {
+            let (after, _) = advance(method, model, h, 1, x);
+            DVector::from_iterator(2 * N, after.q.iter().chain(after.y.iter()).copied())
+        };
+        let mut workspace = method.workspace(model, h).unwrap();
+        let (_, tangent) = method
+            .tangent_map(model, &mut workspace, 0.0, h, &start)
+            .unwrap();
+        let phi = tangent.matrix();
+        for j in 0..2 * N {
+            let (mut plus, mut minus) = (start, start);
+            if j < N {
+                plus.q[j] += delta;
+                minus.q[j] -= delta;
+            } else {
+                plus.y[j - N] += delta;
+                minus.y[j - N] -= delta;
+            }
+            let column = (end(plus) - end(minus)) / (2.0 * delta);
+            let error = (phi.column(j) - &column).amax();
+            assert!(error <= 1e-8, "column {j}: {} vs {column}", phi.column(j));
+        }
+    }
+
+    #[test]
+    fn tangent_map_matches_central_differences_of_the_step_map() {
+        let method = Svi::new(4).with_quadrature(3);
+        assert_tangent_matches_central_differences(
+            &method,
+            &VariableMass,
+            state([0.5, -0.3], [0.4, 0.6]),
+        );
+        // The force Jacobian enters too (the forced map is not symplectic).
+        assert_tangent_matches_central_differences(
+            &method,
+            &Damped::<false> { c: 0.7 },
+            state([1.0], [-0.5]),
+        );
+    }
+
+    #[test]
+    fn invalid_options_are_invalid_parameters_named_after_the_option() {
+        let mut zero_quadrature = Svi::new(4);
+        zero_quadrature.quadrature = Some(0);
+        let cases = [
+            (Svi::new(1), "points"),
+            (Svi::new(MAX_POINTS + 1), "points"),
+            (zero_quadrature, "quadrature"),
+            (Svi::new(4).with_quadrature(MAX_POINTS + 1), "quadrature"),
+            (Svi::new(4).with_max_iterations(0), "max_iterations"),
+        ];
+        for (method, expected) in cases {
+            match method.workspace(&Oscillator::<false>, 0.1) {
+                Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, expected),
+                other => panic!("{method:?}: expected InvalidParameter, got {other:?}"),
+            }
+        }
+        // The largest valid configuration is accepted, and the step size is checked too.
+        assert!(
+            Svi::new(MAX_POINTS)
+                .with_quadrature(MAX_POINTS)
+                .workspace(&Oscillator::<false>, 0.1)
+                .is_ok()
+        );
+        assert!(matches!(
+            Svi::new(4).workspace(&Oscillator::<false>, 0.0),
+            Err(Error::InvalidParameter { name, .. }) if name == "h"
+        ));
+    }
+}
