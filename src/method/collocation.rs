@@ -22,8 +22,9 @@
 //!
 //! # Properties
 //! - an s-stage collocation method with nodes c_1, …, c_s; its order is the order of the
-//!   interpolatory quadrature on those nodes (s for even s and s + 1 for odd s: the CGL nodes
-//!   without their first point are not symmetric);
+//!   interpolatory quadrature on those nodes, computed by `info()` from the moment
+//!   conditions: s for every s (the CGL nodes without their first point are not symmetric, so
+//!   there is no extra order; e.g. s = 2, nodes {1/2, 1}: order 2; the unit tests observe it);
 //! - symmetric: no; symplectic: no (energy and momenta drift, Figs. 14–15 of the paper).
 //!
 //! # References
