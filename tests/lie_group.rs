@@ -19,8 +19,9 @@ use svi::lie_group::{
     RigidTrajectory,
 };
 use svi::observer::{EnergyError, Every, InvariantError, Observer};
+use svi::solve::{SolveOptions, Span};
 use svi::verify::observed_order;
-use svi::{Error, Scalar};
+use svi::{Error, Recovery, RunOptions, Scalar};
 use svi_models::{FreeRigidBody, HeavyTop, Pendulum3d};
 
 type Matrix3 = SMatrix<f64, 3, 3>;
@@ -738,4 +739,85 @@ fn symmetry_as_declared() {
             assert!(defect > 1e-12, "({points}, {quadrature}): {defect:e}");
         }
     }
+}
+
+/// Error of a rigid-body point against the RK4 reference at its time.
+fn point_error(point: &RigidPoint, exact: &(Matrix3, Vector3)) -> f64 {
+    let attitude = log(&(exact.0.transpose() * point.r)).norm();
+    attitude.max((point.momentum - exact.1).norm() / exact.1.norm())
+}
+
+#[test]
+fn step_and_degree_adaptivity_on_so3_meet_their_tolerance() {
+    // The one stepping core serves SO(3) too: step doubling and degree adaptivity of the
+    // Lie-group SVI on the heavy top over T = 1, against RK4 with 10⁵ steps.
+    let model = HeavyTop::default();
+    let (r0, omega0) = model.initial_state();
+    let body = top_body(&model);
+    let p0 = Vector3::from_fn(|i, _| body.inertia[i] * omega0[i]);
+    let exact = reference(&body, &r0, &p0, 1.0, 100_000);
+    let integrator = RigidBodyIntegrator::new(model, LieSvi::new(3));
+    let initial = RigidInitial::Velocity {
+        r: r0,
+        omega: omega0,
+    };
+    let span = Span::new(0.0, 1.0);
+    for tol in [1e-6, 1e-8, 1e-10] {
+        let step = integrator
+            .solve(&span, initial, &SolveOptions::step_adaptive(tol))
+            .unwrap();
+        assert!(step.adaptivity.accepted > 10);
+        assert!(point_error(&step.last, &exact) < tol, "step, tol {tol:e}");
+        let degree = integrator
+            .solve(
+                &span,
+                initial,
+                &SolveOptions::degree_adaptive(0.1, tol, 2, 12),
+            )
+            .unwrap();
+        assert!(degree.adaptivity.points.len() > 0);
+        assert!(
+            point_error(&degree.last, &exact) < tol,
+            "degree, tol {tol:e}"
+        );
+    }
+}
+
+#[test]
+fn recovery_carries_a_rigid_run_past_a_failing_step() {
+    let model = HeavyTop::default();
+    let (r, omega) = model.initial_state();
+    let initial = RigidInitial::Velocity { r, omega };
+    let integrator = RigidBodyIntegrator::new(model, LieSvi::new(3));
+    // h = 0.5 is too large for the Newton iteration at the fourth step.
+    let mut trajectory = RigidTrajectory::new();
+    let failure = integrator
+        .try_run(
+            0.0,
+            initial,
+            0.5,
+            10.0,
+            &RunOptions::default(),
+            &mut trajectory,
+        )
+        .unwrap_err();
+    let Error::NonConvergence { step, .. } = failure.error else {
+        panic!("{failure}")
+    };
+    let partial = failure.partial.unwrap();
+    assert_eq!(partial.statistics.steps, step);
+    assert_eq!(trajectory.points.len(), step + 1);
+    assert_eq!(trajectory.points[step].r, partial.last.r);
+    // Halving failed steps gets through, on the same grid, through the same points up to
+    // the failure.
+    let options = RunOptions::default().with_recovery(Recovery::HalveStep { max_halvings: 4 });
+    let mut recovered = RigidTrajectory::new();
+    let run = integrator
+        .try_run(0.0, initial, 0.5, 10.0, &options, &mut recovered)
+        .unwrap();
+    assert_eq!(run.statistics.steps, 20);
+    assert!(run.statistics.retries > 0);
+    assert_eq!(recovered.points.len(), 21);
+    assert_eq!(recovered.points[..=step], trajectory.points[..]);
+    assert_eq!(recovered.points[20].t, 10.0);
 }

@@ -325,3 +325,134 @@ fn a_tolerance_below_the_minimum_step_ends_in_a_typed_error() {
         other => panic!("expected StepSizeTooSmall, got {other}"),
     }
 }
+
+/// Stops the run at the first observed point at or after `at`.
+struct StopAt {
+    at: f64,
+    seen: Vec<(usize, f64)>,
+}
+
+impl<L> svi::observer::Observer<L, svi::PhasePoint<2>> for StopAt {
+    fn observe(
+        &mut self,
+        _: &L,
+        step: usize,
+        point: &svi::PhasePoint<2>,
+    ) -> std::ops::ControlFlow<()> {
+        self.seen.push((step, point.t));
+        if point.t >= self.at {
+            std::ops::ControlFlow::Break(())
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
+    }
+}
+
+#[test]
+fn every_solve_mode_reports_its_accepted_steps_to_observers() {
+    // The solve modes run on the stepping loop of `Integrator::try_run`: observers see the
+    // initial point and every accepted step, numbered 0, 1, 2, …, at increasing times, and
+    // the last one is the solution's end point.
+    let (model, initial) = kepler(0.5);
+    let integrator = Integrator::new(model, Svi::new(6).with_quadrature(5));
+    let span = Span::new(0.0, 10.0);
+    for options in [
+        SolveOptions::fixed_step(0.1),
+        SolveOptions::step_adaptive(1e-8),
+        SolveOptions::degree_adaptive(0.25, 1e-9, 3, 12),
+    ] {
+        let mut trajectory = svi::observer::Trajectory::new();
+        let solution = integrator
+            .try_solve(&span, initial, &options, &mut trajectory)
+            .unwrap();
+        let points = &trajectory.points;
+        assert_eq!(
+            points.len(),
+            solution.adaptivity.accepted + 1,
+            "{:?}",
+            options.adapt
+        );
+        assert!(points.windows(2).all(|pair| pair[0].t < pair[1].t));
+        assert_eq!(points[0].t, 0.0);
+        let end = points.last().unwrap();
+        assert_eq!(end.t, 10.0);
+        assert_eq!(end.q, solution.last.q);
+        assert!((end.v - solution.last.v).amax() < 1e-14);
+        assert!(kepler_error(&model, &initial, end.t, &end.q) < 1e-6);
+        assert!(!solution.stopped);
+    }
+}
+
+#[test]
+fn an_observer_stops_a_solve_where_it_asks() {
+    let (model, initial) = kepler(0.5);
+    let integrator = Integrator::new(model, Svi::new(6).with_quadrature(5));
+    for options in [
+        SolveOptions::fixed_step(0.1),
+        SolveOptions::step_adaptive(1e-8),
+        SolveOptions::degree_adaptive(0.25, 1e-9, 3, 12),
+    ] {
+        let mut stop = StopAt {
+            at: 3.0,
+            seen: Vec::new(),
+        };
+        let solution = integrator
+            .try_solve(&Span::new(0.0, 10.0), initial, &options, &mut stop)
+            .unwrap();
+        assert!(solution.stopped);
+        let &(step, t) = stop.seen.last().unwrap();
+        let (_, before) = stop.seen[stop.seen.len() - 2];
+        assert!(
+            before < 3.0 && t >= 3.0,
+            "{:?}: stopped at {t}",
+            options.adapt
+        );
+        assert_eq!(solution.last.t, t);
+        assert_eq!(step + 1, stop.seen.len());
+        // The output times up to the stop are served: here the start only.
+        assert_eq!(solution.points.len(), 1);
+    }
+}
+
+#[test]
+fn recovery_and_divergence_limit_apply_to_fixed_step_solves() {
+    // e = 0.9 with h = 0.2: a step fails at the second pericentre passage (as in
+    // `Integrator::try_run`); halving failed steps gets the solve through, on the same grid.
+    let (model, initial) = kepler(0.9);
+    let integrator = Integrator::new(model, Svi::new(6));
+    let span = Span::new(0.0, 200.0);
+    let plain = SolveOptions::fixed_step(0.2);
+    let failure = integrator
+        .try_solve(&span, initial, &plain, &mut ())
+        .unwrap_err();
+    assert!(matches!(failure.error, Error::NonConvergence { .. }));
+    let mut options = SolveOptions::fixed_step(0.2);
+    options.run =
+        svi::RunOptions::default().with_recovery(svi::Recovery::HalveStep { max_halvings: 4 });
+    let solution = integrator.solve(&span, initial, &options).unwrap();
+    let run = integrator
+        .try_run(0.0, initial, 0.2, 200.0, &options.run, &mut ())
+        .unwrap();
+    assert_eq!(solution.last.q, run.last.q);
+    assert_eq!(solution.statistics, run.statistics);
+    assert!(run.statistics.retries > 0);
+    // A divergence limit below the orbit's size stops the solve at the first step beyond it.
+    options.run = svi::RunOptions::default().with_divergence_limit(0.5);
+    let failure = integrator
+        .try_solve(&span, initial, &options, &mut ())
+        .unwrap_err();
+    let Error::Diverged { norm, limit, .. } = failure.error else {
+        panic!("{failure}")
+    };
+    assert!(norm > 0.5 && limit == 0.5);
+    assert!(failure.partial.unwrap().last.q.amax() <= 0.5);
+    // Recovery is for fixed steps: the adaptive modes retry failed steps themselves.
+    let mut adaptive = SolveOptions::step_adaptive(1e-8);
+    adaptive.run =
+        svi::RunOptions::default().with_recovery(svi::Recovery::HalveStep { max_halvings: 4 });
+    let Err(Error::InvalidParameter { name, .. }) = integrator.solve(&span, initial, &adaptive)
+    else {
+        panic!("recovery with step adaptivity must be rejected")
+    };
+    assert_eq!(name, "recovery");
+}

@@ -533,6 +533,30 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         }
     }
 
+    fn points(&self) -> Option<usize> {
+        Some(self.points)
+    }
+
+    /// The same method with `points` CGL points; an explicit quadrature keeps its offset
+    /// from the points.
+    fn with_points(&self, points: usize) -> Option<Self> {
+        let quadrature = self
+            .quadrature
+            .map(|m| (m + points).saturating_sub(self.points).max(1));
+        Some(LieSvi {
+            points,
+            quadrature,
+            ..self.clone()
+        })
+    }
+
+    /// ξ¹, …, ξᵈ of the last step (ξ⁰ = 0): the Lie-algebra polynomial of the step.
+    fn node_offsets<'a>(&self, workspace: &'a LieWorkspace) -> Option<&'a [f64]> {
+        workspace
+            .has_previous
+            .then_some(workspace.previous.as_slice())
+    }
+
     fn point_is_finite(&self, point: &RigidPoint) -> bool {
         point
             .omega

@@ -692,6 +692,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let mut increment = S::State::zeros();
         let mut adaptivity = Adaptivity::default();
         let mut rejections = 0;
+        if observer.wants(0) && self.observe(0, progress, observer)? {
+            return Ok((adaptivity, true));
+        }
         while progress.t < span.t_end {
             let t = progress.t;
             let remaining = span.t_end - t;
@@ -766,6 +769,12 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                             progress.cursor = cursor;
                             progress.t = time;
                             if observer.wants(step) && self.observe(step, progress, observer)? {
+                                // Stopped after the first of the pair: drop the outputs
+                                // served from the second.
+                                let served = outputs
+                                    .points
+                                    .partition_point(|point| S::time(point) <= time);
+                                outputs.points.truncate(served);
                                 return Ok((adaptivity, time < span.t_end));
                             }
                         }
@@ -859,6 +868,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let mut warm = None;
         // (points, error estimate) of the last accepted step.
         let mut previous: Option<(usize, f64)> = None;
+        if observer.wants(0) && self.observe(0, progress, observer)? {
+            return Ok((adaptivity, true));
+        }
         for k in 0..steps {
             let (t, size, end_time) = grid_step(span.t0, span.t_end, h, steps, k);
             let tol_step = tol * size / length;
