@@ -237,6 +237,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             derivatives: DMatrix::zeros(m, degree + 1),
             extrapolation: basis.value_matrix(&shifted),
             nodes: basis.nodes().to_vec(),
+            basis: basis.clone(),
             unknowns: DVector::zeros(3 * degree),
             previous: DVector::zeros(3 * degree),
             has_previous: false,
@@ -533,6 +534,40 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         }
     }
 
+    /// The step curve R_k exp(ξ(τ)) at τ = 2(time − t)/h − 1, with Ω = dexp_{−ξ} ξ̇ and
+    /// Π = ∂L/∂Ω there.
+    fn dense_point(
+        &self,
+        model: &L,
+        workspace: &LieWorkspace,
+        t: f64,
+        h: f64,
+        start: &RigidState,
+        time: f64,
+    ) -> Option<RigidPoint> {
+        if !workspace.has_previous {
+            return None;
+        }
+        let tau = 2.0 * ((time - t) / h).clamp(0.0, 1.0) - 1.0;
+        let values = workspace.basis.value_matrix(&[tau]);
+        let rates = workspace.basis.derivative_matrix(&[tau]);
+        let mut xi = Vector3::zeros();
+        let mut rate = Vector3::zeros();
+        for nu in 1..=workspace.degree {
+            let node = workspace.previous.fixed_rows::<3>(3 * (nu - 1));
+            xi += node * values[(0, nu)];
+            rate += node * (2.0 / h * rates[(0, nu)]);
+        }
+        let r = start.r * exp(&xi);
+        let omega = body_velocity(&xi, &rate);
+        Some(RigidPoint {
+            t: time,
+            r,
+            omega,
+            momentum: model.momentum(&r, &omega),
+        })
+    }
+
     fn points(&self) -> Option<usize> {
         Some(self.points)
     }
@@ -603,6 +638,8 @@ pub struct LieWorkspace {
     extrapolation: DMatrix<f64>,
     /// CGL nodes x_ν.
     nodes: Vec<f64>,
+    /// The Lagrange basis on the CGL nodes (dense output).
+    basis: LagrangeBasis,
     /// ξ¹…ξᵈ, stacked.
     unknowns: DVector<f64>,
     /// The previous step's ξ¹…ξᵈ.
