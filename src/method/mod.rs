@@ -8,6 +8,7 @@
 
 pub mod collocation;
 pub mod lie_svi;
+pub mod registry;
 pub mod variational;
 
 use crate::error::StepFailure;
