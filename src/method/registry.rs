@@ -174,12 +174,12 @@ pub fn grammar_help() -> String {
         + 2;
     let mut text = String::from(
         "NAME, NAME:P or NAME:P/M, with P Chebyshev–Gauss–Lobatto points and M Gauss–Legendre \
-         points for the methods that take them (omitted: the defaults in parentheses):",
+         points for the methods that take them; omitted numbers take the defaults shown:",
     );
     for entry in METHODS {
         text.push_str(&format!("\n  {:<width$}{}", entry.grammar(), entry.summary));
         if entry.takes_points() {
-            text.push_str(&format!(" ({})", entry.spec().canonical()));
+            text.push_str(&format!("; {} = {}", entry.name, entry.spec().canonical()));
         }
     }
     text
@@ -868,9 +868,64 @@ mod tests {
             assert!(line.contains(entry.summary), "{line}");
         }
         assert!(
-            help.contains("svi[:P[/M]]") && help.contains("(svi:6/12)"),
+            help.contains("svi[:P[/M]]") && help.contains("; svi = svi:6/12"),
             "{help}"
         );
         assert!(!help.contains("[`"), "{help}");
+    }
+
+    /// The order column of the README's method table for `spec`: a number, or one of the
+    /// formulas in P and M the table uses.
+    fn readme_order(cell: &str, spec: &MethodSpec) -> Option<usize> {
+        let p = spec.points_in_use().unwrap_or_default();
+        let m = spec.quadrature_in_use().unwrap_or_default();
+        match cell {
+            "2·min(P − 1, M)" => Some(2 * (p - 1).min(m)),
+            "P − 1" => Some(p - 1),
+            _ => cell.parse().ok(),
+        }
+    }
+
+    #[test]
+    fn the_readme_table_lists_every_entry_with_its_grammar_order_and_summary() {
+        let readme = include_str!("../../README.md");
+        let rows: Vec<Vec<&str>> = readme
+            .lines()
+            .skip_while(|line| *line != "| method | grammar | order | summary |")
+            .skip(2)
+            .take_while(|line| line.starts_with('|'))
+            .map(|line| line.trim_matches('|').split(" | ").map(str::trim).collect())
+            .collect();
+        assert_eq!(rows.len(), METHODS.len(), "{rows:?}");
+        for entry in METHODS {
+            let row = rows
+                .iter()
+                .find(|row| row[0] == format!("`{}`", entry.name))
+                .unwrap_or_else(|| panic!("{} is not in the README's method table", entry.name));
+            assert_eq!(row.len(), 4, "{row:?}");
+            assert_eq!(row[1], format!("`{}`", entry.grammar()), "{row:?}");
+            assert_eq!(row[3], entry.summary, "{row:?}");
+            // The order column agrees with the built methods over a range of options.
+            let mut specs = vec![entry.spec()];
+            for points in 2..=9 {
+                if entry.takes_points() {
+                    specs.push(entry.spec().with_points(points).unwrap());
+                }
+                for quadrature in 1..=9 {
+                    if entry.takes_quadrature() {
+                        let spec = entry.spec().with_points(points).unwrap();
+                        specs.push(spec.with_quadrature(quadrature).unwrap());
+                    }
+                }
+            }
+            for spec in specs {
+                assert_eq!(
+                    readme_order(row[2], &spec),
+                    Some(spec.info().unwrap().order),
+                    "{spec}: README order {}",
+                    row[2]
+                );
+            }
+        }
     }
 }
