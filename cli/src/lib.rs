@@ -441,7 +441,7 @@ pub struct RunSection {
     pub divergence_limit: Option<f64>,
 }
 
-/// The adaptivity modes of [`svi::solve`], as named in scenes and on the command line.
+/// The adaptivity modes of [`svi::solve()`], as named in scenes and on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum AdaptMode {
@@ -875,7 +875,7 @@ struct Setup<const N: usize> {
 }
 
 impl<const N: usize> Setup<N> {
-    /// Whether the run goes through [`svi::solve`] (adaptivity or output times) rather than
+    /// Whether the run goes through [`svi::solve()`] (adaptivity or output times) rather than
     /// the plain stepping loop.
     fn solves(&self) -> bool {
         self.adapt != AdaptMode::None || self.output_times.is_some()
@@ -1078,7 +1078,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     }
 }
 
-/// Run a scene through [`svi::solve`]: the observers see the initial point and the states
+/// Run a scene through [`svi::solve()`]: the observers see the initial point and the states
 /// at the output times (every step's end when no output times are given).
 fn solve_scene<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     integrator: &Integrator<M, Me, N>,
@@ -1161,7 +1161,7 @@ pub struct OutputPoint {
     pub p: Vec<f64>,
 }
 
-/// What [`svi::solve`] did, for the summary.
+/// What [`svi::solve()`] did, for the summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AdaptivitySummary {
     /// Accepted steps.
