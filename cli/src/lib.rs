@@ -215,8 +215,9 @@ pub enum SceneError {
         /// What is wrong with it.
         reason: String,
     },
-    /// A method option given to a method that does not have it.
-    #[error("{option} is an option of {}, not of {method}", option_owners(.option, .method))]
+    /// A command-line method option (`--points`, `--quadrature`) given with a method that
+    /// does not take it.
+    #[error("--{option} is an option of {}, not of {method}", option_owners(.option, .method))]
     OptionNotForMethod {
         /// The option: `points` or `quadrature`.
         option: &'static str,
@@ -1773,7 +1774,10 @@ mod tests {
                 .unwrap_err();
             assert_eq!(
                 error.to_string(),
-                format!("points is an option of svi and sc, not of {}", kind.name())
+                format!(
+                    "--points is an option of svi and sc, not of {}",
+                    kind.name()
+                )
             );
             let summary = scene.run(false).unwrap();
             assert_eq!(summary.method, kind.name());

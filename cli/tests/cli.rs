@@ -749,7 +749,7 @@ fn one_method_grammar_on_the_command_line_and_in_scenes() {
         (&["--method", "lie-svi", "--points", "3"], "'lie-svi'"),
         (
             &["--method", "verlet", "--points", "3"],
-            "points is an option of svi and sc, not of verlet",
+            "--points is an option of svi and sc, not of verlet",
         ),
     ] {
         let mut all = vec!["run", "kepler"];
