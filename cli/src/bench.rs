@@ -18,7 +18,7 @@
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
 
 use crate::plot::{Panel, Series, write_svg};
-use crate::{MethodChoice, MethodKind, MethodVisitor, Scene, SceneError};
+use crate::{Scene, SceneError};
 use nalgebra::{SMatrix, SVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
 use serde::Serialize;
@@ -28,72 +28,56 @@ use std::str::FromStr;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
+use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, MomentumError};
-use svi::{Initial, Integrator, LagrangianExt, Method, Structure, linalg::invert_small};
+use svi::{
+    Initial, Integrator, LagrangianExt, Method, MethodSpec, Structure, linalg::invert_small,
+};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
-/// A method configuration to sweep: one of svi's methods, or an `ode_solvers` peer.
+/// A method configuration to sweep: a method of svi's registry, or an `ode_solvers` peer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum MethodSpec {
-    /// An svi method (fixed step).
-    Method(MethodChoice),
+pub enum BenchMethod {
+    /// A method of [`svi::method::registry::METHODS`] (fixed step).
+    Library(MethodSpec),
     /// `ode_solvers`' DOP853 (adaptive, order 8).
     Dop853,
     /// `ode_solvers`' Dopri5 (adaptive, order 5).
     Dopri5,
 }
 
-impl fmt::Display for MethodSpec {
+impl fmt::Display for BenchMethod {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            MethodSpec::Method(choice) => match (choice.kind, choice.quadrature) {
-                (MethodKind::Svi, Some(m)) => write!(f, "svi:{}/{m}", choice.points),
-                (MethodKind::Svi | MethodKind::Sc, _) => {
-                    write!(f, "{}:{}", choice.kind, choice.points)
-                }
-                (kind, _) => write!(f, "{kind}"),
-            },
-            MethodSpec::Dop853 => write!(f, "dop853"),
-            MethodSpec::Dopri5 => write!(f, "dopri5"),
+            BenchMethod::Library(spec) => write!(f, "{spec}"),
+            BenchMethod::Dop853 => write!(f, "dop853"),
+            BenchMethod::Dopri5 => write!(f, "dopri5"),
         }
     }
 }
 
-impl FromStr for MethodSpec {
+impl FromStr for BenchMethod {
     type Err = SceneError;
 
-    /// `svi:P`, `svi:P/M`, `sc:P`, a classic method's name (`midpoint`, `verlet`, ...),
-    /// `dop853` or `dopri5`.
+    /// `dop853`, `dopri5`, or a library method written `name`, `name:P` or `name:P/M`.
     fn from_str(text: &str) -> Result<Self, SceneError> {
         let text = text.trim();
-        let bad = || SceneError::BenchMethod(text.to_string());
-        let number = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
-        let choice = |kind, points, quadrature| {
-            MethodSpec::Method(MethodChoice {
-                kind,
-                points,
-                quadrature,
-            })
-        };
-        match text.split_once(':') {
-            None if text == "dop853" => Ok(MethodSpec::Dop853),
-            None if text == "dopri5" => Ok(MethodSpec::Dopri5),
-            None => match text.parse::<MethodKind>() {
-                Ok(kind) if kind.default_points().is_none() => Ok(choice(kind, 0, None)),
-                _ => Err(bad()),
-            },
-            Some(("svi", rest)) => match rest.split_once('/') {
-                Some((p, m)) => Ok(choice(MethodKind::Svi, number(p)?, Some(number(m)?))),
-                None => Ok(choice(MethodKind::Svi, number(rest)?, None)),
-            },
-            Some(("sc", rest)) => Ok(choice(MethodKind::Sc, number(rest)?, None)),
-            _ => Err(bad()),
+        match text {
+            "dop853" => Ok(BenchMethod::Dop853),
+            "dopri5" => Ok(BenchMethod::Dopri5),
+            _ => text.parse().map(BenchMethod::Library).map_err(|error| {
+                let name = text.split(':').next().unwrap_or_default();
+                match svi::method::registry::find(name) {
+                    Some(_) => SceneError::Svi(error),
+                    None => SceneError::BenchMethod { text: text.into() },
+                }
+            }),
         }
     }
 }
 
-/// Parse a comma-separated list of method specifications.
-pub fn parse_methods(text: &str) -> Result<Vec<MethodSpec>, SceneError> {
+/// Parse a comma-separated list of methods (empty items are skipped).
+pub fn parse_methods(text: &str) -> Result<Vec<BenchMethod>, SceneError> {
     text.split(',')
         .filter(|s| !s.trim().is_empty())
         .map(str::parse)
@@ -104,7 +88,7 @@ pub fn parse_methods(text: &str) -> Result<Vec<MethodSpec>, SceneError> {
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchOptions {
     /// Methods to sweep.
-    pub methods: Vec<MethodSpec>,
+    pub methods: Vec<BenchMethod>,
     /// Stop a sweep once the final error is below this.
     pub target: f64,
     /// Stop a sweep after a point whose single run takes longer (seconds).
@@ -249,15 +233,15 @@ impl ModelVisitor for Bench<'_> {
                 progress: self.progress,
             };
             match *spec {
-                MethodSpec::Method(choice) => choice.visit(Sweep {
+                BenchMethod::Library(method) => method.visit_vector(Sweep {
                     model: &model,
                     label: &label,
                     problem: &problem,
                     options: self.options,
                     report,
                     records: &mut records,
-                })?,
-                MethodSpec::Dop853 | MethodSpec::Dopri5 => {
+                })??,
+                BenchMethod::Dop853 | BenchMethod::Dopri5 => {
                     sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
                 }
             }
@@ -277,7 +261,7 @@ struct Sweep<'a, M, const N: usize> {
     records: &'a mut Vec<Record>,
 }
 
-impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for Sweep<'_, M, N> {
+impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> {
     type Output = Result<(), SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
         sweep_fixed(
@@ -529,7 +513,7 @@ type AdaptiveRun<const S: usize> = (
 /// One DOP853 / Dopri5 run to the horizon (`None` if it fails or stops short).
 fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
     system: FirstOrder<'_, M, N, S>,
-    spec: MethodSpec,
+    spec: BenchMethod,
     problem: &Problem<N>,
     tol: f64,
 ) -> Option<AdaptiveRun<S>> {
@@ -557,7 +541,7 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
     }
     // Crate defaults, except sparse output and a high step cap (as the kepler-peers tool).
     match spec {
-        MethodSpec::Dop853 => go!(dop853(system, t0, t_end, y0, tol)),
+        BenchMethod::Dop853 => go!(dop853(system, t0, t_end, y0, tol)),
         _ => go!(Dopri5::from_param(
             system,
             t0,
@@ -612,7 +596,7 @@ pub(crate) fn dop853<F: System<f64, ode_solvers::SVector<f64, S>>, const S: usiz
 /// Sweep an adaptive `ode_solvers` method over tolerances (models with N ≤ 3).
 fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
     model: &M,
-    spec: MethodSpec,
+    spec: BenchMethod,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
@@ -623,16 +607,17 @@ fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
         1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
         2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
         3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
-        _ => Err(SceneError::BenchMethod(format!(
-            "{spec} (the ode_solvers peers are wired for models of dimension ≤ 3)"
-        ))),
+        _ => Err(SceneError::MethodNotApplicable {
+            method: spec.to_string(),
+            reason: "the ode_solvers peers are wired for models of dimension ≤ 3".into(),
+        }),
     }
 }
 
 /// [`sweep_adaptive`] with the state size S = 2N as a type parameter.
 fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     model: &M,
-    spec: MethodSpec,
+    spec: BenchMethod,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
@@ -809,17 +794,38 @@ mod tests {
     #[test]
     fn method_specifications_parse_and_print_back() {
         for text in [
-            "svi:7/6", "svi:6", "sc:9", "midpoint", "verlet", "dop853", "dopri5",
+            "svi:7/6", "svi:6", "svi", "sc:9", "midpoint", "verlet", "dop853", "dopri5",
         ] {
-            assert_eq!(text.parse::<MethodSpec>().unwrap().to_string(), text);
+            assert_eq!(text.parse::<BenchMethod>().unwrap().to_string(), text);
         }
-        for bad in ["svi", "svi:x", "sc:", "rk4", "svi:6/", "midpoint:3"] {
-            assert!(matches!(
-                bad.parse::<MethodSpec>(),
-                Err(SceneError::BenchMethod(_))
-            ));
+        // A library method's spelling errors are the registry's, naming the text.
+        for bad in ["svi:x", "sc:", "svi:6/", "midpoint:3"] {
+            let error = bad.parse::<BenchMethod>().unwrap_err();
+            assert!(
+                matches!(&error, SceneError::Svi(svi::Error::InvalidParameter { name, .. }) if name == "method"),
+                "{bad}: {error}"
+            );
+            assert!(error.to_string().contains(bad), "{error}");
+        }
+        // Unknown names list the registry and the peers.
+        for bad in ["rk4", "dop853:3", ""] {
+            let error = bad.parse::<BenchMethod>().unwrap_err();
+            assert!(
+                matches!(&error, SceneError::BenchMethod { text } if text == bad),
+                "{bad}: {error}"
+            );
+            assert!(error.to_string().contains("verlet, trapezoid"), "{error}");
+            assert!(error.to_string().contains("dop853, dopri5"), "{error}");
         }
         assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 7);
+        assert_eq!(
+            parse_methods("svi:7/6, sc:9,,dop853").unwrap(),
+            [
+                BenchMethod::Library("svi:7/6".parse().unwrap()),
+                BenchMethod::Library("sc:9".parse().unwrap()),
+                BenchMethod::Dop853
+            ]
+        );
     }
 
     #[test]
@@ -829,7 +835,7 @@ mod tests {
         let mut scene = Scene::builtin("oscillator").unwrap().unwrap();
         scene.run.t_end = Some(10.0);
         let options = BenchOptions {
-            methods: vec!["svi:3/2".parse().unwrap(), MethodSpec::Dop853],
+            methods: vec!["svi:3/2".parse().unwrap(), BenchMethod::Dop853],
             target: 1e-9,
             max_run: 1.0,
             batches: 1,
@@ -859,7 +865,7 @@ mod tests {
         let mut scene = Scene::builtin("oscillator").unwrap().unwrap();
         scene.run.t_end = Some(10.0);
         let options = BenchOptions {
-            methods: vec!["svi:3/2".parse().unwrap(), MethodSpec::Dop853],
+            methods: vec!["svi:3/2".parse().unwrap(), BenchMethod::Dop853],
             batches: 1,
             min_batch: 0.0,
             steps: vec![20, 40, 80],
@@ -899,7 +905,7 @@ mod tests {
         // Dopri5 on Kepler (T = 2000) does not reach the horizon at tol = 1e-3.
         let scene = Scene::builtin("kepler").unwrap().unwrap();
         let single = BenchOptions {
-            methods: vec![MethodSpec::Dopri5],
+            methods: vec![BenchMethod::Dopri5],
             batches: 1,
             min_batch: 0.0,
             tolerances: vec![1e-3],

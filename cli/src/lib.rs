@@ -18,10 +18,10 @@
 //! v = [0.0, 1.7320508075688772]   # or p = [...], not both
 //!
 //! [method]
-//! name = "svi"          # "svi" (default), "sc", or a classic variational integrator:
-//!                       # "symplectic-euler", "symplectic-euler-adjoint", "midpoint",
-//!                       # "verlet", "trapezoid"
-//! points = 6            # Chebyshev–Gauss–Lobatto points, svi and sc (default 6)
+//! name = "svi"          # NAME, NAME:P or NAME:P/M of svi::method::registry::METHODS:
+//!                       # "svi" (default), "svi:7/6", "sc:9", "midpoint", "verlet", ...
+//! points = 6            # Chebyshev–Gauss–Lobatto points, svi and sc (default 6): the same
+//!                       # as name = "svi:6"
 //! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
 //!
 //! [run]                 # absent: the model's default step and horizon
@@ -52,10 +52,10 @@
 //! other, and their force parameters are ordinary `[parameters]`.
 //!
 //! The model, chosen by name at run time, reaches the one generic runner as its concrete
-//! type through [`svi_models::visit_model`]; the method is a `match` on [`MethodKind`]
-//! calling the same generic function with [`Svi`], [`SpectralCollocation`], a
-//! [`VariationalIntegrator`] of a discrete Lagrangian or [`StormerVerlet`]. Observers are
-//! built only for the diagnostics and outputs asked for.
+//! type through [`svi_models::visit_model`]; the method, a [`MethodSpec`] of the library's
+//! registry ([`svi::method::registry`]), reaches it as its concrete type through
+//! [`MethodSpec::visit_vector`]. Observers are built only for the diagnostics and outputs
+//! asked for.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -75,13 +75,11 @@ pub mod rigid;
 pub mod stability;
 pub mod stress;
 
+use svi::method::registry::{self, SpaceKind, VectorMethodVisitor};
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};
 use svi::solve::{Adapt, SolveOptions, Span};
-use svi::{
-    AdjointSymplecticEuler, Integrator, LagrangianExt, Method, Midpoint, PhasePoint,
-    SpectralCollocation, StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
-};
 use svi::{Initial, Recovery, RunFailure, RunOptions, Statistics};
+use svi::{Integrator, LagrangianExt, Method, MethodSpec, PhasePoint};
 use svi_models::{MODEL_NAMES, ModelVisitor, UnknownModel, ZooModel, visit_model};
 
 /// The built-in scenes, as (name, TOML text).
@@ -188,12 +186,6 @@ pub enum SceneError {
     /// A model name that is not in the zoo.
     #[error(transparent)]
     UnknownModel(#[from] UnknownModel),
-    /// A method name that is not one of [`MethodKind::NAMES`].
-    #[error("unknown method '{name}' (known: {})", MethodKind::NAMES.join(", "))]
-    UnknownMethod {
-        /// The name asked for.
-        name: String,
-    },
     /// An initial-state vector whose length is not the model dimension.
     #[error("initial.{field} has {found} components, but model '{model}' has dimension {expected}")]
     Dimension {
@@ -223,13 +215,14 @@ pub enum SceneError {
         /// What is wrong with it.
         reason: String,
     },
-    /// A method option given to a method that does not have it.
-    #[error("{option} is an option of {}, not of {method}", option_owners(.option))]
+    /// A command-line method option (`--points`, `--quadrature`) given with a method that
+    /// does not take it.
+    #[error("--{option} is an option of {}, not of {method}", option_owners(.option, .method))]
     OptionNotForMethod {
-        /// The option.
+        /// The option: `points` or `quadrature`.
         option: &'static str,
         /// The method in use.
-        method: MethodKind,
+        method: MethodSpec,
     },
     /// A trajectory thinning factor without a file to write the trajectory to.
     #[error("output.every is set but no trajectory file is (give --out FILE or output.trajectory)")]
@@ -267,11 +260,25 @@ pub enum SceneError {
         #[source]
         source: svi::Error,
     },
-    /// A malformed `svi bench` method specification.
+    /// A method name of `svi bench` or `svi stress` that is neither a library method nor
+    /// one of the peers `dop853` and `dopri5`.
     #[error(
-        "unknown method '{0}' (expected svi:P, svi:P/M, sc:P, a classic method's name, dop853 or dopri5)"
+        "unknown method '{text}' (known: {}, dop853, dopri5)",
+        registry::known_names()
     )]
-    BenchMethod(String),
+    BenchMethod {
+        /// The method as written.
+        text: String,
+    },
+    /// A method that a command cannot use (a peer without a stability matrix, a peer wired
+    /// for small models only, ...).
+    #[error("method '{method}' cannot be used here: {reason}")]
+    MethodNotApplicable {
+        /// The method as written.
+        method: String,
+        /// Why not.
+        reason: String,
+    },
     /// A `svi bench` step count or tolerance that is out of range or whose run failed.
     #[error("svi bench: {0}")]
     BenchParameter(String),
@@ -282,103 +289,41 @@ pub enum SceneError {
     NoReference(String),
 }
 
-/// The methods that have an option, as named in [`SceneError::OptionNotForMethod`].
-fn option_owners(option: &str) -> &'static str {
-    match option {
-        "points" => "svi and sc",
-        _ => "svi",
+/// The methods on the same space as `method` that take `option`, as named in
+/// [`SceneError::OptionNotForMethod`]: "svi and sc".
+fn option_owners(option: &str, method: &MethodSpec) -> String {
+    let owners: Vec<&str> = registry::METHODS
+        .iter()
+        .filter(|entry| entry.space == method.space())
+        .filter(|entry| match option {
+            "points" => entry.takes_points(),
+            _ => entry.takes_quadrature(),
+        })
+        .map(|entry| entry.name)
+        .collect();
+    match owners.split_last() {
+        Some((last, [])) => last.to_string(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+        None => "no method".into(),
     }
 }
 
-/// The integration methods a scene can choose.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
-#[serde(try_from = "String")]
-pub enum MethodKind {
-    /// Spectral variational integrator ([`Svi`]).
-    #[default]
-    Svi,
-    /// Spectral collocation ([`SpectralCollocation`]).
-    Sc,
-    /// Symplectic Euler, L_d = h L(q_k, v) ([`SymplecticEuler`]).
-    SymplecticEuler,
-    /// The adjoint symplectic Euler method, L_d = h L(q_{k+1}, v)
-    /// ([`AdjointSymplecticEuler`]).
-    SymplecticEulerAdjoint,
-    /// The midpoint rule ([`Midpoint`]).
-    Midpoint,
-    /// Störmer–Verlet, explicit for constant-mass models ([`StormerVerlet`]).
-    Verlet,
-    /// The trapezoidal discrete Lagrangian, always implicit ([`Trapezoid`]).
-    Trapezoid,
+/// Deserialise a method written `name`, `name:P` or `name:P/M`.
+fn method_spec<'de, D: serde::Deserializer<'de>>(deserializer: D) -> Result<MethodSpec, D::Error> {
+    let text = String::deserialize(deserializer)?;
+    text.parse().map_err(serde::de::Error::custom)
 }
 
-impl MethodKind {
-    /// The names, as written in scenes and on the command line.
-    pub const NAMES: [&'static str; 7] = [
-        "svi",
-        "sc",
-        "symplectic-euler",
-        "symplectic-euler-adjoint",
-        "midpoint",
-        "verlet",
-        "trapezoid",
-    ];
-
-    /// Every method, in the order of [`MethodKind::NAMES`].
-    pub const ALL: [MethodKind; 7] = [
-        MethodKind::Svi,
-        MethodKind::Sc,
-        MethodKind::SymplecticEuler,
-        MethodKind::SymplecticEulerAdjoint,
-        MethodKind::Midpoint,
-        MethodKind::Verlet,
-        MethodKind::Trapezoid,
-    ];
-
-    /// The name, as written in scenes and on the command line.
-    pub fn name(self) -> &'static str {
-        match self {
-            MethodKind::Svi => "svi",
-            MethodKind::Sc => "sc",
-            MethodKind::SymplecticEuler => "symplectic-euler",
-            MethodKind::SymplecticEulerAdjoint => "symplectic-euler-adjoint",
-            MethodKind::Midpoint => "midpoint",
-            MethodKind::Verlet => "verlet",
-            MethodKind::Trapezoid => "trapezoid",
-        }
-    }
-
-    /// Default number of CGL points (`None` for the classic methods, which have none).
-    pub fn default_points(self) -> Option<usize> {
-        match self {
-            MethodKind::Svi => Some(Svi::default().points),
-            MethodKind::Sc => Some(SpectralCollocation::default().points),
-            _ => None,
-        }
-    }
+/// Deserialise an optional method written `name`, `name:P` or `name:P/M`.
+fn optional_method_spec<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<Option<MethodSpec>, D::Error> {
+    method_spec(deserializer).map(Some)
 }
 
-impl fmt::Display for MethodKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl FromStr for MethodKind {
-    type Err = SceneError;
-    fn from_str(name: &str) -> Result<Self, SceneError> {
-        MethodKind::ALL
-            .into_iter()
-            .find(|kind| kind.name() == name)
-            .ok_or_else(|| SceneError::UnknownMethod { name: name.into() })
-    }
-}
-
-impl TryFrom<String> for MethodKind {
-    type Error = SceneError;
-    fn try_from(name: String) -> Result<Self, SceneError> {
-        name.parse()
-    }
+/// The help of an option taking a method: `intro`, then the grammar and every method.
+pub fn method_help(intro: &str) -> String {
+    format!("{intro}\n\n{}", registry::grammar_help())
 }
 
 /// A diagnostic evaluated at every step point.
@@ -459,13 +404,14 @@ pub struct InitialSection {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MethodSection {
-    /// `svi` (default), `sc` or a classic method (see [`MethodKind::NAMES`]).
-    #[serde(default)]
-    pub name: MethodKind,
-    /// Chebyshev–Gauss–Lobatto points of svi and sc (default:
-    /// [`MethodKind::default_points`]); ignored by the classic methods.
+    /// The method, `name`, `name:P` or `name:P/M` of [`registry::METHODS`] (default `svi`).
+    #[serde(default, deserialize_with = "method_spec")]
+    pub name: MethodSpec,
+    /// Chebyshev–Gauss–Lobatto points of svi and sc, applied on top of `name` (default: the
+    /// method's); ignored by the methods without.
     pub points: Option<usize>,
-    /// Gauss–Legendre points of svi (default 2 × points); ignored by the other methods.
+    /// Gauss–Legendre points of svi, applied on top of `name` (default 2 × points); ignored
+    /// by the other methods.
     pub quadrature: Option<usize>,
 }
 
@@ -496,7 +442,7 @@ pub struct RunSection {
     pub divergence_limit: Option<f64>,
 }
 
-/// The adaptivity modes of [`svi::solve`], as named in scenes and on the command line.
+/// The adaptivity modes of [`svi::solve()`], as named in scenes and on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum AdaptMode {
@@ -541,7 +487,7 @@ pub enum RecoveryKind {
     #[default]
     None,
     /// Retry a failed step as two half steps (recursively), then go on with the original
-    /// step ([`Recovery::HalveStep`]).
+    /// step.
     HalveStep,
 }
 
@@ -589,13 +535,20 @@ pub struct OutputSection {
 /// Scene fields set from the command line.
 #[derive(Debug, Clone, Default, PartialEq, clap::Args)]
 pub struct Overrides {
-    /// Integration method.
-    #[arg(long, value_enum)]
-    pub method: Option<MethodKind>,
-    /// Number of Chebyshev–Gauss–Lobatto points (svi and sc).
+    /// Integration method: NAME, NAME:P or NAME:P/M, e.g. svi:7/6, sc:9, verlet.
+    #[arg(
+        long,
+        value_name = "METHOD",
+        long_help = method_help(
+            "Integration method (default: the scene's). Rigid-body scenes take lie-svi or \
+             lie-svi-reduced."
+        )
+    )]
+    pub method: Option<MethodSpec>,
+    /// Number of Chebyshev–Gauss–Lobatto points (svi and sc), on top of --method.
     #[arg(long, value_name = "N")]
     pub points: Option<usize>,
-    /// Number of Gauss–Legendre quadrature points (svi only).
+    /// Number of Gauss–Legendre quadrature points (svi only), on top of --method.
     #[arg(long, value_name = "M")]
     pub quadrature: Option<usize>,
     /// Step size.
@@ -698,9 +651,11 @@ impl Scene {
         }
     }
 
-    /// Consistency checks that need no model: one of v and p, `every` only with a file,
-    /// valid run options (recovery and divergence limit only for fixed-step runs).
+    /// Consistency checks that need no model: a method for models on ℝᴺ with valid options,
+    /// one of v and p, `every` only with a file, valid run options (recovery and divergence
+    /// limit only for fixed-step runs).
     pub fn check(&self) -> Result<(), SceneError> {
+        self.method_spec()?;
         if self.initial.v.is_some() && self.initial.p.is_some() {
             return Err(SceneError::VelocityAndMomentum);
         }
@@ -743,15 +698,24 @@ impl Scene {
             divergence_limit,
         } = overrides;
         if let Some(method) = method {
+            method.check_space(SpaceKind::Vector)?;
+            // The options written in `--method` replace the scene's; the others carry over.
             self.method.name = *method;
+            if method.points().is_some() {
+                self.method.points = None;
+            }
+            if method.quadrature().is_some() {
+                self.method.quadrature = None;
+            }
         }
-        if self.method.name != MethodKind::Svi && quadrature.is_some() {
+        let entry = self.method.name.entry();
+        if !entry.takes_quadrature() && quadrature.is_some() {
             return Err(SceneError::OptionNotForMethod {
                 option: "quadrature",
                 method: self.method.name,
             });
         }
-        if self.method.name.default_points().is_none() && points.is_some() {
+        if !entry.takes_points() && points.is_some() {
             return Err(SceneError::OptionNotForMethod {
                 option: "points",
                 method: self.method.name,
@@ -778,22 +742,35 @@ impl Scene {
         self.check()
     }
 
-    /// The number of CGL points in use (`None` for the classic methods).
-    pub fn points(&self) -> Option<usize> {
-        let default = self.method.name.default_points()?;
-        Some(self.method.points.unwrap_or(default))
+    /// The method in use: `[method] name` with `points` and `quadrature` applied on top
+    /// (each only for a method that takes it). An error names the method if it is not for
+    /// models on ℝᴺ, or the option out of range.
+    pub fn method_spec(&self) -> Result<MethodSpec, SceneError> {
+        let mut spec = self.method.name;
+        spec.check_space(SpaceKind::Vector)?;
+        if let Some(points) = self.method.points
+            && spec.entry().takes_points()
+        {
+            spec = spec.with_points(points)?;
+        }
+        if let Some(quadrature) = self.method.quadrature
+            && spec.entry().takes_quadrature()
+        {
+            spec = spec.with_quadrature(quadrature)?;
+        }
+        Ok(spec)
     }
 
-    /// The number of Gauss–Legendre points in use (`None` for all methods but svi).
+    /// The number of CGL points in use (`None` for the classic methods or an invalid
+    /// method).
+    pub fn points(&self) -> Option<usize> {
+        self.method_spec().ok()?.points_in_use()
+    }
+
+    /// The number of Gauss–Legendre points in use (`None` for all methods but svi or an
+    /// invalid method).
     pub fn quadrature(&self) -> Option<usize> {
-        match self.method.name {
-            MethodKind::Svi => Some(self.method.quadrature.unwrap_or_else(|| {
-                self.points()
-                    .unwrap_or(Svi::default().points)
-                    .saturating_mul(2)
-            })),
-            _ => None,
-        }
+        self.method_spec().ok()?.quadrature_in_use()
     }
 
     /// Whether `diagnostic` is asked for.
@@ -804,7 +781,6 @@ impl Scene {
             .is_none_or(|wanted| wanted.contains(&diagnostic))
     }
 
-    /// Integrate the scene, write its trajectory if asked, and summarise. `progress` allows a
     /// Apply the scene's parameters to `model` and resolve the initial time and state, the
     /// step and the horizon (scene values, else the model's defaults).
     pub fn resolve<M: ZooModel<N>, const N: usize>(
@@ -851,6 +827,7 @@ impl Scene {
         ))
     }
 
+    /// Integrate the scene, write its trajectory if asked, and summarise. `progress` allows a
     /// progress bar on stderr for runs of at least [`PROGRESS_MIN_STEPS`] steps.
     pub fn run(&self, progress: bool) -> Result<Summary, SceneError> {
         self.check()?;
@@ -888,7 +865,7 @@ struct Setup<const N: usize> {
     solution: bool,
     trajectory: Option<(PathBuf, usize)>,
     progress: bool,
-    kind: MethodKind,
+    spec: MethodSpec,
     points: Option<usize>,
     quadrature: Option<usize>,
     options: RunOptions,
@@ -899,7 +876,7 @@ struct Setup<const N: usize> {
 }
 
 impl<const N: usize> Setup<N> {
-    /// Whether the run goes through [`svi::solve`] (adaptivity or output times) rather than
+    /// Whether the run goes through [`svi::solve()`] (adaptivity or output times) rather than
     /// the plain stepping loop.
     fn solves(&self) -> bool {
         self.adapt != AdaptMode::None || self.output_times.is_some()
@@ -912,6 +889,7 @@ impl ModelVisitor for RunScene<'_> {
     fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
         let scene = self.scene;
         let (t0, initial, h, t_end) = scene.resolve(&mut model)?;
+        let spec = scene.method_spec()?;
         let setup = Setup {
             t0,
             initial,
@@ -926,69 +904,19 @@ impl ModelVisitor for RunScene<'_> {
                 .clone()
                 .map(|path| (path, scene.output.every.unwrap_or(1))),
             progress: self.progress,
-            kind: scene.method.name,
-            points: scene.points(),
-            quadrature: scene.quadrature(),
+            spec,
+            points: spec.points_in_use(),
+            quadrature: spec.quadrature_in_use(),
             adapt: scene.run.adapt.unwrap_or_default(),
             tol: scene.run.tol,
             points_range: (scene.run.min_points, scene.run.max_points),
             output_times: scene.output.output_times.clone(),
             options: scene.run.options()?,
         };
-        let choice = MethodChoice {
-            kind: scene.method.name,
-            points: setup.points.unwrap_or_default(),
-            quadrature: scene.method.quadrature,
-        };
-        choice.visit(RunWith {
+        spec.visit_vector(RunWith {
             model,
             setup: &setup,
-        })
-    }
-}
-
-/// An integration method chosen at run time: its kind and spectral options.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct MethodChoice {
-    /// Which method.
-    pub kind: MethodKind,
-    /// CGL points (svi and sc).
-    pub points: usize,
-    /// Gauss points (svi; `None`: 2 · points).
-    pub quadrature: Option<usize>,
-}
-
-/// Receives the concrete method of a [`MethodChoice`].
-pub trait MethodVisitor<const N: usize> {
-    /// What the visit returns.
-    type Output;
-    /// Use `method`.
-    fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output;
-}
-
-impl MethodChoice {
-    /// Build the method and hand it to `visitor`: the one place where a method name becomes
-    /// a type (no trait objects).
-    pub fn visit<V: MethodVisitor<N>, const N: usize>(&self, visitor: V) -> V::Output {
-        match self.kind {
-            MethodKind::Svi => {
-                let mut svi = Svi::new(self.points);
-                if let Some(quadrature) = self.quadrature {
-                    svi = svi.with_quadrature(quadrature);
-                }
-                visitor.visit(svi)
-            }
-            MethodKind::Sc => visitor.visit(SpectralCollocation::new(self.points)),
-            MethodKind::SymplecticEuler => {
-                visitor.visit(VariationalIntegrator::new(SymplecticEuler))
-            }
-            MethodKind::SymplecticEulerAdjoint => {
-                visitor.visit(VariationalIntegrator::new(AdjointSymplecticEuler))
-            }
-            MethodKind::Midpoint => visitor.visit(VariationalIntegrator::new(Midpoint)),
-            MethodKind::Verlet => visitor.visit(StormerVerlet::default()),
-            MethodKind::Trapezoid => visitor.visit(VariationalIntegrator::new(Trapezoid)),
-        }
+        })?
     }
 }
 
@@ -998,7 +926,7 @@ struct RunWith<'a, M, const N: usize> {
     setup: &'a Setup<N>,
 }
 
-impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for RunWith<'_, M, N> {
+impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for RunWith<'_, M, N> {
     type Output = Result<Summary, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
         run_with(self.model, method, self.setup)
@@ -1114,7 +1042,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         model: model.name().into(),
         parameters: Parameters(model.parameters()),
         coordinates: model.coordinate_names().iter().map(|&n| n.into()).collect(),
-        method: setup.kind.name().into(),
+        method: setup.spec.name().into(),
         points: setup.points,
         quadrature: setup.quadrature,
         order: info.order,
@@ -1151,7 +1079,7 @@ fn run_with<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     }
 }
 
-/// Run a scene through [`svi::solve`]: the observers see the initial point and the states
+/// Run a scene through [`svi::solve()`]: the observers see the initial point and the states
 /// at the output times (every step's end when no output times are given).
 fn solve_scene<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     integrator: &Integrator<M, Me, svi::Euclidean<N>>,
@@ -1234,7 +1162,7 @@ pub struct OutputPoint {
     pub p: Vec<f64>,
 }
 
-/// What [`svi::solve`] did, for the summary.
+/// What [`svi::solve()`] did, for the summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AdaptivitySummary {
     /// Accepted steps.
@@ -1387,7 +1315,8 @@ pub struct Summary {
     pub parameters: Parameters,
     /// Names of the configuration coordinates (the order of `q`, `v`, `p`).
     pub coordinates: Vec<String>,
-    /// The method's name (see [`MethodKind::NAMES`]).
+    /// The method's name (see [`registry::METHODS`]; its options are `points` and
+    /// `quadrature`).
     pub method: String,
     /// Chebyshev–Gauss–Lobatto points (`None` for the classic methods).
     pub points: Option<usize>,
@@ -1630,6 +1559,10 @@ mod tests {
         Overrides::default()
     }
 
+    fn method(text: &str) -> MethodSpec {
+        text.parse().expect("a method")
+    }
+
     #[test]
     fn every_builtin_scene_parses_and_names_a_zoo_model() {
         assert_eq!(
@@ -1658,7 +1591,7 @@ mod tests {
             assert!(MODEL_NAMES.contains(&scene.model.as_str()), "{name}");
             if MODEL_NAMES.contains(&name) {
                 assert_eq!(scene.model, name);
-                assert_eq!(scene.method.name, MethodKind::Svi);
+                assert_eq!(scene.method.name, method("svi"));
             } else {
                 // The stress scenes are named after their model.
                 assert!(name.contains(&scene.model), "{name}");
@@ -1715,9 +1648,9 @@ mod tests {
     #[test]
     fn a_minimal_scene_falls_back_to_defaults() {
         let scene = Scene::from_toml("model = \"pendulum\"\n", "test").unwrap();
-        assert_eq!(scene.method.name, MethodKind::Svi);
-        assert_eq!(scene.points(), Some(Svi::default().points));
-        assert_eq!(scene.quadrature(), Some(2 * Svi::default().points));
+        assert_eq!(scene.method.name, method("svi"));
+        assert_eq!(scene.points(), Some(svi::Svi::default().points));
+        assert_eq!(scene.quadrature(), Some(2 * svi::Svi::default().points));
         assert_eq!(scene.output, OutputSection::default());
     }
 
@@ -1726,7 +1659,7 @@ mod tests {
         let mut scene = scene("kepler");
         scene
             .apply(&Overrides {
-                method: Some(MethodKind::Svi),
+                method: Some(method("svi")),
                 points: Some(5),
                 quadrature: Some(7),
                 h: Some(0.05),
@@ -1792,7 +1725,7 @@ mod tests {
         let mut scene = scene("kepler");
         scene
             .apply(&Overrides {
-                method: Some(MethodKind::Sc),
+                method: Some(method("sc")),
                 ..overrides()
             })
             .unwrap();
@@ -1807,30 +1740,23 @@ mod tests {
             error,
             SceneError::OptionNotForMethod {
                 option: "quadrature",
-                method: MethodKind::Sc
-            }
+                method
+            } if method == self::method("sc")
         ));
     }
 
     #[test]
     fn classic_methods_have_neither_points_nor_quadrature() {
-        for (kind, name) in MethodKind::ALL.into_iter().zip(MethodKind::NAMES) {
-            assert_eq!(name.parse::<MethodKind>().unwrap(), kind);
-            assert_eq!(kind.name(), name);
-            assert_eq!(
-                clap::ValueEnum::to_possible_value(&kind)
-                    .unwrap()
-                    .get_name(),
-                name
-            );
-        }
-        for kind in [
-            MethodKind::SymplecticEuler,
-            MethodKind::SymplecticEulerAdjoint,
-            MethodKind::Midpoint,
-            MethodKind::Verlet,
-            MethodKind::Trapezoid,
+        for name in [
+            "symplectic-euler",
+            "symplectic-euler-adjoint",
+            "midpoint",
+            "verlet",
+            "trapezoid",
         ] {
+            let kind = method(name);
+            assert_eq!(kind.name(), name);
+            assert!(!kind.entry().takes_points());
             // The scene's `points = 9` is ignored, a `--points` flag is an error.
             let mut scene = scene("oscillator");
             scene
@@ -1848,7 +1774,10 @@ mod tests {
                 .unwrap_err();
             assert_eq!(
                 error.to_string(),
-                format!("points is an option of svi and sc, not of {}", kind.name())
+                format!(
+                    "--points is an option of svi and sc, not of {}",
+                    kind.name()
+                )
             );
             let summary = scene.run(false).unwrap();
             assert_eq!(summary.method, kind.name());
@@ -1872,7 +1801,7 @@ mod tests {
         // E(50) = E(0) e^{−5}-ish: the friction removed almost all the energy.
         assert!(summary.energy_final < 0.01 * summary.energy_initial);
         let mut verlet = scene.clone();
-        verlet.method.name = MethodKind::Verlet;
+        verlet.method.name = method("verlet");
         let summary = verlet.run(false).unwrap();
         // Second order: 1.6e-3 at h = 0.1.
         let error = summary.solution_error_max.unwrap();

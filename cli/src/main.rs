@@ -34,8 +34,16 @@ struct StressArgs {
     /// Stress scenes, comma-separated [default: all of them].
     #[arg(long, value_delimiter = ',')]
     cases: Vec<String>,
-    /// Methods, comma-separated: svi:P, svi:P/M, sc:P, a classic method's name, dop853.
-    #[arg(long, default_value = svi_cli::stress::DEFAULT_METHODS)]
+    /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), and dop853.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = svi_cli::stress::DEFAULT_METHODS,
+        long_help = svi_cli::method_help(
+            "Methods, comma-separated: the library's, and dop853 (ode_solvers' DOP853, drift \
+             only)."
+        )
+    )]
     methods: String,
     /// Steps of the long run of each method.
     #[arg(long, default_value_t = 1_000_000)]
@@ -53,8 +61,13 @@ struct StressArgs {
 
 #[derive(Debug, Args)]
 struct StabilityArgs {
-    /// Method: svi:P, svi:P/M or sc:P [default: svi:5/4].
-    #[arg(long, default_value = "svi:5/4")]
+    /// Method: NAME, NAME:P or NAME:P/M, e.g. svi:5/4, sc:9, verlet (see --help).
+    #[arg(
+        long,
+        value_name = "METHOD",
+        default_value = "svi:5/4",
+        long_help = svi_cli::method_help("Method (for models on ℝᴺ).")
+    )]
     method: String,
     /// Evaluate exactly these z values (comma-separated) and print CSV to stdout.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
@@ -80,8 +93,16 @@ struct StabilityArgs {
 struct BenchArgs {
     /// Built-in scene or scene file; its model needs an exact solution [default: kepler].
     scene: Option<String>,
-    /// Methods, comma-separated: svi:P, svi:P/M, sc:P, dop853, dopri5.
-    #[arg(long, default_value = svi_cli::bench::DEFAULT_METHODS)]
+    /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), dop853, dopri5.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = svi_cli::bench::DEFAULT_METHODS,
+        long_help = svi_cli::method_help(
+            "Methods, comma-separated: the library's (for models on ℝᴺ), and the adaptive \
+             peers dop853 and dopri5 (ode_solvers' DOP853 and Dopri5)."
+        )
+    )]
     methods: String,
     /// Model parameter NAME=VALUE (repeatable).
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = svi_cli::parse_parameter)]
@@ -248,7 +269,7 @@ fn stress(args: StressArgs) -> anyhow::Result<()> {
 }
 
 fn stability(args: StabilityArgs) -> anyhow::Result<()> {
-    use svi_cli::bench::MethodSpec;
+    use svi::MethodSpec;
     use svi_cli::stability::{Answer, Request, describe, figure_configurations, plot, run, to_csv};
     if let Some(values) = args.z {
         let spec: MethodSpec = args.method.parse()?;

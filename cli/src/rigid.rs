@@ -15,10 +15,11 @@
 //! omega = [0.0, 0.0, 10.0]     # body angular velocity, or momentum = [...] (body)
 //!
 //! [method]
-//! name = "lie-svi"      # the only method for rigid bodies
-//! points = 3            # Chebyshev–Gauss–Lobatto points (default 3)
-//! quadrature = 3        # Gauss–Legendre points (default = points)
-//! form = "full"         # or "reduced" (discrete Euler–Poincaré; G-invariant models only)
+//! name = "lie-svi"      # or "lie-svi-reduced", with options: "lie-svi:3/3", "lie-svi-reduced:4"
+//! points = 3            # Chebyshev–Gauss–Lobatto points (default 3), on top of name
+//! quadrature = 3        # Gauss–Legendre points (default = points), on top of name
+//! form = "full"         # or "reduced" (discrete Euler–Poincaré; G-invariant models only);
+//!                       # name = "lie-svi-reduced" is form = "reduced"
 //!
 //! [run]
 //! h = 0.01
@@ -46,11 +47,13 @@ use std::time::Instant;
 
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
+use svi::MethodSpec;
 use svi::lie_group::so3::{exp, orthogonality_error};
 use svi::lie_group::{
     AngularMomentumError, Form, LieSvi, OrthogonalityError, RigidBodyExt, RigidBodyIntegrator,
     RigidInitial, RigidPoint, RigidTrajectory,
 };
+use svi::method::registry::SpaceKind;
 use svi::observer::{EnergyError, Every, InvariantError};
 use svi_models::{RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, visit_rigid_model};
 
@@ -63,7 +66,8 @@ pub const RIGID_SCENES: &[(&str, &str)] = &[
     ("pendulum-3d", include_str!("../scenes/pendulum-3d.toml")),
 ];
 
-/// The name of the rigid-body method in scenes and summaries.
+/// The name of the rigid-body method in summaries (whichever form; the summary's `form`
+/// says which).
 pub const METHOD_NAME: &str = "lie-svi";
 
 /// The TOML text of a built-in rigid-body scene.
@@ -118,13 +122,15 @@ pub struct RigidInitialSection {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RigidMethodSection {
-    /// Must be `lie-svi` when given.
-    pub name: Option<String>,
-    /// Chebyshev–Gauss–Lobatto points (default 3).
+    /// `lie-svi` (the default) or `lie-svi-reduced`, written `name`, `name:P` or
+    /// `name:P/M`.
+    #[serde(default, deserialize_with = "crate::optional_method_spec")]
+    pub name: Option<MethodSpec>,
+    /// Chebyshev–Gauss–Lobatto points, on top of `name` (default 3).
     pub points: Option<usize>,
-    /// Gauss–Legendre points (default: `points`).
+    /// Gauss–Legendre points, on top of `name` (default: `points`).
     pub quadrature: Option<usize>,
-    /// `full` (default) or `reduced`.
+    /// `full` (default) or `reduced`; `lie-svi-reduced` means `reduced`.
     pub form: Option<String>,
 }
 
@@ -221,18 +227,7 @@ impl RigidScene {
             )
             .into());
         }
-        if let Some(name) = &self.method.name
-            && name != METHOD_NAME
-        {
-            return Err(svi::Error::invalid(
-                "method",
-                format!("rigid-body scenes use '{METHOD_NAME}', not '{name}'"),
-            )
-            .into());
-        }
-        if let Some(form) = &self.method.form {
-            parse_form(form)?;
-        }
+        self.method()?;
         match (self.output.every, &self.output.trajectory) {
             (Some(_), None) => Err(SceneError::EveryWithoutOutput),
             (Some(0), Some(_)) => {
@@ -242,15 +237,22 @@ impl RigidScene {
         }
     }
 
-    /// Apply command-line overrides (`--method` does not apply: rigid bodies have one
-    /// method) and an optional `--form`.
+    /// Apply command-line overrides (`--method` takes the rigid-body methods only) and an
+    /// optional `--form`.
     pub fn apply(&mut self, overrides: &Overrides, form: Option<&str>) -> Result<(), SceneError> {
         if let Some(method) = overrides.method {
-            return Err(svi::Error::invalid(
-                "method",
-                format!("rigid-body scenes use '{METHOD_NAME}'; --method {method} does not apply"),
-            )
-            .into());
+            // The options and the form written in `--method` replace the scene's.
+            let built = method.lie_svi()?;
+            self.method.name = Some(method);
+            if method.points().is_some() {
+                self.method.points = None;
+            }
+            if method.quadrature().is_some() {
+                self.method.quadrature = None;
+            }
+            if built.form == Form::Reduced {
+                self.method.form = None;
+            }
         }
         let Overrides {
             points,
@@ -287,14 +289,34 @@ impl RigidScene {
             .is_none_or(|wanted| wanted.contains(&diagnostic))
     }
 
-    /// The method the scene asks for.
+    /// The method the scene asks for: `[method] name` (default `lie-svi`) with `points`,
+    /// `quadrature` and `form` applied on top. An error names a method that is not for rigid
+    /// bodies, an option out of range, or a form that contradicts `lie-svi-reduced`.
     pub fn method(&self) -> Result<LieSvi, SceneError> {
-        let mut method = LieSvi::new(self.method.points.unwrap_or(LieSvi::default().points));
-        if let Some(quadrature) = self.method.quadrature {
-            method = method.with_quadrature(quadrature);
+        let mut spec = match self.method.name {
+            Some(spec) => spec,
+            None => METHOD_NAME.parse()?,
+        };
+        spec.check_space(SpaceKind::Rotation)?;
+        if let Some(points) = self.method.points {
+            spec = spec.with_points(points)?;
         }
+        if let Some(quadrature) = self.method.quadrature {
+            spec = spec.with_quadrature(quadrature)?;
+        }
+        let mut method = spec.lie_svi()?;
         if let Some(form) = &self.method.form {
-            method = method.with_form(parse_form(form)?);
+            let form = parse_form(form)?;
+            if method.form == Form::Reduced && form == Form::Full {
+                return Err(svi::Error::invalid(
+                    "form",
+                    format!(
+                        "form \"full\" contradicts method '{spec}' (use lie-svi for the full form)"
+                    ),
+                )
+                .into());
+            }
+            method = method.with_form(form);
         }
         Ok(method)
     }

@@ -8,11 +8,12 @@
 use crate::plot::{Panel, Series, write_svg};
 use std::fmt::Write as _;
 use std::path::Path;
-use svi::Method;
+use svi::method::registry::VectorMethodVisitor;
 use svi::stability::{Interval, StabilityPoint, StabilityReport, analyse, stability_matrix};
+use svi::{Method, MethodSpec};
 
 /// The configurations of the paper's Figs. 3–6: (label, method).
-pub fn figure_configurations() -> Vec<(&'static str, crate::bench::MethodSpec)> {
+pub fn figure_configurations() -> Vec<(&'static str, MethodSpec)> {
     [
         ("Cheb 5, Gau 4", "svi:5/4"),
         ("Cheb 5, Gau 10", "svi:5/10"),
@@ -141,12 +142,12 @@ pub enum Answer {
     Points(Vec<StabilityPoint>),
 }
 
-/// Run `request` for the method `spec` (one with a tangent map: not the adaptive peers).
-pub fn run(spec: crate::bench::MethodSpec, request: &Request) -> Result<Answer, crate::SceneError> {
-    use crate::bench::MethodSpec;
+/// Run `request` for the method `spec` (a method for models on ℝᴺ; an error names a
+/// rigid-body method).
+pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, svi::Error> {
     /// Answers the request for the visited method.
     struct Answering<'a>(&'a Request);
-    impl crate::MethodVisitor<1> for Answering<'_> {
+    impl VectorMethodVisitor<1> for Answering<'_> {
         type Output = Result<Answer, svi::Error>;
         fn visit<M: Method<1> + Clone>(self, method: M) -> Self::Output {
             match self.0 {
@@ -159,12 +160,7 @@ pub fn run(spec: crate::bench::MethodSpec, request: &Request) -> Result<Answer, 
             }
         }
     }
-    match spec {
-        MethodSpec::Method(choice) => Ok(choice.visit(Answering(request))?),
-        MethodSpec::Dop853 | MethodSpec::Dopri5 => Err(crate::SceneError::BenchMethod(format!(
-            "{spec} (adaptive peers have no fixed-step stability matrix)"
-        ))),
-    }
+    spec.visit_vector(Answering(request))?
 }
 
 #[cfg(test)]
@@ -229,6 +225,13 @@ mod tests {
             "{:?}",
             midpoint.stable
         );
+    }
+
+    #[test]
+    fn every_figure_configuration_parses_and_rigid_methods_are_refused() {
+        assert_eq!(figure_configurations().len(), 6);
+        let error = run("lie-svi".parse().unwrap(), &Request::Values(vec![1.0])).unwrap_err();
+        assert!(error.to_string().contains("'lie-svi'"), "{error}");
     }
 
     #[test]

@@ -24,15 +24,16 @@
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
-use crate::bench::{FirstOrder, MethodSpec, parse_methods};
+use crate::bench::{BenchMethod, FirstOrder, parse_methods};
 use crate::plot::{Panel, PlotError, Series, write_svg};
-use crate::{Float, MethodVisitor, Scene, SceneError};
+use crate::{Float, Scene, SceneError};
 use nalgebra::SVector;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 use svi::drift::{DriftFit, EnergyWindows, Window};
+use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, Every};
 use svi::{
     Error, Initial, Integrator, LagrangianExt, Method, RunOptions, Structure, linalg::invert_small,
@@ -101,8 +102,8 @@ const SAMPLES: usize = 100_000;
 pub struct StressOptions {
     /// Scenes (names from [`CASES`]); empty: all.
     pub cases: Vec<String>,
-    /// Methods: svi's (`svi:P`, `sc:P`, classic names) and `dop853` (drift only).
-    pub methods: Vec<MethodSpec>,
+    /// Methods: the library's (`svi:P/M`, `sc:P`, `verlet`, ...) and `dop853` (drift only).
+    pub methods: Vec<BenchMethod>,
     /// Steps of the long run.
     pub drift_steps: usize,
     /// Bisections refining each stability boundary.
@@ -283,12 +284,12 @@ impl ModelVisitor for CaseRunner<'_> {
             let label = spec.to_string();
             let start = Instant::now();
             let record = match *spec {
-                MethodSpec::Method(choice) => choice.visit(MethodRunner {
+                BenchMethod::Library(method) => method.visit_vector(MethodRunner {
                     model: &model,
                     setup: &setup,
                     label: &label,
-                })?,
-                MethodSpec::Dop853 => StressRecord {
+                })??,
+                BenchMethod::Dop853 => StressRecord {
                     scene: setup.scene.into(),
                     method: label.clone(),
                     h,
@@ -296,10 +297,11 @@ impl ModelVisitor for CaseRunner<'_> {
                     accurate: None,
                     drift: dop853_drift(&model, &setup),
                 },
-                MethodSpec::Dopri5 => {
-                    return Err(SceneError::BenchMethod(
-                        "dopri5 (svi stress compares with dop853 only)".into(),
-                    ));
+                BenchMethod::Dopri5 => {
+                    return Err(SceneError::MethodNotApplicable {
+                        method: label,
+                        reason: "svi stress compares with dop853 only".into(),
+                    });
                 }
             };
             if self.options.verbose {
@@ -324,7 +326,7 @@ struct MethodRunner<'a, M, const N: usize> {
     label: &'a str,
 }
 
-impl<M: ZooModel<N>, const N: usize> MethodVisitor<N> for MethodRunner<'_, M, N> {
+impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_, M, N> {
     type Output = Result<StressRecord, SceneError>;
 
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {

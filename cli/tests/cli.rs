@@ -678,3 +678,167 @@ fn bench_measures_given_step_counts_and_tolerances() {
         failure(&args);
     }
 }
+
+#[test]
+fn one_method_grammar_on_the_command_line_and_in_scenes() {
+    // `--method svi:7/6` is `--method svi --points 7 --quadrature 6`, and the scene's
+    // `name = "svi:7/6"` is `name = "svi"` with `points = 7` and `quadrature = 6`.
+    let args = ["run", "kepler", "--t-end", "4", "--json"];
+    let run = |extra: &[&str]| {
+        let mut all = args.to_vec();
+        all.extend_from_slice(extra);
+        json(&all)
+    };
+    let written = run(&["--method", "svi:7/6"]);
+    let sugar = run(&["--method", "svi", "--points", "7", "--quadrature", "6"]);
+    let scene_points = scene_file(
+        "svi-7-6",
+        "model = \"kepler\"\n[parameters]\ne = 0.5\n[method]\nname = \"svi\"\npoints = 7\n\
+         quadrature = 6\n[run]\nh = 0.2\nt_end = 4\n",
+    );
+    let in_file = json(&["run", &scene_points.path, "--json"]);
+    let scene_name = scene_file(
+        "svi-7-6-name",
+        "model = \"kepler\"\n[parameters]\ne = 0.5\n[method]\nname = \"svi:7/6\"\n\
+         [run]\nh = 0.2\nt_end = 4\n",
+    );
+    let in_name = json(&["run", &scene_name.path, "--json"]);
+    for summary in [&written, &sugar, &in_file, &in_name] {
+        // The JSON keeps the method's name; the options are their own fields.
+        assert_eq!(summary["method"], "svi", "{summary}");
+        assert_eq!(summary["points"], 7, "{summary}");
+        assert_eq!(summary["quadrature"], 6, "{summary}");
+        assert_eq!(summary["order"], 12, "{summary}");
+        assert_eq!(summary["q"], written["q"], "{summary}");
+    }
+    // Flags apply on top of the written method; the scene's points give way to it.
+    let summary = run(&["--method", "svi:7/6", "--points", "5"]);
+    assert_eq!(
+        (&summary["points"], &summary["quadrature"]),
+        (&5.into(), &6.into())
+    );
+    let summary = run(&["--method", "sc:9"]);
+    assert_eq!(
+        (&summary["points"], &summary["order"]),
+        (&9.into(), &8.into())
+    );
+    // The scene's points carry over to a method written without them.
+    let summary = json(&[
+        "run",
+        "oscillator",
+        "--method",
+        "svi",
+        "--t-end",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(
+        (&summary["points"], &summary["quadrature"]),
+        (&9.into(), &18.into())
+    );
+
+    for (extra, needle) in [
+        (&["--method", "midpoint:3"][..], "midpoint takes no options"),
+        (&["--method", "sc:9/4"], "no Gauss points"),
+        (&["--method", "svi:x"], "'svi:x'"),
+        (&["--method", "svi:1"], "1 CGL points"),
+        (
+            &["--method", "lie-svi"],
+            "'lie-svi' integrates rigid bodies on SO(3), not models on ℝᴺ",
+        ),
+        (&["--method", "lie-svi", "--points", "3"], "'lie-svi'"),
+        (
+            &["--method", "verlet", "--points", "3"],
+            "--points is an option of svi and sc, not of verlet",
+        ),
+    ] {
+        let mut all = vec!["run", "kepler"];
+        all.extend_from_slice(extra);
+        let stderr = failure(&all);
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+    }
+    let scene = scene_file(
+        "lie-svi-on-kepler",
+        "model = \"kepler\"\n[method]\nname = \"lie-svi:3/3\"\n",
+    );
+    let stderr = failure(&["run", &scene.path]);
+    assert!(
+        stderr.contains("'lie-svi:3/3' integrates rigid bodies"),
+        "{stderr}"
+    );
+    let scene = scene_file(
+        "bad-name",
+        "model = \"kepler\"\n[method]\nname = \"svi:6/\"\n",
+    );
+    let stderr = failure(&["run", &scene.path]);
+    assert!(
+        stderr.contains("'svi:6/'") && stderr.contains("line 3"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn stability_and_bench_take_the_same_grammar() {
+    let output = svi(&["stability", "--method", "svi:7/6", "--z", "1,2"]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = String::from_utf8(output.stdout).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+    for (method, needle) in [("lie-svi", "'lie-svi'"), ("rk4", "unknown method 'rk4'")] {
+        let stderr = failure(&["stability", "--method", method, "--z", "1"]);
+        assert!(stderr.contains(needle), "{stderr}");
+    }
+
+    let dir = Scratch::new("bench-grammar");
+    let out = dir.0.to_str().unwrap();
+    let output = svi(&[
+        "bench",
+        "kepler",
+        "--methods",
+        "svi:7/6,sc:9,verlet",
+        "--steps",
+        "2000",
+        "--batches",
+        "1",
+        "--min-batch",
+        "0",
+        "--t-end",
+        "20",
+        "--out-dir",
+        out,
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("kepler.csv")).unwrap();
+    let methods: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|line| line.split(',').next().unwrap())
+        .collect();
+    assert_eq!(methods, ["svi:7/6", "sc:9", "verlet"]);
+    for (methods, needle) in [
+        ("svi:7/6,rk4", "unknown method 'rk4'"),
+        ("midpoint:3", "midpoint takes no options"),
+        ("lie-svi", "'lie-svi' integrates rigid bodies"),
+    ] {
+        let stderr = failure(&[
+            "bench",
+            "kepler",
+            "--methods",
+            methods,
+            "--steps",
+            "10",
+            "--out-dir",
+            out,
+        ]);
+        assert!(stderr.contains(needle), "{methods}: {stderr}");
+    }
+    let stderr = failure(&["bench", "kepler", "--methods", "rk4", "--out-dir", out]);
+    assert!(stderr.contains("dop853, dopri5"), "{stderr}");
+}

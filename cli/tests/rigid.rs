@@ -221,3 +221,92 @@ fn list_shows_the_rigid_scenes_and_models() {
     assert!(text.contains("|R^T R - I|"), "{text}");
     assert!(text.contains("vertical angular momentum"), "{text}");
 }
+
+#[test]
+fn rigid_scenes_take_the_method_grammar() {
+    let base = ["run", "rigid-body", "--json", "--t-end", "2"];
+    let run = |extra: &[&str]| {
+        let mut all = base.to_vec();
+        all.extend_from_slice(extra);
+        json(&all)
+    };
+    // The built-in scene: lie-svi, 3/3, reduced form.
+    let scene = run(&[]);
+    for (extra, form) in [
+        (&["--method", "lie-svi-reduced"][..], "reduced"),
+        (&["--method", "lie-svi-reduced:3"], "reduced"),
+        (&["--method", "lie-svi:3/3", "--form", "reduced"], "reduced"),
+        (&["--method", "lie-svi:3/3"], "reduced"),
+        (&["--method", "lie-svi", "--form", "full"], "full"),
+    ] {
+        let summary = run(extra);
+        assert_eq!(summary["method"], "lie-svi", "{extra:?}");
+        assert_eq!(summary["form"], form, "{extra:?}");
+        assert_eq!(
+            (&summary["points"], &summary["quadrature"]),
+            (&3.into(), &3.into())
+        );
+        for (a, b) in vector(&summary, "momentum")
+            .iter()
+            .zip(vector(&scene, "momentum"))
+        {
+            assert!((a - b).abs() <= 1e-12, "{extra:?}: {a} vs {b}");
+        }
+    }
+    let summary = run(&["--method", "lie-svi:3/2"]);
+    assert_eq!(
+        (&summary["points"], &summary["quadrature"]),
+        (&3.into(), &2.into())
+    );
+    assert_eq!(summary["order"], 4);
+    let summary = run(&["--method", "lie-svi:4", "--quadrature", "4"]);
+    assert_eq!(summary["order"], 6);
+
+    let scratch = Scratch::new("grammar");
+    let path = scratch.join("body.toml");
+    let write = |method: &str| {
+        std::fs::write(
+            &path,
+            format!("model = \"rigid-body\"\n[method]\n{method}\n[run]\nh = 0.05\nt_end = 1\n"),
+        )
+        .unwrap();
+    };
+    write("name = \"lie-svi-reduced:4\"");
+    let summary = json(&["run", path.to_str().unwrap(), "--json"]);
+    assert_eq!(
+        (&summary["form"], &summary["points"]),
+        (&"reduced".into(), &4.into())
+    );
+    write("name = \"lie-svi\"\npoints = 4\nquadrature = 4\nform = \"reduced\"");
+    let summary = json(&["run", path.to_str().unwrap(), "--json"]);
+    assert_eq!(
+        (&summary["form"], &summary["order"]),
+        (&"reduced".into(), &6.into())
+    );
+
+    for (method, needle) in [
+        ("name = \"svi:7/6\"", "'svi:7/6' integrates models on ℝᴺ"),
+        ("name = \"lie-svi-reduced\"\nform = \"full\"", "contradicts"),
+        ("name = \"lie-svi:1\"", "1 CGL points"),
+    ] {
+        write(method);
+        let stderr = failure(&["run", path.to_str().unwrap()]);
+        assert!(stderr.contains(needle), "{method}: {stderr}");
+    }
+    for (extra, needle) in [
+        (
+            &["--method", "verlet"][..],
+            "'verlet' integrates models on ℝᴺ",
+        ),
+        (
+            &["--method", "lie-svi-reduced", "--form", "full"],
+            "contradicts",
+        ),
+        (&["--method", "lie-svi:3/3/3"], "lie-svi:3/3/3"),
+    ] {
+        let mut all = vec!["run", "heavy-top"];
+        all.extend_from_slice(extra);
+        let stderr = failure(&all);
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+    }
+}

@@ -11,7 +11,7 @@ use common::*;
 
 use clap::Parser;
 use proptest::prelude::*;
-use svi_cli::bench::MethodSpec;
+use svi_cli::bench::BenchMethod;
 use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
 
 #[path = "../../tests/common/hostile_cases.rs"]
@@ -218,7 +218,16 @@ fn scene_text() -> impl Strategy<Value = String> {
         1 => "[a-z-]{0,12}",
     ];
     let method = prop_oneof![
-        6 => proptest::sample::select(svi_cli::MethodKind::NAMES.to_vec()).prop_map(String::from),
+        6 => proptest::sample::select(
+            svi::method::registry::METHODS
+                .iter()
+                .filter(|entry| entry.space == svi::method::registry::SpaceKind::Vector)
+                .map(|entry| entry.name)
+                .collect::<Vec<_>>()
+        ).prop_map(String::from),
+        1 => proptest::sample::select(vec![
+            "svi:4/3", "svi:5", "sc:4", "svi:1", "sc:3/2", "verlet:2", "lie-svi",
+        ]).prop_map(String::from),
         1 => "[a-z-]{0,12}",
     ];
     let parameter = proptest::sample::select(vec![
@@ -399,7 +408,7 @@ fn token() -> impl Strategy<Value = String> {
         ]).prop_map(String::from),
         3 => toml_value(),
         1 => proptest::sample::select(vec![
-            "svi", "sc", "verlet", "midpoint", "e=0.9", "e=1", "e=nan", "=1", "e=", "sigma=inf",
+            "svi", "sc", "verlet", "midpoint", "svi:7/6", "lie-svi", "midpoint:3", "e=0.9", "e=1", "e=nan", "=1", "e=", "sigma=inf",
             "k=-1", "energy,momentum", "halve-step", "none", "kepler", "oscillator",
         ]).prop_map(String::from),
         1 => ".{0,8}",
@@ -433,8 +442,11 @@ proptest! {
 
     #[test]
     fn method_specifications_and_parameters_parse_or_fail_cleanly(text in ".{0,16}") {
-        if let Ok(spec) = text.parse::<MethodSpec>() {
-            prop_assert_eq!(spec.to_string().parse::<MethodSpec>().ok(), Some(spec));
+        if let Ok(spec) = text.parse::<BenchMethod>() {
+            prop_assert_eq!(spec.to_string().parse::<BenchMethod>().ok(), Some(spec));
+        }
+        if let Err(error) = text.parse::<svi::MethodSpec>() {
+            prop_assert!(error.to_string().starts_with("invalid method: "), "{}", error);
         }
         match parse_parameter(&text) {
             Ok((name, value)) => {

@@ -15,6 +15,7 @@
 
 pub mod collocation;
 pub mod lie_svi;
+pub mod registry;
 pub mod space;
 pub mod step;
 pub mod variational;

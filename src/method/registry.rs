@@ -1,0 +1,931 @@
+//! The library's methods by name: a registry as data and one dispatch.
+//!
+//! [`METHODS`] lists every method with its name, the numeric options its name takes, the
+//! space it integrates on and a one-line summary. A [`MethodSpec`] is one entry with its
+//! options, written and parsed in one grammar:
+//!
+//! - `name` — the method with its default options (`svi`, `midpoint`, `lie-svi`);
+//! - `name:P` — P Chebyshev–Gauss–Lobatto points (`svi:7`, `sc:9`, `lie-svi-reduced:3`);
+//! - `name:P/M` — and M Gauss–Legendre points (`svi:7/6`, `lie-svi:3/3`).
+//!
+//! A spec becomes a method in one place: [`MethodSpec::visit_vector`] hands a method for
+//! models on ℝᴺ ([`crate::Lagrangian`]) to a [`VectorMethodVisitor`] as its concrete type,
+//! and [`MethodSpec::lie_svi`] builds the rigid-body method on SO(3)
+//! ([`crate::lie_group::RigidBodyLagrangian`]). Adding a method touches its own file, one
+//! entry of [`METHODS`] and one arm of one of those two functions.
+//!
+//! ```
+//! use svi::MethodSpec;
+//!
+//! let spec: MethodSpec = "svi:7/6".parse().unwrap();
+//! assert_eq!((spec.name(), spec.points(), spec.quadrature()), ("svi", Some(7), Some(6)));
+//! assert_eq!(spec.to_string(), "svi:7/6");
+//! assert_eq!(spec.info().unwrap().order, 12);
+//! assert!("midpoint:3".parse::<MethodSpec>().is_err());
+//! ```
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::lie_group::{Form, LieSvi};
+use crate::spectral::MAX_POINTS;
+use crate::{
+    AdjointSymplecticEuler, Error, Method, MethodInfo, Midpoint, SpectralCollocation,
+    StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
+};
+
+/// The numeric options a method's name takes in the grammar, with their defaults (read off
+/// the method type's `Default`).
+#[derive(Debug, Clone, Copy)]
+pub enum Options {
+    /// No options: `name` only.
+    None,
+    /// Chebyshev–Gauss–Lobatto points: `name` or `name:P`.
+    Points {
+        /// P when it is omitted.
+        default: fn() -> usize,
+    },
+    /// Chebyshev–Gauss–Lobatto and Gauss–Legendre points: `name`, `name:P` or `name:P/M`.
+    PointsAndQuadrature {
+        /// P when it is omitted.
+        default_points: fn() -> usize,
+        /// M when it is omitted, as a function of P.
+        default_quadrature: fn(usize) -> usize,
+    },
+}
+
+/// The configuration space of the models a method integrates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpaceKind {
+    /// Models on ℝᴺ ([`crate::Lagrangian`]), run by [`crate::Integrator`].
+    Vector,
+    /// Rigid bodies on SO(3) ([`crate::lie_group::RigidBodyLagrangian`]), run by
+    /// [`crate::lie_group::RigidBodyIntegrator`].
+    Rotation,
+}
+
+/// One method of the registry.
+#[derive(Debug, Clone, Copy)]
+pub struct Entry {
+    /// The name, as written in scenes and on the command line (also the name in the built
+    /// method's [`MethodInfo`]).
+    pub name: &'static str,
+    /// The numeric options the name takes.
+    pub options: Options,
+    /// The space the method integrates on.
+    pub space: SpaceKind,
+    /// One line of plain text: what the method is and what its options mean.
+    pub summary: &'static str,
+}
+
+/// Every method of the library, in the order help texts list them.
+pub const METHODS: &[Entry] = &[
+    Entry {
+        name: "svi",
+        options: Options::PointsAndQuadrature {
+            default_points: || Svi::default().points,
+            default_quadrature: |points| Svi::new(points).quadrature_points(),
+        },
+        space: SpaceKind::Vector,
+        summary: "spectral variational integrator: CGL points P, Gauss points M (default 2P)",
+    },
+    Entry {
+        name: "sc",
+        options: Options::Points {
+            default: || SpectralCollocation::default().points,
+        },
+        space: SpaceKind::Vector,
+        summary: "spectral collocation of the Euler–Lagrange equations: CGL points P",
+    },
+    Entry {
+        name: "symplectic-euler",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "symplectic Euler, L_d = h L(q_k, v)",
+    },
+    Entry {
+        name: "symplectic-euler-adjoint",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "adjoint symplectic Euler, L_d = h L(q_k+1, v)",
+    },
+    Entry {
+        name: "midpoint",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "midpoint rule, L_d = h L((q_k + q_k+1)/2, v)",
+    },
+    Entry {
+        name: "verlet",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Störmer–Verlet, explicit for constant-mass models",
+    },
+    Entry {
+        name: "trapezoid",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "trapezoidal discrete Lagrangian, always implicit",
+    },
+    Entry {
+        name: "lie-svi",
+        options: Options::PointsAndQuadrature {
+            default_points: || LieSvi::default().points,
+            default_quadrature: |points| LieSvi::new(points).quadrature_points(),
+        },
+        space: SpaceKind::Rotation,
+        summary: "Lie-group spectral variational integrator on SO(3): CGL points P, Gauss points \
+                  M (default P)",
+    },
+    Entry {
+        name: "lie-svi-reduced",
+        options: Options::PointsAndQuadrature {
+            default_points: || LieSvi::default().points,
+            default_quadrature: |points| LieSvi::new(points).quadrature_points(),
+        },
+        space: SpaceKind::Rotation,
+        summary: "lie-svi in the reduced Euler–Poincaré form, for G-invariant rigid bodies: CGL \
+                  points P, Gauss points M (default P)",
+    },
+];
+
+/// The entry named `name`, if there is one.
+pub fn find(name: &str) -> Option<&'static Entry> {
+    METHODS.iter().find(|entry| entry.name == name)
+}
+
+/// The names of [`METHODS`], comma-separated.
+pub fn known_names() -> String {
+    METHODS
+        .iter()
+        .map(|entry| entry.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The grammar and the methods as plain text, one method per line (`name[:P[/M]]`, summary,
+/// defaults): the help text of every option that takes a method.
+pub fn grammar_help() -> String {
+    let width = METHODS
+        .iter()
+        .map(|entry| entry.grammar().len())
+        .max()
+        .unwrap_or(0)
+        + 2;
+    let mut text = String::from(
+        "NAME, NAME:P or NAME:P/M, with P Chebyshev–Gauss–Lobatto points and M Gauss–Legendre \
+         points for the methods that take them; omitted numbers take the defaults shown:",
+    );
+    for entry in METHODS {
+        text.push_str(&format!("\n  {:<width$}{}", entry.grammar(), entry.summary));
+        if entry.takes_points() {
+            text.push_str(&format!("; {} = {}", entry.name, entry.spec().canonical()));
+        }
+    }
+    text
+}
+
+impl Entry {
+    /// Whether the name takes a number of CGL points (`name:P`).
+    pub fn takes_points(&self) -> bool {
+        !matches!(self.options, Options::None)
+    }
+
+    /// Whether the name takes a number of Gauss points (`name:P/M`).
+    pub fn takes_quadrature(&self) -> bool {
+        matches!(self.options, Options::PointsAndQuadrature { .. })
+    }
+
+    /// The number of CGL points when `name:P` omits it (`None` for methods without).
+    pub fn default_points(&self) -> Option<usize> {
+        match self.options {
+            Options::None => None,
+            Options::Points { default } => Some(default()),
+            Options::PointsAndQuadrature { default_points, .. } => Some(default_points()),
+        }
+    }
+
+    /// The number of Gauss points for `points` CGL points when `name:P/M` omits M (`None`
+    /// for methods without a quadrature).
+    pub fn default_quadrature(&self, points: usize) -> Option<usize> {
+        match self.options {
+            Options::PointsAndQuadrature {
+                default_quadrature, ..
+            } => Some(default_quadrature(points)),
+            _ => None,
+        }
+    }
+
+    /// The grammar of the name: `svi[:P[/M]]`, `sc[:P]`, `midpoint`.
+    pub fn grammar(&self) -> String {
+        match self.options {
+            Options::None => self.name.to_string(),
+            Options::Points { .. } => format!("{}[:P]", self.name),
+            Options::PointsAndQuadrature { .. } => format!("{}[:P[/M]]", self.name),
+        }
+    }
+
+    /// This method with its default options.
+    pub fn spec(&'static self) -> MethodSpec {
+        MethodSpec {
+            entry: self,
+            points: None,
+            quadrature: None,
+        }
+    }
+}
+
+/// A method of [`METHODS`] and its options, as written `name`, `name:P` or `name:P/M` (see
+/// the module documentation). Omitted options take the method's defaults.
+#[derive(Debug, Clone, Copy)]
+pub struct MethodSpec {
+    entry: &'static Entry,
+    points: Option<usize>,
+    quadrature: Option<usize>,
+}
+
+impl PartialEq for MethodSpec {
+    fn eq(&self, other: &Self) -> bool {
+        self.entry.name == other.entry.name
+            && self.points == other.points
+            && self.quadrature == other.quadrature
+    }
+}
+
+impl Eq for MethodSpec {}
+
+impl Default for MethodSpec {
+    /// `svi` with its default options.
+    fn default() -> Self {
+        METHODS[0].spec()
+    }
+}
+
+/// Receives the method of a [`MethodSpec`] for models on ℝᴺ as its concrete type.
+pub trait VectorMethodVisitor<const N: usize> {
+    /// What the visit returns.
+    type Output;
+    /// Use `method`.
+    fn visit<M: Method<N> + Clone>(self, method: M) -> Self::Output;
+}
+
+/// Reads the [`MethodInfo`] of the visited method.
+struct InfoOf;
+
+impl VectorMethodVisitor<1> for InfoOf {
+    type Output = MethodInfo;
+    fn visit<M: Method<1> + Clone>(self, method: M) -> MethodInfo {
+        method.info()
+    }
+}
+
+/// Bounds of the CGL points of every spectral method (as the methods validate them).
+const POINTS: std::ops::RangeInclusive<usize> = 2..=MAX_POINTS;
+/// Bounds of the Gauss points of every spectral method (as the methods validate them).
+const QUADRATURE: std::ops::RangeInclusive<usize> = 1..=MAX_POINTS;
+
+/// The reason a number of CGL points is out of range.
+fn points_out_of_range(points: usize) -> Option<String> {
+    (!POINTS.contains(&points)).then(|| {
+        format!(
+            "{points} CGL points; need {} to {}",
+            POINTS.start(),
+            POINTS.end()
+        )
+    })
+}
+
+/// The reason a number of Gauss points is out of range.
+fn quadrature_out_of_range(quadrature: usize) -> Option<String> {
+    (!QUADRATURE.contains(&quadrature)).then(|| {
+        format!(
+            "{quadrature} Gauss points; need {} to {}",
+            QUADRATURE.start(),
+            QUADRATURE.end()
+        )
+    })
+}
+
+impl MethodSpec {
+    /// The method's name.
+    pub fn name(&self) -> &'static str {
+        self.entry.name
+    }
+
+    /// The method's registry entry.
+    pub fn entry(&self) -> &'static Entry {
+        self.entry
+    }
+
+    /// The space the method integrates on.
+    pub fn space(&self) -> SpaceKind {
+        self.entry.space
+    }
+
+    /// The number of CGL points as written (`None`: omitted, or a method without).
+    pub fn points(&self) -> Option<usize> {
+        self.points
+    }
+
+    /// The number of Gauss points as written (`None`: omitted, or a method without).
+    pub fn quadrature(&self) -> Option<usize> {
+        self.quadrature
+    }
+
+    /// The number of CGL points the method uses: as written, else the default (`None` for
+    /// methods without).
+    pub fn points_in_use(&self) -> Option<usize> {
+        self.points.or_else(|| self.entry.default_points())
+    }
+
+    /// The number of Gauss points the method uses: as written, else the default for
+    /// [`MethodSpec::points_in_use`] (`None` for methods without a quadrature).
+    pub fn quadrature_in_use(&self) -> Option<usize> {
+        self.quadrature.or_else(|| {
+            self.entry
+                .default_quadrature(self.points_in_use().unwrap_or_default())
+        })
+    }
+
+    /// The same method with `points` CGL points (the `--points` of the command line). An
+    /// error names `points` if the method takes none or the number is out of range.
+    pub fn with_points(self, points: usize) -> Result<Self, Error> {
+        if !self.entry.takes_points() {
+            return Err(Error::invalid(
+                "points",
+                format!("{} takes no CGL points", self.entry.name),
+            ));
+        }
+        if let Some(reason) = points_out_of_range(points) {
+            return Err(Error::invalid("points", reason));
+        }
+        Ok(MethodSpec {
+            points: Some(points),
+            ..self
+        })
+    }
+
+    /// The same method with `quadrature` Gauss points (the `--quadrature` of the command
+    /// line); omitted CGL points become explicit defaults, as `name:P/M` needs a P. An error
+    /// names `quadrature` if the method takes none or the number is out of range.
+    pub fn with_quadrature(self, quadrature: usize) -> Result<Self, Error> {
+        if !self.entry.takes_quadrature() {
+            return Err(Error::invalid(
+                "quadrature",
+                format!("{} takes no Gauss points", self.entry.name),
+            ));
+        }
+        if let Some(reason) = quadrature_out_of_range(quadrature) {
+            return Err(Error::invalid("quadrature", reason));
+        }
+        Ok(MethodSpec {
+            points: self.points_in_use(),
+            quadrature: Some(quadrature),
+            ..self
+        })
+    }
+
+    /// The spec with every option written out: `svi:6/12`, `sc:6`, `midpoint`.
+    pub fn canonical(&self) -> MethodSpec {
+        MethodSpec {
+            entry: self.entry,
+            points: self.points_in_use(),
+            quadrature: self.quadrature_in_use(),
+        }
+    }
+
+    /// `Ok` if the method integrates on `space`; else an error naming the method and the
+    /// methods that do.
+    pub fn check_space(&self, space: SpaceKind) -> Result<(), Error> {
+        if self.entry.space == space {
+            return Ok(());
+        }
+        let (what, instead, other) = match self.entry.space {
+            SpaceKind::Vector => ("models on ℝᴺ", "rigid bodies on SO(3)", SpaceKind::Rotation),
+            SpaceKind::Rotation => ("rigid bodies on SO(3)", "models on ℝᴺ", SpaceKind::Vector),
+        };
+        let names: Vec<&str> = METHODS
+            .iter()
+            .filter(|entry| entry.space == other)
+            .map(|entry| entry.name)
+            .collect();
+        Err(Error::invalid(
+            "method",
+            format!(
+                "'{self}' integrates {what}, not {instead} (methods for {instead}: {})",
+                names.join(", ")
+            ),
+        ))
+    }
+
+    /// Build the method for models on ℝᴺ and hand it to `visitor`: the one place where a
+    /// method name becomes a type (no trait objects). An error names the method if it
+    /// integrates rigid bodies.
+    pub fn visit_vector<V: VectorMethodVisitor<N>, const N: usize>(
+        &self,
+        visitor: V,
+    ) -> Result<V::Output, Error> {
+        let points = self.points_in_use().unwrap_or_default();
+        Ok(match self.entry.name {
+            "svi" => {
+                let mut svi = Svi::new(points);
+                if let Some(quadrature) = self.quadrature {
+                    svi = svi.with_quadrature(quadrature);
+                }
+                visitor.visit(svi)
+            }
+            "sc" => visitor.visit(SpectralCollocation::new(points)),
+            "symplectic-euler" => visitor.visit(VariationalIntegrator::new(SymplecticEuler)),
+            "symplectic-euler-adjoint" => {
+                visitor.visit(VariationalIntegrator::new(AdjointSymplecticEuler))
+            }
+            "midpoint" => visitor.visit(VariationalIntegrator::new(Midpoint)),
+            "verlet" => visitor.visit(StormerVerlet::default()),
+            "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
+            _ => {
+                self.check_space(SpaceKind::Vector)?;
+                return Err(Error::invalid(
+                    "method",
+                    format!("'{self}' has no dispatch arm for models on ℝᴺ"),
+                ));
+            }
+        })
+    }
+
+    /// Build the rigid-body method on SO(3). An error names the method if it integrates
+    /// models on ℝᴺ.
+    pub fn lie_svi(&self) -> Result<LieSvi, Error> {
+        let form = match self.entry.name {
+            "lie-svi" => Form::Full,
+            "lie-svi-reduced" => Form::Reduced,
+            _ => {
+                self.check_space(SpaceKind::Rotation)?;
+                return Err(Error::invalid(
+                    "method",
+                    format!("'{self}' has no dispatch arm for rigid bodies"),
+                ));
+            }
+        };
+        let mut method = LieSvi::new(self.points_in_use().unwrap_or_default()).with_form(form);
+        if let Some(quadrature) = self.quadrature {
+            method = method.with_quadrature(quadrature);
+        }
+        Ok(method)
+    }
+
+    /// The built method's name, order and geometric properties (methods on ℝᴺ are built at
+    /// N = 1; their properties do not depend on N).
+    pub fn info(&self) -> Result<MethodInfo, Error> {
+        match self.entry.space {
+            SpaceKind::Vector => self.visit_vector(InfoOf),
+            SpaceKind::Rotation => Ok(self.lie_svi()?.info()),
+        }
+    }
+}
+
+impl fmt::Display for MethodSpec {
+    /// `name`, `name:P` or `name:P/M`, as parsed.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.entry.name)?;
+        if let Some(points) = self.points {
+            write!(f, ":{points}")?;
+            if let Some(quadrature) = self.quadrature {
+                write!(f, "/{quadrature}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl FromStr for MethodSpec {
+    type Err = Error;
+
+    /// Parse `name`, `name:P` or `name:P/M` (surrounding white space ignored). Every error is
+    /// [`Error::InvalidParameter`] named `method`, quoting the text.
+    fn from_str(text: &str) -> Result<Self, Error> {
+        let text = text.trim();
+        let bad = |reason: String| Error::invalid("method", format!("'{text}': {reason}"));
+        let (name, options) = match text.split_once(':') {
+            Some((name, options)) => (name, Some(options)),
+            None => (text, None),
+        };
+        let Some(entry) = find(name) else {
+            return Err(Error::invalid(
+                "method",
+                format!("unknown method '{text}' (known: {})", known_names()),
+            ));
+        };
+        let Some(options) = options else {
+            return Ok(entry.spec());
+        };
+        let usage = || {
+            format!(
+                "write {}{}",
+                entry.grammar(),
+                if entry.takes_points() {
+                    ", P CGL points"
+                } else {
+                    ""
+                }
+            ) + if entry.takes_quadrature() {
+                ", M Gauss points"
+            } else {
+                ""
+            }
+        };
+        if !entry.takes_points() {
+            return Err(bad(format!("{name} takes no options ({})", usage())));
+        }
+        let (points, quadrature) = match options.split_once('/') {
+            Some(_) if !entry.takes_quadrature() => {
+                return Err(bad(format!(
+                    "{name} takes CGL points only, no Gauss points ({})",
+                    usage()
+                )));
+            }
+            Some((points, quadrature)) => (points, Some(quadrature)),
+            None => (options, None),
+        };
+        let number = |digits: &str, what: &str| -> Result<usize, Error> {
+            if digits.is_empty() {
+                return Err(bad(format!(
+                    "the number of {what} is missing ({})",
+                    usage()
+                )));
+            }
+            if !digits.bytes().all(|byte| byte.is_ascii_digit()) {
+                return Err(bad(format!(
+                    "'{digits}' is not a number of {what} ({})",
+                    usage()
+                )));
+            }
+            // Only digits: the parse fails on overflow alone.
+            digits
+                .parse::<usize>()
+                .map_err(|_| bad(format!("{digits} {what} is too many")))
+        };
+        let points = number(points, "CGL points")?;
+        if let Some(reason) = points_out_of_range(points) {
+            return Err(bad(reason));
+        }
+        let quadrature = quadrature
+            .map(|digits| number(digits, "Gauss points"))
+            .transpose()?;
+        if let Some(reason) = quadrature.and_then(quadrature_out_of_range) {
+            return Err(bad(reason));
+        }
+        Ok(MethodSpec {
+            entry,
+            points: Some(points),
+            quadrature,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lie_group::RigidBodyLagrangian;
+    use crate::{Lagrangian, Scalar};
+    use nalgebra::{Matrix3, SVector, Vector3};
+
+    /// A tiny model on ℝ²: two uncoupled oscillators.
+    struct Oscillators;
+    impl Lagrangian<2> for Oscillators {
+        const TIME_DEPENDENT: bool = false;
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            (v.dot(v) - q.dot(q)) * 0.5
+        }
+    }
+
+    fn spec(text: &str) -> MethodSpec {
+        text.parse()
+            .unwrap_or_else(|error| panic!("{text}: {error}"))
+    }
+
+    /// Every name with every option form it takes.
+    fn spellings() -> Vec<String> {
+        let mut texts = Vec::new();
+        for entry in METHODS {
+            texts.push(entry.name.to_string());
+            if entry.takes_points() {
+                texts.push(format!("{}:4", entry.name));
+            }
+            if entry.takes_quadrature() {
+                texts.push(format!("{}:4/3", entry.name));
+            }
+        }
+        texts
+    }
+
+    #[test]
+    fn every_spelling_parses_and_prints_back() {
+        for text in spellings() {
+            let parsed = spec(&text);
+            assert_eq!(parsed.to_string(), text);
+            assert_eq!(spec(&parsed.to_string()), parsed);
+        }
+        for text in ["svi:7/6", "svi:6", "sc:9", "midpoint", "lie-svi-reduced:3"] {
+            assert_eq!(spec(text).to_string(), text);
+        }
+        assert_eq!(spec(" svi:7/6 "), spec("svi:7/6"));
+        assert_eq!(MethodSpec::default(), spec("svi"));
+    }
+
+    #[test]
+    fn omitted_options_take_the_method_types_defaults() {
+        let svi = spec("svi");
+        assert_eq!((svi.points(), svi.quadrature()), (None, None));
+        assert_eq!(svi.points_in_use(), Some(Svi::default().points));
+        assert_eq!(
+            svi.quadrature_in_use(),
+            Some(Svi::default().quadrature_points())
+        );
+        assert_eq!(spec("svi:7").quadrature_in_use(), Some(14));
+        assert_eq!(
+            spec("sc").points_in_use(),
+            Some(SpectralCollocation::default().points)
+        );
+        assert_eq!(spec("sc").quadrature_in_use(), None);
+        assert_eq!(spec("lie-svi:4").quadrature_in_use(), Some(4));
+        assert_eq!(
+            spec("lie-svi").lie_svi().unwrap(),
+            LieSvi::default(),
+            "lie-svi is LieSvi::default()"
+        );
+        assert_eq!(spec("midpoint").points_in_use(), None);
+        assert_eq!(spec("svi").canonical().to_string(), "svi:6/12");
+        assert_eq!(spec("verlet").canonical().to_string(), "verlet");
+    }
+
+    #[test]
+    fn bad_spellings_are_typed_errors_naming_the_text() {
+        for bad in [
+            "",
+            "rk4",
+            "svi:",
+            "svi:x",
+            "svi:6/",
+            "svi:/6",
+            "svi:6/x",
+            "svi:-6",
+            "svi:+6",
+            "svi: 6",
+            "svi:0",
+            "svi:1",
+            "svi:257",
+            "svi:6/0",
+            "svi:6/257",
+            "sc:",
+            "sc:9/4",
+            "midpoint:3",
+            "verlet:",
+            "svi:6:7",
+            "svi:6/7/8",
+            "SVI",
+            "lie-svi:1",
+            "svi:1e3",
+            "svi:99999999999999999999999999",
+        ] {
+            let error = bad.parse::<MethodSpec>().unwrap_err();
+            let Error::InvalidParameter { name, reason } = &error else {
+                panic!("{bad}: {error:?}")
+            };
+            assert_eq!(name, "method", "{bad}");
+            assert!(reason.contains(&format!("'{bad}'")), "{bad}: {reason}");
+        }
+        let unknown = "rk4".parse::<MethodSpec>().unwrap_err().to_string();
+        assert!(
+            unknown.contains("known: svi, sc, symplectic-euler,"),
+            "{unknown}"
+        );
+        let message = "midpoint:3".parse::<MethodSpec>().unwrap_err().to_string();
+        assert!(message.contains("takes no options"), "{message}");
+        let message = "sc:9/4".parse::<MethodSpec>().unwrap_err().to_string();
+        assert!(message.contains("no Gauss points"), "{message}");
+    }
+
+    #[test]
+    fn the_parsers_bounds_are_the_methods_own() {
+        // Exactly the numbers the methods themselves accept parse.
+        for points in [0, 1, 2, 3, MAX_POINTS, MAX_POINTS + 1] {
+            let text = format!("svi:{points}/1");
+            let workspace =
+                Method::<2>::workspace(&Svi::new(points).with_quadrature(1), &Oscillators, 0.1);
+            assert_eq!(
+                text.parse::<MethodSpec>().is_ok(),
+                workspace.is_ok(),
+                "{text}"
+            );
+            let text = format!("sc:{points}");
+            let workspace =
+                Method::<2>::workspace(&SpectralCollocation::new(points), &Oscillators, 0.1);
+            assert_eq!(
+                text.parse::<MethodSpec>().is_ok(),
+                workspace.is_ok(),
+                "{text}"
+            );
+        }
+        for quadrature in [0, 1, MAX_POINTS, MAX_POINTS + 1] {
+            let text = format!("svi:2/{quadrature}");
+            let workspace =
+                Method::<2>::workspace(&Svi::new(2).with_quadrature(quadrature), &Oscillators, 0.1);
+            assert_eq!(
+                text.parse::<MethodSpec>().is_ok(),
+                workspace.is_ok(),
+                "{text}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_sugar_sets_options_and_names_the_option_it_rejects() {
+        assert_eq!(spec("svi").with_points(7).unwrap(), spec("svi:7"));
+        assert_eq!(
+            spec("svi")
+                .with_quadrature(6)
+                .unwrap()
+                .with_points(7)
+                .unwrap(),
+            spec("svi:7/6")
+        );
+        assert_eq!(
+            spec("svi").with_quadrature(6).unwrap().to_string(),
+            "svi:6/6"
+        );
+        assert_eq!(spec("svi:7/6").with_points(5).unwrap(), spec("svi:5/6"));
+        assert_eq!(spec("sc").with_points(9).unwrap(), spec("sc:9"));
+        for (result, option) in [
+            (spec("midpoint").with_points(3), "points"),
+            (spec("sc").with_quadrature(3), "quadrature"),
+            (spec("verlet").with_quadrature(3), "quadrature"),
+            (spec("svi").with_points(1), "points"),
+            (spec("svi").with_quadrature(0), "quadrature"),
+        ] {
+            assert!(
+                matches!(&result, Err(Error::InvalidParameter { name, .. }) if name == option),
+                "{result:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn info_reports_the_built_methods_order() {
+        let svi = spec("svi:7/6").info().unwrap();
+        assert_eq!((svi.name, svi.order), ("svi", 12));
+        assert!(svi.symmetric && svi.symplectic);
+        let sc = spec("sc:9").info().unwrap();
+        assert_eq!(
+            sc.order,
+            Method::<1>::info(&SpectralCollocation::new(9)).order
+        );
+        assert!(!sc.symplectic);
+        assert_eq!(spec("midpoint").info().unwrap().order, 2);
+        assert_eq!(spec("symplectic-euler").info().unwrap().order, 1);
+        assert_eq!(spec("lie-svi:3/3").info().unwrap().order, 4);
+        // Every entry's built method carries the entry's name.
+        for entry in METHODS {
+            assert_eq!(entry.spec().info().unwrap().name, entry.name);
+        }
+    }
+
+    /// Runs one step of the visited method on [`Oscillators`].
+    struct OneStep;
+    impl VectorMethodVisitor<2> for OneStep {
+        type Output = Result<(), Error>;
+        fn visit<M: Method<2> + Clone>(self, method: M) -> Result<(), Error> {
+            crate::Integrator::new(Oscillators, method)
+                .run_from_velocity(
+                    0.0,
+                    SVector::from([1.0, 0.0]),
+                    SVector::from([0.0, 1.0]),
+                    0.1,
+                    0.1,
+                    &mut (),
+                )
+                .map(|_| ())
+        }
+    }
+
+    /// A free rigid body with unit inertia, for one step of the rotation methods.
+    struct Sphere;
+    impl RigidBodyLagrangian for Sphere {
+        const G_INVARIANT: bool = true;
+        fn lagrangian<D: Scalar>(&self, _r: &Matrix3<D>, omega: &Vector3<D>) -> D {
+            omega.dot(omega) * 0.5
+        }
+    }
+
+    #[test]
+    fn every_entry_dispatches_on_its_space_only() {
+        for entry in METHODS {
+            let spec = entry.spec();
+            match entry.space {
+                SpaceKind::Vector => {
+                    spec.visit_vector(OneStep)
+                        .unwrap_or_else(|error| panic!("{}: {error}", entry.name))
+                        .unwrap_or_else(|error| panic!("{}: {error}", entry.name));
+                    let error = spec.lie_svi().unwrap_err().to_string();
+                    assert!(error.contains(entry.name), "{error}");
+                }
+                SpaceKind::Rotation => {
+                    let method = spec.lie_svi().unwrap();
+                    crate::lie_group::RigidBodyIntegrator::new(Sphere, method)
+                        .run(
+                            0.0,
+                            crate::lie_group::RigidInitial::Velocity {
+                                r: Matrix3::identity(),
+                                omega: SVector::from([1.0, 0.5, -0.4]),
+                            },
+                            0.1,
+                            0.1,
+                            &mut (),
+                        )
+                        .unwrap_or_else(|error| panic!("{}: {error}", entry.name));
+                    let error = spec.visit_vector(OneStep).unwrap_err().to_string();
+                    assert!(error.contains(entry.name), "{error}");
+                }
+            }
+        }
+        assert_eq!(
+            spec("lie-svi-reduced:3").lie_svi().unwrap().form,
+            Form::Reduced
+        );
+        assert_eq!(spec("lie-svi:3/2").lie_svi().unwrap().quadrature, Some(2));
+    }
+
+    #[test]
+    fn the_help_lists_every_entry_with_its_grammar_and_summary() {
+        let help = grammar_help();
+        for entry in METHODS {
+            let line = help
+                .lines()
+                .find(|line| {
+                    line.trim_start()
+                        .starts_with(&format!("{} ", entry.grammar()))
+                })
+                .unwrap_or_else(|| panic!("{} missing:\n{help}", entry.name));
+            assert!(line.contains(entry.summary), "{line}");
+        }
+        assert!(
+            help.contains("svi[:P[/M]]") && help.contains("; svi = svi:6/12"),
+            "{help}"
+        );
+        assert!(!help.contains("[`"), "{help}");
+    }
+
+    /// The order column of the README's method table for `spec`: a number, or one of the
+    /// formulas in P and M the table uses.
+    fn readme_order(cell: &str, spec: &MethodSpec) -> Option<usize> {
+        let p = spec.points_in_use().unwrap_or_default();
+        let m = spec.quadrature_in_use().unwrap_or_default();
+        match cell {
+            "2·min(P − 1, M)" => Some(2 * (p - 1).min(m)),
+            "P − 1" => Some(p - 1),
+            _ => cell.parse().ok(),
+        }
+    }
+
+    #[test]
+    fn the_readme_table_lists_every_entry_with_its_grammar_order_and_summary() {
+        let readme = include_str!("../../README.md");
+        let rows: Vec<Vec<&str>> = readme
+            .lines()
+            .skip_while(|line| *line != "| method | grammar | order | summary |")
+            .skip(2)
+            .take_while(|line| line.starts_with('|'))
+            .map(|line| line.trim_matches('|').split(" | ").map(str::trim).collect())
+            .collect();
+        assert_eq!(rows.len(), METHODS.len(), "{rows:?}");
+        for entry in METHODS {
+            let row = rows
+                .iter()
+                .find(|row| row[0] == format!("`{}`", entry.name))
+                .unwrap_or_else(|| panic!("{} is not in the README's method table", entry.name));
+            assert_eq!(row.len(), 4, "{row:?}");
+            assert_eq!(row[1], format!("`{}`", entry.grammar()), "{row:?}");
+            assert_eq!(row[3], entry.summary, "{row:?}");
+            // The order column agrees with the built methods over a range of options.
+            let mut specs = vec![entry.spec()];
+            for points in 2..=9 {
+                if entry.takes_points() {
+                    specs.push(entry.spec().with_points(points).unwrap());
+                }
+                for quadrature in 1..=9 {
+                    if entry.takes_quadrature() {
+                        let spec = entry.spec().with_points(points).unwrap();
+                        specs.push(spec.with_quadrature(quadrature).unwrap());
+                    }
+                }
+            }
+            for spec in specs {
+                assert_eq!(
+                    readme_order(row[2], &spec),
+                    Some(spec.info().unwrap().order),
+                    "{spec}: README order {}",
+                    row[2]
+                );
+            }
+        }
+    }
+}
