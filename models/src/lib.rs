@@ -113,37 +113,44 @@ pub trait ModelVisitor {
     fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> Self::Output;
 }
 
-/// Names of all models, in a stable order (each equals the model's [`Defaults::name`]).
-pub const MODEL_NAMES: &[&str] = &[
-    HarmonicOscillator::NAME,
-    Pendulum::NAME,
-    SpringPendulum::NAME,
-    Kepler::NAME,
-    DoublePendulum::NAME,
-    DampedOscillator::NAME,
-    DampedPendulum::NAME,
-    DrivenOscillator::NAME,
-];
+/// The zoo on ℝᴺ: [`MODEL_NAMES`] and [`visit_model`] from one list of model types (adding
+/// a model is its file and one entry here).
+macro_rules! vector_zoo {
+    ($($model:ident),+ $(,)?) => {
+        /// Names of all models, in a stable order (each equals the model's
+        /// [`Defaults::name`]).
+        pub const MODEL_NAMES: &[&str] = &[$($model::NAME),+];
 
-/// Build the named model with its defaults and hand it to the visitor.
-///
-/// # Errors
-/// [`UnknownModel`] if `name` is not one of [`MODEL_NAMES`].
-pub fn visit_model<V: ModelVisitor>(name: &str, visitor: V) -> Result<V::Output, UnknownModel> {
-    match name {
-        HarmonicOscillator::NAME => Ok(visitor.visit(HarmonicOscillator::default())),
-        Pendulum::NAME => Ok(visitor.visit(Pendulum::default())),
-        SpringPendulum::NAME => Ok(visitor.visit(SpringPendulum::default())),
-        Kepler::NAME => Ok(visitor.visit(Kepler::default())),
-        DoublePendulum::NAME => Ok(visitor.visit(DoublePendulum::default())),
-        DampedOscillator::NAME => Ok(visitor.visit(DampedOscillator::default())),
-        DampedPendulum::NAME => Ok(visitor.visit(DampedPendulum::default())),
-        DrivenOscillator::NAME => Ok(visitor.visit(DrivenOscillator::default())),
-        _ => Err(UnknownModel {
-            name: name.to_owned(),
-        }),
-    }
+        /// Build the named model with its defaults and hand it to the visitor.
+        ///
+        /// # Errors
+        /// [`UnknownModel`] if `name` is not one of [`MODEL_NAMES`].
+        pub fn visit_model<V: ModelVisitor>(
+            name: &str,
+            visitor: V,
+        ) -> Result<V::Output, UnknownModel> {
+            $(
+                if name == $model::NAME {
+                    return Ok(visitor.visit($model::default()));
+                }
+            )+
+            Err(UnknownModel {
+                name: name.to_owned(),
+            })
+        }
+    };
 }
+
+vector_zoo!(
+    HarmonicOscillator,
+    Pendulum,
+    SpringPendulum,
+    Kepler,
+    DoublePendulum,
+    DampedOscillator,
+    DampedPendulum,
+    DrivenOscillator,
+);
 
 /// A model name that is not in [`MODEL_NAMES`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
