@@ -27,7 +27,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::lie_group::{Form, LieSvi};
+use crate::method::lie_svi::{Form, LieSvi};
 use crate::spectral::MAX_POINTS;
 use crate::{
     AdjointSymplecticEuler, Error, Method, MethodInfo, Midpoint, SpectralCollocation,
