@@ -9,7 +9,7 @@
 //!   a buffer allocated once per run; factor and solve allocate nothing. The Newton systems of
 //!   the spectral methods are (N·s)-sized, with s chosen at run time.
 
-use crate::Scalar;
+use crate::scalar::Scalar;
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// Solve A x = b for a small fixed-size system; `None` if A is singular (a zero pivot) or the

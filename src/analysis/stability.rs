@@ -143,12 +143,15 @@
 //! with 2 Gauss points; Lambert, Watson, *Symmetric multistep methods for periodic initial value
 //! problems* (1976), periodicity and P-stability.
 
+use crate::error::Error;
 use crate::error::require_positive;
+use crate::method::Method;
 use crate::method::State;
+use crate::model::Lagrangian;
+use crate::scalar::Scalar;
 use crate::spectral::MAX_POINTS;
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
-use crate::{Error, Lagrangian, Method, Scalar};
 use argmin::core::{
     CostFunction, Executor, IterState, Solver, State as _, TerminationReason, TerminationStatus,
 };
@@ -729,7 +732,8 @@ impl<M: Method<1>> CostFunction for Indicator<'_, M> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{SpectralCollocation, Svi};
+    use crate::method::collocation::SpectralCollocation;
+    use crate::method::variational::svi::Svi;
 
     fn largest_difference(a: &Matrix2<f64>, b: &Matrix2<f64>) -> f64 {
         (a - b).amax() / a.amax().max(1.0)

@@ -4,7 +4,7 @@
 //! step-size ladder, using only the points above the round-off plateau, so a method's
 //! declared order ([`crate::MethodInfo::order`]) can be checked on any model.
 
-use crate::Error;
+use crate::error::Error;
 
 /// Least-squares slope of log(error) against log(h).
 ///

@@ -985,7 +985,7 @@ mod tests {
 
     struct Pendulum;
     impl RigidBodyLagrangian for Pendulum {
-        fn lagrangian<D: crate::Scalar>(&self, r: &Matrix3<D>, w: &Vector3<D>) -> D {
+        fn lagrangian<D: crate::scalar::Scalar>(&self, r: &Matrix3<D>, w: &Vector3<D>) -> D {
             let kinetic = (w[0] * w[0] + w[1] * w[1] * 1.5 + w[2] * w[2] * 2.0) * 0.5;
             // A deliberately nonlinear potential in R, and a coupling of R and Ω.
             let height = r[(2, 0)] * 0.1 + r[(2, 1)] * 0.05 - r[(2, 2)] * 0.5;

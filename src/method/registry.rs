@@ -27,12 +27,17 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::error::Error;
+use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
-use crate::spectral::MAX_POINTS;
-use crate::{
-    AdjointSymplecticEuler, Error, Method, MethodInfo, Midpoint, SpectralCollocation,
-    StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
+use crate::method::variational::discrete_lagrangian::{
+    AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
 };
+use crate::method::variational::stormer_verlet::StormerVerlet;
+use crate::method::variational::svi::Svi;
+use crate::method::variational::variational_integrator::VariationalIntegrator;
+use crate::method::{Method, MethodInfo};
+use crate::spectral::MAX_POINTS;
 
 /// The numeric options a method's name takes in the grammar, with their defaults (read off
 /// the method type's `Default`).
@@ -586,7 +591,8 @@ impl FromStr for MethodSpec {
 mod tests {
     use super::*;
     use crate::lie_group::RigidBodyLagrangian;
-    use crate::{Lagrangian, Scalar};
+    use crate::model::Lagrangian;
+    use crate::scalar::Scalar;
     use nalgebra::{Matrix3, SVector, Vector3};
 
     /// A tiny model on ℝ²: two uncoupled oscillators.
@@ -794,7 +800,7 @@ mod tests {
     impl VectorMethodVisitor<2> for OneStep {
         type Output = Result<(), Error>;
         fn visit<M: Method<2> + Clone>(self, method: M) -> Result<(), Error> {
-            crate::Integrator::new(Oscillators, method)
+            crate::stepping::run::Integrator::new(Oscillators, method)
                 .run_from_velocity(
                     0.0,
                     SVector::from([1.0, 0.0]),

@@ -23,9 +23,10 @@
 //! The methods live on the blanket extension trait [`LagrangianExt`], implemented for every
 //! [`Lagrangian`].
 
+use crate::error::Error;
 use crate::linalg::solve_small;
 use crate::model::{Lagrangian, Symmetries};
-use crate::{Error, Scalar};
+use crate::scalar::Scalar;
 use nalgebra::{Const, SMatrix, SVector};
 use num_dual::{
     Dual2Vec, Dual64, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian,
@@ -481,19 +482,19 @@ where
     solve_small(vv, rhs)
 }
 
-/// M⁻¹ of a [`crate::Structure::ConstantMass`] Lagrangian, computed at the first step (at
-/// the state's (t, q), with its second coordinate standing in for q̇, which M does not depend
-/// on) and cached in `cache`.
+/// M⁻¹ of a [`crate::model::Structure::ConstantMass`] Lagrangian, computed at the first step
+/// (at (t, q), with `y` standing in for q̇, which M does not depend on) and cached in `cache`.
 pub(crate) fn cached_mass_inverse<L: Lagrangian<N>, const N: usize>(
     cache: &mut Option<SMatrix<f64, N, N>>,
     model: &L,
     t: f64,
-    state: &crate::State<N>,
+    q: &SVector<f64, N>,
+    y: &SVector<f64, N>,
 ) -> Result<SMatrix<f64, N, N>, crate::error::StepFailure> {
     if let Some(inverse) = cache {
         return Ok(*inverse);
     }
-    let mass = model.mass_matrix(t, &state.q, &state.y);
+    let mass = model.mass_matrix(t, q, y);
     let inverse =
         crate::linalg::invert_small(&mass).ok_or(crate::error::StepFailure::SingularMatrix)?;
     Ok(*cache.insert(inverse))
@@ -502,7 +503,7 @@ pub(crate) fn cached_mass_inverse<L: Lagrangian<N>, const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Structure;
+    use crate::model::Structure;
 
     /// Harmonic oscillator L = q̇²/2 − q²/2.
     struct Oscillator;
@@ -878,16 +879,13 @@ mod tests {
         // M = [[2, 1], [1, 3]], M⁻¹ = [[3, −1], [−1, 2]] / 5.
         let expected = SMatrix::<f64, 2, 2>::new(0.6, -0.2, -0.2, 0.4);
         let mut cache = None;
-        let state = crate::State {
-            q: SVector::from([0.3, 0.1]),
-            y: SVector::from([1.0, -2.0]),
-        };
-        let inverse = cached_mass_inverse(&mut cache, &ConstantMass, 0.0, &state).unwrap();
+        let (q, y) = (SVector::from([0.3, 0.1]), SVector::from([1.0, -2.0]));
+        let inverse = cached_mass_inverse(&mut cache, &ConstantMass, 0.0, &q, &y).unwrap();
         assert_close(&inverse, &expected, 1e-15);
         // A cached value is returned as is: a stale cache proves no recomputation.
         let stale = SMatrix::<f64, 2, 2>::identity();
         cache = Some(stale);
-        let again = cached_mass_inverse(&mut cache, &ConstantMass, 1.0, &state).unwrap();
+        let again = cached_mass_inverse(&mut cache, &ConstantMass, 1.0, &q, &y).unwrap();
         assert_eq!(again, stale);
     }
 }

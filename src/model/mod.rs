@@ -38,7 +38,7 @@ pub mod derived;
 pub mod rigid_body;
 pub mod so3;
 
-use crate::Scalar;
+use crate::scalar::Scalar;
 use nalgebra::SVector;
 
 /// A Lagrangian L(t, q, q̇) on ℝᴺ, written once, generic over the scalar type.
@@ -210,7 +210,7 @@ pub trait Defaults<const N: usize>: Lagrangian<N> {
     fn parameters(&self) -> Vec<(&'static str, f64)>;
     /// Set one parameter; an unknown name or an out-of-range value is an
     /// [`crate::Error::InvalidParameter`].
-    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), crate::Error>;
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), crate::error::Error>;
     /// Default initial state (t0, q0, q̇0) for the current parameters.
     fn initial_state(&self) -> (f64, SVector<f64, N>, SVector<f64, N>);
     /// Default step size.

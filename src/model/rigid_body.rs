@@ -35,9 +35,10 @@
 //! }
 //! ```
 
+use crate::error::Error;
 use crate::linalg::solve_small;
 use crate::model::so3::{Matrix3, Vector3, exp};
-use crate::{Error, Scalar};
+use crate::scalar::Scalar;
 use nalgebra::Const;
 use num_dual::{Dual2Vec, DualSVec64, DualVec, gradient, hessian};
 

@@ -31,7 +31,7 @@
 //! small angles and would drop the derivative; it is not used here.) Away from zero the
 //! closed forms are evaluated without cancellation (1 − cos θ = 2 sin²(θ/2)).
 
-use crate::Scalar;
+use crate::scalar::Scalar;
 use nalgebra::{SMatrix, SVector};
 
 /// A 3×3 matrix over `D`.

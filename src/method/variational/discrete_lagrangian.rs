@@ -36,7 +36,8 @@
 //!
 //! All are symplectic without forces (a discrete Lagrangian is a type-I generating function).
 
-use crate::{Lagrangian, Scalar};
+use crate::model::Lagrangian;
+use crate::scalar::Scalar;
 use nalgebra::SVector;
 
 /// Static facts about a discrete Lagrangian and the integrator it generates.

@@ -34,16 +34,20 @@
 //! integration* (2006), §I.3 and eq. VI.6.9; Hairer, Lubich, Wanner, *Geometric numerical
 //! integration illustrated by the Störmer–Verlet method*, Acta Numerica (2003).
 
+use crate::error::Error;
 use crate::error::StepFailure;
+use crate::method::Method;
 use crate::method::variational::discrete_lagrangian::Trapezoid;
+use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::variational::variational_integrator::{
     VariationalWorkspace, continuation_tolerance, discrete_tangent_map,
 };
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::Lagrangian;
+use crate::model::Structure;
 use crate::model::derived::LagrangianExt;
 use crate::model::derived::cached_mass_inverse;
 use crate::nonlinear::Newton;
-use crate::{Error, Lagrangian, Method, Structure, VariationalIntegrator};
 use nalgebra::{DVector, SMatrix, SVector};
 
 /// Options of the Störmer–Verlet method.
@@ -172,7 +176,8 @@ fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
     state: &State<N>,
     increment: &mut State<N>,
 ) -> Result<StepReport, StepFailure> {
-    let mass_inverse = cached_mass_inverse(&mut explicit.mass_inverse, model, t, state)?;
+    let mass_inverse =
+        cached_mass_inverse(&mut explicit.mass_inverse, model, t, &state.q, &state.y)?;
     let half = 0.5 * h;
     let mut evaluations = 1;
     let cached = explicit.cache.take().filter(|cache| {

@@ -47,16 +47,19 @@
 //! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
+use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
+use crate::method::Method;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::Lagrangian;
+use crate::model::Structure;
 use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::nonlinear::{FixedPoint, Newton, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use crate::spectral::starting_values::StartingValues;
 use crate::spectral::{MAX_POINTS, check_options};
-use crate::{Error, Lagrangian, Method, Structure};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::ops::ControlFlow;
 
@@ -705,7 +708,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
-    let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, state)?;
+    let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
     let s = tables.degree;
     let m = tables.nodes.len();
     let velocity = mass_inverse * state.y * h;
@@ -838,8 +841,8 @@ fn solve<L: Lagrangian<N>, const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Scalar;
     use crate::analysis::verify::observed_order;
+    use crate::scalar::Scalar;
     use nalgebra::Complex;
 
     /// Harmonic oscillator L = q̇²/2 − q²/2, declared [`Structure::ConstantMass`] (fixed-point

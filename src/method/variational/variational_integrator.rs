@@ -37,13 +37,15 @@
 //! integrators*, Acta Numerica (2001), §1.2, §2.7 and §3.2; Porcù & Penati (OctConf 2013),
 //! "Discrete mechanics" and "Forced mechanics".
 
+use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert_small;
+use crate::method::Method;
 use crate::method::variational::discrete_lagrangian::{DiscreteLagrangian, DiscreteLagrangianInfo};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::nonlinear::Newton;
-use crate::{Error, Lagrangian, Method};
 use nalgebra::{Const, DVector, SMatrix, SVector};
 use num_dual::{Dual2Vec, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian};
 
