@@ -775,7 +775,7 @@ fn step_and_degree_adaptivity_on_so3_meet_their_tolerance() {
                 &SolveOptions::degree_adaptive(0.1, tol, 2, 12),
             )
             .unwrap();
-        assert!(degree.adaptivity.points.len() > 0);
+        assert!(!degree.adaptivity.points.is_empty());
         assert!(
             point_error(&degree.last, &exact) < tol,
             "degree, tol {tol:e}"
