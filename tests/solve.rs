@@ -456,3 +456,51 @@ fn recovery_and_divergence_limit_apply_to_fixed_step_solves() {
     };
     assert_eq!(name, "recovery");
 }
+
+#[test]
+fn steps_below_the_resolution_of_the_times_are_typed_errors() {
+    // At t ≈ 1e16 neighbouring doubles are 2 apart: no step mode may run on such a grid.
+    let (model, initial) = kepler(0.5);
+    let integrator = Integrator::new(model, Svi::new(6));
+    // A span of 2 there is shorter than any resolvable step (1000 spacings).
+    let short = Span::new(1e16, 1e16 + 2.0);
+    for options in [
+        SolveOptions::fixed_step(0.4),
+        SolveOptions::degree_adaptive(0.4, 1e-8, 3, 8),
+        SolveOptions::step_adaptive(1e-8),
+    ] {
+        assert_eq!(
+            name_of(integrator.solve(&short, initial, &options)),
+            "t_end"
+        );
+    }
+    let run = integrator.run(1e16, initial, 0.4, 1e16 + 2.0, &mut ());
+    assert_eq!(name_of(run), "t_end");
+    // A long enough span, but a step below the resolution.
+    let long = Span::new(1e16, 1e16 + 1e5);
+    assert_eq!(
+        name_of(integrator.solve(&long, initial, &SolveOptions::fixed_step(0.4))),
+        "h"
+    );
+    let mut options = SolveOptions::step_adaptive(1e-8);
+    options.min_step = Some(0.4);
+    assert_eq!(
+        name_of(integrator.solve(&long, initial, &options)),
+        "min_step"
+    );
+    // A minimum step above the maximum is an error, not a panic.
+    let mut options = SolveOptions::step_adaptive(1e-8);
+    options.min_step = Some(1.0);
+    options.max_step = Some(0.1);
+    assert_eq!(
+        name_of(integrator.solve(&Span::new(0.0, 10.0), initial, &options)),
+        "min_step"
+    );
+}
+
+fn name_of<T: std::fmt::Debug>(result: Result<T, Error>) -> String {
+    match result {
+        Err(Error::InvalidParameter { name, .. }) => name,
+        other => panic!("expected a typed error, got {other:?}"),
+    }
+}

@@ -92,7 +92,7 @@ pub const METHODS: &[Entry] = &[
             default_quadrature: |points| Svi::new(points).quadrature_points(),
         },
         space: SpaceKind::Vector,
-        summary: "spectral variational integrator: CGL points P, Gauss points M (default 2P)",
+        summary: "spectral variational integrator: CGL points P, Gauss points M (default 2P, at most 256)",
     },
     Entry {
         name: "sc",

@@ -2,7 +2,7 @@
 //! ends. Times are t_k = t_0 + k·h, never accumulated with `t += h`; the last step is
 //! shortened to land on the horizon.
 
-use crate::error::Error;
+use crate::error::{Error, require_finite, require_positive};
 
 /// Number of steps [`crate::Integrator::run`] takes to cover `span` with steps of size at most `h`:
 /// a span within round-off of a whole number of steps gets no extra sliver step, otherwise
@@ -22,6 +22,60 @@ pub fn step_count(span: f64, h: f64) -> Result<usize, Error> {
         ratio.ceil()
     };
     Ok((count as usize).max(1))
+}
+
+/// Smallest step, in units of the spacing of floating-point times near the span, that a
+/// run accepts.
+pub const RESOLUTION: f64 = 1e3;
+
+/// The finest step whose times can be told apart near [t0, t_end]: [`RESOLUTION`] spacings of
+/// the floating-point numbers there (with t0 = 10¹⁶ they are 2 apart, and t0 + 0.4 is t0).
+pub fn resolution(t0: f64, t_end: f64) -> f64 {
+    RESOLUTION * f64::EPSILON * t0.abs().max(t_end.abs())
+}
+
+/// Check a span: finite ends, t_end after t0, and long enough for at least one resolvable
+/// step ([`resolution`]).
+pub fn check_span(t0: f64, t_end: f64) -> Result<(), Error> {
+    require_finite("t0", t0)?;
+    require_finite("t_end", t_end)?;
+    if t_end <= t0 {
+        return Err(Error::invalid(
+            "t_end",
+            format!("the horizon {t_end} is not after the start {t0}"),
+        ));
+    }
+    let finest = resolution(t0, t_end);
+    if t_end - t0 < finest {
+        return Err(Error::invalid(
+            "t_end",
+            format!(
+                "the span from {t0:e} to {t_end:e} is shorter than the finest step {finest:e} \
+                 whose times floating point can tell apart there: start the time at 0"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The number of steps of the fixed grid of step `h` over [t0, t_end] ([`step_count`]), after
+/// checking the span ([`check_span`]) and that `h` is positive and resolvable
+/// ([`resolution`]).
+pub fn grid_steps(t0: f64, t_end: f64, h: f64) -> Result<usize, Error> {
+    check_span(t0, t_end)?;
+    require_positive("h", h)?;
+    let finest = resolution(t0, t_end);
+    if h < finest {
+        return Err(Error::invalid(
+            "h",
+            format!(
+                "step {h:e} is below the finest step {finest:e} whose times floating point \
+                 can tell apart near {:e}: start the time at 0 or take a larger step",
+                t0.abs().max(t_end.abs())
+            ),
+        ));
+    }
+    step_count(t_end - t0, h)
 }
 
 /// Step `k` of the fixed grid t_j = t0 + j·h covering [t0, t_end] in `steps` steps (see
@@ -47,5 +101,22 @@ mod tests {
         assert_eq!(step_count(1.0, 0.3).unwrap(), 4);
         assert_eq!(step_count(0.1, 1.0).unwrap(), 1);
         assert!(step_count(1.0, 1e-300).is_err());
+    }
+
+    #[test]
+    fn a_step_below_the_resolution_of_the_times_is_an_error() {
+        // t0 = 1e16: neighbouring doubles are 2 apart, so steps of 0.4 would integrate 1.6
+        // of 2 time units on repeated time stamps.
+        let name = |result: Result<usize, Error>| match result {
+            Err(Error::InvalidParameter { name, .. }) => name,
+            other => panic!("expected a typed error, got {other:?}"),
+        };
+        assert_eq!(name(grid_steps(1e16, 1e16 + 2.0, 0.4)), "t_end");
+        assert_eq!(name(grid_steps(1e16, 1e16 + 2e5, 0.4)), "h");
+        assert!(grid_steps(1e16, 1e16 + 2e5, 1e4).is_ok());
+        // Ordinary spans are unaffected: 2.2e-10 is the finest step at t ≈ 1e3.
+        assert_eq!(grid_steps(0.0, 1e3, 1e-3).unwrap(), 1_000_000);
+        assert!(grid_steps(0.0, 1e3, 1e-10).is_err());
+        assert!(grid_steps(-5.0, 5.0, 1e-9).is_ok());
     }
 }

@@ -18,7 +18,7 @@ use crate::error::{Error, StepFailure, require_finite, require_positive};
 use crate::method::space::{Initial, PhasePoint, Space, StepState};
 use crate::method::step::Step;
 use crate::method::{Euclidean, StepReport};
-use crate::stepping::grid::{grid_step, step_count};
+use crate::stepping::grid::{grid_step, grid_steps};
 use crate::stepping::observer::Observer;
 use nalgebra::SVector;
 use std::marker::PhantomData;
@@ -281,17 +281,8 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         options: &RunOptions,
         observer: &mut O,
     ) -> Result<Run<S>, RunFailure<S>> {
-        require_finite("t0", t0).map_err(RunFailure::rejected)?;
-        require_finite("t_end", t_end).map_err(RunFailure::rejected)?;
-        require_positive("h", h).map_err(RunFailure::rejected)?;
+        let steps = grid_steps(t0, t_end, h).map_err(RunFailure::rejected)?;
         options.validate().map_err(RunFailure::rejected)?;
-        if t_end <= t0 {
-            return Err(RunFailure::rejected(Error::invalid(
-                "t_end",
-                format!("the horizon {t_end} is not after the start {t0}"),
-            )));
-        }
-        let steps = step_count(t_end - t0, h).map_err(RunFailure::rejected)?;
         let mut workspace = self
             .method
             .workspace(&self.model, h)

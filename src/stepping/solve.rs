@@ -50,7 +50,7 @@ use crate::error::{Error, require_finite, require_positive};
 use crate::method::space::{Space, StepState};
 use crate::method::step::Step;
 use crate::spectral::MAX_POINTS;
-use crate::stepping::grid::{grid_step, step_count};
+use crate::stepping::grid::{check_span, grid_step, grid_steps, resolution};
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{
     Cursor, Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics,
@@ -135,17 +135,7 @@ impl Span {
     }
 
     fn validate(&self) -> Result<(), Error> {
-        require_finite("t0", self.t0)?;
-        require_finite("t_end", self.t_end)?;
-        if self.t_end <= self.t0 {
-            return Err(Error::invalid(
-                "t_end",
-                format!(
-                    "the horizon {} is not after the start {}",
-                    self.t_end, self.t0
-                ),
-            ));
-        }
+        check_span(self.t0, self.t_end)?;
         if self.output_times.is_empty() {
             return Err(Error::invalid("output_times", "no output time given"));
         }
@@ -590,7 +580,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         observer: &mut O,
     ) -> Result<(Adaptivity, bool), RunFailure<S>> {
         let h = options.step().map_err(RunFailure::rejected)?;
-        let steps = step_count(span.t_end - span.t0, h).map_err(RunFailure::rejected)?;
+        let steps = grid_steps(span.t0, span.t_end, h).map_err(RunFailure::rejected)?;
         let mut workspace = self
             .method()
             .workspace(self.model(), h)
@@ -665,8 +655,29 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let rejected = RunFailure::rejected;
         let tol = options.tolerance().map_err(rejected)?;
         let length = span.t_end - span.t0;
-        let min_step = options.min_step.unwrap_or(length * 1e-12);
+        let finest = resolution(span.t0, span.t_end);
+        let min_step = match options.min_step {
+            Some(min_step) if min_step < finest => {
+                return Err(rejected(Error::invalid(
+                    "min_step",
+                    format!(
+                        "{min_step:e} is below the finest step {finest:e} whose times floating \
+                         point can tell apart near the span"
+                    ),
+                )));
+            }
+            Some(min_step) => min_step,
+            None => (length * 1e-12).max(finest),
+        };
         let max_step = options.max_step.unwrap_or(length).min(length);
+        if min_step > max_step {
+            return Err(rejected(Error::invalid(
+                "min_step",
+                format!(
+                    "{min_step:e} is above the largest step {max_step:e} (max_step, or the span)"
+                ),
+            )));
+        }
         let method = self.method();
         let order = method.info().order as i32;
         let numerator = 2.0 * (2f64.powi(order) + 1.0);
@@ -843,7 +854,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             )));
         }
         let length = span.t_end - span.t0;
-        let steps = step_count(length, h).map_err(rejected)?;
+        let steps = grid_steps(span.t0, span.t_end, h).map_err(rejected)?;
         // One method and workspace per number of points, built once (tables are small).
         let mut steppers = (low..=high)
             .map(|points| {

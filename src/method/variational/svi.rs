@@ -69,8 +69,8 @@ use std::ops::ControlFlow;
 pub struct Svi {
     /// Number of Chebyshev–Gauss–Lobatto points s + 1 (polynomial degree s), at least 2.
     pub points: usize,
-    /// Number of Gauss–Legendre points m, at least 1; `None` means 2 · `points`, as in the
-    /// paper's experiments.
+    /// Number of Gauss–Legendre points m, at least 1; `None` means 2 · `points` as in the
+    /// paper's experiments, at most [`MAX_POINTS`].
     pub quadrature: Option<usize>,
     /// Cap on Newton iterations per step.
     pub max_iterations: usize,
@@ -87,7 +87,8 @@ impl Default for Svi {
 }
 
 impl Svi {
-    /// SVI with `points` CGL points and the default quadrature (2 · `points` Gauss points).
+    /// SVI with `points` CGL points and the default quadrature (2 · `points` Gauss points, at
+    /// most [`MAX_POINTS`]).
     pub fn new(points: usize) -> Self {
         Svi {
             points,
@@ -109,7 +110,8 @@ impl Svi {
 
     /// The number of Gauss–Legendre points in use.
     pub fn quadrature_points(&self) -> usize {
-        self.quadrature.unwrap_or(self.points.saturating_mul(2))
+        self.quadrature
+            .unwrap_or(self.points.saturating_mul(2).min(MAX_POINTS))
     }
 
     fn validate(&self) -> Result<(), Error> {
@@ -1240,10 +1242,12 @@ mod tests {
                 other => panic!("{method:?}: expected InvalidParameter, got {other:?}"),
             }
         }
-        // The largest valid configuration is accepted, and the step size is checked too.
+        // The largest valid configuration is accepted (its default quadrature is capped at
+        // MAX_POINTS, not 2 · MAX_POINTS), and the step size is checked too.
+        assert_eq!(Svi::new(MAX_POINTS).quadrature_points(), MAX_POINTS);
+        assert_eq!(Svi::new(100).quadrature_points(), 200);
         assert!(
             Svi::new(MAX_POINTS)
-                .with_quadrature(MAX_POINTS)
                 .workspace(&Oscillator::<false>, 0.1)
                 .is_ok()
         );
