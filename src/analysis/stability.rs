@@ -149,9 +149,9 @@ use crate::method::Method;
 use crate::method::State;
 use crate::model::Lagrangian;
 use crate::scalar::Scalar;
-use crate::spectral::MAX_POINTS;
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
+use crate::spectral::{check_points, check_quadrature};
 use argmin::core::{
     CostFunction, Executor, IterState, Solver, State as _, TerminationReason, TerminationStatus,
 };
@@ -229,17 +229,12 @@ pub fn stability_matrix<M: Method<1>>(method: &M, z: f64) -> Result<Matrix2<f64>
 /// # Errors
 ///
 /// [`Error::InvalidParameter`] named `"z"` if z is not finite and positive or the stage matrix
-/// 4𝒜* − zℱ* is singular at z, `"points"` unless 2 ≤ `points` ≤ [`MAX_POINTS`],
-/// `"quadrature"` unless 1 ≤ `quadrature` ≤ [`MAX_POINTS`].
+/// 4𝒜* − zℱ* is singular at z, `"points"` and `"quadrature"` as the method itself checks
+/// them ([`check_points`], [`check_quadrature`]).
 pub fn svi_closed_form(points: usize, quadrature: usize, z: f64) -> Result<Matrix2<f64>, Error> {
     require_positive("z", z)?;
-    require_points(points)?;
-    if !(1..=MAX_POINTS).contains(&quadrature) {
-        return Err(Error::invalid(
-            "quadrature",
-            format!("{quadrature} Gauss points; need 1 to {MAX_POINTS}"),
-        ));
-    }
+    check_points(points)?;
+    check_quadrature(points, quadrature)?;
     let s = points - 1;
     let basis = LagrangeBasis::chebyshev_gauss_lobatto(points)?;
     let gauss = GaussLegendre::new(quadrature)?;
@@ -277,10 +272,10 @@ pub fn svi_closed_form(points: usize, quadrature: usize, z: f64) -> Result<Matri
 /// # Errors
 ///
 /// [`Error::InvalidParameter`] named `"z"` if z is not finite and positive or 4D*² + zI is
-/// singular at z, `"points"` unless 2 ≤ `points` ≤ [`MAX_POINTS`].
+/// singular at z, `"points"` as the method itself checks them ([`check_points`]).
 pub fn collocation_closed_form(points: usize, z: f64) -> Result<Matrix2<f64>, Error> {
     require_positive("z", z)?;
-    require_points(points)?;
+    check_points(points)?;
     let s = points - 1;
     let d = LagrangeBasis::chebyshev_gauss_lobatto(points)?.differentiation_matrix();
     let d_star = d.view((1, 1), (s, s));
@@ -302,18 +297,6 @@ pub fn collocation_closed_form(points: usize, z: f64) -> Result<Matrix2<f64>, Er
         2.0 * d[(s, 0)] + velocity[(0, 0)],
         velocity[(0, 1)],
     ))
-}
-
-/// Check a number of CGL points.
-fn require_points(points: usize) -> Result<(), Error> {
-    if (2..=MAX_POINTS).contains(&points) {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            "points",
-            format!("{points} CGL points; need 2 to {MAX_POINTS}"),
-        ))
-    }
 }
 
 /// Solve `matrix · x = rhs`; `None` if the matrix is singular or the solution not finite.
@@ -896,7 +879,13 @@ mod tests {
         }
         assert_eq!(name(svi_closed_form(1, 6, 1.0)), "points");
         assert_eq!(name(svi_closed_form(3, 0, 1.0)), "quadrature");
-        assert_eq!(name(collocation_closed_form(MAX_POINTS + 1, 1.0)), "points");
+        assert_eq!(
+            name(collocation_closed_form(
+                crate::spectral::MAX_POINTS + 1,
+                1.0
+            )),
+            "points"
+        );
         assert_eq!(name(analyse(&svi, 0.0, 1.0, 10)), "z_min");
         assert_eq!(name(analyse(&svi, 1.0, f64::NAN, 10)), "z_max");
         assert_eq!(name(analyse(&svi, 2.0, 1.0, 10)), "z_max");

@@ -37,7 +37,7 @@ use crate::method::variational::stormer_verlet::StormerVerlet;
 use crate::method::variational::svi::Svi;
 use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::{Method, MethodInfo};
-use crate::spectral::MAX_POINTS;
+use crate::spectral::{check_points, check_quadrature};
 
 /// The numeric options a method's name takes in the grammar, with their defaults (read off
 /// the method type's `Default`).
@@ -284,31 +284,12 @@ impl VectorMethodVisitor<1> for InfoOf {
     }
 }
 
-/// Bounds of the CGL points of every spectral method (as the methods validate them).
-const POINTS: std::ops::RangeInclusive<usize> = 2..=MAX_POINTS;
-/// Bounds of the Gauss points of every spectral method (as the methods validate them).
-const QUADRATURE: std::ops::RangeInclusive<usize> = 1..=MAX_POINTS;
-
-/// The reason a number of CGL points is out of range.
-fn points_out_of_range(points: usize) -> Option<String> {
-    (!POINTS.contains(&points)).then(|| {
-        format!(
-            "{points} CGL points; need {} to {}",
-            POINTS.start(),
-            POINTS.end()
-        )
-    })
-}
-
-/// The reason a number of Gauss points is out of range.
-fn quadrature_out_of_range(quadrature: usize) -> Option<String> {
-    (!QUADRATURE.contains(&quadrature)).then(|| {
-        format!(
-            "{quadrature} Gauss points; need {} to {}",
-            QUADRATURE.start(),
-            QUADRATURE.end()
-        )
-    })
+/// The reason of an invalid-parameter error (for quoting it under the name `method`).
+fn reason(error: Error) -> String {
+    match error {
+        Error::InvalidParameter { reason, .. } => reason,
+        other => other.to_string(),
+    }
 }
 
 impl MethodSpec {
@@ -361,8 +342,9 @@ impl MethodSpec {
                 format!("{} takes no CGL points", self.entry.name),
             ));
         }
-        if let Some(reason) = points_out_of_range(points) {
-            return Err(Error::invalid("points", reason));
+        check_points(points)?;
+        if let Some(m) = self.quadrature {
+            check_quadrature(points, m)?;
         }
         Ok(MethodSpec {
             points: Some(points),
@@ -380,11 +362,10 @@ impl MethodSpec {
                 format!("{} takes no Gauss points", self.entry.name),
             ));
         }
-        if let Some(reason) = quadrature_out_of_range(quadrature) {
-            return Err(Error::invalid("quadrature", reason));
-        }
+        let points = self.points_in_use().unwrap_or_default();
+        check_quadrature(points, quadrature)?;
         Ok(MethodSpec {
-            points: self.points_in_use(),
+            points: Some(points),
             quadrature: Some(quadrature),
             ..self
         })
@@ -570,14 +551,12 @@ impl FromStr for MethodSpec {
                 .map_err(|_| bad(format!("{digits} {what} is too many")))
         };
         let points = number(points, "CGL points")?;
-        if let Some(reason) = points_out_of_range(points) {
-            return Err(bad(reason));
-        }
+        check_points(points).map_err(|error| bad(reason(error)))?;
         let quadrature = quadrature
             .map(|digits| number(digits, "Gauss points"))
             .transpose()?;
-        if let Some(reason) = quadrature.and_then(quadrature_out_of_range) {
-            return Err(bad(reason));
+        if let Some(m) = quadrature {
+            check_quadrature(points, m).map_err(|error| bad(reason(error)))?;
         }
         Ok(MethodSpec {
             entry,
@@ -593,6 +572,7 @@ mod tests {
     use crate::lie_group::RigidBodyLagrangian;
     use crate::model::Lagrangian;
     use crate::scalar::Scalar;
+    use crate::spectral::MAX_POINTS;
     use nalgebra::{Matrix3, SVector, Vector3};
 
     /// A tiny model on ℝ²: two uncoupled oscillators.
@@ -917,7 +897,8 @@ mod tests {
                 if entry.takes_points() {
                     specs.push(entry.spec().with_points(points).unwrap());
                 }
-                for quadrature in 1..=9 {
+                // Every valid number of Gauss points (at least points − 1).
+                for quadrature in points - 1..=9 {
                     if entry.takes_quadrature() {
                         let spec = entry.spec().with_points(points).unwrap();
                         specs.push(spec.with_quadrature(quadrature).unwrap());
