@@ -414,12 +414,9 @@ impl<const N: usize> Method<N> for SpectralCollocation {
             Structure::ConstantMass => ConstantMass::new(&tables, self.points),
             Structure::General => None,
         };
-        // A forced constant-mass model keeps Newton's buffers for its fallback.
-        let nodes = if constant_mass.is_some() && !L::FORCED {
-            0
-        } else {
-            s
-        };
+        // Newton's buffers exist for every model: a constant-mass model falls back to Newton
+        // where the fixed point fails.
+        let nodes = s;
         Ok(CollocationWorkspace {
             tables,
             offsets: DVector::zeros(s * N),

@@ -519,12 +519,9 @@ impl<const N: usize> Method<N> for Svi {
             Structure::ConstantMass => ConstantMass::new(&tables),
             Structure::General => None,
         };
-        // A forced constant-mass model keeps Newton's buffers for its fallback.
-        let points = if constant_mass.is_some() && !L::FORCED {
-            0
-        } else {
-            m
-        };
+        // Newton's buffers exist for every model: a constant-mass model falls back to Newton
+        // where the fixed point fails.
+        let points = m;
         let forces = if L::FORCED { points } else { 0 };
         Ok(SviWorkspace {
             tables,
