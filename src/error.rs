@@ -19,7 +19,7 @@ pub enum Error {
     },
     /// The nonlinear solve of a step did not converge.
     #[error(
-        "nonlinear solve did not converge at step {step} (t = {t}): {iterations} iterations, residual {residual:e}"
+        "nonlinear solve did not converge at step {step} (t = {t}): {iterations} iterations, last increment {residual:e}"
     )]
     NonConvergence {
         /// Index of the failing step (the step from `t` to `t + h`), counted from 0.
@@ -28,7 +28,8 @@ pub enum Error {
         t: f64,
         /// Iterations performed.
         iterations: usize,
-        /// Infinity norm of the last residual (or increment).
+        /// Infinity norm of the last increment of the unknowns (Newton or fixed-point); the
+        /// field keeps its historical name.
         residual: f64,
     },
     /// The Newton matrix of a step was singular.

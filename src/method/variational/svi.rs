@@ -560,7 +560,10 @@ impl<const N: usize> Method<N> for Svi {
                 ControlFlow::Continue(iterations) => spent = iterations,
             }
         }
-        let iterations = solve(model, workspace, t, h, state)? + spent;
+        // After a capped fixed point Newton starts from its last iterate; after a diverging
+        // one, or for a model that always uses Newton, from the starting values.
+        let warm = spent > 0;
+        let iterations = solve(model, workspace, t, h, state, warm)? + spent;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
         let mut dp = SVector::<f64, N>::zeros();
@@ -782,21 +785,25 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
                 *rate = next / h;
             }
         }
-        if control.converged(change, size)? {
+        let converged = control.converged(change, size);
+        if converged != Ok(false) {
+            // The node offsets of the last iterate: the step's polynomial, or where Newton
+            // takes over from a capped iteration (see `after_fixed_point`).
+            for (j, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
+                let row = &data.propagation[j * m..(j + 1) * m];
+                let mut offset = velocity * data.velocity_coefficients[j];
+                for (p, acceleration) in row.iter().zip(&data.accelerations) {
+                    offset += acceleration * *p;
+                }
+                target.copy_from_slice(offset.as_slice());
+            }
+            converged?;
             break;
         }
     }
     let mut dp = SVector::<f64, N>::zeros();
     for (mu, force) in data.forces.iter().enumerate() {
         dp += force * tables.weights[mu];
-    }
-    for (j, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
-        let row = &data.propagation[j * m..(j + 1) * m];
-        let mut offset = velocity * data.velocity_coefficients[j];
-        for (p, acceleration) in row.iter().zip(&data.accelerations) {
-            offset += acceleration * *p;
-        }
-        target.copy_from_slice(offset.as_slice());
     }
     let mut dq = velocity;
     for (w, acceleration) in data.end_weights.iter().zip(&data.accelerations) {
@@ -819,9 +826,12 @@ fn solve<L: Lagrangian<N>, const N: usize>(
     t: f64,
     h: f64,
     state: &State<N>,
+    warm: bool,
 ) -> Result<usize, StepFailure> {
-    workspace.set_step(h);
-    workspace.start(model, t, state);
+    if !warm {
+        workspace.set_step(h);
+        workspace.start(model, t, state);
+    }
     let SviWorkspace {
         tables,
         offsets,
@@ -1131,6 +1141,35 @@ mod tests {
                 "{method:?}: paths differ by {difference:e}"
             );
         }
+    }
+
+    #[test]
+    fn a_capped_fixed_point_hands_the_step_to_newton_from_its_last_iterate() {
+        // Two fixed-point iterations per step are far from converged (h = 0.2); Newton takes
+        // over from the last iterate in every step, reaches the same solution as the
+        // iteration run to round-off, and the next step tries the fixed point again.
+        let start = state([0.3, -0.2], [0.1, 0.4]);
+        let method = Svi::new(5);
+        let (converged, _) = advance(&method, &HenonHeiles::<true>, 0.2, 20, start);
+        let capped = method.clone().with_max_iterations(2);
+        let (fallback, workspace) = advance(&capped, &HenonHeiles::<true>, 0.2, 20, start);
+        assert!(!workspace.newton_only);
+        let difference = distance(&converged, &fallback);
+        assert!(difference <= 1e-13, "paths differ by {difference:e}");
+        // The step's report counts both iterations.
+        let mut workspace = capped.workspace(&HenonHeiles::<true>, 0.2).unwrap();
+        let mut increment = State::zeros();
+        let report = capped
+            .step(
+                &HenonHeiles::<true>,
+                &mut workspace,
+                0.0,
+                0.2,
+                &start,
+                &mut increment,
+            )
+            .unwrap();
+        assert!(report.iterations > 2, "{report:?}");
     }
 
     #[test]
