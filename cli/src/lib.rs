@@ -69,11 +69,11 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
-pub mod bench;
-pub mod plot;
+pub mod command;
+pub mod report;
 pub mod rigid;
-pub mod stability;
-pub mod stress;
+
+pub use command::{bench, stability, stress};
 
 use svi::method::registry::{self, SpaceKind, VectorMethodVisitor};
 use svi::observer::{EnergyError, Every, MomentumError, Observer, SolutionError, Trajectory};

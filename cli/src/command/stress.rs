@@ -24,8 +24,8 @@
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
-use crate::bench::{BenchMethod, FirstOrder, parse_methods};
-use crate::plot::{Panel, PlotError, Series, write_svg};
+use crate::command::bench::{BenchMethod, FirstOrder, parse_methods};
+use crate::report::plot::{Panel, PlotError, Series, write_svg};
 use crate::{Float, Scene, SceneError};
 use nalgebra::SVector;
 use serde::Serialize;
@@ -575,7 +575,7 @@ fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     // The energy at the accepted step points, as for svi's methods (the dense output's
     // interpolation error would swamp the energy error); ode_solvers stores them all, about
     // 40 bytes per step for N = 2.
-    let mut stepper = crate::bench::dop853(system, setup.t0, t_end, y0, tol);
+    let mut stepper = crate::command::bench::dop853(system, setup.t0, t_end, y0, tol);
     let start = Instant::now();
     let stats = stepper.integrate().map_err(|e| format!("fails: {e:?}"))?;
     let seconds = start.elapsed().as_secs_f64();

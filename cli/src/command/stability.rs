@@ -5,7 +5,7 @@
 //! |tr S| − det S − 1 against z as SVG (Li, Wu, Leok 2018, Figs. 3–6), and prints the
 //! stability, periodicity and strong-stability regions of Definition 4.1.
 
-use crate::plot::{Panel, Series, write_svg};
+use crate::report::plot::{Panel, Series, write_svg};
 use std::fmt::Write as _;
 use std::path::Path;
 use svi::method::registry::VectorMethodVisitor;
@@ -79,7 +79,7 @@ pub fn describe(label: &str, report: &StabilityReport) -> String {
 pub fn plot(
     reports: &[(String, StabilityReport)],
     path: &Path,
-) -> Result<(), crate::plot::PlotError> {
+) -> Result<(), crate::report::plot::PlotError> {
     type Pick = fn(&StabilityPoint) -> f64;
     let quantities: [(&str, Pick); 4] = [
         ("spectral radius ρ(S)", |p| p.rho),

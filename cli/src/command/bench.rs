@@ -17,7 +17,7 @@
 //! Given step counts ([`BenchOptions::steps`]) or tolerances ([`BenchOptions::tolerances`])
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
 
-use crate::plot::{Panel, Series, write_svg};
+use crate::report::plot::{Panel, Series, write_svg};
 use crate::{Scene, SceneError};
 use nalgebra::{SMatrix, SVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
@@ -746,7 +746,11 @@ pub fn to_csv(records: &[Record]) -> String {
 }
 
 /// Error against time and error against evaluations, one curve per method, as SVG.
-pub fn plot(records: &[Record], title: &str, path: &Path) -> Result<(), crate::plot::PlotError> {
+pub fn plot(
+    records: &[Record],
+    title: &str,
+    path: &Path,
+) -> Result<(), crate::report::plot::PlotError> {
     let mut labels: Vec<&str> = Vec::new();
     for r in records {
         if !labels.contains(&r.method.as_str()) {

@@ -1,0 +1,3 @@
+//! What the commands write: SVG plots.
+
+pub mod plot;
