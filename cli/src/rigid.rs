@@ -124,7 +124,10 @@ pub struct RigidInitialSection {
 pub struct RigidMethodSection {
     /// `lie-svi` (the default) or `lie-svi-reduced`, written `name`, `name:P` or
     /// `name:P/M`.
-    #[serde(default, deserialize_with = "crate::optional_method_spec")]
+    #[serde(
+        default,
+        deserialize_with = "crate::scene::schema::optional_method_spec"
+    )]
     pub name: Option<MethodSpec>,
     /// Chebyshev–Gauss–Lobatto points, on top of `name` (default 3).
     pub points: Option<usize>,
@@ -265,19 +268,19 @@ impl RigidScene {
             diagnostics,
             ..
         } = overrides;
-        crate::set(&mut self.method.points, points);
-        crate::set(&mut self.method.quadrature, quadrature);
+        crate::scene::set(&mut self.method.points, points);
+        crate::scene::set(&mut self.method.quadrature, quadrature);
         if let Some(form) = form {
             self.method.form = Some(form.into());
         }
-        crate::set(&mut self.run.h, h);
-        crate::set(&mut self.run.t_end, t_end);
+        crate::scene::set(&mut self.run.h, h);
+        crate::scene::set(&mut self.run.t_end, t_end);
         for (name, value) in parameters {
             self.parameters.insert(name.clone(), *value);
         }
-        crate::set(&mut self.output.every, every);
-        crate::set(&mut self.output.trajectory, out);
-        crate::set(&mut self.output.diagnostics, diagnostics);
+        crate::scene::set(&mut self.output.every, every);
+        crate::scene::set(&mut self.output.trajectory, out);
+        crate::scene::set(&mut self.output.diagnostics, diagnostics);
         self.check()
     }
 

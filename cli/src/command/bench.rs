@@ -18,7 +18,9 @@
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
 
 use crate::report::plot::{Panel, Series, write_svg};
-use crate::{Scene, SceneError};
+use crate::scene::overrides::Overrides;
+use crate::scene::{Scene, SceneError};
+use anyhow::Context;
 use nalgebra::{SMatrix, SVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
 use serde::Serialize;
@@ -789,6 +791,34 @@ pub fn plot(
         640,
         480,
     )
+}
+
+/// `svi bench`: sweep `options.methods` on the scene `name` (with the parameter and horizon
+/// overrides), write `<scene>.csv` and `<scene>.svg` into `out_dir` and print the CSV.
+pub fn execute(
+    name: &str,
+    overrides: &Overrides,
+    options: &BenchOptions,
+    out_dir: &Path,
+) -> anyhow::Result<()> {
+    let mut scene = Scene::load(name)?;
+    scene.apply(overrides)?;
+    let records = work_precision(&scene, options)
+        .with_context(|| format!("benchmark of scene '{name}' failed"))?;
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let stem = Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("bench");
+    let csv = out_dir.join(format!("{stem}.csv"));
+    std::fs::write(&csv, to_csv(&records))
+        .with_context(|| format!("cannot write {}", csv.display()))?;
+    let svg = out_dir.join(format!("{stem}.svg"));
+    plot(&records, stem, &svg)?;
+    print!("{}", to_csv(&records));
+    eprintln!("wrote {} and {}", csv.display(), svg.display());
+    Ok(())
 }
 
 #[cfg(test)]

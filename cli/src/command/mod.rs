@@ -1,6 +1,7 @@
-//! The commands of `svi` besides the scene run: work–precision sweeps (`bench`), linear
-//! stability (`stability`) and stress tests (`stress`).
+//! What `svi` does: each subcommand's work, called by the binary's dispatch.
 
 pub mod bench;
+pub mod list;
+pub mod run;
 pub mod stability;
 pub mod stress;

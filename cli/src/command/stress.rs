@@ -25,8 +25,9 @@
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
 use crate::command::bench::{BenchMethod, FirstOrder, parse_methods};
+use crate::report::csv::Float;
 use crate::report::plot::{Panel, PlotError, Series, write_svg};
-use crate::{Float, Scene, SceneError};
+use crate::scene::{Scene, SceneError};
 use nalgebra::SVector;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -779,6 +780,19 @@ pub fn write_outputs(records: &[StressRecord], dir: &Path) -> Result<(), SceneEr
         path: dir.join("drift.svg"),
         source: std::io::Error::other(e.to_string()),
     })
+}
+
+/// `svi stress`: run the cases of `options`, write `stress.md`, `stress.csv`, `windows.csv`
+/// and `drift.svg` into `out_dir` and print the table.
+pub fn execute(options: &StressOptions, out_dir: &Path) -> anyhow::Result<()> {
+    let records = stress(options)?;
+    write_outputs(&records, out_dir)?;
+    print!("{}", to_markdown(&records));
+    eprintln!(
+        "wrote stress.md, stress.csv, windows.csv and drift.svg to {}",
+        out_dir.display()
+    );
+    Ok(())
 }
 
 #[cfg(test)]
