@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod list;
+pub mod peers;
 pub mod run;
 pub mod stability;
 pub mod stress;
