@@ -11,18 +11,20 @@
 
 pub mod command;
 pub mod report;
-pub mod rigid;
 pub mod scene;
 
 pub use command::list::{ModelDescription, describe_models};
 pub use command::{bench, stability, stress};
 pub use report::csv::{Float, csv_header};
 pub use report::progress::{PROGRESS_MIN_STEPS, Progress};
-pub use report::summary::{AdaptivitySummary, OutputPoint, Parameters, Summary, TrajectoryOutput};
+pub use report::summary::{
+    AdaptivitySummary, Conservation, OutputPoint, Parameters, SolveSummary, StateSummary, Summary,
+    TrajectoryOutput,
+};
 pub use scene::builtin::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, builtin_scene_names};
 pub use scene::overrides::{Overrides, method_help, parse_parameter};
 pub use scene::schema::{
-    AdaptMode, DEFAULT_MAX_HALVINGS, Diagnostic, InitialSection, MethodSection, OutputSection,
-    RecoveryKind, RunSection,
+    AdaptMode, DEFAULT_MAX_HALVINGS, Diagnostic, FormName, InitialSection, MethodSection,
+    OutputSection, RecoveryKind, RunSection,
 };
 pub use scene::{Scene, SceneError};

@@ -7,9 +7,16 @@ use svi_cli::command;
 use svi_cli::command::bench::{BenchOptions, parse_methods};
 use svi_cli::command::stability::Request;
 use svi_cli::command::stress::StressOptions;
-use svi_cli::{DEFAULT_SCENE, Overrides};
+use svi_cli::scene::error::is_bad_input;
+use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
+///
+/// Exit status: 0 when the command succeeded; 1 when a run failed after it started (a solve
+/// that does not converge, a state that diverges: the error reports the last good state, and
+/// the trajectory so far is written) or an output could not be written; 2 for bad input (an
+/// unknown scene, model or method, a malformed scene, an invalid value, an option that the
+/// scene's model, method or other options cannot use), as for malformed arguments.
 #[derive(Debug, Parser)]
 #[command(name = "svi", version, arg_required_else_help = true)]
 struct Cli {
@@ -144,9 +151,6 @@ struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
-    /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
-    #[arg(long, value_name = "FORM")]
-    form: Option<String>,
 }
 
 fn main() -> ExitCode {
@@ -155,7 +159,6 @@ fn main() -> ExitCode {
         Command::Run(args) => command::run::execute(
             args.scene.as_deref().unwrap_or(DEFAULT_SCENE),
             &args.overrides,
-            args.form.as_deref(),
             args.json,
         ),
         Command::List => {
@@ -182,9 +185,22 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {error:#}");
-            ExitCode::FAILURE
+            ExitCode::from(exit_status(&error))
         }
     }
+}
+
+/// The exit status of a failed command (see the long help): 2 when the outermost typed error
+/// is bad input, as for clap's own argument errors; 1 when a run failed or an output could
+/// not be written.
+fn exit_status(error: &anyhow::Error) -> u8 {
+    let bad_input = error.chain().find_map(|cause| {
+        cause
+            .downcast_ref::<SceneError>()
+            .map(SceneError::is_bad_input)
+            .or_else(|| cause.downcast_ref::<svi::Error>().map(is_bad_input))
+    });
+    if bad_input == Some(true) { 2 } else { 1 }
 }
 
 /// `svi bench`: the options from the arguments.

@@ -1,10 +1,15 @@
-//! `svi list`: the built-in scenes and the models with their parameters.
+//! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ and on SO(3).
 
 use serde::Serialize;
-use svi_models::{MODEL_NAMES, ModelVisitor, ZooModel, visit_model};
+use svi::method::registry::SpaceKind;
+use svi_models::{
+    MODEL_NAMES, ModelVisitor, RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, ZooModel,
+    visit_model, visit_rigid_model,
+};
 
 use crate::report::csv::Float;
 use crate::report::summary::Parameters;
+use crate::scene::Scene;
 use crate::scene::builtin::BUILTIN_SCENES;
 
 /// A zoo model's name, dimension, coordinates, parameters and defaults (for `svi list`).
@@ -54,22 +59,36 @@ pub fn describe_models() -> Vec<ModelDescription> {
         .collect()
 }
 
-/// Print the built-in scenes and the models (vector and rigid-body) with their parameters.
+/// The built-in scenes on `space`, as (name, the first line of the scene file).
+fn scenes(space: SpaceKind) -> Vec<(&'static str, &'static str)> {
+    BUILTIN_SCENES
+        .iter()
+        .filter(|(name, _)| {
+            Scene::builtin(name).is_some_and(|scene| scene.is_ok_and(|s| s.space() == space))
+        })
+        .map(|(name, text)| {
+            let description = text
+                .lines()
+                .next()
+                .and_then(|line| line.strip_prefix('#'))
+                .unwrap_or("")
+                .trim();
+            (*name, description)
+        })
+        .collect()
+}
+
+/// Print the built-in scenes and the models (on ℝᴺ and rigid bodies) with their parameters.
 pub fn print() {
     println!("Built-in scenes (svi run NAME):");
-    let width = BUILTIN_SCENES
+    let vector = scenes(SpaceKind::Vector);
+    let width = vector
         .iter()
         .map(|(name, _)| name.len() + 2)
         .max()
         .unwrap_or(0)
         .max(18);
-    for (name, text) in BUILTIN_SCENES {
-        let description = text
-            .lines()
-            .next()
-            .and_then(|line| line.strip_prefix('#'))
-            .unwrap_or("")
-            .trim();
+    for (name, description) in vector {
         println!("  {name:<width$}{description}");
     }
     println!();
@@ -103,7 +122,47 @@ pub fn print() {
         );
     }
     println!();
-    for line in crate::rigid::list_lines() {
-        println!("{line}");
+    println!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):");
+    for (name, description) in scenes(SpaceKind::Rotation) {
+        println!("  {name:<18}{description}");
+    }
+    println!();
+    println!("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):");
+    for name in RIGID_MODEL_NAMES {
+        if let Some(line) = visit_rigid_model(name, DescribeRigid) {
+            println!("{line}");
+        }
+    }
+}
+
+/// Describes a rigid-body model in one line.
+struct DescribeRigid;
+
+impl RigidModelVisitor for DescribeRigid {
+    type Output = String;
+    fn visit<M: RigidZooModel>(self, model: M) -> String {
+        let parameters: Vec<String> = model
+            .parameters()
+            .iter()
+            .map(|(name, value)| format!("{name} = {}", Float(*value)))
+            .collect();
+        let mut facts = Vec::new();
+        if M::G_INVARIANT {
+            facts.push("G-invariant".to_string());
+        }
+        let momenta: Vec<&str> = (0..model.axis_count())
+            .map(|i| model.axis_name(i))
+            .collect();
+        if !momenta.is_empty() {
+            facts.push(format!("conserves {}", momenta.join(", ")));
+        }
+        format!(
+            "  {:<18}{}; h = {}, t_end = {}; {}",
+            model.name(),
+            parameters.join(", "),
+            Float(model.default_step()),
+            Float(model.default_horizon()),
+            facts.join(", ")
+        )
     }
 }

@@ -4,5 +4,6 @@ pub mod bench;
 pub mod list;
 pub mod peers;
 pub mod run;
+pub mod space;
 pub mod stability;
 pub mod stress;

@@ -1,6 +1,13 @@
 //! Trajectory CSV and the number format of every output.
+//!
+//! A trajectory file has a header line and one row per point, every number printed by
+//! [`Float`] (it reads back exactly). The columns depend on the space: [`csv_header`] on ℝᴺ,
+//! [`RIGID_CSV_HEADER`] on SO(3).
 
 use std::fmt;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
 
 /// The CSV header line (with its newline) for the given coordinate names.
 pub fn csv_header(names: &[&str]) -> String {
@@ -12,6 +19,34 @@ pub fn csv_header(names: &[&str]) -> String {
     }
     header.push_str(",energy\n");
     header
+}
+
+/// The CSV header of a rigid-body trajectory (with its newline): time, attitude as a
+/// quaternion and as a matrix (row by row), Ω, Π, energy and ‖RᵀR − I‖_F.
+pub const RIGID_CSV_HEADER: &str = "t,qw,qx,qy,qz,r11,r12,r13,r21,r22,r23,r31,r32,r33,\
+omega_1,omega_2,omega_3,pi_1,pi_2,pi_3,energy,orthogonality\n";
+
+/// Write `points` as CSV to `path`: `header` (with its newline), then one line per point of
+/// the numbers `row` puts into its buffer.
+pub fn write_csv<P>(
+    path: &Path,
+    header: &str,
+    points: &[P],
+    mut row: impl FnMut(&P, &mut Vec<f64>),
+) -> std::io::Result<()> {
+    let mut out = BufWriter::new(File::create(path)?);
+    out.write_all(header.as_bytes())?;
+    let mut values = Vec::new();
+    for point in points {
+        values.clear();
+        row(point, &mut values);
+        for (i, x) in values.iter().enumerate() {
+            let separator = if i == 0 { "" } else { "," };
+            write!(out, "{separator}{}", Float(*x))?;
+        }
+        writeln!(out)?;
+    }
+    out.flush()
 }
 
 /// An `f64` printed so that it reads back exactly: shortest decimal, in exponent form when

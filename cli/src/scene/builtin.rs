@@ -1,6 +1,11 @@
 //! The built-in scenes: their names and TOML texts (the files in `cli/scenes/`).
+//!
+//! To add one: write `cli/scenes/NAME.toml` (its first line, a `#` comment, is what `svi
+//! list` shows) and add `("NAME", include_str!(...))` to [`BUILTIN_SCENES`]. Whether it runs
+//! on ℝᴺ or SO(3) follows from its model.
 
-/// The built-in scenes, as (name, TOML text).
+/// The built-in scenes, as (name, TOML text): the scenes on ℝᴺ, then the rigid bodies on
+/// SO(3).
 pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ("oscillator", include_str!("../../scenes/oscillator.toml")),
     ("kepler", include_str!("../../scenes/kepler.toml")),
@@ -51,6 +56,9 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "oscillator-beyond-stability",
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
     ),
+    ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
+    ("heavy-top", include_str!("../../scenes/heavy-top.toml")),
+    ("pendulum-3d", include_str!("../../scenes/pendulum-3d.toml")),
 ];
 
 /// The scene `svi run` runs when none is named.

@@ -1,17 +1,17 @@
 //! [`SceneError`]: everything that can go wrong between reading a scene and writing its
-//! outputs.
+//! outputs, and which of it is bad input ([`SceneError::is_bad_input`]: exit status 2) rather
+//! than a run that failed (exit status 1).
 
 use std::path::PathBuf;
 
 use svi::MethodSpec;
-use svi::method::registry;
+use svi::method::registry::{self, SpaceKind};
 use svi_models::UnknownModel;
 
-use crate::report::csv::{Float, vector};
+use crate::report::csv::Float;
 use crate::report::summary::Summary;
 use crate::scene::builtin::builtin_scene_names;
-#[allow(unused_imports)] // the doc links
-use crate::scene::schema::{Diagnostic, UnknownDiagnostic};
+use crate::scene::schema::UnknownDiagnostic;
 
 /// Everything that can go wrong between reading a scene and writing its outputs.
 #[derive(Debug, thiserror::Error)]
@@ -63,7 +63,8 @@ pub enum SceneError {
     /// An initial state with both a velocity and a momentum.
     #[error("the initial state gives both v and p: give one of them")]
     VelocityAndMomentum,
-    /// A diagnostic name that is not one of [`Diagnostic::NAMES`].
+    /// A diagnostic name that is not one of
+    /// [`Diagnostic::NAMES`](crate::scene::schema::Diagnostic::NAMES).
     #[error(transparent)]
     UnknownDiagnostic(#[from] UnknownDiagnostic),
     /// A `--param` that is not `NAME=VALUE` with a number as value.
@@ -82,6 +83,16 @@ pub enum SceneError {
         option: &'static str,
         /// The method in use.
         method: MethodSpec,
+    },
+    /// An option, or a scene field, that the scene's model, method or other options cannot
+    /// use (it would otherwise be silently ignored).
+    #[error("{option}: {reason}")]
+    NotApplicable {
+        /// The option as written on the command line, with the scene field where there is
+        /// one: `--tol (run.tol)`.
+        option: &'static str,
+        /// Why it does not apply, and what would.
+        reason: String,
     },
     /// A trajectory thinning factor without a file to write the trajectory to.
     #[error("output.every is set but no trajectory file is (give --out FILE or output.trajectory)")]
@@ -102,11 +113,10 @@ pub enum SceneError {
     /// A run that failed after it started: the summary of the run up to the last good state
     /// (its trajectory file, if asked for, is written) and the library's error.
     #[error(
-        "the run failed after {} steps; last good state at t = {}: q = {}, v = {}{}",
+        "the run failed after {} steps; last good state at t = {}: {}{}",
         .partial.steps,
         Float(.partial.t_end),
-        vector(&.partial.q),
-        vector(&.partial.v),
+        .partial.state.describe(),
         .partial.trajectory.as_ref().map_or_else(String::new, |trajectory| format!(
             "; the trajectory so far is in '{}'",
             trajectory.path
@@ -151,18 +161,42 @@ pub enum SceneError {
 /// The methods on the same space as `method` that take `option`, as named in
 /// [`SceneError::OptionNotForMethod`]: "svi and sc".
 fn option_owners(option: &str, method: &MethodSpec) -> String {
-    let owners: Vec<&str> = registry::METHODS
+    let has = match option {
+        "points" => registry::Entry::takes_points,
+        _ => registry::Entry::takes_quadrature,
+    };
+    methods_with(method.space(), has)
+}
+
+/// The methods on `space` that have an option, as named in messages: "svi and sc".
+pub fn methods_with(space: SpaceKind, has: fn(&registry::Entry) -> bool) -> String {
+    let names: Vec<&str> = registry::METHODS
         .iter()
-        .filter(|entry| entry.space == method.space())
-        .filter(|entry| match option {
-            "points" => entry.takes_points(),
-            _ => entry.takes_quadrature(),
-        })
+        .filter(|entry| entry.space == space && has(entry))
         .map(|entry| entry.name)
         .collect();
-    match owners.split_last() {
+    match names.split_last() {
         Some((last, [])) => last.to_string(),
         Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
         None => "no method".into(),
     }
+}
+
+impl SceneError {
+    /// Whether the error is in the input (a scene, an option, a value the library rejects
+    /// as invalid) rather than in a run that started: `svi` exits with status 2 for bad input
+    /// and 1 for a failed run (or an output that cannot be written).
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            SceneError::Svi(error) => is_bad_input(error),
+            SceneError::RunFailed { .. } | SceneError::Write { .. } => false,
+            _ => true,
+        }
+    }
+}
+
+/// Whether a library error is in the input ([`svi::Error::InvalidParameter`]) rather than in
+/// a run (a solve that does not converge, a state that diverges, ...).
+pub fn is_bad_input(error: &svi::Error) -> bool {
+    matches!(error, svi::Error::InvalidParameter { .. })
 }

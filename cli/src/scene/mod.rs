@@ -1,10 +1,13 @@
-//! # svi-cli — scenes for the `svi` command-line tool
+//! Scenes: what `svi run` simulates — a model of the zoo and its parameters, an initial
+//! state, a method and its options, the step and horizon, and the outputs wanted.
 //!
-//! A [`Scene`] says what to simulate: a model of the zoo and its parameters, an initial
-//! state, a method and its options, the step and horizon, and the outputs wanted. Scenes are
-//! TOML files; the built-in ones ([`BUILTIN_SCENES`]) reproduce the experiments of Li, Wu,
-//! Leok (2018) and run each zoo model with its defaults. Command-line flags ([`Overrides`])
-//! are applied on top of a scene, and [`Scene::run`] integrates it and returns a [`Summary`].
+//! A [`Scene`] is a TOML file or a built-in one ([`builtin`]; they reproduce the experiments
+//! of Li, Wu, Leok (2018), run each zoo model with its defaults, and stress the methods).
+//! Command-line flags ([`Overrides`]) are applied on top of a scene ([`Scene::apply`]), and
+//! every option that the scene's model, method or other options cannot use is an error
+//! ([`SceneError::NotApplicable`]) rather than silently ignored ([`Scene::check`]). The model
+//! decides the space: a zoo model on ℝᴺ (`svi_models::MODEL_NAMES`) or a rigid body on SO(3)
+//! (`svi_models::RIGID_MODEL_NAMES`, see [`rigid`] for its `[initial]` and `form`).
 //!
 //! ```toml
 //! model = "kepler"
@@ -25,23 +28,24 @@
 //! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
 //!
 //! [run]                 # absent: the model's default step and horizon
-//! h = 0.2               # the step (unused by adapt = "step")
+//! h = 0.2               # the step (unused by adapt = "step", which chooses its own)
 //! t_end = 2000.0
 //! adapt = "none"        # "none" (default), "step" (step doubling) or "degree" (points per
-//!                       # step, svi and sc), both to meet `tol`
-//! tol = 1e-9            # target final error of the adaptive modes
-//! min_points = 3        # bounds of adapt = "degree" (defaults 3 and 24)
-//! max_points = 24
-//! recovery = "none"     # or "halve-step": retry a failed step as two half steps
+//!                       # step: methods with points), both to meet `tol`
+//! # tol = 1e-9          # target final error of the adaptive modes (only with them)
+//! # min_points = 3      # bounds of adapt = "degree" (defaults 3 and 24; only with it)
+//! # max_points = 24
+//! recovery = "none"     # or "halve-step": retry a failed step as two half steps (adapt =
+//!                       # "none" only: the adaptive modes retry failed steps themselves)
 //! # max_halvings = 4    # with "halve-step": successive halvings allowed (default 4)
 //! # divergence_limit = 1e6   # stop once |q_i| or |p_i| exceeds this (default: no limit)
 //!
 //! [output]
 //! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
 //! every = 10                  # every 10th step (default 1)
-//! output_times = [1.0, 2.5]   # report (and write) the states at these times, read off each
-//!                             # step's polynomial (dense output), instead of every step
-//! diagnostics = ["energy", "momentum", "solution"]   # the default: all three
+//! # output_times = [1.0, 2.5] # report (and write, instead of every step) the states at these
+//! #                           # times, read off each step's polynomial (dense output)
+//! diagnostics = ["energy", "momentum", "solution"]   # the default: all three; or ["none"]
 //! ```
 //!
 //! A built-in name wins over a file of the same name (write `./kepler` for the file). Paths in
@@ -50,28 +54,27 @@
 //! Forces (friction, driving) are part of a model's definition: the forced zoo models
 //! (`damped-oscillator`, `damped-pendulum`, `driven-oscillator`) are chosen by name like any
 //! other, and their force parameters are ordinary `[parameters]`.
-//!
-//! The model, chosen by name at run time, reaches the one generic runner as its concrete
-//! type through [`svi_models::visit_model`]; the method, a [`MethodSpec`] of the library's
-//! registry ([`svi::method::registry`]), reaches it as its concrete type through
-//! [`MethodSpec::visit_vector`]. Observers are built only for the diagnostics and outputs
-//! asked for.
 
 pub mod builtin;
 pub mod error;
 pub mod overrides;
+pub mod rigid;
 pub mod schema;
+pub mod vector;
 
 pub use error::SceneError;
+
+use error::methods_with;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use nalgebra::SVector;
 use serde::Deserialize;
-use svi::method::registry::SpaceKind;
-use svi::{Initial, MethodSpec, RunOptions};
-use svi_models::ZooModel;
+use svi::Initial;
+use svi::MethodSpec;
+use svi::lie_group::{LieSvi, RigidInitial};
+use svi::method::registry::{self, SpaceKind};
+use svi_models::{RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
@@ -80,11 +83,12 @@ use schema::{
 };
 
 /// A scene: what to simulate and what to report. Absent fields fall back to the model's
-/// [`svi::Defaults`] and the method's defaults.
+/// defaults ([`svi::Defaults`], [`svi::lie_group::RigidBodyDefaults`]) and the method's.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
-    /// Zoo model name (see [`svi_models::MODEL_NAMES`]).
+    /// Zoo model name (see [`svi_models::MODEL_NAMES`] and
+    /// [`svi_models::RIGID_MODEL_NAMES`]).
     pub model: String,
     /// Model parameters, name → value, applied on top of the model's defaults.
     #[serde(default)]
@@ -95,7 +99,7 @@ pub struct Scene {
     /// Method and options.
     #[serde(default)]
     pub method: MethodSection,
-    /// Step and horizon.
+    /// Step, horizon, adaptivity and failure handling.
     #[serde(default)]
     pub run: RunSection,
     /// Outputs.
@@ -104,7 +108,7 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Parse a scene from TOML; `origin` names the source in error messages.
+    /// Parse a scene from TOML and check it; `origin` names the source in error messages.
     pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
         let scene: Scene = toml::from_str(text).map_err(|source| SceneError::Parse {
             origin: origin.into(),
@@ -143,35 +147,168 @@ impl Scene {
         }
     }
 
-    /// Consistency checks that need no model: a method for models on ℝᴺ with valid options,
-    /// one of v and p, `every` only with a file, valid run options (recovery and divergence
-    /// limit only for fixed-step runs).
+    /// The space the scene's model lives on: SO(3) for a rigid-body model, else ℝᴺ (an
+    /// unknown model name is reported when the scene runs).
+    pub fn space(&self) -> SpaceKind {
+        if RIGID_MODEL_NAMES.contains(&self.model.as_str()) {
+            SpaceKind::Rotation
+        } else {
+            SpaceKind::Vector
+        }
+    }
+
+    /// Consistency checks that need no model: a method for the scene's space with valid
+    /// options, initial-state fields of that space (one of each exclusive pair), valid run
+    /// options, and no option the scene cannot use (see [`SceneError::NotApplicable`]).
     pub fn check(&self) -> Result<(), SceneError> {
-        self.method_spec()?;
-        if self.initial.v.is_some() && self.initial.p.is_some() {
-            return Err(SceneError::VelocityAndMomentum);
+        let spec = self.method_spec()?;
+        let initial = &self.initial;
+        match self.space() {
+            SpaceKind::Vector => {
+                let rigid = [
+                    (initial.rotation.is_some(), "initial.rotation"),
+                    (initial.quaternion.is_some(), "initial.quaternion"),
+                    (initial.omega.is_some(), "initial.omega"),
+                    (initial.momentum.is_some(), "initial.momentum"),
+                    (self.method.form.is_some(), "--form (method.form)"),
+                ];
+                if let Some((_, option)) = rigid.into_iter().find(|(given, _)| *given) {
+                    return Err(SceneError::NotApplicable {
+                        option,
+                        reason: format!(
+                            "applies to rigid-body scenes only (see svi list); '{}' is a model \
+                             on ℝᴺ",
+                            self.model
+                        ),
+                    });
+                }
+                if initial.v.is_some() && initial.p.is_some() {
+                    return Err(SceneError::VelocityAndMomentum);
+                }
+            }
+            SpaceKind::Rotation => {
+                let vector = [
+                    (initial.q.is_some(), "initial.q"),
+                    (initial.v.is_some(), "initial.v"),
+                    (initial.p.is_some(), "initial.p"),
+                ];
+                if let Some((_, option)) = vector.into_iter().find(|(given, _)| *given) {
+                    return Err(SceneError::NotApplicable {
+                        option,
+                        reason: format!(
+                            "applies to scenes on ℝᴺ; the rigid body '{}' takes rotation or \
+                             quaternion, and omega or momentum",
+                            self.model
+                        ),
+                    });
+                }
+                rigid::check_initial(initial)?;
+                rigid::method(spec, self.method.form)?;
+                if self.wants_explicitly(Diagnostic::Solution) {
+                    return Err(SceneError::NotApplicable {
+                        option: "--diagnostics solution (output.diagnostics)",
+                        reason: format!(
+                            "the rigid body '{}' has no exact solution to measure against",
+                            self.model
+                        ),
+                    });
+                }
+            }
         }
-        if self.run.options()? != RunOptions::default()
-            && (self.run.adapt.is_some_and(|adapt| adapt != AdaptMode::None)
-                || self.output.output_times.is_some())
+        self.check_run(spec)?;
+        self.check_output()
+    }
+
+    /// `[run]`: valid run options; `tol`, `min_points` and `max_points` only with the modes
+    /// that use them; degree adaptivity only for a method with points; recovery only at fixed
+    /// steps.
+    fn check_run(&self, spec: MethodSpec) -> Result<(), SceneError> {
+        let run = &self.run;
+        run.options()?;
+        let adapt = run.adapt.unwrap_or_default();
+        let not_applicable =
+            |option, reason: String| Err(SceneError::NotApplicable { option, reason });
+        if adapt == AdaptMode::None && run.tol.is_some() {
+            return not_applicable(
+                "--tol (run.tol)",
+                "sets the tolerance of --adapt step and --adapt degree; this run has a fixed \
+                 step (adapt none)"
+                    .into(),
+            );
+        }
+        for (bound, option) in [
+            (run.min_points, "run.min_points"),
+            (run.max_points, "run.max_points"),
+        ] {
+            if bound.is_some() && adapt != AdaptMode::Degree {
+                return not_applicable(
+                    option,
+                    format!(
+                        "bounds the points of adapt = \"degree\", not of adapt = \"{}\"",
+                        adapt.name()
+                    ),
+                );
+            }
+        }
+        if adapt == AdaptMode::Degree && !spec.entry().takes_points() {
+            return not_applicable(
+                "--adapt degree (run.adapt)",
+                format!(
+                    "method {} has no polynomial degree to adapt (methods with points: {})",
+                    spec.name(),
+                    methods_with(spec.space(), registry::Entry::takes_points)
+                ),
+            );
+        }
+        if adapt != AdaptMode::None && run.recovery == Some(RecoveryKind::HalveStep) {
+            return not_applicable(
+                "--recovery (run.recovery)",
+                format!(
+                    "adapt {} retries failed steps itself; recovery applies to fixed steps \
+                     (adapt none)",
+                    adapt.name()
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// `[output]`: `every` only with a trajectory file and without output times, `none` alone
+    /// among the diagnostics.
+    fn check_output(&self) -> Result<(), SceneError> {
+        let output = &self.output;
+        if self.wants_explicitly(Diagnostic::None)
+            && output
+                .diagnostics
+                .as_ref()
+                .is_some_and(|wanted| wanted.len() > 1)
         {
-            return Err(svi::Error::invalid(
-                "recovery",
-                "recovery and divergence_limit apply to fixed-step runs (adapt = \"none\", no \
-                 output_times)",
-            )
-            .into());
+            return Err(SceneError::NotApplicable {
+                option: "--diagnostics (output.diagnostics)",
+                reason: "none means no diagnostic: give it alone, or list the diagnostics \
+                         wanted"
+                    .into(),
+            });
         }
-        match (self.output.every, &self.output.trajectory) {
+        match (output.every, &output.trajectory) {
             (Some(_), None) => Err(SceneError::EveryWithoutOutput),
             (Some(0), Some(_)) => {
                 Err(svi::Error::invalid("every", "0 steps; need at least 1").into())
             }
+            (Some(_), Some(_)) if output.output_times.is_some() => Err(SceneError::NotApplicable {
+                option: "--every (output.every)",
+                reason: "thins the steps written to the trajectory; with --output-times \
+                             the trajectory holds the states at those times"
+                    .into(),
+            }),
             _ => Ok(()),
         }
     }
 
-    /// Apply command-line overrides.
+    /// Apply command-line overrides, then [`Scene::check`]. A flag for a method that does not
+    /// take it (`--points`, `--quadrature`) or for the other space (`--form`), and `--h` with
+    /// `--adapt step`, are errors; a scene's own `points` and `quadrature` are ignored by a
+    /// method without them.
     pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
         let Overrides {
             method,
@@ -188,33 +325,50 @@ impl Scene {
             output_times,
             recovery,
             divergence_limit,
+            form,
         } = overrides;
+        let space = self.space();
         if let Some(method) = method {
-            method.check_space(SpaceKind::Vector)?;
+            method.check_space(space)?;
             // The options written in `--method` replace the scene's; the others carry over.
-            self.method.name = *method;
+            self.method.name = Some(*method);
             if method.points().is_some() {
                 self.method.points = None;
             }
             if method.quadrature().is_some() {
                 self.method.quadrature = None;
             }
+            if space == SpaceKind::Rotation
+                && method.lie_svi()?.form == svi::lie_group::Form::Reduced
+            {
+                self.method.form = None;
+            }
         }
-        let entry = self.method.name.entry();
-        if !entry.takes_quadrature() && quadrature.is_some() {
-            return Err(SceneError::OptionNotForMethod {
-                option: "quadrature",
-                method: self.method.name,
-            });
+        let name = self.method_name();
+        for (given, option, takes) in [
+            (
+                quadrature.is_some(),
+                "quadrature",
+                name.entry().takes_quadrature(),
+            ),
+            (points.is_some(), "points", name.entry().takes_points()),
+        ] {
+            if given && !takes {
+                return Err(SceneError::OptionNotForMethod {
+                    option,
+                    method: name,
+                });
+            }
         }
-        if !entry.takes_points() && points.is_some() {
-            return Err(SceneError::OptionNotForMethod {
-                option: "points",
-                method: self.method.name,
+        if form.is_some() && space == SpaceKind::Vector {
+            return Err(SceneError::NotApplicable {
+                option: "--form",
+                reason: "applies to rigid-body scenes only (see svi list)".into(),
             });
         }
         set(&mut self.method.points, points);
         set(&mut self.method.quadrature, quadrature);
+        set(&mut self.method.form, form);
         set(&mut self.run.h, h);
         set(&mut self.run.t_end, t_end);
         for (name, value) in parameters {
@@ -231,15 +385,35 @@ impl Scene {
         }
         set(&mut self.run.recovery, recovery);
         set(&mut self.run.divergence_limit, divergence_limit);
+        if h.is_some() && self.run.adapt == Some(AdaptMode::Step) {
+            return Err(SceneError::NotApplicable {
+                option: "--h",
+                reason: "not used by --adapt step, which chooses its own steps (the first from \
+                         the initial state)"
+                    .into(),
+            });
+        }
         self.check()
     }
 
-    /// The method in use: `[method] name` with `points` and `quadrature` applied on top
+    /// `[method] name`, or the default method of the scene's space (`svi` on ℝᴺ, `lie-svi`
+    /// on SO(3)).
+    fn method_name(&self) -> MethodSpec {
+        self.method.name.unwrap_or_else(|| {
+            let space = self.space();
+            registry::METHODS
+                .iter()
+                .find(|entry| entry.space == space)
+                .map_or_else(MethodSpec::default, registry::Entry::spec)
+        })
+    }
+
+    /// The method in use: the method name with `points` and `quadrature` applied on top
     /// (each only for a method that takes it). An error names the method if it is not for
-    /// models on ℝᴺ, or the option out of range.
+    /// the scene's space, or the option out of range.
     pub fn method_spec(&self) -> Result<MethodSpec, SceneError> {
-        let mut spec = self.method.name;
-        spec.check_space(SpaceKind::Vector)?;
+        let mut spec = self.method_name();
+        spec.check_space(self.space())?;
         if let Some(points) = self.method.points
             && spec.entry().takes_points()
         {
@@ -253,96 +427,113 @@ impl Scene {
         Ok(spec)
     }
 
+    /// The Lie-group integrator of a rigid-body scene: [`Scene::method_spec`] in the form of
+    /// `[method] form`.
+    pub fn lie_svi(&self) -> Result<LieSvi, SceneError> {
+        rigid::method(self.method_spec()?, self.method.form)
+    }
+
     /// The number of CGL points in use (`None` for the classic methods or an invalid
     /// method).
     pub fn points(&self) -> Option<usize> {
         self.method_spec().ok()?.points_in_use()
     }
 
-    /// The number of Gauss–Legendre points in use (`None` for all methods but svi or an
+    /// The number of Gauss–Legendre points in use (`None` for the methods without or an
     /// invalid method).
     pub fn quadrature(&self) -> Option<usize> {
         self.method_spec().ok()?.quadrature_in_use()
     }
 
-    /// Whether `diagnostic` is asked for.
+    /// Whether `diagnostic` is asked for (all but `none` are by default).
     pub fn wants(&self, diagnostic: Diagnostic) -> bool {
+        match &self.output.diagnostics {
+            Some(wanted) => wanted.contains(&diagnostic),
+            None => diagnostic != Diagnostic::None,
+        }
+    }
+
+    /// Whether `diagnostic` is listed in the scene's (or `--diagnostics`') list.
+    fn wants_explicitly(&self, diagnostic: Diagnostic) -> bool {
         self.output
             .diagnostics
             .as_ref()
-            .is_none_or(|wanted| wanted.contains(&diagnostic))
+            .is_some_and(|wanted| wanted.contains(&diagnostic))
     }
 
-    /// Apply the scene's parameters to `model` and resolve the initial time and state, the
-    /// step and the horizon (scene values, else the model's defaults).
+    /// Whether any diagnostic is asked for: not `none` and not an empty list. Rigid-body runs
+    /// measure their invariants and ‖RᵀR − I‖ whenever this holds.
+    pub fn measures(&self) -> bool {
+        self.output.diagnostics.as_ref().is_none_or(|wanted| {
+            wanted
+                .iter()
+                .any(|diagnostic| *diagnostic != Diagnostic::None)
+        })
+    }
+
+    /// Apply the scene's parameters to a model on ℝᴺ and resolve the initial time and state,
+    /// the step and the horizon (scene values, else the model's defaults).
     pub fn resolve<M: ZooModel<N>, const N: usize>(
         &self,
         model: &mut M,
     ) -> Result<(f64, Initial<N>, f64, f64), SceneError> {
-        let scene = self;
-        for (name, value) in &scene.parameters {
+        for (name, value) in &self.parameters {
             model.set_parameter(name, *value)?;
         }
         let (default_t0, default_q, default_v) = model.initial_state();
-        let vector = |field: &'static str, values: &Option<Vec<f64>>| {
-            values
-                .as_ref()
-                .map(|values| {
-                    if values.len() == N {
-                        Ok(SVector::<f64, N>::from_iterator(values.iter().copied()))
-                    } else {
-                        Err(SceneError::Dimension {
-                            model: model.name().into(),
-                            field,
-                            expected: N,
-                            found: values.len(),
-                        })
-                    }
-                })
-                .transpose()
-        };
-        let q = vector("q", &scene.initial.q)?.unwrap_or(default_q);
-        let initial = match (
-            vector("v", &scene.initial.v)?,
-            vector("p", &scene.initial.p)?,
-        ) {
-            (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
-            (Some(v), None) => Initial::Velocity { q, v },
-            (None, Some(p)) => Initial::Momentum { q, p },
-            (None, None) => Initial::Velocity { q, v: default_v },
-        };
+        let initial = vector::initial(&self.initial, model.name(), default_q, default_v)?;
         Ok((
-            scene.initial.t0.unwrap_or(default_t0),
+            self.initial.t0.unwrap_or(default_t0),
             initial,
-            scene.run.h.unwrap_or_else(|| model.default_step()),
-            scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
+            self.run.h.unwrap_or_else(|| model.default_step()),
+            self.run.t_end.unwrap_or_else(|| model.default_horizon()),
+        ))
+    }
+
+    /// [`Scene::resolve`] for a rigid body on SO(3) (t0 defaults to 0, the horizon to t0
+    /// plus the model's default duration).
+    pub fn resolve_rigid<M: RigidZooModel>(
+        &self,
+        model: &mut M,
+    ) -> Result<(f64, RigidInitial, f64, f64), SceneError> {
+        for (name, value) in &self.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let (default_r, default_omega) = model.initial_state();
+        let initial = rigid::initial(&self.initial, default_r, default_omega)?;
+        let t0 = self.initial.t0.unwrap_or(0.0);
+        Ok((
+            t0,
+            initial,
+            self.run.h.unwrap_or_else(|| model.default_step()),
+            self.run
+                .t_end
+                .unwrap_or_else(|| t0 + model.default_horizon()),
         ))
     }
 }
 
 /// `target = value` if a value is given.
-pub(crate) fn set<T: Clone>(target: &mut Option<T>, value: &Option<T>) {
+fn set<T: Clone>(target: &mut Option<T>, value: &Option<T>) {
     if let Some(value) = value {
         *target = Some(value.clone());
     }
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::*;
-    use svi::Recovery;
-    use svi_models::MODEL_NAMES;
+    use svi::{Recovery, RunOptions};
+    use svi_models::{MODEL_NAMES, RIGID_MODEL_NAMES};
 
-    fn scene(name: &str) -> Scene {
+    /// A built-in scene (tests of other modules use it too).
+    pub(crate) fn scene(name: &str) -> Scene {
         Scene::builtin(name).expect("built-in").expect("parses")
     }
 
-    fn overrides() -> Overrides {
-        Overrides::default()
-    }
-
-    fn method(text: &str) -> MethodSpec {
+    /// A method written `name`, `name:P` or `name:P/M`.
+    pub(crate) fn method(text: &str) -> MethodSpec {
         text.parse().expect("a method")
     }
 
@@ -366,15 +557,22 @@ mod tests {
                 "kepler-e0.99",
                 "kepler-recovery",
                 "double-pendulum-chaotic",
-                "oscillator-beyond-stability"
+                "oscillator-beyond-stability",
+                "rigid-body",
+                "heavy-top",
+                "pendulum-3d"
             ]
         );
         for name in builtin_scene_names() {
             let scene = scene(name);
-            assert!(MODEL_NAMES.contains(&scene.model.as_str()), "{name}");
+            let model = scene.model.as_str();
+            assert!(
+                MODEL_NAMES.contains(&model) || RIGID_MODEL_NAMES.contains(&model),
+                "{name}"
+            );
             if MODEL_NAMES.contains(&name) {
                 assert_eq!(scene.model, name);
-                assert_eq!(scene.method.name, method("svi"));
+                assert_eq!(scene.method.name, Some(method("svi")));
             } else {
                 // The stress scenes are named after their model.
                 assert!(name.contains(&scene.model), "{name}");
@@ -431,7 +629,7 @@ mod tests {
     #[test]
     fn a_minimal_scene_falls_back_to_defaults() {
         let scene = Scene::from_toml("model = \"pendulum\"\n", "test").unwrap();
-        assert_eq!(scene.method.name, method("svi"));
+        assert_eq!(scene.method_spec().unwrap(), method("svi"));
         assert_eq!(scene.points(), Some(svi::Svi::default().points));
         assert_eq!(scene.quadrature(), Some(2 * svi::Svi::default().points));
         assert_eq!(scene.output, OutputSection::default());
@@ -453,15 +651,28 @@ mod tests {
                 diagnostics: Some(vec![Diagnostic::Energy]),
                 adapt: Some(AdaptMode::Degree),
                 tol: Some(1e-9),
-                output_times: Some(vec![1.0, 2.0]),
+                output_times: None,
                 recovery: None,
                 divergence_limit: None,
+                form: None,
             })
             .unwrap();
         assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
         assert_eq!(scene.run.tol, Some(1e-9));
-        assert_eq!(scene.output.output_times, Some(vec![1.0, 2.0]));
-        // Recovery and a divergence limit are for fixed-step runs only.
+        // Output times replace the thinned steps of the trajectory: not with --every.
+        let times = Overrides {
+            output_times: Some(vec![1.0, 2.0]),
+            ..Overrides::default()
+        };
+        let error = scene.clone().apply(&times).unwrap_err();
+        assert!(
+            matches!(error, SceneError::NotApplicable { option, .. } if option.starts_with("--every")),
+            "{error}"
+        );
+        let mut dense = self::scene("kepler");
+        dense.apply(&times).unwrap();
+        assert_eq!(dense.output.output_times, Some(vec![1.0, 2.0]));
+        // Recovery is for fixed-step runs only.
         let recovery = Overrides {
             recovery: Some(RecoveryKind::HalveStep),
             divergence_limit: Some(1e9),
@@ -497,7 +708,7 @@ mod tests {
         scene
             .apply(&Overrides {
                 points: Some(4),
-                ..overrides()
+                ..Overrides::default()
             })
             .unwrap();
         assert_eq!(scene.quadrature(), Some(8));
@@ -509,14 +720,14 @@ mod tests {
         scene
             .apply(&Overrides {
                 method: Some(method("sc")),
-                ..overrides()
+                ..Overrides::default()
             })
             .unwrap();
         assert_eq!(scene.quadrature(), None);
         let error = scene
             .apply(&Overrides {
                 quadrature: Some(12),
-                ..overrides()
+                ..Overrides::default()
             })
             .unwrap_err();
         assert!(matches!(
@@ -526,70 +737,6 @@ mod tests {
                 method
             } if method == self::method("sc")
         ));
-    }
-
-    #[test]
-    fn classic_methods_have_neither_points_nor_quadrature() {
-        for name in [
-            "symplectic-euler",
-            "symplectic-euler-adjoint",
-            "midpoint",
-            "verlet",
-            "trapezoid",
-        ] {
-            let kind = method(name);
-            assert_eq!(kind.name(), name);
-            assert!(!kind.entry().takes_points());
-            // The scene's `points = 9` is ignored, a `--points` flag is an error.
-            let mut scene = scene("oscillator");
-            scene
-                .apply(&Overrides {
-                    method: Some(kind),
-                    ..overrides()
-                })
-                .unwrap();
-            assert_eq!((scene.points(), scene.quadrature()), (None, None));
-            let error = scene
-                .apply(&Overrides {
-                    points: Some(4),
-                    ..overrides()
-                })
-                .unwrap_err();
-            assert_eq!(
-                error.to_string(),
-                format!(
-                    "--points is an option of svi and sc, not of {}",
-                    kind.name()
-                )
-            );
-            let summary = scene.run(false).unwrap();
-            assert_eq!(summary.method, kind.name());
-            assert_eq!((summary.points, summary.quadrature), (None, None));
-            assert!(summary.symplectic && summary.order <= 2);
-            // h = 1 on the oscillator: first- and second-order methods are coarse (the phase
-            // is lost) but stable, with bounded energy error.
-            assert!(summary.energy_error_max.unwrap() <= 0.5, "{kind}");
-            assert!(summary.solution_error_max.unwrap() < 2.0, "{kind}");
-        }
-    }
-
-    #[test]
-    fn the_damped_oscillator_scene_reports_its_solution_error() {
-        let scene = scene("damped-oscillator");
-        assert_eq!(scene.parameters["zeta"], 0.1);
-        assert_eq!((scene.run.h, scene.run.t_end), (Some(0.1), Some(50.0)));
-        let summary = scene.run(false).unwrap();
-        assert_eq!(summary.steps, 500);
-        assert!(summary.solution_error_max.unwrap() < 1e-12);
-        // E(50) = E(0) e^{−5}-ish: the friction removed almost all the energy.
-        assert!(summary.energy_final < 0.01 * summary.energy_initial);
-        let mut verlet = scene.clone();
-        verlet.method.name = method("verlet");
-        let summary = verlet.run(false).unwrap();
-        // Second order: 1.6e-3 at h = 0.1.
-        let error = summary.solution_error_max.unwrap();
-        assert!(error > 1e-3 && error < 2e-3, "{error:e}");
-        assert_eq!(summary.evaluations, 501);
     }
 
     #[test]
@@ -653,46 +800,6 @@ mod tests {
     }
 
     #[test]
-    fn wrong_dimension_names_field_and_sizes() {
-        let text = "model = \"kepler\"\n[initial]\nq = [1, 0, 0]\n";
-        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
-        assert!(matches!(
-            &error,
-            SceneError::Dimension {
-                field: "q",
-                expected: 2,
-                found: 3,
-                ..
-            }
-        ));
-        assert_eq!(
-            error.to_string(),
-            "initial.q has 3 components, but model 'kepler' has dimension 2"
-        );
-        let text = "model = \"oscillator\"\n[initial]\np = []\n";
-        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
-        assert!(matches!(
-            error,
-            SceneError::Dimension {
-                field: "p",
-                expected: 1,
-                found: 0,
-                ..
-            }
-        ));
-    }
-
-    #[test]
-    fn an_unknown_model_lists_the_known_ones() {
-        let error = Scene::from_toml("model = \"kepler3\"\n", "t")
-            .unwrap()
-            .run(false)
-            .unwrap_err();
-        assert!(matches!(error, SceneError::UnknownModel(_)));
-        assert!(error.to_string().contains("known: oscillator, pendulum"));
-    }
-
-    #[test]
     fn a_missing_bare_name_is_an_unknown_scene_and_a_missing_path_a_read_error() {
         let error = Scene::load("keppler").unwrap_err();
         assert!(matches!(error, SceneError::UnknownScene { .. }));
@@ -703,36 +810,71 @@ mod tests {
     }
 
     #[test]
-    fn a_run_that_asks_for_nothing_reports_no_errors() {
-        let mut scene = scene("oscillator");
-        scene.output.diagnostics = Some(vec![]);
-        let summary = scene.run(false).unwrap();
-        assert_eq!(summary.steps, 100);
-        assert_eq!(summary.energy_error_max, None);
-        assert_eq!(summary.momentum_error_max, None);
-        assert_eq!(summary.solution_error_max, None);
-        // q(100) = sin(100) for q0 = 0, p0 = 1.
+    fn options_the_scene_cannot_use_are_named() {
+        for (text, option) in [
+            ("[run]\ntol = 1e-9\n", "--tol (run.tol)"),
+            (
+                "[run]\nadapt = \"step\"\nmin_points = 4\n",
+                "run.min_points",
+            ),
+            (
+                "[method]\nname = \"verlet\"\n[run]\nadapt = \"degree\"\ntol = 1e-9\n",
+                "--adapt degree (run.adapt)",
+            ),
+            (
+                "[run]\nadapt = \"step\"\ntol = 1e-9\nrecovery = \"halve-step\"\n",
+                "--recovery (run.recovery)",
+            ),
+            ("[method]\nform = \"full\"\n", "--form (method.form)"),
+            ("[initial]\nomega = [1, 0, 0]\n", "initial.omega"),
+            (
+                "[output]\ndiagnostics = [\"none\", \"energy\"]\n",
+                "--diagnostics (output.diagnostics)",
+            ),
+            (
+                "[output]\ntrajectory = \"x.csv\"\nevery = 2\noutput_times = [1.0]\n",
+                "--every (output.every)",
+            ),
+        ] {
+            let text = format!("model = \"kepler\"\n{text}");
+            match Scene::from_toml(&text, "t") {
+                Err(error @ SceneError::NotApplicable { option: named, .. }) => {
+                    assert_eq!(named, option, "{text}: {error}");
+                    assert!(error.is_bad_input());
+                }
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+        // The rigid bodies take their own initial fields, and not those on ℝᴺ.
+        let top = "model = \"heavy-top\"\n[initial]\nrotation = [0.1, 0, 0]\nomega = [0, 0, 5]\n";
+        assert_eq!(
+            Scene::from_toml(top, "t").unwrap().space(),
+            SpaceKind::Rotation
+        );
+        let error = Scene::from_toml("model = \"heavy-top\"\n[initial]\nv = [1, 0, 0]\n", "t");
         assert!(
-            (summary.q[0] - 100f64.sin()).abs() < 1e-10,
-            "{:?}",
-            summary.q
+            matches!(
+                error,
+                Err(SceneError::NotApplicable {
+                    option: "initial.v",
+                    ..
+                })
+            ),
+            "{error:?}"
         );
     }
 
     #[test]
-    fn the_summary_reports_the_initial_and_final_energy() {
-        let mut scene = scene("kepler");
-        scene.run.t_end = Some(2.0);
-        let summary = scene.run(false).unwrap();
-        assert_eq!(summary.steps, 10);
-        assert!((summary.energy_initial + 0.5).abs() < 1e-15);
-        assert!(
-            (summary.energy_final + 0.5).abs() < 1e-9,
-            "{}",
-            summary.energy_final
-        );
-        assert_eq!(summary.parameters, Parameters(vec![("e", 0.5)]));
-        assert_eq!(summary.coordinates, ["q1", "q2"]);
-        assert!(summary.to_string().contains("kepler (e = 0.5)"));
+    fn none_means_no_diagnostic() {
+        let mut scene = scene("oscillator");
+        assert!(scene.measures() && scene.wants(Diagnostic::Energy));
+        assert!(!scene.wants(Diagnostic::None));
+        for list in [vec![Diagnostic::None], vec![]] {
+            scene.output.diagnostics = Some(list);
+            assert!(!scene.measures());
+            assert!(!scene.wants(Diagnostic::Energy));
+        }
+        scene.output.diagnostics = Some(vec![Diagnostic::Momentum]);
+        assert!(scene.measures() && !scene.wants(Diagnostic::Energy));
     }
 }

@@ -6,7 +6,7 @@ use svi::MethodSpec;
 use svi::method::registry;
 
 use crate::scene::error::SceneError;
-use crate::scene::schema::{AdaptMode, Diagnostic, RecoveryKind};
+use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
 
 /// The help of an option taking a method: `intro`, then the grammar and every method.
 pub fn method_help(intro: &str) -> String {
@@ -26,13 +26,13 @@ pub struct Overrides {
         )
     )]
     pub method: Option<MethodSpec>,
-    /// Number of Chebyshev–Gauss–Lobatto points (svi and sc), on top of --method.
+    /// Number of Chebyshev–Gauss–Lobatto points (svi, sc, lie-svi), on top of --method.
     #[arg(long, value_name = "N")]
     pub points: Option<usize>,
-    /// Number of Gauss–Legendre quadrature points (svi only), on top of --method.
+    /// Number of Gauss–Legendre quadrature points (svi, lie-svi), on top of --method.
     #[arg(long, value_name = "M")]
     pub quadrature: Option<usize>,
-    /// Step size.
+    /// Step size (not with --adapt step, which chooses its own steps).
     #[arg(long = "h", value_name = "H", allow_negative_numbers = true)]
     pub h: Option<f64>,
     /// Final time.
@@ -41,22 +41,27 @@ pub struct Overrides {
     /// Model parameter (repeatable), e.g. `--param e=0.9`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
     pub parameters: Vec<(String, f64)>,
-    /// Keep every K-th step of the trajectory (with --out; default 1).
+    /// Keep every K-th step of the trajectory (with --out, without --output-times; default 1).
     #[arg(long, value_name = "K")]
     pub every: Option<usize>,
     /// Write the trajectory as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// Diagnostics to compute, comma-separated (default: energy,momentum,solution).
+    /// Diagnostics to compute, comma-separated, or none (default: energy,momentum,solution).
+    ///
+    /// none computes no per-step diagnostic at all (on rigid bodies also no invariant and
+    /// orthogonality errors); their summary fields are null.
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub diagnostics: Option<Vec<Diagnostic>>,
     /// Adaptivity: none (fixed step), step (step doubling) or degree (points per step).
     #[arg(long, value_enum)]
     pub adapt: Option<AdaptMode>,
-    /// Target final error of the adaptive modes.
+    /// Target final error of --adapt step and --adapt degree (needed by them, an error
+    /// without them).
     #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
     pub tol: Option<f64>,
-    /// Report the states at these times, comma-separated (dense output).
+    /// Report the states at these times, comma-separated (dense output); with --out the
+    /// trajectory holds them instead of the steps.
     #[arg(
         long,
         value_name = "LIST",
@@ -64,12 +69,16 @@ pub struct Overrides {
         allow_negative_numbers = true
     )]
     pub output_times: Option<Vec<f64>>,
-    /// Recovery policy for failed steps.
+    /// Recovery policy for failed steps (fixed steps only: the adaptive modes retry failed
+    /// steps themselves).
     #[arg(long, value_enum)]
     pub recovery: Option<RecoveryKind>,
     /// Stop once a state component exceeds this in absolute value.
     #[arg(long, value_name = "LIMIT")]
     pub divergence_limit: Option<f64>,
+    /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
+    #[arg(long, value_enum, value_name = "FORM")]
+    pub form: Option<FormName>,
 }
 
 /// Parse `NAME=VALUE` (the argument of `--param`).

@@ -1,26 +1,23 @@
 //! The sections of a scene file, as deserialised from TOML: `[initial]`, `[method]`, `[run]`,
-//! `[output]`, and the named choices in them (adaptivity, recovery, diagnostics).
+//! `[output]`, and the named choices in them (adaptivity, recovery, diagnostics, form).
+//!
+//! One schema serves scenes on every space; the fields of `[initial]` and `form` of `[method]`
+//! that belong to the other space are rejected by the scene's checks
+//! ([`crate::scene::Scene::check`]).
 
 use std::path::PathBuf;
 use std::str::FromStr;
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 use svi::solve::Adapt;
 use svi::{MethodSpec, Recovery, RunOptions};
 
-/// Deserialise a method written `name`, `name:P` or `name:P/M`.
-pub(crate) fn method_spec<'de, D: serde::Deserializer<'de>>(
-    deserializer: D,
-) -> Result<MethodSpec, D::Error> {
-    let text = String::deserialize(deserializer)?;
-    text.parse().map_err(serde::de::Error::custom)
-}
-
 /// Deserialise an optional method written `name`, `name:P` or `name:P/M`.
-pub(crate) fn optional_method_spec<'de, D: serde::Deserializer<'de>>(
+fn optional_method_spec<'de, D: serde::Deserializer<'de>>(
     deserializer: D,
 ) -> Result<Option<MethodSpec>, D::Error> {
-    method_spec(deserializer).map(Some)
+    let text = String::deserialize(deserializer)?;
+    text.parse().map(Some).map_err(serde::de::Error::custom)
 }
 
 /// A diagnostic evaluated at every step point.
@@ -33,11 +30,13 @@ pub enum Diagnostic {
     Momentum,
     /// Largest position error against the exact solution.
     Solution,
+    /// No diagnostic at all (alone; on SO(3) also no invariant and orthogonality errors).
+    None,
 }
 
 impl Diagnostic {
     /// The names, as written in scenes and on the command line.
-    pub const NAMES: [&'static str; 3] = ["energy", "momentum", "solution"];
+    pub const NAMES: [&'static str; 4] = ["energy", "momentum", "solution", "none"];
 }
 
 /// A diagnostic name that is not one of [`Diagnostic::NAMES`].
@@ -55,6 +54,7 @@ impl FromStr for Diagnostic {
             "energy" => Ok(Diagnostic::Energy),
             "momentum" => Ok(Diagnostic::Momentum),
             "solution" => Ok(Diagnostic::Solution),
+            "none" => Ok(Diagnostic::None),
             _ => Err(UnknownDiagnostic { name: name.into() }),
         }
     }
@@ -67,33 +67,56 @@ impl TryFrom<String> for Diagnostic {
     }
 }
 
-/// `[initial]`: t0, q and one of v, p.
+/// `[initial]`: on ℝᴺ t0, q and one of v, p; on SO(3) t0, one of rotation, quaternion and
+/// one of omega, momentum. Absent fields come from the model's default state.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSection {
     /// Initial time.
     pub t0: Option<f64>,
-    /// Initial configuration.
+    /// Initial configuration (ℝᴺ).
     pub q: Option<Vec<f64>>,
-    /// Initial velocity (excludes `p`).
+    /// Initial velocity (ℝᴺ; excludes `p`).
     pub v: Option<Vec<f64>>,
-    /// Initial momentum (excludes `v`).
+    /// Initial momentum (ℝᴺ; excludes `v`).
     pub p: Option<Vec<f64>>,
+    /// R₀ as a rotation vector, R₀ = exp(rotation^) (SO(3); excludes `quaternion`).
+    pub rotation: Option<Vec<f64>>,
+    /// R₀ as a unit quaternion (w, x, y, z) (SO(3); excludes `rotation`).
+    pub quaternion: Option<Vec<f64>>,
+    /// Body angular velocity Ω₀ (SO(3); excludes `momentum`).
+    pub omega: Option<Vec<f64>>,
+    /// Body angular momentum Π₀ (SO(3); excludes `omega`).
+    pub momentum: Option<Vec<f64>>,
 }
 
 /// `[method]`: name and options.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MethodSection {
-    /// The method, `name`, `name:P` or `name:P/M` of [`registry::METHODS`] (default `svi`).
-    #[serde(default, deserialize_with = "method_spec")]
-    pub name: MethodSpec,
-    /// Chebyshev–Gauss–Lobatto points of svi and sc, applied on top of `name` (default: the
-    /// method's); ignored by the methods without.
+    /// The method, `name`, `name:P` or `name:P/M` of `svi::method::registry::METHODS`
+    /// (default: `svi` on ℝᴺ, `lie-svi` on SO(3)).
+    #[serde(default, deserialize_with = "optional_method_spec")]
+    pub name: Option<MethodSpec>,
+    /// Chebyshev–Gauss–Lobatto points of svi, sc and lie-svi, applied on top of `name`
+    /// (default: the method's); ignored by the methods without.
     pub points: Option<usize>,
-    /// Gauss–Legendre points of svi, applied on top of `name` (default 2 × points); ignored
-    /// by the other methods.
+    /// Gauss–Legendre points of svi and lie-svi, applied on top of `name` (default: svi
+    /// 2 × points, lie-svi points); ignored by the other methods.
     pub quadrature: Option<usize>,
+    /// The form of the Lie-group integrator (SO(3) only; default full; `lie-svi-reduced` is
+    /// `reduced`).
+    pub form: Option<FormName>,
+}
+
+/// The form of the Lie-group integrator, as named in scenes and on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum FormName {
+    /// The full discrete Euler–Lagrange equations on SO(3) (Leok 2004 §5.3).
+    Full,
+    /// The discrete Euler–Poincaré equations (§5.4), for G-invariant Lagrangians.
+    Reduced,
 }
 
 /// `[run]`: step, horizon, adaptivity and failure handling.
@@ -124,7 +147,7 @@ pub struct RunSection {
 }
 
 /// The adaptivity modes of [`svi::solve()`], as named in scenes and on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum AdaptMode {
     /// Fixed step.
@@ -132,7 +155,7 @@ pub enum AdaptMode {
     None,
     /// Step doubling to meet `tol`.
     Step,
-    /// Points per step (svi and sc) to meet `tol`, at fixed step.
+    /// Points per step (svi, sc and lie-svi) to meet `tol`, at fixed step.
     Degree,
 }
 
@@ -181,8 +204,7 @@ impl RunSection {
                 return Err(svi::Error::invalid(
                     "max_halvings",
                     "set, but recovery is not \"halve-step\"",
-                )
-                .into());
+                ));
             }
             (RecoveryKind::None, None) => {}
             (RecoveryKind::HalveStep, halvings) => {
@@ -199,16 +221,20 @@ impl RunSection {
     }
 }
 
-/// `[output]`: trajectory file and diagnostics.
+/// `[output]`: trajectory file, output times and diagnostics.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputSection {
-    /// Write every `every`-th step of the trajectory (default 1; needs `trajectory`).
+    /// Write every `every`-th step of the trajectory (default 1; needs `trajectory`, and no
+    /// `output_times`).
     pub every: Option<usize>,
-    /// CSV file for the trajectory (absent: no trajectory is kept).
+    /// CSV file for the trajectory: the initial point and every `every`-th step, or with
+    /// `output_times` the initial point and the states at those times (absent: no
+    /// trajectory is kept).
     pub trajectory: Option<PathBuf>,
-    /// Diagnostics to compute (default: all of [`Diagnostic::NAMES`]).
+    /// Diagnostics to compute (default: energy, momentum and solution; `["none"]` or `[]`:
+    /// none at all).
     pub diagnostics: Option<Vec<Diagnostic>>,
-    /// Report the states at these times (dense output) instead of at every step.
+    /// Report the states at these times, read off each step's polynomial (dense output).
     pub output_times: Option<Vec<f64>>,
 }
