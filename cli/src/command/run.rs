@@ -7,7 +7,7 @@
 //!    SO(3). The visitor resolves the initial state, the step and the horizon, builds the
 //!    method (on ℝᴺ as its concrete type through [`svi::MethodSpec::visit_vector`]; on SO(3) the
 //!    Lie-group integrator) and pairs both in an [`Integrator`].
-//! 3. [`run_scene`], generic over the space ([`RunSpace`]), builds the observers the scene
+//! 3. `run_scene`, generic over the space ([`RunSpace`]), builds the observers the scene
 //!    asks for, runs [`Integrator::try_solve`] (fixed steps, step or degree adaptivity,
 //!    output times, recovery, divergence limit: one call for all), writes the trajectory and
 //!    assembles the one [`Summary`]. A run that fails after it started still writes its
@@ -322,49 +322,13 @@ where
                     (std::iter::once(first).chain(later).collect(), every)
                 }
             };
-            write_csv(path, &S::csv_header(model), &rows, |point, row| {
-                S::csv_row(model, point, row)
-            })
-            .map_err(|source| SceneError::Write {
-                path: path.clone(),
-                source,
-            })?;
-            Some(TrajectoryOutput {
-                path: path.display().to_string(),
-                every,
-                rows: rows.len(),
-            })
+            Some(write_trajectory::<L, S>(model, path, &rows, every)?)
         }
         None => None,
     };
 
     let solves = adapt != AdaptMode::None || output_times.is_some();
-    let solve = (S::LISTS_RUN_FIELDS || solves).then(|| SolveSummary {
-        adapt: adapt.into(),
-        tol: scene.run.tol,
-        adaptivity: outcome
-            .solved
-            .as_ref()
-            .filter(|_| solves)
-            .map(|(adaptivity, points)| AdaptivitySummary {
-                accepted: adaptivity.accepted,
-                rejected: adaptivity.rejected,
-                min_step: adaptivity.min_step,
-                max_step: adaptivity.max_step,
-                points_used: adaptivity.points.clone(),
-                unmet: adaptivity.unmet,
-                outputs: points.len(),
-            }),
-        outputs: output_times.map(|_| {
-            let points = outcome.solved.iter().flat_map(|(_, points)| points);
-            points
-                .map(|point| OutputPoint {
-                    t: S::time(point),
-                    state: S::state(point),
-                })
-                .collect()
-        }),
-    });
+    let solve = (S::LISTS_RUN_FIELDS || solves).then(|| solve_summary::<L, S>(scene, &outcome));
     let recovers = scene.run.recovery == Some(RecoveryKind::HalveStep);
     let (energy_error_max, conservation) = S::measured(model, diagnostics, &last);
     let info = integrator.method().info();
@@ -400,6 +364,58 @@ where
         Some(source) => Err(SceneError::RunFailed {
             partial: Box::new(summary),
             source,
+        }),
+    }
+}
+
+/// Write `rows` as the trajectory CSV of the space to `path`.
+fn write_trajectory<L, S: RunSpace<L>>(
+    model: &L,
+    path: &std::path::Path,
+    rows: &[S::Point],
+    every: usize,
+) -> Result<TrajectoryOutput, SceneError> {
+    write_csv(path, &S::csv_header(model), rows, |point, row| {
+        S::csv_row(model, point, row)
+    })
+    .map_err(|source| SceneError::Write {
+        path: path.into(),
+        source,
+    })?;
+    Ok(TrajectoryOutput {
+        path: path.display().to_string(),
+        every,
+        rows: rows.len(),
+    })
+}
+
+/// The adaptivity and output-time fields of a summary: what the adaptivity did (adaptive
+/// runs and runs with output times that reached the end) and the states at the output times.
+fn solve_summary<L, S: RunSpace<L>>(scene: &Scene, outcome: &Outcome<S::Point>) -> SolveSummary {
+    let adapt = scene.run.adapt.unwrap_or_default();
+    let output_times = scene.output.output_times.as_ref();
+    let solves = adapt != AdaptMode::None || output_times.is_some();
+    let solved = outcome.solved.as_ref().filter(|_| solves);
+    SolveSummary {
+        adapt: adapt.into(),
+        tol: scene.run.tol,
+        adaptivity: solved.map(|(adaptivity, points)| AdaptivitySummary {
+            accepted: adaptivity.accepted,
+            rejected: adaptivity.rejected,
+            min_step: adaptivity.min_step,
+            max_step: adaptivity.max_step,
+            points_used: adaptivity.points.clone(),
+            unmet: adaptivity.unmet,
+            outputs: points.len(),
+        }),
+        outputs: output_times.map(|_| {
+            let points = solved.iter().flat_map(|(_, points)| points);
+            points
+                .map(|point| OutputPoint {
+                    t: S::time(point),
+                    state: S::state(point),
+                })
+                .collect()
         }),
     }
 }
