@@ -1,13 +1,22 @@
 //! `svi`: run scenes of the svi model zoo from the command line.
 
-use std::io::IsTerminal;
 use std::process::ExitCode;
 
-use anyhow::Context;
 use clap::{Args, Parser, Subcommand};
-use svi_cli::{BUILTIN_SCENES, DEFAULT_SCENE, Float, Overrides, Scene, describe_models};
+use svi_cli::command;
+use svi_cli::command::bench::{BenchOptions, parse_methods};
+use svi_cli::command::stability::Request;
+use svi_cli::command::stress::StressOptions;
+use svi_cli::scene::error::is_bad_input;
+use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
+///
+/// Exit status: 0 when the command succeeded; 1 when a run failed after it started (a solve
+/// that does not converge, a state that diverges: the error reports the last good state, and
+/// the trajectory so far is written) or an output could not be written; 2 for bad input (an
+/// unknown scene, model or method, a malformed scene, an invalid value, an option that the
+/// scene's model, method or other options cannot use), as for malformed arguments.
 #[derive(Debug, Parser)]
 #[command(name = "svi", version, arg_required_else_help = true)]
 struct Cli {
@@ -142,84 +151,65 @@ struct RunArgs {
     /// Print the summary as one JSON object.
     #[arg(long)]
     json: bool,
-    /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
-    #[arg(long, value_name = "FORM")]
-    form: Option<String>,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run(args) => run(args),
+        Command::Run(args) => command::run::execute(
+            args.scene.as_deref().unwrap_or(DEFAULT_SCENE),
+            &args.overrides,
+            args.json,
+        ),
         Command::List => {
-            list();
+            command::list::print();
             Ok(())
         }
         Command::Bench(args) => bench(args),
-        Command::Stability(args) => stability(args),
+        Command::Stability(args) => command::stability::execute(
+            &args.method,
+            match args.z {
+                Some(values) => Request::Values(values),
+                None => Request::Range {
+                    z_min: args.z_min,
+                    z_max: args.z_max,
+                    samples: args.samples,
+                },
+            },
+            args.figures,
+            &args.out_dir,
+        ),
         Command::Stress(args) => stress(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("error: {error:#}");
-            ExitCode::FAILURE
+            ExitCode::from(exit_status(&error))
         }
     }
 }
 
-fn run(args: RunArgs) -> anyhow::Result<()> {
-    let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-    if let Some(scene) = svi_cli::rigid::RigidScene::load_if_rigid(name) {
-        return run_rigid(scene?, name, &args);
-    }
-    anyhow::ensure!(
-        args.form.is_none(),
-        "--form applies to rigid-body scenes only (see svi list)"
-    );
-    let mut scene = Scene::load(name)?;
-    scene.apply(&args.overrides)?;
-    let summary = scene
-        .run(std::io::stderr().is_terminal())
-        .with_context(|| format!("scene '{name}' failed"))?;
-    print_summary(&summary, args.json)
+/// The exit status of a failed command (see the long help): 2 when the outermost typed error
+/// is bad input, as for clap's own argument errors; 1 when a run failed or an output could
+/// not be written.
+fn exit_status(error: &anyhow::Error) -> u8 {
+    let bad_input = error.chain().find_map(|cause| {
+        cause
+            .downcast_ref::<SceneError>()
+            .map(SceneError::is_bad_input)
+            .or_else(|| cause.downcast_ref::<svi::Error>().map(is_bad_input))
+    });
+    if bad_input == Some(true) { 2 } else { 1 }
 }
 
-fn run_rigid(
-    mut scene: svi_cli::rigid::RigidScene,
-    name: &str,
-    args: &RunArgs,
-) -> anyhow::Result<()> {
-    scene.apply(&args.overrides, args.form.as_deref())?;
-    let summary = scene
-        .run(std::io::stderr().is_terminal())
-        .with_context(|| format!("scene '{name}' failed"))?;
-    print_summary(&summary, args.json)
-}
-
-/// Print a run's summary as one JSON object or as text.
-fn print_summary<S: serde::Serialize + std::fmt::Display>(
-    summary: &S,
-    json: bool,
-) -> anyhow::Result<()> {
-    if json {
-        println!("{}", serde_json::to_string(summary)?);
-    } else {
-        print!("{summary}");
-    }
-    Ok(())
-}
-
+/// `svi bench`: the options from the arguments.
 fn bench(args: BenchArgs) -> anyhow::Result<()> {
-    use svi_cli::bench::{BenchOptions, parse_methods, plot, to_csv, work_precision};
-    let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-    let mut scene = Scene::load(name)?;
     let overrides = Overrides {
-        parameters: args.parameters.clone(),
+        parameters: args.parameters,
         t_end: args.t_end,
         ..Overrides::default()
     };
-    scene.apply(&overrides)?;
     let options = BenchOptions {
         methods: parse_methods(&args.methods)?,
         target: args.target,
@@ -230,137 +220,23 @@ fn bench(args: BenchArgs) -> anyhow::Result<()> {
         tolerances: args.tolerances,
         verbose: true,
     };
-    let records = work_precision(&scene, &options)
-        .with_context(|| format!("benchmark of scene '{name}' failed"))?;
-    std::fs::create_dir_all(&args.out_dir)
-        .with_context(|| format!("cannot create {}", args.out_dir.display()))?;
-    let stem = std::path::Path::new(name)
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("bench");
-    let csv = args.out_dir.join(format!("{stem}.csv"));
-    std::fs::write(&csv, to_csv(&records))
-        .with_context(|| format!("cannot write {}", csv.display()))?;
-    let svg = args.out_dir.join(format!("{stem}.svg"));
-    plot(&records, stem, &svg)?;
-    print!("{}", to_csv(&records));
-    eprintln!("wrote {} and {}", csv.display(), svg.display());
-    Ok(())
+    command::bench::execute(
+        args.scene.as_deref().unwrap_or(DEFAULT_SCENE),
+        &overrides,
+        &options,
+        &args.out_dir,
+    )
 }
 
+/// `svi stress`: the options from the arguments.
 fn stress(args: StressArgs) -> anyhow::Result<()> {
-    use svi_cli::stress::{StressOptions, stress, to_markdown, write_outputs};
     let options = StressOptions {
         cases: args.cases,
-        methods: svi_cli::bench::parse_methods(&args.methods)?,
+        methods: parse_methods(&args.methods)?,
         drift_steps: args.steps,
         bisections: args.bisections,
         tolerance: args.tolerance,
         verbose: true,
     };
-    let records = stress(&options)?;
-    write_outputs(&records, &args.out_dir)?;
-    print!("{}", to_markdown(&records));
-    eprintln!(
-        "wrote stress.md, stress.csv, windows.csv and drift.svg to {}",
-        args.out_dir.display()
-    );
-    Ok(())
-}
-
-fn stability(args: StabilityArgs) -> anyhow::Result<()> {
-    use svi::MethodSpec;
-    use svi_cli::stability::{Answer, Request, describe, figure_configurations, plot, run, to_csv};
-    if let Some(values) = args.z {
-        let spec: MethodSpec = args.method.parse()?;
-        if let Answer::Points(points) = run(spec, &Request::Values(values))? {
-            print!("{}", to_csv(&points));
-        }
-        return Ok(());
-    }
-    let request = Request::Range {
-        z_min: args.z_min,
-        z_max: args.z_max,
-        samples: args.samples,
-    };
-    let configurations: Vec<(String, MethodSpec)> = if args.figures {
-        figure_configurations()
-            .into_iter()
-            .map(|(label, spec)| (label.to_string(), spec))
-            .collect()
-    } else {
-        vec![(args.method.clone(), args.method.parse()?)]
-    };
-    let mut reports = Vec::new();
-    for (label, spec) in configurations {
-        if let Answer::Report(report) = run(spec, &request)? {
-            print!("{}", describe(&label, &report));
-            reports.push((label, report));
-        }
-    }
-    std::fs::create_dir_all(&args.out_dir)
-        .with_context(|| format!("cannot create {}", args.out_dir.display()))?;
-    if let [(_, report)] = reports.as_slice() {
-        let csv = args.out_dir.join("stability.csv");
-        std::fs::write(&csv, to_csv(&report.points))
-            .with_context(|| format!("cannot write {}", csv.display()))?;
-        eprintln!("wrote {}", csv.display());
-    }
-    let svg = args.out_dir.join("stability.svg");
-    plot(&reports, &svg)?;
-    eprintln!("wrote {}", svg.display());
-    Ok(())
-}
-
-fn list() {
-    println!("Built-in scenes (svi run NAME):");
-    let width = BUILTIN_SCENES
-        .iter()
-        .map(|(name, _)| name.len() + 2)
-        .max()
-        .unwrap_or(0)
-        .max(18);
-    for (name, text) in BUILTIN_SCENES {
-        let description = text
-            .lines()
-            .next()
-            .and_then(|line| line.strip_prefix('#'))
-            .unwrap_or("")
-            .trim();
-        println!("  {name:<width$}{description}");
-    }
-    println!();
-    println!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):");
-    for model in describe_models() {
-        let parameters: Vec<String> = model
-            .parameters
-            .0
-            .iter()
-            .map(|(name, value)| format!("{name} = {}", Float(*value)))
-            .collect();
-        let mut facts = vec![format!("q = ({})", model.coordinates.join(", "))];
-        if model.momenta > 0 {
-            let noun = if model.momenta == 1 {
-                "momentum"
-            } else {
-                "momenta"
-            };
-            facts.push(format!("{} Noether {noun}", model.momenta));
-        }
-        if model.exact_solution {
-            facts.push("exact solution".into());
-        }
-        println!(
-            "  {:<18}{}; h = {}, t_end = {}; {}",
-            model.name,
-            parameters.join(", "),
-            Float(model.h),
-            Float(model.t_end),
-            facts.join(", ")
-        );
-    }
-    println!();
-    for line in svi_cli::rigid::list_lines() {
-        println!("{line}");
-    }
+    command::stress::execute(&options, &args.out_dir)
 }

@@ -6,23 +6,6 @@
 mod common;
 use common::*;
 
-/// A scene file in its own scratch directory.
-struct SceneFile {
-    path: String,
-    _dir: Scratch,
-}
-
-/// Write a scene file.
-fn scene_file(name: &str, text: &str) -> SceneFile {
-    let dir = Scratch::new(name);
-    let path = dir.join("scene.toml");
-    std::fs::write(&path, text).unwrap();
-    SceneFile {
-        path: path.to_str().unwrap().to_owned(),
-        _dir: dir,
-    }
-}
-
 const REQUIRED: [&str; 14] = [
     "model",
     "method",
@@ -841,4 +824,136 @@ fn stability_and_bench_take_the_same_grammar() {
     }
     let stderr = failure(&["bench", "kepler", "--methods", "rk4", "--out-dir", out]);
     assert!(stderr.contains("dop853, dopri5"), "{stderr}");
+}
+
+#[test]
+fn diagnostics_none_computes_no_diagnostic() {
+    let vector = [
+        "energy_error_max",
+        "momentum_error_max",
+        "solution_error_max",
+    ];
+    let rigid = [
+        "energy_error_max",
+        "momentum_error_max",
+        "momentum_error_relative",
+        "invariant_error_max",
+        "orthogonality_error_max",
+    ];
+    for (scene, fields) in [("kepler", &vector[..]), ("rigid-body", &rigid[..])] {
+        let args = [
+            "run",
+            scene,
+            "--t-end",
+            "20",
+            "--diagnostics",
+            "none",
+            "--json",
+        ];
+        let summary = json(&args);
+        for field in fields {
+            assert!(summary[field].is_null(), "{scene} {field}: {summary}");
+        }
+    }
+    // The final state is measured once, not per step.
+    let args = [
+        "run",
+        "rigid-body",
+        "--t-end",
+        "5",
+        "--diagnostics",
+        "none",
+        "--json",
+    ];
+    assert!(number(&json(&args), "orthogonality_error_final") <= 1e-13);
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--t-end",
+        "20",
+        "--diagnostics",
+        "none",
+        "--json",
+    ]);
+    // The same run: the same final state and work as with every diagnostic.
+    let all = json(&["run", "kepler", "--t-end", "20", "--json"]);
+    for field in ["q", "p", "steps", "iterations", "evaluations"] {
+        assert_eq!(summary[field], all[field], "{field}");
+    }
+    let scene = scene_file(
+        "no-diagnostics",
+        "model = \"oscillator\"\n[output]\ndiagnostics = [\"none\"]\n",
+    );
+    let summary = json(&["run", &scene.path, "--json"]);
+    assert!(summary["energy_error_max"].is_null(), "{summary}");
+    let stderr = failure(&["run", "kepler", "--diagnostics", "energy,none"]);
+    assert!(stderr.contains("--diagnostics"), "{stderr}");
+}
+
+#[test]
+fn options_the_scene_cannot_use_are_errors_with_status_2() {
+    for (args, needle) in [
+        (&["--tol", "1e-9"][..], "--tol (run.tol)"),
+        (
+            &["--adapt", "degree", "--tol", "1e-6", "--method", "verlet"],
+            "--adapt degree (run.adapt): method verlet has no polynomial degree",
+        ),
+        (
+            &[
+                "--adapt",
+                "step",
+                "--tol",
+                "1e-9",
+                "--recovery",
+                "halve-step",
+            ],
+            "--recovery (run.recovery)",
+        ),
+        (&["--adapt", "step", "--tol", "1e-9", "--h", "0.1"], "--h: "),
+        (
+            &["--output-times", "1", "--out", "x.csv", "--every", "2"],
+            "--every (output.every)",
+        ),
+        (
+            &["--form", "full"],
+            "--form: applies to rigid-body scenes only",
+        ),
+        (
+            &["--method", "verlet", "--points", "4"],
+            "--points is an option",
+        ),
+        (&["--param", "bogus=1"], "invalid bogus"),
+        (&["--h", "0"], "invalid h"),
+        (&["--diagnostics", "entropy"], "invalid value 'entropy'"),
+    ] {
+        let mut all = vec!["run", "kepler"];
+        all.extend_from_slice(args);
+        let stderr = failure(&all);
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert_eq!(svi(&all).status.code(), Some(2), "{args:?}: {stderr}");
+    }
+    for name in ["keppler", "kepler.toml"] {
+        assert_eq!(svi(&["run", name]).status.code(), Some(2), "{name}");
+    }
+    let scene = scene_file(
+        "tol-without-adapt",
+        "model = \"kepler\"\n[run]\ntol = 1e-9\n",
+    );
+    let stderr = failure(&["run", &scene.path]);
+    assert!(stderr.contains("--tol (run.tol)"), "{stderr}");
+    // A run that starts and fails exits with status 1.
+    let output = svi(&["run", "kepler-recovery", "--recovery", "none"]);
+    assert_eq!(output.status.code(), Some(1));
+}
+
+#[test]
+fn the_help_states_the_exit_statuses_and_diagnostics_none() {
+    let text = String::from_utf8(svi(&["--help"]).stdout).unwrap();
+    assert!(text.contains("Exit status: 0"), "{text}");
+    assert!(text.contains("2 for bad input"), "{text}");
+    let text = String::from_utf8(svi(&["run", "--help"]).stdout).unwrap();
+    assert!(
+        text.contains("none computes no per-step diagnostic"),
+        "{text}"
+    );
 }

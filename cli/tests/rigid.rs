@@ -310,3 +310,138 @@ fn rigid_scenes_take_the_method_grammar() {
         assert!(stderr.contains(needle), "{extra:?}: {stderr}");
     }
 }
+
+#[test]
+fn rigid_scenes_take_adaptivity_output_times_and_failure_handling() {
+    // Step doubling on SO(3): every accepted step keeps the momenta and R orthogonal.
+    let summary = json(&[
+        "run",
+        "rigid-body",
+        "--adapt",
+        "step",
+        "--tol",
+        "1e-8",
+        "--json",
+    ]);
+    assert_eq!(summary["adapt"], "step");
+    assert_eq!(number(&summary, "tol"), 1e-8);
+    let adaptivity = &summary["adaptivity"];
+    let accepted = adaptivity["accepted"].as_u64().unwrap();
+    assert!(accepted > 0, "{summary}");
+    // Step doubling takes three method steps per trial (two of h, one of 2h).
+    assert!(
+        summary["steps"].as_u64().unwrap() >= accepted * 3 / 2,
+        "{summary}"
+    );
+    assert_eq!(number(&summary, "t_end"), 100.0);
+    assert!(number(adaptivity, "min_step") > 0.0, "{summary}");
+    for (field, bound) in [
+        ("momentum_error_relative", 1e-12),
+        ("orthogonality_error_max", 1e-13),
+    ] {
+        assert!(number(&summary, field) <= bound, "{field}: {summary}");
+    }
+    assert!(summary["outputs"].is_null());
+
+    // Output times, read off the step curve R_k exp(ξ(τ)) of the Lie-group integrator.
+    let summary = json(&["run", "heavy-top", "--output-times", "0.5,1.25", "--json"]);
+    let outputs = summary["outputs"].as_array().unwrap();
+    let times: Vec<f64> = outputs.iter().map(|o| number(o, "t")).collect();
+    assert_eq!(times, [0.5, 1.25]);
+    for output in outputs {
+        let q = vector(output, "quaternion");
+        assert!(
+            (q.iter().map(|c| c * c).sum::<f64>() - 1.0).abs() < 1e-13,
+            "{output}"
+        );
+        // Spin Ω₃ = 10 of the symmetric top is constant.
+        assert!((vector(output, "omega")[2] - 10.0).abs() < 1e-9, "{output}");
+    }
+    assert_eq!(summary["adaptivity"]["outputs"], 2);
+    assert_eq!(summary["steps"], 2000);
+
+    // Degree adaptivity chooses the points of each step.
+    let summary = json(&[
+        "run",
+        "heavy-top",
+        "--t-end",
+        "2",
+        "--adapt",
+        "degree",
+        "--tol",
+        "1e-10",
+        "--json",
+    ]);
+    assert_eq!(summary["adapt"], "degree");
+    assert!(
+        !summary["adaptivity"]["points_used"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    assert!(
+        number(&summary, "momentum_error_relative") <= 1e-12,
+        "{summary}"
+    );
+
+    // Recovery and a divergence limit: a plain run's numbers, with the retries counted.
+    let plain = json(&["run", "heavy-top", "--t-end", "1", "--json"]);
+    assert!(plain.get("retries").is_none() && plain.get("adaptivity").is_none());
+    let guarded = json(&[
+        "run",
+        "heavy-top",
+        "--t-end",
+        "1",
+        "--recovery",
+        "halve-step",
+        "--divergence-limit",
+        "100",
+        "--json",
+    ]);
+    assert_eq!(guarded["retries"], 0);
+    assert_eq!(guarded["quaternion"], plain["quaternion"]);
+    // Π₃ = I₃ Ω₃ = 5 exceeds a limit of 1 in the first step: a run failure (status 1).
+    let output = svi(&["run", "heavy-top", "--divergence-limit", "1"]);
+    assert_eq!(output.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("the run failed after 0 steps; last good state at t = 0: quaternion = ")
+            && stderr.contains("state diverged at step 0"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn options_a_rigid_scene_cannot_use_exit_with_status_2() {
+    for (args, needle) in [
+        (&["--tol", "1e-8"][..], "--tol (run.tol)"),
+        (
+            &[
+                "--adapt",
+                "step",
+                "--tol",
+                "1e-8",
+                "--recovery",
+                "halve-step",
+            ],
+            "--recovery (run.recovery)",
+        ),
+        (&["--adapt", "step", "--tol", "1e-8", "--h", "0.1"], "--h: "),
+        (&["--every", "2"], "no trajectory file"),
+        (&["--diagnostics", "none,energy"], "--diagnostics"),
+        (&["--diagnostics", "solution"], "has no exact solution"),
+        (&["--param", "bogus=1"], "bogus"),
+        (&["--method", "verlet"], "'verlet' integrates models on ℝᴺ"),
+    ] {
+        bad_input(&["run", "heavy-top"], args, needle);
+    }
+    let scene = scene_file(
+        "cross",
+        "model = \"heavy-top\"\n[initial]\nq = [1.0, 0.0, 0.0]\n",
+    );
+    bad_input(
+        &["run", &scene.path],
+        &[],
+        "initial.q: applies to scenes on ℝᴺ",
+    );
+}

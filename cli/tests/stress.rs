@@ -345,13 +345,17 @@ fn parse_and_maybe_run(text: &str) -> Result<Outcome, TestCaseError> {
         match scene.run(false) {
             Ok(summary) => {
                 prop_assert!(summary.steps as f64 <= MAX_TEST_STEPS + 1.0);
-                prop_assert!(summary.q.iter().all(|x| x.is_finite()));
+                prop_assert!(summary.state.configuration().iter().all(|x| x.is_finite()));
             }
             Err(error) => {
                 let message = error.to_string();
                 prop_assert!(!message.is_empty());
                 if let SceneError::RunFailed { partial, .. } = &error {
-                    prop_assert!(partial.q.iter().all(|x| x.is_finite()), "{}", message);
+                    prop_assert!(
+                        partial.state.configuration().iter().all(|x| x.is_finite()),
+                        "{}",
+                        message
+                    );
                 }
             }
         }

@@ -40,6 +40,34 @@ pub fn failure(args: &[&str]) -> String {
     stderr
 }
 
+/// Run `svi` with `command` followed by `args`, expect exit status 2 (bad input, as for
+/// malformed arguments) and `needle` in the message; return stderr.
+pub fn bad_input(command: &[&str], args: &[&str], needle: &str) -> String {
+    let all: Vec<&str> = command.iter().chain(args).copied().collect();
+    let stderr = failure(&all);
+    assert!(stderr.contains(needle), "svi {all:?}: {stderr}");
+    assert_eq!(svi(&all).status.code(), Some(2), "svi {all:?}: {stderr}");
+    stderr
+}
+
+/// A scene file in its own scratch directory.
+pub struct SceneFile {
+    /// The file.
+    pub path: String,
+    _dir: Scratch,
+}
+
+/// Write a scene file.
+pub fn scene_file(name: &str, text: &str) -> SceneFile {
+    let dir = Scratch::new(name);
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    SceneFile {
+        path: path.to_str().unwrap().to_owned(),
+        _dir: dir,
+    }
+}
+
 /// The number `value[key]`.
 pub fn number(value: &Value, key: &str) -> f64 {
     value[key]

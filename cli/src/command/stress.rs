@@ -24,9 +24,11 @@
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
-use crate::bench::{BenchMethod, FirstOrder, parse_methods};
-use crate::plot::{Panel, PlotError, Series, write_svg};
-use crate::{Float, Scene, SceneError};
+use crate::command::bench::{BenchMethod, parse_methods};
+use crate::command::peers::{FirstOrder, dop853};
+use crate::report::csv::Float;
+use crate::report::plot::{Panel, PlotError, Series, write_svg};
+use crate::scene::{Scene, SceneError};
 use nalgebra::SVector;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -35,9 +37,7 @@ use std::time::Instant;
 use svi::drift::{DriftFit, EnergyWindows, Window};
 use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, Every};
-use svi::{
-    Error, Initial, Integrator, LagrangianExt, Method, RunOptions, Structure, linalg::invert_small,
-};
+use svi::{Error, Initial, Integrator, LagrangianExt, Method, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A stress case: a built-in scene and the horizon of its stability probes.
@@ -561,21 +561,14 @@ fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
                 .map_err(|e| e.to_string())?,
         ),
     };
-    let mass_inverse = match M::STRUCTURE {
-        Structure::ConstantMass => invert_small(&model.mass_matrix(setup.t0, &q0, &v0)),
-        Structure::General => None,
-    };
-    let system = FirstOrder::<M, N, S> {
-        model,
-        mass_inverse,
-    };
+    let system = FirstOrder::<M, N, S>::new(model, setup.t0, &q0, &v0);
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(q0.iter().chain(v0.iter()).copied());
     let t_end = setup.t0 + setup.options.drift_steps as f64 * setup.h;
     let tol = setup.options.tolerance;
     // The energy at the accepted step points, as for svi's methods (the dense output's
     // interpolation error would swamp the energy error); ode_solvers stores them all, about
     // 40 bytes per step for N = 2.
-    let mut stepper = crate::bench::dop853(system, setup.t0, t_end, y0, tol);
+    let mut stepper = dop853(system, setup.t0, t_end, y0, tol);
     let start = Instant::now();
     let stats = stepper.integrate().map_err(|e| format!("fails: {e:?}"))?;
     let seconds = start.elapsed().as_secs_f64();
@@ -779,6 +772,19 @@ pub fn write_outputs(records: &[StressRecord], dir: &Path) -> Result<(), SceneEr
         path: dir.join("drift.svg"),
         source: std::io::Error::other(e.to_string()),
     })
+}
+
+/// `svi stress`: run the cases of `options`, write `stress.md`, `stress.csv`, `windows.csv`
+/// and `drift.svg` into `out_dir` and print the table.
+pub fn execute(options: &StressOptions, out_dir: &Path) -> anyhow::Result<()> {
+    let records = stress(options)?;
+    write_outputs(&records, out_dir)?;
+    print!("{}", to_markdown(&records));
+    eprintln!(
+        "wrote stress.md, stress.csv, windows.csv and drift.svg to {}",
+        out_dir.display()
+    );
+    Ok(())
 }
 
 #[cfg(test)]

@@ -5,7 +5,8 @@
 //! |tr S| − det S − 1 against z as SVG (Li, Wu, Leok 2018, Figs. 3–6), and prints the
 //! stability, periodicity and strong-stability regions of Definition 4.1.
 
-use crate::plot::{Panel, Series, write_svg};
+use crate::report::plot::{Panel, Series, write_svg};
+use anyhow::Context;
 use std::fmt::Write as _;
 use std::path::Path;
 use svi::method::registry::VectorMethodVisitor;
@@ -79,7 +80,7 @@ pub fn describe(label: &str, report: &StabilityReport) -> String {
 pub fn plot(
     reports: &[(String, StabilityReport)],
     path: &Path,
-) -> Result<(), crate::plot::PlotError> {
+) -> Result<(), crate::report::plot::PlotError> {
     type Pick = fn(&StabilityPoint) -> f64;
     let quantities: [(&str, Pick); 4] = [
         ("spectral radius ρ(S)", |p| p.rho),
@@ -161,6 +162,51 @@ pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, svi::Error> {
         }
     }
     spec.visit_vector(Answering(request))?
+}
+
+/// `svi stability`: for listed z values, print the CSV of `method`; for a range, print the
+/// regions of `method` (or of the paper's six configurations with `figures`) and write
+/// `stability.csv` (one method) and `stability.svg` into `out_dir`.
+pub fn execute(
+    method: &str,
+    request: Request,
+    figures: bool,
+    out_dir: &Path,
+) -> anyhow::Result<()> {
+    if let Request::Values(_) = request {
+        let spec: MethodSpec = method.parse()?;
+        if let Answer::Points(points) = run(spec, &request)? {
+            print!("{}", to_csv(&points));
+        }
+        return Ok(());
+    }
+    let configurations: Vec<(String, MethodSpec)> = if figures {
+        figure_configurations()
+            .into_iter()
+            .map(|(label, spec)| (label.to_string(), spec))
+            .collect()
+    } else {
+        vec![(method.to_string(), method.parse()?)]
+    };
+    let mut reports = Vec::new();
+    for (label, spec) in configurations {
+        if let Answer::Report(report) = run(spec, &request)? {
+            print!("{}", describe(&label, &report));
+            reports.push((label, report));
+        }
+    }
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    if let [(_, report)] = reports.as_slice() {
+        let csv = out_dir.join("stability.csv");
+        std::fs::write(&csv, to_csv(&report.points))
+            .with_context(|| format!("cannot write {}", csv.display()))?;
+        eprintln!("wrote {}", csv.display());
+    }
+    let svg = out_dir.join("stability.svg");
+    plot(&reports, &svg)?;
+    eprintln!("wrote {}", svg.display());
+    Ok(())
 }
 
 #[cfg(test)]

@@ -17,10 +17,12 @@
 //! Given step counts ([`BenchOptions::steps`]) or tolerances ([`BenchOptions::tolerances`])
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
 
-use crate::plot::{Panel, Series, write_svg};
-use crate::{Scene, SceneError};
-use nalgebra::{SMatrix, SVector};
-use ode_solvers::{Dop853, Dopri5, OutputType, System};
+use crate::command::peers::{FirstOrder, dop853, dopri5};
+use crate::report::plot::{Panel, Series, write_svg};
+use crate::scene::overrides::Overrides;
+use crate::scene::{Scene, SceneError};
+use anyhow::Context;
+use nalgebra::SVector;
 use serde::Serialize;
 use std::fmt;
 use std::path::Path;
@@ -30,9 +32,7 @@ use std::time::Instant;
 use indicatif::{ProgressBar, ProgressStyle};
 use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, MomentumError};
-use svi::{
-    Initial, Integrator, LagrangianExt, Method, MethodSpec, Structure, linalg::invert_small,
-};
+use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A method configuration to sweep: a method of svi's registry, or an `ode_solvers` peer.
@@ -468,40 +468,6 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     Ok(())
 }
 
-/// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers`, with a
-/// fixed-size state of S = 2N components (as a user of `ode_solvers` would write it: a
-/// heap-allocated `DVector` state would cost the peers a factor of several).
-pub(crate) struct FirstOrder<'a, M, const N: usize, const S: usize> {
-    pub(crate) model: &'a M,
-    /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
-    pub(crate) mass_inverse: Option<SMatrix<f64, N, N>>,
-}
-
-impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
-    for FirstOrder<'_, M, N, S>
-{
-    fn system(
-        &self,
-        t: f64,
-        y: &ode_solvers::SVector<f64, S>,
-        dy: &mut ode_solvers::SVector<f64, S>,
-    ) {
-        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
-        let a = match self.mass_inverse {
-            Some(inverse) => inverse * self.model.force(t, &q, &v),
-            None => self
-                .model
-                .acceleration(t, &q, &v)
-                .unwrap_or_else(|| SVector::repeat(f64::NAN)),
-        };
-        for i in 0..N {
-            dy[i] = v[i];
-            dy[N + i] = a[i];
-        }
-    }
-}
-
 /// Outcome of one adaptive run: final state, steps, evaluations, stored states.
 type AdaptiveRun<const S: usize> = (
     ode_solvers::SVector<f64, S>,
@@ -520,7 +486,7 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(
         problem.q0.iter().chain(problem.v0.iter()).copied(),
     );
-    let (t0, t_end, span) = (problem.t0, problem.t_end, problem.t_end - problem.t0);
+    let (t0, t_end) = (problem.t0, problem.t_end);
     macro_rules! go {
         ($stepper:expr) => {{
             let mut stepper = $stepper;
@@ -539,58 +505,10 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
             ))
         }};
     }
-    // Crate defaults, except sparse output and a high step cap (as the kepler-peers tool).
     match spec {
         BenchMethod::Dop853 => go!(dop853(system, t0, t_end, y0, tol)),
-        _ => go!(Dopri5::from_param(
-            system,
-            t0,
-            t_end,
-            span,
-            y0,
-            tol,
-            tol,
-            0.9,
-            0.04,
-            0.2,
-            10.0,
-            span,
-            0.0,
-            2_000_000_000,
-            1000,
-            OutputType::Sparse,
-        )),
+        _ => go!(dopri5(system, t0, t_end, y0, tol)),
     }
-}
-
-/// `ode_solvers`' DOP853 from `t0` to `t_end` with rtol = atol = `tol`, as the peers run it:
-/// crate defaults except sparse output (the accepted step points only) and a high step cap.
-pub(crate) fn dop853<F: System<f64, ode_solvers::SVector<f64, S>>, const S: usize>(
-    system: F,
-    t0: f64,
-    t_end: f64,
-    y0: ode_solvers::SVector<f64, S>,
-    tol: f64,
-) -> Dop853<f64, ode_solvers::SVector<f64, S>, F> {
-    let span = t_end - t0;
-    Dop853::from_param(
-        system,
-        t0,
-        t_end,
-        span,
-        y0,
-        tol,
-        tol,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        span,
-        0.0,
-        2_000_000_000,
-        1000,
-        OutputType::Sparse,
-    )
 }
 
 /// Sweep an adaptive `ode_solvers` method over tolerances (models with N ≤ 3).
@@ -624,16 +542,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     records: &mut Vec<Record>,
 ) -> Result<(), SceneError> {
     assert_eq!(S, 2 * N, "state size");
-    let mass_inverse = match M::STRUCTURE {
-        Structure::ConstantMass => {
-            invert_small(&model.mass_matrix(problem.t0, &problem.q0, &problem.v0))
-        }
-        Structure::General => None,
-    };
-    let system = || FirstOrder::<M, N, S> {
-        model,
-        mass_inverse,
-    };
+    let system = || FirstOrder::<M, N, S>::new(model, problem.t0, &problem.q0, &problem.v0);
     let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);
     let measure = |tol: f64| -> Option<Record> {
         let (last, steps, evaluations, states) = adaptive_run(system(), spec, problem, tol)?;
@@ -746,7 +655,11 @@ pub fn to_csv(records: &[Record]) -> String {
 }
 
 /// Error against time and error against evaluations, one curve per method, as SVG.
-pub fn plot(records: &[Record], title: &str, path: &Path) -> Result<(), crate::plot::PlotError> {
+pub fn plot(
+    records: &[Record],
+    title: &str,
+    path: &Path,
+) -> Result<(), crate::report::plot::PlotError> {
     let mut labels: Vec<&str> = Vec::new();
     for r in records {
         if !labels.contains(&r.method.as_str()) {
@@ -785,6 +698,34 @@ pub fn plot(records: &[Record], title: &str, path: &Path) -> Result<(), crate::p
         640,
         480,
     )
+}
+
+/// `svi bench`: sweep `options.methods` on the scene `name` (with the parameter and horizon
+/// overrides), write `<scene>.csv` and `<scene>.svg` into `out_dir` and print the CSV.
+pub fn execute(
+    name: &str,
+    overrides: &Overrides,
+    options: &BenchOptions,
+    out_dir: &Path,
+) -> anyhow::Result<()> {
+    let mut scene = Scene::load(name)?;
+    scene.apply(overrides)?;
+    let records = work_precision(&scene, options)
+        .with_context(|| format!("benchmark of scene '{name}' failed"))?;
+    std::fs::create_dir_all(out_dir)
+        .with_context(|| format!("cannot create {}", out_dir.display()))?;
+    let stem = Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("bench");
+    let csv = out_dir.join(format!("{stem}.csv"));
+    std::fs::write(&csv, to_csv(&records))
+        .with_context(|| format!("cannot write {}", csv.display()))?;
+    let svg = out_dir.join(format!("{stem}.svg"));
+    plot(&records, stem, &svg)?;
+    print!("{}", to_csv(&records));
+    eprintln!("wrote {} and {}", csv.display(), svg.display());
+    Ok(())
 }
 
 #[cfg(test)]

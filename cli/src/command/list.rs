@@ -1,0 +1,168 @@
+//! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ and on SO(3).
+
+use serde::Serialize;
+use svi::method::registry::SpaceKind;
+use svi_models::{
+    MODEL_NAMES, ModelVisitor, RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, ZooModel,
+    visit_model, visit_rigid_model,
+};
+
+use crate::report::csv::Float;
+use crate::report::summary::Parameters;
+use crate::scene::Scene;
+use crate::scene::builtin::BUILTIN_SCENES;
+
+/// A zoo model's name, dimension, coordinates, parameters and defaults (for `svi list`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelDescription {
+    /// Name.
+    pub name: &'static str,
+    /// Configuration coordinate names.
+    pub coordinates: Vec<&'static str>,
+    /// Default parameters.
+    pub parameters: Parameters,
+    /// Default step.
+    pub h: f64,
+    /// Default horizon.
+    pub t_end: f64,
+    /// Number of Noether momenta.
+    pub momenta: usize,
+    /// Whether an exact solution is known for the default initial state.
+    pub exact_solution: bool,
+}
+
+/// Describes a model.
+struct Describe;
+
+impl ModelVisitor for Describe {
+    type Output = ModelDescription;
+
+    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> ModelDescription {
+        let (t0, q0, v0) = model.initial_state();
+        ModelDescription {
+            name: model.name(),
+            coordinates: model.coordinate_names().to_vec(),
+            parameters: Parameters(model.parameters()),
+            h: model.default_step(),
+            t_end: model.default_horizon(),
+            momenta: model.generator_count(),
+            exact_solution: model.exact_solution(t0, &q0, &v0, t0).is_some(),
+        }
+    }
+}
+
+/// Descriptions of all zoo models, in [`MODEL_NAMES`] order.
+pub fn describe_models() -> Vec<ModelDescription> {
+    MODEL_NAMES
+        .iter()
+        .filter_map(|name| visit_model(name, Describe).ok())
+        .collect()
+}
+
+/// The built-in scenes on `space`, as (name, the first line of the scene file).
+fn scenes(space: SpaceKind) -> Vec<(&'static str, &'static str)> {
+    BUILTIN_SCENES
+        .iter()
+        .filter(|(name, _)| {
+            Scene::builtin(name).is_some_and(|scene| scene.is_ok_and(|s| s.space() == space))
+        })
+        .map(|(name, text)| {
+            let description = text
+                .lines()
+                .next()
+                .and_then(|line| line.strip_prefix('#'))
+                .unwrap_or("")
+                .trim();
+            (*name, description)
+        })
+        .collect()
+}
+
+/// Print the built-in scenes and the models (on ℝᴺ and rigid bodies) with their parameters.
+pub fn print() {
+    println!("Built-in scenes (svi run NAME):");
+    let vector = scenes(SpaceKind::Vector);
+    let width = vector
+        .iter()
+        .map(|(name, _)| name.len() + 2)
+        .max()
+        .unwrap_or(0)
+        .max(18);
+    for (name, description) in vector {
+        println!("  {name:<width$}{description}");
+    }
+    println!();
+    println!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):");
+    for model in describe_models() {
+        let parameters: Vec<String> = model
+            .parameters
+            .0
+            .iter()
+            .map(|(name, value)| format!("{name} = {}", Float(*value)))
+            .collect();
+        let mut facts = vec![format!("q = ({})", model.coordinates.join(", "))];
+        if model.momenta > 0 {
+            let noun = if model.momenta == 1 {
+                "momentum"
+            } else {
+                "momenta"
+            };
+            facts.push(format!("{} Noether {noun}", model.momenta));
+        }
+        if model.exact_solution {
+            facts.push("exact solution".into());
+        }
+        println!(
+            "  {:<18}{}; h = {}, t_end = {}; {}",
+            model.name,
+            parameters.join(", "),
+            Float(model.h),
+            Float(model.t_end),
+            facts.join(", ")
+        );
+    }
+    println!();
+    println!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):");
+    for (name, description) in scenes(SpaceKind::Rotation) {
+        println!("  {name:<18}{description}");
+    }
+    println!();
+    println!("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):");
+    for name in RIGID_MODEL_NAMES {
+        if let Some(line) = visit_rigid_model(name, DescribeRigid) {
+            println!("{line}");
+        }
+    }
+}
+
+/// Describes a rigid-body model in one line.
+struct DescribeRigid;
+
+impl RigidModelVisitor for DescribeRigid {
+    type Output = String;
+    fn visit<M: RigidZooModel>(self, model: M) -> String {
+        let parameters: Vec<String> = model
+            .parameters()
+            .iter()
+            .map(|(name, value)| format!("{name} = {}", Float(*value)))
+            .collect();
+        let mut facts = Vec::new();
+        if M::G_INVARIANT {
+            facts.push("G-invariant".to_string());
+        }
+        let momenta: Vec<&str> = (0..model.axis_count())
+            .map(|i| model.axis_name(i))
+            .collect();
+        if !momenta.is_empty() {
+            facts.push(format!("conserves {}", momenta.join(", ")));
+        }
+        format!(
+            "  {:<18}{}; h = {}, t_end = {}; {}",
+            model.name(),
+            parameters.join(", "),
+            Float(model.default_step()),
+            Float(model.default_horizon()),
+            facts.join(", ")
+        )
+    }
+}

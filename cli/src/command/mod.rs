@@ -1,0 +1,9 @@
+//! What `svi` does: each subcommand's work, called by the binary's dispatch.
+
+pub mod bench;
+pub mod list;
+pub mod peers;
+pub mod run;
+pub mod space;
+pub mod stability;
+pub mod stress;

@@ -1,0 +1,569 @@
+//! `svi run`: the one run path, for scenes on every space.
+//!
+//! 1. [`execute`] loads the scene (built-in or file), applies the command-line overrides and
+//!    checks them ([`Scene::apply`]).
+//! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
+//!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_rigid_model`] on
+//!    SO(3). The visitor resolves the initial state, the step and the horizon, builds the
+//!    method (on ℝᴺ as its concrete type through [`svi::MethodSpec::visit_vector`]; on SO(3) the
+//!    Lie-group integrator) and pairs both in an [`Integrator`].
+//! 3. `run_scene`, generic over the space ([`RunSpace`]), builds the observers the scene
+//!    asks for, runs [`Integrator::try_solve`] (fixed steps, step or degree adaptivity,
+//!    output times, recovery, divergence limit: one call for all), writes the trajectory and
+//!    assembles the one [`Summary`]. A run that fails after it started still writes its
+//!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
+
+use std::io::IsTerminal;
+use std::ops::ControlFlow;
+use std::time::Instant;
+
+use anyhow::Context;
+use svi::lie_group::RigidBodyIntegrator;
+use svi::method::registry::{SpaceKind, VectorMethodVisitor};
+use svi::method::step::Step;
+use svi::observer::{Every, Observer, Points};
+use svi::solve::{SolveOptions, Span};
+use svi::stepping::run::RunFailure;
+use svi::{Integrator, Method, Statistics};
+use svi_models::{
+    ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel, visit_model, visit_rigid_model,
+};
+
+use crate::command::space::RunSpace;
+use crate::report::csv::write_csv;
+use crate::report::progress::Progress;
+use crate::report::summary::{
+    AdaptivitySummary, OutputPoint, Parameters, SolveSummary, Summary, TrajectoryOutput,
+};
+use crate::scene::overrides::Overrides;
+use crate::scene::rigid::{METHOD_NAME, form_name};
+use crate::scene::schema::{AdaptMode, RecoveryKind};
+use crate::scene::{Scene, SceneError};
+
+/// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
+/// run it and print its summary as text or as one JSON object.
+pub fn execute(name: &str, overrides: &Overrides, json: bool) -> anyhow::Result<()> {
+    let mut scene = Scene::load(name)?;
+    scene.apply(overrides)?;
+    let summary = scene
+        .run(std::io::stderr().is_terminal())
+        .with_context(|| format!("scene '{name}' failed"))?;
+    if json {
+        println!("{}", serde_json::to_string(&summary)?);
+    } else {
+        print!("{summary}");
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Integrate the scene, write its trajectory if asked, and summarise. `progress` allows a
+    /// progress bar on stderr for fixed-grid runs of at least
+    /// [`crate::report::progress::PROGRESS_MIN_STEPS`] steps.
+    pub fn run(&self, progress: bool) -> Result<Summary, SceneError> {
+        self.check()?;
+        let run = SceneRun {
+            scene: self,
+            progress,
+        };
+        match self.space() {
+            SpaceKind::Vector => visit_model(&self.model, run)?,
+            SpaceKind::Rotation => visit_rigid_model(&self.model, run)
+                .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
+        }
+    }
+}
+
+/// A scene resolved for a model on the space `S`: what [`run_scene`] needs besides the
+/// integrator.
+struct Plan<'a, S: svi::method::space::Space> {
+    scene: &'a Scene,
+    progress: bool,
+    t0: f64,
+    initial: S::Initial,
+    h: f64,
+    t_end: f64,
+    /// The method as the summary names it.
+    method: MethodFields,
+}
+
+/// The method's fields of the summary that the built method does not tell.
+struct MethodFields {
+    name: String,
+    form: Option<String>,
+    points: Option<usize>,
+    quadrature: Option<usize>,
+}
+
+/// Receives the model of a scene, on ℝᴺ or SO(3), and runs it with the scene's method.
+#[derive(Clone, Copy)]
+struct SceneRun<'a> {
+    scene: &'a Scene,
+    progress: bool,
+}
+
+impl<'a> SceneRun<'a> {
+    /// The plan of a run from `t0` with `initial`, step `h` to `t_end`, by `method`.
+    fn plan<S: svi::method::space::Space>(
+        self,
+        (t0, initial, h, t_end): (f64, S::Initial, f64, f64),
+        method: MethodFields,
+    ) -> Plan<'a, S> {
+        Plan {
+            scene: self.scene,
+            progress: self.progress,
+            t0,
+            initial,
+            h,
+            t_end,
+            method,
+        }
+    }
+}
+
+impl ModelVisitor for SceneRun<'_> {
+    type Output = Result<Summary, SceneError>;
+
+    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+        let resolved = self.scene.resolve(&mut model)?;
+        let spec = self.scene.method_spec()?;
+        let method = MethodFields {
+            name: spec.name().into(),
+            form: None,
+            points: spec.points_in_use(),
+            quadrature: spec.quadrature_in_use(),
+        };
+        let plan = self.plan(resolved, method);
+        spec.visit_vector(VectorMethod { model, plan })?
+    }
+}
+
+/// Runs a scene's model on ℝᴺ with the visited method.
+struct VectorMethod<'a, M, const N: usize> {
+    model: M,
+    plan: Plan<'a, svi::Euclidean<N>>,
+}
+
+impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for VectorMethod<'_, M, N> {
+    type Output = Result<Summary, SceneError>;
+    fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
+        run_scene(&Integrator::new(self.model, method), &self.plan)
+    }
+}
+
+impl RigidModelVisitor for SceneRun<'_> {
+    type Output = Result<Summary, SceneError>;
+
+    fn visit<M: RigidZooModel>(self, mut model: M) -> Self::Output {
+        let resolved = self.scene.resolve_rigid(&mut model)?;
+        let lie_svi = self.scene.lie_svi()?;
+        let method = MethodFields {
+            name: METHOD_NAME.into(),
+            form: Some(form_name(lie_svi.form).into()),
+            points: Some(lie_svi.points),
+            quadrature: Some(lie_svi.quadrature_points()),
+        };
+        let plan = self.plan(resolved, method);
+        run_scene(&RigidBodyIntegrator::new(model, lie_svi), &plan)
+    }
+}
+
+/// The solve options of a scene: its adaptivity (step control chooses its own first step),
+/// tolerance, degree bounds, recovery and divergence limit.
+fn solve_options(scene: &Scene, h: f64) -> Result<SolveOptions, SceneError> {
+    let run = &scene.run;
+    let adapt = run.adapt.unwrap_or_default();
+    let mut options = SolveOptions::default();
+    options.adapt = adapt.into();
+    // Step control chooses its own first step from the initial state: a default step that is
+    // far too large at a close approach can pass the step-doubling test pre-asymptotically.
+    options.h = (adapt != AdaptMode::Step).then_some(h);
+    options.tol = run.tol;
+    if let Some(points) = run.min_points {
+        options.min_points = points;
+    }
+    if let Some(points) = run.max_points {
+        options.max_points = points;
+    }
+    options.run = run.options()?;
+    Ok(options)
+}
+
+/// An observer that passes everything to `inner` and keeps the last point it passed on.
+struct Watched<O, P> {
+    inner: O,
+    last: Option<P>,
+}
+
+impl<L, P: Copy, O: Observer<L, P>> Observer<L, P> for Watched<O, P> {
+    fn wants(&self, step: usize) -> bool {
+        self.inner.wants(step)
+    }
+
+    fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()> {
+        self.last = Some(*point);
+        self.inner.observe(model, step, point)
+    }
+}
+
+/// What a run produced, whether it reached the end or failed after it started.
+struct Outcome<P> {
+    last: P,
+    statistics: Statistics,
+    /// The adaptivity and the states at the output times (a run that reached the end).
+    solved: Option<(svi::solve::Adaptivity, Vec<P>)>,
+}
+
+/// The one run path: run `integrator` on the scene of `plan` through
+/// [`Integrator::try_solve`], observing only what the scene asks for; write the trajectory
+/// and summarise.
+///
+/// With fixed steps and no output times inside the span this is [`Integrator::try_run`]'s
+/// loop: the same steps, points and statistics.
+fn run_scene<L, M, S>(
+    integrator: &Integrator<L, M, S>,
+    plan: &Plan<'_, S>,
+) -> Result<Summary, SceneError>
+where
+    M: Step<L, S> + Clone,
+    S: RunSpace<L>,
+{
+    let scene = plan.scene;
+    let model = integrator.model();
+    let (t0, t_end) = (plan.t0, plan.t_end);
+    let adapt = scene.run.adapt.unwrap_or_default();
+    let output_times = scene.output.output_times.as_ref();
+    let every = scene.output.every.unwrap_or(1);
+    let options = solve_options(scene, plan.h)?;
+    // With output times the trajectory holds the states at those times (written below).
+    let trajectory = scene
+        .output
+        .trajectory
+        .as_ref()
+        .filter(|_| output_times.is_none())
+        .map(|_| Every::new(every, Points::<S::Point>::new()));
+    let progress = (plan.progress && adapt != AdaptMode::Step)
+        .then(|| Progress::for_run(t0, plan.h, t_end))
+        .flatten();
+    let mut observers = Watched {
+        inner: (S::diagnostics(model, scene), trajectory, progress),
+        last: None,
+    };
+    let span = match output_times {
+        Some(times) => Span::with_outputs(t0, t_end, times.clone()),
+        None => Span::new(t0, t_end),
+    };
+    let start = Instant::now();
+    let result = integrator.try_solve(&span, plan.initial, &options, &mut observers);
+    let seconds = start.elapsed().as_secs_f64();
+    let Watched {
+        inner: (diagnostics, trajectory, progress),
+        last: last_observed,
+    } = observers;
+    if let Some(progress) = &progress {
+        progress.finish();
+    }
+    // A failed run still reports (and writes) everything up to its last good state.
+    let (outcome, failure) = match result {
+        Ok(solution) => (
+            Outcome {
+                last: solution.last,
+                statistics: solution.statistics,
+                solved: Some((solution.adaptivity, solution.points)),
+            },
+            None,
+        ),
+        Err(RunFailure {
+            error,
+            partial: Some(run),
+        }) => (
+            Outcome {
+                last: run.last,
+                statistics: run.statistics,
+                solved: None,
+            },
+            Some(error),
+        ),
+        Err(RunFailure {
+            error,
+            partial: None,
+        }) => return Err(error.into()),
+    };
+    let mut last = outcome.last;
+    if adapt == AdaptMode::None && output_times.is_none() && failure.is_none() {
+        // `try_run` completes its last state from the velocity last observed (the start's,
+        // if none was), `try_solve` serves the end of the span from the velocity at t0: the
+        // same state, the same point to round-off, but not to the last bit where the inverse
+        // Legendre map is nonlinear. Complete it as `try_run` does.
+        let state = S::method_state(&last, integrator.method().info().coordinates);
+        let guess = last_observed.map_or_else(
+            || S::initial_guess(&plan.initial),
+            |point| S::velocity(&point),
+        );
+        last = integrator.phase_point(S::time(&last), &state, &guess)?;
+    }
+    let first = integrator.initial_state(t0, &plan.initial)?;
+    let first = integrator.phase_point(t0, &first, &S::initial_guess_at_rest(&plan.initial))?;
+
+    let trajectory = match &scene.output.trajectory {
+        Some(path) => {
+            let (rows, every) = match (trajectory, &outcome.solved) {
+                (Some(Every { every, inner }), _) => {
+                    let mut rows = inner.points;
+                    if rows.last().is_none_or(|row| S::time(row) != S::time(&last)) {
+                        rows.push(last);
+                    }
+                    (rows, every)
+                }
+                // Output times: the initial point and the states at those times.
+                (None, solved) => {
+                    let outputs = solved.iter().flat_map(|(_, points)| points);
+                    let later = outputs.filter(|point| S::time(point) > t0).copied();
+                    (std::iter::once(first).chain(later).collect(), every)
+                }
+            };
+            Some(write_trajectory::<L, S>(model, path, &rows, every)?)
+        }
+        None => None,
+    };
+
+    let solves = adapt != AdaptMode::None || output_times.is_some();
+    let solve = (S::LISTS_RUN_FIELDS || solves).then(|| solve_summary::<L, S>(scene, &outcome));
+    let recovers = scene.run.recovery == Some(RecoveryKind::HalveStep);
+    let (energy_error_max, conservation) = S::measured(model, diagnostics, &last);
+    let info = integrator.method().info();
+    let summary = Summary {
+        model: S::model_name(model).into(),
+        parameters: Parameters(S::parameters(model)),
+        coordinates: S::coordinates(model),
+        method: plan.method.name.clone(),
+        form: plan.method.form.clone(),
+        points: plan.method.points,
+        quadrature: plan.method.quadrature,
+        order: info.order,
+        symmetric: info.symmetric,
+        symplectic: info.symplectic,
+        h: plan.h,
+        t0,
+        t_end: S::time(&last),
+        steps: outcome.statistics.steps,
+        state: S::state(&last),
+        energy_initial: S::energy(model, &first),
+        energy_final: S::energy(model, &last),
+        energy_error_max,
+        conservation,
+        iterations: outcome.statistics.iterations,
+        evaluations: outcome.statistics.evaluations,
+        retries: (S::LISTS_RUN_FIELDS || recovers).then_some(outcome.statistics.retries),
+        seconds,
+        trajectory,
+        solve,
+    };
+    match failure {
+        None => Ok(summary),
+        Some(source) => Err(SceneError::RunFailed {
+            partial: Box::new(summary),
+            source,
+        }),
+    }
+}
+
+/// Write `rows` as the trajectory CSV of the space to `path`.
+fn write_trajectory<L, S: RunSpace<L>>(
+    model: &L,
+    path: &std::path::Path,
+    rows: &[S::Point],
+    every: usize,
+) -> Result<TrajectoryOutput, SceneError> {
+    write_csv(path, &S::csv_header(model), rows, |point, row| {
+        S::csv_row(model, point, row)
+    })
+    .map_err(|source| SceneError::Write {
+        path: path.into(),
+        source,
+    })?;
+    Ok(TrajectoryOutput {
+        path: path.display().to_string(),
+        every,
+        rows: rows.len(),
+    })
+}
+
+/// The adaptivity and output-time fields of a summary: what the adaptivity did (adaptive
+/// runs and runs with output times that reached the end) and the states at the output times.
+fn solve_summary<L, S: RunSpace<L>>(scene: &Scene, outcome: &Outcome<S::Point>) -> SolveSummary {
+    let adapt = scene.run.adapt.unwrap_or_default();
+    let output_times = scene.output.output_times.as_ref();
+    let solves = adapt != AdaptMode::None || output_times.is_some();
+    let solved = outcome.solved.as_ref().filter(|_| solves);
+    SolveSummary {
+        adapt: adapt.into(),
+        tol: scene.run.tol,
+        adaptivity: solved.map(|(adaptivity, points)| AdaptivitySummary {
+            accepted: adaptivity.accepted,
+            rejected: adaptivity.rejected,
+            min_step: adaptivity.min_step,
+            max_step: adaptivity.max_step,
+            points_used: adaptivity.points.clone(),
+            unmet: adaptivity.unmet,
+            outputs: points.len(),
+        }),
+        outputs: output_times.map(|_| {
+            let points = solved.iter().flat_map(|(_, points)| points);
+            points
+                .map(|point| OutputPoint {
+                    t: S::time(point),
+                    state: S::state(point),
+                })
+                .collect()
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::summary::Parameters;
+    use crate::scene::tests::{method, scene};
+
+    #[test]
+    fn classic_methods_have_neither_points_nor_quadrature() {
+        for name in [
+            "symplectic-euler",
+            "symplectic-euler-adjoint",
+            "midpoint",
+            "verlet",
+            "trapezoid",
+        ] {
+            let kind = method(name);
+            assert_eq!(kind.name(), name);
+            assert!(!kind.entry().takes_points());
+            // The scene's `points = 9` is ignored, a `--points` flag is an error.
+            let mut scene = scene("oscillator");
+            scene
+                .apply(&Overrides {
+                    method: Some(kind),
+                    ..Overrides::default()
+                })
+                .unwrap();
+            assert_eq!((scene.points(), scene.quadrature()), (None, None));
+            let error = scene
+                .apply(&Overrides {
+                    points: Some(4),
+                    ..Overrides::default()
+                })
+                .unwrap_err();
+            assert_eq!(
+                error.to_string(),
+                format!(
+                    "--points is an option of svi and sc, not of {}",
+                    kind.name()
+                )
+            );
+            let summary = scene.run(false).unwrap();
+            assert_eq!(summary.method, kind.name());
+            assert_eq!((summary.points, summary.quadrature), (None, None));
+            assert!(summary.symplectic && summary.order <= 2);
+            // h = 1 on the oscillator: first- and second-order methods are coarse (the phase
+            // is lost) but stable, with bounded energy error.
+            assert!(summary.energy_error_max.unwrap() <= 0.5, "{kind}");
+            assert!(
+                summary.conservation.solution_error_max().unwrap() < 2.0,
+                "{kind}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_damped_oscillator_scene_reports_its_solution_error() {
+        let scene = scene("damped-oscillator");
+        assert_eq!(scene.parameters["zeta"], 0.1);
+        assert_eq!((scene.run.h, scene.run.t_end), (Some(0.1), Some(50.0)));
+        let summary = scene.run(false).unwrap();
+        assert_eq!(summary.steps, 500);
+        assert!(summary.conservation.solution_error_max().unwrap() < 1e-12);
+        // E(50) = E(0) e^{−5}-ish: the friction removed almost all the energy.
+        assert!(summary.energy_final < 0.01 * summary.energy_initial);
+        let mut verlet = scene.clone();
+        verlet.method.name = Some(method("verlet"));
+        let summary = verlet.run(false).unwrap();
+        // Second order: 1.6e-3 at h = 0.1.
+        let error = summary.conservation.solution_error_max().unwrap();
+        assert!(error > 1e-3 && error < 2e-3, "{error:e}");
+        assert_eq!(summary.evaluations, 501);
+    }
+
+    #[test]
+    fn wrong_dimension_names_field_and_sizes() {
+        let text = "model = \"kepler\"\n[initial]\nq = [1, 0, 0]\n";
+        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
+        assert!(matches!(
+            &error,
+            SceneError::Dimension {
+                field: "q",
+                expected: 2,
+                found: 3,
+                ..
+            }
+        ));
+        assert_eq!(
+            error.to_string(),
+            "initial.q has 3 components, but model 'kepler' has dimension 2"
+        );
+        let text = "model = \"oscillator\"\n[initial]\np = []\n";
+        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
+        assert!(matches!(
+            error,
+            SceneError::Dimension {
+                field: "p",
+                expected: 1,
+                found: 0,
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn an_unknown_model_lists_the_known_ones() {
+        let error = Scene::from_toml("model = \"kepler3\"\n", "t")
+            .unwrap()
+            .run(false)
+            .unwrap_err();
+        assert!(matches!(error, SceneError::UnknownModel(_)));
+        assert!(error.to_string().contains("known: oscillator, pendulum"));
+    }
+
+    #[test]
+    fn a_run_that_asks_for_nothing_reports_no_errors() {
+        let mut scene = scene("oscillator");
+        scene.output.diagnostics = Some(vec![]);
+        let summary = scene.run(false).unwrap();
+        assert_eq!(summary.steps, 100);
+        assert_eq!(summary.energy_error_max, None);
+        assert_eq!(summary.conservation.momentum_error_max(), None);
+        assert_eq!(summary.conservation.solution_error_max(), None);
+        // q(100) = sin(100) for q0 = 0, p0 = 1.
+        assert!(
+            (summary.state.configuration()[0] - 100f64.sin()).abs() < 1e-10,
+            "{:?}",
+            summary.state.configuration()
+        );
+    }
+
+    #[test]
+    fn the_summary_reports_the_initial_and_final_energy() {
+        let mut scene = scene("kepler");
+        scene.run.t_end = Some(2.0);
+        let summary = scene.run(false).unwrap();
+        assert_eq!(summary.steps, 10);
+        assert!((summary.energy_initial + 0.5).abs() < 1e-15);
+        assert!(
+            (summary.energy_final + 0.5).abs() < 1e-9,
+            "{}",
+            summary.energy_final
+        );
+        assert_eq!(summary.parameters, Parameters(vec![("e", 0.5)]));
+        assert_eq!(summary.coordinates, Some(vec!["q1".into(), "q2".into()]));
+        assert!(summary.to_string().contains("kepler (e = 0.5)"));
+    }
+}

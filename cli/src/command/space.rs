@@ -1,0 +1,258 @@
+//! What a scene's run does differently on each space, ℝᴺ and SO(3): the command line's side
+//! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
+//! [`RunSpace`]; everything particular to a space is here.
+
+use nalgebra::SVector;
+use svi::lie_group::so3::orthogonality_error;
+use svi::lie_group::{
+    AngularMomentumError, OrthogonalityError, RigidBodyDefaults, RigidBodyExt, RigidInitial,
+    RigidPoint, RigidState, SO3,
+};
+use svi::method::space::Space;
+use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
+use svi::{Coordinates, Defaults, Euclidean, Initial, LagrangianExt, PhasePoint, State};
+use svi_models::{RigidZooModel, ZooModel};
+
+use crate::report::csv::{RIGID_CSV_HEADER, csv_header};
+use crate::report::summary::{Conservation, StateSummary};
+use crate::scene::Scene;
+use crate::scene::schema::Diagnostic;
+
+/// The parts of a run on the space `Self` with models `L` that differ between spaces: the
+/// diagnostics observers, the summary fields and the trajectory CSV columns.
+pub trait RunSpace<L>: Space {
+    /// Whether summaries list `retries`, `adapt`, `tol`, `adaptivity` and `outputs` even for
+    /// a plain fixed-step run (on ℝᴺ, whose summaries have always had them; on SO(3) they
+    /// appear when the run uses them).
+    const LISTS_RUN_FIELDS: bool;
+
+    /// The observers of the diagnostics a scene may ask for (each an `Option`: `None` when
+    /// not asked for or not measurable for the model).
+    type Diagnostics: Observer<L, Self::Point>;
+
+    /// The observers of the diagnostics `scene` asks for, and only those.
+    fn diagnostics(model: &L, scene: &Scene) -> Self::Diagnostics;
+
+    /// The largest energy error and the conservation fields of the summary, from the
+    /// observers after the run (`last`: the final point).
+    fn measured(
+        model: &L,
+        diagnostics: Self::Diagnostics,
+        last: &Self::Point,
+    ) -> (Option<f64>, Conservation);
+
+    /// The model's name.
+    fn model_name(model: &L) -> &'static str;
+
+    /// The model's parameters, in its order.
+    fn parameters(model: &L) -> Vec<(&'static str, f64)>;
+
+    /// The names of the configuration coordinates, where they have names (ℝᴺ).
+    fn coordinates(model: &L) -> Option<Vec<String>>;
+
+    /// The energy of a point.
+    fn energy(model: &L, point: &Self::Point) -> f64;
+
+    /// A point as summary fields.
+    fn state(point: &Self::Point) -> StateSummary;
+
+    /// The method state (in `coordinates`) a completed point was completed from: its
+    /// entries, copied.
+    fn method_state(point: &Self::Point, coordinates: Coordinates) -> Self::State;
+
+    /// The Newton start of the inverse Legendre map at the initial state, for the summary's
+    /// initial energy: the initial velocity or momentum on ℝᴺ, rest on SO(3).
+    fn initial_guess_at_rest(initial: &Self::Initial) -> Self::Velocity;
+
+    /// The header line of the trajectory CSV (with its newline).
+    fn csv_header(model: &L) -> String;
+
+    /// The numbers of one trajectory CSV row, appended to `row`.
+    fn csv_row(model: &L, point: &Self::Point, row: &mut Vec<f64>);
+}
+
+impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
+    const LISTS_RUN_FIELDS: bool = true;
+
+    /// Energy, Noether momenta (for models with symmetries), error against the exact
+    /// solution (`None` at the end where the model has none).
+    type Diagnostics = (
+        Option<EnergyError>,
+        Option<MomentumError>,
+        Option<SolutionError<N>>,
+    );
+
+    fn diagnostics(model: &L, scene: &Scene) -> Self::Diagnostics {
+        (
+            scene.wants(Diagnostic::Energy).then(EnergyError::default),
+            (scene.wants(Diagnostic::Momentum) && model.generator_count() > 0)
+                .then(MomentumError::default),
+            scene
+                .wants(Diagnostic::Solution)
+                .then(SolutionError::<N>::default),
+        )
+    }
+
+    fn measured(
+        _: &L,
+        (energy, momentum, solution): Self::Diagnostics,
+        _: &PhasePoint<N>,
+    ) -> (Option<f64>, Conservation) {
+        (
+            energy.map(|e| e.max),
+            Conservation::Vector {
+                momentum_error_max: momentum.map(|m| m.max),
+                solution_error_max: solution.and_then(|s| s.max),
+            },
+        )
+    }
+
+    fn model_name(model: &L) -> &'static str {
+        Defaults::name(model)
+    }
+
+    fn parameters(model: &L) -> Vec<(&'static str, f64)> {
+        Defaults::parameters(model)
+    }
+
+    fn coordinates(model: &L) -> Option<Vec<String>> {
+        Some(model.coordinate_names().map(String::from).to_vec())
+    }
+
+    fn energy(model: &L, point: &PhasePoint<N>) -> f64 {
+        LagrangianExt::energy(model, point.t, &point.q, &point.v)
+    }
+
+    fn state(point: &PhasePoint<N>) -> StateSummary {
+        StateSummary::Vector {
+            q: point.q.iter().copied().collect(),
+            v: point.v.iter().copied().collect(),
+            p: point.p.iter().copied().collect(),
+        }
+    }
+
+    fn method_state(point: &PhasePoint<N>, coordinates: Coordinates) -> State<N> {
+        let y = match coordinates {
+            Coordinates::Momentum => point.p,
+            Coordinates::Velocity => point.v,
+        };
+        State { q: point.q, y }
+    }
+
+    fn initial_guess_at_rest(initial: &Initial<N>) -> SVector<f64, N> {
+        <Self as Space>::initial_guess(initial)
+    }
+
+    /// `t,q_<name>…,v_<name>…,p_<name>…,energy`.
+    fn csv_header(model: &L) -> String {
+        csv_header(&model.coordinate_names())
+    }
+
+    /// t, q, v, p and the energy p·v − L.
+    fn csv_row(model: &L, point: &PhasePoint<N>, row: &mut Vec<f64>) {
+        row.push(point.t);
+        row.extend(point.q.iter().chain(&point.v).chain(&point.p));
+        row.push(point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v));
+    }
+}
+
+impl<L: RigidZooModel> RunSpace<L> for SO3 {
+    const LISTS_RUN_FIELDS: bool = false;
+
+    /// Energy, angular momenta about the symmetry axes (for models with axes), the other
+    /// invariants (for models with some), and ‖RᵀR − I‖.
+    type Diagnostics = (
+        Option<EnergyError>,
+        Option<AngularMomentumError>,
+        Option<InvariantError>,
+        Option<OrthogonalityError>,
+    );
+
+    /// The invariants and ‖RᵀR − I‖ are measured unless the scene asks for no diagnostic.
+    fn diagnostics(model: &L, scene: &Scene) -> Self::Diagnostics {
+        let any = scene.measures();
+        (
+            scene.wants(Diagnostic::Energy).then(EnergyError::default),
+            (scene.wants(Diagnostic::Momentum) && model.axis_count() > 0)
+                .then(AngularMomentumError::default),
+            (any && model.invariant_count() > 0).then(InvariantError::default),
+            any.then(OrthogonalityError::default),
+        )
+    }
+
+    fn measured(
+        model: &L,
+        (energy, momentum, invariants, orthogonality): Self::Diagnostics,
+        last: &RigidPoint,
+    ) -> (Option<f64>, Conservation) {
+        (
+            energy.map(|e| e.max),
+            Conservation::Rigid {
+                momentum_names: (0..model.axis_count())
+                    .map(|i| model.axis_name(i))
+                    .collect(),
+                momentum_error_max: momentum.as_ref().map(|m| m.max),
+                momentum_error_relative: momentum.as_ref().map(AngularMomentumError::relative),
+                invariant_names: (0..model.invariant_count())
+                    .map(|i| model.invariant_name(i))
+                    .collect(),
+                invariant_error_max: invariants.map(|i| i.max),
+                orthogonality_error_max: orthogonality.map(|o| o.max),
+                orthogonality_error_final: orthogonality_error(&last.r),
+            },
+        )
+    }
+
+    fn model_name(model: &L) -> &'static str {
+        RigidBodyDefaults::name(model)
+    }
+
+    fn parameters(model: &L) -> Vec<(&'static str, f64)> {
+        RigidBodyDefaults::parameters(model)
+    }
+
+    fn coordinates(_: &L) -> Option<Vec<String>> {
+        None
+    }
+
+    fn energy(model: &L, point: &RigidPoint) -> f64 {
+        RigidBodyExt::energy(model, &point.r, &point.omega)
+    }
+
+    fn state(point: &RigidPoint) -> StateSummary {
+        StateSummary::Rigid {
+            attitude: point.r.transpose().iter().copied().collect(),
+            quaternion: point.quaternion().to_vec(),
+            omega: point.omega.iter().copied().collect(),
+            momentum: point.momentum.iter().copied().collect(),
+            spatial_momentum: point.spatial_momentum().iter().copied().collect(),
+        }
+    }
+
+    /// (R, Π) in the momentum coordinates of the Lie-group integrator.
+    fn method_state(point: &RigidPoint, _: Coordinates) -> RigidState {
+        RigidState {
+            r: point.r,
+            momentum: point.momentum,
+        }
+    }
+
+    fn initial_guess_at_rest(_: &RigidInitial) -> SVector<f64, 3> {
+        SVector::zeros()
+    }
+
+    /// [`RIGID_CSV_HEADER`].
+    fn csv_header(_: &L) -> String {
+        RIGID_CSV_HEADER.into()
+    }
+
+    /// t, quaternion, R row by row, Ω, Π, energy and ‖RᵀR − I‖_F.
+    fn csv_row(model: &L, point: &RigidPoint, row: &mut Vec<f64>) {
+        row.push(point.t);
+        row.extend(point.quaternion());
+        row.extend(point.r.transpose().iter());
+        row.extend(point.omega.iter().chain(point.momentum.iter()));
+        row.push(RigidBodyExt::energy(model, &point.r, &point.omega));
+        row.push(orthogonality_error(&point.r));
+    }
+}

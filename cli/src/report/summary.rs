@@ -1,0 +1,490 @@
+//! The summary of a run, for scenes on every space: what `svi run` prints, as text or as one
+//! JSON object (`--json`).
+//!
+//! The JSON fields are an interface. Every summary has the fields of [`Summary`]; the final
+//! state ([`StateSummary`]) and the conservation diagnostics ([`Conservation`]) are flattened
+//! into it with the fields of their space. On ℝᴺ the run-mode fields (`retries`, `adapt`,
+//! `tol`, `adaptivity`, `outputs`) are always present (`null` when unused); on SO(3) they
+//! appear when the run uses them (recovery, adaptivity or output times), so a plain run
+//! prints the fields it always has.
+
+use std::fmt;
+
+use serde::Serialize;
+use svi::solve::Adapt;
+
+use crate::report::csv::{Float, vector};
+
+/// The result of running a scene (`svi run --json` prints it as one JSON object).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// Model name.
+    pub model: String,
+    /// Model parameters in effect.
+    pub parameters: Parameters,
+    /// Names of the configuration coordinates, the order of `q`, `v`, `p` (ℝᴺ only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coordinates: Option<Vec<String>>,
+    /// The method's name (see `svi::method::registry::METHODS`; its options are `points`
+    /// and `quadrature`; on SO(3) `lie-svi`, with `form`).
+    pub method: String,
+    /// `full` or `reduced`: the form of the Lie-group integrator (SO(3) only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub form: Option<String>,
+    /// Chebyshev–Gauss–Lobatto points (`None` for the classic methods).
+    pub points: Option<usize>,
+    /// Gauss–Legendre points (`None` for the methods without).
+    pub quadrature: Option<usize>,
+    /// Classical order of the method.
+    pub order: usize,
+    /// Whether the method is symmetric.
+    pub symmetric: bool,
+    /// Whether the method is symplectic.
+    pub symplectic: bool,
+    /// Step size.
+    pub h: f64,
+    /// Initial time.
+    pub t0: f64,
+    /// Final time reached.
+    pub t_end: f64,
+    /// Steps taken.
+    pub steps: usize,
+    /// The final state.
+    #[serde(flatten)]
+    pub state: StateSummary,
+    /// Energy of the initial state.
+    pub energy_initial: f64,
+    /// Energy of the final state.
+    pub energy_final: f64,
+    /// Largest |E − E₀| over the step points (`None` if not asked for).
+    pub energy_error_max: Option<f64>,
+    /// The conservation diagnostics of the space.
+    #[serde(flatten)]
+    pub conservation: Conservation,
+    /// Nonlinear iterations, summed over all steps.
+    pub iterations: usize,
+    /// Points at which derivatives of the Lagrangian were evaluated.
+    pub evaluations: usize,
+    /// Failed steps retried with half the step (`recovery = "halve-step"`; see the module
+    /// documentation for when it is present).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub retries: Option<usize>,
+    /// Wall time of the integration, in seconds.
+    pub seconds: f64,
+    /// The trajectory file, if one was written.
+    pub trajectory: Option<TrajectoryOutput>,
+    /// Adaptivity and output times (see the module documentation for when it is present).
+    #[serde(flatten)]
+    pub solve: Option<SolveSummary>,
+}
+
+/// A state of a run (the final one, or one at an output time), with the fields of its space.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum StateSummary {
+    /// On ℝᴺ.
+    Vector {
+        /// Configuration.
+        q: Vec<f64>,
+        /// Velocity.
+        v: Vec<f64>,
+        /// Momentum.
+        p: Vec<f64>,
+    },
+    /// On SO(3).
+    Rigid {
+        /// Attitude R, row by row (9 numbers).
+        attitude: Vec<f64>,
+        /// Attitude as a unit quaternion (w, x, y, z), w ≥ 0.
+        quaternion: Vec<f64>,
+        /// Body angular velocity Ω.
+        omega: Vec<f64>,
+        /// Body angular momentum Π.
+        momentum: Vec<f64>,
+        /// Spatial angular momentum π = RΠ.
+        spatial_momentum: Vec<f64>,
+    },
+}
+
+impl StateSummary {
+    /// The configuration: q on ℝᴺ, the attitude's entries on SO(3).
+    pub fn configuration(&self) -> &[f64] {
+        match self {
+            StateSummary::Vector { q, .. } => q,
+            StateSummary::Rigid { attitude, .. } => attitude,
+        }
+    }
+
+    /// The configuration and velocity in words, for error messages.
+    pub fn describe(&self) -> String {
+        match self {
+            StateSummary::Vector { q, v, .. } => format!("q = {}, v = {}", vector(q), vector(v)),
+            StateSummary::Rigid {
+                quaternion, omega, ..
+            } => format!(
+                "quaternion = {}, omega = {}",
+                vector(quaternion),
+                vector(omega)
+            ),
+        }
+    }
+
+    /// The rows of the text summary.
+    fn rows(&self) -> Vec<(&'static str, String)> {
+        match self {
+            StateSummary::Vector { q, v, p } => vec![
+                ("final q", vector(q)),
+                ("final v", vector(v)),
+                ("final p", vector(p)),
+            ],
+            StateSummary::Rigid {
+                quaternion,
+                omega,
+                momentum,
+                spatial_momentum,
+                ..
+            } => vec![
+                ("final quaternion", vector(quaternion)),
+                ("final omega", vector(omega)),
+                ("final Pi (body)", vector(momentum)),
+                ("final pi (space)", vector(spatial_momentum)),
+            ],
+        }
+    }
+
+    /// One line for a state at an output time.
+    fn line(&self) -> String {
+        match self {
+            StateSummary::Vector { q, v, p } => {
+                format!("q {} v {} p {}", vector(q), vector(v), vector(p))
+            }
+            StateSummary::Rigid {
+                quaternion,
+                omega,
+                momentum,
+                ..
+            } => format!(
+                "quaternion {} omega {} Pi {}",
+                vector(quaternion),
+                vector(omega),
+                vector(momentum)
+            ),
+        }
+    }
+
+    /// What the text summary calls the iterations of the method's solves.
+    fn iterations(&self) -> &'static str {
+        match self {
+            StateSummary::Vector { .. } => "nonlinear",
+            StateSummary::Rigid { .. } => "Newton",
+        }
+    }
+}
+
+/// The conservation diagnostics of a run, with the fields of its space (`None`: not asked
+/// for, or nothing to measure).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Conservation {
+    /// On ℝᴺ.
+    Vector {
+        /// Largest deviation of the Noether momenta (`None` if the model has no symmetry).
+        momentum_error_max: Option<f64>,
+        /// Largest position error against the exact solution (`None` if there is none).
+        solution_error_max: Option<f64>,
+    },
+    /// On SO(3).
+    Rigid {
+        /// Names of the conserved angular momenta (about the model's symmetry axes).
+        momentum_names: Vec<&'static str>,
+        /// Largest deviation of those angular momenta (`None` if the model has none).
+        momentum_error_max: Option<f64>,
+        /// `momentum_error_max` relative to ‖Π₀‖.
+        momentum_error_relative: Option<f64>,
+        /// Names of the model's other invariants (body Casimirs).
+        invariant_names: Vec<&'static str>,
+        /// Largest deviation of those invariants (`None` if the model has none).
+        invariant_error_max: Option<f64>,
+        /// Largest ‖RᵀR − I‖_F over the step points (R is never re-orthonormalised).
+        orthogonality_error_max: Option<f64>,
+        /// ‖RᵀR − I‖_F at the end.
+        orthogonality_error_final: f64,
+    },
+}
+
+impl Conservation {
+    /// Largest deviation of the conserved momenta (Noether momenta on ℝᴺ, angular momenta
+    /// about the symmetry axes on SO(3)).
+    pub fn momentum_error_max(&self) -> Option<f64> {
+        match self {
+            Conservation::Vector {
+                momentum_error_max, ..
+            }
+            | Conservation::Rigid {
+                momentum_error_max, ..
+            } => *momentum_error_max,
+        }
+    }
+
+    /// Largest position error against the exact solution (ℝᴺ; `None` on SO(3)).
+    pub fn solution_error_max(&self) -> Option<f64> {
+        match self {
+            Conservation::Vector {
+                solution_error_max, ..
+            } => *solution_error_max,
+            Conservation::Rigid { .. } => None,
+        }
+    }
+
+    /// The rows of the text summary.
+    fn rows(&self) -> Vec<(&'static str, String)> {
+        let named = |value: Option<f64>, names: &[&str]| {
+            if names.is_empty() {
+                error(value)
+            } else {
+                format!("{} ({})", error(value), names.join(", "))
+            }
+        };
+        match self {
+            Conservation::Vector {
+                momentum_error_max,
+                solution_error_max,
+            } => vec![
+                ("momentum error", error(*momentum_error_max)),
+                ("solution error", error(*solution_error_max)),
+            ],
+            Conservation::Rigid {
+                momentum_names,
+                momentum_error_max,
+                invariant_names,
+                invariant_error_max,
+                orthogonality_error_max,
+                orthogonality_error_final,
+                ..
+            } => vec![
+                ("momentum error", named(*momentum_error_max, momentum_names)),
+                (
+                    "invariant error",
+                    named(*invariant_error_max, invariant_names),
+                ),
+                (
+                    "|R^T R - I|",
+                    format!(
+                        "{} (max), {:.3e} (final)",
+                        error(*orthogonality_error_max),
+                        orthogonality_error_final
+                    ),
+                ),
+            ],
+        }
+    }
+}
+
+/// Adaptivity and output times of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SolveSummary {
+    /// Adaptivity mode: `none`, `step` or `degree`.
+    #[serde(serialize_with = "serialize_display")]
+    pub adapt: Adapt,
+    /// Target final error of the adaptive modes.
+    pub tol: Option<f64>,
+    /// What the adaptivity did (adaptive runs and runs with output times).
+    pub adaptivity: Option<AdaptivitySummary>,
+    /// The states at the requested output times (`None` without output times).
+    pub outputs: Option<Vec<OutputPoint>>,
+}
+
+/// A state at a requested output time.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OutputPoint {
+    /// Time.
+    pub t: f64,
+    /// The state, with the fields of its space.
+    #[serde(flatten)]
+    pub state: StateSummary,
+}
+
+/// What [`svi::solve()`] did, for the summary.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AdaptivitySummary {
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Rejected trial steps.
+    pub rejected: usize,
+    /// Smallest accepted step.
+    pub min_step: f64,
+    /// Largest accepted step.
+    pub max_step: f64,
+    /// (CGL points, steps that used them).
+    pub points_used: Vec<(usize, usize)>,
+    /// Steps of `adapt = "degree"` that missed the tolerance at `max_points`.
+    pub unmet: usize,
+    /// States reported at output times.
+    pub outputs: usize,
+}
+
+/// Model parameters in the model's order (serialised as a JSON object).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameters(pub Vec<(&'static str, f64)>);
+
+impl Serialize for Parameters {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+/// Serialise a value as its `Display` text.
+fn serialize_display<T: fmt::Display, S: serde::Serializer>(
+    value: &T,
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    serializer.collect_str(value)
+}
+
+/// Where the trajectory went.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrajectoryOutput {
+    /// The CSV file.
+    pub path: String,
+    /// Thinning factor.
+    pub every: usize,
+    /// Data rows written (the initial point, every `every`-th step, and the last point; or
+    /// the initial point and the output times).
+    pub rows: usize,
+}
+
+/// `{:.3e}`, or `n/a` when absent.
+fn error(value: Option<f64>) -> String {
+    value.map_or_else(|| "n/a".into(), |x| format!("{x:.3e}"))
+}
+
+impl Summary {
+    /// The method line of the text summary: name, form, points, order and properties.
+    fn method_line(&self) -> String {
+        let mut method = self.method.clone();
+        if let Some(form) = &self.form {
+            method.push_str(&format!(" ({form} form)"));
+        }
+        if let Some(points) = self.points {
+            method.push_str(&format!(", {points} CGL points"));
+        }
+        if let Some(quadrature) = self.quadrature {
+            method.push_str(&format!(", {quadrature} Gauss points"));
+        }
+        method.push_str(&format!("; order {}", self.order));
+        if self.symmetric {
+            method.push_str(", symmetric");
+        }
+        if self.symplectic {
+            method.push_str(", symplectic");
+        }
+        method
+    }
+
+    /// The adaptivity line of the text summary.
+    fn adaptivity_line(solve: &SolveSummary, a: &AdaptivitySummary) -> String {
+        let mut line = format!(
+            "{} accepted, {} rejected steps, h from {:.3e} to {:.3e}",
+            a.accepted, a.rejected, a.min_step, a.max_step
+        );
+        if let Some(tol) = solve.tol {
+            line = format!("{}, tol {tol:e}: {line}", solve.adapt);
+        }
+        if solve.adapt == Adapt::Degree {
+            let used: Vec<String> = a
+                .points_used
+                .iter()
+                .map(|(points, steps)| format!("{points}:{steps}"))
+                .collect();
+            line.push_str(&format!("; points:steps {}", used.join(" ")));
+            if a.unmet > 0 {
+                line.push_str(&format!("; {} steps missed tol at max_points", a.unmet));
+            }
+        }
+        line
+    }
+}
+
+impl fmt::Display for Summary {
+    /// An aligned block of labelled lines, the labels as wide as the longest plus two.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let parameters: Vec<String> = self
+            .parameters
+            .0
+            .iter()
+            .map(|(name, value)| format!("{name} = {value}"))
+            .collect();
+        let retries = match self.retries {
+            Some(retries) if retries > 0 => format!(", {retries} steps retried with h/2"),
+            _ => String::new(),
+        };
+        let mut rows = vec![
+            (
+                "model",
+                format!("{} ({})", self.model, parameters.join(", ")),
+            ),
+            ("method", self.method_line()),
+            ("step h", Float(self.h).to_string()),
+            (
+                "time",
+                format!(
+                    "{} to {} in {} steps",
+                    Float(self.t0),
+                    Float(self.t_end),
+                    self.steps
+                ),
+            ),
+            ("wall time", format!("{:.3} s", self.seconds)),
+            (
+                "work",
+                format!(
+                    "{} {} iterations, {} evaluations{retries}",
+                    self.iterations,
+                    self.state.iterations(),
+                    self.evaluations
+                ),
+            ),
+        ];
+        if let Some(coordinates) = &self.coordinates {
+            rows.push(("coordinates", coordinates.join(", ")));
+        }
+        rows.extend(self.state.rows());
+        rows.push((
+            "energy",
+            format!(
+                "{} to {}",
+                Float(self.energy_initial),
+                Float(self.energy_final)
+            ),
+        ));
+        rows.push(("energy error", error(self.energy_error_max)));
+        rows.extend(self.conservation.rows());
+        let width = rows.iter().map(|(label, _)| label.len()).max().unwrap_or(0) + 2;
+        for (label, value) in rows {
+            writeln!(f, "{label:<width$}{value}")?;
+        }
+        if let Some(solve) = &self.solve {
+            if let Some(adaptivity) = &solve.adaptivity {
+                let line = Summary::adaptivity_line(solve, adaptivity);
+                writeln!(f, "{:<width$}{line}", "adaptivity")?;
+            }
+            for point in solve.outputs.iter().flatten() {
+                let label = format!("t = {}", Float(point.t));
+                writeln!(f, "{label:<width$}{}", point.state.line())?;
+            }
+        }
+        if let Some(trajectory) = &self.trajectory {
+            writeln!(
+                f,
+                "{:<width$}{} ({} rows, every {} steps)",
+                "trajectory", trajectory.path, trajectory.rows, trajectory.every
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,78 @@
+//! The built-in scenes: their names and TOML texts (the files in `cli/scenes/`).
+//!
+//! To add one: write `cli/scenes/NAME.toml` (its first line, a `#` comment, is what `svi
+//! list` shows) and add `("NAME", include_str!(...))` to [`BUILTIN_SCENES`]. Whether it runs
+//! on ℝᴺ or SO(3) follows from its model.
+
+/// The built-in scenes, as (name, TOML text): the scenes on ℝᴺ, then the rigid bodies on
+/// SO(3).
+pub const BUILTIN_SCENES: &[(&str, &str)] = &[
+    ("oscillator", include_str!("../../scenes/oscillator.toml")),
+    ("kepler", include_str!("../../scenes/kepler.toml")),
+    ("pendulum", include_str!("../../scenes/pendulum.toml")),
+    (
+        "spring-pendulum",
+        include_str!("../../scenes/spring-pendulum.toml"),
+    ),
+    (
+        "double-pendulum",
+        include_str!("../../scenes/double-pendulum.toml"),
+    ),
+    (
+        "damped-oscillator",
+        include_str!("../../scenes/damped-oscillator.toml"),
+    ),
+    (
+        "damped-pendulum",
+        include_str!("../../scenes/damped-pendulum.toml"),
+    ),
+    (
+        "driven-oscillator",
+        include_str!("../../scenes/driven-oscillator.toml"),
+    ),
+    (
+        "stiff-spring-pendulum",
+        include_str!("../../scenes/stiff-spring-pendulum.toml"),
+    ),
+    (
+        "stiff-spring-pendulum-coarse",
+        include_str!("../../scenes/stiff-spring-pendulum-coarse.toml"),
+    ),
+    ("kepler-long", include_str!("../../scenes/kepler-long.toml")),
+    ("kepler-e0.9", include_str!("../../scenes/kepler-e0.9.toml")),
+    (
+        "kepler-e0.99",
+        include_str!("../../scenes/kepler-e0.99.toml"),
+    ),
+    (
+        "kepler-recovery",
+        include_str!("../../scenes/kepler-recovery.toml"),
+    ),
+    (
+        "double-pendulum-chaotic",
+        include_str!("../../scenes/double-pendulum-chaotic.toml"),
+    ),
+    (
+        "oscillator-beyond-stability",
+        include_str!("../../scenes/oscillator-beyond-stability.toml"),
+    ),
+    ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
+    ("heavy-top", include_str!("../../scenes/heavy-top.toml")),
+    ("pendulum-3d", include_str!("../../scenes/pendulum-3d.toml")),
+];
+
+/// The scene `svi run` runs when none is named.
+pub const DEFAULT_SCENE: &str = "kepler";
+
+/// Names of the built-in scenes.
+pub fn builtin_scene_names() -> Vec<&'static str> {
+    BUILTIN_SCENES.iter().map(|(name, _)| *name).collect()
+}
+
+/// The TOML text of a built-in scene.
+pub fn builtin_scene(name: &str) -> Option<&'static str> {
+    BUILTIN_SCENES
+        .iter()
+        .find(|(scene, _)| *scene == name)
+        .map(|(_, text)| *text)
+}

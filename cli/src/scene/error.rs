@@ -1,0 +1,202 @@
+//! [`SceneError`]: everything that can go wrong between reading a scene and writing its
+//! outputs, and which of it is bad input ([`SceneError::is_bad_input`]: exit status 2) rather
+//! than a run that failed (exit status 1).
+
+use std::path::PathBuf;
+
+use svi::MethodSpec;
+use svi::method::registry::{self, SpaceKind};
+use svi_models::UnknownModel;
+
+use crate::report::csv::Float;
+use crate::report::summary::Summary;
+use crate::scene::builtin::builtin_scene_names;
+use crate::scene::schema::UnknownDiagnostic;
+
+/// Everything that can go wrong between reading a scene and writing its outputs.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SceneError {
+    /// The scene is not valid TOML or does not fit the scene format (the source names the
+    /// line and column).
+    #[error("cannot parse scene {origin}")]
+    Parse {
+        /// Where the text came from (a file path or `built-in scene 'name'`).
+        origin: String,
+        /// The TOML parser's message.
+        #[source]
+        source: toml::de::Error,
+    },
+    /// Neither a built-in scene name nor an existing file.
+    #[error(
+        "no built-in scene or scene file named '{name}' (built-in scenes: {})",
+        builtin_scene_names().join(", ")
+    )]
+    UnknownScene {
+        /// The name asked for.
+        name: String,
+    },
+    /// A scene file that cannot be read.
+    #[error("cannot read scene file '{}'", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A model name that is not in the zoo.
+    #[error(transparent)]
+    UnknownModel(#[from] UnknownModel),
+    /// An initial-state vector whose length is not the model dimension.
+    #[error("initial.{field} has {found} components, but model '{model}' has dimension {expected}")]
+    Dimension {
+        /// The model.
+        model: String,
+        /// `q`, `v` or `p`.
+        field: &'static str,
+        /// The model dimension.
+        expected: usize,
+        /// The length given.
+        found: usize,
+    },
+    /// An initial state with both a velocity and a momentum.
+    #[error("the initial state gives both v and p: give one of them")]
+    VelocityAndMomentum,
+    /// A diagnostic name that is not one of
+    /// [`Diagnostic::NAMES`](crate::scene::schema::Diagnostic::NAMES).
+    #[error(transparent)]
+    UnknownDiagnostic(#[from] UnknownDiagnostic),
+    /// A `--param` that is not `NAME=VALUE` with a number as value.
+    #[error("malformed parameter '{text}': {reason}")]
+    MalformedParameter {
+        /// The argument as given.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A command-line method option (`--points`, `--quadrature`) given with a method that
+    /// does not take it.
+    #[error("--{option} is an option of {}, not of {method}", option_owners(.option, .method))]
+    OptionNotForMethod {
+        /// The option: `points` or `quadrature`.
+        option: &'static str,
+        /// The method in use.
+        method: MethodSpec,
+    },
+    /// An option, or a scene field, that the scene's model, method or other options cannot
+    /// use (it would otherwise be silently ignored).
+    #[error("{option}: {reason}")]
+    NotApplicable {
+        /// The option as written on the command line, with the scene field where there is
+        /// one: `--tol (run.tol)`.
+        option: &'static str,
+        /// Why it does not apply, and what would.
+        reason: String,
+    },
+    /// A trajectory thinning factor without a file to write the trajectory to.
+    #[error("output.every is set but no trajectory file is (give --out FILE or output.trajectory)")]
+    EveryWithoutOutput,
+    /// The trajectory file cannot be written.
+    #[error("cannot write trajectory '{}'", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Everything the library rejects: parameters, step, horizon, method options, initial
+    /// state, nonlinear solves.
+    #[error(transparent)]
+    Svi(#[from] svi::Error),
+    /// A run that failed after it started: the summary of the run up to the last good state
+    /// (its trajectory file, if asked for, is written) and the library's error.
+    #[error(
+        "the run failed after {} steps; last good state at t = {}: {}{}",
+        .partial.steps,
+        Float(.partial.t_end),
+        .partial.state.describe(),
+        .partial.trajectory.as_ref().map_or_else(String::new, |trajectory| format!(
+            "; the trajectory so far is in '{}'",
+            trajectory.path
+        ))
+    )]
+    RunFailed {
+        /// Summary of the run up to the last good state.
+        partial: Box<Summary>,
+        /// What went wrong, with step index and time.
+        #[source]
+        source: svi::Error,
+    },
+    /// A method name of `svi bench` or `svi stress` that is neither a library method nor
+    /// one of the peers `dop853` and `dopri5`.
+    #[error(
+        "unknown method '{text}' (known: {}, dop853, dopri5)",
+        registry::known_names()
+    )]
+    BenchMethod {
+        /// The method as written.
+        text: String,
+    },
+    /// A method that a command cannot use (a peer without a stability matrix, a peer wired
+    /// for small models only, ...).
+    #[error("method '{method}' cannot be used here: {reason}")]
+    MethodNotApplicable {
+        /// The method as written.
+        method: String,
+        /// Why not.
+        reason: String,
+    },
+    /// A `svi bench` step count or tolerance that is out of range or whose run failed.
+    #[error("svi bench: {0}")]
+    BenchParameter(String),
+    /// A benchmark needs an exact solution as reference.
+    #[error(
+        "model '{0}' has no exact solution for this initial state: nothing to measure errors against"
+    )]
+    NoReference(String),
+}
+
+/// The methods on the same space as `method` that take `option`, as named in
+/// [`SceneError::OptionNotForMethod`]: "svi and sc".
+fn option_owners(option: &str, method: &MethodSpec) -> String {
+    let has = match option {
+        "points" => registry::Entry::takes_points,
+        _ => registry::Entry::takes_quadrature,
+    };
+    methods_with(method.space(), has)
+}
+
+/// The methods on `space` that have an option, as named in messages: "svi and sc".
+pub fn methods_with(space: SpaceKind, has: fn(&registry::Entry) -> bool) -> String {
+    let names: Vec<&str> = registry::METHODS
+        .iter()
+        .filter(|entry| entry.space == space && has(entry))
+        .map(|entry| entry.name)
+        .collect();
+    match names.split_last() {
+        Some((last, [])) => last.to_string(),
+        Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+        None => "no method".into(),
+    }
+}
+
+impl SceneError {
+    /// Whether the error is in the input (a scene, an option, a value the library rejects
+    /// as invalid) rather than in a run that started: `svi` exits with status 2 for bad input
+    /// and 1 for a failed run (or an output that cannot be written).
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            SceneError::Svi(error) => is_bad_input(error),
+            SceneError::RunFailed { .. } | SceneError::Write { .. } => false,
+            _ => true,
+        }
+    }
+}
+
+/// Whether a library error is in the input ([`svi::Error::InvalidParameter`]) rather than in
+/// a run (a solve that does not converge, a state that diverges, ...).
+pub fn is_bad_input(error: &svi::Error) -> bool {
+    matches!(error, svi::Error::InvalidParameter { .. })
+}

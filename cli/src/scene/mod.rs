@@ -1,0 +1,880 @@
+//! Scenes: what `svi run` simulates — a model of the zoo and its parameters, an initial
+//! state, a method and its options, the step and horizon, and the outputs wanted.
+//!
+//! A [`Scene`] is a TOML file or a built-in one ([`builtin`]; they reproduce the experiments
+//! of Li, Wu, Leok (2018), run each zoo model with its defaults, and stress the methods).
+//! Command-line flags ([`Overrides`]) are applied on top of a scene ([`Scene::apply`]), and
+//! every option that the scene's model, method or other options cannot use is an error
+//! ([`SceneError::NotApplicable`]) rather than silently ignored ([`Scene::check`]). The model
+//! decides the space: a zoo model on ℝᴺ (`svi_models::MODEL_NAMES`) or a rigid body on SO(3)
+//! (`svi_models::RIGID_MODEL_NAMES`, see [`rigid`] for its `[initial]` and `form`).
+//!
+//! ```toml
+//! model = "kepler"
+//!
+//! [parameters]          # model parameters, name = value (absent: the model's defaults)
+//! e = 0.5
+//!
+//! [initial]             # optional; absent fields come from the model's default state
+//! t0 = 0.0
+//! q = [0.5, 0.0]
+//! v = [0.0, 1.7320508075688772]   # or p = [...], not both
+//!
+//! [method]
+//! name = "svi"          # NAME, NAME:P or NAME:P/M of svi::method::registry::METHODS:
+//!                       # "svi" (default), "svi:7/6", "sc:9", "midpoint", "verlet", ...
+//! points = 6            # Chebyshev–Gauss–Lobatto points, svi and sc (default 6): the same
+//!                       # as name = "svi:6"
+//! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
+//!
+//! [run]                 # absent: the model's default step and horizon
+//! h = 0.2               # the step (unused by adapt = "step", which chooses its own)
+//! t_end = 2000.0
+//! adapt = "none"        # "none" (default), "step" (step doubling) or "degree" (points per
+//!                       # step: methods with points), both to meet `tol`
+//! # tol = 1e-9          # target final error of the adaptive modes (only with them)
+//! # min_points = 3      # bounds of adapt = "degree" (defaults 3 and 24; only with it)
+//! # max_points = 24
+//! recovery = "none"     # or "halve-step": retry a failed step as two half steps (adapt =
+//!                       # "none" only: the adaptive modes retry failed steps themselves)
+//! # max_halvings = 4    # with "halve-step": successive halvings allowed (default 4)
+//! # divergence_limit = 1e6   # stop once |q_i| or |p_i| exceeds this (default: no limit)
+//!
+//! [output]
+//! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
+//! every = 10                  # every 10th step (default 1)
+//! # output_times = [1.0, 2.5] # report (and write, instead of every step) the states at these
+//! #                           # times, read off each step's polynomial (dense output)
+//! diagnostics = ["energy", "momentum", "solution"]   # the default: all three; or ["none"]
+//! ```
+//!
+//! A built-in name wins over a file of the same name (write `./kepler` for the file). Paths in
+//! a scene (the trajectory file) are relative to the working directory.
+//!
+//! Forces (friction, driving) are part of a model's definition: the forced zoo models
+//! (`damped-oscillator`, `damped-pendulum`, `driven-oscillator`) are chosen by name like any
+//! other, and their force parameters are ordinary `[parameters]`.
+
+pub mod builtin;
+pub mod error;
+pub mod overrides;
+pub mod rigid;
+pub mod schema;
+pub mod vector;
+
+pub use error::SceneError;
+
+use error::methods_with;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::Deserialize;
+use svi::Initial;
+use svi::MethodSpec;
+use svi::lie_group::{LieSvi, RigidInitial};
+use svi::method::registry::{self, SpaceKind};
+use svi_models::{RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
+
+use builtin::builtin_scene;
+use overrides::Overrides;
+use schema::{
+    AdaptMode, Diagnostic, InitialSection, MethodSection, OutputSection, RecoveryKind, RunSection,
+};
+
+/// A scene: what to simulate and what to report. Absent fields fall back to the model's
+/// defaults ([`svi::Defaults`], [`svi::lie_group::RigidBodyDefaults`]) and the method's.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Zoo model name (see [`svi_models::MODEL_NAMES`] and
+    /// [`svi_models::RIGID_MODEL_NAMES`]).
+    pub model: String,
+    /// Model parameters, name → value, applied on top of the model's defaults.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, f64>,
+    /// Initial state; absent fields come from the model's default state.
+    #[serde(default)]
+    pub initial: InitialSection,
+    /// Method and options.
+    #[serde(default)]
+    pub method: MethodSection,
+    /// Step, horizon, adaptivity and failure handling.
+    #[serde(default)]
+    pub run: RunSection,
+    /// Outputs.
+    #[serde(default)]
+    pub output: OutputSection,
+}
+
+impl Scene {
+    /// Parse a scene from TOML and check it; `origin` names the source in error messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|source| SceneError::Parse {
+            origin: origin.into(),
+            source,
+        })?;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// A built-in scene by name.
+    pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+        builtin_scene(name).map(|text| Scene::from_toml(text, &format!("built-in scene '{name}'")))
+    }
+
+    /// A built-in scene if `name_or_path` names one, else the scene file at that path.
+    pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        if let Some(scene) = Scene::builtin(name_or_path) {
+            return scene;
+        }
+        let path = Path::new(name_or_path);
+        match std::fs::read_to_string(path) {
+            Ok(text) => Scene::from_toml(&text, &format!("'{}'", path.display())),
+            Err(error)
+                if error.kind() == std::io::ErrorKind::NotFound
+                    && path.extension().is_none()
+                    && path.components().count() == 1 =>
+            {
+                Err(SceneError::UnknownScene {
+                    name: name_or_path.into(),
+                })
+            }
+            Err(source) => Err(SceneError::Read {
+                path: path.into(),
+                source,
+            }),
+        }
+    }
+
+    /// The space the scene's model lives on: SO(3) for a rigid-body model, else ℝᴺ (an
+    /// unknown model name is reported when the scene runs).
+    pub fn space(&self) -> SpaceKind {
+        if RIGID_MODEL_NAMES.contains(&self.model.as_str()) {
+            SpaceKind::Rotation
+        } else {
+            SpaceKind::Vector
+        }
+    }
+
+    /// Consistency checks that need no model: a method for the scene's space with valid
+    /// options, initial-state fields of that space (one of each exclusive pair), valid run
+    /// options, and no option the scene cannot use (see [`SceneError::NotApplicable`]).
+    pub fn check(&self) -> Result<(), SceneError> {
+        let spec = self.method_spec()?;
+        let initial = &self.initial;
+        match self.space() {
+            SpaceKind::Vector => {
+                let rigid = [
+                    (initial.rotation.is_some(), "initial.rotation"),
+                    (initial.quaternion.is_some(), "initial.quaternion"),
+                    (initial.omega.is_some(), "initial.omega"),
+                    (initial.momentum.is_some(), "initial.momentum"),
+                    (self.method.form.is_some(), "--form (method.form)"),
+                ];
+                if let Some((_, option)) = rigid.into_iter().find(|(given, _)| *given) {
+                    return Err(SceneError::NotApplicable {
+                        option,
+                        reason: format!(
+                            "applies to rigid-body scenes only (see svi list); '{}' is a model \
+                             on ℝᴺ",
+                            self.model
+                        ),
+                    });
+                }
+                if initial.v.is_some() && initial.p.is_some() {
+                    return Err(SceneError::VelocityAndMomentum);
+                }
+            }
+            SpaceKind::Rotation => {
+                let vector = [
+                    (initial.q.is_some(), "initial.q"),
+                    (initial.v.is_some(), "initial.v"),
+                    (initial.p.is_some(), "initial.p"),
+                ];
+                if let Some((_, option)) = vector.into_iter().find(|(given, _)| *given) {
+                    return Err(SceneError::NotApplicable {
+                        option,
+                        reason: format!(
+                            "applies to scenes on ℝᴺ; the rigid body '{}' takes rotation or \
+                             quaternion, and omega or momentum",
+                            self.model
+                        ),
+                    });
+                }
+                rigid::check_initial(initial)?;
+                rigid::method(spec, self.method.form)?;
+                if self.wants_explicitly(Diagnostic::Solution) {
+                    return Err(SceneError::NotApplicable {
+                        option: "--diagnostics solution (output.diagnostics)",
+                        reason: format!(
+                            "the rigid body '{}' has no exact solution to measure against",
+                            self.model
+                        ),
+                    });
+                }
+            }
+        }
+        self.check_run(spec)?;
+        self.check_output()
+    }
+
+    /// `[run]`: valid run options; `tol`, `min_points` and `max_points` only with the modes
+    /// that use them; degree adaptivity only for a method with points; recovery only at fixed
+    /// steps.
+    fn check_run(&self, spec: MethodSpec) -> Result<(), SceneError> {
+        let run = &self.run;
+        run.options()?;
+        let adapt = run.adapt.unwrap_or_default();
+        let not_applicable =
+            |option, reason: String| Err(SceneError::NotApplicable { option, reason });
+        if adapt == AdaptMode::None && run.tol.is_some() {
+            return not_applicable(
+                "--tol (run.tol)",
+                "sets the tolerance of --adapt step and --adapt degree; this run has a fixed \
+                 step (adapt none)"
+                    .into(),
+            );
+        }
+        for (bound, option) in [
+            (run.min_points, "run.min_points"),
+            (run.max_points, "run.max_points"),
+        ] {
+            if bound.is_some() && adapt != AdaptMode::Degree {
+                return not_applicable(
+                    option,
+                    format!(
+                        "bounds the points of adapt = \"degree\", not of adapt = \"{}\"",
+                        adapt.name()
+                    ),
+                );
+            }
+        }
+        if adapt == AdaptMode::Degree && !spec.entry().takes_points() {
+            return not_applicable(
+                "--adapt degree (run.adapt)",
+                format!(
+                    "method {} has no polynomial degree to adapt (methods with points: {})",
+                    spec.name(),
+                    methods_with(spec.space(), registry::Entry::takes_points)
+                ),
+            );
+        }
+        if adapt != AdaptMode::None && run.recovery == Some(RecoveryKind::HalveStep) {
+            return not_applicable(
+                "--recovery (run.recovery)",
+                format!(
+                    "adapt {} retries failed steps itself; recovery applies to fixed steps \
+                     (adapt none)",
+                    adapt.name()
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// `[output]`: `every` only with a trajectory file and without output times, `none` alone
+    /// among the diagnostics.
+    fn check_output(&self) -> Result<(), SceneError> {
+        let output = &self.output;
+        if self.wants_explicitly(Diagnostic::None)
+            && output
+                .diagnostics
+                .as_ref()
+                .is_some_and(|wanted| wanted.len() > 1)
+        {
+            return Err(SceneError::NotApplicable {
+                option: "--diagnostics (output.diagnostics)",
+                reason: "none means no diagnostic: give it alone, or list the diagnostics \
+                         wanted"
+                    .into(),
+            });
+        }
+        match (output.every, &output.trajectory) {
+            (Some(_), None) => Err(SceneError::EveryWithoutOutput),
+            (Some(0), Some(_)) => {
+                Err(svi::Error::invalid("every", "0 steps; need at least 1").into())
+            }
+            (Some(_), Some(_)) if output.output_times.is_some() => Err(SceneError::NotApplicable {
+                option: "--every (output.every)",
+                reason: "thins the steps written to the trajectory; with --output-times \
+                             the trajectory holds the states at those times"
+                    .into(),
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Apply command-line overrides, then [`Scene::check`]. A flag for a method that does not
+    /// take it (`--points`, `--quadrature`) or for the other space (`--form`), and `--h` with
+    /// `--adapt step`, are errors; a scene's own `points` and `quadrature` are ignored by a
+    /// method without them.
+    pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
+        let Overrides {
+            method,
+            points,
+            quadrature,
+            h,
+            t_end,
+            parameters,
+            every,
+            out,
+            diagnostics,
+            adapt,
+            tol,
+            output_times,
+            recovery,
+            divergence_limit,
+            form,
+        } = overrides;
+        let space = self.space();
+        if let Some(method) = method {
+            method.check_space(space)?;
+            // The options written in `--method` replace the scene's; the others carry over.
+            self.method.name = Some(*method);
+            if method.points().is_some() {
+                self.method.points = None;
+            }
+            if method.quadrature().is_some() {
+                self.method.quadrature = None;
+            }
+            if space == SpaceKind::Rotation
+                && method.lie_svi()?.form == svi::lie_group::Form::Reduced
+            {
+                self.method.form = None;
+            }
+        }
+        let name = self.method_name();
+        for (given, option, takes) in [
+            (
+                quadrature.is_some(),
+                "quadrature",
+                name.entry().takes_quadrature(),
+            ),
+            (points.is_some(), "points", name.entry().takes_points()),
+        ] {
+            if given && !takes {
+                return Err(SceneError::OptionNotForMethod {
+                    option,
+                    method: name,
+                });
+            }
+        }
+        if form.is_some() && space == SpaceKind::Vector {
+            return Err(SceneError::NotApplicable {
+                option: "--form",
+                reason: "applies to rigid-body scenes only (see svi list)".into(),
+            });
+        }
+        set(&mut self.method.points, points);
+        set(&mut self.method.quadrature, quadrature);
+        set(&mut self.method.form, form);
+        set(&mut self.run.h, h);
+        set(&mut self.run.t_end, t_end);
+        for (name, value) in parameters {
+            self.parameters.insert(name.clone(), *value);
+        }
+        set(&mut self.output.every, every);
+        set(&mut self.output.trajectory, out);
+        set(&mut self.output.diagnostics, diagnostics);
+        set(&mut self.run.adapt, adapt);
+        set(&mut self.run.tol, tol);
+        set(&mut self.output.output_times, output_times);
+        if *recovery == Some(RecoveryKind::None) {
+            self.run.max_halvings = None;
+        }
+        set(&mut self.run.recovery, recovery);
+        set(&mut self.run.divergence_limit, divergence_limit);
+        if h.is_some() && self.run.adapt == Some(AdaptMode::Step) {
+            return Err(SceneError::NotApplicable {
+                option: "--h",
+                reason: "not used by --adapt step, which chooses its own steps (the first from \
+                         the initial state)"
+                    .into(),
+            });
+        }
+        self.check()
+    }
+
+    /// `[method] name`, or the default method of the scene's space (`svi` on ℝᴺ, `lie-svi`
+    /// on SO(3)).
+    fn method_name(&self) -> MethodSpec {
+        self.method.name.unwrap_or_else(|| {
+            let space = self.space();
+            registry::METHODS
+                .iter()
+                .find(|entry| entry.space == space)
+                .map_or_else(MethodSpec::default, registry::Entry::spec)
+        })
+    }
+
+    /// The method in use: the method name with `points` and `quadrature` applied on top
+    /// (each only for a method that takes it). An error names the method if it is not for
+    /// the scene's space, or the option out of range.
+    pub fn method_spec(&self) -> Result<MethodSpec, SceneError> {
+        let mut spec = self.method_name();
+        spec.check_space(self.space())?;
+        if let Some(points) = self.method.points
+            && spec.entry().takes_points()
+        {
+            spec = spec.with_points(points)?;
+        }
+        if let Some(quadrature) = self.method.quadrature
+            && spec.entry().takes_quadrature()
+        {
+            spec = spec.with_quadrature(quadrature)?;
+        }
+        Ok(spec)
+    }
+
+    /// The Lie-group integrator of a rigid-body scene: [`Scene::method_spec`] in the form of
+    /// `[method] form`.
+    pub fn lie_svi(&self) -> Result<LieSvi, SceneError> {
+        rigid::method(self.method_spec()?, self.method.form)
+    }
+
+    /// The number of CGL points in use (`None` for the classic methods or an invalid
+    /// method).
+    pub fn points(&self) -> Option<usize> {
+        self.method_spec().ok()?.points_in_use()
+    }
+
+    /// The number of Gauss–Legendre points in use (`None` for the methods without or an
+    /// invalid method).
+    pub fn quadrature(&self) -> Option<usize> {
+        self.method_spec().ok()?.quadrature_in_use()
+    }
+
+    /// Whether `diagnostic` is asked for (all but `none` are by default).
+    pub fn wants(&self, diagnostic: Diagnostic) -> bool {
+        match &self.output.diagnostics {
+            Some(wanted) => wanted.contains(&diagnostic),
+            None => diagnostic != Diagnostic::None,
+        }
+    }
+
+    /// Whether `diagnostic` is listed in the scene's (or `--diagnostics`') list.
+    fn wants_explicitly(&self, diagnostic: Diagnostic) -> bool {
+        self.output
+            .diagnostics
+            .as_ref()
+            .is_some_and(|wanted| wanted.contains(&diagnostic))
+    }
+
+    /// Whether any diagnostic is asked for: not `none` and not an empty list. Rigid-body runs
+    /// measure their invariants and ‖RᵀR − I‖ whenever this holds.
+    pub fn measures(&self) -> bool {
+        self.output.diagnostics.as_ref().is_none_or(|wanted| {
+            wanted
+                .iter()
+                .any(|diagnostic| *diagnostic != Diagnostic::None)
+        })
+    }
+
+    /// Apply the scene's parameters to a model on ℝᴺ and resolve the initial time and state,
+    /// the step and the horizon (scene values, else the model's defaults).
+    pub fn resolve<M: ZooModel<N>, const N: usize>(
+        &self,
+        model: &mut M,
+    ) -> Result<(f64, Initial<N>, f64, f64), SceneError> {
+        for (name, value) in &self.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let (default_t0, default_q, default_v) = model.initial_state();
+        let initial = vector::initial(&self.initial, model.name(), default_q, default_v)?;
+        Ok((
+            self.initial.t0.unwrap_or(default_t0),
+            initial,
+            self.run.h.unwrap_or_else(|| model.default_step()),
+            self.run.t_end.unwrap_or_else(|| model.default_horizon()),
+        ))
+    }
+
+    /// [`Scene::resolve`] for a rigid body on SO(3) (t0 defaults to 0, the horizon to t0
+    /// plus the model's default duration).
+    pub fn resolve_rigid<M: RigidZooModel>(
+        &self,
+        model: &mut M,
+    ) -> Result<(f64, RigidInitial, f64, f64), SceneError> {
+        for (name, value) in &self.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let (default_r, default_omega) = model.initial_state();
+        let initial = rigid::initial(&self.initial, default_r, default_omega)?;
+        let t0 = self.initial.t0.unwrap_or(0.0);
+        Ok((
+            t0,
+            initial,
+            self.run.h.unwrap_or_else(|| model.default_step()),
+            self.run
+                .t_end
+                .unwrap_or_else(|| t0 + model.default_horizon()),
+        ))
+    }
+}
+
+/// `target = value` if a value is given.
+fn set<T: Clone>(target: &mut Option<T>, value: &Option<T>) {
+    if let Some(value) = value {
+        *target = Some(value.clone());
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::*;
+    use svi::{Recovery, RunOptions};
+    use svi_models::{MODEL_NAMES, RIGID_MODEL_NAMES};
+
+    /// A built-in scene (tests of other modules use it too).
+    pub(crate) fn scene(name: &str) -> Scene {
+        Scene::builtin(name).expect("built-in").expect("parses")
+    }
+
+    /// A method written `name`, `name:P` or `name:P/M`.
+    pub(crate) fn method(text: &str) -> MethodSpec {
+        text.parse().expect("a method")
+    }
+
+    #[test]
+    fn every_builtin_scene_parses_and_names_a_zoo_model() {
+        assert_eq!(
+            builtin_scene_names(),
+            [
+                "oscillator",
+                "kepler",
+                "pendulum",
+                "spring-pendulum",
+                "double-pendulum",
+                "damped-oscillator",
+                "damped-pendulum",
+                "driven-oscillator",
+                "stiff-spring-pendulum",
+                "stiff-spring-pendulum-coarse",
+                "kepler-long",
+                "kepler-e0.9",
+                "kepler-e0.99",
+                "kepler-recovery",
+                "double-pendulum-chaotic",
+                "oscillator-beyond-stability",
+                "rigid-body",
+                "heavy-top",
+                "pendulum-3d"
+            ]
+        );
+        for name in builtin_scene_names() {
+            let scene = scene(name);
+            let model = scene.model.as_str();
+            assert!(
+                MODEL_NAMES.contains(&model) || RIGID_MODEL_NAMES.contains(&model),
+                "{name}"
+            );
+            if MODEL_NAMES.contains(&name) {
+                assert_eq!(scene.model, name);
+                assert_eq!(scene.method.name, Some(method("svi")));
+            } else {
+                // The stress scenes are named after their model.
+                assert!(name.contains(&scene.model), "{name}");
+            }
+        }
+        assert!(Scene::builtin("kepler2").is_none());
+    }
+
+    #[test]
+    fn oscillator_scene_is_the_papers_setting() {
+        let scene = scene("oscillator");
+        assert_eq!(scene.parameters["sigma"], 1.0);
+        assert_eq!(scene.initial.t0, Some(0.0));
+        assert_eq!(scene.initial.q, Some(vec![0.0]));
+        assert_eq!(scene.initial.p, Some(vec![1.0]));
+        assert_eq!(scene.initial.v, None);
+        assert_eq!(scene.run.h, Some(1.0));
+        assert_eq!(scene.run.t_end, Some(100.0));
+        assert_eq!(scene.points(), Some(9));
+        assert_eq!(scene.quadrature(), Some(18));
+        assert!(scene.output.trajectory.is_none());
+        for diagnostic in [
+            Diagnostic::Energy,
+            Diagnostic::Momentum,
+            Diagnostic::Solution,
+        ] {
+            assert!(scene.wants(diagnostic));
+        }
+    }
+
+    #[test]
+    fn kepler_scene_is_the_papers_setting() {
+        let scene = scene("kepler");
+        assert_eq!(scene.parameters["e"], 0.5);
+        assert_eq!(scene.initial, InitialSection::default());
+        assert_eq!(scene.run.h, Some(0.2));
+        assert_eq!(scene.run.t_end, Some(2000.0));
+        assert_eq!(scene.points(), Some(6));
+        assert_eq!(scene.quadrature(), Some(12));
+        assert_eq!(DEFAULT_SCENE, "kepler");
+    }
+
+    #[test]
+    fn the_other_scenes_use_the_model_defaults() {
+        for name in ["pendulum", "spring-pendulum", "double-pendulum"] {
+            let scene = scene(name);
+            assert!(scene.parameters.is_empty(), "{name}");
+            assert_eq!(scene.initial, InitialSection::default(), "{name}");
+            assert_eq!(scene.run, RunSection::default(), "{name}");
+            assert_eq!(scene.points(), Some(6), "{name}");
+        }
+    }
+
+    #[test]
+    fn a_minimal_scene_falls_back_to_defaults() {
+        let scene = Scene::from_toml("model = \"pendulum\"\n", "test").unwrap();
+        assert_eq!(scene.method_spec().unwrap(), method("svi"));
+        assert_eq!(scene.points(), Some(svi::Svi::default().points));
+        assert_eq!(scene.quadrature(), Some(2 * svi::Svi::default().points));
+        assert_eq!(scene.output, OutputSection::default());
+    }
+
+    #[test]
+    fn overrides_replace_scene_fields() {
+        let mut scene = scene("kepler");
+        scene
+            .apply(&Overrides {
+                method: Some(method("svi")),
+                points: Some(5),
+                quadrature: Some(7),
+                h: Some(0.05),
+                t_end: Some(10.0),
+                parameters: vec![("e".into(), 0.9)],
+                every: Some(10),
+                out: Some("x.csv".into()),
+                diagnostics: Some(vec![Diagnostic::Energy]),
+                adapt: Some(AdaptMode::Degree),
+                tol: Some(1e-9),
+                output_times: None,
+                recovery: None,
+                divergence_limit: None,
+                form: None,
+            })
+            .unwrap();
+        assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
+        assert_eq!(scene.run.tol, Some(1e-9));
+        // Output times replace the thinned steps of the trajectory: not with --every.
+        let times = Overrides {
+            output_times: Some(vec![1.0, 2.0]),
+            ..Overrides::default()
+        };
+        let error = scene.clone().apply(&times).unwrap_err();
+        assert!(
+            matches!(error, SceneError::NotApplicable { option, .. } if option.starts_with("--every")),
+            "{error}"
+        );
+        let mut dense = self::scene("kepler");
+        dense.apply(&times).unwrap();
+        assert_eq!(dense.output.output_times, Some(vec![1.0, 2.0]));
+        // Recovery is for fixed-step runs only.
+        let recovery = Overrides {
+            recovery: Some(RecoveryKind::HalveStep),
+            divergence_limit: Some(1e9),
+            ..Overrides::default()
+        };
+        assert!(scene.clone().apply(&recovery).is_err());
+        let mut fixed = self::scene("kepler");
+        fixed.apply(&recovery).unwrap();
+        assert_eq!(fixed.run.recovery, Some(RecoveryKind::HalveStep));
+        assert_eq!(
+            fixed.run.options().unwrap(),
+            RunOptions::default()
+                .with_recovery(Recovery::HalveStep {
+                    max_halvings: DEFAULT_MAX_HALVINGS
+                })
+                .with_divergence_limit(1e9)
+        );
+        assert_eq!(scene.points(), Some(5));
+        assert_eq!(scene.quadrature(), Some(7));
+        assert_eq!(scene.run.h, Some(0.05));
+        assert_eq!(scene.run.t_end, Some(10.0));
+        assert_eq!(scene.parameters["e"], 0.9);
+        assert_eq!(scene.output.every, Some(10));
+        assert_eq!(scene.output.trajectory, Some("x.csv".into()));
+        assert!(scene.wants(Diagnostic::Energy));
+        assert!(!scene.wants(Diagnostic::Momentum));
+        assert!(!scene.wants(Diagnostic::Solution));
+    }
+
+    #[test]
+    fn points_without_quadrature_keep_the_papers_rule() {
+        let mut scene = scene("oscillator");
+        scene
+            .apply(&Overrides {
+                points: Some(4),
+                ..Overrides::default()
+            })
+            .unwrap();
+        assert_eq!(scene.quadrature(), Some(8));
+    }
+
+    #[test]
+    fn switching_to_sc_drops_the_quadrature_and_rejects_it_as_a_flag() {
+        let mut scene = scene("kepler");
+        scene
+            .apply(&Overrides {
+                method: Some(method("sc")),
+                ..Overrides::default()
+            })
+            .unwrap();
+        assert_eq!(scene.quadrature(), None);
+        let error = scene
+            .apply(&Overrides {
+                quadrature: Some(12),
+                ..Overrides::default()
+            })
+            .unwrap_err();
+        assert!(matches!(
+            error,
+            SceneError::OptionNotForMethod {
+                option: "quadrature",
+                method
+            } if method == self::method("sc")
+        ));
+    }
+
+    #[test]
+    fn scene_format_errors_name_the_line() {
+        let text = "model = \"kepler\"\n[run]\nh = 0.1\nstep = 3\n";
+        let error = Scene::from_toml(text, "'test.toml'").unwrap_err();
+        let SceneError::Parse { origin, source } = &error else {
+            panic!("{error}")
+        };
+        assert_eq!(origin, "'test.toml'");
+        let message = source.to_string();
+        assert!(message.contains("line 4"), "{message}");
+        assert!(message.contains("step"), "{message}");
+    }
+
+    #[test]
+    fn unknown_method_and_diagnostic_names_are_listed() {
+        let error =
+            Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk4\"\n", "t").unwrap_err();
+        let SceneError::Parse { source, .. } = &error else {
+            panic!("{error}")
+        };
+        assert!(
+            source
+                .to_string()
+                .contains("unknown method 'rk4' (known: svi, sc, symplectic-euler,")
+        );
+        let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
+        let SceneError::Parse { source, .. } = Scene::from_toml(text, "t").unwrap_err() else {
+            panic!()
+        };
+        let message = source.to_string();
+        assert!(
+            message.contains("unknown diagnostic 'angular'"),
+            "{message}"
+        );
+        assert!(message.contains("line 3"), "{message}");
+    }
+
+    #[test]
+    fn both_velocity_and_momentum_are_rejected() {
+        let text = "model = \"kepler\"\n[initial]\nq = [1, 0]\nv = [0, 1]\np = [0, 1]\n";
+        assert!(matches!(
+            Scene::from_toml(text, "t"),
+            Err(SceneError::VelocityAndMomentum)
+        ));
+    }
+
+    #[test]
+    fn every_needs_a_file_and_a_positive_count() {
+        let text = "model = \"kepler\"\n[output]\nevery = 10\n";
+        assert!(matches!(
+            Scene::from_toml(text, "t"),
+            Err(SceneError::EveryWithoutOutput)
+        ));
+        let text = "model = \"kepler\"\n[output]\nevery = 0\ntrajectory = \"x.csv\"\n";
+        assert!(matches!(
+            Scene::from_toml(text, "t"),
+            Err(SceneError::Svi(svi::Error::InvalidParameter { name, .. })) if name == "every"
+        ));
+    }
+
+    #[test]
+    fn a_missing_bare_name_is_an_unknown_scene_and_a_missing_path_a_read_error() {
+        let error = Scene::load("keppler").unwrap_err();
+        assert!(matches!(error, SceneError::UnknownScene { .. }));
+        assert!(error.to_string().contains("oscillator, kepler"), "{error}");
+        let path = std::env::temp_dir().join("svi-cli-no-such-dir/scene.toml");
+        let error = Scene::load(path.to_str().unwrap()).unwrap_err();
+        assert!(matches!(error, SceneError::Read { .. }), "{error}");
+    }
+
+    #[test]
+    fn options_the_scene_cannot_use_are_named() {
+        for (text, option) in [
+            ("[run]\ntol = 1e-9\n", "--tol (run.tol)"),
+            (
+                "[run]\nadapt = \"step\"\nmin_points = 4\n",
+                "run.min_points",
+            ),
+            (
+                "[method]\nname = \"verlet\"\n[run]\nadapt = \"degree\"\ntol = 1e-9\n",
+                "--adapt degree (run.adapt)",
+            ),
+            (
+                "[run]\nadapt = \"step\"\ntol = 1e-9\nrecovery = \"halve-step\"\n",
+                "--recovery (run.recovery)",
+            ),
+            ("[method]\nform = \"full\"\n", "--form (method.form)"),
+            ("[initial]\nomega = [1, 0, 0]\n", "initial.omega"),
+            (
+                "[output]\ndiagnostics = [\"none\", \"energy\"]\n",
+                "--diagnostics (output.diagnostics)",
+            ),
+            (
+                "[output]\ntrajectory = \"x.csv\"\nevery = 2\noutput_times = [1.0]\n",
+                "--every (output.every)",
+            ),
+        ] {
+            let text = format!("model = \"kepler\"\n{text}");
+            match Scene::from_toml(&text, "t") {
+                Err(error @ SceneError::NotApplicable { option: named, .. }) => {
+                    assert_eq!(named, option, "{text}: {error}");
+                    assert!(error.is_bad_input());
+                }
+                other => panic!("{text}: {other:?}"),
+            }
+        }
+        // The rigid bodies take their own initial fields, and not those on ℝᴺ.
+        let top = "model = \"heavy-top\"\n[initial]\nrotation = [0.1, 0, 0]\nomega = [0, 0, 5]\n";
+        assert_eq!(
+            Scene::from_toml(top, "t").unwrap().space(),
+            SpaceKind::Rotation
+        );
+        let error = Scene::from_toml("model = \"heavy-top\"\n[initial]\nv = [1, 0, 0]\n", "t");
+        assert!(
+            matches!(
+                error,
+                Err(SceneError::NotApplicable {
+                    option: "initial.v",
+                    ..
+                })
+            ),
+            "{error:?}"
+        );
+    }
+
+    #[test]
+    fn none_means_no_diagnostic() {
+        let mut scene = scene("oscillator");
+        assert!(scene.measures() && scene.wants(Diagnostic::Energy));
+        assert!(!scene.wants(Diagnostic::None));
+        for list in [vec![Diagnostic::None], vec![]] {
+            scene.output.diagnostics = Some(list);
+            assert!(!scene.measures());
+            assert!(!scene.wants(Diagnostic::Energy));
+        }
+        scene.output.diagnostics = Some(vec![Diagnostic::Momentum]);
+        assert!(scene.measures() && !scene.wants(Diagnostic::Energy));
+    }
+}

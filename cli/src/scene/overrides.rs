@@ -1,0 +1,121 @@
+//! Scene fields set from the command line (`svi run`'s flags) and the help of method options.
+
+use std::path::PathBuf;
+
+use svi::MethodSpec;
+use svi::method::registry;
+
+use crate::scene::error::SceneError;
+use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
+
+/// The help of an option taking a method: `intro`, then the grammar and every method.
+pub fn method_help(intro: &str) -> String {
+    format!("{intro}\n\n{}", registry::grammar_help())
+}
+
+/// Scene fields set from the command line.
+#[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+pub struct Overrides {
+    /// Integration method: NAME, NAME:P or NAME:P/M, e.g. svi:7/6, sc:9, verlet.
+    #[arg(
+        long,
+        value_name = "METHOD",
+        long_help = method_help(
+            "Integration method (default: the scene's). Rigid-body scenes take lie-svi or \
+             lie-svi-reduced."
+        )
+    )]
+    pub method: Option<MethodSpec>,
+    /// Number of Chebyshev–Gauss–Lobatto points (svi, sc, lie-svi), on top of --method.
+    #[arg(long, value_name = "N")]
+    pub points: Option<usize>,
+    /// Number of Gauss–Legendre quadrature points (svi, lie-svi), on top of --method.
+    #[arg(long, value_name = "M")]
+    pub quadrature: Option<usize>,
+    /// Step size (not with --adapt step, which chooses its own steps).
+    #[arg(long = "h", value_name = "H", allow_negative_numbers = true)]
+    pub h: Option<f64>,
+    /// Final time.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+    /// Model parameter (repeatable), e.g. `--param e=0.9`.
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
+    pub parameters: Vec<(String, f64)>,
+    /// Keep every K-th step of the trajectory (with --out, without --output-times; default 1).
+    #[arg(long, value_name = "K")]
+    pub every: Option<usize>,
+    /// Write the trajectory as CSV to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Diagnostics to compute, comma-separated, or none (default: energy,momentum,solution).
+    ///
+    /// none computes no per-step diagnostic at all (on rigid bodies also no invariant and
+    /// orthogonality errors); their summary fields are null.
+    #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
+    pub diagnostics: Option<Vec<Diagnostic>>,
+    /// Adaptivity: none (fixed step), step (step doubling) or degree (points per step).
+    #[arg(long, value_enum)]
+    pub adapt: Option<AdaptMode>,
+    /// Target final error of --adapt step and --adapt degree (needed by them, an error
+    /// without them).
+    #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
+    pub tol: Option<f64>,
+    /// Report the states at these times, comma-separated (dense output); with --out the
+    /// trajectory holds them instead of the steps.
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub output_times: Option<Vec<f64>>,
+    /// Recovery policy for failed steps (fixed steps only: the adaptive modes retry failed
+    /// steps themselves).
+    #[arg(long, value_enum)]
+    pub recovery: Option<RecoveryKind>,
+    /// Stop once a state component exceeds this in absolute value.
+    #[arg(long, value_name = "LIMIT")]
+    pub divergence_limit: Option<f64>,
+    /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
+    #[arg(long, value_enum, value_name = "FORM")]
+    pub form: Option<FormName>,
+}
+
+/// Parse `NAME=VALUE` (the argument of `--param`).
+pub fn parse_parameter(text: &str) -> Result<(String, f64), SceneError> {
+    let malformed = |reason: &str| SceneError::MalformedParameter {
+        text: text.into(),
+        reason: reason.into(),
+    };
+    let (name, value) = text
+        .split_once('=')
+        .ok_or_else(|| malformed("expected NAME=VALUE"))?;
+    let name = name.trim();
+    if name.is_empty() {
+        return Err(malformed("the name is empty (expected NAME=VALUE)"));
+    }
+    let value = value
+        .trim()
+        .parse::<f64>()
+        .map_err(|_| malformed(&format!("'{}' is not a number", value.trim())))?;
+    Ok((name.into(), value))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_parse_as_name_equals_number() {
+        assert_eq!(parse_parameter("e=0.9").unwrap(), ("e".into(), 0.9));
+        assert_eq!(parse_parameter(" g = 9.81 ").unwrap(), ("g".into(), 9.81));
+        assert_eq!(parse_parameter("k=1e4").unwrap(), ("k".into(), 1e4));
+        for bad in ["e", "e=", "=1", "e=abc", "e:1"] {
+            let error = parse_parameter(bad).unwrap_err();
+            assert!(
+                matches!(&error, SceneError::MalformedParameter { text, .. } if text == bad),
+                "{bad}: {error}"
+            );
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! The sections of a scene file, as deserialised from TOML: `[initial]`, `[method]`, `[run]`,
+//! `[output]`, and the named choices in them (adaptivity, recovery, diagnostics, form).
+//!
+//! One schema serves scenes on every space; the fields of `[initial]` and `form` of `[method]`
+//! that belong to the other space are rejected by the scene's checks
+//! ([`crate::scene::Scene::check`]).
+
+use std::path::PathBuf;
+use std::str::FromStr;
+
+use serde::Deserialize;
+use svi::solve::Adapt;
+use svi::{MethodSpec, Recovery, RunOptions};
+
+/// Deserialise an optional method written `name`, `name:P` or `name:P/M`.
+fn optional_method_spec<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> Result<Option<MethodSpec>, D::Error> {
+    let text = String::deserialize(deserializer)?;
+    text.parse().map(Some).map_err(serde::de::Error::custom)
+}
+
+/// A diagnostic evaluated at every step point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(try_from = "String")]
+pub enum Diagnostic {
+    /// Largest energy deviation |E − E₀|.
+    Energy,
+    /// Largest deviation of the Noether momenta.
+    Momentum,
+    /// Largest position error against the exact solution.
+    Solution,
+    /// No diagnostic at all (alone; on SO(3) also no invariant and orthogonality errors).
+    None,
+}
+
+impl Diagnostic {
+    /// The names, as written in scenes and on the command line.
+    pub const NAMES: [&'static str; 4] = ["energy", "momentum", "solution", "none"];
+}
+
+/// A diagnostic name that is not one of [`Diagnostic::NAMES`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown diagnostic '{name}' (known: {})", Diagnostic::NAMES.join(", "))]
+pub struct UnknownDiagnostic {
+    /// The name asked for.
+    pub name: String,
+}
+
+impl FromStr for Diagnostic {
+    type Err = UnknownDiagnostic;
+    fn from_str(name: &str) -> Result<Self, UnknownDiagnostic> {
+        match name {
+            "energy" => Ok(Diagnostic::Energy),
+            "momentum" => Ok(Diagnostic::Momentum),
+            "solution" => Ok(Diagnostic::Solution),
+            "none" => Ok(Diagnostic::None),
+            _ => Err(UnknownDiagnostic { name: name.into() }),
+        }
+    }
+}
+
+impl TryFrom<String> for Diagnostic {
+    type Error = UnknownDiagnostic;
+    fn try_from(name: String) -> Result<Self, UnknownDiagnostic> {
+        name.parse()
+    }
+}
+
+/// `[initial]`: on ℝᴺ t0, q and one of v, p; on SO(3) t0, one of rotation, quaternion and
+/// one of omega, momentum. Absent fields come from the model's default state.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSection {
+    /// Initial time.
+    pub t0: Option<f64>,
+    /// Initial configuration (ℝᴺ).
+    pub q: Option<Vec<f64>>,
+    /// Initial velocity (ℝᴺ; excludes `p`).
+    pub v: Option<Vec<f64>>,
+    /// Initial momentum (ℝᴺ; excludes `v`).
+    pub p: Option<Vec<f64>>,
+    /// R₀ as a rotation vector, R₀ = exp(rotation^) (SO(3); excludes `quaternion`).
+    pub rotation: Option<Vec<f64>>,
+    /// R₀ as a unit quaternion (w, x, y, z) (SO(3); excludes `rotation`).
+    pub quaternion: Option<Vec<f64>>,
+    /// Body angular velocity Ω₀ (SO(3); excludes `momentum`).
+    pub omega: Option<Vec<f64>>,
+    /// Body angular momentum Π₀ (SO(3); excludes `omega`).
+    pub momentum: Option<Vec<f64>>,
+}
+
+/// `[method]`: name and options.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MethodSection {
+    /// The method, `name`, `name:P` or `name:P/M` of `svi::method::registry::METHODS`
+    /// (default: `svi` on ℝᴺ, `lie-svi` on SO(3)).
+    #[serde(default, deserialize_with = "optional_method_spec")]
+    pub name: Option<MethodSpec>,
+    /// Chebyshev–Gauss–Lobatto points of svi, sc and lie-svi, applied on top of `name`
+    /// (default: the method's); ignored by the methods without.
+    pub points: Option<usize>,
+    /// Gauss–Legendre points of svi and lie-svi, applied on top of `name` (default: svi
+    /// 2 × points, lie-svi points); ignored by the other methods.
+    pub quadrature: Option<usize>,
+    /// The form of the Lie-group integrator (SO(3) only; default full; `lie-svi-reduced` is
+    /// `reduced`).
+    pub form: Option<FormName>,
+}
+
+/// The form of the Lie-group integrator, as named in scenes and on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum FormName {
+    /// The full discrete Euler–Lagrange equations on SO(3) (Leok 2004 §5.3).
+    Full,
+    /// The discrete Euler–Poincaré equations (§5.4), for G-invariant Lagrangians.
+    Reduced,
+}
+
+/// `[run]`: step, horizon, adaptivity and failure handling.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSection {
+    /// Step size (default: the model's default step); unused by `adapt = "step"`, which
+    /// chooses its first step from the initial state.
+    pub h: Option<f64>,
+    /// Final time (default: the model's default horizon).
+    pub t_end: Option<f64>,
+    /// Adaptivity (default none).
+    pub adapt: Option<AdaptMode>,
+    /// Target final error of the adaptive modes.
+    pub tol: Option<f64>,
+    /// Fewest CGL points of `adapt = "degree"` (default 3).
+    pub min_points: Option<usize>,
+    /// Most CGL points of `adapt = "degree"` (default 24).
+    pub max_points: Option<usize>,
+    /// What to do when a step fails (default: `none`, stop with the error).
+    pub recovery: Option<RecoveryKind>,
+    /// Successive halvings allowed by `recovery = "halve-step"` (default
+    /// [`DEFAULT_MAX_HALVINGS`]).
+    pub max_halvings: Option<usize>,
+    /// Stop with an error once a state component exceeds this in absolute value (default:
+    /// no limit; NaN and infinity always stop the run).
+    pub divergence_limit: Option<f64>,
+}
+
+/// The adaptivity modes of [`svi::solve()`], as named in scenes and on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum AdaptMode {
+    /// Fixed step.
+    #[default]
+    None,
+    /// Step doubling to meet `tol`.
+    Step,
+    /// Points per step (svi, sc and lie-svi) to meet `tol`, at fixed step.
+    Degree,
+}
+
+impl AdaptMode {
+    /// The name, as written in scenes and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            AdaptMode::None => "none",
+            AdaptMode::Step => "step",
+            AdaptMode::Degree => "degree",
+        }
+    }
+}
+
+impl From<AdaptMode> for Adapt {
+    fn from(mode: AdaptMode) -> Adapt {
+        match mode {
+            AdaptMode::None => Adapt::None,
+            AdaptMode::Step => Adapt::Step,
+            AdaptMode::Degree => Adapt::Degree,
+        }
+    }
+}
+
+/// Successive halvings of a failed step allowed by default under `recovery = "halve-step"`.
+pub const DEFAULT_MAX_HALVINGS: usize = 4;
+
+/// A scene's recovery policy for failed steps (`[run] recovery`, `--recovery`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum RecoveryKind {
+    /// Stop the run with the failed step's error.
+    #[default]
+    None,
+    /// Retry a failed step as two half steps (recursively), then go on with the original
+    /// step.
+    HalveStep,
+}
+
+impl RunSection {
+    /// The library's run options for this section.
+    pub fn options(&self) -> Result<RunOptions, svi::Error> {
+        let mut options = RunOptions::default();
+        match (self.recovery.unwrap_or_default(), self.max_halvings) {
+            (RecoveryKind::None, Some(_)) => {
+                return Err(svi::Error::invalid(
+                    "max_halvings",
+                    "set, but recovery is not \"halve-step\"",
+                ));
+            }
+            (RecoveryKind::None, None) => {}
+            (RecoveryKind::HalveStep, halvings) => {
+                options = options.with_recovery(Recovery::HalveStep {
+                    max_halvings: halvings.unwrap_or(DEFAULT_MAX_HALVINGS),
+                });
+            }
+        }
+        if let Some(limit) = self.divergence_limit {
+            options = options.with_divergence_limit(limit);
+        }
+        options.validate()?;
+        Ok(options)
+    }
+}
+
+/// `[output]`: trajectory file, output times and diagnostics.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSection {
+    /// Write every `every`-th step of the trajectory (default 1; needs `trajectory`, and no
+    /// `output_times`).
+    pub every: Option<usize>,
+    /// CSV file for the trajectory: the initial point and every `every`-th step, or with
+    /// `output_times` the initial point and the states at those times (absent: no
+    /// trajectory is kept).
+    pub trajectory: Option<PathBuf>,
+    /// Diagnostics to compute (default: energy, momentum and solution; `["none"]` or `[]`:
+    /// none at all).
+    pub diagnostics: Option<Vec<Diagnostic>>,
+    /// Report the states at these times, read off each step's polynomial (dense output).
+    pub output_times: Option<Vec<f64>>,
+}

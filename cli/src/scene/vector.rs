@@ -1,0 +1,43 @@
+//! The initial state of a scene on ℝᴺ: `[initial]`'s t0, q and one of v, p, against the
+//! model's dimension and defaults.
+
+use nalgebra::SVector;
+use svi::Initial;
+
+use crate::scene::error::SceneError;
+use crate::scene::schema::InitialSection;
+
+/// The initial state of `section` for a model of dimension `N` named `model`: the given q
+/// (else `default_q`) with the given v or p (else `default_v`). An error names a vector whose
+/// length is not `N`, or both v and p.
+pub fn initial<const N: usize>(
+    section: &InitialSection,
+    model: &str,
+    default_q: SVector<f64, N>,
+    default_v: SVector<f64, N>,
+) -> Result<Initial<N>, SceneError> {
+    let vector = |field: &'static str, values: &Option<Vec<f64>>| {
+        values
+            .as_ref()
+            .map(|values| {
+                if values.len() == N {
+                    Ok(SVector::<f64, N>::from_iterator(values.iter().copied()))
+                } else {
+                    Err(SceneError::Dimension {
+                        model: model.into(),
+                        field,
+                        expected: N,
+                        found: values.len(),
+                    })
+                }
+            })
+            .transpose()
+    };
+    let q = vector("q", &section.q)?.unwrap_or(default_q);
+    Ok(match (vector("v", &section.v)?, vector("p", &section.p)?) {
+        (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
+        (Some(v), None) => Initial::Velocity { q, v },
+        (None, Some(p)) => Initial::Momentum { q, p },
+        (None, None) => Initial::Velocity { q, v: default_v },
+    })
+}
