@@ -499,16 +499,12 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 self.solve_degree_adaptive(span, options, &mut progress, &mut outputs, observer)
             }
         }?;
-        let last = match outputs.points.last() {
-            Some(point) if !stopped && S::time(point) == span.t_end => *point,
-            _ => self
-                .phase_point(progress.t, &progress.cursor.state, &outputs.guess)
-                .map_err(|error| self.failure(error, &progress, stopped))?,
-        };
+        // The end point as `try_run` completes it (from the velocity last observed).
+        let run = self.finish(progress, stopped)?;
         Ok(Solution {
             points: outputs.points,
-            last,
-            statistics: progress.statistics,
+            last: run.last,
+            statistics: run.statistics,
             adaptivity,
             stopped,
         })

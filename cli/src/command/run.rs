@@ -14,14 +14,13 @@
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
 
 use std::io::IsTerminal;
-use std::ops::ControlFlow;
 use std::time::Instant;
 
 use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
 use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::method::step::Step;
-use svi::observer::{Every, Observer, Points};
+use svi::observer::{Every, Points};
 use svi::solve::{SolveOptions, Span};
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method, Statistics};
@@ -189,23 +188,6 @@ fn solve_options(scene: &Scene, h: f64) -> Result<SolveOptions, SceneError> {
     Ok(options)
 }
 
-/// An observer that passes everything to `inner` and keeps the last point it passed on.
-struct Watched<O, P> {
-    inner: O,
-    last: Option<P>,
-}
-
-impl<L, P: Copy, O: Observer<L, P>> Observer<L, P> for Watched<O, P> {
-    fn wants(&self, step: usize) -> bool {
-        self.inner.wants(step)
-    }
-
-    fn observe(&mut self, model: &L, step: usize, point: &P) -> ControlFlow<()> {
-        self.last = Some(*point);
-        self.inner.observe(model, step, point)
-    }
-}
-
 /// What a run produced, whether it reached the end or failed after it started.
 struct Outcome<P> {
     last: P,
@@ -245,10 +227,7 @@ where
     let progress = (plan.progress && adapt != AdaptMode::Step)
         .then(|| Progress::for_run(t0, plan.h, t_end))
         .flatten();
-    let mut observers = Watched {
-        inner: (S::diagnostics(model, scene), trajectory, progress),
-        last: None,
-    };
+    let mut observers = (S::diagnostics(model, scene), trajectory, progress);
     let span = match output_times {
         Some(times) => Span::with_outputs(t0, t_end, times.clone()),
         None => Span::new(t0, t_end),
@@ -256,10 +235,7 @@ where
     let start = Instant::now();
     let result = integrator.try_solve(&span, plan.initial, &options, &mut observers);
     let seconds = start.elapsed().as_secs_f64();
-    let Watched {
-        inner: (diagnostics, trajectory, progress),
-        last: last_observed,
-    } = observers;
+    let (diagnostics, trajectory, progress) = observers;
     if let Some(progress) = &progress {
         progress.finish();
     }
@@ -289,19 +265,7 @@ where
             partial: None,
         }) => return Err(error.into()),
     };
-    let mut last = outcome.last;
-    if adapt == AdaptMode::None && output_times.is_none() && failure.is_none() {
-        // `try_run` completes its last state from the velocity last observed (the start's,
-        // if none was), `try_solve` serves the end of the span from the velocity at t0: the
-        // same state, the same point to round-off, but not to the last bit where the inverse
-        // Legendre map is nonlinear. Complete it as `try_run` does.
-        let state = S::method_state(&last, integrator.method().info().coordinates);
-        let guess = last_observed.map_or_else(
-            || S::initial_guess(&plan.initial),
-            |point| S::velocity(&point),
-        );
-        last = integrator.phase_point(S::time(&last), &state, &guess)?;
-    }
+    let last = outcome.last;
     let first = integrator.initial_state(t0, &plan.initial)?;
     let first = integrator.phase_point(t0, &first, &S::initial_guess_at_rest(&plan.initial))?;
 

@@ -6,11 +6,11 @@ use nalgebra::SVector;
 use svi::lie_group::so3::orthogonality_error;
 use svi::lie_group::{
     AngularMomentumError, OrthogonalityError, RigidBodyDefaults, RigidBodyExt, RigidInitial,
-    RigidPoint, RigidState, SO3,
+    RigidPoint, SO3,
 };
 use svi::method::space::Space;
 use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
-use svi::{Coordinates, Defaults, Euclidean, Initial, LagrangianExt, PhasePoint, State};
+use svi::{Defaults, Euclidean, Initial, LagrangianExt, PhasePoint};
 use svi_models::{RigidZooModel, ZooModel};
 
 use crate::report::csv::{RIGID_CSV_HEADER, csv_header};
@@ -55,10 +55,6 @@ pub trait RunSpace<L>: Space {
 
     /// A point as summary fields.
     fn state(point: &Self::Point) -> StateSummary;
-
-    /// The method state (in `coordinates`) a completed point was completed from: its
-    /// entries, copied.
-    fn method_state(point: &Self::Point, coordinates: Coordinates) -> Self::State;
 
     /// The Newton start of the inverse Legendre map at the initial state, for the summary's
     /// initial energy: the initial velocity or momentum on ℝᴺ, rest on SO(3).
@@ -129,14 +125,6 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
             v: point.v.iter().copied().collect(),
             p: point.p.iter().copied().collect(),
         }
-    }
-
-    fn method_state(point: &PhasePoint<N>, coordinates: Coordinates) -> State<N> {
-        let y = match coordinates {
-            Coordinates::Momentum => point.p,
-            Coordinates::Velocity => point.v,
-        };
-        State { q: point.q, y }
     }
 
     fn initial_guess_at_rest(initial: &Initial<N>) -> SVector<f64, N> {
@@ -226,14 +214,6 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
             omega: point.omega.iter().copied().collect(),
             momentum: point.momentum.iter().copied().collect(),
             spatial_momentum: point.spatial_momentum().iter().copied().collect(),
-        }
-    }
-
-    /// (R, Π) in the momentum coordinates of the Lie-group integrator.
-    fn method_state(point: &RigidPoint, _: Coordinates) -> RigidState {
-        RigidState {
-            r: point.r,
-            momentum: point.momentum,
         }
     }
 
