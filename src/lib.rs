@@ -48,6 +48,8 @@ mod nonlinear;
 pub mod scalar;
 pub mod spectral;
 pub mod stepping;
+#[cfg(test)]
+mod test_models;
 
 // Module paths of earlier releases, kept for users' code.
 pub use analysis::{drift, stability, verify};

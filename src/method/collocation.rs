@@ -614,113 +614,11 @@ impl<const N: usize> Method<N> for SpectralCollocation {
 mod tests {
     use super::*;
     use crate::analysis::verify::observed_order;
-    use crate::scalar::Scalar;
+    use crate::test_models::{
+        Damped, HenonHeiles, Oscillator, VariableMass, advance,
+        assert_tangent_matches_central_differences, distance, factorial, state,
+    };
     use nalgebra::Complex;
-
-    /// Harmonic oscillator L = q̇²/2 − q²/2, declared [`Structure::ConstantMass`] (fixed-point
-    /// path) or [`Structure::General`] (Newton path).
-    struct Oscillator<const CONSTANT_MASS: bool>;
-    impl<const CONSTANT_MASS: bool> Lagrangian<1> for Oscillator<CONSTANT_MASS> {
-        const TIME_DEPENDENT: bool = false;
-        const STRUCTURE: Structure = if CONSTANT_MASS {
-            Structure::ConstantMass
-        } else {
-            Structure::General
-        };
-        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
-            (v[0] * v[0] - q[0] * q[0]) * 0.5
-        }
-    }
-
-    /// Hénon–Heiles potential with the constant, non-diagonal mass M = [[2, 1], [1, 3]]:
-    /// L = ½ q̇ᵀMq̇ − ½|q|² − q₀²q₁ + q₁³/3, declared either way.
-    struct HenonHeiles<const CONSTANT_MASS: bool>;
-    impl<const CONSTANT_MASS: bool> Lagrangian<2> for HenonHeiles<CONSTANT_MASS> {
-        const TIME_DEPENDENT: bool = false;
-        const STRUCTURE: Structure = if CONSTANT_MASS {
-            Structure::ConstantMass
-        } else {
-            Structure::General
-        };
-        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
-            let kinetic = (v[0] * v[0] * 2.0 + v[0] * v[1] * 2.0 + v[1] * v[1] * 3.0) * 0.5;
-            let potential = q.dot(q) * 0.5 + q[0] * q[0] * q[1] - q[1].powi(3) / 3.0;
-            kinetic - potential
-        }
-    }
-
-    /// Position-dependent mass: L = ½ (1 + q₁²) q̇₀² + ½ q̇₁² − ½ |q|² − ¼ q₀⁴.
-    struct VariableMass;
-    impl Lagrangian<2> for VariableMass {
-        const TIME_DEPENDENT: bool = false;
-        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
-            let kinetic = (q[1] * q[1] + 1.0) * v[0] * v[0] * 0.5 + v[1] * v[1] * 0.5;
-            kinetic - q.dot(q) * 0.5 - q[0].powi(4) * 0.25
-        }
-    }
-
-    /// Damped oscillator L = q̇²/2 − q²/2 with friction f_L = −c q̇ (Newton path).
-    struct Damped {
-        c: f64,
-    }
-    impl Lagrangian<1> for Damped {
-        const TIME_DEPENDENT: bool = false;
-        const FORCED: bool = true;
-        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
-            (v[0] * v[0] - q[0] * q[0]) * 0.5
-        }
-        fn external_force<D: Scalar>(
-            &self,
-            _t: D,
-            _q: &SVector<D, 1>,
-            v: &SVector<D, 1>,
-        ) -> SVector<D, 1> {
-            v.map(|x| x * (-self.c))
-        }
-    }
-
-    fn state<const N: usize>(q: [f64; N], y: [f64; N]) -> State<N> {
-        State {
-            q: SVector::from(q),
-            y: SVector::from(y),
-        }
-    }
-
-    /// `steps` steps of size `h` from (q, q̇) at t = 0, by the method alone (no stepping loop).
-    fn advance<L: Lagrangian<N>, const N: usize>(
-        method: &SpectralCollocation,
-        model: &L,
-        h: f64,
-        steps: usize,
-        start: State<N>,
-    ) -> (State<N>, CollocationWorkspace<N>) {
-        let mut workspace = method.workspace(model, h).unwrap();
-        let mut current = start;
-        let mut increment = State::zeros();
-        for k in 0..steps {
-            method
-                .step(
-                    model,
-                    &mut workspace,
-                    k as f64 * h,
-                    h,
-                    &current,
-                    &mut increment,
-                )
-                .unwrap();
-            current.q += increment.q;
-            current.y += increment.y;
-        }
-        (current, workspace)
-    }
-
-    fn distance<const N: usize>(a: &State<N>, b: &State<N>) -> f64 {
-        (a.q - b.q).amax().max((a.y - b.y).amax())
-    }
-
-    fn factorial(n: usize) -> f64 {
-        (1..=n).map(|k| k as f64).product()
-    }
 
     /// The stability function of the collocation method on the nodes c₁, …, c_s of [0, 1]
     /// (Nørsett; Hairer, Wanner II, Thm. IV.3.10):
@@ -899,39 +797,6 @@ mod tests {
         assert!(difference <= 1e-13, "paths differ by {difference:e}");
     }
 
-    /// Central differences of the step map with δ = 1e-6 (each evaluation from a fresh
-    /// workspace, converged to round-off): truncation δ² |Φ'''| ≈ 1e-12 and round-off
-    /// ε/δ ≈ 1e-10, so the tangent map must agree to 1e-8.
-    fn assert_tangent_matches_central_differences<L: Lagrangian<N>, const N: usize>(
-        method: &SpectralCollocation,
-        model: &L,
-        start: State<N>,
-    ) {
-        let (h, delta) = (0.3, 1e-6);
-        let end = |x: State<N>| {
-            let (after, _) = advance(method, model, h, 1, x);
-            DVector::from_iterator(2 * N, after.q.iter().chain(after.y.iter()).copied())
-        };
-        let mut workspace = method.workspace(model, h).unwrap();
-        let (_, tangent) = method
-            .tangent_map(model, &mut workspace, 0.0, h, &start)
-            .unwrap();
-        let phi = tangent.matrix();
-        for j in 0..2 * N {
-            let (mut plus, mut minus) = (start, start);
-            if j < N {
-                plus.q[j] += delta;
-                minus.q[j] -= delta;
-            } else {
-                plus.y[j - N] += delta;
-                minus.y[j - N] -= delta;
-            }
-            let column = (end(plus) - end(minus)) / (2.0 * delta);
-            let error = (phi.column(j) - &column).amax();
-            assert!(error <= 1e-8, "column {j}: {} vs {column}", phi.column(j));
-        }
-    }
-
     #[test]
     fn tangent_map_matches_central_differences_of_the_step_map() {
         let method = SpectralCollocation::new(5);
@@ -941,7 +806,7 @@ mod tests {
         assert_tangent_matches_central_differences(&method, &HenonHeiles::<true>, start);
         assert_tangent_matches_central_differences(
             &method,
-            &Damped { c: 0.7 },
+            &Damped::<false> { c: 0.7 },
             state([1.0], [-0.5]),
         );
     }

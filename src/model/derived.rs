@@ -504,27 +504,7 @@ pub(crate) fn cached_mass_inverse<L: Lagrangian<N>, const N: usize>(
 mod tests {
     use super::*;
     use crate::model::Structure;
-
-    /// Harmonic oscillator L = q̇²/2 − q²/2.
-    struct Oscillator;
-    impl Lagrangian<1> for Oscillator {
-        const TIME_DEPENDENT: bool = false;
-        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
-            (v[0] * v[0] - q[0] * q[0]) * 0.5
-        }
-    }
-
-    /// Position-dependent mass: L = ½ (1 + q₁²) q̇₀² + ½ q̇₁² − V(q),
-    /// V = ½ q₀² + ½ q₁² + ¼ q₀⁴.
-    struct VariableMass;
-    impl Lagrangian<2> for VariableMass {
-        const TIME_DEPENDENT: bool = false;
-        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
-            let kinetic = (q[1] * q[1] + 1.0) * v[0] * v[0] * 0.5 + v[1] * v[1] * 0.5;
-            let potential = (q[0] * q[0] + q[1] * q[1]) * 0.5 + q[0].powi(4) * 0.25;
-            kinetic - potential
-        }
-    }
+    use crate::test_models::{Oscillator, VariableMass};
 
     /// The closed forms of [`VariableMass`], derived by hand.
     mod variable_mass {
@@ -713,7 +693,7 @@ mod tests {
     #[test]
     fn energy_is_kinetic_plus_potential() {
         for (q, v) in [(0.0, 1.0), (0.6, -0.8), (-2.5, 3.25)] {
-            let energy = Oscillator.energy(0.0, &SVector::from([q]), &SVector::from([v]));
+            let energy = Oscillator::<false>.energy(0.0, &SVector::from([q]), &SVector::from([v]));
             assert!(
                 (energy - 0.5 * (v * v + q * q)).abs() <= 1e-15 * energy,
                 "{energy}"
@@ -847,7 +827,7 @@ mod tests {
         assert!((force.v[(0, 0)] + DAMPING).abs() <= 1e-15);
         // Unforced models report an exact zero without evaluating anything.
         assert_eq!(
-            Oscillator.external_force_jacobian(t, &q, &v),
+            Oscillator::<false>.external_force_jacobian(t, &q, &v),
             ForceJacobian::zeros()
         );
     }
