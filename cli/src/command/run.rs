@@ -177,7 +177,7 @@ fn solve_options(scene: &Scene, h: f64) -> Result<SolveOptions, SceneError> {
     // Step control chooses its own first step from the initial state: a default step that is
     // far too large at a close approach can pass the step-doubling test pre-asymptotically.
     options.h = (adapt != AdaptMode::Step).then_some(h);
-    options.tol = run.tol;
+    options.tol = tolerance(scene);
     if let Some(points) = run.min_points {
         options.min_points = points;
     }
@@ -353,6 +353,15 @@ fn write_trajectory<L, S: RunSpace<L>>(
     })
 }
 
+/// The tolerance of an adaptive run: the scene's, or without one the library's default;
+/// `None` for fixed steps.
+fn tolerance(scene: &Scene) -> Option<f64> {
+    let adaptive = scene.run.adapt.unwrap_or_default() != AdaptMode::None;
+    adaptive
+        .then(|| scene.run.tol.or(SolveOptions::default().tol))
+        .flatten()
+}
+
 /// The adaptivity and output-time fields of a summary: what the adaptivity did (adaptive
 /// runs and runs with output times that reached the end) and the states at the output times.
 fn solve_summary<L, S: RunSpace<L>>(scene: &Scene, outcome: &Outcome<S::Point>) -> SolveSummary {
@@ -362,7 +371,7 @@ fn solve_summary<L, S: RunSpace<L>>(scene: &Scene, outcome: &Outcome<S::Point>) 
     let solved = outcome.solved.as_ref().filter(|_| solves);
     SolveSummary {
         adapt: adapt.into(),
-        tol: scene.run.tol,
+        tol: tolerance(scene),
         adaptivity: solved.map(|(adaptivity, points)| AdaptivitySummary {
             accepted: adaptivity.accepted,
             rejected: adaptivity.rejected,

@@ -56,8 +56,8 @@ pub struct Overrides {
     /// Adaptivity: none (fixed step), step (step doubling) or degree (points per step).
     #[arg(long, value_enum)]
     pub adapt: Option<AdaptMode>,
-    /// Target final error of --adapt step and --adapt degree (needed by them, an error
-    /// without them).
+    /// Target final error of --adapt step and --adapt degree [default: 1e-8]; an error
+    /// without them.
     #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
     pub tol: Option<f64>,
     /// Report the states at these times, comma-separated (dense output); with --out the
