@@ -101,6 +101,46 @@ impl Error {
             reason: reason.into(),
         }
     }
+
+    /// The kind of error as a stable snake-case name (for machine-readable reports):
+    /// `invalid_parameter`, `non_convergence`, `singular_matrix`, `legendre_map`,
+    /// `step_size_too_small`, `non_finite` or `diverged`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Error::InvalidParameter { .. } => "invalid_parameter",
+            Error::NonConvergence { .. } => "non_convergence",
+            Error::SingularMatrix { .. } => "singular_matrix",
+            Error::LegendreMap { .. } => "legendre_map",
+            Error::StepSizeTooSmall { .. } => "step_size_too_small",
+            Error::NonFinite { .. } => "non_finite",
+            Error::Diverged { .. } => "diverged",
+        }
+    }
+
+    /// The index of the failing step, for failures that happen in a step.
+    pub fn step(&self) -> Option<usize> {
+        match *self {
+            Error::NonConvergence { step, .. }
+            | Error::SingularMatrix { step, .. }
+            | Error::NonFinite { step, .. }
+            | Error::Diverged { step, .. } => Some(step),
+            _ => None,
+        }
+    }
+
+    /// The time at which the failure happened (the start of the failing step), for failures
+    /// during a run.
+    pub fn time(&self) -> Option<f64> {
+        match *self {
+            Error::NonConvergence { t, .. }
+            | Error::SingularMatrix { t, .. }
+            | Error::NonFinite { t, .. }
+            | Error::Diverged { t, .. }
+            | Error::LegendreMap { t, .. }
+            | Error::StepSizeTooSmall { t, .. } => Some(t),
+            Error::InvalidParameter { .. } => None,
+        }
+    }
 }
 
 /// Why one step failed, without the step's context (the [`crate::Integrator`] adds it).
@@ -185,4 +225,30 @@ pub(crate) fn require_finite_entries<'a>(
         require_finite(&format!("{name}[{i}]"), *x)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kinds_steps_and_times_of_errors() {
+        let failure = StepFailure::NonConvergence {
+            iterations: 50,
+            residual: 1e-3,
+        }
+        .at(7, 1.4);
+        assert_eq!(failure.kind(), "non_convergence");
+        assert_eq!((failure.step(), failure.time()), (Some(7), Some(1.4)));
+        let invalid = Error::invalid("h", "must be positive");
+        assert_eq!(invalid.kind(), "invalid_parameter");
+        assert_eq!((invalid.step(), invalid.time()), (None, None));
+        let legendre = Error::LegendreMap {
+            t: 2.0,
+            iterations: 3,
+            residual: 1.0,
+        };
+        assert_eq!((legendre.kind(), legendre.step()), ("legendre_map", None));
+        assert_eq!(legendre.time(), Some(2.0));
+    }
 }
