@@ -148,9 +148,14 @@ struct RunArgs {
     scene: Option<String>,
     #[command(flatten)]
     overrides: Overrides,
-    /// Print the summary as one JSON object.
+    /// Print the summary as one JSON object, also when the run fails ("status": "failed",
+    /// with the error and the run up to its last good state).
     #[arg(long)]
     json: bool,
+    /// Make a failed health check (an energy error above 1 % of the energy's scale, an
+    /// escaped configuration) an error: exit status 1 instead of a warning.
+    #[arg(long)]
+    strict: bool,
 }
 
 fn main() -> ExitCode {
@@ -160,6 +165,7 @@ fn main() -> ExitCode {
             args.scene.as_deref().unwrap_or(DEFAULT_SCENE),
             &args.overrides,
             args.json,
+            args.strict,
         ),
         Command::List => {
             command::list::print();

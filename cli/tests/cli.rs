@@ -590,7 +590,10 @@ fn bad_tolerances_and_output_times_are_rejected() {
     for (args, message) in [
         (&["--adapt", "step", "--tol", "0"][..], "invalid tol"),
         (&["--adapt", "step", "--tol", "nan"][..], "invalid tol"),
-        (&["--adapt", "degree", "--tol", "1e-20"][..], "double precision"),
+        (
+            &["--adapt", "degree", "--tol", "1e-20"][..],
+            "double precision",
+        ),
         (&["--output-times", "1,0.5"][..], "increase strictly"),
         (&["--output-times", "0.5,3000"][..], "outside the span"),
         (

@@ -14,13 +14,17 @@
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
 
 use std::io::IsTerminal;
+use std::marker::PhantomData;
+use std::ops::ControlFlow;
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
 use svi::method::registry::{SpaceKind, VectorMethodVisitor};
+use svi::method::space::Space;
 use svi::method::step::Step;
-use svi::observer::{Every, Points};
+use svi::observer::{Every, Observer};
 use svi::solve::{SolveOptions, Span};
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method, Statistics};
@@ -29,10 +33,12 @@ use svi_models::{
 };
 
 use crate::command::space::RunSpace;
-use crate::report::csv::write_csv;
+use crate::report::csv::CsvStream;
+use crate::report::health::{self, Measured};
 use crate::report::progress::Progress;
 use crate::report::summary::{
-    AdaptivitySummary, OutputPoint, Parameters, SolveSummary, Summary, TrajectoryOutput,
+    AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
+    TrajectoryOutput,
 };
 use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
@@ -40,19 +46,75 @@ use crate::scene::schema::{AdaptMode, RecoveryKind};
 use crate::scene::{Scene, SceneError};
 
 /// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
-/// run it and print its summary as text or as one JSON object.
-pub fn execute(name: &str, overrides: &Overrides, json: bool) -> anyhow::Result<()> {
-    let mut scene = Scene::load(name)?;
-    scene.apply(overrides)?;
-    let summary = scene
-        .run(std::io::stderr().is_terminal())
-        .with_context(|| format!("scene '{name}' failed"))?;
-    if json {
-        println!("{}", serde_json::to_string(&summary)?);
-    } else {
-        print!("{summary}");
+/// run it and print its summary as text or as one JSON object, and the failed health checks
+/// on stderr (with `strict` they fail the run).
+///
+/// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
+/// run that failed after it started, the summary up to its last good state with
+/// `"status": "failed"` and the `error` (kind, message, step, t); bad input, only `status`
+/// and `error`. The exit status stays that of the error (see `main.rs`).
+pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> anyhow::Result<()> {
+    // Errors of the run carry the scene's name; errors of loading it name what is wrong.
+    let mut ran = false;
+    let result = Scene::load(name).and_then(|mut scene| {
+        scene.apply(overrides)?;
+        ran = true;
+        scene.run(std::io::stderr().is_terminal())
+    });
+    let (summary, error) = match result {
+        Ok(mut summary) => {
+            let error = (strict && !summary.warnings.is_empty()).then(|| SceneError::Unhealthy {
+                warnings: summary.warnings.iter().map(|w| w.message.clone()).collect(),
+            });
+            if let Some(error) = &error {
+                summary.status = Status::Failed;
+                summary.error = Some(error_report(error));
+            }
+            (Some(summary), error)
+        }
+        Err(SceneError::RunFailed { partial, source }) => (
+            Some((*partial).clone()),
+            Some(SceneError::RunFailed { partial, source }),
+        ),
+        Err(error) => (None, Some(error)),
+    };
+    for warning in summary.iter().flat_map(|summary| &summary.warnings) {
+        eprintln!("warning: {}", warning.message);
     }
-    Ok(())
+    match (&summary, json) {
+        (Some(summary), true) => println!("{}", serde_json::to_string(summary)?),
+        (Some(summary), false) if error.is_none() => print!("{summary}"),
+        (None, true) => {
+            let report = error.as_ref().map(error_report);
+            let object = serde_json::json!({ "status": Status::Failed, "error": report });
+            println!("{object}");
+        }
+        _ => {}
+    }
+    match error {
+        None => Ok(()),
+        Some(error) if ran => Err(error).with_context(|| format!("scene '{name}' failed")),
+        Some(error) => Err(error.into()),
+    }
+}
+
+/// The JSON `error` object of a scene error: the library's kind for its errors, `health`,
+/// `output`, or `invalid_input` for other bad input.
+fn error_report(error: &SceneError) -> ErrorReport {
+    let kind = match error {
+        SceneError::Svi(error) | SceneError::RunFailed { source: error, .. } => {
+            return ErrorReport::of(error);
+        }
+        SceneError::Unhealthy { .. } => "health",
+        SceneError::Write { .. } => "output",
+        _ => "invalid_input",
+    };
+    ErrorReport {
+        kind,
+        message: error.to_string(),
+        step: None,
+        t: None,
+    }
 }
 
 impl Scene {
@@ -217,13 +279,16 @@ where
     let output_times = scene.output.output_times.as_ref();
     let every = scene.output.every.unwrap_or(1);
     let options = solve_options(scene, plan.h)?;
-    // With output times the trajectory holds the states at those times (written below).
-    let trajectory = scene
-        .output
-        .trajectory
-        .as_ref()
+    // The trajectory file is opened before the first step and written as the run goes; with
+    // output times it holds the states at those times (written after the run).
+    let mut stream = match &scene.output.trajectory {
+        Some(path) => Some(TrajectoryStream::<S>::create(model, path)?),
+        None => None,
+    };
+    let trajectory = stream
+        .as_mut()
         .filter(|_| output_times.is_none())
-        .map(|_| Every::new(every, Points::<S::Point>::new()));
+        .map(|stream| Every::new(every, stream));
     let progress = (plan.progress && adapt != AdaptMode::Step)
         .then(|| Progress::for_run(t0, plan.h, t_end))
         .flatten();
@@ -235,7 +300,7 @@ where
     let start = Instant::now();
     let result = integrator.try_solve(&span, plan.initial, &options, &mut observers);
     let seconds = start.elapsed().as_secs_f64();
-    let (diagnostics, trajectory, progress) = observers;
+    let (diagnostics, _, progress) = observers;
     if let Some(progress) = &progress {
         progress.finish();
     }
@@ -269,24 +334,20 @@ where
     let first = integrator.initial_state(t0, &plan.initial)?;
     let first = integrator.phase_point(t0, &first, &S::initial_guess_at_rest(&plan.initial))?;
 
-    let trajectory = match &scene.output.trajectory {
-        Some(path) => {
-            let (rows, every) = match (trajectory, &outcome.solved) {
-                (Some(Every { every, inner }), _) => {
-                    let mut rows = inner.points;
-                    if rows.last().is_none_or(|row| S::time(row) != S::time(&last)) {
-                        rows.push(last);
-                    }
-                    (rows, every)
+    let trajectory = match stream {
+        Some(mut stream) => {
+            if output_times.is_some() {
+                // The initial point and the states at the output times.
+                let outputs = outcome.solved.iter().flat_map(|(_, points)| points);
+                let later = outputs.filter(|point| S::time(point) > t0);
+                for point in std::iter::once(&first).chain(later) {
+                    stream.write(model, point)?;
                 }
-                // Output times: the initial point and the states at those times.
-                (None, solved) => {
-                    let outputs = solved.iter().flat_map(|(_, points)| points);
-                    let later = outputs.filter(|point| S::time(point) > t0).copied();
-                    (std::iter::once(first).chain(later).collect(), every)
-                }
-            };
-            Some(write_trajectory::<L, S>(model, path, &rows, every)?)
+            } else if stream.last_time() != Some(S::time(&last)) {
+                // The last point, when the thinning skipped it.
+                stream.write(model, &last)?;
+            }
+            Some(stream.finish(every)?)
         }
         None => None,
     };
@@ -295,6 +356,16 @@ where
     let solve = (S::LISTS_RUN_FIELDS || solves).then(|| solve_summary::<L, S>(scene, &outcome));
     let recovers = scene.run.recovery == Some(RecoveryKind::HalveStep);
     let (energy_error_max, conservation) = S::measured(model, diagnostics, &last);
+    let (energy_initial, energy_final) = (S::energy(model, &first), S::energy(model, &last));
+    let warnings = health::check(&Measured {
+        conserves_energy: S::conserves_energy(model),
+        energy_initial,
+        energy_final,
+        energy_error_max,
+        energy_scale: S::energy_scale(model, &first).max(S::energy_scale(model, &last)),
+        extent: S::extent(&first).zip(S::extent(&last)),
+        retries: outcome.statistics.retries,
+    });
     let info = integrator.method().info();
     let summary = Summary {
         model: S::model_name(model).into(),
@@ -312,8 +383,8 @@ where
         t_end: S::time(&last),
         steps: outcome.statistics.steps,
         state: S::state(&last),
-        energy_initial: S::energy(model, &first),
-        energy_final: S::energy(model, &last),
+        energy_initial,
+        energy_final,
         energy_error_max,
         conservation,
         iterations: outcome.statistics.iterations,
@@ -322,35 +393,102 @@ where
         seconds,
         trajectory,
         solve,
+        status: Status::Ok,
+        warnings,
+        error: None,
     };
     match failure {
         None => Ok(summary),
         Some(source) => Err(SceneError::RunFailed {
-            partial: Box::new(summary),
+            partial: Box::new(Summary {
+                status: Status::Failed,
+                error: Some(ErrorReport::of(&source)),
+                ..summary
+            }),
             source,
         }),
     }
 }
 
-/// Write `rows` as the trajectory CSV of the space to `path`.
-fn write_trajectory<L, S: RunSpace<L>>(
-    model: &L,
-    path: &std::path::Path,
-    rows: &[S::Point],
-    every: usize,
-) -> Result<TrajectoryOutput, SceneError> {
-    write_csv(path, &S::csv_header(model), rows, |point, row| {
-        S::csv_row(model, point, row)
-    })
-    .map_err(|source| SceneError::Write {
-        path: path.into(),
-        source,
-    })?;
-    Ok(TrajectoryOutput {
-        path: path.display().to_string(),
-        every,
-        rows: rows.len(),
-    })
+/// The trajectory file of a run on the space `S`, written as the run goes: an observer of
+/// the thinned step points (a write error stops the run and is reported after it).
+struct TrajectoryStream<S> {
+    path: std::path::PathBuf,
+    stream: CsvStream,
+    error: Option<std::io::Error>,
+    space: PhantomData<S>,
+}
+
+impl<S: Space> TrajectoryStream<S> {
+    /// Create the file at `path` with the header of the space.
+    fn create<L>(model: &L, path: &Path) -> Result<Self, SceneError>
+    where
+        S: RunSpace<L>,
+    {
+        let write_error = |source| SceneError::Write {
+            path: path.into(),
+            source,
+        };
+        Ok(TrajectoryStream {
+            path: path.into(),
+            stream: CsvStream::create(path, &S::csv_header(model)).map_err(write_error)?,
+            error: None,
+            space: PhantomData,
+        })
+    }
+
+    /// Append the row of `point`.
+    fn write<L>(&mut self, model: &L, point: &S::Point) -> Result<(), SceneError>
+    where
+        S: RunSpace<L>,
+    {
+        let result = self
+            .stream
+            .write_row(S::time(point), |row| S::csv_row(model, point, row));
+        result.map_err(|source| self.failed(source))
+    }
+
+    /// The time of the last row written.
+    fn last_time(&self) -> Option<f64> {
+        self.stream.last_time()
+    }
+
+    /// Flush the file (or report the write error that stopped the run).
+    fn finish(self, every: usize) -> Result<TrajectoryOutput, SceneError> {
+        let path = self.path.display().to_string();
+        let error = |source| SceneError::Write {
+            path: self.path.clone(),
+            source,
+        };
+        if let Some(source) = self.error {
+            return Err(error(source));
+        }
+        let rows = self.stream.finish().map_err(error)?;
+        Ok(TrajectoryOutput { path, every, rows })
+    }
+
+    /// The error of a failed write, as a scene error.
+    fn failed(&self, source: std::io::Error) -> SceneError {
+        SceneError::Write {
+            path: self.path.clone(),
+            source,
+        }
+    }
+}
+
+impl<L, S: RunSpace<L>> Observer<L, S::Point> for TrajectoryStream<S> {
+    fn observe(&mut self, model: &L, _: usize, point: &S::Point) -> ControlFlow<()> {
+        let result = self
+            .stream
+            .write_row(S::time(point), |row| S::csv_row(model, point, row));
+        match result {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(error) => {
+                self.error = Some(error);
+                ControlFlow::Break(())
+            }
+        }
+    }
 }
 
 /// The tolerance of an adaptive run: the scene's, or without one the library's default;

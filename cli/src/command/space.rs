@@ -53,6 +53,18 @@ pub trait RunSpace<L>: Space {
     /// The energy of a point.
     fn energy(model: &L, point: &Self::Point) -> f64;
 
+    /// Whether the model conserves energy (autonomous and unforced): the health check's
+    /// energy test applies.
+    fn conserves_energy(model: &L) -> bool;
+
+    /// The scale of the energy at a point, max(|E|, ½|p·q̇|), against which the health check
+    /// measures energy errors.
+    fn energy_scale(model: &L, point: &Self::Point) -> f64;
+
+    /// The largest component of a point's configuration, where it can grow without bound
+    /// (ℝᴺ; `None` on SO(3)).
+    fn extent(point: &Self::Point) -> Option<f64>;
+
     /// A point as summary fields.
     fn state(point: &Self::Point) -> StateSummary;
 
@@ -117,6 +129,19 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
 
     fn energy(model: &L, point: &PhasePoint<N>) -> f64 {
         LagrangianExt::energy(model, point.t, &point.q, &point.v)
+    }
+
+    fn conserves_energy(_: &L) -> bool {
+        !L::FORCED && !L::TIME_DEPENDENT
+    }
+
+    fn energy_scale(model: &L, point: &PhasePoint<N>) -> f64 {
+        let energy = <Self as RunSpace<L>>::energy(model, point).abs();
+        energy.max(0.5 * point.p.dot(&point.v).abs())
+    }
+
+    fn extent(point: &PhasePoint<N>) -> Option<f64> {
+        Some(point.q.amax())
     }
 
     fn state(point: &PhasePoint<N>) -> StateSummary {
@@ -205,6 +230,20 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
 
     fn energy(model: &L, point: &RigidPoint) -> f64 {
         RigidBodyExt::energy(model, &point.r, &point.omega)
+    }
+
+    /// Rigid bodies here are autonomous and unforced.
+    fn conserves_energy(_: &L) -> bool {
+        true
+    }
+
+    fn energy_scale(model: &L, point: &RigidPoint) -> f64 {
+        let energy = <Self as RunSpace<L>>::energy(model, point).abs();
+        energy.max(0.5 * point.momentum.dot(&point.omega).abs())
+    }
+
+    fn extent(_: &RigidPoint) -> Option<f64> {
+        None
     }
 
     fn state(point: &RigidPoint) -> StateSummary {

@@ -26,27 +26,70 @@ pub fn csv_header(names: &[&str]) -> String {
 pub const RIGID_CSV_HEADER: &str = "t,qw,qx,qy,qz,r11,r12,r13,r21,r22,r23,r31,r32,r33,\
 omega_1,omega_2,omega_3,pi_1,pi_2,pi_3,energy,orthogonality\n";
 
-/// Write `points` as CSV to `path`: `header` (with its newline), then one line per point of
-/// the numbers `row` puts into its buffer.
-pub fn write_csv<P>(
-    path: &Path,
-    header: &str,
-    points: &[P],
-    mut row: impl FnMut(&P, &mut Vec<f64>),
-) -> std::io::Result<()> {
-    let mut out = BufWriter::new(File::create(path)?);
-    out.write_all(header.as_bytes())?;
-    let mut values = Vec::new();
-    for point in points {
-        values.clear();
-        row(point, &mut values);
-        for (i, x) in values.iter().enumerate() {
-            let separator = if i == 0 { "" } else { "," };
-            write!(out, "{separator}{}", Float(*x))?;
-        }
-        writeln!(out)?;
+/// A CSV file written row by row as a run computes it: created (and its header written)
+/// before the first step, so an unwritable path is reported before any work, and flushed
+/// every [`CsvStream::FLUSH_ROWS`] rows, so memory stays flat and a killed run keeps its rows.
+#[derive(Debug)]
+pub struct CsvStream {
+    out: BufWriter<File>,
+    values: Vec<f64>,
+    rows: usize,
+    last_time: Option<f64>,
+}
+
+impl CsvStream {
+    /// Rows between two flushes.
+    pub const FLUSH_ROWS: usize = 256;
+
+    /// Create (or truncate) the file at `path` and write `header` (with its newline).
+    pub fn create(path: &Path, header: &str) -> std::io::Result<Self> {
+        let mut out = BufWriter::new(File::create(path)?);
+        out.write_all(header.as_bytes())?;
+        out.flush()?;
+        Ok(CsvStream {
+            out,
+            values: Vec::new(),
+            rows: 0,
+            last_time: None,
+        })
     }
-    out.flush()
+
+    /// Append the row of the point at `time`, whose numbers `fill` puts into its buffer.
+    pub fn write_row(
+        &mut self,
+        time: f64,
+        fill: impl FnOnce(&mut Vec<f64>),
+    ) -> std::io::Result<()> {
+        self.values.clear();
+        fill(&mut self.values);
+        for (i, x) in self.values.iter().enumerate() {
+            let separator = if i == 0 { "" } else { "," };
+            write!(self.out, "{separator}{}", Float(*x))?;
+        }
+        writeln!(self.out)?;
+        self.rows += 1;
+        self.last_time = Some(time);
+        if self.rows.is_multiple_of(Self::FLUSH_ROWS) {
+            self.out.flush()?;
+        }
+        Ok(())
+    }
+
+    /// The rows written so far.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// The time of the last row written.
+    pub fn last_time(&self) -> Option<f64> {
+        self.last_time
+    }
+
+    /// Flush what is left; the number of rows.
+    pub fn finish(mut self) -> std::io::Result<usize> {
+        self.out.flush()?;
+        Ok(self.rows)
+    }
 }
 
 /// An `f64` printed so that it reads back exactly: shortest decimal, in exponent form when

@@ -1,7 +1,8 @@
-//! What the commands write: the run summary, trajectory CSV and the number format, SVG plots,
-//! the progress bar.
+//! What the commands write: the run summary and its health check, trajectory CSV and the
+//! number format, SVG plots, the progress bar.
 
 pub mod csv;
+pub mod health;
 pub mod plot;
 pub mod progress;
 pub mod summary;

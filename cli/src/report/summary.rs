@@ -14,6 +14,7 @@ use serde::Serialize;
 use svi::solve::Adapt;
 
 use crate::report::csv::{Float, vector};
+use crate::report::health::Warning;
 
 /// The result of running a scene (`svi run --json` prints it as one JSON object).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -76,6 +77,52 @@ pub struct Summary {
     /// Adaptivity and output times (see the module documentation for when it is present).
     #[serde(flatten)]
     pub solve: Option<SolveSummary>,
+    /// `ok`, or `failed` for a run that stopped with an error (the fields above then describe
+    /// the run up to its last good state) or failed the health check under `--strict`.
+    pub status: Status,
+    /// The health checks the run failed ([`crate::report::health`]).
+    pub warnings: Vec<Warning>,
+    /// Why the run failed (`status` = `failed`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<ErrorReport>,
+}
+
+/// Whether a run ended well.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// The run reached its horizon.
+    Ok,
+    /// The run stopped with an error, or failed a health check under `--strict`.
+    Failed,
+}
+
+/// A failure, for machine-readable output: the JSON `error` object.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ErrorReport {
+    /// `invalid_parameter`, `non_convergence`, `singular_matrix`, `legendre_map`,
+    /// `step_size_too_small`, `non_finite`, `diverged` (the library's error kinds),
+    /// `invalid_input` (other bad input), `output` (an output that cannot be written) or
+    /// `health` (a failed health check under `--strict`).
+    pub kind: &'static str,
+    /// The message, as printed on stderr.
+    pub message: String,
+    /// Index of the failing step, for failures in a step.
+    pub step: Option<usize>,
+    /// Time of the failure (the start of the failing step).
+    pub t: Option<f64>,
+}
+
+impl ErrorReport {
+    /// The report of a library error: its kind, message, step and time.
+    pub fn of(error: &svi::Error) -> Self {
+        ErrorReport {
+            kind: error.kind(),
+            message: error.to_string(),
+            step: error.step(),
+            t: error.time(),
+        }
+    }
 }
 
 /// A state of a run (the final one, or one at an output time), with the fields of its space.

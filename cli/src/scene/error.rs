@@ -106,6 +106,12 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// A run that reached its horizon but failed its health check, under `svi run --strict`.
+    #[error("the run failed its health check (--strict): {}", .warnings.join("; "))]
+    Unhealthy {
+        /// The messages of the failed checks.
+        warnings: Vec<String>,
+    },
     /// Everything the library rejects: parameters, step, horizon, method options, initial
     /// state, nonlinear solves.
     #[error(transparent)]
@@ -189,7 +195,9 @@ impl SceneError {
     pub fn is_bad_input(&self) -> bool {
         match self {
             SceneError::Svi(error) => is_bad_input(error),
-            SceneError::RunFailed { .. } | SceneError::Write { .. } => false,
+            SceneError::RunFailed { .. }
+            | SceneError::Write { .. }
+            | SceneError::Unhealthy { .. } => false,
             _ => true,
         }
     }

@@ -1,0 +1,160 @@
+//! The health check of a run: a run that completes is not yet a run to trust. Two symptoms
+//! of garbage are checked after every run, at no cost to the run itself:
+//!
+//! - **energy**: for a model whose energy is conserved (autonomous, unforced), the energy
+//!   error (the largest over the step points when measured, otherwise that of the final
+//!   point) above [`ENERGY_TOLERANCE`] of the energy's scale, the largest of |E₀|, ½|p₀·q̇₀|
+//!   and ½|p·q̇| at the end (the energy, and the kinetic energy of a quadratic kinetic term at
+//!   both ends, Π·Ω on SO(3): E₀ alone may vanish, as for a double pendulum released from rest
+//!   with its arms horizontal);
+//! - **escape**: the configuration's largest component grown beyond [`ESCAPE_FACTOR`] times
+//!   its initial size (at least 1): a bound motion that flew off (on ℝᴺ).
+//!
+//! A failing check is a [`Warning`]: printed on stderr as `warning: …`, listed in the JSON
+//! summary's `warnings`, and with `svi run --strict` an error (exit status 1). A run that
+//! recovered failed steps and then fails a check says so.
+
+use serde::Serialize;
+
+/// Largest energy error accepted, relative to the energy's scale: 1 %.
+pub const ENERGY_TOLERANCE: f64 = 1e-2;
+
+/// Largest growth of the configuration accepted (final largest component over the initial
+/// one, or 1 if that is smaller): 100.
+pub const ESCAPE_FACTOR: f64 = 1e2;
+
+/// A check the run failed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Warning {
+    /// `energy` or `escape`.
+    pub kind: &'static str,
+    /// What was measured, against what bound, and what it means.
+    pub message: String,
+}
+
+/// What the checks look at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measured {
+    /// Whether the model conserves energy (autonomous and unforced).
+    pub conserves_energy: bool,
+    /// Energy of the initial point.
+    pub energy_initial: f64,
+    /// Energy of the final point.
+    pub energy_final: f64,
+    /// Largest |E − E₀| over the step points, if measured.
+    pub energy_error_max: Option<f64>,
+    /// The energy's scale: the largest of |E₀|, ½|p₀·q̇₀| and ½|p·q̇| at the end.
+    pub energy_scale: f64,
+    /// Largest component of the initial and the final configuration (ℝᴺ only).
+    pub extent: Option<(f64, f64)>,
+    /// Failed steps retried with half the step.
+    pub retries: usize,
+}
+
+/// The checks `measured` fails.
+pub fn check(measured: &Measured) -> Vec<Warning> {
+    let mut warnings = Vec::new();
+    let error = measured
+        .energy_error_max
+        .unwrap_or((measured.energy_final - measured.energy_initial).abs());
+    let scale = measured.energy_scale;
+    if measured.conserves_energy && !(error <= ENERGY_TOLERANCE * scale) {
+        let relative = if scale > 0.0 {
+            error / scale
+        } else {
+            f64::INFINITY
+        };
+        warnings.push(Warning {
+            kind: "energy",
+            message: format!(
+                "the energy error {error:.3e} is {:.3} % of the energy's scale {scale:.3e} (more \
+                 than {} %): the step does not resolve the motion, and the result is not to be \
+                 trusted",
+                100.0 * relative,
+                100.0 * ENERGY_TOLERANCE
+            ),
+        });
+    }
+    if let Some((initial, last)) = measured.extent {
+        let bound = ESCAPE_FACTOR * initial.max(1.0);
+        if !(last <= bound) {
+            warnings.push(Warning {
+                kind: "escape",
+                message: format!(
+                    "the configuration grew from {initial:.3e} to {last:.3e} (more than {} \
+                     times): the motion escaped",
+                    ESCAPE_FACTOR
+                ),
+            });
+        }
+    }
+    if measured.retries > 0 {
+        for warning in &mut warnings {
+            warning.message.push_str(&format!(
+                "; {} failed steps were retried with h/2: recovery kept the run going, it did \
+                 not make it accurate",
+                measured.retries
+            ));
+        }
+    }
+    warnings
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured(error: f64, scale: f64) -> Measured {
+        Measured {
+            conserves_energy: true,
+            energy_initial: -0.5,
+            energy_final: -0.5 + error,
+            energy_error_max: Some(error),
+            energy_scale: scale,
+            extent: Some((1.0, 2.0)),
+            retries: 0,
+        }
+    }
+
+    #[test]
+    fn an_energy_error_above_one_percent_of_the_scale_is_a_warning() {
+        assert!(check(&measured(4.9e-3, 0.5)).is_empty());
+        let warnings = check(&measured(5.1e-3, 0.5));
+        assert_eq!(warnings.len(), 1);
+        assert_eq!(warnings[0].kind, "energy");
+        assert!(
+            warnings[0].message.contains("1.020 %"),
+            "{}",
+            warnings[0].message
+        );
+        // NaN is never healthy; a model that does not conserve energy is not checked.
+        assert_eq!(check(&measured(f64::NAN, 0.5)).len(), 1);
+        let forced = Measured {
+            conserves_energy: false,
+            ..measured(1.0, 0.5)
+        };
+        assert!(check(&forced).is_empty());
+    }
+
+    #[test]
+    fn an_escaped_configuration_is_a_warning_and_recovery_is_named() {
+        let escaped = Measured {
+            extent: Some((0.5, 150.0)),
+            retries: 3,
+            ..measured(1.0, 0.5)
+        };
+        let warnings = check(&escaped);
+        let kinds: Vec<&str> = warnings.iter().map(|w| w.kind).collect();
+        assert_eq!(kinds, ["energy", "escape"]);
+        assert!(
+            warnings
+                .iter()
+                .all(|w| w.message.contains("3 failed steps were retried"))
+        );
+        let bounded = Measured {
+            extent: Some((0.5, 99.0)),
+            ..measured(0.0, 0.5)
+        };
+        assert!(check(&bounded).is_empty());
+    }
+}
