@@ -58,7 +58,12 @@ pub fn check(measured: &Measured) -> Vec<Warning> {
         .energy_error_max
         .unwrap_or((measured.energy_final - measured.energy_initial).abs());
     let scale = measured.energy_scale;
-    if measured.conserves_energy && !(error <= ENERGY_TOLERANCE * scale) {
+    // NaN compares false: a NaN error or scale is never healthy.
+    let healthy = matches!(
+        error.partial_cmp(&(ENERGY_TOLERANCE * scale)),
+        Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+    );
+    if measured.conserves_energy && !healthy {
         let relative = if scale > 0.0 {
             error / scale
         } else {
@@ -77,7 +82,10 @@ pub fn check(measured: &Measured) -> Vec<Warning> {
     }
     if let Some((initial, last)) = measured.extent {
         let bound = ESCAPE_FACTOR * initial.max(1.0);
-        if !(last <= bound) {
+        if !matches!(
+            last.partial_cmp(&bound),
+            Some(std::cmp::Ordering::Less | std::cmp::Ordering::Equal)
+        ) {
             warnings.push(Warning {
                 kind: "escape",
                 message: format!(
