@@ -3,6 +3,7 @@
 //! adaptivity on the same loop ([`solve`]), and the observers ([`observer`], with the rigid-body
 //! ones in [`rigid_observer`]).
 
+pub mod adapt;
 pub mod grid;
 pub mod observer;
 pub mod rigid_observer;

@@ -1,12 +1,12 @@
 //! `solve`: states at requested times, dense output, and step- or degree-adaptivity.
 //!
 //! The calling convention of Porcù & Penati's `[T, Y] = spectralvarint(odefun, tspan, y0,
-//! options)`: a model, a [`Span`] (a horizon or a list of output times), an [`Initial`] state
+//! options)`: a model, a [`Span`] (a horizon or a list of output times), an [`crate::Initial`] state
 //! and [`SolveOptions`]; the result is the phase point at every output time plus statistics.
 //!
 //! # Dense output
 //! Every step of [`crate::Svi`] and [`crate::SpectralCollocation`] carries its interpolating
-//! polynomial ([`Method::dense_output`]); an output time inside a step is read off it, and the
+//! polynomial ([`crate::Method::dense_output`]); an output time inside a step is read off it, and the
 //! step is never shortened to land on an output time (that would break the fixed-step
 //! geometry). At interior times p is the Legendre map of the polynomial's (q, q̇). Methods
 //! without a step polynomial are interpolated by the cubic Hermite polynomial of the step's
@@ -24,37 +24,15 @@
 //! - [`Adapt::None`]: fixed steps t_k = t_0 + k·h, exactly [`crate::Integrator::run`]'s
 //!   geometry. Symplectic methods stay symplectic, momenta of symmetries are conserved, and
 //!   energy errors stay bounded over exponentially long times (backward error analysis).
-//! - [`Adapt::Step`]: step doubling as in Porcù & Penati's slides. From (t, y) the method takes
-//!   two steps of h (result X2) and one of 2h (result W); with r the order,
-//!   h_opt = h (2(2^r + 1) tol_step / ‖W − X2‖)^(1/(r+1)). The step is accepted (keeping the
-//!   more accurate X2) when h_opt ≥ h, and retried with h_opt otherwise; the next h is
-//!   safety · h_opt, with growth and shrink bounded, and a step below the minimum ends in
-//!   [`Error::StepSizeTooSmall`]. Each accepted step is still a composition of symplectic
-//!   maps and conserves the Noether momenta exactly, but the step size depends on the state,
-//!   so the map over many steps is not symplectic and the energy error may drift.
-//! - [`Adapt::Degree`]: fixed h, and the number of CGL points of each step chosen between
-//!   `min_points` and `max_points` from the decay of the step polynomial's Chebyshev
-//!   coefficients a_k (max over components). With the tail a_s and its decay rate ρ per
-//!   degree, the local error of s' + 1 points is estimated as a_s ρ^(s' − s + (r − s')/2)
-//!   for a method of order r (r = 2s' for SVI, whose end points are superconvergent, so the
-//!   end-point error falls faster than the polynomial's tail; r ≈ s' for SC).
-//!   A step whose estimate exceeds tol_step is retried with more points; the next step's
-//!   points are chosen ahead from the trend of the estimates (raised before the tolerance
-//!   is missed, lowered by at most one per step and only with a margin). Every step is
-//!   a symplectic map with its own degree, momenta of symmetries are conserved exactly, the
-//!   time grid is fixed; the composition of different symplectic maps is symplectic, but
-//!   the choice of map depends on the state, so there is no modified Hamiltonian and no
-//!   bounded-energy guarantee.
+//! - [`Adapt::Step`] (step doubling) and [`Adapt::Degree`] (points per step): see
+//!   [`super::adapt`].
 
 use crate::error::{Error, require_finite, require_positive};
-use crate::method::space::{Space, StepState};
+use crate::method::space::Space;
 use crate::method::step::Step;
-use crate::spectral::MAX_POINTS;
-use crate::stepping::grid::{check_span, grid_step, grid_steps, resolution};
+use crate::stepping::grid::{check_span, grid_steps};
 use crate::stepping::observer::Observer;
-use crate::stepping::run::{
-    Cursor, Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics,
-};
+use crate::stepping::run::{Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics};
 use std::fmt;
 use std::str::FromStr;
 
@@ -247,7 +225,7 @@ impl SolveOptions {
         }
     }
 
-    fn tolerance(&self) -> Result<f64, Error> {
+    pub(super) fn tolerance(&self) -> Result<f64, Error> {
         let tol = self.tol.ok_or_else(|| {
             Error::invalid("tol", format!("adapt = {} needs a tolerance", self.adapt))
         })?;
@@ -261,7 +239,7 @@ impl SolveOptions {
         Ok(tol)
     }
 
-    fn step(&self) -> Result<f64, Error> {
+    pub(super) fn step(&self) -> Result<f64, Error> {
         let h = self
             .h
             .ok_or_else(|| Error::invalid("h", format!("adapt = {} needs a step", self.adapt)))?;
@@ -330,7 +308,7 @@ pub struct Adaptivity {
 }
 
 impl Adaptivity {
-    fn record(&mut self, h: f64, points: Option<usize>) {
+    pub(super) fn record(&mut self, h: f64, points: Option<usize>) {
         if self.accepted == 0 {
             self.min_step = h;
             self.max_step = h;
@@ -398,57 +376,17 @@ pub fn solve<L, M: Step<L, S> + Clone, S: Space>(
 }
 
 /// Output times not yet served, and the points produced so far.
-struct Outputs<'a, S: Space> {
+pub(super) struct Outputs<'a, S: Space> {
     times: &'a [f64],
-    points: Vec<S::Point>,
+    pub(super) points: Vec<S::Point>,
     /// Last velocity, the Newton start of the next inverse Legendre map.
-    guess: S::Velocity,
+    pub(super) guess: S::Velocity,
 }
 
 impl<S: Space> Outputs<'_, S> {
     fn next(&self) -> Option<f64> {
         self.times.get(self.points.len()).copied()
     }
-}
-
-/// Chebyshev coefficient magnitudes a_k = max over components |c_k| (k = 0..s) of the
-/// polynomial through the CGL node values (offsets, `width` numbers per node: node 0 is zero).
-fn chebyshev_magnitudes(offsets: &[f64], width: usize, out: &mut [f64]) {
-    let s = offsets.len() / width;
-    for (k, a) in out.iter_mut().enumerate().take(s + 1) {
-        let scale = if k == 0 || k == s { 1.0 } else { 2.0 } / s as f64;
-        *a = 0.0;
-        for component in 0..width {
-            let mut c = 0.0;
-            for (nu, node) in offsets.chunks_exact(width).enumerate() {
-                let nu = nu + 1;
-                // x_ν = −cos(νπ/s), so T_k(x_ν) = (−1)^k cos(kνπ/s).
-                let weight = if nu == s { 0.5 } else { 1.0 };
-                let angle = std::f64::consts::PI * ((k * nu) % (2 * s)) as f64 / s as f64;
-                let tk = if k % 2 == 0 {
-                    angle.cos()
-                } else {
-                    -angle.cos()
-                };
-                c += weight * tk * node[component];
-            }
-            *a = a.max((c * scale).abs());
-        }
-    }
-}
-
-/// The local-error model of degree adaptivity, from the Chebyshev magnitudes a_0..a_s of the
-/// step polynomial: the tail a_s and its decay rate per degree ρ = max(a_s/a_{s−1},
-/// √(a_s/a_{s−2})) (the square root covers problems whose odd or even coefficients vanish).
-fn decay(magnitudes: &[f64]) -> (f64, f64) {
-    let s = magnitudes.len() - 1;
-    let floor = f64::EPSILON * magnitudes[1].max(f64::MIN_POSITIVE);
-    let tail = magnitudes[s].max(floor);
-    let mut rho = tail / magnitudes[s - 1].max(floor);
-    if s >= 3 {
-        rho = rho.max((tail / magnitudes[s - 2].max(floor)).sqrt());
-    }
-    (tail, rho.min(1.0))
 }
 
 impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
@@ -515,7 +453,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// inside the step the method's dense output or, without one, the space's interpolant of
     /// the completed end points.
     #[allow(clippy::too_many_arguments)]
-    fn emit(
+    pub(super) fn emit(
         &self,
         method: &M,
         workspace: &M::Workspace,
@@ -605,374 +543,5 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             },
         )?;
         Ok((adaptivity, stopped))
-    }
-
-    /// One trial step of an adaptive mode from `from` at `t` with size `h` (counted in
-    /// `statistics.steps`), with the step's index and time attached to a failure.
-    #[allow(clippy::too_many_arguments)]
-    fn trial(
-        &self,
-        method: &M,
-        workspace: &mut M::Workspace,
-        increment: &mut S::State,
-        t: f64,
-        h: f64,
-        from: &Cursor<S>,
-        divergence_limit: Option<f64>,
-        statistics: &mut Statistics,
-    ) -> Result<Cursor<S>, Error> {
-        let index = statistics.steps;
-        let next = self
-            .attempt(
-                method,
-                workspace,
-                increment,
-                t,
-                h,
-                from,
-                divergence_limit,
-                statistics,
-            )
-            .map_err(|failure| failure.at(index, t))?;
-        statistics.steps += 1;
-        Ok(next)
-    }
-
-    /// Step doubling (see the module docs): two steps of h against one of 2h, accepted when
-    /// the optimal step is not smaller; observers see the points of the accepted steps.
-    fn solve_step_adaptive<O: Observer<L, S::Point>>(
-        &self,
-        span: &Span,
-        options: &SolveOptions,
-        progress: &mut Progress<S>,
-        outputs: &mut Outputs<'_, S>,
-        observer: &mut O,
-    ) -> Result<(Adaptivity, bool), RunFailure<S>> {
-        let rejected = RunFailure::rejected;
-        let tol = options.tolerance().map_err(rejected)?;
-        let length = span.t_end - span.t0;
-        let finest = resolution(span.t0, span.t_end);
-        let min_step = match options.min_step {
-            Some(min_step) if min_step < finest => {
-                return Err(rejected(Error::invalid(
-                    "min_step",
-                    format!(
-                        "{min_step:e} is below the finest step {finest:e} whose times floating \
-                         point can tell apart near the span"
-                    ),
-                )));
-            }
-            Some(min_step) => min_step,
-            None => (length * 1e-12).max(finest),
-        };
-        let max_step = options.max_step.unwrap_or(length).min(length);
-        if min_step > max_step {
-            return Err(rejected(Error::invalid(
-                "min_step",
-                format!(
-                    "{min_step:e} is above the largest step {max_step:e} (max_step, or the span)"
-                ),
-            )));
-        }
-        let method = self.method();
-        let order = method.info().order as i32;
-        let numerator = 2.0 * (2f64.powi(order) + 1.0);
-        let exponent = 1.0 / (f64::from(order) + 1.0);
-        let mut h = match options.h {
-            Some(h) => {
-                require_positive("h", h).map_err(rejected)?;
-                h
-            }
-            None => {
-                let point = self
-                    .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
-                    .map_err(rejected)?;
-                let (size, speed) = S::size_and_speed(&point);
-                0.01 * size.max(1e-3) / speed.max(1e-12)
-            }
-        }
-        .clamp(min_step, max_step);
-        let points = method.points();
-        let limit = options.run.divergence_limit;
-        let mut half = method.workspace(self.model(), h).map_err(rejected)?;
-        let mut full = method.workspace(self.model(), 2.0 * h).map_err(rejected)?;
-        let mut increment = S::State::zeros();
-        let mut adaptivity = Adaptivity::default();
-        let mut rejections = 0;
-        if observer.wants(0) && self.observe(0, progress, observer)? {
-            return Ok((adaptivity, true));
-        }
-        while progress.t < span.t_end {
-            let t = progress.t;
-            let remaining = span.t_end - t;
-            let last = 2.0 * h >= remaining * (1.0 - 1e-12);
-            let end = if last { span.t_end } else { t + 2.0 * h };
-            let dt = if last { 0.5 * remaining } else { h };
-            let mid = t + dt;
-            let mark = outputs.points.len();
-            let guess = outputs.guess;
-            let start = progress.cursor;
-            let statistics = &mut progress.statistics;
-            let mut trial = || -> Result<(Cursor<S>, Cursor<S>, f64), Error> {
-                let x1 = self.trial(
-                    method,
-                    &mut half,
-                    &mut increment,
-                    t,
-                    dt,
-                    &start,
-                    limit,
-                    statistics,
-                )?;
-                self.emit(method, &half, outputs, t, dt, &start.state, &x1.state, mid)?;
-                let x2 = self.trial(
-                    method,
-                    &mut half,
-                    &mut increment,
-                    mid,
-                    end - mid,
-                    &x1,
-                    limit,
-                    statistics,
-                )?;
-                self.emit(
-                    method,
-                    &half,
-                    outputs,
-                    mid,
-                    end - mid,
-                    &x1.state,
-                    &x2.state,
-                    end,
-                )?;
-                let w = self.trial(
-                    method,
-                    &mut full,
-                    &mut increment,
-                    t,
-                    end - t,
-                    &start,
-                    limit,
-                    statistics,
-                )?;
-                Ok((x1, x2, w.state.distance(&x2.state)))
-            };
-            let optimal = match trial() {
-                Ok((x1, x2, error)) => {
-                    // The slides' h_opt is the step whose single-step error is tol_step.
-                    let tol_step = tol * dt / length;
-                    let optimal = dt * (numerator * tol_step / error).powf(exponent);
-                    if optimal >= dt {
-                        adaptivity.record(dt, points);
-                        adaptivity.record(end - mid, points);
-                        rejections = 0;
-                        h = (options.safety * optimal)
-                            .clamp(dt * options.max_shrink, dt * options.max_growth)
-                            .min(max_step);
-                        for (step, cursor, time) in [
-                            (adaptivity.accepted - 1, x1, mid),
-                            (adaptivity.accepted, x2, end),
-                        ] {
-                            progress.cursor = cursor;
-                            progress.t = time;
-                            if observer.wants(step) && self.observe(step, progress, observer)? {
-                                // Stopped after the first of the pair: drop the outputs
-                                // served from the second.
-                                let served = outputs
-                                    .points
-                                    .partition_point(|point| S::time(point) <= time);
-                                outputs.points.truncate(served);
-                                return Ok((adaptivity, time < span.t_end));
-                            }
-                        }
-                        continue;
-                    }
-                    optimal
-                }
-                // A trial step too large for the nonlinear solve is rejected like one too
-                // inaccurate.
-                Err(Error::NonConvergence { .. })
-                | Err(Error::SingularMatrix { .. })
-                | Err(Error::NonFinite { .. }) => 0.0,
-                Err(other) => return Err(self.failure(other, progress, false)),
-            };
-            outputs.points.truncate(mark);
-            outputs.guess = guess;
-            method.restart(&mut half);
-            method.restart(&mut full);
-            adaptivity.rejected += 1;
-            rejections += 1;
-            h = (options.safety * optimal).max(dt * options.max_shrink);
-            if h < min_step || rejections > options.max_rejections {
-                let error = Error::StepSizeTooSmall {
-                    t,
-                    h,
-                    min_step,
-                    rejections,
-                };
-                return Err(self.failure(error, progress, false));
-            }
-        }
-        Ok((adaptivity, false))
-    }
-
-    /// Fixed h, the number of points of each step chosen from the decay of the step
-    /// polynomial's Chebyshev coefficients (see the module docs).
-    fn solve_degree_adaptive<O: Observer<L, S::Point>>(
-        &self,
-        span: &Span,
-        options: &SolveOptions,
-        progress: &mut Progress<S>,
-        outputs: &mut Outputs<'_, S>,
-        observer: &mut O,
-    ) -> Result<(Adaptivity, bool), RunFailure<S>> {
-        let rejected = RunFailure::rejected;
-        let tol = options.tolerance().map_err(rejected)?;
-        let h = options.step().map_err(rejected)?;
-        let base = self.method();
-        let Some(initial_points) = base.points() else {
-            return Err(rejected(Error::invalid(
-                "adapt",
-                format!(
-                    "method {} has no polynomial degree to adapt",
-                    base.info().name
-                ),
-            )));
-        };
-        let (low, high) = (options.min_points, options.max_points);
-        if !(2..=MAX_POINTS).contains(&low) || !(low..=MAX_POINTS).contains(&high) {
-            return Err(rejected(Error::invalid(
-                "points",
-                format!(
-                    "min_points = {low}, max_points = {high}: need 2 ≤ min_points ≤ max_points ≤ \
-                     {MAX_POINTS}"
-                ),
-            )));
-        }
-        let length = span.t_end - span.t0;
-        let steps = grid_steps(span.t0, span.t_end, h).map_err(rejected)?;
-        // One method and workspace per number of points, built once (tables are small).
-        let mut steppers = (low..=high)
-            .map(|points| {
-                let method = base.with_points(points).ok_or_else(|| {
-                    Error::invalid("adapt", "the method cannot change its number of points")
-                })?;
-                let workspace = method.workspace(self.model(), h)?;
-                Ok((method, workspace))
-            })
-            .collect::<Result<Vec<_>, Error>>()
-            .map_err(rejected)?;
-        let orders: Vec<f64> = steppers
-            .iter()
-            .map(|(method, _)| method.info().order as f64)
-            .collect();
-        let limit = options.run.divergence_limit;
-        let mut increment = S::State::zeros();
-        let mut points = initial_points.clamp(low, high);
-        let mut magnitudes = [0.0; MAX_POINTS];
-        let mut adaptivity = Adaptivity::default();
-        // The points used by the previous step, whose warm start continues into this one.
-        let mut warm = None;
-        // (points, error estimate) of the last accepted step.
-        let mut previous: Option<(usize, f64)> = None;
-        if observer.wants(0) && self.observe(0, progress, observer)? {
-            return Ok((adaptivity, true));
-        }
-        for k in 0..steps {
-            let (t, size, end_time) = grid_step(span.t0, span.t_end, h, steps, k);
-            let tol_step = tol * size / length;
-            loop {
-                let (method, workspace) = &mut steppers[points - low];
-                if warm != Some(points) {
-                    method.restart(workspace);
-                }
-                let next = match self.trial(
-                    method,
-                    workspace,
-                    &mut increment,
-                    t,
-                    size,
-                    &progress.cursor,
-                    limit,
-                    &mut progress.statistics,
-                ) {
-                    Ok(next) => next,
-                    Err(Error::NonConvergence { .. } | Error::NonFinite { .. })
-                        if points < high =>
-                    {
-                        adaptivity.rejected += 1;
-                        warm = None;
-                        points += 1;
-                        continue;
-                    }
-                    Err(error) => return Err(self.failure(error, progress, false)),
-                };
-                warm = Some(points);
-                let Some(offsets) = method.node_offsets(workspace) else {
-                    let error = Error::invalid("adapt", "the method has no step polynomial");
-                    return Err(self.failure(error, progress, false));
-                };
-                let s = offsets.len() / S::NODE_WIDTH;
-                chebyshev_magnitudes(offsets, S::NODE_WIDTH, &mut magnitudes[..=s]);
-                let (tail, rho) = decay(&magnitudes[..=s]);
-                // a_s ρ^(s' − s) is the tail with s' + 1 points, and the end point of a
-                // method of order r beats it by ρ^((r − s')/2) (measured on Kepler
-                // problems: within a factor 5 for SVI, r = 2s'; SC has r ≈ s').
-                let estimate = |p: usize| {
-                    let degree = (p - 1) as f64;
-                    let exponent = degree - s as f64 + 0.5 * (orders[p - low] - degree).max(0.0);
-                    tail * rho.powf(exponent)
-                };
-                let target = options.safety * tol_step;
-                if estimate(points) > tol_step && points < high {
-                    adaptivity.rejected += 1;
-                    points = (points + 1..=high)
-                        .find(|&p| estimate(p) <= target)
-                        .unwrap_or(high);
-                    continue;
-                }
-                if estimate(points) > tol_step {
-                    adaptivity.unmet += 1;
-                }
-                if let Err(error) = self.emit(
-                    method,
-                    workspace,
-                    outputs,
-                    t,
-                    size,
-                    &progress.cursor.state,
-                    &next.state,
-                    end_time,
-                ) {
-                    return Err(self.failure(error, progress, false));
-                }
-                adaptivity.record(size, Some(points));
-                progress.cursor = next;
-                progress.t = end_time;
-                if observer.wants(k + 1) && self.observe(k + 1, progress, observer)? {
-                    return Ok((adaptivity, k + 1 < steps));
-                }
-                // The next step's estimate, extrapolated from the trend of the last two at
-                // the same points, chooses the next points: more before the tolerance is
-                // missed (a rejection costs a whole step), fewer with a margin (hysteresis).
-                let now = estimate(points);
-                let growth = match previous {
-                    Some((p, before)) if p == points && before > 0.0 => {
-                        (now / before).clamp(1.0, 1e3)
-                    }
-                    _ => 1.0,
-                };
-                previous = Some((points, now));
-                if now * growth * growth > target && points < high {
-                    points = (points + 1..=high)
-                        .find(|&p| estimate(p) * growth * growth <= target)
-                        .unwrap_or(high);
-                } else if points > low && estimate(points - 1) <= 0.1 * target {
-                    points -= 1;
-                }
-                break;
-            }
-        }
-        Ok((adaptivity, false))
     }
 }
