@@ -12,7 +12,7 @@ pub fn step_count(span: f64, h: f64) -> Result<usize, Error> {
     if !ratio.is_finite() || ratio > 1e12 {
         return Err(Error::invalid(
             "h",
-            format!("step {h} is too small for the span {span} (more than 10^12 steps)"),
+            format!("step {h:?} is too small for the span {span:?} (more than 10^12 steps)"),
         ));
     }
     let nearest = ratio.round();
@@ -42,7 +42,7 @@ pub fn check_span(t0: f64, t_end: f64) -> Result<(), Error> {
     if t_end <= t0 {
         return Err(Error::invalid(
             "t_end",
-            format!("the horizon {t_end} is not after the start {t0}"),
+            format!("the horizon {t_end:?} is not after the start {t0:?}"),
         ));
     }
     let finest = resolution(t0, t_end);
