@@ -27,10 +27,10 @@ pub struct Overrides {
     )]
     pub method: Option<MethodSpec>,
     /// Number of Chebyshev–Gauss–Lobatto points (svi, sc, lie-svi), on top of --method.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub points: Option<usize>,
     /// Number of Gauss–Legendre quadrature points (svi, lie-svi), on top of --method.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub quadrature: Option<usize>,
     /// Step size (not with --adapt step, which chooses its own steps).
     #[arg(long = "h", value_name = "H", allow_negative_numbers = true)]
@@ -42,7 +42,7 @@ pub struct Overrides {
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
     pub parameters: Vec<(String, f64)>,
     /// Keep every K-th step of the trajectory (with --out, without --output-times; default 1).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
     pub every: Option<usize>,
     /// Write the trajectory as CSV to FILE.
     #[arg(long, value_name = "FILE")]
@@ -74,7 +74,7 @@ pub struct Overrides {
     #[arg(long, value_enum)]
     pub recovery: Option<RecoveryKind>,
     /// Stop once a state component exceeds this in absolute value.
-    #[arg(long, value_name = "LIMIT")]
+    #[arg(long, value_name = "LIMIT", allow_negative_numbers = true)]
     pub divergence_limit: Option<f64>,
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]
