@@ -110,7 +110,7 @@ pub struct BenchArgs {
     /// step.
     #[arg(
         long,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Horizon (overrides the scene's), at most {MAX_STEPS} steps of the model's default \
              step"
@@ -120,7 +120,7 @@ pub struct BenchArgs {
     /// Stop a method's sweep once its final error is below this.
     #[arg(
         long,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Stop a method's sweep once its final error is below this positive number \
              [default: {}]; only when a method sweeps",
@@ -131,7 +131,7 @@ pub struct BenchArgs {
     /// Stop a method's sweep after a point whose single run takes longer (seconds).
     #[arg(
         long,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Stop a method's sweep after a point whose single run takes longer, in seconds \
              (above 0, at most {}) [default: {}]; only when a method sweeps",
@@ -144,7 +144,7 @@ pub struct BenchArgs {
     #[arg(
         long,
         default_value_t = 5,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!("Timing batches per point (median reported), 1 to {MAX_BATCHES}")
     )]
     pub batches: usize,
@@ -152,7 +152,7 @@ pub struct BenchArgs {
     #[arg(
         long,
         default_value_t = 0.2,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Minimum duration of a timing batch, in seconds (0: one run per batch; at most {})",
             csv::Float(MAX_BATCH_SECONDS)
@@ -163,7 +163,7 @@ pub struct BenchArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Run the fixed-step methods at these step counts (each 1 to {MAX_STEPS}) instead \
              of sweeping them"
@@ -171,7 +171,7 @@ pub struct BenchArgs {
     )]
     pub steps: Vec<usize>,
     /// Run the adaptive peers (dop853, dopri5) at these tolerances instead of sweeping them.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub tolerances: Vec<f64>,
     /// Directory for `<scene>.csv` and `<scene>.svg`.
     #[arg(long, default_value = "bench-out")]
@@ -953,6 +953,7 @@ pub fn execute(
     options: &BenchOptions,
     out_dir: &Path,
 ) -> anyhow::Result<()> {
+    options.check()?;
     let mut scene = Scene::load(name)?;
     scene.apply(overrides)?;
     let records = work_precision(&scene, options)

@@ -185,21 +185,21 @@ pub struct StabilityArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         conflicts_with_all = ["z_min", "z_max", "samples", "figures", "out_dir"]
     )]
     pub z: Option<Vec<f64>>,
     /// Lower end of the z range.
-    #[arg(long, default_value_t = 1e-6, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1e-6, allow_hyphen_values = true)]
     pub z_min: f64,
     /// Upper end of the z range.
-    #[arg(long, default_value_t = 900.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 900.0, allow_hyphen_values = true)]
     pub z_max: f64,
     /// Grid points on the z range.
     #[arg(
         long,
         default_value_t = 900,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!("Grid points on the z range, 2 to {MAX_SAMPLES}")
     )]
     pub samples: usize,

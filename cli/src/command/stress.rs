@@ -131,7 +131,7 @@ pub struct StressArgs {
     #[arg(
         long,
         default_value_t = 1_000_000,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Steps of the long run of each method, {} to {MAX_DRIFT_STEPS}",
             MIN_DRIFT_STEPS
@@ -141,7 +141,7 @@ pub struct StressArgs {
     /// Bisections refining each stability boundary.
     #[arg(
         long,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "Bisections refining each stability boundary, 0 to {MAX_BISECTIONS} [default: {}]; \
              not with dop853 alone (it has no boundary)",
@@ -152,7 +152,7 @@ pub struct StressArgs {
     /// DOP853's rtol = atol.
     #[arg(
         long,
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         help = format!(
             "DOP853's rtol = atol, a positive number [default: {}]; only with dop853 in \
              --methods",
