@@ -19,7 +19,7 @@ pub enum Error {
     },
     /// The nonlinear solve of a step did not converge.
     #[error(
-        "nonlinear solve did not converge at step {step} (t = {t}): {iterations} iterations, last increment {residual:e}"
+        "nonlinear solve did not converge at step {step} (t = {t:?}): {iterations} iterations, last increment {residual:e}"
     )]
     NonConvergence {
         /// Index of the failing step (the step from `t` to `t + h`), counted from 0.
@@ -33,7 +33,7 @@ pub enum Error {
         residual: f64,
     },
     /// The Newton matrix of a step was singular.
-    #[error("singular Newton matrix at step {step} (t = {t})")]
+    #[error("singular Newton matrix at step {step} (t = {t:?})")]
     SingularMatrix {
         /// Index of the failing step.
         step: usize,
@@ -42,7 +42,7 @@ pub enum Error {
     },
     /// The inverse Legendre map q̇(q, p) did not converge (or met a singular mass matrix).
     #[error(
-        "inverse Legendre map did not converge at t = {t}: {iterations} iterations, last increment {residual:e}"
+        "inverse Legendre map did not converge at t = {t:?}: {iterations} iterations, last increment {residual:e}"
     )]
     LegendreMap {
         /// Time of the state being converted.
@@ -54,7 +54,7 @@ pub enum Error {
     },
     /// Step-size control could not meet the tolerance with steps above the minimum.
     #[error(
-        "step size {h:e} at t = {t} is below the minimum {min_step:e} after {rejections} rejected steps: the tolerance cannot be met"
+        "step size {h:e} at t = {t:?} is below the minimum {min_step:e} after {rejections} rejected steps: the tolerance cannot be met"
     )]
     StepSizeTooSmall {
         /// Time at which the step was tried.
@@ -67,7 +67,7 @@ pub enum Error {
         rejections: usize,
     },
     /// A state or an intermediate value became NaN or infinite.
-    #[error("non-finite {what} at step {step} (t = {t})")]
+    #[error("non-finite {what} at step {step} (t = {t:?})")]
     NonFinite {
         /// What became non-finite (for example "state" or "initial momentum").
         what: String,
@@ -79,7 +79,7 @@ pub enum Error {
     /// The state left the bound set by [`crate::stepping::run::RunOptions::divergence_limit`]:
     /// the signature of a step beyond the method's stability limit.
     #[error(
-        "state diverged at step {step} (t = {t}): largest component {norm:e} exceeds the limit {limit:e}"
+        "state diverged at step {step} (t = {t:?}): largest component {norm:e} exceeds the limit {limit:e}"
     )]
     Diverged {
         /// Index of the step after which the bound was exceeded.
@@ -199,10 +199,10 @@ impl StepFailure {
 /// Check that `value` is finite and strictly positive.
 pub(crate) fn require_positive(name: &str, value: f64) -> Result<(), Error> {
     if !value.is_finite() {
-        return Err(Error::invalid(name, format!("{value} is not finite")));
+        return Err(Error::invalid(name, format!("{value:?} is not finite")));
     }
     if value <= 0.0 {
-        return Err(Error::invalid(name, format!("{value} must be positive")));
+        return Err(Error::invalid(name, format!("{value:?} must be positive")));
     }
     Ok(())
 }
@@ -212,7 +212,7 @@ pub(crate) fn require_finite(name: &str, value: f64) -> Result<(), Error> {
     if value.is_finite() {
         Ok(())
     } else {
-        Err(Error::invalid(name, format!("{value} is not finite")))
+        Err(Error::invalid(name, format!("{value:?} is not finite")))
     }
 }
 

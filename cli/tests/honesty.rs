@@ -207,3 +207,26 @@ fn the_limits_are_the_documented_ones_and_errors_name_the_option_set() {
         "{message}"
     );
 }
+
+#[test]
+fn a_reader_that_goes_away_ends_svi_without_a_panic() {
+    // `svi list | head -0`: the pipe is closed before svi writes. It ends as Unix tools end
+    // (by SIGPIPE, status 141 in a shell), not with a panic in println!.
+    use std::process::{Command, Stdio};
+    for args in [
+        &["list"][..],
+        &["run", "kepler", "--t-end", "10", "--json"][..],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_svi"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Close the read end at once: every write of svi fails.
+        drop(child.stdout.take());
+        let output = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!stderr.contains("panicked"), "svi {args:?}: {stderr}");
+    }
+}

@@ -205,7 +205,7 @@ impl Defaults<2> for Kepler {
                 if !(0.0..1.0).contains(&value) {
                     return Err(Error::invalid(
                         name,
-                        format!("{value} is outside [0, 1) (the orbit must be bound)"),
+                        format!("{value:?} is outside [0, 1) (the orbit must be bound)"),
                     ));
                 }
                 self.e = value;

@@ -6,7 +6,7 @@ use svi::Error;
 pub(crate) fn positive(name: &str, value: f64) -> Result<f64, Error> {
     finite(name, value)?;
     if value <= 0.0 {
-        return Err(Error::invalid(name, format!("{value} must be positive")));
+        return Err(Error::invalid(name, format!("{value:?} must be positive")));
     }
     Ok(value)
 }
@@ -17,7 +17,7 @@ pub(crate) fn non_negative(name: &str, value: f64) -> Result<f64, Error> {
     if value < 0.0 {
         return Err(Error::invalid(
             name,
-            format!("{value} must not be negative"),
+            format!("{value:?} must not be negative"),
         ));
     }
     Ok(value)
@@ -28,7 +28,7 @@ pub(crate) fn finite(name: &str, value: f64) -> Result<f64, Error> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(Error::invalid(name, format!("{value} is not finite")))
+        Err(Error::invalid(name, format!("{value:?} is not finite")))
     }
 }
 

@@ -220,7 +220,8 @@ fn error_messages_name_the_model_and_the_known_parameters() {
         "{error}"
     );
     let error = HarmonicOscillator::new(-2.0).unwrap_err().to_string();
-    assert_eq!(error, "invalid sigma: -2 must be positive");
+    // Numbers print with `{:?}`: 1e300, never 300 digits (issue #14, item 8).
+    assert_eq!(error, "invalid sigma: -2.0 must be positive");
     let error = DoublePendulum::default()
         .set_parameter("d2", f64::INFINITY)
         .unwrap_err()

@@ -215,7 +215,7 @@ pub fn stability_matrix<M: Method<1>>(method: &M, z: f64) -> Result<Matrix2<f64>
         Ok(matrix)
     } else {
         Err(Error::NonFinite {
-            what: format!("stability matrix at z = {z}"),
+            what: format!("stability matrix at z = {z:?}"),
             step: 0,
             t: 0.0,
         })
@@ -252,7 +252,7 @@ pub fn svi_closed_form(points: usize, quadrature: usize, z: f64) -> Result<Matri
         Error::invalid(
             "z",
             format!(
-                "the stage matrix 4A* − zF* of {points} CGL points and {quadrature} Gauss points is singular at z = {z}"
+                "the stage matrix 4A* − zF* of {points} CGL points and {quadrature} Gauss points is singular at z = {z:?}"
             ),
         )
     })?;
@@ -287,7 +287,7 @@ pub fn collocation_closed_form(points: usize, z: f64) -> Result<Matrix2<f64>, Er
     let y = solve(stage, rhs).ok_or_else(|| {
         Error::invalid(
             "z",
-            format!("the stage matrix 4D*² + zI of {points} CGL points is singular at z = {z}"),
+            format!("the stage matrix 4D*² + zI of {points} CGL points is singular at z = {z:?}"),
         )
     })?;
     let velocity = d.view((s, 1), (1, s)) * &y * 2.0;
@@ -429,7 +429,7 @@ pub fn analyse<M: Method<1>>(
     if z_min >= z_max {
         return Err(Error::invalid(
             "z_max",
-            format!("{z_max} must exceed z_min = {z_min}"),
+            format!("{z_max:?} must exceed z_min = {z_min:?}"),
         ));
     }
     if samples < 2 {
@@ -621,7 +621,7 @@ impl Condition {
             (status, _) => Err(Error::invalid(
                 "z",
                 format!(
-                    "Brent's method did not locate a boundary in [{}, {}]: {status:?}",
+                    "Brent's method did not locate a boundary in [{:?}, {:?}]: {status:?}",
                     left.z, right.z
                 ),
             )),
@@ -687,7 +687,7 @@ where
             Ok(error) => error,
             Err(other) => Error::invalid(
                 "z",
-                format!("Brent's method failed on [{lower}, {upper}]: {other}"),
+                format!("Brent's method failed on [{lower:?}, {upper:?}]: {other}"),
             ),
         })
 }

@@ -450,7 +450,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             return Err(Error::invalid(
                 "initial attitude",
                 format!(
-                    "not a rotation: ‖RᵀR − I‖ = {error:e}, det R = {}",
+                    "not a rotation: ‖RᵀR − I‖ = {error:e}, det R = {:?}",
                     r.determinant()
                 ),
             ));

@@ -190,7 +190,14 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         let state = State { q: *q, y };
         if !state.is_finite() {
             return Err(Error::NonFinite {
-                what: "initial state".into(),
+                what: format!(
+                    "{} of the model from the given initial state (its Lagrangian or \
+                     derivatives are singular or overflow there)",
+                    match initial {
+                        Initial::Velocity { .. } => "momentum ∂L/∂q̇",
+                        Initial::Momentum { .. } => "velocity (inverse Legendre map)",
+                    }
+                ),
                 step: 0,
                 t: t0,
             });

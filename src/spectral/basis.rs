@@ -152,7 +152,7 @@ impl LagrangeBasis {
         if let Some(k) = nodes.iter().position(|x| !x.is_finite()) {
             return Err(Error::invalid(
                 "nodes",
-                format!("node {k} is {}, not a finite number", nodes[k]),
+                format!("node {k} is {:?}, not a finite number", nodes[k]),
             ));
         }
         let lower = nodes.iter().copied().fold(f64::INFINITY, f64::min);
@@ -162,7 +162,7 @@ impl LagrangeBasis {
             let reason = if lower == upper {
                 "nodes must be distinct".to_string()
             } else {
-                format!("the spread of the nodes, [{lower}, {upper}], is out of range")
+                format!("the spread of the nodes, [{lower:?}, {upper:?}], is out of range")
             };
             return Err(Error::invalid("nodes", reason));
         }
@@ -183,7 +183,7 @@ impl LagrangeBasis {
                 if factor == 0.0 {
                     return Err(Error::invalid(
                         "nodes",
-                        format!("nodes {k} and {j} coincide (both {xj}); nodes must be distinct"),
+                        format!("nodes {k} and {j} coincide (both {xj:?}); nodes must be distinct"),
                     ));
                 }
                 if factor.abs() < 2f64.powi(-600) {

@@ -49,7 +49,7 @@ pub fn check_span(t0: f64, t_end: f64) -> Result<(), Error> {
     if t_end <= t0 {
         return Err(Error::invalid(
             "t_end",
-            format!("the horizon {t_end} is not after the start {t0}"),
+            format!("the horizon {t_end:?} is not after the start {t0:?}"),
         ));
     }
     let finest = resolution(t0, t_end);

@@ -123,7 +123,7 @@ impl Span {
                 return Err(Error::invalid(
                     "output_times",
                     format!(
-                        "time {time} (entry {i}) is outside the span [{}, {}]",
+                        "time {time:?} (entry {i}) is outside the span [{:?}, {:?}]",
                         self.t0, self.t_end
                     ),
                 ));
@@ -132,7 +132,7 @@ impl Span {
                 return Err(Error::invalid(
                     "output_times",
                     format!(
-                        "times must increase strictly: entry {i} ({time}) follows {}",
+                        "times must increase strictly: entry {i} ({time:?}) follows {:?}",
                         self.output_times[i - 1]
                     ),
                 ));
@@ -251,19 +251,19 @@ impl SolveOptions {
         if !(self.max_growth.is_finite() && self.max_growth > 1.0) {
             return Err(Error::invalid(
                 "max_growth",
-                format!("{} must be a finite number above 1", self.max_growth),
+                format!("{:?} must be a finite number above 1", self.max_growth),
             ));
         }
         if !(self.max_shrink > 0.0 && self.max_shrink < 1.0) {
             return Err(Error::invalid(
                 "max_shrink",
-                format!("{} must lie in (0, 1)", self.max_shrink),
+                format!("{:?} must lie in (0, 1)", self.max_shrink),
             ));
         }
         if !(self.safety > 0.0 && self.safety <= 1.0) {
             return Err(Error::invalid(
                 "safety",
-                format!("{} must lie in (0, 1]", self.safety),
+                format!("{:?} must lie in (0, 1]", self.safety),
             ));
         }
         if self.max_rejections == 0 {
@@ -490,7 +490,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     Error::invalid(
                         "output_times",
                         format!(
-                            "{time} lies inside a step, and {} has neither dense output nor an \
+                            "{time:?} lies inside a step, and {} has neither dense output nor an \
                              interpolant on its space: ask for output at the ends of the span",
                             method.info().name
                         ),

@@ -18,8 +18,11 @@
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
 
 use crate::command::peers::{FirstOrder, dop853, dopri5};
+use crate::report::csv;
 use crate::report::plot::{Panel, Series, write_svg};
-use crate::scene::overrides::Overrides;
+use crate::scene::builtin::DEFAULT_SCENE;
+use crate::scene::limits::{self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS};
+use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
 use nalgebra::SVector;
@@ -30,7 +33,7 @@ use std::str::FromStr;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use svi::method::registry::VectorMethodVisitor;
+use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::observer::{EnergyError, MomentumError};
 use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
@@ -84,21 +87,138 @@ pub fn parse_methods(text: &str) -> Result<Vec<BenchMethod>, SceneError> {
         .collect()
 }
 
+/// `svi bench`'s arguments (parsed by the binary, and by tests as the binary does).
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct BenchArgs {
+    /// Built-in scene or scene file; its model needs an exact solution [default: kepler].
+    pub scene: Option<String>,
+    /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), dop853, dopri5.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = DEFAULT_METHODS,
+        long_help = method_help(
+            "Methods, comma-separated: the library's (for models on ℝᴺ), and the adaptive \
+             peers dop853 and dopri5 (ode_solvers' DOP853 and Dopri5)."
+        )
+    )]
+    pub methods: String,
+    /// Model parameter NAME=VALUE (repeatable).
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
+    pub parameters: Vec<(String, f64)>,
+    /// Horizon (overrides the scene's), at most [`MAX_STEPS`] steps of the model's default
+    /// step.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help = format!(
+            "Horizon (overrides the scene's), at most {MAX_STEPS} steps of the model's default \
+             step"
+        )
+    )]
+    pub t_end: Option<f64>,
+    /// Stop a method's sweep once its final error is below this.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help = format!(
+            "Stop a method's sweep once its final error is below this positive number \
+             [default: {}]; only when a method sweeps",
+            csv::Float(DEFAULT_TARGET)
+        )
+    )]
+    pub target: Option<f64>,
+    /// Stop a method's sweep after a point whose single run takes longer (seconds).
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help = format!(
+            "Stop a method's sweep after a point whose single run takes longer, in seconds \
+             (above 0, at most {}) [default: {}]; only when a method sweeps",
+            csv::Float(MAX_RUN_SECONDS),
+            csv::Float(DEFAULT_MAX_RUN)
+        )
+    )]
+    pub max_run: Option<f64>,
+    /// Timing batches per point (median reported).
+    #[arg(
+        long,
+        default_value_t = 5,
+        allow_hyphen_values = true,
+        help = format!("Timing batches per point (median reported), 1 to {MAX_BATCHES}")
+    )]
+    pub batches: usize,
+    /// Minimum duration of a timing batch (seconds).
+    #[arg(
+        long,
+        default_value_t = 0.2,
+        allow_hyphen_values = true,
+        help = format!(
+            "Minimum duration of a timing batch, in seconds (0: one run per batch; at most {})",
+            csv::Float(MAX_BATCH_SECONDS)
+        )
+    )]
+    pub min_batch: f64,
+    /// Run the fixed-step methods at these step counts instead of sweeping them.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        help = format!(
+            "Run the fixed-step methods at these step counts (each 1 to {MAX_STEPS}) instead \
+             of sweeping them"
+        )
+    )]
+    pub steps: Vec<usize>,
+    /// Run the adaptive peers (dop853, dopri5) at these tolerances instead of sweeping them.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub tolerances: Vec<f64>,
+    /// Directory for `<scene>.csv` and `<scene>.svg`.
+    #[arg(long, default_value = "bench-out")]
+    pub out_dir: std::path::PathBuf,
+}
+
+impl BenchArgs {
+    /// The overrides (parameters, horizon) and the options of the sweep these arguments ask
+    /// for; an error names a method that is not known.
+    pub fn options(&self) -> Result<(Overrides, BenchOptions), SceneError> {
+        let overrides = Overrides {
+            parameters: self.parameters.clone(),
+            t_end: self.t_end,
+            ..Overrides::default()
+        };
+        let options = BenchOptions {
+            methods: parse_methods(&self.methods)?,
+            target: self.target,
+            max_run: self.max_run,
+            batches: self.batches,
+            min_batch: self.min_batch,
+            steps: self.steps.clone(),
+            tolerances: self.tolerances.clone(),
+            verbose: true,
+        };
+        Ok((overrides, options))
+    }
+}
+
 /// Options of a work–precision sweep.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BenchOptions {
     /// Methods to sweep.
     pub methods: Vec<BenchMethod>,
-    /// Stop a sweep once the final error is below this.
-    pub target: f64,
-    /// Stop a sweep after a point whose single run takes longer (seconds).
-    pub max_run: f64,
-    /// Timing batches per point (the median is reported).
+    /// Stop a sweep once the final error is below this (`None`: [`DEFAULT_TARGET`]); set
+    /// only when a method sweeps.
+    pub target: Option<f64>,
+    /// Stop a sweep after a point whose single run takes longer, in seconds, up to
+    /// [`MAX_RUN_SECONDS`] (`None`: [`DEFAULT_MAX_RUN`]); set only when a method sweeps.
+    pub max_run: Option<f64>,
+    /// Timing batches per point (the median is reported), 1 to [`MAX_BATCHES`].
     pub batches: usize,
-    /// Minimum duration of one batch (seconds).
+    /// Minimum duration of one batch, in seconds, 0 to [`MAX_BATCH_SECONDS`] (0: one run
+    /// per batch).
     pub min_batch: f64,
-    /// Step counts at which to run the fixed-step methods instead of sweeping them (empty:
-    /// sweep).
+    /// Step counts, 1 to [`MAX_STEPS`], at which to run the fixed-step methods instead of
+    /// sweeping them (empty: sweep).
     pub steps: Vec<usize>,
     /// Tolerances at which to run the adaptive peers instead of sweeping them (empty: sweep).
     pub tolerances: Vec<f64>,
@@ -110,8 +230,8 @@ impl Default for BenchOptions {
     fn default() -> Self {
         BenchOptions {
             methods: parse_methods(DEFAULT_METHODS).unwrap_or_default(),
-            target: 1e-13,
-            max_run: 2.0,
+            target: None,
+            max_run: None,
             batches: 5,
             min_batch: 0.2,
             steps: Vec::new(),
@@ -123,6 +243,90 @@ impl Default for BenchOptions {
 
 /// The default method list of `svi bench`.
 pub const DEFAULT_METHODS: &str = "svi:7/6,svi:6/5,svi:9/8,svi:6/12,sc:9,dop853,dopri5";
+
+/// The error at which a sweep stops by default (`--target`).
+pub const DEFAULT_TARGET: f64 = 1e-13;
+
+/// The single-run time, in seconds, after which a sweep stops by default (`--max-run`).
+pub const DEFAULT_MAX_RUN: f64 = 2.0;
+
+impl BenchOptions {
+    /// The error at which a sweep stops.
+    pub fn target(&self) -> f64 {
+        self.target.unwrap_or(DEFAULT_TARGET)
+    }
+
+    /// The single-run time after which a sweep stops.
+    pub fn max_run(&self) -> f64 {
+        self.max_run.unwrap_or(DEFAULT_MAX_RUN)
+    }
+
+    /// Check every option against its range ([`crate::scene::limits`]), and that each one
+    /// set applies to some method: `--steps` to the library's methods, `--tolerances` to the
+    /// peers, `--target` and `--max-run` to a sweep. An error names the option.
+    pub fn check(&self) -> Result<(), SceneError> {
+        if self.methods.is_empty() {
+            return Err(SceneError::InvalidOption {
+                option: "--methods",
+                reason: "no method given".into(),
+            });
+        }
+        limits::count("--batches", self.batches, 1, MAX_BATCHES, "timing batches")?;
+        limits::seconds("--min-batch", self.min_batch, true, MAX_BATCH_SECONDS)?;
+        if let Some(max_run) = self.max_run {
+            limits::seconds("--max-run", max_run, false, MAX_RUN_SECONDS)?;
+        }
+        if let Some(target) = self.target {
+            limits::positive("--target", target)?;
+        }
+        for &steps in &self.steps {
+            limits::count("--steps", steps, 1, MAX_STEPS, "steps")?;
+        }
+        for &tol in &self.tolerances {
+            limits::positive("--tolerances", tol)?;
+        }
+        let fixed = self
+            .methods
+            .iter()
+            .any(|method| matches!(method, BenchMethod::Library(_)));
+        let peers = self
+            .methods
+            .iter()
+            .any(|method| !matches!(method, BenchMethod::Library(_)));
+        let not_applicable = |option, reason: &str| {
+            Err(SceneError::NotApplicable {
+                option,
+                reason: reason.into(),
+            })
+        };
+        if !self.steps.is_empty() && !fixed {
+            return not_applicable(
+                "--steps",
+                "sets the step counts of the library's methods, and --methods lists only \
+                 dop853 or dopri5 (set their --tolerances)",
+            );
+        }
+        if !self.tolerances.is_empty() && !peers {
+            return not_applicable(
+                "--tolerances",
+                "sets the tolerances of dop853 and dopri5, and --methods lists neither",
+            );
+        }
+        let sweeps = (fixed && self.steps.is_empty()) || (peers && self.tolerances.is_empty());
+        for (given, option) in [
+            (self.target.is_some(), "--target"),
+            (self.max_run.is_some(), "--max-run"),
+        ] {
+            if given && !sweeps {
+                return not_applicable(
+                    option,
+                    "ends a sweep, and every method runs at the given --steps or --tolerances",
+                );
+            }
+        }
+        Ok(())
+    }
+}
 
 /// One point of a work–precision curve.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -152,20 +356,17 @@ pub struct Record {
 /// Sweep every method of `options` on `scene`. With `verbose`, every point is printed to
 /// stderr under a progress bar over the methods (drawn only on a terminal).
 pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Record>, SceneError> {
+    options.check()?;
     scene.check()?;
-    if let Some(steps) = options.steps.iter().find(|&&steps| steps == 0) {
-        return Err(SceneError::BenchParameter(format!(
-            "step count {steps} (expected at least 1)"
-        )));
-    }
-    if let Some(tol) = options
-        .tolerances
-        .iter()
-        .find(|tol| !(tol.is_finite() && **tol > 0.0))
-    {
-        return Err(SceneError::BenchParameter(format!(
-            "tolerance {tol} (expected a finite positive number)"
-        )));
+    if scene.space() == SpaceKind::Rotation {
+        return Err(SceneError::NotApplicable {
+            option: "svi bench SCENE",
+            reason: format!(
+                "'{}' is a rigid body on SO(3); svi bench measures models on ℝᴺ against their \
+                 exact solution (see svi list)",
+                scene.model
+            ),
+        });
     }
     let progress = if options.verbose {
         let bar = ProgressBar::new(options.methods.len() as u64);
@@ -209,6 +410,7 @@ impl ModelVisitor for Bench<'_> {
 
     fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
         let (t0, initial, _, t_end) = self.scene.resolve(&mut model)?;
+        check_horizon(t0, t_end, model.default_step())?;
         let (q0, v0) = match initial {
             Initial::Velocity { q, v } => (q, v),
             Initial::Momentum { q, p } => (q, model.velocity(t0, &q, &p, &p)?),
@@ -249,6 +451,37 @@ impl ModelVisitor for Bench<'_> {
         }
         Ok(records)
     }
+}
+
+/// Check the horizon of a sweep before anything is run: a span svi can step through
+/// ([`svi::stepping::grid::check_span`]) that needs at most [`MAX_STEPS`] steps of the
+/// model's default step `h` (the most a sweep takes). An error names `--t-end`.
+fn check_horizon(t0: f64, t_end: f64, h: f64) -> Result<(), SceneError> {
+    const OPTION: &str = "--t-end (run.t_end)";
+    svi::stepping::grid::check_span(t0, t_end).map_err(|error| match error {
+        svi::Error::InvalidParameter { name, reason } if name == "t_end" => {
+            SceneError::InvalidOption {
+                option: OPTION,
+                reason,
+            }
+        }
+        other => other.into(),
+    })?;
+    let longest = h * MAX_STEPS as f64;
+    if t_end - t0 > longest {
+        return Err(SceneError::InvalidOption {
+            option: OPTION,
+            reason: format!(
+                "the span from {} to {} needs more than {MAX_STEPS} steps of the model's step {} \
+                 (the most a sweep takes): at most {}",
+                csv::Float(t0),
+                csv::Float(t_end),
+                csv::Float(h),
+                csv::Float(t0 + longest)
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Sweeps the visited fixed-step method.
@@ -315,9 +548,9 @@ impl Stall {
     /// Whether a sweep ends after `record`: its error is below the target, its run took
     /// longer than `max_run`, or the error has stalled.
     fn ends_after(&mut self, record: &Record, options: &BenchOptions) -> bool {
-        record.final_error < options.target
+        record.final_error < options.target()
             || self.stalled(record.final_error)
-            || record.seconds > options.max_run
+            || record.seconds > options.max_run()
     }
 
     /// Record an error; `true` once three points in a row failed to halve the best error
@@ -440,14 +673,14 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         return Ok(());
     }
     let mut steps = 8usize;
-    while steps < 100_000_000 && !matches!(final_error(steps), Ok(e) if e <= 3e-2) {
+    while steps < MAX_STEPS && !matches!(final_error(steps), Ok(e) if e <= 3e-2) {
         steps *= 2;
     }
     // Two points per halving of the error exponent: 10^(1/(2r)) between step counts.
     let factor = 10f64.powf(0.5 / order);
     let mut stall = Stall::default();
     let mut failures = 0;
-    while steps < 100_000_000 {
+    while steps < MAX_STEPS {
         let record = match measure(steps) {
             Ok(record) => record,
             Err(_) if failures < 3 => {
@@ -700,6 +933,18 @@ pub fn plot(
     )
 }
 
+/// `svi bench` with the arguments `args`: [`execute`] on their scene, overrides, options and
+/// output directory.
+pub fn execute_args(args: &BenchArgs) -> anyhow::Result<()> {
+    let (overrides, options) = args.options()?;
+    execute(
+        args.scene.as_deref().unwrap_or(DEFAULT_SCENE),
+        &overrides,
+        &options,
+        &args.out_dir,
+    )
+}
+
 /// `svi bench`: sweep `options.methods` on the scene `name` (with the parameter and horizon
 /// overrides), write `<scene>.csv` and `<scene>.svg` into `out_dir` and print the CSV.
 pub fn execute(
@@ -708,6 +953,7 @@ pub fn execute(
     options: &BenchOptions,
     out_dir: &Path,
 ) -> anyhow::Result<()> {
+    options.check()?;
     let mut scene = Scene::load(name)?;
     scene.apply(overrides)?;
     let records = work_precision(&scene, options)
@@ -777,8 +1023,8 @@ mod tests {
         scene.run.t_end = Some(10.0);
         let options = BenchOptions {
             methods: vec!["svi:3/2".parse().unwrap(), BenchMethod::Dop853],
-            target: 1e-9,
-            max_run: 1.0,
+            target: Some(1e-9),
+            max_run: Some(1.0),
             batches: 1,
             min_batch: 0.0,
             ..BenchOptions::default()
@@ -830,14 +1076,21 @@ mod tests {
             ("dop853", 1e-8)
         );
 
-        for (steps, tolerances) in [(vec![10, 0], vec![]), (vec![], vec![1e-8, -1.0])] {
+        // Out of range: an error naming the option (issue #14, item 8).
+        for (steps, tolerances, option) in [
+            (vec![10, 0], vec![], "--steps"),
+            (vec![], vec![1e-8, -1.0], "--tolerances"),
+        ] {
             let options = BenchOptions {
                 steps,
                 tolerances,
                 ..options.clone()
             };
             let error = work_precision(&scene, &options).unwrap_err();
-            assert!(matches!(error, SceneError::BenchParameter(_)), "{error}");
+            assert!(
+                matches!(error, SceneError::InvalidOption { option: named, .. } if named == option),
+                "{error}"
+            );
         }
     }
 
@@ -857,7 +1110,7 @@ mod tests {
             Err(SceneError::BenchParameter(_))
         ));
         let sweep = BenchOptions {
-            target: 1e-3,
+            target: Some(1e-3),
             tolerances: Vec::new(),
             ..single
         };

@@ -357,12 +357,13 @@ where
     let recovers = scene.run.recovery == Some(RecoveryKind::HalveStep);
     let (energy_error_max, conservation) = S::measured(model, diagnostics, &last);
     let (energy_initial, energy_final) = (S::energy(model, &first), S::energy(model, &last));
+    let energy_scale = S::energy_scale(model, &first).max(S::energy_scale(model, &last));
     let warnings = health::check(&Measured {
         conserves_energy: S::conserves_energy(model),
         energy_initial,
         energy_final,
         energy_error_max,
-        energy_scale: S::energy_scale(model, &first).max(S::energy_scale(model, &last)),
+        energy_scale,
         extent: S::extent(&first).zip(S::extent(&last)),
         retries: outcome.statistics.retries,
     });
@@ -386,6 +387,7 @@ where
         energy_initial,
         energy_final,
         energy_error_max,
+        energy_scale,
         conservation,
         iterations: outcome.statistics.iterations,
         evaluations: outcome.statistics.evaluations,

@@ -6,6 +6,9 @@
 //! stability, periodicity and strong-stability regions of Definition 4.1.
 
 use crate::report::plot::{Panel, Series, write_svg};
+use crate::scene::SceneError;
+use crate::scene::limits::{self, MAX_SAMPLES};
+use crate::scene::overrides::method_help;
 use anyhow::Context;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -57,17 +60,37 @@ fn intervals(list: &[Interval]) -> String {
         return "none".into();
     }
     list.iter()
-        .map(|i| format!("[{:.10}, {:.10}]", i.lower, i.upper))
+        .map(|i| format!("[{}, {}]", fixed(i.lower), fixed(i.upper)))
         .collect::<Vec<_>>()
         .join(" ∪ ")
+}
+
+/// `x` with ten decimals, or in exponent form where that would print dozens of digits or
+/// none that count (|x| ≥ 10¹⁶ or below 10⁻¹⁰).
+fn fixed(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-10..1e16).contains(&x.abs()) {
+        format!("{x:.10}")
+    } else {
+        format!("{x:.10e}")
+    }
+}
+
+/// `x` as `{}` prints it, or in exponent form where that would print dozens of digits
+/// (|x| ≥ 10¹⁶ or below 10⁻⁷).
+fn plain(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-7..1e16).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// The regions of a report as text.
 pub fn describe(label: &str, report: &StabilityReport) -> String {
     format!(
         "{label} on z ∈ [{}, {}]:\n  stable          {}\n  periodic        {}\n  strongly stable {}\n  A-stable: {}, P-stable: {}\n",
-        report.range.lower,
-        report.range.upper,
+        plain(report.range.lower),
+        plain(report.range.upper),
         intervals(&report.stable),
         intervals(&report.periodic),
         intervals(&report.strongly_stable),
@@ -118,7 +141,7 @@ pub fn report<M: Method<1>>(
     analyse(method, z_min, z_max, samples)
 }
 
-/// What to compute for one method.
+/// What to compute for one method (see [`Request::check`] for the limits).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Request {
     /// Regions and curves on [z_min, z_max] with `samples` grid points.
@@ -134,6 +157,75 @@ pub enum Request {
     Values(Vec<f64>),
 }
 
+impl Request {
+    /// Check the request's size: at most [`MAX_SAMPLES`] grid points (the z values are the
+    /// library's to check). An error names `--samples`.
+    pub fn check(&self) -> Result<(), SceneError> {
+        if let Request::Range { samples, .. } = self {
+            limits::count("--samples", *samples, 2, MAX_SAMPLES, "grid points")?;
+        }
+        Ok(())
+    }
+}
+
+/// `svi stability`'s arguments (parsed by the binary, and by tests as the binary does).
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct StabilityArgs {
+    /// Method: NAME, NAME:P or NAME:P/M, e.g. svi:5/4, sc:9, verlet (see --help).
+    #[arg(
+        long,
+        value_name = "METHOD",
+        default_value = "svi:5/4",
+        long_help = method_help("Method (for models on ℝᴺ; not with --figures)."),
+        conflicts_with = "figures"
+    )]
+    pub method: String,
+    /// Evaluate exactly these z values (comma-separated) and print CSV to stdout (instead of
+    /// the range: not with --z-min, --z-max, --samples, --figures, --out-dir).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        conflicts_with_all = ["z_min", "z_max", "samples", "figures", "out_dir"]
+    )]
+    pub z: Option<Vec<f64>>,
+    /// Lower end of the z range.
+    #[arg(long, default_value_t = 1e-6, allow_hyphen_values = true)]
+    pub z_min: f64,
+    /// Upper end of the z range.
+    #[arg(long, default_value_t = 900.0, allow_hyphen_values = true)]
+    pub z_max: f64,
+    /// Grid points on the z range.
+    #[arg(
+        long,
+        default_value_t = 900,
+        allow_hyphen_values = true,
+        help = format!("Grid points on the z range, 2 to {MAX_SAMPLES}")
+    )]
+    pub samples: usize,
+    /// The six configurations of the paper's Figs. 3–6 instead of --method (not with
+    /// --method or --z).
+    #[arg(long)]
+    pub figures: bool,
+    /// Directory for `stability.csv` (one method) and `stability.svg`.
+    #[arg(long, default_value = "stability-out")]
+    pub out_dir: std::path::PathBuf,
+}
+
+impl StabilityArgs {
+    /// The request these arguments make: the listed z values, or the range.
+    pub fn request(&self) -> Request {
+        match &self.z {
+            Some(values) => Request::Values(values.clone()),
+            None => Request::Range {
+                z_min: self.z_min,
+                z_max: self.z_max,
+                samples: self.samples,
+            },
+        }
+    }
+}
+
 /// The answer to a [`Request`].
 #[derive(Debug, Clone, PartialEq)]
 pub enum Answer {
@@ -144,8 +236,9 @@ pub enum Answer {
 }
 
 /// Run `request` for the method `spec` (a method for models on ℝᴺ; an error names a
-/// rigid-body method).
-pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, svi::Error> {
+/// rigid-body method) after checking it ([`Request::check`]).
+pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, SceneError> {
+    request.check()?;
     /// Answers the request for the visited method.
     struct Answering<'a>(&'a Request);
     impl VectorMethodVisitor<1> for Answering<'_> {
@@ -161,7 +254,13 @@ pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, svi::Error> {
             }
         }
     }
-    spec.visit_vector(Answering(request))?
+    Ok(spec.visit_vector(Answering(request))??)
+}
+
+/// `svi stability` with the arguments `args`: [`execute`] on their method, request, figures
+/// and output directory.
+pub fn execute_args(args: &StabilityArgs) -> anyhow::Result<()> {
+    execute(&args.method, args.request(), args.figures, &args.out_dir)
 }
 
 /// `svi stability`: for listed z values, print the CSV of `method`; for a range, print the

@@ -21,6 +21,8 @@
 //!    rtol = atol = [`StressOptions::tolerance`]) runs the same horizon as a non-geometric
 //!    peer, sampled at up to 10⁵ of its accepted step points.
 //!
+//! Every option is checked before anything runs ([`StressOptions::check`]).
+//!
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
@@ -28,6 +30,8 @@ use crate::command::bench::{BenchMethod, parse_methods};
 use crate::command::peers::{FirstOrder, dop853};
 use crate::report::csv::Float;
 use crate::report::plot::{Panel, PlotError, Series, write_svg};
+use crate::scene::limits::{self, MAX_BISECTIONS, MAX_DRIFT_STEPS};
+use crate::scene::overrides::method_help;
 use crate::scene::{Scene, SceneError};
 use nalgebra::SVector;
 use serde::Serialize;
@@ -97,6 +101,84 @@ const WINDOWS: usize = 100;
 /// Largest number of energy samples of a drift run.
 const SAMPLES: usize = 100_000;
 
+/// Fewest steps of the long run (two per window of the drift fit).
+pub const MIN_DRIFT_STEPS: usize = 2 * WINDOWS;
+
+/// Bisections refining each stability boundary by default (`--bisections`).
+pub const DEFAULT_BISECTIONS: usize = 5;
+
+/// DOP853's rtol = atol by default (`--tolerance`).
+pub const DEFAULT_TOLERANCE: f64 = 1e-10;
+
+/// `svi stress`'s arguments (parsed by the binary, and by tests as the binary does).
+#[derive(Debug, Clone, PartialEq, clap::Args)]
+pub struct StressArgs {
+    /// Stress scenes, comma-separated [default: all of them].
+    #[arg(long, value_delimiter = ',')]
+    pub cases: Vec<String>,
+    /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), and dop853.
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = DEFAULT_METHODS,
+        long_help = method_help(
+            "Methods, comma-separated: the library's, and dop853 (ode_solvers' DOP853, drift \
+             only)."
+        )
+    )]
+    pub methods: String,
+    /// Steps of the long run of each method.
+    #[arg(
+        long,
+        default_value_t = 1_000_000,
+        allow_hyphen_values = true,
+        help = format!(
+            "Steps of the long run of each method, {} to {MAX_DRIFT_STEPS}",
+            MIN_DRIFT_STEPS
+        )
+    )]
+    pub steps: usize,
+    /// Bisections refining each stability boundary.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help = format!(
+            "Bisections refining each stability boundary, 0 to {MAX_BISECTIONS} [default: {}]; \
+             not with dop853 alone (it has no boundary)",
+            DEFAULT_BISECTIONS
+        )
+    )]
+    pub bisections: Option<usize>,
+    /// DOP853's rtol = atol.
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help = format!(
+            "DOP853's rtol = atol, a positive number [default: {}]; only with dop853 in \
+             --methods",
+            Float(DEFAULT_TOLERANCE)
+        )
+    )]
+    pub tolerance: Option<f64>,
+    /// Directory for stress.md, stress.csv, windows.csv and drift.svg.
+    #[arg(long, default_value = "stress-out")]
+    pub out_dir: std::path::PathBuf,
+}
+
+impl StressArgs {
+    /// The options these arguments ask for; an error names a method that is not known.
+    pub fn options(&self) -> Result<StressOptions, SceneError> {
+        Ok(StressOptions {
+            cases: self.cases.clone(),
+            methods: parse_methods(&self.methods)?,
+            drift_steps: self.steps,
+            bisections: self.bisections,
+            tolerance: self.tolerance,
+            verbose: true,
+        })
+    }
+}
+
 /// Options of [`stress`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct StressOptions {
@@ -104,12 +186,13 @@ pub struct StressOptions {
     pub cases: Vec<String>,
     /// Methods: the library's (`svi:P/M`, `sc:P`, `verlet`, ...) and `dop853` (drift only).
     pub methods: Vec<BenchMethod>,
-    /// Steps of the long run.
+    /// Steps of the long run, [`MIN_DRIFT_STEPS`] to [`MAX_DRIFT_STEPS`].
     pub drift_steps: usize,
-    /// Bisections refining each stability boundary.
-    pub bisections: usize,
-    /// DOP853's rtol = atol.
-    pub tolerance: f64,
+    /// Bisections refining each stability boundary, up to [`MAX_BISECTIONS`] (`None`:
+    /// [`DEFAULT_BISECTIONS`]); set only with a library method.
+    pub bisections: Option<usize>,
+    /// DOP853's rtol = atol (`None`: [`DEFAULT_TOLERANCE`]); set only with `dop853`.
+    pub tolerance: Option<f64>,
     /// Print progress to stderr.
     pub verbose: bool,
 }
@@ -120,10 +203,86 @@ impl Default for StressOptions {
             cases: Vec::new(),
             methods: parse_methods(DEFAULT_METHODS).unwrap_or_default(),
             drift_steps: 1_000_000,
-            bisections: 5,
-            tolerance: 1e-10,
+            bisections: None,
+            tolerance: None,
             verbose: false,
         }
+    }
+}
+
+impl StressOptions {
+    /// The bisections refining each stability boundary.
+    pub fn bisections(&self) -> usize {
+        self.bisections.unwrap_or(DEFAULT_BISECTIONS)
+    }
+
+    /// DOP853's rtol = atol.
+    pub fn tolerance(&self) -> f64 {
+        self.tolerance.unwrap_or(DEFAULT_TOLERANCE)
+    }
+
+    /// Check every option before anything runs: known stress cases, methods `svi stress`
+    /// can use, counts within their caps ([`crate::scene::limits`]), and `--bisections` and
+    /// `--tolerance` only with the methods they apply to. An error names the option.
+    pub fn check(&self) -> Result<(), SceneError> {
+        for name in &self.cases {
+            if !CASES.iter().any(|case| case.scene == name) {
+                return Err(SceneError::UnknownStressCase {
+                    name: name.clone(),
+                    known: CASES.iter().map(|case| case.scene).collect(),
+                });
+            }
+        }
+        if self.methods.is_empty() {
+            return Err(SceneError::InvalidOption {
+                option: "--methods",
+                reason: "no method given".into(),
+            });
+        }
+        if self.methods.contains(&BenchMethod::Dopri5) {
+            return Err(dopri5_not_applicable());
+        }
+        limits::count(
+            "--steps",
+            self.drift_steps,
+            MIN_DRIFT_STEPS,
+            MAX_DRIFT_STEPS,
+            "steps",
+        )?;
+        let library = self
+            .methods
+            .iter()
+            .any(|method| matches!(method, BenchMethod::Library(_)));
+        let dop853 = self.methods.contains(&BenchMethod::Dop853);
+        if let Some(bisections) = self.bisections {
+            limits::count("--bisections", bisections, 0, MAX_BISECTIONS, "bisections")?;
+            if !library {
+                return Err(SceneError::NotApplicable {
+                    option: "--bisections",
+                    reason: "refines the step limits of the library's methods, and --methods \
+                             lists only dop853 (which has none)"
+                        .into(),
+                });
+            }
+        }
+        if let Some(tolerance) = self.tolerance {
+            limits::positive("--tolerance", tolerance)?;
+            if !dop853 {
+                return Err(SceneError::NotApplicable {
+                    option: "--tolerance",
+                    reason: "sets DOP853's tolerance, and --methods has no dop853".into(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `dopri5` in `svi stress --methods`.
+fn dopri5_not_applicable() -> SceneError {
+    SceneError::MethodNotApplicable {
+        method: BenchMethod::Dopri5.to_string(),
+        reason: "svi stress compares with dop853 only".into(),
     }
 }
 
@@ -205,29 +364,7 @@ pub struct StressRecord {
 
 /// Run every case of `options` (see the module documentation).
 pub fn stress(options: &StressOptions) -> Result<Vec<StressRecord>, SceneError> {
-    for name in &options.cases {
-        if !CASES.iter().any(|case| case.scene == name) {
-            return Err(SceneError::UnknownScene { name: name.clone() });
-        }
-    }
-    if options.drift_steps < 2 * WINDOWS {
-        return Err(svi::Error::invalid(
-            "steps",
-            format!(
-                "{} is fewer than {} steps",
-                options.drift_steps,
-                2 * WINDOWS
-            ),
-        )
-        .into());
-    }
-    if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
-        return Err(svi::Error::invalid(
-            "tolerance",
-            format!("{} must be positive and finite", options.tolerance),
-        )
-        .into());
-    }
+    options.check()?;
     let mut records = Vec::new();
     for case in CASES
         .iter()
@@ -297,12 +434,7 @@ impl ModelVisitor for CaseRunner<'_> {
                     accurate: None,
                     drift: dop853_drift(&model, &setup),
                 },
-                BenchMethod::Dopri5 => {
-                    return Err(SceneError::MethodNotApplicable {
-                        method: label,
-                        reason: "svi stress compares with dop853 only".into(),
-                    });
-                }
+                BenchMethod::Dopri5 => return Err(dopri5_not_applicable()),
             };
             if self.options.verbose {
                 eprintln!(
@@ -360,7 +492,7 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_,
             p
         };
         let range = (setup.probe_time / 2e6, setup.probe_time / 8.0);
-        let bisections = setup.options.bisections;
+        let bisections = setup.options.bisections();
         let bounded = search(setup.h, range, bisections, |h| {
             let p = probe(h);
             (p.failure.is_none(), p.failure.unwrap_or_default())
@@ -564,7 +696,7 @@ fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     let system = FirstOrder::<M, N, S>::new(model, setup.t0, &q0, &v0);
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(q0.iter().chain(v0.iter()).copied());
     let t_end = setup.t0 + setup.options.drift_steps as f64 * setup.h;
-    let tol = setup.options.tolerance;
+    let tol = setup.options.tolerance();
     // The energy at the accepted step points, as for svi's methods (the dense output's
     // interpolation error would swamp the energy error); ode_solvers stores them all, about
     // 40 bytes per step for N = 2.
@@ -772,6 +904,11 @@ pub fn write_outputs(records: &[StressRecord], dir: &Path) -> Result<(), SceneEr
         path: dir.join("drift.svg"),
         source: std::io::Error::other(e.to_string()),
     })
+}
+
+/// `svi stress` with the arguments `args`: [`execute`] on their options and output directory.
+pub fn execute_args(args: &StressArgs) -> anyhow::Result<()> {
+    execute(&args.options()?, &args.out_dir)
 }
 
 /// `svi stress`: run the cases of `options`, write `stress.md`, `stress.csv`, `windows.csv`

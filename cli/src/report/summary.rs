@@ -59,6 +59,9 @@ pub struct Summary {
     pub energy_final: f64,
     /// Largest |E − E₀| over the step points (`None` if not asked for).
     pub energy_error_max: Option<f64>,
+    /// The energy's scale, max(|E₀|, ½|p₀·q̇₀|, ½|p·q̇|) at the two ends (Π·Ω on SO(3)):
+    /// the health check warns when the energy error exceeds 1 % of it.
+    pub energy_scale: f64,
     /// The conservation diagnostics of the space.
     #[serde(flatten)]
     pub conservation: Conservation,

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use svi::MethodSpec;
 use svi::method::registry::{self, SpaceKind};
-use svi_models::UnknownModel;
+use svi_models::{MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel};
 
 use crate::report::csv::Float;
 use crate::report::summary::Summary;
@@ -36,6 +36,28 @@ pub enum SceneError {
         /// The name asked for.
         name: String,
     },
+    /// A path that names no regular file of at most
+    /// [`MAX_SCENE_BYTES`](crate::scene::limits::MAX_SCENE_BYTES): a directory, a FIFO, a
+    /// device, a huge file (read only up to the limit, never without bound).
+    #[error("'{}' is not a scene file: {reason}", path.display())]
+    NotASceneFile {
+        /// The path given.
+        path: PathBuf,
+        /// What it is instead.
+        reason: String,
+    },
+    /// A name given to `svi stress --cases` that is not one of its stress cases (its own
+    /// list, not every built-in scene).
+    #[error(
+        "'{name}' is not a stress case of svi stress (stress cases: {})",
+        known.join(", ")
+    )]
+    UnknownStressCase {
+        /// The name asked for.
+        name: String,
+        /// The stress cases.
+        known: Vec<&'static str>,
+    },
     /// A scene file that cannot be read.
     #[error("cannot read scene file '{}'", path.display())]
     Read {
@@ -45,9 +67,15 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
-    /// A model name that is not in the zoo.
-    #[error(transparent)]
-    UnknownModel(#[from] UnknownModel),
+    /// A model name that is not in the zoo (the message lists the models on ℝᴺ and the
+    /// rigid bodies).
+    #[error(
+        "unknown model '{}' (known: {}; rigid bodies: {})",
+        .0.name,
+        MODEL_NAMES.join(", "),
+        RIGID_MODEL_NAMES.join(", ")
+    )]
+    UnknownModel(UnknownModel),
     /// An initial-state vector whose length is not the model dimension.
     #[error("initial.{field} has {found} components, but model '{model}' has dimension {expected}")]
     Dimension {
@@ -92,6 +120,17 @@ pub enum SceneError {
         /// one: `--tol (run.tol)`.
         option: &'static str,
         /// Why it does not apply, and what would.
+        reason: String,
+    },
+    /// A command-line option (or its scene field) whose value is out of range: a count above
+    /// its cap, a time budget that is not a finite positive number of seconds below its cap,
+    /// a horizon that cannot be run (see [`crate::scene::limits`]).
+    #[error("invalid {option}: {reason}")]
+    InvalidOption {
+        /// The option as written on the command line, with the scene field where there is
+        /// one: `--t-end (run.t_end)`.
+        option: &'static str,
+        /// What is wrong with the value, and what would do.
         reason: String,
     },
     /// A trajectory thinning factor without a file to write the trajectory to.
@@ -162,6 +201,12 @@ pub enum SceneError {
         "model '{0}' has no exact solution for this initial state: nothing to measure errors against"
     )]
     NoReference(String),
+}
+
+impl From<UnknownModel> for SceneError {
+    fn from(error: UnknownModel) -> SceneError {
+        SceneError::UnknownModel(error)
+    }
 }
 
 /// The methods on the same space as `method` that take `option`, as named in

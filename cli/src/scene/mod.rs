@@ -57,6 +57,7 @@
 
 pub mod builtin;
 pub mod error;
+pub mod limits;
 pub mod overrides;
 pub mod rigid;
 pub mod schema;
@@ -70,10 +71,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde::Deserialize;
-use svi::Initial;
 use svi::MethodSpec;
 use svi::lie_group::{LieSvi, RigidInitial};
 use svi::method::registry::{self, SpaceKind};
+use svi::{Initial, LagrangianExt};
 use svi_models::{RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
 use builtin::builtin_scene;
@@ -123,16 +124,17 @@ impl Scene {
         builtin_scene(name).map(|text| Scene::from_toml(text, &format!("built-in scene '{name}'")))
     }
 
-    /// A built-in scene if `name_or_path` names one, else the scene file at that path.
+    /// A built-in scene if `name_or_path` names one, else the scene file at that path (read
+    /// only if it is a regular file of at most [`limits::MAX_SCENE_BYTES`]).
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
         if let Some(scene) = Scene::builtin(name_or_path) {
             return scene;
         }
         let path = Path::new(name_or_path);
-        match std::fs::read_to_string(path) {
+        match limits::read_scene_file(path) {
             Ok(text) => Scene::from_toml(&text, &format!("'{}'", path.display())),
-            Err(error)
-                if error.kind() == std::io::ErrorKind::NotFound
+            Err(SceneError::Read { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound
                     && path.extension().is_none()
                     && path.components().count() == 1 =>
             {
@@ -140,10 +142,7 @@ impl Scene {
                     name: name_or_path.into(),
                 })
             }
-            Err(source) => Err(SceneError::Read {
-                path: path.into(),
-                source,
-            }),
+            Err(error) => Err(error),
         }
     }
 
@@ -482,8 +481,31 @@ impl Scene {
         }
         let (default_t0, default_q, default_v) = model.initial_state();
         let initial = vector::initial(&self.initial, model.name(), default_q, default_v)?;
+        let t0 = self.initial.t0.unwrap_or(default_t0);
+        if self.wants_explicitly(Diagnostic::Momentum) && model.generator_count() == 0 {
+            return Err(self.not_measurable(
+                "--diagnostics momentum (output.diagnostics)",
+                "has no symmetry, hence no Noether momentum to measure",
+            ));
+        }
+        if self.wants_explicitly(Diagnostic::Solution) {
+            let velocity = match initial {
+                Initial::Velocity { v, .. } => Some(v),
+                Initial::Momentum { q, p } => model.velocity(t0, &q, &p, &p).ok(),
+            };
+            let q = match initial {
+                Initial::Velocity { q, .. } | Initial::Momentum { q, .. } => q,
+            };
+            // A velocity that cannot be computed is the run's to report.
+            if velocity.is_some_and(|v| model.exact_solution(t0, &q, &v, t0).is_none()) {
+                return Err(self.not_measurable(
+                    "--diagnostics solution (output.diagnostics)",
+                    "has no exact solution for this initial state to measure against",
+                ));
+            }
+        }
         Ok((
-            self.initial.t0.unwrap_or(default_t0),
+            t0,
             initial,
             self.run.h.unwrap_or_else(|| model.default_step()),
             self.run.t_end.unwrap_or_else(|| model.default_horizon()),
@@ -501,6 +523,12 @@ impl Scene {
         }
         let (default_r, default_omega) = model.initial_state();
         let initial = rigid::initial(&self.initial, default_r, default_omega)?;
+        if self.wants_explicitly(Diagnostic::Momentum) && model.axis_count() == 0 {
+            return Err(self.not_measurable(
+                "--diagnostics momentum (output.diagnostics)",
+                "has no symmetry axis, hence no conserved angular momentum to measure",
+            ));
+        }
         let t0 = self.initial.t0.unwrap_or(0.0);
         Ok((
             t0,
@@ -510,6 +538,17 @@ impl Scene {
                 .t_end
                 .unwrap_or_else(|| t0 + model.default_horizon()),
         ))
+    }
+}
+
+impl Scene {
+    /// A diagnostic asked for by name that the scene's model cannot give: an error naming
+    /// the option (it would otherwise be a silent `null`).
+    fn not_measurable(&self, option: &'static str, what: &str) -> SceneError {
+        SceneError::NotApplicable {
+            option,
+            reason: format!("the model '{}' {what}", self.model),
+        }
     }
 }
 

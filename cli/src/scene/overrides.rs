@@ -27,22 +27,22 @@ pub struct Overrides {
     )]
     pub method: Option<MethodSpec>,
     /// Number of Chebyshev–Gauss–Lobatto points (svi, sc, lie-svi), on top of --method.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub points: Option<usize>,
     /// Number of Gauss–Legendre quadrature points (svi, lie-svi), on top of --method.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub quadrature: Option<usize>,
     /// Step size (not with --adapt step, which chooses its own steps).
-    #[arg(long = "h", value_name = "H", allow_negative_numbers = true)]
+    #[arg(long = "h", value_name = "H", allow_hyphen_values = true)]
     pub h: Option<f64>,
     /// Final time.
-    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Model parameter (repeatable), e.g. `--param e=0.9`.
     #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
     pub parameters: Vec<(String, f64)>,
     /// Keep every K-th step of the trajectory (with --out, without --output-times; default 1).
-    #[arg(long, value_name = "K")]
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
     pub every: Option<usize>,
     /// Write the trajectory as CSV to FILE.
     #[arg(long, value_name = "FILE")]
@@ -58,7 +58,7 @@ pub struct Overrides {
     pub adapt: Option<AdaptMode>,
     /// Target final error of --adapt step and --adapt degree [default: 1e-8]; an error
     /// without them.
-    #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol: Option<f64>,
     /// Report the states at these times, comma-separated (dense output); with --out the
     /// trajectory holds them instead of the steps.
@@ -66,7 +66,7 @@ pub struct Overrides {
         long,
         value_name = "LIST",
         value_delimiter = ',',
-        allow_negative_numbers = true
+        allow_hyphen_values = true
     )]
     pub output_times: Option<Vec<f64>>,
     /// Recovery policy for failed steps (fixed steps only: the adaptive modes retry failed
@@ -74,7 +74,7 @@ pub struct Overrides {
     #[arg(long, value_enum)]
     pub recovery: Option<RecoveryKind>,
     /// Stop once a state component exceeds this in absolute value.
-    #[arg(long, value_name = "LIMIT")]
+    #[arg(long, value_name = "LIMIT", allow_hyphen_values = true)]
     pub divergence_limit: Option<f64>,
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]

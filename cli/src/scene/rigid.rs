@@ -36,6 +36,7 @@ use svi::MethodSpec;
 use svi::lie_group::so3::exp;
 use svi::lie_group::{Form, LieSvi, RigidInitial};
 
+use crate::report::csv::Float;
 use crate::scene::error::SceneError;
 use crate::scene::schema::{FormName, InitialSection};
 
@@ -146,7 +147,7 @@ fn rotation_from_quaternion(q: &SVector<f64, 4>) -> Result<SMatrix<f64, 3, 3>, S
     if !norm.is_finite() || (norm - 1.0).abs() > 1e-10 {
         return Err(svi::Error::invalid(
             "initial.quaternion",
-            format!("norm {norm}; a unit quaternion is needed"),
+            format!("norm {}; a unit quaternion is needed", Float(norm)),
         )
         .into());
     }

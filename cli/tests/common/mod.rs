@@ -2,8 +2,10 @@
 //! its failures, and scratch directories.
 #![allow(dead_code)] // each test file uses its own subset
 
+use std::io::Read;
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
@@ -14,6 +16,79 @@ pub fn svi(args: &[&str]) -> Output {
         .output()
         .expect("the svi binary runs")
 }
+
+/// Run `svi` with `args` and no input; kill it if it runs longer than `limit` (an error
+/// saying so: a hang, or a run far longer than the input asked for).
+pub fn svi_within(args: &[&str], limit: Duration) -> Result<Output, String> {
+    svi_within_in(None, args, limit)
+}
+
+/// [`svi_within`] in the working directory `dir` (where relative output paths go).
+pub fn svi_within_in(
+    dir: Option<&std::path::Path>,
+    args: &[&str],
+    limit: Duration,
+) -> Result<Output, String> {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_svi"));
+    if let Some(dir) = dir {
+        command.current_dir(dir);
+    }
+    let mut child = command
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|error| format!("svi {args:?} does not start: {error}"))?;
+    // Drain both pipes as the child writes, so that it never blocks on a full pipe.
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut pipe) = pipe {
+                let _ = pipe.read_to_end(&mut bytes);
+            }
+            bytes
+        })
+    };
+    let stdout = drain(
+        child
+            .stdout
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let stderr = drain(
+        child
+            .stderr
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let start = Instant::now();
+    let mut pause = Duration::from_millis(1);
+    let status = loop {
+        if let Some(status) = child.try_wait().map_err(|error| error.to_string())? {
+            break status;
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!(
+                "svi {args:?} ran longer than {limit:?} and was killed"
+            ));
+        }
+        std::thread::sleep(pause);
+        pause = (pause * 2).min(Duration::from_millis(20));
+    };
+    Ok(Output {
+        status,
+        stdout: stdout.join().unwrap_or_default(),
+        stderr: stderr.join().unwrap_or_default(),
+    })
+}
+
+/// The time any single command of the tests may take before it counts as a hang: far
+/// above what each one needs (well under a second), so that a loaded CI machine does not
+/// trip it.
+pub const HANG: Duration = Duration::from_secs(60);
 
 /// Run `svi` with `args`, expect success, and parse stdout as JSON.
 pub fn json(args: &[&str]) -> Value {
@@ -40,13 +115,21 @@ pub fn failure(args: &[&str]) -> String {
     stderr
 }
 
-/// Run `svi` with `command` followed by `args`, expect exit status 2 (bad input, as for
-/// malformed arguments) and `needle` in the message; return stderr.
+/// Run `svi` with `command` followed by `args` (killed after [`HANG`]), expect exit status
+/// 2 (bad input, as for malformed arguments), no panic, nothing on stdout and `needle` in
+/// the message; return stderr.
 pub fn bad_input(command: &[&str], args: &[&str], needle: &str) -> String {
     let all: Vec<&str> = command.iter().chain(args).copied().collect();
-    let stderr = failure(&all);
+    let output = svi_within(&all, HANG).unwrap_or_else(|hang| panic!("{hang}"));
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(2), "svi {all:?}: {stderr}");
+    assert!(output.stdout.is_empty(), "svi {all:?} printed to stdout");
+    assert!(
+        !stderr.contains("panicked"),
+        "svi {all:?} panicked: {stderr}"
+    );
+    assert!(stderr.starts_with("error: "), "svi {all:?}: {stderr}");
     assert!(stderr.contains(needle), "svi {all:?}: {stderr}");
-    assert_eq!(svi(&all).status.code(), Some(2), "svi {all:?}: {stderr}");
     stderr
 }
 
@@ -106,4 +189,18 @@ impl Drop for Scratch {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// Whether `text` holds a run of 22 or more digits: a number printed in full (`{}` of 1e300
+/// or 1e-300) where it should read 1e300. Shortest round-trip numbers have at most 17
+/// significant digits, and integers up to 2⁶⁴ at most 20.
+pub fn has_long_number(text: &str) -> bool {
+    let mut run = 0;
+    for c in text.chars() {
+        run = if c.is_ascii_digit() { run + 1 } else { 0 };
+        if run >= 22 {
+            return true;
+        }
+    }
+    false
 }

@@ -1,0 +1,184 @@
+//! The limits of what a user may ask `svi` for: every count and time budget set on the
+//! command line has a cap, stated once here (and in the option's `--help` and the README's
+//! "Limits"), so that no input makes a command read, run or allocate without bound. A value
+//! out of range is bad input (exit status 2) whose message names the option.
+
+use std::path::Path;
+
+use crate::report::csv::Float;
+use crate::scene::error::SceneError;
+
+/// Largest scene file read (1 MiB): a scene is a short TOML file.
+pub const MAX_SCENE_BYTES: u64 = 1 << 20;
+
+/// Most grid points of `svi stability --samples` (10⁵: a 12 MB CSV, 2 s for svi:9/18).
+pub const MAX_SAMPLES: usize = 100_000;
+
+/// Most timing batches per point of `svi bench --batches`.
+pub const MAX_BATCHES: usize = 100;
+
+/// Longest minimum batch duration of `svi bench --min-batch`, in seconds.
+pub const MAX_BATCH_SECONDS: f64 = 60.0;
+
+/// Longest single-run limit of `svi bench --max-run`, in seconds.
+pub const MAX_RUN_SECONDS: f64 = 3600.0;
+
+/// Most steps of one run of `svi bench` (each `--steps` entry, and where a sweep stops).
+pub const MAX_STEPS: usize = 100_000_000;
+
+/// Most steps of the long run of `svi stress --steps` (10 times the default; DOP853 keeps
+/// every step it takes, about 40 bytes each, up to 15 per svi step on the stiff spring).
+pub const MAX_DRIFT_STEPS: usize = 10_000_000;
+
+/// Most bisections of `svi stress --bisections` (after 50 the two ends of a boundary are
+/// adjacent floating-point numbers).
+pub const MAX_BISECTIONS: usize = 50;
+
+/// A count set by the user for `option`: `low` to `cap` `what`, else an error naming the
+/// option, the value and the range.
+pub fn count(
+    option: &'static str,
+    value: usize,
+    low: usize,
+    cap: usize,
+    what: &str,
+) -> Result<usize, SceneError> {
+    if (low..=cap).contains(&value) {
+        Ok(value)
+    } else {
+        Err(SceneError::InvalidOption {
+            option,
+            reason: format!("{value} {what}; need {low} to {cap}"),
+        })
+    }
+}
+
+/// A time budget in seconds for `option`: finite, positive (or zero where `zero` means
+/// something) and at most `cap`, else an error naming the option.
+pub fn seconds(option: &'static str, value: f64, zero: bool, cap: f64) -> Result<f64, SceneError> {
+    let low_ok = if zero { value >= 0.0 } else { value > 0.0 };
+    if value.is_finite() && low_ok && value <= cap {
+        Ok(value)
+    } else {
+        let low = if zero { "of 0 s or more" } else { "above 0 s" };
+        Err(SceneError::InvalidOption {
+            option,
+            reason: format!(
+                "{} s; need a finite duration {low}, at most {} s",
+                Float(value),
+                Float(cap)
+            ),
+        })
+    }
+}
+
+/// A finite positive number for `option`, else an error naming the option.
+pub fn positive(option: &'static str, value: f64) -> Result<f64, SceneError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(SceneError::InvalidOption {
+            option,
+            reason: format!("{}; need a finite positive number", Float(value)),
+        })
+    }
+}
+
+/// The text of the scene file at `path`, read only if it is a regular file of at most
+/// [`MAX_SCENE_BYTES`]: a directory, a FIFO, a device or a huge file is an error naming it
+/// ([`SceneError::NotASceneFile`]), never an endless read.
+pub fn read_scene_file(path: &Path) -> Result<String, SceneError> {
+    use std::io::Read;
+    let not_a_scene = |reason: String| SceneError::NotASceneFile {
+        path: path.into(),
+        reason,
+    };
+    let read_error = |source: std::io::Error| SceneError::Read {
+        path: path.into(),
+        source,
+    };
+    // Ask before opening: opening a FIFO blocks until a writer comes.
+    let metadata = std::fs::metadata(path).map_err(read_error)?;
+    if !metadata.is_file() {
+        return Err(not_a_scene(format!("it is {}", file_kind(&metadata))));
+    }
+    let too_large = || {
+        not_a_scene(format!(
+            "it is larger than {MAX_SCENE_BYTES} bytes (1 MiB), the limit for a scene"
+        ))
+    };
+    if metadata.len() > MAX_SCENE_BYTES {
+        return Err(too_large());
+    }
+    // A file may grow, or report no size (/proc): read at most one byte past the limit.
+    let file = std::fs::File::open(path).map_err(read_error)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(read_error)?;
+    if bytes.len() as u64 > MAX_SCENE_BYTES {
+        return Err(too_large());
+    }
+    String::from_utf8(bytes).map_err(|error| {
+        read_error(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("not UTF-8 text ({error})"),
+        ))
+    })
+}
+
+/// What a file that is not a regular file is, in words.
+fn file_kind(metadata: &std::fs::Metadata) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let kind = metadata.file_type();
+        if kind.is_fifo() {
+            return "a FIFO (named pipe)";
+        }
+        if kind.is_char_device() {
+            return "a character device";
+        }
+        if kind.is_block_device() {
+            return "a block device";
+        }
+        if kind.is_socket() {
+            return "a socket";
+        }
+    }
+    if metadata.is_dir() {
+        "a directory"
+    } else {
+        "not a regular file"
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_and_budgets_name_the_option_and_the_range() {
+        assert_eq!(count("--batches", 5, 1, MAX_BATCHES, "batches").unwrap(), 5);
+        let error = count("--batches", 0, 1, MAX_BATCHES, "batches").unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "invalid --batches: 0 batches; need 1 to 100"
+        );
+        assert!(error.is_bad_input());
+        assert_eq!(seconds("--min-batch", 0.0, true, 60.0).unwrap(), 0.0);
+        for bad in [f64::NAN, f64::INFINITY, -1.0, 61.0, 1e300] {
+            let error = seconds("--min-batch", bad, true, 60.0).unwrap_err();
+            assert!(
+                error.to_string().starts_with("invalid --min-batch: "),
+                "{error}"
+            );
+        }
+        assert!(seconds("--max-run", 0.0, false, 3600.0).is_err());
+        let error = positive("--target", -1e-300).unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "invalid --target: -1e-300; need a finite positive number"
+        );
+    }
+}
