@@ -504,3 +504,26 @@ fn name_of<T: std::fmt::Debug>(result: Result<T, Error>) -> String {
         other => panic!("expected a typed error, got {other:?}"),
     }
 }
+
+#[test]
+fn a_non_finite_output_point_is_an_error_not_a_silent_nan() {
+    // Found by the hostile suite: a subnormal step (h = 6.6e-309) integrates, but its step
+    // polynomial, read off inside the step, has an infinite slope. The output point is
+    // non-finite, and the run says so instead of returning NaN with success.
+    let (model, initial) = kepler(0.5);
+    let h = 6.6123807894145e-309;
+    let result = solve(
+        model,
+        Svi::new(6),
+        &Span::with_outputs(0.0, 2000.0 * h, vec![4.67111811255018e-309]),
+        initial,
+        &SolveOptions::fixed_step(h),
+    );
+    match result {
+        Err(Error::NonFinite { what, step, .. }) => {
+            assert!(what.contains("output point"), "{what}");
+            assert_eq!(step, 1);
+        }
+        other => panic!("expected a non-finite output point, got {other:?}"),
+    }
+}

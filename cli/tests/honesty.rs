@@ -230,3 +230,30 @@ fn a_reader_that_goes_away_ends_svi_without_a_panic() {
         assert!(!stderr.contains("panicked"), "svi {args:?}: {stderr}");
     }
 }
+
+#[test]
+fn an_overflowing_energy_is_a_failure_not_a_null_with_status_0() {
+    // Found by the hostile suite: Störmer–Verlet at h = 1e139 ends on a finite state
+    // (q = 1e78, q̇ = −5e155) whose energy overflows. It printed energy_final null, an energy
+    // error of 0 (f64::max dropped the NaN) and status ok.
+    let (status, json) = run_json(&[
+        "oscillator",
+        "--method",
+        "verlet",
+        "--h",
+        "1e139",
+        "--t-end",
+        "1e78",
+    ]);
+    assert_eq!(status, 1);
+    assert_eq!(json["status"], "failed");
+    assert_eq!(json["error"]["kind"], "non_finite");
+    assert!(json["energy_error_max"].is_null(), "{json}");
+    let kinds: Vec<&str> = json["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["kind"].as_str().unwrap())
+        .collect();
+    assert!(kinds.contains(&"energy"), "{kinds:?}");
+}

@@ -25,7 +25,7 @@ use serde_json::Value;
 use svi_cli::bench::{BenchArgs, BenchMethod, work_precision};
 use svi_cli::scene::limits::{
     MAX_BATCH_SECONDS, MAX_BATCHES, MAX_BISECTIONS, MAX_DRIFT_STEPS, MAX_RUN_SECONDS, MAX_SAMPLES,
-    MAX_STEPS,
+    MAX_STEPS, MIN_PEER_TOLERANCE,
 };
 use svi_cli::stability::{Answer, Request, StabilityArgs};
 use svi_cli::stress::{StressArgs, stress};
@@ -840,7 +840,12 @@ fn bench_in_process(args: &[String]) -> Result<usize, TestCaseError> {
     prop_assert!(options.max_run() <= MAX_RUN_SECONDS);
     prop_assert!(options.target().is_finite() && options.target() > 0.0);
     prop_assert!(options.steps.iter().all(|s| (1..=MAX_STEPS).contains(s)));
-    prop_assert!(options.tolerances.iter().all(|t| t.is_finite() && *t > 0.0));
+    prop_assert!(
+        options
+            .tolerances
+            .iter()
+            .all(|t| t.is_finite() && *t >= MIN_PEER_TOLERANCE)
+    );
     let fixed = options
         .methods
         .iter()
@@ -1043,7 +1048,7 @@ fn stress_in_process(args: &[String]) -> Result<usize, TestCaseError> {
     };
     prop_assert!(options.drift_steps <= MAX_DRIFT_STEPS);
     prop_assert!(options.bisections() <= MAX_BISECTIONS);
-    prop_assert!(options.tolerance().is_finite() && options.tolerance() > 0.0);
+    prop_assert!(options.tolerance().is_finite() && options.tolerance() >= MIN_PEER_TOLERANCE);
     let cheap = options.cases.iter().all(|case| case == "oscillator")
         && !options.cases.is_empty()
         && options.drift_steps <= 1000

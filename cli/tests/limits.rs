@@ -8,7 +8,7 @@ use common::*;
 
 use svi_cli::scene::limits::{
     MAX_BATCH_SECONDS, MAX_BATCHES, MAX_BISECTIONS, MAX_DRIFT_STEPS, MAX_RUN_SECONDS, MAX_SAMPLES,
-    MAX_SCENE_BYTES, MAX_STEPS,
+    MAX_SCENE_BYTES, MAX_STEPS, MIN_PEER_TOLERANCE,
 };
 
 /// Issue #14, item 2: `svi run /dev/urandom` read without bound (1.6 GB in 6 s). A scene is
@@ -97,6 +97,15 @@ fn time_budgets_and_counts_are_checked_before_anything_runs() {
             &["stress", "--bisections", &too_many_bisections],
             "invalid --bisections: 51 bisections; need 0 to 50",
         ),
+        // DOP853 at a tolerance of 1e-300 took steps until memory ran out (24 GB).
+        (
+            &["stress", "--methods", "dop853", "--tolerance", "1e-300"],
+            "invalid --tolerance: 1e-300; need a finite tolerance of at least 1e-20",
+        ),
+        (
+            &["bench", "--methods", "dop853", "--tolerances", "1e-8,1e-21"],
+            "invalid --tolerances: 1e-21; need a finite tolerance of at least 1e-20",
+        ),
     ] {
         bad_input(args, &["--out-dir", out], needle);
     }
@@ -115,6 +124,8 @@ fn every_cap_is_in_the_help_and_the_readme() {
         ("bench", format!("1 to {MAX_STEPS}")),
         ("stress", format!("200 to {MAX_DRIFT_STEPS}")),
         ("stress", format!("0 to {MAX_BISECTIONS}")),
+        ("stress", format!("at least {MIN_PEER_TOLERANCE:e}")),
+        ("bench", format!("at least {MIN_PEER_TOLERANCE:e}")),
     ] {
         assert!(
             help(command).contains(&text),
@@ -136,6 +147,7 @@ fn every_cap_is_in_the_help_and_the_readme() {
         "10⁸ steps",
         "10⁷ steps",
         "50 bisections",
+        "1e-20",
     ] {
         assert!(limits.contains(cap), "README Limits: {cap}\n{limits}");
     }

@@ -190,7 +190,17 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     limit,
                     statistics,
                 )?;
-                self.emit(method, &half, outputs, t, dt, &start.state, &x1.state, mid)?;
+                self.emit(
+                    method,
+                    &half,
+                    outputs,
+                    statistics.steps,
+                    t,
+                    dt,
+                    &start.state,
+                    &x1.state,
+                    mid,
+                )?;
                 let x2 = self.trial(
                     method,
                     &mut half,
@@ -205,6 +215,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     method,
                     &half,
                     outputs,
+                    statistics.steps,
                     mid,
                     end - mid,
                     &x1.state,
@@ -404,6 +415,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     method,
                     workspace,
                     outputs,
+                    progress.statistics.steps,
                     t,
                     size,
                     &progress.cursor.state,

@@ -144,6 +144,16 @@ impl<L: ?Sized, P: Clone> Observer<L, P> for Points<P> {
 /// Stores the observed phase points of a run on ℝᴺ.
 pub type Trajectory<const N: usize> = Points<PhasePoint<N>>;
 
+/// The larger of a running maximum and a new deviation, where NaN (an overflowed quantity)
+/// wins: `f64::max` would drop it and report the maximum before the overflow.
+pub(crate) fn worst(max: f64, deviation: f64) -> f64 {
+    if deviation.is_nan() || deviation > max {
+        deviation
+    } else {
+        max
+    }
+}
+
 /// Largest deviation |E(t) − E(t₀)| of the energy E = p·q̇ − L over the observed points
 /// (E = Π·Ω − L for rigid bodies, [`crate::lie_group`]).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -158,7 +168,7 @@ impl<L: Lagrangian<N>, const N: usize> Observer<L, PhasePoint<N>> for EnergyErro
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
         let initial = *self.initial.get_or_insert(energy);
-        self.max = self.max.max((energy - initial).abs());
+        self.max = worst(self.max, (energy - initial).abs());
         ControlFlow::Continue(())
     }
 }
@@ -182,7 +192,7 @@ impl<L: Symmetries<N>, const N: usize> Observer<L, PhasePoint<N>> for MomentumEr
             if first {
                 self.initial.push(momentum);
             } else {
-                self.max = self.max.max((momentum - self.initial[i]).abs());
+                self.max = worst(self.max, (momentum - self.initial[i]).abs());
             }
         }
         ControlFlow::Continue(())
@@ -207,7 +217,7 @@ impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantE
             if first {
                 self.initial.push(value);
             } else {
-                self.max = self.max.max((value - self.initial[i]).abs());
+                self.max = worst(self.max, (value - self.initial[i]).abs());
             }
         }
         ControlFlow::Continue(())
@@ -232,7 +242,7 @@ impl<L: ExactSolution<N>, const N: usize> Observer<L, PhasePoint<N>> for Solutio
         let start = *self.initial.get_or_insert(*point);
         if let Some((q, _)) = model.exact_solution(start.t, &start.q, &start.v, point.t) {
             let error = (point.q - q).norm();
-            self.max = Some(self.max.unwrap_or(0.0).max(error));
+            self.max = Some(worst(self.max.unwrap_or(0.0), error));
             self.last = Some(error);
         }
         ControlFlow::Continue(())

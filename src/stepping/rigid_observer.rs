@@ -16,14 +16,14 @@ use crate::model::rigid_body::{
     RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
 use crate::model::so3::orthogonality_error;
-use crate::stepping::observer::{EnergyError, InvariantError, Observer};
+use crate::stepping::observer::{EnergyError, InvariantError, Observer, worst};
 use std::ops::ControlFlow;
 
 impl<L: RigidBodyLagrangian> Observer<L, RigidPoint> for EnergyError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         let energy = point.momentum.dot(&point.omega) - model.value(&point.r, &point.omega);
         let initial = *self.initial.get_or_insert(energy);
-        self.max = self.max.max((energy - initial).abs());
+        self.max = worst(self.max, (energy - initial).abs());
         ControlFlow::Continue(())
     }
 }
@@ -64,7 +64,7 @@ impl<L: RigidBodySymmetries> Observer<L, RigidPoint> for AngularMomentumError {
             if first {
                 self.initial.push(momentum);
             } else {
-                self.max = self.max.max((momentum - self.initial[i]).abs());
+                self.max = worst(self.max, (momentum - self.initial[i]).abs());
             }
         }
         ControlFlow::Continue(())
@@ -80,7 +80,7 @@ impl<L: RigidBodyInvariants> Observer<L, RigidPoint> for InvariantError {
             if first {
                 self.initial.push(value);
             } else {
-                self.max = self.max.max((value - self.initial[i]).abs());
+                self.max = worst(self.max, (value - self.initial[i]).abs());
             }
         }
         ControlFlow::Continue(())
@@ -99,7 +99,7 @@ pub struct OrthogonalityError {
 impl<L: ?Sized> Observer<L, RigidPoint> for OrthogonalityError {
     fn observe(&mut self, _: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
         self.last = orthogonality_error(&point.r);
-        self.max = self.max.max(self.last);
+        self.max = worst(self.max, self.last);
         ControlFlow::Continue(())
     }
 }

@@ -451,13 +451,15 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// Serve every output time in (t, t + h] from the step of `method` just taken from
     /// `start` at `t` to `end` at `end_time`: at `end_time` itself the completed end point,
     /// inside the step the method's dense output or, without one, the space's interpolant of
-    /// the completed end points.
+    /// the completed end points. A non-finite output point (a step too short for its
+    /// polynomial's scaling, say) is [`Error::NonFinite`] at `step`, never a silent NaN.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn emit(
         &self,
         method: &M,
         workspace: &M::Workspace,
         outputs: &mut Outputs<'_, S>,
+        step: usize,
         t: f64,
         h: f64,
         start: &S::State,
@@ -497,6 +499,13 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     )
                 })?
             };
+            if !method.point_is_finite(&point) {
+                return Err(Error::NonFinite {
+                    what: format!("output point at t = {time:?}"),
+                    step,
+                    t,
+                });
+            }
             outputs.guess = S::velocity(&point);
             outputs.points.push(point);
         }
@@ -532,6 +541,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     self.method(),
                     workspace,
                     outputs,
+                    progress.statistics.steps,
                     t,
                     size,
                     start,

@@ -13,6 +13,9 @@ pub fn cases(base: u32) -> ProptestConfig {
     ProptestConfig {
         cases: base.saturating_mul(factor),
         failure_persistence: None,
+        // A failing case is reported after at most this many shrinking steps (each may be
+        // a run), not after minutes of shrinking.
+        max_shrink_iters: 2000,
         ..ProptestConfig::default()
     }
 }

@@ -21,7 +21,9 @@ use crate::command::peers::{FirstOrder, dop853, dopri5};
 use crate::report::csv;
 use crate::report::plot::{Panel, Series, write_svg};
 use crate::scene::builtin::DEFAULT_SCENE;
-use crate::scene::limits::{self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS};
+use crate::scene::limits::{
+    self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS, MIN_PEER_TOLERANCE,
+};
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
@@ -171,7 +173,16 @@ pub struct BenchArgs {
     )]
     pub steps: Vec<usize>,
     /// Run the adaptive peers (dop853, dopri5) at these tolerances instead of sweeping them.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        help = format!(
+            "Run the adaptive peers (dop853, dopri5) at these tolerances (each at least {}) \
+             instead of sweeping them",
+            csv::Float(MIN_PEER_TOLERANCE)
+        )
+    )]
     pub tolerances: Vec<f64>,
     /// Directory for `<scene>.csv` and `<scene>.svg`.
     #[arg(long, default_value = "bench-out")]
@@ -283,7 +294,7 @@ impl BenchOptions {
             limits::count("--steps", steps, 1, MAX_STEPS, "steps")?;
         }
         for &tol in &self.tolerances {
-            limits::positive("--tolerances", tol)?;
+            limits::peer_tolerance("--tolerances", tol)?;
         }
         let fixed = self
             .methods

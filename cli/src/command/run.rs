@@ -358,6 +358,16 @@ where
     let (energy_error_max, conservation) = S::measured(model, diagnostics, &last);
     let (energy_initial, energy_final) = (S::energy(model, &first), S::energy(model, &last));
     let energy_scale = S::energy_scale(model, &first).max(S::energy_scale(model, &last));
+    // A state whose energy overflows (finite q and q̇ of 1e155 and more) is no result: the
+    // run fails at its end rather than printing a null energy with status 0.
+    let failure = failure.or_else(|| {
+        (!(energy_initial.is_finite() && energy_final.is_finite() && energy_scale.is_finite()))
+            .then(|| svi::Error::NonFinite {
+                what: "energy of the final state (the state overflows it)".into(),
+                step: outcome.statistics.steps,
+                t: S::time(&last),
+            })
+    });
     let warnings = health::check(&Measured {
         conserves_energy: S::conserves_energy(model),
         energy_initial,

@@ -30,7 +30,7 @@ use crate::command::bench::{BenchMethod, parse_methods};
 use crate::command::peers::{FirstOrder, dop853};
 use crate::report::csv::Float;
 use crate::report::plot::{Panel, PlotError, Series, write_svg};
-use crate::scene::limits::{self, MAX_BISECTIONS, MAX_DRIFT_STEPS};
+use crate::scene::limits::{self, MAX_BISECTIONS, MAX_DRIFT_STEPS, MIN_PEER_TOLERANCE};
 use crate::scene::overrides::method_help;
 use crate::scene::{Scene, SceneError};
 use nalgebra::SVector;
@@ -154,8 +154,9 @@ pub struct StressArgs {
         long,
         allow_hyphen_values = true,
         help = format!(
-            "DOP853's rtol = atol, a positive number [default: {}]; only with dop853 in \
+            "DOP853's rtol = atol, at least {} [default: {}]; only with dop853 in \
              --methods",
+            Float(MIN_PEER_TOLERANCE),
             Float(DEFAULT_TOLERANCE)
         )
     )]
@@ -266,7 +267,7 @@ impl StressOptions {
             }
         }
         if let Some(tolerance) = self.tolerance {
-            limits::positive("--tolerance", tolerance)?;
+            limits::peer_tolerance("--tolerance", tolerance)?;
             if !dop853 {
                 return Err(SceneError::NotApplicable {
                     option: "--tolerance",

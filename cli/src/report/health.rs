@@ -69,15 +69,22 @@ pub fn check(measured: &Measured) -> Vec<Warning> {
         } else {
             f64::INFINITY
         };
-        warnings.push(Warning {
-            kind: "energy",
-            message: format!(
+        let message = if error.is_finite() && scale.is_finite() {
+            format!(
                 "the energy error {error:.3e} is {:.3} % of the energy's scale {scale:.3e} (more \
                  than {} %): the step does not resolve the motion, and the result is not to be \
                  trusted",
                 100.0 * relative,
                 100.0 * ENERGY_TOLERANCE
-            ),
+            )
+        } else {
+            "the energy error is not finite (the state overflows the energy): the result is \
+             not to be trusted"
+                .to_string()
+        };
+        warnings.push(Warning {
+            kind: "energy",
+            message,
         });
     }
     if let Some((initial, last)) = measured.extent {

@@ -34,6 +34,30 @@ pub const MAX_DRIFT_STEPS: usize = 10_000_000;
 /// adjacent floating-point numbers).
 pub const MAX_BISECTIONS: usize = 50;
 
+/// Smallest tolerance of the adaptive peers (`dop853`, `dopri5`; `svi bench --tolerances`,
+/// `svi stress --tolerance`): 1e-20. Their error stops improving near 1e-16 (round-off),
+/// while their step count, and the step points `ode_solvers` keeps, grow as tol^(−1/order)
+/// without bound: at 1e-300 some 10³⁵ times as many steps.
+pub const MIN_PEER_TOLERANCE: f64 = 1e-20;
+
+/// A tolerance of an adaptive peer for `option`: finite and at least
+/// [`MIN_PEER_TOLERANCE`], else an error naming the option.
+pub fn peer_tolerance(option: &'static str, value: f64) -> Result<f64, SceneError> {
+    if value.is_finite() && value >= MIN_PEER_TOLERANCE {
+        Ok(value)
+    } else {
+        Err(SceneError::InvalidOption {
+            option,
+            reason: format!(
+                "{}; need a finite tolerance of at least {} (below it the step count grows \
+                 without gaining accuracy)",
+                Float(value),
+                Float(MIN_PEER_TOLERANCE)
+            ),
+        })
+    }
+}
+
 /// A count set by the user for `option`: `low` to `cap` `what`, else an error naming the
 /// option, the value and the range.
 pub fn count(
