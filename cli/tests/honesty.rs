@@ -20,6 +20,16 @@ fn run_json(args: &[&str]) -> (i32, Value) {
     (output.status.code().unwrap(), value)
 }
 
+/// The `kind` of each of a summary's warnings.
+fn warning_kinds(summary: &Value) -> Vec<&str> {
+    summary["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["kind"].as_str().unwrap())
+        .collect()
+}
+
 #[test]
 fn diagnostics_are_maxima_over_every_step_whatever_is_output() {
     // Issue 14, item 1: with output times only at t = 0 the maxima used to be taken there
@@ -128,12 +138,7 @@ fn garbage_is_never_silent_and_strict_makes_it_an_error() {
     ] {
         let (status, summary) = run_json(args);
         assert_eq!(status, 0, "{args:?}");
-        let kinds: Vec<&str> = summary["warnings"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|w| w["kind"].as_str().unwrap())
-            .collect();
+        let kinds = warning_kinds(&summary);
         assert!(kinds.contains(&"energy"), "{args:?}: {kinds:?}");
         let mut all = vec!["run"];
         all.extend_from_slice(args);
@@ -249,11 +254,6 @@ fn an_overflowing_energy_is_a_failure_not_a_null_with_status_0() {
     assert_eq!(json["status"], "failed");
     assert_eq!(json["error"]["kind"], "non_finite");
     assert!(json["energy_error_max"].is_null(), "{json}");
-    let kinds: Vec<&str> = json["warnings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|w| w["kind"].as_str().unwrap())
-        .collect();
+    let kinds = warning_kinds(&json);
     assert!(kinds.contains(&"energy"), "{kinds:?}");
 }
