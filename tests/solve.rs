@@ -522,7 +522,8 @@ fn a_non_finite_output_point_is_an_error_not_a_silent_nan() {
     match result {
         Err(Error::NonFinite { what, step, .. }) => {
             assert!(what.contains("output point"), "{what}");
-            assert_eq!(step, 1);
+            // The first step (index 0, from t = 0) holds the output time.
+            assert_eq!(step, 0);
         }
         other => panic!("expected a non-finite output point, got {other:?}"),
     }

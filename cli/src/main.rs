@@ -15,9 +15,9 @@ use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
 /// Exit status: 0 when the command succeeded; 1 when a run failed after it started (a solve
 /// that does not converge, a state that diverges: the error reports the last good state, and
 /// the trajectory so far is written), an output could not be written, or a health check
-/// failed under `svi run --strict`; 2 for bad input (an
-/// unknown scene, model or method, a malformed scene, an invalid value, an option that the
-/// scene's model, method or other options cannot use), as for malformed arguments.
+/// failed under `svi run --strict`; 2 for bad input (an unknown scene, model or method, a
+/// malformed scene, an invalid value, an option that the scene's model, method or other
+/// options cannot use), as for malformed arguments.
 #[derive(Debug, Parser)]
 #[command(name = "svi", version, arg_required_else_help = true)]
 struct Cli {

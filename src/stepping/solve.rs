@@ -451,15 +451,17 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// Serve every output time in (t, t + h] from the step of `method` just taken from
     /// `start` at `t` to `end` at `end_time`: at `end_time` itself the completed end point,
     /// inside the step the method's dense output or, without one, the space's interpolant of
-    /// the completed end points. A non-finite output point (a step too short for its
-    /// polynomial's scaling, say) is [`Error::NonFinite`] at `step`, never a silent NaN.
+    /// the completed end points. `steps_taken` counts the steps so far, this one included. A
+    /// non-finite output point (a step too short for its polynomial's scaling, say) is
+    /// [`Error::NonFinite`] in this step (index `steps_taken − 1`, starting at `t`), never a
+    /// silent NaN.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn emit(
         &self,
         method: &M,
         workspace: &M::Workspace,
         outputs: &mut Outputs<'_, S>,
-        step: usize,
+        steps_taken: usize,
         t: f64,
         h: f64,
         start: &S::State,
@@ -502,7 +504,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             if !method.point_is_finite(&point) {
                 return Err(Error::NonFinite {
                     what: format!("output point at t = {time:?}"),
-                    step,
+                    step: steps_taken.saturating_sub(1),
                     t,
                 });
             }

@@ -363,7 +363,7 @@ where
     let failure = failure.or_else(|| {
         (!(energy_initial.is_finite() && energy_final.is_finite() && energy_scale.is_finite()))
             .then(|| svi::Error::NonFinite {
-                what: "energy of the final state (the state overflows it)".into(),
+                what: "energy (the initial or the final state overflows it)".into(),
                 step: outcome.statistics.steps,
                 t: S::time(&last),
             })
