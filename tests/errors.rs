@@ -134,3 +134,49 @@ fn singular_systems_are_reported_not_panicked_on() {
         "{error:?}"
     );
 }
+
+/// A particle declared to have a constant mass matrix, with a term linear in q̇ (`drift`)
+/// and a q-dependent mass (`stiffening`) that break the declaration.
+struct Declared {
+    drift: f64,
+    stiffening: f64,
+}
+
+impl svi::Lagrangian<1> for Declared {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: svi::Structure = svi::Structure::ConstantMass;
+    fn lagrangian<D: svi::Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+        let mass = q[0] * q[0] * self.stiffening + 1.0;
+        mass * v[0] * v[0] * 0.5 + v[0] * self.drift - q[0] * q[0] * 0.5
+    }
+}
+
+#[test]
+fn a_wrong_constant_mass_declaration_is_an_error_not_a_wrong_result() {
+    // L = ½q̇² + c q̇ − ½q² has L_qv = 0 and a constant L_vv, but p = q̇ + c: the fixed-point
+    // iteration and q̇ = M⁻¹p assume p = Mq̇, so the declaration is refused by name.
+    let (q, v) = (SVector::from([0.5]), SVector::from([0.2]));
+    for (drift, stiffening, named) in [(0.3, 0.0, "∂L/∂q̇ = 3e-1"), (0.0, 1.0, "∂²L/∂q∂q̇")]
+    {
+        let integrator = Integrator::new(Declared { drift, stiffening }, Svi::new(4));
+        let error = integrator
+            .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+            .unwrap_err();
+        let message = error.to_string();
+        assert_eq!(invalid_name(error), "structure");
+        assert!(message.contains(named), "{message}");
+    }
+    // The true declaration runs.
+    let integrator = Integrator::new(
+        Declared {
+            drift: 0.0,
+            stiffening: 0.0,
+        },
+        Svi::new(4),
+    );
+    assert!(
+        integrator
+            .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+            .is_ok()
+    );
+}

@@ -37,8 +37,9 @@ fn diagnostics_are_maxima_over_every_step_whatever_is_output() {
     let common = [
         "kepler", "--t-end", "100", "--method", "verlet", "--h", "0.1",
     ];
-    let plain = json(&[&["run"][..], &common, &["--json"]].concat());
-    let outputs = json(&[&["run"][..], &common, &["--output-times", "0", "--json"]].concat());
+    let all = ["--diagnostics", "energy,momentum,solution", "--json"];
+    let plain = json(&[&["run"][..], &common, &all].concat());
+    let outputs = json(&[&["run"][..], &common, &["--output-times", "0"], &all].concat());
     for key in [
         "energy_error_max",
         "momentum_error_max",
@@ -188,11 +189,13 @@ fn a_fixed_point_creeping_at_round_off_is_not_a_failure() {
     // Issue 14, item 6: Kepler e = 0.9 with h = 0.2 stopped at step 27 with "did not
     // converge … residual 2.97e-15" (the fixed point's last increment, still decreasing at
     // its cap). Newton now takes the step over; the run completes, and the health check says
-    // that h = 0.2 does not resolve this orbit.
+    // that h = 0.2 does not resolve this orbit. (Further on, at step 119, Newton itself
+    // fails on this unresolved orbit or not, depending on the last bits of the force: the
+    // test stops at T = 20.)
     let (status, summary) =
-        run_json(&["kepler", "--param", "e=0.9", "--h", "0.2", "--t-end", "200"]);
+        run_json(&["kepler", "--param", "e=0.9", "--h", "0.2", "--t-end", "20"]);
     assert_eq!(status, 0);
-    assert_eq!(summary["steps"], 1000);
+    assert_eq!(summary["steps"], 100);
     assert_eq!(summary["warnings"][0]["kind"], "energy");
 }
 

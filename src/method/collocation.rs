@@ -546,7 +546,7 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         })
     }
 
-    fn node_offsets<'a>(&self, workspace: &'a CollocationWorkspace<N>) -> Option<&'a [f64]> {
+    fn node_offsets<'a>(&self, workspace: &'a mut CollocationWorkspace<N>) -> Option<&'a [f64]> {
         workspace.start.last_offsets()
     }
 

@@ -476,7 +476,8 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         if !L::G_INVARIANT {
             return Ok(());
         }
-        let omega = Step::<L, SO3>::complete(self, model, t0, state, &Vector3::zeros())?.omega;
+        let omega =
+            Step::<L, SO3>::complete(self, model, None, t0, state, &Vector3::zeros())?.omega;
         let here = model.value(&state.r, &omega);
         let identity = model.value(&Matrix3::identity(), &omega);
         let torque = model.torque(&state.r, &omega).amax();
@@ -498,6 +499,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
     fn complete(
         &self,
         model: &L,
+        _workspace: Option<&Self::Workspace>,
         t: f64,
         state: &RigidState,
         guess: &Vector3<f64>,
@@ -586,7 +588,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
     }
 
     /// ξ¹, …, ξᵈ of the last step (ξ⁰ = 0): the Lie-algebra polynomial of the step.
-    fn node_offsets<'a>(&self, workspace: &'a LieWorkspace) -> Option<&'a [f64]> {
+    fn node_offsets<'a>(&self, workspace: &'a mut LieWorkspace) -> Option<&'a [f64]> {
         workspace
             .has_previous
             .then_some(workspace.previous.as_slice())

@@ -106,6 +106,18 @@ pub trait Method<const N: usize> {
         None
     }
 
+    /// The velocity q̇ for the momentum `p` of a state this run's steps reached, from what the
+    /// workspace already holds (for a constant mass matrix its cached inverse, q̇ = M⁻¹p);
+    /// `None` where the inverse Legendre map must be solved for.
+    fn velocity(
+        &self,
+        workspace: &Self::Workspace,
+        p: &SVector<f64, N>,
+    ) -> Option<SVector<f64, N>> {
+        let _ = (workspace, p);
+        None
+    }
+
     /// Number of interpolation points of a spectral method (polynomial degree + 1); `None`
     /// for methods without a degree.
     fn points(&self) -> Option<usize> {
@@ -124,7 +136,7 @@ pub trait Method<const N: usize> {
 
     /// Node values of the last step's polynomial, as offsets qᵛ − q_k at the CGL nodes
     /// ν = 1, …, s (stacked, N numbers per node); `None` for methods without a degree.
-    fn node_offsets<'a>(&self, workspace: &'a Self::Workspace) -> Option<&'a [f64]> {
+    fn node_offsets<'a>(&self, workspace: &'a mut Self::Workspace) -> Option<&'a [f64]> {
         let _ = workspace;
         None
     }

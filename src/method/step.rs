@@ -72,10 +72,13 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 
     /// Complete a state to a point (the inverse Legendre map started at `guess`, or the
-    /// Legendre map, by the method's coordinates).
+    /// Legendre map, by the method's coordinates). With the `workspace` of the run that
+    /// reached the state, a method may complete it from what its steps already hold (a
+    /// constant mass matrix's cached inverse) instead of solving for it.
     fn complete(
         &self,
         model: &L,
+        workspace: Option<&Self::Workspace>,
         t: f64,
         state: &S::State,
         guess: &S::Velocity,
@@ -130,7 +133,7 @@ pub trait Step<L: ?Sized, S: Space> {
     /// Node values of the last step's polynomial as offsets from its first node, at the
     /// nodes ν = 1, …, s ([`Space::NODE_WIDTH`] numbers per node); `None` for methods without a
     /// degree.
-    fn node_offsets<'a>(&self, workspace: &'a Self::Workspace) -> Option<&'a [f64]> {
+    fn node_offsets<'a>(&self, workspace: &'a mut Self::Workspace) -> Option<&'a [f64]> {
         let _ = workspace;
         None
     }
@@ -205,8 +208,10 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         Ok(state)
     }
 
-    /// A [`Structure::ConstantMass`] declaration: L_qv must vanish and L_vv must not change
-    /// with q̇ (a necessary condition, checked once per run).
+    /// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
+    /// L_vv must not change with q̇, and ∂L/∂q̇ must vanish at q̇ = 0 (no term linear in q̇:
+    /// p = Mq̇ exactly, which the fixed-point iteration and the cached q̇ = M⁻¹p rely on).
+    /// Necessary conditions, checked once per run at the initial state.
     fn check_model(&self, model: &L, t: f64, state: &State<N>) -> Result<(), Error> {
         if L::STRUCTURE != Structure::ConstantMass {
             return Ok(());
@@ -217,12 +222,14 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         let scale = 1.0 + first.vv.amax() + first.qq.amax();
         let coupling = first.qv.amax().max(second.qv.amax());
         let change = (first.vv - second.vv).amax();
-        if coupling > 1e-12 * scale || change > 1e-12 * scale {
+        let linear = model.momentum(t, &state.q, &SVector::zeros()).amax();
+        if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
             return Err(Error::invalid(
                 "structure",
                 format!(
-                    "the model declares a constant mass matrix, but ∂²L/∂q∂q̇ = {coupling:e} and \
-                     ∂²L/∂q̇² changes by {change:e} with q̇"
+                    "the model declares a constant mass matrix (L = ½ q̇ᵀMq̇ − V), but \
+                     ∂²L/∂q∂q̇ = {coupling:e}, ∂²L/∂q̇² changes by {change:e} with q̇ and \
+                     ∂L/∂q̇ = {linear:e} at q̇ = 0"
                 ),
             ));
         }
@@ -232,12 +239,20 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
     fn complete(
         &self,
         model: &L,
+        workspace: Option<&M::Workspace>,
         t: f64,
         state: &State<N>,
         guess: &SVector<f64, N>,
     ) -> Result<PhasePoint<N>, Error> {
         let (v, p) = match Method::info(self).coordinates {
-            Coordinates::Momentum => (model.velocity(t, &state.q, &state.y, guess)?, state.y),
+            Coordinates::Momentum => {
+                let known = workspace.and_then(|workspace| self.velocity(workspace, &state.y));
+                let v = match known {
+                    Some(v) => v,
+                    None => model.velocity(t, &state.q, &state.y, guess)?,
+                };
+                (v, state.y)
+            }
             Coordinates::Velocity => (state.y, model.momentum(t, &state.q, &state.y)),
         };
         Ok(PhasePoint {
@@ -325,7 +340,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         Method::with_points(self, points)
     }
 
-    fn node_offsets<'a>(&self, workspace: &'a M::Workspace) -> Option<&'a [f64]> {
+    fn node_offsets<'a>(&self, workspace: &'a mut M::Workspace) -> Option<&'a [f64]> {
         Method::node_offsets(self, workspace)
     }
 }

@@ -81,6 +81,18 @@ impl StartingValues {
         self.previous_step = Some(h);
     }
 
+    /// Remember a step of size `h` whose offsets the caller writes later, through
+    /// [`StartingValues::previous_mut`], before anything reads them (a method that can
+    /// start the next step without them).
+    pub(crate) fn remember_size(&mut self, h: f64) {
+        self.previous_step = Some(h);
+    }
+
+    /// The remembered offsets, to be written (see [`StartingValues::remember_size`]).
+    pub(crate) fn previous_mut(&mut self) -> &mut [f64] {
+        self.previous.as_mut_slice()
+    }
+
     /// Offsets from the previous step's polynomial, relative to the new start q_{k+1}, for
     /// the step size last given to [`StartingValues::prepare`].
     pub(crate) fn extrapolate<const N: usize>(&self, offsets: &mut DVector<f64>) {
@@ -95,6 +107,12 @@ impl StartingValues {
                 }
             }
         }
+    }
+
+    /// The extrapolation table X (s × s, row-major) for the step ratio last given to
+    /// [`StartingValues::prepare`], and that ratio.
+    pub(crate) fn table(&self) -> (&[f64], f64) {
+        (&self.extrapolation, self.ratio)
     }
 
     /// Node offsets of the remembered step, if any.
@@ -112,18 +130,33 @@ impl StartingValues {
         values: &mut [f64],
     ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
         self.previous_step?;
+        let previous = self.previous.as_slice();
+        Some(self.polynomial(tau, values, |j| {
+            SVector::from_column_slice(&previous[j * N..(j + 1) * N])
+        }))
+    }
+
+    /// The polynomial with node offsets `node(j)` (j = 0..s − 1 for the nodes 1..s) at
+    /// τ ∈ [−1, 1]: Σ_j l_j(τ) Z_j and Σ_j l̇_j(τ) Z_j, with the basis values l_j(τ) written to
+    /// `values` (length s + 1).
+    pub(crate) fn polynomial<const N: usize>(
+        &self,
+        tau: f64,
+        values: &mut [f64],
+        node: impl Fn(usize) -> SVector<f64, N>,
+    ) -> (SVector<f64, N>, SVector<f64, N>) {
         let mut derivatives = [0.0; crate::spectral::MAX_POINTS];
         let points = self.basis.len();
         self.basis.values_into(tau, &mut values[..points]);
         self.basis.derivatives_into(tau, &mut derivatives[..points]);
         let mut offset = SVector::zeros();
         let mut rate = SVector::zeros();
-        for (j, node) in self.previous.as_slice().chunks_exact(N).enumerate() {
-            let node = SVector::<f64, N>::from_column_slice(node);
+        for j in 0..points - 1 {
+            let node = node(j);
             offset += node * values[j + 1];
             rate += node * derivatives[j + 1];
         }
-        Some((offset, rate))
+        (offset, rate)
     }
 
     /// Offsets of the Taylor polynomial with velocity `v` and acceleration `a`.

@@ -165,7 +165,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let mut increment = S::State::zeros();
         let mut adaptivity = Adaptivity::default();
         let mut rejections = 0;
-        if observer.wants(0) && self.observe(0, progress, observer)? {
+        if observer.wants(0) && self.observe(0, None, progress, observer)? {
             return Ok((adaptivity, true));
         }
         while progress.t < span.t_end {
@@ -252,7 +252,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                         ] {
                             progress.cursor = cursor;
                             progress.t = time;
-                            if observer.wants(step) && self.observe(step, progress, observer)? {
+                            if observer.wants(step)
+                                && self.observe(step, Some(&half), progress, observer)?
+                            {
                                 // Stopped after the first of the pair: drop the outputs
                                 // served from the second.
                                 let served = outputs
@@ -352,7 +354,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let mut warm = None;
         // (points, error estimate) of the last accepted step.
         let mut previous: Option<(usize, f64)> = None;
-        if observer.wants(0) && self.observe(0, progress, observer)? {
+        if observer.wants(0) && self.observe(0, None, progress, observer)? {
             return Ok((adaptivity, true));
         }
         for k in 0..steps {
@@ -427,7 +429,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 adaptivity.record(size, Some(points));
                 progress.cursor = next;
                 progress.t = end_time;
-                if observer.wants(k + 1) && self.observe(k + 1, progress, observer)? {
+                if observer.wants(k + 1)
+                    && self.observe(k + 1, Some(&steppers[points - low].1), progress, observer)?
+                {
                     return Ok((adaptivity, k + 1 < steps));
                 }
                 // The next step's estimate, extrapolated from the trend of the last two at

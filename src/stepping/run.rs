@@ -232,7 +232,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         state: &S::State,
         guess: &S::Velocity,
     ) -> Result<S::Point, Error> {
-        self.method.complete(&self.model, t, state, guess)
+        self.method.complete(&self.model, None, t, state, guess)
     }
 
     /// The method state for an initial condition, after checking it.
@@ -379,7 +379,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             Recovery::None => 0,
             Recovery::HalveStep { max_halvings } => max_halvings,
         };
-        if observer.wants(0) && self.observe(0, progress, observer)? {
+        if observer.wants(0) && self.observe(0, Some(workspace), progress, observer)? {
             return Ok(true);
         }
         let mut increment = S::State::zeros();
@@ -402,22 +402,30 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             progress.t = end;
             after_step(workspace, t, step_size, &start, progress)
                 .map_err(|error| self.failure(error, progress, false))?;
-            if observer.wants(k + 1) && self.observe(k + 1, progress, observer)? {
+            if observer.wants(k + 1) && self.observe(k + 1, Some(workspace), progress, observer)? {
                 return Ok(k + 1 < steps);
             }
         }
         Ok(false)
     }
 
-    /// Complete the current point and hand it to `observer` as the point after step `step`;
-    /// whether the observer asked to stop.
+    /// Complete the current point (from `workspace`, of the run that reached it, where it
+    /// can) and hand it to `observer` as the point after step `step`; whether the observer
+    /// asked to stop.
     pub(crate) fn observe<O: Observer<L, S::Point>>(
         &self,
         step: usize,
+        workspace: Option<&M::Workspace>,
         progress: &mut Progress<S>,
         observer: &mut O,
     ) -> Result<bool, RunFailure<S>> {
-        match self.complete(step, progress.t, &progress.cursor.state, &progress.guess) {
+        match self.complete(
+            workspace,
+            step,
+            progress.t,
+            &progress.cursor.state,
+            &progress.guess,
+        ) {
             Ok(point) => {
                 progress.guess = S::velocity(&point);
                 Ok(observer.observe(&self.model, step, &point).is_break())
@@ -434,6 +442,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     ) -> Result<Run<S>, RunFailure<S>> {
         let last = self
             .complete(
+                None,
                 progress.statistics.steps,
                 progress.t,
                 &progress.cursor.state,
@@ -448,16 +457,20 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         })
     }
 
-    /// [`Integrator::phase_point`], with a non-finite velocity or momentum (from a finite
-    /// state, e.g. an overflowing ∂L/∂q̇) reported as [`Error::NonFinite`] at `step`.
+    /// [`Integrator::phase_point`] (from what `workspace`, of the run that reached `state`,
+    /// holds where it can), with a non-finite velocity or momentum (from a finite state, e.g.
+    /// an overflowing ∂L/∂q̇) reported as [`Error::NonFinite`] at `step`.
     pub(crate) fn complete(
         &self,
+        workspace: Option<&M::Workspace>,
         step: usize,
         t: f64,
         state: &S::State,
         guess: &S::Velocity,
     ) -> Result<S::Point, Error> {
-        let point = self.phase_point(t, state, guess)?;
+        let point = self
+            .method
+            .complete(&self.model, workspace, t, state, guess)?;
         if self.method.point_is_finite(&point) {
             Ok(point)
         } else {

@@ -38,6 +38,7 @@ pub trait RunSpace<L>: Space {
     fn measured(
         model: &L,
         diagnostics: Self::Diagnostics,
+        first: &Self::Point,
         last: &Self::Point,
     ) -> (Option<f64>, Conservation);
 
@@ -102,15 +103,18 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
     }
 
     fn measured(
-        _: &L,
+        model: &L,
         (energy, momentum, solution): Self::Diagnostics,
-        _: &PhasePoint<N>,
+        first: &PhasePoint<N>,
+        last: &PhasePoint<N>,
     ) -> (Option<f64>, Conservation) {
+        let exact = model.exact_solution(first.t, &first.q, &first.v, last.t);
         (
             energy.map(|e| e.max),
             Conservation::Vector {
                 momentum_error_max: momentum.map(|m| m.max),
                 solution_error_max: solution.and_then(|s| s.max),
+                solution_error_final: exact.map(|(q, _)| (last.q - q).norm()),
             },
         )
     }
@@ -196,6 +200,7 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
     fn measured(
         model: &L,
         (energy, momentum, invariants, orthogonality): Self::Diagnostics,
+        _: &RigidPoint,
         last: &RigidPoint,
     ) -> (Option<f64>, Conservation) {
         (

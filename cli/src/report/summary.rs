@@ -240,8 +240,11 @@ pub enum Conservation {
     Vector {
         /// Largest deviation of the Noether momenta (`None` if the model has no symmetry).
         momentum_error_max: Option<f64>,
-        /// Largest position error against the exact solution (`None` if there is none).
+        /// Largest position error against the exact solution over the run (`None` if there
+        /// is none, or the `solution` diagnostic was not asked for).
         solution_error_max: Option<f64>,
+        /// Position error against the exact solution at the end (`None` if there is none).
+        solution_error_final: Option<f64>,
     },
     /// On SO(3).
     Rigid {
@@ -286,6 +289,17 @@ impl Conservation {
         }
     }
 
+    /// Position error against the exact solution at the end (ℝᴺ; `None` on SO(3)).
+    pub fn solution_error_final(&self) -> Option<f64> {
+        match self {
+            Conservation::Vector {
+                solution_error_final,
+                ..
+            } => *solution_error_final,
+            Conservation::Rigid { .. } => None,
+        }
+    }
+
     /// The rows of the text summary.
     fn rows(&self) -> Vec<(&'static str, String)> {
         let named = |value: Option<f64>, names: &[&str]| {
@@ -299,9 +313,17 @@ impl Conservation {
             Conservation::Vector {
                 momentum_error_max,
                 solution_error_max,
+                solution_error_final,
             } => vec![
                 ("momentum error", error(*momentum_error_max)),
-                ("solution error", error(*solution_error_max)),
+                (
+                    "solution error",
+                    match (solution_error_max, solution_error_final) {
+                        (Some(max), Some(last)) => format!("{max:.3e} max, {last:.3e} at the end"),
+                        (None, Some(last)) => format!("{last:.3e} at the end"),
+                        (max, None) => error(*max),
+                    },
+                ),
             ],
             Conservation::Rigid {
                 momentum_names,

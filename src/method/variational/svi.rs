@@ -242,6 +242,28 @@ struct ConstantMass<const N: usize> {
     stage_rate: Vec<f64>,
     /// B_μν, row-major m × m (velocities at the quadrature points, forced models).
     rate_matrix: Vec<f64>,
+    /// W = l X, row-major m × s: the positions at this step's quadrature points from the
+    /// previous step's node offsets, Q_μ = q_k + Σ_j W_μj Z_j (the starting values of
+    /// [`StartingValues`] taken straight to the quadrature points).
+    stage_extrapolation: Vec<f64>,
+    /// E = W P, row-major m × m, and γ = W c: the same positions from the previous step's
+    /// velocity term and accelerations, Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν, so that
+    /// a step needs no node offsets at all while nobody reads its polynomial.
+    start_matrix: Vec<f64>,
+    /// γ, see `start_matrix`.
+    start_velocity: Vec<f64>,
+    /// The step ratio `stage_extrapolation`, `start_matrix` and `start_velocity` were built
+    /// for.
+    extrapolation_ratio: f64,
+    /// h M⁻¹p_k of the last converged step.
+    last_velocity: SVector<f64, N>,
+    /// The scaled accelerations h² M⁻¹ ∂L/∂q(τ_μ) of the last converged step: with
+    /// `last_velocity` they determine its node offsets, Z_j = c_j h M⁻¹p_k + Σ_μ P_jμ a_μ.
+    last_accelerations: Vec<SVector<f64, N>>,
+    /// Whether the last step is remembered only by `last_velocity` and `last_accelerations`:
+    /// its node offsets in [`StartingValues`] are still to be written ([`ConstantMass::settle`])
+    /// before anything reads them.
+    pending: bool,
     /// M⁻¹, from the first step.
     mass_inverse: Option<SMatrix<f64, N, N>>,
     /// ∂L/∂q at the quadrature points.
@@ -327,6 +349,13 @@ impl<const N: usize> ConstantMass<N> {
             stage_values,
             stage_rate,
             rate_matrix,
+            stage_extrapolation: vec![0.0; m * s],
+            start_matrix: vec![0.0; m * m],
+            start_velocity: vec![0.0; m],
+            extrapolation_ratio: f64::NAN,
+            last_velocity: SVector::zeros(),
+            last_accelerations: vec![SVector::zeros(); m],
+            pending: false,
             mass_inverse: None,
             forces: vec![SVector::zeros(); m],
             accelerations: vec![SVector::zeros(); m],
@@ -334,6 +363,95 @@ impl<const N: usize> ConstantMass<N> {
             bases: vec![SVector::zeros(); m],
             velocities: vec![SVector::zeros(); m],
         })
+    }
+}
+
+impl<const N: usize> ConstantMass<N> {
+    /// Q_μ = q_k + Σ_j T_μj Z_j for node offsets Z_j (j = 1..s, stacked), with T the
+    /// extrapolation W (`extrapolated`) or the interpolation l_j(τ_μ).
+    fn set_positions(
+        &mut self,
+        q: &SVector<f64, N>,
+        extrapolated: bool,
+        offsets: &[f64],
+        s: usize,
+    ) {
+        let table = if extrapolated {
+            &self.stage_extrapolation
+        } else {
+            &self.stage_values
+        };
+        for (position, row) in self.positions.iter_mut().zip(table.chunks_exact(s)) {
+            let mut sum = *q;
+            for (w, offset) in row.iter().zip(offsets.chunks_exact(N)) {
+                for d in 0..N {
+                    sum[d] += w * offset[d];
+                }
+            }
+            *position = sum;
+        }
+    }
+
+    /// W = l X, E = W P and γ = W c for the starting values' extrapolation table X (s × s)
+    /// of step ratio `ratio`.
+    fn build_extrapolation(&mut self, table: &[f64], ratio: f64, s: usize) {
+        let m = self.positions.len();
+        for mu in 0..m {
+            for j in 0..s {
+                self.stage_extrapolation[mu * s + j] = (0..s)
+                    .map(|nu| self.stage_values[mu * s + nu] * table[nu * s + j])
+                    .sum();
+            }
+            let row = &self.stage_extrapolation[mu * s..(mu + 1) * s];
+            for nu in 0..m {
+                self.start_matrix[mu * m + nu] =
+                    (0..s).map(|j| row[j] * self.propagation[j * m + nu]).sum();
+            }
+            self.start_velocity[mu] = (0..s).map(|j| row[j] * self.velocity_coefficients[j]).sum();
+        }
+        self.extrapolation_ratio = ratio;
+    }
+
+    /// Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν from the last step's pending data.
+    fn extrapolate_positions(&mut self, q: &SVector<f64, N>) {
+        let m = self.positions.len();
+        for ((position, row), gamma) in self
+            .positions
+            .iter_mut()
+            .zip(self.start_matrix.chunks_exact(m))
+            .zip(&self.start_velocity)
+        {
+            // Accumulated in a local (registers), not through the reference.
+            let mut sum = *q;
+            add_scaled(&mut sum, *gamma, &self.last_velocity);
+            for (e, acceleration) in row.iter().zip(&self.last_accelerations) {
+                add_scaled(&mut sum, *e, acceleration);
+            }
+            *position = sum;
+        }
+    }
+
+    /// Node offset Z_j (j = 0..s − 1 for the nodes 1..s) of the last converged step, from
+    /// its velocity term and accelerations.
+    fn last_offset(&self, j: usize) -> SVector<f64, N> {
+        let m = self.last_accelerations.len();
+        let mut offset = self.last_velocity * self.velocity_coefficients[j];
+        let row = &self.propagation[j * m..(j + 1) * m];
+        for (p, acceleration) in row.iter().zip(&self.last_accelerations) {
+            add_scaled(&mut offset, *p, acceleration);
+        }
+        offset
+    }
+
+    /// Write the pending node offsets of the last step into `start` (see `pending`).
+    fn settle(&mut self, start: &mut StartingValues) {
+        if !self.pending {
+            return;
+        }
+        for (j, target) in start.previous_mut().chunks_exact_mut(N).enumerate() {
+            target.copy_from_slice(self.last_offset(j).as_slice());
+        }
+        self.pending = false;
     }
 }
 
@@ -417,17 +535,52 @@ impl<const N: usize> SviWorkspace<N> {
     /// Starting values: the previous step's polynomial extrapolated to the new nodes, or at
     /// the first step the Taylor polynomial with q̇ from the inverse Legendre map.
     fn start<L: Lagrangian<N>>(&mut self, model: &L, t: f64, state: &State<N>) {
-        if self.start.prepare(self.tables.h) {
-            self.start.extrapolate::<N>(&mut self.offsets);
-        } else {
-            let v = model
-                .velocity(t, &state.q, &state.y, &state.y)
-                .unwrap_or_else(|_| SVector::zeros());
-            let a = model
-                .acceleration(t, &state.q, &v)
-                .unwrap_or_else(SVector::zeros);
-            self.start.taylor(self.tables.h, &v, &a, &mut self.offsets);
+        self.settle();
+        starting_offsets(
+            &mut self.start,
+            self.tables.h,
+            &mut self.offsets,
+            model,
+            t,
+            state,
+        );
+    }
+
+    /// Write the last step's node offsets where the fixed-point iteration left them pending.
+    fn settle(&mut self) {
+        if let Some(data) = self.constant_mass.as_mut() {
+            data.settle(&mut self.start);
         }
+    }
+
+    /// Remember the node offsets in `offsets` as the last step's, of size `h`.
+    fn remember(&mut self, h: f64) {
+        self.start.remember(&self.offsets, h);
+        if let Some(data) = self.constant_mass.as_mut() {
+            data.pending = false;
+        }
+    }
+}
+
+/// [`SviWorkspace::start`] on the workspace's parts.
+fn starting_offsets<L: Lagrangian<N>, const N: usize>(
+    start: &mut StartingValues,
+    h: f64,
+    offsets: &mut DVector<f64>,
+    model: &L,
+    t: f64,
+    state: &State<N>,
+) {
+    if start.prepare(h) {
+        start.extrapolate::<N>(offsets);
+    } else {
+        let v = model
+            .velocity(t, &state.q, &state.y, &state.y)
+            .unwrap_or_else(|_| SVector::zeros());
+        let a = model
+            .acceleration(t, &state.q, &v)
+            .unwrap_or_else(SVector::zeros);
+        start.taylor(h, &v, &a, offsets);
     }
 }
 
@@ -578,7 +731,7 @@ impl<const N: usize> Method<N> for Svi {
         }
         increment.q = ws.offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = dp;
-        ws.start.remember(&ws.offsets, h);
+        ws.remember(h);
         let m = ws.tables.nodes.len();
         Ok(StepReport {
             iterations,
@@ -588,6 +741,9 @@ impl<const N: usize> Method<N> for Svi {
 
     fn restart(&self, workspace: &mut SviWorkspace<N>) {
         workspace.start.invalidate();
+        if let Some(data) = workspace.constant_mass.as_mut() {
+            data.pending = false;
+        }
     }
 
     /// q(τ) = q_k + Σ_j l_j(τ) Z_j and q̇(τ) = (2/h) Σ_j l̇_j(τ) Z_j, τ = 2θ − 1.
@@ -599,10 +755,26 @@ impl<const N: usize> Method<N> for Svi {
         theta: f64,
     ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
         let mut values = [0.0; MAX_POINTS];
-        let (offset, rate) = workspace
-            .start
-            .last_step::<N>(2.0 * theta - 1.0, &mut values)?;
+        let tau = 2.0 * theta - 1.0;
+        let (offset, rate) = match workspace.constant_mass.as_ref() {
+            Some(data) if data.pending => workspace
+                .start
+                .polynomial(tau, &mut values, |j| data.last_offset(j)),
+            _ => workspace.start.last_step::<N>(tau, &mut values)?,
+        };
         Some((state.q + offset, rate * (2.0 / h)))
+    }
+
+    /// q̇ = M⁻¹p once the fixed-point iteration has cached M⁻¹ (a constant-mass model,
+    /// L = ½ q̇ᵀMq̇ − V, so p = Mq̇ exactly; [`Structure::ConstantMass`] is checked once per
+    /// run).
+    fn velocity(
+        &self,
+        workspace: &SviWorkspace<N>,
+        p: &SVector<f64, N>,
+    ) -> Option<SVector<f64, N>> {
+        let inverse = workspace.constant_mass.as_ref()?.mass_inverse?;
+        Some(inverse * p)
     }
 
     fn points(&self) -> Option<usize> {
@@ -621,7 +793,8 @@ impl<const N: usize> Method<N> for Svi {
         })
     }
 
-    fn node_offsets<'a>(&self, workspace: &'a SviWorkspace<N>) -> Option<&'a [f64]> {
+    fn node_offsets<'a>(&self, workspace: &'a mut SviWorkspace<N>) -> Option<&'a [f64]> {
+        workspace.settle();
         workspace.start.last_offsets()
     }
 
@@ -635,6 +808,11 @@ impl<const N: usize> Method<N> for Svi {
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
         let mut increment = State::zeros();
         self.step(model, workspace, t, h, state, &mut increment)?;
+        // The converged node offsets (a fixed-point step leaves them pending).
+        workspace.settle();
+        if let Some(offsets) = workspace.start.last_offsets() {
+            workspace.offsets.copy_from_slice(offsets);
+        }
         let ws = &*workspace;
         let tables = &ws.tables;
         let s = tables.degree;
@@ -687,6 +865,45 @@ impl<const N: usize> Method<N> for Svi {
     }
 }
 
+/// `y += a x`, written out so that it compiles to N fused multiply-adds in the inner loops.
+#[inline(always)]
+fn add_scaled<const N: usize>(y: &mut SVector<f64, N>, a: f64, x: &SVector<f64, N>) {
+    for d in 0..N {
+        y[d] += a * x[d];
+    }
+}
+
+/// Positions at the quadrature points at the start of a step: the previous step's polynomial
+/// extrapolated, straight from its velocity term and accelerations where its node offsets
+/// are pending (Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν, the cost of one product, as the
+/// extrapolation of a Gauss–Legendre code), else from its node offsets (Q_μ = q_k + Σ_j W_μj
+/// Z_j), or at a cold start from the starting values' offsets (the Taylor polynomial,
+/// written to `offsets`). Returns whether the start was warm.
+fn starting_positions<L: Lagrangian<N>, const N: usize>(
+    (start, tables, offsets): (&mut StartingValues, &Tables, &mut DVector<f64>),
+    data: &mut ConstantMass<N>,
+    model: &L,
+    t: f64,
+    state: &State<N>,
+) -> bool {
+    let s = tables.degree;
+    if !start.prepare(tables.h) {
+        starting_offsets(start, tables.h, offsets, model, t, state);
+        data.set_positions(&state.q, false, offsets.as_slice(), s);
+        return false;
+    }
+    let (table, ratio) = start.table();
+    if ratio != data.extrapolation_ratio {
+        data.build_extrapolation(table, ratio, s);
+    }
+    if data.pending {
+        data.extrapolate_positions(&state.q);
+    } else if let Some(previous) = start.last_offsets() {
+        data.set_positions(&state.q, true, previous, s);
+    }
+    true
+}
+
 /// One step of a constant-mass Lagrangian by fixed-point iteration (no Hessian; an external
 /// force is evaluated at the quadrature points' positions and velocities).
 fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
@@ -699,7 +916,10 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     increment: &mut State<N>,
 ) -> Result<StepReport, StepFailure> {
     workspace.set_step(h);
-    workspace.start(model, t, state);
+    if L::FORCED {
+        // The velocities at the quadrature points start from the extrapolated offsets.
+        workspace.settle();
+    }
     let SviWorkspace {
         tables,
         offsets,
@@ -710,19 +930,17 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
+    let warm = starting_positions((start, tables, offsets), data, model, t, state);
     let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
-    let s = tables.degree;
     let m = tables.nodes.len();
     let velocity = mass_inverse * state.y * h;
     let scaled_inverse = mass_inverse * (h * h);
-    for (mu, position) in data.positions.iter_mut().enumerate() {
-        *position = state.q;
-        let values = &data.stage_values[mu * s..(mu + 1) * s];
-        for (value, offset) in values.iter().zip(offsets.as_slice().chunks_exact(N)) {
-            *position += SVector::<f64, N>::from_column_slice(offset) * *value;
-        }
-    }
     if L::FORCED {
+        // The velocities of the starting polynomial, from its offsets (the previous step's
+        // polynomial extrapolated, as the positions).
+        if warm {
+            start.extrapolate::<N>(offsets);
+        }
         for (mu, rate) in data.velocities.iter_mut().enumerate() {
             *rate = SVector::zeros();
             for (j, offset) in offsets.as_slice().chunks_exact(N).enumerate() {
@@ -733,7 +951,8 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     }
     let mut size: f64 = 0.0;
     for (base, c) in data.bases.iter_mut().zip(&data.stage_velocity) {
-        *base = state.q + velocity * *c;
+        *base = state.q;
+        add_scaled(base, *c, &velocity);
         size = size.max(base.amax());
     }
     let mut control = FixedPoint::new(max_iterations);
@@ -752,27 +971,25 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             *acceleration = scaled_inverse * *force;
         }
         // The largest change by plain comparisons (no NaN-aware max in the hot loop): a NaN
-        // force is caught by the finiteness check of the positions below.
+        // force is caught by the finiteness check below.
         let mut change: f64 = 0.0;
+        let mut finite = true;
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.stage_matrix[mu * m..(mu + 1) * m];
             let mut next = *base;
             for (a, acceleration) in row.iter().zip(&data.accelerations) {
-                next += acceleration * *a;
+                add_scaled(&mut next, *a, acceleration);
             }
-            for (x, y) in next.iter().zip(position.iter()) {
-                let difference = (x - y).abs();
+            for d in 0..N {
+                let difference = (next[d] - position[d]).abs();
                 if difference > change {
                     change = difference;
                 }
+                finite &= next[d].is_finite();
             }
             *position = next;
         }
-        if !data
-            .positions
-            .iter()
-            .all(|p| p.iter().all(|x| x.is_finite()))
-        {
+        if !finite {
             return Err(StepFailure::NonFinite);
         }
         if L::FORCED {
@@ -780,38 +997,51 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
                 let row = &data.rate_matrix[mu * m..(mu + 1) * m];
                 let mut next = velocity * data.stage_rate[mu];
                 for (b, acceleration) in row.iter().zip(&data.accelerations) {
-                    next += acceleration * *b;
+                    add_scaled(&mut next, *b, acceleration);
                 }
                 *rate = next / h;
             }
         }
         let converged = control.converged(change, size);
-        if converged != Ok(false) {
-            // The node offsets of the last iterate: the step's polynomial, or where Newton
-            // takes over from a capped iteration (see `after_fixed_point`).
-            for (j, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
-                let row = &data.propagation[j * m..(j + 1) * m];
-                let mut offset = velocity * data.velocity_coefficients[j];
-                for (p, acceleration) in row.iter().zip(&data.accelerations) {
-                    offset += acceleration * *p;
-                }
-                target.copy_from_slice(offset.as_slice());
-            }
-            converged?;
+        if converged == Ok(true) {
             break;
+        }
+        if let Err(failure) = converged {
+            // The node offsets of the last iterate, where Newton takes over from a capped
+            // iteration (see `after_fixed_point`).
+            for ((target, row), c) in offsets
+                .as_mut_slice()
+                .chunks_exact_mut(N)
+                .zip(data.propagation.chunks_exact(m))
+                .zip(&data.velocity_coefficients)
+            {
+                let mut offset = velocity * *c;
+                for (p, acceleration) in row.iter().zip(&data.accelerations) {
+                    add_scaled(&mut offset, *p, acceleration);
+                }
+                for d in 0..N {
+                    target[d] = offset[d];
+                }
+            }
+            return Err(failure);
         }
     }
     let mut dp = SVector::<f64, N>::zeros();
-    for (mu, force) in data.forces.iter().enumerate() {
-        dp += force * tables.weights[mu];
+    for (force, w) in data.forces.iter().zip(&tables.weights) {
+        add_scaled(&mut dp, *w, force);
     }
     let mut dq = velocity;
     for (w, acceleration) in data.end_weights.iter().zip(&data.accelerations) {
-        dq += acceleration * *w;
+        add_scaled(&mut dq, *w, acceleration);
     }
     increment.q = dq;
     increment.y = dp;
-    start.remember(offsets, h);
+    // The step's polynomial is remembered by its velocity term and accelerations; its node
+    // offsets are written only if something reads them (see `ConstantMass::pending`).
+    data.last_velocity = velocity;
+    std::mem::swap(&mut data.accelerations, &mut data.last_accelerations);
+    data.pending = true;
+    start.remember_size(h);
     let iterations = control.iterations();
     Ok(StepReport {
         iterations,
@@ -1034,6 +1264,64 @@ mod tests {
                 "{method:?}: paths differ by {difference:e}"
             );
         }
+    }
+
+    #[test]
+    fn a_fixed_point_step_remembers_its_polynomial_without_writing_it() {
+        // The step's node offsets stay pending (its velocity term and accelerations) until
+        // something reads them: dense output at θ = 1 and the settled last node must both be
+        // the step's end point, and the next step's start from the pending data must equal
+        // the start from the settled offsets (one more step each way, same result).
+        let method = Svi::new(7).with_quadrature(6);
+        let model = HenonHeiles::<true>;
+        let h = 0.1;
+        let (end, mut workspace) = advance(&method, &model, h, 3, state([0.3, -0.2], [0.1, 0.4]));
+        let (before, _) = advance(&method, &model, h, 2, state([0.3, -0.2], [0.1, 0.4]));
+        assert!(workspace.constant_mass.as_ref().unwrap().pending);
+        let (q, v) = Method::<2>::dense_output(&method, &workspace, &before, h, 1.0).unwrap();
+        assert!((q - end.q).amax() <= 1e-15, "{q:?} {:?}", end.q);
+        // The end velocity of the step polynomial is M⁻¹p to the method's accuracy.
+        let mass_inverse = SMatrix::<f64, 2, 2>::new(0.6, -0.2, -0.2, 0.4);
+        assert!((v - mass_inverse * end.y).amax() <= 1e-9, "{v:?}");
+        let mut settled = workspace.clone();
+        let offsets = Method::<2>::node_offsets(&method, &mut settled).unwrap();
+        let last = SVector::<f64, 2>::from_column_slice(&offsets[offsets.len() - 2..]);
+        assert!((before.q + last - end.q).amax() <= 1e-15);
+        assert!(!settled.constant_mass.as_ref().unwrap().pending);
+        let mut increments = [State::zeros(), State::zeros()];
+        for (ws, increment) in [&mut workspace, &mut settled]
+            .into_iter()
+            .zip(&mut increments)
+        {
+            method
+                .step(&model, ws, 3.0 * h, h, &end, increment)
+                .unwrap();
+        }
+        assert!(distance(&increments[0], &increments[1]) <= 1e-15);
+    }
+
+    #[test]
+    fn the_velocity_of_a_constant_mass_state_is_the_cached_inverse_mass_times_p() {
+        // q̇ = M⁻¹p from the workspace, against the inverse Legendre map by Newton.
+        let method = Svi::new(6);
+        let model = HenonHeiles::<true>;
+        let (end, workspace) = advance(&method, &model, 0.1, 4, state([0.3, -0.2], [0.1, 0.4]));
+        let cached = Method::<2>::velocity(&method, &workspace, &end.y).unwrap();
+        let solved = model
+            .velocity(0.4, &end.q, &end.y, &SVector::zeros())
+            .unwrap();
+        assert!((cached - solved).amax() <= 1e-15, "{cached:?} {solved:?}");
+        // Not before a step has cached M⁻¹, and never for a general Lagrangian.
+        let fresh = Method::<2>::workspace(&method, &model, 0.1).unwrap();
+        assert!(Method::<2>::velocity(&method, &fresh, &end.y).is_none());
+        let (_, general) = advance(
+            &method,
+            &VariableMass,
+            0.1,
+            2,
+            state([0.3, -0.2], [0.1, 0.4]),
+        );
+        assert!(Method::<2>::velocity(&method, &general, &end.y).is_none());
     }
 
     #[test]
