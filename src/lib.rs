@@ -65,7 +65,7 @@ pub use method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, DiscreteLagrangian, Midpoint, SymplecticEuler, Trapezoid,
 };
 pub use method::variational::stormer_verlet::StormerVerlet;
-pub use method::variational::svi::Svi;
+pub use method::variational::svi::{Solver, Svi};
 pub use method::variational::variational_integrator::VariationalIntegrator;
 pub use method::{
     Coordinates, Euclidean, Initial, Method, MethodInfo, PhasePoint, SO3, Space, State, Step,

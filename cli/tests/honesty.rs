@@ -61,16 +61,16 @@ fn a_failed_run_prints_one_json_object_with_its_last_good_state() {
     assert_eq!(summary["status"], "failed");
     let error = &summary["error"];
     assert_eq!(error["kind"], "non_convergence");
-    assert_eq!(error["step"], 55);
-    assert_eq!(number(error, "t"), 4.4);
+    assert_eq!(error["step"], 26);
+    assert_eq!(number(error, "t"), 2.86);
     assert!(
         error["message"]
             .as_str()
             .unwrap()
             .contains("did not converge")
     );
-    assert_eq!(summary["steps"], 55);
-    assert_eq!(number(&summary, "t_end"), 4.4);
+    assert_eq!(summary["steps"], 26);
+    assert_eq!(number(&summary, "t_end"), 2.86);
     assert_eq!(summary["q"].as_array().unwrap().len(), 2);
     // The diagnostics so far.
     assert!(number(&summary, "energy_error_max") > 0.0);

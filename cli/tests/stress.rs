@@ -22,8 +22,8 @@ fn every_stress_scene_parses_and_a_short_run_of_each_succeeds() {
         scene.run.t_end = Some(50.0 * h);
         let summary = scene.run(false).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(summary.steps, 50, "{name}");
-        // kepler-recovery is coarse on purpose (h = 0.08 at e = 0.95: 0.13 after 50 steps).
-        let bound = if name == "kepler-recovery" { 0.2 } else { 1e-2 };
+        // kepler-recovery is coarse on purpose (h = 0.11 at e = 0.95: 0.33 after 50 steps).
+        let bound = if name == "kepler-recovery" { 0.5 } else { 1e-2 };
         assert!(
             summary.energy_error_max.unwrap() < bound,
             "{name}: {summary:?}"
@@ -47,17 +47,17 @@ fn a_failed_run_reports_the_last_good_state_and_keeps_its_trajectory() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert!(
-        stderr.contains("the run failed after 55 steps; last good state at t = 4.4"),
+        stderr.contains("the run failed after 26 steps; last good state at t = 2.86"),
         "{stderr}"
     );
     assert!(
-        stderr.contains("nonlinear solve did not converge at step 55 (t = 4.4"),
+        stderr.contains("nonlinear solve did not converge at step 26 (t = 2.86"),
         "{stderr}"
     );
-    // Header, the initial point and the 55 good steps.
+    // Header, the initial point and the 26 good steps.
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert_eq!(text.lines().count(), 57);
-    assert!(text.lines().last().unwrap().starts_with("4.4,"));
+    assert_eq!(text.lines().count(), 28);
+    assert!(text.lines().last().unwrap().starts_with("2.86,"));
     // With recovery the same scene completes.
     let output = svi(&["run", "kepler-recovery", "--json"]);
     assert!(
@@ -66,7 +66,7 @@ fn a_failed_run_reports_the_last_good_state_and_keeps_its_trajectory() {
         String::from_utf8_lossy(&output.stderr)
     );
     let summary: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
-    assert_eq!(summary["steps"].as_u64(), Some(2500));
+    assert_eq!(summary["steps"].as_u64(), Some(1819));
     assert!(summary["retries"].as_u64().unwrap() >= 1);
 }
 

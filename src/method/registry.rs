@@ -34,7 +34,7 @@ use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
 };
 use crate::method::variational::stormer_verlet::StormerVerlet;
-use crate::method::variational::svi::Svi;
+use crate::method::variational::svi::{Solver, Svi};
 use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::{Method, MethodInfo};
 use crate::spectral::{check_points, check_quadrature};
@@ -93,6 +93,16 @@ pub const METHODS: &[Entry] = &[
         },
         space: SpaceKind::Vector,
         summary: "spectral variational integrator: CGL points P, Gauss points M (default 2P, at most 256)",
+    },
+    Entry {
+        name: "svi-newton",
+        options: Options::PointsAndQuadrature {
+            default_points: || Svi::default().points,
+            default_quadrature: |points| Svi::new(points).quadrature_points(),
+        },
+        space: SpaceKind::Vector,
+        summary: "svi with Newton's method and the exact Jacobian at every iteration, also for \
+                  constant-mass models: CGL points P, Gauss points M (default 2P)",
     },
     Entry {
         name: "sc",
@@ -413,10 +423,13 @@ impl MethodSpec {
     ) -> Result<V::Output, Error> {
         let points = self.points_in_use().unwrap_or_default();
         Ok(match self.entry.name {
-            "svi" => {
+            "svi" | "svi-newton" => {
                 let mut svi = Svi::new(points);
                 if let Some(quadrature) = self.quadrature {
                     svi = svi.with_quadrature(quadrature);
+                }
+                if self.entry.name == "svi-newton" {
+                    svi = svi.with_solver(Solver::Newton);
                 }
                 visitor.visit(svi)
             }
@@ -682,7 +695,7 @@ mod tests {
         }
         let unknown = "rk4".parse::<MethodSpec>().unwrap_err().to_string();
         assert!(
-            unknown.contains("known: svi, sc, symplectic-euler,"),
+            unknown.contains("known: svi, svi-newton, sc, symplectic-euler,"),
             "{unknown}"
         );
         let message = "midpoint:3".parse::<MethodSpec>().unwrap_err().to_string();

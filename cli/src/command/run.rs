@@ -580,7 +580,7 @@ mod tests {
             assert_eq!(
                 error.to_string(),
                 format!(
-                    "--points is an option of svi and sc, not of {}",
+                    "--points is an option of svi, svi-newton and sc, not of {}",
                     kind.name()
                 )
             );

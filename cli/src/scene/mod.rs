@@ -804,7 +804,7 @@ pub(crate) mod tests {
         assert!(
             source
                 .to_string()
-                .contains("unknown method 'rk4' (known: svi, sc, symplectic-euler,")
+                .contains("unknown method 'rk4' (known: svi, svi-newton, sc, symplectic-euler,")
         );
         let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
         let SceneError::Parse { source, .. } = Scene::from_toml(text, "t").unwrap_err() else {
