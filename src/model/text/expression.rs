@@ -6,8 +6,6 @@
 //! [`Expression::evaluate`] on a fixed-size array (no allocation per evaluation), generic over
 //! [`Scalar`].
 
-use num_dual::DualStruct;
-
 use crate::model::text::TextError;
 use crate::scalar::Scalar;
 
@@ -968,7 +966,7 @@ mod tests {
 
     #[test]
     fn evaluation_is_generic_over_duals() {
-        use num_dual::Dual64;
+        use num_dual::{Dual64, DualStruct};
         let expression = parse("x^3 * sin(x) + 1/x").unwrap();
         let x = Dual64::from(1.5).derivative();
         let y = Dual64::from(-2.0);
