@@ -142,8 +142,8 @@ fn a_forced_model_from_text_has_the_zoo_models_force() {
     let points = [(0.0, [0.3], [1.1]), (2.0, [-2.9], [-0.4])];
     same_derivatives(&text, &zoo, &points);
     // A short run with the force: the same states to round-off.
-    let run = |integrator: Integrator<_, Svi, _>| {
-        integrator
+    fn run<L: svi::Lagrangian<1>>(model: L) -> svi::PhasePoint<1> {
+        Integrator::new(model, Svi::new(6))
             .run_from_velocity(
                 0.0,
                 SVector::from([1.0]),
@@ -154,11 +154,8 @@ fn a_forced_model_from_text_has_the_zoo_models_force() {
             )
             .unwrap()
             .last
-    };
-    let (a, b) = (
-        run(Integrator::new(text, Svi::new(6))),
-        run(Integrator::new(zoo, Svi::new(6))),
-    );
+    }
+    let (a, b) = (run(text), run(zoo));
     assert!((a.q - b.q).amax() < 1e-13, "{} against {}", a.q, b.q);
 }
 

@@ -692,6 +692,7 @@ pub(crate) mod tests {
             [
                 "oscillator",
                 "kepler",
+                "kepler-text",
                 "pendulum",
                 "spring-pendulum",
                 "double-pendulum",
@@ -713,9 +714,11 @@ pub(crate) mod tests {
         );
         for name in builtin_scene_names() {
             let scene = scene(name);
-            let model = scene.model.as_str();
+            let model = scene.model_name();
             assert!(
-                MODEL_NAMES.contains(&model) || RIGID_MODEL_NAMES.contains(&model),
+                MODEL_NAMES.contains(&model)
+                    || RIGID_MODEL_NAMES.contains(&model)
+                    || scene.lagrangian.is_some(),
                 "{name}"
             );
             if MODEL_NAMES.contains(&name) {
@@ -723,7 +726,7 @@ pub(crate) mod tests {
                 assert_eq!(scene.method.name, Some(method("svi")));
             } else {
                 // The stress scenes are named after their model.
-                assert!(name.contains(&scene.model), "{name}");
+                assert!(name.contains(scene.model_name()), "{name}");
             }
         }
         assert!(Scene::builtin("kepler2").is_none());

@@ -95,7 +95,7 @@
 
 mod expression;
 
-pub use expression::MAX_STACK;
+pub use expression::{MAX_NODES, MAX_STACK};
 
 use std::collections::BTreeSet;
 use std::sync::Mutex;
@@ -105,7 +105,7 @@ use nalgebra::SVector;
 use crate::error::Error;
 use crate::model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 use crate::scalar::Scalar;
-use expression::{CONSTANT_NAMES, Expression, FUNCTION_NAMES, Names};
+use expression::{CONSTANT_NAMES, Expression, FUNCTION_NAMES, Names, Tape, Velocities};
 
 /// What goes wrong when reading a text model: every message names the field and, for the
 /// expressions, the column (counted in characters from 1) and the offending symbol.
@@ -158,6 +158,14 @@ pub enum TextError {
         /// The field.
         field: String,
         /// [`MAX_STACK`].
+        limit: usize,
+    },
+    /// An expression of more than [`MAX_NODES`] numbers, names and operations.
+    #[error("{field} is too long: more than {limit} numbers, names and operations")]
+    TooLong {
+        /// The field.
+        field: String,
+        /// [`MAX_NODES`].
         limit: usize,
     },
     /// A coordinate or parameter name that is not an identifier, is given twice, or is taken
@@ -236,6 +244,62 @@ pub struct TextModel {
     forces: Vec<Expression>,
     generators: Vec<Vec<Expression>>,
     momentum_names: Vec<&'static str>,
+    /// The expressions compiled for the current parameter values.
+    tapes: Tapes,
+}
+
+/// The tapes of a text model for its current parameter values.
+#[derive(Debug, Clone, PartialEq)]
+struct Tapes {
+    lagrangian: Tape,
+    /// For a constant-mass L = ½q̇ᵀMq̇ + U(t, q): the tape of U (L at q̇ = 0) and the
+    /// terms (i, j, c) of ½q̇ᵀMq̇ = Σ c q̇ᵢq̇ⱼ (i ≤ j, c ≠ 0), evaluated without a tape.
+    constant_mass: Option<(Tape, Vec<(usize, usize, f64)>)>,
+    forces: Vec<Tape>,
+    generators: Vec<Vec<Tape>>,
+}
+
+impl Tapes {
+    /// Compile the expressions with `parameters`.
+    fn compile(
+        lagrangian: &Expression,
+        forces: &[Expression],
+        generators: &[Vec<Expression>],
+        parameters: &[f64],
+        n: usize,
+    ) -> Tapes {
+        let constant_mass = lagrangian
+            .properties()
+            .velocity
+            .filter(|form| form.is_constant_mass())
+            .and_then(|_| lagrangian.quadratic_form(parameters, n))
+            .map(|q| {
+                let mut terms = Vec::new();
+                for i in 0..n {
+                    for j in i..n {
+                        let c = if i == j {
+                            q[i * n + i]
+                        } else {
+                            q[i * n + j] + q[j * n + i]
+                        };
+                        if c != 0.0 {
+                            terms.push((i, j, c));
+                        }
+                    }
+                }
+                (lagrangian.compile(parameters, Velocities::Zero), terms)
+            });
+        let compile = |expression: &Expression| expression.compile(parameters, Velocities::Read);
+        Tapes {
+            lagrangian: compile(lagrangian),
+            constant_mass,
+            forces: forces.iter().map(compile).collect(),
+            generators: generators
+                .iter()
+                .map(|generator| generator.iter().map(compile).collect())
+                .collect(),
+        }
+    }
 }
 
 impl TextModel {
@@ -339,6 +403,7 @@ impl TextModel {
         let momentum_names = (1..=generators.len())
             .map(|i| intern(&format!("J{i}")))
             .collect();
+        let tapes = Tapes::compile(&lagrangian, &forces, &generators, &parameter_values, n);
         Ok(TextModel {
             coordinates,
             parameter_names,
@@ -347,6 +412,7 @@ impl TextModel {
             forces,
             generators,
             momentum_names,
+            tapes,
         })
     }
 
@@ -373,9 +439,9 @@ impl TextModel {
     /// [`Structure::ConstantMass`] if L is, by its structure, ½q̇ᵀMq̇ − V(t, q) with M
     /// constant (see the [module docs](self)), else [`Structure::General`].
     pub fn structure(&self) -> Structure {
-        match self.lagrangian.properties().velocity {
-            Some(form) if form.is_constant_mass() => Structure::ConstantMass,
-            _ => Structure::General,
+        match self.tapes.constant_mass {
+            Some(_) => Structure::ConstantMass,
+            None => Structure::General,
         }
     }
 
@@ -414,6 +480,13 @@ impl TextModel {
             ));
         }
         self.parameter_values[index] = value;
+        self.tapes = Tapes::compile(
+            &self.lagrangian,
+            &self.forces,
+            &self.generators,
+            &self.parameter_values,
+            self.dimension(),
+        );
         Ok(())
     }
 }
@@ -529,10 +602,16 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
 
     #[inline]
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
-        let model = &self.model;
-        model
-            .lagrangian
-            .evaluate(&model.parameter_values, t, q.as_slice(), v.as_slice())
+        let tapes = &self.model.tapes;
+        if CONSTANT_MASS && let Some((potential, kinetic)) = &tapes.constant_mass {
+            // ½q̇ᵀMq̇ without a tape, plus U(t, q).
+            let mut sum = potential.evaluate(t, q.as_slice(), v.as_slice());
+            for &(i, j, c) in kinetic {
+                sum += v[i] * v[j] * c;
+            }
+            return sum;
+        }
+        tapes.lagrangian.evaluate(t, q.as_slice(), v.as_slice())
     }
 
     #[inline]
@@ -542,13 +621,11 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
         q: &SVector<D, N>,
         v: &SVector<D, N>,
     ) -> SVector<D, N> {
-        let model = &self.model;
-        if model.forces.is_empty() {
+        let forces = &self.model.tapes.forces;
+        if forces.is_empty() {
             return SVector::zeros();
         }
-        SVector::from_fn(|i, _| {
-            model.forces[i].evaluate(&model.parameter_values, t, q.as_slice(), v.as_slice())
-        })
+        SVector::from_fn(|i, _| forces[i].evaluate(t, q.as_slice(), v.as_slice()))
     }
 }
 
@@ -570,11 +647,8 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
     /// # Panics
     /// If `index >= generator_count()`.
     fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N> {
-        let model = &self.model;
-        let generator = &model.generators[index];
-        SVector::from_fn(|i, _| {
-            generator[i].evaluate(&model.parameter_values, 0.0, q.as_slice(), &[])
-        })
+        let generator = &self.model.tapes.generators[index];
+        SVector::from_fn(|i, _| generator[i].evaluate(0.0, q.as_slice(), &[]))
     }
 }
 
