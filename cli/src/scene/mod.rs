@@ -54,6 +54,22 @@
 //! Forces (friction, driving) are part of a model's definition: the forced zoo models
 //! (`damped-oscillator`, `damped-pendulum`, `driven-oscillator`) are chosen by name like any
 //! other, and their force parameters are ordinary `[parameters]`.
+//!
+//! Instead of `model`, a scene may write its Lagrangian as text (grammar:
+//! [`svi::model::text`]; the velocity of coordinate `x` is `vx`), with optional forces and
+//! symmetry generators, one expression per coordinate. `[parameters]` then declares every
+//! parameter the expressions use, and the scene gives what such a model has no default for:
+//! `initial.q`, `initial.v` (or `p`), `run.h` (unless `adapt = "step"`) and `run.t_end`.
+//!
+//! ```toml
+//! lagrangian = "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)"
+//! coordinates = ["x", "y"]
+//! symmetries = [["-y", "x"]]       # optional: generators ξ(q); momenta J1, J2, ...
+//! # forces = ["-c*vx", "-c*vy"]    # optional: f_L(t, q, q̇)
+//!
+//! [parameters]
+//! mu = 1.0
+//! ```
 
 pub mod builtin;
 pub mod error;

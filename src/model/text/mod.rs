@@ -88,10 +88,18 @@
 //!
 //! # Evaluation
 //!
-//! Each expression is a postfix tape with constant subexpressions folded, products and
-//! quotients by numbers as scalings, `1/x` as a reciprocal and `x^2` as a product. It is run
-//! on a stack array of at most [`MAX_STACK`] slots (8 for expressions of depth up to 8):
-//! no allocation per evaluation.
+//! Each expression is compiled, for the current parameter values, into a postfix tape:
+//! parameters and constant subexpressions folded into numbers, products and quotients by
+//! numbers as scalings, `1/x` as a reciprocal, a variable or its square read by the
+//! operation that uses it (`x^2 + y^2` is two instructions), and the top of the stack kept in
+//! a local. The tape runs on a stack array of at most [`MAX_STACK`] slots (1 or 8 for most
+//! expressions): no allocation per evaluation. [`TextModel::set_parameter`] recompiles.
+//!
+//! For a constant-mass L the kinetic part ½q̇ᵀMq̇ is read off the tree once (M from the
+//! constant coefficients) and evaluated as a sum of products without a tape; only
+//! U(t, q) = L(t, q, 0) runs on one. On the Kepler scene of the paper (10 000 steps of SVI
+//! with 6/12 points) a text model takes 2.7 times as long as the same model in Rust
+//! (`cargo bench --bench text`).
 
 mod expression;
 
