@@ -909,7 +909,7 @@ impl Folding<'_> {
                     self.emit(a, ops);
                     ops.push(Op::Scale(c));
                 }
-                (Binary::Divide, Some(c), None) if c == 1.0 => {
+                (Binary::Divide, Some(1.0), None) => {
                     self.emit(b, ops);
                     ops.push(Op::Reciprocal);
                 }
@@ -1110,7 +1110,7 @@ fn stack_depth(tape: &[Op]) -> usize {
 /// What the structure of the subtree at `root` shows.
 fn properties(nodes: &[Node], root: usize) -> Properties {
     Properties {
-        time: nodes.iter().any(|node| *node == Node::Symbol(Symbol::Time)),
+        time: nodes.contains(&Node::Symbol(Symbol::Time)),
         velocity: velocity_form(nodes, root),
     }
 }

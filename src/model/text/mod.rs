@@ -260,11 +260,19 @@ pub struct TextModel {
 #[derive(Debug, Clone, PartialEq)]
 struct Tapes {
     lagrangian: Tape,
-    /// For a constant-mass L = ½q̇ᵀMq̇ + U(t, q): the tape of U (L at q̇ = 0) and the
-    /// terms (i, j, c) of ½q̇ᵀMq̇ = Σ c q̇ᵢq̇ⱼ (i ≤ j, c ≠ 0), evaluated without a tape.
-    constant_mass: Option<(Tape, Vec<(usize, usize, f64)>)>,
+    /// For a constant-mass L: its two parts.
+    constant_mass: Option<Split>,
     forces: Vec<Tape>,
     generators: Vec<Vec<Tape>>,
+}
+
+/// A constant-mass L = ½q̇ᵀMq̇ + U(t, q) in two parts.
+#[derive(Debug, Clone, PartialEq)]
+struct Split {
+    /// The tape of U(t, q) = L(t, q, 0).
+    potential: Tape,
+    /// The terms (i, j, c) of ½q̇ᵀMq̇ = Σ c q̇ᵢq̇ⱼ (i ≤ j, c ≠ 0), evaluated without a tape.
+    kinetic: Vec<(usize, usize, f64)>,
 }
 
 impl Tapes {
@@ -295,7 +303,10 @@ impl Tapes {
                         }
                     }
                 }
-                (lagrangian.compile(parameters, Velocities::Zero), terms)
+                Split {
+                    potential: lagrangian.compile(parameters, Velocities::Zero),
+                    kinetic: terms,
+                }
             });
         let compile = |expression: &Expression| expression.compile(parameters, Velocities::Read);
         Tapes {
@@ -611,10 +622,10 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
     #[inline]
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
         let tapes = &self.model.tapes;
-        if CONSTANT_MASS && let Some((potential, kinetic)) = &tapes.constant_mass {
+        if CONSTANT_MASS && let Some(split) = &tapes.constant_mass {
             // ½q̇ᵀMq̇ without a tape, plus U(t, q).
-            let mut sum = potential.evaluate(t, q.as_slice(), v.as_slice());
-            for &(i, j, c) in kinetic {
+            let mut sum = split.potential.evaluate(t, q.as_slice(), v.as_slice());
+            for &(i, j, c) in &split.kinetic {
                 sum += v[i] * v[j] * c;
             }
             return sum;
