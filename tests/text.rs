@@ -176,3 +176,29 @@ fn kepler_from_text_matches_the_zoo_model_at_t_2000() {
     let difference = (text.last.q - zoo.last.q).amax();
     assert!(difference < 1e-10, "|Δq| = {difference:e}");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
+
+    /// Any text — tokens of the grammar in any order, and arbitrary characters — is a model
+    /// or a typed error, never a panic; a model evaluates (and differentiates) without
+    /// panicking, and its declarations hold where they are claimed.
+    #[test]
+    fn arbitrary_text_is_a_model_or_an_error(
+        text in "([-+*/^(), .]|[0-9]|1e3|x|y|vx|vy|t|mu|sin|atan2|sqrt|pi|e|[a-zα]){0,40}",
+        q in proptest::array::uniform2(-3.0..3.0f64),
+        v in proptest::array::uniform2(-3.0..3.0f64),
+    ) {
+        let spec = spec(&text, &["x", "y"], &[("mu", 0.5)]);
+        let Ok(model) = TextModel::new(&spec) else { return Ok(()) };
+        let structure = model.structure();
+        let text_model = TextLagrangian::<2>::new(model).unwrap();
+        let (q, v) = (SVector::from(q), SVector::from(v));
+        let value = text_model.value(0.3, &q, &v);
+        let second = text_model.second_derivatives(0.3, &q, &v);
+        if structure == Structure::ConstantMass && second.qv.iter().all(|x| x.is_finite()) {
+            proptest::prop_assert_eq!(second.qv, nalgebra::SMatrix::<f64, 2, 2>::zeros(), "{}", text);
+        }
+        proptest::prop_assert!(value.is_nan() || value == second.value, "{}", text);
+    }
+}

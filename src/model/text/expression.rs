@@ -16,7 +16,7 @@ pub const MAX_STACK: usize = 64;
 
 /// Most numbers, names and operations in one expression (it bounds the recursion of the
 /// folding and analysis over the tree, whatever the input).
-pub const MAX_NODES: usize = 4096;
+pub const MAX_NODES: usize = 2048;
 
 /// Most nested parentheses, function calls, unary signs and powers inside one another (it
 /// bounds the parser's recursion, whatever the input).
@@ -388,8 +388,10 @@ impl Expression {
             nodes: parser.nodes,
             root,
         };
-        // The depth of a tape does not depend on the parameter values.
-        let parameters = vec![1.0; names.parameters.len()];
+        // The deepest tape for any parameter values: NaN is neither 0 nor 1, so no
+        // instruction folds away for it (x + 0 is x, 1/x a reciprocal; for other values the
+        // tape is as deep or less).
+        let parameters = vec![f64::NAN; names.parameters.len()];
         if expression.compile(&parameters, Velocities::Read).depth > MAX_STACK {
             return Err(TextError::TooDeep {
                 field: field.into(),
@@ -459,7 +461,8 @@ impl Tape {
         let fetch = |symbol: Symbol| match symbol {
             Symbol::Coordinate(i) => q[i],
             Symbol::Velocity(i) => v[i],
-            Symbol::Time | Symbol::Parameter(_) => t,
+            Symbol::Time => t,
+            Symbol::Parameter(_) => unreachable!("parameters are folded into numbers"),
         };
         // The accumulator holds the top of the stack; `stack[..top]` the values below it (the
         // first load pushes the accumulator's initial zero, never read).
@@ -1308,9 +1311,12 @@ mod tests {
         assert!(matches!(parse(&minus), Err(TextError::Syntax { .. })));
         let right = format!("{}x{}", "(x+y)*(".repeat(70), ")".repeat(70));
         assert!(matches!(parse(&right), Err(TextError::TooDeep { .. })));
-        let long = vec!["x"; 2000].join(" + ");
-        assert_eq!(value(&long), 3000.0);
-        let longer = vec!["x"; 3000].join(" + ");
+        // The longest expression, folded and analysed on a test thread's stack.
+        let long = vec!["x"; MAX_NODES / 2].join(" + ");
+        assert_eq!(value(&long), 1.5 * (MAX_NODES / 2) as f64);
+        let form = parse(&long).unwrap().quadratic_form(&[2.0], 2);
+        assert_eq!(form, Some(vec![0.0; 4]));
+        let longer = vec!["x"; MAX_NODES / 2 + 1].join(" + ");
         assert!(matches!(parse(&longer), Err(TextError::TooLong { .. })));
     }
 
