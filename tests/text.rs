@@ -192,6 +192,8 @@ proptest::proptest! {
         let spec = spec(&text, &["x", "y"], &[("mu", 0.5)]);
         let Ok(model) = TextModel::new(&spec) else { return Ok(()) };
         let structure = model.structure();
+        let split = (structure == Structure::ConstantMass)
+            .then(|| TextLagrangian::<2, true, true, true>::new(model.clone()).unwrap());
         let text_model = TextLagrangian::<2>::new(model).unwrap();
         let (q, v) = (SVector::from(q), SVector::from(v));
         let value = text_model.value(0.3, &q, &v);
@@ -200,5 +202,13 @@ proptest::proptest! {
             proptest::prop_assert_eq!(second.qv, nalgebra::SMatrix::<f64, 2, 2>::zeros(), "{}", text);
         }
         proptest::prop_assert!(value.is_nan() || value == second.value, "{}", text);
+        // ½q̇ᵀMq̇ + U(t, q) is L.
+        if let Some(split) = split {
+            let other = split.value(0.3, &q, &v);
+            proptest::prop_assert!(
+                !value.is_finite() || (other - value).abs() <= 1e-12 * value.abs().max(1.0),
+                "{}: {} against {}", text, other, value
+            );
+        }
     }
 }
