@@ -102,8 +102,12 @@
 //! (`cargo bench --bench text`).
 
 mod expression;
+mod parse;
+mod structure;
+mod tree;
 
-pub use expression::{MAX_NODES, MAX_STACK};
+pub use expression::MAX_STACK;
+pub use tree::MAX_NODES;
 
 use std::collections::BTreeSet;
 use std::sync::Mutex;
@@ -113,7 +117,8 @@ use nalgebra::SVector;
 use crate::error::Error;
 use crate::model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 use crate::scalar::Scalar;
-use expression::{CONSTANT_NAMES, Expression, FUNCTION_NAMES, Names, Tape, Velocities};
+use expression::{Expression, Tape, Velocities};
+use tree::{CONSTANT_NAMES, FUNCTION_NAMES, Names};
 
 /// What goes wrong when reading a text model: every message names the field and, for the
 /// expressions, the column (counted in characters from 1) and the offending symbol.
