@@ -213,16 +213,29 @@ impl Tape {
                 Op::Call(function) => function.apply(x),
                 Op::Binary(binary) => {
                     top -= 1;
-                    binary.apply(stack[top], x)
+                    arithmetic(binary, stack[top], x)
                 }
-                Op::WithSymbol(binary, symbol) => binary.apply(x, fetch(symbol)),
+                Op::WithSymbol(binary, symbol) => arithmetic(binary, x, fetch(symbol)),
                 Op::WithSquare(binary, symbol) => {
                     let value = fetch(symbol);
-                    binary.apply(x, value * value)
+                    arithmetic(binary, x, value * value)
                 }
             };
         }
         accumulator
+    }
+}
+
+/// x ∘ y with the four arithmetic operations inlined into the tape's loop (the powers and
+/// atan2 are calls).
+#[inline(always)]
+fn arithmetic<D: Scalar>(binary: Binary, x: D, y: D) -> D {
+    match binary {
+        Binary::Add => x + y,
+        Binary::Subtract => x - y,
+        Binary::Multiply => x * y,
+        Binary::Divide => x / y,
+        _ => binary.apply(x, y),
     }
 }
 
