@@ -43,6 +43,10 @@
 //! assert_eq!(visit_model("kepler", Describe).unwrap(), "kepler (N = 2)");
 //! assert!(visit_model("pendulm", Describe).is_err());
 //! ```
+//!
+//! A Lagrangian written as text ([`svi::model::text`]) has its dimension and declarations
+//! known only at run time: [`visit_text_model`] hands it to the same visitor as a
+//! [`TextLagrangian`] of its dimension (up to [`MAX_TEXT_DIMENSION`]) and declarations.
 
 mod elliptic;
 mod params;
@@ -73,7 +77,8 @@ pub use heavy_top::HeavyTop;
 pub use pendulum_3d::Pendulum3d;
 pub use rigid_body::FreeRigidBody;
 
-use svi::{Defaults, ExactSolution, Invariants, Lagrangian, Symmetries};
+use svi::model::text::{TextError, TextLagrangian, TextModel};
+use svi::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 
 /// Everything a zoo model implements (blanket impl for any type with all the bounds).
 pub trait ZooModel<const N: usize>:
@@ -151,6 +156,56 @@ vector_zoo!(
     DampedPendulum,
     DrivenOscillator,
 );
+
+/// Most coordinates of a text model that [`visit_text_model`] dispatches on: each
+/// dimension monomorphises every method for three text Lagrangians, and the command line's
+/// compile time grows with them.
+pub const MAX_TEXT_DIMENSION: usize = 3;
+
+/// Hand a text model to the visitor as a [`TextLagrangian`] of its dimension N, with the
+/// tightest declarations it allows among three: autonomous, unforced and constant-mass
+/// (`TextLagrangian<N, false, false, true>`: the Hessian-free iterations and explicit
+/// Störmer–Verlet); autonomous and unforced (`TextLagrangian<N, false, false, false>`:
+/// energy is conserved, and checked); anything else (`TextLagrangian<N>`: time-dependent and
+/// forced, correct for every model).
+///
+/// # Errors
+/// [`TextError::TooManyCoordinates`] above [`MAX_TEXT_DIMENSION`] coordinates.
+pub fn visit_text_model<V: ModelVisitor>(
+    model: TextModel,
+    visitor: V,
+) -> Result<V::Output, TextError> {
+    /// One arm per dimension.
+    macro_rules! dimensions {
+        ($($n:literal),+) => {
+            match model.dimension() {
+                $($n => visit_text_dimension::<V, $n>(model, visitor),)+
+                found => Err(TextError::TooManyCoordinates {
+                    found,
+                    max: MAX_TEXT_DIMENSION,
+                }),
+            }
+        };
+    }
+    dimensions!(1, 2, 3)
+}
+
+/// [`visit_text_model`] for a model of dimension `N`.
+fn visit_text_dimension<V: ModelVisitor, const N: usize>(
+    model: TextModel,
+    visitor: V,
+) -> Result<V::Output, TextError> {
+    let conservative = !model.time_dependent() && !model.forced();
+    Ok(match (conservative, model.structure()) {
+        (true, Structure::ConstantMass) => {
+            visitor.visit(TextLagrangian::<N, false, false, true>::new(model)?)
+        }
+        (true, Structure::General) => {
+            visitor.visit(TextLagrangian::<N, false, false, false>::new(model)?)
+        }
+        (false, _) => visitor.visit(TextLagrangian::<N>::new(model)?),
+    })
+}
 
 /// A model name that is not in [`MODEL_NAMES`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

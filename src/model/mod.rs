@@ -18,6 +18,8 @@
 //! - [`ExactSolution`]: a closed-form solution, for error measurements.
 //! - [`Defaults`]: named parameters, a default initial state, step and horizon.
 //!
+//! A Lagrangian may also be written as text, parsed at run time: [`text`].
+//!
 //! # Example
 //! ```
 //! use nalgebra::SVector;
@@ -37,6 +39,7 @@
 pub mod derived;
 pub mod rigid_body;
 pub mod so3;
+pub mod text;
 
 use crate::scalar::Scalar;
 use nalgebra::SVector;

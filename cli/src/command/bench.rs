@@ -379,6 +379,14 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Recor
             ),
         });
     }
+    if scene.lagrangian.is_some() {
+        return Err(SceneError::NotApplicable {
+            option: "svi bench SCENE",
+            reason: "a Lagrangian written as text has no exact solution to measure errors \
+                     against (svi run runs it)"
+                .into(),
+        });
+    }
     let progress = if options.verbose {
         let bar = ProgressBar::new(options.methods.len() as u64);
         if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} methods {msg}") {

@@ -30,6 +30,7 @@ use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method, Statistics};
 use svi_models::{
     ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel, visit_model, visit_rigid_model,
+    visit_text_model,
 };
 
 use crate::command::space::RunSpace;
@@ -128,7 +129,10 @@ impl Scene {
             progress,
         };
         match self.space() {
-            SpaceKind::Vector => visit_model(&self.model, run)?,
+            SpaceKind::Vector => match self.text_model() {
+                Some(model) => visit_text_model(model?, run)?,
+                None => visit_model(&self.model, run)?,
+            },
             SpaceKind::Rotation => visit_rigid_model(&self.model, run)
                 .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
         }

@@ -76,6 +76,29 @@ pub enum SceneError {
         RIGID_MODEL_NAMES.join(", ")
     )]
     UnknownModel(UnknownModel),
+    /// A scene with neither a zoo model nor a Lagrangian written as text.
+    #[error(
+        "the scene names no model: give model = \"NAME\" (see svi list) or write the \
+         Lagrangian, lagrangian = \"...\" with coordinates = [...]"
+    )]
+    NoModel,
+    /// A scene with both a zoo model and a Lagrangian written as text.
+    #[error("the scene gives both model = \"{model}\" and lagrangian: give one of them")]
+    ModelAndLagrangian {
+        /// The zoo model named.
+        model: String,
+    },
+    /// A Lagrangian written as text that cannot be read (the message names the field, the
+    /// column and the symbol).
+    #[error(transparent)]
+    Text(#[from] svi::model::text::TextError),
+    /// A field that a scene with a Lagrangian written as text must give: such a model has
+    /// no default initial state, step or horizon.
+    #[error("{field} is needed: a Lagrangian written as text has no default for it")]
+    TextModelNeeds {
+        /// The field, as written in the scene.
+        field: &'static str,
+    },
     /// An initial-state vector whose length is not the model dimension.
     #[error("initial.{field} has {found} components, but model '{model}' has dimension {expected}")]
     Dimension {

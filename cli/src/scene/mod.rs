@@ -56,6 +56,22 @@
 //! Forces (friction, driving) are part of a model's definition: the forced zoo models
 //! (`damped-oscillator`, `damped-pendulum`, `driven-oscillator`) are chosen by name like any
 //! other, and their force parameters are ordinary `[parameters]`.
+//!
+//! Instead of `model`, a scene may write its Lagrangian as text (grammar:
+//! [`svi::model::text`]; the velocity of coordinate `x` is `vx`), with optional forces and
+//! symmetry generators, one expression per coordinate. `[parameters]` then declares every
+//! parameter the expressions use, and the scene gives what such a model has no default for:
+//! `initial.q`, `initial.v` (or `p`), `run.h` (unless `adapt = "step"`) and `run.t_end`.
+//!
+//! ```toml
+//! lagrangian = "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)"
+//! coordinates = ["x", "y"]
+//! symmetries = [["-y", "x"]]       # optional: generators ξ(q); momenta J1, J2, ...
+//! # forces = ["-c*vx", "-c*vy"]    # optional: f_L(t, q, q̇)
+//!
+//! [parameters]
+//! mu = 1.0
+//! ```
 
 pub mod builtin;
 pub mod error;
@@ -76,8 +92,9 @@ use serde::Deserialize;
 use svi::MethodSpec;
 use svi::lie_group::{LieSvi, RigidInitial};
 use svi::method::registry::{self, SpaceKind};
+use svi::model::text::{TextError, TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
-use svi_models::{RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
+use svi_models::{MAX_TEXT_DIMENSION, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
@@ -91,9 +108,20 @@ use schema::{
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Zoo model name (see [`svi_models::MODEL_NAMES`] and
-    /// [`svi_models::RIGID_MODEL_NAMES`]).
+    /// [`svi_models::RIGID_MODEL_NAMES`]); empty for a Lagrangian written as text.
+    #[serde(default)]
     pub model: String,
-    /// Model parameters, name → value, applied on top of the model's defaults.
+    /// A Lagrangian written as text, instead of `model` (see [`svi::model::text`] for the
+    /// grammar; velocities are `v` + the coordinate's name).
+    pub lagrangian: Option<String>,
+    /// The coordinate names of `lagrangian`.
+    pub coordinates: Option<Vec<String>>,
+    /// The non-conservative force of `lagrangian`, one expression per coordinate.
+    pub forces: Option<Vec<String>>,
+    /// Symmetry generators ξ(q) of `lagrangian`, each one expression per coordinate.
+    pub symmetries: Option<Vec<Vec<String>>>,
+    /// Model parameters, name → value, applied on top of the model's defaults; for a
+    /// Lagrangian written as text, its parameters.
     #[serde(default)]
     pub parameters: BTreeMap<String, f64>,
     /// Initial state; absent fields come from the model's default state.
@@ -148,6 +176,86 @@ impl Scene {
         }
     }
 
+    /// The name of the scene's model: its zoo name, or [`TextModel::NAME`] for a Lagrangian
+    /// written as text.
+    pub fn model_name(&self) -> &str {
+        match self.lagrangian {
+            Some(_) => TextModel::NAME,
+            None => &self.model,
+        }
+    }
+
+    /// The scene's Lagrangian written as text, parsed with the scene's parameters (`None`
+    /// for a zoo model).
+    pub fn text_model(&self) -> Option<Result<TextModel, SceneError>> {
+        let lagrangian = self.lagrangian.as_ref()?;
+        let spec = TextSpec {
+            lagrangian: lagrangian.clone(),
+            coordinates: self.coordinates.clone().unwrap_or_default(),
+            parameters: self
+                .parameters
+                .iter()
+                .map(|(name, value)| (name.clone(), *value))
+                .collect(),
+            forces: self.forces.clone().unwrap_or_default(),
+            symmetries: self.symmetries.clone().unwrap_or_default(),
+        };
+        Some(TextModel::new(&spec).map_err(SceneError::from))
+    }
+
+    /// The model fields: a zoo `model` or a `lagrangian` (parsed, with the initial state,
+    /// step and horizon it has no defaults for), and the fields of a text model only with
+    /// one.
+    fn check_model(&self) -> Result<(), SceneError> {
+        let Some(model) = self.text_model() else {
+            let text_fields = [
+                (self.coordinates.is_some(), "coordinates"),
+                (self.forces.is_some(), "forces"),
+                (self.symmetries.is_some(), "symmetries"),
+            ];
+            if let Some((_, option)) = text_fields.into_iter().find(|(given, _)| *given) {
+                return Err(SceneError::NotApplicable {
+                    option,
+                    reason: "belongs to a Lagrangian written as text (lagrangian = \"...\")".into(),
+                });
+            }
+            if self.model.is_empty() {
+                return Err(SceneError::NoModel);
+            }
+            return Ok(());
+        };
+        if !self.model.is_empty() {
+            return Err(SceneError::ModelAndLagrangian {
+                model: self.model.clone(),
+            });
+        }
+        let model = model?;
+        let initial = &self.initial;
+        let needed = [
+            (initial.q.is_none(), "initial.q"),
+            (
+                initial.v.is_none() && initial.p.is_none(),
+                "initial.v (or initial.p)",
+            ),
+            (
+                self.run.h.is_none() && self.run.adapt != Some(AdaptMode::Step),
+                "run.h",
+            ),
+            (self.run.t_end.is_none(), "run.t_end"),
+        ];
+        if let Some((_, field)) = needed.into_iter().find(|(missing, _)| *missing) {
+            return Err(SceneError::TextModelNeeds { field });
+        }
+        if let Some(max) = Some(MAX_TEXT_DIMENSION).filter(|max| model.dimension() > *max) {
+            return Err(TextError::TooManyCoordinates {
+                found: model.dimension(),
+                max,
+            }
+            .into());
+        }
+        Ok(())
+    }
+
     /// The space the scene's model lives on: SO(3) for a rigid-body model, else ℝᴺ (an
     /// unknown model name is reported when the scene runs).
     pub fn space(&self) -> SpaceKind {
@@ -162,6 +270,7 @@ impl Scene {
     /// options, initial-state fields of that space (one of each exclusive pair), valid run
     /// options, and no option the scene cannot use (see [`SceneError::NotApplicable`]).
     pub fn check(&self) -> Result<(), SceneError> {
+        self.check_model()?;
         let spec = self.method_spec()?;
         let initial = &self.initial;
         match self.space() {
@@ -179,7 +288,7 @@ impl Scene {
                         reason: format!(
                             "applies to rigid-body scenes only (see svi list); '{}' is a model \
                              on ℝᴺ",
-                            self.model
+                            self.model_name()
                         ),
                     });
                 }
@@ -373,6 +482,22 @@ impl Scene {
         set(&mut self.run.h, h);
         set(&mut self.run.t_end, t_end);
         for (name, value) in parameters {
+            // A text model's parameters are those its scene declares.
+            if self.lagrangian.is_some() && !self.parameters.contains_key(name) {
+                let declared: Vec<&str> = self.parameters.keys().map(String::as_str).collect();
+                return Err(svi::Error::invalid(
+                    name.as_str(),
+                    format!(
+                        "not a parameter of the text model (parameters: {})",
+                        if declared.is_empty() {
+                            "none".into()
+                        } else {
+                            declared.join(", ")
+                        }
+                    ),
+                )
+                .into());
+            }
             self.parameters.insert(name.clone(), *value);
         }
         set(&mut self.output.every, every);
@@ -555,7 +680,7 @@ impl Scene {
     fn not_measurable(&self, option: &'static str, what: &str) -> SceneError {
         SceneError::NotApplicable {
             option,
-            reason: format!("the model '{}' {what}", self.model),
+            reason: format!("the model '{}' {what}", self.model_name()),
         }
     }
 }
@@ -591,6 +716,7 @@ pub(crate) mod tests {
             [
                 "oscillator",
                 "kepler",
+                "kepler-text",
                 "pendulum",
                 "spring-pendulum",
                 "double-pendulum",
@@ -612,9 +738,11 @@ pub(crate) mod tests {
         );
         for name in builtin_scene_names() {
             let scene = scene(name);
-            let model = scene.model.as_str();
+            let model = scene.model_name();
             assert!(
-                MODEL_NAMES.contains(&model) || RIGID_MODEL_NAMES.contains(&model),
+                MODEL_NAMES.contains(&model)
+                    || RIGID_MODEL_NAMES.contains(&model)
+                    || scene.lagrangian.is_some(),
                 "{name}"
             );
             if MODEL_NAMES.contains(&name) {
@@ -622,7 +750,7 @@ pub(crate) mod tests {
                 assert_eq!(scene.method.name, Some(method("svi")));
             } else {
                 // The stress scenes are named after their model.
-                assert!(name.contains(&scene.model), "{name}");
+                assert!(name.contains(scene.model_name()), "{name}");
             }
         }
         assert!(Scene::builtin("kepler2").is_none());

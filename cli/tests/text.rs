@@ -1,0 +1,158 @@
+//! Lagrangians written as text in scene files, end to end through the `svi` binary: the
+//! built-in `kepler-text` scene against the built-in `kepler` (the same orbit from the zoo
+//! model: the reference), parameters, diagnostics, and errors that name the column.
+
+mod common;
+use common::*;
+
+/// A text scene: the Kepler problem as in `cli/scenes/kepler-text.toml`, with `extra` lines
+/// at the top level and a horizon of 20.
+fn kepler_scene(lagrangian: &str, extra: &str) -> String {
+    format!(
+        "lagrangian = \"{lagrangian}\"\ncoordinates = [\"x\", \"y\"]\n{extra}\n\
+         [parameters]\nmu = 1.0\n[initial]\nq = [0.5, 0.0]\nv = [0.0, 1.7320508075688772]\n\
+         [run]\nh = 0.2\nt_end = 20.0\n"
+    )
+}
+
+#[test]
+fn kepler_from_text_matches_the_builtin_kepler_scene() {
+    let text = json(&["run", "kepler-text", "--json"]);
+    let zoo = json(&["run", "kepler", "--json"]);
+    assert_eq!(text["model"], "text");
+    assert_eq!(text["coordinates"], serde_json::json!(["x", "y"]));
+    assert_eq!(text["parameters"], serde_json::json!({ "mu": 1.0 }));
+    assert_eq!(number(&text, "steps"), 10_000.0);
+    for (a, b) in vector(&text, "q").iter().zip(vector(&zoo, "q")) {
+        assert!((a - b).abs() < 1e-10, "{a} against {b}");
+    }
+    // The same diagnostics as the zoo model: bounded energy error, the angular momentum of
+    // the generator ["-y", "x"] to round-off; no exact solution to measure against.
+    let energy = number(&text, "energy_error_max");
+    assert!(energy < 1e-9 && (energy - number(&zoo, "energy_error_max")).abs() < 1e-12);
+    assert!(number(&text, "momentum_error_max") < 1e-12, "{text}");
+    assert!(text["solution_error_max"].is_null());
+    assert_eq!(text["status"], "ok");
+}
+
+#[test]
+fn parameters_of_a_text_model_are_overridden_by_flag() {
+    let scene = scene_file(
+        "text-param",
+        &kepler_scene("0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)", ""),
+    );
+    let one = json(&["run", &scene.path, "--json"]);
+    let two = json(&["run", &scene.path, "--json", "--param", "mu=2"]);
+    assert_eq!(two["parameters"], serde_json::json!({ "mu": 2.0 }));
+    // E = |v|²/2 − μ/|q|: 1.5 − 2 and 1.5 − 4.
+    assert!((number(&one, "energy_initial") + 0.5).abs() < 1e-15);
+    assert!((number(&two, "energy_initial") + 2.5).abs() < 1e-15);
+    bad_input(
+        &["run", &scene.path],
+        &["--param", "m=2"],
+        "not a parameter of the text model (parameters: mu)",
+    );
+    // Without symmetries there is no momentum to measure, and asking for it is an error.
+    assert!(one["momentum_error_max"].is_null());
+    bad_input(
+        &["run", &scene.path],
+        &["--diagnostics", "momentum"],
+        "no Noether momentum",
+    );
+}
+
+#[test]
+fn a_forced_time_dependent_text_model_runs_with_every_method() {
+    let text = "lagrangian = \"(vq^2 - q^2)/2 + q*cos(t)\"\ncoordinates = [\"q\"]\n\
+                forces = [\"-0.1*vq\"]\n[initial]\nq = [1.0]\nv = [0.0]\n\
+                [run]\nh = 0.05\nt_end = 10.0\n";
+    let scene = scene_file("text-forced", text);
+    let reference = json(&["run", &scene.path, "--json", "--method", "svi:9"]);
+    let q = vector(&reference, "q")[0];
+    for method in ["sc", "midpoint", "verlet", "trapezoid"] {
+        let summary = json(&["run", &scene.path, "--json", "--method", method]);
+        let error = (vector(&summary, "q")[0] - q).abs();
+        assert!(error < 1e-2, "{method}: {error:e}");
+    }
+}
+
+#[test]
+fn a_syntax_error_names_the_column() {
+    let scene = scene_file(
+        "text-syntax",
+        &kepler_scene("0.5*(vx^2 + vy^2 + 1/sqrt(x^2 + y^2)", ""),
+    );
+    let message = bad_input(&["run", &scene.path], &[], "at column 5 of lagrangian");
+    assert!(message.contains("unbalanced '('"), "{message}");
+    let scene = scene_file("text-symbol", &kepler_scene("0.5*(vx^2 + vz^2)", ""));
+    bad_input(
+        &["run", &scene.path],
+        &[],
+        "unknown symbol 'vz' at column 13 of lagrangian (known: x, y, vx, vy, t, mu)",
+    );
+    let scene = scene_file(
+        "text-force",
+        &kepler_scene("0.5*(vx^2 + vy^2)", "forces = [\"-vx\", \"-vy*\"]"),
+    );
+    bad_input(&["run", &scene.path], &[], "at column 5 of forces[1]");
+    // As JSON: the error object, of kind invalid_input.
+    let output = svi(&["run", &scene.path, "--json"]);
+    assert_eq!(output.status.code(), Some(2));
+    let error: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(error["error"]["kind"], "invalid_input");
+    assert!(
+        error["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("column 5")
+    );
+}
+
+#[test]
+fn what_a_text_scene_must_give_is_named() {
+    let kepler = "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)";
+    for (text, needle) in [
+        (
+            kepler_scene(kepler, "model = \"kepler\""),
+            "both model = \"kepler\" and lagrangian",
+        ),
+        (
+            kepler_scene(kepler, "").replace("q = [0.5, 0.0]\n", ""),
+            "initial.q is needed",
+        ),
+        (
+            kepler_scene(kepler, "").replace("t_end = 20.0\n", ""),
+            "run.t_end is needed",
+        ),
+        (
+            kepler_scene(kepler, "").replace("coordinates = [\"x\", \"y\"]", "coordinates = [\"x\", \"x\"]"),
+            "invalid coordinate name 'x': given twice",
+        ),
+        (
+            kepler_scene(kepler, "").replace("coordinates = [\"x\", \"y\"]", "coordinates = [\"x\", \"sin\"]"),
+            "invalid coordinate name 'sin': it is a function",
+        ),
+        (
+            kepler_scene(kepler, "").replace("mu = 1.0", "mu = nan"),
+            "parameter 'mu' = NaN is not a finite number",
+        ),
+        (
+            kepler_scene(kepler, "symmetries = [[\"-y\"]]"),
+            "symmetries[0] has 1 expressions, but the model has 2 coordinates",
+        ),
+        (
+            "model = \"kepler\"\ncoordinates = [\"x\"]\n".into(),
+            "coordinates: belongs to a Lagrangian written as text",
+        ),
+        ("[run]\nh = 0.1\n".into(), "the scene names no model"),
+        (
+            "lagrangian = \"va^2 + vb^2 + vc^2 + vd^2\"\ncoordinates = [\"a\", \"b\", \"c\", \"d\"]\n\
+             [initial]\nq = [0, 0, 0, 0]\nv = [0, 0, 0, 0]\n[run]\nh = 0.1\nt_end = 1.0\n"
+                .into(),
+            "4 coordinates: text models have at most 3",
+        ),
+    ] {
+        let scene = scene_file("text-needs", &text);
+        bad_input(&["run", &scene.path], &[], needle);
+    }
+}

@@ -1,0 +1,841 @@
+//! Lagrangians written as text: `"0.5*(vx^2 + vy^2) + 1/sqrt(x^2 + y^2)"`.
+//!
+//! A [`TextSpec`] gives L as an expression in named coordinates, their velocities, the time
+//! and named parameters, with optional non-conservative forces and symmetry generators the
+//! same way. [`TextModel::new`] parses it once into postfix tapes; [`TextLagrangian`] puts a
+//! model of known dimension N behind [`Lagrangian<N>`], evaluating the tapes generically over
+//! [`Scalar`]: every method, derivative and diagnostic works as for a model written in Rust,
+//! with derivatives by automatic differentiation, not by hand.
+//!
+//! ```
+//! use nalgebra::SVector;
+//! use svi::model::text::{TextLagrangian, TextModel, TextSpec};
+//! use svi::{Integrator, Svi, Symmetries};
+//!
+//! let spec = TextSpec {
+//!     lagrangian: "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)".into(),
+//!     coordinates: vec!["x".into(), "y".into()],
+//!     parameters: vec![("mu".into(), 1.0)],
+//!     symmetries: vec![vec!["-y".into(), "x".into()]],
+//!     ..TextSpec::default()
+//! };
+//! let model = TextModel::new(&spec)?;
+//! // Autonomous, unforced, ½q̇ᵀMq̇ − V(q): all three may be declared.
+//! let kepler = TextLagrangian::<2, false, false, true>::new(model)?;
+//! assert_eq!(kepler.generator_count(), 1);
+//! let integrator = Integrator::new(kepler, Svi::new(6));
+//! let (q, v) = (SVector::from([1.0, 0.0]), SVector::from([0.0, 1.0]));
+//! let run = integrator.run_from_velocity(0.0, q, v, 0.1, 6.0, &mut ()).unwrap();
+//! assert!((run.last.q - SVector::from([6f64.cos(), 6f64.sin()])).amax() < 1e-10);
+//! # Ok::<(), svi::model::text::TextError>(())
+//! ```
+//!
+//! # Grammar
+//!
+//! ```text
+//! expression := sum
+//! sum        := product (('+' | '-') product)*
+//! product    := unary (('*' | '/') unary)*
+//! unary      := ('-' | '+') unary | power
+//! power      := atom ('^' unary)?                    right-associative: 2^3^2 = 2^9
+//! atom       := number | name | function '(' expression (',' expression)* ')'
+//!             | '(' expression ')'
+//! number     := digits ['.' digits] [('e' | 'E') ['+' | '-'] digits]     1, 0.5, .5, 1.5e-3
+//! name       := (letter | '_') (letter | digit | '_')*
+//! ```
+//!
+//! `-x^2` is `-(x^2)`; `x^-1` is `1/x`. An integer literal exponent (`x^2`, `x^-3`) is an
+//! integer power (`powi`, exact for negative x); any other exponent free of t, q and q̇ (a
+//! parameter, `0.5`) a real power (`powf`); an exponent depending on them exp(y ln x).
+//! Spaces are ignored.
+//!
+//! Names, in the order they are looked up:
+//! - the coordinates, as given (`x`, `theta`, `q1`);
+//! - the parameters, as given, read at every evaluation (so `set_parameter` takes effect);
+//! - the velocities: `v` followed by the coordinate's name (`vx` for `x`, `vtheta` for
+//!   `theta`); not in symmetry generators, which are functions of q only;
+//! - `t`, the time (not in symmetry generators);
+//! - the constants `pi` and `e`;
+//! - the functions `sin cos tan asin acos atan sinh cosh tanh exp ln sqrt abs`, `log` (the
+//!   natural logarithm, as `ln`) and `atan2(y, x)`.
+//!
+//! No name may be given twice, or be a function, a constant or `t`; a coordinate's velocity
+//! name must not be another name.
+//!
+//! # What the text declares
+//!
+//! The structure of the expressions decides the declarations a [`TextLagrangian`] may make
+//! ([`TextModel::time_dependent`], [`TextModel::forced`], [`TextModel::structure`]):
+//! time dependence when `t` appears in L; a force when forces are given; and
+//! [`Structure::ConstantMass`] when L is, by its structure, a sum of terms free of q̇ and of
+//! terms quadratic in q̇ with constant coefficients (numbers and parameters), and has no term
+//! linear in q̇. The analysis follows sums, products, quotients by expressions free of q̇,
+//! negation and squares: `0.5*m*(vx^2 + vy^2) - V` qualifies, `(vx^2 + vy^2)/(2*m)` too,
+//! while `sqrt(vx^2)^2` or `vx^2*x` do not. It is sound — a model it calls constant-mass is
+//! one — but not complete: a model it does not recognise runs as [`Structure::General`],
+//! correctly, with Newton's method instead of the Hessian-free iteration. That M is positive
+//! definite is not checked here (a singular M fails the run, as for any model).
+//!
+//! # Why a parser of our own
+//!
+//! The expression must be evaluated over every scalar type the integrators choose inside
+//! their generic code (`f64`, num-dual's first- and second-order and nested dual numbers)
+//! from one parse. The maintained expression crates fix the number type at parse time
+//! (exmex's `FlatEx<T>`, whose operators are function pointers over one `T`) or evaluate
+//! `f64` only (meval, fasteval, evalexpr's dynamic `Value`): none can be evaluated generically
+//! over [`Scalar`] inside `fn lagrangian<D: Scalar>`. The grammar above is small enough for
+//! about 300 lines of recursive descent, with errors that name the column and the symbol.
+//!
+//! # Evaluation
+//!
+//! Each expression is compiled, for the current parameter values, into a postfix tape:
+//! parameters and constant subexpressions folded into numbers, products and quotients by
+//! numbers as scalings, `1/x` as a reciprocal, a variable or its square read by the
+//! operation that uses it (`x^2 + y^2` is two instructions), and the top of the stack kept in
+//! a local. The tape runs on a stack array of at most [`MAX_STACK`] slots (1 or 8 for most
+//! expressions): no allocation per evaluation. [`TextModel::set_parameter`] recompiles.
+//!
+//! For a constant-mass L the kinetic part ½q̇ᵀMq̇ is read off the tree once (M from the
+//! constant coefficients) and evaluated as a sum of products without a tape; only
+//! U(t, q) = L(t, q, 0) runs on one. On the Kepler scene of the paper (10 000 steps of SVI
+//! with 6/12 points) a text model takes 2.7 times as long as the same model in Rust
+//! (`cargo bench --bench text`).
+
+mod expression;
+mod parse;
+mod structure;
+mod tree;
+
+pub use expression::MAX_STACK;
+pub use tree::MAX_NODES;
+
+use std::collections::BTreeSet;
+use std::sync::Mutex;
+
+use nalgebra::SVector;
+
+use crate::error::Error;
+use crate::model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
+use crate::scalar::Scalar;
+use expression::{Expression, Tape, Velocities};
+use tree::{CONSTANT_NAMES, FUNCTION_NAMES, Names};
+
+/// What goes wrong when reading a text model: every message names the field and, for the
+/// expressions, the column (counted in characters from 1) and the offending symbol.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum TextError {
+    /// An expression that does not follow the grammar.
+    #[error("syntax error at column {column} of {field}: {message}")]
+    Syntax {
+        /// The field: `lagrangian`, `forces[1]`, `symmetries[0][1]`.
+        field: String,
+        /// Column of the error, in characters from 1.
+        column: usize,
+        /// What is wrong there.
+        message: String,
+    },
+    /// A name that is neither a coordinate, a velocity, `t`, a parameter nor a constant.
+    #[error("unknown symbol '{symbol}' at column {column} of {field} (known: {known})")]
+    UnknownSymbol {
+        /// The field.
+        field: String,
+        /// Column of the symbol, in characters from 1.
+        column: usize,
+        /// The symbol.
+        symbol: String,
+        /// The symbols the field may use.
+        known: String,
+    },
+    /// A name followed by `(` that is not a function.
+    #[error("unknown function '{name}' at column {column} of {field} (known: {known})")]
+    UnknownFunction {
+        /// The field.
+        field: String,
+        /// Column of the name, in characters from 1.
+        column: usize,
+        /// The name.
+        name: String,
+        /// The functions of the grammar.
+        known: String,
+    },
+    /// An expression with nothing but spaces.
+    #[error("{field} is empty")]
+    Empty {
+        /// The field.
+        field: String,
+    },
+    /// An expression whose evaluation needs more than [`MAX_STACK`] values at once.
+    #[error("{field} nests too deeply: its evaluation needs more than {limit} values at once")]
+    TooDeep {
+        /// The field.
+        field: String,
+        /// [`MAX_STACK`].
+        limit: usize,
+    },
+    /// An expression of more than [`MAX_NODES`] numbers, names and operations.
+    #[error("{field} is too long: more than {limit} numbers, names and operations")]
+    TooLong {
+        /// The field.
+        field: String,
+        /// [`MAX_NODES`].
+        limit: usize,
+    },
+    /// A coordinate or parameter name that is not an identifier, is given twice, or is taken
+    /// by a function, a constant, `t` or a velocity.
+    #[error("invalid {role} name '{name}': {reason}")]
+    InvalidName {
+        /// `coordinate` or `parameter`.
+        role: &'static str,
+        /// The name.
+        name: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// A parameter value that is NaN or infinite.
+    #[error("parameter '{name}' = {value} is not a finite number")]
+    NonFiniteParameter {
+        /// The parameter.
+        name: String,
+        /// Its value.
+        value: f64,
+    },
+    /// A model without coordinates.
+    #[error("a text model needs at least one coordinate")]
+    NoCoordinates,
+    /// A list of expressions (forces, a symmetry generator) whose length is not the number
+    /// of coordinates.
+    #[error("{field} has {found} expressions, but the model has {expected} coordinates")]
+    Dimension {
+        /// `forces` or `symmetries[i]`.
+        field: String,
+        /// The number of coordinates.
+        expected: usize,
+        /// The number of expressions given.
+        found: usize,
+    },
+    /// More coordinates than the caller can dispatch on (see `svi_models::visit_text_model`).
+    #[error("{found} coordinates: text models have at most {max}")]
+    TooManyCoordinates {
+        /// The number of coordinates.
+        found: usize,
+        /// The most supported.
+        max: usize,
+    },
+    /// A [`TextLagrangian`] whose dimension or declarations do not fit its model.
+    #[error("TextLagrangian cannot hold this model: {reason}")]
+    Declaration {
+        /// What does not fit.
+        reason: String,
+    },
+}
+
+/// A text model as written: the expressions and the names they use.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TextSpec {
+    /// L(t, q, q̇) as an expression.
+    pub lagrangian: String,
+    /// The coordinate names; their velocities are `v` + name.
+    pub coordinates: Vec<String>,
+    /// The parameters, name and value.
+    pub parameters: Vec<(String, f64)>,
+    /// The non-conservative force f_L(t, q, q̇), one expression per coordinate (empty: none).
+    pub forces: Vec<String>,
+    /// Symmetry generators ξ(q), each one expression per coordinate in q and the parameters;
+    /// their Noether momenta are named `J1`, `J2`, ...
+    pub symmetries: Vec<Vec<String>>,
+}
+
+/// A parsed text model of any dimension (known at run time); [`TextLagrangian`] puts it
+/// behind [`Lagrangian<N>`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextModel {
+    coordinates: Vec<&'static str>,
+    parameter_names: Vec<&'static str>,
+    parameter_values: Vec<f64>,
+    lagrangian: Expression,
+    forces: Vec<Expression>,
+    generators: Vec<Vec<Expression>>,
+    momentum_names: Vec<&'static str>,
+    /// The expressions compiled for the current parameter values.
+    tapes: Tapes,
+}
+
+/// The tapes of a text model for its current parameter values.
+#[derive(Debug, Clone, PartialEq)]
+struct Tapes {
+    lagrangian: Tape,
+    /// For a constant-mass L: its two parts.
+    constant_mass: Option<Split>,
+    forces: Vec<Tape>,
+    generators: Vec<Vec<Tape>>,
+}
+
+/// A constant-mass L = ½q̇ᵀMq̇ + U(t, q) in two parts.
+#[derive(Debug, Clone, PartialEq)]
+struct Split {
+    /// The tape of U(t, q) = L(t, q, 0).
+    potential: Tape,
+    /// The terms (i, j, c) of ½q̇ᵀMq̇ = Σ c q̇ᵢq̇ⱼ (i ≤ j, c ≠ 0), evaluated without a tape.
+    kinetic: Vec<(usize, usize, f64)>,
+}
+
+impl Tapes {
+    /// Compile the expressions with `parameters`.
+    fn compile(
+        lagrangian: &Expression,
+        forces: &[Expression],
+        generators: &[Vec<Expression>],
+        parameters: &[f64],
+        n: usize,
+    ) -> Tapes {
+        let constant_mass = lagrangian
+            .properties()
+            .velocity
+            .filter(|form| form.is_constant_mass())
+            .and_then(|_| lagrangian.quadratic_form(parameters, n))
+            .map(|q| {
+                let mut terms = Vec::new();
+                for i in 0..n {
+                    for j in i..n {
+                        let c = if i == j {
+                            q[i * n + i]
+                        } else {
+                            q[i * n + j] + q[j * n + i]
+                        };
+                        if c != 0.0 {
+                            terms.push((i, j, c));
+                        }
+                    }
+                }
+                Split {
+                    potential: lagrangian.compile(parameters, Velocities::Zero),
+                    kinetic: terms,
+                }
+            });
+        let compile = |expression: &Expression| expression.compile(parameters, Velocities::Read);
+        Tapes {
+            lagrangian: compile(lagrangian),
+            constant_mass,
+            forces: forces.iter().map(compile).collect(),
+            generators: generators
+                .iter()
+                .map(|generator| generator.iter().map(compile).collect())
+                .collect(),
+        }
+    }
+}
+
+impl TextModel {
+    /// Name of every text model in reports ([`Defaults::name`]).
+    pub const NAME: &'static str = "text";
+
+    /// Check the names and parameter values of `spec` and parse its expressions.
+    ///
+    /// # Errors
+    /// A [`TextError`] naming the field, and for an expression the column and the symbol.
+    pub fn new(spec: &TextSpec) -> Result<TextModel, TextError> {
+        if spec.coordinates.is_empty() {
+            return Err(TextError::NoCoordinates);
+        }
+        let mut taken = BTreeSet::new();
+        let mut coordinates = Vec::new();
+        for name in &spec.coordinates {
+            check_name("coordinate", name)?;
+            if !taken.insert(name.as_str()) {
+                return Err(TextError::InvalidName {
+                    role: "coordinate",
+                    name: name.clone(),
+                    reason: "given twice".into(),
+                });
+            }
+            coordinates.push(intern(name));
+        }
+        let velocity_names: Vec<String> = spec
+            .coordinates
+            .iter()
+            .map(|name| format!("v{name}"))
+            .collect();
+        let mut velocities = Vec::new();
+        for (name, velocity) in spec.coordinates.iter().zip(&velocity_names) {
+            if !taken.insert(velocity.as_str()) {
+                return Err(TextError::InvalidName {
+                    role: "coordinate",
+                    name: name.clone(),
+                    reason: format!("its velocity '{velocity}' is also a coordinate"),
+                });
+            }
+            velocities.push(intern(velocity));
+        }
+        let mut parameter_names = Vec::new();
+        let mut parameter_values = Vec::new();
+        for (name, value) in &spec.parameters {
+            check_name("parameter", name)?;
+            if !taken.insert(name.as_str()) {
+                return Err(TextError::InvalidName {
+                    role: "parameter",
+                    name: name.clone(),
+                    reason: "given twice, or a coordinate or velocity".into(),
+                });
+            }
+            if !value.is_finite() {
+                return Err(TextError::NonFiniteParameter {
+                    name: name.clone(),
+                    value: *value,
+                });
+            }
+            parameter_names.push(intern(name));
+            parameter_values.push(*value);
+        }
+        let phase_space = Names {
+            coordinates: &coordinates,
+            velocities: &velocities,
+            parameters: &parameter_names,
+            phase_space: true,
+        };
+        let configuration = Names {
+            phase_space: false,
+            ..phase_space
+        };
+        let n = coordinates.len();
+        let list = |field: &str, texts: &[String], names: &Names<'_>| {
+            if texts.len() != n {
+                return Err(TextError::Dimension {
+                    field: field.into(),
+                    expected: n,
+                    found: texts.len(),
+                });
+            }
+            texts
+                .iter()
+                .enumerate()
+                .map(|(i, text)| Expression::parse(text, &format!("{field}[{i}]"), names))
+                .collect::<Result<Vec<_>, _>>()
+        };
+        let lagrangian = Expression::parse(&spec.lagrangian, "lagrangian", &phase_space)?;
+        let forces = if spec.forces.is_empty() {
+            Vec::new()
+        } else {
+            list("forces", &spec.forces, &phase_space)?
+        };
+        let generators = spec
+            .symmetries
+            .iter()
+            .enumerate()
+            .map(|(i, texts)| list(&format!("symmetries[{i}]"), texts, &configuration))
+            .collect::<Result<Vec<_>, _>>()?;
+        let momentum_names = (1..=generators.len())
+            .map(|i| intern(&format!("J{i}")))
+            .collect();
+        let tapes = Tapes::compile(&lagrangian, &forces, &generators, &parameter_values, n);
+        Ok(TextModel {
+            coordinates,
+            parameter_names,
+            parameter_values,
+            lagrangian,
+            forces,
+            generators,
+            momentum_names,
+            tapes,
+        })
+    }
+
+    /// The number of coordinates N.
+    pub fn dimension(&self) -> usize {
+        self.coordinates.len()
+    }
+
+    /// The coordinate names.
+    pub fn coordinate_names(&self) -> &[&'static str] {
+        &self.coordinates
+    }
+
+    /// Whether `t` appears in L.
+    pub fn time_dependent(&self) -> bool {
+        self.lagrangian.properties().time
+    }
+
+    /// Whether forces are given.
+    pub fn forced(&self) -> bool {
+        !self.forces.is_empty()
+    }
+
+    /// [`Structure::ConstantMass`] if L is, by its structure, ½q̇ᵀMq̇ − V(t, q) with M
+    /// constant (see the [module docs](self)), else [`Structure::General`].
+    pub fn structure(&self) -> Structure {
+        match self.tapes.constant_mass {
+            Some(_) => Structure::ConstantMass,
+            None => Structure::General,
+        }
+    }
+
+    /// The parameters, name and current value.
+    pub fn parameters(&self) -> Vec<(&'static str, f64)> {
+        self.parameter_names
+            .iter()
+            .copied()
+            .zip(self.parameter_values.iter().copied())
+            .collect()
+    }
+
+    /// Set the parameter `name`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a name that is not a parameter or a value that is not
+    /// finite.
+    pub fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        let Some(index) = self.parameter_names.iter().position(|known| *known == name) else {
+            return Err(Error::invalid(
+                name,
+                format!(
+                    "not a parameter of the text model (parameters: {})",
+                    if self.parameter_names.is_empty() {
+                        "none".into()
+                    } else {
+                        self.parameter_names.join(", ")
+                    }
+                ),
+            ));
+        };
+        if !value.is_finite() {
+            return Err(Error::invalid(
+                name,
+                format!("{value} is not a finite number"),
+            ));
+        }
+        self.parameter_values[index] = value;
+        self.tapes = Tapes::compile(
+            &self.lagrangian,
+            &self.forces,
+            &self.generators,
+            &self.parameter_values,
+            self.dimension(),
+        );
+        Ok(())
+    }
+}
+
+/// Reject a name that is not an identifier, or is a function, a constant or `t`.
+fn check_name(role: &'static str, name: &str) -> Result<(), TextError> {
+    let invalid = |reason: &str| {
+        Err(TextError::InvalidName {
+            role,
+            name: name.into(),
+            reason: reason.into(),
+        })
+    };
+    let mut chars = name.chars();
+    let identifier = chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
+        && chars.all(|c| c.is_alphanumeric() || c == '_');
+    if !identifier {
+        return invalid("a name is a letter or '_' followed by letters, digits and '_'");
+    }
+    if FUNCTION_NAMES.contains(&name) {
+        return invalid("it is a function");
+    }
+    if CONSTANT_NAMES.contains(&name) {
+        return invalid("it is a constant");
+    }
+    if name == "t" {
+        return invalid("t is the time");
+    }
+    Ok(())
+}
+
+/// Intern `name`: the one `&'static str` with its text. The traits of a model name its
+/// coordinates, parameters and momenta with `&'static str`; a text model's names are leaked
+/// once per distinct name and process, not once per model.
+fn intern(name: &str) -> &'static str {
+    static NAMES: Mutex<BTreeSet<&'static str>> = Mutex::new(BTreeSet::new());
+    let mut names = NAMES
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some(known) = names.get(name) {
+        return known;
+    }
+    let leaked: &'static str = Box::leak(name.to_owned().into_boxed_str());
+    names.insert(leaked);
+    leaked
+}
+
+/// A [`TextModel`] of dimension `N` as a [`Lagrangian<N>`] (with [`Symmetries`],
+/// [`Invariants`] — none —, [`ExactSolution`] — none — and [`Defaults`]).
+///
+/// The other parameters are the model's declarations ([`Lagrangian::TIME_DEPENDENT`],
+/// [`Lagrangian::FORCED`], and `CONSTANT_MASS` for [`Structure::ConstantMass`]): constants
+/// of the type, so a caller that learns the model's at run time dispatches on them. The
+/// defaults (time-dependent, forced, general) fit every model; [`TextLagrangian::new`]
+/// rejects declarations the model does not allow.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextLagrangian<
+    const N: usize,
+    const TIME_DEPENDENT: bool = true,
+    const FORCED: bool = true,
+    const CONSTANT_MASS: bool = false,
+> {
+    model: TextModel,
+}
+
+impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+    TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+{
+    /// `model` as a Lagrangian on ℝᴺ with the type's declarations.
+    ///
+    /// # Errors
+    /// [`TextError::Declaration`] if the model's dimension is not `N`, or a declaration does
+    /// not hold: `TIME_DEPENDENT = false` with `t` in L, `FORCED = false` with forces,
+    /// `CONSTANT_MASS = true` for L not recognised as constant-mass.
+    pub fn new(model: TextModel) -> Result<Self, TextError> {
+        let declaration = |reason: String| Err(TextError::Declaration { reason });
+        if model.dimension() != N {
+            return declaration(format!(
+                "the model has {} coordinates, the Lagrangian N = {N}",
+                model.dimension()
+            ));
+        }
+        if model.time_dependent() && !TIME_DEPENDENT {
+            return declaration("L depends on t, but TIME_DEPENDENT = false".into());
+        }
+        if model.forced() && !FORCED {
+            return declaration("the model has forces, but FORCED = false".into());
+        }
+        if CONSTANT_MASS && model.structure() != Structure::ConstantMass {
+            return declaration(
+                "CONSTANT_MASS = true, but L is not recognised as ½q̇ᵀMq̇ − V(t, q)".into(),
+            );
+        }
+        Ok(TextLagrangian { model })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &TextModel {
+        &self.model
+    }
+}
+
+impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+    Lagrangian<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+{
+    const TIME_DEPENDENT: bool = TIME_DEPENDENT;
+    const FORCED: bool = FORCED;
+    const STRUCTURE: Structure = if CONSTANT_MASS {
+        Structure::ConstantMass
+    } else {
+        Structure::General
+    };
+
+    #[inline]
+    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
+        let tapes = &self.model.tapes;
+        if CONSTANT_MASS && let Some(split) = &tapes.constant_mass {
+            // ½q̇ᵀMq̇ without a tape, plus U(t, q).
+            let mut sum = split.potential.evaluate(t, q.as_slice(), v.as_slice());
+            for &(i, j, c) in &split.kinetic {
+                sum += v[i] * v[j] * c;
+            }
+            return sum;
+        }
+        tapes.lagrangian.evaluate(t, q.as_slice(), v.as_slice())
+    }
+
+    #[inline]
+    fn external_force<D: Scalar>(
+        &self,
+        t: D,
+        q: &SVector<D, N>,
+        v: &SVector<D, N>,
+    ) -> SVector<D, N> {
+        let forces = &self.model.tapes.forces;
+        if forces.is_empty() {
+            return SVector::zeros();
+        }
+        SVector::from_fn(|i, _| forces[i].evaluate(t, q.as_slice(), v.as_slice()))
+    }
+}
+
+impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+    Symmetries<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+{
+    fn generator_count(&self) -> usize {
+        self.model.generators.len()
+    }
+
+    /// `J1`, `J2`, ... in the order of [`TextSpec::symmetries`].
+    ///
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn momentum_name(&self, index: usize) -> &'static str {
+        self.model.momentum_names[index]
+    }
+
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N> {
+        let generator = &self.model.tapes.generators[index];
+        SVector::from_fn(|i, _| generator[i].evaluate(0.0, q.as_slice(), &[]))
+    }
+}
+
+impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+    Invariants<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+{
+}
+
+impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+    ExactSolution<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+{
+    /// None: a text model has no closed-form solution.
+    fn exact_solution(
+        &self,
+        _t0: f64,
+        _q0: &SVector<f64, N>,
+        _v0: &SVector<f64, N>,
+        _t: f64,
+    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+        None
+    }
+}
+
+impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+    Defaults<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+{
+    /// [`TextModel::NAME`].
+    fn name(&self) -> &'static str {
+        TextModel::NAME
+    }
+
+    fn coordinate_names(&self) -> [&'static str; N] {
+        std::array::from_fn(|i| self.model.coordinates[i])
+    }
+
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        self.model.parameters()
+    }
+
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        self.model.set_parameter(name, value)
+    }
+
+    /// A text model has no literature defaults: at rest at the origin at t = 0 (give the
+    /// initial state).
+    fn initial_state(&self) -> (f64, SVector<f64, N>, SVector<f64, N>) {
+        (0.0, SVector::zeros(), SVector::zeros())
+    }
+
+    /// A placeholder, 0.01 (give the step).
+    fn default_step(&self) -> f64 {
+        0.01
+    }
+
+    /// A placeholder, 10 (give the horizon).
+    fn default_horizon(&self) -> f64 {
+        10.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::derived::LagrangianExt;
+
+    fn spec(lagrangian: &str, coordinates: &[&str]) -> TextSpec {
+        TextSpec {
+            lagrangian: lagrangian.into(),
+            coordinates: coordinates.iter().map(|name| (*name).into()).collect(),
+            ..TextSpec::default()
+        }
+    }
+
+    #[test]
+    fn names_are_checked() {
+        let invalid = |spec: &TextSpec| match TextModel::new(spec) {
+            Err(TextError::InvalidName { role, name, .. }) => (role, name),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(invalid(&spec("x", &["x", "x"])), ("coordinate", "x".into()));
+        assert_eq!(invalid(&spec("x", &["sin"])), ("coordinate", "sin".into()));
+        assert_eq!(invalid(&spec("x", &["pi"])), ("coordinate", "pi".into()));
+        assert_eq!(invalid(&spec("x", &["t"])), ("coordinate", "t".into()));
+        assert_eq!(invalid(&spec("x", &["2x"])), ("coordinate", "2x".into()));
+        assert_eq!(invalid(&spec("x", &[""])), ("coordinate", "".into()));
+        // The velocity of x is vx: no coordinate may be called vx too.
+        assert_eq!(
+            invalid(&spec("x", &["x", "vx"])),
+            ("coordinate", "x".into())
+        );
+        assert_eq!(
+            invalid(&spec("x", &["vx", "x"])),
+            ("coordinate", "x".into())
+        );
+        let mut with_parameter = spec("x", &["x"]);
+        with_parameter.parameters = vec![("vx".into(), 1.0)];
+        assert_eq!(invalid(&with_parameter), ("parameter", "vx".into()));
+        with_parameter.parameters = vec![("m".into(), f64::NAN)];
+        assert!(matches!(
+            TextModel::new(&with_parameter),
+            Err(TextError::NonFiniteParameter { .. })
+        ));
+        assert_eq!(
+            TextModel::new(&spec("x", &[])),
+            Err(TextError::NoCoordinates)
+        );
+        let error = TextModel::new(&spec("x", &["x", "y"])).map(|_| ());
+        assert_eq!(error, Ok(()));
+    }
+
+    #[test]
+    fn lists_have_one_expression_per_coordinate() {
+        let mut forced = spec("vx^2/2", &["x"]);
+        forced.forces = vec!["-vx".into(), "0".into()];
+        assert_eq!(
+            TextModel::new(&forced).unwrap_err().to_string(),
+            "forces has 2 expressions, but the model has 1 coordinates"
+        );
+        let mut symmetric = spec("vx^2/2 + vy^2/2", &["x", "y"]);
+        symmetric.symmetries = vec![vec!["-y".into(), "vx".into()]];
+        let error = TextModel::new(&symmetric).unwrap_err().to_string();
+        assert!(error.starts_with("unknown symbol 'vx' at column 1 of symmetries[0][1]"));
+        symmetric.forces = vec!["-vx".into(), "-vy + z".into()];
+        let error = TextModel::new(&symmetric).unwrap_err().to_string();
+        assert!(
+            error.starts_with("unknown symbol 'z' at column 7 of forces[1]"),
+            "{error}"
+        );
+    }
+
+    #[test]
+    fn declarations_follow_the_text() {
+        let model = TextModel::new(&spec("vx^2/2 - x^2/2", &["x"])).unwrap();
+        assert!(!model.time_dependent() && !model.forced());
+        assert_eq!(model.structure(), Structure::ConstantMass);
+        assert!(TextLagrangian::<1, false, false, true>::new(model.clone()).is_ok());
+        assert!(TextLagrangian::<1>::new(model.clone()).is_ok());
+        assert!(TextLagrangian::<2>::new(model).is_err());
+        let mut driven = spec("vx^2/2 - x^2/2 + x*cos(t)", &["x"]);
+        driven.forces = vec!["-0.1*vx".into()];
+        let model = TextModel::new(&driven).unwrap();
+        assert!(model.time_dependent() && model.forced());
+        assert!(TextLagrangian::<1, false, true, true>::new(model.clone()).is_err());
+        assert!(TextLagrangian::<1, true, false, true>::new(model.clone()).is_err());
+        let driven = TextLagrangian::<1, true, true, true>::new(model).unwrap();
+        let (q, v) = (SVector::from([0.5]), SVector::from([2.0]));
+        assert_eq!(driven.external_force(0.0, &q, &v)[0], -0.2);
+        assert_eq!(driven.value(0.0, &q, &v), 2.0 - 0.125 + 0.5);
+    }
+
+    #[test]
+    fn parameters_are_read_at_every_evaluation() {
+        let mut kepler = spec("(vx^2 + vy^2)/2 + mu/sqrt(x^2 + y^2)", &["x", "y"]);
+        kepler.parameters = vec![("mu".into(), 1.0)];
+        let mut model = TextLagrangian::<2>::new(TextModel::new(&kepler).unwrap()).unwrap();
+        let (q, v) = (SVector::from([3.0, 4.0]), SVector::from([0.0, 0.0]));
+        assert_eq!(model.value(0.0, &q, &v), 0.2);
+        model.set_parameter("mu", 5.0).unwrap();
+        assert_eq!(model.value(0.0, &q, &v), 1.0);
+        assert_eq!(model.parameters(), [("mu", 5.0)]);
+        assert!(model.set_parameter("mu", f64::INFINITY).is_err());
+        assert!(model.set_parameter("m", 1.0).is_err());
+        assert_eq!(model.coordinate_names(), ["x", "y"]);
+        assert_eq!(model.name(), "text");
+    }
+}
