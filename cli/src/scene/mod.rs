@@ -56,6 +56,7 @@
 //! other, and their force parameters are ordinary `[parameters]`.
 
 pub mod builtin;
+pub mod ensemble;
 pub mod error;
 pub mod limits;
 pub mod overrides;
