@@ -56,14 +56,14 @@ pub struct EnsembleArgs {
     pub initial: Vec<Axis>,
     /// Draw N members at random instead of a grid: each varied field uniformly from its
     /// range (LO:HI or LO:HI:COUNT) or its list.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub random: Option<usize>,
     /// Seed of the random draws (Xoshiro256++; the same seed gives the same members
     /// everywhere) [default: 0].
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub seed: Option<u64>,
     /// Threads running members [default: 0 = every core].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub threads: Option<usize>,
     /// Write the member table as CSV to FILE (one row per member); without it the table is
     /// printed on stdout (unless --json).
@@ -318,7 +318,8 @@ pub struct MembersFailed {
 
 /// `svi ensemble`: run the members, write the table (`--out` or stdout), the plot and the
 /// summary. Exit status 0 when every member is `ok`; 1 when some failed (everything is still
-/// written); 2 for bad input of the ensemble itself.
+/// written); 2 for bad input of the ensemble itself, including options that every member
+/// rejects before it starts (then nothing is written).
 pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
     let name = args.scene.as_deref().unwrap_or(crate::scene::builtin::DEFAULT_SCENE);
     if args.seed.is_some() && args.random.is_none() {
@@ -357,6 +358,26 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     if let Some(bar) = &bar {
         bar.finish_and_clear();
+    }
+    // An ensemble none of whose members could start (a shared option the runs reject, as
+    // --h -1) is bad input, as the same `svi run` would be: nothing is written.
+    let bad_input = |outcome: &MemberOutcome| {
+        outcome.summary.is_none()
+            && outcome
+                .error
+                .as_ref()
+                .is_some_and(|error| matches!(error.kind, "invalid_parameter" | "invalid_input"))
+    };
+    if !outcomes.is_empty() && outcomes.iter().all(bad_input) {
+        let message = outcomes[0].error.as_ref().map(|error| error.message.clone());
+        return Err(SceneError::NotApplicable {
+            option: "the ensemble",
+            reason: format!(
+                "no member could start; the first: {}",
+                message.unwrap_or_default()
+            ),
+        }
+        .into());
     }
     let table = ensemble.table(&outcomes);
     match &args.out {
