@@ -22,7 +22,7 @@ use crate::command::run::error_report;
 use crate::report::map::{self, Heatmap};
 use crate::report::plot::{Panel, Series, write_svg};
 use crate::report::summary::ErrorReport;
-use crate::report::table::{MemberOutcome, Table};
+use crate::report::table::{MemberOutcome, Schema, Table};
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
@@ -157,18 +157,19 @@ pub struct Ensemble {
     pub axes: Vec<Axis>,
     /// The members, in table order.
     pub members: Vec<Member>,
+    /// The summary columns of the table.
+    pub schema: Schema,
 }
 
 impl Ensemble {
-    /// Load the scene `name`, apply `overrides`, check the axes against its model and expand
-    /// the members. Every error here is bad input (exit status 2).
+    /// Apply `overrides` to `scene`, check the axes against its model and expand the members.
+    /// Every error here is bad input (exit status 2).
     pub fn new(
-        name: &str,
+        mut scene: Scene,
         overrides: &Overrides,
         axes: Vec<Axis>,
         random: Option<Random>,
     ) -> Result<Ensemble, SceneError> {
-        let mut scene = Scene::load(name)?;
         if overrides.diagnostics.is_none() && scene.output.diagnostics.is_none() {
             scene.output.diagnostics = Some(DEFAULT_DIAGNOSTICS.to_vec());
         }
@@ -181,12 +182,17 @@ impl Ensemble {
                     .into(),
             });
         }
-        check_axes(&scene, &axes)?;
+        let names = check_axes(&scene, &axes)?;
+        let schema = match &names.coordinates {
+            Some(coordinates) => Schema::vector(coordinates),
+            None => Schema::rigid(),
+        };
         let members = members(&axes, random)?;
         Ok(Ensemble {
             scene,
             axes,
             members,
+            schema,
         })
     }
 
@@ -254,10 +260,11 @@ impl Ensemble {
         }
     }
 
-    /// The table of `outcomes`, the outcomes of all members in order.
-    pub fn table(&self, outcomes: &[MemberOutcome]) -> Table {
-        let values: Vec<Vec<f64>> = self.members.iter().map(|m| m.values.clone()).collect();
-        Table::new(&self.axis_names(), &values, outcomes)
+    /// The table of `outcomes`, the outcomes of the members from `first` on, in order.
+    pub fn table(&self, first: usize, outcomes: &[MemberOutcome]) -> Table {
+        let members = self.members.iter().skip(first).take(outcomes.len());
+        let values: Vec<Vec<f64>> = members.map(|m| m.values.clone()).collect();
+        Table::new(&self.schema, &self.axis_names(), first, &values, outcomes)
     }
 }
 
@@ -333,7 +340,7 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         count,
         seed: args.seed.unwrap_or(0),
     });
-    let ensemble = Ensemble::new(name, &args.overrides(), args.axes(), random)?;
+    let ensemble = Ensemble::new(Scene::load(name)?, &args.overrides(), args.axes(), random)?;
     if let Some(plot) = &args.plot {
         check_plot(&ensemble, plot, random.is_some())?;
     }
@@ -379,7 +386,7 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         }
         .into());
     }
-    let table = ensemble.table(&outcomes);
+    let table = ensemble.table(0, &outcomes);
     match &args.out {
         Some(path) => write_table(&table, path)?,
         None if !args.json => table.write_csv(&mut std::io::stdout().lock())?,

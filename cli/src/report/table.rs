@@ -12,7 +12,7 @@
 //! - the fields of the member's summary, as `svi run --json` prints them: `t_end`, `steps`,
 //!   the final state (`q_NAME`, `v_NAME`, `p_NAME` per coordinate on ℝᴺ; `quaternion_1..4`,
 //!   `omega_1..3`, `momentum_1..3` on SO(3)), the energies, the conservation diagnostics,
-//!   `iterations`, `evaluations` (and `retries` where the summary has it). A member that
+//!   `iterations`, `evaluations`, `retries` (empty where the summary has no value). A member that
 //!   failed after it started has those of its last good state; a member rejected before it
 //!   ran has them empty;
 //! - `warnings`: the kinds of the failed health checks, `;`-separated;
@@ -97,15 +97,27 @@ pub struct Table {
     pub rows: Vec<Vec<Cell>>,
 }
 
-/// The scalar fields of a summary that become columns, in order (those a summary has).
-const SCALAR_FIELDS: [&str; 13] = [
+/// The scalar fields of a summary that become columns on ℝᴺ, in order.
+const VECTOR_SCALARS: [&str; 9] = [
+    "energy_initial",
+    "energy_final",
+    "energy_error_max",
+    "energy_scale",
+    "momentum_error_max",
+    "solution_error_max",
+    "iterations",
+    "evaluations",
+    "retries",
+];
+
+/// The scalar fields of a summary that become columns on SO(3), in order.
+const RIGID_SCALARS: [&str; 12] = [
     "energy_initial",
     "energy_final",
     "energy_error_max",
     "energy_scale",
     "momentum_error_max",
     "momentum_error_relative",
-    "solution_error_max",
     "invariant_error_max",
     "orthogonality_error_max",
     "orthogonality_error_final",
@@ -114,50 +126,53 @@ const SCALAR_FIELDS: [&str; 13] = [
     "retries",
 ];
 
-/// The vector fields of the final state that become columns, per component.
-const STATE_FIELDS: [&str; 6] = ["q", "v", "p", "quaternion", "omega", "momentum"];
+/// The columns of a table's summary fields, fixed by the scene's space and model (not by the
+/// outcomes: every chunk of an ensemble has the same columns, so chunks run apart — on
+/// several machines — concatenate into the table of one run).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Schema {
+    /// (column name, JSON field of the summary, component index of an array field).
+    fields: Vec<(String, &'static str, Option<usize>)>,
+}
+
+impl Schema {
+    /// The columns of a model on ℝᴺ with these coordinate names.
+    pub fn vector(coordinates: &[&str]) -> Schema {
+        let mut fields = vec![("t_end".into(), "t_end", None), ("steps".into(), "steps", None)];
+        for field in ["q", "v", "p"] {
+            for (i, name) in coordinates.iter().enumerate() {
+                fields.push((format!("{field}_{name}"), field, Some(i)));
+            }
+        }
+        fields.extend(VECTOR_SCALARS.map(|field| (field.to_string(), field, None)));
+        Schema { fields }
+    }
+
+    /// The columns of a rigid body on SO(3).
+    pub fn rigid() -> Schema {
+        let mut fields = vec![("t_end".into(), "t_end", None), ("steps".into(), "steps", None)];
+        for (field, size) in [("quaternion", 4), ("omega", 3), ("momentum", 3)] {
+            for i in 0..size {
+                fields.push((format!("{field}_{}", i + 1), field, Some(i)));
+            }
+        }
+        fields.extend(RIGID_SCALARS.map(|field| (field.to_string(), field, None)));
+        Schema { fields }
+    }
+}
 
 impl Table {
-    /// The table of `outcomes` (in member order), whose varied fields are named `axes` and
-    /// take `values` (one row of values per member).
-    pub fn new(axes: &[String], values: &[Vec<f64>], outcomes: &[MemberOutcome]) -> Table {
-        let summaries: Vec<Option<serde_json::Map<String, Value>>> = outcomes
-            .iter()
-            .map(|outcome| {
-                outcome.summary.as_ref().and_then(|summary| {
-                    match serde_json::to_value(summary) {
-                        Ok(Value::Object(map)) => Some(map),
-                        _ => None,
-                    }
-                })
-            })
-            .collect();
-        // The summary's columns: (column name, JSON field, component index).
-        let mut fields: Vec<(String, &str, Option<usize>)> =
-            vec![("t_end".into(), "t_end", None), ("steps".into(), "steps", None)];
-        let first = summaries.iter().flatten().next();
-        let coordinates: Option<Vec<String>> = outcomes
-            .iter()
-            .filter_map(|outcome| outcome.summary.as_ref())
-            .find_map(|summary| summary.coordinates.clone());
-        if let Some(first) = first {
-            for field in STATE_FIELDS {
-                if let Some(Value::Array(items)) = first.get(field) {
-                    for i in 0..items.len() {
-                        let suffix = coordinates
-                            .as_ref()
-                            .and_then(|names| names.get(i).cloned())
-                            .unwrap_or_else(|| (i + 1).to_string());
-                        fields.push((format!("{field}_{suffix}"), field, Some(i)));
-                    }
-                }
-            }
-        }
-        for field in SCALAR_FIELDS {
-            if summaries.iter().flatten().any(|map| map.contains_key(field)) {
-                fields.push((field.into(), field, None));
-            }
-        }
+    /// The table of `outcomes` of the members numbered from `first`, in order, whose varied
+    /// fields are named `axes` and take `values` (one row of values per member), with the
+    /// summary columns of `schema`.
+    pub fn new(
+        schema: &Schema,
+        axes: &[String],
+        first: usize,
+        values: &[Vec<f64>],
+        outcomes: &[MemberOutcome],
+    ) -> Table {
+        let fields = &schema.fields;
         let mut columns: Vec<String> = vec!["member".into()];
         columns.extend(axes.iter().cloned());
         columns.push("status".into());
@@ -165,14 +180,19 @@ impl Table {
         columns.extend(["warnings", "error_step", "error_t", "error"].map(String::from));
         let rows = outcomes
             .iter()
-            .zip(&summaries)
             .zip(values)
             .enumerate()
-            .map(|(index, ((outcome, summary), values))| {
-                let mut row = vec![Cell::Integer(index as u64)];
+            .map(|(index, (outcome, values))| {
+                let summary = outcome.summary.as_ref().and_then(|summary| {
+                    match serde_json::to_value(summary) {
+                        Ok(Value::Object(map)) => Some(map),
+                        _ => None,
+                    }
+                });
+                let mut row = vec![Cell::Integer((first + index) as u64)];
                 row.extend(values.iter().map(|x| Cell::Number(*x)));
                 row.push(Cell::Text(outcome.status().into()));
-                for (_, field, component) in &fields {
+                for (_, field, component) in fields {
                     let value = summary.as_ref().and_then(|map| map.get(*field));
                     let value = match (value, component) {
                         (Some(Value::Array(items)), Some(i)) => items.get(*i),
@@ -256,17 +276,20 @@ mod tests {
                 t: None,
             }),
         };
-        let table = Table::new(&["e".into()], &[vec![1.2]], &[rejected]);
+        let schema = Schema { fields: vec![] };
+        let table = Table::new(&schema, &["e".into()], 0, &[vec![1.2]], &[rejected]);
         assert_eq!(
             table.columns,
-            ["member", "e", "status", "t_end", "steps", "warnings", "error_step", "error_t", "error"]
+            ["member", "e", "status", "warnings", "error_step", "error_t", "error"]
         );
+        let columns = Table::new(&Schema::vector(&["x"]), &[], 0, &[], &[]).columns;
+        assert_eq!(columns[2..7], ["t_end", "steps", "q_x", "v_x", "p_x"]);
         let mut csv = Vec::new();
         table.write_csv(&mut csv).unwrap();
         assert_eq!(
             String::from_utf8(csv).unwrap(),
-            "member,e,status,t_end,steps,warnings,error_step,error_t,error\n\
-             0,1.2,invalid_parameter,,,,,,\"invalid parameter e: 1.2 is outside [0, 1)\"\n"
+            "member,e,status,warnings,error_step,error_t,error\n\
+             0,1.2,invalid_parameter,,,,\"invalid parameter e: 1.2 is outside [0, 1)\"\n"
         );
     }
 }

@@ -552,8 +552,9 @@ impl RigidModelVisitor for ModelNamesOf {
 struct ModelNamesOf;
 
 /// Check the axes against the scene's model before any member runs: every parameter is one
-/// of the model's, every initial component one of its coordinates (ℝᴺ scenes only).
-pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<(), SceneError> {
+/// of the model's, every initial component one of its coordinates (ℝᴺ scenes only). Returns
+/// the model's names.
+pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError> {
     let names = match scene.space() {
         SpaceKind::Vector => svi_models::visit_model(&scene.model, ModelNamesOf)?,
         SpaceKind::Rotation => svi_models::visit_rigid_model(&scene.model, ModelNamesOf)
@@ -596,7 +597,7 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<(), SceneError> {
             Target::Parameter(_) => {}
         }
     }
-    Ok(())
+    Ok(names)
 }
 
 #[cfg(test)]
