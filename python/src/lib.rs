@@ -125,8 +125,24 @@ fn overrides(
 }
 
 /// Put the fields of `initial` (`t0`, `q`, `v`, `p`, `rotation`, `quaternion`, `omega`,
-/// `momentum`) into the scene's `[initial]`, then check the scene.
+/// `momentum`) into the scene's `[initial]` (a velocity replaces the scene's momentum and so
+/// on), then check the scene.
 fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResult<()> {
+    // A field given replaces the scene's exclusive partner (v for p, omega for momentum, ...)
+    // unless both are given, which the scene's check rejects.
+    let section = &mut scene.initial;
+    for (given, partner) in [
+        ("v", &mut section.p),
+        ("p", &mut section.v),
+        ("rotation", &mut section.quaternion),
+        ("quaternion", &mut section.rotation),
+        ("omega", &mut section.momentum),
+        ("momentum", &mut section.omega),
+    ] {
+        if initial.contains_key(given) {
+            *partner = None;
+        }
+    }
     for (name, values) in initial {
         let section = &mut scene.initial;
         let slot = match name.as_str() {
