@@ -393,6 +393,80 @@ fn scenes() -> Vec<(&'static str, String)> {
         .collect()
 }
 
+/// `svi stability`'s arguments, parsed as the binary parses them.
+#[derive(clap::Parser)]
+struct StabilityCommand {
+    #[command(flatten)]
+    args: svi_cli::command::stability::StabilityArgs,
+}
+
+/// `svi bench`'s arguments, parsed as the binary parses them.
+#[derive(clap::Parser)]
+struct BenchCommand {
+    #[command(flatten)]
+    args: svi_cli::command::bench::BenchArgs,
+}
+
+/// Parse command-line `args` of `command` (a clap error is bad input).
+fn parse<T: clap::Parser>(command: &str, args: Vec<String>) -> PyResult<T> {
+    T::try_parse_from(std::iter::once(command.to_string()).chain(args)).map_err(|error| {
+        let message = error.to_string();
+        let first = message.lines().next().unwrap_or("").trim_start_matches("error: ");
+        failure(SceneError::InvalidOption {
+            option: "arguments",
+            reason: first.to_string(),
+        })
+    })
+}
+
+/// Linear stability as `svi stability ARGS` computes it (`--method`, `--z` or `--z-min`,
+/// `--z-max`, `--samples`): the CSV of the points and, for a range, the regions as JSON.
+#[pyfunction]
+fn stability(py: Python<'_>, args: Vec<String>) -> PyResult<(String, Option<String>)> {
+    use svi_cli::command::stability::{Answer, run, to_csv};
+    let command: StabilityCommand = parse("stability", args)?;
+    let spec: svi::MethodSpec = command
+        .args
+        .method
+        .parse()
+        .map_err(|error| invalid("method", format!("{error}")))?;
+    let request = command.args.request();
+    let answer = py.detach(|| run(spec, &request)).map_err(failure)?;
+    Ok(match answer {
+        Answer::Points(points) => (to_csv(&points), None),
+        Answer::Report(report) => {
+            let intervals = |list: &[svi::analysis::stability::Interval]| {
+                list.iter()
+                    .map(|interval| [interval.lower, interval.upper])
+                    .collect::<Vec<_>>()
+            };
+            let regions = serde_json::json!({
+                "stable": intervals(&report.stable),
+                "periodic": intervals(&report.periodic),
+                "strongly_stable": intervals(&report.strongly_stable),
+                "a_stable": report.a_stable,
+                "p_stable": report.p_stable,
+            });
+            (to_csv(&report.points), Some(regions.to_string()))
+        }
+    })
+}
+
+/// A work–precision sweep as `svi bench ARGS` runs it: the records as JSON.
+#[pyfunction]
+#[pyo3(name = "bench")]
+fn work_precision(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
+    let command: BenchCommand = parse("bench", args)?;
+    let (overrides, options) = command.args.options().map_err(failure)?;
+    let name = command.args.scene.as_deref().unwrap_or(svi_cli::DEFAULT_SCENE);
+    let mut scene = load(name)?;
+    scene.apply(&overrides).map_err(failure)?;
+    let records = py
+        .detach(|| svi_cli::command::bench::work_precision(&scene, &options))
+        .map_err(failure)?;
+    serde_json::to_string(&records).map_err(|error| invalid("bench", error.to_string()))
+}
+
 /// The svi version.
 #[pyfunction]
 fn version() -> &'static str {
@@ -408,5 +482,7 @@ fn _svi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(scenes, m)?)?;
     m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(stability, m)?)?;
+    m.add_function(wrap_pyfunction!(work_precision, m)?)?;
     Ok(())
 }

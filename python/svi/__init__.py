@@ -41,10 +41,12 @@ __all__ = [
     "SingularMatrixError",
     "StepSizeTooSmallError",
     "SviError",
+    "bench",
     "ensemble",
     "models",
     "run",
     "scenes",
+    "stability",
 ]
 
 #: The scene ``svi run`` runs without a name.
@@ -460,6 +462,11 @@ def ensemble(
         if bar is not None:
             bar.close()
     table = {name: _column([row[i] for row in rows]) for i, name in enumerate(columns)}
+    return _frame(table, columns, as_frame)
+
+
+def _frame(table: Dict[str, Any], columns: List[str], as_frame: Optional[bool]) -> Any:
+    """A table as a pandas DataFrame (when pandas is installed and ``as_frame`` is not False)."""
     if as_frame is not False:
         try:
             import pandas
@@ -469,3 +476,77 @@ def ensemble(
         else:
             return pandas.DataFrame(table, columns=columns)
     return table
+
+
+def stability(
+    method: str = "svi:5/4",
+    z: Optional[Sequence[float]] = None,
+    *,
+    z_min: Optional[float] = None,
+    z_max: Optional[float] = None,
+    samples: Optional[int] = None,
+    as_frame: Optional[bool] = None,
+) -> Dict[str, Any]:
+    """Linear stability on the harmonic oscillator, as ``svi stability``.
+
+    With ``z`` the stability matrix S(z) at those z = σ²h²; else on [z_min, z_max] (defaults
+    1e-6 and 900) at ``samples`` points, with the regions.
+
+    Returns:
+        ``{"points": table of z, rho, det, trace, discriminant, strong_margin}``, plus for a
+        range ``stable``, ``periodic``, ``strongly_stable`` (lists of [lower, upper]),
+        ``a_stable`` and ``p_stable``.
+    """
+    args = ["--method", method]
+    if z is not None:
+        args += ["--z", ",".join(_number(x) for x in z)]
+    for flag, value in (("--z-min", z_min), ("--z-max", z_max)):
+        if value is not None:
+            args += [flag, _number(value)]
+    if samples is not None:
+        args += ["--samples", str(int(samples))]
+    csv, regions = _call(_svi.stability, args)
+    lines = csv.strip().splitlines()
+    columns = lines[0].split(",")
+    values = np.array([[float(x) for x in line.split(",")] for line in lines[1:]], dtype=float).reshape(-1, len(columns))
+    result: Dict[str, Any] = {"points": _frame({name: values[:, i] for i, name in enumerate(columns)}, columns, as_frame)}
+    if regions is not None:
+        result.update(json.loads(regions))
+    return result
+
+
+def bench(
+    scene: str = DEFAULT_SCENE,
+    methods: Optional[Union[str, Sequence[str]]] = None,
+    *,
+    steps: Optional[Sequence[int]] = None,
+    tolerances: Optional[Sequence[float]] = None,
+    t_end: Optional[float] = None,
+    params: Optional[Mapping[str, float]] = None,
+    batches: Optional[int] = None,
+    min_batch: Optional[float] = None,
+    target: Optional[float] = None,
+    max_run: Optional[float] = None,
+    as_frame: Optional[bool] = None,
+) -> Any:
+    """A work–precision sweep, as ``svi bench``: one row per (method, step count or tolerance)
+    with the final error, energy and momentum errors, evaluations, iterations and median wall
+    time. The scene's model needs an exact solution."""
+    args = [scene]
+    if methods is not None:
+        args += ["--methods", methods if isinstance(methods, str) else ",".join(methods)]
+    if steps is not None:
+        args += ["--steps", ",".join(str(int(n)) for n in steps)]
+    if tolerances is not None:
+        args += ["--tolerances", ",".join(_number(x) for x in tolerances)]
+    if t_end is not None:
+        args += ["--t-end", _number(t_end)]
+    for name, value in (params or {}).items():
+        args += ["--param", f"{name}={_number(value)}"]
+    for flag, value in (("--batches", batches), ("--min-batch", min_batch), ("--target", target), ("--max-run", max_run)):
+        if value is not None:
+            args += [flag, str(value)]
+    records = json.loads(_call(_svi.bench, args))
+    columns = list(records[0]) if records else []
+    table = {name: _column([record[name] for record in records]) for name in columns}
+    return _frame(table, columns, as_frame)

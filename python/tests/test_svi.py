@@ -181,3 +181,18 @@ def test_a_dask_cluster_returns_the_local_table():
         else:
             assert np.array_equal(a, b, equal_nan=True), name
     assert remote["status"].tolist()[-1] == "invalid_parameter"
+
+
+def test_stability_and_bench():
+    points = svi.stability("svi:5/4", z=[0.5, 2.0], as_frame=False)["points"]
+    status, stdout, _ = cli("stability", "--method", "svi:5/4", "--z", "0.5,2")
+    assert status == 0
+    rows = [line.split(",") for line in stdout.strip().splitlines()[1:]]
+    assert points["rho"].tolist() == [float(row[1]) for row in rows]
+    report = svi.stability("verlet", z_min=0.1, z_max=5.0, samples=50)
+    assert report["stable"] and report["stable"][0][1] == pytest.approx(4.0, rel=1e-9)
+    records = svi.bench("kepler", methods="verlet", steps=[200, 400], t_end=2.0, batches=1, min_batch=0, as_frame=False)
+    assert records["method"].tolist() == ["verlet", "verlet"]
+    assert records["final_error"][1] < records["final_error"][0]
+    with pytest.raises(svi.InvalidInputError):
+        svi.stability("no-such-method", z=[1.0])
