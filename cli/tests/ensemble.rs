@@ -29,7 +29,10 @@ fn parse_csv(text: &str) -> Vec<HashMap<String, String>> {
     lines
         .map(|line| {
             let (plain, quoted) = match line.find('"') {
-                Some(at) => (&line[..at], Some(line[at..].trim_matches('"').replace("\"\"", "\""))),
+                Some(at) => (
+                    &line[..at],
+                    Some(line[at..].trim_matches('"').replace("\"\"", "\"")),
+                ),
                 None => (line, None),
             };
             let mut fields: Vec<String> = plain.split(',').map(String::from).collect();
@@ -38,11 +41,7 @@ fn parse_csv(text: &str) -> Vec<HashMap<String, String>> {
                 fields.push(quoted);
             }
             assert_eq!(fields.len(), header.len(), "{line}");
-            header
-                .iter()
-                .map(|h| h.to_string())
-                .zip(fields)
-                .collect()
+            header.iter().map(|h| h.to_string()).zip(fields).collect()
         })
         .collect()
 }
@@ -58,7 +57,10 @@ fn cell(row: &HashMap<String, String>, column: &str) -> f64 {
 /// parser (serde_json's own float parsing may be off in the last digit).
 fn raw(text: &str, key: &str) -> Vec<f64> {
     let pattern = format!("\"{key}\":");
-    let start = text.find(&pattern).unwrap_or_else(|| panic!("no {key} in {text}")) + pattern.len();
+    let start = text
+        .find(&pattern)
+        .unwrap_or_else(|| panic!("no {key} in {text}"))
+        + pattern.len();
     let rest = &text[start..];
     let token = if let Some(array) = rest.strip_prefix('[') {
         &array[..array.find(']').unwrap()]
@@ -184,8 +186,17 @@ fn the_table_is_the_same_on_one_thread_and_two_and_draws_repeat_with_the_seed() 
     let scratch = Scratch::new("ensemble-threads");
     let args = |threads: &'static str, seed: &'static str| {
         vec![
-            "kepler", "--param", "e=0:0.8", "--random", "40", "--seed", seed, "--t-end", "10",
-            "--threads", threads,
+            "kepler",
+            "--param",
+            "e=0:0.8",
+            "--random",
+            "40",
+            "--seed",
+            seed,
+            "--t-end",
+            "10",
+            "--threads",
+            threads,
         ]
     };
     let read = |file: &str| std::fs::read_to_string(scratch.join(file)).unwrap();
@@ -243,11 +254,24 @@ fn bad_ensembles_name_their_option_with_exit_status_2() {
         (vec!["--param", "e=0.1:0.9"], "only --random draws"),
         (vec!["--initial", "q.q9=0:1:2"], "no coordinate 'q9'"),
         (vec!["--initial", "z.q1=0:1:2"], "unknown field 'z'"),
-        (vec!["--param", "e=0:1:3", "--threads", "100000"], "--threads"),
+        (
+            vec!["--param", "e=0:1:3", "--threads", "100000"],
+            "--threads",
+        ),
         (vec!["--param", "e=0:1:3", "--threads", "-1"], "--threads"),
         (vec!["--param", "e=0:1:3", "--seed", "3"], "--seed"),
         (vec!["--param", "e=0:1", "--random", "0"], "--random"),
-        (vec!["--param", "e=0:1:3", "--plot", "x.gif", "--plot-value", "q_q1"], "--plot"),
+        (
+            vec![
+                "--param",
+                "e=0:1:3",
+                "--plot",
+                "x.gif",
+                "--plot-value",
+                "q_q1",
+            ],
+            "--plot",
+        ),
         (vec!["--param", "e=0:1:3", "--h", "-1"], "h"),
     ] {
         bad_input(&ensemble, &args, needle);

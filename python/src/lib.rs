@@ -95,7 +95,10 @@ fn overrides(
     form: Option<&str>,
 ) -> PyResult<Overrides> {
     let method = method
-        .map(|text| text.parse().map_err(|error| invalid("method", format!("{error}"))))
+        .map(|text| {
+            text.parse()
+                .map_err(|error| invalid("method", format!("{error}")))
+        })
         .transpose()?;
     let diagnostics = diagnostics
         .map(|names| {
@@ -175,6 +178,9 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
     scene.check().map_err(failure)
 }
 
+/// A trajectory: its column names and rows.
+type Trajectory = (Vec<String>, Vec<Vec<f64>>);
+
 /// Run a scene as `svi run` does, with these overrides; returns the JSON summary and, with
 /// `trajectory`, the trajectory's column names and rows (every step, or the output times).
 #[pyfunction]
@@ -203,7 +209,7 @@ fn run(
     form: Option<&str>,
     trajectory: bool,
     every: Option<usize>,
-) -> PyResult<(String, Option<(Vec<String>, Vec<Vec<f64>>)>)> {
+) -> PyResult<(String, Option<Trajectory>)> {
     let overrides = overrides(
         method,
         points,
@@ -244,8 +250,8 @@ fn run(
     };
     let mut summary = result.map_err(failure)?;
     summary.trajectory = None;
-    let json = serde_json::to_string(&summary)
-        .map_err(|error| invalid("summary", error.to_string()))?;
+    let json =
+        serde_json::to_string(&summary).map_err(|error| invalid("summary", error.to_string()))?;
     Ok((json, rows))
 }
 
@@ -275,9 +281,14 @@ fn scratch_file() -> PathBuf {
 }
 
 /// The header and rows of a trajectory CSV.
-fn parse_trajectory(text: &str) -> PyResult<(Vec<String>, Vec<Vec<f64>>)> {
+fn parse_trajectory(text: &str) -> PyResult<Trajectory> {
     let mut lines = text.lines();
-    let header = lines.next().unwrap_or("").split(',').map(String::from).collect();
+    let header = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(String::from)
+        .collect();
     let rows = lines
         .map(|line| {
             line.split(',')
@@ -411,7 +422,11 @@ struct BenchCommand {
 fn parse<T: clap::Parser>(command: &str, args: Vec<String>) -> PyResult<T> {
     T::try_parse_from(std::iter::once(command.to_string()).chain(args)).map_err(|error| {
         let message = error.to_string();
-        let first = message.lines().next().unwrap_or("").trim_start_matches("error: ");
+        let first = message
+            .lines()
+            .next()
+            .unwrap_or("")
+            .trim_start_matches("error: ");
         failure(SceneError::InvalidOption {
             option: "arguments",
             reason: first.to_string(),
@@ -458,7 +473,11 @@ fn stability(py: Python<'_>, args: Vec<String>) -> PyResult<(String, Option<Stri
 fn work_precision(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
     let command: BenchCommand = parse("bench", args)?;
     let (overrides, options) = command.args.options().map_err(failure)?;
-    let name = command.args.scene.as_deref().unwrap_or(svi_cli::DEFAULT_SCENE);
+    let name = command
+        .args
+        .scene
+        .as_deref()
+        .unwrap_or(svi_cli::DEFAULT_SCENE);
     let mut scene = load(name)?;
     scene.apply(&overrides).map_err(failure)?;
     let records = py

@@ -141,7 +141,11 @@ impl EnsembleArgs {
 
     /// The varied fields: the parameters, then the initial components.
     pub fn axes(&self) -> Vec<Axis> {
-        self.parameters.iter().chain(&self.initial).cloned().collect()
+        self.parameters
+            .iter()
+            .chain(&self.initial)
+            .cloned()
+            .collect()
     }
 }
 
@@ -328,7 +332,10 @@ pub struct MembersFailed {
 /// written); 2 for bad input of the ensemble itself, including options that every member
 /// rejects before it starts (then nothing is written).
 pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
-    let name = args.scene.as_deref().unwrap_or(crate::scene::builtin::DEFAULT_SCENE);
+    let name = args
+        .scene
+        .as_deref()
+        .unwrap_or(crate::scene::builtin::DEFAULT_SCENE);
     if args.seed.is_some() && args.random.is_none() {
         return Err(SceneError::NotApplicable {
             option: "--seed",
@@ -349,7 +356,9 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
     let count = ensemble.members.len();
     let bar = if std::io::stderr().is_terminal() && count > 1 {
         let bar = ProgressBar::new(count as u64);
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} members, {elapsed} (eta {eta})") {
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} members, {elapsed} (eta {eta})")
+        {
             bar.set_style(style);
         }
         Some(bar)
@@ -376,7 +385,10 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
                 .is_some_and(|error| matches!(error.kind, "invalid_parameter" | "invalid_input"))
     };
     if !outcomes.is_empty() && outcomes.iter().all(bad_input) {
-        let message = outcomes[0].error.as_ref().map(|error| error.message.clone());
+        let message = outcomes[0]
+            .error
+            .as_ref()
+            .map(|error| error.message.clone());
         return Err(SceneError::NotApplicable {
             option: "the ensemble",
             reason: format!(
@@ -488,13 +500,15 @@ fn draw(
     column: &str,
     cyclic: bool,
 ) -> Result<(), SceneError> {
-    let index = table.column(column).ok_or_else(|| SceneError::InvalidOption {
-        option: "--plot-value",
-        reason: format!(
-            "no column '{column}' in the table (columns: {})",
-            table.columns.join(", ")
-        ),
-    })?;
+    let index = table
+        .column(column)
+        .ok_or_else(|| SceneError::InvalidOption {
+            option: "--plot-value",
+            reason: format!(
+                "no column '{column}' in the table (columns: {})",
+                table.columns.join(", ")
+            ),
+        })?;
     let values = table.numbers(index);
     let names = ensemble.axis_names();
     let plot_error = |reason: String| SceneError::Write {
@@ -511,7 +525,9 @@ fn draw(
         let positive = points.iter().all(|(_, y)| *y > 0.0);
         let (low, high) = points
             .iter()
-            .fold((f64::INFINITY, 0.0f64), |(l, h), (_, y)| (l.min(*y), h.max(*y)));
+            .fold((f64::INFINITY, 0.0f64), |(l, h), (_, y)| {
+                (l.min(*y), h.max(*y))
+            });
         let panel = Panel {
             title: format!("{column} against {} ({})", names[0], ensemble.scene.model),
             x_label: names[0].clone(),

@@ -138,7 +138,10 @@ pub struct Schema {
 impl Schema {
     /// The columns of a model on ℝᴺ with these coordinate names.
     pub fn vector(coordinates: &[&str]) -> Schema {
-        let mut fields = vec![("t_end".into(), "t_end", None), ("steps".into(), "steps", None)];
+        let mut fields = vec![
+            ("t_end".into(), "t_end", None),
+            ("steps".into(), "steps", None),
+        ];
         for field in ["q", "v", "p"] {
             for (i, name) in coordinates.iter().enumerate() {
                 fields.push((format!("{field}_{name}"), field, Some(i)));
@@ -150,7 +153,10 @@ impl Schema {
 
     /// The columns of a rigid body on SO(3).
     pub fn rigid() -> Schema {
-        let mut fields = vec![("t_end".into(), "t_end", None), ("steps".into(), "steps", None)];
+        let mut fields = vec![
+            ("t_end".into(), "t_end", None),
+            ("steps".into(), "steps", None),
+        ];
         for (field, size) in [("quaternion", 4), ("omega", 3), ("momentum", 3)] {
             for i in 0..size {
                 fields.push((format!("{field}_{}", i + 1), field, Some(i)));
@@ -183,12 +189,13 @@ impl Table {
             .zip(values)
             .enumerate()
             .map(|(index, (outcome, values))| {
-                let summary = outcome.summary.as_ref().and_then(|summary| {
-                    match serde_json::to_value(summary) {
-                        Ok(Value::Object(map)) => Some(map),
-                        _ => None,
-                    }
-                });
+                let summary =
+                    outcome.summary.as_ref().and_then(|summary| {
+                        match serde_json::to_value(summary) {
+                            Ok(Value::Object(map)) => Some(map),
+                            _ => None,
+                        }
+                    });
                 let mut row = vec![Cell::Integer((first + index) as u64)];
                 row.extend(values.iter().map(|x| Cell::Number(*x)));
                 row.push(Cell::Text(outcome.status().into()));
@@ -280,7 +287,15 @@ mod tests {
         let table = Table::new(&schema, &["e".into()], 0, &[vec![1.2]], &[rejected]);
         assert_eq!(
             table.columns,
-            ["member", "e", "status", "warnings", "error_step", "error_t", "error"]
+            [
+                "member",
+                "e",
+                "status",
+                "warnings",
+                "error_step",
+                "error_t",
+                "error"
+            ]
         );
         let columns = Table::new(&Schema::vector(&["x"]), &[], 0, &[], &[]).columns;
         assert_eq!(columns[2..7], ["t_end", "steps", "q_x", "v_x", "p_x"]);

@@ -20,9 +20,9 @@ use rand::{RngExt, SeedableRng};
 use svi::method::registry::SpaceKind;
 use svi_models::{ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel};
 
+use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
-use crate::scene::Scene;
 
 /// The largest number of members of one ensemble.
 pub const MAX_MEMBERS: usize = 10_000_000;
@@ -93,7 +93,13 @@ pub fn linspace(lo: f64, hi: f64, count: usize) -> Vec<f64> {
     }
     let step = (hi - lo) / (count - 1) as f64;
     (0..count)
-        .map(|i| if i + 1 == count { hi } else { lo + i as f64 * step })
+        .map(|i| {
+            if i + 1 == count {
+                hi
+            } else {
+                lo + i as f64 * step
+            }
+        })
         .collect()
 }
 
@@ -211,7 +217,11 @@ fn parse_values(option: &'static str, text: &str, spec: &str) -> Result<Values, 
         [lo, hi, rest @ ..] if rest.len() <= 1 => {
             let (lo, hi) = (number(option, text, lo)?, number(option, text, hi)?);
             if lo > hi {
-                return Err(malformed(option, text, format!("LO = {lo} exceeds HI = {hi}")));
+                return Err(malformed(
+                    option,
+                    text,
+                    format!("LO = {lo} exceeds HI = {hi}"),
+                ));
             }
             match rest {
                 [] => Ok(Values::Range { lo, hi }),
@@ -422,7 +432,9 @@ impl Member {
             .iter()
             .zip(&self.values)
             .filter_map(|(axis, value)| match &axis.target {
-                Target::Initial { field, coordinate } => Some((*field, coordinate.as_str(), *value)),
+                Target::Initial { field, coordinate } => {
+                    Some((*field, coordinate.as_str(), *value))
+                }
                 Target::Parameter(_) => None,
             })
             .collect();
@@ -432,8 +444,8 @@ impl Member {
         let resolved = svi_models::visit_model(&scene.model, ResolveInitial { scene: &scene })??;
         let (names, mut state) = resolved;
         for (field, coordinate, value) in initial {
-            let index = coordinate_index(&names, coordinate).ok_or_else(|| {
-                SceneError::InvalidOption {
+            let index =
+                coordinate_index(&names, coordinate).ok_or_else(|| SceneError::InvalidOption {
                     option: "--initial",
                     reason: format!(
                         "model '{}' has no coordinate '{coordinate}' (coordinates: {}; or an \
@@ -441,10 +453,12 @@ impl Member {
                         scene.model,
                         names.join(", ")
                     ),
-                }
-            })?;
+                })?;
             let vector = match (field, &mut state) {
-                (InitialField::Q, InitialVectors::Velocity { q, .. } | InitialVectors::Momentum { q, .. }) => q,
+                (
+                    InitialField::Q,
+                    InitialVectors::Velocity { q, .. } | InitialVectors::Momentum { q, .. },
+                ) => q,
                 (InitialField::V, InitialVectors::Velocity { v, .. })
                 | (InitialField::P, InitialVectors::Momentum { p: v, .. }) => v,
                 (field, _) => {
@@ -521,6 +535,7 @@ impl ModelVisitor for ResolveInitial<'_> {
 }
 
 /// The names of a scene's model: its parameters and (on ℝᴺ) its coordinates.
+#[derive(Debug, Clone, PartialEq)]
 pub struct ModelNames {
     /// The model's parameter names.
     pub parameters: Vec<&'static str>,
@@ -675,9 +690,19 @@ mod tests {
         );
         assert_eq!(members(&[], None).unwrap().len(), 1);
         let twice = [axes[0].clone(), axes[0].clone()];
-        assert!(members(&twice, None).unwrap_err().to_string().contains("twice"));
+        assert!(
+            members(&twice, None)
+                .unwrap_err()
+                .to_string()
+                .contains("twice")
+        );
         let range = [parse_parameter_axis("e=0:1").unwrap()];
-        assert!(members(&range, None).unwrap_err().to_string().contains("--random"));
+        assert!(
+            members(&range, None)
+                .unwrap_err()
+                .to_string()
+                .contains("--random")
+        );
         let huge = [
             parse_parameter_axis("a=0:1:100000").unwrap(),
             parse_parameter_axis("b=0:1:100000").unwrap(),
