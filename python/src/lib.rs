@@ -183,11 +183,12 @@ type Trajectory = (Vec<String>, Vec<Vec<f64>>);
 
 /// Run a scene as `svi run` does, with these overrides; returns the JSON summary and, with
 /// `trajectory`, the trajectory's column names and rows (every step, or the output times).
+/// `progress` allows `svi run`'s progress bar on stderr (long fixed-step runs, on a terminal).
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
     initial=None, diagnostics=None, output_times=None, adapt=None, tol=None, recovery=None,
-    divergence_limit=None, form=None, trajectory=true, every=None
+    divergence_limit=None, form=None, trajectory=true, every=None, progress=false
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run(
@@ -209,6 +210,7 @@ fn run(
     form: Option<&str>,
     trajectory: bool,
     every: Option<usize>,
+    progress: bool,
 ) -> PyResult<(String, Option<Trajectory>)> {
     let overrides = overrides(
         method,
@@ -236,7 +238,7 @@ fn run(
     loaded.output.trajectory = file.clone();
     loaded.output.every = every;
     loaded.check().map_err(failure)?;
-    let result = py.detach(|| loaded.run(false));
+    let result = py.detach(|| loaded.run(progress));
     let rows = match &file {
         Some(path) => {
             let text = std::fs::read_to_string(path);

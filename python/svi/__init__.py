@@ -37,6 +37,7 @@ __all__ = [
     "NonConvergenceError",
     "NonFiniteError",
     "OutputError",
+    "Array",
     "Result",
     "SingularMatrixError",
     "StepSizeTooSmallError",
@@ -166,6 +167,25 @@ def _call(function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         raise _error(failure) from None
 
 
+class Array(np.ndarray):
+    """A NumPy array that prints every digit: each number as its shortest exact decimal (the
+    digits of ``svi run --json``), instead of NumPy's 8 significant digits."""
+
+    def __str__(self) -> str:
+        if self.dtype.kind != "f":
+            return np.ndarray.__str__(np.asarray(self))
+        exact = {"float_kind": lambda x: repr(float(x))}
+        return np.array2string(np.asarray(self), formatter=exact, separator=", ", max_line_width=120)
+
+    def __repr__(self) -> str:
+        return f"Array({self})"
+
+
+def _exact(values: np.ndarray) -> Array:
+    """``values`` as an :class:`Array` (a view, no copy)."""
+    return np.asarray(values, dtype=float).view(Array)
+
+
 class Result:
     """The result of :func:`run`: the summary of ``svi run --json`` and the trajectory.
 
@@ -173,7 +193,8 @@ class Result:
         summary: the JSON summary as a dict (every field is also an attribute:
             ``result.energy_error_max``, ``result.steps``, ...).
         t: times of the trajectory's points (every step, or the initial time and the output
-            times), a NumPy array; ``None`` without a trajectory.
+            times), a NumPy array (an :class:`Array`, which prints every digit); ``None``
+            without a trajectory.
         q, v, p: configuration, velocity and momentum at those times, arrays of shape
             (points, N) (scenes on ℝᴺ; ``None`` for rigid bodies).
         energy: energy at those times.
@@ -191,7 +212,7 @@ class Result:
         self.energy: Optional[np.ndarray] = None
         if trajectory is not None:
             columns, rows = trajectory
-            data = np.array(rows, dtype=float).reshape(len(rows), len(columns))
+            data = _exact(np.array(rows, dtype=float).reshape(len(rows), len(columns)))
             self.trajectory = {name: data[:, i] for i, name in enumerate(columns)}
             self.t = self.trajectory.get("t")
             self.energy = self.trajectory.get("energy")
@@ -236,6 +257,7 @@ def run(
     form: Optional[str] = None,
     trajectory: bool = True,
     every: Optional[int] = None,
+    progress: Optional[bool] = None,
 ) -> Result:
     """Run a scene, as ``svi run SCENE --json`` does, and return its summary and trajectory.
 
@@ -253,6 +275,8 @@ def run(
             ``svi run`` of the same names.
         trajectory: record every step (or the output times) as arrays ``t``, ``q``, ``v``, ``p``.
         every: record every ``every``-th step only (the last step is always recorded).
+        progress: show ``svi run``'s progress bar on stderr for runs of 10⁴ steps and more
+            (default: when stderr is a terminal; in a notebook, ensembles show a tqdm bar).
 
     Raises:
         SviError: the subclass of the failure's kind, with its fields.
@@ -281,8 +305,19 @@ def run(
         form=form,
         trajectory=trajectory,
         every=every,
+        progress=_stderr_is_terminal() if progress is None else bool(progress),
     )
     return Result(json.loads(summary), rows)
+
+
+def _stderr_is_terminal() -> bool:
+    """Whether stderr is a terminal (where a progress bar can be drawn)."""
+    import sys
+
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
 
 
 def models() -> List[Dict[str, Any]]:

@@ -24,6 +24,7 @@ def run(
     form: Optional[str] = None,
     trajectory: bool = True,
     every: Optional[int] = None,
+    progress: bool = False,
 ) -> Tuple[str, Optional[Tuple[List[str], List[List[float]]]]]:
     """Run a scene as ``svi run`` does: the JSON summary and the trajectory's columns and rows."""
 

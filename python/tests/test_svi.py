@@ -58,6 +58,19 @@ def test_run_kepler_matches_the_binary_to_the_last_digit():
     assert "energy_error_max" in dir(result)
 
 
+def test_the_readme_command_prints_the_binarys_digits():
+    import re
+    import sys
+
+    printed = subprocess.run(
+        [sys.executable, "-c", "import svi; print(svi.run('kepler').q[-1])"],
+        capture_output=True, text=True, check=True, cwd="/",
+    ).stdout.strip()
+    _, stdout, _ = cli("run", "kepler", "--json")
+    digits = re.search(r'"q":\[([^\]]*)\]', stdout).group(1).split(",")
+    assert printed == "[" + ", ".join(digits) + "]"
+
+
 def test_overrides_method_params_initial_and_output_times():
     result = svi.run("kepler", method="svi:7/6", h=0.1, t_end=5.0, params={"e": 0.6}, diagnostics=["energy"])
     reference = cli_json(
