@@ -348,8 +348,8 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         seed: args.seed.unwrap_or(0),
     });
     let ensemble = Ensemble::new(Scene::load(name)?, &args.overrides(), args.axes(), random)?;
-    if let Some(plot) = &args.plot {
-        check_plot(&ensemble, plot, random.is_some())?;
+    if let (Some(plot), Some(column)) = (&args.plot, &args.plot_value) {
+        check_plot(&ensemble, plot, column, random.is_some())?;
     }
     let threads = args.threads.unwrap_or(0);
     let pool_threads = thread_pool(threads)?.current_num_threads();
@@ -463,9 +463,24 @@ fn write_table(table: &Table, path: &Path) -> Result<(), SceneError> {
     })
 }
 
-/// Check before running that the plot can be drawn: a grid (not random draws) of one varied
-/// field for an `.svg` line, of two for a `.png` heat map.
-fn check_plot(ensemble: &Ensemble, path: &Path, random: bool) -> Result<(), SceneError> {
+/// Check before running that the plot can be drawn: a column of the table, over a grid (not
+/// random draws) of one varied field for an `.svg` line, of two for a `.png` heat map.
+fn check_plot(
+    ensemble: &Ensemble,
+    path: &Path,
+    column: &str,
+    random: bool,
+) -> Result<(), SceneError> {
+    let columns = ensemble.table(0, &[]).columns;
+    if !columns.iter().any(|name| name == column) {
+        return Err(SceneError::InvalidOption {
+            option: "--plot-value",
+            reason: format!(
+                "no column '{column}' in the table (columns: {})",
+                columns.join(", ")
+            ),
+        });
+    }
     let not_applicable = |reason: String| SceneError::NotApplicable {
         option: "--plot",
         reason,
