@@ -24,8 +24,9 @@ use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
 
-/// The largest number of members of one ensemble.
-pub const MAX_MEMBERS: usize = 10_000_000;
+/// The largest number of members of one ensemble (each keeps its summary until the table is
+/// written: about 2 kB).
+pub const MAX_MEMBERS: usize = 1_000_000;
 
 /// The values an axis takes.
 #[derive(Debug, Clone, PartialEq)]
@@ -221,6 +222,13 @@ fn parse_values(option: &'static str, text: &str, spec: &str) -> Result<Values, 
                     option,
                     text,
                     format!("LO = {lo} exceeds HI = {hi}"),
+                ));
+            }
+            if !(hi - lo).is_finite() {
+                return Err(malformed(
+                    option,
+                    text,
+                    "HI − LO overflows: the range is wider than the largest number",
                 ));
             }
             match rest {
@@ -650,6 +658,7 @@ mod tests {
             ("e=0.1:0.9:x", "not a whole number"),
             ("e=0.1:0.9:-1", "not a whole number"),
             ("e=1:2:3:4", "expected LO:HI:COUNT"),
+            ("e=-1e308:1e308", "overflows"),
             ("e", "expected NAME=SPEC"),
             ("=1", "the name is empty"),
             ("e=a,b", "'a' is not a number"),
