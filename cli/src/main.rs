@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use svi_cli::command;
 use svi_cli::command::bench::BenchArgs;
+use svi_cli::command::ensemble::EnsembleArgs;
 use svi_cli::command::stability::StabilityArgs;
 use svi_cli::command::stress::StressArgs;
 use svi_cli::scene::error::is_bad_input;
@@ -37,6 +38,9 @@ enum Command {
     Stability(StabilityArgs),
     /// Stress tests: largest stable step, failure mode and long-time energy drift per method.
     Stress(StressArgs),
+    /// Run a scene over grids or random draws of parameters and initial states, in parallel:
+    /// one row per member (exit status 1 if any member failed; the table lists every one).
+    Ensemble(EnsembleArgs),
 }
 
 #[derive(Debug, Args)]
@@ -83,6 +87,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => command::bench::execute_args(&args),
         Command::Stability(args) => command::stability::execute_args(&args),
         Command::Stress(args) => command::stress::execute_args(&args),
+        Command::Ensemble(args) => command::ensemble::execute_args(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -101,7 +101,7 @@ pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> a
 
 /// The JSON `error` object of a scene error: the library's kind for its errors, `health`,
 /// `output`, or `invalid_input` for other bad input.
-fn error_report(error: &SceneError) -> ErrorReport {
+pub fn error_report(error: &SceneError) -> ErrorReport {
     let kind = match error {
         SceneError::Svi(error) | SceneError::RunFailed { source: error, .. } => {
             return ErrorReport::of(error);

@@ -3,6 +3,8 @@
 
 pub mod csv;
 pub mod health;
+pub mod map;
 pub mod plot;
 pub mod progress;
 pub mod summary;
+pub mod table;

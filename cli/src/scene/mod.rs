@@ -74,6 +74,7 @@
 //! ```
 
 pub mod builtin;
+pub mod ensemble;
 pub mod error;
 pub mod limits;
 pub mod overrides;

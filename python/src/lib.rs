@@ -1,0 +1,509 @@
+//! `svi._svi`: the native module of the svi Python package.
+//!
+//! Every function goes through the command line's own code (`svi_cli`): a run is
+//! [`Scene::load`], [`Scene::apply`] of the overrides, the `[initial]` fields, then
+//! [`Scene::run`] — the path of `svi run` — so `svi.run("kepler")` and `svi run kepler --json`
+//! print the same numbers. Results cross into Python as JSON text (a summary, a failure) and
+//! lists of numbers (trajectories, tables); `svi/__init__.py` turns them into NumPy arrays,
+//! result objects, exceptions and DataFrames. The Global Interpreter Lock is released while
+//! Rust runs.
+//!
+//! A failure raises `svi._svi.Failure` with one argument, the JSON text of the failure object
+//! of `svi run --json` (`kind`, `message`, `step`, `t`) plus `bad_input` and `summary` (the
+//! run up to its last good state, for a run that failed after it started).
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use clap::ValueEnum;
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+use svi_cli::command::ensemble::Ensemble;
+use svi_cli::command::run::error_report;
+use svi_cli::report::table::Cell;
+use svi_cli::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
+use svi_cli::{AdaptMode, Diagnostic, FormName, Overrides, RecoveryKind, Scene, SceneError};
+
+create_exception!(
+    _svi,
+    Failure,
+    PyException,
+    "A failed call: its one argument is the JSON text of the failure object."
+);
+
+/// The Python exception of a scene error: its JSON failure object.
+fn failure(error: SceneError) -> PyErr {
+    let bad_input = error.is_bad_input();
+    let report = error_report(&error);
+    let summary = match &error {
+        SceneError::RunFailed { partial, .. } => serde_json::to_value(partial.as_ref()).ok(),
+        _ => None,
+    };
+    let object = serde_json::json!({
+        "kind": report.kind,
+        "message": format!("{}", DisplayChain(&error)),
+        "step": report.step,
+        "t": report.t,
+        "bad_input": bad_input,
+        "summary": summary,
+    });
+    Failure::new_err(object.to_string())
+}
+
+/// An error with its sources, `a: b: c`, as `svi` prints it.
+struct DisplayChain<'a>(&'a (dyn std::error::Error + 'static));
+
+impl std::fmt::Display for DisplayChain<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.0)?;
+        let mut source = self.0.source();
+        while let Some(cause) = source {
+            write!(f, ": {cause}")?;
+            source = cause.source();
+        }
+        Ok(())
+    }
+}
+
+/// A bad argument value, as the failure of an invalid option.
+fn invalid(option: &'static str, reason: String) -> PyErr {
+    failure(SceneError::InvalidOption { option, reason })
+}
+
+/// Parse a clap value enum (`adapt`, `recovery`, `form`) by its command-line name.
+fn choice<T: ValueEnum>(option: &'static str, text: Option<&str>) -> PyResult<Option<T>> {
+    text.map(|text| T::from_str(text, false).map_err(|reason| invalid(option, reason)))
+        .transpose()
+}
+
+/// The overrides of `svi run` from keyword arguments.
+#[allow(clippy::too_many_arguments)]
+fn overrides(
+    method: Option<&str>,
+    points: Option<usize>,
+    quadrature: Option<usize>,
+    h: Option<f64>,
+    t_end: Option<f64>,
+    params: Option<BTreeMap<String, f64>>,
+    diagnostics: Option<Vec<String>>,
+    output_times: Option<Vec<f64>>,
+    adapt: Option<&str>,
+    tol: Option<f64>,
+    recovery: Option<&str>,
+    divergence_limit: Option<f64>,
+    form: Option<&str>,
+) -> PyResult<Overrides> {
+    let method = method
+        .map(|text| {
+            text.parse()
+                .map_err(|error| invalid("method", format!("{error}")))
+        })
+        .transpose()?;
+    let diagnostics = diagnostics
+        .map(|names| {
+            names
+                .iter()
+                .map(|name| name.parse::<Diagnostic>())
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|error| failure(error.into()))
+        })
+        .transpose()?;
+    Ok(Overrides {
+        method,
+        points,
+        quadrature,
+        h,
+        t_end,
+        parameters: params.unwrap_or_default().into_iter().collect(),
+        diagnostics,
+        adapt: choice::<AdaptMode>("adapt", adapt)?,
+        tol,
+        output_times,
+        recovery: choice::<RecoveryKind>("recovery", recovery)?,
+        divergence_limit,
+        form: choice::<FormName>("form", form)?,
+        ..Overrides::default()
+    })
+}
+
+/// Put the fields of `initial` (`t0`, `q`, `v`, `p`, `rotation`, `quaternion`, `omega`,
+/// `momentum`) into the scene's `[initial]` (a velocity replaces the scene's momentum and so
+/// on), then check the scene.
+fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResult<()> {
+    // A field given replaces the scene's exclusive partner (v for p, omega for momentum, ...)
+    // unless both are given, which the scene's check rejects.
+    let section = &mut scene.initial;
+    for (given, partner) in [
+        ("v", &mut section.p),
+        ("p", &mut section.v),
+        ("rotation", &mut section.quaternion),
+        ("quaternion", &mut section.rotation),
+        ("omega", &mut section.momentum),
+        ("momentum", &mut section.omega),
+    ] {
+        if initial.contains_key(given) {
+            *partner = None;
+        }
+    }
+    for (name, values) in initial {
+        let section = &mut scene.initial;
+        let slot = match name.as_str() {
+            "t0" => {
+                let [t0] = values.as_slice() else {
+                    return Err(invalid("initial", "t0 is one number".into()));
+                };
+                section.t0 = Some(*t0);
+                continue;
+            }
+            "q" => &mut section.q,
+            "v" => &mut section.v,
+            "p" => &mut section.p,
+            "rotation" => &mut section.rotation,
+            "quaternion" => &mut section.quaternion,
+            "omega" => &mut section.omega,
+            "momentum" => &mut section.momentum,
+            other => {
+                return Err(invalid(
+                    "initial",
+                    format!(
+                        "unknown field '{other}' (known: t0, q, v, p, rotation, quaternion, \
+                         omega, momentum)"
+                    ),
+                ));
+            }
+        };
+        *slot = Some(values);
+    }
+    scene.check().map_err(failure)
+}
+
+/// A trajectory: its column names and rows.
+type Trajectory = (Vec<String>, Vec<Vec<f64>>);
+
+/// Run a scene as `svi run` does, with these overrides; returns the JSON summary and, with
+/// `trajectory`, the trajectory's column names and rows (every step, or the output times).
+/// `progress` allows `svi run`'s progress bar on stderr (long fixed-step runs, on a terminal).
+#[pyfunction]
+#[pyo3(signature = (
+    scene, *, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
+    initial=None, diagnostics=None, output_times=None, adapt=None, tol=None, recovery=None,
+    divergence_limit=None, form=None, trajectory=true, every=None, progress=false
+))]
+#[allow(clippy::too_many_arguments)]
+fn run(
+    py: Python<'_>,
+    scene: &str,
+    method: Option<&str>,
+    points: Option<usize>,
+    quadrature: Option<usize>,
+    h: Option<f64>,
+    t_end: Option<f64>,
+    params: Option<BTreeMap<String, f64>>,
+    initial: Option<BTreeMap<String, Vec<f64>>>,
+    diagnostics: Option<Vec<String>>,
+    output_times: Option<Vec<f64>>,
+    adapt: Option<&str>,
+    tol: Option<f64>,
+    recovery: Option<&str>,
+    divergence_limit: Option<f64>,
+    form: Option<&str>,
+    trajectory: bool,
+    every: Option<usize>,
+    progress: bool,
+) -> PyResult<(String, Option<Trajectory>)> {
+    let overrides = overrides(
+        method,
+        points,
+        quadrature,
+        h,
+        t_end,
+        params,
+        diagnostics,
+        output_times,
+        adapt,
+        tol,
+        recovery,
+        divergence_limit,
+        form,
+    )?;
+    let mut loaded = load(scene)?;
+    loaded.apply(&overrides).map_err(failure)?;
+    if let Some(initial) = initial {
+        set_initial(&mut loaded, initial)?;
+    }
+    // The trajectory is the run's own CSV file (its numbers read back exactly), in a
+    // scratch file removed afterwards.
+    let file = trajectory.then(scratch_file);
+    loaded.output.trajectory = file.clone();
+    loaded.output.every = every;
+    loaded.check().map_err(failure)?;
+    let result = py.detach(|| loaded.run(progress));
+    let rows = match &file {
+        Some(path) => {
+            let text = std::fs::read_to_string(path);
+            let _ = std::fs::remove_file(path);
+            match (&result, text) {
+                (Ok(_), Ok(text)) => Some(parse_trajectory(&text)?),
+                _ => None,
+            }
+        }
+        None => None,
+    };
+    let mut summary = result.map_err(failure)?;
+    summary.trajectory = None;
+    let json =
+        serde_json::to_string(&summary).map_err(|error| invalid("summary", error.to_string()))?;
+    Ok((json, rows))
+}
+
+/// The scene `name`: a built-in scene or a scene file (as `svi run` loads it), else the text
+/// of a scene (TOML: it has a line break or `=`), else a zoo model with its defaults.
+fn load(name: &str) -> PyResult<Scene> {
+    if name.contains(['\n', '=']) {
+        return Scene::from_toml(name, "a scene text").map_err(failure);
+    }
+    match Scene::load(name) {
+        Err(SceneError::UnknownScene { .. })
+            if svi_models::MODEL_NAMES.contains(&name)
+                || svi_models::RIGID_MODEL_NAMES.contains(&name) =>
+        {
+            Scene::from_toml(&format!("model = \"{name}\"\n"), "a model name").map_err(failure)
+        }
+        result => result.map_err(failure),
+    }
+}
+
+/// A fresh scratch file for a trajectory.
+fn scratch_file() -> PathBuf {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static NEXT: AtomicUsize = AtomicUsize::new(0);
+    let n = NEXT.fetch_add(1, Ordering::Relaxed);
+    std::env::temp_dir().join(format!("svi-python-{}-{n}.csv", std::process::id()))
+}
+
+/// The header and rows of a trajectory CSV.
+fn parse_trajectory(text: &str) -> PyResult<Trajectory> {
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(String::from)
+        .collect();
+    let rows = lines
+        .map(|line| {
+            line.split(',')
+                .map(|x| x.parse::<f64>())
+                .collect::<Result<Vec<f64>, _>>()
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|error| invalid("trajectory", error.to_string()))?;
+    Ok((header, rows))
+}
+
+/// An ensemble's table chunk: (total members, column names, rows).
+type Chunk = (usize, Vec<String>, Vec<Vec<Py<PyAny>>>);
+
+/// Run the members `start..stop` of an ensemble (all without `stop`; none with `stop =
+/// start`) as `svi ensemble` does, on `threads` threads (0: every core); returns the number
+/// of members, the table's columns and the rows of those members.
+#[pyfunction]
+#[pyo3(signature = (
+    scene, *, params=vec![], initial=vec![], random=None, seed=0, start=0, stop=None, threads=0,
+    method=None, points=None, quadrature=None, h=None, t_end=None, diagnostics=None,
+    adapt=None, tol=None, recovery=None, divergence_limit=None, form=None
+))]
+#[allow(clippy::too_many_arguments)]
+fn ensemble(
+    py: Python<'_>,
+    scene: &str,
+    params: Vec<String>,
+    initial: Vec<String>,
+    random: Option<usize>,
+    seed: u64,
+    start: usize,
+    stop: Option<usize>,
+    threads: usize,
+    method: Option<&str>,
+    points: Option<usize>,
+    quadrature: Option<usize>,
+    h: Option<f64>,
+    t_end: Option<f64>,
+    diagnostics: Option<Vec<String>>,
+    adapt: Option<&str>,
+    tol: Option<f64>,
+    recovery: Option<&str>,
+    divergence_limit: Option<f64>,
+    form: Option<&str>,
+) -> PyResult<Chunk> {
+    let overrides = overrides(
+        method,
+        points,
+        quadrature,
+        h,
+        t_end,
+        None,
+        diagnostics,
+        None,
+        adapt,
+        tol,
+        recovery,
+        divergence_limit,
+        form,
+    )?;
+    let mut axes = Vec::new();
+    for text in &params {
+        axes.push(parse_parameter_axis(text).map_err(failure)?);
+    }
+    for text in &initial {
+        axes.push(parse_initial_axis(text).map_err(failure)?);
+    }
+    let random = random.map(|count| Random { count, seed });
+    let ensemble = Ensemble::new(load(scene)?, &overrides, axes, random).map_err(failure)?;
+    let count = ensemble.members.len();
+    let stop = stop.unwrap_or(count).min(count);
+    let start = start.min(stop);
+    let outcomes = py
+        .detach(|| ensemble.run(start..stop, threads, &|| {}))
+        .map_err(failure)?;
+    let table = ensemble.table(start, &outcomes);
+    let rows = table
+        .rows
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|cell| match cell {
+                    Cell::Number(x) => x.into_pyobject(py).map(|x| x.into_any().unbind()),
+                    Cell::Integer(n) => n.into_pyobject(py).map(|x| x.into_any().unbind()),
+                    Cell::Text(text) => text.into_pyobject(py).map(|x| x.into_any().unbind()),
+                    Cell::Empty => Ok(py.None()),
+                })
+                .collect::<Result<Vec<_>, std::convert::Infallible>>()
+        })
+        .collect::<Result<Vec<_>, std::convert::Infallible>>()
+        .unwrap_or_else(|never| match never {});
+    Ok((count, table.columns, rows))
+}
+
+/// The zoo models on ℝᴺ (name, coordinates, parameters, default step and horizon, Noether
+/// momenta, exact solution), as JSON.
+#[pyfunction]
+fn models() -> PyResult<String> {
+    serde_json::to_string(&svi_cli::describe_models())
+        .map_err(|error| invalid("models", error.to_string()))
+}
+
+/// The built-in scenes: (name, the first line of its file).
+#[pyfunction]
+fn scenes() -> Vec<(&'static str, String)> {
+    svi_cli::BUILTIN_SCENES
+        .iter()
+        .map(|(name, text)| {
+            let line = text.lines().next().unwrap_or("");
+            (*name, line.trim_start_matches('#').trim().to_string())
+        })
+        .collect()
+}
+
+/// `svi stability`'s arguments, parsed as the binary parses them.
+#[derive(clap::Parser)]
+struct StabilityCommand {
+    #[command(flatten)]
+    args: svi_cli::command::stability::StabilityArgs,
+}
+
+/// `svi bench`'s arguments, parsed as the binary parses them.
+#[derive(clap::Parser)]
+struct BenchCommand {
+    #[command(flatten)]
+    args: svi_cli::command::bench::BenchArgs,
+}
+
+/// Parse command-line `args` of `command` (a clap error is bad input).
+fn parse<T: clap::Parser>(command: &str, args: Vec<String>) -> PyResult<T> {
+    T::try_parse_from(std::iter::once(command.to_string()).chain(args)).map_err(|error| {
+        let message = error.to_string();
+        let first = message
+            .lines()
+            .next()
+            .unwrap_or("")
+            .trim_start_matches("error: ");
+        failure(SceneError::InvalidOption {
+            option: "arguments",
+            reason: first.to_string(),
+        })
+    })
+}
+
+/// Linear stability as `svi stability ARGS` computes it (`--method`, `--z` or `--z-min`,
+/// `--z-max`, `--samples`): the CSV of the points and, for a range, the regions as JSON.
+#[pyfunction]
+fn stability(py: Python<'_>, args: Vec<String>) -> PyResult<(String, Option<String>)> {
+    use svi_cli::command::stability::{Answer, run, to_csv};
+    let command: StabilityCommand = parse("stability", args)?;
+    let spec: svi::MethodSpec = command
+        .args
+        .method
+        .parse()
+        .map_err(|error| invalid("method", format!("{error}")))?;
+    let request = command.args.request();
+    let answer = py.detach(|| run(spec, &request)).map_err(failure)?;
+    Ok(match answer {
+        Answer::Points(points) => (to_csv(&points), None),
+        Answer::Report(report) => {
+            let intervals = |list: &[svi::analysis::stability::Interval]| {
+                list.iter()
+                    .map(|interval| [interval.lower, interval.upper])
+                    .collect::<Vec<_>>()
+            };
+            let regions = serde_json::json!({
+                "stable": intervals(&report.stable),
+                "periodic": intervals(&report.periodic),
+                "strongly_stable": intervals(&report.strongly_stable),
+                "a_stable": report.a_stable,
+                "p_stable": report.p_stable,
+            });
+            (to_csv(&report.points), Some(regions.to_string()))
+        }
+    })
+}
+
+/// A work–precision sweep as `svi bench ARGS` runs it: the records as JSON.
+#[pyfunction]
+#[pyo3(name = "bench")]
+fn work_precision(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
+    let command: BenchCommand = parse("bench", args)?;
+    let (overrides, options) = command.args.options().map_err(failure)?;
+    let name = command
+        .args
+        .scene
+        .as_deref()
+        .unwrap_or(svi_cli::DEFAULT_SCENE);
+    let mut scene = load(name)?;
+    scene.apply(&overrides).map_err(failure)?;
+    let records = py
+        .detach(|| svi_cli::command::bench::work_precision(&scene, &options))
+        .map_err(failure)?;
+    serde_json::to_string(&records).map_err(|error| invalid("bench", error.to_string()))
+}
+
+/// The svi version.
+#[pyfunction]
+fn version() -> &'static str {
+    env!("CARGO_PKG_VERSION")
+}
+
+/// The native module.
+#[pymodule]
+fn _svi(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("Failure", m.py().get_type::<Failure>())?;
+    m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble, m)?)?;
+    m.add_function(wrap_pyfunction!(models, m)?)?;
+    m.add_function(wrap_pyfunction!(scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(stability, m)?)?;
+    m.add_function(wrap_pyfunction!(work_precision, m)?)?;
+    Ok(())
+}

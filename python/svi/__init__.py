@@ -1,0 +1,587 @@
+"""svi — structure-preserving simulation of mechanical systems, from Python.
+
+The numbers come from the Rust core through the command line's own run path: ``svi.run("kepler")``
+gives exactly the numbers of ``svi run kepler --json``, and ``svi.ensemble(...)`` exactly the table
+of ``svi ensemble ... --out``.
+
+>>> import svi
+>>> result = svi.run("kepler", method="svi:7/6", t_end=20.0, params={"e": 0.6})
+>>> result.q[-1]            # the final configuration, a NumPy array
+>>> result.energy_error_max # any field of the JSON summary, as an attribute
+>>> table = svi.ensemble("kepler", params={"e": [0.1, 0.3, 0.5]}, t_end=20.0)
+
+Failures raise :class:`SviError` (a subclass per kind, e.g. :class:`InvalidParameterError`,
+:class:`NonConvergenceError`) with the fields of the JSON failure object: ``kind``, ``message``,
+``step``, ``t``, and ``summary`` for a run that failed after it started.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _svi
+
+__version__: str = _svi.version()
+
+__all__ = [
+    "DEFAULT_SCENE",
+    "DivergedError",
+    "HealthError",
+    "InvalidInputError",
+    "InvalidParameterError",
+    "LegendreMapError",
+    "NonConvergenceError",
+    "NonFiniteError",
+    "OutputError",
+    "Array",
+    "Result",
+    "SingularMatrixError",
+    "StepSizeTooSmallError",
+    "SviError",
+    "bench",
+    "ensemble",
+    "models",
+    "run",
+    "scenes",
+    "stability",
+]
+
+#: The scene ``svi run`` runs without a name.
+DEFAULT_SCENE = "kepler"
+
+
+class SviError(Exception):
+    """A failed svi call, with the fields of ``svi run --json``'s failure object.
+
+    Attributes:
+        kind: the error kind: ``invalid_parameter``, ``non_convergence``, ``singular_matrix``,
+            ``legendre_map``, ``step_size_too_small``, ``non_finite``, ``diverged``,
+            ``invalid_input``, ``output`` or ``health``.
+        message: the message, as ``svi`` prints it.
+        step: the index of the failing step (failures in a step), else ``None``.
+        t: the time of the failure (the start of the failing step), else ``None``.
+        bad_input: whether the input was at fault (``svi`` exits with status 2) rather than a
+            run that started (status 1).
+        summary: for a run that failed after it started, its summary up to the last good
+            state (a dict, as ``svi run --json`` prints it); else ``None``.
+    """
+
+    def __init__(
+        self,
+        kind: str,
+        message: str,
+        step: Optional[int] = None,
+        t: Optional[float] = None,
+        bad_input: bool = False,
+        summary: Optional[Dict[str, Any]] = None,
+    ) -> None:
+        super().__init__(message)
+        self.kind = kind
+        self.message = message
+        self.step = step
+        self.t = t
+        self.bad_input = bad_input
+        self.summary = summary
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(kind={self.kind!r}, message={self.message!r}, step={self.step!r}, t={self.t!r})"
+
+
+class InvalidParameterError(SviError, ValueError):
+    """A value the library rejects (``invalid_parameter``): a model parameter, a step, a method option."""
+
+
+class InvalidInputError(SviError, ValueError):
+    """Other bad input (``invalid_input``): an unknown scene or model, an option the scene cannot use."""
+
+
+class NonConvergenceError(SviError):
+    """A nonlinear solve of a step that did not converge (``non_convergence``)."""
+
+
+class SingularMatrixError(SviError):
+    """A singular Newton matrix (``singular_matrix``)."""
+
+
+class LegendreMapError(SviError):
+    """A Legendre map that could not be inverted (``legendre_map``)."""
+
+
+class StepSizeTooSmallError(SviError):
+    """Adaptivity or recovery that needed a step below the smallest allowed (``step_size_too_small``)."""
+
+
+class NonFiniteError(SviError):
+    """A state or energy that is not a finite number (``non_finite``)."""
+
+
+class DivergedError(SviError):
+    """A state beyond the divergence limit (``diverged``)."""
+
+
+class OutputError(SviError):
+    """An output that could not be written (``output``)."""
+
+
+class HealthError(SviError):
+    """A failed health check (``health``)."""
+
+
+_ERRORS: Dict[str, type] = {
+    "invalid_parameter": InvalidParameterError,
+    "invalid_input": InvalidInputError,
+    "non_convergence": NonConvergenceError,
+    "singular_matrix": SingularMatrixError,
+    "legendre_map": LegendreMapError,
+    "step_size_too_small": StepSizeTooSmallError,
+    "non_finite": NonFiniteError,
+    "diverged": DivergedError,
+    "output": OutputError,
+    "health": HealthError,
+}
+
+
+def _error(failure: Exception) -> SviError:
+    """The :class:`SviError` of a native failure (its argument is the failure object's JSON)."""
+    fields = json.loads(failure.args[0])
+    cls = _ERRORS.get(fields["kind"], SviError)
+    return cls(
+        fields["kind"],
+        fields["message"],
+        fields.get("step"),
+        fields.get("t"),
+        bool(fields.get("bad_input")),
+        fields.get("summary"),
+    )
+
+
+def _call(function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
+    """Call a native function, raising its failures as :class:`SviError`."""
+    try:
+        return function(*args, **kwargs)
+    except _svi.Failure as failure:
+        raise _error(failure) from None
+
+
+class Array(np.ndarray):
+    """A NumPy array that prints every digit: each number as its shortest exact decimal (the
+    digits of ``svi run --json``), instead of NumPy's 8 significant digits."""
+
+    def __str__(self) -> str:
+        if self.dtype.kind != "f":
+            return np.ndarray.__str__(np.asarray(self))
+        exact = {"float_kind": lambda x: repr(float(x))}
+        return np.array2string(np.asarray(self), formatter=exact, separator=", ", max_line_width=120)
+
+    def __repr__(self) -> str:
+        return f"Array({self})"
+
+
+def _exact(values: np.ndarray) -> Array:
+    """``values`` as an :class:`Array` (a view, no copy)."""
+    return np.asarray(values, dtype=float).view(Array)
+
+
+class Result:
+    """The result of :func:`run`: the summary of ``svi run --json`` and the trajectory.
+
+    Attributes:
+        summary: the JSON summary as a dict (every field is also an attribute:
+            ``result.energy_error_max``, ``result.steps``, ...).
+        t: times of the trajectory's points (every step, or the initial time and the output
+            times), a NumPy array (an :class:`Array`, which prints every digit); ``None``
+            without a trajectory.
+        q, v, p: configuration, velocity and momentum at those times, arrays of shape
+            (points, N) (scenes on ℝᴺ; ``None`` for rigid bodies).
+        energy: energy at those times.
+        trajectory: every column of the trajectory by name (``t``, ``q_q1``, ..., on SO(3)
+            ``qw``, ..., ``omega_1``, ...).
+    """
+
+    def __init__(self, summary: Dict[str, Any], trajectory: Optional[Tuple[List[str], List[List[float]]]]) -> None:
+        self.summary: Dict[str, Any] = summary
+        self.trajectory: Dict[str, np.ndarray] = {}
+        self.t: Optional[np.ndarray] = None
+        self.q: Optional[np.ndarray] = None
+        self.v: Optional[np.ndarray] = None
+        self.p: Optional[np.ndarray] = None
+        self.energy: Optional[np.ndarray] = None
+        if trajectory is not None:
+            columns, rows = trajectory
+            data = _exact(np.array(rows, dtype=float).reshape(len(rows), len(columns)))
+            self.trajectory = {name: data[:, i] for i, name in enumerate(columns)}
+            self.t = self.trajectory.get("t")
+            self.energy = self.trajectory.get("energy")
+            for field in ("q", "v", "p"):
+                indices = [i for i, name in enumerate(columns) if name.startswith(field + "_")]
+                if indices:
+                    setattr(self, field, data[:, indices])
+
+    def __getattr__(self, name: str) -> Any:
+        summary = self.__dict__.get("summary", {})
+        if name in summary:
+            return summary[name]
+        raise AttributeError(f"Result has no attribute {name!r} (summary fields: {', '.join(summary)})")
+
+    def __dir__(self) -> List[str]:
+        return sorted(set(super().__dir__()) | set(self.summary))
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (
+            f"Result(model={s.get('model')!r}, method={s.get('method')!r}, steps={s.get('steps')}, "
+            f"t_end={s.get('t_end')}, status={s.get('status')!r})"
+        )
+
+
+def run(
+    scene: str = DEFAULT_SCENE,
+    method: Optional[str] = None,
+    *,
+    h: Optional[float] = None,
+    t_end: Optional[float] = None,
+    params: Optional[Mapping[str, float]] = None,
+    initial: Optional[Mapping[str, Union[float, Sequence[float]]]] = None,
+    diagnostics: Optional[Sequence[str]] = None,
+    output_times: Optional[Sequence[float]] = None,
+    points: Optional[int] = None,
+    quadrature: Optional[int] = None,
+    adapt: Optional[str] = None,
+    tol: Optional[float] = None,
+    recovery: Optional[str] = None,
+    divergence_limit: Optional[float] = None,
+    form: Optional[str] = None,
+    trajectory: bool = True,
+    every: Optional[int] = None,
+    progress: Optional[bool] = None,
+) -> Result:
+    """Run a scene, as ``svi run SCENE --json`` does, and return its summary and trajectory.
+
+    Args:
+        scene: a built-in scene (:func:`scenes`), a zoo model's name (:func:`models`; run with
+            its defaults), a path to a scene TOML file, or the text of a scene (TOML).
+        method: ``NAME``, ``NAME:P`` or ``NAME:P/M``, e.g. ``"svi:7/6"``, ``"sc:9"``, ``"verlet"``.
+        h: the step.  t_end: the final time.
+        params: model parameters, ``{"e": 0.9}``.
+        initial: initial-state fields, ``{"q": [...], "v": [...]}`` (or ``p``; ``t0``; on SO(3)
+            ``rotation``/``quaternion`` and ``omega``/``momentum``).
+        diagnostics: any of ``"energy"``, ``"momentum"``, ``"solution"``, or ``["none"]``.
+        output_times: report (and record in the trajectory) the states at these times.
+        points, quadrature, adapt, tol, recovery, divergence_limit, form: as the flags of
+            ``svi run`` of the same names.
+        trajectory: record every step (or the output times) as arrays ``t``, ``q``, ``v``, ``p``.
+        every: record every ``every``-th step only (the last step is always recorded).
+        progress: show ``svi run``'s progress bar on stderr for runs of 10⁴ steps and more
+            (default: when stderr is a terminal; in a notebook, ensembles show a tqdm bar).
+
+    Raises:
+        SviError: the subclass of the failure's kind, with its fields.
+    """
+    initial_lists = None
+    if initial is not None:
+        initial_lists = {
+            name: [float(x) for x in np.atleast_1d(np.asarray(value, dtype=float))] for name, value in initial.items()
+        }
+    summary, rows = _call(
+        _svi.run,
+        scene,
+        method=method,
+        points=points,
+        quadrature=quadrature,
+        h=None if h is None else float(h),
+        t_end=None if t_end is None else float(t_end),
+        params=None if params is None else {k: float(v) for k, v in params.items()},
+        initial=initial_lists,
+        diagnostics=None if diagnostics is None else list(diagnostics),
+        output_times=None if output_times is None else [float(t) for t in output_times],
+        adapt=adapt,
+        tol=tol,
+        recovery=recovery,
+        divergence_limit=divergence_limit,
+        form=form,
+        trajectory=trajectory,
+        every=every,
+        progress=_stderr_is_terminal() if progress is None else bool(progress),
+    )
+    return Result(json.loads(summary), rows)
+
+
+def _stderr_is_terminal() -> bool:
+    """Whether stderr is a terminal (where a progress bar can be drawn)."""
+    import sys
+
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+def models() -> List[Dict[str, Any]]:
+    """The zoo models on ℝᴺ: name, coordinates, parameters (with defaults), default step and
+    horizon, Noether momenta, whether an exact solution is known (as ``svi list``)."""
+    return json.loads(_svi.models())
+
+
+def scenes() -> Dict[str, str]:
+    """The built-in scenes: name → the first line of its file."""
+    return dict(_svi.scenes())
+
+
+ValuesSpec = Union[str, float, Sequence[float], np.ndarray, Tuple[float, float], Tuple[float, float, int]]
+
+
+def _number(x: Any) -> str:
+    """A number as text that Rust reads back exactly (Python's repr is the shortest round trip)."""
+    return repr(float(x))
+
+
+def _spec(name: str, values: ValuesSpec) -> str:
+    """The command-line form ``NAME=SPEC`` of an axis given in Python.
+
+    - a string: the command line's own SPEC (``"0.1:0.9:81"``, ``"0.1,0.3"``);
+    - a tuple ``(lo, hi, count)`` with an integer count: a grid, both ends included;
+    - a tuple ``(lo, hi)``: a range to draw from (``random=N``);
+    - a number, a list or an array: these values.
+    """
+    if isinstance(values, str):
+        return f"{name}={values}"
+    if isinstance(values, tuple) and len(values) == 3 and isinstance(values[2], (int, np.integer)) and not isinstance(values[2], bool):
+        return f"{name}={_number(values[0])}:{_number(values[1])}:{int(values[2])}"
+    if isinstance(values, tuple) and len(values) == 2:
+        return f"{name}={_number(values[0])}:{_number(values[1])}"
+    array = np.atleast_1d(np.asarray(values, dtype=float))
+    return f"{name}={','.join(_number(x) for x in array)}"
+
+
+def _column(values: List[Any]) -> Any:
+    """A table column as a NumPy array: integers, floats (``nan`` where empty) or objects."""
+    present = [v for v in values if v is not None]
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in present):
+        if len(present) == len(values):
+            return np.array(values, dtype=np.int64)
+        return np.array([math.nan if v is None else float(v) for v in values], dtype=float)
+    if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present):
+        return np.array([math.nan if v is None else float(v) for v in values], dtype=float)
+    return np.array(["" if v is None else v for v in values], dtype=object)
+
+
+def _chunks(count: int, size: int) -> Iterator[Tuple[int, int]]:
+    """The ranges ``[start, stop)`` of ``count`` members in chunks of ``size``."""
+    for start in range(0, count, size):
+        yield start, min(start + size, count)
+
+
+def _progress(total: int, show: Optional[bool]) -> Any:
+    """A tqdm progress bar over members (notebook or terminal), or ``None`` without tqdm."""
+    if show is False:
+        return None
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    return tqdm(total=total, unit="member", desc="svi ensemble")
+
+
+def _run_chunk(arguments: Dict[str, Any], start: int, stop: int) -> Tuple[List[str], List[List[Any]]]:
+    """Run members ``start..stop`` of an ensemble (a Dask task: runs in a worker)."""
+    _, columns, rows = _call(_svi.ensemble, start=start, stop=stop, **arguments)
+    return columns, rows
+
+
+def ensemble(
+    scene: str = DEFAULT_SCENE,
+    params: Optional[Mapping[str, ValuesSpec]] = None,
+    initial: Optional[Mapping[str, ValuesSpec]] = None,
+    *,
+    random: Optional[int] = None,
+    seed: int = 0,
+    threads: int = 0,
+    client: Any = None,
+    chunk_size: Optional[int] = None,
+    progress: Optional[bool] = None,
+    as_frame: Optional[bool] = None,
+    method: Optional[str] = None,
+    h: Optional[float] = None,
+    t_end: Optional[float] = None,
+    diagnostics: Optional[Sequence[str]] = None,
+    points: Optional[int] = None,
+    quadrature: Optional[int] = None,
+    adapt: Optional[str] = None,
+    tol: Optional[float] = None,
+    recovery: Optional[str] = None,
+    divergence_limit: Optional[float] = None,
+    form: Optional[str] = None,
+) -> Any:
+    """Run a scene over grids or random draws of parameters and initial states, as ``svi ensemble``.
+
+    Args:
+        scene: a built-in scene, a zoo model's name, a scene file or a scene's TOML text.
+        params: varied model parameters, name → values: a list or array (these values), a
+            tuple ``(lo, hi, count)`` (a grid, both ends included, as ``numpy.linspace``), a
+            tuple ``(lo, hi)`` (a range, with ``random``), or the command line's SPEC string.
+            Several names make the grid of every combination, the first slowest.
+        initial: varied initial components, ``"q.alpha1"`` (field ``q``, ``v`` or ``p`` and the
+            model's coordinate name or index) → values, as for ``params``.
+        random: draw this many members uniformly from the ranges instead of a grid.
+        seed: the seed of the draws.
+        threads: threads per process (0: every core).
+        client: a ``dask.distributed.Client``: the members are run on its workers in chunks
+            (each worker runs the Rust core; ``svi`` must be installed there) and gathered in
+            member order — the same table as a local run.
+        chunk_size: members per chunk (default: about 4 chunks per worker with a client, 1 %
+            of the members locally when a progress bar is shown, else all at once).
+        progress: show a tqdm progress bar (default: when tqdm is installed).
+        as_frame: return a pandas DataFrame (default: when pandas is installed), else a dict
+            of column name → NumPy array.
+        method, h, t_end, diagnostics, points, quadrature, adapt, tol, recovery,
+        divergence_limit, form: shared by every member, as the flags of ``svi ensemble``.
+
+    Returns:
+        The member table: one row per member — ``member``, the varied values, ``status``
+        (``"ok"`` or the error kind), the final state, the diagnostics, ``steps``, the error.
+        A failed member is a row with its error; it never stops the others.
+
+    Raises:
+        SviError: bad input of the ensemble itself (unknown scene, parameter or coordinate,
+        malformed values).
+    """
+    arguments: Dict[str, Any] = dict(
+        scene=scene,
+        params=[_spec(name, values) for name, values in (params or {}).items()],
+        initial=[_spec(name, values) for name, values in (initial or {}).items()],
+        random=random,
+        seed=int(seed),
+        threads=int(threads),
+        method=method,
+        points=points,
+        quadrature=quadrature,
+        h=None if h is None else float(h),
+        t_end=None if t_end is None else float(t_end),
+        diagnostics=None if diagnostics is None else list(diagnostics),
+        adapt=adapt,
+        tol=tol,
+        recovery=recovery,
+        divergence_limit=divergence_limit,
+        form=form,
+    )
+    count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)
+    rows: List[List[Any]] = []
+    bar = _progress(count, progress)
+    try:
+        if client is not None:
+            workers = max(1, len(client.scheduler_info().get("workers", {})))
+            size = chunk_size or max(1, math.ceil(count / (4 * workers)))
+            ranges = list(_chunks(count, size))
+            futures = [client.submit(_run_chunk, arguments, start, stop, pure=False) for start, stop in ranges]
+            if bar is not None:
+                from dask.distributed import as_completed
+
+                for future in as_completed(futures):
+                    start, stop = ranges[futures.index(future)]
+                    bar.update(stop - start)
+            for chunk_columns, chunk_rows in client.gather(futures):
+                if chunk_columns != columns:
+                    raise RuntimeError("a worker's table has other columns: is the same svi installed on every worker?")
+                rows.extend(chunk_rows)
+        else:
+            size = chunk_size or (max(1, math.ceil(count / 100)) if bar is not None else max(1, count))
+            for start, stop in _chunks(count, size):
+                rows.extend(_run_chunk(arguments, start, stop)[1])
+                if bar is not None:
+                    bar.update(stop - start)
+    finally:
+        if bar is not None:
+            bar.close()
+    table = {name: _column([row[i] for row in rows]) for i, name in enumerate(columns)}
+    return _frame(table, columns, as_frame)
+
+
+def _frame(table: Dict[str, Any], columns: List[str], as_frame: Optional[bool]) -> Any:
+    """A table as a pandas DataFrame (when pandas is installed and ``as_frame`` is not False)."""
+    if as_frame is not False:
+        try:
+            import pandas
+        except ImportError:
+            if as_frame:
+                raise
+        else:
+            return pandas.DataFrame(table, columns=columns)
+    return table
+
+
+def stability(
+    method: str = "svi:5/4",
+    z: Optional[Sequence[float]] = None,
+    *,
+    z_min: Optional[float] = None,
+    z_max: Optional[float] = None,
+    samples: Optional[int] = None,
+    as_frame: Optional[bool] = None,
+) -> Dict[str, Any]:
+    """Linear stability on the harmonic oscillator, as ``svi stability``.
+
+    With ``z`` the stability matrix S(z) at those z = σ²h²; else on [z_min, z_max] (defaults
+    1e-6 and 900) at ``samples`` points, with the regions.
+
+    Returns:
+        ``{"points": table of z, rho, det, trace, discriminant, strong_margin}``, plus for a
+        range ``stable``, ``periodic``, ``strongly_stable`` (lists of [lower, upper]),
+        ``a_stable`` and ``p_stable``.
+    """
+    args = ["--method", method]
+    if z is not None:
+        args += ["--z", ",".join(_number(x) for x in z)]
+    for flag, value in (("--z-min", z_min), ("--z-max", z_max)):
+        if value is not None:
+            args += [flag, _number(value)]
+    if samples is not None:
+        args += ["--samples", str(int(samples))]
+    csv, regions = _call(_svi.stability, args)
+    lines = csv.strip().splitlines()
+    columns = lines[0].split(",")
+    values = np.array([[float(x) for x in line.split(",")] for line in lines[1:]], dtype=float).reshape(-1, len(columns))
+    result: Dict[str, Any] = {"points": _frame({name: values[:, i] for i, name in enumerate(columns)}, columns, as_frame)}
+    if regions is not None:
+        result.update(json.loads(regions))
+    return result
+
+
+def bench(
+    scene: str = DEFAULT_SCENE,
+    methods: Optional[Union[str, Sequence[str]]] = None,
+    *,
+    steps: Optional[Sequence[int]] = None,
+    tolerances: Optional[Sequence[float]] = None,
+    t_end: Optional[float] = None,
+    params: Optional[Mapping[str, float]] = None,
+    batches: Optional[int] = None,
+    min_batch: Optional[float] = None,
+    target: Optional[float] = None,
+    max_run: Optional[float] = None,
+    as_frame: Optional[bool] = None,
+) -> Any:
+    """A work–precision sweep, as ``svi bench``: one row per (method, step count or tolerance)
+    with the final error, energy and momentum errors, evaluations, iterations and median wall
+    time. The scene's model needs an exact solution."""
+    args = [scene]
+    if methods is not None:
+        args += ["--methods", methods if isinstance(methods, str) else ",".join(methods)]
+    if steps is not None:
+        args += ["--steps", ",".join(str(int(n)) for n in steps)]
+    if tolerances is not None:
+        args += ["--tolerances", ",".join(_number(x) for x in tolerances)]
+    if t_end is not None:
+        args += ["--t-end", _number(t_end)]
+    for name, value in (params or {}).items():
+        args += ["--param", f"{name}={_number(value)}"]
+    for flag, value in (("--batches", batches), ("--min-batch", min_batch), ("--target", target), ("--max-run", max_run)):
+        if value is not None:
+            args += [flag, str(value)]
+    records = json.loads(_call(_svi.bench, args))
+    columns = list(records[0]) if records else []
+    table = {name: _column([record[name] for record in records]) for name in columns}
+    return _frame(table, columns, as_frame)

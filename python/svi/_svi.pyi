@@ -1,0 +1,68 @@
+"""Type stubs of the native module svi._svi (the Rust core; use the functions of ``svi``)."""
+
+from typing import Dict, List, Optional, Sequence, Tuple
+
+class Failure(Exception):
+    """A failed call; its one argument is the JSON text of the failure object."""
+
+def run(
+    scene: str,
+    *,
+    method: Optional[str] = None,
+    points: Optional[int] = None,
+    quadrature: Optional[int] = None,
+    h: Optional[float] = None,
+    t_end: Optional[float] = None,
+    params: Optional[Dict[str, float]] = None,
+    initial: Optional[Dict[str, List[float]]] = None,
+    diagnostics: Optional[Sequence[str]] = None,
+    output_times: Optional[Sequence[float]] = None,
+    adapt: Optional[str] = None,
+    tol: Optional[float] = None,
+    recovery: Optional[str] = None,
+    divergence_limit: Optional[float] = None,
+    form: Optional[str] = None,
+    trajectory: bool = True,
+    every: Optional[int] = None,
+    progress: bool = False,
+) -> Tuple[str, Optional[Tuple[List[str], List[List[float]]]]]:
+    """Run a scene as ``svi run`` does: the JSON summary and the trajectory's columns and rows."""
+
+def ensemble(
+    scene: str,
+    *,
+    params: Sequence[str] = ...,
+    initial: Sequence[str] = ...,
+    random: Optional[int] = None,
+    seed: int = 0,
+    start: int = 0,
+    stop: Optional[int] = None,
+    threads: int = 0,
+    method: Optional[str] = None,
+    points: Optional[int] = None,
+    quadrature: Optional[int] = None,
+    h: Optional[float] = None,
+    t_end: Optional[float] = None,
+    diagnostics: Optional[Sequence[str]] = None,
+    adapt: Optional[str] = None,
+    tol: Optional[float] = None,
+    recovery: Optional[str] = None,
+    divergence_limit: Optional[float] = None,
+    form: Optional[str] = None,
+) -> Tuple[int, List[str], List[List[object]]]:
+    """Run members ``start..stop`` of an ensemble: (member count, columns, rows)."""
+
+def models() -> str:
+    """The zoo models on ℝᴺ, as JSON."""
+
+def scenes() -> List[Tuple[str, str]]:
+    """The built-in scenes: (name, description)."""
+
+def version() -> str:
+    """The svi version."""
+
+def stability(args: List[str]) -> Tuple[str, Optional[str]]:
+    """``svi stability ARGS``: the CSV of the points and, for a range, the regions as JSON."""
+
+def bench(args: List[str]) -> str:
+    """``svi bench ARGS``: the work–precision records as JSON."""

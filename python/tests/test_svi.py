@@ -1,0 +1,211 @@
+"""The svi Python package against the svi binary: the same numbers digit for digit (the binary's
+JSON is read with Python's exact float parser), errors as exceptions with the failure object's
+fields, ensembles as tables, and a Dask cluster that returns the local table."""
+
+import json
+import math
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import svi
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def svi_binary():
+    """The svi binary: $SVI_BIN, else the workspace's release build, else svi on PATH."""
+    candidates = [os.environ.get("SVI_BIN")]
+    target = os.environ.get("CARGO_TARGET_DIR", str(ROOT / "target"))
+    candidates.append(str(Path(target) / "release" / "svi"))
+    candidates.append(shutil.which("svi"))
+    for candidate in candidates:
+        if candidate and Path(candidate).is_file():
+            return candidate
+    pytest.skip("no svi binary (build it with cargo build --release -p svi-cli)")
+
+
+def cli(*args):
+    """`svi ARGS` as (exit status, stdout, stderr)."""
+    done = subprocess.run([svi_binary(), *args], capture_output=True, text=True, timeout=600)
+    return done.returncode, done.stdout, done.stderr
+
+
+def cli_json(*args):
+    status, stdout, stderr = cli(*args)
+    assert status == 0, stderr
+    return json.loads(stdout)
+
+
+def test_run_kepler_matches_the_binary_to_the_last_digit():
+    result = svi.run("kepler")
+    reference = cli_json("run", "kepler", "--json")
+    assert result.q[-1].tolist() == reference["q"]
+    assert result.v[-1].tolist() == reference["v"]
+    assert result.p[-1].tolist() == reference["p"]
+    assert result.summary["q"] == reference["q"]
+    for field in ["steps", "iterations", "evaluations", "energy_error_max", "energy_final", "momentum_error_max", "solution_error_max"]:
+        assert result.summary[field] == reference[field], field
+    # The trajectory: every step, from t0 to t_end.
+    assert result.t.shape == (10001,)
+    assert result.q.shape == (10001, 2)
+    assert result.t[0] == 0.0 and result.t[-1] == 2000.0
+    assert result.steps == 10000
+    assert "energy_error_max" in dir(result)
+
+
+def test_the_readme_command_prints_the_binarys_digits():
+    import re
+    import sys
+
+    printed = subprocess.run(
+        [sys.executable, "-c", "import svi; print(svi.run('kepler').q[-1])"],
+        capture_output=True, text=True, check=True, cwd="/",
+    ).stdout.strip()
+    _, stdout, _ = cli("run", "kepler", "--json")
+    digits = re.search(r'"q":\[([^\]]*)\]', stdout).group(1).split(",")
+    assert printed == "[" + ", ".join(digits) + "]"
+
+
+def test_overrides_method_params_initial_and_output_times():
+    result = svi.run("kepler", method="svi:7/6", h=0.1, t_end=5.0, params={"e": 0.6}, diagnostics=["energy"])
+    reference = cli_json(
+        "run", "kepler", "--method", "svi:7/6", "--h", "0.1", "--t-end", "5", "--param", "e=0.6",
+        "--diagnostics", "energy", "--json",
+    )
+    assert result.q[-1].tolist() == reference["q"]
+    assert (result.points, result.quadrature, result.parameters) == (7, 6, {"e": 0.6})
+    assert result.momentum_error_max is None
+    # The oscillator from q0 = 0, v0 = 1: q(t) = sin t.
+    result = svi.run("oscillator", initial={"q": [0.0], "v": [1.0]}, output_times=[1.0, 2.5], t_end=3.0)
+    assert result.t.tolist() == [0.0, 1.0, 2.5]
+    assert np.allclose(result.q[:, 0], np.sin(result.t), atol=1e-12)
+    assert [point["t"] for point in result.outputs] == [1.0, 2.5]
+    # A zoo model by name, with its defaults; and a scene given as text.
+    assert svi.run("pendulum", t_end=1.0).model == "pendulum"
+    text = 'model = "oscillator"\n[run]\nh = 0.5\nt_end = 2.0\n'
+    assert svi.run(text).steps == 4
+    assert svi.run("kepler", t_end=4.0, every=5).q.shape == (5, 2)
+    assert svi.run("kepler", t_end=4.0, trajectory=False).q is None
+
+
+def test_errors_are_exceptions_with_the_failure_objects_fields():
+    with pytest.raises(svi.InvalidParameterError) as caught:
+        svi.run("kepler", params={"e": 1.2})
+    error = caught.value
+    status, stdout, _ = cli("run", "kepler", "--param", "e=1.2", "--json")
+    reference = json.loads(stdout)["error"]
+    assert status == 2 and error.bad_input
+    assert (error.kind, error.message, error.step, error.t) == (reference["kind"], reference["message"], None, None)
+    assert isinstance(error, svi.SviError) and isinstance(error, ValueError)
+
+    with pytest.raises(svi.InvalidInputError) as caught:
+        svi.run("no-such-scene")
+    assert caught.value.kind == "invalid_input"
+    assert "no built-in scene" in caught.value.message
+
+    # A run that fails after it started: the step, the time and the partial summary.
+    with pytest.raises(svi.SviError) as caught:
+        svi.run("kepler", params={"e": 0.95}, h=1.0, t_end=50.0)
+    error = caught.value
+    status, stdout, _ = cli("run", "kepler", "--param", "e=0.95", "--h", "1", "--t-end", "50", "--json")
+    reference = json.loads(stdout)
+    assert status == 1 and not error.bad_input
+    assert error.kind == reference["error"]["kind"]
+    assert (error.step, error.t) == (reference["error"]["step"], reference["error"]["t"])
+    assert error.summary["q"] == reference["q"]
+    assert error.summary["status"] == "failed"
+
+    with pytest.raises(svi.InvalidInputError):
+        svi.run("kepler", adapt="sometimes")
+
+
+def test_models_and_scenes():
+    names = [model["name"] for model in svi.models()]
+    assert "kepler" in names and "double-pendulum" in names
+    kepler = next(model for model in svi.models() if model["name"] == "kepler")
+    assert kepler["coordinates"] == ["q1", "q2"]
+    assert "kepler" in svi.scenes()
+
+
+def test_ensemble_rows_are_the_single_runs_and_a_failure_is_recorded():
+    table = svi.ensemble("kepler", params={"e": [0.1, 0.3, 0.5, 1.2]}, t_end=20.0, as_frame=False)
+    assert table["member"].tolist() == [0, 1, 2, 3]
+    assert table["status"].tolist() == ["ok", "ok", "ok", "invalid_parameter"]
+    assert math.isnan(table["q_q1"][3])
+    assert "outside [0, 1)" in table["error"][3]
+    for i, e in enumerate([0.1, 0.3, 0.5]):
+        single = svi.run("kepler", params={"e": e}, t_end=20.0, diagnostics=["energy"], trajectory=False)
+        assert [table["q_q1"][i], table["q_q2"][i]] == single.summary["q"]
+        assert table["energy_error_max"][i] == single.energy_error_max
+        assert table["steps"][i] == single.steps
+
+
+def test_ensemble_matches_the_binarys_table():
+    frame = svi.ensemble("kepler", params={"e": (0.0, 0.8, 5)}, t_end=10.0)
+    import pandas
+
+    assert isinstance(frame, pandas.DataFrame)
+    status, stdout, stderr = cli("ensemble", "kepler", "--param", "e=0:0.8:5", "--t-end", "10")
+    assert status == 0, stderr
+    lines = stdout.splitlines()
+    assert lines[0].split(",") == list(frame.columns)
+    for line, (_, row) in zip(lines[1:], frame.iterrows()):
+        for text, value in zip(line.split(","), row):
+            if text == "":
+                assert value == "" or (isinstance(value, float) and math.isnan(value))
+            elif isinstance(value, str):
+                assert text == value
+            else:
+                assert float(text) == value
+
+
+def test_random_draws_and_initial_grids():
+    drawn = svi.ensemble("kepler", params={"e": (0.0, 0.8)}, random=20, seed=3, t_end=5.0, as_frame=False)
+    again = svi.ensemble("kepler", params={"e": (0.0, 0.8)}, random=20, seed=3, t_end=5.0, as_frame=False, threads=1)
+    assert drawn["e"].tolist() == again["e"].tolist()
+    assert drawn["q_q1"].tolist() == again["q_q1"].tolist()
+    grid = svi.ensemble("double-pendulum", initial={"q.alpha1": (-1.0, 1.0, 3), "q.alpha2": [0.0, 0.5]}, t_end=0.5, as_frame=False)
+    assert len(grid["member"]) == 6
+    assert grid["q.alpha1"].tolist() == [-1.0, -1.0, 0.0, 0.0, 1.0, 1.0]
+    with pytest.raises(svi.InvalidInputError) as caught:
+        svi.ensemble("kepler", params={"x": [1.0]})
+    assert "no parameter 'x'" in caught.value.message
+    with pytest.raises(svi.InvalidInputError):
+        svi.ensemble("kepler", params={"e": (0.9, 0.1, 3)})
+
+
+def test_a_dask_cluster_returns_the_local_table():
+    distributed = pytest.importorskip("dask.distributed")
+    kwargs = dict(params={"e": [0.0, 0.2, 0.4, 0.6, 0.8, 1.2]}, t_end=20.0, as_frame=False)
+    local = svi.ensemble("kepler", **kwargs)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            remote = svi.ensemble("kepler", client=client, chunk_size=2, **kwargs)
+    assert list(remote) == list(local)
+    for name in local:
+        a, b = local[name], remote[name]
+        if a.dtype == object:
+            assert a.tolist() == b.tolist(), name
+        else:
+            assert np.array_equal(a, b, equal_nan=True), name
+    assert remote["status"].tolist()[-1] == "invalid_parameter"
+
+
+def test_stability_and_bench():
+    points = svi.stability("svi:5/4", z=[0.5, 2.0], as_frame=False)["points"]
+    status, stdout, _ = cli("stability", "--method", "svi:5/4", "--z", "0.5,2")
+    assert status == 0
+    rows = [line.split(",") for line in stdout.strip().splitlines()[1:]]
+    assert points["rho"].tolist() == [float(row[1]) for row in rows]
+    report = svi.stability("verlet", z_min=0.1, z_max=5.0, samples=50)
+    assert report["stable"] and report["stable"][0][1] == pytest.approx(4.0, rel=1e-9)
+    records = svi.bench("kepler", methods="verlet", steps=[200, 400], t_end=2.0, batches=1, min_batch=0, as_frame=False)
+    assert records["method"].tolist() == ["verlet", "verlet"]
+    assert records["final_error"][1] < records["final_error"][0]
+    with pytest.raises(svi.InvalidInputError):
+        svi.stability("no-such-method", z=[1.0])
