@@ -83,23 +83,23 @@ pub struct Entry {
     pub summary: &'static str,
 }
 
+/// The options of `svi` and `svi-newton` (one method, two solvers).
+const SVI_OPTIONS: Options = Options::PointsAndQuadrature {
+    default_points: || Svi::default().points,
+    default_quadrature: |points| Svi::new(points).quadrature_points(),
+};
+
 /// Every method of the library, in the order help texts list them.
 pub const METHODS: &[Entry] = &[
     Entry {
         name: "svi",
-        options: Options::PointsAndQuadrature {
-            default_points: || Svi::default().points,
-            default_quadrature: |points| Svi::new(points).quadrature_points(),
-        },
+        options: SVI_OPTIONS,
         space: SpaceKind::Vector,
         summary: "spectral variational integrator: CGL points P, Gauss points M (default 2P, at most 256)",
     },
     Entry {
         name: "svi-newton",
-        options: Options::PointsAndQuadrature {
-            default_points: || Svi::default().points,
-            default_quadrature: |points| Svi::new(points).quadrature_points(),
-        },
+        options: SVI_OPTIONS,
         space: SpaceKind::Vector,
         summary: "svi with Newton's method and the exact Jacobian at every iteration, also for \
                   constant-mass models: CGL points P, Gauss points M (default 2P)",
