@@ -165,6 +165,14 @@ pub enum StepFailure {
         /// The bound that was exceeded.
         limit: f64,
     },
+    /// The method cannot do what was asked of it on this model (an
+    /// [`Error::InvalidParameter`] named `option`).
+    Unsupported {
+        /// The option or operation asked for.
+        option: &'static str,
+        /// Why not.
+        reason: &'static str,
+    },
 }
 
 impl StepFailure {
@@ -192,6 +200,7 @@ impl StepFailure {
                 norm,
                 limit,
             },
+            StepFailure::Unsupported { option, reason } => Error::invalid(option, reason),
         }
     }
 }

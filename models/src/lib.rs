@@ -55,10 +55,12 @@ pub mod damped_oscillator;
 pub mod damped_pendulum;
 pub mod double_pendulum;
 pub mod driven_oscillator;
+pub mod fput;
 pub mod kepler;
 pub mod oscillator;
 pub mod pendulum;
 pub mod spring_pendulum;
+pub mod toda;
 
 pub mod heavy_top;
 pub mod pendulum_3d;
@@ -68,10 +70,12 @@ pub use damped_oscillator::DampedOscillator;
 pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
 pub use driven_oscillator::DrivenOscillator;
+pub use fput::Fput;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use spring_pendulum::SpringPendulum;
+pub use toda::Toda;
 
 pub use heavy_top::HeavyTop;
 pub use pendulum_3d::Pendulum3d;

@@ -48,3 +48,19 @@ pub(crate) fn unknown(model: &str, name: &str, known: &[&str]) -> Error {
 pub(crate) fn no_such_index(what: &str, model: &str, index: usize) -> ! {
     panic!("{model} has no {what} with index {index}")
 }
+
+/// The largest number of particles of a chain or lattice model (vectors of 10⁷ numbers are
+/// 80 MB each).
+pub(crate) const MAX_SIZE: usize = 10_000_000;
+
+/// Check that `value` is a whole number of particles from `min` to [`MAX_SIZE`].
+pub(crate) fn size(name: &str, value: f64, min: usize) -> Result<usize, Error> {
+    finite(name, value)?;
+    if value.fract() != 0.0 || value < min as f64 || value > MAX_SIZE as f64 {
+        return Err(Error::invalid(
+            name,
+            format!("{value:?} must be a whole number from {min} to {MAX_SIZE}"),
+        ));
+    }
+    Ok(value as usize)
+}

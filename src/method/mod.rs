@@ -15,14 +15,15 @@
 
 pub mod collocation;
 pub mod lie_svi;
+pub mod local;
 pub mod registry;
 pub mod space;
 pub mod step;
 pub mod variational;
 
 pub use space::{
-    Euclidean, Initial, PhasePoint, RigidInitial, RigidPoint, RigidState, SO3, Space, State,
-    StepState, TangentMap,
+    DynEuclidean, DynInitial, DynPoint, DynState, Euclidean, Initial, PhasePoint, RigidInitial,
+    RigidPoint, RigidState, SO3, Space, State, StepState, TangentMap,
 };
 pub use step::Step;
 

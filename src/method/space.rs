@@ -12,13 +12,16 @@
 
 use crate::linalg::compensated_add;
 use crate::model::so3::{Matrix3, Vector3};
-use nalgebra::{DMatrix, SMatrix, SVector};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::fmt::Debug;
 
 /// What the stepping core does with a state in a method's coordinates.
-pub trait StepState: Copy + Debug + PartialEq {
-    /// The zero state (increments and compensations start here).
-    fn zeros() -> Self;
+pub trait StepState: Clone + Debug + PartialEq {
+    /// The zero state of the same shape as `self` (increments and compensations start
+    /// here).
+    fn zeros_like(&self) -> Self;
+    /// `self = other`, reusing `self`'s storage (no allocation for runtime-sized states).
+    fn assign(&mut self, other: &Self);
     /// `self + increment`, entry by entry, without compensation.
     fn plus(&self, increment: &Self) -> Self;
     /// `self += increment` with the Kahan compensation carried in `compensation`.
@@ -37,16 +40,17 @@ pub trait Space: Copy + Debug + PartialEq + Default + 'static {
     /// A state in a method's coordinates.
     type State: StepState;
     /// A state completed for observers and results, with its time.
-    type Point: Copy + Debug + PartialEq;
+    type Point: Clone + Debug + PartialEq;
     /// An initial condition.
-    type Initial: Copy + Debug + PartialEq;
+    type Initial: Clone + Debug + PartialEq;
     /// A velocity, kept from one completed point to the next as the Newton start of the
     /// inverse Legendre map.
-    type Velocity: Copy + Debug;
+    type Velocity: Clone + Debug;
     /// The Jacobian of one step with respect to the state.
     type Tangent: Clone + Debug;
-    /// Numbers per interpolation node of a step polynomial (N on ℝᴺ, 3 on SO(3)).
-    const NODE_WIDTH: usize;
+    /// Numbers per interpolation node of a step polynomial from `state` (N on ℝᴺ, 3 on
+    /// SO(3)).
+    fn node_width(state: &Self::State) -> usize;
 
     /// The time of a point.
     fn time(point: &Self::Point) -> f64;
@@ -71,7 +75,10 @@ impl<const N: usize> Space for Euclidean<N> {
     type Initial = Initial<N>;
     type Velocity = SVector<f64, N>;
     type Tangent = TangentMap<N>;
-    const NODE_WIDTH: usize = N;
+
+    fn node_width(_state: &State<N>) -> usize {
+        N
+    }
 
     fn time(point: &PhasePoint<N>) -> f64 {
         point.t
@@ -124,8 +131,12 @@ impl<const N: usize> State<N> {
 }
 
 impl<const N: usize> StepState for State<N> {
-    fn zeros() -> Self {
+    fn zeros_like(&self) -> Self {
         State::zeros()
+    }
+
+    fn assign(&mut self, other: &Self) {
+        *self = *other;
     }
 
     fn plus(&self, increment: &Self) -> Self {
@@ -242,7 +253,10 @@ impl Space for SO3 {
     /// The 6×6 Jacobian in the canonical coordinates (η, p) of T*SO(3) about the step's
     /// input and output (see [`crate::lie_group::LieSvi`]).
     type Tangent = SMatrix<f64, 6, 6>;
-    const NODE_WIDTH: usize = 3;
+
+    fn node_width(_state: &RigidState) -> usize {
+        3
+    }
 
     fn time(point: &RigidPoint) -> f64 {
         point.t
@@ -302,8 +316,12 @@ impl RigidState {
 }
 
 impl StepState for RigidState {
-    fn zeros() -> Self {
+    fn zeros_like(&self) -> Self {
         RigidState::zeros()
+    }
+
+    fn assign(&mut self, other: &Self) {
+        *self = *other;
     }
 
     fn plus(&self, increment: &Self) -> Self {
@@ -382,5 +400,162 @@ pub enum RigidInitial {
         r: Matrix3<f64>,
         /// Body angular momentum.
         momentum: Vector3<f64>,
+    },
+}
+
+/// ℝⁿ with n chosen at run time: configurations q ∈ ℝⁿ of models
+/// [`crate::model::local::LocalLagrangian`] (chains, lattices, discretised fields).
+///
+/// States and points are runtime-sized vectors; the stepping loop reuses their storage from
+/// step to step ([`StepState::assign`]), so a run allocates only when it starts. The tangent
+/// map is a dense 2n × 2n matrix, computed only where asked for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DynEuclidean;
+
+impl Space for DynEuclidean {
+    type State = DynState;
+    type Point = DynPoint;
+    type Initial = DynInitial;
+    type Velocity = DVector<f64>;
+    /// [[∂q'/∂q, ∂q'/∂y], [∂y'/∂q, ∂y'/∂y]], 2n × 2n.
+    type Tangent = DMatrix<f64>;
+
+    fn node_width(state: &DynState) -> usize {
+        state.q.len()
+    }
+
+    fn time(point: &DynPoint) -> f64 {
+        point.t
+    }
+
+    fn velocity(point: &DynPoint) -> DVector<f64> {
+        point.v.clone()
+    }
+
+    fn initial_guess(initial: &DynInitial) -> DVector<f64> {
+        match initial {
+            DynInitial::Velocity { v, .. } => v.clone(),
+            DynInitial::Momentum { p, .. } => p.clone(),
+        }
+    }
+
+    /// The first and last few components (a state of 10⁵ numbers is not a message).
+    fn describe(point: &DynPoint) -> String {
+        fn brief(x: &DVector<f64>) -> String {
+            const SHOWN: usize = 4;
+            if x.len() <= 2 * SHOWN {
+                format!("{:?}", x.as_slice())
+            } else {
+                let n = x.len();
+                format!(
+                    "{:?} … {:?} ({n} components)",
+                    &x.as_slice()[..SHOWN],
+                    &x.as_slice()[n - SHOWN..]
+                )
+            }
+        }
+        format!("q = {}, v = {}", brief(&point.q), brief(&point.v))
+    }
+
+    fn size_and_speed(point: &DynPoint) -> (f64, f64) {
+        (point.q.amax(), point.v.amax())
+    }
+}
+
+/// The state a method on runtime-sized ℝⁿ advances: configuration `q` and `y` (the momentum
+/// p or the velocity q̇, by the method's [`crate::Coordinates`]), as [`State`] on ℝᴺ.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynState {
+    /// Configuration q.
+    pub q: DVector<f64>,
+    /// Momentum p or velocity q̇.
+    pub y: DVector<f64>,
+}
+
+impl DynState {
+    /// The zero state of dimension `n`.
+    pub fn zeros(n: usize) -> Self {
+        DynState {
+            q: DVector::zeros(n),
+            y: DVector::zeros(n),
+        }
+    }
+}
+
+impl StepState for DynState {
+    fn zeros_like(&self) -> Self {
+        DynState::zeros(self.q.len())
+    }
+
+    fn assign(&mut self, other: &Self) {
+        self.q.copy_from(&other.q);
+        self.y.copy_from(&other.y);
+    }
+
+    fn plus(&self, increment: &Self) -> Self {
+        DynState {
+            q: &self.q + &increment.q,
+            y: &self.y + &increment.y,
+        }
+    }
+
+    fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {
+        compensated_add(
+            self.q.as_mut_slice(),
+            compensation.q.as_mut_slice(),
+            increment.q.as_slice(),
+        );
+        compensated_add(
+            self.y.as_mut_slice(),
+            compensation.y.as_mut_slice(),
+            increment.y.as_slice(),
+        );
+    }
+
+    fn is_finite(&self) -> bool {
+        self.q.iter().chain(self.y.iter()).all(|x| x.is_finite())
+    }
+
+    fn max_abs(&self) -> f64 {
+        self.q.amax().max(self.y.amax())
+    }
+
+    fn distance(&self, other: &Self) -> f64 {
+        let q = self.q.iter().zip(other.q.iter());
+        let y = self.y.iter().zip(other.y.iter());
+        q.chain(y).fold(0.0, |m, (a, b)| m.max((a - b).abs()))
+    }
+}
+
+/// A complete phase-space point on runtime-sized ℝⁿ: time, configuration, velocity and
+/// momentum.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynPoint {
+    /// Time t.
+    pub t: f64,
+    /// Configuration q.
+    pub q: DVector<f64>,
+    /// Velocity q̇.
+    pub v: DVector<f64>,
+    /// Momentum p = ∂L/∂q̇.
+    pub p: DVector<f64>,
+}
+
+/// An initial state on runtime-sized ℝⁿ: configuration with either velocity or momentum.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DynInitial {
+    /// (q0, q̇0).
+    Velocity {
+        /// Configuration.
+        q: DVector<f64>,
+        /// Velocity.
+        v: DVector<f64>,
+    },
+    /// (q0, p0).
+    Momentum {
+        /// Configuration.
+        q: DVector<f64>,
+        /// Momentum.
+        p: DVector<f64>,
     },
 }

@@ -37,6 +37,7 @@
 //! ```
 
 pub mod derived;
+pub mod local;
 pub mod rigid_body;
 pub mod so3;
 pub mod text;

@@ -88,18 +88,19 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         statistics: &mut Statistics,
     ) -> Result<Cursor<S>, Error> {
         let index = statistics.steps;
-        let next = self
-            .attempt(
-                method,
-                workspace,
-                increment,
-                t,
-                h,
-                from,
-                divergence_limit,
-                statistics,
-            )
-            .map_err(|failure| failure.at(index, t))?;
+        let mut next = from.clone();
+        self.attempt(
+            method,
+            workspace,
+            increment,
+            t,
+            h,
+            from,
+            &mut next,
+            divergence_limit,
+            statistics,
+        )
+        .map_err(|failure| failure.at(index, t))?;
         statistics.steps += 1;
         Ok(next)
     }
@@ -162,7 +163,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let limit = options.run.divergence_limit;
         let mut half = method.workspace(self.model(), h).map_err(rejected)?;
         let mut full = method.workspace(self.model(), 2.0 * h).map_err(rejected)?;
-        let mut increment = S::State::zeros();
+        let mut increment = progress.cursor.state.zeros_like();
         let mut adaptivity = Adaptivity::default();
         let mut rejections = 0;
         if observer.wants(0) && self.observe(0, None, progress, observer)? {
@@ -176,8 +177,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             let dt = if last { 0.5 * remaining } else { h };
             let mid = t + dt;
             let mark = outputs.points.len();
-            let guess = outputs.guess;
-            let start = progress.cursor;
+            let guess = outputs.guess.clone();
+            let start = progress.cursor.clone();
             let statistics = &mut progress.statistics;
             let mut trial = || -> Result<(Cursor<S>, Cursor<S>, f64), Error> {
                 let x1 = self.trial(
@@ -232,7 +233,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     limit,
                     statistics,
                 )?;
-                Ok((x1, x2, w.state.distance(&x2.state)))
+                let error = w.state.distance(&x2.state);
+                Ok((x1, x2, error))
             };
             let optimal = match trial() {
                 Ok((x1, x2, error)) => {
@@ -346,7 +348,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             .map(|(method, _)| method.info().order as f64)
             .collect();
         let limit = options.run.divergence_limit;
-        let mut increment = S::State::zeros();
+        let mut increment = progress.cursor.state.zeros_like();
+        let width = S::node_width(&progress.cursor.state);
         let mut points = initial_points.clamp(low, high);
         let mut magnitudes = [0.0; MAX_POINTS];
         let mut adaptivity = Adaptivity::default();
@@ -391,8 +394,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     let error = Error::invalid("adapt", "the method has no step polynomial");
                     return Err(self.failure(error, progress, false));
                 };
-                let s = offsets.len() / S::NODE_WIDTH;
-                chebyshev_magnitudes(offsets, S::NODE_WIDTH, &mut magnitudes[..=s]);
+                let s = offsets.len() / width;
+                chebyshev_magnitudes(offsets, width, &mut magnitudes[..=s]);
                 let (tail, rho) = decay(&magnitudes[..=s]);
                 // a_s ρ^(s' − s) is the tail with s' + 1 points, and the end point of a
                 // method of order r beats it by ρ^((r − s')/2) (measured on Kepler

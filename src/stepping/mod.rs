@@ -5,6 +5,7 @@
 
 pub mod adapt;
 pub mod grid;
+pub mod local_observer;
 pub mod observer;
 pub mod rigid_observer;
 pub mod run;

@@ -166,7 +166,7 @@ impl<S: Space> From<RunFailure<S>> for Error {
 }
 
 /// A state with the compensation of its Kahan sums.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(crate) struct Cursor<S: Space> {
     pub(crate) state: S::State,
     pub(crate) compensation: S::State,
@@ -176,9 +176,15 @@ impl<S: Space> Cursor<S> {
     /// A cursor at `state` with no compensation yet.
     pub(crate) fn new(state: S::State) -> Self {
         Cursor {
+            compensation: state.zeros_like(),
             state,
-            compensation: S::State::zeros(),
         }
+    }
+
+    /// `self = other`, reusing the storage.
+    pub(crate) fn assign(&mut self, other: &Cursor<S>) {
+        self.state.assign(&other.state);
+        self.compensation.assign(&other.compensation);
     }
 }
 
@@ -187,6 +193,9 @@ pub(crate) struct Progress<S: Space> {
     /// Time of `cursor`.
     pub(crate) t: f64,
     pub(crate) cursor: Cursor<S>,
+    /// Where a step is computed before it is accepted into `cursor` (storage reused from
+    /// step to step).
+    pub(crate) scratch: Cursor<S>,
     /// Newton start of the next inverse Legendre map (the last velocity completed).
     pub(crate) guess: S::Velocity,
     pub(crate) statistics: Statistics,
@@ -303,7 +312,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     /// new state (without compensated summation) and the work done.
     pub fn step(&self, t: f64, state: &S::State, h: f64) -> Result<(S::State, StepReport), Error> {
         let mut workspace = self.cold_workspace(t, state, h)?;
-        let mut increment = S::State::zeros();
+        let mut increment = state.zeros_like();
         let report = self
             .method
             .step(&self.model, &mut workspace, t, h, state, &mut increment)
@@ -347,9 +356,11 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     pub(crate) fn start(&self, t0: f64, initial: &S::Initial) -> Result<Progress<S>, Error> {
         let state = self.initial_state(t0, initial)?;
         self.method.check_model(&self.model, t0, &state)?;
+        let cursor = Cursor::new(state);
         Ok(Progress {
             t: t0,
-            cursor: Cursor::new(state),
+            scratch: cursor.clone(),
+            cursor,
             guess: S::initial_guess(initial),
             statistics: Statistics::default(),
         })
@@ -382,10 +393,11 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         if observer.wants(0) && self.observe(0, Some(workspace), progress, observer)? {
             return Ok(true);
         }
-        let mut increment = S::State::zeros();
+        let mut increment = progress.cursor.state.zeros_like();
+        let mut start = progress.cursor.state.clone();
         for k in 0..steps {
             let (t, step_size, end) = grid_step(t0, t_end, h, steps, k);
-            let start = progress.cursor.state;
+            start.assign(&progress.cursor.state);
             if let Err(failure) = self.advance(
                 &self.method,
                 workspace,
@@ -482,7 +494,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         }
     }
 
-    /// One step of `method` from `from` at `t` with size `h`: the new cursor (the increment
+    /// One step of `method` from `from` at `t` with size `h` into `next` (the increment
     /// added with compensated summation), checked for finite values and against the
     /// divergence limit.
     #[allow(clippy::too_many_arguments)]
@@ -494,13 +506,14 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         t: f64,
         h: f64,
         from: &Cursor<S>,
+        next: &mut Cursor<S>,
         divergence_limit: Option<f64>,
         statistics: &mut Statistics,
-    ) -> Result<Cursor<S>, StepFailure> {
+    ) -> Result<(), StepFailure> {
         let report = method.step(&self.model, workspace, t, h, &from.state, increment)?;
         statistics.iterations += report.iterations;
         statistics.evaluations += report.evaluations;
-        let mut next = *from;
+        next.assign(from);
         next.state
             .add_compensated(&mut next.compensation, increment);
         if !next.state.is_finite() {
@@ -512,7 +525,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
                 return Err(StepFailure::Diverged { norm, limit });
             }
         }
-        Ok(next)
+        Ok(())
     }
 
     /// Advance `progress` over [t, t + h]: one step, or (after a failure, while `depth` > 0)
@@ -537,11 +550,12 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             t,
             h,
             &progress.cursor,
+            &mut progress.scratch,
             divergence_limit,
             &mut progress.statistics,
         ) {
-            Ok(next) => {
-                progress.cursor = next;
+            Ok(()) => {
+                std::mem::swap(&mut progress.cursor, &mut progress.scratch);
                 return Ok(());
             }
             Err(failure) => failure,
@@ -550,7 +564,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             return Err(failure);
         }
         progress.statistics.retries += 1;
-        let saved = progress.cursor;
+        let saved = progress.cursor.clone();
         let half = 0.5 * h;
         for (start, size) in [(t, half), (t + half, h - half)] {
             if self
@@ -589,7 +603,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             error,
             partial: Some(Run {
                 last,
-                state: *state,
+                state: state.clone(),
                 statistics: progress.statistics,
                 stopped,
             }),

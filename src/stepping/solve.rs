@@ -419,7 +419,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let mut outputs = Outputs {
             times: &span.output_times,
             points: Vec::with_capacity(span.output_times.len()),
-            guess: progress.guess,
+            guess: progress.guess.clone(),
         };
         if outputs.next() == Some(span.t0) {
             let point = self
@@ -480,17 +480,13 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 point
             } else {
                 let (a, b) = match ends {
-                    Some(known) => known,
-                    None => {
-                        let known = (
-                            self.phase_point(t, start, &outputs.guess)?,
-                            self.phase_point(end_time, end, &outputs.guess)?,
-                        );
-                        ends = Some(known);
-                        known
-                    }
+                    Some(ref known) => known,
+                    None => ends.insert((
+                        self.phase_point(t, start, &outputs.guess)?,
+                        self.phase_point(end_time, end, &outputs.guess)?,
+                    )),
                 };
-                method.interpolate(model, &a, &b, time).ok_or_else(|| {
+                method.interpolate(model, a, b, time).ok_or_else(|| {
                     Error::invalid(
                         "output_times",
                         format!(

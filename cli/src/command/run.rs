@@ -302,7 +302,7 @@ where
         None => Span::new(t0, t_end),
     };
     let start = Instant::now();
-    let result = integrator.try_solve(&span, plan.initial, &options, &mut observers);
+    let result = integrator.try_solve(&span, plan.initial.clone(), &options, &mut observers);
     let seconds = start.elapsed().as_secs_f64();
     let (diagnostics, _, progress) = observers;
     if let Some(progress) = &progress {
@@ -334,7 +334,7 @@ where
             partial: None,
         }) => return Err(error.into()),
     };
-    let last = outcome.last;
+    let last = outcome.last.clone();
     let first = integrator.initial_state(t0, &plan.initial)?;
     let first = integrator.phase_point(t0, &first, &S::initial_guess_at_rest(&plan.initial))?;
 

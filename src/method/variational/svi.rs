@@ -135,7 +135,7 @@ impl Svi {
             .unwrap_or(self.points.saturating_mul(2).min(MAX_POINTS))
     }
 
-    fn validate(&self) -> Result<(), Error> {
+    pub(crate) fn validate(&self) -> Result<(), Error> {
         check_options(
             self.points,
             Some(self.quadrature_points()),
@@ -146,15 +146,15 @@ impl Svi {
 
 /// Tables of one SVI configuration, scaled for the current step size.
 #[derive(Debug, Clone)]
-struct Tables {
-    degree: usize,
-    h: f64,
+pub(crate) struct Tables {
+    pub(crate) degree: usize,
+    pub(crate) h: f64,
     /// Gauss nodes τ_μ on [−1, 1].
     nodes: Vec<f64>,
     /// Gauss weights w_μ.
     reference_weights: Vec<f64>,
     /// (h/2) w_μ.
-    weights: Vec<f64>,
+    pub(crate) weights: Vec<f64>,
     /// l_ν(τ_μ), m × (s + 1).
     values: DMatrix<f64>,
     /// l̇_ν(τ_μ), m × (s + 1).
@@ -170,7 +170,7 @@ struct Tables {
 }
 
 impl Tables {
-    fn new(basis: &LagrangeBasis, quadrature: usize, h: f64) -> Result<Self, Error> {
+    pub(crate) fn new(basis: &LagrangeBasis, quadrature: usize, h: f64) -> Result<Self, Error> {
         let points = basis.len();
         let gauss = GaussLegendre::new(quadrature)?;
         let mut tables = Tables {
@@ -190,7 +190,7 @@ impl Tables {
         Ok(tables)
     }
 
-    fn rescale(&mut self, h: f64) {
+    pub(crate) fn rescale(&mut self, h: f64) {
         self.h = h;
         for (w, r) in self.weights.iter_mut().zip(&self.reference_weights) {
             *w = 0.5 * h * r;
@@ -199,7 +199,7 @@ impl Tables {
             .zip_apply(&self.reference_derivatives, |d, r| *d = 2.0 / h * r);
     }
 
-    fn time(&self, t: f64, mu: usize) -> f64 {
+    pub(crate) fn time(&self, t: f64, mu: usize) -> f64 {
         t + 0.5 * self.h * (self.nodes[mu] + 1.0)
     }
 
@@ -261,38 +261,48 @@ impl Tables {
 /// bit for bit). The velocity dependence makes the iteration contract only by a factor
 /// O(h ‖M⁻¹ ∂f_L/∂q̇‖) instead of O(h²‖M⁻¹ L_qq‖): a forced model whose iteration does not
 /// converge (strong friction) falls back to Newton's method for the rest of the run.
+/// The dimension-free tables of the fixed-point iteration (see [`ConstantMass`]), shared
+/// with the runtime-dimension SVI ([`crate::method::local::svi`]).
 #[derive(Debug, Clone)]
-struct ConstantMass<const N: usize> {
+pub(crate) struct NystromTables {
     /// c_j, j = 1..s.
-    velocity_coefficients: Vec<f64>,
+    pub(crate) velocity_coefficients: Vec<f64>,
     /// P_jμ, row-major s × m.
-    propagation: Vec<f64>,
+    pub(crate) propagation: Vec<f64>,
     /// P_sμ in closed form, w_μ (1 − τ_μ)/4: the end-point update
     /// q_{k+1} − q_k = h M⁻¹p_k + h² Σ_μ P_sμ M⁻¹ ∂L/∂q(τ_μ) (the Nyström b̄ weights).
-    end_weights: Vec<f64>,
+    pub(crate) end_weights: Vec<f64>,
     /// c'_μ.
-    stage_velocity: Vec<f64>,
+    pub(crate) stage_velocity: Vec<f64>,
     /// A_μν, row-major m × m.
-    stage_matrix: Vec<f64>,
+    pub(crate) stage_matrix: Vec<f64>,
     /// l_j(τ_μ), row-major m × s (j = 1..s).
-    stage_values: Vec<f64>,
+    pub(crate) stage_values: Vec<f64>,
     /// c''_μ (velocities at the quadrature points, forced models).
-    stage_rate: Vec<f64>,
+    pub(crate) stage_rate: Vec<f64>,
     /// B_μν, row-major m × m (velocities at the quadrature points, forced models).
-    rate_matrix: Vec<f64>,
+    pub(crate) rate_matrix: Vec<f64>,
     /// W = l X, row-major m × s: the positions at this step's quadrature points from the
     /// previous step's node offsets, Q_μ = q_k + Σ_j W_μj Z_j (the starting values of
     /// [`StartingValues`] taken straight to the quadrature points).
-    stage_extrapolation: Vec<f64>,
+    pub(crate) stage_extrapolation: Vec<f64>,
     /// E = W P, row-major m × m, and γ = W c: the same positions from the previous step's
     /// velocity term and accelerations, Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν, so that
     /// a step needs no node offsets at all while nobody reads its polynomial.
-    start_matrix: Vec<f64>,
+    pub(crate) start_matrix: Vec<f64>,
     /// γ, see `start_matrix`.
-    start_velocity: Vec<f64>,
+    pub(crate) start_velocity: Vec<f64>,
     /// The step ratio `stage_extrapolation`, `start_matrix` and `start_velocity` were built
     /// for.
-    extrapolation_ratio: f64,
+    pub(crate) extrapolation_ratio: f64,
+}
+
+/// The fixed-point iteration's tables and buffers on ℝᴺ (the iteration is described above
+/// [`NystromTables`]).
+#[derive(Debug, Clone)]
+struct ConstantMass<const N: usize> {
+    /// The dimension-free tables.
+    nystrom: NystromTables,
     /// h M⁻¹p_k of the last converged step.
     last_velocity: SVector<f64, N>,
     /// The scaled accelerations h² M⁻¹ ∂L/∂q(τ_μ) of the last converged step: with
@@ -316,9 +326,9 @@ struct ConstantMass<const N: usize> {
     velocities: Vec<SVector<f64, N>>,
 }
 
-impl<const N: usize> ConstantMass<N> {
+impl NystromTables {
     /// `None` when K̃* is singular (too few Gauss points): Newton's method is used instead.
-    fn new(tables: &Tables) -> Option<Self> {
+    pub(crate) fn new(tables: &Tables) -> Option<Self> {
         let s = tables.degree;
         let m = tables.nodes.len();
         let d = &tables.reference_derivatives;
@@ -378,7 +388,7 @@ impl<const N: usize> ConstantMass<N> {
             .zip(&tables.reference_weights)
             .map(|(c, w)| 0.5 * w * (1.0 - c))
             .collect();
-        Some(ConstantMass {
+        Some(NystromTables {
             velocity_coefficients,
             end_weights,
             propagation,
@@ -391,6 +401,36 @@ impl<const N: usize> ConstantMass<N> {
             start_matrix: vec![0.0; m * m],
             start_velocity: vec![0.0; m],
             extrapolation_ratio: f64::NAN,
+        })
+    }
+
+    /// W = l X, E = W P and γ = W c for the starting values' extrapolation table X (s × s)
+    /// of step ratio `ratio`.
+    pub(crate) fn build_extrapolation(&mut self, table: &[f64], ratio: f64, s: usize) {
+        let m = self.stage_velocity.len();
+        for mu in 0..m {
+            for j in 0..s {
+                self.stage_extrapolation[mu * s + j] = (0..s)
+                    .map(|nu| self.stage_values[mu * s + nu] * table[nu * s + j])
+                    .sum();
+            }
+            let row = &self.stage_extrapolation[mu * s..(mu + 1) * s];
+            for nu in 0..m {
+                self.start_matrix[mu * m + nu] =
+                    (0..s).map(|j| row[j] * self.propagation[j * m + nu]).sum();
+            }
+            self.start_velocity[mu] = (0..s).map(|j| row[j] * self.velocity_coefficients[j]).sum();
+        }
+        self.extrapolation_ratio = ratio;
+    }
+}
+
+impl<const N: usize> ConstantMass<N> {
+    /// `None` when K̃* is singular (too few Gauss points): Newton's method is used instead.
+    fn new(tables: &Tables) -> Option<Self> {
+        let m = tables.nodes.len();
+        Some(ConstantMass {
+            nystrom: NystromTables::new(tables)?,
             last_velocity: SVector::zeros(),
             last_accelerations: vec![SVector::zeros(); m],
             pending: false,
@@ -415,9 +455,9 @@ impl<const N: usize> ConstantMass<N> {
         s: usize,
     ) {
         let table = if extrapolated {
-            &self.stage_extrapolation
+            &self.nystrom.stage_extrapolation
         } else {
-            &self.stage_values
+            &self.nystrom.stage_values
         };
         for (position, row) in self.positions.iter_mut().zip(table.chunks_exact(s)) {
             let mut sum = *q;
@@ -430,34 +470,14 @@ impl<const N: usize> ConstantMass<N> {
         }
     }
 
-    /// W = l X, E = W P and γ = W c for the starting values' extrapolation table X (s × s)
-    /// of step ratio `ratio`.
-    fn build_extrapolation(&mut self, table: &[f64], ratio: f64, s: usize) {
-        let m = self.positions.len();
-        for mu in 0..m {
-            for j in 0..s {
-                self.stage_extrapolation[mu * s + j] = (0..s)
-                    .map(|nu| self.stage_values[mu * s + nu] * table[nu * s + j])
-                    .sum();
-            }
-            let row = &self.stage_extrapolation[mu * s..(mu + 1) * s];
-            for nu in 0..m {
-                self.start_matrix[mu * m + nu] =
-                    (0..s).map(|j| row[j] * self.propagation[j * m + nu]).sum();
-            }
-            self.start_velocity[mu] = (0..s).map(|j| row[j] * self.velocity_coefficients[j]).sum();
-        }
-        self.extrapolation_ratio = ratio;
-    }
-
     /// Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν from the last step's pending data.
     fn extrapolate_positions(&mut self, q: &SVector<f64, N>) {
         let m = self.positions.len();
         for ((position, row), gamma) in self
             .positions
             .iter_mut()
-            .zip(self.start_matrix.chunks_exact(m))
-            .zip(&self.start_velocity)
+            .zip(self.nystrom.start_matrix.chunks_exact(m))
+            .zip(&self.nystrom.start_velocity)
         {
             // Accumulated in a local (registers), not through the reference.
             let mut sum = *q;
@@ -473,8 +493,8 @@ impl<const N: usize> ConstantMass<N> {
     /// its velocity term and accelerations.
     fn last_offset(&self, j: usize) -> SVector<f64, N> {
         let m = self.last_accelerations.len();
-        let mut offset = self.last_velocity * self.velocity_coefficients[j];
-        let row = &self.propagation[j * m..(j + 1) * m];
+        let mut offset = self.last_velocity * self.nystrom.velocity_coefficients[j];
+        let row = &self.nystrom.propagation[j * m..(j + 1) * m];
         for (p, acceleration) in row.iter().zip(&self.last_accelerations) {
             add_scaled(&mut offset, *p, acceleration);
         }
@@ -938,8 +958,8 @@ fn starting_positions<L: Lagrangian<N>, const N: usize>(
         return false;
     }
     let (table, ratio) = start.table();
-    if ratio != data.extrapolation_ratio {
-        data.build_extrapolation(table, ratio, s);
+    if ratio != data.nystrom.extrapolation_ratio {
+        data.nystrom.build_extrapolation(table, ratio, s);
     }
     if data.pending {
         data.extrapolate_positions(&state.q);
@@ -995,7 +1015,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         }
     }
     let mut size: f64 = 0.0;
-    for (base, c) in data.bases.iter_mut().zip(&data.stage_velocity) {
+    for (base, c) in data.bases.iter_mut().zip(&data.nystrom.stage_velocity) {
         *base = state.q;
         add_scaled(base, *c, &velocity);
         size = size.max(base.amax());
@@ -1020,7 +1040,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         let mut change: f64 = 0.0;
         let mut finite = true;
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
-            let row = &data.stage_matrix[mu * m..(mu + 1) * m];
+            let row = &data.nystrom.stage_matrix[mu * m..(mu + 1) * m];
             let mut next = *base;
             for (a, acceleration) in row.iter().zip(&data.accelerations) {
                 add_scaled(&mut next, *a, acceleration);
@@ -1039,8 +1059,8 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         }
         if L::FORCED {
             for (mu, rate) in data.velocities.iter_mut().enumerate() {
-                let row = &data.rate_matrix[mu * m..(mu + 1) * m];
-                let mut next = velocity * data.stage_rate[mu];
+                let row = &data.nystrom.rate_matrix[mu * m..(mu + 1) * m];
+                let mut next = velocity * data.nystrom.stage_rate[mu];
                 for (b, acceleration) in row.iter().zip(&data.accelerations) {
                     add_scaled(&mut next, *b, acceleration);
                 }
@@ -1057,8 +1077,8 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             for ((target, row), c) in offsets
                 .as_mut_slice()
                 .chunks_exact_mut(N)
-                .zip(data.propagation.chunks_exact(m))
-                .zip(&data.velocity_coefficients)
+                .zip(data.nystrom.propagation.chunks_exact(m))
+                .zip(&data.nystrom.velocity_coefficients)
             {
                 let mut offset = velocity * *c;
                 for (p, acceleration) in row.iter().zip(&data.accelerations) {
@@ -1076,7 +1096,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         add_scaled(&mut dp, *w, force);
     }
     let mut dq = velocity;
-    for (w, acceleration) in data.end_weights.iter().zip(&data.accelerations) {
+    for (w, acceleration) in data.nystrom.end_weights.iter().zip(&data.accelerations) {
         add_scaled(&mut dq, *w, acceleration);
     }
     increment.q = dq;

@@ -1,0 +1,233 @@
+//! Methods on runtime-sized ℝⁿ for Lagrangians written as sums of local terms
+//! ([`LocalLagrangian`]): chains, lattices, discretised strings and fields, up to 10⁵
+//! degrees of freedom and beyond.
+//!
+//! A method here is the same options struct as on ℝᴺ ([`crate::Svi`], [`crate::StormerVerlet`])
+//! with a second implementation, of [`LocalMethod`], whose data layout is made for large n:
+//! stage values as runtime vectors, derivatives of L assembled term by term in O(n)
+//! ([`crate::model::local::LocalLagrangianExt`]), no dense n × n matrix anywhere. Every
+//! [`LocalMethod`] is a [`Step`] on [`DynEuclidean`] by the blanket implementation below, so it
+//! runs through the one stepping loop ([`crate::Integrator`]) with observers, recovery, the
+//! divergence limit and output times like every other method.
+//!
+//! What runs on large systems: Störmer–Verlet ([`verlet`], explicit kick–drift–kick for a
+//! constant mass matrix) and SVI by the Hessian-free fixed point for a constant mass matrix
+//! ([`svi`]). Spectral collocation, the implicit classic variational integrators, linear
+//! stability analysis and the tangent map stay on fixed-size ℝᴺ (small systems) for now;
+//! asking for them on a runtime-dimension model is an error that says so.
+
+pub mod mass;
+pub mod svi;
+
+pub mod verlet;
+
+use crate::error::{Error, StepFailure, require_finite_entries};
+use crate::method::space::{DynEuclidean, DynInitial, DynPoint, DynState};
+use crate::method::step::Step;
+use crate::method::{MethodInfo, StepReport};
+use crate::model::Structure;
+use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
+use mass::MassInverse;
+use nalgebra::DVector;
+
+/// An integration method for [`LocalLagrangian`] models on runtime-sized ℝⁿ, in the
+/// coordinates (q, p).
+pub trait LocalMethod {
+    /// Buffers and precomputed tables of one run, sized once.
+    type Workspace;
+
+    /// Name, order and geometric properties.
+    fn info(&self) -> MethodInfo;
+
+    /// Validate the options against the model and build every buffer for steps of size `h`.
+    fn local_workspace<L: LocalLagrangian>(
+        &self,
+        model: &L,
+        h: f64,
+    ) -> Result<Self::Workspace, Error>;
+
+    /// Advance `state` from `t` to `t + h`, writing the increment into `increment`.
+    /// Allocates nothing.
+    fn local_step<L: LocalLagrangian>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &DynState,
+        increment: &mut DynState,
+    ) -> Result<StepReport, StepFailure>;
+
+    /// Drop warm-start data (the next step does not continue the last one).
+    fn local_restart(&self, workspace: &mut Self::Workspace) {
+        let _ = workspace;
+    }
+
+    /// The cached M⁻¹ of a constant-mass run, from which q̇ = M⁻¹p completes a state.
+    fn mass_inverse<'a>(&self, workspace: &'a Self::Workspace) -> Option<&'a MassInverse>;
+}
+
+/// The constant mass matrix of `model` at (t, q), inverted, after checking that the model
+/// declares [`Structure::ConstantMass`] (the only structure the large-system methods take
+/// so far).
+pub(crate) fn constant_mass<L: LocalLagrangian>(
+    model: &L,
+    method: &'static str,
+    t: f64,
+    q: &DVector<f64>,
+) -> Result<MassInverse, Error> {
+    if L::STRUCTURE != Structure::ConstantMass {
+        return Err(Error::invalid(
+            "structure",
+            format!(
+                "{method} on a runtime-dimension model needs a constant mass matrix \
+                 (Structure::ConstantMass); a general Lagrangian needs the sparse Newton \
+                 path, which is not built yet"
+            ),
+        ));
+    }
+    let zero = DVector::zeros(q.len());
+    MassInverse::new(q.len(), &model.mass_triplets(t, q, &zero))
+}
+
+impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
+    type Workspace = M::Workspace;
+
+    fn info(&self) -> MethodInfo {
+        LocalMethod::info(self)
+    }
+
+    fn workspace(&self, model: &L, h: f64) -> Result<M::Workspace, Error> {
+        model.check_indices()?;
+        self.local_workspace(model, h)
+    }
+
+    fn step(
+        &self,
+        model: &L,
+        workspace: &mut M::Workspace,
+        t: f64,
+        h: f64,
+        state: &DynState,
+        increment: &mut DynState,
+    ) -> Result<StepReport, StepFailure> {
+        self.local_step(model, workspace, t, h, state, increment)
+    }
+
+    fn restart(&self, workspace: &mut M::Workspace) {
+        self.local_restart(workspace);
+    }
+
+    fn tangent_map(
+        &self,
+        _model: &L,
+        _workspace: &mut M::Workspace,
+        _t: f64,
+        _h: f64,
+        _state: &DynState,
+    ) -> Result<(DynState, nalgebra::DMatrix<f64>), StepFailure> {
+        Err(StepFailure::Unsupported {
+            option: "tangent_map",
+            reason: "the tangent map of a runtime-dimension model (a dense 2n × 2n matrix) is \
+                     not available yet",
+        })
+    }
+
+    fn initial_state(&self, model: &L, t0: f64, initial: &DynInitial) -> Result<DynState, Error> {
+        let n = model.dimension();
+        let (q, second, name) = match initial {
+            DynInitial::Velocity { q, v } => (q, v, "initial velocity"),
+            DynInitial::Momentum { q, p } => (q, p, "initial momentum"),
+        };
+        for (what, x) in [("initial position", q), (name, second)] {
+            if x.len() != n {
+                return Err(Error::invalid(
+                    what,
+                    format!("has {} components, the model has {n} coordinates", x.len()),
+                ));
+            }
+            require_finite_entries(what, x)?;
+        }
+        let y = match initial {
+            DynInitial::Momentum { p, .. } => p.clone(),
+            DynInitial::Velocity { q, v } => {
+                let mut p = DVector::zeros(n);
+                model.momentum_into(t0, q, v, &mut p);
+                p
+            }
+        };
+        let state = DynState { q: q.clone(), y };
+        if !crate::method::StepState::is_finite(&state) {
+            return Err(Error::NonFinite {
+                what: "momentum ∂L/∂q̇ of the model from the given initial state".into(),
+                step: 0,
+                t: t0,
+            });
+        }
+        Ok(state)
+    }
+
+    /// A [`Structure::ConstantMass`] declaration: ∂L/∂q̇ = M q̇ with the M of the mass
+    /// triplets, checked at q̇ = 0 (no linear term) and at the state's velocity.
+    fn check_model(&self, model: &L, t: f64, state: &DynState) -> Result<(), Error> {
+        if L::STRUCTURE != Structure::ConstantMass {
+            return Ok(());
+        }
+        let n = state.q.len();
+        let zero = DVector::zeros(n);
+        let mass = MassInverse::new(n, &model.mass_triplets(t, &state.q, &zero))?;
+        let v = mass.apply(&state.y);
+        let mut p = DVector::zeros(n);
+        model.momentum_into(t, &state.q, &v, &mut p);
+        let mut linear = DVector::zeros(n);
+        model.momentum_into(t, &state.q, &zero, &mut linear);
+        let scale = 1.0 + state.y.amax();
+        let mismatch = (&p - &state.y).amax();
+        if mismatch > 1e-12 * scale || linear.amax() > 1e-12 * scale {
+            return Err(Error::invalid(
+                "structure",
+                format!(
+                    "the model declares a constant mass matrix (L = ½ q̇ᵀMq̇ − V), but ∂L/∂q̇ \
+                     differs from M q̇ by {mismatch:e} and is {:e} at q̇ = 0",
+                    linear.amax()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn complete(
+        &self,
+        model: &L,
+        workspace: Option<&M::Workspace>,
+        t: f64,
+        state: &DynState,
+        _guess: &DVector<f64>,
+    ) -> Result<DynPoint, Error> {
+        let v = match workspace.and_then(|workspace| self.mass_inverse(workspace)) {
+            Some(inverse) => inverse.apply(&state.y),
+            None => {
+                constant_mass(model, LocalMethod::info(self).name, t, &state.q)?.apply(&state.y)
+            }
+        };
+        Ok(DynPoint {
+            t,
+            q: state.q.clone(),
+            v,
+            p: state.y.clone(),
+        })
+    }
+
+    fn incomplete(&self, t: f64, state: &DynState, guess: &DVector<f64>) -> DynPoint {
+        DynPoint {
+            t,
+            q: state.q.clone(),
+            v: guess.clone(),
+            p: state.y.clone(),
+        }
+    }
+
+    fn point_is_finite(&self, point: &DynPoint) -> bool {
+        point.v.iter().chain(point.p.iter()).all(|x| x.is_finite())
+    }
+}

@@ -1,0 +1,353 @@
+//! Lagrangians on ℝⁿ with n chosen at run time, written as sums of small local terms.
+//!
+//! Chains, lattices and semi-discretised strings and fields have Lagrangians
+//!
+//! L(t, q, q̇) = Σₑ ℓₑ(t, q_{I(e)}, q̇_{I(e)}),
+//!
+//! each term ℓₑ a function of a few coordinates, those of its index set I(e) (a spring and
+//! the two particles it joins, a particle's kinetic energy). A [`LocalLagrangian`] writes one
+//! term, generic over [`Scalar`] and K = [`LocalLagrangian::Width`] coordinates wide, and
+//! says which coordinates each term reads; everything else follows term by term from the
+//! fixed-size automatic differentiation of [`crate::model::derived`] (each term is a
+//! [`Lagrangian<K>`] through [`Term`]) and is scattered into vectors of length n — so one
+//! evaluation of ∂L/∂q, of p = ∂L/∂q̇ or of the energy costs O(n), and the sparsity of the
+//! Hessian blocks is the union of the terms' index sets.
+//!
+//! Companions, as for [`crate::Lagrangian`]: [`LocalDefaults`] (name, parameters, default
+//! state, step and horizon) and [`LocalInvariants`] (known conserved quantities).
+//!
+//! # Example
+//! ```
+//! use nalgebra::{Const, SVector};
+//! use svi::model::local::LocalLagrangian;
+//! use svi::Scalar;
+//!
+//! /// n unit masses joined by unit springs, with both ends fixed: n + 1 springs.
+//! struct Chain {
+//!     n: usize,
+//! }
+//!
+//! impl LocalLagrangian for Chain {
+//!     type Width = Const<2>;
+//!     const TIME_DEPENDENT: bool = false;
+//!     fn dimension(&self) -> usize {
+//!         self.n
+//!     }
+//!     fn term_count(&self) -> usize {
+//!         self.n + 1
+//!     }
+//!     /// Spring e joins particles e − 1 and e (the walls at −1 and n are slot 0 or 1 with
+//!     /// the neighbouring particle's index repeated, and the term ignores that slot).
+//!     fn indices(&self, e: usize) -> [usize; 2] {
+//!         [e.saturating_sub(1), e.min(self.n - 1)]
+//!     }
+//!     fn term<D: Scalar>(&self, e: usize, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+//!         let (left, right) = match e {
+//!             0 => (D::from(0.0), q[1]),
+//!             e if e == self.n => (q[0], D::from(0.0)),
+//!             _ => (q[0], q[1]),
+//!         };
+//!         // The kinetic energy of particle e rides on spring e (the last spring has none).
+//!         let kinetic = if e < self.n { v[1] * v[1] * 0.5 } else { D::from(0.0) };
+//!         let stretch = right - left;
+//!         kinetic - stretch * stretch * 0.5
+//!     }
+//! }
+//! ```
+
+use crate::error::Error;
+use crate::model::derived::LagrangianExt;
+use crate::model::{Lagrangian, Structure};
+use crate::scalar::Scalar;
+use nalgebra::{Const, DVector, SVector};
+
+/// The width K of a [`LocalLagrangian`]'s terms: `nalgebra::Const<K>`.
+///
+/// It carries K to the fixed-size code a term is differentiated by (stable Rust cannot use
+/// an associated constant as an array length). Implemented for every `Const<K>`; not meant
+/// to be implemented elsewhere.
+pub trait TermWidth {
+    /// K.
+    const WIDTH: usize;
+    /// The coordinates (or velocities) of one term: `SVector<D, K>`.
+    type Vector<D: Scalar>;
+    /// The index set of one term: `[usize; K]`.
+    type Indices: AsRef<[usize]> + Copy;
+
+    /// Add the term's ∂ℓₑ/∂q (`velocity == false`) or ∂ℓₑ/∂q̇ (`velocity == true`) at
+    /// (t, q, q̇) into `out` at the term's indices.
+    fn scatter_gradient<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        velocity: bool,
+        out: &mut DVector<f64>,
+    );
+
+    /// The term's value ℓₑ(t, q_{I(e)}, q̇_{I(e)}).
+    fn value<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+    ) -> f64;
+
+    /// Add the term's block of ∂²L/∂q̇∂q̇ into `out` as (row, column, value) triplets.
+    fn mass_triplets<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        out: &mut Vec<(usize, usize, f64)>,
+    );
+}
+
+/// One term of a [`LocalLagrangian`] as a fixed-size [`Lagrangian<K>`] in its own K
+/// coordinates, so that every derived quantity of [`LagrangianExt`] applies to it.
+#[derive(Debug)]
+pub struct Term<'a, L: ?Sized> {
+    /// The whole model.
+    pub model: &'a L,
+    /// Which term.
+    pub index: usize,
+}
+
+impl<L, const K: usize> Lagrangian<K> for Term<'_, L>
+where
+    L: LocalLagrangian<Width = Const<K>> + ?Sized,
+{
+    const TIME_DEPENDENT: bool = L::TIME_DEPENDENT;
+    const STRUCTURE: Structure = L::STRUCTURE;
+
+    #[inline]
+    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, K>, v: &SVector<D, K>) -> D {
+        self.model.term(self.index, t, q, v)
+    }
+}
+
+/// The term's coordinates and velocities, gathered from the global vectors.
+#[inline]
+fn gather<const K: usize>(
+    indices: &[usize; K],
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+) -> (SVector<f64, K>, SVector<f64, K>) {
+    (
+        SVector::from_fn(|i, _| q[indices[i]]),
+        SVector::from_fn(|i, _| v[indices[i]]),
+    )
+}
+
+impl<const K: usize> TermWidth for Const<K> {
+    const WIDTH: usize = K;
+    type Vector<D: Scalar> = SVector<D, K>;
+    type Indices = [usize; K];
+
+    #[inline]
+    fn scatter_gradient<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        velocity: bool,
+        out: &mut DVector<f64>,
+    ) {
+        let indices = model.indices(term);
+        let (ql, vl) = gather(&indices, q, v);
+        let local = Term { model, index: term };
+        let gradient = if velocity {
+            local.momentum(t, &ql, &vl)
+        } else {
+            local.force(t, &ql, &vl)
+        };
+        for (i, g) in indices.iter().zip(gradient.iter()) {
+            out[*i] += g;
+        }
+    }
+
+    #[inline]
+    fn value<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+    ) -> f64 {
+        let (ql, vl) = gather(&model.indices(term), q, v);
+        model.term(term, t, &ql, &vl)
+    }
+
+    fn mass_triplets<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        out: &mut Vec<(usize, usize, f64)>,
+    ) {
+        let indices = model.indices(term);
+        let (ql, vl) = gather(&indices, q, v);
+        let block = Term { model, index: term }.mass_matrix(t, &ql, &vl);
+        for (a, row) in indices.iter().enumerate() {
+            for (b, column) in indices.iter().enumerate() {
+                if block[(a, b)] != 0.0 {
+                    out.push((*row, *column, block[(a, b)]));
+                }
+            }
+        }
+    }
+}
+
+/// A Lagrangian on ℝⁿ (n at run time) written as a sum of local terms,
+/// L = Σₑ ℓₑ(t, q_{I(e)}, q̇_{I(e)}) (see the module docs).
+///
+/// A term may use fewer than K coordinates (a spring to a fixed wall): it then repeats an
+/// index in [`LocalLagrangian::indices`] and ignores that slot; the derivatives it scatters
+/// there are zero.
+pub trait LocalLagrangian {
+    /// K, the number of coordinates of one term, as `nalgebra::Const<K>`.
+    type Width: TermWidth;
+
+    /// Whether L depends explicitly on t (the default, `true`, is always correct).
+    const TIME_DEPENDENT: bool = true;
+
+    /// Structure the integrators may exploit, as [`crate::Lagrangian::STRUCTURE`]: with
+    /// [`Structure::ConstantMass`] (every term ½ q̇ᵀMₑq̇ − Vₑ(t, q) with constant Mₑ) SVI
+    /// iterates without a Hessian and Störmer–Verlet runs explicitly. Checked at the initial
+    /// state of every run.
+    const STRUCTURE: Structure = Structure::General;
+
+    /// n, the number of coordinates.
+    fn dimension(&self) -> usize;
+
+    /// The number of terms.
+    fn term_count(&self) -> usize;
+
+    /// The index set I(e) of term `term`: which coordinates its K slots read (each below
+    /// [`LocalLagrangian::dimension`]).
+    fn indices(&self, term: usize) -> <Self::Width as TermWidth>::Indices;
+
+    /// The term ℓₑ(t, q_{I(e)}, q̇_{I(e)}), written once, generic over the scalar.
+    fn term<D: Scalar>(
+        &self,
+        term: usize,
+        t: D,
+        q: &<Self::Width as TermWidth>::Vector<D>,
+        v: &<Self::Width as TermWidth>::Vector<D>,
+    ) -> D;
+}
+
+/// Quantities of a whole [`LocalLagrangian`], assembled term by term (each in O(n)).
+pub trait LocalLagrangianExt: LocalLagrangian {
+    /// L(t, q, q̇).
+    fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        (0..self.term_count())
+            .map(|e| Self::Width::value(self, e, t, q, v))
+            .sum()
+    }
+
+    /// ∂L/∂q, written into `out`.
+    #[inline]
+    fn force_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
+        out.fill(0.0);
+        for e in 0..self.term_count() {
+            Self::Width::scatter_gradient(self, e, t, q, v, false, out);
+        }
+    }
+
+    /// p = ∂L/∂q̇, written into `out`.
+    fn momentum_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
+        out.fill(0.0);
+        for e in 0..self.term_count() {
+            Self::Width::scatter_gradient(self, e, t, q, v, true, out);
+        }
+    }
+
+    /// The energy E = p·q̇ − L.
+    fn energy(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        let mut p = DVector::zeros(q.len());
+        self.momentum_into(t, q, v, &mut p);
+        p.dot(v) - self.value(t, q, v)
+    }
+
+    /// The mass matrix ∂²L/∂q̇∂q̇ at (t, q, q̇) as (row, column, value) triplets, one per
+    /// nonzero entry of each term's block (entries of different terms at the same place add
+    /// up).
+    fn mass_triplets(
+        &self,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+    ) -> Vec<(usize, usize, f64)> {
+        let mut triplets = Vec::new();
+        for e in 0..self.term_count() {
+            Self::Width::mass_triplets(self, e, t, q, v, &mut triplets);
+        }
+        triplets
+    }
+
+    /// Check the model's shape: at least one coordinate, every index below n.
+    fn check_indices(&self) -> Result<(), Error> {
+        let n = self.dimension();
+        if n == 0 {
+            return Err(Error::invalid("n", "the model has no coordinates"));
+        }
+        for e in 0..self.term_count() {
+            if let Some(i) = self.indices(e).as_ref().iter().find(|&&i| i >= n) {
+                return Err(Error::invalid(
+                    "indices",
+                    format!("term {e} reads coordinate {i}, but the model has {n}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<L: LocalLagrangian + ?Sized> LocalLagrangianExt for L {}
+
+/// Named parameters and defaults of a [`LocalLagrangian`] (as [`crate::Defaults`] for
+/// fixed-size models).
+pub trait LocalDefaults: LocalLagrangian {
+    /// Short name (as used by the CLI, e.g. `"fput"`).
+    fn name(&self) -> &'static str;
+    /// Current parameter values, by name (the size parameter, e.g. `n`, among them).
+    fn parameters(&self) -> Vec<(&'static str, f64)>;
+    /// Set one parameter; an unknown name or an out-of-range value (a size that is not a
+    /// positive integer) is an [`Error::InvalidParameter`].
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error>;
+    /// Default initial state (t0, q0, q̇0) for the current parameters.
+    fn initial_state(&self) -> (f64, DVector<f64>, DVector<f64>);
+    /// Default step size.
+    fn default_step(&self) -> f64;
+    /// Default final time.
+    fn default_horizon(&self) -> f64;
+}
+
+/// Known conserved quantities of a [`LocalLagrangian`].
+pub trait LocalInvariants: LocalLagrangian {
+    /// Number of invariants (default: none).
+    fn invariant_count(&self) -> usize {
+        0
+    }
+    /// Name of invariant `index`.
+    ///
+    /// # Panics
+    /// If `index >= invariant_count()` (the default panics for every index).
+    fn invariant_name(&self, index: usize) -> &'static str {
+        panic!("no invariant with index {index}")
+    }
+    /// Value of invariant `index` at (t, q, q̇).
+    ///
+    /// # Panics
+    /// If `index >= invariant_count()` (the default panics for every index).
+    fn invariant(&self, index: usize, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        let _ = (t, q, v);
+        panic!("no invariant with index {index}")
+    }
+}

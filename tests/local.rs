@@ -1,0 +1,338 @@
+//! Runtime-dimension models (sums of local terms) through the one stepping loop: the FPUT
+//! chain against the same chain written as a fixed-size Lagrangian, energy behaviour, and
+//! bad input.
+
+use nalgebra::{DVector, SVector};
+use svi::method::DynInitial;
+use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt};
+use svi::observer::EnergyError;
+use svi::{Integrator, Lagrangian, Scalar, StormerVerlet, Structure};
+use svi_models::Fput;
+
+/// The FPUT chain of 8 particles written directly as one fixed-size Lagrangian (an
+/// independent implementation of the same L).
+struct FixedFput {
+    alpha: f64,
+    beta: f64,
+}
+
+impl Lagrangian<8> for FixedFput {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
+    fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 8>, v: &SVector<D, 8>) -> D {
+        let mut kinetic = D::from(0.0);
+        for i in 0..8 {
+            kinetic += v[i] * v[i] * 0.5;
+        }
+        let mut potential = D::from(0.0);
+        for j in 0..=8 {
+            let left = if j == 0 { D::from(0.0) } else { q[j - 1] };
+            let right = if j == 8 { D::from(0.0) } else { q[j] };
+            let r = right - left;
+            potential +=
+                r * r * 0.5 + r * r * r * (self.alpha / 3.0) + r * r * r * r * (self.beta / 4.0);
+        }
+        kinetic - potential
+    }
+}
+
+fn fput(n: usize) -> Fput {
+    let mut model = Fput::default();
+    model.set_parameter("n", n as f64).unwrap();
+    model.set_parameter("beta", 0.5).unwrap();
+    model
+}
+
+#[test]
+fn local_terms_assemble_the_fixed_size_lagrangians_derivatives() {
+    use svi::LagrangianExt;
+    let model = fput(8);
+    let fixed = FixedFput {
+        alpha: model.alpha,
+        beta: model.beta,
+    };
+    let q = DVector::from_fn(8, |i, _| 0.3 * (i as f64 + 1.0).sin());
+    let v = DVector::from_fn(8, |i, _| 0.2 * (i as f64 * 0.7).cos());
+    let (qs, vs) = (
+        SVector::<f64, 8>::from_column_slice(q.as_slice()),
+        SVector::<f64, 8>::from_column_slice(v.as_slice()),
+    );
+    let mut force = DVector::zeros(8);
+    model.force_into(0.0, &q, &v, &mut force);
+    let mut momentum = DVector::zeros(8);
+    model.momentum_into(0.0, &q, &v, &mut momentum);
+    let reference = fixed.first_derivatives(0.0, &qs, &vs);
+    for i in 0..8 {
+        assert!((force[i] - reference.q[i]).abs() < 1e-15, "∂L/∂q[{i}]");
+        assert!((momentum[i] - reference.v[i]).abs() < 1e-15, "p[{i}]");
+    }
+    assert!((LocalLagrangianExt::value(&model, 0.0, &q, &v) - reference.value).abs() < 1e-15);
+    assert!(
+        (LocalLagrangianExt::energy(&model, 0.0, &q, &v) - fixed.energy(0.0, &qs, &vs)).abs()
+            < 1e-15
+    );
+    // The mass matrix is the identity, one diagonal entry per particle.
+    let mut mass = model.mass_triplets(0.0, &q, &v);
+    mass.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    assert_eq!(mass, (0..8).map(|i| (i, i, 1.0)).collect::<Vec<_>>());
+}
+
+#[test]
+fn verlet_on_local_terms_follows_the_fixed_size_verlet_to_round_off() {
+    let model = fput(8);
+    let fixed = FixedFput {
+        alpha: model.alpha,
+        beta: model.beta,
+    };
+    let (t0, q0, v0) = model.initial_state();
+    let (h, t_end) = (0.05, 50.0);
+    let local = Integrator::new(model, StormerVerlet::default())
+        .run(
+            t0,
+            DynInitial::Velocity {
+                q: q0.clone(),
+                v: v0.clone(),
+            },
+            h,
+            t_end,
+            &mut (),
+        )
+        .unwrap();
+    let qs = SVector::<f64, 8>::from_column_slice(q0.as_slice());
+    let vs = SVector::<f64, 8>::from_column_slice(v0.as_slice());
+    let reference = Integrator::new(fixed, StormerVerlet::default())
+        .run_from_velocity(t0, qs, vs, h, t_end, &mut ())
+        .unwrap();
+    assert_eq!(local.statistics.steps, 1000);
+    for i in 0..8 {
+        assert!(
+            (local.last.q[i] - reference.last.q[i]).abs() < 1e-13,
+            "q[{i}]"
+        );
+        assert!(
+            (local.last.p[i] - reference.last.p[i]).abs() < 1e-13,
+            "p[{i}]"
+        );
+    }
+    assert_eq!(
+        local.statistics.evaluations,
+        reference.statistics.evaluations
+    );
+}
+
+#[test]
+fn verlet_energy_error_is_second_order_and_bounded() {
+    // Halving h divides the maximal energy error by 4 (order 2), over many periods of the
+    // fastest mode (no drift: the bound holds over the whole run).
+    let model = fput(64);
+    let (t0, q0, v0) = model.initial_state();
+    let energy_error = |h: f64| {
+        let mut energy = EnergyError::default();
+        Integrator::new(model.clone(), StormerVerlet::default())
+            .run(
+                t0,
+                DynInitial::Velocity {
+                    q: q0.clone(),
+                    v: v0.clone(),
+                },
+                h,
+                400.0,
+                &mut energy,
+            )
+            .unwrap();
+        energy.max
+    };
+    let (coarse, fine) = (energy_error(0.2), energy_error(0.1));
+    let order = (coarse / fine).log2();
+    assert!((order - 2.0).abs() < 0.1, "observed order {order}");
+    assert!(fine < 1e-4 * LocalLagrangianExt::energy(&model, t0, &q0, &v0));
+}
+
+#[test]
+fn observers_see_runtime_sized_points() {
+    let model = fput(5);
+    let (t0, q0, v0) = model.initial_state();
+    let mut trajectory = svi::observer::Points::default();
+    let run = Integrator::new(model, StormerVerlet::default())
+        .run(
+            t0,
+            DynInitial::Velocity {
+                q: q0.clone(),
+                v: v0,
+            },
+            0.1,
+            1.0,
+            &mut trajectory,
+        )
+        .unwrap();
+    assert_eq!(trajectory.points.len(), 11);
+    let first: &svi::method::DynPoint = &trajectory.points[0];
+    assert_eq!(first.q, q0);
+    assert_eq!(trajectory.points[10].q, run.last.q);
+    assert_eq!(run.last.v, run.last.p); // unit masses
+}
+
+#[test]
+fn bad_sizes_and_states_are_errors_naming_them() {
+    let mut model = Fput::default();
+    for bad in [0.0, -3.0, 2.5, f64::NAN, 1e300] {
+        let error = model.set_parameter("n", bad).unwrap_err();
+        assert!(error.to_string().contains('n'), "{error}");
+    }
+    let (t0, q0, _) = model.initial_state();
+    let short = DVector::zeros(model.dimension() - 1);
+    let error = Integrator::new(model.clone(), StormerVerlet::default())
+        .run(
+            t0,
+            DynInitial::Velocity {
+                q: q0.clone(),
+                v: short,
+            },
+            0.1,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(error.to_string().contains("initial velocity"), "{error}");
+    let mut nan = q0.clone();
+    nan[3] = f64::NAN;
+    let v = DVector::zeros(q0.len());
+    let error = Integrator::new(model, StormerVerlet::default())
+        .run(t0, DynInitial::Velocity { q: nan, v }, 0.1, 1.0, &mut ())
+        .unwrap_err();
+    assert!(error.to_string().contains("initial position"), "{error}");
+}
+
+#[test]
+fn svi_on_local_terms_follows_the_fixed_size_svi_to_round_off() {
+    use svi::Svi;
+    let model = fput(8);
+    let fixed = FixedFput {
+        alpha: model.alpha,
+        beta: model.beta,
+    };
+    let (t0, q0, v0) = model.initial_state();
+    let (h, t_end) = (0.5, 100.0);
+    for method in [Svi::new(7).with_quadrature(6), Svi::new(4)] {
+        let local = Integrator::new(model.clone(), method.clone())
+            .run(
+                t0,
+                DynInitial::Velocity {
+                    q: q0.clone(),
+                    v: v0.clone(),
+                },
+                h,
+                t_end,
+                &mut (),
+            )
+            .unwrap();
+        let qs = SVector::<f64, 8>::from_column_slice(q0.as_slice());
+        let vs = SVector::<f64, 8>::from_column_slice(v0.as_slice());
+        let reference = Integrator::new(FixedFput { ..fixed }, method)
+            .run_from_velocity(t0, qs, vs, h, t_end, &mut ())
+            .unwrap();
+        for i in 0..8 {
+            assert!(
+                (local.last.q[i] - reference.last.q[i]).abs() < 1e-12,
+                "q[{i}]"
+            );
+            assert!(
+                (local.last.p[i] - reference.last.p[i]).abs() < 1e-12,
+                "p[{i}]"
+            );
+        }
+    }
+}
+
+#[test]
+fn svi_on_local_terms_reaches_its_order_and_conserves_energy() {
+    use svi::Svi;
+    // SVI 4/3 is of order 6: halving h divides the error at T = 20 by 2⁶ (against a reference
+    // of SVI 7/6, order 12, at h/4).
+    let model = fput(16);
+    let (t0, q0, v0) = model.initial_state();
+    let run = |method: Svi, h: f64| {
+        let mut energy = EnergyError::default();
+        let run = Integrator::new(model.clone(), method)
+            .run(
+                t0,
+                DynInitial::Velocity {
+                    q: q0.clone(),
+                    v: v0.clone(),
+                },
+                h,
+                20.0,
+                &mut energy,
+            )
+            .unwrap();
+        (run.last.q, energy.max)
+    };
+    let (reference, _) = run(Svi::new(7).with_quadrature(6), 0.1);
+    let (coarse, _) = run(Svi::new(4).with_quadrature(3), 0.8);
+    let (fine, energy) = run(Svi::new(4).with_quadrature(3), 0.4);
+    let order = ((&coarse - &reference).amax() / (&fine - &reference).amax()).log2();
+    assert!((order - 6.0).abs() < 0.3, "observed order {order}");
+    assert!(energy < 1e-8, "energy error {energy:e}");
+}
+
+#[test]
+fn toda_lax_traces_match_a_dense_lax_matrix_and_stay_conserved() {
+    use nalgebra::DMatrix;
+    use svi::Svi;
+    use svi::model::local::LocalInvariants;
+    use svi::observer::InvariantError;
+    use svi_models::Toda;
+    // The traces from shifted diagonals against powers of the dense Lax matrix, for a ring
+    // long enough that no power wraps around and for rings where they do.
+    for n in [2, 3, 4, 9] {
+        let mut model = Toda::default();
+        model.set_parameter("n", n as f64).unwrap();
+        let q = DVector::from_fn(n, |i, _| 0.3 * (1.7 * i as f64).sin());
+        let p = DVector::from_fn(n, |i, _| 0.5 * (0.9 * i as f64).cos());
+        let mut lax = DMatrix::<f64>::zeros(n, n);
+        for i in 0..n {
+            let j = (i + 1) % n;
+            let a = 0.5 * ((q[i] - q[j]) * 0.5).exp();
+            lax[(i, i)] += -0.5 * p[i];
+            lax[(i, j)] += a;
+            lax[(j, i)] += a;
+        }
+        let traces = model.lax_traces(&q, &p, 4);
+        let mut power = DMatrix::<f64>::identity(n, n);
+        for (k, trace) in traces.iter().enumerate() {
+            power = &power * &lax;
+            assert!(
+                (trace - power.trace()).abs() < 1e-13 * (1.0 + trace.abs()),
+                "n = {n}, k = {}",
+                k + 1
+            );
+        }
+    }
+    // tr 𝕃² is half the energy; SVI 6/5 keeps every trace to 1e-10 relative over 20 000 steps.
+    let model = Toda::default();
+    let (t0, q0, v0) = model.initial_state();
+    let energy = LocalLagrangianExt::energy(&model, t0, &q0, &v0);
+    assert!((model.invariant(1, t0, &q0, &v0) - 0.5 * energy).abs() < 1e-14 * energy);
+    let mut invariants = InvariantError::default();
+    Integrator::new(model.clone(), Svi::new(6).with_quadrature(5))
+        .run(
+            t0,
+            DynInitial::Velocity {
+                q: q0.clone(),
+                v: v0.clone(),
+            },
+            0.1,
+            2000.0,
+            &mut invariants,
+        )
+        .unwrap();
+    let scale = invariants
+        .initial
+        .iter()
+        .fold(1.0f64, |m, x| m.max(x.abs()));
+    assert!(
+        invariants.max < 1e-10 * scale,
+        "Lax trace error {:e}",
+        invariants.max
+    );
+}
