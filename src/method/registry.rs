@@ -30,6 +30,7 @@ use std::str::FromStr;
 use crate::error::Error;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
+use crate::method::local::LocalMethod;
 use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
 };
@@ -284,6 +285,15 @@ pub trait VectorMethodVisitor<const N: usize> {
     fn visit<M: Method<N> + Clone>(self, method: M) -> Self::Output;
 }
 
+/// Receives a method for runtime-dimension models ([`crate::model::local::LocalLagrangian`])
+/// as its concrete type (see [`MethodSpec::visit_local`]).
+pub trait LocalMethodVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Use `method`.
+    fn visit<M: LocalMethod + Clone>(self, method: M) -> Self::Output;
+}
+
 /// Reads the [`MethodInfo`] of the visited method.
 struct InfoOf;
 
@@ -449,6 +459,30 @@ impl MethodSpec {
                 ));
             }
         })
+    }
+
+    /// Build the method for a runtime-dimension model (a sum of local terms,
+    /// [`crate::model::local::LocalLagrangian`]) and hand it to `visitor` as its concrete type:
+    /// `svi` (the fixed point, constant mass) and `verlet`. The other methods of ℝᴺ run on
+    /// fixed-size models only, and asking for one is an error that names it.
+    pub fn visit_local<V: LocalMethodVisitor>(&self, visitor: V) -> Result<V::Output, Error> {
+        self.check_space(SpaceKind::Vector)?;
+        match self.entry.name {
+            "svi" => {
+                let mut svi = Svi::new(self.points_in_use().unwrap_or_default());
+                if let Some(quadrature) = self.quadrature {
+                    svi = svi.with_quadrature(quadrature);
+                }
+                Ok(visitor.visit(svi))
+            }
+            "verlet" => Ok(visitor.visit(StormerVerlet::default())),
+            name => Err(Error::invalid(
+                "method",
+                format!(
+                    "'{self}' runs on fixed-size models only; runtime-dimension models (chains,                      lattices) take svi or verlet (not {name})"
+                ),
+            )),
+        }
     }
 
     /// Build the rigid-body method on SO(3). An error names the method if it integrates
