@@ -29,7 +29,7 @@
 //! pivoting searches but never swaps — the same work for every implementation). Every
 //! implementation's solution is checked against a known x before timing.
 //!
-//! Run with `cargo bench --features faer --bench linear_solve` (add `-- linear_solve/lu` or
+//! Run with `cargo bench --bench linear_solve` (add `-- linear_solve/lu` or
 //! `-- linear_solve/small` for a subset). Timings are short on purpose (2 s measurement,
 //! 0.5 s warm-up, 20 samples); medians are in
 //! `target/criterion/linear_solve_lu/<implementation>/<n>/new/estimates.json`.

@@ -9,6 +9,8 @@
 //!   a buffer allocated once per run; factor and solve allocate nothing. The Newton systems of
 //!   the spectral methods are (N·s)-sized, with s chosen at run time.
 
+pub mod sparse;
+
 use crate::scalar::Scalar;
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 

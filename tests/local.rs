@@ -336,3 +336,130 @@ fn toda_lax_traces_match_a_dense_lax_matrix_and_stay_conserved() {
         invariants.max
     );
 }
+
+mod newton {
+    use super::*;
+    use svi::method::local::newton::LinearSolverKind;
+    use svi::{Solver, Svi};
+    use svi_models::RelativisticChain;
+
+    fn chain(n: usize) -> RelativisticChain {
+        let mut model = RelativisticChain::default();
+        model.set_parameter("n", n as f64).unwrap();
+        model
+    }
+
+    #[test]
+    fn sparse_and_dense_newton_take_the_same_step() {
+        // One step of SVI 6/5 on the relativistic chain of 50 particles (300 unknowns), the
+        // Newton systems solved by faer's sparse LU and by svi's dense LU.
+        let model = chain(50);
+        let (t0, q0, v0) = model.initial_state();
+        let step = |kind| {
+            let integrator = Integrator::new(
+                model.clone(),
+                Svi::new(6).with_quadrature(5).with_linear_solver(kind),
+            );
+            let start = integrator
+                .initial_state(
+                    t0,
+                    &DynInitial::Velocity {
+                        q: q0.clone(),
+                        v: v0.clone(),
+                    },
+                )
+                .unwrap();
+            integrator.step(t0, &start, 0.2).unwrap().0
+        };
+        let (sparse, dense) = (
+            step(LinearSolverKind::Sparse),
+            step(LinearSolverKind::Dense),
+        );
+        let q = (&sparse.q - &dense.q).amax();
+        let p = (&sparse.y - &dense.y).amax();
+        assert!(q < 1e-12 && p < 1e-12, "q: {q:e}, p: {p:e}");
+        assert!(sparse.q.amax() > 0.1, "the step moved");
+    }
+
+    #[test]
+    fn the_inverse_legendre_map_matches_the_closed_form() {
+        let model = chain(20);
+        let (t0, q0, v0) = model.initial_state();
+        let run = Integrator::new(model.clone(), Svi::new(4))
+            .run(
+                t0,
+                DynInitial::Velocity {
+                    q: q0,
+                    v: v0.clone(),
+                },
+                0.1,
+                1.0,
+                &mut (),
+            )
+            .unwrap();
+        for (v, p) in run.last.v.iter().zip(run.last.p.iter()) {
+            assert!(
+                (v - model.velocity(*p)).abs() < 1e-14,
+                "{v} against {}",
+                model.velocity(*p)
+            );
+        }
+        assert!(run.last.v.amax() > 0.5, "relativistic speeds");
+    }
+
+    #[test]
+    fn newton_reaches_the_order_and_conserves_energy_on_a_relativistic_chain() {
+        // SVI 4/3 (order 6) with velocity-dependent mass: observed order at T = 5 against a
+        // reference of SVI 7/6 (order 12); bounded energy error.
+        let model = chain(12);
+        let (t0, q0, v0) = model.initial_state();
+        let run = |method: Svi, h: f64| {
+            let mut energy = EnergyError::default();
+            let run = Integrator::new(model.clone(), method)
+                .run(
+                    t0,
+                    DynInitial::Velocity {
+                        q: q0.clone(),
+                        v: v0.clone(),
+                    },
+                    h,
+                    5.0,
+                    &mut energy,
+                )
+                .unwrap();
+            (run.last.q, energy.max, run.statistics)
+        };
+        let (reference, _, _) = run(Svi::new(7).with_quadrature(6), 0.05);
+        let (coarse, _, _) = run(Svi::new(4).with_quadrature(3), 0.5);
+        let (fine, energy, statistics) = run(Svi::new(4).with_quadrature(3), 0.25);
+        let order = ((&coarse - &reference).amax() / (&fine - &reference).amax()).log2();
+        assert!((order - 6.0).abs() < 0.5, "observed order {order}");
+        assert!(energy < 1e-7, "energy error {energy:e}");
+        assert_eq!(statistics.steps, 20);
+    }
+
+    #[test]
+    fn sparse_newton_and_the_fixed_point_agree_on_a_constant_mass_chain() {
+        let model = fput(16);
+        let (t0, q0, v0) = model.initial_state();
+        let run = |method: Svi| {
+            Integrator::new(model.clone(), method)
+                .run(
+                    t0,
+                    DynInitial::Velocity {
+                        q: q0.clone(),
+                        v: v0.clone(),
+                    },
+                    0.5,
+                    50.0,
+                    &mut (),
+                )
+                .unwrap()
+                .last
+        };
+        let fixed = run(Svi::new(6).with_quadrature(5));
+        let newton = run(Svi::new(6).with_quadrature(5).with_solver(Solver::Newton));
+        assert!((&fixed.q - &newton.q).amax() < 1e-12);
+        assert!((&fixed.p - &newton.p).amax() < 1e-12);
+    }
+}

@@ -59,6 +59,7 @@ pub mod fput;
 pub mod kepler;
 pub mod oscillator;
 pub mod pendulum;
+pub mod relativistic_chain;
 pub mod spring_pendulum;
 pub mod toda;
 
@@ -74,6 +75,7 @@ pub use fput::Fput;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
+pub use relativistic_chain::RelativisticChain;
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
 

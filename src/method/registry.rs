@@ -463,15 +463,19 @@ impl MethodSpec {
 
     /// Build the method for a runtime-dimension model (a sum of local terms,
     /// [`crate::model::local::LocalLagrangian`]) and hand it to `visitor` as its concrete type:
-    /// `svi` (the fixed point, constant mass) and `verlet`. The other methods of ℝᴺ run on
+    /// `svi` (the fixed point for constant mass, else sparse Newton), `svi-newton` (sparse
+    /// Newton always) and `verlet` (constant mass). The other methods of ℝᴺ run on
     /// fixed-size models only, and asking for one is an error that names it.
     pub fn visit_local<V: LocalMethodVisitor>(&self, visitor: V) -> Result<V::Output, Error> {
         self.check_space(SpaceKind::Vector)?;
         match self.entry.name {
-            "svi" => {
+            "svi" | "svi-newton" => {
                 let mut svi = Svi::new(self.points_in_use().unwrap_or_default());
                 if let Some(quadrature) = self.quadrature {
                     svi = svi.with_quadrature(quadrature);
+                }
+                if self.entry.name == "svi-newton" {
+                    svi = svi.with_solver(Solver::Newton);
                 }
                 Ok(visitor.visit(svi))
             }
@@ -479,7 +483,8 @@ impl MethodSpec {
             name => Err(Error::invalid(
                 "method",
                 format!(
-                    "'{self}' runs on fixed-size models only; runtime-dimension models (chains,                      lattices) take svi or verlet (not {name})"
+                    "'{self}' runs on fixed-size models only; runtime-dimension models \
+                     (chains, lattices) take svi, svi-newton or verlet (not {name})"
                 ),
             )),
         }

@@ -95,6 +95,28 @@ pub trait TermWidth {
         v: &DVector<f64>,
     ) -> f64;
 
+    /// The term's first derivatives ∂ℓ/∂q, ∂ℓ/∂q̇ at (t, q, q̇) (local coordinates), written
+    /// to the first 2K entries of `out` in the layout of [`TermDerivatives`].
+    fn first_derivatives<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    );
+
+    /// The term's first and second derivatives at (t, q, q̇), flattened into `out` (length
+    /// 2K + 3K², see [`TermDerivatives`]).
+    fn second_derivatives<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    );
+
     /// Add the term's block of ∂²L/∂q̇∂q̇ into `out` as (row, column, value) triplets.
     fn mass_triplets<L: LocalLagrangian<Width = Self> + ?Sized>(
         model: &L,
@@ -104,6 +126,48 @@ pub trait TermWidth {
         v: &DVector<f64>,
         out: &mut Vec<(usize, usize, f64)>,
     );
+}
+
+/// The layout of one term's derivatives as [`TermWidth::second_derivatives`] writes them:
+/// ∂ℓ/∂q (K), ∂ℓ/∂q̇ (K), then the column-major K × K blocks ∂²ℓ/∂q∂q, ∂²ℓ/∂q∂q̇ (entry
+/// (a, b) = ∂²ℓ/∂q_a∂q̇_b) and ∂²ℓ/∂q̇∂q̇.
+#[derive(Debug, Clone, Copy)]
+pub struct TermDerivatives {
+    /// K.
+    pub width: usize,
+}
+
+impl TermDerivatives {
+    /// The length 2K + 3K² of the flattened derivatives.
+    pub fn len(&self) -> usize {
+        2 * self.width + 3 * self.width * self.width
+    }
+    /// Whether the layout is empty (K = 0).
+    pub fn is_empty(&self) -> bool {
+        self.width == 0
+    }
+    /// ∂ℓ/∂q_a.
+    pub fn q(&self, d: &[f64], a: usize) -> f64 {
+        d[a]
+    }
+    /// ∂ℓ/∂q̇_a.
+    pub fn v(&self, d: &[f64], a: usize) -> f64 {
+        d[self.width + a]
+    }
+    /// ∂²ℓ/∂q_a∂q_b.
+    pub fn qq(&self, d: &[f64], a: usize, b: usize) -> f64 {
+        d[2 * self.width + a + self.width * b]
+    }
+    /// ∂²ℓ/∂q_a∂q̇_b.
+    pub fn qv(&self, d: &[f64], a: usize, b: usize) -> f64 {
+        let k = self.width;
+        d[2 * k + k * k + a + k * b]
+    }
+    /// ∂²ℓ/∂q̇_a∂q̇_b.
+    pub fn vv(&self, d: &[f64], a: usize, b: usize) -> f64 {
+        let k = self.width;
+        d[2 * k + 2 * k * k + a + k * b]
+    }
 }
 
 /// One term of a [`LocalLagrangian`] as a fixed-size [`Lagrangian<K>`] in its own K
@@ -180,6 +244,47 @@ impl<const K: usize> TermWidth for Const<K> {
     ) -> f64 {
         let (ql, vl) = gather(&model.indices(term), q, v);
         model.term(term, t, &ql, &vl)
+    }
+
+    #[inline]
+    fn first_derivatives<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    ) {
+        let d = Term { model, index: term }.first_derivatives(
+            t,
+            &SVector::from_column_slice(q),
+            &SVector::from_column_slice(v),
+        );
+        out[..K].copy_from_slice(d.q.as_slice());
+        out[K..2 * K].copy_from_slice(d.v.as_slice());
+    }
+
+    #[inline]
+    fn second_derivatives<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    ) {
+        let d = Term { model, index: term }.second_derivatives(
+            t,
+            &SVector::from_column_slice(q),
+            &SVector::from_column_slice(v),
+        );
+        let (gradients, hessians) = out.split_at_mut(2 * K);
+        gradients[..K].copy_from_slice(d.q.as_slice());
+        gradients[K..].copy_from_slice(d.v.as_slice());
+        let square = K * K;
+        hessians[..square].copy_from_slice(d.qq.as_slice());
+        hessians[square..2 * square].copy_from_slice(d.qv.as_slice());
+        hessians[2 * square..].copy_from_slice(d.vv.as_slice());
     }
 
     fn mass_triplets<L: LocalLagrangian<Width = Self> + ?Sized>(

@@ -11,12 +11,14 @@
 //! divergence limit and output times like every other method.
 //!
 //! What runs on large systems: Störmer–Verlet ([`verlet`], explicit kick–drift–kick for a
-//! constant mass matrix) and SVI by the Hessian-free fixed point for a constant mass matrix
-//! ([`svi`]). Spectral collocation, the implicit classic variational integrators, linear
+//! constant mass matrix), SVI by the Hessian-free fixed point for a constant mass matrix and
+//! by sparse Newton for every other Lagrangian ([`svi`], [`newton`]; the linear solves go
+//! through the seam of [`crate::linalg::sparse`]). Spectral collocation, the implicit classic variational integrators, linear
 //! stability analysis and the tangent map stay on fixed-size ℝᴺ (small systems) for now;
 //! asking for them on a runtime-dimension model is an error that says so.
 
 pub mod mass;
+pub mod newton;
 pub mod svi;
 
 pub mod verlet;
@@ -29,6 +31,7 @@ use crate::model::Structure;
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
 use mass::MassInverse;
 use nalgebra::DVector;
+use newton::{Legendre, LinearSolverKind};
 
 /// An integration method for [`LocalLagrangian`] models on runtime-sized ℝⁿ, in the
 /// coordinates (q, p).
@@ -63,8 +66,36 @@ pub trait LocalMethod {
         let _ = workspace;
     }
 
-    /// The cached M⁻¹ of a constant-mass run, from which q̇ = M⁻¹p completes a state.
-    fn mass_inverse<'a>(&self, workspace: &'a Self::Workspace) -> Option<&'a MassInverse>;
+    /// The velocity q̇ of the momentum `p` at (t, q), from what the run's workspace holds (a
+    /// constant mass matrix's cached inverse, or the sparse inverse Legendre map started at
+    /// `guess`).
+    fn local_velocity<L: LocalLagrangian>(
+        &self,
+        model: &L,
+        workspace: &Self::Workspace,
+        t: f64,
+        q: &DVector<f64>,
+        p: &DVector<f64>,
+        guess: &DVector<f64>,
+    ) -> Result<DVector<f64>, Error>;
+}
+
+/// The velocity q̇ of the momentum `p` at (t, q) without a run's workspace: M⁻¹p for a
+/// constant mass matrix, else the inverse Legendre map by sparse Newton from `guess`.
+pub(crate) fn cold_velocity<L: LocalLagrangian>(
+    model: &L,
+    t: f64,
+    q: &DVector<f64>,
+    p: &DVector<f64>,
+    guess: &DVector<f64>,
+) -> Result<DVector<f64>, Error> {
+    if L::STRUCTURE == Structure::ConstantMass {
+        let zero = DVector::zeros(q.len());
+        return Ok(MassInverse::new(q.len(), &model.mass_triplets(t, q, &zero))?.apply(p));
+    }
+    let mut v = guess.clone();
+    Legendre::new(model, LinearSolverKind::Sparse)?.solve(model, t, q, p, &mut v)?;
+    Ok(v)
 }
 
 /// The constant mass matrix of `model` at (t, q), inverted, after checking that the model
@@ -81,8 +112,7 @@ pub(crate) fn constant_mass<L: LocalLagrangian>(
             "structure",
             format!(
                 "{method} on a runtime-dimension model needs a constant mass matrix \
-                 (Structure::ConstantMass); a general Lagrangian needs the sparse Newton \
-                 path, which is not built yet"
+                 (Structure::ConstantMass); a general Lagrangian takes svi (sparse Newton)"
             ),
         ));
     }
@@ -202,13 +232,13 @@ impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
         workspace: Option<&M::Workspace>,
         t: f64,
         state: &DynState,
-        _guess: &DVector<f64>,
+        guess: &DVector<f64>,
     ) -> Result<DynPoint, Error> {
-        let v = match workspace.and_then(|workspace| self.mass_inverse(workspace)) {
-            Some(inverse) => inverse.apply(&state.y),
-            None => {
-                constant_mass(model, LocalMethod::info(self).name, t, &state.q)?.apply(&state.y)
+        let v = match workspace {
+            Some(workspace) => {
+                self.local_velocity(model, workspace, t, &state.q, &state.y, guess)?
             }
+            None => cold_velocity(model, t, &state.q, &state.y, guess)?,
         };
         Ok(DynPoint {
             t,

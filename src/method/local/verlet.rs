@@ -10,7 +10,7 @@
 use crate::StormerVerlet;
 use crate::error::{Error, StepFailure};
 use crate::method::local::mass::MassInverse;
-use crate::method::local::{LocalMethod, constant_mass};
+use crate::method::local::{LocalMethod, cold_velocity, constant_mass};
 use crate::method::space::DynState;
 use crate::method::{Coordinates, MethodInfo, StepReport};
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
@@ -141,7 +141,18 @@ impl LocalMethod for StormerVerlet {
         workspace.cached = false;
     }
 
-    fn mass_inverse<'a>(&self, workspace: &'a LocalVerletWorkspace) -> Option<&'a MassInverse> {
-        workspace.mass_inverse.as_ref()
+    fn local_velocity<L: LocalLagrangian>(
+        &self,
+        model: &L,
+        workspace: &LocalVerletWorkspace,
+        t: f64,
+        q: &DVector<f64>,
+        p: &DVector<f64>,
+        guess: &DVector<f64>,
+    ) -> Result<DVector<f64>, Error> {
+        match &workspace.mass_inverse {
+            Some(inverse) => Ok(inverse.apply(p)),
+            None => cold_velocity(model, t, q, p, guess),
+        }
     }
 }

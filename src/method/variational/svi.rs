@@ -51,6 +51,7 @@ use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::method::Method;
+use crate::method::local::newton::LinearSolverKind;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
@@ -76,6 +77,9 @@ pub struct Svi {
     pub max_iterations: usize,
     /// How the stage equations (8a)–(8b) are solved.
     pub solver: Solver,
+    /// The linear solver of Newton's method on runtime-dimension models
+    /// ([`crate::method::local`]; fixed-size models always take svi's dense LU).
+    pub linear_solver: LinearSolverKind,
 }
 
 /// How SVI solves its stage equations.
@@ -97,6 +101,7 @@ impl Default for Svi {
             quadrature: None,
             max_iterations: 50,
             solver: Solver::Auto,
+            linear_solver: LinearSolverKind::Sparse,
         }
     }
 }
@@ -129,6 +134,12 @@ impl Svi {
         self
     }
 
+    /// Solve Newton's linear systems on runtime-dimension models with `linear_solver`.
+    pub fn with_linear_solver(mut self, linear_solver: LinearSolverKind) -> Self {
+        self.linear_solver = linear_solver;
+        self
+    }
+
     /// The number of Gauss–Legendre points in use.
     pub fn quadrature_points(&self) -> usize {
         self.quadrature
@@ -156,17 +167,17 @@ pub(crate) struct Tables {
     /// (h/2) w_μ.
     pub(crate) weights: Vec<f64>,
     /// l_ν(τ_μ), m × (s + 1).
-    values: DMatrix<f64>,
+    pub(crate) values: DMatrix<f64>,
     /// l̇_ν(τ_μ), m × (s + 1).
     reference_derivatives: DMatrix<f64>,
     /// (2/h) l̇_ν(τ_μ), m × (s + 1).
-    derivatives: DMatrix<f64>,
+    pub(crate) derivatives: DMatrix<f64>,
     /// CGL nodes x_ν.
     interpolation_nodes: Vec<f64>,
     /// c'_μ = (τ_μ + 1)/2, the quadrature nodes on [0, 1].
     unit_nodes: Vec<f64>,
     /// c_ν = (x_ν + 1)/2, the CGL nodes on [0, 1].
-    unit_points: Vec<f64>,
+    pub(crate) unit_points: Vec<f64>,
 }
 
 impl Tables {
@@ -853,8 +864,7 @@ impl<const N: usize> Method<N> for Svi {
         Some(Svi {
             points,
             quadrature,
-            max_iterations: self.max_iterations,
-            solver: self.solver,
+            ..self.clone()
         })
     }
 
