@@ -6,6 +6,7 @@ use clap::{Args, Parser, Subcommand};
 use svi_cli::command;
 use svi_cli::command::bench::BenchArgs;
 use svi_cli::command::ensemble::EnsembleArgs;
+use svi_cli::command::scale::ScaleArgs;
 use svi_cli::command::stability::StabilityArgs;
 use svi_cli::command::stress::StressArgs;
 use svi_cli::scene::error::is_bad_input;
@@ -38,6 +39,9 @@ enum Command {
     Stability(StabilityArgs),
     /// Stress tests: largest stable step, failure mode and long-time energy drift per method.
     Stress(StressArgs),
+    /// Time per step against the number of degrees of freedom of chains (runtime-dimension
+    /// models): fitted exponent, peak memory, CSV and SVG.
+    Scale(ScaleArgs),
     /// Run a scene over grids or random draws of parameters and initial states, in parallel:
     /// one row per member (exit status 1 if any member failed; the table lists every one).
     Ensemble(EnsembleArgs),
@@ -88,6 +92,7 @@ fn main() -> ExitCode {
         Command::Stability(args) => command::stability::execute_args(&args),
         Command::Stress(args) => command::stress::execute_args(&args),
         Command::Ensemble(args) => command::ensemble::execute_args(&args),
+        Command::Scale(args) => command::scale::execute_args(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,6 +10,7 @@
 //! (Kahan) summation, so a run of 10⁶ steps keeps the accuracy of its steps (on SO(3) this is
 //! what keeps R orthogonal to round-off without re-orthonormalisation).
 
+use crate::error::StepFailure;
 use crate::linalg::compensated_add;
 use crate::model::so3::{Matrix3, Vector3};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
@@ -26,6 +27,30 @@ pub trait StepState: Clone + Debug + PartialEq {
     fn plus(&self, increment: &Self) -> Self;
     /// `self += increment` with the Kahan compensation carried in `compensation`.
     fn add_compensated(&mut self, compensation: &mut Self, increment: &Self);
+    /// [`StepState::add_compensated`] if the sum is finite and, with a `limit`, no component
+    /// exceeds it in absolute value; otherwise `self` and `compensation` are left as they
+    /// were and the failure says why.
+    fn add_checked(
+        &mut self,
+        compensation: &mut Self,
+        increment: &Self,
+        limit: Option<f64>,
+    ) -> Result<(), StepFailure> {
+        let (mut next, mut carried) = (self.clone(), compensation.clone());
+        next.add_compensated(&mut carried, increment);
+        if !next.is_finite() {
+            return Err(StepFailure::NonFinite);
+        }
+        if let Some(limit) = limit {
+            let norm = next.max_abs();
+            if norm > limit {
+                return Err(StepFailure::Diverged { norm, limit });
+            }
+        }
+        self.assign(&next);
+        compensation.assign(&carried);
+        Ok(())
+    }
     /// Whether every component is finite.
     fn is_finite(&self) -> bool;
     /// The largest absolute component (for the divergence limit).
@@ -512,8 +537,43 @@ impl StepState for DynState {
         );
     }
 
+    /// One read-only pass computes the sums exactly as the compensated addition will (t =
+    /// s + (δ − c)) and checks them; only then are they written: no copy of the state.
+    fn add_checked(
+        &mut self,
+        compensation: &mut Self,
+        increment: &Self,
+        limit: Option<f64>,
+    ) -> Result<(), StepFailure> {
+        // Plain comparisons on slices (vectorised); a NaN sum is caught by `finite`.
+        let sums = |s: &DVector<f64>, c: &DVector<f64>, d: &DVector<f64>| {
+            let (mut norm, mut finite) = (0.0f64, true);
+            for ((s, c), d) in s.as_slice().iter().zip(c.as_slice()).zip(d.as_slice()) {
+                let t = (s + (d - c)).abs();
+                finite &= t <= f64::MAX;
+                norm = if t > norm { t } else { norm };
+            }
+            (norm, finite)
+        };
+        let (q_norm, q_finite) = sums(&self.q, &compensation.q, &increment.q);
+        let (y_norm, y_finite) = sums(&self.y, &compensation.y, &increment.y);
+        if !(q_finite && y_finite) {
+            return Err(StepFailure::NonFinite);
+        }
+        let norm = q_norm.max(y_norm);
+        if let Some(limit) = limit
+            && norm > limit
+        {
+            return Err(StepFailure::Diverged { norm, limit });
+        }
+        self.add_compensated(compensation, increment);
+        Ok(())
+    }
+
     fn is_finite(&self) -> bool {
-        self.q.iter().chain(self.y.iter()).all(|x| x.is_finite())
+        let finite =
+            |x: &DVector<f64>| x.as_slice().iter().fold(true, |all, x| all & x.is_finite());
+        finite(&self.q) & finite(&self.y)
     }
 
     fn max_abs(&self) -> f64 {

@@ -200,6 +200,7 @@ fn gather<const K: usize>(
     q: &DVector<f64>,
     v: &DVector<f64>,
 ) -> (SVector<f64, K>, SVector<f64, K>) {
+    let (q, v) = (q.as_slice(), v.as_slice());
     (
         SVector::from_fn(|i, _| q[indices[i]]),
         SVector::from_fn(|i, _| v[indices[i]]),
@@ -229,7 +230,8 @@ impl<const K: usize> TermWidth for Const<K> {
         } else {
             local.force(t, &ql, &vl)
         };
-        for (i, g) in indices.iter().zip(gradient.iter()) {
+        let out = out.as_mut_slice();
+        for (i, g) in indices.iter().zip(gradient.as_slice()) {
             out[*i] += g;
         }
     }

@@ -95,7 +95,6 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             increment,
             t,
             h,
-            from,
             &mut next,
             divergence_limit,
             statistics,

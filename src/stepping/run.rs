@@ -180,12 +180,6 @@ impl<S: Space> Cursor<S> {
             state,
         }
     }
-
-    /// `self = other`, reusing the storage.
-    pub(crate) fn assign(&mut self, other: &Cursor<S>) {
-        self.state.assign(&other.state);
-        self.compensation.assign(&other.compensation);
-    }
 }
 
 /// The state of a run between steps.
@@ -193,9 +187,6 @@ pub(crate) struct Progress<S: Space> {
     /// Time of `cursor`.
     pub(crate) t: f64,
     pub(crate) cursor: Cursor<S>,
-    /// Where a step is computed before it is accepted into `cursor` (storage reused from
-    /// step to step).
-    pub(crate) scratch: Cursor<S>,
     /// Newton start of the next inverse Legendre map (the last velocity completed).
     pub(crate) guess: S::Velocity,
     pub(crate) statistics: Statistics,
@@ -356,11 +347,9 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     pub(crate) fn start(&self, t0: f64, initial: &S::Initial) -> Result<Progress<S>, Error> {
         let state = self.initial_state(t0, initial)?;
         self.method.check_model(&self.model, t0, &state)?;
-        let cursor = Cursor::new(state);
         Ok(Progress {
             t: t0,
-            scratch: cursor.clone(),
-            cursor,
+            cursor: Cursor::new(state),
             guess: S::initial_guess(initial),
             statistics: Statistics::default(),
         })
@@ -494,9 +483,9 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         }
     }
 
-    /// One step of `method` from `from` at `t` with size `h` into `next` (the increment
+    /// One step of `method` from `cursor` at `t` with size `h`, in place (the increment
     /// added with compensated summation), checked for finite values and against the
-    /// divergence limit.
+    /// divergence limit; on failure `cursor` is left as it was.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn attempt(
         &self,
@@ -505,27 +494,16 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         increment: &mut S::State,
         t: f64,
         h: f64,
-        from: &Cursor<S>,
-        next: &mut Cursor<S>,
+        cursor: &mut Cursor<S>,
         divergence_limit: Option<f64>,
         statistics: &mut Statistics,
     ) -> Result<(), StepFailure> {
-        let report = method.step(&self.model, workspace, t, h, &from.state, increment)?;
+        let report = method.step(&self.model, workspace, t, h, &cursor.state, increment)?;
         statistics.iterations += report.iterations;
         statistics.evaluations += report.evaluations;
-        next.assign(from);
-        next.state
-            .add_compensated(&mut next.compensation, increment);
-        if !next.state.is_finite() {
-            return Err(StepFailure::NonFinite);
-        }
-        if let Some(limit) = divergence_limit {
-            let norm = next.state.max_abs();
-            if norm > limit {
-                return Err(StepFailure::Diverged { norm, limit });
-            }
-        }
-        Ok(())
+        cursor
+            .state
+            .add_checked(&mut cursor.compensation, increment, divergence_limit)
     }
 
     /// Advance `progress` over [t, t + h]: one step, or (after a failure, while `depth` > 0)
@@ -549,15 +527,11 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             increment,
             t,
             h,
-            &progress.cursor,
-            &mut progress.scratch,
+            &mut progress.cursor,
             divergence_limit,
             &mut progress.statistics,
         ) {
-            Ok(()) => {
-                std::mem::swap(&mut progress.cursor, &mut progress.scratch);
-                return Ok(());
-            }
+            Ok(()) => return Ok(()),
             Err(failure) => failure,
         };
         if depth == 0 {

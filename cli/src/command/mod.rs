@@ -5,6 +5,7 @@ pub mod ensemble;
 pub mod list;
 pub mod peers;
 pub mod run;
+pub mod scale;
 pub mod space;
 pub mod stability;
 pub mod stress;

@@ -69,7 +69,16 @@ impl MassInverse {
     /// out = M⁻¹ p (out and p of length n).
     pub fn apply_into(&self, p: &DVector<f64>, out: &mut DVector<f64>) {
         match self {
-            MassInverse::Diagonal(inverse) => out.zip_zip_apply(p, inverse, |o, p, m| *o = p * m),
+            MassInverse::Diagonal(inverse) => {
+                for ((o, p), m) in out
+                    .as_mut_slice()
+                    .iter_mut()
+                    .zip(p.as_slice())
+                    .zip(inverse.as_slice())
+                {
+                    *o = p * m;
+                }
+            }
             MassInverse::Dense(lu) => {
                 out.copy_from(p);
                 lu.solve_in_place(out);

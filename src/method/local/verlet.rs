@@ -107,9 +107,12 @@ impl LocalMethod for StormerVerlet {
                 || (*cached_t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cached_t.abs()))
             && state
                 .q
+                .as_slice()
                 .iter()
-                .zip(cached_q.iter())
-                .all(|(a, b)| (a - b).abs() <= *cached_tolerance);
+                .zip(cached_q.as_slice())
+                .fold(true, |all, (a, b)| {
+                    all & ((a - b).abs() <= *cached_tolerance)
+                });
         if continues {
             std::mem::swap(start_force, end_force);
         } else {
@@ -117,20 +120,45 @@ impl LocalMethod for StormerVerlet {
             // ∂L/∂q of a constant-mass model does not depend on q̇.
             model.force_into(t, &state.q, &state.y, start_force);
         }
-        // Kick, drift.
-        half.zip_zip_apply(&state.y, start_force, |k, p, f| *k = p + dt * f);
+        // Kick, drift (loops over slices: nalgebra's element iterators do not vectorise).
+        for ((k, p), f) in half
+            .as_mut_slice()
+            .iter_mut()
+            .zip(state.y.as_slice())
+            .zip(start_force.as_slice())
+        {
+            *k = p + dt * f;
+        }
         mass_inverse.apply_into(half, velocity);
-        increment.q.zip_apply(velocity, |d, v| *d = h * v);
-        cached_q.zip_zip_apply(&state.q, &increment.q, |e, q, d| *e = q + d);
+        let mut extent = 0.0f64;
+        for (((d, e), q), v) in increment
+            .q
+            .as_mut_slice()
+            .iter_mut()
+            .zip(cached_q.as_mut_slice())
+            .zip(state.q.as_slice())
+            .zip(velocity.as_slice())
+        {
+            *d = h * v;
+            *e = q + *d;
+            let size = q.abs().max(e.abs());
+            extent = if size > extent { size } else { extent };
+        }
         let end_t = t + h;
         // Kick at the end.
         model.force_into(end_t, cached_q, velocity, end_force);
-        increment
+        for ((d, a), b) in increment
             .y
-            .zip_zip_apply(start_force, end_force, |d, a, b| *d = dt * (a + b));
+            .as_mut_slice()
+            .iter_mut()
+            .zip(start_force.as_slice())
+            .zip(end_force.as_slice())
+        {
+            *d = dt * (a + b);
+        }
         *cached = true;
         *cached_t = end_t;
-        *cached_tolerance = 4.0 * f64::EPSILON * state.q.amax().max(cached_q.amax());
+        *cached_tolerance = 4.0 * f64::EPSILON * extent;
         Ok(StepReport {
             iterations: 0,
             evaluations,
