@@ -60,6 +60,7 @@ pub mod kepler;
 pub mod oscillator;
 pub mod pendulum;
 pub mod relativistic_chain;
+pub mod sine_gordon_chain;
 pub mod spring_pendulum;
 pub mod toda;
 
@@ -76,6 +77,7 @@ pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use relativistic_chain::RelativisticChain;
+pub use sine_gordon_chain::SineGordonChain;
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
 

@@ -9,8 +9,9 @@
 //!   simplified across iterations and steps), h = 0.1.
 //!
 //! For each n the run of 2K steps and the run of K steps are timed (the median of `batches`
-//! runs each) and their difference divided by K is the cost of a step, free of the set-up
-//! (workspace, symbolic analysis, the first factorisation). The exponent is the
+//! runs each; K doubled from `--steps` until the longer run lasts 0.2 s) and their difference
+//! divided by K is the cost of a step, free of the set-up (workspace, symbolic analysis, the
+//! first factorisation). The exponent is the
 //! least-squares slope of log(time per step) against log n. The peak resident memory of the
 //! process (getrusage) is read after each size; sizes run in ascending order, so the figure
 //! after the largest size is that size's peak. Writes `scale.csv` and `scale.svg` to
@@ -32,6 +33,9 @@ use svi_models::{Fput, RelativisticChain};
 /// factors).
 pub const MAX_SIZE: usize = 1_000_000;
 
+/// The largest K.
+const MAX_STEPS: usize = 1 << 20;
+
 /// The arguments of `svi scale`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ScaleArgs {
@@ -42,12 +46,16 @@ pub struct ScaleArgs {
         default_value = "1000,3162,10000,31623,100000"
     )]
     pub sizes: Vec<usize>,
-    /// K: the timed runs take K and 2K steps (1 to 10⁴).
+    /// K: the timed runs take K and 2K steps (1 to 2²⁰), K doubled until the longer run
+    /// lasts 0.2 s.
     #[arg(long, default_value_t = 10)]
     pub steps: usize,
     /// Timed runs of each length; the median is used (1 to 100).
     #[arg(long, default_value_t = 3)]
     pub batches: usize,
+    /// K doubles until the run of 2K steps lasts this many seconds (0 to 60).
+    #[arg(long, default_value_t = 0.2)]
+    pub min_run: f64,
     /// Where `scale.csv` and `scale.svg` are written.
     #[arg(long, default_value = "benches/results")]
     pub out_dir: String,
@@ -143,9 +151,17 @@ fn measure<L: LocalLagrangian + LocalDefaults + Clone, M: LocalMethod + Clone>(
     args: &ScaleArgs,
 ) -> Result<Measurement, Error> {
     model.set_parameter("n", n as f64)?;
-    let k = args.steps;
-    let (short, short_iterations) = time_run(&model, &method, k, args.batches)?;
-    let (long, long_iterations) = time_run(&model, &method, 2 * k, args.batches)?;
+    // K doubles until the run of 2K steps lasts `min_run`: cheap steps need many to stand out
+    // of the set-up and the clock's noise.
+    let mut k = args.steps;
+    let (short, short_iterations, long, long_iterations) = loop {
+        let (short, short_iterations) = time_run(&model, &method, k, args.batches)?;
+        let (long, long_iterations) = time_run(&model, &method, 2 * k, args.batches)?;
+        if long >= args.min_run || k >= MAX_STEPS {
+            break (short, short_iterations, long, long_iterations);
+        }
+        k *= 2;
+    };
     Ok(Measurement {
         method: method_name,
         model: model.name(),
@@ -288,6 +304,7 @@ mod tests {
             sizes: vec![100],
             steps: 2,
             batches: 1,
+            min_run: 0.0,
             out_dir: "x".into(),
         };
         assert!(good.check().is_ok());
@@ -331,6 +348,7 @@ mod tests {
             sizes: vec![50, 20],
             steps: 2,
             batches: 1,
+            min_run: 0.0,
             out_dir: "unused".into(),
         };
         let measurements = scale(&args).unwrap();
