@@ -115,7 +115,7 @@ impl LocalDefaults for SineGordonChain {
             "n" => self.n = size(name, value, 1)?,
             "length" => self.length = positive(name, value)?,
             "speed" => {
-                if !(finite(name, value)?.abs() < 1.0) {
+                if finite(name, value)?.abs() >= 1.0 {
                     return Err(Error::invalid(
                         name,
                         format!("{value:?} must lie in (−1, 1)"),
