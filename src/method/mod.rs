@@ -15,6 +15,7 @@
 
 pub mod collocation;
 pub mod lie_svi;
+pub mod multiscale;
 pub mod registry;
 pub mod space;
 pub mod step;
