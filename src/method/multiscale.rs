@@ -74,7 +74,10 @@
 //!   Lagrangian).
 //!
 //! Needs hω ≫ 1: for small θ the oscillatory functions approach polynomials already in the
-//! space and the Newton matrix becomes singular. External forces are not supported.
+//! space and the Newton matrix becomes ill-conditioned (harmonic oscillator ω = 1, 4 points,
+//! one step from (1, 0): no convergence in 50 Newton iterations for hω ≤ 1, 35 iterations at
+//! hω = 2, against 4 per step on the stiff spring pendulum at hω ≈ 31). External forces are
+//! not supported.
 //!
 //! # References
 //! M. Leok, *Generalized Variational Integrators*, ch. 5 of *Foundations of Computational
