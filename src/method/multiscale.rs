@@ -428,6 +428,7 @@ fn fast_frequency<L: Lagrangian<N>, const N: usize>(
 }
 
 /// Residual of the stationarity conditions and its Jacobian in the unknowns.
+#[allow(clippy::too_many_arguments)]
 fn assemble<L: Lagrangian<N>, const N: usize>(
     model: &L,
     tables: &Tables,
