@@ -105,7 +105,7 @@ pub struct Multiscale {
     pub points: usize,
     /// Degree d of the envelopes of sin ωt and cos ωt.
     pub envelope: usize,
-    /// Filon–Lobatto nodes n of the action integral (in x); `None`: 2 · `points`.
+    /// Filon–Lobatto nodes n of the action integral (in x); `None`: `points` + 2.
     pub filon: Option<usize>,
     /// Highest harmonic M of the fast phase resolved in the action (K = 2M + 1 phase points).
     pub harmonics: usize,
@@ -117,13 +117,14 @@ pub struct Multiscale {
 }
 
 impl Default for Multiscale {
-    /// 4 points (degree 3), linear envelopes, 8 Filon nodes, harmonics up to 4, ω estimated.
+    /// 4 points (degree 3), linear envelopes, 6 Filon nodes, harmonics up to 2 (exact for a
+    /// Lagrangian quadratic in the oscillating coordinates), ω estimated.
     fn default() -> Self {
         Multiscale {
             points: 4,
             envelope: 1,
             filon: None,
-            harmonics: 4,
+            harmonics: 2,
             frequency: None,
             max_iterations: 50,
         }
@@ -166,7 +167,7 @@ impl Multiscale {
     /// The number of Filon–Lobatto nodes in use.
     pub fn filon_points(&self) -> usize {
         self.filon
-            .unwrap_or(self.points.saturating_mul(2).min(MAX_POINTS))
+            .unwrap_or(self.points.saturating_add(2).min(MAX_POINTS))
     }
 
     fn validate(&self) -> Result<(), Error> {
@@ -676,11 +677,12 @@ mod tests {
     use super::*;
     use crate::test_models::{Damped, HenonHeiles, Oscillator, VariableMass, advance, state};
 
-    /// The harmonic oscillator's solution cos t lies in the function space and its action
-    /// integrand is a trigonometric polynomial of degree 2 in ψ with polynomial coefficients
-    /// of degree ≤ 4 < n = 6 Filon nodes, so the discrete action is exact and so is the step
-    /// map, for any h: the exact solution (cos t, −sin t) to round-off after 10 steps of up to
-    /// 2.2 periods each.
+    /// The harmonic oscillator's solution cos t lies in the function space, and along it the
+    /// integrands of the stationarity conditions, (−q φ_b + q̇ φ̇_b)(x, ψ), are trigonometric
+    /// polynomials of degree 2 in ψ (M = 2 harmonics) with coefficients of degree ≤ s = 2 in x
+    /// (n = 5 Filon nodes integrate them exactly), so the exact solution solves the discrete
+    /// equations for any h: (cos t, −sin t) to round-off after 10 steps of up to 2.2 periods
+    /// each. (With n = 2 Filon nodes the error is 1.9, with M = 1 harmonic 4e4.)
     #[test]
     fn oscillator_is_exact_for_steps_of_several_periods() {
         let method = Multiscale::new(3);
