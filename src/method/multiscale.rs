@@ -529,9 +529,16 @@ impl<const N: usize> Method<N> for Multiscale {
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         let ws = workspace;
-        let velocity = model
-            .velocity(t, &state.q, &state.y, &state.y)
-            .map_err(|_| StepFailure::NonFinite)?;
+        // A cold start (first step, new h, after a restart) needs the velocity: the inverse
+        // Legendre map, solved only then.
+        let cold = !ws.warm || ws.omega.is_none() || ws.tables.h != h;
+        let velocity = if cold {
+            model
+                .velocity(t, &state.q, &state.y, &state.y)
+                .map_err(|_| StepFailure::NonFinite)?
+        } else {
+            SVector::zeros()
+        };
         let omega = match ws.omega {
             Some(omega) => omega,
             None => {
