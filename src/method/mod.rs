@@ -11,7 +11,8 @@
 //! [`Step`] on [`SO3`] directly.
 //!
 //! Families, one folder or file each: [`variational`] (SVI and the classic variational
-//! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)).
+//! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
+//! (the multiscale variational integrator for stiff oscillations).
 
 pub mod collocation;
 pub mod lie_svi;
