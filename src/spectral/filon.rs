@@ -64,7 +64,9 @@
 //!
 //! **Accuracy.** Each weight is a sum of n terms of size up to |C_kj| |j_k|; the rounding
 //! error is about n² ε relative to Σⱼ|wⱼ| at large θ (where the interior weights are O(θ⁻²)
-//! and the end-point weights O(θ⁻¹)). The tests check 1e-14 for n ≤ 8 over θ ∈ [0, 5·10³].
+//! and the end-point weights O(θ⁻¹)). The tests check 1e-14 for n ≤ 12 and n = 16 over
+//! θ ∈ [0, 5·10³] (measured: 3.2e-15 up to n = 12, the reference's own level; 6.1e-15 at
+//! n = 16; 1.2e-14 at n = 24).
 
 use crate::error::Error;
 use crate::spectral::MAX_POINTS;
@@ -401,10 +403,11 @@ mod tests {
     /// (a) The weights integrate xᵏ cos θx and xᵏ sin θx, k < n, as the composite
     /// Gauss–Legendre reference does, to 1e-14 relative to Σⱼ|wⱼ| (|xᵏ| ≤ 1), for
     /// hω = 2θ from 0 through 10⁻¹⁰, …, 10⁴.
+    /// Measured: largest error 6.1e-15 (n = 16), 3.2e-15 for n ≤ 12.
     #[test]
     fn weights_match_composite_gauss_legendre() {
         let mut worst: f64 = 0.0;
-        for n in 2..=8 {
+        for n in (2..=12).chain([16]) {
             let mut rule = FilonLobatto::new(n).unwrap();
             let (mut c, mut s) = (vec![0.0; n], vec![0.0; n]);
             for theta in theta_grid() {
