@@ -7,11 +7,12 @@
 mod allocations;
 
 use nalgebra::SVector;
+use svi::method::multiscale::Multiscale;
 use svi::{
     Integrator, Lagrangian, Method, Midpoint, SpectralCollocation, StormerVerlet, Svi,
     SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
-use svi_models::{DampedPendulum, DoublePendulum, Kepler};
+use svi_models::{DampedPendulum, DoublePendulum, Kepler, SpringPendulum};
 
 /// Allocations of a run of `steps` steps of size 0.01.
 fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
@@ -80,4 +81,15 @@ fn forced_paths_do_not_allocate_per_step() {
     assert_loop_allocates_nothing(model, SpectralCollocation::new(5), q, v);
     assert_loop_allocates_nothing(model, VariationalIntegrator::new(Midpoint), q, v);
     assert_loop_allocates_nothing(model, StormerVerlet::default(), q, v);
+}
+
+#[test]
+fn multiscale_does_not_allocate_per_step() {
+    // k = 10⁸: ω = 10⁴, so the steps of 0.01 span 16 fast periods (the method's regime).
+    let model = SpringPendulum {
+        k: 1e8,
+        ..SpringPendulum::default()
+    };
+    let (q, v) = (SVector::from([0.0, 0.5]), SVector::from([0.0, 0.0]));
+    assert_loop_allocates_nothing(model, Multiscale::default(), q, v);
 }

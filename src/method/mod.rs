@@ -11,11 +11,15 @@
 //! [`Step`] on [`SO3`] directly.
 //!
 //! Families, one folder or file each: [`variational`] (SVI and the classic variational
-//! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)).
+//! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
+//! (the multiscale variational integrator for stiff oscillations), and [`local`] (SVI and
+//! Störmer–Verlet on runtime-dimension models: chains, lattices, up to 10⁵ degrees of freedom
+//! and beyond).
 
 pub mod collocation;
 pub mod lie_svi;
 pub mod local;
+pub mod multiscale;
 pub mod registry;
 pub mod space;
 pub mod step;

@@ -31,6 +31,7 @@ use crate::error::Error;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::local::LocalMethod;
+use crate::method::multiscale::Multiscale;
 use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
 };
@@ -142,6 +143,16 @@ pub const METHODS: &[Entry] = &[
         options: Options::None,
         space: SpaceKind::Vector,
         summary: "trapezoidal discrete Lagrangian, always implicit",
+    },
+    Entry {
+        name: "multiscale",
+        options: Options::Points {
+            default: || Multiscale::default().points,
+        },
+        space: SpaceKind::Vector,
+        summary: "multiscale variational integrator: polynomials of CGL points P plus sin ωt and \
+                  cos ωt with linear envelopes, Filon–Lobatto action, ω from the linearisation; \
+                  for steps of several fast periods",
     },
     Entry {
         name: "lie-svi",
@@ -451,6 +462,7 @@ impl MethodSpec {
             "midpoint" => visitor.visit(VariationalIntegrator::new(Midpoint)),
             "verlet" => visitor.visit(StormerVerlet::default()),
             "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
+            "multiscale" => visitor.visit(Multiscale::new(points)),
             _ => {
                 self.check_space(SpaceKind::Vector)?;
                 return Err(Error::invalid(
@@ -832,13 +844,19 @@ mod tests {
     impl VectorMethodVisitor<2> for OneStep {
         type Output = Result<(), Error>;
         fn visit<M: Method<2> + Clone>(self, method: M) -> Result<(), Error> {
+            // The multiscale method needs steps of about a fast period or more (ω = 1 here).
+            let h = if method.info().name == "multiscale" {
+                7.0
+            } else {
+                0.1
+            };
             crate::stepping::run::Integrator::new(Oscillators, method)
                 .run_from_velocity(
                     0.0,
                     SVector::from([1.0, 0.0]),
                     SVector::from([0.0, 1.0]),
-                    0.1,
-                    0.1,
+                    h,
+                    h,
                     &mut (),
                 )
                 .map(|_| ())
@@ -920,6 +938,7 @@ mod tests {
         match cell {
             "2·min(P − 1, M)" => Some(2 * (p - 1).min(m)),
             "P − 1" => Some(p - 1),
+            "2·(P − 1)" => Some(2 * (p - 1)),
             _ => cell.parse().ok(),
         }
     }

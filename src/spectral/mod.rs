@@ -5,10 +5,13 @@
 //! - [`basis`]: Chebyshev–Gauss–Lobatto nodes and barycentric Lagrange interpolation (the
 //!   interpolation and differentiation matrices of Li–Wu–Leok eqs. 6–7 and 17).
 //! - [`quadrature`]: Gauss–Legendre rules (the quadrature of the discrete action, eq. 8).
+//! - [`filon`]: Filon–Lobatto rules for ∫ f(x) e^{iθx} dx with θ-dependent weights (the
+//!   oscillatory discrete action of the multiscale integrator, Leok 2004 §5.7.2).
 //! - `starting_values`: the previous step's polynomial extrapolated to the next step's nodes,
 //!   the start of every nonlinear iteration.
 
 pub mod basis;
+pub mod filon;
 pub mod quadrature;
 pub(crate) mod starting_values;
 

@@ -584,7 +584,7 @@ mod tests {
             assert_eq!(
                 error.to_string(),
                 format!(
-                    "--points is an option of svi, svi-newton and sc, not of {}",
+                    "--points is an option of svi, svi-newton, sc and multiscale, not of {}",
                     kind.name()
                 )
             );
