@@ -34,6 +34,8 @@ pub struct Statistics {
     pub iterations: usize,
     /// Points at which derivatives of the Lagrangian were evaluated.
     pub evaluations: usize,
+    /// Jacobians of the nonlinear solves assembled and LU-factorised, summed over all steps.
+    pub factorizations: usize,
 }
 
 /// The result of a run on the space `S` (on ℝᴺ: [`crate::Run`]).
@@ -500,6 +502,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         let report = method.step(&self.model, workspace, t, h, &from.state, increment)?;
         statistics.iterations += report.iterations;
         statistics.evaluations += report.evaluations;
+        statistics.factorizations += report.factorizations;
         let mut next = *from;
         next.state
             .add_compensated(&mut next.compensation, increment);

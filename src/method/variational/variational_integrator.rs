@@ -243,6 +243,7 @@ impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator
         Ok(StepReport {
             iterations,
             evaluations: points * (iterations + 1),
+            factorizations: iterations,
         })
     }
 
