@@ -53,8 +53,8 @@ fn newton_on_kepler_reaches_the_round_off_floor_of_the_fixed_point() {
     // (Brouwer's law), a draw that varies with the step count, so the median is compared.
     // Measured: 2.4e-11, 4.6e-12, 1.1e-12, 1.1e-13, 1.0e-11 (median 4.6e-12; the fixed point
     // over 40000, 42500, …, 80000: median 5.3e-12). Before the residual was written relative
-    // to p_k and the end point taken from the momentum-balance form: 1.4e-10, 8.6e-11,
-    // 9.5e-11, 7.7e-11, 6.6e-11 (median 8.6e-11).
+    // to p_k and the end point taken from the momentum-balance form: 8.8e-11, 6.0e-11,
+    // 4.8e-11, 6.5e-11, 6.4e-11 (median 6.4e-11).
     let model = Kepler::default();
     let (t0, q0, v0) = model.initial_state();
     let t_end = 2000.0;
