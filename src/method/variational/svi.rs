@@ -672,8 +672,9 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
         }
     }
     // Relative to p_k: Σ_μ (h/2) w_μ (2/h) l̇_ν(τ_μ) = l_ν(1) − l_ν(−1) = δ_νs − δ_ν0 (the
-    // quadrature is exact on l̇_ν), so the rows ν < s of p_k δ_ν0 + Σ_μ (h/2) w_μ l̇_ν p(τ_μ)
-    // equal Σ_μ (h/2) w_μ l̇_ν (p(τ_μ) − p_k): the O(|p|) terms, which cancel through the
+    // quadrature is exact on l̇_ν, of degree s − 1 ≤ 2m − 1, since the options require
+    // m ≥ s), so the rows ν < s of p_k δ_ν0 + Σ_μ (h/2) w_μ l̇_ν p(τ_μ) equal
+    // Σ_μ (h/2) w_μ l̇_ν (p(τ_μ) − p_k): the O(|p|) terms, which cancel through the
     // differentiation weights, are left out exactly instead of in floating point.
     residual.fill(0.0);
     for (mu, d) in points.iter().enumerate() {
