@@ -436,6 +436,13 @@ mod newton {
         assert!((order - 6.0).abs() < 0.5, "observed order {order}");
         assert!(energy < 1e-7, "energy error {energy:e}");
         assert_eq!(statistics.steps, 20);
+        // One symbolic analysis per pattern (the stage Jacobian's and ∂²L/∂q̇²'s) for the
+        // whole run; the simplified Newton iteration factorises less often than it steps.
+        assert_eq!(statistics.analyses, 2);
+        assert!(
+            statistics.factorizations < statistics.steps,
+            "{statistics:?}"
+        );
     }
 
     #[test]

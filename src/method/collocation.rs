@@ -392,6 +392,8 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     Ok(StepReport {
         iterations,
         evaluations: s * iterations,
+        factorizations: 0,
+        analyses: 0,
     })
 }
 
@@ -494,7 +496,8 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         if singular {
             return Err(StepFailure::SingularMatrix);
         }
-        let iterations = iterations? + spent;
+        let factorizations = iterations?;
+        let iterations = factorizations + spent;
         let s = tables.degree;
         increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
         increment.y = tables.velocity::<N>(s, offsets) - state.y;
@@ -502,6 +505,8 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         Ok(StepReport {
             iterations,
             evaluations: s * iterations,
+            factorizations,
+            analyses: 0,
         })
     }
 

@@ -314,6 +314,8 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         Ok(StepReport {
             iterations,
             evaluations: m * (iterations + 1),
+            factorizations: iterations,
+            analyses: 0,
         })
     }
 

@@ -66,6 +66,13 @@ pub struct StepReport {
     pub iterations: usize,
     /// Points at which derivatives of L were evaluated.
     pub evaluations: usize,
+    /// Jacobians of the nonlinear solve assembled and LU-factorised (Newton's method
+    /// factorises at every iteration, the simplified Newton method only when its iteration
+    /// stops contracting well).
+    pub factorizations: usize,
+    /// Symbolic analyses (fill-reducing orderings) of a sparse linear solver's pattern: one
+    /// per pattern and run, reported with the first step.
+    pub analyses: usize,
 }
 
 /// An integration method for Lagrangians on ℝᴺ.

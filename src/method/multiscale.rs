@@ -597,6 +597,8 @@ impl<const N: usize> Method<N> for Multiscale {
         Ok(StepReport {
             iterations,
             evaluations: tables.points() * (iterations + 1),
+            factorizations: iterations,
+            analyses: 0,
         })
     }
 

@@ -34,6 +34,10 @@ pub struct Statistics {
     pub iterations: usize,
     /// Points at which derivatives of the Lagrangian were evaluated.
     pub evaluations: usize,
+    /// Jacobians of the nonlinear solves assembled and LU-factorised, summed over all steps.
+    pub factorizations: usize,
+    /// Symbolic analyses of a sparse linear solver's pattern (one per pattern and run).
+    pub analyses: usize,
 }
 
 /// The result of a run on the space `S` (on ℝᴺ: [`crate::Run`]).
@@ -501,6 +505,8 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         let report = method.step(&self.model, workspace, t, h, &cursor.state, increment)?;
         statistics.iterations += report.iterations;
         statistics.evaluations += report.evaluations;
+        statistics.factorizations += report.factorizations;
+        statistics.analyses += report.analyses;
         cursor
             .state
             .add_checked(&mut cursor.compensation, increment, divergence_limit)

@@ -405,6 +405,7 @@ where
         conservation,
         iterations: outcome.statistics.iterations,
         evaluations: outcome.statistics.evaluations,
+        factorizations: outcome.statistics.factorizations,
         retries: (S::LISTS_RUN_FIELDS || recovers).then_some(outcome.statistics.retries),
         seconds,
         trajectory,

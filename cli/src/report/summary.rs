@@ -69,6 +69,9 @@ pub struct Summary {
     pub iterations: usize,
     /// Points at which derivatives of the Lagrangian were evaluated.
     pub evaluations: usize,
+    /// Jacobians of the nonlinear solves assembled and LU-factorised, summed over all steps
+    /// (0 for explicit methods and fixed-point iterations).
+    pub factorizations: usize,
     /// Failed steps retried with half the step (`recovery = "halve-step"`; see the module
     /// documentation for when it is present).
     #[serde(skip_serializing_if = "Option::is_none")]

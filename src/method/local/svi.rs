@@ -83,6 +83,9 @@ struct NewtonData {
     previous: DVector<f64>,
     /// q̇ at the last cold start (the Newton start of the next inverse Legendre map).
     velocity: DVector<f64>,
+    /// Symbolic analyses done when the workspace was built (the stage Jacobian's pattern
+    /// and ∂²L/∂q̇²'s), not yet reported.
+    analyses: usize,
 }
 
 impl LocalMethod for Svi {
@@ -141,6 +144,7 @@ impl LocalMethod for Svi {
                 offsets: DVector::zeros(s * n),
                 previous: DVector::zeros(s * n),
                 velocity: DVector::zeros(n),
+                analyses: 2,
             }))
         };
         Ok(LocalSviWorkspace {
@@ -256,6 +260,8 @@ fn newton_step<L: LocalLagrangian>(
     Ok(StepReport {
         iterations: report.iterations,
         evaluations: report.evaluations + tables.weights.len() * model.term_count(),
+        factorizations: report.factorizations,
+        analyses: std::mem::take(&mut data.analyses),
     })
 }
 
@@ -369,5 +375,6 @@ fn fixed_point_step<L: LocalLagrangian>(
     Ok(StepReport {
         iterations,
         evaluations: m * iterations,
+        ..StepReport::default()
     })
 }

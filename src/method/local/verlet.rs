@@ -160,8 +160,8 @@ impl LocalMethod for StormerVerlet {
         *cached_t = end_t;
         *cached_tolerance = 4.0 * f64::EPSILON * extent;
         Ok(StepReport {
-            iterations: 0,
             evaluations,
+            ..StepReport::default()
         })
     }
 

@@ -235,5 +235,8 @@ fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
     Ok(StepReport {
         iterations,
         evaluations,
+        // Newton's method factorises at every iteration.
+        factorizations: iterations,
+        analyses: 0,
     })
 }

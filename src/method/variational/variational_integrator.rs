@@ -243,6 +243,8 @@ impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator
         Ok(StepReport {
             iterations,
             evaluations: points * (iterations + 1),
+            factorizations: iterations,
+            analyses: 0,
         })
     }
 
