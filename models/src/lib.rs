@@ -22,6 +22,7 @@
 //! | --- | --- | --- | --- | --- |
 //! | `fput` | [`Fput`] | 32 | — | energies of the first min(n, 8) normal modes, `mode_1`, … |
 //! | `toda` | [`Toda`] | 16 | tr 𝕃ᵏ, k = 1…4 (Lax traces) | the four Lax traces |
+//! | `relativistic-chain` | [`RelativisticChain`] | 32 | — | the largest speed, max ∣q̇ᵢ∣/c |
 //!
 //! They implement [`LocalZooModel`] and are handed to a [`LocalModelVisitor`] by
 //! [`visit_local_model`] (names: [`LOCAL_MODEL_NAMES`]).
@@ -349,6 +350,18 @@ impl LocalZooModel for Toda {
     }
 }
 
+impl LocalZooModel for RelativisticChain {
+    /// `speed_max`.
+    fn observable_names(&self) -> Vec<String> {
+        vec!["speed_max".into()]
+    }
+
+    /// The largest speed as a fraction of c, max ∣q̇ᵢ∣/c (below 1 on every valid state).
+    fn observables_into(&self, _: f64, _: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
+        out.push(v.amax() / self.c);
+    }
+}
+
 /// Receives a concrete runtime-dimension model chosen by name at run time (see
 /// [`visit_local_model`]).
 pub trait LocalModelVisitor {
@@ -378,7 +391,11 @@ macro_rules! local_zoo {
     };
 }
 
-local_zoo!("fput" => Fput, "toda" => Toda);
+local_zoo!(
+    "fput" => Fput,
+    "toda" => Toda,
+    "relativistic-chain" => RelativisticChain,
+);
 
 #[cfg(test)]
 mod tests {

@@ -128,7 +128,10 @@ pub fn print() {
         );
     }
     println!();
-    println!("Chains and lattices of any size n (svi run NAME --param n=N; methods svi, verlet):");
+    println!(
+        "Chains and lattices of any size n (svi run NAME --param n=N; methods svi, svi-newton, \
+         verlet):"
+    );
     for (name, description) in scenes(SpaceKind::Vector, true) {
         println!("  {name:<18}{description}");
     }

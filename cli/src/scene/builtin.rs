@@ -59,6 +59,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ),
     ("fput", include_str!("../../scenes/fput.toml")),
     ("toda", include_str!("../../scenes/toda.toml")),
+    (
+        "relativistic-chain",
+        include_str!("../../scenes/relativistic-chain.toml"),
+    ),
     ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
     ("heavy-top", include_str!("../../scenes/heavy-top.toml")),
     ("pendulum-3d", include_str!("../../scenes/pendulum-3d.toml")),

@@ -8,7 +8,7 @@
 //! ([`SceneError::NotApplicable`]) rather than silently ignored ([`Scene::check`]). The model
 //! decides the space: a zoo model on ℝᴺ (`svi_models::MODEL_NAMES`), a chain or lattice on
 //! ℝⁿ with n a parameter (`svi_models::LOCAL_MODEL_NAMES`: `[initial]` vectors of n
-//! components, methods svi and verlet) or a rigid body on SO(3)
+//! components, methods svi, svi-newton and verlet) or a rigid body on SO(3)
 //! (`svi_models::RIGID_MODEL_NAMES`, see [`rigid`] for its `[initial]` and `form`).
 //!
 //! ```toml
@@ -280,7 +280,8 @@ impl Scene {
         self.lagrangian.is_none() && LOCAL_MODEL_NAMES.contains(&self.model.as_str())
     }
 
-    /// The options a runtime-dimension scene cannot use: a method other than svi or verlet
+    /// The options a runtime-dimension scene cannot use: a method other than svi, svi-newton
+    /// or verlet
     /// (the library's [`MethodSpec::visit_local`] decides, naming the method), degree
     /// adaptivity (its methods have a fixed degree), and the diagnostics it has nothing for
     /// (momentum, solution).
@@ -812,6 +813,7 @@ pub(crate) mod tests {
                 "oscillator-beyond-stability",
                 "fput",
                 "toda",
+                "relativistic-chain",
                 "rigid-body",
                 "heavy-top",
                 "pendulum-3d"
