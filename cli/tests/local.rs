@@ -95,6 +95,11 @@ fn methods_and_options_a_chain_cannot_use_are_bad_input_naming_them() {
     bad_input(&["run", "fput"], &["--method", "lie-svi"], "lie-svi");
     bad_input(&["run", "fput"], &["--adapt", "degree"], "--adapt degree");
     bad_input(
+        &["run", "relativistic-chain"],
+        &["--method", "verlet"],
+        "--method verlet",
+    );
+    bad_input(
         &["run", "fput"],
         &["--diagnostics", "momentum"],
         "--diagnostics momentum",
@@ -322,6 +327,28 @@ fn chains_take_output_times_step_adaptivity_recovery_and_strictness() {
 }
 
 #[test]
+fn the_relativistic_chain_runs_by_sparse_newton_below_the_speed_of_light() {
+    let summary = json(&["run", "relativistic-chain", "--t-end", "10", "--json"]);
+    assert_eq!(summary["model"], "relativistic-chain");
+    assert_eq!(summary["steps"], 100);
+    // E = Σ m c² γᵢ at rest positions, γᵢ = 1/√(1 − (0.8 sin(πi/33))²).
+    let energy: f64 = (1..=32)
+        .map(|i| {
+            let speed = 0.8 * (std::f64::consts::PI * f64::from(i) / 33.0).sin();
+            1.0 / (1.0 - speed * speed).sqrt()
+        })
+        .sum();
+    assert!(
+        (number(&summary, "energy_initial") - energy).abs() < 1e-12,
+        "{summary} {energy}"
+    );
+    assert!(number(&summary, "energy_error_max") < 1e-12, "{summary}");
+    let v = vector(&summary, "v");
+    assert_eq!(v.len(), 32);
+    assert!(v.iter().all(|x| x.abs() < 1.0), "{v:?}");
+}
+
+#[test]
 fn list_shows_the_chains_and_their_observables() {
     let output = svi(&["list"]);
     assert!(output.status.success());
@@ -330,7 +357,7 @@ fn list_shows_the_chains_and_their_observables() {
         .split("Chains and lattices of any size n")
         .nth(1)
         .expect("a group of its own");
-    for name in ["fput", "toda"] {
+    for name in ["fput", "toda", "relativistic-chain"] {
         assert!(chains.matches(name).count() >= 2, "{name} missing:\n{text}");
     }
     assert!(

@@ -226,6 +226,18 @@ impl LocalModelVisitor for SceneRun<'_> {
     fn visit<M: LocalZooModel>(self, mut model: M) -> Self::Output {
         let resolved = self.scene.resolve_local(&mut model)?;
         let spec = self.scene.method_spec()?;
+        // Explicit Störmer–Verlet on a chain needs the constant mass matrix it inverts once:
+        // bad input, before the run (the library would refuse it as the run starts).
+        if spec.name() == "verlet" && M::STRUCTURE != svi::Structure::ConstantMass {
+            return Err(SceneError::NotApplicable {
+                option: "--method verlet (method.name)",
+                reason: format!(
+                    "the model '{}' has a velocity-dependent mass matrix; verlet on a chain \
+                     needs a constant one (use svi or svi-newton)",
+                    model.name()
+                ),
+            });
+        }
         let method = MethodFields {
             name: spec.name().into(),
             form: None,
