@@ -16,7 +16,7 @@ pub mod scene;
 pub use command::list::{ModelDescription, describe_models};
 pub use command::{bench, stability, stress};
 pub use report::csv::{Float, csv_header};
-pub use report::progress::{PROGRESS_MIN_STEPS, Progress};
+pub use report::progress::{PROGRESS_MIN_STEPS, PROGRESS_MIN_WORK, Progress};
 pub use report::summary::{
     AdaptivitySummary, Conservation, OutputPoint, Parameters, SolveSummary, StateSummary, Summary,
     TrajectoryOutput,

@@ -335,6 +335,7 @@ fn scene_text() -> impl Strategy<Value = String> {
     let model = prop_oneof![
         6 => select(svi_models::MODEL_NAMES.to_vec()).prop_map(String::from),
         2 => select(svi_models::RIGID_MODEL_NAMES.to_vec()).prop_map(String::from),
+        1 => select(svi_models::LOCAL_MODEL_NAMES.to_vec()).prop_map(String::from),
         1 => "[a-z-]{0,12}",
     ];
     let method = prop_oneof![
@@ -580,6 +581,8 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         "pendulum-3d",
         "kepler-recovery",
         "oscillator-beyond-stability",
+        "fput",
+        "toda",
         "keppler",
     ]);
     let numeric = vec![

@@ -14,6 +14,19 @@
 //! | `damped-pendulum` | [`DampedPendulum`] | 1 | — | — | only undamped (c = 0) |
 //! | `driven-oscillator` | [`DrivenOscillator`] | 1 | — | — | yes |
 //!
+//! Chains and lattices have their dimension n at run time (a parameter, `n`): each is a sum
+//! of local terms ([`svi::model::local::LocalLagrangian`]) on runtime-sized ℝⁿ, integrated by
+//! the large-system methods (`svi`, `verlet`; see [`svi::method::local`]):
+//!
+//! | name | model | n (default) | invariants | observables (trajectory CSV) |
+//! | --- | --- | --- | --- | --- |
+//! | `fput` | [`Fput`] | 32 | — | energies of the first min(n, 8) normal modes, `mode_1`, … |
+//! | `toda` | [`Toda`] | 16 | tr 𝕃ᵏ, k = 1…4 (Lax traces) | the four Lax traces |
+//! | `relativistic-chain` | [`RelativisticChain`] | 32 | — | the largest speed, max ∣q̇ᵢ∣/c |
+//!
+//! They implement [`LocalZooModel`] and are handed to a [`LocalModelVisitor`] by
+//! [`visit_local_model`] (names: [`LOCAL_MODEL_NAMES`]).
+//!
 //! The last three are forced (`Lagrangian::FORCED`): their non-conservative force (friction,
 //! a time-dependent drive) is part of the model, [`svi::Lagrangian::external_force`], and
 //! every integrator of `svi` solves their Lagrange–d'Alembert equations.
@@ -85,6 +98,8 @@ pub use heavy_top::HeavyTop;
 pub use pendulum_3d::Pendulum3d;
 pub use rigid_body::FreeRigidBody;
 
+use nalgebra::DVector;
+use svi::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian};
 use svi::model::text::{TextError, TextLagrangian, TextModel};
 use svi::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 
@@ -279,5 +294,171 @@ pub fn visit_rigid_model<V: RigidModelVisitor>(name: &str, visitor: V) -> Option
         HeavyTop::NAME => Some(visitor.visit(HeavyTop::default())),
         Pendulum3d::NAME => Some(visitor.visit(Pendulum3d::default())),
         _ => None,
+    }
+}
+
+/// Everything a runtime-dimension zoo model implements: a Lagrangian on ℝⁿ written as a sum
+/// of local terms with its defaults and invariants, plus the named *observables* that a
+/// trajectory writes besides time and energy (n coordinates per row would make a file of
+/// 10⁵ columns; a few quantities that summarise the state are written instead).
+pub trait LocalZooModel:
+    LocalLagrangian
+    + LocalDefaults
+    + LocalInvariants
+    + Default
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
+{
+    /// The names of the observables, in the order of [`LocalZooModel::observables_into`]
+    /// (CSV column names: letters, digits and `_`).
+    fn observable_names(&self) -> Vec<String>;
+
+    /// The observables at (t, q, q̇), appended to `out` (as many as
+    /// [`LocalZooModel::observable_names`]; O(n) each).
+    fn observables_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>);
+}
+
+/// The number of normal-mode energies an FPUT trajectory writes (at most n).
+pub const FPUT_OBSERVED_MODES: usize = 8;
+
+impl LocalZooModel for Fput {
+    /// `mode_1`, …, `mode_k` with k = min(n, [`FPUT_OBSERVED_MODES`]).
+    fn observable_names(&self) -> Vec<String> {
+        (1..=self.n.min(FPUT_OBSERVED_MODES))
+            .map(|k| format!("mode_{k}"))
+            .collect()
+    }
+
+    /// The harmonic energies of the first modes ([`Fput::mode_energies`]).
+    fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
+        out.extend(self.mode_energies(q, v, FPUT_OBSERVED_MODES));
+    }
+}
+
+impl LocalZooModel for Toda {
+    /// The invariants' names, `trace_lax_1`, …, `trace_lax_4`.
+    fn observable_names(&self) -> Vec<String> {
+        (0..self.invariant_count())
+            .map(|k| self.invariant_name(k).to_owned())
+            .collect()
+    }
+
+    /// tr 𝕃ᵏ, k = 1…4 ([`Toda::lax_traces`], one pass for all four).
+    fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
+        out.extend(self.lax_traces(q, v, self.invariant_count()));
+    }
+}
+
+impl LocalZooModel for RelativisticChain {
+    /// `speed_max`.
+    fn observable_names(&self) -> Vec<String> {
+        vec!["speed_max".into()]
+    }
+
+    /// The largest speed as a fraction of c, max ∣q̇ᵢ∣/c (below 1 on every valid state).
+    fn observables_into(&self, _: f64, _: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
+        out.push(v.amax() / self.c);
+    }
+}
+
+/// Receives a concrete runtime-dimension model chosen by name at run time (see
+/// [`visit_local_model`]).
+pub trait LocalModelVisitor {
+    /// What the visit produces.
+    type Output;
+
+    /// Called once with the model, as its concrete type (with its default parameters).
+    fn visit<M: LocalZooModel>(self, model: M) -> Self::Output;
+}
+
+/// The runtime-dimension zoo: [`LOCAL_MODEL_NAMES`] and [`visit_local_model`] from one list
+/// of (name, model type) pairs; each name equals the model's [`LocalDefaults::name`] (a
+/// test checks it).
+macro_rules! local_zoo {
+    ($($name:literal => $model:ident),+ $(,)?) => {
+        /// Names of the runtime-dimension models (chains, lattices), in a stable order.
+        pub const LOCAL_MODEL_NAMES: &[&str] = &[$($name),+];
+
+        /// Build the named runtime-dimension model with its defaults and hand it to the
+        /// visitor; `None` if `name` is not one of [`LOCAL_MODEL_NAMES`].
+        pub fn visit_local_model<V: LocalModelVisitor>(name: &str, visitor: V) -> Option<V::Output> {
+            match name {
+                $($name => Some(visitor.visit($model::default())),)+
+                _ => None,
+            }
+        }
+    };
+}
+
+local_zoo!(
+    "fput" => Fput,
+    "toda" => Toda,
+    "relativistic-chain" => RelativisticChain,
+);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reports a model's name, dimension and observables.
+    struct Describe;
+
+    impl LocalModelVisitor for Describe {
+        type Output = (&'static str, usize, Vec<String>, usize);
+        fn visit<M: LocalZooModel>(self, model: M) -> Self::Output {
+            let (t0, q, v) = model.initial_state();
+            let mut values = Vec::new();
+            model.observables_into(t0, &q, &v, &mut values);
+            (
+                model.name(),
+                model.dimension(),
+                model.observable_names(),
+                values.len(),
+            )
+        }
+    }
+
+    #[test]
+    fn local_names_are_the_models_names_and_observables_match_their_names() {
+        for name in LOCAL_MODEL_NAMES {
+            let (own, n, names, count) = visit_local_model(name, Describe).unwrap();
+            assert_eq!(own, *name);
+            assert_eq!(names.len(), count, "{name}");
+            assert!(n >= 2, "{name}");
+        }
+        assert!(visit_local_model("kepler", Describe).is_none());
+        let (_, n, names, _) = visit_local_model("fput", Describe).unwrap();
+        assert_eq!(n, 32);
+        assert_eq!(names.first().map(String::as_str), Some("mode_1"));
+        assert_eq!(names.last().map(String::as_str), Some("mode_8"));
+        let (_, _, names, _) = visit_local_model("toda", Describe).unwrap();
+        assert_eq!(
+            names,
+            ["trace_lax_1", "trace_lax_2", "trace_lax_3", "trace_lax_4"]
+        );
+    }
+
+    #[test]
+    fn a_short_chain_observes_every_mode_it_has() {
+        let mut fput = Fput::default();
+        fput.set_parameter("n", 3.0).unwrap();
+        assert_eq!(fput.observable_names(), ["mode_1", "mode_2", "mode_3"]);
+        let (t0, q, v) = fput.initial_state();
+        let mut values = Vec::new();
+        fput.observables_into(t0, &q, &v, &mut values);
+        // All the energy starts in mode 1: E₁ = ½ ω₁² (A √((n+1)/2))², the others zero.
+        let amplitude = fput.amplitude * (4.0f64 / 2.0).sqrt();
+        let expected = 0.5 * (fput.mode_frequency(1) * amplitude).powi(2);
+        assert!(
+            (values[0] - expected).abs() < 1e-12,
+            "{values:?} {expected}"
+        );
+        assert!(
+            values[1].abs() < 1e-24 && values[2].abs() < 1e-24,
+            "{values:?}"
+        );
     }
 }

@@ -266,6 +266,7 @@ fn load(name: &str) -> PyResult<Scene> {
     match Scene::load(name) {
         Err(SceneError::UnknownScene { .. })
             if svi_models::MODEL_NAMES.contains(&name)
+                || svi_models::LOCAL_MODEL_NAMES.contains(&name)
                 || svi_models::RIGID_MODEL_NAMES.contains(&name) =>
         {
             Scene::from_toml(&format!("model = \"{name}\"\n"), "a model name").map_err(failure)

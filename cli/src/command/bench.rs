@@ -379,6 +379,16 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Recor
             ),
         });
     }
+    if scene.is_local() {
+        return Err(SceneError::NotApplicable {
+            option: "svi bench SCENE",
+            reason: format!(
+                "'{}' is a chain of runtime dimension with no exact solution to measure errors \
+                 against (svi run runs it)",
+                scene.model
+            ),
+        });
+    }
     if scene.lagrangian.is_some() {
         return Err(SceneError::NotApplicable {
             option: "svi bench SCENE",

@@ -1,10 +1,12 @@
-//! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ and on SO(3).
+//! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ (fixed N and
+//! runtime dimension) and on SO(3).
 
 use serde::Serialize;
 use svi::method::registry::SpaceKind;
 use svi_models::{
-    MODEL_NAMES, ModelVisitor, RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, ZooModel,
-    visit_model, visit_rigid_model,
+    LOCAL_MODEL_NAMES, LocalModelVisitor, LocalZooModel, MODEL_NAMES, ModelVisitor,
+    RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, ZooModel, visit_local_model, visit_model,
+    visit_rigid_model,
 };
 
 use crate::report::csv::Float;
@@ -59,12 +61,15 @@ pub fn describe_models() -> Vec<ModelDescription> {
         .collect()
 }
 
-/// The built-in scenes on `space`, as (name, the first line of the scene file).
-fn scenes(space: SpaceKind) -> Vec<(&'static str, &'static str)> {
+/// The built-in scenes on `space` whose model is (`local`) or is not of runtime dimension,
+/// as (name, the first line of the scene file).
+fn scenes(space: SpaceKind, local: bool) -> Vec<(&'static str, &'static str)> {
     BUILTIN_SCENES
         .iter()
         .filter(|(name, _)| {
-            Scene::builtin(name).is_some_and(|scene| scene.is_ok_and(|s| s.space() == space))
+            Scene::builtin(name).is_some_and(|scene| {
+                scene.is_ok_and(|s| s.space() == space && s.is_local() == local)
+            })
         })
         .map(|(name, text)| {
             let description = text
@@ -78,10 +83,11 @@ fn scenes(space: SpaceKind) -> Vec<(&'static str, &'static str)> {
         .collect()
 }
 
-/// Print the built-in scenes and the models (on ℝᴺ and rigid bodies) with their parameters.
+/// Print the built-in scenes and the models (on ℝᴺ, chains of runtime dimension and rigid
+/// bodies) with their parameters.
 pub fn print() {
     println!("Built-in scenes (svi run NAME):");
-    let vector = scenes(SpaceKind::Vector);
+    let vector = scenes(SpaceKind::Vector, false);
     let width = vector
         .iter()
         .map(|(name, _)| name.len() + 2)
@@ -122,8 +128,26 @@ pub fn print() {
         );
     }
     println!();
+    println!(
+        "Chains and lattices of any size n (svi run NAME --param n=N; methods svi, svi-newton, \
+         verlet):"
+    );
+    for (name, description) in scenes(SpaceKind::Vector, true) {
+        println!("  {name:<18}{description}");
+    }
+    println!();
+    println!(
+        "Runtime-dimension models (model = \"NAME\"; parameters, default step and horizon; \
+         trajectory columns t, energy and these observables):"
+    );
+    for name in LOCAL_MODEL_NAMES {
+        if let Some(line) = visit_local_model(name, DescribeLocal) {
+            println!("{line}");
+        }
+    }
+    println!();
     println!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):");
-    for (name, description) in scenes(SpaceKind::Rotation) {
+    for (name, description) in scenes(SpaceKind::Rotation, false) {
         println!("  {name:<18}{description}");
     }
     println!();
@@ -132,6 +156,38 @@ pub fn print() {
         if let Some(line) = visit_rigid_model(name, DescribeRigid) {
             println!("{line}");
         }
+    }
+}
+
+/// Describes a runtime-dimension model in one line.
+struct DescribeLocal;
+
+impl LocalModelVisitor for DescribeLocal {
+    type Output = String;
+    fn visit<M: LocalZooModel>(self, model: M) -> String {
+        let parameters: Vec<String> = model
+            .parameters()
+            .iter()
+            .map(|(name, value)| format!("{name} = {}", Float(*value)))
+            .collect();
+        let mut facts = vec![format!(
+            "observables {}",
+            model.observable_names().join(", ")
+        )];
+        let invariants: Vec<&str> = (0..model.invariant_count())
+            .map(|i| model.invariant_name(i))
+            .collect();
+        if !invariants.is_empty() {
+            facts.push(format!("conserves {}", invariants.join(", ")));
+        }
+        format!(
+            "  {:<18}{}; h = {}, t_end = {}; {}",
+            model.name(),
+            parameters.join(", "),
+            Float(model.default_step()),
+            Float(model.default_horizon()),
+            facts.join("; ")
+        )
     }
 }
 

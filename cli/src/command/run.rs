@@ -3,8 +3,8 @@
 //! 1. [`execute`] loads the scene (built-in or file), applies the command-line overrides and
 //!    checks them ([`Scene::apply`]).
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
-//!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_rigid_model`] on
-//!    SO(3). The visitor resolves the initial state, the step and the horizon, builds the
+//!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
+//!    runtime-sized ℝⁿ (chains, lattices), [`svi_models::visit_rigid_model`] on SO(3). The visitor resolves the initial state, the step and the horizon, builds the
 //!    method (on ℝᴺ as its concrete type through [`svi::MethodSpec::visit_vector`]; on SO(3) the
 //!    Lie-group integrator) and pairs both in an [`Integrator`].
 //! 3. `run_scene`, generic over the space ([`RunSpace`]), builds the observers the scene
@@ -21,7 +21,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
-use svi::method::registry::{SpaceKind, VectorMethodVisitor};
+use svi::method::DynEuclidean;
+use svi::method::local::LocalMethod;
+use svi::method::registry::{LocalMethodVisitor, SpaceKind, VectorMethodVisitor};
 use svi::method::space::Space;
 use svi::method::step::Step;
 use svi::observer::{Every, Observer};
@@ -29,8 +31,8 @@ use svi::solve::{SolveOptions, Span};
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method, Statistics};
 use svi_models::{
-    ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel, visit_model, visit_rigid_model,
-    visit_text_model,
+    LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
+    visit_local_model, visit_model, visit_rigid_model, visit_text_model,
 };
 
 use crate::command::space::RunSpace;
@@ -131,6 +133,8 @@ impl Scene {
         match self.space() {
             SpaceKind::Vector => match self.text_model() {
                 Some(model) => visit_text_model(model?, run)?,
+                None if self.is_local() => visit_local_model(&self.model, run)
+                    .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
                 None => visit_model(&self.model, run)?,
             },
             SpaceKind::Rotation => visit_rigid_model(&self.model, run)
@@ -216,6 +220,48 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for VectorMethod<'_,
     }
 }
 
+impl LocalModelVisitor for SceneRun<'_> {
+    type Output = Result<Summary, SceneError>;
+
+    fn visit<M: LocalZooModel>(self, mut model: M) -> Self::Output {
+        let resolved = self.scene.resolve_local(&mut model)?;
+        let spec = self.scene.method_spec()?;
+        // Explicit Störmer–Verlet on a chain needs the constant mass matrix it inverts once:
+        // bad input, before the run (the library would refuse it as the run starts).
+        if spec.name() == "verlet" && M::STRUCTURE != svi::Structure::ConstantMass {
+            return Err(SceneError::NotApplicable {
+                option: "--method verlet (method.name)",
+                reason: format!(
+                    "the model '{}' has a velocity-dependent mass matrix; verlet on a chain \
+                     needs a constant one (use svi or svi-newton)",
+                    model.name()
+                ),
+            });
+        }
+        let method = MethodFields {
+            name: spec.name().into(),
+            form: None,
+            points: spec.points_in_use(),
+            quadrature: spec.quadrature_in_use(),
+        };
+        let plan = self.plan(resolved, method);
+        spec.visit_local(LocalRun { model, plan })?
+    }
+}
+
+/// Runs a scene's runtime-dimension model with the visited large-system method.
+struct LocalRun<'a, M> {
+    model: M,
+    plan: Plan<'a, DynEuclidean>,
+}
+
+impl<M: LocalZooModel> LocalMethodVisitor for LocalRun<'_, M> {
+    type Output = Result<Summary, SceneError>;
+    fn visit<Me: LocalMethod + Clone>(self, method: Me) -> Self::Output {
+        run_scene(&Integrator::new(self.model, method), &self.plan)
+    }
+}
+
 impl RigidModelVisitor for SceneRun<'_> {
     type Output = Result<Summary, SceneError>;
 
@@ -294,7 +340,7 @@ where
         .filter(|_| output_times.is_none())
         .map(|stream| Every::new(every, stream));
     let progress = (plan.progress && adapt != AdaptMode::Step)
-        .then(|| Progress::for_run(t0, plan.h, t_end))
+        .then(|| Progress::for_run(t0, plan.h, t_end, S::coordinate_count(&plan.initial)))
         .flatten();
     let mut observers = (S::diagnostics(model, scene), trajectory, progress);
     let span = match output_times {

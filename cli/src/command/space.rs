@@ -1,4 +1,5 @@
-//! What a scene's run does differently on each space, ℝᴺ and SO(3): the command line's side
+//! What a scene's run does differently on each space, ℝᴺ (fixed N, and runtime-sized ℝⁿ for
+//! chains and lattices) and SO(3): the command line's side
 //! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
@@ -9,9 +10,11 @@ use svi::lie_group::{
     RigidPoint, SO3,
 };
 use svi::method::space::Space;
+use svi::method::{DynEuclidean, DynInitial, DynPoint};
+use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt};
 use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
 use svi::{Defaults, Euclidean, Initial, LagrangianExt, PhasePoint};
-use svi_models::{RigidZooModel, ZooModel};
+use svi_models::{LocalZooModel, RigidZooModel, ZooModel};
 
 use crate::report::csv::{RIGID_CSV_HEADER, csv_header};
 use crate::report::summary::{Conservation, StateSummary};
@@ -72,6 +75,10 @@ pub trait RunSpace<L>: Space {
     /// The Newton start of the inverse Legendre map at the initial state, for the summary's
     /// initial energy: the initial velocity or momentum on ℝᴺ, rest on SO(3).
     fn initial_guess_at_rest(initial: &Self::Initial) -> Self::Velocity;
+
+    /// The number of configuration coordinates of the initial state (the progress bar's
+    /// measure of work per step).
+    fn coordinate_count(initial: &Self::Initial) -> usize;
 
     /// The header line of the trajectory CSV (with its newline).
     fn csv_header(model: &L) -> String;
@@ -158,6 +165,10 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
 
     fn initial_guess_at_rest(initial: &Initial<N>) -> SVector<f64, N> {
         <Self as Space>::initial_guess(initial)
+    }
+
+    fn coordinate_count(_: &Initial<N>) -> usize {
+        N
     }
 
     /// `t,q_<name>…,v_<name>…,p_<name>…,energy`.
@@ -265,6 +276,10 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
         SVector::zeros()
     }
 
+    fn coordinate_count(_: &RigidInitial) -> usize {
+        3
+    }
+
     /// [`RIGID_CSV_HEADER`].
     fn csv_header(_: &L) -> String {
         RIGID_CSV_HEADER.into()
@@ -278,5 +293,108 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
         row.extend(point.omega.iter().chain(point.momentum.iter()));
         row.push(RigidBodyExt::energy(model, &point.r, &point.omega));
         row.push(orthogonality_error(&point.r));
+    }
+}
+
+impl<L: LocalZooModel> RunSpace<L> for DynEuclidean {
+    const LISTS_RUN_FIELDS: bool = true;
+
+    /// Energy and the model's invariants (for models with some), each O(n) per step.
+    type Diagnostics = (Option<EnergyError>, Option<InvariantError>);
+
+    /// The invariants are measured unless the scene asks for no diagnostic (as on SO(3)).
+    fn diagnostics(model: &L, scene: &Scene) -> Self::Diagnostics {
+        (
+            scene.wants(Diagnostic::Energy).then(EnergyError::default),
+            (scene.measures() && model.invariant_count() > 0).then(InvariantError::default),
+        )
+    }
+
+    fn measured(
+        model: &L,
+        (energy, invariants): Self::Diagnostics,
+        _: &DynPoint,
+        _: &DynPoint,
+    ) -> (Option<f64>, Conservation) {
+        (
+            energy.map(|e| e.max),
+            Conservation::Local {
+                momentum_error_max: None,
+                solution_error_max: None,
+                solution_error_final: None,
+                invariant_names: (0..model.invariant_count())
+                    .map(|i| model.invariant_name(i))
+                    .collect(),
+                invariant_error_max: invariants.map(|i| i.max),
+            },
+        )
+    }
+
+    fn model_name(model: &L) -> &'static str {
+        LocalDefaults::name(model)
+    }
+
+    fn parameters(model: &L) -> Vec<(&'static str, f64)> {
+        LocalDefaults::parameters(model)
+    }
+
+    /// None: the n coordinates of a chain are numbered, not named.
+    fn coordinates(_: &L) -> Option<Vec<String>> {
+        None
+    }
+
+    fn energy(model: &L, point: &DynPoint) -> f64 {
+        point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v)
+    }
+
+    /// Local models have no external force: autonomous ones conserve energy.
+    fn conserves_energy(_: &L) -> bool {
+        !<L as LocalLagrangian>::TIME_DEPENDENT
+    }
+
+    fn energy_scale(model: &L, point: &DynPoint) -> f64 {
+        let energy = <Self as RunSpace<L>>::energy(model, point).abs();
+        energy.max(0.5 * point.p.dot(&point.v).abs())
+    }
+
+    fn extent(point: &DynPoint) -> Option<f64> {
+        Some(point.q.amax())
+    }
+
+    fn state(point: &DynPoint) -> StateSummary {
+        StateSummary::Vector {
+            q: point.q.iter().copied().collect(),
+            v: point.v.iter().copied().collect(),
+            p: point.p.iter().copied().collect(),
+        }
+    }
+
+    fn initial_guess_at_rest(initial: &DynInitial) -> nalgebra::DVector<f64> {
+        <Self as Space>::initial_guess(initial)
+    }
+
+    fn coordinate_count(initial: &DynInitial) -> usize {
+        match initial {
+            DynInitial::Velocity { q, .. } | DynInitial::Momentum { q, .. } => q.len(),
+        }
+    }
+
+    /// `t,energy,<observables>`: the model's few observables (FPUT: the mode energies
+    /// `mode_1`, …; Toda: the Lax traces), not the n coordinates.
+    fn csv_header(model: &L) -> String {
+        let mut header = String::from("t,energy");
+        for name in model.observable_names() {
+            header.push(',');
+            header.push_str(&name);
+        }
+        header.push('\n');
+        header
+    }
+
+    /// t, the energy p·v − L and the observables.
+    fn csv_row(model: &L, point: &DynPoint, row: &mut Vec<f64>) {
+        row.push(point.t);
+        row.push(<Self as RunSpace<L>>::energy(model, point));
+        model.observables_into(point.t, &point.q, &point.v, row);
     }
 }

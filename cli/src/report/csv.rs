@@ -114,9 +114,41 @@ pub fn vector(values: &[f64]) -> String {
     format!("[{}]", items.join(", "))
 }
 
+/// [`vector`] for messages and the text summary: a vector of more than
+/// [`BRIEF_COMPONENTS`] numbers (a chain of 10⁵ particles) shows its first and last few and
+/// its length, `[1, 2, 3, 4, …, 97, 98, 99, 100] (100 components)`.
+pub fn brief_vector(values: &[f64]) -> String {
+    let n = values.len();
+    if n <= BRIEF_COMPONENTS {
+        return vector(values);
+    }
+    let shown = BRIEF_COMPONENTS / 2;
+    let first = vector(&values[..shown]);
+    let last = vector(&values[n - shown..]);
+    format!(
+        "{}, …, {} ({n} components)",
+        &first[..first.len() - 1],
+        &last[1..]
+    )
+}
+
+/// The most components [`brief_vector`] prints in full.
+pub const BRIEF_COMPONENTS: usize = 8;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn brief_vectors_show_both_ends_of_long_vectors() {
+        assert_eq!(brief_vector(&[1.0, 0.5]), "[1, 0.5]");
+        let long: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(
+            brief_vector(&long),
+            "[1, 2, 3, 4, …, 97, 98, 99, 100] (100 components)"
+        );
+        assert_eq!(brief_vector(&long[..8]), vector(&long[..8]));
+    }
 
     #[test]
     fn csv_header_prefixes_the_coordinate_names() {

@@ -8,6 +8,11 @@ use svi::observer::Observer;
 /// Runs with at least this many steps show a progress bar (on a terminal).
 pub const PROGRESS_MIN_STEPS: usize = 10_000;
 
+/// Runs of at least this many coordinate-steps (steps × coordinates) show a progress bar too:
+/// 100 steps of a chain of 10⁵ particles take seconds. A model of at most 3 coordinates
+/// reaches it only beyond [`PROGRESS_MIN_STEPS`] steps.
+pub const PROGRESS_MIN_WORK: usize = 1_000_000;
+
 /// A progress bar on stderr, updated about every 1 % of the steps.
 #[derive(Debug)]
 pub struct Progress {
@@ -30,11 +35,15 @@ impl Progress {
         }
     }
 
-    /// A progress bar for a run from `t0` to `t_end` with step `h`, or `None` if the run has
-    /// fewer than [`PROGRESS_MIN_STEPS`] steps (or invalid inputs, which the run rejects).
-    pub fn for_run(t0: f64, h: f64, t_end: f64) -> Option<Self> {
+    /// A progress bar for a run of a model with `coordinates` coordinates from `t0` to
+    /// `t_end` with step `h`, or `None` if the run has fewer than [`PROGRESS_MIN_STEPS`]
+    /// steps and fewer than [`PROGRESS_MIN_WORK`] coordinate-steps (or invalid inputs, which
+    /// the run rejects).
+    pub fn for_run(t0: f64, h: f64, t_end: f64, coordinates: usize) -> Option<Self> {
         let steps = svi::step_count(t_end - t0, h).ok()?;
-        (steps >= PROGRESS_MIN_STEPS).then(|| Progress::new(steps))
+        let long =
+            steps >= PROGRESS_MIN_STEPS || steps.saturating_mul(coordinates) >= PROGRESS_MIN_WORK;
+        long.then(|| Progress::new(steps))
     }
 
     /// Remove the bar.
@@ -61,10 +70,13 @@ mod tests {
 
     #[test]
     fn progress_is_only_for_long_runs() {
-        assert!(Progress::for_run(0.0, 0.2, 2000.0).is_some());
-        assert!(Progress::for_run(0.0, 1.0, 100.0).is_none());
-        assert!(Progress::for_run(0.0, 0.0, 100.0).is_none());
-        assert!(Progress::for_run(0.0, -1.0, 100.0).is_none());
+        assert!(Progress::for_run(0.0, 0.2, 2000.0, 2).is_some());
+        assert!(Progress::for_run(0.0, 1.0, 100.0, 2).is_none());
+        assert!(Progress::for_run(0.0, 0.0, 100.0, 2).is_none());
+        assert!(Progress::for_run(0.0, -1.0, 100.0, 2).is_none());
+        // 100 steps of 10⁵ coordinates, not of 10³.
+        assert!(Progress::for_run(0.0, 0.1, 10.0, 100_000).is_some());
+        assert!(Progress::for_run(0.0, 0.1, 10.0, 1000).is_none());
         let progress = Progress::new(10_000);
         assert_eq!(progress.stride, 100);
         let wants = |step| Observer::<(), ()>::wants(&progress, step);

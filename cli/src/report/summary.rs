@@ -13,7 +13,7 @@ use std::fmt;
 use serde::Serialize;
 use svi::solve::Adapt;
 
-use crate::report::csv::{Float, vector};
+use crate::report::csv::{Float, brief_vector as vector};
 use crate::report::health::Warning;
 
 /// The result of running a scene (`svi run --json` prints it as one JSON object).
@@ -249,6 +249,22 @@ pub enum Conservation {
         /// Position error against the exact solution at the end (`None` if there is none).
         solution_error_final: Option<f64>,
     },
+    /// On runtime-sized ℝⁿ (chains and lattices): no symmetry or exact solution is measured
+    /// there (`momentum_error_max`, `solution_error_*` are always `None`, so the fields of
+    /// ℝᴺ keep their meaning), and the model's invariants are.
+    Local {
+        /// Always `None` (no Noether momentum is measured on runtime-dimension models).
+        momentum_error_max: Option<f64>,
+        /// Always `None` (no exact solution).
+        solution_error_max: Option<f64>,
+        /// Always `None` (no exact solution).
+        solution_error_final: Option<f64>,
+        /// Names of the model's invariants (the Toda lattice's Lax traces).
+        invariant_names: Vec<&'static str>,
+        /// Largest absolute deviation of those invariants over the step points (`None` if
+        /// the model has none or no diagnostic is asked for).
+        invariant_error_max: Option<f64>,
+    },
     /// On SO(3).
     Rigid {
         /// Names of the conserved angular momenta (about the model's symmetry axes).
@@ -276,6 +292,9 @@ impl Conservation {
             Conservation::Vector {
                 momentum_error_max, ..
             }
+            | Conservation::Local {
+                momentum_error_max, ..
+            }
             | Conservation::Rigid {
                 momentum_error_max, ..
             } => *momentum_error_max,
@@ -287,6 +306,9 @@ impl Conservation {
         match self {
             Conservation::Vector {
                 solution_error_max, ..
+            }
+            | Conservation::Local {
+                solution_error_max, ..
             } => *solution_error_max,
             Conservation::Rigid { .. } => None,
         }
@@ -296,6 +318,10 @@ impl Conservation {
     pub fn solution_error_final(&self) -> Option<f64> {
         match self {
             Conservation::Vector {
+                solution_error_final,
+                ..
+            }
+            | Conservation::Local {
                 solution_error_final,
                 ..
             } => *solution_error_final,
@@ -328,6 +354,14 @@ impl Conservation {
                     },
                 ),
             ],
+            Conservation::Local {
+                invariant_names,
+                invariant_error_max,
+                ..
+            } => vec![(
+                "invariant error",
+                named(*invariant_error_max, invariant_names),
+            )],
             Conservation::Rigid {
                 momentum_names,
                 momentum_error_max,

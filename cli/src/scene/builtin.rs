@@ -4,8 +4,8 @@
 //! list` shows) and add `("NAME", include_str!(...))` to [`BUILTIN_SCENES`]. Whether it runs
 //! on ℝᴺ or SO(3) follows from its model.
 
-/// The built-in scenes, as (name, TOML text): the scenes on ℝᴺ, then the rigid bodies on
-/// SO(3).
+/// The built-in scenes, as (name, TOML text): the scenes on ℝᴺ, the chains of runtime
+/// dimension, then the rigid bodies on SO(3).
 pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ("oscillator", include_str!("../../scenes/oscillator.toml")),
     ("kepler", include_str!("../../scenes/kepler.toml")),
@@ -56,6 +56,12 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     (
         "oscillator-beyond-stability",
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
+    ),
+    ("fput", include_str!("../../scenes/fput.toml")),
+    ("toda", include_str!("../../scenes/toda.toml")),
+    (
+        "relativistic-chain",
+        include_str!("../../scenes/relativistic-chain.toml"),
     ),
     ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
     ("heavy-top", include_str!("../../scenes/heavy-top.toml")),

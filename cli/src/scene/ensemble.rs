@@ -578,6 +578,16 @@ struct ModelNamesOf;
 /// of the model's, every initial component one of its coordinates (ℝᴺ scenes only). Returns
 /// the model's names.
 pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError> {
+    if scene.is_local() {
+        return Err(SceneError::NotApplicable {
+            option: "svi ensemble SCENE",
+            reason: format!(
+                "'{}' is a chain of runtime dimension, whose members' tables are not built yet; \
+                 svi run runs it (models of fixed dimension and rigid bodies run as ensembles)",
+                scene.model
+            ),
+        });
+    }
     let names = match scene.space() {
         SpaceKind::Vector => svi_models::visit_model(&scene.model, ModelNamesOf)?,
         SpaceKind::Rotation => svi_models::visit_rigid_model(&scene.model, ModelNamesOf)

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use svi::MethodSpec;
 use svi::method::registry::{self, SpaceKind};
-use svi_models::{MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel};
+use svi_models::{LOCAL_MODEL_NAMES, MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel};
 
 use crate::report::csv::Float;
 use crate::report::summary::Summary;
@@ -67,13 +67,14 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
-    /// A model name that is not in the zoo (the message lists the models on ℝᴺ and the
-    /// rigid bodies).
+    /// A model name that is not in the zoo (the message lists the models on ℝᴺ, the rigid
+    /// bodies and the chains of runtime dimension).
     #[error(
-        "unknown model '{}' (known: {}; rigid bodies: {})",
+        "unknown model '{}' (known: {}; rigid bodies: {}; chains of any size: {})",
         .0.name,
         MODEL_NAMES.join(", "),
-        RIGID_MODEL_NAMES.join(", ")
+        RIGID_MODEL_NAMES.join(", "),
+        LOCAL_MODEL_NAMES.join(", ")
     )]
     UnknownModel(UnknownModel),
     /// A scene with neither a zoo model nor a Lagrangian written as text.

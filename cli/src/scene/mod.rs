@@ -6,7 +6,9 @@
 //! Command-line flags ([`Overrides`]) are applied on top of a scene ([`Scene::apply`]), and
 //! every option that the scene's model, method or other options cannot use is an error
 //! ([`SceneError::NotApplicable`]) rather than silently ignored ([`Scene::check`]). The model
-//! decides the space: a zoo model on ℝᴺ (`svi_models::MODEL_NAMES`) or a rigid body on SO(3)
+//! decides the space: a zoo model on ℝᴺ (`svi_models::MODEL_NAMES`), a chain or lattice on
+//! ℝⁿ with n a parameter (`svi_models::LOCAL_MODEL_NAMES`: `[initial]` vectors of n
+//! components, methods svi, svi-newton and verlet) or a rigid body on SO(3)
 //! (`svi_models::RIGID_MODEL_NAMES`, see [`rigid`] for its `[initial]` and `form`).
 //!
 //! ```toml
@@ -92,10 +94,14 @@ use std::path::Path;
 use serde::Deserialize;
 use svi::MethodSpec;
 use svi::lie_group::{LieSvi, RigidInitial};
+use svi::method::DynInitial;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::text::{TextError, TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
-use svi_models::{MAX_TEXT_DIMENSION, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
+use svi_models::{
+    LOCAL_MODEL_NAMES, LocalZooModel, MAX_TEXT_DIMENSION, RIGID_MODEL_NAMES, RigidZooModel,
+    ZooModel,
+};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
@@ -267,6 +273,56 @@ impl Scene {
         }
     }
 
+    /// Whether the scene's model is a runtime-dimension one (a chain or lattice of
+    /// [`svi_models::LOCAL_MODEL_NAMES`], on ℝⁿ with n a parameter): it runs with the
+    /// large-system methods, and its `[initial]` vectors have n components.
+    pub fn is_local(&self) -> bool {
+        self.lagrangian.is_none() && LOCAL_MODEL_NAMES.contains(&self.model.as_str())
+    }
+
+    /// The options a runtime-dimension scene cannot use: a method other than svi, svi-newton
+    /// or verlet
+    /// (the library's [`MethodSpec::visit_local`] decides, naming the method), degree
+    /// adaptivity (its methods have a fixed degree), and the diagnostics it has nothing for
+    /// (momentum, solution).
+    fn check_local(&self, spec: MethodSpec) -> Result<(), SceneError> {
+        /// Accepts any method the library builds for runtime-dimension models.
+        struct Accepts;
+        impl registry::LocalMethodVisitor for Accepts {
+            type Output = ();
+            fn visit<M: svi::method::local::LocalMethod + Clone>(self, _: M) {}
+        }
+        spec.visit_local(Accepts)?;
+        if self.run.adapt == Some(AdaptMode::Degree) {
+            return Err(SceneError::NotApplicable {
+                option: "--adapt degree (run.adapt)",
+                reason: format!(
+                    "'{}' is a runtime-dimension model, whose methods ({}) keep their degree; \
+                     use --adapt step or none",
+                    self.model,
+                    spec.name()
+                ),
+            });
+        }
+        for (diagnostic, option, what) in [
+            (
+                Diagnostic::Momentum,
+                "--diagnostics momentum (output.diagnostics)",
+                "declares no symmetry, hence no Noether momentum to measure",
+            ),
+            (
+                Diagnostic::Solution,
+                "--diagnostics solution (output.diagnostics)",
+                "has no exact solution to measure against",
+            ),
+        ] {
+            if self.wants_explicitly(diagnostic) {
+                return Err(self.not_measurable(option, what));
+            }
+        }
+        Ok(())
+    }
+
     /// Consistency checks that need no model: a method for the scene's space with valid
     /// options, initial-state fields of that space (one of each exclusive pair), valid run
     /// options, and no option the scene cannot use (see [`SceneError::NotApplicable`]).
@@ -295,6 +351,9 @@ impl Scene {
                 }
                 if initial.v.is_some() && initial.p.is_some() {
                     return Err(SceneError::VelocityAndMomentum);
+                }
+                if self.is_local() {
+                    self.check_local(spec)?;
                 }
             }
             SpaceKind::Rotation => {
@@ -646,6 +705,26 @@ impl Scene {
         ))
     }
 
+    /// [`Scene::resolve`] for a runtime-dimension model: its parameters (the size `n` among
+    /// them) first, then the initial state of `[initial]` (vectors of n components) or the
+    /// model's default for that n.
+    pub fn resolve_local<M: LocalZooModel>(
+        &self,
+        model: &mut M,
+    ) -> Result<(f64, DynInitial, f64, f64), SceneError> {
+        for (name, value) in &self.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let (default_t0, default_q, default_v) = model.initial_state();
+        let initial = vector::local_initial(&self.initial, model.name(), default_q, default_v)?;
+        Ok((
+            self.initial.t0.unwrap_or(default_t0),
+            initial,
+            self.run.h.unwrap_or_else(|| model.default_step()),
+            self.run.t_end.unwrap_or_else(|| model.default_horizon()),
+        ))
+    }
+
     /// [`Scene::resolve`] for a rigid body on SO(3) (t0 defaults to 0, the horizon to t0
     /// plus the model's default duration).
     pub fn resolve_rigid<M: RigidZooModel>(
@@ -732,6 +811,9 @@ pub(crate) mod tests {
                 "kepler-recovery",
                 "double-pendulum-chaotic",
                 "oscillator-beyond-stability",
+                "fput",
+                "toda",
+                "relativistic-chain",
                 "rigid-body",
                 "heavy-top",
                 "pendulum-3d"
@@ -743,10 +825,16 @@ pub(crate) mod tests {
             assert!(
                 MODEL_NAMES.contains(&model)
                     || RIGID_MODEL_NAMES.contains(&model)
+                    || LOCAL_MODEL_NAMES.contains(&model)
                     || scene.lagrangian.is_some(),
                 "{name}"
             );
-            if MODEL_NAMES.contains(&name) {
+            assert_eq!(
+                scene.is_local(),
+                LOCAL_MODEL_NAMES.contains(&model),
+                "{name}"
+            );
+            if MODEL_NAMES.contains(&name) || LOCAL_MODEL_NAMES.contains(&name) {
                 assert_eq!(scene.model, name);
                 assert_eq!(scene.method.name, Some(method("svi")));
             } else {

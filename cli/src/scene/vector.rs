@@ -1,8 +1,9 @@
 //! The initial state of a scene on ℝᴺ: `[initial]`'s t0, q and one of v, p, against the
-//! model's dimension and defaults.
+//! model's dimension and defaults (fixed N, or the n of a runtime-dimension model).
 
-use nalgebra::SVector;
+use nalgebra::{DVector, SVector};
 use svi::Initial;
+use svi::method::DynInitial;
 
 use crate::scene::error::SceneError;
 use crate::scene::schema::InitialSection;
@@ -39,5 +40,41 @@ pub fn initial<const N: usize>(
         (Some(v), None) => Initial::Velocity { q, v },
         (None, Some(p)) => Initial::Momentum { q, p },
         (None, None) => Initial::Velocity { q, v: default_v },
+    })
+}
+
+/// [`initial`] for a runtime-dimension model named `model`, whose n is the length of its
+/// default state: the given q (else `default_q`) with the given v or p (else `default_v`).
+/// An error names a vector whose length is not n, or both v and p.
+pub fn local_initial(
+    section: &InitialSection,
+    model: &str,
+    default_q: DVector<f64>,
+    default_v: DVector<f64>,
+) -> Result<DynInitial, SceneError> {
+    let n = default_q.len();
+    let vector = |field: &'static str, values: &Option<Vec<f64>>| {
+        values
+            .as_ref()
+            .map(|values| {
+                if values.len() == n {
+                    Ok(DVector::from_column_slice(values))
+                } else {
+                    Err(SceneError::Dimension {
+                        model: model.into(),
+                        field,
+                        expected: n,
+                        found: values.len(),
+                    })
+                }
+            })
+            .transpose()
+    };
+    let q = vector("q", &section.q)?.unwrap_or(default_q);
+    Ok(match (vector("v", &section.v)?, vector("p", &section.p)?) {
+        (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
+        (Some(v), None) => DynInitial::Velocity { q, v },
+        (None, Some(p)) => DynInitial::Momentum { q, p },
+        (None, None) => DynInitial::Velocity { q, v: default_v },
     })
 }
