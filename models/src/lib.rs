@@ -364,6 +364,19 @@ impl LocalZooModel for RelativisticChain {
     }
 }
 
+impl LocalZooModel for SineGordonChain {
+    /// `kink_position`.
+    fn observable_names(&self) -> Vec<String> {
+        vec!["kink_position".into()]
+    }
+
+    /// Where φ first crosses π (linear between sites): the kink's centre; NaN without a
+    /// crossing.
+    fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
+        out.push(self.kink_position(q));
+    }
+}
+
 /// Receives a concrete runtime-dimension model chosen by name at run time (see
 /// [`visit_local_model`]).
 pub trait LocalModelVisitor {
@@ -397,6 +410,7 @@ local_zoo!(
     "fput" => Fput,
     "toda" => Toda,
     "relativistic-chain" => RelativisticChain,
+    "sine-gordon-chain" => SineGordonChain,
 );
 
 #[cfg(test)]

@@ -54,6 +54,22 @@ impl SineGordonChain {
     pub fn site(&self, i: usize) -> f64 {
         -0.5 * self.length + (i + 1) as f64 * self.spacing()
     }
+
+    /// The kink's centre: where φ first crosses π, linear between sites (the walls at
+    /// φ = 0 and 2π included); NaN when φ does not cross π.
+    pub fn kink_position(&self, q: &DVector<f64>) -> f64 {
+        let value = |i: usize| match i {
+            0 => 0.0,
+            i if i == self.n + 1 => 2.0 * PI,
+            i => q[i - 1],
+        };
+        (0..=self.n)
+            .find(|&i| value(i) < PI && value(i + 1) >= PI)
+            .map_or(f64::NAN, |i| {
+                let fraction = (PI - value(i)) / (value(i + 1) - value(i));
+                -0.5 * self.length + (i as f64 + fraction) * self.spacing()
+            })
+    }
 }
 
 impl LocalLagrangian for SineGordonChain {

@@ -63,6 +63,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "relativistic-chain",
         include_str!("../../scenes/relativistic-chain.toml"),
     ),
+    (
+        "sine-gordon-chain",
+        include_str!("../../scenes/sine-gordon-chain.toml"),
+    ),
     ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
     ("heavy-top", include_str!("../../scenes/heavy-top.toml")),
     ("pendulum-3d", include_str!("../../scenes/pendulum-3d.toml")),

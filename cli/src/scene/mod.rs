@@ -814,6 +814,7 @@ pub(crate) mod tests {
                 "fput",
                 "toda",
                 "relativistic-chain",
+                "sine-gordon-chain",
                 "rigid-body",
                 "heavy-top",
                 "pendulum-3d"
