@@ -339,7 +339,7 @@ fn toda_lax_traces_match_a_dense_lax_matrix_and_stay_conserved() {
 
 mod newton {
     use super::*;
-    use svi::method::local::newton::LinearSolverKind;
+    use svi::linalg::sparse::LinearSolverKind;
     use svi::{Solver, Svi};
     use svi_models::RelativisticChain;
 

@@ -93,6 +93,16 @@ impl Pattern {
     }
 }
 
+/// Which implementation of the seam a Newton iteration uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LinearSolverKind {
+    /// faer's sparse LU (the default).
+    #[default]
+    Sparse,
+    /// svi's dense LU (moderate sizes; the reference in tests).
+    Dense,
+}
+
 /// A solver of A x = b for matrices of one [`Pattern`], values given in the pattern's slot
 /// order.
 pub trait LinearSolver {

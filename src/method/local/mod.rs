@@ -24,6 +24,7 @@ pub mod svi;
 pub mod verlet;
 
 use crate::error::{Error, StepFailure, require_finite_entries};
+use crate::linalg::sparse::LinearSolverKind;
 use crate::method::space::{DynEuclidean, DynInitial, DynPoint, DynState};
 use crate::method::step::Step;
 use crate::method::{MethodInfo, StepReport};
@@ -31,7 +32,7 @@ use crate::model::Structure;
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
 use mass::MassInverse;
 use nalgebra::DVector;
-use newton::{Legendre, LinearSolverKind};
+use newton::Legendre;
 
 /// An integration method for [`LocalLagrangian`] models on runtime-sized ℝⁿ, in the
 /// coordinates (q, p).

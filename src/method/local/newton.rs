@@ -27,21 +27,11 @@
 //! run's statistics count the numeric factorisations and the (one) symbolic analysis.
 
 use crate::error::{Error, StepFailure};
-use crate::linalg::sparse::{DenseSolver, LinearSolver, Pattern, SparseLu};
+use crate::linalg::sparse::{DenseSolver, LinearSolver, LinearSolverKind, Pattern, SparseLu};
 use crate::method::space::DynState;
 use crate::method::variational::svi::Tables;
 use crate::model::local::{LocalLagrangian, TermDerivatives, TermWidth};
 use nalgebra::DVector;
-
-/// Which implementation of the linear-solver seam a Newton iteration uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum LinearSolverKind {
-    /// faer's sparse LU (the default).
-    #[default]
-    Sparse,
-    /// svi's dense LU (moderate sizes; the reference in tests).
-    Dense,
-}
 
 /// A linear solver of either kind.
 #[derive(Debug)]

@@ -62,8 +62,8 @@
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
+use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
-use crate::method::local::newton::LinearSolverKind;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
