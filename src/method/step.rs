@@ -18,6 +18,44 @@ use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure};
 use nalgebra::SVector;
 
+/// The cubic Hermite basis on a step [t_a, t_b] of length h at s = (time − t_a)/h: the
+/// interpolant of (q_a, q̇_a, q_b, q̇_b) is q = w₀q_a + h w₁q̇_a + w₂q_b + h w₃q̇_b, its
+/// derivative q̇ = (d₀q_a + d₂q_b)/h + d₁q̇_a + d₃q̇_b (the `interpolate` of the spaces on ℝᴺ
+/// and ℝⁿ).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Hermite {
+    /// The step length h.
+    pub(crate) h: f64,
+    /// w₀ … w₃.
+    pub(crate) value: [f64; 4],
+    /// d₀ … d₃ (the derivatives of the w in s).
+    pub(crate) rate: [f64; 4],
+}
+
+impl Hermite {
+    /// The basis at `time` in [t_a, t_b].
+    pub(crate) fn new(t_a: f64, t_b: f64, time: f64) -> Self {
+        let h = t_b - t_a;
+        let s = (time - t_a) / h;
+        let (s2, s3) = (s * s, s * s * s);
+        Hermite {
+            h,
+            value: [
+                2.0 * s3 - 3.0 * s2 + 1.0,
+                s3 - 2.0 * s2 + s,
+                -2.0 * s3 + 3.0 * s2,
+                s3 - s2,
+            ],
+            rate: [
+                6.0 * s2 - 6.0 * s,
+                3.0 * s2 - 4.0 * s + 1.0,
+                -6.0 * s2 + 6.0 * s,
+                3.0 * s2 - 2.0 * s,
+            ],
+        }
+    }
+}
+
 /// One step of a method on models `L` in the space `S`, and what the stepping loop needs to
 /// know about states of `S` under `L`.
 pub trait Step<L: ?Sized, S: Space> {
@@ -307,23 +345,13 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         b: &PhasePoint<N>,
         time: f64,
     ) -> Option<PhasePoint<N>> {
-        let h = b.t - a.t;
-        let s = (time - a.t) / h;
-        let (s2, s3) = (s * s, s * s * s);
-        let (h00, h10, h01, h11) = (
-            2.0 * s3 - 3.0 * s2 + 1.0,
-            s3 - 2.0 * s2 + s,
-            -2.0 * s3 + 3.0 * s2,
-            s3 - s2,
-        );
-        let (d00, d10, d01, d11) = (
-            6.0 * s2 - 6.0 * s,
-            3.0 * s2 - 4.0 * s + 1.0,
-            -6.0 * s2 + 6.0 * s,
-            3.0 * s2 - 2.0 * s,
-        );
-        let q = a.q * h00 + a.v * (h * h10) + b.q * h01 + b.v * (h * h11);
-        let v = (a.q * d00 + b.q * d01) / h + a.v * d10 + b.v * d11;
+        let Hermite {
+            h,
+            value: w,
+            rate: d,
+        } = Hermite::new(a.t, b.t, time);
+        let q = a.q * w[0] + a.v * (h * w[1]) + b.q * w[2] + b.v * (h * w[3]);
+        let v = (a.q * d[0] + b.q * d[2]) / h + a.v * d[1] + b.v * d[3];
         Some(PhasePoint {
             t: time,
             q,

@@ -18,15 +18,8 @@ impl<L: LocalLagrangian> Observer<L, DynPoint> for EnergyError {
 
 impl<L: LocalInvariants> Observer<L, DynPoint> for InvariantError {
     fn observe(&mut self, model: &L, _: usize, point: &DynPoint) -> ControlFlow<()> {
-        let first = self.initial.is_empty();
-        for i in 0..model.invariant_count() {
-            let value = model.invariant(i, point.t, &point.q, &point.v);
-            if first {
-                self.initial.push(value);
-            } else {
-                self.max = worst(self.max, (value - self.initial[i]).abs());
-            }
-        }
-        ControlFlow::Continue(())
+        self.record(
+            (0..model.invariant_count()).map(|i| model.invariant(i, point.t, &point.q, &point.v)),
+        )
     }
 }

@@ -209,11 +209,11 @@ pub struct InvariantError {
     pub max: f64,
 }
 
-impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantError {
-    fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+impl InvariantError {
+    /// Record the invariants' values at one point (the first point's are the references).
+    pub(crate) fn record(&mut self, values: impl Iterator<Item = f64>) -> ControlFlow<()> {
         let first = self.initial.is_empty();
-        for i in 0..model.invariant_count() {
-            let value = model.invariant(i, point.t, &point.q, &point.v);
+        for (i, value) in values.enumerate() {
             if first {
                 self.initial.push(value);
             } else {
@@ -221,6 +221,14 @@ impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantE
             }
         }
         ControlFlow::Continue(())
+    }
+}
+
+impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantError {
+    fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
+        self.record(
+            (0..model.invariant_count()).map(|i| model.invariant(i, point.t, &point.q, &point.v)),
+        )
     }
 }
 

@@ -74,16 +74,10 @@ impl<L: RigidBodySymmetries> Observer<L, RigidPoint> for AngularMomentumError {
 /// The model's known invariants (body Casimirs).
 impl<L: RigidBodyInvariants> Observer<L, RigidPoint> for InvariantError {
     fn observe(&mut self, model: &L, _: usize, point: &RigidPoint) -> ControlFlow<()> {
-        let first = self.initial.is_empty();
-        for i in 0..model.invariant_count() {
-            let value = model.invariant(i, &point.r, &point.omega, &point.momentum);
-            if first {
-                self.initial.push(value);
-            } else {
-                self.max = worst(self.max, (value - self.initial[i]).abs());
-            }
-        }
-        ControlFlow::Continue(())
+        self.record(
+            (0..model.invariant_count())
+                .map(|i| model.invariant(i, &point.r, &point.omega, &point.momentum)),
+        )
     }
 }
 

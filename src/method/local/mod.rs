@@ -26,7 +26,7 @@ pub mod verlet;
 use crate::error::{Error, StepFailure, require_finite_entries};
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::space::{DynEuclidean, DynInitial, DynPoint, DynState};
-use crate::method::step::Step;
+use crate::method::step::{Hermite, Step};
 use crate::method::{MethodInfo, StepReport};
 use crate::model::Structure;
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
@@ -265,27 +265,17 @@ impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
     /// Cubic Hermite interpolation of (q, q̇) between the ends of one step, with p from
     /// ∂L/∂q̇ (as on fixed-size ℝᴺ): output times inside steps, O(n) each.
     fn interpolate(&self, model: &L, a: &DynPoint, b: &DynPoint, time: f64) -> Option<DynPoint> {
-        let h = b.t - a.t;
-        let s = (time - a.t) / h;
-        let (s2, s3) = (s * s, s * s * s);
-        let (h00, h10, h01, h11) = (
-            2.0 * s3 - 3.0 * s2 + 1.0,
-            s3 - 2.0 * s2 + s,
-            -2.0 * s3 + 3.0 * s2,
-            s3 - s2,
-        );
-        let (d00, d10, d01, d11) = (
-            (6.0 * s2 - 6.0 * s) / h,
-            3.0 * s2 - 4.0 * s + 1.0,
-            (-6.0 * s2 + 6.0 * s) / h,
-            3.0 * s2 - 2.0 * s,
-        );
+        let Hermite {
+            h,
+            value: w,
+            rate: d,
+        } = Hermite::new(a.t, b.t, time);
         let n = a.q.len();
         let mut q = DVector::zeros(n);
         let mut v = DVector::zeros(n);
         for i in 0..n {
-            q[i] = a.q[i] * h00 + a.v[i] * (h * h10) + b.q[i] * h01 + b.v[i] * (h * h11);
-            v[i] = a.q[i] * d00 + b.q[i] * d01 + a.v[i] * d10 + b.v[i] * d11;
+            q[i] = a.q[i] * w[0] + a.v[i] * (h * w[1]) + b.q[i] * w[2] + b.v[i] * (h * w[3]);
+            v[i] = (a.q[i] * d[0] + b.q[i] * d[2]) / h + a.v[i] * d[1] + b.v[i] * d[3];
         }
         let mut p = DVector::zeros(n);
         model.momentum_into(time, &q, &v, &mut p);
