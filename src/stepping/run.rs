@@ -298,6 +298,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             (t0, t_end, h, steps),
             options,
             observer,
+            false,
             |_, _, _, _, _| Ok(()),
         )?;
         self.finish(progress, stopped)
@@ -361,8 +362,9 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
 
     /// The fixed-grid loop: `steps` steps of the grid (t0, t_end, h) from `progress`, with
     /// recovery, divergence limit and observers, calling `after_step(workspace, t, h, start,
-    /// end)` after each step (dense output of the step just taken). Returns whether an
-    /// observer stopped the run.
+    /// end)` after each step (dense output of the step just taken). The state at the start
+    /// of each step is kept (copied) only with `keep_start`; otherwise `start` is `None`.
+    /// Returns whether an observer stopped the run.
     #[allow(clippy::type_complexity)]
     pub(crate) fn run_grid<O: Observer<L, S::Point>>(
         &self,
@@ -371,11 +373,12 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         (t0, t_end, h, steps): (f64, f64, f64, usize),
         options: &RunOptions,
         observer: &mut O,
+        keep_start: bool,
         mut after_step: impl FnMut(
             &M::Workspace,
             f64,
             f64,
-            &S::State,
+            Option<&S::State>,
             &Progress<S>,
         ) -> Result<(), Error>,
     ) -> Result<bool, RunFailure<S>> {
@@ -387,10 +390,12 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             return Ok(true);
         }
         let mut increment = progress.cursor.state.zeros_like();
-        let mut start = progress.cursor.state.clone();
+        let mut start = keep_start.then(|| progress.cursor.state.clone());
         for k in 0..steps {
             let (t, step_size, end) = grid_step(t0, t_end, h, steps, k);
-            start.assign(&progress.cursor.state);
+            if let Some(start) = &mut start {
+                start.assign(&progress.cursor.state);
+            }
             if let Err(failure) = self.advance(
                 &self.method,
                 workspace,
@@ -405,7 +410,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             }
             progress.statistics.steps += 1;
             progress.t = end;
-            after_step(workspace, t, step_size, &start, progress)
+            after_step(workspace, t, step_size, start.as_ref(), progress)
                 .map_err(|error| self.failure(error, progress, false))?;
             if observer.wants(k + 1) && self.observe(k + 1, Some(workspace), progress, observer)? {
                 return Ok(k + 1 < steps);

@@ -534,18 +534,22 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             (span.t0, span.t_end, h, steps),
             &options.run,
             observer,
+            // The start of a step is read only to serve output times inside it.
+            outputs.next().is_some(),
             |workspace, t, size, start, progress| {
-                self.emit(
-                    self.method(),
-                    workspace,
-                    outputs,
-                    progress.statistics.steps,
-                    t,
-                    size,
-                    start,
-                    &progress.cursor.state,
-                    progress.t,
-                )?;
+                if let Some(start) = start {
+                    self.emit(
+                        self.method(),
+                        workspace,
+                        outputs,
+                        progress.statistics.steps,
+                        t,
+                        size,
+                        start,
+                        &progress.cursor.state,
+                        progress.t,
+                    )?;
+                }
                 adaptivity.record(size, points);
                 Ok(())
             },
