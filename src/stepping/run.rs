@@ -365,7 +365,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     /// end)` after each step (dense output of the step just taken). The state at the start
     /// of each step is kept (copied) only with `keep_start`; otherwise `start` is `None`.
     /// Returns whether an observer stopped the run.
-    #[allow(clippy::type_complexity)]
+    #[allow(clippy::type_complexity, clippy::too_many_arguments)]
     pub(crate) fn run_grid<O: Observer<L, S::Point>>(
         &self,
         workspace: &mut M::Workspace,
