@@ -14,6 +14,7 @@
 //! n = 32, α = 0.25, A = 1), and the energy flows to the next few modes and returns to mode 1
 //! near the recurrence time (about 157 periods of mode 1 there).
 
+use crate::chain::{spring_ends, spring_indices};
 use crate::params::{finite, non_negative, size, unknown};
 use nalgebra::{Const, DVector, SVector};
 use svi::Error;
@@ -96,19 +97,13 @@ impl LocalLagrangian for Fput {
     /// the term ignores that slot).
     #[inline]
     fn indices(&self, e: usize) -> [usize; 2] {
-        [e.saturating_sub(1), e.min(self.n - 1)]
+        spring_indices(e, self.n)
     }
 
     #[inline]
     fn term<D: Scalar>(&self, e: usize, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         let zero = D::from(0.0);
-        let (left, right) = if e == 0 {
-            (zero, q[1])
-        } else if e == self.n {
-            (q[0], zero)
-        } else {
-            (q[0], q[1])
-        };
+        let (left, right) = spring_ends(e, self.n, q, (0.0, 0.0));
         let kinetic = if e < self.n { v[1] * v[1] * 0.5 } else { zero };
         kinetic - self.spring(right - left)
     }

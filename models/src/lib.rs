@@ -61,6 +61,7 @@
 //! known only at run time: [`visit_text_model`] hands it to the same visitor as a
 //! [`TextLagrangian`] of its dimension (up to [`MAX_TEXT_DIMENSION`]) and declarations.
 
+mod chain;
 mod elliptic;
 mod params;
 

@@ -9,6 +9,7 @@
 //! closed form q̇ = p/√(m² + p²/c²) (used in tests). A sum of local terms of width 2: term e
 //! is spring e between particles e − 1 and e, carrying particle e's kinetic energy.
 
+use crate::chain::{spring_ends, spring_indices};
 use crate::params::{positive, size, unknown};
 use nalgebra::{Const, DVector, SVector};
 use svi::Error;
@@ -64,19 +65,13 @@ impl LocalLagrangian for RelativisticChain {
 
     #[inline]
     fn indices(&self, e: usize) -> [usize; 2] {
-        [e.saturating_sub(1), e.min(self.n - 1)]
+        spring_indices(e, self.n)
     }
 
     #[inline]
     fn term<D: Scalar>(&self, e: usize, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         let zero = D::from(0.0);
-        let (left, right) = if e == 0 {
-            (zero, q[1])
-        } else if e == self.n {
-            (q[0], zero)
-        } else {
-            (q[0], q[1])
-        };
+        let (left, right) = spring_ends(e, self.n, q, (0.0, 0.0));
         let c2 = self.c * self.c;
         let kinetic = if e < self.n {
             ((D::from(1.0) - v[1] * v[1] * (1.0 / c2)).sqrt()) * (-self.m * c2)

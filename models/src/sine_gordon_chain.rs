@@ -12,6 +12,7 @@
 //! pendulums e − 1 and e (the walls at e = 0 and e = n), carrying pendulum e's kinetic and
 //! on-site energy.
 
+use crate::chain::{spring_ends, spring_indices};
 use crate::params::{finite, positive, size, unknown};
 use nalgebra::{Const, DVector, SVector};
 use std::f64::consts::PI;
@@ -87,19 +88,13 @@ impl LocalLagrangian for SineGordonChain {
 
     #[inline]
     fn indices(&self, e: usize) -> [usize; 2] {
-        [e.saturating_sub(1), e.min(self.n - 1)]
+        spring_indices(e, self.n)
     }
 
     #[inline]
     fn term<D: Scalar>(&self, e: usize, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         let a = self.spacing();
-        let (left, right) = if e == 0 {
-            (D::from(0.0), q[1])
-        } else if e == self.n {
-            (q[0], D::from(2.0 * PI))
-        } else {
-            (q[0], q[1])
-        };
+        let (left, right) = spring_ends(e, self.n, q, (0.0, 2.0 * PI));
         let stretch = right - left;
         let spring = stretch * stretch * (0.5 / a);
         if e < self.n {
