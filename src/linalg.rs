@@ -190,11 +190,62 @@ pub fn compensated_add(sum: &mut [f64], compensation: &mut [f64], increment: &[f
     }
 }
 
+/// The largest |s + (δ − c)| over the entries of a compensated addition
+/// ([`compensated_add`]) not yet made, and whether every such sum is finite: the check
+/// before a step's increment is added.
+///
+/// Runs over four independent lanes so that the maximum vectorises (a single running
+/// maximum is a floating-point reduction the compiler may not reorder).
+pub fn compensated_sum_extent(sum: &[f64], compensation: &[f64], increment: &[f64]) -> (f64, bool) {
+    const LANES: usize = 4;
+    let (mut norm, mut finite) = ([0.0f64; LANES], [true; LANES]);
+    let mut lane = |l: usize, s: f64, c: f64, d: f64| {
+        let t = (s + (d - c)).abs();
+        finite[l] &= t <= f64::MAX;
+        norm[l] = if t > norm[l] { t } else { norm[l] };
+    };
+    let chunks = sum
+        .chunks_exact(LANES)
+        .zip(compensation.chunks_exact(LANES))
+        .zip(increment.chunks_exact(LANES));
+    for ((s, c), d) in chunks {
+        for l in 0..LANES {
+            lane(l, s[l], c[l], d[l]);
+        }
+    }
+    let tail = sum.len() - sum.len() % LANES;
+    for i in tail..sum.len() {
+        lane(0, sum[i], compensation[i], increment[i]);
+    }
+    (
+        norm.iter().fold(0.0, |m: f64, x| m.max(*x)),
+        finite.iter().all(|f| *f),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use num_dual::{DualNum, DualSVec64, jacobian};
+
+    #[test]
+    fn compensated_sum_extent_finds_the_largest_sum_and_any_non_finite_one_in_every_lane() {
+        // Seven entries: four lanes and a tail of three.
+        let s = [1.0, -2.0, 0.5, 0.0, 3.0, -1.0, 0.25];
+        let c = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        let d = [0.5, -1.0, 0.0, 0.1, -7.0, 0.0, 0.0];
+        // s + (d − c): 1.5, −3, 0.5, 0.1, −4, −1, −0.75.
+        assert_eq!(compensated_sum_extent(&s, &c, &d), (4.0, true));
+        for i in 0..s.len() {
+            for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+                let mut d = d;
+                d[i] = bad;
+                assert!(!compensated_sum_extent(&s, &c, &d).1, "entry {i}, {bad}");
+            }
+        }
+        assert_eq!(compensated_sum_extent(&[], &[], &[]), (0.0, true));
+    }
 
     #[test]
     fn small_solve_matches_known_solution_and_needs_pivoting() {

@@ -11,7 +11,7 @@
 //! what keeps R orthogonal to round-off without re-orthonormalisation).
 
 use crate::error::StepFailure;
-use crate::linalg::compensated_add;
+use crate::linalg::{compensated_add, compensated_sum_extent};
 use crate::model::so3::{Matrix3, Vector3};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::fmt::Debug;
@@ -545,15 +545,9 @@ impl StepState for DynState {
         increment: &Self,
         limit: Option<f64>,
     ) -> Result<(), StepFailure> {
-        // Plain comparisons on slices (vectorised); a NaN sum is caught by `finite`.
+        // A NaN sum is caught by `finite`.
         let sums = |s: &DVector<f64>, c: &DVector<f64>, d: &DVector<f64>| {
-            let (mut norm, mut finite) = (0.0f64, true);
-            for ((s, c), d) in s.as_slice().iter().zip(c.as_slice()).zip(d.as_slice()) {
-                let t = (s + (d - c)).abs();
-                finite &= t <= f64::MAX;
-                norm = if t > norm { t } else { norm };
-            }
-            (norm, finite)
+            compensated_sum_extent(s.as_slice(), c.as_slice(), d.as_slice())
         };
         let (q_norm, q_finite) = sums(&self.q, &compensation.q, &increment.q);
         let (y_norm, y_finite) = sums(&self.y, &compensation.y, &increment.y);

@@ -361,7 +361,7 @@ pub trait LocalLagrangianExt: LocalLagrangian {
     /// ∂L/∂q, written into `out`.
     #[inline]
     fn force_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
-        out.fill(0.0);
+        out.as_mut_slice().fill(0.0);
         for e in 0..self.term_count() {
             Self::Width::scatter_gradient(self, e, t, q, v, false, out);
         }
@@ -369,7 +369,7 @@ pub trait LocalLagrangianExt: LocalLagrangian {
 
     /// p = ∂L/∂q̇, written into `out`.
     fn momentum_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
-        out.fill(0.0);
+        out.as_mut_slice().fill(0.0);
         for e in 0..self.term_count() {
             Self::Width::scatter_gradient(self, e, t, q, v, true, out);
         }

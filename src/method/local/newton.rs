@@ -338,7 +338,7 @@ impl StageNewton {
             .enumerate()
         {
             q.copy_from(q0);
-            v.fill(0.0);
+            v.as_mut_slice().fill(0.0);
             for j in 1..=s {
                 let node = z.rows((j - 1) * n, n);
                 q.axpy(tables.values[(mu, j)], &node, 1.0);
@@ -361,7 +361,7 @@ impl StageNewton {
         self.points(tables, &state.q, z);
         let (n, s, k) = (self.n, self.s, self.terms.width);
         let layout = TermDerivatives { width: k };
-        self.residual.fill(0.0);
+        self.residual.as_mut_slice().fill(0.0);
         self.residual.rows_mut(0, n).copy_from(&state.y);
         if jacobian {
             self.values.fill(0.0);
@@ -508,7 +508,7 @@ impl StageNewton {
         let k = self.terms.width;
         let layout = TermDerivatives { width: k };
         let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
-        dp.fill(0.0);
+        dp.as_mut_slice().fill(0.0);
         for mu in 0..self.positions.len() {
             let (w, time) = (tables.weights[mu], tables.time(t, mu));
             for e in 0..model.term_count() {

@@ -226,7 +226,7 @@ fn newton_step<L: LocalLagrangian>(
     // Starting values: the last step's polynomial extrapolated, or uniform motion.
     if start.prepare(h) {
         let (table, _) = start.table();
-        data.offsets.fill(0.0);
+        data.offsets.as_mut_slice().fill(0.0);
         for nu in 0..s {
             for j in 0..s {
                 let x = table[nu * s + j];
@@ -360,7 +360,7 @@ fn fixed_point_step<L: LocalLagrangian>(
             break;
         }
     }
-    increment.y.fill(0.0);
+    increment.y.as_mut_slice().fill(0.0);
     for (force, w) in forces.iter().zip(&tables.weights) {
         increment.y.axpy(*w, force, 1.0);
     }

@@ -102,48 +102,46 @@ impl LocalMethod for StormerVerlet {
         };
         let dt = 0.5 * h;
         let mut evaluations = 1;
-        let continues = *cached
+        // The force at the end of the last step is the force at the start of this one when
+        // the state is the one that step ended at (checked entry by entry inside the
+        // kick–drift pass, which reads `cached_q` before overwriting it).
+        let reuse = *cached
             && (!L::TIME_DEPENDENT
-                || (*cached_t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cached_t.abs()))
-            && state
-                .q
-                .as_slice()
-                .iter()
-                .zip(cached_q.as_slice())
-                .fold(true, |all, (a, b)| {
-                    all & ((a - b).abs() <= *cached_tolerance)
-                });
-        if continues {
+                || (*cached_t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cached_t.abs()));
+        if reuse {
             std::mem::swap(start_force, end_force);
         } else {
             evaluations += 1;
             // ∂L/∂q of a constant-mass model does not depend on q̇.
             model.force_into(t, &state.q, &state.y, start_force);
         }
-        // Kick, drift (loops over slices: nalgebra's element iterators do not vectorise).
-        for ((k, p), f) in half
-            .as_mut_slice()
-            .iter_mut()
-            .zip(state.y.as_slice())
-            .zip(start_force.as_slice())
-        {
-            *k = p + dt * f;
+        let mut extent = kick_drift(
+            mass_inverse,
+            (dt, h),
+            state,
+            start_force,
+            reuse.then_some(*cached_tolerance),
+            (half, velocity),
+            &mut increment.q,
+            cached_q,
+        );
+        if extent.is_none() {
+            // The state is not where the last step ended: its force is needed after all.
+            evaluations += 1;
+            model.force_into(t, &state.q, &state.y, start_force);
+            extent = kick_drift(
+                mass_inverse,
+                (dt, h),
+                state,
+                start_force,
+                None,
+                (half, velocity),
+                &mut increment.q,
+                cached_q,
+            );
         }
-        mass_inverse.apply_into(half, velocity);
-        let mut extent = 0.0f64;
-        for (((d, e), q), v) in increment
-            .q
-            .as_mut_slice()
-            .iter_mut()
-            .zip(cached_q.as_mut_slice())
-            .zip(state.q.as_slice())
-            .zip(velocity.as_slice())
-        {
-            *d = h * v;
-            *e = q + *d;
-            let size = q.abs().max(e.abs());
-            extent = if size > extent { size } else { extent };
-        }
+        // The second pass does not check, so it always returns the extent.
+        let extent = extent.unwrap_or(f64::INFINITY);
         let end_t = t + h;
         // Kick at the end.
         model.force_into(end_t, cached_q, velocity, end_force);
@@ -183,4 +181,73 @@ impl LocalMethod for StormerVerlet {
             None => cold_velocity(model, t, q, p, guess),
         }
     }
+}
+
+/// The kick p_{k+½} = p_k + (h/2) F_k and the drift q_{k+1} = q_k + h M⁻¹p_{k+½} in one pass
+/// (for a diagonal M⁻¹; a coupled one solves between the two): writes the velocity M⁻¹p_{k+½}
+/// to `buffers.1`, the increment of q to `dq` and q_{k+1} to `end_q`, and returns
+/// max |q| over both ends.
+///
+/// With `check = Some(tolerance)`, `end_q` holds the end of the last step on entry, and the
+/// pass also checks that q_k is that point to within `tolerance` entry by entry; it returns
+/// `None` if not (the force F_k it was given is then not the force at q_k).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn kick_drift(
+    mass_inverse: &MassInverse,
+    (dt, h): (f64, f64),
+    state: &DynState,
+    force: &DVector<f64>,
+    check: Option<f64>,
+    (half, velocity): (&mut DVector<f64>, &mut DVector<f64>),
+    dq: &mut DVector<f64>,
+    end_q: &mut DVector<f64>,
+) -> Option<f64> {
+    let tolerance = check.unwrap_or(f64::INFINITY);
+    let (mut same, mut extent) = (true, 0.0f64);
+    // Loops over slices: nalgebra's element iterators do not vectorise.
+    let mut drift = |d: &mut f64, e: &mut f64, q: f64, v: f64| {
+        same &= (q - *e).abs() <= tolerance;
+        *d = h * v;
+        *e = q + *d;
+        let size = q.abs().max(e.abs());
+        extent = if size > extent { size } else { extent };
+    };
+    let q = state.q.as_slice();
+    match mass_inverse {
+        MassInverse::Diagonal(inverse) => {
+            let columns = velocity
+                .as_mut_slice()
+                .iter_mut()
+                .zip(dq.as_mut_slice())
+                .zip(end_q.as_mut_slice())
+                .zip(q.iter().zip(state.y.as_slice()))
+                .zip(force.as_slice().iter().zip(inverse.as_slice()));
+            for ((((v, d), e), (q, p)), (f, m)) in columns {
+                *v = (p + dt * f) * m;
+                drift(d, e, *q, *v);
+            }
+        }
+        MassInverse::Dense(_) => {
+            for ((k, p), f) in half
+                .as_mut_slice()
+                .iter_mut()
+                .zip(state.y.as_slice())
+                .zip(force.as_slice())
+            {
+                *k = p + dt * f;
+            }
+            mass_inverse.apply_into(half, velocity);
+            let columns = dq
+                .as_mut_slice()
+                .iter_mut()
+                .zip(end_q.as_mut_slice())
+                .zip(q.iter().zip(velocity.as_slice()));
+            for ((d, e), (q, v)) in columns {
+                drift(d, e, *q, *v);
+            }
+        }
+    }
+    // NaN entries fail the check: a NaN state is never "where the last step ended".
+    (check.is_none() || same).then_some(extent)
 }
