@@ -371,3 +371,31 @@ fn list_shows_the_chains_and_their_observables() {
     assert!(text.contains("(100 components)"), "{text}");
     assert!(text.lines().all(|line| line.len() < 400), "{text}");
 }
+
+#[test]
+fn plot_draws_the_trajectory_columns_and_needs_the_trajectory_file() {
+    let scratch = Scratch::new("fput-plot");
+    let (csv, svg) = (scratch.join("fput.csv"), scratch.join("fput.svg"));
+    let summary = json(&[
+        "run",
+        "fput",
+        "--t-end",
+        "100",
+        "--every",
+        "10",
+        "--out",
+        csv.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(summary["status"], "ok");
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    assert!(picture.starts_with("<svg"), "{}", &picture[..80]);
+    // One legend entry per column but t, and the title names scene and method.
+    for label in ["energy", "mode_1", "mode_8", "fput (svi)"] {
+        assert!(picture.contains(label), "{label} missing");
+    }
+    // Without a trajectory file there is nothing to draw: bad input naming --plot.
+    bad_input(&["run", "fput"], &["--plot", svg.to_str().unwrap()], "--plot");
+}

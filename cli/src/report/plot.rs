@@ -86,6 +86,47 @@ pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Resu
     root.present().map_err(|e| error(e.to_string()))
 }
 
+/// Draw the CSV file `csv` (a header of column names, then numeric rows whose first column
+/// is t, as `svi run --out` writes them) as one SVG line chart at `svg`: every other column
+/// against t, titled `title`.
+pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
+    let error = |reason: String| PlotError {
+        path: svg.display().to_string(),
+        reason,
+    };
+    let text = std::fs::read_to_string(csv)
+        .map_err(|e| error(format!("cannot read '{}': {e}", csv.display())))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let mut series: Vec<Series> = header
+        .iter()
+        .skip(1)
+        .map(|name| Series {
+            label: name.to_string(),
+            points: Vec::new(),
+        })
+        .collect();
+    for (row, line) in lines.enumerate() {
+        let values = line
+            .split(',')
+            .map(str::parse::<f64>)
+            .collect::<Result<Vec<f64>, _>>()
+            .map_err(|e| error(format!("row {} of '{}': {e}", row + 1, csv.display())))?;
+        for (series, value) in series.iter_mut().zip(values.iter().skip(1)) {
+            series.points.push((values[0], *value));
+        }
+    }
+    let panel = Panel {
+        title: title.to_string(),
+        x_label: "t".into(),
+        y_label: header.get(1..).map_or(String::new(), |names| names.join(", ")),
+        x_log: false,
+        y_log: false,
+        series,
+    };
+    write_svg(svg, &[panel], 900, 560)
+}
+
 fn draw_panel(
     panel: &Panel,
     area: &DrawingArea<SVGBackend, plotters::coord::Shift>,

@@ -44,6 +44,7 @@
 //!
 //! [output]
 //! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
+//! # plot = "kepler.svg"       # draw its columns against t as SVG (needs trajectory)
 //! every = 10                  # every 10th step (default 1)
 //! # output_times = [1.0, 2.5] # report (and write, instead of every step) the states at these
 //! #                           # times, read off each step's polynomial (dense output)
@@ -460,6 +461,13 @@ impl Scene {
                     .into(),
             });
         }
+        if output.plot.is_some() && output.trajectory.is_none() {
+            return Err(SceneError::NotApplicable {
+                option: "--plot (output.plot)",
+                reason: "draws the trajectory file: give --out FILE (output.trajectory) too"
+                    .into(),
+            });
+        }
         match (output.every, &output.trajectory) {
             (Some(_), None) => Err(SceneError::EveryWithoutOutput),
             (Some(0), Some(_)) => {
@@ -489,6 +497,7 @@ impl Scene {
             parameters,
             every,
             out,
+            plot,
             diagnostics,
             adapt,
             tol,
@@ -562,6 +571,7 @@ impl Scene {
         }
         set(&mut self.output.every, every);
         set(&mut self.output.trajectory, out);
+        set(&mut self.output.plot, plot);
         set(&mut self.output.diagnostics, diagnostics);
         set(&mut self.run.adapt, adapt);
         set(&mut self.run.tol, tol);

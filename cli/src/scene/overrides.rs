@@ -47,6 +47,10 @@ pub struct Overrides {
     /// Write the trajectory as CSV to FILE.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Draw the trajectory written by --out as an SVG line chart to FILE: every column
+    /// against t (on chains the energy and the observables, e.g. FPUT's mode energies).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
     /// Diagnostics to compute, comma-separated, or none (default: energy,momentum,solution).
     ///
     /// none computes no per-step diagnostic at all (on rigid bodies also no invariant and

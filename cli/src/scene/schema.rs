@@ -232,6 +232,9 @@ pub struct OutputSection {
     /// `output_times` the initial point and the states at those times (absent: no
     /// trajectory is kept).
     pub trajectory: Option<PathBuf>,
+    /// SVG file for a line chart of the trajectory file's columns against t (needs
+    /// `trajectory`; absent: no plot).
+    pub plot: Option<PathBuf>,
     /// Diagnostics to compute (default: energy, momentum and solution; `["none"]` or `[]`:
     /// none at all).
     pub diagnostics: Option<Vec<Diagnostic>>,
