@@ -10,7 +10,12 @@
 //!   written by hand, one force evaluation per step, plain summation (what a user writes
 //!   without a library).
 //!
-//! Each measured unit is 100 steps of h = 0.1 from the default (mode 1) state; both end at
+//! # `chain_force/<implementation>/10⁴`
+//!
+//! The force ∂L/∂q alone at the default state: svi's term-by-term assembly
+//! (`LocalLagrangianExt::force_into`) against the hand-written loop.
+//!
+//! Each measured unit of `chain_verlet` is 100 steps of h = 0.1 from the default (mode 1) state; both end at
 //! the same state to 1e-12 (checked before timing). Run with `cargo bench --bench chain`;
 //! medians in `target/criterion/chain_verlet/<implementation>/<n>/new/estimates.json`.
 
@@ -19,7 +24,7 @@ use nalgebra::DVector;
 use std::hint::black_box;
 use std::time::Duration;
 use svi::method::DynInitial;
-use svi::model::local::LocalDefaults;
+use svi::model::local::{LocalDefaults, LocalLagrangianExt};
 use svi::{Integrator, StormerVerlet};
 use svi_models::Fput;
 
@@ -111,6 +116,25 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    group.finish();
+
+    // The force alone: ∂L/∂q assembled term by term by AD against the hand-written force.
+    let mut group = c.benchmark_group("chain_force");
+    group
+        .measurement_time(Duration::from_secs(2))
+        .warm_up_time(Duration::from_millis(300))
+        .sample_size(20);
+    let n = 10_000;
+    let model = model(n);
+    let (t0, q0, v0) = model.initial_state();
+    let mut out = DVector::zeros(n);
+    group.bench_function(BenchmarkId::new("svi", n), |b| {
+        b.iter(|| model.force_into(t0, black_box(&q0), &v0, &mut out))
+    });
+    let mut f = vec![0.0; n];
+    group.bench_function(BenchmarkId::new("hand_written", n), |b| {
+        b.iter(|| force(&model, black_box(q0.as_slice()), &mut f))
+    });
     group.finish();
 }
 
