@@ -39,6 +39,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "stiff-spring-pendulum-coarse",
         include_str!("../../scenes/stiff-spring-pendulum-coarse.toml"),
     ),
+    (
+        "stiff-spring-pendulum-multiscale",
+        include_str!("../../scenes/stiff-spring-pendulum-multiscale.toml"),
+    ),
     ("kepler-long", include_str!("../../scenes/kepler-long.toml")),
     ("kepler-e0.9", include_str!("../../scenes/kepler-e0.9.toml")),
     (
