@@ -11,6 +11,7 @@ fn every_stress_scene_parses_and_a_short_run_of_each_succeeds() {
     for name in [
         "stiff-spring-pendulum",
         "stiff-spring-pendulum-coarse",
+        "stiff-spring-pendulum-multiscale",
         "kepler-long",
         "kepler-e0.9",
         "kepler-e0.99",

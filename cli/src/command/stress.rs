@@ -80,6 +80,10 @@ pub const CASES: &[StressCase] = &[
         probe_time: 10.0,
     },
     StressCase {
+        scene: "stiff-spring-pendulum-multiscale",
+        probe_time: 10.0,
+    },
+    StressCase {
         scene: "double-pendulum-chaotic",
         probe_time: 20.0,
     },
