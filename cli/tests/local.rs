@@ -397,5 +397,9 @@ fn plot_draws_the_trajectory_columns_and_needs_the_trajectory_file() {
         assert!(picture.contains(label), "{label} missing");
     }
     // Without a trajectory file there is nothing to draw: bad input naming --plot.
-    bad_input(&["run", "fput"], &["--plot", svg.to_str().unwrap()], "--plot");
+    bad_input(
+        &["run", "fput"],
+        &["--plot", svg.to_str().unwrap()],
+        "--plot",
+    );
 }

@@ -37,8 +37,8 @@ use svi_models::{
 
 use crate::command::space::RunSpace;
 use crate::report::csv::CsvStream;
-use crate::report::plot::plot_csv;
 use crate::report::health::{self, Measured};
+use crate::report::plot::plot_csv;
 use crate::report::progress::Progress;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
@@ -403,11 +403,12 @@ where
         None => None,
     };
     if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
-        plot_csv(csv, svg, &format!("{} ({})", scene.model, plan.method.name))
-            .map_err(|e| SceneError::Write {
+        plot_csv(csv, svg, &format!("{} ({})", scene.model, plan.method.name)).map_err(|e| {
+            SceneError::Write {
                 path: svg.clone(),
                 source: std::io::Error::other(e.reason),
-            })?;
+            }
+        })?;
     }
 
     let solves = adapt != AdaptMode::None || output_times.is_some();

@@ -119,7 +119,9 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
     let panel = Panel {
         title: title.to_string(),
         x_label: "t".into(),
-        y_label: header.get(1..).map_or(String::new(), |names| names.join(", ")),
+        y_label: header
+            .get(1..)
+            .map_or(String::new(), |names| names.join(", ")),
         x_log: false,
         y_log: false,
         series,

@@ -464,8 +464,7 @@ impl Scene {
         if output.plot.is_some() && output.trajectory.is_none() {
             return Err(SceneError::NotApplicable {
                 option: "--plot (output.plot)",
-                reason: "draws the trajectory file: give --out FILE (output.trajectory) too"
-                    .into(),
+                reason: "draws the trajectory file: give --out FILE (output.trajectory) too".into(),
             });
         }
         match (output.every, &output.trajectory) {

@@ -2,32 +2,31 @@
 //! the terms' blocks once per run and applied as q̇ = M⁻¹p in O(n).
 //!
 //! A diagonal M (particles with their own masses: chains, lattices) is inverted entry by
-//! entry. A coupled M is factored densely up to [`MassInverse::MAX_DENSE`] coordinates;
-//! beyond, it needs the sparse factorisation of the linear-solver seam, not built yet, and is
-//! an error that says so.
+//! entry. A coupled M (a consistent finite-element mass matrix, bodies sharing
+//! coordinates) is factored once by faer's sparse LU on the pattern of the terms' blocks
+//! (`linalg::sparse`), so any n whose factors fit in memory runs.
 
 use crate::error::Error;
-use crate::linalg::DenseLu;
+use crate::linalg::sparse::{LinearSolver, Pattern, SparseLu};
 use nalgebra::DVector;
+use std::cell::RefCell;
 
 /// M⁻¹ of a constant mass matrix, ready to apply.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub enum MassInverse {
     /// The reciprocal diagonal entries.
     Diagonal(DVector<f64>),
-    /// The LU factors of a coupled M (moderate n).
-    Dense(Box<DenseLu>),
+    /// The sparse LU factors of a coupled M (faer), in a cell because the solve writes
+    /// to the factorisation's scratch memory.
+    Coupled(Box<RefCell<SparseLu>>),
 }
 
 impl MassInverse {
-    /// The largest n whose coupled mass matrix is factored densely.
-    pub const MAX_DENSE: usize = 2000;
-
     /// M⁻¹ for M of size n given as (row, column, value) triplets (repeated places add up).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] `structure` when M is singular
-    /// or not positive on its diagonal, or coupled with n above [`MassInverse::MAX_DENSE`].
+    /// [`Error::InvalidParameter`] `structure` when M is singular or not positive on its
+    /// diagonal.
     pub fn new(n: usize, triplets: &[(usize, usize, f64)]) -> Result<Self, Error> {
         let singular = |what: String| {
             Error::invalid(
@@ -35,35 +34,38 @@ impl MassInverse {
                 format!("the mass matrix ∂²L/∂q̇² is {what}: the Legendre map is not invertible"),
             )
         };
-        if triplets.iter().all(|(i, j, _)| i == j) {
-            let mut diagonal = DVector::<f64>::zeros(n);
-            for (i, _, value) in triplets {
+        let mut diagonal = DVector::<f64>::zeros(n);
+        for (i, j, value) in triplets {
+            if i == j {
                 diagonal[*i] += value;
             }
-            if let Some(i) = diagonal.iter().position(|m| !(*m > 0.0 && m.is_finite())) {
-                return Err(singular(format!(
-                    "diagonal with entry {:e} at coordinate {i}",
-                    diagonal[i]
-                )));
-            }
+        }
+        if let Some(i) = diagonal.iter().position(|m| !(*m > 0.0 && m.is_finite())) {
+            return Err(singular(format!(
+                "not positive on its diagonal: entry {:e} at coordinate {i}",
+                diagonal[i]
+            )));
+        }
+        if triplets.iter().all(|(i, j, _)| i == j) {
             return Ok(MassInverse::Diagonal(diagonal.map(|m| 1.0 / m)));
         }
-        if n > Self::MAX_DENSE {
-            return Err(Error::invalid(
-                "structure",
-                format!(
-                    "a coupled (non-diagonal) constant mass matrix of {n} coordinates needs a \
-                     sparse factorisation (at most {} are factored densely)",
-                    Self::MAX_DENSE
-                ),
-            ));
+        let places: Vec<(usize, usize)> = triplets.iter().map(|&(i, j, _)| (i, j)).collect();
+        let pattern = Pattern::new(n, &places)?;
+        let mut values = vec![0.0; pattern.len()];
+        for &(i, j, value) in triplets {
+            if let Some(slot) = pattern.slot(i, j) {
+                values[slot] += value;
+            }
         }
-        let mut lu = DenseLu::new(n);
-        for (i, j, value) in triplets {
-            lu.matrix_mut()[(*i, *j)] += value;
-        }
-        lu.factor().map_err(|_| singular("singular".to_string()))?;
-        Ok(MassInverse::Dense(Box::new(lu)))
+        let mut lu = SparseLu::default();
+        lu.analyse(&pattern)?;
+        lu.factor(&pattern, &values)
+            .map_err(|_| singular("singular".to_string()))?;
+        // faer does not stop at a zero pivot: a singular M shows in a solve.
+        let mut probe = DVector::from_element(n, 1.0);
+        lu.solve_in_place(&mut probe)
+            .map_err(|_| singular("singular".to_string()))?;
+        Ok(MassInverse::Coupled(Box::new(RefCell::new(lu))))
     }
 
     /// out = M⁻¹ p (out and p of length n).
@@ -79,9 +81,11 @@ impl MassInverse {
                     *o = p * m;
                 }
             }
-            MassInverse::Dense(lu) => {
+            MassInverse::Coupled(lu) => {
                 out.copy_from(p);
-                lu.solve_in_place(out);
+                // Factored and probed in `new`: a non-finite result can only come from a
+                // non-finite p, and shows in the caller's finiteness checks.
+                let _ = lu.borrow_mut().solve_in_place(out);
             }
         }
     }

@@ -17,7 +17,7 @@ use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
 use nalgebra::DVector;
 
 /// Buffers of a Störmer–Verlet run on runtime-sized ℝⁿ.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct LocalVerletWorkspace {
     /// M⁻¹, from the first step.
     mass_inverse: Option<MassInverse>,
@@ -228,7 +228,7 @@ fn kick_drift(
                 drift(d, e, *q, *v);
             }
         }
-        MassInverse::Dense(_) => {
+        MassInverse::Coupled(_) => {
             for ((k, p), f) in half
                 .as_mut_slice()
                 .iter_mut()
