@@ -93,3 +93,57 @@ fn multiscale_does_not_allocate_per_step() {
     let (q, v) = (SVector::from([0.0, 0.5]), SVector::from([0.0, 0.0]));
     assert_loop_allocates_nothing(model, Multiscale::default(), q, v);
 }
+
+/// Allocations of a run of `steps` steps of size 0.01 of a runtime-dimension model from
+/// its default state, observing the energy at every step.
+fn local_allocations<L, M>(model: &L, method: &M, steps: usize) -> usize
+where
+    L: svi::model::local::LocalDefaults + Clone,
+    M: svi::method::local::LocalMethod + Clone,
+{
+    let (t0, q, v) = model.initial_state();
+    let integrator = Integrator::new(model.clone(), method.clone());
+    let mut energy = svi::observer::EnergyError::default();
+    let before = allocations::count();
+    integrator
+        .run(
+            t0,
+            svi::method::DynInitial::Velocity { q, v },
+            0.01,
+            t0 + 0.01 * steps as f64,
+            &mut energy,
+        )
+        .unwrap();
+    allocations::count() - before
+}
+
+/// The runtime-dimension paths (Verlet, SVI's fixed point, sparse Newton) allocate nothing
+/// per step either, with an observer at every step: each observed point reuses the last
+/// one's vectors.
+#[test]
+fn runtime_dimension_paths_do_not_allocate_per_step_or_per_observed_point() {
+    use svi::model::local::LocalDefaults;
+    use svi_models::{Fput, RelativisticChain};
+    let mut fput = Fput::default();
+    fput.set_parameter("n", 64.0).unwrap();
+    let mut relativistic = RelativisticChain::default();
+    relativistic.set_parameter("n", 16.0).unwrap();
+    let verlet = StormerVerlet::default();
+    let svi = Svi::new(6).with_quadrature(5);
+    assert_eq!(
+        local_allocations(&fput, &verlet, 20),
+        local_allocations(&fput, &verlet, 2000),
+        "verlet"
+    );
+    assert_eq!(
+        local_allocations(&fput, &svi, 20),
+        local_allocations(&fput, &svi, 2000),
+        "svi, fixed point"
+    );
+    let svi = Svi::new(4).with_quadrature(3);
+    assert_eq!(
+        local_allocations(&relativistic, &svi, 20),
+        local_allocations(&relativistic, &svi, 200),
+        "svi, sparse Newton"
+    );
+}

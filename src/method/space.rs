@@ -81,6 +81,10 @@ pub trait Space: Copy + Debug + PartialEq + Default + 'static {
     fn time(point: &Self::Point) -> f64;
     /// The velocity of a point.
     fn velocity(point: &Self::Point) -> Self::Velocity;
+    /// Overwrite `velocity` with the point's velocity (no allocation on runtime-sized spaces).
+    fn assign_velocity(velocity: &mut Self::Velocity, point: &Self::Point) {
+        *velocity = Self::velocity(point);
+    }
     /// The first Newton start of the inverse Legendre map for an initial condition.
     fn initial_guess(initial: &Self::Initial) -> Self::Velocity;
     /// The configuration and velocity of a point in words, for error messages.
@@ -455,6 +459,10 @@ impl Space for DynEuclidean {
 
     fn velocity(point: &DynPoint) -> DVector<f64> {
         point.v.clone()
+    }
+
+    fn assign_velocity(velocity: &mut DVector<f64>, point: &DynPoint) {
+        velocity.copy_from(&point.v);
     }
 
     fn initial_guess(initial: &DynInitial) -> DVector<f64> {

@@ -122,6 +122,22 @@ pub trait Step<L: ?Sized, S: Space> {
         guess: &S::Velocity,
     ) -> Result<S::Point, Error>;
 
+    /// [`Step::complete`] into `point`, a point of an earlier completion of the same run
+    /// (the default overwrites it; runtime-sized spaces reuse its vectors, so observing
+    /// every step allocates nothing).
+    fn complete_into(
+        &self,
+        model: &L,
+        workspace: Option<&Self::Workspace>,
+        t: f64,
+        state: &S::State,
+        guess: &S::Velocity,
+        point: &mut S::Point,
+    ) -> Result<(), Error> {
+        *point = self.complete(model, workspace, t, state, guess)?;
+        Ok(())
+    }
+
     /// The point of a state whose completion failed, with `guess` (the last velocity
     /// completed) standing in for the velocity: the last good state of a failure report.
     fn incomplete(&self, t: f64, state: &S::State, guess: &S::Velocity) -> S::Point;

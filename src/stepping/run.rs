@@ -194,6 +194,8 @@ pub(crate) struct Progress<S: Space> {
     /// Newton start of the next inverse Legendre map (the last velocity completed).
     pub(crate) guess: S::Velocity,
     pub(crate) statistics: Statistics,
+    /// The last point handed to an observer, whose memory the next one reuses.
+    pub(crate) point: Option<S::Point>,
 }
 
 /// A model and a method on the space `S`, ready to run.
@@ -357,6 +359,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             cursor: Cursor::new(state),
             guess: S::initial_guess(initial),
             statistics: Statistics::default(),
+            point: None,
         })
     }
 
@@ -429,16 +432,20 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         progress: &mut Progress<S>,
         observer: &mut O,
     ) -> Result<bool, RunFailure<S>> {
-        match self.complete(
-            workspace,
-            step,
-            progress.t,
-            &progress.cursor.state,
-            &progress.guess,
-        ) {
+        let (t, state, guess) = (progress.t, &progress.cursor.state, &progress.guess);
+        // The last observed point's memory is reused (moved out and back: no copy).
+        let completed = match progress.point.take() {
+            Some(mut point) => self
+                .complete_into(workspace, step, t, state, guess, &mut point)
+                .map(|()| point),
+            None => self.complete(workspace, step, t, state, guess),
+        };
+        match completed {
             Ok(point) => {
-                progress.guess = S::velocity(&point);
-                Ok(observer.observe(&self.model, step, &point).is_break())
+                S::assign_velocity(&mut progress.guess, &point);
+                let stop = observer.observe(&self.model, step, &point).is_break();
+                progress.point = Some(point);
+                Ok(stop)
             }
             Err(error) => Err(self.failure(error, progress, false)),
         }
@@ -481,8 +488,29 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         let point = self
             .method
             .complete(&self.model, workspace, t, state, guess)?;
-        if self.method.point_is_finite(&point) {
-            Ok(point)
+        self.check_point(&point, step, t)?;
+        Ok(point)
+    }
+
+    /// [`Integrator::complete`] into `point`, a point of an earlier completion of this run.
+    pub(crate) fn complete_into(
+        &self,
+        workspace: Option<&M::Workspace>,
+        step: usize,
+        t: f64,
+        state: &S::State,
+        guess: &S::Velocity,
+        point: &mut S::Point,
+    ) -> Result<(), Error> {
+        self.method
+            .complete_into(&self.model, workspace, t, state, guess, point)?;
+        self.check_point(point, step, t)
+    }
+
+    /// [`Error::NonFinite`] at `step` unless every number of `point` is finite.
+    fn check_point(&self, point: &S::Point, step: usize, t: f64) -> Result<(), Error> {
+        if self.method.point_is_finite(point) {
+            Ok(())
         } else {
             Err(Error::NonFinite {
                 what: "velocity or momentum".into(),

@@ -67,9 +67,9 @@ pub trait LocalMethod {
         let _ = workspace;
     }
 
-    /// The velocity q̇ of the momentum `p` at (t, q), from what the run's workspace holds (a
-    /// constant mass matrix's cached inverse, or the sparse inverse Legendre map started at
-    /// `guess`).
+    /// The velocity q̇ of the momentum `p` at (t, q), written into `v`, from what the run's
+    /// workspace holds (a constant mass matrix's cached inverse, or the sparse inverse
+    /// Legendre map started at `v`'s value on entry).
     fn local_velocity<L: LocalLagrangian>(
         &self,
         model: &L,
@@ -77,26 +77,26 @@ pub trait LocalMethod {
         t: f64,
         q: &DVector<f64>,
         p: &DVector<f64>,
-        guess: &DVector<f64>,
-    ) -> Result<DVector<f64>, Error>;
+        v: &mut DVector<f64>,
+    ) -> Result<(), Error>;
 }
 
-/// The velocity q̇ of the momentum `p` at (t, q) without a run's workspace: M⁻¹p for a
-/// constant mass matrix, else the inverse Legendre map by sparse Newton from `guess`.
+/// The velocity q̇ of the momentum `p` at (t, q) without a run's workspace, written into
+/// `v`: M⁻¹p for a constant mass matrix, else the inverse Legendre map by sparse Newton
+/// from `v`'s value on entry.
 pub(crate) fn cold_velocity<L: LocalLagrangian>(
     model: &L,
     t: f64,
     q: &DVector<f64>,
     p: &DVector<f64>,
-    guess: &DVector<f64>,
-) -> Result<DVector<f64>, Error> {
+    v: &mut DVector<f64>,
+) -> Result<(), Error> {
     if L::STRUCTURE == Structure::ConstantMass {
         let zero = DVector::zeros(q.len());
-        return Ok(MassInverse::new(q.len(), &model.mass_triplets(t, q, &zero))?.apply(p));
+        MassInverse::new(q.len(), &model.mass_triplets(t, q, &zero))?.apply_into(p, v);
+        return Ok(());
     }
-    let mut v = guess.clone();
-    Legendre::new(model, LinearSolverKind::Sparse)?.solve(model, t, q, p, &mut v)?;
-    Ok(v)
+    Legendre::new(model, LinearSolverKind::Sparse)?.solve(model, t, q, p, v)
 }
 
 /// The constant mass matrix of `model` at (t, q), inverted, after checking that the model
@@ -235,18 +235,30 @@ impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
         state: &DynState,
         guess: &DVector<f64>,
     ) -> Result<DynPoint, Error> {
-        let v = match workspace {
+        let mut point = <Self as Step<L, DynEuclidean>>::incomplete(self, t, state, guess);
+        self.complete_into(model, workspace, t, state, guess, &mut point)?;
+        Ok(point)
+    }
+
+    fn complete_into(
+        &self,
+        model: &L,
+        workspace: Option<&M::Workspace>,
+        t: f64,
+        state: &DynState,
+        guess: &DVector<f64>,
+        point: &mut DynPoint,
+    ) -> Result<(), Error> {
+        point.t = t;
+        point.q.copy_from(&state.q);
+        point.p.copy_from(&state.y);
+        point.v.copy_from(guess);
+        match workspace {
             Some(workspace) => {
-                self.local_velocity(model, workspace, t, &state.q, &state.y, guess)?
+                self.local_velocity(model, workspace, t, &state.q, &state.y, &mut point.v)
             }
-            None => cold_velocity(model, t, &state.q, &state.y, guess)?,
-        };
-        Ok(DynPoint {
-            t,
-            q: state.q.clone(),
-            v,
-            p: state.y.clone(),
-        })
+            None => cold_velocity(model, t, &state.q, &state.y, &mut point.v),
+        }
     }
 
     fn incomplete(&self, t: f64, state: &DynState, guess: &DVector<f64>) -> DynPoint {

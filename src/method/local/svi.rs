@@ -193,18 +193,17 @@ impl LocalMethod for Svi {
         t: f64,
         q: &DVector<f64>,
         p: &DVector<f64>,
-        guess: &DVector<f64>,
-    ) -> Result<DVector<f64>, Error> {
+        v: &mut DVector<f64>,
+    ) -> Result<(), Error> {
         match &workspace.path {
             Path::FixedPoint(data) => match &data.mass_inverse {
-                Some(inverse) => Ok(inverse.apply(p)),
-                None => cold_velocity(model, t, q, p, guess),
+                Some(inverse) => {
+                    inverse.apply_into(p, v);
+                    Ok(())
+                }
+                None => cold_velocity(model, t, q, p, v),
             },
-            Path::Newton(data) => {
-                let mut v = guess.clone();
-                data.legendre.borrow_mut().solve(model, t, q, p, &mut v)?;
-                Ok(v)
-            }
+            Path::Newton(data) => data.legendre.borrow_mut().solve(model, t, q, p, v),
         }
     }
 }

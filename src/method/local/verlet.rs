@@ -174,11 +174,14 @@ impl LocalMethod for StormerVerlet {
         t: f64,
         q: &DVector<f64>,
         p: &DVector<f64>,
-        guess: &DVector<f64>,
-    ) -> Result<DVector<f64>, Error> {
+        v: &mut DVector<f64>,
+    ) -> Result<(), Error> {
         match &workspace.mass_inverse {
-            Some(inverse) => Ok(inverse.apply(p)),
-            None => cold_velocity(model, t, q, p, guess),
+            Some(inverse) => {
+                inverse.apply_into(p, v);
+                Ok(())
+            }
+            None => cold_velocity(model, t, q, p, v),
         }
     }
 }
