@@ -917,6 +917,7 @@ pub(crate) mod tests {
                 parameters: vec![("e".into(), 0.9)],
                 every: Some(10),
                 out: Some("x.csv".into()),
+                plot: Some("x.svg".into()),
                 diagnostics: Some(vec![Diagnostic::Energy]),
                 adapt: Some(AdaptMode::Degree),
                 tol: Some(1e-9),
@@ -966,6 +967,7 @@ pub(crate) mod tests {
         assert_eq!(scene.parameters["e"], 0.9);
         assert_eq!(scene.output.every, Some(10));
         assert_eq!(scene.output.trajectory, Some("x.csv".into()));
+        assert_eq!(scene.output.plot, Some("x.svg".into()));
         assert!(scene.wants(Diagnostic::Energy));
         assert!(!scene.wants(Diagnostic::Momentum));
         assert!(!scene.wants(Diagnostic::Solution));
