@@ -814,6 +814,7 @@ pub(crate) mod tests {
                 "driven-oscillator",
                 "stiff-spring-pendulum",
                 "stiff-spring-pendulum-coarse",
+                "stiff-spring-pendulum-multiscale",
                 "kepler-long",
                 "kepler-e0.9",
                 "kepler-e0.99",
