@@ -60,6 +60,17 @@
 //! A Lagrangian written as text ([`svi::model::text`]) has its dimension and declarations
 //! known only at run time: [`visit_text_model`] hands it to the same visitor as a
 //! [`TextLagrangian`] of its dimension (up to [`MAX_TEXT_DIMENSION`]) and declarations.
+//!
+//! Field theories in 1 + 1 dimensions are Lagrangian densities ℒ(x, t, u, u_t, u_x)
+//! ([`svi::model::density`]) on a domain with a boundary condition, integrated by the
+//! multisymplectic integrator of [`svi::field`] ([`fields`]):
+//!
+//! | name | model | ℒ | domain, boundary | exact solution |
+//! | --- | --- | --- | --- | --- |
+//! | `wave` | [`Wave`] | ½u_t² − ½c²u_x² | [0, 2π], periodic | d'Alembert |
+//! | `sine-gordon-kink` | [`SineGordonKink`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0, 2π | moving kink |
+//! | `sine-gordon-breather` | [`SineGordonBreather`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0 | breather |
+//! | `phi4-kink` | [`Phi4Kink`] | ½u_t² − ½u_x² − ¼(u² − 1)² | [−20, 20], u = ∓1 | boosted kink |
 
 mod chain;
 mod elliptic;
@@ -69,6 +80,7 @@ pub mod damped_oscillator;
 pub mod damped_pendulum;
 pub mod double_pendulum;
 pub mod driven_oscillator;
+pub mod fields;
 pub mod fput;
 pub mod kepler;
 pub mod oscillator;
@@ -86,6 +98,7 @@ pub use damped_oscillator::DampedOscillator;
 pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
 pub use driven_oscillator::DrivenOscillator;
+pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
 pub use fput::Fput;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;

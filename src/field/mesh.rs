@@ -36,7 +36,12 @@ impl<const C: usize> Mesh<C> {
     /// [`Error::InvalidParameter`] named `points` (fewer than [`MIN_POINTS`] or more than
     /// [`MAX_POINTS`]), `dt` (not finite and positive) or `boundary` (a non-finite Dirichlet
     /// value).
-    pub fn new(domain: Domain, points: usize, dt: f64, boundary: Boundary<C>) -> Result<Self, Error> {
+    pub fn new(
+        domain: Domain,
+        points: usize,
+        dt: f64,
+        boundary: Boundary<C>,
+    ) -> Result<Self, Error> {
         if !(MIN_POINTS..=MAX_POINTS).contains(&points) {
             return Err(Error::invalid(
                 "points",
@@ -127,7 +132,10 @@ impl<const C: usize> Mesh<C> {
 
     /// The left and right neighbours of free node `node` (wrapping around a periodic mesh).
     pub fn neighbours(&self, node: usize) -> (usize, usize) {
-        ((node + self.points - 1) % self.points, (node + 1) % self.points)
+        (
+            (node + self.points - 1) % self.points,
+            (node + 1) % self.points,
+        )
     }
 }
 
@@ -146,7 +154,10 @@ mod tests {
         assert_eq!((periodic.dx(), periodic.cells()), (0.25, 4));
         assert_eq!(periodic.cell_nodes(3), (3, 0));
         assert_eq!(periodic.neighbours(0), (3, 1));
-        assert_eq!((periodic.free_nodes(), periodic.unknown(3)), (0..4, Some(3)));
+        assert_eq!(
+            (periodic.free_nodes(), periodic.unknown(3)),
+            (0..4, Some(3))
+        );
         let held = Boundary::Dirichlet {
             left: SVector::from([0.0]),
             right: SVector::from([1.0]),
@@ -155,7 +166,10 @@ mod tests {
         assert_eq!((dirichlet.dx(), dirichlet.cells()), (0.25, 4));
         assert_eq!(dirichlet.x(4), 1.0);
         assert_eq!(dirichlet.free_nodes(), 1..4);
-        assert_eq!((dirichlet.unknown(0), dirichlet.unknown(2)), (None, Some(1)));
+        assert_eq!(
+            (dirichlet.unknown(0), dirichlet.unknown(2)),
+            (None, Some(1))
+        );
     }
 
     /// The name an error carries, or a panic if there is none.
@@ -169,10 +183,16 @@ mod tests {
     #[test]
     fn bad_meshes_and_boundaries_are_named_errors() {
         for points in [0, 1, 2, MAX_POINTS + 1] {
-            assert_eq!(error_name(Mesh::<1>::new(unit(), points, 0.1, Boundary::Periodic)), "points");
+            assert_eq!(
+                error_name(Mesh::<1>::new(unit(), points, 0.1, Boundary::Periodic)),
+                "points"
+            );
         }
         for dt in [0.0, -0.1, f64::NAN, f64::INFINITY] {
-            assert_eq!(error_name(Mesh::<1>::new(unit(), 10, dt, Boundary::Periodic)), "dt");
+            assert_eq!(
+                error_name(Mesh::<1>::new(unit(), 10, dt, Boundary::Periodic)),
+                "dt"
+            );
         }
         let bad = Boundary::Dirichlet {
             left: SVector::from([0.0, f64::NAN]),
@@ -181,6 +201,9 @@ mod tests {
         assert_eq!(error_name(Mesh::<2>::new(unit(), 10, 0.1, bad)), "boundary");
         // A domain so short that Δx underflows to zero.
         let tiny = Domain::new(0.0, 5e-324).unwrap();
-        assert_eq!(error_name(Mesh::<1>::new(tiny, 10, 0.1, Boundary::Periodic)), "dx");
+        assert_eq!(
+            error_name(Mesh::<1>::new(tiny, 10, 0.1, Boundary::Periodic)),
+            "dx"
+        );
     }
 }

@@ -59,8 +59,10 @@
 //! ω_{i,j+½} = (W_{i,j}V_{i,j+1} − V_{i,j}W_{i,j+1})/Δt and
 //! κ_{i+½,j} = (W_{i,j}V_{i+1,j} − V_{i,j}W_{i+1,j})/Δx (Bridges & Reich 2001).
 //! [`multisymplectic::Multisymplectic::run`] propagates V and W through the linearised level
-//! map (the level Jacobian, factored by faer's sparse LU) and reports the largest |residual|
-//! over all nodes and levels.
+//! map (the level Jacobian, factored by faer's sparse LU), rescaling each to unit max norm
+//! at every level (a multiple of a first variation is one; without it, variations that grow
+//! secularly along a breather's phase would inflate the round-off of the bilinear residual),
+//! and reports the largest |residual| over all nodes and levels.
 //!
 //! # Energy and momentum
 //! For a density independent of x and t, the discrete energy of slab [t_j, t_{j+1}] is the

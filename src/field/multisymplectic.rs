@@ -95,7 +95,8 @@ pub struct FieldRun<const C: usize> {
     /// The discrete momentum P^{j+½} = −Σ_cells Δx Σ_q w_q (π·u_x)(q) of each slab.
     pub momentum: Vec<f64>,
     /// The largest |residual| of the discrete multisymplectic conservation law over all free
-    /// nodes and levels; `None` unless [`MultisymplecticOptions::multisymplectic_check`].
+    /// nodes and levels, for first variations of unit max norm at each level (see
+    /// [`crate::field`]); `None` unless [`MultisymplecticOptions::multisymplectic_check`].
     pub multisymplectic_residual_max: Option<f64>,
     /// Whether the levels were solved explicitly.
     pub explicit: bool,
@@ -123,7 +124,12 @@ impl Node {
             xi,
             tau,
             weight: weight * dx * dt,
-            phi: [(1.0 - xi) * (1.0 - tau), xi * (1.0 - tau), (1.0 - xi) * tau, xi * tau],
+            phi: [
+                (1.0 - xi) * (1.0 - tau),
+                xi * (1.0 - tau),
+                (1.0 - xi) * tau,
+                xi * tau,
+            ],
             d_t: [-(1.0 - xi) / dt, -xi / dt, (1.0 - xi) / dt, xi / dt],
             d_x: [-(1.0 - tau) / dx, (1.0 - tau) / dx, -tau / dx, tau / dx],
         }
@@ -254,7 +260,8 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         require_finite("t0", t0)?;
         let mesh = &self.mesh;
         let (points, dx, dt) = (mesh.points(), mesh.dx(), mesh.dt());
-        let (mut current, velocity): (Vec<_>, Vec<_>) = (0..points).map(|n| initial(mesh.x(n))).unzip();
+        let (mut current, velocity): (Vec<_>, Vec<_>) =
+            (0..points).map(|n| initial(mesh.x(n))).unzip();
         for (n, (u, v)) in current.iter().zip(&velocity).enumerate() {
             if !u.iter().chain(v.iter()).all(|x| x.is_finite()) {
                 return Err(Error::invalid(
@@ -334,8 +341,16 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
                     next[n] -= inverse_blocks[offset] * (momentum[n] + slab.bottom[n]);
                 }
             } else if let Some(system) = system.as_mut() {
-                run.newton_iterations +=
-                    self.newton(level, t, &current, &mut next, &momentum, &mut slab, system, &mut cell_hessians)?;
+                run.newton_iterations += self.newton(
+                    level,
+                    t,
+                    &current,
+                    &mut next,
+                    &momentum,
+                    &mut slab,
+                    system,
+                    &mut cell_hessians,
+                )?;
             }
             self.slab(t, &current, &next, &mut slab);
             if !next.iter().all(|u| u.iter().all(|x| x.is_finite())) || !slab.energy.is_finite() {
@@ -389,26 +404,40 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
     /// Check a [`DensityStructure::ConstantMass`] declaration at the initial jets, and for the
     /// explicit scheme its von Neumann limit Δt² μ ≤ 4, μ the largest eigenvalue of
     /// M⁻¹(4K/Δx² − ∂²ℒ/∂u²) with K = −∂²ℒ/∂u_x² (for the wave equation Δt ≤ Δx/c).
-    fn check_initial_structure(&self, t0: f64, jets: &[Jet<C>], explicit: bool) -> Result<(), Error> {
+    fn check_initial_structure(
+        &self,
+        t0: f64,
+        jets: &[Jet<C>],
+        explicit: bool,
+    ) -> Result<(), Error> {
         let mesh = &self.mesh;
         let (dx, dt) = (mesh.dx(), mesh.dt());
         let mut mass = None;
         for n in mesh.free_nodes() {
             let x = mesh.x(n);
-            let [[uu, _, _], [tu, tt, tx], [_, _, xx]] = self.density.hessian(x, t0, &jets[n]).blocks;
+            let [[uu, _, _], [tu, tt, tx], [_, _, xx]] =
+                self.density.hessian(x, t0, &jets[n]).blocks;
             let scale = 1.0 + tt.amax();
             let reference = *mass.get_or_insert(tt);
-            if tu.amax() > 1e-12 * scale || tx.amax() > 1e-12 * scale || (tt - reference).amax() > 1e-12 * scale {
+            if tu.amax() > 1e-12 * scale
+                || tx.amax() > 1e-12 * scale
+                || (tt - reference).amax() > 1e-12 * scale
+            {
                 return Err(Error::invalid(
                     "structure",
-                    format!("the density is declared ConstantMass but ∂²ℒ/∂u_t² is not one constant matrix independent of u and u_x (at x = {x})"),
+                    format!(
+                        "the density is declared ConstantMass but ∂²ℒ/∂u_t² is not one constant matrix independent of u and u_x (at x = {x})"
+                    ),
                 ));
             }
             if !explicit {
                 continue;
             }
             let Some(inverse) = invert_small(&tt) else {
-                return Err(Error::invalid("structure", format!("∂²ℒ/∂u_t² is singular at x = {x}")));
+                return Err(Error::invalid(
+                    "structure",
+                    format!("∂²ℒ/∂u_t² is singular at x = {x}"),
+                ));
             };
             let stiffness = inverse * (xx * (-4.0 / (dx * dx)) - uu);
             let mu = largest_eigenvalue(&stiffness);
@@ -458,18 +487,35 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
 
     /// The corner values of cell `cell` between levels `lower` and `upper`, and the cell's
     /// left node.
-    fn corners(&self, cell: usize, lower: &[SVector<f64, C>], upper: &[SVector<f64, C>]) -> ([usize; 4], [SVector<f64, C>; 4]) {
+    fn corners(
+        &self,
+        cell: usize,
+        lower: &[SVector<f64, C>],
+        upper: &[SVector<f64, C>],
+    ) -> ([usize; 4], [SVector<f64, C>; 4]) {
         let (left, right) = self.mesh.cell_nodes(cell);
         let nodes = [left, right, left, right];
-        (nodes, [lower[left], lower[right], upper[left], upper[right]])
+        (
+            nodes,
+            [lower[left], lower[right], upper[left], upper[right]],
+        )
     }
 
     /// One pass over slab [t, t + Δt]: D_k L_d of every cell scattered to its corners
     /// (bottom: k = 0, 1; top: k = 2, 3), the energy and the momentum.
-    fn slab(&self, t: f64, lower: &[SVector<f64, C>], upper: &[SVector<f64, C>], out: &mut Slab<C>) {
+    fn slab(
+        &self,
+        t: f64,
+        lower: &[SVector<f64, C>],
+        upper: &[SVector<f64, C>],
+        out: &mut Slab<C>,
+    ) {
         let mesh = &self.mesh;
         let dt = mesh.dt();
-        out.bottom.iter_mut().chain(out.top.iter_mut()).for_each(|v| *v = SVector::zeros());
+        out.bottom
+            .iter_mut()
+            .chain(out.top.iter_mut())
+            .for_each(|v| *v = SVector::zeros());
         out.energy = 0.0;
         out.momentum = 0.0;
         for cell in 0..mesh.cells() {
@@ -478,9 +524,12 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             let mut derivative = [SVector::<f64, C>::zeros(); 4];
             for node in &self.nodes {
                 let jet = node.jet(&corners);
-                let g = self.density.gradient(x + node.xi * mesh.dx(), t + node.tau * dt, &jet);
+                let g = self
+                    .density
+                    .gradient(x + node.xi * mesh.dx(), t + node.tau * dt, &jet);
                 for (k, d) in derivative.iter_mut().enumerate() {
-                    *d += (g.u * node.phi[k] + g.u_t * node.d_t[k] + g.u_x * node.d_x[k]) * node.weight;
+                    *d += (g.u * node.phi[k] + g.u_t * node.d_t[k] + g.u_x * node.d_x[k])
+                        * node.weight;
                 }
                 out.energy += node.weight / dt * g.energy(&jet);
                 out.momentum += node.weight / dt * g.momentum(&jet);
@@ -494,7 +543,13 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
 
     /// D_k D_l L_d of every cell of slab [t, t + Δt]:
     /// ΔxΔt Σ_q w_q Σ_{a,b} s_k^a ∂²ℒ/∂a∂b s_l^b with s_k = (φ_k, ∂_tφ_k, ∂_xφ_k).
-    fn cell_hessians(&self, t: f64, lower: &[SVector<f64, C>], upper: &[SVector<f64, C>], out: &mut [CellHessian<C>]) {
+    fn cell_hessians(
+        &self,
+        t: f64,
+        lower: &[SVector<f64, C>],
+        upper: &[SVector<f64, C>],
+        out: &mut [CellHessian<C>],
+    ) {
         let mesh = &self.mesh;
         for (cell, hessian) in out.iter_mut().enumerate() {
             let (nodes, corners) = self.corners(cell, lower, upper);
@@ -502,7 +557,10 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             *hessian = [[SMatrix::zeros(); 4]; 4];
             for node in &self.nodes {
                 let jet = node.jet(&corners);
-                let h = self.density.hessian(x + node.xi * mesh.dx(), t + node.tau * mesh.dt(), &jet).blocks;
+                let h = self
+                    .density
+                    .hessian(x + node.xi * mesh.dx(), t + node.tau * mesh.dt(), &jet)
+                    .blocks;
                 let s = |k: usize| [node.phi[k], node.d_t[k], node.d_x[k]];
                 for (k, row) in hessian.iter_mut().enumerate() {
                     for (l, block) in row.iter_mut().enumerate() {
@@ -530,7 +588,9 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             let nodes = [left, right, left, right];
             for k in 0..2 {
                 for l in 2..4 {
-                    let (Some(row), Some(col)) = (self.mesh.unknown(nodes[k]), self.mesh.unknown(nodes[l])) else {
+                    let (Some(row), Some(col)) =
+                        (self.mesh.unknown(nodes[k]), self.mesh.unknown(nodes[l]))
+                    else {
                         continue;
                     };
                     for a in 0..C {
@@ -559,7 +619,11 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         }
         diagonal
             .iter()
-            .map(|block| invert_small(block).ok_or_else(|| Error::invalid("structure", "the mass matrix ∂²ℒ/∂u_t² is singular")))
+            .map(|block| {
+                invert_small(block).ok_or_else(|| {
+                    Error::invalid("structure", "the mass matrix ∂²ℒ/∂u_t² is singular")
+                })
+            })
             .collect()
     }
 
@@ -620,7 +684,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         })
     }
 
-    /// The two first variations at level 0: V = (sin, Δx cos), W = (cos 3θ, Δx sin 2θ) in
+    /// The two first variations at level 0: V = (sin θ, Δx cos θ), W = (cos 3θ, Δx sin 2θ) in
     /// θ = 2π(x − a)/(b − a), zero on held nodes.
     fn initial_variations(&self) -> Variations<C> {
         let mesh = &self.mesh;
@@ -639,9 +703,11 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             let theta = 2.0 * std::f64::consts::PI * (mesh.x(n) - domain.left()) / domain.length();
             let profile = |c: usize, f: fn(f64) -> f64, k: f64| f(k * theta + c as f64);
             variations.current[0][n] = SVector::from_fn(|c, _| profile(c, f64::sin, 1.0));
-            variations.momentum[0][n] = SVector::from_fn(|c, _| profile(c, f64::cos, 1.0)) * mesh.dx();
+            variations.momentum[0][n] =
+                SVector::from_fn(|c, _| profile(c, f64::cos, 1.0)) * mesh.dx();
             variations.current[1][n] = SVector::from_fn(|c, _| profile(c, f64::cos, 3.0));
-            variations.momentum[1][n] = SVector::from_fn(|c, _| profile(c, f64::sin, 2.0)) * mesh.dx();
+            variations.momentum[1][n] =
+                SVector::from_fn(|c, _| profile(c, f64::sin, 2.0)) * mesh.dx();
         }
         variations
     }
@@ -677,7 +743,14 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         // δR(V) = 0.
         for which in 0..2 {
             upper[which].iter_mut().for_each(|v| *v = SVector::zeros());
-            linearised(mesh, cells, &values[which], &upper[which], [0, 1], &mut sums[which]);
+            linearised(
+                mesh,
+                cells,
+                &values[which],
+                &upper[which],
+                [0, 1],
+                &mut sums[which],
+            );
             for (offset, n) in mesh.free_nodes().enumerate() {
                 for a in 0..C {
                     system.rhs[offset * C + a] = momentum[which][n][a] + sums[which][n][a];
@@ -695,7 +768,14 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         }
         // The law at level j, then the momenta δp^{j+1} = Σ D_{2|3} D_l L_d V_l.
         for which in 0..2 {
-            linearised(mesh, cells, &values[which], &upper[which], [0, 1], &mut sums[which]);
+            linearised(
+                mesh,
+                cells,
+                &values[which],
+                &upper[which],
+                [0, 1],
+                &mut sums[which],
+            );
             for n in mesh.free_nodes() {
                 sums[which][n] += momentum[which][n];
             }
@@ -704,9 +784,26 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             let r = values[1][n].dot(&sums[0][n]) - values[0][n].dot(&sums[1][n]);
             *residual_max = residual_max.max(r.abs());
         }
+        // The next level's pair, each rescaled to unit max norm (with its momentum: the law
+        // is bilinear, and a multiple of a first variation is one) so that growing variations
+        // neither overflow nor inflate the round-off of the residual.
         for which in 0..2 {
-            linearised(mesh, cells, &values[which], &upper[which], [2, 3], &mut momentum[which]);
+            linearised(
+                mesh,
+                cells,
+                &values[which],
+                &upper[which],
+                [2, 3],
+                &mut momentum[which],
+            );
             std::mem::swap(&mut values[which], &mut upper[which]);
+            let size = values[which].iter().map(|v| v.amax()).fold(0.0, f64::max);
+            if size > 0.0 {
+                values[which]
+                    .iter_mut()
+                    .chain(momentum[which].iter_mut())
+                    .for_each(|v| *v /= size);
+            }
         }
         Ok(())
     }

@@ -10,10 +10,11 @@
 //! first jet bundle J¹Y, here written in coordinates). Its Euler–Lagrange equation is
 //! ∂_t ∂ℒ/∂u_t + ∂_x ∂ℒ/∂u_x = ∂ℒ/∂u. The multisymplectic integrators of
 //! [`crate::field`] need, at a point of the jet, the gradient of ℒ in (u, u_t, u_x)
-//! ([`LagrangianDensityExt::gradient`]: three C-sized dual sweeps) and, for Newton's method
-//! and the multisymplectic diagnostics, its Hessian ([`LagrangianDensityExt::hessian`]: three
-//! C-sized Hessian sweeps and three partial Hessians, since 3C is not a const expression on
-//! stable Rust).
+//! ([`LagrangianDensityExt::gradient`]: 3C scalar dual sweeps) and, for Newton's method
+//! and the multisymplectic diagnostics, its Hessian ([`LagrangianDensityExt::hessian`]: one
+//! scalar hyper-dual sweep per entry; 3C is not a const expression on stable Rust, so one
+//! vector sweep over all 3C arguments is not available, and for the small C of field
+//! theories the scalar sweeps are the cheaper ones).
 //!
 //! Companions, each optional: [`FieldDefaults`] (name, parameters, spatial domain, boundary
 //! condition, initial field, mesh and horizon) and [`ExactField`] (a closed-form solution).
@@ -51,9 +52,7 @@
 use crate::error::Error;
 use crate::scalar::Scalar;
 use nalgebra::{SMatrix, SVector};
-use num_dual::{
-    Dual2Vec, DualSVec64, DualVec, HyperDualSVec64, HyperDualVec, gradient, hessian, partial_hessian,
-};
+use num_dual::{Dual64, HyperDual64};
 
 /// A Lagrangian density ℒ(x, t, u, u_t, u_x) of a field with C real components, written once,
 /// generic over the scalar type.
@@ -133,59 +132,45 @@ pub struct DensityHessian<const C: usize> {
 /// Derived quantities of a Lagrangian density, by automatic differentiation. Implemented for
 /// every [`LagrangianDensity`].
 pub trait LagrangianDensityExt<const C: usize>: LagrangianDensity<C> {
-    /// ℒ, ∂ℒ/∂u, ∂ℒ/∂u_t and ∂ℒ/∂u_x at (x, t, jet): three C-sized gradient sweeps.
+    /// ℒ, ∂ℒ/∂u, ∂ℒ/∂u_t and ∂ℒ/∂u_x at (x, t, jet): 3C sweeps of the scalar dual number
+    /// `Dual64`, one per argument (a vector dual `DualSVec64<C>` per argument group costs
+    /// twice as much for C = 1, and 3C is not a const expression for one sweep of all).
     #[inline]
     fn gradient(&self, x: f64, t: f64, jet: &Jet<C>) -> DensityGradient<C> {
-        let lift = |v: &SVector<f64, C>| v.map(DualVec::from_re);
-        let (value, u) = gradient(
-            |w: SVector<DualSVec64<C>, C>| self.density(x, t, &w, &lift(&jet.u_t), &lift(&jet.u_x)),
-            &jet.u,
-        );
-        let (_, u_t) = gradient(
-            |w: SVector<DualSVec64<C>, C>| self.density(x, t, &lift(&jet.u), &w, &lift(&jet.u_x)),
-            &jet.u_t,
-        );
-        let (_, u_x) = gradient(
-            |w: SVector<DualSVec64<C>, C>| self.density(x, t, &lift(&jet.u), &lift(&jet.u_t), &w),
-            &jet.u_x,
-        );
-        DensityGradient {
-            value,
-            u,
-            u_t,
-            u_x,
+        let args = [jet.u, jet.u_t, jet.u_x];
+        let mut derivatives = [SVector::<f64, C>::zeros(); 3];
+        let mut value = 0.0;
+        for (a, derivative) in derivatives.iter_mut().enumerate() {
+            for c in 0..C {
+                let mut lifted = args.map(|v| v.map(Dual64::from_re));
+                lifted[a][c].eps = 1.0;
+                let result = self.density(x, t, &lifted[0], &lifted[1], &lifted[2]);
+                value = result.re;
+                derivative[c] = result.eps;
+            }
         }
+        let [u, u_t, u_x] = derivatives;
+        DensityGradient { value, u, u_t, u_x }
     }
 
-    /// The Hessian of ℒ in (u, u_t, u_x) at (x, t, jet): three C-sized Hessians (the diagonal
-    /// blocks) and three partial Hessians (the blocks above the diagonal; those below are
-    /// their transposes).
+    /// The Hessian of ℒ in (u, u_t, u_x) at (x, t, jet): one sweep of the scalar hyper-dual
+    /// number `HyperDual64` per entry on and above the diagonal, 3C(3C + 1)/2 in all.
     fn hessian(&self, x: f64, t: f64, jet: &Jet<C>) -> DensityHessian<C> {
         let args = [jet.u, jet.u_t, jet.u_x];
-        let mut blocks = [[SMatrix::zeros(); 3]; 3];
-        for (a, block) in args.iter().enumerate() {
-            let (_, _, h) = hessian(
-                |w| {
-                    let mut lifted = args.map(|v| v.map(Dual2Vec::from_re));
-                    lifted[a] = w;
-                    self.density(x, t, &lifted[0], &lifted[1], &lifted[2])
-                },
-                block,
-            );
-            blocks[a][a] = h;
-        }
-        for (a, b) in [(0, 1), (0, 2), (1, 2)] {
-            let (_, _, _, h) = partial_hessian(
-                |(wa, wb): (SVector<HyperDualSVec64<C, C>, C>, SVector<HyperDualSVec64<C, C>, C>)| {
-                    let mut lifted = args.map(|v| v.map(HyperDualVec::from_re));
-                    lifted[a] = wa;
-                    lifted[b] = wb;
-                    self.density(x, t, &lifted[0], &lifted[1], &lifted[2])
-                },
-                (&args[a], &args[b]),
-            );
-            blocks[a][b] = h;
-            blocks[b][a] = h.transpose();
+        let mut blocks = [[SMatrix::<f64, C, C>::zeros(); 3]; 3];
+        for first in 0..3 * C {
+            for second in first..3 * C {
+                let (a, i) = (first / C, first % C);
+                let (b, j) = (second / C, second % C);
+                let mut lifted = args.map(|v| v.map(HyperDual64::from_re));
+                lifted[a][i].eps1 = 1.0;
+                lifted[b][j].eps2 = 1.0;
+                let entry = self
+                    .density(x, t, &lifted[0], &lifted[1], &lifted[2])
+                    .eps1eps2;
+                blocks[a][b][(i, j)] = entry;
+                blocks[b][a][(j, i)] = entry;
+            }
         }
         DensityHessian { blocks }
     }
@@ -321,7 +306,9 @@ mod tests {
         let uu = SMatrix::<f64, 2, 2>::new(-u[0].sin() * ut[1] * x, -ux[0], -ux[0], 0.0);
         assert!((h[0][0] - uu).amax() < 1e-15);
         // ∂²ℒ/∂u₀∂u_t₁ = cos(u₀) x; ∂²ℒ/∂u_i∂u_x₀ = −u_{1−i}.
-        assert!((h[0][1] - SMatrix::<f64, 2, 2>::new(0.0, u[0].cos() * x, 0.0, 0.0)).amax() < 1e-15);
+        assert!(
+            (h[0][1] - SMatrix::<f64, 2, 2>::new(0.0, u[0].cos() * x, 0.0, 0.0)).amax() < 1e-15
+        );
         assert!((h[0][2] - SMatrix::<f64, 2, 2>::new(-u[1], 0.0, -u[0], 0.0)).amax() < 1e-15);
         assert_eq!(h[2][0], h[0][2].transpose());
         assert_eq!(h[1][1], SMatrix::<f64, 2, 2>::identity());
@@ -332,7 +319,12 @@ mod tests {
     #[test]
     fn an_empty_or_non_finite_domain_is_an_error() {
         assert!(Domain::new(0.0, 1.0).is_ok());
-        for (a, b) in [(1.0, 1.0), (2.0, 1.0), (f64::NAN, 1.0), (0.0, f64::INFINITY)] {
+        for (a, b) in [
+            (1.0, 1.0),
+            (2.0, 1.0),
+            (f64::NAN, 1.0),
+            (0.0, f64::INFINITY),
+        ] {
             match Domain::new(a, b) {
                 Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "domain"),
                 other => panic!("{other:?}"),
