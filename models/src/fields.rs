@@ -266,7 +266,7 @@ impl FieldDefaults<1> for SineGordonBreather {
     fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
         match name {
             "omega" => {
-                if !(positive(name, value)? < 1.0) {
+                if positive(name, value)? >= 1.0 {
                     return Err(Error::invalid(
                         name,
                         format!("{value:?} must lie in (0, 1)"),

@@ -28,8 +28,8 @@
 
 use crate::error::{Error, require_finite};
 use crate::field::mesh::Mesh;
-use crate::linalg::invert_small;
 use crate::linalg::sparse::{LinearSolver, Pattern, SparseLu};
+use crate::linalg::{Singular, invert_small};
 use crate::model::density::{
     Boundary, DensityStructure, Jet, LagrangianDensity, LagrangianDensityExt,
 };
@@ -193,6 +193,29 @@ struct LevelSystem {
     rhs: DVector<f64>,
 }
 
+impl LevelSystem {
+    /// Solve A x = first + second (both restricted to the free nodes) with the last factored
+    /// A; x stays in `rhs`.
+    fn solve<const C: usize>(
+        &mut self,
+        mesh: &Mesh<C>,
+        first: &[SVector<f64, C>],
+        second: &[SVector<f64, C>],
+    ) -> Result<(), Singular> {
+        for (offset, n) in mesh.free_nodes().enumerate() {
+            self.rhs
+                .fixed_rows_mut::<C>(offset * C)
+                .copy_from(&(first[n] + second[n]));
+        }
+        self.solver.solve_in_place(&mut self.rhs)
+    }
+
+    /// The block of the last solution belonging to free node number `offset`.
+    fn solution<const C: usize>(&self, offset: usize) -> SVector<f64, C> {
+        self.rhs.fixed_rows::<C>(offset * C).into_owned()
+    }
+}
+
 impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
     /// The integrator of `density` on `mesh`.
     ///
@@ -270,7 +293,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
                 ));
             }
         }
-        self.hold_boundary(&mut current, true)?;
+        self.hold_boundary(&mut current)?;
         let jets: Vec<Jet<C>> = (0..points)
             .map(|n| {
                 let (left, right) = mesh.neighbours(n);
@@ -377,16 +400,16 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         Ok(run)
     }
 
-    /// Check the initial field against the Dirichlet values (`check`) and put them on the
-    /// end nodes.
-    fn hold_boundary(&self, field: &mut [SVector<f64, C>], check: bool) -> Result<(), Error> {
+    /// Check the initial field against the Dirichlet values (within 10⁻⁶, relative) and put
+    /// them on the end nodes.
+    fn hold_boundary(&self, field: &mut [SVector<f64, C>]) -> Result<(), Error> {
         let Boundary::Dirichlet { left, right } = *self.mesh.boundary() else {
             return Ok(());
         };
         let last = field.len() - 1;
         for (node, value, end) in [(0, left, "left"), (last, right, "right")] {
             let gap = (field[node] - value).amax();
-            if check && gap > 1e-6 * (1.0 + value.amax()) {
+            if gap > 1e-6 * (1.0 + value.amax()) {
                 return Err(Error::invalid(
                     "boundary",
                     format!(
@@ -652,21 +675,13 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         let mut increment = f64::INFINITY;
         for iteration in 1..=self.options.max_iterations {
             self.slab(t, current, next, slab);
-            for (offset, n) in mesh.free_nodes().enumerate() {
-                for a in 0..C {
-                    system.rhs[offset * C + a] = momentum[n][a] + slab.bottom[n][a];
-                }
-            }
             system
-                .solver
-                .solve_in_place(&mut system.rhs)
+                .solve(mesh, momentum, &slab.bottom)
                 .map_err(|_| Error::SingularMatrix { step: level, t })?;
             let mut size = 0.0f64;
             for (offset, n) in mesh.free_nodes().enumerate() {
-                for a in 0..C {
-                    next[n][a] -= system.rhs[offset * C + a];
-                    size = size.max(next[n][a].abs());
-                }
+                next[n] -= system.solution::<C>(offset);
+                size = size.max(next[n].amax());
             }
             increment = system.rhs.amax();
             if !increment.is_finite() {
@@ -751,19 +766,11 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
                 [0, 1],
                 &mut sums[which],
             );
-            for (offset, n) in mesh.free_nodes().enumerate() {
-                for a in 0..C {
-                    system.rhs[offset * C + a] = momentum[which][n][a] + sums[which][n][a];
-                }
-            }
             system
-                .solver
-                .solve_in_place(&mut system.rhs)
+                .solve(mesh, &momentum[which], &sums[which])
                 .map_err(|_| Error::SingularMatrix { step: level, t })?;
             for (offset, n) in mesh.free_nodes().enumerate() {
-                for a in 0..C {
-                    upper[which][n][a] = -system.rhs[offset * C + a];
-                }
+                upper[which][n] = -system.solution::<C>(offset);
             }
         }
         // The law at level j, then the momenta δp^{j+1} = Σ D_{2|3} D_l L_d V_l.
