@@ -460,6 +460,22 @@ mod tests {
     }
 
     #[test]
+    fn every_field_model_is_visited_by_its_name() {
+        /// The model's own name.
+        struct Name;
+        impl crate::FieldModelVisitor for Name {
+            type Output = &'static str;
+            fn visit<M: crate::FieldZooModel>(self, model: M) -> &'static str {
+                model.name()
+            }
+        }
+        for name in crate::FIELD_MODEL_NAMES {
+            assert_eq!(crate::visit_field_model(name, Name), Some(*name));
+        }
+        assert_eq!(crate::visit_field_model("kepler", Name), None);
+    }
+
+    #[test]
     fn parameters_out_of_range_are_errors() {
         assert!(
             SineGordonKink::default()
