@@ -78,6 +78,7 @@
 pub mod builtin;
 pub mod ensemble;
 pub mod error;
+pub mod field;
 pub mod limits;
 pub mod overrides;
 pub mod rigid;
