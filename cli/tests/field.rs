@@ -81,7 +81,7 @@ fn the_field_is_written_as_t_x_u_rows() {
     // The first row is u(0, 0) = exp(sin 0) = 1; the last is the last node at the end.
     assert_eq!(rows[0], vec![0.0, 0.0, 1.0]);
     let last = &rows[rows.len() - 1];
-    assert!((last[0] - 0.7853981633974483).abs() < 1e-12);
+    assert!((last[0] - std::f64::consts::FRAC_PI_4).abs() < 1e-12);
     assert!((last[1] - 63.0 * 2.0 * std::f64::consts::PI / 64.0).abs() < 1e-12);
 }
 
@@ -91,7 +91,8 @@ fn bad_field_input_is_exit_status_two() {
     bad_input(&run, &["wave", "--param", "points=1"], "points");
     bad_input(&run, &["wave", "--h", "0.06"], "stability limit");
     bad_input(&run, &["wave", "--h", "-1"], "h");
-    bad_input(&run, &["wave", "--t-end", "1.0"], "whole number");
+    bad_input(&run, &["wave", "--t-end", "0"], "t_end");
+    bad_input(&run, &["wave", "--t-end", "1e12"], "more than");
     bad_input(&run, &["sine-gordon-kink", "--param", "speed=1.5"], "speed");
     bad_input(&run, &["phi4-kink", "--adapt", "step"], "field scene");
     bad_input(&run, &["wave", "--param", "mass=1"], "mass");

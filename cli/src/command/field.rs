@@ -5,7 +5,8 @@
 //!
 //! The field CSV has the header `t,x,u` and one row per node and written time level (the
 //! initial level, every `every`-th level and the last), levels in time order, nodes from
-//! left to right (a periodic mesh does not repeat its first node at the right end).
+//! left to right (a periodic mesh does not repeat its first node at the right end). The run
+//! takes the whole number of steps h that reaches t_end (the last level at or after it).
 
 use std::time::Instant;
 
@@ -108,13 +109,14 @@ impl FieldModelVisitor for FieldRun<'_> {
             "t_end",
             scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
         )?;
-        let levels = (t_end / h).round();
-        if !(1.0..=MAX_LEVELS as f64).contains(&levels) || (levels * h - t_end).abs() > 1e-9 * t_end
-        {
+        // The last level at or after t_end (a field's time step is the mesh's: no shorter
+        // last step).
+        let levels = (t_end / h * (1.0 - 1e-12)).ceil().max(1.0);
+        if levels > MAX_LEVELS as f64 {
             return Err(SceneError::InvalidOption {
                 option: "t_end",
                 reason: format!(
-                    "{} is not a whole number (1 to {MAX_LEVELS}) of steps h = {}",
+                    "{} takes more than {MAX_LEVELS} steps h = {}",
                     Float(t_end),
                     Float(h)
                 ),

@@ -43,7 +43,6 @@ use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
     TrajectoryOutput,
 };
-use crate::scene::field::FieldScene;
 use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};
@@ -51,17 +50,14 @@ use crate::scene::{Scene, SceneError};
 
 /// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
 /// run it and print its summary as text or as one JSON object, and the failed health checks
-/// on stderr (with `strict` they fail the run). A field scene ([`FieldScene`]) takes its own
-/// path, `command/field.rs`.
+/// on stderr (with `strict` they fail the run). A field scene takes its own path,
+/// `command/field.rs` (chosen in `main.rs`).
 ///
 /// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
 /// run that failed after it started, the summary up to its last good state with
 /// `"status": "failed"` and the `error` (kind, message, step, t); bad input, only `status`
 /// and `error`. The exit status stays that of the error (see `main.rs`).
 pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> anyhow::Result<()> {
-    if let Some(scene) = FieldScene::load(name) {
-        return crate::command::field::execute(name, scene, overrides, json, strict);
-    }
     // Errors of the run carry the scene's name; errors of loading it name what is wrong.
     let mut ran = false;
     let result = Scene::load(name).and_then(|mut scene| {

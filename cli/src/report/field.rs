@@ -30,7 +30,7 @@ pub struct FieldSummary {
     pub h: f64,
     /// Time levels computed.
     pub levels: usize,
-    /// Final time.
+    /// Final time reached, levels · h (the first level at or after the scene's t_end).
     pub t_end: f64,
     /// `trapezoid` or `midpoint`.
     pub quadrature: &'static str,

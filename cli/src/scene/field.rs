@@ -17,7 +17,7 @@
 //!
 //! [run]                   # absent: the model's default step and horizon
 //! h = 0.05                # the time step Δt
-//! t_end = 50.0            # a whole number of steps
+//! t_end = 50.0            # the run ends at the first level at or after it
 //!
 //! [output]
 //! trajectory = "breather.csv"   # the field as CSV, rows t,x,u (absent: none)
@@ -110,7 +110,7 @@ impl QuadratureName {
 pub struct FieldRunSection {
     /// The time step Δt.
     pub h: Option<f64>,
-    /// The final time (a whole number of steps).
+    /// The final time (the run ends at the first level at or after it).
     pub t_end: Option<f64>,
 }
 
