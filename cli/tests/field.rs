@@ -106,3 +106,25 @@ fn an_unwritable_field_file_is_exit_status_one() {
     assert_eq!(output.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&output.stderr).contains("cannot write"));
 }
+
+#[test]
+fn list_shows_the_field_scenes_and_run_prints_a_text_summary() {
+    let text = String::from_utf8(svi(&["list"]).stdout).unwrap();
+    let fields = text
+        .split("Field scenes in 1 + 1 dimensions")
+        .nth(1)
+        .expect("a group of its own");
+    for name in [
+        "wave",
+        "sine-gordon-kink",
+        "sine-gordon-breather",
+        "phi4-kink",
+    ] {
+        assert!(fields.contains(name), "{name} missing:\n{text}");
+    }
+    let output = svi(&["run", "phi4-kink", "--t-end", "1"]);
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("multisymplectic residual:"), "{text}");
+    assert!(text.contains("0 to 1 in 20 levels"), "{text}");
+}
