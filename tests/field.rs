@@ -327,3 +327,71 @@ fn a_density_that_breaks_its_structure_declaration_is_rejected() {
     );
     assert_eq!(error_name(result), "structure");
 }
+
+/// Two uncoupled fields in one: a sine-Gordon kink in component 0 and a Klein–Gordon field of
+/// unit mass in component 1, ℒ = ½|u_t|² − ½|u_x|² − (1 − cos u₀) − ½u₁².
+#[derive(Clone)]
+struct KinkAndKleinGordon;
+
+impl LagrangianDensity<2> for KinkAndKleinGordon {
+    const STRUCTURE: DensityStructure = DensityStructure::ConstantMass;
+    fn density<D: Scalar>(
+        &self,
+        _x: f64,
+        _t: f64,
+        u: &SVector<D, 2>,
+        u_t: &SVector<D, 2>,
+        u_x: &SVector<D, 2>,
+    ) -> D {
+        (u_t.dot(u_t) - u_x.dot(u_x)) * 0.5 - (D::from(1.0) - u[0].cos()) - u[1] * u[1] * 0.5
+    }
+}
+
+#[test]
+fn a_field_of_two_components_runs_each_component_as_its_own_field() {
+    // Component 0 must follow the one-component sine-Gordon run exactly (the same cells,
+    // the same arithmetic up to the order of sums), component 1 stay a Klein–Gordon field.
+    let kink = SineGordonKink::default();
+    let (points, dt, levels) = (201, 0.1, 200);
+    let (reference, _) = run_against_exact(
+        &kink,
+        points,
+        dt,
+        levels,
+        options(CellQuadrature::Trapezoid),
+    )
+    .unwrap();
+    let boundary = Boundary::Dirichlet {
+        left: SVector::from([0.0, 0.0]),
+        right: SVector::from([2.0 * std::f64::consts::PI, 0.0]),
+    };
+    let initial = |x: f64| {
+        let (u, u_t) = kink.initial_field(x);
+        (
+            SVector::from([u[0], 0.1 * (-x * x).exp()]),
+            SVector::from([u_t[0], 0.0]),
+        )
+    };
+    for force_newton in [false, true] {
+        let mut options = options(CellQuadrature::Trapezoid);
+        options.force_newton = force_newton;
+        options.multisymplectic_check = true;
+        let mesh = Mesh::new(kink.domain(), points, dt, boundary).unwrap();
+        let run = Multisymplectic::new(KinkAndKleinGordon, mesh, options)
+            .unwrap()
+            .run(0.0, initial, levels, |_, _, _| {})
+            .unwrap();
+        assert_eq!(run.explicit, !force_newton);
+        let difference = run
+            .last
+            .iter()
+            .zip(&reference.last)
+            .map(|(u, v)| (u[0] - v[0]).abs())
+            .fold(0.0, f64::max);
+        assert!(difference < 1e-11, "{difference}");
+        // The Klein–Gordon pulse disperses: still there, at most its initial height.
+        let pulse = run.last.iter().map(|u| u[1].abs()).fold(0.0, f64::max);
+        assert!(pulse > 1e-3 && pulse < 0.1, "{pulse}");
+        assert!(run.multisymplectic_residual_max.unwrap() < 1e-13);
+    }
+}
