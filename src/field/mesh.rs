@@ -116,6 +116,13 @@ impl<const C: usize> Mesh<C> {
         (cell, (cell + 1) % self.points)
     }
 
+    /// The nodes at the corners of cell `cell` on its two levels, in the order of the cell's
+    /// discrete Lagrangian: 0 = bottom left, 1 = bottom right, 2 = top left, 3 = top right.
+    pub fn cell_corners(&self, cell: usize) -> [usize; 4] {
+        let (left, right) = self.cell_nodes(cell);
+        [left, right, left, right]
+    }
+
     /// The free nodes (those not held by a Dirichlet condition), ascending.
     pub fn free_nodes(&self) -> std::ops::Range<usize> {
         match self.boundary {

@@ -508,19 +508,23 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         })
     }
 
-    /// The corner values of cell `cell` between levels `lower` and `upper`, and the cell's
-    /// left node.
+    /// The corner nodes of cell `cell` ([`Mesh::cell_corners`]) and their values, the bottom
+    /// two from level `lower`, the top two from `upper`.
     fn corners(
         &self,
         cell: usize,
         lower: &[SVector<f64, C>],
         upper: &[SVector<f64, C>],
     ) -> ([usize; 4], [SVector<f64, C>; 4]) {
-        let (left, right) = self.mesh.cell_nodes(cell);
-        let nodes = [left, right, left, right];
+        let nodes = self.mesh.cell_corners(cell);
         (
             nodes,
-            [lower[left], lower[right], upper[left], upper[right]],
+            [
+                lower[nodes[0]],
+                lower[nodes[1]],
+                upper[nodes[2]],
+                upper[nodes[3]],
+            ],
         )
     }
 
@@ -607,8 +611,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
     fn assemble(&self, cells: &[CellHessian<C>], system: &mut LevelSystem) {
         system.values.iter_mut().for_each(|v| *v = 0.0);
         for (cell, hessian) in cells.iter().enumerate() {
-            let (left, right) = self.mesh.cell_nodes(cell);
-            let nodes = [left, right, left, right];
+            let nodes = self.mesh.cell_corners(cell);
             for k in 0..2 {
                 for l in 2..4 {
                     let (Some(row), Some(col)) =
@@ -829,11 +832,16 @@ fn linearised<const C: usize>(
 ) {
     out.iter_mut().for_each(|v| *v = SVector::zeros());
     for (cell, hessian) in cells.iter().enumerate() {
-        let (left, right) = mesh.cell_nodes(cell);
-        let values = [lower[left], lower[right], upper[left], upper[right]];
-        for (node, k) in [left, right].into_iter().zip(rows) {
+        let nodes = mesh.cell_corners(cell);
+        let values = [
+            lower[nodes[0]],
+            lower[nodes[1]],
+            upper[nodes[2]],
+            upper[nodes[3]],
+        ];
+        for k in rows {
             for (l, value) in values.iter().enumerate() {
-                out[node] += hessian[k][l] * value;
+                out[nodes[k]] += hessian[k][l] * value;
             }
         }
     }
