@@ -3,6 +3,9 @@
 //! 2, the discrete multisymplectic conservation law, bounded energy, explicit against
 //! Newton, and the typed errors of bad input.
 
+#[path = "common/allocations.rs"]
+mod allocations;
+
 use nalgebra::SVector;
 use svi::Error;
 use svi::Scalar;
@@ -393,5 +396,30 @@ fn a_field_of_two_components_runs_each_component_as_its_own_field() {
         let pulse = run.last.iter().map(|u| u[1].abs()).fold(0.0, f64::max);
         assert!(pulse > 1e-3 && pulse < 0.1, "{pulse}");
         assert!(run.multisymplectic_residual_max.unwrap() < 1e-13);
+    }
+}
+
+#[test]
+fn the_level_loop_allocates_nothing() {
+    // A run of 40 levels makes exactly as many heap allocations as a run of 10: all of them
+    // in the set-up (buffers, the pattern, the symbolic analysis), none per level.
+    let kink = Phi4Kink::default();
+    let count = |options: MultisymplecticOptions, levels: usize| {
+        let mesh = Mesh::new(kink.domain(), 101, 0.2, kink.boundary()).unwrap();
+        let integrator = Multisymplectic::new(kink.clone(), mesh, options).unwrap();
+        let before = allocations::count();
+        integrator
+            .run(0.0, |x| kink.initial_field(x), levels, |_, _, _| {})
+            .unwrap();
+        allocations::count() - before
+    };
+    let mut checked = options(CellQuadrature::Trapezoid);
+    checked.multisymplectic_check = true;
+    for options in [
+        options(CellQuadrature::Trapezoid),
+        options(CellQuadrature::Midpoint),
+        checked,
+    ] {
+        assert_eq!(count(options, 10), count(options, 40), "{options:?}");
     }
 }
