@@ -327,13 +327,12 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         } else {
             Some(self.level_system()?)
         };
-        let mut cell_hessians = vec![[[SMatrix::zeros(); 4]; 4]; mesh.cells()];
-        // Explicit: the inverse diagonal blocks of the (constant, block-diagonal) Jacobian.
-        let inverse_blocks = if explicit {
-            self.cell_hessians(t0, &current, &current, &mut cell_hessians);
-            self.inverse_diagonal(&cell_hessians)?
+        // Newton's cell Hessians; explicit: the inverse diagonal blocks of the (constant,
+        // block-diagonal) Jacobian instead.
+        let (mut cell_hessians, inverse_blocks) = if explicit {
+            (Vec::new(), self.inverse_diagonal(t0, &current)?)
         } else {
-            Vec::new()
+            (vec![[[SMatrix::zeros(); 4]; 4]; mesh.cells()], Vec::new())
         };
         let mut variations = self
             .options
@@ -568,8 +567,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         }
     }
 
-    /// D_k D_l L_d of every cell of slab [t, t + Δt]:
-    /// ΔxΔt Σ_q w_q Σ_{a,b} s_k^a ∂²ℒ/∂a∂b s_l^b with s_k = (φ_k, ∂_tφ_k, ∂_xφ_k).
+    /// D_k D_l L_d of every cell of slab [t, t + Δt] ([`Self::cell_hessian`]).
     fn cell_hessians(
         &self,
         t: f64,
@@ -577,33 +575,46 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         upper: &[SVector<f64, C>],
         out: &mut [CellHessian<C>],
     ) {
-        let mesh = &self.mesh;
         for (cell, hessian) in out.iter_mut().enumerate() {
-            let (nodes, corners) = self.corners(cell, lower, upper);
-            let x = mesh.x(nodes[0]);
-            *hessian = [[SMatrix::zeros(); 4]; 4];
-            for node in &self.nodes {
-                let jet = node.jet(&corners);
-                let h = self
-                    .density
-                    .hessian(x + node.xi * mesh.dx(), t + node.tau * mesh.dt(), &jet)
-                    .blocks;
-                let s = |k: usize| [node.phi[k], node.d_t[k], node.d_x[k]];
-                for (k, row) in hessian.iter_mut().enumerate() {
-                    for (l, block) in row.iter_mut().enumerate() {
-                        let (sk, sl) = (s(k), s(l));
-                        for a in 0..3 {
-                            for b in 0..3 {
-                                let factor = node.weight * sk[a] * sl[b];
-                                if factor != 0.0 {
-                                    *block += h[a][b] * factor;
-                                }
+            *hessian = self.cell_hessian(cell, t, lower, upper);
+        }
+    }
+
+    /// D_k D_l L_d of cell `cell` of slab [t, t + Δt]:
+    /// ΔxΔt Σ_q w_q Σ_{a,b} s_k^a ∂²ℒ/∂a∂b s_l^b with s_k = (φ_k, ∂_tφ_k, ∂_xφ_k).
+    fn cell_hessian(
+        &self,
+        cell: usize,
+        t: f64,
+        lower: &[SVector<f64, C>],
+        upper: &[SVector<f64, C>],
+    ) -> CellHessian<C> {
+        let mesh = &self.mesh;
+        let (nodes, corners) = self.corners(cell, lower, upper);
+        let x = mesh.x(nodes[0]);
+        let mut hessian = [[SMatrix::zeros(); 4]; 4];
+        for node in &self.nodes {
+            let jet = node.jet(&corners);
+            let h = self
+                .density
+                .hessian(x + node.xi * mesh.dx(), t + node.tau * mesh.dt(), &jet)
+                .blocks;
+            let s = |k: usize| [node.phi[k], node.d_t[k], node.d_x[k]];
+            for (k, row) in hessian.iter_mut().enumerate() {
+                for (l, block) in row.iter_mut().enumerate() {
+                    let (sk, sl) = (s(k), s(l));
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            let factor = node.weight * sk[a] * sl[b];
+                            if factor != 0.0 {
+                                *block += h[a][b] * factor;
                             }
                         }
                     }
                 }
             }
         }
+        hessian
     }
 
     /// Write ∂(p^j + Σ D_{0|1} L_d)/∂u^{j+1} (bottom corner rows, top corner columns, free
@@ -631,11 +642,17 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
         }
     }
 
-    /// The inverses of the diagonal blocks of the explicit scheme's Jacobian.
-    fn inverse_diagonal(&self, cells: &[CellHessian<C>]) -> Result<Vec<SMatrix<f64, C, C>>, Error> {
+    /// The inverses of the diagonal blocks of the explicit scheme's Jacobian, from the cells
+    /// of the first slab with both levels at `field`.
+    fn inverse_diagonal(
+        &self,
+        t0: f64,
+        field: &[SVector<f64, C>],
+    ) -> Result<Vec<SMatrix<f64, C, C>>, Error> {
         let mesh = &self.mesh;
         let mut diagonal = vec![SMatrix::<f64, C, C>::zeros(); mesh.free_nodes().len()];
-        for (cell, hessian) in cells.iter().enumerate() {
+        for cell in 0..mesh.cells() {
+            let hessian = self.cell_hessian(cell, t0, field, field);
             let (left, right) = mesh.cell_nodes(cell);
             for (k, node) in [(0, left), (1, right)] {
                 if let Some(index) = mesh.unknown(node) {
