@@ -423,3 +423,28 @@ fn the_level_loop_allocates_nothing() {
         assert_eq!(count(options, 10), count(options, 40), "{options:?}");
     }
 }
+
+#[test]
+fn a_newton_solve_that_does_not_converge_is_a_typed_error_with_its_level() {
+    let kink = SineGordonKink::default();
+    let mut options = options(CellQuadrature::Midpoint);
+    options.max_iterations = 1;
+    match run_against_exact(&kink, 101, 0.4, 10, options) {
+        Err(Error::NonConvergence {
+            step,
+            t,
+            iterations,
+            residual,
+        }) => {
+            assert_eq!((step, t, iterations), (0, 0.0, 1));
+            assert!(residual > 0.0);
+        }
+        other => panic!("{other:?}"),
+    }
+    options.max_iterations = 0;
+    let mesh = Mesh::new(kink.domain(), 101, 0.4, kink.boundary()).unwrap();
+    assert_eq!(
+        error_name(Multisymplectic::new(kink, mesh, options)),
+        "max_iterations"
+    );
+}
