@@ -17,6 +17,11 @@
 //! the reduced discrete Euler–Poincaré form for G-invariant L, §5.4), through its own
 //! stepping loop and observers ([`lie_group::RigidBodyIntegrator`]).
 //!
+//! Field theories in 1 + 1 dimensions are written as a Lagrangian density ℒ(x, t, u, u_t, u_x)
+//! ([`model::density`]) and integrated by the multisymplectic variational integrator of
+//! [`field`] (Leok §5.1.3): bilinear elements on a space-time mesh, explicit leapfrog or sparse
+//! Newton per time level, with the discrete multisymplectic conservation law as a diagnostic.
+//!
 //! ```
 //! use nalgebra::SVector;
 //! use svi::{Integrator, Lagrangian, Scalar, Svi};
@@ -40,6 +45,7 @@
 // The layers, bottom up; each imports only from the ones above it in this list.
 pub mod analysis;
 pub mod error;
+pub mod field;
 pub mod lie_group;
 pub mod linalg;
 pub mod method;

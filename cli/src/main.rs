@@ -10,6 +10,7 @@ use svi_cli::command::scale::ScaleArgs;
 use svi_cli::command::stability::StabilityArgs;
 use svi_cli::command::stress::StressArgs;
 use svi_cli::scene::error::is_bad_input;
+use svi_cli::scene::field::FieldScene;
 use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
@@ -29,7 +30,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run a scene: a built-in name or a TOML scene file.
+    /// Run a scene: a built-in name or a TOML scene file (a field scene, see `svi list`, runs
+    /// the multisymplectic integrator).
     Run(RunArgs),
     /// List the built-in scenes and the models with their parameters.
     List,
@@ -78,12 +80,15 @@ fn main() -> ExitCode {
     quit_quietly_when_the_reader_goes();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run(args) => command::run::execute(
-            args.scene.as_deref().unwrap_or(DEFAULT_SCENE),
-            &args.overrides,
-            args.json,
-            args.strict,
-        ),
+        Command::Run(args) => {
+            let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+            match FieldScene::load(name) {
+                Some(scene) => {
+                    command::field::execute(name, scene, &args.overrides, args.json, args.strict)
+                }
+                None => command::run::execute(name, &args.overrides, args.json, args.strict),
+            }
+        }
         Command::List => {
             command::list::print();
             Ok(())

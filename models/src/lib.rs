@@ -60,6 +60,20 @@
 //! A Lagrangian written as text ([`svi::model::text`]) has its dimension and declarations
 //! known only at run time: [`visit_text_model`] hands it to the same visitor as a
 //! [`TextLagrangian`] of its dimension (up to [`MAX_TEXT_DIMENSION`]) and declarations.
+//!
+//! Field theories in 1 + 1 dimensions are Lagrangian densities ℒ(x, t, u, u_t, u_x)
+//! ([`svi::model::density`]) on a domain with a boundary condition, integrated by the
+//! multisymplectic integrator of [`svi::field`] ([`fields`]):
+//!
+//! | name | model | ℒ | domain, boundary | exact solution |
+//! | --- | --- | --- | --- | --- |
+//! | `wave` | [`Wave`] | ½u_t² − ½c²u_x² | [0, 2π], periodic | d'Alembert |
+//! | `sine-gordon-kink` | [`SineGordonKink`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0, 2π | moving kink |
+//! | `sine-gordon-breather` | [`SineGordonBreather`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0 | breather |
+//! | `phi4-kink` | [`Phi4Kink`] | ½u_t² − ½u_x² − ¼(u² − 1)² | [−20, 20], u = ∓1 | boosted kink |
+//!
+//! They implement [`FieldZooModel`] and are handed to a [`FieldModelVisitor`] by
+//! [`visit_field_model`] (names: [`FIELD_MODEL_NAMES`]).
 
 mod chain;
 mod elliptic;
@@ -69,6 +83,7 @@ pub mod damped_oscillator;
 pub mod damped_pendulum;
 pub mod double_pendulum;
 pub mod driven_oscillator;
+pub mod fields;
 pub mod fput;
 pub mod kepler;
 pub mod oscillator;
@@ -86,6 +101,7 @@ pub use damped_oscillator::DampedOscillator;
 pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
 pub use driven_oscillator::DrivenOscillator;
+pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
 pub use fput::Fput;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
@@ -412,6 +428,66 @@ local_zoo!(
     "toda" => Toda,
     "relativistic-chain" => RelativisticChain,
     "sine-gordon-chain" => SineGordonChain,
+);
+
+/// Everything a field model of the zoo implements (blanket impl): a scalar Lagrangian
+/// density with its defaults and exact solution, integrated by
+/// [`svi::field::multisymplectic::Multisymplectic`].
+pub trait FieldZooModel:
+    svi::model::density::LagrangianDensity<1>
+    + svi::model::density::FieldDefaults<1>
+    + svi::model::density::ExactField<1>
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
+{
+}
+
+impl<T> FieldZooModel for T where
+    T: svi::model::density::LagrangianDensity<1>
+        + svi::model::density::FieldDefaults<1>
+        + svi::model::density::ExactField<1>
+        + Clone
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + 'static
+{
+}
+
+/// Receives a field model chosen by name at run time (see [`visit_field_model`]).
+pub trait FieldModelVisitor {
+    /// What the visit produces.
+    type Output;
+
+    /// Called once with the model, as its concrete type (with its default parameters).
+    fn visit<M: FieldZooModel>(self, model: M) -> Self::Output;
+}
+
+/// The field zoo: [`FIELD_MODEL_NAMES`] and [`visit_field_model`] from one list.
+macro_rules! field_zoo {
+    ($($name:literal => $model:ident),+ $(,)?) => {
+        /// Names of the field models (each equals the model's `FieldDefaults::name`).
+        pub const FIELD_MODEL_NAMES: &[&str] = &[$($name),+];
+
+        /// Build the named field model with its defaults and hand it to the visitor; `None`
+        /// if `name` is not one of [`FIELD_MODEL_NAMES`].
+        pub fn visit_field_model<V: FieldModelVisitor>(name: &str, visitor: V) -> Option<V::Output> {
+            match name {
+                $($name => Some(visitor.visit($model::default())),)+
+                _ => None,
+            }
+        }
+    };
+}
+
+field_zoo!(
+    "wave" => Wave,
+    "sine-gordon-kink" => SineGordonKink,
+    "sine-gordon-breather" => SineGordonBreather,
+    "phi4-kink" => Phi4Kink,
 );
 
 #[cfg(test)]

@@ -36,6 +36,7 @@
 //! }
 //! ```
 
+pub mod density;
 pub mod derived;
 pub mod local;
 pub mod rigid_body;

@@ -13,6 +13,7 @@ use crate::report::csv::Float;
 use crate::report::summary::Parameters;
 use crate::scene::Scene;
 use crate::scene::builtin::BUILTIN_SCENES;
+use crate::scene::field::FIELD_SCENES;
 
 /// A zoo model's name, dimension, coordinates, parameters and defaults (for `svi list`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -71,16 +72,17 @@ fn scenes(space: SpaceKind, local: bool) -> Vec<(&'static str, &'static str)> {
                 scene.is_ok_and(|s| s.space() == space && s.is_local() == local)
             })
         })
-        .map(|(name, text)| {
-            let description = text
-                .lines()
-                .next()
-                .and_then(|line| line.strip_prefix('#'))
-                .unwrap_or("")
-                .trim();
-            (*name, description)
-        })
+        .map(|(name, text)| (*name, description(text)))
         .collect()
+}
+
+/// A scene's description: the first line of its file, a `#` comment.
+fn description(text: &str) -> &str {
+    text.lines()
+        .next()
+        .and_then(|line| line.strip_prefix('#'))
+        .unwrap_or("")
+        .trim()
 }
 
 /// Print the built-in scenes and the models (on ℝᴺ, chains of runtime dimension and rigid
@@ -156,6 +158,14 @@ pub fn print() {
         if let Some(line) = visit_rigid_model(name, DescribeRigid) {
             println!("{line}");
         }
+    }
+    println!();
+    println!(
+        "Field scenes in 1 + 1 dimensions (svi run NAME --param points=N; the multisymplectic \
+         integrator; the models of the same names, with their parameters):"
+    );
+    for (name, text) in FIELD_SCENES {
+        println!("  {name:<22}{}", description(text));
     }
 }
 

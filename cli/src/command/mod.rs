@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod ensemble;
+pub mod field;
 pub mod list;
 pub mod peers;
 pub mod run;

@@ -51,7 +51,8 @@ use crate::scene::{Scene, SceneError};
 
 /// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
 /// run it and print its summary as text or as one JSON object, and the failed health checks
-/// on stderr (with `strict` they fail the run).
+/// on stderr (with `strict` they fail the run). A field scene takes its own path,
+/// `command/field.rs` (chosen in `main.rs`).
 ///
 /// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
 /// run that failed after it started, the summary up to its last good state with

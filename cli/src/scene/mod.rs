@@ -79,6 +79,7 @@
 pub mod builtin;
 pub mod ensemble;
 pub mod error;
+pub mod field;
 pub mod limits;
 pub mod overrides;
 pub mod rigid;

@@ -1,0 +1,234 @@
+//! `svi run` on a field scene ([`FieldScene`]): the model chosen by name
+//! ([`svi_models::visit_field_model`]), its mesh, the multisymplectic integrator
+//! ([`svi::field::multisymplectic::Multisymplectic`]), the field written as CSV while it runs,
+//! and the [`FieldSummary`].
+//!
+//! The field CSV has the header `t,x,u` and one row per node and written time level (the
+//! initial level, every `every`-th level and the last), levels in time order, nodes from
+//! left to right (a periodic mesh does not repeat its first node at the right end). The run
+//! takes the whole number of steps h that reaches t_end (the last level at or after it).
+
+use std::time::Instant;
+
+use anyhow::Context;
+use svi::field::mesh::Mesh;
+use svi::field::multisymplectic::{CellQuadrature, Multisymplectic, MultisymplecticOptions};
+use svi_models::{FieldModelVisitor, FieldZooModel, UnknownModel, visit_field_model};
+
+use crate::command::run::error_report;
+use crate::report::csv::{CsvStream, Float};
+use crate::report::field::FieldSummary;
+use crate::report::health::{self, Measured};
+use crate::report::summary::{Parameters, Status, TrajectoryOutput};
+use crate::scene::error::SceneError;
+use crate::scene::field::{FieldScene, QuadratureName};
+use crate::scene::limits;
+use crate::scene::overrides::Overrides;
+
+/// The most time levels a field run may take.
+pub const MAX_LEVELS: usize = 100_000_000;
+
+/// `svi run` on the field scene `scene` (loaded as `name`): apply the overrides, run, print
+/// the summary as text or JSON (also for failures, as `svi run` does for every scene) and
+/// return the error, if any, for the exit status.
+pub fn execute(
+    name: &str,
+    scene: Result<FieldScene, SceneError>,
+    overrides: &Overrides,
+    json: bool,
+    strict: bool,
+) -> anyhow::Result<()> {
+    let mut ran = false;
+    let result = scene.and_then(|mut scene| {
+        scene.apply(overrides)?;
+        ran = true;
+        scene.run()
+    });
+    let (summary, error) = match result {
+        Ok(mut summary) => {
+            let error = (strict && !summary.warnings.is_empty()).then(|| SceneError::Unhealthy {
+                warnings: summary.warnings.iter().map(|w| w.message.clone()).collect(),
+            });
+            if let Some(error) = &error {
+                summary.status = Status::Failed;
+                summary.error = Some(error_report(error));
+            }
+            (Some(summary), error)
+        }
+        Err(error) => (None, Some(error)),
+    };
+    for warning in summary.iter().flat_map(|summary| &summary.warnings) {
+        eprintln!("warning: {}", warning.message);
+    }
+    match (&summary, json) {
+        (Some(summary), true) => println!("{}", serde_json::to_string(summary)?),
+        (Some(summary), false) if error.is_none() => print!("{summary}"),
+        (None, true) => {
+            let report = error.as_ref().map(error_report);
+            println!(
+                "{}",
+                serde_json::json!({ "status": Status::Failed, "error": report })
+            );
+        }
+        _ => {}
+    }
+    match error {
+        None => Ok(()),
+        Some(error) if ran => Err(error).with_context(|| format!("scene '{name}' failed")),
+        Some(error) => Err(error.into()),
+    }
+}
+
+impl FieldScene {
+    /// Run the scene and summarise it.
+    pub fn run(&self) -> Result<FieldSummary, SceneError> {
+        visit_field_model(&self.model, FieldRun { scene: self }).unwrap_or_else(|| {
+            Err(SceneError::UnknownModel(UnknownModel {
+                name: self.model.clone(),
+            }))
+        })
+    }
+}
+
+/// Runs a field scene on the model it is handed.
+struct FieldRun<'a> {
+    scene: &'a FieldScene,
+}
+
+impl FieldModelVisitor for FieldRun<'_> {
+    type Output = Result<FieldSummary, SceneError>;
+
+    fn visit<M: FieldZooModel>(self, mut model: M) -> Self::Output {
+        let scene = self.scene;
+        for (name, value) in &scene.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        let points = scene.mesh.points.unwrap_or_else(|| model.default_points());
+        let h = limits::positive("h", scene.run.h.unwrap_or_else(|| model.default_step()))?;
+        let t_end = limits::positive(
+            "t_end",
+            scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
+        )?;
+        // The last level at or after t_end (a field's time step is the mesh's: no shorter
+        // last step).
+        let levels = (t_end / h * (1.0 - 1e-12)).ceil().max(1.0);
+        if levels > MAX_LEVELS as f64 {
+            return Err(SceneError::InvalidOption {
+                option: "t_end",
+                reason: format!(
+                    "{} takes more than {MAX_LEVELS} steps h = {}",
+                    Float(t_end),
+                    Float(h)
+                ),
+            });
+        }
+        let levels = levels as usize;
+        let quadrature = scene.mesh.quadrature.unwrap_or(QuadratureName::Trapezoid);
+        let mut options = MultisymplecticOptions::default();
+        options.quadrature = quadrature.quadrature();
+        options.multisymplectic_check = scene.output.multisymplectic_check.unwrap_or(true);
+        let mesh = Mesh::new(model.domain(), points, h, model.boundary())?;
+        let xs: Vec<f64> = (0..points).map(|n| mesh.x(n)).collect();
+        let dx = mesh.dx();
+        let integrator = Multisymplectic::new(model.clone(), mesh, options)?;
+
+        let every = scene.output.every.unwrap_or(1);
+        let mut csv = match &scene.output.trajectory {
+            Some(path) => Some((
+                path,
+                CsvStream::create(path, "t,x,u\n").map_err(|source| SceneError::Write {
+                    path: path.clone(),
+                    source,
+                })?,
+            )),
+            None => None,
+        };
+        let mut write_error = None;
+        let mut error_max = 0.0f64;
+        let start = Instant::now();
+        let run = integrator.run(
+            0.0,
+            |x| model.initial_field(x),
+            levels,
+            |level, t, u| {
+                for (x, value) in xs.iter().zip(u) {
+                    error_max = error_max.max((value[0] - model.exact_field(*x, t)[0]).abs());
+                }
+                let Some((_, stream)) = csv.as_mut() else {
+                    return;
+                };
+                if write_error.is_some() || !(level % every == 0 || level == levels) {
+                    return;
+                }
+                for (x, value) in xs.iter().zip(u) {
+                    if let Err(error) = stream.write_row(t, |row| row.extend([t, *x, value[0]])) {
+                        write_error = Some(error);
+                        return;
+                    }
+                }
+            },
+        )?;
+        let seconds = start.elapsed().as_secs_f64();
+        let trajectory = match csv {
+            Some((path, stream)) => {
+                let rows = match write_error {
+                    Some(error) => Err(error),
+                    None => stream.finish(),
+                }
+                .map_err(|source| SceneError::Write {
+                    path: path.clone(),
+                    source,
+                })?;
+                Some(TrajectoryOutput {
+                    path: path.display().to_string(),
+                    every,
+                    rows,
+                })
+            }
+            None => None,
+        };
+        let spread = |values: &[f64]| {
+            values
+                .iter()
+                .map(|v| (v - values[0]).abs())
+                .fold(0.0, f64::max)
+        };
+        let energy_initial = run.energy[0];
+        let energy_error_max = spread(&run.energy);
+        let warnings = health::check(&Measured {
+            conserves_energy: true,
+            energy_initial,
+            energy_final: run.energy[run.energy.len() - 1],
+            energy_error_max: Some(energy_error_max),
+            energy_scale: energy_initial.abs(),
+            extent: None,
+            retries: 0,
+        });
+        Ok(FieldSummary {
+            model: model.name().into(),
+            parameters: Parameters(model.parameters()),
+            points,
+            dx,
+            h,
+            levels,
+            t_end: levels as f64 * h,
+            quadrature: match options.quadrature {
+                CellQuadrature::Trapezoid => "trapezoid",
+                CellQuadrature::Midpoint => "midpoint",
+            },
+            explicit: run.explicit,
+            energy_initial,
+            energy_error_max,
+            momentum_initial: run.momentum[0],
+            momentum_error_max: spread(&run.momentum),
+            multisymplectic_residual_max: run.multisymplectic_residual_max,
+            error_max,
+            newton_iterations: run.newton_iterations,
+            seconds,
+            trajectory,
+            status: Status::Ok,
+            warnings,
+            error: None,
+        })
+    }
+}

@@ -1,0 +1,140 @@
+//! The summary of a field run (`svi run` on a field scene), as text or one JSON object.
+//!
+//! The JSON fields are an interface: `model`, `parameters`, `points`, `dx`, `h`, `levels`,
+//! `t_end`, `quadrature`, `explicit`, `energy_initial`, `energy_error_max` (largest
+//! |E^{j+½} − E^{½}| of the discrete energy), `momentum_initial`, `momentum_error_max`,
+//! `multisymplectic_residual_max` (null when not measured), `error_max` (largest
+//! |u − u_exact| over all nodes and levels), `newton_iterations`, `seconds`, `trajectory`,
+//! `status`, `warnings` and, for a failed run, `error`.
+
+use std::fmt;
+
+use serde::Serialize;
+
+use crate::report::csv::Float;
+use crate::report::health::Warning;
+use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
+
+/// The result of a field run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FieldSummary {
+    /// Model name.
+    pub model: String,
+    /// Model parameters in effect.
+    pub parameters: Parameters,
+    /// Nodes in space.
+    pub points: usize,
+    /// Δx.
+    pub dx: f64,
+    /// The time step Δt.
+    pub h: f64,
+    /// Time levels computed.
+    pub levels: usize,
+    /// Final time reached, levels · h (the first level at or after the scene's t_end).
+    pub t_end: f64,
+    /// `trapezoid` or `midpoint`.
+    pub quadrature: &'static str,
+    /// Whether the levels were solved explicitly.
+    pub explicit: bool,
+    /// The discrete energy of the first slab.
+    pub energy_initial: f64,
+    /// Largest |E^{j+½} − E^{½}|.
+    pub energy_error_max: f64,
+    /// The discrete momentum of the first slab.
+    pub momentum_initial: f64,
+    /// Largest |P^{j+½} − P^{½}|.
+    pub momentum_error_max: f64,
+    /// Largest |residual| of the discrete multisymplectic conservation law.
+    pub multisymplectic_residual_max: Option<f64>,
+    /// Largest |u − u_exact| over all nodes and levels.
+    pub error_max: f64,
+    /// Newton iterations over the run (0 when explicit).
+    pub newton_iterations: usize,
+    /// Wall time of the integration, in seconds.
+    pub seconds: f64,
+    /// The field CSV, if one was written.
+    pub trajectory: Option<TrajectoryOutput>,
+    /// `ok`, or `failed` (a failed health check under `--strict`).
+    pub status: Status,
+    /// The health checks the run failed.
+    pub warnings: Vec<Warning>,
+    /// Why the run failed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<ErrorReport>,
+}
+
+impl fmt::Display for FieldSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let parameters: Vec<String> = self
+            .parameters
+            .0
+            .iter()
+            .map(|(name, value)| format!("{name} = {value}"))
+            .collect();
+        let optional = |value: Option<f64>| value.map_or("n/a".into(), |v| format!("{v:.3e}"));
+        let mut rows = vec![
+            (
+                "model",
+                format!("{} ({})", self.model, parameters.join(", ")),
+            ),
+            (
+                "method",
+                format!(
+                    "multisymplectic, {} cells ({})",
+                    self.quadrature,
+                    if self.explicit { "explicit" } else { "Newton" }
+                ),
+            ),
+            (
+                "mesh",
+                format!(
+                    "{} points, dx = {}, h = {}",
+                    self.points,
+                    Float(self.dx),
+                    Float(self.h)
+                ),
+            ),
+            (
+                "time",
+                format!("0 to {} in {} levels", Float(self.t_end), self.levels),
+            ),
+            ("wall time", format!("{:.3} s", self.seconds)),
+            (
+                "energy",
+                format!(
+                    "{} (max error {:.3e})",
+                    Float(self.energy_initial),
+                    self.energy_error_max
+                ),
+            ),
+            (
+                "momentum",
+                format!(
+                    "{} (max error {:.3e})",
+                    Float(self.momentum_initial),
+                    self.momentum_error_max
+                ),
+            ),
+            (
+                "multisymplectic residual",
+                optional(self.multisymplectic_residual_max),
+            ),
+            ("error vs exact", format!("{:.3e}", self.error_max)),
+            ("Newton iterations", self.newton_iterations.to_string()),
+        ];
+        if let Some(trajectory) = &self.trajectory {
+            rows.push((
+                "field",
+                format!(
+                    "{} ({} rows, every {} levels)",
+                    trajectory.path, trajectory.rows, trajectory.every
+                ),
+            ));
+        }
+        let width = rows.iter().map(|(label, _)| label.len()).max().unwrap_or(0) + 2;
+        for (label, value) in rows {
+            writeln!(f, "{:width$}{value}", format!("{label}:"))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,263 @@
+//! Field scenes: a 1 + 1 field theory of the zoo ([`svi_models::FIELD_MODEL_NAMES`]) run by
+//! the multisymplectic integrator ([`svi::field`]). They have their own, smaller format and
+//! their own run path (`command/field.rs`): a field has a mesh instead of an initial state
+//! and a method.
+//!
+//! ```toml
+//! # The sine-Gordon breather (the first line, a comment, describes the scene)
+//! model = "sine-gordon-breather"
+//!
+//! [parameters]            # model parameters (absent: the model's defaults)
+//! omega = 0.5
+//!
+//! [mesh]
+//! points = 401            # nodes in space (absent: the model's default)
+//! quadrature = "trapezoid"   # cell quadrature: "trapezoid" (explicit for ½u_t² − …,
+//!                            # the default) or "midpoint" (the implicit box scheme)
+//!
+//! [run]                   # absent: the model's default step and horizon
+//! h = 0.05                # the time step Δt
+//! t_end = 50.0            # the run ends at the first level at or after it
+//!
+//! [output]
+//! trajectory = "breather.csv"   # the field as CSV, rows t,x,u (absent: none)
+//! every = 10                    # every 10th time level (default 1)
+//! multisymplectic_check = true  # measure the discrete multisymplectic law (default true)
+//! ```
+//!
+//! From the command line, `--h`, `--t-end`, `--param NAME=VALUE` (`--param points=N` sets
+//! the mesh), `--out` and `--every` apply; every other run flag is an error
+//! ([`SceneError::NotApplicable`]).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use svi::field::multisymplectic::CellQuadrature;
+use svi_models::FIELD_MODEL_NAMES;
+
+use crate::scene::error::SceneError;
+use crate::scene::limits::read_scene_file;
+use crate::scene::overrides::Overrides;
+
+/// The built-in field scenes, as (name, TOML text).
+pub const FIELD_SCENES: &[(&str, &str)] = &[
+    ("wave", include_str!("../../scenes/wave.toml")),
+    (
+        "sine-gordon-kink",
+        include_str!("../../scenes/sine-gordon-kink.toml"),
+    ),
+    (
+        "sine-gordon-breather",
+        include_str!("../../scenes/sine-gordon-breather.toml"),
+    ),
+    ("phi4-kink", include_str!("../../scenes/phi4-kink.toml")),
+];
+
+/// A field scene (see the module documentation).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldScene {
+    /// The field model, one of [`FIELD_MODEL_NAMES`].
+    pub model: String,
+    /// Model parameters, name → value.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, f64>,
+    /// The mesh.
+    #[serde(default)]
+    pub mesh: MeshSection,
+    /// Step and horizon.
+    #[serde(default)]
+    pub run: FieldRunSection,
+    /// Outputs.
+    #[serde(default)]
+    pub output: FieldOutputSection,
+}
+
+/// `[mesh]` of a field scene.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSection {
+    /// Nodes in space.
+    pub points: Option<usize>,
+    /// The cell quadrature.
+    pub quadrature: Option<QuadratureName>,
+}
+
+/// The cell quadrature as a scene names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QuadratureName {
+    /// [`CellQuadrature::Trapezoid`].
+    Trapezoid,
+    /// [`CellQuadrature::Midpoint`].
+    Midpoint,
+}
+
+impl QuadratureName {
+    /// The library's quadrature.
+    pub fn quadrature(self) -> CellQuadrature {
+        match self {
+            QuadratureName::Trapezoid => CellQuadrature::Trapezoid,
+            QuadratureName::Midpoint => CellQuadrature::Midpoint,
+        }
+    }
+}
+
+/// `[run]` of a field scene.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldRunSection {
+    /// The time step Δt.
+    pub h: Option<f64>,
+    /// The final time (the run ends at the first level at or after it).
+    pub t_end: Option<f64>,
+}
+
+/// `[output]` of a field scene.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FieldOutputSection {
+    /// The CSV file of the field (rows `t,x,u`).
+    pub trajectory: Option<PathBuf>,
+    /// Write every k-th time level.
+    pub every: Option<usize>,
+    /// Measure the discrete multisymplectic conservation law (default true).
+    pub multisymplectic_check: Option<bool>,
+}
+
+impl FieldScene {
+    /// The field scene `name_or_path` names: a built-in field scene, or a scene file whose
+    /// `model` is a field model; `None` for anything else (the other scenes, and paths that
+    /// are no readable file: the scene loader reports those).
+    pub fn load(name_or_path: &str) -> Option<Result<FieldScene, SceneError>> {
+        if let Some((name, text)) = FIELD_SCENES.iter().find(|(name, _)| *name == name_or_path) {
+            return Some(FieldScene::from_toml(
+                text,
+                &format!("built-in scene '{name}'"),
+            ));
+        }
+        let path = Path::new(name_or_path);
+        let text = read_scene_file(path).ok()?;
+        let table: toml::Table = toml::from_str(&text).ok()?;
+        let model = table.get("model")?.as_str()?;
+        FIELD_MODEL_NAMES
+            .contains(&model)
+            .then(|| FieldScene::from_toml(&text, &format!("'{}'", path.display())))
+    }
+
+    /// Parse a field scene; `origin` names the source in error messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<FieldScene, SceneError> {
+        toml::from_str(text).map_err(|source| SceneError::Parse {
+            origin: origin.into(),
+            source,
+        })
+    }
+
+    /// Put the command-line flags on top: `--h`, `--t-end`, `--param` (`points` sets
+    /// `mesh.points`), `--out` and `--every`; any other run flag is
+    /// [`SceneError::NotApplicable`].
+    pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
+        let unused = [
+            (overrides.method.is_some(), "--method"),
+            (overrides.points.is_some(), "--points"),
+            (overrides.quadrature.is_some(), "--quadrature"),
+            (overrides.diagnostics.is_some(), "--diagnostics"),
+            (overrides.adapt.is_some(), "--adapt"),
+            (overrides.tol.is_some(), "--tol"),
+            (overrides.output_times.is_some(), "--output-times"),
+            (overrides.recovery.is_some(), "--recovery"),
+            (overrides.divergence_limit.is_some(), "--divergence-limit"),
+            (overrides.form.is_some(), "--form"),
+        ];
+        if let Some((_, option)) = unused.into_iter().find(|(given, _)| *given) {
+            return Err(SceneError::NotApplicable {
+                option,
+                reason: format!(
+                    "'{}' is a field scene (the multisymplectic integrator): it takes --h, \
+                     --t-end, --param (points=N for the mesh), --out and --every",
+                    self.model
+                ),
+            });
+        }
+        for (name, value) in &overrides.parameters {
+            if name == "points" {
+                if value.fract() != 0.0 || *value < 0.0 || *value > usize::MAX as f64 {
+                    return Err(SceneError::InvalidOption {
+                        option: "points",
+                        reason: format!("{value} is not a whole number of mesh points"),
+                    });
+                }
+                self.mesh.points = Some(*value as usize);
+            } else {
+                self.parameters.insert(name.clone(), *value);
+            }
+        }
+        if let Some(h) = overrides.h {
+            self.run.h = Some(h);
+        }
+        if let Some(t_end) = overrides.t_end {
+            self.run.t_end = Some(t_end);
+        }
+        if let Some(out) = &overrides.out {
+            self.output.trajectory = Some(out.clone());
+        }
+        if let Some(every) = overrides.every {
+            self.output.every = Some(every);
+        }
+        if self.output.every.is_some() && self.output.trajectory.is_none() {
+            return Err(SceneError::EveryWithoutOutput);
+        }
+        if self.output.every == Some(0) {
+            return Err(SceneError::InvalidOption {
+                option: "every",
+                reason: "0; need a positive number of time levels".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_built_in_field_scenes_parse_and_name_field_models() {
+        for (name, _) in FIELD_SCENES {
+            let scene = FieldScene::load(name).unwrap().unwrap();
+            assert!(FIELD_MODEL_NAMES.contains(&scene.model.as_str()), "{name}");
+        }
+        assert!(FieldScene::load("kepler").is_none());
+    }
+
+    #[test]
+    fn flags_for_other_scenes_are_not_applicable() {
+        let mut scene = FieldScene::load("wave").unwrap().unwrap();
+        let overrides = Overrides {
+            adapt: Some(crate::scene::schema::AdaptMode::Step),
+            ..Overrides::default()
+        };
+        assert!(matches!(
+            scene.apply(&overrides),
+            Err(SceneError::NotApplicable {
+                option: "--adapt",
+                ..
+            })
+        ));
+        let overrides = Overrides {
+            parameters: vec![("points".into(), 64.0), ("c".into(), 2.0)],
+            h: Some(0.01),
+            ..Overrides::default()
+        };
+        scene.apply(&overrides).unwrap();
+        assert_eq!(scene.mesh.points, Some(64));
+        assert_eq!(scene.parameters.get("c"), Some(&2.0));
+        assert_eq!(scene.run.h, Some(0.01));
+        let overrides = Overrides {
+            parameters: vec![("points".into(), 6.5)],
+            ..Overrides::default()
+        };
+        assert!(scene.apply(&overrides).is_err());
+    }
+}

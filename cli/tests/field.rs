@@ -1,0 +1,130 @@
+//! `svi run` on the field scenes (issue 19): the built-in scenes with their diagnostics, the
+//! field CSV, field scene files, and bad input with exit status 2.
+
+mod common;
+
+use common::{Scratch, bad_input, json, number, scene_file, svi};
+
+#[test]
+fn the_built_in_field_scenes_run_with_their_diagnostics() {
+    // Errors against the exact solutions at the scenes' meshes (Δx = 0.1 for the kinks and
+    // the breather, 2π/128 for the wave), measured once: second-order schemes on these
+    // meshes give errors of about 10⁻³–10⁻¹, and the conservation laws hold to round-off.
+    for (scene, largest_error) in [
+        ("wave", 3e-3),
+        ("sine-gordon-kink", 2e-2),
+        ("sine-gordon-breather", 0.3),
+        ("phi4-kink", 5e-3),
+    ] {
+        let summary = json(&["run", scene, "--json"]);
+        assert_eq!(summary["status"], "ok", "{scene}: {summary}");
+        assert_eq!(summary["model"], scene);
+        assert_eq!(summary["explicit"], true);
+        let error = number(&summary, "error_max");
+        assert!(error > 0.0 && error < largest_error, "{scene}: {summary}");
+        assert!(
+            number(&summary, "multisymplectic_residual_max") < 1e-13,
+            "{scene}: {summary}"
+        );
+        let energy = number(&summary, "energy_initial");
+        assert!(
+            number(&summary, "energy_error_max") < 2e-3 * energy,
+            "{scene}: {summary}"
+        );
+    }
+}
+
+#[test]
+fn the_midpoint_scheme_runs_by_newton_from_a_scene_file() {
+    let file = scene_file(
+        "field-midpoint",
+        "model = \"phi4-kink\"\n[mesh]\npoints = 201\nquadrature = \"midpoint\"\n[run]\nh = 0.2\nt_end = 4.0\n",
+    );
+    let summary = json(&["run", &file.path, "--json"]);
+    assert_eq!(summary["explicit"], false);
+    assert_eq!(summary["quadrature"], "midpoint");
+    assert_eq!(summary["levels"], 20);
+    assert!(number(&summary, "newton_iterations") >= 20.0);
+    assert!(number(&summary, "error_max") < 1e-2, "{summary}");
+    assert!(number(&summary, "multisymplectic_residual_max") < 1e-13);
+}
+
+#[test]
+fn the_field_is_written_as_t_x_u_rows() {
+    let dir = Scratch::new("field-csv");
+    let path = dir.join("wave.csv");
+    let path = path.to_str().unwrap();
+    // 64 nodes, levels 0, 4, 8, 12, 16 of 16: five levels of 64 rows.
+    let summary = json(&[
+        "run",
+        "wave",
+        "--param",
+        "points=64",
+        "--h",
+        "0.04908738521234052",
+        "--t-end",
+        "0.7853981633974483",
+        "--out",
+        path,
+        "--every",
+        "4",
+        "--json",
+    ]);
+    assert_eq!(summary["trajectory"]["rows"], 5 * 64);
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,x,u"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|line| line.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 5 * 64);
+    // The first row is u(0, 0) = exp(sin 0) = 1; the last is the last node at the end.
+    assert_eq!(rows[0], vec![0.0, 0.0, 1.0]);
+    let last = &rows[rows.len() - 1];
+    assert!((last[0] - std::f64::consts::FRAC_PI_4).abs() < 1e-12);
+    assert!((last[1] - 63.0 * 2.0 * std::f64::consts::PI / 64.0).abs() < 1e-12);
+}
+
+#[test]
+fn bad_field_input_is_exit_status_two() {
+    let run = ["run"];
+    bad_input(&run, &["wave", "--param", "points=1"], "points");
+    bad_input(&run, &["wave", "--h", "0.06"], "stability limit");
+    bad_input(&run, &["wave", "--h", "-1"], "h");
+    bad_input(&run, &["wave", "--t-end", "0"], "t_end");
+    bad_input(&run, &["wave", "--t-end", "1e12"], "more than");
+    bad_input(&run, &["sine-gordon-kink", "--param", "speed=1.5"], "speed");
+    bad_input(&run, &["phi4-kink", "--adapt", "step"], "field scene");
+    bad_input(&run, &["wave", "--param", "mass=1"], "mass");
+    let file = scene_file("field-unknown", "model = \"wave\"\n[mesh]\nspacing = 0.1\n");
+    bad_input(&run, &[&file.path], "spacing");
+}
+
+#[test]
+fn an_unwritable_field_file_is_exit_status_one() {
+    let output = svi(&["run", "wave", "--out", "/nonexistent-dir/wave.csv"]);
+    assert_eq!(output.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("cannot write"));
+}
+
+#[test]
+fn list_shows_the_field_scenes_and_run_prints_a_text_summary() {
+    let text = String::from_utf8(svi(&["list"]).stdout).unwrap();
+    let fields = text
+        .split("Field scenes in 1 + 1 dimensions")
+        .nth(1)
+        .expect("a group of its own");
+    for name in [
+        "wave",
+        "sine-gordon-kink",
+        "sine-gordon-breather",
+        "phi4-kink",
+    ] {
+        assert!(fields.contains(name), "{name} missing:\n{text}");
+    }
+    let output = svi(&["run", "phi4-kink", "--t-end", "1"]);
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    assert!(text.contains("multisymplectic residual:"), "{text}");
+    assert!(text.contains("0 to 1 in 20 levels"), "{text}");
+}
