@@ -128,3 +128,32 @@ fn list_shows_the_field_scenes_and_run_prints_a_text_summary() {
     assert!(text.contains("multisymplectic residual:"), "{text}");
     assert!(text.contains("0 to 1 in 20 levels"), "{text}");
 }
+
+#[test]
+fn plot_draws_the_field_over_space_and_time_and_needs_the_trajectory_file() {
+    let scratch = Scratch::new("breather-plot");
+    let (csv, svg) = (scratch.join("breather.csv"), scratch.join("breather.svg"));
+    let summary = json(&[
+        "run",
+        "sine-gordon-breather",
+        "--t-end",
+        "10",
+        "--out",
+        csv.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(summary["status"], "ok");
+    let picture = std::fs::read_to_string(&svg).unwrap();
+    assert!(picture.starts_with("<svg"));
+    assert!(picture.contains("sine-gordon-breather: u from"));
+    // One filled cell per sampled node and level: at most 160 × 120, at least a few thousand.
+    let cells = picture.matches("<rect").count();
+    assert!((2_000..=160 * 121 + 10).contains(&cells), "{cells} cells");
+    bad_input(
+        &["run", "sine-gordon-breather"],
+        &["--plot", svg.to_str().unwrap()],
+        "--plot",
+    );
+}

@@ -19,6 +19,7 @@ use crate::command::run::error_report;
 use crate::report::csv::{CsvStream, Float};
 use crate::report::field::FieldSummary;
 use crate::report::health::{self, Measured};
+use crate::report::plot::plot_space_time;
 use crate::report::summary::{Parameters, Status, TrajectoryOutput};
 use crate::scene::error::SceneError;
 use crate::scene::field::{FieldScene, QuadratureName};
@@ -187,6 +188,12 @@ impl FieldModelVisitor for FieldRun<'_> {
             }
             None => None,
         };
+        if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
+            plot_space_time(csv, svg, model.name()).map_err(|e| SceneError::Write {
+                path: svg.clone(),
+                source: std::io::Error::other(e.reason),
+            })?;
+        }
         let spread = |values: &[f64]| {
             values
                 .iter()

@@ -86,6 +86,32 @@ pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Resu
     root.present().map_err(|e| error(e.to_string()))
 }
 
+/// A numeric CSV file as written by `svi run --out`: its column names and rows.
+fn read_csv(
+    csv: &Path,
+    error: impl Fn(String) -> PlotError,
+) -> Result<(Vec<String>, Vec<Vec<f64>>), PlotError> {
+    let text = std::fs::read_to_string(csv)
+        .map_err(|e| error(format!("cannot read '{}': {e}", csv.display())))?;
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(String::from)
+        .collect();
+    let rows = lines
+        .enumerate()
+        .map(|(row, line)| {
+            line.split(',')
+                .map(str::parse::<f64>)
+                .collect::<Result<Vec<f64>, _>>()
+                .map_err(|e| error(format!("row {} of '{}': {e}", row + 1, csv.display())))
+        })
+        .collect::<Result<_, _>>()?;
+    Ok((header, rows))
+}
+
 /// Draw the CSV file `csv` (a header of column names, then numeric rows whose first column
 /// is t, as `svi run --out` writes them) as one SVG line chart at `svg`: every other column
 /// against t, titled `title`.
@@ -94,28 +120,19 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
         path: svg.display().to_string(),
         reason,
     };
-    let text = std::fs::read_to_string(csv)
-        .map_err(|e| error(format!("cannot read '{}': {e}", csv.display())))?;
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
-    let mut series: Vec<Series> = header
+    let (header, rows) = read_csv(csv, error)?;
+    let series = header
         .iter()
+        .enumerate()
         .skip(1)
-        .map(|name| Series {
-            label: name.to_string(),
-            points: Vec::new(),
+        .map(|(column, name)| Series {
+            label: name.clone(),
+            points: rows
+                .iter()
+                .filter_map(|row| Some((row[0], *row.get(column)?)))
+                .collect(),
         })
         .collect();
-    for (row, line) in lines.enumerate() {
-        let values = line
-            .split(',')
-            .map(str::parse::<f64>)
-            .collect::<Result<Vec<f64>, _>>()
-            .map_err(|e| error(format!("row {} of '{}': {e}", row + 1, csv.display())))?;
-        for (series, value) in series.iter_mut().zip(values.iter().skip(1)) {
-            series.points.push((values[0], *value));
-        }
-    }
     let panel = Panel {
         title: title.to_string(),
         x_label: "t".into(),
@@ -127,6 +144,107 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
         series,
     };
     write_svg(svg, &[panel], 900, 560)
+}
+
+/// Largest number of cells of a space-time picture along x and along t (the field is
+/// sampled down to them, so the SVG stays small).
+const SPACE_TIME_CELLS: (usize, usize) = (160, 120);
+
+/// Draw a field's space-time CSV `csv` (rows `t,x,u`, the nodes of one time level after
+/// another, as `svi run --out` writes a field scene) as an SVG picture at `svg`: u coloured
+/// over the (x, t) plane (blue lowest, white middle, red highest), titled `title`.
+pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
+    let error = |reason: String| PlotError {
+        path: svg.display().to_string(),
+        reason,
+    };
+    let (_, rows) = read_csv(csv, error)?;
+    if rows.iter().any(|row| row.len() != 3) {
+        return Err(error(format!("'{}' is not a t,x,u table", csv.display())));
+    }
+    // The nodes of a level share its t: the level's width is the run of equal t's.
+    let width = rows.iter().take_while(|row| row[0] == rows[0][0]).count();
+    if width < 2 || rows.len() % width != 0 {
+        return Err(error(format!(
+            "'{}' holds no whole time levels",
+            csv.display()
+        )));
+    }
+    let levels = rows.len() / width;
+    let stride = |count: usize, cells: usize| count.div_ceil(cells).max(1);
+    let (x_stride, t_stride) = (
+        stride(width, SPACE_TIME_CELLS.0),
+        stride(levels, SPACE_TIME_CELLS.1),
+    );
+    let value = |level: usize, node: usize| rows[level * width + node][2];
+    let (low, high) = rows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), row| {
+            (l.min(row[2]), h.max(row[2]))
+        });
+    let (x0, x1) = (rows[0][1], rows[width - 1][1]);
+    let (t0, t1) = (rows[0][0], rows[rows.len() - 1][0]);
+    if !(low.is_finite() && high.is_finite() && x1 > x0 && t1 > t0) {
+        return Err(error(format!(
+            "'{}' has no finite field to draw",
+            csv.display()
+        )));
+    }
+    let colour = |u: f64| {
+        let s = if high > low {
+            (u - low) / (high - low)
+        } else {
+            0.5
+        };
+        let mix = |a: f64, b: f64, w: f64| (a + (b - a) * w).round() as u8;
+        let (from, to, w) = if s < 0.5 {
+            ((59.0, 76.0, 192.0), (247.0, 247.0, 247.0), 2.0 * s)
+        } else {
+            ((247.0, 247.0, 247.0), (180.0, 4.0, 38.0), 2.0 * s - 1.0)
+        };
+        RGBColor(
+            mix(from.0, to.0, w),
+            mix(from.1, to.1, w),
+            mix(from.2, to.2, w),
+        )
+    };
+    let draw = || -> Result<(), String> {
+        let root = SVGBackend::new(svg, (900, 640)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let caption = format!("{title}: u from {low:.3} (blue) to {high:.3} (red)");
+        let mut chart = ChartBuilder::on(&root)
+            .caption(caption, ("sans-serif", 18))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, t0..t1)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("x")
+            .y_desc("t")
+            .disable_mesh()
+            .draw()
+            .map_err(|e| e.to_string())?;
+        let cells = (0..levels)
+            .step_by(t_stride)
+            .flat_map(|level| (0..width).step_by(x_stride).map(move |node| (level, node)));
+        chart
+            .draw_series(cells.map(|(level, node)| {
+                let (right, top) = (
+                    (node + x_stride).min(width - 1),
+                    (level + t_stride).min(levels - 1),
+                );
+                let corner = |l: usize, n: usize| (rows[n + l * width][1], rows[l * width][0]);
+                Rectangle::new(
+                    [corner(level, node), corner(top, right)],
+                    colour(value(level, node)).filled(),
+                )
+            }))
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())
+    };
+    draw().map_err(error)
 }
 
 fn draw_panel(

@@ -22,11 +22,12 @@
 //! [output]
 //! trajectory = "breather.csv"   # the field as CSV, rows t,x,u (absent: none)
 //! every = 10                    # every 10th time level (default 1)
+//! # plot = "breather.svg"       # a space-time picture of that file (needs trajectory)
 //! multisymplectic_check = true  # measure the discrete multisymplectic law (default true)
 //! ```
 //!
 //! From the command line, `--h`, `--t-end`, `--param NAME=VALUE` (`--param points=N` sets
-//! the mesh), `--out` and `--every` apply; every other run flag is an error
+//! the mesh), `--out`, `--every` and `--plot` apply; every other run flag is an error
 //! ([`SceneError::NotApplicable`]).
 
 use std::collections::BTreeMap;
@@ -122,6 +123,8 @@ pub struct FieldOutputSection {
     pub trajectory: Option<PathBuf>,
     /// Write every k-th time level.
     pub every: Option<usize>,
+    /// An SVG space-time picture of the field written to `trajectory` (needs it).
+    pub plot: Option<PathBuf>,
     /// Measure the discrete multisymplectic conservation law (default true).
     pub multisymplectic_check: Option<bool>,
 }
@@ -155,7 +158,7 @@ impl FieldScene {
     }
 
     /// Put the command-line flags on top: `--h`, `--t-end`, `--param` (`points` sets
-    /// `mesh.points`), `--out` and `--every`; any other run flag is
+    /// `mesh.points`), `--out`, `--every` and `--plot`; any other run flag is
     /// [`SceneError::NotApplicable`].
     pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
         let unused = [
@@ -175,7 +178,7 @@ impl FieldScene {
                 option,
                 reason: format!(
                     "'{}' is a field scene (the multisymplectic integrator): it takes --h, \
-                     --t-end, --param (points=N for the mesh), --out and --every",
+                     --t-end, --param (points=N for the mesh), --out, --every and --plot",
                     self.model
                 ),
             });
@@ -204,6 +207,17 @@ impl FieldScene {
         }
         if let Some(every) = overrides.every {
             self.output.every = Some(every);
+        }
+        if let Some(plot) = &overrides.plot {
+            self.output.plot = Some(plot.clone());
+        }
+        if self.output.plot.is_some() && self.output.trajectory.is_none() {
+            return Err(SceneError::NotApplicable {
+                option: "--plot (output.plot)",
+                reason: "draws the field written to the trajectory file: give --out FILE \
+                         (output.trajectory) too"
+                    .into(),
+            });
         }
         if self.output.every.is_some() && self.output.trajectory.is_none() {
             return Err(SceneError::EveryWithoutOutput);
