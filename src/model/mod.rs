@@ -38,6 +38,7 @@
 
 pub mod derived;
 pub mod local;
+pub mod reparametrized;
 pub mod rigid_body;
 pub mod so3;
 pub mod text;

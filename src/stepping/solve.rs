@@ -112,7 +112,7 @@ impl Span {
         }
     }
 
-    fn validate(&self) -> Result<(), Error> {
+    pub(super) fn validate(&self) -> Result<(), Error> {
         check_span(self.t0, self.t_end)?;
         if self.output_times.is_empty() {
             return Err(Error::invalid("output_times", "no output time given"));
@@ -245,6 +245,19 @@ impl SolveOptions {
             .ok_or_else(|| Error::invalid("h", format!("adapt = {} needs a step", self.adapt)))?;
         require_positive("h", h)?;
         Ok(h)
+    }
+
+    /// The options [`crate::Integrator::try_solve_reparametrized`] reads: the run options,
+    /// without recovery (a failed τ-step ends the run).
+    pub(super) fn validate_reparametrized(&self) -> Result<(), Error> {
+        self.run.validate()?;
+        if self.run.recovery != Recovery::None {
+            return Err(Error::invalid(
+                "recovery",
+                "reparam takes fixed steps in τ and has no recovery of failed steps",
+            ));
+        }
+        Ok(())
     }
 
     fn validate(&self) -> Result<(), Error> {
