@@ -212,3 +212,26 @@ fn output_times_inside_steps_come_from_the_step_polynomial() {
         assert!((point.p - point.v).norm() < 1e-12, "p = q̇ for Kepler");
     }
 }
+
+#[test]
+fn the_last_step_lands_on_the_horizon_near_a_close_approach() {
+    // Horizons just before and after the pericentre at t = 2π, where g is small at the end of
+    // an overshooting step (a plain Newton step on Δτ left the bracket there and took a step
+    // of size 0).
+    let (model, q0, v0) = eccentric();
+    for k in 0..40 {
+        let t_end = std::f64::consts::TAU - 0.2 + 0.01 * f64::from(k);
+        let solution = solve_reparametrized(
+            model,
+            Svi::new(5),
+            Sundman { alpha: 1.5 },
+            &Span::new(0.0, t_end),
+            Initial::Velocity { q: q0, v: v0 },
+            &SolveOptions::fixed_step(0.2),
+        )
+        .unwrap_or_else(|error| panic!("t_end = {t_end}: {error}"));
+        assert_eq!(solution.last.t, t_end);
+        let (q, _) = model.exact_solution(0.0, &q0, &v0, t_end).unwrap();
+        assert!((solution.last.q - q).norm() < 1e-4, "t_end = {t_end}");
+    }
+}

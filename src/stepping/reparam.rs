@@ -39,7 +39,7 @@ use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
 use nalgebra::SVector;
 
 /// Newton iterations allowed for the last step's Δτ and for an output time's σ.
-const TIME_NEWTON_ITERATIONS: usize = 12;
+const TIME_NEWTON_ITERATIONS: usize = 40;
 
 /// The value g(q), checked positive and finite.
 fn monitor_value<G: Monitor<N>, const N: usize>(
@@ -229,7 +229,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                     .attempt(
                         method, workspace, increment, tau, size, cursor, limit, statistics,
                     )
-                    .map_err(|failure: StepFailure| failure.at(k, tau))?;
+                    .map_err(|failure: StepFailure| failure.at(k, clock.t))?;
                 let dt = time
                     .elapsed(
                         method,
@@ -283,15 +283,34 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                     outputs.push(point);
                     served += 1;
                 }
-                // Newton on the last step's Δτ: t(Δτ) = t_end, dt/dΔτ = g at its end.
-                for _ in 0..TIME_NEWTON_ITERATIONS {
-                    let residual = clock.t + dt - span.t_end;
-                    if residual.abs() <= 4.0 * f64::EPSILON * span.t_end.abs().max(1.0) {
-                        break;
+                // Newton on the last step's Δτ: t(Δτ) = t_end, dt/dΔτ = g at its end, kept
+                // inside the bracket (lo, hi) of sizes that fall short of and reach t_end.
+                let tolerance = 4.0 * f64::EPSILON * span.t_end.abs().max(1.0);
+                let (mut lo, mut hi) = (0.0, size);
+                let mut residual = clock.t + dt - span.t_end;
+                let mut iterations = 0;
+                while residual.abs() > tolerance {
+                    if iterations == TIME_NEWTON_ITERATIONS {
+                        let error = Error::NonConvergence {
+                            step: k,
+                            t: clock.t,
+                            iterations,
+                            residual,
+                        };
+                        return Err(failure(error, &last, progress.statistics));
+                    }
+                    iterations += 1;
+                    if residual > 0.0 {
+                        hi = size;
+                    } else {
+                        lo = size;
                     }
                     let g = monitor_value(monitor, &progress.cursor.state.q, tau + size)
                         .map_err(|error| failure(error, &last, progress.statistics))?;
-                    size = (size - residual / g).clamp(0.0, dtau);
+                    size -= residual / g;
+                    if !(size > lo && size < hi) {
+                        size = 0.5 * (lo + hi);
+                    }
                     progress.cursor = begin.clone();
                     Method::restart(method, &mut workspace);
                     dt = step(
@@ -302,6 +321,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                         &mut progress.statistics,
                     )
                     .map_err(|error| failure(error, &last, progress.statistics))?;
+                    residual = clock.t + dt - span.t_end;
                 }
             } else {
                 while served < span.output_times.len() && span.output_times[served] <= clock.t + dt
