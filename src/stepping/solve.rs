@@ -17,8 +17,8 @@
 //! tol · (step length) / (span length) (error per unit step). The final error also carries
 //! the propagation of those local errors: on Kepler orbits an energy error becomes a phase
 //! error that grows linearly in time. Step adaptivity on Kepler e = 0.9 over 318 orbits
-//! ends within 0.1–3 × `tol` for tol = 1e-6 … 1e-9 and at the resolution of its error
-//! estimate (2.4e-9) below that ([`super::adapt`]); degree adaptivity was measured at
+//! ends within 0.1–5 × `tol` for tol = 1e-6 … 1e-9 and at the resolution of its error
+//! estimate (4e-9) below that ([`super::adapt`]); degree adaptivity was measured at
 //! 1–20 × `tol` on e = 0.5 over 318 orbits. [`crate::stepping::reparam`] adapts the physical
 //! step with fixed steps in τ instead.
 //!
