@@ -1145,7 +1145,19 @@ mod tests {
             assert!(error.to_string().contains("verlet, trapezoid"), "{error}");
             assert!(error.to_string().contains("dop853, dopri5"), "{error}");
         }
-        assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 7);
+        assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 9);
+        // The adaptive modes of a library method, and what is not one.
+        for text in ["svi:9/8@sundman:1", "svi:7/6@step", "verlet@sundman:1.5"] {
+            assert_eq!(text.parse::<BenchMethod>().unwrap().to_string(), text);
+        }
+        assert!(matches!(
+            "dop853@step".parse::<BenchMethod>(),
+            Err(SceneError::BenchMethod { .. })
+        ));
+        assert!(matches!(
+            "svi@r^2".parse::<BenchMethod>(),
+            Err(SceneError::Svi(svi::Error::InvalidParameter { name, .. })) if name == "monitor"
+        ));
         assert_eq!(
             parse_methods("svi:7/6, sc:9,,dop853").unwrap(),
             [
@@ -1232,6 +1244,46 @@ mod tests {
                 matches!(error, SceneError::InvalidOption { option: named, .. } if named == option),
                 "{error}"
             );
+        }
+    }
+
+    #[test]
+    fn the_adaptive_modes_are_measured_beside_the_fixed_steps() {
+        // Two periods of Kepler e = 0.9 against the exact orbit: svi:5 (order 8) in τ with
+        // g = |q| at 40 and 80 τ-steps per span, step doubling at two tolerances.
+        let mut scene = Scene::builtin("kepler-e0.9").unwrap().unwrap();
+        scene.run.t_end = Some(4.0 * std::f64::consts::PI);
+        let options = BenchOptions {
+            methods: parse_methods("svi:5@sundman:1,svi:5@step").unwrap(),
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![40, 80],
+            tolerances: vec![1e-6, 1e-8],
+            ..BenchOptions::default()
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        let labels: Vec<(&str, f64)> = records
+            .iter()
+            .map(|r| (r.method.as_str(), r.parameter))
+            .collect();
+        assert_eq!(
+            labels,
+            [
+                ("svi:5@sundman:1", 40.0),
+                ("svi:5@sundman:1", 80.0),
+                ("svi:5@step", 1e-6),
+                ("svi:5@step", 1e-8)
+            ]
+        );
+        let (coarse, fine) = (&records[0], &records[1]);
+        assert_eq!(coarse.h, Some(scene.run.t_end.unwrap() / 40.0));
+        // Order 8: halving Δτ divides the error by about 2⁸.
+        let ratio = coarse.final_error / fine.final_error;
+        assert!(ratio > 50.0 && ratio < 2000.0, "{coarse:?} {fine:?}");
+        assert!(fine.final_error < 1e-6, "{fine:?}");
+        for record in &records[2..] {
+            assert!(record.h.is_none());
+            assert!(record.final_error < 10.0 * record.parameter, "{record:?}");
         }
     }
 

@@ -955,6 +955,7 @@ pub(crate) mod tests {
                 diagnostics: Some(vec![Diagnostic::Energy]),
                 adapt: Some(AdaptMode::Degree),
                 tol: Some(1e-9),
+                monitor: None,
                 output_times: None,
                 recovery: None,
                 divergence_limit: None,
