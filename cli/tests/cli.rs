@@ -1062,7 +1062,7 @@ fn reparam_options_that_do_not_apply_are_bad_input() {
         (
             "driven-oscillator",
             &["--adapt", "reparam"][..],
-            "autonomous",
+            "unforced",
         ),
     ] {
         bad_input(&["run", scene], args, needle);

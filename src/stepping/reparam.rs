@@ -145,8 +145,8 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             .phase_point(span.t0, &start.cursor.state, &start.guess)
             .map_err(rejected)?;
         let energy = model.energy(span.t0, &first.q, &first.v);
-        let g0 = monitor_value(monitor, &first.q, 0.0).map_err(rejected)?;
         let tilde = Reparametrized::new(model, monitor, energy).map_err(rejected)?;
+        let g0 = monitor_value(monitor, &first.q, 0.0).map_err(rejected)?;
         let inner: Integrator<_, M, Euclidean<N>> = Integrator::new(tilde, method.clone());
         let mut progress = inner
             .start(
