@@ -1059,11 +1059,7 @@ fn reparam_options_that_do_not_apply_are_bad_input() {
             "--adapt reparam (run.adapt)",
         ),
         ("damped-oscillator", &["--adapt", "reparam"][..], "unforced"),
-        (
-            "driven-oscillator",
-            &["--adapt", "reparam"][..],
-            "unforced",
-        ),
+        ("driven-oscillator", &["--adapt", "reparam"][..], "unforced"),
     ] {
         bad_input(&["run", scene], args, needle);
     }

@@ -170,7 +170,7 @@ impl<'a, L, G> Reparametrized<'a, L, G> {
     }
 
     /// The energy level E₀.
-    pub fn energy(&self) -> f64 {
+    pub fn energy_level(&self) -> f64 {
         self.energy
     }
 }
