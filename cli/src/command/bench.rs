@@ -354,8 +354,8 @@ impl BenchOptions {
         if !self.tolerances.is_empty() && !peers {
             return not_applicable(
                 "--tolerances",
-                "sets the tolerances of dop853, dopri5 and METHOD@step, and --methods lists \
-                 none of them",
+                "sets the tolerances of dop853 and dopri5 (and of METHOD@step), and --methods \
+                 lists none of them",
             );
         }
         let sweeps = (fixed && self.steps.is_empty()) || (peers && self.tolerances.is_empty());
