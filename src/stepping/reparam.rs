@@ -4,8 +4,12 @@
 //! L̃ = g (L(q, q'/g) + E₀) of [`crate::model::reparametrized`] (Leok, *Generalized
 //! Variational Integrators*, §5.6: the Poincaré transformation) with a fixed step Δτ, so the
 //! method keeps its geometry in τ — a symplectic method is symplectic for K = g (H − E₀),
-//! momenta of symmetries of L that leave g invariant are conserved exactly, and the energy
-//! error stays bounded without drift — while the physical steps shrink where g is small.
+//! momenta of symmetries of L that leave g invariant are conserved exactly, and backward
+//! error analysis bounds the energy error — while the physical steps shrink where g is
+//! small. Measured on Kepler e = 0.9 (svi 9/8, g = |q|, Δτ = 0.3): the largest energy error
+//! was 1.0e-12, 1.0e-11 and 1.0e-10 after 10⁴, 10⁵ and 10⁶ steps, a linear growth of about
+//! 10⁻¹⁶ a step at the level where the stage solves stop (step doubling at tol 1e-8 grew to
+//! 1.1e-7).
 //!
 //! # Physical time
 //! Over a step, t advances by ∫ g(q(σ)) dσ. On the step polynomial of a spectral method
