@@ -1029,3 +1029,83 @@ fn the_multiscale_scene_steps_over_five_spring_periods_with_the_slow_angle_right
         "{long_error:e} after T = 1000 against {short_error:e}"
     );
 }
+
+#[test]
+fn reparam_takes_fixed_steps_in_tau_and_follows_the_exact_orbit() {
+    // Ten periods of Kepler e = 0.9 (the exact orbit by Kepler's equation), g = |q|.
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--param",
+        "e=0.9",
+        "--t-end",
+        "62.83",
+        "--adapt",
+        "reparam",
+        "--monitor",
+        "sundman:1",
+        "--h",
+        "0.1",
+        "--points",
+        "7",
+        "--quadrature",
+        "6",
+        "--json",
+    ]);
+    assert_eq!(summary["adapt"], "reparam");
+    assert_eq!(summary["monitor"], "sundman:1");
+    assert!(summary["tol"].is_null(), "{summary}");
+    assert_eq!(number(&summary, "t_end"), 62.83);
+    assert!(
+        number(&summary, "solution_error_final") < 1e-10,
+        "{summary}"
+    );
+    assert!(number(&summary, "energy_error_max") < 1e-11, "{summary}");
+    assert!(number(&summary, "momentum_error_max") < 1e-12, "{summary}");
+    // dt = |q| dτ: steps of 0.1 · 0.1 at pericentre, 0.1 · 1.9 at apocentre.
+    let adaptivity = &summary["adaptivity"];
+    assert!(number(adaptivity, "max_step") > 15.0 * number(adaptivity, "min_step"));
+    // The same from a scene file.
+    let scene = scene_file(
+        "reparam",
+        "model = \"kepler\"\n[parameters]\ne = 0.9\n[method]\nname = \"svi:7/6\"\n\
+         [run]\nh = 0.1\nt_end = 62.83\nadapt = \"reparam\"\nmonitor = \"sundman:1\"\n",
+    );
+    let from_scene = json(&["run", &scene.path, "--json"]);
+    assert_eq!(from_scene["q"], summary["q"]);
+}
+
+#[test]
+fn reparam_options_that_do_not_apply_are_bad_input() {
+    for (scene, args, needle) in [
+        (
+            "kepler",
+            &["--adapt", "reparam", "--monitor", "sundman:x"][..],
+            "monitor",
+        ),
+        (
+            "kepler",
+            &["--adapt", "reparam", "--monitor", "r^2"][..],
+            "unknown monitor",
+        ),
+        (
+            "kepler",
+            &["--monitor", "sundman:1"][..],
+            "--monitor (run.monitor)",
+        ),
+        (
+            "kepler",
+            &["--adapt", "reparam", "--tol", "1e-9"][..],
+            "--tol (run.tol)",
+        ),
+        (
+            "rigid-body",
+            &["--adapt", "reparam"][..],
+            "--adapt reparam (run.adapt)",
+        ),
+        ("damped-oscillator", &["--adapt", "reparam"][..], "unforced"),
+        ("driven-oscillator", &["--adapt", "reparam"][..], "unforced"),
+    ] {
+        bad_input(&["run", scene], args, needle);
+    }
+}

@@ -39,6 +39,7 @@
 pub mod density;
 pub mod derived;
 pub mod local;
+pub mod reparametrized;
 pub mod rigid_body;
 pub mod so3;
 pub mod text;

@@ -7,6 +7,7 @@ pub mod adapt;
 pub mod grid;
 pub mod local_observer;
 pub mod observer;
+pub mod reparam;
 pub mod rigid_observer;
 pub mod run;
 pub mod solve;

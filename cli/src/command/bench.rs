@@ -16,6 +16,13 @@
 //! takes longer than `max_run`, or when the error has stalled for three points (round-off).
 //! Given step counts ([`BenchOptions::steps`]) or tolerances ([`BenchOptions::tolerances`])
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
+//!
+//! The library's adaptive modes have rows of their own beside the fixed-step methods and the
+//! peers, so one plot shows all: `METHOD@MONITOR` (e.g. `svi:9/8@sundman:1`) is the method
+//! reparametrised in time ([`svi::Integrator::try_solve_reparametrized`]), swept like a
+//! fixed-step method over n steps in τ of Δτ = (t_end − t0)/n (its `h` column is Δτ, its
+//! `steps` the τ-steps taken); `METHOD@step` is step doubling ([`svi::solve()`]), swept over
+//! tolerances like the peers down to 1e-15.
 
 use crate::command::peers::{FirstOrder, dop853, dopri5};
 use crate::report::csv;
@@ -36,12 +43,14 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use svi::method::registry::{SpaceKind, VectorMethodVisitor};
-use svi::observer::{EnergyError, MomentumError};
+use svi::model::reparametrized::MonitorSpec;
+use svi::observer::{EnergyError, MomentumError, Observer};
+use svi::solve::{SolveOptions, Span};
 use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A method configuration to sweep: a method of svi's registry, or an `ode_solvers` peer.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BenchMethod {
     /// A method of [`svi::method::registry::METHODS`] (fixed step).
     Library(MethodSpec),
@@ -49,6 +58,18 @@ pub enum BenchMethod {
     Dop853,
     /// `ode_solvers`' Dopri5 (adaptive, order 5).
     Dopri5,
+    /// A library method in computational time τ with a monitor (`METHOD@MONITOR`).
+    Reparam(MethodSpec, MonitorSpec),
+    /// A library method with step doubling (`METHOD@step`).
+    StepDoubling(MethodSpec),
+}
+
+impl BenchMethod {
+    /// Whether the method is swept over step counts (the library's fixed-step methods and
+    /// their τ-steps), not tolerances.
+    fn takes_steps(&self) -> bool {
+        matches!(self, BenchMethod::Library(_) | BenchMethod::Reparam(..))
+    }
 }
 
 impl fmt::Display for BenchMethod {
@@ -57,6 +78,8 @@ impl fmt::Display for BenchMethod {
             BenchMethod::Library(spec) => write!(f, "{spec}"),
             BenchMethod::Dop853 => write!(f, "dop853"),
             BenchMethod::Dopri5 => write!(f, "dopri5"),
+            BenchMethod::Reparam(spec, monitor) => write!(f, "{spec}@{monitor}"),
+            BenchMethod::StepDoubling(spec) => write!(f, "{spec}@step"),
         }
     }
 }
@@ -64,9 +87,20 @@ impl fmt::Display for BenchMethod {
 impl FromStr for BenchMethod {
     type Err = SceneError;
 
-    /// `dop853`, `dopri5`, or a library method written `name`, `name:P` or `name:P/M`.
+    /// `dop853`, `dopri5`, or a library method written `name`, `name:P` or `name:P/M`,
+    /// optionally followed by `@MONITOR` (reparametrised, e.g. `svi:9/8@sundman:1`) or
+    /// `@step` (step doubling).
     fn from_str(text: &str) -> Result<Self, SceneError> {
         let text = text.trim();
+        if let Some((method, mode)) = text.split_once('@') {
+            let BenchMethod::Library(spec) = method.parse()? else {
+                return Err(SceneError::BenchMethod { text: text.into() });
+            };
+            return match mode.trim() {
+                "step" => Ok(BenchMethod::StepDoubling(spec)),
+                monitor => Ok(BenchMethod::Reparam(spec, monitor.parse()?)),
+            };
+        }
         match text {
             "dop853" => Ok(BenchMethod::Dop853),
             "dopri5" => Ok(BenchMethod::Dopri5),
@@ -100,8 +134,11 @@ pub struct BenchArgs {
         value_name = "LIST",
         default_value = DEFAULT_METHODS,
         long_help = method_help(
-            "Methods, comma-separated: the library's (for models on ℝᴺ), and the adaptive \
-             peers dop853 and dopri5 (ode_solvers' DOP853 and Dopri5)."
+            "Methods, comma-separated: the library's (for models on ℝᴺ), the library's with \
+             an adaptive mode — METHOD@MONITOR reparametrised in time (fixed steps in τ, dt = \
+             g(q) dτ, e.g. svi:9/8@sundman:1; see svi run --monitor), METHOD@step step \
+             doubling —, and the adaptive peers dop853 and dopri5 (ode_solvers' DOP853 and \
+             Dopri5)."
         )
     )]
     pub methods: String,
@@ -161,25 +198,27 @@ pub struct BenchArgs {
         )
     )]
     pub min_batch: f64,
-    /// Run the fixed-step methods at these step counts instead of sweeping them.
+    /// Run the fixed-step methods (and METHOD@MONITOR, in τ-steps) at these step counts
+    /// instead of sweeping them.
     #[arg(
         long,
         value_delimiter = ',',
         allow_hyphen_values = true,
         help = format!(
-            "Run the fixed-step methods at these step counts (each 1 to {MAX_STEPS}) instead \
-             of sweeping them"
+            "Run the fixed-step methods (and METHOD@MONITOR, in steps of τ) at these step counts \
+             (each 1 to {MAX_STEPS}) instead of sweeping them"
         )
     )]
     pub steps: Vec<usize>,
-    /// Run the adaptive peers (dop853, dopri5) at these tolerances instead of sweeping them.
+    /// Run the adaptive peers (dop853, dopri5) and METHOD@step at these tolerances instead
+    /// of sweeping them.
     #[arg(
         long,
         value_delimiter = ',',
         allow_hyphen_values = true,
         help = format!(
-            "Run the adaptive peers (dop853, dopri5) at these tolerances (each at least {}) \
-             instead of sweeping them",
+            "Run the adaptive peers (dop853, dopri5) and METHOD@step at these tolerances (each \
+             at least {}) instead of sweeping them",
             csv::Float(MIN_PEER_TOLERANCE)
         )
     )]
@@ -253,7 +292,8 @@ impl Default for BenchOptions {
 }
 
 /// The default method list of `svi bench`.
-pub const DEFAULT_METHODS: &str = "svi:7/6,svi:6/5,svi:9/8,svi:6/12,sc:9,dop853,dopri5";
+pub const DEFAULT_METHODS: &str =
+    "svi:7/6,svi:6/5,svi:9/8,svi:6/12,sc:9,svi:9/8@sundman:1,svi:7/6@step,dop853,dopri5";
 
 /// The error at which a sweep stops by default (`--target`).
 pub const DEFAULT_TARGET: f64 = 1e-13;
@@ -296,14 +336,8 @@ impl BenchOptions {
         for &tol in &self.tolerances {
             limits::peer_tolerance("--tolerances", tol)?;
         }
-        let fixed = self
-            .methods
-            .iter()
-            .any(|method| matches!(method, BenchMethod::Library(_)));
-        let peers = self
-            .methods
-            .iter()
-            .any(|method| !matches!(method, BenchMethod::Library(_)));
+        let fixed = self.methods.iter().any(BenchMethod::takes_steps);
+        let peers = self.methods.iter().any(|method| !method.takes_steps());
         let not_applicable = |option, reason: &str| {
             Err(SceneError::NotApplicable {
                 option,
@@ -314,13 +348,14 @@ impl BenchOptions {
             return not_applicable(
                 "--steps",
                 "sets the step counts of the library's methods, and --methods lists only \
-                 dop853 or dopri5 (set their --tolerances)",
+                 dop853, dopri5 or METHOD@step (set their --tolerances)",
             );
         }
         if !self.tolerances.is_empty() && !peers {
             return not_applicable(
                 "--tolerances",
-                "sets the tolerances of dop853 and dopri5, and --methods lists neither",
+                "sets the tolerances of dop853 and dopri5 (and of METHOD@step), and --methods \
+                 lists none of them",
             );
         }
         let sweeps = (fixed && self.steps.is_empty()) || (peers && self.tolerances.is_empty());
@@ -463,15 +498,24 @@ impl ModelVisitor for Bench<'_> {
                 verbose: self.options.verbose,
                 progress: self.progress,
             };
+            let sweep = |mode| Sweep {
+                model: &model,
+                label: &label,
+                mode,
+                problem: &problem,
+                options: self.options,
+                report,
+            };
             match *spec {
-                BenchMethod::Library(method) => method.visit_vector(Sweep {
-                    model: &model,
-                    label: &label,
-                    problem: &problem,
-                    options: self.options,
-                    report,
-                    records: &mut records,
-                })??,
+                BenchMethod::Library(method) => {
+                    records.extend(method.visit_vector(sweep(Mode::Fixed))??);
+                }
+                BenchMethod::Reparam(method, monitor) => {
+                    records.extend(method.visit_vector(sweep(Mode::Reparam(monitor)))??);
+                }
+                BenchMethod::StepDoubling(method) => {
+                    records.extend(method.visit_vector(sweep(Mode::StepDoubling))??);
+                }
                 BenchMethod::Dop853 | BenchMethod::Dopri5 => {
                     sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
                 }
@@ -513,29 +557,70 @@ fn check_horizon(t0: f64, t_end: f64, h: f64) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// Sweeps the visited fixed-step method.
+/// How a library method runs in a sweep.
+#[derive(Debug, Clone, Copy)]
+enum Mode {
+    /// Fixed steps h, swept over step counts.
+    Fixed,
+    /// Fixed steps Δτ in computational time with a monitor, swept over τ-step counts.
+    Reparam(MonitorSpec),
+    /// Step doubling, swept over tolerances.
+    StepDoubling,
+}
+
+/// Sweeps the visited library method in its mode.
 struct Sweep<'a, M, const N: usize> {
     model: &'a M,
     label: &'a str,
+    mode: Mode,
     problem: &'a Problem<N>,
     options: &'a BenchOptions,
     report: Report<'a>,
-    records: &'a mut Vec<Record>,
 }
 
 impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> {
-    type Output = Result<(), SceneError>;
+    type Output = Result<Vec<Record>, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
-        sweep_fixed(
-            self.model,
-            method,
-            self.label,
-            self.problem,
-            self.options,
-            self.report,
-            self.records,
-        )
+        let mut records = Vec::new();
+        sweep_library(self, method, &mut records)?;
+        Ok(records)
     }
+}
+
+/// One run of `integrator` in `mode` over the problem: at step (or Δτ) `h`, or for step
+/// doubling at tolerance `h`; the final position and the statistics.
+fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, const N: usize>(
+    integrator: &Integrator<L, Me, svi::Euclidean<N>>,
+    mode: Mode,
+    problem: &Problem<N>,
+    h: f64,
+    observer: &mut O,
+) -> Result<(SVector<f64, N>, svi::Statistics), svi::Error>
+where
+    O: Observer<L, svi::PhasePoint<N>>,
+{
+    let initial = Initial::Velocity {
+        q: problem.q0,
+        v: problem.v0,
+    };
+    let span = Span::new(problem.t0, problem.t_end);
+    let solution = match mode {
+        Mode::Fixed => {
+            let run = integrator.run(problem.t0, initial, h, problem.t_end, observer)?;
+            return Ok((run.last.q, run.statistics));
+        }
+        Mode::Reparam(monitor) => integrator.try_solve_reparametrized(
+            &monitor,
+            &span,
+            initial,
+            &SolveOptions::fixed_step(h),
+            observer,
+        ),
+        Mode::StepDoubling => {
+            integrator.try_solve(&span, initial, &SolveOptions::step_adaptive(h), observer)
+        }
+    }?;
+    Ok((solution.last.q, solution.statistics))
 }
 
 /// Median per-run time of `run` (see the module docs).
@@ -631,71 +716,98 @@ impl Report<'_> {
     }
 }
 
-/// Sweep a fixed-step method over step counts.
-fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
-    model: &M,
+/// Sweep a library method in its mode: over step counts (fixed steps, steps in τ) or
+/// tolerances (step doubling).
+fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+    sweep: Sweep<'_, M, N>,
     method: Me,
-    label: &str,
-    problem: &Problem<N>,
-    options: &BenchOptions,
-    report: Report<'_>,
     records: &mut Vec<Record>,
 ) -> Result<(), SceneError> {
+    let Sweep {
+        model,
+        label,
+        mode,
+        problem,
+        options,
+        report,
+    } = sweep;
     let order = method.info().order.max(1) as f64;
     let integrator = Integrator::new(model.clone(), method);
     let span = problem.t_end - problem.t0;
-    let initial = Initial::Velocity {
-        q: problem.q0,
-        v: problem.v0,
-    };
     let final_error = |steps: usize| {
-        integrator
-            .run(
-                problem.t0,
-                initial,
-                span / steps as f64,
-                problem.t_end,
-                &mut (),
-            )
-            .map(|run| (run.last.q - problem.exact).norm())
+        run_mode(&integrator, mode, problem, span / steps as f64, &mut ())
+            .map(|(q, _)| (q - problem.exact).norm())
     };
-    let measure = |steps: usize| -> Result<Record, svi::Error> {
-        let h = span / steps as f64;
+    // `parameter`: a step count, or a tolerance of step doubling.
+    let measure = |parameter: f64| -> Result<Record, svi::Error> {
+        let h = match mode {
+            Mode::StepDoubling => parameter,
+            _ => span / parameter,
+        };
         let mut energy = EnergyError::default();
         let mut momentum = MomentumError::default();
-        let run = if model.generator_count() > 0 {
-            integrator.run(
-                problem.t0,
-                initial,
+        let (q, statistics) = if model.generator_count() > 0 {
+            run_mode(
+                &integrator,
+                mode,
+                problem,
                 h,
-                problem.t_end,
                 &mut (&mut energy, &mut momentum),
             )
         } else {
-            integrator.run(problem.t0, initial, h, problem.t_end, &mut energy)
+            run_mode(&integrator, mode, problem, h, &mut energy)
         }?;
         let seconds = median_seconds(
             || {
-                let _ = integrator.run(problem.t0, initial, h, problem.t_end, &mut ());
+                let _ = run_mode(&integrator, mode, problem, h, &mut ());
             },
             options,
         );
         Ok(Record {
             method: label.to_string(),
-            parameter: steps as f64,
-            h: Some(h),
-            steps: run.statistics.steps,
-            final_error: (run.last.q - problem.exact).norm(),
+            parameter,
+            h: (!matches!(mode, Mode::StepDoubling)).then_some(h),
+            steps: statistics.steps,
+            final_error: (q - problem.exact).norm(),
             energy_error_max: energy.max,
             momentum_error_max: (model.generator_count() > 0).then_some(momentum.max),
-            evaluations: run.statistics.evaluations,
-            iterations: run.statistics.iterations,
+            evaluations: statistics.evaluations,
+            iterations: statistics.iterations,
             seconds,
         })
     };
+    if let Mode::StepDoubling = mode {
+        if !options.tolerances.is_empty() {
+            for &tol in &options.tolerances {
+                let record = measure(tol)?;
+                report.record(&record);
+                records.push(record);
+            }
+            return Ok(());
+        }
+        // 10^-3, 10^-3.5, …, 10^-15 (the smallest tolerance step doubling takes).
+        let mut stall = Stall::default();
+        for k in 0..=24 {
+            let tol = 10f64.powf(-3.0 - 0.5 * f64::from(k));
+            let record = match measure(tol) {
+                Ok(record) => record,
+                Err(error) => {
+                    report.note(&format!("{label} at tolerance {tol:e}: {error}"));
+                    continue;
+                }
+            };
+            report.record(&record);
+            let done = stall.ends_after(&record, options);
+            records.push(record);
+            if done {
+                break;
+            }
+        }
+        return Ok(());
+    }
     if !options.steps.is_empty() {
         for &steps in &options.steps {
-            let record = measure(steps)?;
+            let record = measure(steps as f64)?;
             report.record(&record);
             records.push(record);
         }
@@ -710,7 +822,7 @@ fn sweep_fixed<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     let mut stall = Stall::default();
     let mut failures = 0;
     while steps < MAX_STEPS {
-        let record = match measure(steps) {
+        let record = match measure(steps as f64) {
             Ok(record) => record,
             Err(_) if failures < 3 => {
                 failures += 1;
@@ -1033,7 +1145,19 @@ mod tests {
             assert!(error.to_string().contains("verlet, trapezoid"), "{error}");
             assert!(error.to_string().contains("dop853, dopri5"), "{error}");
         }
-        assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 7);
+        assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 9);
+        // The adaptive modes of a library method, and what is not one.
+        for text in ["svi:9/8@sundman:1", "svi:7/6@step", "verlet@sundman:1.5"] {
+            assert_eq!(text.parse::<BenchMethod>().unwrap().to_string(), text);
+        }
+        assert!(matches!(
+            "dop853@step".parse::<BenchMethod>(),
+            Err(SceneError::BenchMethod { .. })
+        ));
+        assert!(matches!(
+            "svi@r^2".parse::<BenchMethod>(),
+            Err(SceneError::Svi(svi::Error::InvalidParameter { name, .. })) if name == "monitor"
+        ));
         assert_eq!(
             parse_methods("svi:7/6, sc:9,,dop853").unwrap(),
             [
@@ -1120,6 +1244,46 @@ mod tests {
                 matches!(error, SceneError::InvalidOption { option: named, .. } if named == option),
                 "{error}"
             );
+        }
+    }
+
+    #[test]
+    fn the_adaptive_modes_are_measured_beside_the_fixed_steps() {
+        // Two periods of Kepler e = 0.9 against the exact orbit: svi:5 (order 8) in τ with
+        // g = |q| at 40 and 80 τ-steps per span, step doubling at two tolerances.
+        let mut scene = Scene::builtin("kepler-e0.9").unwrap().unwrap();
+        scene.run.t_end = Some(4.0 * std::f64::consts::PI);
+        let options = BenchOptions {
+            methods: parse_methods("svi:5@sundman:1,svi:5@step").unwrap(),
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![40, 80],
+            tolerances: vec![1e-6, 1e-8],
+            ..BenchOptions::default()
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        let labels: Vec<(&str, f64)> = records
+            .iter()
+            .map(|r| (r.method.as_str(), r.parameter))
+            .collect();
+        assert_eq!(
+            labels,
+            [
+                ("svi:5@sundman:1", 40.0),
+                ("svi:5@sundman:1", 80.0),
+                ("svi:5@step", 1e-6),
+                ("svi:5@step", 1e-8)
+            ]
+        );
+        let (coarse, fine) = (&records[0], &records[1]);
+        assert_eq!(coarse.h, Some(scene.run.t_end.unwrap() / 40.0));
+        // Order 8: halving Δτ divides the error by about 2⁸.
+        let ratio = coarse.final_error / fine.final_error;
+        assert!(ratio > 50.0 && ratio < 2000.0, "{coarse:?} {fine:?}");
+        assert!(fine.final_error < 1e-6, "{fine:?}");
+        for record in &records[2..] {
+            assert!(record.h.is_none());
+            assert!(record.final_error < 10.0 * record.parameter, "{record:?}");
         }
     }
 

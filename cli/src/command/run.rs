@@ -26,8 +26,9 @@ use svi::method::local::LocalMethod;
 use svi::method::registry::{LocalMethodVisitor, SpaceKind, VectorMethodVisitor};
 use svi::method::space::Space;
 use svi::method::step::Step;
+use svi::model::reparametrized::MonitorSpec;
 use svi::observer::{Every, Observer};
-use svi::solve::{SolveOptions, Span};
+use svi::solve::{Solution, SolveOptions, Span};
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method, Statistics};
 use svi_models::{
@@ -218,7 +219,64 @@ struct VectorMethod<'a, M, const N: usize> {
 impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for VectorMethod<'_, M, N> {
     type Output = Result<Summary, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
-        run_scene(&Integrator::new(self.model, method), &self.plan)
+        let integrator = Integrator::new(self.model, method);
+        if self.plan.scene.run.adapt == Some(AdaptMode::Reparam) {
+            let monitor = self.plan.scene.monitor()?;
+            let solver = InTau {
+                integrator: &integrator,
+                monitor,
+            };
+            run_scene(&integrator, &self.plan, &solver)
+        } else {
+            run_scene(&integrator, &self.plan, &integrator)
+        }
+    }
+}
+
+/// How [`run_scene`] solves: the one loop ([`Integrator::try_solve`]), or fixed steps in
+/// computational time ([`InTau`]).
+trait Solver<L, S: Space> {
+    /// Solve over `span` from `initial`, reporting the accepted steps to `observer`.
+    fn solve<O: Observer<L, S::Point>>(
+        &self,
+        span: &Span,
+        initial: S::Initial,
+        options: &SolveOptions,
+        observer: &mut O,
+    ) -> Result<Solution<S>, RunFailure<S>>;
+}
+
+impl<L, M: Step<L, S> + Clone, S: Space> Solver<L, S> for Integrator<L, M, S> {
+    fn solve<O: Observer<L, S::Point>>(
+        &self,
+        span: &Span,
+        initial: S::Initial,
+        options: &SolveOptions,
+        observer: &mut O,
+    ) -> Result<Solution<S>, RunFailure<S>> {
+        self.try_solve(span, initial, options, observer)
+    }
+}
+
+/// `adapt = "reparam"`: the integrator on ℝᴺ in computational time τ with its monitor
+/// ([`Integrator::try_solve_reparametrized`]).
+struct InTau<'a, L, M, const N: usize> {
+    integrator: &'a Integrator<L, M, svi::Euclidean<N>>,
+    monitor: MonitorSpec,
+}
+
+impl<L: svi::Lagrangian<N>, M: Method<N> + Clone, const N: usize> Solver<L, svi::Euclidean<N>>
+    for InTau<'_, L, M, N>
+{
+    fn solve<O: Observer<L, svi::PhasePoint<N>>>(
+        &self,
+        span: &Span,
+        initial: svi::Initial<N>,
+        options: &SolveOptions,
+        observer: &mut O,
+    ) -> Result<Solution<svi::Euclidean<N>>, RunFailure<svi::Euclidean<N>>> {
+        self.integrator
+            .try_solve_reparametrized(&self.monitor, span, initial, options, observer)
     }
 }
 
@@ -260,7 +318,8 @@ struct LocalRun<'a, M> {
 impl<M: LocalZooModel> LocalMethodVisitor for LocalRun<'_, M> {
     type Output = Result<Summary, SceneError>;
     fn visit<Me: LocalMethod + Clone>(self, method: Me) -> Self::Output {
-        run_scene(&Integrator::new(self.model, method), &self.plan)
+        let integrator = Integrator::new(self.model, method);
+        run_scene(&integrator, &self.plan, &integrator)
     }
 }
 
@@ -277,7 +336,8 @@ impl RigidModelVisitor for SceneRun<'_> {
             quadrature: Some(lie_svi.quadrature_points()),
         };
         let plan = self.plan(resolved, method);
-        run_scene(&RigidBodyIntegrator::new(model, lie_svi), &plan)
+        let integrator = RigidBodyIntegrator::new(model, lie_svi);
+        run_scene(&integrator, &plan, &integrator)
     }
 }
 
@@ -319,6 +379,7 @@ struct Outcome<P> {
 fn run_scene<L, M, S>(
     integrator: &Integrator<L, M, S>,
     plan: &Plan<'_, S>,
+    solver: &impl Solver<L, S>,
 ) -> Result<Summary, SceneError>
 where
     M: Step<L, S> + Clone,
@@ -341,7 +402,8 @@ where
         .as_mut()
         .filter(|_| output_times.is_none())
         .map(|stream| Every::new(every, stream));
-    let progress = (plan.progress && adapt != AdaptMode::Step)
+    // The step count of step doubling and of steps in τ is not known ahead.
+    let progress = (plan.progress && !matches!(adapt, AdaptMode::Step | AdaptMode::Reparam))
         .then(|| Progress::for_run(t0, plan.h, t_end, S::coordinate_count(&plan.initial)))
         .flatten();
     let mut observers = (S::diagnostics(model, scene), trajectory, progress);
@@ -350,7 +412,7 @@ where
         None => Span::new(t0, t_end),
     };
     let start = Instant::now();
-    let result = integrator.try_solve(&span, plan.initial.clone(), &options, &mut observers);
+    let result = solver.solve(&span, plan.initial.clone(), &options, &mut observers);
     let seconds = start.elapsed().as_secs_f64();
     let (diagnostics, _, progress) = observers;
     if let Some(progress) = &progress {
@@ -565,9 +627,12 @@ impl<L, S: RunSpace<L>> Observer<L, S::Point> for TrajectoryStream<S> {
 }
 
 /// The tolerance of an adaptive run: the scene's, or without one the library's default;
-/// `None` for fixed steps.
+/// `None` for fixed steps (in t or in τ).
 fn tolerance(scene: &Scene) -> Option<f64> {
-    let adaptive = scene.run.adapt.unwrap_or_default() != AdaptMode::None;
+    let adaptive = matches!(
+        scene.run.adapt.unwrap_or_default(),
+        AdaptMode::Step | AdaptMode::Degree
+    );
     adaptive
         .then(|| scene.run.tol.or(SolveOptions::default().tol))
         .flatten()
@@ -581,7 +646,11 @@ fn solve_summary<L, S: RunSpace<L>>(scene: &Scene, outcome: &Outcome<S::Point>) 
     let solves = adapt != AdaptMode::None || output_times.is_some();
     let solved = outcome.solved.as_ref().filter(|_| solves);
     SolveSummary {
-        adapt: adapt.into(),
+        adapt: adapt.name(),
+        monitor: (adapt == AdaptMode::Reparam)
+            .then(|| scene.monitor().ok())
+            .flatten()
+            .map(|monitor| monitor.to_string()),
         tol: tolerance(scene),
         adaptivity: solved.map(|(adaptivity, points)| AdaptivitySummary {
             accepted: adaptivity.accepted,

@@ -247,6 +247,9 @@ impl StressOptions {
         if self.methods.contains(&BenchMethod::Dopri5) {
             return Err(dopri5_not_applicable());
         }
+        if let Some(method) = self.methods.iter().find(|method| is_adaptive_mode(method)) {
+            return Err(adaptive_mode_not_applicable(method));
+        }
         limits::count(
             "--steps",
             self.drift_steps,
@@ -288,6 +291,24 @@ fn dopri5_not_applicable() -> SceneError {
     SceneError::MethodNotApplicable {
         method: BenchMethod::Dopri5.to_string(),
         reason: "svi stress compares with dop853 only".into(),
+    }
+}
+
+/// Whether `method` is a library method in an adaptive mode (`METHOD@MONITOR`, `METHOD@step`).
+fn is_adaptive_mode(method: &BenchMethod) -> bool {
+    matches!(
+        method,
+        BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_)
+    )
+}
+
+/// An adaptive mode of the library in `svi stress --methods`.
+fn adaptive_mode_not_applicable(method: &BenchMethod) -> SceneError {
+    SceneError::MethodNotApplicable {
+        method: method.to_string(),
+        reason: "svi stress probes the step limits of fixed steps; the adaptive modes are \
+                 measured by svi bench"
+            .into(),
     }
 }
 
@@ -440,6 +461,9 @@ impl ModelVisitor for CaseRunner<'_> {
                     drift: dop853_drift(&model, &setup),
                 },
                 BenchMethod::Dopri5 => return Err(dopri5_not_applicable()),
+                BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_) => {
+                    return Err(adaptive_mode_not_applicable(spec));
+                }
             };
             if self.options.verbose {
                 eprintln!(

@@ -11,7 +11,6 @@
 use std::fmt;
 
 use serde::Serialize;
-use svi::solve::Adapt;
 
 use crate::report::csv::{Float, brief_vector as vector};
 use crate::report::health::Warning;
@@ -392,9 +391,10 @@ impl Conservation {
 /// Adaptivity and output times of a run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SolveSummary {
-    /// Adaptivity mode: `none`, `step` or `degree`.
-    #[serde(serialize_with = "serialize_display")]
-    pub adapt: Adapt,
+    /// Adaptivity mode: `none`, `step`, `degree` or `reparam`.
+    pub adapt: &'static str,
+    /// The monitor of `reparam` (e.g. `sundman:1.5`); `None` for the other modes.
+    pub monitor: Option<String>,
     /// Target final error of the adaptive modes.
     pub tol: Option<f64>,
     /// What the adaptivity did (adaptive runs and runs with output times).
@@ -447,14 +447,6 @@ impl Serialize for Parameters {
     }
 }
 
-/// Serialise a value as its `Display` text.
-fn serialize_display<T: fmt::Display, S: serde::Serializer>(
-    value: &T,
-    serializer: S,
-) -> Result<S::Ok, S::Error> {
-    serializer.collect_str(value)
-}
-
 /// Where the trajectory went.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrajectoryOutput {
@@ -504,7 +496,16 @@ impl Summary {
         if let Some(tol) = solve.tol {
             line = format!("{}, tol {tol:e}: {line}", solve.adapt);
         }
-        if solve.adapt == Adapt::Degree {
+        if let Some(monitor) = &solve.monitor {
+            line = format!("{}, monitor {monitor}: {line}", solve.adapt);
+        }
+        if solve.adapt == "step" && a.unmet > 0 {
+            line.push_str(&format!(
+                "; {} steps at the resolution of the error estimate",
+                a.unmet
+            ));
+        }
+        if solve.adapt == "degree" {
             let used: Vec<String> = a
                 .points_used
                 .iter()

@@ -168,6 +168,7 @@ impl FieldScene {
             (overrides.diagnostics.is_some(), "--diagnostics"),
             (overrides.adapt.is_some(), "--adapt"),
             (overrides.tol.is_some(), "--tol"),
+            (overrides.monitor.is_some(), "--monitor"),
             (overrides.output_times.is_some(), "--output-times"),
             (overrides.recovery.is_some(), "--recovery"),
             (overrides.divergence_limit.is_some(), "--divergence-limit"),

@@ -30,11 +30,14 @@
 //! quadrature = 12       # Gauss–Legendre points, svi only (default 2 × points)
 //!
 //! [run]                 # absent: the model's default step and horizon
-//! h = 0.2               # the step (unused by adapt = "step", which chooses its own)
+//! h = 0.2               # the step (unused by adapt = "step", which chooses its own; the
+//!                       # step in τ of adapt = "reparam")
 //! t_end = 2000.0
 //! adapt = "none"        # "none" (default), "step" (step doubling) or "degree" (points per
-//!                       # step: methods with points), both to meet `tol`
-//! # tol = 1e-9          # target final error of the adaptive modes (only with them)
+//!                       # step: methods with points), both to meet `tol`, or "reparam"
+//!                       # (fixed steps in τ, dt = g(q) dτ: structure-preserving)
+//! # tol = 1e-9          # target final error of adapt = "step" and "degree" (only with them)
+//! # monitor = "sundman:1.5"  # g(q) = |q|^1.5 of adapt = "reparam" (only with it; default)
 //! # min_points = 3      # bounds of adapt = "degree" (defaults 3 and 24; only with it)
 //! # max_points = 24
 //! recovery = "none"     # or "halve-step": retry a failed step as two half steps (adapt =
@@ -98,6 +101,7 @@ use svi::MethodSpec;
 use svi::lie_group::{LieSvi, RigidInitial};
 use svi::method::DynInitial;
 use svi::method::registry::{self, SpaceKind};
+use svi::model::reparametrized::MonitorSpec;
 use svi::model::text::{TextError, TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
 use svi_models::{
@@ -275,6 +279,15 @@ impl Scene {
         }
     }
 
+    /// The monitor of `adapt = "reparam"`: `run.monitor` parsed, or the default
+    /// (`sundman:1.5`).
+    pub fn monitor(&self) -> Result<MonitorSpec, SceneError> {
+        match &self.run.monitor {
+            Some(text) => Ok(text.parse()?),
+            None => Ok(MonitorSpec::default()),
+        }
+    }
+
     /// Whether the scene's model is a runtime-dimension one (a chain or lattice of
     /// [`svi_models::LOCAL_MODEL_NAMES`], on ℝⁿ with n a parameter): it runs with the
     /// large-system methods, and its `[initial]` vectors have n components.
@@ -400,13 +413,40 @@ impl Scene {
         let adapt = run.adapt.unwrap_or_default();
         let not_applicable =
             |option, reason: String| Err(SceneError::NotApplicable { option, reason });
-        if adapt == AdaptMode::None && run.tol.is_some() {
+        if matches!(adapt, AdaptMode::None | AdaptMode::Reparam) && run.tol.is_some() {
             return not_applicable(
                 "--tol (run.tol)",
-                "sets the tolerance of --adapt step and --adapt degree; this run has a fixed \
-                 step (adapt none)"
-                    .into(),
+                format!(
+                    "sets the tolerance of --adapt step and --adapt degree; this run has fixed \
+                     steps (adapt {}{})",
+                    adapt.name(),
+                    if adapt == AdaptMode::Reparam {
+                        ": choose --h, the step in τ"
+                    } else {
+                        ""
+                    }
+                ),
             );
+        }
+        if adapt != AdaptMode::Reparam && run.monitor.is_some() {
+            return not_applicable(
+                "--monitor (run.monitor)",
+                format!(
+                    "sets the monitor of --adapt reparam, not of adapt {}",
+                    adapt.name()
+                ),
+            );
+        }
+        if adapt == AdaptMode::Reparam {
+            self.monitor()?;
+            if self.space() != SpaceKind::Vector || self.is_local() {
+                return not_applicable(
+                    "--adapt reparam (run.adapt)",
+                    "reparametrises models on ℝᴺ of fixed dimension (not rigid bodies or \
+                     chains)"
+                        .into(),
+                );
+            }
         }
         for (bound, option) in [
             (run.min_points, "run.min_points"),
@@ -501,6 +541,7 @@ impl Scene {
             diagnostics,
             adapt,
             tol,
+            monitor,
             output_times,
             recovery,
             divergence_limit,
@@ -575,6 +616,9 @@ impl Scene {
         set(&mut self.output.diagnostics, diagnostics);
         set(&mut self.run.adapt, adapt);
         set(&mut self.run.tol, tol);
+        if let Some(monitor) = monitor {
+            self.run.monitor = Some(monitor.to_string());
+        }
         set(&mut self.output.output_times, output_times);
         if *recovery == Some(RecoveryKind::None) {
             self.run.max_halvings = None;
@@ -923,6 +967,7 @@ pub(crate) mod tests {
                 diagnostics: Some(vec![Diagnostic::Energy]),
                 adapt: Some(AdaptMode::Degree),
                 tol: Some(1e-9),
+                monitor: None,
                 output_times: None,
                 recovery: None,
                 divergence_limit: None,

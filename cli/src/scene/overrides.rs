@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use svi::MethodSpec;
 use svi::method::registry;
+use svi::model::reparametrized::MonitorSpec;
 
 use crate::scene::error::SceneError;
 use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
@@ -57,13 +58,18 @@ pub struct Overrides {
     /// orthogonality errors); their summary fields are null.
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub diagnostics: Option<Vec<Diagnostic>>,
-    /// Adaptivity: none (fixed step), step (step doubling) or degree (points per step).
+    /// Adaptivity: none (fixed step), step (step doubling), degree (points per step) or
+    /// reparam (fixed steps --h in computational time τ, dt = g(q) dτ; see --monitor).
     #[arg(long, value_enum)]
     pub adapt: Option<AdaptMode>,
     /// Target final error of --adapt step and --adapt degree [default: 1e-8]; an error
     /// without them.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub tol: Option<f64>,
+    /// The monitor g(q) > 0 of --adapt reparam: sundman:ALPHA is g = |q|^ALPHA for a central
+    /// force about the origin (ALPHA = 1.5 or 1 for Kepler orbits) [default: sundman:1.5].
+    #[arg(long, value_name = "MONITOR")]
+    pub monitor: Option<MonitorSpec>,
     /// Report the states at these times, comma-separated (dense output); with --out the
     /// trajectory holds them instead of the steps.
     #[arg(

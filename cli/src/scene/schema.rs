@@ -130,8 +130,12 @@ pub struct RunSection {
     pub t_end: Option<f64>,
     /// Adaptivity (default none).
     pub adapt: Option<AdaptMode>,
-    /// Target final error of the adaptive modes.
+    /// Target final error of `adapt = "step"` and `adapt = "degree"`.
     pub tol: Option<f64>,
+    /// The monitor g(q) of `adapt = "reparam"` (dt = g dτ), as
+    /// [`svi::model::reparametrized::MonitorSpec`] parses it, e.g. `"sundman:1.5"`
+    /// (default).
+    pub monitor: Option<String>,
     /// Fewest CGL points of `adapt = "degree"` (default 3).
     pub min_points: Option<usize>,
     /// Most CGL points of `adapt = "degree"` (default 24).
@@ -157,6 +161,9 @@ pub enum AdaptMode {
     Step,
     /// Points per step (svi, sc and lie-svi) to meet `tol`, at fixed step.
     Degree,
+    /// Fixed steps `h` in computational time τ, physical steps dt = g(q) dτ from a monitor
+    /// (structure-preserving; models on ℝᴺ without time dependence or force).
+    Reparam,
 }
 
 impl AdaptMode {
@@ -166,6 +173,7 @@ impl AdaptMode {
             AdaptMode::None => "none",
             AdaptMode::Step => "step",
             AdaptMode::Degree => "degree",
+            AdaptMode::Reparam => "reparam",
         }
     }
 }
@@ -176,6 +184,8 @@ impl From<AdaptMode> for Adapt {
             AdaptMode::None => Adapt::None,
             AdaptMode::Step => Adapt::Step,
             AdaptMode::Degree => Adapt::Degree,
+            // Fixed steps, in τ.
+            AdaptMode::Reparam => Adapt::None,
         }
     }
 }
