@@ -526,10 +526,6 @@ fn draw(
         })?;
     let values = table.numbers(index);
     let names = ensemble.axis_names();
-    let plot_error = |reason: String| SceneError::Write {
-        path: path.into(),
-        source: std::io::Error::other(reason),
-    };
     if ensemble.axes.len() == 1 {
         let points: Vec<(f64, f64)> = ensemble
             .members
@@ -554,7 +550,7 @@ fn draw(
                 points,
             }],
         };
-        write_svg(path, &[panel], 800, 500).map_err(|error| plot_error(error.to_string()))
+        Ok(write_svg(path, &[panel], 800, 500)?)
     } else {
         let size = |axis: &Axis| match axis.values {
             Values::Grid { count, .. } => count,

@@ -189,10 +189,7 @@ impl FieldModelVisitor for FieldRun<'_> {
             None => None,
         };
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
-            plot_space_time(csv, svg, model.name()).map_err(|e| SceneError::Write {
-                path: svg.clone(),
-                source: std::io::Error::other(e.reason),
-            })?;
+            plot_space_time(csv, svg, model.name())?;
         }
         let spread = |values: &[f64]| {
             values

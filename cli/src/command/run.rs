@@ -112,7 +112,7 @@ pub fn error_report(error: &SceneError) -> ErrorReport {
             return ErrorReport::of(error);
         }
         SceneError::Unhealthy { .. } => "health",
-        SceneError::Write { .. } => "output",
+        SceneError::Write { .. } | SceneError::Plot(_) => "output",
         _ => "invalid_input",
     };
     ErrorReport {
@@ -466,12 +466,7 @@ where
         None => None,
     };
     if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
-        plot_csv(csv, svg, &format!("{} ({})", scene.model, plan.method.name)).map_err(|e| {
-            SceneError::Write {
-                path: svg.clone(),
-                source: std::io::Error::other(e.reason),
-            }
-        })?;
+        plot_csv(csv, svg, &format!("{} ({})", scene.model, plan.method.name))?;
     }
 
     let solves = adapt != AdaptMode::None || output_times.is_some();

@@ -10,6 +10,7 @@ use svi_models::{LOCAL_MODEL_NAMES, MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel
 
 use crate::report::csv::Float;
 use crate::report::summary::Summary;
+use crate::report::plot::PlotError;
 use crate::scene::builtin::builtin_scene_names;
 use crate::scene::schema::UnknownDiagnostic;
 
@@ -169,6 +170,9 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// A plot (`--plot`, `svi ensemble --plot`) cannot be drawn or written.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
     /// A run that reached its horizon but failed its health check, under `svi run --strict`.
     #[error("the run failed its health check (--strict): {}", .warnings.join("; "))]
     Unhealthy {
@@ -266,6 +270,7 @@ impl SceneError {
             SceneError::Svi(error) => is_bad_input(error),
             SceneError::RunFailed { .. }
             | SceneError::Write { .. }
+            | SceneError::Plot(_)
             | SceneError::Unhealthy { .. } => false,
             _ => true,
         }
