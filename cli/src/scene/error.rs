@@ -9,8 +9,8 @@ use svi::method::registry::{self, SpaceKind};
 use svi_models::{LOCAL_MODEL_NAMES, MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel};
 
 use crate::report::csv::Float;
-use crate::report::summary::Summary;
 use crate::report::plot::PlotError;
+use crate::report::summary::Summary;
 use crate::scene::builtin::builtin_scene_names;
 use crate::scene::schema::UnknownDiagnostic;
 
