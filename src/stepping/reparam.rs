@@ -266,27 +266,33 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             )
             .map_err(|error| failure(error, &last, progress.statistics))?;
             let finish = clock.t + dt >= span.t_end;
-            if finish {
-                // Serve the output times inside the span from this step's polynomial first.
-                while served < span.output_times.len() && span.output_times[served] < span.t_end {
-                    let target = span.output_times[served];
-                    let point = self
-                        .output_point(
-                            &inner,
-                            &time,
-                            &workspace,
-                            monitor,
-                            &begin.state,
-                            clock.t,
-                            tau,
-                            size,
-                            dt,
-                            target,
-                        )
-                        .map_err(|error| failure(error, &last, progress.statistics))?;
-                    outputs.push(point);
-                    served += 1;
+            // The output times inside this step, from its polynomial (on the last step those
+            // before t_end, served before its Δτ is shortened to land on t_end).
+            while let Some(&target) = span.output_times.get(served).filter(|&&target| {
+                if finish {
+                    target < span.t_end
+                } else {
+                    target <= clock.t + dt
                 }
+            }) {
+                let point = self
+                    .output_point(
+                        &inner,
+                        &time,
+                        &workspace,
+                        monitor,
+                        &begin.state,
+                        clock.t,
+                        tau,
+                        size,
+                        dt,
+                        target,
+                    )
+                    .map_err(|error| failure(error, &last, progress.statistics))?;
+                outputs.push(point);
+                served += 1;
+            }
+            if finish {
                 // Newton on the last step's Δτ: t(Δτ) = t_end, dt/dΔτ = g at its end, kept
                 // inside the bracket (lo, hi) of sizes that fall short of and reach t_end.
                 let tolerance = 4.0 * f64::EPSILON * span.t_end.abs().max(1.0);
@@ -326,27 +332,6 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                     )
                     .map_err(|error| failure(error, &last, progress.statistics))?;
                     residual = clock.t + dt - span.t_end;
-                }
-            } else {
-                while served < span.output_times.len() && span.output_times[served] <= clock.t + dt
-                {
-                    let target = span.output_times[served];
-                    let point = self
-                        .output_point(
-                            &inner,
-                            &time,
-                            &workspace,
-                            monitor,
-                            &begin.state,
-                            clock.t,
-                            tau,
-                            size,
-                            dt,
-                            target,
-                        )
-                        .map_err(|error| failure(error, &last, progress.statistics))?;
-                    outputs.push(point);
-                    served += 1;
                 }
             }
             clock.add(dt);
