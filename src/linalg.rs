@@ -190,37 +190,49 @@ pub fn compensated_add(sum: &mut [f64], compensation: &mut [f64], increment: &[f
     }
 }
 
-/// The largest |s + (δ − c)| over the entries of a compensated addition
-/// ([`compensated_add`]) not yet made, and whether every such sum is finite: the check
-/// before a step's increment is added.
+/// The largest `size` and whether every `ok` holds, over `(size, ok) = entry(xᵢ)` where xᵢ
+/// holds the i-th entries of the M `slices` (of one length): the reductions of a read-only
+/// pass over runtime-sized vectors (a step's extent and checks).
 ///
-/// Runs over four independent lanes so that the maximum vectorises (a single running
-/// maximum is a floating-point reduction the compiler may not reorder).
-pub fn compensated_sum_extent(sum: &[f64], compensation: &[f64], increment: &[f64]) -> (f64, bool) {
+/// Runs over four independent lanes of fixed-size chunks, so that the maximum vectorises (a
+/// single running maximum is a floating-point reduction the compiler may not reorder) and no
+/// entry needs a bounds check. A NaN `size` is ignored by the maximum: let `ok` catch it.
+#[inline(always)]
+pub fn lane_extent<const M: usize>(
+    slices: [&[f64]; M],
+    entry: impl Fn([f64; M]) -> (f64, bool),
+) -> (f64, bool) {
     const LANES: usize = 4;
-    let (mut norm, mut finite) = ([0.0f64; LANES], [true; LANES]);
-    let mut lane = |l: usize, s: f64, c: f64, d: f64| {
-        let t = (s + (d - c)).abs();
-        finite[l] &= t <= f64::MAX;
-        norm[l] = if t > norm[l] { t } else { norm[l] };
-    };
-    let chunks = sum
-        .chunks_exact(LANES)
-        .zip(compensation.chunks_exact(LANES))
-        .zip(increment.chunks_exact(LANES));
-    for ((s, c), d) in chunks {
+    let n = slices.iter().map(|s| s.len()).min().unwrap_or(0);
+    let chunks = slices.map(|s| s[..n].as_chunks::<LANES>().0);
+    let (mut norm, mut all) = ([0.0f64; LANES], [true; LANES]);
+    for c in 0..n / LANES {
+        let block = chunks.map(|s| s[c]);
         for l in 0..LANES {
-            lane(l, s[l], c[l], d[l]);
+            let (size, ok) = entry(block.map(|b| b[l]));
+            all[l] &= ok;
+            norm[l] = if size > norm[l] { size } else { norm[l] };
         }
     }
-    let tail = sum.len() - sum.len() % LANES;
-    for i in tail..sum.len() {
-        lane(0, sum[i], compensation[i], increment[i]);
+    for i in n - n % LANES..n {
+        let (size, ok) = entry(slices.map(|s| s[i]));
+        all[0] &= ok;
+        norm[0] = if size > norm[0] { size } else { norm[0] };
     }
     (
         norm.iter().fold(0.0, |m: f64, x| m.max(*x)),
-        finite.iter().all(|f| *f),
+        all.iter().all(|a| *a),
     )
+}
+
+/// The largest |s + (δ − c)| over the entries of a compensated addition
+/// ([`compensated_add`]) not yet made, and whether every such sum is finite: the check
+/// before a step's increment is added.
+pub fn compensated_sum_extent(sum: &[f64], compensation: &[f64], increment: &[f64]) -> (f64, bool) {
+    lane_extent([sum, compensation, increment], |[s, c, d]| {
+        let t = (s + (d - c)).abs();
+        (t, t <= f64::MAX)
+    })
 }
 
 #[cfg(test)]

@@ -153,6 +153,21 @@ pub trait Method<const N: usize> {
         None
     }
 
+    /// The discrete energy E_d = −∂L_d/∂h of the last step taken (from `state` at `t` with
+    /// size `h`) for Galerkin methods, whose L_d is the action of the step polynomial by
+    /// quadrature (see [`crate::stepping::sem`]); `None` for other methods.
+    fn discrete_energy<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Option<f64> {
+        let _ = (model, workspace, t, h, state);
+        None
+    }
+
     /// Perform the step like [`Method::step`] and return its exact Jacobian with respect to
     /// `state` (implicit function theorem on the converged nonlinear system; derivatives of L
     /// by automatic differentiation).

@@ -191,6 +191,22 @@ pub trait Step<L: ?Sized, S: Space> {
         let _ = workspace;
         None
     }
+
+    /// The discrete energy E_d = −∂L_d/∂h of the last step taken (from `start` at `t` with
+    /// size `h`), for methods whose discrete Lagrangian L_d(q_k, q_{k+1}, h) is a Galerkin
+    /// action (the energy equation of the symplectic-energy-momentum integrators, Leok
+    /// §5.5); `None` for other methods.
+    fn discrete_energy(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        start: &S::State,
+    ) -> Option<f64> {
+        let _ = (model, workspace, t, h, start);
+        None
+    }
 }
 
 impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M {
@@ -386,5 +402,15 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
 
     fn node_offsets<'a>(&self, workspace: &'a mut M::Workspace) -> Option<&'a [f64]> {
         Method::node_offsets(self, workspace)
+    }
+    fn discrete_energy(
+        &self,
+        model: &L,
+        workspace: &mut M::Workspace,
+        t: f64,
+        h: f64,
+        start: &State<N>,
+    ) -> Option<f64> {
+        Method::discrete_energy(self, model, workspace, t, h, start)
     }
 }

@@ -109,7 +109,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// One trial step of an adaptive mode from `from` at `t` with size `h` (counted in
     /// `statistics.steps`), with the step's index and time attached to a failure.
     #[allow(clippy::too_many_arguments)]
-    fn trial(
+    pub(super) fn trial(
         &self,
         method: &M,
         workspace: &mut M::Workspace,

@@ -10,4 +10,5 @@ pub mod observer;
 pub mod reparam;
 pub mod rigid_observer;
 pub mod run;
+pub mod sem;
 pub mod solve;

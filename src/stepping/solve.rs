@@ -48,6 +48,9 @@ pub enum Adapt {
     Step,
     /// Fixed step `h`; the number of interpolation points per step chosen to meet `tol`.
     Degree,
+    /// Symplectic-energy-momentum steps: each step's size fixed by discrete energy
+    /// conservation, the first of size `h` ([`super::sem`]; SVI on autonomous models).
+    Sem,
 }
 
 impl FromStr for Adapt {
@@ -57,9 +60,10 @@ impl FromStr for Adapt {
             "none" => Ok(Adapt::None),
             "step" => Ok(Adapt::Step),
             "degree" => Ok(Adapt::Degree),
+            "sem" => Ok(Adapt::Sem),
             other => Err(Error::invalid(
                 "adapt",
-                format!("unknown mode {other:?}; use step, degree or none"),
+                format!("unknown mode {other:?}; use step, degree, sem or none"),
             )),
         }
     }
@@ -71,6 +75,7 @@ impl fmt::Display for Adapt {
             Adapt::None => "none",
             Adapt::Step => "step",
             Adapt::Degree => "degree",
+            Adapt::Sem => "sem",
         })
     }
 }
@@ -215,6 +220,16 @@ impl SolveOptions {
         }
     }
 
+    /// Symplectic-energy-momentum steps ([`Adapt::Sem`]), the first of size `h`.
+    pub fn energy_fitted(h: f64) -> Self {
+        SolveOptions {
+            adapt: Adapt::Sem,
+            h: Some(h),
+            tol: None,
+            ..SolveOptions::default()
+        }
+    }
+
     /// Degree adaptivity with step `h` to meet `tol`, between `min_points` and `max_points`.
     pub fn degree_adaptive(h: f64, tol: f64, min_points: usize, max_points: usize) -> Self {
         SolveOptions {
@@ -318,9 +333,11 @@ pub struct Adaptivity {
     pub max_step: f64,
     /// (points, accepted steps that used them), by increasing points.
     pub points: Vec<(usize, usize)>,
-    /// Steps of [`Adapt::Degree`] that missed the tolerance even with `max_points`, and
-    /// steps of [`Adapt::Step`] accepted at the resolution of the error estimate (a
-    /// tolerance per step below what the estimate can tell; see [`super::adapt`]).
+    /// Steps of [`Adapt::Degree`] that missed the tolerance even with `max_points`, steps
+    /// of [`Adapt::Step`] accepted at the resolution of the error estimate (a tolerance per
+    /// step below what the estimate can tell; see [`super::adapt`]), and steps of
+    /// [`Adapt::Sem`] whose energy equation had no root (the fallback that minimises the
+    /// energy error; see [`super::sem`]).
     pub unmet: usize,
 }
 
@@ -453,6 +470,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             Adapt::Degree => {
                 self.solve_degree_adaptive(span, options, &mut progress, &mut outputs, observer)
             }
+            Adapt::Sem => self.solve_sem(span, options, &mut progress, &mut outputs, observer),
         }?;
         // The end point as `try_run` completes it (from the velocity last observed).
         let run = self.finish(progress, stopped)?;

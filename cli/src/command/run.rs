@@ -403,9 +403,10 @@ where
         .filter(|_| output_times.is_none())
         .map(|stream| Every::new(every, stream));
     // The step count of step doubling and of steps in τ is not known ahead.
-    let progress = (plan.progress && !matches!(adapt, AdaptMode::Step | AdaptMode::Reparam))
-        .then(|| Progress::for_run(t0, plan.h, t_end, S::coordinate_count(&plan.initial)))
-        .flatten();
+    let progress = (plan.progress
+        && !matches!(adapt, AdaptMode::Step | AdaptMode::Reparam | AdaptMode::Sem))
+    .then(|| Progress::for_run(t0, plan.h, t_end, S::coordinate_count(&plan.initial)))
+    .flatten();
     let mut observers = (S::diagnostics(model, scene), trajectory, progress);
     let span = match output_times {
         Some(times) => Span::with_outputs(t0, t_end, times.clone()),

@@ -413,18 +413,37 @@ impl Scene {
         let adapt = run.adapt.unwrap_or_default();
         let not_applicable =
             |option, reason: String| Err(SceneError::NotApplicable { option, reason });
-        if matches!(adapt, AdaptMode::None | AdaptMode::Reparam) && run.tol.is_some() {
+        if matches!(adapt, AdaptMode::None | AdaptMode::Reparam | AdaptMode::Sem)
+            && run.tol.is_some()
+        {
             return not_applicable(
                 "--tol (run.tol)",
                 format!(
-                    "sets the tolerance of --adapt step and --adapt degree; this run has fixed \
-                     steps (adapt {}{})",
-                    adapt.name(),
-                    if adapt == AdaptMode::Reparam {
-                        ": choose --h, the step in τ"
+                    "sets the tolerance of --adapt step and --adapt degree; this run has {} \
+                     (adapt {}{})",
+                    if adapt == AdaptMode::Sem {
+                        "steps fixed by energy conservation"
                     } else {
-                        ""
+                        "fixed steps"
+                    },
+                    adapt.name(),
+                    match adapt {
+                        AdaptMode::Reparam => ": choose --h, the step in τ",
+                        AdaptMode::Sem => ": --h is the first step",
+                        _ => "",
                     }
+                ),
+            );
+        }
+        if adapt == AdaptMode::Sem
+            && (self.space() != SpaceKind::Vector || self.is_local() || spec.name() != "svi")
+        {
+            return not_applicable(
+                "--adapt sem (run.adapt)",
+                format!(
+                    "fits the steps of svi on models on ℝᴺ of fixed dimension to discrete \
+                     energy conservation, not of {} on this model",
+                    spec.name()
                 ),
             );
         }

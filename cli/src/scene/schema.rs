@@ -164,6 +164,10 @@ pub enum AdaptMode {
     /// Fixed steps `h` in computational time τ, physical steps dt = g(q) dτ from a monitor
     /// (structure-preserving; models on ℝᴺ without time dependence or force).
     Reparam,
+    /// Symplectic-energy-momentum steps: each step's size fixed by discrete energy
+    /// conservation, the first of size `h` (svi on models on ℝᴺ without time dependence or
+    /// force).
+    Sem,
 }
 
 impl AdaptMode {
@@ -174,6 +178,7 @@ impl AdaptMode {
             AdaptMode::Step => "step",
             AdaptMode::Degree => "degree",
             AdaptMode::Reparam => "reparam",
+            AdaptMode::Sem => "sem",
         }
     }
 }
@@ -186,6 +191,7 @@ impl From<AdaptMode> for Adapt {
             AdaptMode::Degree => Adapt::Degree,
             // Fixed steps, in τ.
             AdaptMode::Reparam => Adapt::None,
+            AdaptMode::Sem => Adapt::Sem,
         }
     }
 }

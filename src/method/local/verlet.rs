@@ -9,6 +9,7 @@
 
 use crate::StormerVerlet;
 use crate::error::{Error, StepFailure};
+use crate::linalg::lane_extent;
 use crate::method::local::mass::MassInverse;
 use crate::method::local::{LocalMethod, cold_velocity, constant_mass};
 use crate::method::space::DynState;
@@ -207,29 +208,15 @@ fn kick_drift(
     end_q: &mut DVector<f64>,
 ) -> Option<f64> {
     let tolerance = check.unwrap_or(f64::INFINITY);
-    let (mut same, mut extent) = (true, 0.0f64);
-    // Loops over slices: nalgebra's element iterators do not vectorise.
-    let mut drift = |d: &mut f64, e: &mut f64, q: f64, v: f64| {
-        same &= (q - *e).abs() <= tolerance;
-        *d = h * v;
-        *e = q + *d;
-        let size = q.abs().max(e.abs());
-        extent = if size > extent { size } else { extent };
-    };
     let q = state.q.as_slice();
     match mass_inverse {
         MassInverse::Diagonal(inverse) => {
-            let columns = velocity
+            velocity
                 .as_mut_slice()
                 .iter_mut()
-                .zip(dq.as_mut_slice())
-                .zip(end_q.as_mut_slice())
-                .zip(q.iter().zip(state.y.as_slice()))
-                .zip(force.as_slice().iter().zip(inverse.as_slice()));
-            for ((((v, d), e), (q, p)), (f, m)) in columns {
-                *v = (p + dt * f) * m;
-                drift(d, e, *q, *v);
-            }
+                .zip(state.y.as_slice())
+                .zip(force.as_slice().iter().zip(inverse.as_slice()))
+                .for_each(|((v, p), (f, m))| *v = (p + dt * f) * m);
         }
         MassInverse::Coupled(_) => {
             for ((k, p), f) in half
@@ -241,16 +228,23 @@ fn kick_drift(
                 *k = p + dt * f;
             }
             mass_inverse.apply_into(half, velocity);
-            let columns = dq
-                .as_mut_slice()
-                .iter_mut()
-                .zip(end_q.as_mut_slice())
-                .zip(q.iter().zip(velocity.as_slice()));
-            for ((d, e), (q, v)) in columns {
-                drift(d, e, *q, *v);
-            }
         }
     }
+    // The check reads q_k against the end of the last step before the drift overwrites it.
+    let (_, same) = lane_extent([q, end_q.as_slice()], |[q, e]| {
+        (0.0, (q - e).abs() <= tolerance)
+    });
+    for (((d, e), q), v) in dq
+        .as_mut_slice()
+        .iter_mut()
+        .zip(end_q.as_mut_slice())
+        .zip(q)
+        .zip(velocity.as_slice())
+    {
+        *d = h * v;
+        *e = q + *d;
+    }
+    let (extent, _) = lane_extent([q, end_q.as_slice()], |[q, e]| (q.abs().max(e.abs()), true));
     // NaN entries fail the check: a NaN state is never "where the last step ended".
     (check.is_none() || same).then_some(extent)
 }

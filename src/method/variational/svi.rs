@@ -948,6 +948,39 @@ impl<const N: usize> Method<N> for Svi {
         workspace.start.last_offsets()
     }
 
+    /// E_d = −∂L_d/∂h = Σ_μ (w_μ/2) E(q(c'_μ h), q̇(c'_μ h)) with E = p·q̇ − L: the Gauss
+    /// average of the energy along the step polynomial. (With the nodes held fixed,
+    /// ∂/∂h [h L(q_μ, (1/h) Σ_ν q^ν l̇_ν(τ_μ))] = L_μ − p_μ·q̇_μ; the interior nodes are
+    /// stationary points of L_d, so holding them fixed changes nothing.)
+    fn discrete_energy<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut SviWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Option<f64> {
+        // The energy of a time-dependent or forced model is not conserved.
+        if L::TIME_DEPENDENT || L::FORCED {
+            return None;
+        }
+        workspace.settle();
+        if workspace.tables.h != h {
+            return None;
+        }
+        workspace
+            .offsets
+            .copy_from_slice(workspace.start.last_offsets()?);
+        let tables = &workspace.tables;
+        let energy = (0..tables.nodes.len())
+            .map(|mu| {
+                let (q, v) = tables.point(mu, &state.q, &workspace.offsets);
+                0.5 * tables.reference_weights[mu] * model.energy(tables.time(t, mu), &q, &v)
+            })
+            .sum();
+        Some(energy)
+    }
+
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
