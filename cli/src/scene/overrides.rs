@@ -58,8 +58,9 @@ pub struct Overrides {
     /// orthogonality errors); their summary fields are null.
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub diagnostics: Option<Vec<Diagnostic>>,
-    /// Adaptivity: none (fixed step), step (step doubling), degree (points per step) or
-    /// reparam (fixed steps --h in computational time τ, dt = g(q) dτ; see --monitor).
+    /// Adaptivity: none (fixed step), step (step doubling), degree (points per step),
+    /// reparam (fixed steps --h in computational time τ, dt = g(q) dτ; see --monitor) or sem
+    /// (svi's steps fixed by discrete energy conservation, the first of size --h).
     #[arg(long, value_enum)]
     pub adapt: Option<AdaptMode>,
     /// Target final error of --adapt step and --adapt degree [default: 1e-8]; an error
