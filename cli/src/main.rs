@@ -11,6 +11,7 @@ use svi_cli::command::stability::StabilityArgs;
 use svi_cli::command::stress::StressArgs;
 use svi_cli::scene::error::is_bad_input;
 use svi_cli::scene::field::FieldScene;
+use svi_cli::scene::spectral::SpectralScene;
 use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
@@ -82,11 +83,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => {
             let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-            match FieldScene::load(name) {
-                Some(scene) => {
-                    command::field::execute(name, scene, &args.overrides, args.json, args.strict)
-                }
-                None => command::run::execute(name, &args.overrides, args.json, args.strict),
+            if let Some(scene) = FieldScene::load(name) {
+                command::field::execute(name, scene, &args.overrides, args.json, args.strict)
+            } else if let Some(scene) = SpectralScene::load(name) {
+                command::spectral::execute(name, scene, &args.overrides, args.json, args.strict)
+            } else {
+                command::run::execute(name, &args.overrides, args.json, args.strict)
             }
         }
         Command::List => {

@@ -183,6 +183,8 @@ pub struct Pseudospectral<F> {
     kinetic: f64,
     /// ω_k per FFT slot.
     frequencies: Vec<f64>,
+    /// e^{−iω_k h} per FFT slot (the exact linear step of Strang; empty otherwise).
+    propagator: Vec<Complex64>,
     gauss: Option<GaussTableau>,
 }
 
@@ -379,9 +381,18 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                 kinetic / (2.0 * symplectic) * k * k
             })
             .collect();
-        let gauss = match options.scheme {
-            TimeScheme::Galerkin { degree } => Some(GaussTableau::new(degree, h, &frequencies)?),
-            TimeScheme::Strang => None,
+        let (gauss, propagator) = match options.scheme {
+            TimeScheme::Galerkin { degree } => (
+                Some(GaussTableau::new(degree, h, &frequencies)?),
+                Vec::new(),
+            ),
+            TimeScheme::Strang => (
+                None,
+                frequencies
+                    .iter()
+                    .map(|omega| Complex64::from_polar(1.0, -omega * h))
+                    .collect(),
+            ),
         };
         Ok(Pseudospectral {
             density,
@@ -391,6 +402,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
             symplectic,
             kinetic,
             frequencies,
+            propagator,
             gauss,
         })
     }
@@ -411,7 +423,8 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
     }
 
     /// ∂ℒ/∂u and ∂ℒ/∂u_x at (x, t, u, u_t = 0, u_x) as complex numbers (real part: the a
-    /// component), and ℒ: four `Dual64` sweeps.
+    /// component), and ℒ: four `Dual64` sweeps, or two (∂ℒ/∂u only, ∂ℒ/∂u_x returned as 0)
+    /// when `with_slope` is false.
     #[inline]
     fn local_gradient(
         &self,
@@ -419,12 +432,14 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
         t: f64,
         u: Complex64,
         u_x: Complex64,
+        with_slope: bool,
     ) -> (Complex64, Complex64, f64) {
         let base = [u.re, u.im, u_x.re, u_x.im];
         let mut derivative = [0.0; 4];
         let mut value = 0.0;
         let zero = SVector::<Dual64, 2>::zeros();
-        for (direction, slot) in derivative.iter_mut().enumerate() {
+        let directions = if with_slope { 4 } else { 2 };
+        for (direction, slot) in derivative.iter_mut().enumerate().take(directions) {
             let mut lifted = base.map(Dual64::from_re);
             lifted[direction].eps = 1.0;
             let result = self.density.density(
@@ -457,7 +472,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
         let mut density_sum = 0.0;
         for j in 0..psi.len() {
             let x = self.fourier.x(j);
-            let (g_u, g_x, value) = self.local_gradient(x, t, psi[j], derivative[j]);
+            let (g_u, g_x, value) = self.local_gradient(x, t, psi[j], derivative[j], true);
             out[j] = g_u;
             derivative[j] = g_x;
             density_sum += value;
@@ -501,8 +516,8 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                 ));
             }
             if self.options.scheme == TimeScheme::Strang {
-                let (g_u, g_x, _) = self.local_gradient(x, t0, u, u_x);
-                let (g_u0, _, _) = self.local_gradient(x, t0, u, Complex64::default());
+                let (g_u, g_x, _) = self.local_gradient(x, t0, u, u_x, true);
+                let (g_u0, _, _) = self.local_gradient(x, t0, u, Complex64::default(), false);
                 let rotation = (u.conj() * g_u0).im.abs();
                 if (g_x + u_x * self.kinetic).norm() > tolerance
                     || (g_u - g_u0).norm() > tolerance
@@ -769,7 +784,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                 continue;
             }
             let (g_u, _, _) =
-                self.local_gradient(self.fourier.x(j), t, *value, Complex64::default());
+                self.local_gradient(self.fourier.x(j), t, *value, Complex64::default(), false);
             // f_loc = (i/2c) G_u = iγψ: γ = Re(ψ̄ G_u)/(2c|ψ|²).
             let gamma = (value.conj() * g_u).re * scale / squared;
             *value *= Complex64::from_polar(1.0, gamma * tau);
@@ -782,8 +797,8 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
         next.copy_from_slice(current);
         self.rotate(t, 0.5 * h, next);
         self.fourier.forward_in_place(next);
-        for (value, omega) in next.iter_mut().zip(&self.frequencies) {
-            *value *= Complex64::from_polar(1.0, -omega * h);
+        for (value, phase) in next.iter_mut().zip(&self.propagator) {
+            *value *= phase;
         }
         self.fourier.inverse_in_place(next);
         self.rotate(t + h, 0.5 * h, next);

@@ -8,5 +8,6 @@ pub mod peers;
 pub mod run;
 pub mod scale;
 pub mod space;
+pub mod spectral;
 pub mod stability;
 pub mod stress;
