@@ -1,6 +1,7 @@
 //! What `svi` does: each subcommand's work, called by the binary's dispatch.
 
 pub mod bench;
+pub mod bench_spectral;
 pub mod ensemble;
 pub mod field;
 pub mod list;

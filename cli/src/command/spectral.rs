@@ -11,7 +11,7 @@
 use std::time::Instant;
 
 use svi::field::fourier::Complex64;
-use svi::field::pseudospectral::{Pseudospectral, PseudospectralOptions};
+use svi::field::pseudospectral::{Pseudospectral, PseudospectralOptions, TimeScheme};
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
 use crate::command::field::{MAX_LEVELS, RunSummary, print_outcome};
@@ -96,25 +96,8 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             });
         }
         let steps = steps as usize;
-        let mut options = PseudospectralOptions::default();
-        options.scheme = scheme;
-        let mut integrator = Pseudospectral::new(
-            model.clone(),
-            model.domain(),
-            model.boundary(),
-            points,
-            h,
-            options,
-        )?;
-        let xs: Vec<f64> = (0..points).map(|j| integrator.fourier().x(j)).collect();
+        let (mut integrator, xs, initial) = prepare(&model, scheme, points, h)?;
         let dx = integrator.fourier().dx();
-        let initial: Vec<Complex64> = xs
-            .iter()
-            .map(|&x| {
-                let u = model.initial_field(x).0;
-                Complex64::new(u[0], u[1])
-            })
-            .collect();
 
         let every = scene.output.every.unwrap_or(1);
         let mut csv = match &scene.output.trajectory {
@@ -131,11 +114,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
         let (mut error_max, mut error_final) = (0.0f64, 0.0f64);
         let start = Instant::now();
         let run = integrator.run(0.0, &initial, steps, |level, t, psi| {
-            error_final = 0.0;
-            for (x, value) in xs.iter().zip(psi) {
-                let exact = model.exact_field(*x, t);
-                error_final = error_final.max((value - Complex64::new(exact[0], exact[1])).norm());
-            }
+            error_final = error_against_exact(&model, &xs, t, psi);
             error_max = error_max.max(error_final);
             let Some((_, stream)) = csv.as_mut() else {
                 return;
@@ -198,4 +177,49 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             error: None,
         })
     }
+}
+
+/// The integrator of `model` with `scheme` on `points` Fourier modes and step `h`, the nodes,
+/// and the initial field at the nodes.
+pub fn prepare<M: SpectralZooModel>(
+    model: &M,
+    scheme: TimeScheme,
+    points: usize,
+    h: f64,
+) -> Result<(Pseudospectral<M>, Vec<f64>, Vec<Complex64>), SceneError> {
+    let mut options = PseudospectralOptions::default();
+    options.scheme = scheme;
+    let integrator = Pseudospectral::new(
+        model.clone(),
+        model.domain(),
+        model.boundary(),
+        points,
+        h,
+        options,
+    )?;
+    let xs: Vec<f64> = (0..points).map(|j| integrator.fourier().x(j)).collect();
+    let initial = xs
+        .iter()
+        .map(|&x| {
+            let u = model.initial_field(x).0;
+            Complex64::new(u[0], u[1])
+        })
+        .collect();
+    Ok((integrator, xs, initial))
+}
+
+/// max_j |ψ_j − ψ_exact(x_j, t)|.
+pub fn error_against_exact<M: SpectralZooModel>(
+    model: &M,
+    xs: &[f64],
+    t: f64,
+    psi: &[Complex64],
+) -> f64 {
+    xs.iter()
+        .zip(psi)
+        .map(|(&x, value)| {
+            let exact = model.exact_field(x, t);
+            (value - Complex64::new(exact[0], exact[1])).norm()
+        })
+        .fold(0.0, f64::max)
 }
