@@ -165,10 +165,10 @@ impl SpectralModelVisitor for Sweep<'_> {
         }
         let mut records = Vec::new();
         for &scheme in &self.schemes {
-            // The Galerkin iteration needs h·3ν < 2 (ν ≈ η² for the soliton): start at h ≈ ¼.
+            // The Galerkin iteration needs h·3ν < 2 (ν ≈ η² for the soliton): start at h = ½.
             let first = match scheme {
                 TimeScheme::Strang => (t_end * 8.0).ceil() as usize,
-                TimeScheme::Galerkin { .. } => (t_end * 4.0).ceil() as usize,
+                TimeScheme::Galerkin { .. } => (t_end * 2.0).ceil() as usize,
             };
             let ladder: Vec<usize> = if self.steps.is_empty() {
                 (0..)

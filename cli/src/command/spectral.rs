@@ -150,7 +150,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             None => None,
         };
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
-            plot_space_time(csv, svg, &format!("|ψ| of {}", model.name()))?;
+            plot_space_time(csv, svg, model.name())?;
         }
         Ok(SpectralSummary {
             model: model.name().into(),
