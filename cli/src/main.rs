@@ -95,7 +95,14 @@ fn main() -> ExitCode {
             command::list::print();
             Ok(())
         }
-        Command::Bench(args) => command::bench::execute_args(&args),
+        Command::Bench(args) => match args
+            .scene
+            .as_deref()
+            .map(|name| (name, SpectralScene::load(name)))
+        {
+            Some((name, Some(scene))) => command::bench_spectral::execute(name, scene, &args),
+            _ => command::bench::execute_args(&args),
+        },
         Command::Stability(args) => command::stability::execute_args(&args),
         Command::Stress(args) => command::stress::execute_args(&args),
         Command::Ensemble(args) => command::ensemble::execute_args(&args),

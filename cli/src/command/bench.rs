@@ -32,7 +32,6 @@ use crate::scene::limits::{
     self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS, MIN_PEER_TOLERANCE,
 };
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
-use crate::scene::spectral::SpectralScene;
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
 use nalgebra::SVector;
@@ -1078,13 +1077,6 @@ pub fn plot(
 /// `svi bench` with the arguments `args`: [`execute`] on their scene, overrides, options and
 /// output directory.
 pub fn execute_args(args: &BenchArgs) -> anyhow::Result<()> {
-    if let Some((name, scene)) = args
-        .scene
-        .as_deref()
-        .and_then(|name| SpectralScene::load(name).map(|scene| (name, scene)))
-    {
-        return crate::command::bench_spectral::execute(name, scene?, args);
-    }
     let (overrides, options) = args.options()?;
     execute(
         args.scene.as_deref().unwrap_or(DEFAULT_SCENE),

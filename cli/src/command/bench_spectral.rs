@@ -63,8 +63,12 @@ pub struct SpectralRecord {
 
 /// `svi bench` on the pseudospectral scene `scene` (loaded as `name`): sweep, write
 /// `<scene>.csv` and `<scene>.svg` into `--out-dir`, print the CSV and the closing note.
-pub fn execute(name: &str, scene: SpectralScene, args: &BenchArgs) -> anyhow::Result<()> {
-    let mut scene = scene;
+pub fn execute(
+    name: &str,
+    scene: Result<SpectralScene, SceneError>,
+    args: &BenchArgs,
+) -> anyhow::Result<()> {
+    let mut scene = scene?;
     scene.apply(&Overrides {
         parameters: args.parameters.clone(),
         t_end: args.t_end,
