@@ -73,7 +73,7 @@
 //!
 //! # Pseudospectral integrators (§5.8)
 //! A complex field ψ = a + ib on a periodic domain with a density first order in time,
-//! ℒ = c(b a_t − a b_t) − h(x, t, u, u_x) (Schrödinger, cubic NLS): a discrete Fourier series
+//! ℒ = c(b a_t − a b_t) − W(x, t, u, u_x) (Schrödinger, cubic NLS): a discrete Fourier series
 //! in space ([`fourier`]) and a Galerkin polynomial in time, or the Strang split-step Fourier
 //! method for comparison ([`pseudospectral`]).
 

@@ -7,11 +7,11 @@
 //! # The density and the semi-discrete Lagrangian (§5.8.1)
 //! The density is a [`LagrangianDensity<2>`] of u = (a, b), first order in time:
 //!
-//! ℒ = c (b a_t − a b_t) − h(x, t, u, u_x).
+//! ℒ = c (b a_t − a b_t) − W(x, t, u, u_x).
 //!
 //! The Schrödinger density of §5.8.1, (iħ/2)(ψ_t ψ̄ − ψ ψ̄_t) − (ħ²/2m)|ψ_x|² − V|ψ|², is
 //! this with c = ħ (ψ_t ψ̄ − ψψ̄_t = 2i(a_t b − a b_t), times iħ/2: ħ(b a_t − a b_t)) and
-//! h = (ħ²/2m)(a_x² + b_x²) + V(a² + b²); the focusing cubic NLS adds −(κ/2)(a² + b²)² to h.
+//! W = (ħ²/2m)(a_x² + b_x²) + V(a² + b²); the focusing cubic NLS adds −(κ/2)(a² + b²)² to W.
 //! The integrator reads c off ∂ℒ/∂u_t (it checks ∂ℒ/∂u_t = c(b, −a) on the initial field) and
 //! the kinetic coefficient α = −∂²ℒ/∂a_x² (for the preconditioner and the Strang split).
 //!
@@ -80,7 +80,7 @@
 //! ψ_{l+1} = ψ_l + Σ_j d_j Z_j with dᵀ = bᵀA⁻¹ (no further evaluation of f).
 //!
 //! # Strang split-step Fourier (the comparison)
-//! For a density h = (α/2)|u_x|² + P(x, t, |u|²) (checked on the initial field), the local
+//! For W = (α/2)|u_x|² + P(x, t, |u|²) (checked on the initial field), the local
 //! part of f, (i/2c)G_u with u_x = 0, is a phase rotation iγψ with γ = Im(ψ̄ f)/|ψ|² real and
 //! |ψ| constant along it: exactly solvable. One step is a half step of the rotation, the
 //! exact linear step ψ̂_k ↦ e^{−iω_k h} ψ̂_k, and another half rotation: 2 FFTs per step,
@@ -177,7 +177,7 @@ pub struct Pseudospectral<F> {
     fourier: Fourier,
     h: f64,
     options: PseudospectralOptions,
-    /// c of ℒ = c(b a_t − a b_t) − h.
+    /// c of ℒ = c(b a_t − a b_t) − W.
     symplectic: f64,
     /// α = −∂²ℒ/∂a_x².
     kinetic: f64,
@@ -328,7 +328,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
     /// [`Error::InvalidParameter`] named `boundary` (not periodic), `modes` (odd, or out of
     /// range: [`Fourier::new`]), `h` (not finite and positive), `degree` (0 or above
     /// [`MAX_DEGREE`]), `max_iterations` (0), `tolerance` (not finite and positive) or
-    /// `density` (not of the form c(b a_t − a b_t) − h with c ≠ 0 and a finite kinetic
+    /// `density` (not of the form c(b a_t − a b_t) − W with c ≠ 0 and a finite kinetic
     /// coefficient).
     pub fn new(
         density: F,
@@ -370,7 +370,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
             return Err(Error::invalid(
                 "density",
                 format!(
-                    "not of the Schrödinger form c(b a_t − a b_t) − h(x, t, u, u_x) with c ≠ 0 \
+                    "not of the Schrödinger form c(b a_t − a b_t) − W(x, t, u, u_x) with c ≠ 0 \
                      (c = {symplectic:?}, α = {kinetic:?})"
                 ),
             ));
@@ -511,7 +511,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                     "density",
                     format!(
                         "∂ℒ/∂u_t ≠ c(b, −a) at x = {x}: not first order in time as \
-                         c(b a_t − a b_t) − h(x, t, u, u_x)"
+                         c(b a_t − a b_t) − W(x, t, u, u_x)"
                     ),
                 ));
             }
@@ -526,7 +526,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                     return Err(Error::invalid(
                         "method",
                         format!(
-                            "Strang splitting needs h = (α/2)|u_x|² + P(x, t, |u|²); the density \
+                            "Strang splitting needs W = (α/2)|u_x|² + P(x, t, |u|²); the density \
                              breaks it at x = {x}"
                         ),
                     ));
