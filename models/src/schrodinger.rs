@@ -9,8 +9,8 @@
 //!
 //! - [`SchrodingerPacket`]: κ = 0, the free particle, a Gaussian packet of width σ and mean
 //!   wavenumber k₀ on [−π, π]; the exact solution is the periodised free Gaussian
-//!   Σ_n G(x + 2πn, t), G = (σ²/(σ² + it))^{1/2} exp(−(x − x₀ − k₀t)²/(2(σ² + it))
-//!   + ik₀(x − x₀) − ik₀²t/2), summed over every image within nine widths of the point
+//!   Σ_n G(x + 2πn, t), G = (σ²/(σ² + it))^{1/2} exp(−(x − x₀ − k₀t)²/(2(σ² + it)) +
+//!   ik₀(x − x₀) − ik₀²t/2), summed over every image within nine widths of the point
 //!   (exact to round-off at every t).
 //! - [`NlsSoliton`]: κ = 1, the focusing cubic NLS soliton
 //!   ψ = η sech(η(x − x₀ − ct)) exp(i(c(x − x₀) + (η² − c²)t/2)) on [−40, 40]; at the ends of

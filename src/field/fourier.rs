@@ -72,7 +72,7 @@ impl Fourier {
     /// [`Error::InvalidParameter`] `modes` if the count is odd, below [`MIN_MODES`] or above
     /// [`MAX_MODES`].
     pub fn new(domain: Domain, modes: usize) -> Result<Self, Error> {
-        if !(MIN_MODES..=MAX_MODES).contains(&modes) || modes % 2 != 0 {
+        if !(MIN_MODES..=MAX_MODES).contains(&modes) || !modes.is_multiple_of(2) {
             return Err(Error::invalid(
                 "modes",
                 format!(

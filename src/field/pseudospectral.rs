@@ -696,8 +696,9 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
         let mut result = Err(0.0);
         for iteration in 1..=self.options.max_iterations {
             for m in 0..s {
-                for n in 0..modes {
-                    work.stage[n] = current[n] + work.z[m * modes + n];
+                let stage_z = &work.z[m * modes..(m + 1) * modes];
+                for ((stage, value), z) in work.stage.iter_mut().zip(current).zip(stage_z) {
+                    *stage = value + z;
                 }
                 let rates = &mut work.rates[m * modes..(m + 1) * modes];
                 self.rate(
@@ -752,8 +753,8 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
         }
         let outcome = match result {
             Ok(iterations) => {
-                for n in 0..modes {
-                    work.next[n] = current[n]
+                for (n, (next, value)) in work.next.iter_mut().zip(current).enumerate() {
+                    *next = value
                         + (0..s)
                             .map(|j| work.z[j * modes + n] * gauss.d[j])
                             .sum::<Complex64>();

@@ -21,7 +21,7 @@ use svi::field::pseudospectral::TimeScheme;
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
 use crate::command::bench::{BenchArgs, DEFAULT_MAX_RUN, DEFAULT_METHODS};
-use crate::command::spectral::{error_against_exact, prepare};
+use crate::command::spectral::{Prepared, error_against_exact, prepare};
 use crate::report::plot::{Panel, Series, write_svg};
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
@@ -215,12 +215,16 @@ impl Sweep<'_> {
         let mut times = Vec::with_capacity(self.batches);
         let mut outcome = None;
         for _ in 0..self.batches {
-            let (mut integrator, xs, initial) = prepare(model, scheme, points, h)?;
+            let Prepared {
+                mut integrator,
+                nodes,
+                initial,
+            } = prepare(model, scheme, points, h)?;
             let start = Instant::now();
             let run = integrator.run(0.0, &initial, steps, |_, _, _| {})?;
             let seconds = start.elapsed().as_secs_f64();
             times.push(seconds);
-            let error = error_against_exact(model, &xs, t_end, &run.last);
+            let error = error_against_exact(model, &nodes, t_end, &run.last);
             outcome = Some((error, run.ffts, run.norm_error_max));
             if seconds > SINGLE_RUN_SECONDS {
                 break;

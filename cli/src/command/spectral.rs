@@ -96,7 +96,11 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             });
         }
         let steps = steps as usize;
-        let (mut integrator, xs, initial) = prepare(&model, scheme, points, h)?;
+        let Prepared {
+            mut integrator,
+            nodes: xs,
+            initial,
+        } = prepare(&model, scheme, points, h)?;
         let dx = integrator.fourier().dx();
 
         let every = scene.output.every.unwrap_or(1);
@@ -179,6 +183,16 @@ impl SpectralModelVisitor for SpectralRun<'_> {
     }
 }
 
+/// A run ready to start: the integrator, its nodes and the initial field there.
+pub struct Prepared<M> {
+    /// The integrator.
+    pub integrator: Pseudospectral<M>,
+    /// The nodes x_j.
+    pub nodes: Vec<f64>,
+    /// ψ(x_j, 0).
+    pub initial: Vec<Complex64>,
+}
+
 /// The integrator of `model` with `scheme` on `points` Fourier modes and step `h`, the nodes,
 /// and the initial field at the nodes.
 pub fn prepare<M: SpectralZooModel>(
@@ -186,7 +200,7 @@ pub fn prepare<M: SpectralZooModel>(
     scheme: TimeScheme,
     points: usize,
     h: f64,
-) -> Result<(Pseudospectral<M>, Vec<f64>, Vec<Complex64>), SceneError> {
+) -> Result<Prepared<M>, SceneError> {
     let mut options = PseudospectralOptions::default();
     options.scheme = scheme;
     let integrator = Pseudospectral::new(
@@ -205,7 +219,11 @@ pub fn prepare<M: SpectralZooModel>(
             Complex64::new(u[0], u[1])
         })
         .collect();
-    Ok((integrator, xs, initial))
+    Ok(Prepared {
+        integrator,
+        nodes: xs,
+        initial,
+    })
 }
 
 /// max_j |ψ_j − ψ_exact(x_j, t)|.
