@@ -279,8 +279,9 @@ mod tests {
         let packet = SchrodingerPacket::default();
         let soliton = NlsSoliton::default();
         for (x, t) in [(-1.0, 0.3), (0.4, 0.9), (2.5, 0.1)] {
+            // Nested central differences: O(δ²|ψ''''|), |ψ''''| ≈ k₀⁴ ≈ 10³ for the packet.
             assert!(
-                residual(&packet, x, t) < 1e-5,
+                residual(&packet, x, t) < 1e-4,
                 "{}",
                 residual(&packet, x, t)
             );
