@@ -11,6 +11,7 @@ use svi_cli::command::stability::StabilityArgs;
 use svi_cli::command::stress::StressArgs;
 use svi_cli::scene::error::is_bad_input;
 use svi_cli::scene::field::FieldScene;
+use svi_cli::scene::spectral::SpectralScene;
 use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
@@ -82,18 +83,26 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => {
             let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-            match FieldScene::load(name) {
-                Some(scene) => {
-                    command::field::execute(name, scene, &args.overrides, args.json, args.strict)
-                }
-                None => command::run::execute(name, &args.overrides, args.json, args.strict),
+            if let Some(scene) = FieldScene::load(name) {
+                command::field::execute(name, scene, &args.overrides, args.json, args.strict)
+            } else if let Some(scene) = SpectralScene::load(name) {
+                command::spectral::execute(name, scene, &args.overrides, args.json, args.strict)
+            } else {
+                command::run::execute(name, &args.overrides, args.json, args.strict)
             }
         }
         Command::List => {
             command::list::print();
             Ok(())
         }
-        Command::Bench(args) => command::bench::execute_args(&args),
+        Command::Bench(args) => match args
+            .scene
+            .as_deref()
+            .map(|name| (name, SpectralScene::load(name)))
+        {
+            Some((name, Some(scene))) => command::bench_spectral::execute(name, scene, &args),
+            _ => command::bench::execute_args(&args),
+        },
         Command::Stability(args) => command::stability::execute_args(&args),
         Command::Stress(args) => command::stress::execute_args(&args),
         Command::Ensemble(args) => command::ensemble::execute_args(&args),

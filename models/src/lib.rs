@@ -74,6 +74,17 @@
 //!
 //! They implement [`FieldZooModel`] and are handed to a [`FieldModelVisitor`] by
 //! [`visit_field_model`] (names: [`FIELD_MODEL_NAMES`]).
+//!
+//! Complex fields ψ = a + ib with a density first order in time (ħ = m = 1), integrated by the
+//! pseudospectral integrators of [`svi::field::pseudospectral`] ([`schrodinger`]):
+//!
+//! | name | model | equation | domain | exact solution |
+//! | --- | --- | --- | --- | --- |
+//! | `schrodinger-packet` | [`SchrodingerPacket`] | iψ_t + ½ψ_xx = 0 | [−π, π], periodic | periodised Gaussian |
+//! | `nls-soliton` | [`NlsSoliton`] | iψ_t + ½ψ_xx + ∣ψ∣²ψ = 0 | [−40, 40], periodic | soliton |
+//!
+//! They implement [`SpectralZooModel`] and are handed to a [`SpectralModelVisitor`] by
+//! [`visit_spectral_model`] (names: [`SPECTRAL_MODEL_NAMES`]).
 
 mod chain;
 mod elliptic;
@@ -89,6 +100,7 @@ pub mod kepler;
 pub mod oscillator;
 pub mod pendulum;
 pub mod relativistic_chain;
+pub mod schrodinger;
 pub mod sine_gordon_chain;
 pub mod spring_pendulum;
 pub mod toda;
@@ -107,6 +119,7 @@ pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use relativistic_chain::RelativisticChain;
+pub use schrodinger::{NlsSoliton, SchrodingerPacket};
 pub use sine_gordon_chain::SineGordonChain;
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
@@ -489,6 +502,55 @@ field_zoo!(
     "sine-gordon-breather" => SineGordonBreather,
     "phi4-kink" => Phi4Kink,
 );
+
+/// Everything a complex (Schrödinger-type) field model of the zoo implements (blanket impl):
+/// a density of u = (a, b) with its defaults and exact solution, integrated by
+/// [`svi::field::pseudospectral::Pseudospectral`].
+pub trait SpectralZooModel:
+    svi::model::density::LagrangianDensity<2>
+    + svi::model::density::FieldDefaults<2>
+    + svi::model::density::ExactField<2>
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
+{
+}
+
+impl<T> SpectralZooModel for T where
+    T: svi::model::density::LagrangianDensity<2>
+        + svi::model::density::FieldDefaults<2>
+        + svi::model::density::ExactField<2>
+        + Clone
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + 'static
+{
+}
+
+/// Receives a complex field model chosen by name at run time (see [`visit_spectral_model`]).
+pub trait SpectralModelVisitor {
+    /// What the visit produces.
+    type Output;
+
+    /// Called once with the model, as its concrete type (with its default parameters).
+    fn visit<M: SpectralZooModel>(self, model: M) -> Self::Output;
+}
+
+/// Names of the complex field models (each equals the model's `FieldDefaults::name`).
+pub const SPECTRAL_MODEL_NAMES: &[&str] = &["schrodinger-packet", "nls-soliton"];
+
+/// Build the named complex field model with its defaults and hand it to the visitor; `None`
+/// if `name` is not one of [`SPECTRAL_MODEL_NAMES`].
+pub fn visit_spectral_model<V: SpectralModelVisitor>(name: &str, visitor: V) -> Option<V::Output> {
+    match name {
+        "schrodinger-packet" => Some(visitor.visit(SchrodingerPacket::default())),
+        "nls-soliton" => Some(visitor.visit(NlsSoliton::default())),
+        _ => None,
+    }
+}
 
 #[cfg(test)]
 mod tests {

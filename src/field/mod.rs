@@ -70,5 +70,14 @@
 //! momentum that of −π·u_x; neither is conserved exactly, both stay within O(Δx² + Δt²) of
 //! their initial values with no drift (the scheme is multisymplectic).
 
+//!
+//! # Pseudospectral integrators (§5.8)
+//! A complex field ψ = a + ib on a periodic domain with a density first order in time,
+//! ℒ = c(b a_t − a b_t) − W(x, t, u, u_x) (Schrödinger, cubic NLS): a discrete Fourier series
+//! in space ([`fourier`]) and a Galerkin polynomial in time, or the Strang split-step Fourier
+//! method for comparison ([`pseudospectral`]).
+
+pub mod fourier;
 pub mod mesh;
 pub mod multisymplectic;
+pub mod pseudospectral;

@@ -18,9 +18,9 @@ use svi_models::{FieldModelVisitor, FieldZooModel, UnknownModel, visit_field_mod
 use crate::command::run::error_report;
 use crate::report::csv::{CsvStream, Float};
 use crate::report::field::FieldSummary;
-use crate::report::health::{self, Measured};
+use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_space_time;
-use crate::report::summary::{Parameters, Status, TrajectoryOutput};
+use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
 use crate::scene::error::SceneError;
 use crate::scene::field::{FieldScene, QuadratureName};
 use crate::scene::limits;
@@ -45,20 +45,54 @@ pub fn execute(
         ran = true;
         scene.run()
     });
+    print_outcome(name, result, ran, json, strict)
+}
+
+/// The summary of a run of a field-like scene, as [`print_outcome`] prints it.
+pub trait RunSummary: serde::Serialize + std::fmt::Display {
+    /// The health checks the run failed.
+    fn warnings(&self) -> &[Warning];
+    /// Mark the run failed with `report` (a failed health check under `--strict`).
+    fn fail(&mut self, report: ErrorReport);
+}
+
+impl RunSummary for FieldSummary {
+    fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+    fn fail(&mut self, report: ErrorReport) {
+        self.status = Status::Failed;
+        self.error = Some(report);
+    }
+}
+
+/// Print the outcome of a field-like run (`ran`: whether it started, after the scene was
+/// loaded and the flags applied) as text or JSON (also for failures, as `svi run` does for
+/// every scene), the warnings on stderr, and return the error, if any, for the exit status.
+pub fn print_outcome<S: RunSummary>(
+    name: &str,
+    result: Result<S, SceneError>,
+    ran: bool,
+    json: bool,
+    strict: bool,
+) -> anyhow::Result<()> {
     let (summary, error) = match result {
         Ok(mut summary) => {
-            let error = (strict && !summary.warnings.is_empty()).then(|| SceneError::Unhealthy {
-                warnings: summary.warnings.iter().map(|w| w.message.clone()).collect(),
+            let error = (strict && !summary.warnings().is_empty()).then(|| SceneError::Unhealthy {
+                warnings: summary
+                    .warnings()
+                    .iter()
+                    .map(|w| w.message.clone())
+                    .collect(),
             });
             if let Some(error) = &error {
-                summary.status = Status::Failed;
-                summary.error = Some(error_report(error));
+                summary.fail(error_report(error));
             }
             (Some(summary), error)
         }
         Err(error) => (None, Some(error)),
     };
-    for warning in summary.iter().flat_map(|summary| &summary.warnings) {
+    for warning in summary.iter().flat_map(|summary| summary.warnings()) {
         eprintln!("warning: {}", warning.message);
     }
     match (&summary, json) {

@@ -14,6 +14,7 @@ use crate::report::summary::Parameters;
 use crate::scene::Scene;
 use crate::scene::builtin::BUILTIN_SCENES;
 use crate::scene::field::FIELD_SCENES;
+use crate::scene::spectral::SPECTRAL_SCENES;
 
 /// A zoo model's name, dimension, coordinates, parameters and defaults (for `svi list`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -165,6 +166,14 @@ pub fn print() {
          integrator; the models of the same names, with their parameters):"
     );
     for (name, text) in FIELD_SCENES {
+        println!("  {name:<22}{}", description(text));
+    }
+    println!();
+    println!(
+        "Pseudospectral scenes, complex fields (svi run NAME --method midpoint|svi:P \
+         --param points=N):"
+    );
+    for (name, text) in SPECTRAL_SCENES {
         println!("  {name:<22}{}", description(text));
     }
 }

@@ -1,6 +1,7 @@
 //! What `svi` does: each subcommand's work, called by the binary's dispatch.
 
 pub mod bench;
+pub mod bench_spectral;
 pub mod ensemble;
 pub mod field;
 pub mod list;
@@ -8,5 +9,6 @@ pub mod peers;
 pub mod run;
 pub mod scale;
 pub mod space;
+pub mod spectral;
 pub mod stability;
 pub mod stress;

@@ -7,5 +7,6 @@ pub mod health;
 pub mod map;
 pub mod plot;
 pub mod progress;
+pub mod spectral;
 pub mod summary;
 pub mod table;

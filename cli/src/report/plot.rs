@@ -150,8 +150,9 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
 /// sampled down to them, so the SVG stays small).
 const SPACE_TIME_CELLS: (usize, usize) = (160, 120);
 
-/// Draw a field's space-time CSV `csv` (rows `t,x,u`, the nodes of one time level after
-/// another, as `svi run --out` writes a field scene) as an SVG picture at `svg`: u coloured
+/// Draw a field's space-time CSV `csv` (rows `t,x,u` or `t,x,u,…`, the nodes of one time level
+/// after another, as `svi run --out` writes a field scene; further columns are ignored, e.g.
+/// the real and imaginary parts after |ψ|) as an SVG picture at `svg`: u coloured
 /// over the (x, t) plane (blue lowest, white middle, red highest), titled `title`.
 pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
     let error = |reason: String| PlotError {
@@ -159,7 +160,7 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
         reason,
     };
     let (_, rows) = read_csv(csv, error)?;
-    if rows.iter().any(|row| row.len() != 3) {
+    if rows.iter().any(|row| row.len() < 3) {
         return Err(error(format!("'{}' is not a t,x,u table", csv.display())));
     }
     // The nodes of a level share its t: the level's width is the run of equal t's.

@@ -87,6 +87,7 @@ pub mod limits;
 pub mod overrides;
 pub mod rigid;
 pub mod schema;
+pub mod spectral;
 pub mod vector;
 
 pub use error::SceneError;
