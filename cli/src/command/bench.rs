@@ -22,7 +22,9 @@
 //! reparametrised in time ([`svi::Integrator::try_solve_reparametrized`]), swept like a
 //! fixed-step method over n steps in τ of Δτ = (t_end − t0)/n (its `h` column is Δτ, its
 //! `steps` the τ-steps taken); `METHOD@step` is step doubling ([`svi::solve()`]), swept over
-//! tolerances like the peers down to 1e-15.
+//! tolerances like the peers down to 1e-15; `METHOD@sem` takes symplectic-energy-momentum
+//! steps ([`svi::stepping::sem`]), swept over its first step (t_end − t0)/n like a fixed-step
+//! method (its `steps` count every trial step of the energy equation).
 
 use crate::command::peers::{FirstOrder, dop853, dopri5};
 use crate::report::csv;
@@ -62,13 +64,19 @@ pub enum BenchMethod {
     Reparam(MethodSpec, MonitorSpec),
     /// A library method with step doubling (`METHOD@step`).
     StepDoubling(MethodSpec),
+    /// A library method with symplectic-energy-momentum steps (`METHOD@sem`), swept over
+    /// its first step.
+    Sem(MethodSpec),
 }
 
 impl BenchMethod {
     /// Whether the method is swept over step counts (the library's fixed-step methods and
     /// their τ-steps), not tolerances.
     fn takes_steps(&self) -> bool {
-        matches!(self, BenchMethod::Library(_) | BenchMethod::Reparam(..))
+        matches!(
+            self,
+            BenchMethod::Library(_) | BenchMethod::Reparam(..) | BenchMethod::Sem(_)
+        )
     }
 }
 
@@ -80,6 +88,7 @@ impl fmt::Display for BenchMethod {
             BenchMethod::Dopri5 => write!(f, "dopri5"),
             BenchMethod::Reparam(spec, monitor) => write!(f, "{spec}@{monitor}"),
             BenchMethod::StepDoubling(spec) => write!(f, "{spec}@step"),
+            BenchMethod::Sem(spec) => write!(f, "{spec}@sem"),
         }
     }
 }
@@ -88,8 +97,8 @@ impl FromStr for BenchMethod {
     type Err = SceneError;
 
     /// `dop853`, `dopri5`, or a library method written `name`, `name:P` or `name:P/M`,
-    /// optionally followed by `@MONITOR` (reparametrised, e.g. `svi:9/8@sundman:1`) or
-    /// `@step` (step doubling).
+    /// optionally followed by `@MONITOR` (reparametrised, e.g. `svi:9/8@sundman:1`),
+    /// `@step` (step doubling) or `@sem` (symplectic-energy-momentum steps).
     fn from_str(text: &str) -> Result<Self, SceneError> {
         let text = text.trim();
         if let Some((method, mode)) = text.split_once('@') {
@@ -98,6 +107,7 @@ impl FromStr for BenchMethod {
             };
             return match mode.trim() {
                 "step" => Ok(BenchMethod::StepDoubling(spec)),
+                "sem" => Ok(BenchMethod::Sem(spec)),
                 monitor => Ok(BenchMethod::Reparam(spec, monitor.parse()?)),
             };
         }
@@ -137,7 +147,8 @@ pub struct BenchArgs {
             "Methods, comma-separated: the library's (for models on ℝᴺ), the library's with \
              an adaptive mode — METHOD@MONITOR reparametrised in time (fixed steps in τ, dt = \
              g(q) dτ, e.g. svi:9/8@sundman:1; see svi run --monitor), METHOD@step step \
-             doubling —, and the adaptive peers dop853 and dopri5 (ode_solvers' DOP853 and \
+             doubling, METHOD@sem steps fixed by discrete energy conservation (svi; swept \
+             over the first step) —, and the adaptive peers dop853 and dopri5 (ode_solvers' DOP853 and \
              Dopri5)."
         )
     )]
@@ -516,6 +527,9 @@ impl ModelVisitor for Bench<'_> {
                 BenchMethod::StepDoubling(method) => {
                     records.extend(method.visit_vector(sweep(Mode::StepDoubling))??);
                 }
+                BenchMethod::Sem(method) => {
+                    records.extend(method.visit_vector(sweep(Mode::Sem))??);
+                }
                 BenchMethod::Dop853 | BenchMethod::Dopri5 => {
                     sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
                 }
@@ -566,6 +580,8 @@ enum Mode {
     Reparam(MonitorSpec),
     /// Step doubling, swept over tolerances.
     StepDoubling,
+    /// Symplectic-energy-momentum steps, swept over the first step's size.
+    Sem,
 }
 
 /// Sweeps the visited library method in its mode.
@@ -618,6 +634,9 @@ where
         ),
         Mode::StepDoubling => {
             integrator.try_solve(&span, initial, &SolveOptions::step_adaptive(h), observer)
+        }
+        Mode::Sem => {
+            integrator.try_solve(&span, initial, &SolveOptions::energy_fitted(h), observer)
         }
     }?;
     Ok((solution.last.q, solution.statistics))
@@ -1147,7 +1166,12 @@ mod tests {
         }
         assert_eq!(parse_methods(DEFAULT_METHODS).unwrap().len(), 9);
         // The adaptive modes of a library method, and what is not one.
-        for text in ["svi:9/8@sundman:1", "svi:7/6@step", "verlet@sundman:1.5"] {
+        for text in [
+            "svi:9/8@sundman:1",
+            "svi:7/6@step",
+            "svi:2/1@sem",
+            "verlet@sundman:1.5",
+        ] {
             assert_eq!(text.parse::<BenchMethod>().unwrap().to_string(), text);
         }
         assert!(matches!(

@@ -294,11 +294,12 @@ fn dopri5_not_applicable() -> SceneError {
     }
 }
 
-/// Whether `method` is a library method in an adaptive mode (`METHOD@MONITOR`, `METHOD@step`).
+/// Whether `method` is a library method in an adaptive mode (`METHOD@MONITOR`,
+/// `METHOD@step`, `METHOD@sem`).
 fn is_adaptive_mode(method: &BenchMethod) -> bool {
     matches!(
         method,
-        BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_)
+        BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_) | BenchMethod::Sem(_)
     )
 }
 
@@ -461,7 +462,7 @@ impl ModelVisitor for CaseRunner<'_> {
                     drift: dop853_drift(&model, &setup),
                 },
                 BenchMethod::Dopri5 => return Err(dopri5_not_applicable()),
-                BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_) => {
+                BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_) | BenchMethod::Sem(_) => {
                     return Err(adaptive_mode_not_applicable(spec));
                 }
             };
