@@ -52,7 +52,11 @@
 //! ```
 //!
 //! the discrete Hamiltonian map (q_k, p_k) ↦ (q_{k+1}, p_{k+1}). The unknowns are solved for
-//! by Newton's method with the exact Jacobian from the Hessian blocks of L at the n·K points.
+//! by the simplified Newton method (Hairer & Wanner, *Solving ODEs II*, §IV.8): the Jacobian,
+//! from the Hessian blocks of L at the n·K points, is factorised at a cold start and whenever
+//! the contraction rate exceeds 0.4, and kept across steps otherwise; the residuals need only
+//! ∂L/∂q and ∂L/∂q̇. A warm step starts from the last step's curve continued over the next
+//! one (`Tables::extrapolate`).
 //! Since Σ_ν l_ν = 1 and the oscillatory g_b vanish, p_{k+1} − p_k = g_0 + g_s =
 //! (h/2) Σ Ω_jκ ∂L/∂q(x_j, ψ_κ), computed without cancellation.
 //!
