@@ -411,8 +411,8 @@ impl Tables {
             let row = &self.extrapolation[nu * (s + 1)..(nu + 1) * (s + 1)];
             // P(x_ν + 2) − q_{k+1}, with P relative to q_k.
             let mut value = -end - last_shift * row[s];
-            for mu in 1..=s {
-                value += block(z, mu - 1) * row[mu];
+            for (mu, &l) in row.iter().enumerate().skip(1) {
+                value += block(z, mu - 1) * l;
             }
             let mut power = 1.0;
             for e in 0..amplitudes {
