@@ -71,6 +71,13 @@ pub(crate) struct Newton {
     pub(crate) max_iterations: usize,
     /// Whether `lu` holds factors that [`Jacobian::Kept`] may reuse.
     factored: bool,
+    /// Relative size of a non-decreasing [`Jacobian::Kept`] increment that counts as
+    /// round-off.
+    noise: f64,
+    /// Contraction rate above which [`Jacobian::Kept`] refactorises.
+    refactor: f64,
+    /// Least size of the unknowns that the stopping rules measure increments against.
+    scale_floor: f64,
 }
 
 impl Newton {
@@ -80,7 +87,32 @@ impl Newton {
             residual: DVector::zeros(size),
             max_iterations,
             factored: false,
+            noise: FIXED_POINT_NOISE,
+            refactor: REFACTOR_CONTRACTION,
+            scale_floor: 0.0,
         }
+    }
+
+    /// Measure increments against at least `floor` (default 0: the unknowns' own size), for
+    /// unknowns that are offsets of larger quantities and so carry their round-off.
+    pub(crate) fn set_scale_floor(&mut self, floor: f64) {
+        self.scale_floor = floor;
+    }
+
+    /// Refactorise a [`Jacobian::Kept`] iteration only once its contraction rate exceeds
+    /// `contraction` (default [`REFACTOR_CONTRACTION`]): for systems whose Jacobian costs many
+    /// residuals.
+    pub(crate) fn with_refactor(mut self, contraction: f64) -> Self {
+        self.refactor = contraction;
+        self
+    }
+
+    /// Count a non-decreasing [`Jacobian::Kept`] increment below `noise` times the unknowns
+    /// as round-off (default `1e-13`), for ill-conditioned systems whose solution is known
+    /// only to that level.
+    pub(crate) fn with_noise(mut self, noise: f64) -> Self {
+        self.noise = noise;
+        self
     }
 
     /// Drop the kept factors: the next [`Jacobian::Kept`] iteration refactorises.
@@ -160,7 +192,7 @@ impl Newton {
             if !size.is_finite() {
                 return Err(StepFailure::NonFinite);
             }
-            let scale = z.amax();
+            let scale = z.amax().max(self.scale_floor);
             let converged = match jacobian {
                 Jacobian::Exact => {
                     size <= CONVERGED * scale || (size >= previous && size <= STALLED * scale)
@@ -169,7 +201,7 @@ impl Newton {
                 Jacobian::Kept => {
                     size <= 2.0 * f64::EPSILON * scale
                         || (previous.is_finite() && size * size <= f64::EPSILON * scale * previous)
-                        || (size >= previous && size <= FIXED_POINT_NOISE * scale)
+                        || (size >= previous && size <= self.noise * scale)
                 }
             };
             if converged || size == 0.0 {
@@ -178,7 +210,7 @@ impl Newton {
                     factorizations,
                 });
             }
-            if !refactor && size > REFACTOR_CONTRACTION * previous {
+            if !refactor && size > self.refactor * previous {
                 self.factored = false;
             }
             previous = size;

@@ -1,7 +1,10 @@
 //! Work–precision harness: run time and cost against error, method by method.
 //!
-//! [`work_precision`] sweeps each method's step (or tolerance) on a scene whose model has an
-//! exact solution, and records for every point the final position error at the horizon, the
+//! [`work_precision`] sweeps each method's step (or tolerance) on a scene, and records for
+//! every point the final position error at the horizon (against the model's exact solution,
+//! or for a model without one against a resolved reference run: SVI of order 12 at the
+//! model's default step h, checked against h/2; `--coordinate` measures one coordinate, e.g.
+//! the slow angle of the stiff spring pendulum), the
 //! largest energy and Noether-momentum errors (measured in a separate, untimed run with
 //! observers), the derivative evaluations, the nonlinear iterations and the wall time of a run
 //! that observes nothing (median over batches, each batch repeating the run for at least
@@ -136,7 +139,7 @@ pub fn parse_methods(text: &str) -> Result<Vec<BenchMethod>, SceneError> {
 /// `svi bench`'s arguments (parsed by the binary, and by tests as the binary does).
 #[derive(Debug, Clone, PartialEq, clap::Args)]
 pub struct BenchArgs {
-    /// Built-in scene or scene file; its model needs an exact solution [default: kepler].
+    /// Built-in scene or scene file [default: kepler].
     pub scene: Option<String>,
     /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), dop853, dopri5.
     #[arg(
@@ -234,6 +237,10 @@ pub struct BenchArgs {
         )
     )]
     pub tolerances: Vec<f64>,
+    /// Measure the final error in this one coordinate of the model (e.g. theta) instead of
+    /// the Euclidean position error.
+    #[arg(long, value_name = "NAME")]
+    pub coordinate: Option<String>,
     /// Directory for `<scene>.csv` and `<scene>.svg`.
     #[arg(long, default_value = "bench-out")]
     pub out_dir: std::path::PathBuf,
@@ -256,6 +263,7 @@ impl BenchArgs {
             min_batch: self.min_batch,
             steps: self.steps.clone(),
             tolerances: self.tolerances.clone(),
+            coordinate: self.coordinate.clone(),
             verbose: true,
         };
         Ok((overrides, options))
@@ -283,6 +291,9 @@ pub struct BenchOptions {
     pub steps: Vec<usize>,
     /// Tolerances at which to run the adaptive peers instead of sweeping them (empty: sweep).
     pub tolerances: Vec<f64>,
+    /// The coordinate (one of the model's coordinate names) the final error is measured in
+    /// (`None`: the Euclidean position error).
+    pub coordinate: Option<String>,
     /// Print one line per point to stderr.
     pub verbose: bool,
 }
@@ -297,6 +308,7 @@ impl Default for BenchOptions {
             min_batch: 0.2,
             steps: Vec::new(),
             tolerances: Vec::new(),
+            coordinate: None,
             verbose: false,
         }
     }
@@ -396,7 +408,9 @@ pub struct Record {
     pub h: Option<f64>,
     /// Steps taken (accepted and rejected, for adaptive methods).
     pub steps: usize,
-    /// Euclidean position error at the horizon against the exact solution.
+    /// Position error at the horizon against the exact solution (or, for a model without
+    /// one, a resolved reference run): Euclidean, or in the one coordinate of
+    /// [`BenchOptions::coordinate`].
     pub final_error: f64,
     /// Largest |E − E₀| over the steps.
     pub energy_error_max: f64,
@@ -471,13 +485,68 @@ struct Bench<'a> {
     progress: &'a ProgressBar,
 }
 
-/// The problem of a sweep: initial state, horizon and the exact final position.
+/// The problem of a sweep: initial state, horizon, the reference final position and the
+/// coordinate the error is measured in.
 struct Problem<const N: usize> {
     t0: f64,
     q0: SVector<f64, N>,
     v0: SVector<f64, N>,
     t_end: f64,
     exact: SVector<f64, N>,
+    /// The one coordinate of `--coordinate` (`None`: the Euclidean norm of all).
+    coordinate: Option<usize>,
+}
+
+impl<const N: usize> Problem<N> {
+    /// The final error of a run that ends at `q`: in the chosen coordinate, or the Euclidean
+    /// position error.
+    fn error(&self, q: &SVector<f64, N>) -> f64 {
+        match self.coordinate {
+            Some(i) => (q[i] - self.exact[i]).abs(),
+            None => (q - self.exact).norm(),
+        }
+    }
+}
+
+/// The method of the resolved reference run of a model without an exact solution: SVI with
+/// 7 CGL and 6 Gauss points (order 12).
+fn reference_method() -> svi::Svi {
+    svi::Svi::new(7).with_quadrature(6)
+}
+
+/// The final position of a model without an exact solution, from the resolved reference run
+/// ([`reference_method`] at the model's default step h and at h/2: the second is the
+/// reference, their difference its error estimate, which must be below 10⁻¹¹ relative).
+fn resolved_reference<M: ZooModel<N>, const N: usize>(
+    model: &M,
+    t0: f64,
+    q0: SVector<f64, N>,
+    v0: SVector<f64, N>,
+    t_end: f64,
+) -> Result<(SVector<f64, N>, f64), SceneError> {
+    let integrator = Integrator::new(model.clone(), reference_method());
+    let h = model.default_step();
+    let run = |h: f64| {
+        integrator
+            .run_from_velocity(t0, q0, v0, h, t_end, &mut ())
+            .map(|run| run.state.q)
+            .map_err(|error| SceneError::NoReference {
+                model: model.name().into(),
+                reason: format!("its reference run (svi:7/6 at h = {h:e}) failed: {error}"),
+            })
+    };
+    let (coarse, fine) = (run(h)?, run(0.5 * h)?);
+    let discrepancy = (coarse - fine).amax();
+    if discrepancy > 1e-11 * fine.amax().max(1.0) {
+        return Err(SceneError::NoReference {
+            model: model.name().into(),
+            reason: format!(
+                "its reference runs (svi:7/6 at h = {h:e} and h/2) differ by {discrepancy:.1e}: \
+                 the model's default step does not resolve it"
+            ),
+        });
+    }
+    Ok((fine, discrepancy))
 }
 
 impl ModelVisitor for Bench<'_> {
@@ -490,16 +559,47 @@ impl ModelVisitor for Bench<'_> {
             Initial::Velocity { q, v } => (q, v),
             Initial::Momentum { q, p } => (q, model.velocity(t0, &q, &p, &p)?),
         };
-        let exact = model
-            .exact_solution(t0, &q0, &v0, t_end)
-            .ok_or_else(|| SceneError::NoReference(model.name().into()))?
-            .0;
+        let coordinate = match &self.options.coordinate {
+            None => None,
+            Some(name) => {
+                let names = model.coordinate_names();
+                let index = names
+                    .iter()
+                    .position(|known| known == name)
+                    .ok_or_else(|| SceneError::InvalidOption {
+                        option: "--coordinate",
+                        reason: format!(
+                            "'{name}' is not a coordinate of {} (its coordinates: {})",
+                            model.name(),
+                            names.join(", ")
+                        ),
+                    })?;
+                Some(index)
+            }
+        };
+        let exact = match model.exact_solution(t0, &q0, &v0, t_end) {
+            Some((q, _)) => q,
+            None => {
+                let (q, discrepancy) = resolved_reference(&model, t0, q0, v0, t_end)?;
+                if self.options.verbose {
+                    self.progress.suspend(|| {
+                        eprintln!(
+                            "reference: svi:7/6 at h = {:e}, {discrepancy:.1e} from the run at \
+                             twice the step",
+                            0.5 * model.default_step()
+                        )
+                    });
+                }
+                q
+            }
+        };
         let problem = Problem {
             t0,
             q0,
             v0,
             t_end,
             exact,
+            coordinate,
         };
         let mut records = Vec::new();
         for spec in &self.options.methods {
@@ -755,7 +855,7 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     let span = problem.t_end - problem.t0;
     let final_error = |steps: usize| {
         run_mode(&integrator, mode, problem, span / steps as f64, &mut ())
-            .map(|(q, _)| (q - problem.exact).norm())
+            .map(|(q, _)| problem.error(&q))
     };
     // `parameter`: a step count, or a tolerance of step doubling.
     let measure = |parameter: f64| -> Result<Record, svi::Error> {
@@ -787,7 +887,7 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             parameter,
             h: (!matches!(mode, Mode::StepDoubling)).then_some(h),
             steps: statistics.steps,
-            final_error: (q - problem.exact).norm(),
+            final_error: problem.error(&q),
             energy_error_max: energy.max,
             momentum_error_max: (model.generator_count() > 0).then_some(momentum.max),
             evaluations: statistics.evaluations,
@@ -973,7 +1073,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
             parameter: tol,
             h: None,
             steps,
-            final_error: (q - problem.exact).norm(),
+            final_error: problem.error(&q),
             energy_error_max,
             momentum_error_max,
             evaluations,
@@ -1309,6 +1409,38 @@ mod tests {
             assert!(record.h.is_none());
             assert!(record.final_error < 10.0 * record.parameter, "{record:?}");
         }
+    }
+
+    #[test]
+    fn a_model_without_exact_solution_is_measured_against_a_resolved_run() {
+        // The stiff spring pendulum to T = 1 has no exact solution: the reference is svi:7/6
+        // at h = 5e-4 (checked against 1e-3). multiscale:6 at 4 steps (h = 0.25, 4 spring
+        // periods per step) has a slow-angle error below 1e-5; an unknown coordinate is an
+        // error naming the option.
+        let mut scene = Scene::builtin("stiff-spring-pendulum").unwrap().unwrap();
+        scene.run.t_end = Some(1.0);
+        let options = BenchOptions {
+            methods: parse_methods("multiscale:6").unwrap(),
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![4],
+            coordinate: Some("theta".into()),
+            ..BenchOptions::default()
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        assert_eq!(records.len(), 1);
+        assert!(records[0].final_error < 1e-5, "{records:?}");
+        let unknown = BenchOptions {
+            coordinate: Some("phi".into()),
+            ..options
+        };
+        assert!(matches!(
+            work_precision(&scene, &unknown),
+            Err(SceneError::InvalidOption {
+                option: "--coordinate",
+                ..
+            })
+        ));
     }
 
     #[test]

@@ -224,11 +224,15 @@ pub enum SceneError {
     /// A `svi bench` step count or tolerance that is out of range or whose run failed.
     #[error("svi bench: {0}")]
     BenchParameter(String),
-    /// A benchmark needs an exact solution as reference.
-    #[error(
-        "model '{0}' has no exact solution for this initial state: nothing to measure errors against"
-    )]
-    NoReference(String),
+    /// A benchmark of a model without an exact solution whose resolved reference run failed
+    /// or did not converge.
+    #[error("model '{model}' has no exact solution for this initial state, and {reason}")]
+    NoReference {
+        /// The model's name.
+        model: String,
+        /// What happened to the reference run.
+        reason: String,
+    },
 }
 
 impl From<UnknownModel> for SceneError {
