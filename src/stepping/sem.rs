@@ -34,7 +34,9 @@
 //! step polynomial gives E_d. The secant method starts at the previous step's h and 1.1 h, and
 //! stops when |F| reaches the round-off level 16 ε max(1, |E*|) or the update of h falls below
 //! 16 ε h. It is kept inside [h_prev · `max_shrink`, h_prev · `max_growth`] (and the solve's
-//! `min_step`, `max_step`).
+//! `min_step`, by default 10⁻⁶ h₀, and `max_step`); a step that would have to fall to
+//! `min_step` ends the run with [`Error::StepSizeTooSmall`] (the energy equation lost its
+//! root, and the steps would crawl).
 //!
 //! # Where F has no root
 //! Near turning points the energy equation may have no solution (§5.5, "Solvability of the
@@ -198,7 +200,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let rejected = RunFailure::rejected;
         let h0 = options.step().map_err(rejected)?;
         let length = span.t_end - span.t0;
-        let min_step = options.min_step.unwrap_or(length * 1e-12);
+        // Steps shrinking a millionfold below the first mean the energy equation has lost
+        // its root (the run would crawl): an error, unless the caller allows smaller ones.
+        let min_step = options.min_step.unwrap_or(h0 * 1e-6);
         let max_step = options.max_step.unwrap_or(length);
         let method = self.method();
         let mut workspace = method.workspace(self.model(), h0).map_err(rejected)?;
@@ -260,6 +264,15 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     size
                 }
             };
+            if fitted <= min_step && fitted < remaining {
+                let error = Error::StepSizeTooSmall {
+                    t,
+                    h: fitted,
+                    min_step,
+                    rejections: progress.statistics.steps - adaptivity.accepted,
+                };
+                return Err(self.failure(error, progress, false));
+            }
             // The step that would pass the end is cut to land on it.
             let size = if fitted >= remaining {
                 remaining

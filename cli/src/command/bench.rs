@@ -1147,7 +1147,8 @@ pub fn to_csv(records: &[Record]) -> String {
     text
 }
 
-/// Error against time and error against evaluations, one curve per method, as SVG.
+/// Error against time and error against evaluations, one curve per method, as SVG (runs
+/// with an error above 1 are left to the CSV).
 pub fn plot(
     records: &[Record],
     title: &str,
@@ -1164,9 +1165,11 @@ pub fn plot(
             .iter()
             .map(|label| Series {
                 label: label.to_string(),
+                // A run that lost the solution (error above 1, up to 1e40 for a diverged
+                // one) would stretch the axis over the whole page: it stays in the CSV.
                 points: records
                     .iter()
-                    .filter(|r| r.method == *label)
+                    .filter(|r| r.method == *label && r.final_error <= 1.0)
                     .map(|r| (x(r), r.final_error))
                     .collect(),
             })
