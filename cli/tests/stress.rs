@@ -156,6 +156,70 @@ fn svi_stress_measures_the_verlet_limit_and_the_kepler_drift() {
 }
 
 #[test]
+fn svi_stress_runs_the_adaptive_modes_reparametrised_bounded_and_step_doubling_drifting() {
+    let dir = Scratch::new("stress-adaptive");
+    let output = svi(&[
+        "stress",
+        "--cases",
+        "kepler-long",
+        "--methods",
+        "svi:6@sundman:1,svi:6@step",
+        "--steps",
+        "20000",
+        "--bisections",
+        "1",
+        "--tolerance",
+        "1e-8",
+        "--out-dir",
+        dir.0.to_str().unwrap(),
+    ]);
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.0.join("stress.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 2);
+    let value = |r: &Vec<&str>, name: &str| r[column(name)].parse::<f64>().unwrap();
+    // Time-reparametrised SVI is symplectic in τ: no drift over the horizon 20000 · 0.2 (the
+    // energy error stays at round-off, 8e-14 of 0.5), with a step limit in Δτ found by the
+    // search (Δτ = 1.7 on this machine).
+    let reparam = &rows[0];
+    assert_eq!(reparam[1], "svi:6@sundman:1");
+    assert_ne!(reparam[column("verdict")], "drifts", "{reparam:?}");
+    assert!(value(reparam, "max_error") < 1e-12, "{reparam:?}");
+    assert!(value(reparam, "bounded_h") >= 0.2, "{reparam:?}");
+    // Step doubling has no step limit, and its energy error drifts.
+    let doubling = &rows[1];
+    assert_eq!(doubling[1], "svi:6@step");
+    assert_eq!(doubling[column("bounded_h")], "", "{doubling:?}");
+    assert_eq!(doubling[column("verdict")], "drifts", "{doubling:?}");
+    // --bisections needs a method with a step limit, --tolerance one that takes it.
+    for (args, option) in [
+        (
+            vec!["--methods", "svi:6@step", "--bisections", "2"],
+            "--bisections",
+        ),
+        (
+            vec!["--methods", "svi:6@sundman:1", "--tolerance", "1e-8"],
+            "--tolerance",
+        ),
+    ] {
+        let output = svi(&[&["stress", "--cases", "kepler-long"], &args[..]].concat());
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(stderr.contains(option), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
 fn svi_stress_rejects_unknown_cases_and_too_few_steps() {
     for args in [
         vec!["stress", "--cases", "nope"],

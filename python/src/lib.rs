@@ -88,8 +88,7 @@ fn overrides(
     params: Option<BTreeMap<String, f64>>,
     diagnostics: Option<Vec<String>>,
     output_times: Option<Vec<f64>>,
-    adapt: Option<&str>,
-    tol: Option<f64>,
+    (adapt, monitor, tol): (Option<&str>, Option<&str>, Option<f64>),
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
     form: Option<&str>,
@@ -118,6 +117,12 @@ fn overrides(
         parameters: params.unwrap_or_default().into_iter().collect(),
         diagnostics,
         adapt: choice::<AdaptMode>("adapt", adapt)?,
+        monitor: monitor
+            .map(|text| {
+                text.parse()
+                    .map_err(|error| invalid("monitor", format!("{error}")))
+            })
+            .transpose()?,
         tol,
         output_times,
         recovery: choice::<RecoveryKind>("recovery", recovery)?,
@@ -187,8 +192,8 @@ type Trajectory = (Vec<String>, Vec<Vec<f64>>);
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
-    initial=None, diagnostics=None, output_times=None, adapt=None, tol=None, recovery=None,
-    divergence_limit=None, form=None, trajectory=true, every=None, progress=false
+    initial=None, diagnostics=None, output_times=None, adapt=None, monitor=None, tol=None,
+    recovery=None, divergence_limit=None, form=None, trajectory=true, every=None, progress=false
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run(
@@ -204,6 +209,7 @@ fn run(
     diagnostics: Option<Vec<String>>,
     output_times: Option<Vec<f64>>,
     adapt: Option<&str>,
+    monitor: Option<&str>,
     tol: Option<f64>,
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
@@ -221,8 +227,7 @@ fn run(
         params,
         diagnostics,
         output_times,
-        adapt,
-        tol,
+        (adapt, monitor, tol),
         recovery,
         divergence_limit,
         form,
@@ -313,7 +318,7 @@ type Chunk = (usize, Vec<String>, Vec<Vec<Py<PyAny>>>);
 #[pyo3(signature = (
     scene, *, params=vec![], initial=vec![], random=None, seed=0, start=0, stop=None, threads=0,
     method=None, points=None, quadrature=None, h=None, t_end=None, diagnostics=None,
-    adapt=None, tol=None, recovery=None, divergence_limit=None, form=None
+    adapt=None, monitor=None, tol=None, recovery=None, divergence_limit=None, form=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble(
@@ -333,6 +338,7 @@ fn ensemble(
     t_end: Option<f64>,
     diagnostics: Option<Vec<String>>,
     adapt: Option<&str>,
+    monitor: Option<&str>,
     tol: Option<f64>,
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
@@ -347,8 +353,7 @@ fn ensemble(
         None,
         diagnostics,
         None,
-        adapt,
-        tol,
+        (adapt, monitor, tol),
         recovery,
         divergence_limit,
         form,

@@ -251,6 +251,7 @@ def run(
     points: Optional[int] = None,
     quadrature: Optional[int] = None,
     adapt: Optional[str] = None,
+    monitor: Optional[str] = None,
     tol: Optional[float] = None,
     recovery: Optional[str] = None,
     divergence_limit: Optional[float] = None,
@@ -271,8 +272,9 @@ def run(
             ``rotation``/``quaternion`` and ``omega``/``momentum``).
         diagnostics: any of ``"energy"``, ``"momentum"``, ``"solution"``, or ``["none"]``.
         output_times: report (and record in the trajectory) the states at these times.
-        points, quadrature, adapt, tol, recovery, divergence_limit, form: as the flags of
-            ``svi run`` of the same names.
+        points, quadrature, adapt, monitor, tol, recovery, divergence_limit, form: as the flags
+            of ``svi run`` of the same names (``adapt="reparam", monitor="sundman:1"``: fixed
+            steps ``h`` in computational time τ, dt = |q| dτ).
         trajectory: record every step (or the output times) as arrays ``t``, ``q``, ``v``, ``p``.
         every: record every ``every``-th step only (the last step is always recorded).
         progress: show ``svi run``'s progress bar on stderr for runs of 10⁴ steps and more
@@ -299,6 +301,7 @@ def run(
         diagnostics=None if diagnostics is None else list(diagnostics),
         output_times=None if output_times is None else [float(t) for t in output_times],
         adapt=adapt,
+        monitor=monitor,
         tol=tol,
         recovery=recovery,
         divergence_limit=divergence_limit,
@@ -411,6 +414,7 @@ def ensemble(
     points: Optional[int] = None,
     quadrature: Optional[int] = None,
     adapt: Optional[str] = None,
+    monitor: Optional[str] = None,
     tol: Optional[float] = None,
     recovery: Optional[str] = None,
     divergence_limit: Optional[float] = None,
@@ -437,7 +441,7 @@ def ensemble(
         progress: show a tqdm progress bar (default: when tqdm is installed).
         as_frame: return a pandas DataFrame (default: when pandas is installed), else a dict
             of column name → NumPy array.
-        method, h, t_end, diagnostics, points, quadrature, adapt, tol, recovery,
+        method, h, t_end, diagnostics, points, quadrature, adapt, monitor, tol, recovery,
         divergence_limit, form: shared by every member, as the flags of ``svi ensemble``.
 
     Returns:
@@ -463,6 +467,7 @@ def ensemble(
         t_end=None if t_end is None else float(t_end),
         diagnostics=None if diagnostics is None else list(diagnostics),
         adapt=adapt,
+        monitor=monitor,
         tol=tol,
         recovery=recovery,
         divergence_limit=divergence_limit,

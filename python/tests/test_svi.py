@@ -93,6 +93,25 @@ def test_overrides_method_params_initial_and_output_times():
     assert svi.run("kepler", t_end=4.0, trajectory=False).q is None
 
 
+def test_a_reparametrised_run_takes_its_monitor_and_matches_the_binary():
+    # Kepler e = 0.9 over T = 2000 (about 318 orbits), fixed steps 0.3 in τ with dt = |q| dτ:
+    # the final position within 1e-9 of the exact orbit (tests/reparam.rs, README).
+    arguments = dict(method="svi:9/8", h=0.3, params={"e": 0.9}, adapt="reparam", diagnostics=["solution"])
+    result = svi.run("kepler", monitor="sundman:1", trajectory=False, **arguments)
+    reference = cli_json(
+        "run", "kepler", "--method", "svi:9/8", "--h", "0.3", "--param", "e=0.9", "--adapt", "reparam",
+        "--monitor", "sundman:1", "--diagnostics", "solution", "--json",
+    )
+    assert result.summary["q"] == reference["q"]
+    assert (result.summary["adapt"], result.summary["monitor"]) == ("reparam", "sundman:1")
+    assert result.solution_error_final < 1e-9
+    # The default monitor (sundman:1.5) is another run; a malformed one is bad input.
+    assert svi.run("kepler", trajectory=False, **arguments).summary["q"] != reference["q"]
+    with pytest.raises(svi.InvalidInputError) as caught:
+        svi.run("kepler", monitor="sundman:x", **arguments)
+    assert "monitor" in caught.value.message
+
+
 def test_errors_are_exceptions_with_the_failure_objects_fields():
     with pytest.raises(svi.InvalidParameterError) as caught:
         svi.run("kepler", params={"e": 1.2})

@@ -51,7 +51,7 @@ use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::model::reparametrized::MonitorSpec;
 use svi::observer::{EnergyError, MomentumError, Observer};
 use svi::solve::{SolveOptions, Span};
-use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec};
+use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A method configuration to sweep: a method of svi's registry, or an `ode_solvers` peer.
@@ -498,6 +498,17 @@ struct Problem<const N: usize> {
 }
 
 impl<const N: usize> Problem<N> {
+    /// The initial time and state.
+    fn start(&self) -> (f64, Initial<N>) {
+        (
+            self.t0,
+            Initial::Velocity {
+                q: self.q0,
+                v: self.v0,
+            },
+        )
+    }
+
     /// The final error of a run that ends at `q`: in the chosen coordinate, or the Euclidean
     /// position error.
     fn error(&self, q: &SVector<f64, N>) -> f64 {
@@ -617,20 +628,9 @@ impl ModelVisitor for Bench<'_> {
                 options: self.options,
                 report,
             };
-            match *spec {
-                BenchMethod::Library(method) => {
-                    records.extend(method.visit_vector(sweep(Mode::Fixed))??);
-                }
-                BenchMethod::Reparam(method, monitor) => {
-                    records.extend(method.visit_vector(sweep(Mode::Reparam(monitor)))??);
-                }
-                BenchMethod::StepDoubling(method) => {
-                    records.extend(method.visit_vector(sweep(Mode::StepDoubling))??);
-                }
-                BenchMethod::Sem(method) => {
-                    records.extend(method.visit_vector(sweep(Mode::Sem))??);
-                }
-                BenchMethod::Dop853 | BenchMethod::Dopri5 => {
+            match Mode::of(spec) {
+                Some((method, mode)) => records.extend(method.visit_vector(sweep(mode))??),
+                None => {
                     sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
                 }
             }
@@ -671,9 +671,9 @@ fn check_horizon(t0: f64, t_end: f64, h: f64) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// How a library method runs in a sweep.
+/// How a library method runs in a sweep (and in `svi stress`).
 #[derive(Debug, Clone, Copy)]
-enum Mode {
+pub(crate) enum Mode {
     /// Fixed steps h, swept over step counts.
     Fixed,
     /// Fixed steps Δτ in computational time with a monitor, swept over τ-step counts.
@@ -682,6 +682,19 @@ enum Mode {
     StepDoubling,
     /// Symplectic-energy-momentum steps, swept over the first step's size.
     Sem,
+}
+
+impl Mode {
+    /// The mode of a library method in `--methods` (`None` for the peers).
+    pub(crate) fn of(method: &BenchMethod) -> Option<(MethodSpec, Mode)> {
+        match *method {
+            BenchMethod::Library(spec) => Some((spec, Mode::Fixed)),
+            BenchMethod::Reparam(spec, monitor) => Some((spec, Mode::Reparam(monitor))),
+            BenchMethod::StepDoubling(spec) => Some((spec, Mode::StepDoubling)),
+            BenchMethod::Sem(spec) => Some((spec, Mode::Sem)),
+            BenchMethod::Dop853 | BenchMethod::Dopri5 => None,
+        }
+    }
 }
 
 /// Sweeps the visited library method in its mode.
@@ -703,42 +716,53 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> 
     }
 }
 
-/// One run of `integrator` in `mode` over the problem: at step (or Δτ) `h`, or for step
-/// doubling at tolerance `h`; the final position and the statistics.
-fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, const N: usize>(
+/// One run of `integrator` in `mode` from `start` = (t0, initial) to `t_end`: at step (or Δτ)
+/// `h`, or for step doubling at tolerance `h`, under `run` (the divergence limit); the final
+/// position and the statistics.
+pub(crate) fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, const N: usize>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     mode: Mode,
-    problem: &Problem<N>,
+    (start, t_end): ((f64, Initial<N>), f64),
     h: f64,
+    run: &RunOptions,
     observer: &mut O,
 ) -> Result<(SVector<f64, N>, svi::Statistics), svi::Error>
 where
     O: Observer<L, svi::PhasePoint<N>>,
 {
-    let initial = Initial::Velocity {
-        q: problem.q0,
-        v: problem.v0,
+    let (t0, initial) = start;
+    let span = Span::new(t0, t_end);
+    let with_run = |mut options: SolveOptions| {
+        options.run = run.clone();
+        options
     };
-    let span = Span::new(problem.t0, problem.t_end);
     let solution = match mode {
         Mode::Fixed => {
-            let run = integrator.run(problem.t0, initial, h, problem.t_end, observer)?;
-            return Ok((run.last.q, run.statistics));
+            let done = integrator.try_run(t0, initial, h, t_end, run, observer);
+            let done = done.map_err(|failure| failure.error)?;
+            return Ok((done.last.q, done.statistics));
         }
         Mode::Reparam(monitor) => integrator.try_solve_reparametrized(
             &monitor,
             &span,
             initial,
-            &SolveOptions::fixed_step(h),
+            &with_run(SolveOptions::fixed_step(h)),
             observer,
         ),
-        Mode::StepDoubling => {
-            integrator.try_solve(&span, initial, &SolveOptions::step_adaptive(h), observer)
-        }
-        Mode::Sem => {
-            integrator.try_solve(&span, initial, &SolveOptions::energy_fitted(h), observer)
-        }
-    }?;
+        Mode::StepDoubling => integrator.try_solve(
+            &span,
+            initial,
+            &with_run(SolveOptions::step_adaptive(h)),
+            observer,
+        ),
+        Mode::Sem => integrator.try_solve(
+            &span,
+            initial,
+            &with_run(SolveOptions::energy_fitted(h)),
+            observer,
+        ),
+    }
+    .map_err(|failure| failure.error)?;
     Ok((solution.last.q, solution.statistics))
 }
 
@@ -853,8 +877,10 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     let order = method.info().order.max(1) as f64;
     let integrator = Integrator::new(model.clone(), method);
     let span = problem.t_end - problem.t0;
+    let from = (problem.start(), problem.t_end);
+    let free = RunOptions::default();
     let final_error = |steps: usize| {
-        run_mode(&integrator, mode, problem, span / steps as f64, &mut ())
+        run_mode(&integrator, mode, from, span / steps as f64, &free, &mut ())
             .map(|(q, _)| problem.error(&q))
     };
     // `parameter`: a step count, or a tolerance of step doubling.
@@ -869,16 +895,17 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             run_mode(
                 &integrator,
                 mode,
-                problem,
+                from,
                 h,
+                &free,
                 &mut (&mut energy, &mut momentum),
             )
         } else {
-            run_mode(&integrator, mode, problem, h, &mut energy)
+            run_mode(&integrator, mode, from, h, &free, &mut energy)
         }?;
         let seconds = median_seconds(
             || {
-                let _ = run_mode(&integrator, mode, problem, h, &mut ());
+                let _ = run_mode(&integrator, mode, from, h, &free, &mut ());
             },
             options,
         );

@@ -21,12 +21,19 @@
 //!    rtol = atol = [`StressOptions::tolerance`]) runs the same horizon as a non-geometric
 //!    peer, sampled at up to 10⁵ of its accepted step points.
 //!
+//! The library's adaptive modes run as in `svi bench`: `METHOD@MONITOR` (time-reparametrised,
+//! its τ-step Δτ in place of h: the searches run over Δτ, the long run takes Δτ = the scene's
+//! step over the same physical horizon, so its step count is the number of τ-steps that
+//! horizon needs), `METHOD@sem` (the searches and the long run over the first step) and
+//! `METHOD@step` (step doubling at tol = [`StressOptions::tolerance`] over the same horizon,
+//! no step limits: it chooses its steps).
+//!
 //! Every option is checked before anything runs ([`StressOptions::check`]).
 //!
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
-use crate::command::bench::{BenchMethod, parse_methods};
+use crate::command::bench::{BenchMethod, Mode, parse_methods, run_mode};
 use crate::command::peers::{FirstOrder, dop853};
 use crate::report::csv::Float;
 use crate::report::plot::{Panel, PlotError, Series, write_svg};
@@ -120,14 +127,17 @@ pub struct StressArgs {
     /// Stress scenes, comma-separated [default: all of them].
     #[arg(long, value_delimiter = ',')]
     pub cases: Vec<String>,
-    /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), and dop853.
+    /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), their adaptive
+    /// modes METHOD@MONITOR, METHOD@sem and METHOD@step, and dop853.
     #[arg(
         long,
         value_name = "LIST",
         default_value = DEFAULT_METHODS,
         long_help = method_help(
-            "Methods, comma-separated: the library's, and dop853 (ode_solvers' DOP853, drift \
-             only)."
+            "Methods, comma-separated: the library's; their adaptive modes METHOD@MONITOR \
+             (time-reparametrised, Δτ in place of h), METHOD@sem (symplectic-energy-momentum, \
+             the first step in place of h) and METHOD@step (step doubling at --tolerance, drift \
+             only); and dop853 (ode_solvers' DOP853, drift only)."
         )
     )]
     pub methods: String,
@@ -153,13 +163,13 @@ pub struct StressArgs {
         )
     )]
     pub bisections: Option<usize>,
-    /// DOP853's rtol = atol.
+    /// DOP853's rtol = atol, and step doubling's tolerance.
     #[arg(
         long,
         allow_hyphen_values = true,
         help = format!(
-            "DOP853's rtol = atol, at least {} [default: {}]; only with dop853 in \
-             --methods",
+            "DOP853's rtol = atol and METHOD@step's tolerance, at least {} [default: {}]; \
+             only with dop853 or METHOD@step in --methods",
             Float(MIN_PEER_TOLERANCE),
             Float(DEFAULT_TOLERANCE)
         )
@@ -189,14 +199,16 @@ impl StressArgs {
 pub struct StressOptions {
     /// Scenes (names from [`CASES`]); empty: all.
     pub cases: Vec<String>,
-    /// Methods: the library's (`svi:P/M`, `sc:P`, `verlet`, ...) and `dop853` (drift only).
+    /// Methods: the library's (`svi:P/M`, `sc:P`, `verlet`, ...), their adaptive modes
+    /// (`METHOD@MONITOR`, `METHOD@sem`, `METHOD@step`) and `dop853` (drift only).
     pub methods: Vec<BenchMethod>,
     /// Steps of the long run, [`MIN_DRIFT_STEPS`] to [`MAX_DRIFT_STEPS`].
     pub drift_steps: usize,
     /// Bisections refining each stability boundary, up to [`MAX_BISECTIONS`] (`None`:
     /// [`DEFAULT_BISECTIONS`]); set only with a library method.
     pub bisections: Option<usize>,
-    /// DOP853's rtol = atol (`None`: [`DEFAULT_TOLERANCE`]); set only with `dop853`.
+    /// DOP853's rtol = atol and step doubling's tolerance (`None`: [`DEFAULT_TOLERANCE`]);
+    /// set only with `dop853` or `METHOD@step`.
     pub tolerance: Option<f64>,
     /// Print progress to stderr.
     pub verbose: bool,
@@ -221,7 +233,7 @@ impl StressOptions {
         self.bisections.unwrap_or(DEFAULT_BISECTIONS)
     }
 
-    /// DOP853's rtol = atol.
+    /// DOP853's rtol = atol, and step doubling's tolerance.
     pub fn tolerance(&self) -> f64 {
         self.tolerance.unwrap_or(DEFAULT_TOLERANCE)
     }
@@ -247,9 +259,6 @@ impl StressOptions {
         if self.methods.contains(&BenchMethod::Dopri5) {
             return Err(dopri5_not_applicable());
         }
-        if let Some(method) = self.methods.iter().find(|method| is_adaptive_mode(method)) {
-            return Err(adaptive_mode_not_applicable(method));
-        }
         limits::count(
             "--steps",
             self.drift_steps,
@@ -257,28 +266,35 @@ impl StressOptions {
             MAX_DRIFT_STEPS,
             "steps",
         )?;
-        let library = self
+        let searched = self.methods.iter().any(|method| {
+            matches!(
+                method,
+                BenchMethod::Library(_) | BenchMethod::Reparam(..) | BenchMethod::Sem(_)
+            )
+        });
+        let tolerance_driven = self
             .methods
             .iter()
-            .any(|method| matches!(method, BenchMethod::Library(_)));
-        let dop853 = self.methods.contains(&BenchMethod::Dop853);
+            .any(|method| matches!(method, BenchMethod::Dop853 | BenchMethod::StepDoubling(_)));
         if let Some(bisections) = self.bisections {
             limits::count("--bisections", bisections, 0, MAX_BISECTIONS, "bisections")?;
-            if !library {
+            if !searched {
                 return Err(SceneError::NotApplicable {
                     option: "--bisections",
-                    reason: "refines the step limits of the library's methods, and --methods \
-                             lists only dop853 (which has none)"
+                    reason: "refines the step limits of the library's stepped methods, and \
+                             --methods lists only dop853 and METHOD@step (which have none)"
                         .into(),
                 });
             }
         }
         if let Some(tolerance) = self.tolerance {
             limits::peer_tolerance("--tolerance", tolerance)?;
-            if !dop853 {
+            if !tolerance_driven {
                 return Err(SceneError::NotApplicable {
                     option: "--tolerance",
-                    reason: "sets DOP853's tolerance, and --methods has no dop853".into(),
+                    reason: "sets the tolerance of dop853 and METHOD@step, and --methods has \
+                             neither"
+                        .into(),
                 });
             }
         }
@@ -291,25 +307,6 @@ fn dopri5_not_applicable() -> SceneError {
     SceneError::MethodNotApplicable {
         method: BenchMethod::Dopri5.to_string(),
         reason: "svi stress compares with dop853 only".into(),
-    }
-}
-
-/// Whether `method` is a library method in an adaptive mode (`METHOD@MONITOR`,
-/// `METHOD@step`, `METHOD@sem`).
-fn is_adaptive_mode(method: &BenchMethod) -> bool {
-    matches!(
-        method,
-        BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_) | BenchMethod::Sem(_)
-    )
-}
-
-/// An adaptive mode of the library in `svi stress --methods`.
-fn adaptive_mode_not_applicable(method: &BenchMethod) -> SceneError {
-    SceneError::MethodNotApplicable {
-        method: method.to_string(),
-        reason: "svi stress probes the step limits of fixed steps; the adaptive modes are \
-                 measured by svi bench"
-            .into(),
     }
 }
 
@@ -329,7 +326,7 @@ pub struct Limit {
 pub struct Drift {
     /// Steps taken (accepted plus rejected for DOP853).
     pub steps: usize,
-    /// Step (the scene's; `None` for DOP853).
+    /// Step (the scene's; `None` for DOP853 and step doubling).
     pub h: Option<f64>,
     /// Horizon of the run.
     pub horizon: f64,
@@ -381,9 +378,10 @@ pub struct StressRecord {
     pub method: String,
     /// The scene's step.
     pub h: f64,
-    /// Largest bounded step (`None` for DOP853).
+    /// Largest bounded step (`None` for DOP853 and step doubling).
     pub bounded: Option<Limit>,
-    /// Largest step with an energy error below 10 % (`None` for DOP853).
+    /// Largest step with an energy error below 10 % (`None` for DOP853 and step
+    /// doubling).
     pub accurate: Option<Limit>,
     /// The long run, or why it failed.
     pub drift: Result<Drift, String>,
@@ -447,13 +445,14 @@ impl ModelVisitor for CaseRunner<'_> {
         for spec in &self.options.methods {
             let label = spec.to_string();
             let start = Instant::now();
-            let record = match *spec {
-                BenchMethod::Library(method) => method.visit_vector(MethodRunner {
+            let record = match (Mode::of(spec), spec) {
+                (Some((method, mode)), _) => method.visit_vector(MethodRunner {
                     model: &model,
                     setup: &setup,
                     label: &label,
+                    mode,
                 })??,
-                BenchMethod::Dop853 => StressRecord {
+                (None, BenchMethod::Dop853) => StressRecord {
                     scene: setup.scene.into(),
                     method: label.clone(),
                     h,
@@ -461,10 +460,7 @@ impl ModelVisitor for CaseRunner<'_> {
                     accurate: None,
                     drift: dop853_drift(&model, &setup),
                 },
-                BenchMethod::Dopri5 => return Err(dopri5_not_applicable()),
-                BenchMethod::Reparam(..) | BenchMethod::StepDoubling(_) | BenchMethod::Sem(_) => {
-                    return Err(adaptive_mode_not_applicable(spec));
-                }
+                (None, _) => return Err(dopri5_not_applicable()),
             };
             if self.options.verbose {
                 eprintln!(
@@ -481,11 +477,12 @@ impl ModelVisitor for CaseRunner<'_> {
     }
 }
 
-/// Runs one case with the visited method.
+/// Runs one case with the visited method in its mode.
 struct MethodRunner<'a, M, const N: usize> {
     model: &'a M,
     setup: &'a Setup<'a, N>,
     label: &'a str,
+    mode: Mode,
 }
 
 impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_, M, N> {
@@ -500,50 +497,51 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_,
         let scale = energy0.abs().max(1.0);
         let size = first.q.amax().max(first.y.amax()).max(1.0);
         let options = RunOptions::default().with_divergence_limit(DIVERGENCE * size);
+        let mode = self.mode;
         let mut probes: Vec<(f64, Probe)> = Vec::new();
         let mut probe = |h: f64| -> Probe {
             if let Some((_, p)) = probes.iter().find(|(x, _)| *x == h) {
                 return p.clone();
             }
             let mut energy = EnergyError::default();
-            let result = integrator.try_run(
-                setup.t0,
-                setup.initial,
-                h,
-                setup.t0 + setup.probe_time,
-                &options,
-                &mut energy,
-            );
+            let from = ((setup.t0, setup.initial), setup.t0 + setup.probe_time);
+            let result = run_mode(&integrator, mode, from, h, &options, &mut energy);
             let p = Probe {
-                failure: result.err().map(|failure| describe(&failure.error)),
+                failure: result.err().map(|error| describe(&error)),
                 energy_error: energy.max / scale,
             };
             probes.push((h, p.clone()));
             p
         };
+        // Step doubling chooses its own steps: it has no step limit to search.
+        let searched = !matches!(mode, Mode::StepDoubling);
         let range = (setup.probe_time / 2e6, setup.probe_time / 8.0);
         let bisections = setup.options.bisections();
-        let bounded = search(setup.h, range, bisections, |h| {
-            let p = probe(h);
-            (p.failure.is_none(), p.failure.unwrap_or_default())
+        let bounded = searched.then(|| {
+            search(setup.h, range, bisections, |h| {
+                let p = probe(h);
+                (p.failure.is_none(), p.failure.unwrap_or_default())
+            })
         });
-        let accurate = search(setup.h, range, bisections, |h| {
-            let p = probe(h);
-            match p.failure {
-                Some(failure) => (false, failure),
-                None => (
-                    p.energy_error <= ACCURATE,
-                    format!("relative energy error {:.2}", p.energy_error),
-                ),
-            }
+        let accurate = searched.then(|| {
+            search(setup.h, range, bisections, |h| {
+                let p = probe(h);
+                match p.failure {
+                    Some(failure) => (false, failure),
+                    None => (
+                        p.energy_error <= ACCURATE,
+                        format!("relative energy error {:.2}", p.energy_error),
+                    ),
+                }
+            })
         });
         Ok(StressRecord {
             scene: setup.scene.into(),
             method: self.label.into(),
             h: setup.h,
-            bounded: Some(bounded),
-            accurate: Some(accurate),
-            drift: svi_drift(&integrator, setup, &options),
+            bounded,
+            accurate,
+            drift: svi_drift(&integrator, mode, setup, &options),
         })
     }
 }
@@ -646,9 +644,12 @@ fn describe(error: &Error) -> String {
     }
 }
 
-/// The long run of an svi method at the scene's step.
-fn svi_drift<L: ZooModel<N>, Me: Method<N>, const N: usize>(
+/// The long run of an svi method in `mode` over `drift_steps` scene steps: at the scene's
+/// step (Δτ = h for a reparametrised method, the first step for SEM), or at the peers'
+/// tolerance for step doubling.
+fn svi_drift<L: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
+    mode: Mode,
     setup: &Setup<'_, N>,
     options: &RunOptions,
 ) -> Result<Drift, String> {
@@ -657,19 +658,22 @@ fn svi_drift<L: ZooModel<N>, Me: Method<N>, const N: usize>(
     let samples = steps / stride + 1;
     let mut windows = Every::new(stride, EnergyWindows::new(samples.div_ceil(WINDOWS)));
     let t_end = setup.t0 + steps as f64 * setup.h;
+    let (h, step) = match mode {
+        Mode::StepDoubling => (setup.options.tolerance(), None),
+        _ => (setup.h, Some(setup.h)),
+    };
     let start = Instant::now();
-    let run = integrator
-        .try_run(
-            setup.t0,
-            setup.initial,
-            setup.h,
-            t_end,
-            options,
-            &mut windows,
-        )
-        .map_err(|failure| format!("fails: {}", describe(&failure.error)))?;
+    let (_, statistics) = run_mode(
+        integrator,
+        mode,
+        ((setup.t0, setup.initial), t_end),
+        h,
+        options,
+        &mut windows,
+    )
+    .map_err(|error| format!("fails: {}", describe(&error)))?;
     let seconds = start.elapsed().as_secs_f64();
-    drift(&windows.inner, run.statistics.steps, Some(setup.h), seconds)
+    drift(&windows.inner, statistics.steps, step, seconds)
 }
 
 /// Fit the drift of collected windows.
