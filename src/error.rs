@@ -52,11 +52,15 @@ pub enum Error {
         /// Infinity norm of the last Newton increment.
         residual: f64,
     },
-    /// Step-size control could not meet the tolerance with steps above the minimum.
+    /// The step-size control needed a step below the minimum: the tolerance cannot be met
+    /// (step doubling), or the energy equation has no step above it (symplectic-energy-
+    /// momentum steps); `cause` says which.
     #[error(
-        "step size {h:e} at t = {t:?} is below the minimum {min_step:e} after {rejections} rejected steps: the tolerance cannot be met"
+        "step size {h:e} at t = {t:?} is below the minimum {min_step:e} after {rejections} rejected steps: {cause}"
     )]
     StepSizeTooSmall {
+        /// Why the step had to be this small, e.g. "the tolerance cannot be met".
+        cause: &'static str,
         /// Time at which the step was tried.
         t: f64,
         /// The step size that would be needed next.

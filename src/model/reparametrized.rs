@@ -208,14 +208,20 @@ mod tests {
     #[test]
     fn sundman_is_the_power_of_the_distance_for_every_exponent_and_its_derivative() {
         // g = |q|^α at |q| = 5 (q = (3, 4)): 5^α, and ∂g/∂q₀ = α 5^(α−2) · 3.
-        use num_dual::{Dual64, DualNum};
+        use num_dual::Dual64;
         for alpha in [1.0, 1.5, 2.0, 3.0, 0.7, -1.0] {
             let g = Sundman { alpha };
             let q = SVector::from([Dual64::from_re(3.0).derivative(), Dual64::from_re(4.0)]);
             let value = Monitor::<2>::monitor(&g, &q);
             let (exact, slope) = (5f64.powf(alpha), alpha * 5f64.powf(alpha - 2.0) * 3.0);
-            assert!((value.re - exact).abs() <= 4.0 * f64::EPSILON * exact, "α = {alpha}");
-            assert!((value.eps - slope).abs() <= 8.0 * f64::EPSILON * slope.abs(), "α = {alpha}");
+            assert!(
+                (value.re - exact).abs() <= 4.0 * f64::EPSILON * exact,
+                "α = {alpha}"
+            );
+            assert!(
+                (value.eps - slope).abs() <= 8.0 * f64::EPSILON * slope.abs(),
+                "α = {alpha}"
+            );
         }
     }
 

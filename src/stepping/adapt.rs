@@ -352,6 +352,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             h = (options.safety * optimal).max(dt * options.max_shrink);
             if h < min_step || rejections > options.max_rejections {
                 let error = Error::StepSizeTooSmall {
+                    cause: "the tolerance cannot be met",
                     t,
                     h,
                     min_step,

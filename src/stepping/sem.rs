@@ -266,6 +266,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             };
             if fitted <= min_step && fitted < remaining {
                 let error = Error::StepSizeTooSmall {
+                    cause: "the discrete energy equation fits no larger step",
                     t,
                     h: fitted,
                     min_step,

@@ -1175,12 +1175,18 @@ pub fn to_csv(records: &[Record]) -> String {
 }
 
 /// Error against time and error against evaluations, one curve per method, as SVG (runs
-/// with an error above 1 are left to the CSV).
+/// with an error above 1 are left to the CSV); `coordinate` names the one coordinate the
+/// error was measured in (`--coordinate`), if any.
 pub fn plot(
     records: &[Record],
     title: &str,
+    coordinate: Option<&str>,
     path: &Path,
 ) -> Result<(), crate::report::plot::PlotError> {
+    let y_label = coordinate.map_or_else(
+        || "final position error".to_string(),
+        |name| format!("final error in {name}"),
+    );
     let mut labels: Vec<&str> = Vec::new();
     for r in records {
         if !labels.contains(&r.method.as_str()) {
@@ -1205,7 +1211,7 @@ pub fn plot(
     let panel = |what: &str, x_label: &str, x: fn(&Record) -> f64| Panel {
         title: format!("{title}: error against {what}"),
         x_label: x_label.into(),
-        y_label: "final position error".into(),
+        y_label: y_label.clone(),
         x_log: true,
         y_log: true,
         series: series(x),
@@ -1258,7 +1264,7 @@ pub fn execute(
     std::fs::write(&csv, to_csv(&records))
         .with_context(|| format!("cannot write {}", csv.display()))?;
     let svg = out_dir.join(format!("{stem}.svg"));
-    plot(&records, stem, &svg)?;
+    plot(&records, stem, options.coordinate.as_deref(), &svg)?;
     print!("{}", to_csv(&records));
     eprintln!("wrote {} and {}", csv.display(), svg.display());
     Ok(())
