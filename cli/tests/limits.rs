@@ -356,7 +356,7 @@ fn options_that_would_be_ignored_are_errors() {
         ),
         (
             &["stress", "--methods", "svi:6", "--tolerance", "1e-8"],
-            "--tolerance: sets DOP853's tolerance",
+            "--tolerance: sets the tolerance of dop853 and METHOD@step",
         ),
         (
             &["run", "pendulum", "--diagnostics", "momentum"],
