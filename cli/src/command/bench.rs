@@ -760,7 +760,7 @@ where
     let (t0, initial) = start;
     let span = Span::new(t0, t_end);
     let with_run = |mut options: SolveOptions| {
-        options.run = run.clone();
+        options.run = *run;
         options
     };
     let solution = match mode {
