@@ -776,6 +776,7 @@ fn bench_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
                     "svi:3/2",
                     "dop853",
                     "verlet,dopri5",
+                    "radau5",
                     ",",
                     "rk4",
                     "lie-svi",
@@ -1015,6 +1016,7 @@ fn stress_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
                 "verlet,dop853",
                 "midpoint",
                 "dopri5",
+                "radau5",
                 ",",
                 "rk4",
             ])

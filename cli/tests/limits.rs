@@ -320,7 +320,7 @@ fn options_that_would_be_ignored_are_errors() {
         ),
         (
             &["bench", "--methods", "svi:3/2", "--tolerances", "1e-8"],
-            "--tolerances: sets the tolerances of dop853 and dopri5",
+            "--tolerances: sets the tolerances of dop853, dopri5 and radau5",
         ),
         (
             &["bench", "--methods", "dop853", "--steps", "10"],
@@ -356,7 +356,7 @@ fn options_that_would_be_ignored_are_errors() {
         ),
         (
             &["stress", "--methods", "svi:6", "--tolerance", "1e-8"],
-            "--tolerance: sets DOP853's tolerance",
+            "--tolerance: sets the tolerance of dop853 and METHOD@step",
         ),
         (
             &["run", "pendulum", "--diagnostics", "momentum"],

@@ -1,14 +1,19 @@
-//! The `ode_solvers` peers of `svi bench` and `svi stress`: DOP853 and Dopri5 on the
-//! first-order form of a Lagrangian, with the settings the peers are compared at.
+//! The peers of `svi bench` and `svi stress` on the first-order form of a Lagrangian, with the
+//! settings they are compared at: `ode_solvers`' DOP853 and Dopri5 (explicit), and the stiff
+//! solver a user would pick, Radau IIA of order 5 (`differential-equations`' `radau5`, after
+//! Hairer & Wanner's RADAU5) with the exact Jacobian of the first-order form by automatic
+//! differentiation.
 
+use differential_equations::prelude::{IVP, ImplicitRungeKutta, Matrix, ODE};
 use nalgebra::{SMatrix, SVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
 use svi::{LagrangianExt, Structure, linalg::invert_small};
 use svi_models::ZooModel;
 
-/// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers`, with a
-/// fixed-size state of S = 2N components (as a user of `ode_solvers` would write it: a
-/// heap-allocated `DVector` state would cost the peers a factor of several).
+/// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers` and
+/// `differential-equations`, with a fixed-size state of S = 2N components (as a user of these
+/// crates would write it: a heap-allocated `DVector` state would cost the peers a factor of
+/// several).
 pub(crate) struct FirstOrder<'a, M, const N: usize, const S: usize> {
     model: &'a M,
     /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
@@ -30,15 +35,10 @@ impl<'a, M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'a, M, N, S>
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
-    for FirstOrder<'_, M, N, S>
-{
-    fn system(
-        &self,
-        t: f64,
-        y: &ode_solvers::SVector<f64, S>,
-        dy: &mut ode_solvers::SVector<f64, S>,
-    ) {
+impl<M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'_, M, N, S> {
+    /// (q̇, q̈) at the state y = (q, q̇), written into `dy` (NaN where the mass matrix is
+    /// singular).
+    fn rates(&self, t: f64, y: &[f64], dy: &mut [f64]) {
         let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
         let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
         let a = match self.mass_inverse {
@@ -53,6 +53,99 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SV
             dy[N + i] = a[i];
         }
     }
+}
+
+impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
+    for FirstOrder<'_, M, N, S>
+{
+    fn system(
+        &self,
+        t: f64,
+        y: &ode_solvers::SVector<f64, S>,
+        dy: &mut ode_solvers::SVector<f64, S>,
+    ) {
+        self.rates(t, y.as_slice(), dy.as_mut_slice());
+    }
+}
+
+impl<M: ZooModel<N>, const N: usize, const S: usize> ODE<f64, [f64; S]>
+    for FirstOrder<'_, M, N, S>
+{
+    fn diff(&self, t: f64, y: &[f64; S], dydt: &mut [f64; S]) {
+        self.rates(t, y, dydt);
+    }
+
+    /// [[0, I], [∂q̈/∂q, ∂q̈/∂q̇]], the acceleration's Jacobian by automatic differentiation
+    /// (NaN where the mass matrix is singular).
+    fn jacobian(&self, t: f64, y: &[f64; S], j: &mut Matrix<f64>) {
+        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
+        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+        let derivative = self.model.acceleration_jacobian(t, &q, &v);
+        for r in 0..N {
+            for c in 0..N {
+                j[(r, c)] = 0.0;
+                j[(r, N + c)] = if r == c { 1.0 } else { 0.0 };
+                let (dq, dv) = derivative
+                    .as_ref()
+                    .map_or((f64::NAN, f64::NAN), |d| (d.q[(r, c)], d.v[(r, c)]));
+                j[(N + r, c)] = dq;
+                j[(N + r, N + c)] = dv;
+            }
+        }
+    }
+}
+
+/// The tolerance at and below which `radau5` does not run: the crate, as Hairer & Wanner's
+/// RADAU5, rejects rtol ≤ 10·uround with uround = 10⁻¹⁶.
+pub(crate) const RADAU5_TOLERANCE_FLOOR: f64 = 1e-15;
+
+/// Outcome of one `radau5` run to the horizon.
+pub(crate) struct Radau5Run<const S: usize> {
+    /// The state (q, q̇) at the horizon.
+    pub(crate) last: [f64; S],
+    /// Steps taken, accepted and rejected.
+    pub(crate) steps: usize,
+    /// Right-hand-side evaluations (the Jacobian's evaluations are not counted).
+    pub(crate) evaluations: usize,
+    /// Newton iterations.
+    pub(crate) iterations: usize,
+    /// The states at the initial point and at every accepted step.
+    pub(crate) states: Vec<[f64; S]>,
+}
+
+/// `differential-equations`' Radau IIA of order 5 from `t0` to `t_end` with rtol = atol = `tol`
+/// (which the crate, as RADAU5, turns into 0.1·tol^(2/3) internally) and the crate's other
+/// defaults (its predictive step controller, Newton tolerance and starting step), the exact
+/// Jacobian of the first-order form, output at every accepted step and a high step cap (as the
+/// `ode_solvers` peers); `None` if it fails (also for `tol` ≤ [`RADAU5_TOLERANCE_FLOOR`]) or
+/// stops short.
+pub(crate) fn radau5<M: ZooModel<N>, const N: usize, const S: usize>(
+    system: &FirstOrder<'_, M, N, S>,
+    t0: f64,
+    t_end: f64,
+    y0: [f64; S],
+    tol: f64,
+) -> Option<Radau5Run<S>> {
+    let solution = IVP::ode(system, t0, t_end, y0)
+        .method(
+            ImplicitRungeKutta::radau5()
+                .rtol(tol)
+                .atol(tol)
+                .max_steps(2_000_000_000),
+        )
+        .solve()
+        .ok()?;
+    let reached = *solution.t.last()?;
+    if (reached - t_end).abs() > 1e-9 * t_end.abs().max(1.0) {
+        return None;
+    }
+    Some(Radau5Run {
+        last: *solution.y.last()?,
+        steps: solution.steps.accepted + solution.steps.rejected,
+        evaluations: solution.evals.function,
+        iterations: solution.evals.newton,
+        states: solution.y,
+    })
 }
 
 /// A constructor of an `ode_solvers` stepper from `t0` to `t_end` with rtol = atol = `tol`,

@@ -256,8 +256,12 @@ impl StressOptions {
                 reason: "no method given".into(),
             });
         }
-        if self.methods.contains(&BenchMethod::Dopri5) {
-            return Err(dopri5_not_applicable());
+        if let Some(&peer) = self
+            .methods
+            .iter()
+            .find(|method| matches!(method, BenchMethod::Dopri5 | BenchMethod::Radau5))
+        {
+            return Err(peer_not_applicable(peer));
         }
         limits::count(
             "--steps",
@@ -302,10 +306,10 @@ impl StressOptions {
     }
 }
 
-/// `dopri5` in `svi stress --methods`.
-fn dopri5_not_applicable() -> SceneError {
+/// A peer other than `dop853` (`dopri5`, `radau5`) in `svi stress --methods`.
+fn peer_not_applicable(peer: BenchMethod) -> SceneError {
     SceneError::MethodNotApplicable {
-        method: BenchMethod::Dopri5.to_string(),
+        method: peer.to_string(),
         reason: "svi stress compares with dop853 only".into(),
     }
 }
@@ -460,7 +464,7 @@ impl ModelVisitor for CaseRunner<'_> {
                     accurate: None,
                     drift: dop853_drift(&model, &setup),
                 },
-                (None, _) => return Err(dopri5_not_applicable()),
+                (None, peer) => return Err(peer_not_applicable(*peer)),
             };
             if self.options.verbose {
                 eprintln!(
@@ -976,5 +980,26 @@ mod tests {
         assert_eq!(never.beyond, None);
         assert!(never.failure.starts_with("none up to"));
         assert!(never.h.unwrap() <= 100.0 && never.h.unwrap() > 100.0 / LADDER);
+    }
+
+    #[test]
+    fn the_peers_other_than_dop853_are_refused_by_name() {
+        // dopri5 and radau5 alike: the same error, naming the peer, before anything runs.
+        for (methods, named) in [
+            ("verlet,dopri5", "dopri5"),
+            ("radau5", "radau5"),
+            ("dop853,radau5,dopri5", "radau5"),
+        ] {
+            let options = StressOptions {
+                methods: parse_methods(methods).unwrap(),
+                ..StressOptions::default()
+            };
+            let error = options.check().unwrap_err();
+            assert!(
+                matches!(&error, SceneError::MethodNotApplicable { method, reason }
+                    if method == named && reason == "svi stress compares with dop853 only"),
+                "{methods}: {error}"
+            );
+        }
     }
 }
