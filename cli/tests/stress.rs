@@ -94,34 +94,22 @@ fn beyond_the_stability_limit_the_run_stops_with_a_divergence_error() {
 
 #[test]
 fn svi_stress_measures_the_verlet_limit_and_the_kepler_drift() {
-    let dir = Scratch::new("stress");
-    let output = svi(&[
+    let (dir, csv) = stress(
         "stress",
-        "--cases",
-        "oscillator,kepler-long",
-        "--methods",
-        "verlet,svi:6,sc:6,dop853",
-        "--steps",
-        "20000",
-        "--out-dir",
-        dir.0.to_str().unwrap(),
-    ]);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+        &[
+            "--cases",
+            "oscillator,kepler-long",
+            "--methods",
+            "verlet,svi:6,sc:6,dop853",
+            "--steps",
+            "20000",
+        ],
     );
     for file in ["stress.md", "stress.csv", "windows.csv", "drift.svg"] {
         assert!(dir.0.join(file).exists(), "{file}");
     }
-    let csv = std::fs::read_to_string(dir.0.join("stress.csv")).unwrap();
-    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (header, rows) = table(&csv);
     let column = |name: &str| header.iter().position(|c| *c == name).unwrap();
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
     assert_eq!(rows.len(), 8);
     let row = |scene: &str, method: &str| {
         rows.iter()
@@ -157,35 +145,23 @@ fn svi_stress_measures_the_verlet_limit_and_the_kepler_drift() {
 
 #[test]
 fn svi_stress_runs_the_adaptive_modes_reparametrised_bounded_and_step_doubling_drifting() {
-    let dir = Scratch::new("stress-adaptive");
-    let output = svi(&[
-        "stress",
-        "--cases",
-        "kepler-long",
-        "--methods",
-        "svi:6@sundman:1,svi:6@step",
-        "--steps",
-        "20000",
-        "--bisections",
-        "1",
-        "--tolerance",
-        "1e-8",
-        "--out-dir",
-        dir.0.to_str().unwrap(),
-    ]);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
+    let (_dir, csv) = stress(
+        "stress-adaptive",
+        &[
+            "--cases",
+            "kepler-long",
+            "--methods",
+            "svi:6@sundman:1,svi:6@step",
+            "--steps",
+            "20000",
+            "--bisections",
+            "1",
+            "--tolerance",
+            "1e-8",
+        ],
     );
-    let csv = std::fs::read_to_string(dir.0.join("stress.csv")).unwrap();
-    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let (header, rows) = table(&csv);
     let column = |name: &str| header.iter().position(|c| *c == name).unwrap();
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
     assert_eq!(rows.len(), 2);
     let value = |r: &Vec<&str>, name: &str| r[column(name)].parse::<f64>().unwrap();
     // Time-reparametrised SVI is symplectic in τ: no drift over the horizon 20000 · 0.2 (the
@@ -233,4 +209,26 @@ fn svi_stress_rejects_unknown_cases_and_too_few_steps() {
         assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
         assert!(!stderr.contains("panicked"));
     }
+}
+
+/// `svi stress ARGS --out-dir` a scratch directory named `name` (the run must succeed): the
+/// directory and its stress.csv.
+fn stress(name: &str, args: &[&str]) -> (Scratch, String) {
+    let dir = Scratch::new(name);
+    let out = ["--out-dir", dir.0.to_str().unwrap()];
+    let output = svi(&[&["stress"], args, &out[..]].concat());
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.0.join("stress.csv")).unwrap();
+    (dir, csv)
+}
+
+/// The header and rows of a CSV text whose cells hold no commas.
+fn table(csv: &str) -> (Vec<&str>, Vec<Vec<&str>>) {
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap().split(',').collect();
+    (header, lines.map(|l| l.split(',').collect()).collect())
 }
