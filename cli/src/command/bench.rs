@@ -1335,6 +1335,14 @@ pub fn execute(
 mod tests {
     use super::*;
 
+    /// (method, parameter) of every record, in order.
+    fn labels(records: &[Record]) -> Vec<(&str, f64)> {
+        records
+            .iter()
+            .map(|r| (r.method.as_str(), r.parameter))
+            .collect()
+    }
+
     #[test]
     fn method_specifications_parse_and_print_back() {
         for text in [
@@ -1492,12 +1500,8 @@ mod tests {
             ..BenchOptions::default()
         };
         let records = work_precision(&scene, &options).unwrap();
-        let labels: Vec<(&str, f64)> = records
-            .iter()
-            .map(|r| (r.method.as_str(), r.parameter))
-            .collect();
         assert_eq!(
-            labels,
+            labels(&records),
             [
                 ("svi:5@sundman:1", 40.0),
                 ("svi:5@sundman:1", 80.0),
@@ -1592,12 +1596,8 @@ mod tests {
             ..BenchOptions::default()
         };
         let records = work_precision(&scene, &options).unwrap();
-        let labels: Vec<(&str, f64)> = records
-            .iter()
-            .map(|r| (r.method.as_str(), r.parameter))
-            .collect();
         assert_eq!(
-            labels,
+            labels(&records),
             [("radau5", 1e-4), ("radau5", 1e-7), ("radau5", 1e-10)]
         );
         for (record, bound) in records.iter().zip(ERROR_BOUNDS) {
