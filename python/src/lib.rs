@@ -71,6 +71,18 @@ fn invalid(option: &'static str, reason: String) -> PyErr {
     failure(SceneError::InvalidOption { option, reason })
 }
 
+/// Parse an argument written as on the command line (`method`, `monitor`).
+fn parsed<T: std::str::FromStr>(option: &'static str, text: Option<&str>) -> PyResult<Option<T>>
+where
+    T::Err: std::fmt::Display,
+{
+    text.map(|text| {
+        text.parse()
+            .map_err(|error| invalid(option, format!("{error}")))
+    })
+    .transpose()
+}
+
 /// Parse a clap value enum (`adapt`, `recovery`, `form`) by its command-line name.
 fn choice<T: ValueEnum>(option: &'static str, text: Option<&str>) -> PyResult<Option<T>> {
     text.map(|text| T::from_str(text, false).map_err(|reason| invalid(option, reason)))
@@ -88,17 +100,13 @@ fn overrides(
     params: Option<BTreeMap<String, f64>>,
     diagnostics: Option<Vec<String>>,
     output_times: Option<Vec<f64>>,
-    (adapt, monitor, tol): (Option<&str>, Option<&str>, Option<f64>),
+    adapt: Option<&str>,
+    monitor: Option<&str>,
+    tol: Option<f64>,
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
     form: Option<&str>,
 ) -> PyResult<Overrides> {
-    let method = method
-        .map(|text| {
-            text.parse()
-                .map_err(|error| invalid("method", format!("{error}")))
-        })
-        .transpose()?;
     let diagnostics = diagnostics
         .map(|names| {
             names
@@ -109,7 +117,7 @@ fn overrides(
         })
         .transpose()?;
     Ok(Overrides {
-        method,
+        method: parsed("method", method)?,
         points,
         quadrature,
         h,
@@ -117,12 +125,7 @@ fn overrides(
         parameters: params.unwrap_or_default().into_iter().collect(),
         diagnostics,
         adapt: choice::<AdaptMode>("adapt", adapt)?,
-        monitor: monitor
-            .map(|text| {
-                text.parse()
-                    .map_err(|error| invalid("monitor", format!("{error}")))
-            })
-            .transpose()?,
+        monitor: parsed("monitor", monitor)?,
         tol,
         output_times,
         recovery: choice::<RecoveryKind>("recovery", recovery)?,
@@ -227,7 +230,9 @@ fn run(
         params,
         diagnostics,
         output_times,
-        (adapt, monitor, tol),
+        adapt,
+        monitor,
+        tol,
         recovery,
         divergence_limit,
         form,
@@ -353,7 +358,9 @@ fn ensemble(
         None,
         diagnostics,
         None,
-        (adapt, monitor, tol),
+        adapt,
+        monitor,
+        tol,
         recovery,
         divergence_limit,
         form,

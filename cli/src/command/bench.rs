@@ -17,8 +17,9 @@
 //! `differential-equations`' Radau5 with the exact Jacobian by automatic differentiation, on
 //! the first-order form q̇ = v, v̇ = q̈(t, q, v) derived from the Lagrangian) sweep
 //! tol = 10⁻³, 10⁻³·⁵, …, 10⁻¹⁶ (Radau5, whose error falls as about tol^0.55: 10⁻³, 10⁻⁴,
-//! …, 10⁻¹⁴, as RADAU5 rejects rtol ≤ 10⁻¹⁵) with rtol = atol = tol and sparse output. A sweep stops at the target error, when a single run
-//! takes longer than `max_run`, or when the error has stalled for three points (round-off).
+//! …, 10⁻¹⁴, as RADAU5 rejects rtol ≤ 10⁻¹⁵) with rtol = atol = tol and sparse output. A
+//! sweep stops at the target error, when a single run takes longer than `max_run`, or when
+//! the error has stalled for three points (round-off).
 //! Given step counts ([`BenchOptions::steps`]) or tolerances ([`BenchOptions::tolerances`])
 //! replace the sweep: every one of them is measured, and a run that fails is an error.
 //!
@@ -31,7 +32,7 @@
 //! steps ([`svi::stepping::sem`]), swept over its first step (t_end − t0)/n like a fixed-step
 //! method (its `steps` count every trial step of the energy equation).
 
-use crate::command::peers::{FirstOrder, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
+use crate::command::peers::{FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
 use crate::report::csv;
 use crate::report::plot::{Panel, Series, write_svg};
 use crate::scene::builtin::DEFAULT_SCENE;
@@ -78,9 +79,9 @@ pub enum BenchMethod {
 }
 
 impl BenchMethod {
-    /// Whether the method is swept over step counts (the library's fixed-step methods and
-    /// their τ-steps), not tolerances.
-    fn takes_steps(&self) -> bool {
+    /// Whether the method is swept over step counts (the library's fixed-step methods, their
+    /// τ-steps and SEM's first steps), not tolerances.
+    pub(crate) fn takes_steps(&self) -> bool {
         matches!(
             self,
             BenchMethod::Library(_) | BenchMethod::Reparam(..) | BenchMethod::Sem(_)
@@ -1015,27 +1016,13 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     Ok(())
 }
 
-/// Outcome of one adaptive run to the horizon.
-struct AdaptiveRun<const S: usize> {
-    /// The state (q, q̇) at the horizon.
-    last: ode_solvers::SVector<f64, S>,
-    /// Steps taken, accepted and rejected.
-    steps: usize,
-    /// Right-hand-side evaluations.
-    evaluations: usize,
-    /// Newton iterations (Radau5; none for the explicit peers).
-    iterations: usize,
-    /// The states at the accepted steps.
-    states: Vec<ode_solvers::SVector<f64, S>>,
-}
-
 /// One DOP853 / Dopri5 / Radau5 run to the horizon (`None` if it fails or stops short).
 fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
     system: FirstOrder<'_, M, N, S>,
     spec: BenchMethod,
     problem: &Problem<N>,
     tol: f64,
-) -> Option<AdaptiveRun<S>> {
+) -> Option<PeerRun<S>> {
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(
         problem.q0.iter().chain(problem.v0.iter()).copied(),
     );
@@ -1044,13 +1031,11 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
         ($stepper:expr) => {{
             let mut stepper = $stepper;
             let stats = stepper.integrate().ok()?;
-            let last = stepper.y_out().last()?.clone();
             let reached = *stepper.x_out().last()?;
             if (reached - t_end).abs() > 1e-9 * t_end.abs().max(1.0) {
                 return None;
             }
-            Some(AdaptiveRun {
-                last,
+            Some(PeerRun {
                 steps: (stats.accepted_steps + stats.rejected_steps) as usize,
                 evaluations: stats.num_eval as usize,
                 iterations: 0,
@@ -1060,16 +1045,7 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
     }
     match spec {
         BenchMethod::Dop853 => go!(dop853(system, t0, t_end, y0, tol)),
-        BenchMethod::Radau5 => {
-            let run = radau5(&system, t0, t_end, y0.into(), tol)?;
-            Some(AdaptiveRun {
-                last: run.last.into(),
-                steps: run.steps,
-                evaluations: run.evaluations,
-                iterations: run.iterations,
-                states: run.states.into_iter().map(Into::into).collect(),
-            })
-        }
+        BenchMethod::Radau5 => radau5(&system, t0, t_end, y0.into(), tol),
         _ => go!(dopri5(system, t0, t_end, y0, tol)),
     }
 }
@@ -1108,13 +1084,13 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     let system = || FirstOrder::<M, N, S>::new(model, problem.t0, &problem.q0, &problem.v0);
     let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);
     let measure = |tol: f64| -> Option<Record> {
-        let AdaptiveRun {
-            last,
+        let PeerRun {
             steps,
             evaluations,
             iterations,
             states,
         } = adaptive_run(system(), spec, problem, tol)?;
+        let last = states.last()?;
         let q = SVector::<f64, N>::from_fn(|i, _| last[i]);
         let energy_error_max = states
             .iter()

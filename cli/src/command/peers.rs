@@ -99,18 +99,16 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> ODE<f64, [f64; S]>
 /// RADAU5, rejects rtol ≤ 10·uround with uround = 10⁻¹⁶.
 pub(crate) const RADAU5_TOLERANCE_FLOOR: f64 = 1e-15;
 
-/// Outcome of one `radau5` run to the horizon.
-pub(crate) struct Radau5Run<const S: usize> {
-    /// The state (q, q̇) at the horizon.
-    pub(crate) last: [f64; S],
+/// Outcome of one adaptive peer run to the horizon.
+pub(crate) struct PeerRun<const S: usize> {
     /// Steps taken, accepted and rejected.
     pub(crate) steps: usize,
-    /// Right-hand-side evaluations (the Jacobian's evaluations are not counted).
+    /// Right-hand-side evaluations (a Jacobian's evaluations are not counted).
     pub(crate) evaluations: usize,
-    /// Newton iterations.
+    /// Newton iterations (none for the explicit peers).
     pub(crate) iterations: usize,
-    /// The states at the initial point and at every accepted step.
-    pub(crate) states: Vec<[f64; S]>,
+    /// The states (q, q̇) at the accepted steps, the last one at the horizon (never empty).
+    pub(crate) states: Vec<ode_solvers::SVector<f64, S>>,
 }
 
 /// `differential-equations`' Radau IIA of order 5 from `t0` to `t_end` with rtol = atol = `tol`
@@ -125,7 +123,7 @@ pub(crate) fn radau5<M: ZooModel<N>, const N: usize, const S: usize>(
     t_end: f64,
     y0: [f64; S],
     tol: f64,
-) -> Option<Radau5Run<S>> {
+) -> Option<PeerRun<S>> {
     let solution = IVP::ode(system, t0, t_end, y0)
         .method(
             ImplicitRungeKutta::radau5()
@@ -139,12 +137,11 @@ pub(crate) fn radau5<M: ZooModel<N>, const N: usize, const S: usize>(
     if (reached - t_end).abs() > 1e-9 * t_end.abs().max(1.0) {
         return None;
     }
-    Some(Radau5Run {
-        last: *solution.y.last()?,
+    Some(PeerRun {
         steps: solution.steps.accepted + solution.steps.rejected,
         evaluations: solution.evals.function,
         iterations: solution.evals.newton,
-        states: solution.y,
+        states: solution.y.into_iter().map(Into::into).collect(),
     })
 }
 

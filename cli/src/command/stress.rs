@@ -270,16 +270,10 @@ impl StressOptions {
             MAX_DRIFT_STEPS,
             "steps",
         )?;
-        let searched = self.methods.iter().any(|method| {
-            matches!(
-                method,
-                BenchMethod::Library(_) | BenchMethod::Reparam(..) | BenchMethod::Sem(_)
-            )
-        });
-        let tolerance_driven = self
-            .methods
-            .iter()
-            .any(|method| matches!(method, BenchMethod::Dop853 | BenchMethod::StepDoubling(_)));
+        // Dopri5 and Radau5 are refused above: the methods left without steps are dop853
+        // and METHOD@step, which take --tolerance.
+        let searched = self.methods.iter().any(BenchMethod::takes_steps);
+        let tolerance_driven = self.methods.iter().any(|method| !method.takes_steps());
         if let Some(bisections) = self.bisections {
             limits::count("--bisections", bisections, 0, MAX_BISECTIONS, "bisections")?;
             if !searched {

@@ -35,9 +35,10 @@ pub const MAX_DRIFT_STEPS: usize = 10_000_000;
 pub const MAX_BISECTIONS: usize = 50;
 
 /// Smallest tolerance of the adaptive peers (`dop853`, `dopri5`; `svi bench --tolerances`,
-/// `svi stress --tolerance`): 1e-20 (`radau5` needs more, see `svi bench --help`). Their error stops improving near 1e-16 (round-off),
-/// while their step count, and the step points `ode_solvers` keeps, grow as tol^(−1/order)
-/// without bound: at 1e-300 some 10³⁵ times as many steps.
+/// `svi stress --tolerance`): 1e-20 (`radau5` needs more, see `svi bench --help`). Their
+/// error stops improving near 1e-16 (round-off), while their step count, and the step points
+/// `ode_solvers` keeps, grow as tol^(−1/order) without bound: at 1e-300 some 10³⁵ times as
+/// many steps.
 pub const MIN_PEER_TOLERANCE: f64 = 1e-20;
 
 /// A tolerance of an adaptive peer for `option`: finite and at least
