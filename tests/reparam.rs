@@ -4,15 +4,15 @@
 
 use nalgebra::SVector;
 use std::ops::ControlFlow;
-use svi::model::reparametrized::{Monitor, Reparametrized, Sundman};
+use svi::model::reparametrized::{Force, Monitor, MonitorSpec, Reparametrized, Sundman};
 use svi::observer::Observer;
 use svi::solve::{SolveOptions, Span};
 use svi::stepping::reparam::solve_reparametrized;
 use svi::{
-    Defaults, Error, ExactSolution, Initial, Integrator, LagrangianExt, Method, PhasePoint, Scalar,
-    State, StormerVerlet, Svi,
+    Defaults, Error, ExactSolution, Initial, Integrator, Lagrangian, LagrangianExt, Method,
+    PhasePoint, Scalar, State, StormerVerlet, Svi,
 };
-use svi_models::Kepler;
+use svi_models::{HarmonicOscillator, Kepler};
 
 /// Kepler e = 0.9 from its pericentre: (model, q0, v0).
 fn eccentric() -> (Kepler, SVector<f64, 2>, SVector<f64, 2>) {
@@ -164,7 +164,7 @@ fn the_energy_error_stays_bounded() {
 /// g = −1: not a monitor.
 struct Negative;
 impl Monitor<2> for Negative {
-    fn monitor<D: Scalar>(&self, q: &SVector<D, 2>) -> D {
+    fn monitor<D: Scalar, L: Lagrangian<2> + ?Sized>(&self, _model: &L, q: &SVector<D, 2>) -> D {
         q[0] * 0.0 - 1.0
     }
 }
@@ -234,4 +234,56 @@ fn the_last_step_lands_on_the_horizon_near_a_close_approach() {
         let (q, _) = model.exact_solution(0.0, &q0, &v0, t_end).unwrap();
         assert!((solution.last.q - q).norm() < 1e-4, "t_end = {t_end}");
     }
+}
+
+#[test]
+fn the_force_monitor_of_kepler_is_sundman_three_halves() {
+    // Kepler's force at rest is |∂L/∂q| = 1/r² (μ = 1), so |F|^(−3/4) = r^(3/2): the force
+    // monitor, derived from L by nested dual numbers, must take the steps of sundman:1.5 —
+    // the same final state to round-off over two periods of e = 0.9.
+    let (model, q0, v0) = eccentric();
+    let t_end = 4.0 * std::f64::consts::PI;
+    let run = |monitor: MonitorSpec| {
+        solve_reparametrized(
+            model,
+            Svi::new(7).with_quadrature(6),
+            monitor,
+            &Span::new(0.0, t_end),
+            Initial::Velocity { q: q0, v: v0 },
+            &SolveOptions::fixed_step(0.05),
+        )
+        .unwrap()
+    };
+    let sundman = run(MonitorSpec::Sundman(Sundman { alpha: 1.5 }));
+    let force = run(MonitorSpec::Force(Force { beta: 0.75 }));
+    assert_eq!(force.statistics.steps, sundman.statistics.steps);
+    let difference =
+        (force.last.q - sundman.last.q).norm() + (force.last.v - sundman.last.v).norm();
+    assert!(difference < 1e-11, "{difference:e}");
+    // And both meet the exact orbit.
+    let (q, _) = model.exact_solution(0.0, &q0, &v0, t_end).unwrap();
+    let error = (force.last.q - q).norm();
+    assert!(error < 1e-9, "{error:e}");
+}
+
+#[test]
+fn the_force_monitor_at_an_equilibrium_is_a_typed_error() {
+    // The oscillator starts at q = 0, where the force vanishes: g = |F|^(−β) = ∞.
+    let model = HarmonicOscillator::default();
+    let error = solve_reparametrized(
+        model,
+        StormerVerlet::default(),
+        Force { beta: 0.5 },
+        &Span::new(0.0, 1.0),
+        Initial::Velocity {
+            q: SVector::from([0.0]),
+            v: SVector::from([1.0]),
+        },
+        &SolveOptions::fixed_step(0.01),
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "monitor"),
+        "{error}"
+    );
 }

@@ -24,21 +24,48 @@
 //!
 //! # Monitors
 //! A [`Monitor`] is written once, generic over [`Scalar`] (the integrators differentiate
-//! it). [`Sundman`]: g = |q|^α for central forces (α = 3/2 makes Kepler steps uniform in the
-//! mean anomaly's rate of change at pericentre, α = 1 is the eccentric anomaly).
-//! [`MonitorSpec`] names the monitors the command line knows (`sundman:ALPHA`).
+//! it), and may read the model. [`Sundman`]: g = |q|^α for central forces (α = 3/2 makes
+//! Kepler steps uniform in the mean anomaly's rate of change at pericentre, α = 1 is the
+//! eccentric anomaly). [`Force`]: g = |F(q)|^(−β) with F = ∂L/∂q(q, 0), the generalised force
+//! at rest (−∇V for L = ½q̇ᵀM(q)q̇ − V(q)), derived from L by automatic differentiation
+//! (nested in the integrators' own dual numbers), for any model: steps shrink where the force
+//! is strong. For a central force μ/r² it is Sundman's monitor, |F|^(−β) = μ^(−β) r^(2β), so
+//! `force:0.75` takes the steps of `sundman:1.5` (Δτ scaled by μ^(3/4)). A point where the
+//! force vanishes (an equilibrium) has g = ∞: the run stops there with a typed error.
+//! [`MonitorSpec`] names the monitors the command line knows (`sundman:ALPHA`,
+//! `force:BETA`).
 
 use crate::error::Error;
 use crate::model::Lagrangian;
 use crate::scalar::{Scalar, constant};
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
+use num_dual::{DualVec, gradient};
 use std::fmt;
 use std::str::FromStr;
 
 /// A time monitor g(q) > 0: dt/dτ = g(q) (small where the motion is fast).
 pub trait Monitor<const N: usize> {
-    /// The value g(q), written once generic over the scalar (it is differentiated).
-    fn monitor<D: Scalar>(&self, q: &SVector<D, N>) -> D;
+    /// The value g(q) for `model`, written once generic over the scalar (it is
+    /// differentiated). Monitors of the positions alone ignore `model`.
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D;
+}
+
+/// x^(α/2) from x = r² ≥ 0: the exponents α = 1/2, 1, 3/2, 2 and 3 by square roots and
+/// products (a general power costs several `pow` calls on dual numbers: 16 % of a
+/// reparametrised Kepler step with α = 1), others by `powf`.
+#[inline]
+fn half_power<D: Scalar>(x: D, alpha: f64) -> D {
+    match alpha {
+        0.5 => x.sqrt().sqrt(),
+        1.0 => x.sqrt(),
+        1.5 => {
+            let r = x.sqrt();
+            r * r.sqrt()
+        }
+        2.0 => x,
+        3.0 => x * x.sqrt(),
+        alpha => x.powf(0.5 * alpha),
+    }
 }
 
 /// The Sundman monitor g(q) = |q|^α of a central force about the origin.
@@ -49,34 +76,51 @@ pub struct Sundman {
 }
 
 impl<const N: usize> Monitor<N> for Sundman {
-    /// |q|^α from r² = |q|²; the exponents 1, 3/2, 2 and 3 by square roots and products (a
-    /// general power costs several `pow` calls on dual numbers: 16 % of a reparametrised
-    /// Kepler step with α = 1).
+    /// |q|^α from r² = |q|².
     #[inline]
-    fn monitor<D: Scalar>(&self, q: &SVector<D, N>) -> D {
-        let r2 = q.dot(q);
-        match self.alpha {
-            1.0 => r2.sqrt(),
-            1.5 => {
-                let r = r2.sqrt();
-                r * r.sqrt()
-            }
-            2.0 => r2,
-            3.0 => r2 * r2.sqrt(),
-            alpha => r2.powf(0.5 * alpha),
-        }
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, _model: &L, q: &SVector<D, N>) -> D {
+        half_power(q.dot(q), self.alpha)
+    }
+}
+
+/// The force monitor g(q) = |∂L/∂q(q, 0)|^(−β): the generalised force at rest, by automatic
+/// differentiation of the model's Lagrangian (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Force {
+    /// The exponent β (finite; β = 3/4 is Sundman's 3/2 for an inverse-square force).
+    pub beta: f64,
+}
+
+impl<const N: usize> Monitor<N> for Force {
+    /// (|F|²)^(−β/2) from F = ∂L/∂q at q̇ = 0, t = 0 (one gradient sweep in dual numbers
+    /// over the caller's scalar).
+    #[inline]
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D {
+        let (_, force) = gradient(
+            |x: SVector<DualVec<D, Const<N>>, N>| {
+                model.lagrangian(
+                    DualVec::from_re(constant(0.0)),
+                    &x,
+                    &SVector::from_element(DualVec::from_re(constant(0.0))),
+                )
+            },
+            q,
+        );
+        half_power(force.dot(&force), self.beta).recip()
     }
 }
 
 /// The monitors known by name (the command line's `--monitor`).
 ///
-/// Grammar: `sundman:ALPHA` (g = |q|^ALPHA, ALPHA a finite number, e.g. `sundman:1.5`) or
-/// `sundman` (α = 3/2).
+/// Grammar: `sundman:ALPHA` (g = |q|^ALPHA, ALPHA a finite number, e.g. `sundman:1.5`),
+/// `sundman` (α = 3/2), `force:BETA` (g = |∂L/∂q(q, 0)|^(−BETA)) or `force` (β = 3/4).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub enum MonitorSpec {
     /// [`Sundman`].
     Sundman(Sundman),
+    /// [`Force`].
+    Force(Force),
 }
 
 impl Default for MonitorSpec {
@@ -88,9 +132,10 @@ impl Default for MonitorSpec {
 
 impl<const N: usize> Monitor<N> for MonitorSpec {
     #[inline]
-    fn monitor<D: Scalar>(&self, q: &SVector<D, N>) -> D {
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D {
         match self {
-            MonitorSpec::Sundman(sundman) => sundman.monitor(q),
+            MonitorSpec::Sundman(sundman) => sundman.monitor(model, q),
+            MonitorSpec::Force(force) => force.monitor(model, q),
         }
     }
 }
@@ -103,28 +148,38 @@ impl FromStr for MonitorSpec {
             Some((name, argument)) => (name.trim(), Some(argument.trim())),
             None => (text, None),
         };
-        match name {
-            "sundman" => {
-                let alpha = match argument {
-                    None => 1.5,
-                    Some(argument) => argument.parse::<f64>().map_err(|_| {
-                        Error::invalid(
-                            "monitor",
-                            format!("'{argument}' is not a number (expected sundman:ALPHA)"),
-                        )
-                    })?,
-                };
-                if !alpha.is_finite() {
-                    return Err(Error::invalid(
+        let exponent = |default: f64, grammar: &str| -> Result<f64, Error> {
+            let value = match argument {
+                None => default,
+                Some(argument) => argument.parse::<f64>().map_err(|_| {
+                    Error::invalid(
                         "monitor",
-                        format!("the exponent of sundman:ALPHA must be finite, not {alpha}"),
-                    ));
-                }
-                Ok(MonitorSpec::Sundman(Sundman { alpha }))
+                        format!("'{argument}' is not a number (expected {grammar})"),
+                    )
+                })?,
+            };
+            if value.is_finite() {
+                Ok(value)
+            } else {
+                Err(Error::invalid(
+                    "monitor",
+                    format!("the exponent of {grammar} must be finite, not {value}"),
+                ))
             }
+        };
+        match name {
+            "sundman" => Ok(MonitorSpec::Sundman(Sundman {
+                alpha: exponent(1.5, "sundman:ALPHA")?,
+            })),
+            "force" => Ok(MonitorSpec::Force(Force {
+                beta: exponent(0.75, "force:BETA")?,
+            })),
             other => Err(Error::invalid(
                 "monitor",
-                format!("unknown monitor {other:?}; use sundman:ALPHA (g = |q|^ALPHA)"),
+                format!(
+                    "unknown monitor {other:?}; use sundman:ALPHA (g = |q|^ALPHA) or force:BETA \
+                     (g = |∂L/∂q(q, 0)|^(−BETA))"
+                ),
             )),
         }
     }
@@ -134,6 +189,7 @@ impl fmt::Display for MonitorSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             MonitorSpec::Sundman(Sundman { alpha }) => write!(f, "sundman:{alpha}"),
+            MonitorSpec::Force(Force { beta }) => write!(f, "force:{beta}"),
         }
     }
 }
@@ -186,6 +242,16 @@ impl<'a, L, G> Reparametrized<'a, L, G> {
     pub fn energy_level(&self) -> f64 {
         self.energy
     }
+
+    /// The monitor's value g(q) for the model.
+    #[inline]
+    pub fn monitor_value<D: Scalar, const N: usize>(&self, q: &SVector<D, N>) -> D
+    where
+        L: Lagrangian<N>,
+        G: Monitor<N>,
+    {
+        self.monitor.monitor(self.model, q)
+    }
 }
 
 impl<L: Lagrangian<N>, G: Monitor<N>, const N: usize> Lagrangian<N> for Reparametrized<'_, L, G> {
@@ -193,7 +259,7 @@ impl<L: Lagrangian<N>, G: Monitor<N>, const N: usize> Lagrangian<N> for Reparame
 
     #[inline]
     fn lagrangian<D: Scalar>(&self, _tau: D, q: &SVector<D, N>, w: &SVector<D, N>) -> D {
-        let g = self.monitor.monitor(q);
+        let g = self.monitor_value(q);
         let inverse = g.recip();
         let v = w.map(|x| x * inverse);
         g * (self.model.lagrangian(constant(0.0), q, &v) + constant::<D>(self.energy))
@@ -212,7 +278,7 @@ mod tests {
         for alpha in [1.0, 1.5, 2.0, 3.0, 0.7, -1.0] {
             let g = Sundman { alpha };
             let q = SVector::from([Dual64::from_re(3.0).derivative(), Dual64::from_re(4.0)]);
-            let value = Monitor::<2>::monitor(&g, &q);
+            let value = Monitor::<2>::monitor(&g, &Kepler, &q);
             let (exact, slope) = (5f64.powf(alpha), alpha * 5f64.powf(alpha - 2.0) * 3.0);
             assert!(
                 (value.re - exact).abs() <= 4.0 * f64::EPSILON * exact,
@@ -222,6 +288,39 @@ mod tests {
                 (value.eps - slope).abs() <= 8.0 * f64::EPSILON * slope.abs(),
                 "α = {alpha}"
             );
+        }
+    }
+
+    #[test]
+    fn the_force_monitor_is_the_force_at_rest_with_its_derivative() {
+        // A spring pendulum in (a, θ) with a position-dependent mass matrix: the force at
+        // rest F = (−k a + m g cos θ, −m g (l + a) sin θ) ignores the kinetic energy, and
+        // g = |F|^(−β); its derivative in a against the closed form.
+        use num_dual::Dual64;
+        struct Spring;
+        const K: f64 = 50.0;
+        impl Lagrangian<2> for Spring {
+            fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+                let length = q[0] + 1.0;
+                (v[0] * v[0] + length * length * v[1] * v[1]) * 0.5 + length * q[1].cos() * 9.81
+                    - q[0] * q[0] * (0.5 * K)
+            }
+        }
+        let (a, theta): (f64, f64) = (0.3, 0.7);
+        let force = |a: f64| {
+            SVector::<f64, 2>::from([-K * a + 9.81 * theta.cos(), -9.81 * (1.0 + a) * theta.sin()])
+        };
+        for beta in [0.75, 0.5, 1.0, 0.4] {
+            let monitor = Force { beta };
+            let q = SVector::from([Dual64::from_re(a).derivative(), Dual64::from_re(theta)]);
+            let g = Monitor::<2>::monitor(&monitor, &Spring, &q);
+            let exact = force(a).norm().powf(-beta);
+            // d|F|^(−β)/da = −β |F|^(−β−2) F·∂F/∂a, ∂F/∂a = (−k, −g sin θ).
+            let slope = -beta
+                * force(a).norm().powf(-beta - 2.0)
+                * force(a).dot(&SVector::from([-K, -9.81 * theta.sin()]));
+            assert!((g.re - exact).abs() <= 1e-15 * exact, "β = {beta}");
+            assert!((g.eps - slope).abs() <= 1e-14 * slope.abs(), "β = {beta}");
         }
     }
 
@@ -260,7 +359,13 @@ mod tests {
             "sundman".parse::<MonitorSpec>().unwrap(),
             MonitorSpec::default()
         );
-        for bad in ["sundman:x", "sundman:inf", "r^2", ""] {
+        assert_eq!(
+            "force".parse::<MonitorSpec>().unwrap(),
+            MonitorSpec::Force(Force { beta: 0.75 })
+        );
+        let spec: MonitorSpec = " force : 0.5 ".parse().unwrap();
+        assert_eq!(spec.to_string(), "force:0.5");
+        for bad in ["sundman:x", "sundman:inf", "force:nan", "force:", "r^2", ""] {
             let error = bad.parse::<MonitorSpec>().unwrap_err();
             assert!(
                 matches!(&error, Error::InvalidParameter { name, .. } if name == "monitor"),

@@ -46,12 +46,12 @@ use nalgebra::SVector;
 const TIME_NEWTON_ITERATIONS: usize = 40;
 
 /// The value g(q), checked positive and finite.
-fn monitor_value<G: Monitor<N>, const N: usize>(
-    monitor: &G,
+fn monitor_value<L: Lagrangian<N>, G: Monitor<N>, const N: usize>(
+    tilde: &Reparametrized<'_, L, G>,
     q: &SVector<f64, N>,
     tau: f64,
 ) -> Result<f64, Error> {
-    let g = monitor.monitor(q);
+    let g = tilde.monitor_value(q);
     if g.is_finite() && g > 0.0 {
         Ok(g)
     } else {
@@ -78,11 +78,11 @@ impl TimeRule {
     /// ∫₀^{θΔτ} g(q(σ)) dσ over the step just taken from `start` with size `dtau`, for
     /// θ ∈ (0, 1]; `end` is the step's end state (used without a step polynomial, θ = 1).
     #[allow(clippy::too_many_arguments)]
-    fn elapsed<M: Method<N>, G: Monitor<N>, const N: usize>(
+    fn elapsed<L: Lagrangian<N>, M: Method<N>, G: Monitor<N>, const N: usize>(
         &self,
         method: &M,
         workspace: &M::Workspace,
-        monitor: &G,
+        tilde: &Reparametrized<'_, L, G>,
         start: &State<N>,
         end: &State<N>,
         dtau: f64,
@@ -96,11 +96,11 @@ impl TimeRule {
                 if theta < 1.0 {
                     return Ok(None);
                 }
-                let g0 = monitor_value(monitor, &start.q, tau)?;
-                let g1 = monitor_value(monitor, &end.q, tau + dtau)?;
+                let g0 = monitor_value(tilde, &start.q, tau)?;
+                let g1 = monitor_value(tilde, &end.q, tau + dtau)?;
                 return Ok(Some(0.5 * dtau * (g0 + g1)));
             };
-            sum += w * monitor_value(monitor, &q, tau + at * dtau)?;
+            sum += w * monitor_value(tilde, &q, tau + at * dtau)?;
         }
         Ok(Some(0.5 * theta * dtau * sum))
     }
@@ -150,7 +150,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             .map_err(rejected)?;
         let energy = model.energy(span.t0, &first.q, &first.v);
         let tilde = Reparametrized::new(model, monitor, energy).map_err(rejected)?;
-        let g0 = monitor_value(monitor, &first.q, 0.0).map_err(rejected)?;
+        let g0 = monitor_value(&tilde, &first.q, 0.0).map_err(rejected)?;
         let inner: Integrator<_, M, Euclidean<N>> = Integrator::new(tilde, method.clone());
         let mut progress = inner
             .start(
@@ -201,7 +201,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                         workspace: &M::Workspace|
          -> Result<(PhasePoint<N>, SVector<f64, N>), Error> {
             let point = inner.complete(Some(workspace), 0, tau, state, guess)?;
-            let g = monitor_value(monitor, &point.q, tau)?;
+            let g = monitor_value(inner.model(), &point.q, tau)?;
             let physical = PhasePoint {
                 t,
                 q: point.q,
@@ -238,7 +238,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                     .elapsed(
                         method,
                         workspace,
-                        monitor,
+                        inner.model(),
                         &begin.state,
                         &cursor.state,
                         size,
@@ -280,7 +280,6 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                         &inner,
                         &time,
                         &workspace,
-                        monitor,
                         &begin.state,
                         clock.t,
                         tau,
@@ -315,7 +314,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                     } else {
                         lo = size;
                     }
-                    let g = monitor_value(monitor, &progress.cursor.state.q, tau + size)
+                    let g = monitor_value(inner.model(), &progress.cursor.state.q, tau + size)
                         .map_err(|error| failure(error, &last, progress.statistics))?;
                     size -= residual / g;
                     if !(size > lo && size < hi) {
@@ -385,7 +384,6 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         inner: &Integrator<Reparametrized<'_, L, G>, M, Euclidean<N>>,
         time: &TimeRule,
         workspace: &M::Workspace,
-        monitor: &G,
         start: &State<N>,
         t: f64,
         tau: f64,
@@ -407,7 +405,16 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let mut theta = ((target - t) / dt).clamp(0.0, 1.0);
         for _ in 0..TIME_NEWTON_ITERATIONS {
             let elapsed = time
-                .elapsed(method, workspace, monitor, start, start, size, theta, tau)?
+                .elapsed(
+                    method,
+                    workspace,
+                    inner.model(),
+                    start,
+                    start,
+                    size,
+                    theta,
+                    tau,
+                )?
                 .ok_or_else(no_polynomial)?;
             let residual = t + elapsed - target;
             if residual.abs() <= 4.0 * f64::EPSILON * target.abs().max(1.0) {
@@ -416,13 +423,13 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             let (q, _) = method
                 .dense_output(workspace, start, size, theta)
                 .ok_or_else(no_polynomial)?;
-            let g = monitor_value(monitor, &q, tau + theta * size)?;
+            let g = monitor_value(inner.model(), &q, tau + theta * size)?;
             theta = (theta - residual / (g * size)).clamp(0.0, 1.0);
         }
         let (q, w) = method
             .dense_output(workspace, start, size, theta)
             .ok_or_else(no_polynomial)?;
-        let g = monitor_value(monitor, &q, tau + theta * size)?;
+        let g = monitor_value(inner.model(), &q, tau + theta * size)?;
         let p = inner.model().momentum(0.0, &q, &w);
         Ok(PhasePoint {
             t: target,

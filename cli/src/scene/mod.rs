@@ -37,7 +37,8 @@
 //!                       # step: methods with points), both to meet `tol`, or "reparam"
 //!                       # (fixed steps in τ, dt = g(q) dτ: structure-preserving)
 //! # tol = 1e-9          # target final error of adapt = "step" and "degree" (only with them)
-//! # monitor = "sundman:1.5"  # g(q) = |q|^1.5 of adapt = "reparam" (only with it; default)
+//! # monitor = "sundman:1.5"  # g(q) = |q|^1.5 of adapt = "reparam" (only with it; default),
+//!                       # or "force:BETA": g = |∂L/∂q(q, 0)|^(−BETA), any model
 //! # min_points = 3      # bounds of adapt = "degree" (defaults 3 and 24; only with it)
 //! # max_points = 24
 //! recovery = "none"     # or "halve-step": retry a failed step as two half steps (adapt =

@@ -134,7 +134,7 @@ pub struct RunSection {
     pub tol: Option<f64>,
     /// The monitor g(q) of `adapt = "reparam"` (dt = g dτ), as
     /// [`svi::model::reparametrized::MonitorSpec`] parses it, e.g. `"sundman:1.5"`
-    /// (default).
+    /// (default) or `"force:0.75"`.
     pub monitor: Option<String>,
     /// Fewest CGL points of `adapt = "degree"` (default 3).
     pub min_points: Option<usize>,
