@@ -21,6 +21,7 @@
 //! | name | model | n (default) | invariants | observables (trajectory CSV) |
 //! | --- | --- | --- | --- | --- |
 //! | `fput` | [`Fput`] | 32 | — | energies of the first min(n, 8) normal modes, `mode_1`, … |
+//! | `fput-stiff` | [`FputStiff`] | 6 (m = 3) | — | the stiff springs' oscillatory energies `oscillatory_1`, … (at most 8) and their sum `oscillatory_sum` |
 //! | `toda` | [`Toda`] | 16 | tr 𝕃ᵏ, k = 1…4 (Lax traces) | the four Lax traces |
 //! | `relativistic-chain` | [`RelativisticChain`] | 32 | — | the largest speed, max ∣q̇ᵢ∣/c |
 //!
@@ -96,6 +97,7 @@ pub mod double_pendulum;
 pub mod driven_oscillator;
 pub mod fields;
 pub mod fput;
+pub mod fput_stiff;
 pub mod kepler;
 pub mod oscillator;
 pub mod pendulum;
@@ -115,6 +117,7 @@ pub use double_pendulum::DoublePendulum;
 pub use driven_oscillator::DrivenOscillator;
 pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
 pub use fput::Fput;
+pub use fput_stiff::FputStiff;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
@@ -368,6 +371,29 @@ impl LocalZooModel for Fput {
     }
 }
 
+/// The number of stiff springs whose oscillatory energies a stiff–soft FPU trajectory writes
+/// (their sum covers all m).
+pub const FPUT_STIFF_OBSERVED_SPRINGS: usize = 8;
+
+impl LocalZooModel for FputStiff {
+    /// `oscillatory_1`, …, `oscillatory_k` with k = min(m, [`FPUT_STIFF_OBSERVED_SPRINGS`]),
+    /// and `oscillatory_sum`.
+    fn observable_names(&self) -> Vec<String> {
+        (1..=self.m.min(FPUT_STIFF_OBSERVED_SPRINGS))
+            .map(|i| format!("oscillatory_{i}"))
+            .chain(std::iter::once("oscillatory_sum".to_owned()))
+            .collect()
+    }
+
+    /// The oscillatory energies of the first springs and their sum over all m
+    /// ([`FputStiff::oscillatory_energies`]).
+    fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
+        let energies = self.oscillatory_energies(q, v);
+        out.extend(energies.iter().take(FPUT_STIFF_OBSERVED_SPRINGS));
+        out.push(energies.iter().sum());
+    }
+}
+
 impl LocalZooModel for Toda {
     /// The invariants' names, `trace_lax_1`, …, `trace_lax_4`.
     fn observable_names(&self) -> Vec<String> {
@@ -438,6 +464,7 @@ macro_rules! local_zoo {
 
 local_zoo!(
     "fput" => Fput,
+    "fput-stiff" => FputStiff,
     "toda" => Toda,
     "relativistic-chain" => RelativisticChain,
     "sine-gordon-chain" => SineGordonChain,
@@ -587,11 +614,45 @@ mod tests {
         assert_eq!(n, 32);
         assert_eq!(names.first().map(String::as_str), Some("mode_1"));
         assert_eq!(names.last().map(String::as_str), Some("mode_8"));
+        let (_, n, names, _) = visit_local_model("fput-stiff", Describe).unwrap();
+        assert_eq!(n, 6);
+        assert_eq!(
+            names,
+            [
+                "oscillatory_1",
+                "oscillatory_2",
+                "oscillatory_3",
+                "oscillatory_sum"
+            ]
+        );
         let (_, _, names, _) = visit_local_model("toda", Describe).unwrap();
         assert_eq!(
             names,
             ["trace_lax_1", "trace_lax_2", "trace_lax_3", "trace_lax_4"]
         );
+    }
+
+    #[test]
+    fn the_stiff_soft_chain_observes_its_first_springs_and_the_sum_of_all() {
+        // HLW's initial state puts I₁ = ½(ẋ₁² + ω² x₁²) = ½(1 + 1) = 1 in the first stiff
+        // spring and nothing in the others; with m = 10 the file holds 8 springs and the sum
+        // of all 10.
+        let mut chain = FputStiff::default();
+        chain.set_parameter("m", 10.0).unwrap();
+        let names = chain.observable_names();
+        assert_eq!(names.len(), 9);
+        assert_eq!(names[7], "oscillatory_8");
+        let (t0, q, v) = chain.initial_state();
+        let mut values = Vec::new();
+        chain.observables_into(t0, &q, &v, &mut values);
+        assert_eq!(values.len(), 9);
+        assert!((values[0] - 1.0).abs() < 1e-14, "{values:?}");
+        assert!(values[1..8].iter().all(|&i| i == 0.0), "{values:?}");
+        assert!((values[8] - 1.0).abs() < 1e-14, "{values:?}");
+        for bad in [0.0, -1.0, 2.5, f64::NAN] {
+            assert!(chain.set_parameter("m", bad).is_err(), "m = {bad}");
+        }
+        assert!(chain.set_parameter("omega", 0.0).is_err());
     }
 
     #[test]

@@ -888,6 +888,7 @@ pub(crate) mod tests {
                 "double-pendulum-chaotic",
                 "oscillator-beyond-stability",
                 "fput",
+                "fput-stiff",
                 "toda",
                 "relativistic-chain",
                 "sine-gordon-chain",
