@@ -869,6 +869,11 @@ impl Report<'_> {
         }
     }
 
+    /// Print a warning (always), above the progress bar.
+    fn warn(&self, text: &str) {
+        self.progress.suspend(|| eprintln!("warning: {text}"));
+    }
+
     /// Print a measured point (verbose only), above the progress bar.
     fn record(&self, record: &Record) {
         if self.verbose {
@@ -952,12 +957,14 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     };
     if let Mode::StepDoubling = mode {
         if !options.tolerances.is_empty() {
-            for &tol in &options.tolerances {
-                let record = measure(tol)?;
-                report.record(&record);
-                records.push(record);
-            }
-            return Ok(());
+            return measure_requested(
+                label,
+                &options.tolerances,
+                "tolerance",
+                measure,
+                report,
+                records,
+            );
         }
         // 10^-3, 10^-3.5, …, 10^-15 (the smallest tolerance step doubling takes).
         let mut stall = Stall::default();
@@ -980,12 +987,8 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         return Ok(());
     }
     if !options.steps.is_empty() {
-        for &steps in &options.steps {
-            let record = measure(steps as f64)?;
-            report.record(&record);
-            records.push(record);
-        }
-        return Ok(());
+        let steps: Vec<f64> = options.steps.iter().map(|&steps| steps as f64).collect();
+        return measure_requested(label, &steps, "steps", measure, report, records);
     }
     let mut steps = 8usize;
     while steps < MAX_STEPS && !matches!(final_error(steps), Ok(e) if e <= 3e-2) {
@@ -1014,6 +1017,38 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         steps = ((steps as f64 * factor).ceil() as usize).max(steps + 1);
     }
     Ok(())
+}
+
+/// Measure the points of the method `label` that the user asked for (`--steps` or
+/// `--tolerances`, named `what`): a point that fails is a warning naming it and the others are
+/// kept; if every point fails, the first failure is the error.
+fn measure_requested(
+    label: &str,
+    points: &[f64],
+    what: &str,
+    measure: impl Fn(f64) -> Result<Record, svi::Error>,
+    report: Report<'_>,
+    records: &mut Vec<Record>,
+) -> Result<(), SceneError> {
+    let mut first_failure = None;
+    let mut measured = 0;
+    for &point in points {
+        match measure(point) {
+            Ok(record) => {
+                report.record(&record);
+                records.push(record);
+                measured += 1;
+            }
+            Err(error) => {
+                report.warn(&format!("{label} at {what} {point} failed: {error}"));
+                first_failure.get_or_insert(error);
+            }
+        }
+    }
+    match first_failure {
+        Some(error) if measured == 0 => Err(error.into()),
+        _ => Ok(()),
+    }
 }
 
 /// One DOP853 / Dopri5 / Radau5 run to the horizon (`None` if it fails or stops short).
@@ -1495,6 +1530,29 @@ mod tests {
             assert!(record.h.is_none());
             assert!(record.final_error < 10.0 * record.parameter, "{record:?}");
         }
+    }
+
+    #[test]
+    fn a_requested_step_count_that_fails_is_a_warning_and_the_others_are_kept() {
+        // Two periods of Kepler e = 0.9: svi:5 in τ with g = |q| cannot take 2 τ-steps per span
+        // (the stage solve does not converge), but 40 are fine; asked for both, the bench keeps
+        // the 40, and asked for 2 alone it is the error.
+        let mut scene = Scene::builtin("kepler-e0.9").unwrap().unwrap();
+        scene.run.t_end = Some(4.0 * std::f64::consts::PI);
+        let options = BenchOptions {
+            methods: parse_methods("svi:5@sundman:1").unwrap(),
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![2, 40],
+            ..BenchOptions::default()
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        assert_eq!(labels(&records), [("svi:5@sundman:1", 40.0)]);
+        let alone = BenchOptions {
+            steps: vec![2],
+            ..options
+        };
+        assert!(work_precision(&scene, &alone).is_err());
     }
 
     #[test]
