@@ -304,7 +304,7 @@ mod tests {
     #[test]
     fn sinc_is_smooth_across_its_series_branch() {
         assert_eq!(sinc(0.0), 1.0);
-        for xi in [1e-8, 1e-4, 0.009_999, 0.01, 0.3, 31.0] {
+        for xi in [1e-8f64, 1e-4, 0.009_999, 0.01, 0.3, 31.0] {
             let direct = xi.sin() / xi;
             assert!((sinc(xi) - direct).abs() < 1e-15, "{xi}");
             assert_eq!(sinc(-xi), sinc(xi));
