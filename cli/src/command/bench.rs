@@ -501,6 +501,9 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Recor
                 .into(),
         });
     }
+    if options.methods.contains(&BenchMethod::Molly) {
+        molly::check_model(&scene.model)?;
+    }
     let progress = if options.verbose {
         let bar = ProgressBar::new(options.methods.len() as u64);
         if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} methods {msg}") {
@@ -1705,8 +1708,9 @@ mod tests {
 
     #[test]
     fn molly_on_another_model_is_an_error_naming_it() {
-        // Kepler (and the oscillator) are not spring pendulums: a typed error, not a panic.
-        for name in ["kepler", "oscillator"] {
+        // Kepler, the oscillator and the double pendulum (whose reference run it does not
+        // wait for) are not spring pendulums: a typed error, not a panic.
+        for name in ["kepler", "oscillator", "double-pendulum"] {
             let scene = Scene::builtin(name).unwrap().unwrap();
             let options = BenchOptions {
                 methods: parse_methods("molly").unwrap(),

@@ -237,20 +237,32 @@ impl Molly {
     }
 }
 
-/// The spring pendulum of a zoo model named [`SpringPendulum::NAME`], with its parameters;
+/// Whether `molly` applies to the model named `model`: only to [`SpringPendulum::NAME`];
 /// for any other model the error every use of `molly` on it gives.
+pub(crate) fn check_model(model: &str) -> Result<(), SceneError> {
+    if model == SpringPendulum::NAME {
+        return Ok(());
+    }
+    Err(SceneError::MethodNotApplicable {
+        method: NAME.into(),
+        reason: format!(
+            "the mollified impulse method is written for the splitting of the model '{}' (a \
+             harmonic spring and a slow pendulum), not for '{model}'",
+            SpringPendulum::NAME
+        ),
+    })
+}
+
+/// The spring pendulum of a zoo model named [`SpringPendulum::NAME`], with its parameters;
+/// for any other model the error of [`check_model`].
 pub(crate) fn spring_pendulum<M: Defaults<N>, const N: usize>(
     model: &M,
 ) -> Result<SpringPendulum, SceneError> {
-    if model.name() != SpringPendulum::NAME || N != 2 {
+    check_model(model.name())?;
+    if N != 2 {
         return Err(SceneError::MethodNotApplicable {
             method: NAME.into(),
-            reason: format!(
-                "the mollified impulse method is written for the splitting of the model '{}' \
-                 (a harmonic spring and a slow pendulum), not for '{}'",
-                SpringPendulum::NAME,
-                model.name()
-            ),
+            reason: format!("a model of dimension {N} named '{}'", model.name()),
         });
     }
     let mut pendulum = SpringPendulum::default();
@@ -315,7 +327,9 @@ mod tests {
     #[test]
     fn converges_at_order_two_to_a_resolved_run() {
         // T = 1 at h = 1e-3 … 1.25e-4 (hω = 0.1 … 0.0125) against SVI of order 12
-        // (svi:7/6) at h = 1e-3: the position error falls as h².
+        // (svi:7/6) at h = 1e-3: the position error falls as h², 9.6e-8 at h = 1e-3 and
+        // 1.5e-9 at 1.25e-4 (as a prototype of the same formulas against RK4 at h = 2.5e-5),
+        // bounded here at about twice that.
         let (model, start) = released();
         let t_end = 1.0;
         let reference = Integrator::new(model, svi::Svi::new(7).with_quadrature(6))
@@ -341,7 +355,7 @@ mod tests {
         let sizes: Vec<f64> = steps.iter().map(|&n| t_end / n as f64).collect();
         let order = svi::verify::observed_order(&sizes, &errors, 1e-12).unwrap();
         assert!((1.8..2.2).contains(&order), "{order} {errors:?}");
-        assert!(errors[0] < 1e-6 && errors[3] < 2e-8, "{errors:?}");
+        assert!(errors[0] < 2e-7 && errors[3] < 3e-9, "{errors:?}");
     }
 
     #[test]
