@@ -12,7 +12,10 @@
 //!
 //! Fixed-step methods start from 8 steps, double until the error is below 3·10⁻², then
 //! multiply the step count by 10^(1/(2·order)) per point (about a √10-fold error reduction,
-//! so that the crossing of an error target is located to within a factor 1.2 in time).
+//! so that the crossing of an error target is located to within a factor 1.2 in time). The
+//! trigonometric peer `molly`, the mollified impulse method of García-Archilla, Sanz-Serna &
+//! Skeel (1999) written for the spring pendulum's splitting ([`crate::command::molly`]), takes
+//! fixed steps over the fast spring and is swept in the same way (order 2).
 //! Adaptive peers (`ode_solvers`' DOP853 and Dopri5, and the stiff solver
 //! `differential-equations`' Radau5 with the exact Jacobian by automatic differentiation, on
 //! the first-order form q̇ = v, v̇ = q̈(t, q, v) derived from the Lagrangian) sweep
@@ -32,6 +35,7 @@
 //! steps ([`svi::stepping::sem`]), swept over its first step (t_end − t0)/n like a fixed-step
 //! method (its `steps` count every trial step of the energy equation).
 
+use crate::command::molly;
 use crate::command::peers::{FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
 use crate::report::csv;
 use crate::report::plot::{Panel, Series, write_svg};
@@ -58,7 +62,8 @@ use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A method configuration to sweep: a method of svi's registry, or a peer (`ode_solvers`'
-/// DOP853 and Dopri5, `differential-equations`' Radau5).
+/// DOP853 and Dopri5, `differential-equations`' Radau5, the mollified impulse method on the
+/// spring pendulum).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum BenchMethod {
     /// A method of [`svi::method::registry::METHODS`] (fixed step).
@@ -69,6 +74,9 @@ pub enum BenchMethod {
     Dopri5,
     /// `differential-equations`' Radau IIA (adaptive, implicit, order 5): the stiff solver.
     Radau5,
+    /// The mollified impulse method ([`crate::command::molly`]; fixed step, order 2, spring
+    /// pendulum only): the trigonometric peer.
+    Molly,
     /// A library method in computational time τ with a monitor (`METHOD@MONITOR`).
     Reparam(MethodSpec, MonitorSpec),
     /// A library method with step doubling (`METHOD@step`).
@@ -80,11 +88,14 @@ pub enum BenchMethod {
 
 impl BenchMethod {
     /// Whether the method is swept over step counts (the library's fixed-step methods, their
-    /// τ-steps and SEM's first steps), not tolerances.
+    /// τ-steps, SEM's first steps and `molly`), not tolerances.
     pub(crate) fn takes_steps(&self) -> bool {
         matches!(
             self,
-            BenchMethod::Library(_) | BenchMethod::Reparam(..) | BenchMethod::Sem(_)
+            BenchMethod::Library(_)
+                | BenchMethod::Reparam(..)
+                | BenchMethod::Sem(_)
+                | BenchMethod::Molly
         )
     }
 }
@@ -96,6 +107,7 @@ impl fmt::Display for BenchMethod {
             BenchMethod::Dop853 => write!(f, "dop853"),
             BenchMethod::Dopri5 => write!(f, "dopri5"),
             BenchMethod::Radau5 => write!(f, "radau5"),
+            BenchMethod::Molly => write!(f, "{}", molly::NAME),
             BenchMethod::Reparam(spec, monitor) => write!(f, "{spec}@{monitor}"),
             BenchMethod::StepDoubling(spec) => write!(f, "{spec}@step"),
             BenchMethod::Sem(spec) => write!(f, "{spec}@sem"),
@@ -106,7 +118,7 @@ impl fmt::Display for BenchMethod {
 impl FromStr for BenchMethod {
     type Err = SceneError;
 
-    /// `dop853`, `dopri5`, `radau5`, or a library method written `name`, `name:P` or
+    /// `dop853`, `dopri5`, `radau5`, `molly`, or a library method written `name`, `name:P` or
     /// `name:P/M`, optionally followed by `@MONITOR` (reparametrised, e.g.
     /// `svi:9/8@sundman:1`), `@step` (step doubling) or `@sem` (symplectic-energy-momentum
     /// steps).
@@ -126,6 +138,7 @@ impl FromStr for BenchMethod {
             "dop853" => Ok(BenchMethod::Dop853),
             "dopri5" => Ok(BenchMethod::Dopri5),
             "radau5" => Ok(BenchMethod::Radau5),
+            molly::NAME => Ok(BenchMethod::Molly),
             _ => text.parse().map(BenchMethod::Library).map_err(|error| {
                 let name = text.split(':').next().unwrap_or_default();
                 match svi::method::registry::find(name) {
@@ -151,7 +164,7 @@ pub struct BenchArgs {
     /// Built-in scene or scene file [default: kepler].
     pub scene: Option<String>,
     /// Methods, comma-separated: NAME, NAME:P or NAME:P/M (see --help), dop853, dopri5,
-    /// radau5.
+    /// radau5, molly.
     #[arg(
         long,
         value_name = "LIST",
@@ -162,8 +175,11 @@ pub struct BenchArgs {
              g(q) dτ, e.g. svi:9/8@sundman:1; see svi run --monitor), METHOD@step step \
              doubling, METHOD@sem steps fixed by discrete energy conservation (svi; swept \
              over the first step) —, the adaptive peers dop853 and dopri5 (ode_solvers' \
-             DOP853 and Dopri5), and radau5 (differential-equations' Radau IIA of order 5, \
-             the stiff solver, with the exact Jacobian by automatic differentiation)."
+             DOP853 and Dopri5), radau5 (differential-equations' Radau IIA of order 5, \
+             the stiff solver, with the exact Jacobian by automatic differentiation), and \
+             molly (the mollified impulse method of García-Archilla, Sanz-Serna & Skeel, a \
+             trigonometric integrator with fixed steps over the fast spring, order 2; the \
+             spring pendulum only)."
         )
     )]
     pub methods: String,
@@ -223,15 +239,15 @@ pub struct BenchArgs {
         )
     )]
     pub min_batch: f64,
-    /// Run the fixed-step methods (and METHOD@MONITOR, in τ-steps) at these step counts
-    /// instead of sweeping them.
+    /// Run the fixed-step methods (and METHOD@MONITOR, in τ-steps, and molly) at these step
+    /// counts instead of sweeping them.
     #[arg(
         long,
         value_delimiter = ',',
         allow_hyphen_values = true,
         help = format!(
-            "Run the fixed-step methods (and METHOD@MONITOR, in steps of τ) at these step counts \
-             (each 1 to {MAX_STEPS}) instead of sweeping them"
+            "Run the fixed-step methods (and METHOD@MONITOR, in steps of τ, and molly) at these \
+             step counts (each 1 to {MAX_STEPS}) instead of sweeping them"
         )
     )]
     pub steps: Vec<usize>,
@@ -485,6 +501,9 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Recor
                 .into(),
         });
     }
+    if options.methods.contains(&BenchMethod::Molly) {
+        molly::check_model(&scene.model)?;
+    }
     let progress = if options.verbose {
         let bar = ProgressBar::new(options.methods.len() as u64);
         if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} methods {msg}") {
@@ -656,9 +675,12 @@ impl ModelVisitor for Bench<'_> {
                 options: self.options,
                 report,
             };
-            match Mode::of(spec) {
-                Some((method, mode)) => records.extend(method.visit_vector(sweep(mode))??),
-                None => {
+            match (Mode::of(spec), spec) {
+                (Some((method, mode)), _) => records.extend(method.visit_vector(sweep(mode))??),
+                (None, BenchMethod::Molly) => {
+                    sweep_molly(&model, &problem, self.options, report, &mut records)?
+                }
+                (None, _) => {
                     sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
                 }
             }
@@ -720,7 +742,10 @@ impl Mode {
             BenchMethod::Reparam(spec, monitor) => Some((spec, Mode::Reparam(monitor))),
             BenchMethod::StepDoubling(spec) => Some((spec, Mode::StepDoubling)),
             BenchMethod::Sem(spec) => Some((spec, Mode::Sem)),
-            BenchMethod::Dop853 | BenchMethod::Dopri5 | BenchMethod::Radau5 => None,
+            BenchMethod::Dop853
+            | BenchMethod::Dopri5
+            | BenchMethod::Radau5
+            | BenchMethod::Molly => None,
         }
     }
 }
@@ -986,6 +1011,22 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
         }
         return Ok(());
     }
+    sweep_steps(label, order, options, report, records, final_error, measure)
+}
+
+/// Sweep the fixed-step method `label` of order `order` over step counts (see the module
+/// docs): the given `--steps` ([`measure_requested`]), or from 8 steps doubled until `final_error` is below 3·10⁻², then grown by
+/// 10^(1/(2·order)) per point until the sweep ends ([`Stall::ends_after`]); `measure` makes
+/// the record of a step count (passed as `f64`).
+fn sweep_steps(
+    label: &str,
+    order: f64,
+    options: &BenchOptions,
+    report: Report<'_>,
+    records: &mut Vec<Record>,
+    final_error: impl Fn(usize) -> Result<f64, svi::Error>,
+    measure: impl Fn(f64) -> Result<Record, svi::Error>,
+) -> Result<(), SceneError> {
     if !options.steps.is_empty() {
         let steps: Vec<f64> = options.steps.iter().map(|&steps| steps as f64).collect();
         return measure_requested(label, &steps, "steps", measure, report, records);
@@ -1049,6 +1090,66 @@ fn measure_requested(
         Some(error) if measured == 0 => Err(error.into()),
         _ => Ok(()),
     }
+}
+
+/// Sweep the mollified impulse method ([`molly`]) over step counts, as a fixed-step method
+/// of order 2; a model other than the spring pendulum is an error naming `molly`. Its energy
+/// error is measured at every step of a separate run, its evaluations are the slow-force
+/// evaluations ([`molly::EVALUATIONS_PER_STEP`] per step).
+fn sweep_molly<M: ZooModel<N>, const N: usize>(
+    model: &M,
+    problem: &Problem<N>,
+    options: &BenchOptions,
+    report: Report<'_>,
+    records: &mut Vec<Record>,
+) -> Result<(), SceneError> {
+    let pendulum = molly::spring_pendulum(model)?;
+    let position = |q: &SVector<f64, 2>| SVector::<f64, N>::from_fn(|i, _| q[i]);
+    let start = molly::State::from_velocity(
+        &pendulum,
+        &SVector::from_fn(|i, _| problem.q0[i]),
+        &SVector::from_fn(|i, _| problem.v0[i]),
+    );
+    let from = (problem.t0, start);
+    let energy0 = start.energy(&pendulum);
+    let final_error = |steps: usize| {
+        molly::run(pendulum, from, problem.t_end, steps, |_| ())
+            .map(|end| problem.error(&position(&end.position())))
+    };
+    let measure = |parameter: f64| -> Result<Record, svi::Error> {
+        let steps = parameter as usize;
+        let mut energy_error_max: f64 = 0.0;
+        let end = molly::run(pendulum, from, problem.t_end, steps, |state| {
+            energy_error_max = energy_error_max.max((state.energy(&pendulum) - energy0).abs());
+        })?;
+        let seconds = median_seconds(
+            || {
+                let _ = molly::run(pendulum, from, problem.t_end, steps, |_| ());
+            },
+            options,
+        );
+        Ok(Record {
+            method: molly::NAME.into(),
+            parameter,
+            h: Some((problem.t_end - problem.t0) / parameter),
+            steps,
+            final_error: problem.error(&position(&end.position())),
+            energy_error_max,
+            momentum_error_max: None,
+            evaluations: molly::EVALUATIONS_PER_STEP * steps,
+            iterations: 0,
+            seconds,
+        })
+    };
+    sweep_steps(
+        molly::NAME,
+        2.0,
+        options,
+        report,
+        records,
+        final_error,
+        measure,
+    )
 }
 
 /// One DOP853 / Dopri5 / Radau5 run to the horizon (`None` if it fails or stops short).
@@ -1358,6 +1459,7 @@ mod tests {
     fn method_specifications_parse_and_print_back() {
         for text in [
             "svi:7/6", "svi:6", "svi", "sc:9", "midpoint", "verlet", "dop853", "dopri5", "radau5",
+            "molly",
         ] {
             assert_eq!(text.parse::<BenchMethod>().unwrap().to_string(), text);
         }
@@ -1393,7 +1495,13 @@ mod tests {
         ] {
             assert_eq!(text.parse::<BenchMethod>().unwrap().to_string(), text);
         }
-        for peer in ["dop853@step", "radau5@step", "radau5:3"] {
+        for peer in [
+            "dop853@step",
+            "radau5@step",
+            "radau5:3",
+            "molly:3",
+            "molly@step",
+        ] {
             assert!(
                 matches!(
                     peer.parse::<BenchMethod>(),
@@ -1611,6 +1719,84 @@ mod tests {
         assert!(!records.is_empty());
         assert!(records[0].parameter < 1e-3, "{records:?}");
         assert!(records.last().unwrap().final_error < 1e-3, "{records:?}");
+    }
+
+    #[test]
+    fn molly_runs_the_stiff_spring_pendulum_at_the_given_steps_and_in_a_sweep() {
+        // The stiff spring pendulum to T = 1, slow-angle error against the resolved reference:
+        // 6.4e-6 at 100 steps (h = 0.01, hω = 1) and 7.4e-8 at 1000, energy errors 7.3e-4 and
+        // 7.6e-6 (a prototype of the same formulas against RK4 at h = 2.5e-5), bounded here at
+        // about twice that; order 2: ten times the steps, a hundredth of the errors.
+        let mut scene = Scene::builtin("stiff-spring-pendulum").unwrap().unwrap();
+        scene.run.t_end = Some(1.0);
+        let options = BenchOptions {
+            methods: parse_methods("molly").unwrap(),
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![100, 1000],
+            coordinate: Some("theta".into()),
+            ..BenchOptions::default()
+        };
+        let records = work_precision(&scene, &options).unwrap();
+        assert_eq!(labels(&records), [("molly", 100.0), ("molly", 1000.0)]);
+        let (coarse, fine) = (&records[0], &records[1]);
+        assert!(coarse.final_error < 1.3e-5, "{coarse:?}");
+        assert!(fine.final_error < 1.5e-7, "{fine:?}");
+        let ratio = coarse.final_error / fine.final_error;
+        assert!(ratio > 60.0 && ratio < 140.0, "{ratio}");
+        let ratio = coarse.energy_error_max / fine.energy_error_max;
+        assert!(ratio > 60.0 && ratio < 140.0, "{ratio}");
+        assert_eq!(
+            (
+                coarse.h,
+                coarse.steps,
+                coarse.evaluations,
+                coarse.iterations
+            ),
+            (Some(0.01), 100, 200, 0)
+        );
+        assert!(coarse.momentum_error_max.is_none() && coarse.seconds > 0.0);
+        // A sweep over step counts, as the fixed-step methods: up to the target error, the
+        // error falling by about √10 per point at the end (order 2).
+        let sweep = BenchOptions {
+            steps: Vec::new(),
+            target: Some(1e-7),
+            ..options
+        };
+        let records = work_precision(&scene, &sweep).unwrap();
+        assert!(records.len() >= 5, "{records:?}");
+        assert!(records.windows(2).all(|pair| pair[1].steps > pair[0].steps));
+        assert!(records.last().unwrap().final_error < 1e-7, "{records:?}");
+        for pair in records[records.len() - 3..].windows(2) {
+            let ratio = pair[0].final_error / pair[1].final_error;
+            assert!(ratio > 2.0 && ratio < 5.0, "{pair:?}");
+        }
+    }
+
+    #[test]
+    fn molly_on_another_model_is_an_error_naming_it() {
+        // Kepler, the oscillator and the double pendulum (whose reference run it does not
+        // wait for) are not spring pendulums: a typed error, not a panic.
+        for name in ["kepler", "oscillator", "double-pendulum"] {
+            let scene = Scene::builtin(name).unwrap().unwrap();
+            let options = BenchOptions {
+                methods: parse_methods("molly").unwrap(),
+                batches: 1,
+                min_batch: 0.0,
+                steps: vec![10],
+                ..BenchOptions::default()
+            };
+            let error = work_precision(&scene, &options).unwrap_err();
+            assert!(
+                matches!(&error, SceneError::MethodNotApplicable { method, .. } if method == "molly"),
+                "{error}"
+            );
+            let message = error.to_string();
+            assert!(
+                message.contains("'molly'") && message.contains("spring-pendulum"),
+                "{message}"
+            );
+        }
     }
 
     #[test]

@@ -5,6 +5,7 @@ pub mod bench_spectral;
 pub mod ensemble;
 pub mod field;
 pub mod list;
+pub mod molly;
 pub mod peers;
 pub mod run;
 pub mod scale;

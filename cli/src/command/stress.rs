@@ -256,11 +256,12 @@ impl StressOptions {
                 reason: "no method given".into(),
             });
         }
-        if let Some(&peer) = self
-            .methods
-            .iter()
-            .find(|method| matches!(method, BenchMethod::Dopri5 | BenchMethod::Radau5))
-        {
+        if let Some(&peer) = self.methods.iter().find(|method| {
+            matches!(
+                method,
+                BenchMethod::Dopri5 | BenchMethod::Radau5 | BenchMethod::Molly
+            )
+        }) {
             return Err(peer_not_applicable(peer));
         }
         limits::count(
@@ -270,8 +271,8 @@ impl StressOptions {
             MAX_DRIFT_STEPS,
             "steps",
         )?;
-        // Dopri5 and Radau5 are refused above: the methods left without steps are dop853
-        // and METHOD@step, which take --tolerance.
+        // Dopri5, Radau5 and molly are refused above: the methods left without steps are
+        // dop853 and METHOD@step, which take --tolerance.
         let searched = self.methods.iter().any(BenchMethod::takes_steps);
         let tolerance_driven = self.methods.iter().any(|method| !method.takes_steps());
         if let Some(bisections) = self.bisections {
@@ -300,7 +301,7 @@ impl StressOptions {
     }
 }
 
-/// A peer other than `dop853` (`dopri5`, `radau5`) in `svi stress --methods`.
+/// A peer other than `dop853` (`dopri5`, `radau5`, `molly`) in `svi stress --methods`.
 fn peer_not_applicable(peer: BenchMethod) -> SceneError {
     SceneError::MethodNotApplicable {
         method: peer.to_string(),
@@ -978,11 +979,13 @@ mod tests {
 
     #[test]
     fn the_peers_other_than_dop853_are_refused_by_name() {
-        // dopri5 and radau5 alike: the same error, naming the peer, before anything runs.
+        // dopri5, radau5 and molly alike: the same error, naming the peer, before anything
+        // runs.
         for (methods, named) in [
             ("verlet,dopri5", "dopri5"),
             ("radau5", "radau5"),
             ("dop853,radau5,dopri5", "radau5"),
+            ("verlet,molly", "molly"),
         ] {
             let options = StressOptions {
                 methods: parse_methods(methods).unwrap(),

@@ -203,9 +203,9 @@ pub enum SceneError {
         source: svi::Error,
     },
     /// A method name of `svi bench` or `svi stress` that is neither a library method nor
-    /// one of the peers `dop853`, `dopri5` and `radau5`.
+    /// one of the peers `dop853`, `dopri5`, `radau5` and `molly`.
     #[error(
-        "unknown method '{text}' (known: {}, dop853, dopri5, radau5)",
+        "unknown method '{text}' (known: {}, dop853, dopri5, radau5, molly)",
         registry::known_names()
     )]
     BenchMethod {
