@@ -50,13 +50,17 @@ pub trait Monitor<const N: usize> {
     fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D;
 }
 
-/// x^(α/2) from x = r² ≥ 0: the exponents α = 1/2, 1, 3/2, 2 and 3 by square roots and
-/// products (a general power costs several `pow` calls on dual numbers: 16 % of a
-/// reparametrised Kepler step with α = 1), others by `powf`.
+/// x^(α/2) from x = r² ≥ 0: the exponents α = 1/2, 3/4 (the force monitor's default), 1,
+/// 3/2, 2 and 3 by square roots and products (a general power costs several `pow` calls on
+/// dual numbers: 16 % of a reparametrised Kepler step with α = 1), others by `powf`.
 #[inline]
 fn half_power<D: Scalar>(x: D, alpha: f64) -> D {
     match alpha {
         0.5 => x.sqrt().sqrt(),
+        0.75 => {
+            let r = x.sqrt().sqrt();
+            r * r.sqrt()
+        }
         1.0 => x.sqrt(),
         1.5 => {
             let r = x.sqrt();

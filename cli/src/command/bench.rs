@@ -27,7 +27,8 @@
 //! sweep stops at the target error, when a single run takes longer than `max_run`, or when
 //! the error has stalled for three points (round-off).
 //! Given step counts ([`BenchOptions::steps`]) or tolerances ([`BenchOptions::tolerances`])
-//! replace the sweep: every one of them is measured, and a run that fails is an error.
+//! replace the sweep: every one of them is measured; a run that fails is a warning naming it,
+//! and an error only when every one of a method's runs fails.
 //!
 //! The library's adaptive modes have rows of their own beside the fixed-step methods and the
 //! peers, so one plot shows all: `METHOD@MONITOR` (e.g. `svi:9/8@sundman:1`) is the method
