@@ -1,14 +1,15 @@
 //! The AD tax: what each derived quantity of a Lagrangian costs, per model and per dual type.
 //!
-//! For every zoo model, at one fixed generic state (no symmetric or zero components), this
+//! For every zoo model and a coupled chain of N = 3, 4, 6 pendulums (where the scalar sweeps
+//! stop paying), at one fixed generic state (no symmetric or zero components), this
 //! times the methods of [`LagrangianExt`]:
 //!
 //! | id | work | num-dual type |
 //! | --- | --- | --- |
 //! | `value` | L itself | `f64` (the baseline) |
 //! | `force_ad` | ∂L/∂q: N sweeps for N ≤ 4, else one | `Dual64`, else `DualSVec64<N>` |
-//! | `first_derivatives` | L, ∂L/∂q, ∂L/∂q̇: two gradient sweeps | `DualSVec64<N>` |
-//! | `second_derivatives` | L, gradients, L_qq, L_qv, L_vv: three sweeps | `HyperDualVec`, 2 × `Dual2Vec` |
+//! | `first_derivatives` | L, ∂L/∂q, ∂L/∂q̇: 2N sweeps for N ≤ 4, else two | `Dual64`, else `DualSVec64<N>` |
+//! | `second_derivatives` | L, gradients, L_qq, L_qv, L_vv: one sweep per Hessian entry in (q, q̇) for N ≤ 4, else three | `HyperDual64`, else `HyperDualVec`, 2 × `Dual2Vec` |
 //! | `acceleration` | q̈ = L_vv⁻¹(L_q − L_vq q̇): second derivatives + a small solve | as above |
 //! | `acceleration_jacobian` | q̈, ∂q̈/∂q, ∂q̈/∂q̇: the acceleration on nested duals | `DualSVec64` over `HyperDualVec`/`Dual2Vec` |
 //!
@@ -34,6 +35,7 @@ use num_dual::{DualSVec64, DualVec};
 use std::hint::black_box;
 use std::time::Duration;
 use svi::derived::{AccelerationJacobian, SecondDerivatives};
+use svi::scalar::Scalar;
 use svi::{Lagrangian, LagrangianExt};
 use svi_models::{DoublePendulum, HarmonicOscillator, Kepler, Pendulum, SpringPendulum};
 
@@ -71,6 +73,33 @@ fn model_group<'a, L: Lagrangian<N>, const N: usize>(
         })
     });
     group
+}
+
+/// A chain of N pendulums with velocity coupling, a generic N-dimensional Lagrangian with a
+/// configuration-dependent mass matrix: L = Σᵢ (q̇ᵢ²/2 + cos qᵢ) plus the coupling
+/// Σᵢ q̇ᵢ q̇ᵢ₊₁ cos(qᵢ − qᵢ₊₁)/10.
+struct CoupledChain;
+
+impl<const N: usize> Lagrangian<N> for CoupledChain {
+    fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
+        let mut l = D::from(0.0);
+        for i in 0..N {
+            l += v[i] * v[i] * 0.5 + q[i].cos();
+            if i + 1 < N {
+                l += v[i] * v[i + 1] * (q[i] - q[i + 1]).cos() * 0.1;
+            }
+        }
+        l
+    }
+}
+
+/// The chain's evaluation point: distinct angles and rates.
+fn chain_q(i: usize, _: usize) -> f64 {
+    0.1 + 0.2 * i as f64
+}
+
+fn chain_v(i: usize, _: usize) -> f64 {
+    0.3 - 0.1 * i as f64
 }
 
 /// Kepler's ∂L/∂q = −q/|q|³, by hand.
@@ -165,6 +194,33 @@ fn derivatives(c: &mut Criterion) {
     model_group(c, "pendulum", Pendulum::default(), q1, v1).finish();
     model_group(c, "spring-pendulum", SpringPendulum::default(), q2, v2).finish();
     model_group(c, "double-pendulum", DoublePendulum::default(), q2, v2).finish();
+
+    // Coupled chains of N = 3, 4, 6 pendulums: where scalar sweeps stop paying
+    // (`svi::derived::SCALAR_SWEEPS_UP_TO`).
+    model_group(
+        c,
+        "chain-3",
+        CoupledChain,
+        SVector::<f64, 3>::from_fn(chain_q),
+        SVector::from_fn(chain_v),
+    )
+    .finish();
+    model_group(
+        c,
+        "chain-4",
+        CoupledChain,
+        SVector::<f64, 4>::from_fn(chain_q),
+        SVector::from_fn(chain_v),
+    )
+    .finish();
+    model_group(
+        c,
+        "chain-6",
+        CoupledChain,
+        SVector::<f64, 6>::from_fn(chain_q),
+        SVector::from_fn(chain_v),
+    )
+    .finish();
 
     let kepler = Kepler::default();
     check_kepler_hand(&kepler, &q2, &v2);

@@ -99,7 +99,7 @@ use crate::nonlinear::{Jacobian, Newton};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::filon::FilonLobatto;
 use crate::spectral::{MAX_POINTS, check_points};
-use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use nalgebra::{DMatrix, DMatrixView, DMatrixViewMut, DVector, SMatrix, SVector};
 
 /// Relative size of a non-decreasing Newton increment that counts as round-off. The Newton
 /// matrix's condition grows as hω falls (the oscillatory functions approach polynomials of
@@ -111,7 +111,9 @@ const STALLED_INCREMENT: f64 = 1e-9;
 /// costs the Hessian blocks of L at every point, several residuals' worth. On the stiff
 /// spring pendulum (6 points, h = 0.31, T = 100; callgrind): 0.4 takes 126 M instructions,
 /// 0.25 141 M, the library's default 0.03 155 M; 0.6 took 109 M but at T = 650 (h = 1/3)
-/// iterated 50 times at a rate of 0.56 without reaching round-off.
+/// iterated 50 times at a rate of 0.56 without reaching round-off. For the same reason the
+/// factors are not refreshed at the start of a step after a slowly contracting one (the
+/// library's default): at h = 2/3, T = 100 that took 90 M instructions against 71 M.
 const REFACTOR_CONTRACTION: f64 = 0.4;
 
 /// Options of the multiscale variational integrator.
@@ -250,6 +252,13 @@ struct Tables {
     /// φ_b and φ̇_b at point p, row-major (n·K) × basis.
     point_values: Vec<f64>,
     point_rates: Vec<f64>,
+    /// The same tables as matrices over the 2·(n·K) rows (p, a), a = 0 for φ, 1 for φ̇ (the
+    /// layout of [`Scratch`]): the equations' basis functions (`row_basis`) as a
+    /// 2nK × U matrix and its transpose, and the unknowns' (`column_basis`) transposed,
+    /// U × 2nK (U unknown blocks).
+    rows: DMatrix<f64>,
+    rows_t: DMatrix<f64>,
+    columns_t: DMatrix<f64>,
     /// Filon node x_p of point p (for its time).
     point_nodes: Vec<f64>,
     /// The CGL nodes x_ν of the polynomial part.
@@ -291,6 +300,9 @@ impl Tables {
             weights: vec![0.0; points],
             point_values: vec![0.0; points * count],
             point_rates: vec![0.0; points * count],
+            rows: DMatrix::zeros(2 * points, count - 1),
+            rows_t: DMatrix::zeros(count - 1, 2 * points),
+            columns_t: DMatrix::zeros(count - 1, 2 * points),
             point_nodes: (0..points).map(|p| filon.nodes()[p / phases]).collect(),
             nodes: basis.nodes().to_vec(),
             extrapolation: row_major(&extrapolation),
@@ -359,6 +371,19 @@ impl Tables {
                     rate[b] = 2.0 / h * ((cos_psi - 1.0) * slope - (cos_end - 1.0) * dl_end)
                         - omega * sin_psi * envelope;
                 }
+            }
+        }
+        for p in 0..self.points() {
+            let value = &self.point_values[p * count..(p + 1) * count];
+            let rate = &self.point_rates[p * count..(p + 1) * count];
+            for u in 0..count - 1 {
+                let (r, c) = (self.row_basis(u), self.column_basis(u));
+                self.rows[(2 * p, u)] = value[r];
+                self.rows[(2 * p + 1, u)] = rate[r];
+                self.rows_t[(u, 2 * p)] = value[r];
+                self.rows_t[(u, 2 * p + 1)] = rate[r];
+                self.columns_t[(u, 2 * p)] = value[c];
+                self.columns_t[(u, 2 * p + 1)] = rate[c];
             }
         }
     }
@@ -479,8 +504,8 @@ pub struct MultiscaleWorkspace<const N: usize> {
     warm: bool,
     /// Scratch of the size of `unknowns` (the extrapolated starting values).
     previous: DVector<f64>,
-    /// Second derivatives of L at the quadrature points.
-    derivatives: Vec<SecondDerivatives<N>>,
+    /// Buffers of [`assemble`].
+    scratch: Scratch<N>,
     newton: Newton,
     /// The fast frequency of the run, once known.
     omega: Option<f64>,
@@ -524,24 +549,75 @@ fn fast_frequency<L: Lagrangian<N>, const N: usize>(
     (estimate.is_finite() && estimate > 0.0).then(|| estimate.sqrt())
 }
 
+/// Buffers of [`assemble`], with the points' 2nK rows (p, a) as columns: q and q̇ at each
+/// point, the weighted gradients w_p ∂L/∂q and w_p ∂L/∂q̇, and one component's Hessian
+/// products (see [`assemble`]).
+#[derive(Debug, Clone)]
+struct Scratch<const N: usize> {
+    /// Second derivatives of L at the quadrature points.
+    derivatives: Vec<SecondDerivatives<N>>,
+    /// N × 2nK: column 2p is q(x_p, ψ_p) − q_k, column 2p + 1 is q̇.
+    positions: DMatrix<f64>,
+    /// N × 2nK: column 2p is w_p ∂L/∂q, column 2p + 1 is w_p ∂L/∂q̇.
+    gradients: DMatrix<f64>,
+    /// 2nK × U·N: row (p, a), column (c, e): w_p Σ_b H^{ab}_{de} φ^b_c(p) for one d.
+    hessian_products: DMatrix<f64>,
+}
+
+impl<const N: usize> Scratch<N> {
+    fn new(tables: &Tables) -> Self {
+        let zero = SecondDerivatives {
+            value: 0.0,
+            q: SVector::zeros(),
+            v: SVector::zeros(),
+            qq: SMatrix::zeros(),
+            qv: SMatrix::zeros(),
+            vv: SMatrix::zeros(),
+        };
+        let (rows, unknowns) = (2 * tables.points(), tables.basis - 1);
+        Scratch {
+            derivatives: vec![zero; tables.points()],
+            positions: DMatrix::zeros(N, rows),
+            gradients: DMatrix::zeros(N, rows),
+            hessian_products: DMatrix::zeros(rows, unknowns * N),
+        }
+    }
+}
+
 /// Residual of the stationarity conditions and, when `jacobian` is `Some`, its Jacobian in
 /// the unknowns (the residual alone needs only the first derivatives of L: ∂L/∂q and ∂L/∂q̇
 /// at each point, while the Jacobian needs the Hessian blocks).
+///
+/// With the basis values φ^a_b(p) (a = 0: φ, a = 1: φ̇) as the matrices of [`Tables`], every
+/// sum over the points is a matrix product: the points' (q, q̇) are Zᵀ Cᵀ (C the unknowns'
+/// columns), the residual rows g_r = Σ_{p,a} φ^a_r(p) w_p ∂L/∂(q, q̇)(p) are G R, and the
+/// Jacobian's rows of component d are Rᵀ M_d with
+/// M_d[(p, a), (c, e)] = w_p Σ_b H^{ab}_{de}(p) φ^b_c(p), H^{qq} = L_qq, H^{qv} = L_qq̇,
+/// H^{vq} = L_qq̇ᵀ, H^{vv} = L_q̇q̇.
 #[allow(clippy::too_many_arguments)]
 fn assemble<L: Lagrangian<N>, const N: usize>(
     model: &L,
     tables: &Tables,
-    derivatives: &mut [SecondDerivatives<N>],
+    scratch: &mut Scratch<N>,
     t: f64,
     state: &State<N>,
     z: &DVector<f64>,
     jacobian: Option<&mut DMatrix<f64>>,
     residual: &mut DVector<f64>,
 ) {
-    let count = tables.basis;
-    let unknowns = count - 1;
+    let unknowns = tables.basis - 1;
+    let Scratch {
+        derivatives,
+        positions,
+        gradients,
+        hessian_products,
+    } = scratch;
+    // The unknowns as an N × U matrix (block c is column c).
+    let z_matrix = DMatrixView::from_slice(z.as_slice(), N, unknowns);
+    positions.gemm(1.0, &z_matrix, &tables.columns_t, 0.0);
     for (p, point) in derivatives.iter_mut().enumerate() {
-        let (q, v) = tables.point(p, &state.q, z);
+        let q = state.q + positions.fixed_view::<N, 1>(0, 2 * p);
+        let v: SVector<f64, N> = positions.fixed_view::<N, 1>(0, 2 * p + 1).into_owned();
         let time = tables.time(t, p);
         if jacobian.is_some() {
             *point = model.second_derivatives(time, &q, &v);
@@ -550,39 +626,41 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
             point.q = model.force(time, &q, &v);
             point.v = model.momentum(time, &q, &v);
         }
-    }
-    residual.fill(0.0);
-    residual.fixed_rows_mut::<N>(0).copy_from(&state.y);
-    for (p, d) in derivatives.iter().enumerate() {
         let w = tables.weights[p];
-        let value = &tables.point_values[p * count..(p + 1) * count];
-        let rate = &tables.point_rates[p * count..(p + 1) * count];
-        for r in 0..unknowns {
-            let b = tables.row_basis(r);
-            let mut row = residual.fixed_rows_mut::<N>(r * N);
-            row += (d.q * value[b] + d.v * rate[b]) * w;
-        }
+        gradients
+            .fixed_view_mut::<N, 1>(0, 2 * p)
+            .copy_from(&(point.q * w));
+        gradients
+            .fixed_view_mut::<N, 1>(0, 2 * p + 1)
+            .copy_from(&(point.v * w));
     }
+    let mut residual_matrix = DMatrixViewMut::from_slice(residual.as_mut_slice(), N, unknowns);
+    residual_matrix.gemm(1.0, gradients, &tables.rows, 0.0);
+    let mut first = residual.fixed_rows_mut::<N>(0);
+    first += state.y;
     let Some(jacobian) = jacobian else {
         return;
     };
-    jacobian.fill(0.0);
-    for (p, d) in derivatives.iter().enumerate() {
-        let w = tables.weights[p];
-        let value = &tables.point_values[p * count..(p + 1) * count];
-        let rate = &tables.point_rates[p * count..(p + 1) * count];
-        let qv_t = d.qv.transpose();
-        for c in 0..unknowns {
-            let bc = tables.column_basis(c);
-            let from_q: SMatrix<f64, N, N> = (d.qq * value[bc] + d.qv * rate[bc]) * w;
-            let from_v: SMatrix<f64, N, N> = (qv_t * value[bc] + d.vv * rate[bc]) * w;
-            for r in 0..unknowns {
-                let b = tables.row_basis(r);
-                let block = from_q * value[b] + from_v * rate[b];
-                let mut target = jacobian.fixed_view_mut::<N, N>(r * N, c * N);
-                target += block;
+    for d in 0..N {
+        for (p, point) in derivatives.iter().enumerate() {
+            let w = tables.weights[p];
+            for c in 0..unknowns {
+                let (value, rate) = (
+                    tables.columns_t[(c, 2 * p)],
+                    tables.columns_t[(c, 2 * p + 1)],
+                );
+                for e in 0..N {
+                    let column = c * N + e;
+                    hessian_products[(2 * p, column)] =
+                        w * (point.qq[(d, e)] * value + point.qv[(d, e)] * rate);
+                    hessian_products[(2 * p + 1, column)] =
+                        w * (point.qv[(e, d)] * value + point.vv[(d, e)] * rate);
+                }
             }
         }
+        // Rows r·N + d of the Jacobian.
+        let mut rows = jacobian.view_with_steps_mut((d, 0), (unknowns, unknowns * N), (N - 1, 0));
+        rows.gemm(1.0, &tables.rows_t, hessian_products, 0.0);
     }
 }
 
@@ -614,23 +692,16 @@ impl<const N: usize> Method<N> for Multiscale {
         }
         let tables = Tables::new(self)?;
         let size = (tables.basis - 1) * N;
-        let zero = SecondDerivatives {
-            value: 0.0,
-            q: SVector::zeros(),
-            v: SVector::zeros(),
-            qq: SMatrix::zeros(),
-            qv: SMatrix::zeros(),
-            vv: SMatrix::zeros(),
-        };
         Ok(MultiscaleWorkspace {
-            derivatives: vec![zero; tables.points()],
+            scratch: Scratch::new(&tables),
             tables,
             unknowns: DVector::zeros(size),
             previous: DVector::zeros(size),
             warm: false,
             newton: Newton::new(size, self.max_iterations)
                 .with_noise(STALLED_INCREMENT)
-                .with_refactor(REFACTOR_CONTRACTION),
+                .with_refactor(REFACTOR_CONTRACTION)
+                .with_refresh(f64::INFINITY),
             omega: self.frequency,
         })
     }
@@ -693,11 +764,11 @@ impl<const N: usize> Method<N> for Multiscale {
         // The offsets and amplitudes build positions of the size of q_k.
         ws.newton.set_scale_floor(state.q.amax());
         let tables = &ws.tables;
-        let derivatives = &mut ws.derivatives;
+        let scratch = &mut ws.scratch;
         let solved = ws
             .newton
             .iterate(&mut ws.unknowns, jacobian, |z, jacobian, residual| {
-                assemble(model, tables, derivatives, t, state, z, jacobian, residual)
+                assemble(model, tables, scratch, t, state, z, jacobian, residual)
             })
             .inspect_err(|_| ws.warm = false)?;
         let mut dp = SVector::<f64, N>::zeros();
