@@ -8,8 +8,8 @@
 //!   plain f64, not an optional vector: Kepler's force costs 6.8 ns that way against 16 ns
 //!   with one `DualSVec64<2>` sweep and 5.5 ns by hand, `cargo bench --bench derivatives --
 //!   kepler/force`);
-//! - the Hessian blocks L_qq, L_qv, L_vv: for N ≤ [`SCALAR_SWEEPS_UP_TO`] one sweep of the
-//!   scalar `HyperDual64` per Hessian entry in (q, q̇) (three to five times faster there),
+//! - the Hessian blocks L_qq, L_qv, L_vv: for N ≤ [`SCALAR_HESSIAN_UP_TO`] one sweep of the
+//!   scalar `HyperDual64` per Hessian entry in (q, q̇) (three times faster there),
 //!   else `hessian` in q, `hessian` in q̇ and one `partial_hessian` (`2N` is not a const
 //!   expression on stable Rust, so the full second derivative is assembled from three
 //!   N-sized sweeps);
@@ -36,11 +36,19 @@ use num_dual::{
 };
 
 /// Largest dimension whose gradients are taken as N scalar-dual sweeps rather than one
-/// vector-dual sweep, and whose Hessian blocks as one scalar hyper-dual sweep per entry
-/// (`cargo bench --bench derivatives -- chain` with this constant at 4 and at 6: on the
-/// coupled chain of pendulums the scalar Hessian sweeps win up to N = 4 and lose 2× at
-/// N = 6).
-pub const SCALAR_SWEEPS_UP_TO: usize = 4;
+/// vector-dual sweep. Scalar sweeps are cheap where the compiler inlines L into each and
+/// shares its transcendental functions between them (`cargo bench --bench derivatives --
+/// chain`, run with this constant at 2, 3 and 4: on the coupled chain of pendulums the force
+/// costs 50 ns by scalar sweeps against 81 ns by one vector sweep at N = 3, but 334 ns
+/// against 189 ns at N = 4).
+pub const SCALAR_SWEEPS_UP_TO: usize = 3;
+
+/// Largest dimension whose Hessian blocks are taken as one scalar hyper-dual sweep per entry
+/// in (q, q̇), (2N)(2N + 1)/2 sweeps, rather than three vector sweeps: 138 ns against 411 ns
+/// for the spring pendulum, 43 against 144 for Kepler, 98 against 350 for the double
+/// pendulum, but 1.6 µs against 0.56 µs for the coupled chain of three pendulums
+/// (`cargo bench --bench derivatives`, run with this constant at 2 and 4).
+pub const SCALAR_HESSIAN_UP_TO: usize = 2;
 
 /// ∇f(x) for f: ℝᴺ → ℝ: N forward sweeps with `Dual64` for small N, else one `DualSVec64<N>`
 /// sweep. `f` receives the seeded argument.
@@ -64,22 +72,21 @@ fn scalar_gradient<const N: usize>(
     x: &SVector<f64, N>,
 ) -> (f64, SVector<f64, N>) {
     let mut value = 0.0;
-    let gradient = SVector::from_fn(|i, _| {
+    let mut gradient = SVector::zeros();
+    for i in 0..N {
         let y = f(SVector::from_fn(|j, _| {
             Dual64::new(x[j], if i == j { 1.0 } else { 0.0 })
         }));
         value = y.re;
-        y.eps
-    });
+        gradient[i] = y.eps;
+    }
     (value, gradient)
 }
 
 /// L, its gradients and Hessian blocks by (2N)(2N + 1)/2 sweeps of the scalar hyper-dual
 /// number `HyperDual64`, one per entry (i ≤ j) of the Hessian in x = (q, q̇): the sweep seeded
 /// with ε₁ on xᵢ and ε₂ on xⱼ carries ∂²L/∂xᵢ∂xⱼ in its ε₁ε₂ part, and with i = j also
-/// ∂L/∂xᵢ in ε₁. For N ≤ [`SCALAR_SWEEPS_UP_TO`] these scalar sweeps cost a third to a fifth
-/// of the three vector sweeps of the generic path (spring pendulum 139 ns against 411 ns,
-/// Kepler 43 against 144, a coupled chain with N = 4 418 against 1949).
+/// ∂L/∂xᵢ in ε₁. Used for N ≤ [`SCALAR_HESSIAN_UP_TO`].
 #[inline]
 fn scalar_second_derivatives<L, const N: usize>(
     model: &L,
@@ -90,14 +97,7 @@ fn scalar_second_derivatives<L, const N: usize>(
 where
     L: Lagrangian<N> + ?Sized,
 {
-    let mut d = SecondDerivatives {
-        value: 0.0,
-        q: SVector::zeros(),
-        v: SVector::zeros(),
-        qq: SMatrix::zeros(),
-        qv: SMatrix::zeros(),
-        vv: SMatrix::zeros(),
-    };
+    let mut d = SecondDerivatives::zeros();
     let seed = |k: usize, x: f64, i: usize, j: usize| {
         HyperDual64::new(
             x,
@@ -162,6 +162,20 @@ pub struct SecondDerivatives<const N: usize> {
     pub qv: SMatrix<f64, N, N>,
     /// ∂²L/∂q̇∂q̇ (the mass matrix of a mechanical Lagrangian).
     pub vv: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> SecondDerivatives<N> {
+    /// All zeros (a buffer's initial value).
+    pub fn zeros() -> Self {
+        SecondDerivatives {
+            value: 0.0,
+            q: SVector::zeros(),
+            v: SVector::zeros(),
+            qq: SMatrix::zeros(),
+            qv: SMatrix::zeros(),
+            vv: SMatrix::zeros(),
+        }
+    }
 }
 
 /// The Euler–Lagrange acceleration and its Jacobian.
@@ -281,7 +295,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         q: &SVector<f64, N>,
         v: &SVector<f64, N>,
     ) -> SecondDerivatives<N> {
-        if N <= SCALAR_SWEEPS_UP_TO {
+        if N <= SCALAR_HESSIAN_UP_TO {
             scalar_second_derivatives(self, t, q, v)
         } else {
             second_derivatives_generic(self, t, q, v).into()
@@ -780,6 +794,14 @@ mod tests {
             assert_close(&second.qq, &variable_mass::lqq(&q, &v), 1e-15);
             assert_close(&second.qv, &variable_mass::lqv(&q, &v), 1e-15);
             assert_close(&second.vv, &variable_mass::lvv(&q), 1e-15);
+            // N = 2 takes the scalar hyper-dual sweeps; the vector sweeps of larger N agree.
+            let vector: SecondDerivatives<2> =
+                second_derivatives_generic(&model, 0.0, &q, &v).into();
+            assert_close(&vector.q, &second.q, 1e-15);
+            assert_close(&vector.v, &second.v, 1e-15);
+            assert_close(&vector.qq, &second.qq, 1e-15);
+            assert_close(&vector.qv, &second.qv, 1e-15);
+            assert_close(&vector.vv, &second.vv, 1e-15);
             assert_close(
                 &model.mass_matrix(0.0, &q, &v),
                 &variable_mass::lvv(&q),

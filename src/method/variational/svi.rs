@@ -775,14 +775,7 @@ impl<const N: usize> Method<N> for Svi {
         crate::error::require_positive("h", h)?;
         let m = self.quadrature_points();
         let size = (self.points - 1) * N;
-        let zero = SecondDerivatives {
-            value: 0.0,
-            q: SVector::zeros(),
-            v: SVector::zeros(),
-            qq: SMatrix::zeros(),
-            qv: SMatrix::zeros(),
-            vv: SMatrix::zeros(),
-        };
+        let zero = SecondDerivatives::zeros();
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
         let tables = Tables::new(&basis, m, h)?;
         let constant_mass = match L::STRUCTURE {
