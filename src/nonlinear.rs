@@ -11,13 +11,7 @@
 //!   solves, so the iteration converges linearly, with the observed contraction rate
 //!   θ_k = ‖Δ_k‖/‖Δ_{k−1}‖. It is refactorised at the current iterate once θ_k exceeds
 //!   [`REFACTOR_CONTRACTION`] (or the increments stop decreasing), after a failure and
-//!   whenever the caller [`Newton::invalidate`]s it (a new step size). As in Hairer &
-//!   Wanner's RADAU5, a solve whose slowest contraction exceeded [`REFACTOR_CONTRACTION`] ×
-//!   [`REFRESH_FRACTION`] leaves its factors stale for the next solve, which refactorises at
-//!   its first (extrapolated) iterate instead of spending iterations on factors from the
-//!   last step that will not contract (SVI 4/3 and 7/6 on the double pendulum, h = 0.01 and
-//!   0.05, T = 20: 244 M instructions against 293 M; reparametrised Kepler e = 0.9, SVI 7/6,
-//!   Δτ = 0.57: 511 M against 553 M). A linear iteration
+//!   whenever the caller [`Newton::invalidate`]s it (a new step size). A linear iteration
 //!   is stopped only when its next increment is predicted below one ulp of the unknowns
 //!   (θ_k ‖Δ_k‖ ≤ ε ‖z‖) or an increment is at round-off, so that the solution is the one
 //!   of the residual to round-off, the same as the exact Newton method's.
@@ -49,12 +43,6 @@ const FIXED_POINT_NOISE: f64 = 1e-13;
 /// 0.1 cost 364 M instructions, 0.03 and 0.01 302 M each, 0.003 308 M; 0.03 factorises half
 /// as often as 0.01.
 pub(crate) const REFACTOR_CONTRACTION: f64 = 0.03;
-
-/// A kept Jacobian whose solve contracted more slowly than this fraction of the refactor
-/// threshold is refreshed at the start of the next solve: the next step starts farther from
-/// where it was factorised (about ten times, for the steps' extrapolated starting values),
-/// and its first iterations would contract above the threshold.
-const REFRESH_FRACTION: f64 = 0.1;
 
 /// How a [`Newton`] iteration treats its Jacobian.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,11 +78,6 @@ pub(crate) struct Newton {
     refactor: f64,
     /// Least size of the unknowns that the stopping rules measure increments against.
     scale_floor: f64,
-    /// Contraction rate of a converged [`Jacobian::Kept`] solve above which its factors are
-    /// deemed stale for the next solve (refreshed at its first iteration).
-    refresh: f64,
-    /// Set when the last solve contracted too slowly for its factors to serve the next one.
-    stale: bool,
 }
 
 impl Newton {
@@ -107,8 +90,6 @@ impl Newton {
             noise: FIXED_POINT_NOISE,
             refactor: REFACTOR_CONTRACTION,
             scale_floor: 0.0,
-            refresh: REFACTOR_CONTRACTION * REFRESH_FRACTION,
-            stale: false,
         }
     }
 
@@ -123,14 +104,6 @@ impl Newton {
     /// residuals.
     pub(crate) fn with_refactor(mut self, contraction: f64) -> Self {
         self.refactor = contraction;
-        self
-    }
-
-    /// Refresh the kept factors at the start of a solve only after a solve that contracted
-    /// more slowly than `contraction` (default [`REFACTOR_CONTRACTION`] ×
-    /// [`REFRESH_FRACTION`]); `f64::INFINITY` never refreshes them there.
-    pub(crate) fn with_refresh(mut self, contraction: f64) -> Self {
-        self.refresh = contraction;
         self
     }
 
@@ -197,11 +170,6 @@ impl Newton {
     {
         let mut previous = f64::INFINITY;
         let mut factorizations = 0;
-        if jacobian == Jacobian::Kept && self.stale {
-            self.factored = false;
-        }
-        self.stale = false;
-        let mut slowest: f64 = 0.0;
         for iteration in 1..=self.max_iterations {
             let refactor = jacobian == Jacobian::Exact || !self.factored;
             if refactor {
@@ -236,12 +204,7 @@ impl Newton {
                         || (size >= previous && size <= self.noise * scale)
                 }
             };
-            // The contraction rate, where the increment is above round-off.
-            if previous.is_finite() && size > 1e3 * f64::EPSILON * scale {
-                slowest = slowest.max(size / previous);
-            }
             if converged || size == 0.0 {
-                self.stale = slowest > self.refresh;
                 return Ok(Solved {
                     iterations: iteration,
                     factorizations,
@@ -444,7 +407,7 @@ mod tests {
     }
 
     #[test]
-    fn simplified_newton_reaches_the_root_to_round_off_and_refreshes_stale_factors() {
+    fn simplified_newton_reaches_the_root_to_round_off_and_keeps_its_factors() {
         // Reference: √2 (correctly rounded 1.4142135623730951) and √2.0001. The map
         // x ← x − (x² − 2)/(2 x_J) contracts by |1 − √2/x_J|. From 1 (x_J = 1) the iterates
         // are 3/2, 11/8; the contraction 0.41 > REFACTOR_CONTRACTION refactorises at 11/8,
@@ -461,32 +424,11 @@ mod tests {
         );
         assert_eq!(solved.factorizations, 2, "{solved:?}");
         assert!((10..=12).contains(&solved.iterations), "{solved:?}");
-        // That solve contracted at 0.41 at worst, above the refresh rate, so a nearby
-        // problem refreshes the factors at its first iterate √2: the contraction
-        // |1 − √2.0001/√2| = 3.5e-5 reaches round-off from 3.5e-5 in about three iterations.
+        // A nearby problem reuses the factors at 11/8: the contraction rate is
+        // |1 − √2.0001/(11/8)| = 0.0285 < REFACTOR_CONTRACTION, so no factorisation, and from
+        // x − √2.0001 = 3.5e-5 about nine iterations to round-off.
         let target = 2.0001f64.sqrt();
         let solved = newton
-            .iterate(&mut z, Jacobian::Kept, square_minus(2.0001))
-            .unwrap();
-        assert!((z[0] - target).abs() <= f64::EPSILON, "{z} vs {target}");
-        assert_eq!(solved.factorizations, 1, "{solved:?}");
-        assert!((2..=4).contains(&solved.iterations), "{solved:?}");
-        // That one contracted fast, so the next nearby problem keeps the factors.
-        let target = 2.0002f64.sqrt();
-        let solved = newton
-            .iterate(&mut z, Jacobian::Kept, square_minus(2.0002))
-            .unwrap();
-        assert!((z[0] - target).abs() <= f64::EPSILON, "{z} vs {target}");
-        assert_eq!(solved.factorizations, 0, "{solved:?}");
-        // Without the refresh the factors at 11/8 serve the nearby problem: the contraction
-        // rate |1 − √2.0001/(11/8)| = 0.0285 < REFACTOR_CONTRACTION, so no factorisation, and
-        // from x − √2.0001 = 3.5e-5 about nine iterations to round-off.
-        let mut kept = Newton::new(1, 50).with_refresh(f64::INFINITY);
-        let mut z = DVector::from_vec(vec![1.0]);
-        kept.iterate(&mut z, Jacobian::Kept, square_minus(2.0))
-            .unwrap();
-        let target = 2.0001f64.sqrt();
-        let solved = kept
             .iterate(&mut z, Jacobian::Kept, square_minus(2.0001))
             .unwrap();
         assert!((z[0] - target).abs() <= f64::EPSILON, "{z} vs {target}");

@@ -111,10 +111,10 @@ const STALLED_INCREMENT: f64 = 1e-9;
 /// costs the Hessian blocks of L at every point, several residuals' worth. On the stiff
 /// spring pendulum (6 points, h = 0.31, T = 100; callgrind): 0.4 takes 126 M instructions,
 /// 0.25 141 M, the library's default 0.03 155 M; 0.6 took 109 M but at T = 650 (h = 1/3)
-/// iterated 50 times at a rate of 0.56 without reaching round-off. For the same reason the
-/// factors are not refreshed at the start of a step after a slowly contracting one (the
-/// library's default): at h = 2/3, T = 100 that took 7.0 ms against 5.0 ms, and 0.1 or 0.2
-/// with or without the refresh 5.9 to 7.9 ms (best of five runs each).
+/// iterated 50 times at a rate of 0.56 without reaching round-off. With the cheaper Hessians
+/// of the scalar dual sweeps 0.4 still wins: at h = 2/3, T = 100, 5.0 ms against 5.9 to 7.9 ms
+/// for 0.1 and 0.2, also with the factors refreshed at each step's start (best of five runs
+/// each).
 const REFACTOR_CONTRACTION: f64 = 0.4;
 
 /// Options of the multiscale variational integrator.
@@ -695,8 +695,7 @@ impl<const N: usize> Method<N> for Multiscale {
             warm: false,
             newton: Newton::new(size, self.max_iterations)
                 .with_noise(STALLED_INCREMENT)
-                .with_refactor(REFACTOR_CONTRACTION)
-                .with_refresh(f64::INFINITY),
+                .with_refactor(REFACTOR_CONTRACTION),
             omega: self.frequency,
         })
     }
