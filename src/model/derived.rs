@@ -45,9 +45,9 @@ pub const SCALAR_SWEEPS_UP_TO: usize = 3;
 
 /// Largest dimension whose Hessian blocks are taken as one scalar hyper-dual sweep per entry
 /// in (q, q̇), (2N)(2N + 1)/2 sweeps, rather than three vector sweeps: 138 ns against 411 ns
-/// for the spring pendulum, 43 against 144 for Kepler, 98 against 350 for the double
-/// pendulum, but 1.6 µs against 0.56 µs for the coupled chain of three pendulums
-/// (`cargo bench --bench derivatives`, run with this constant at 2 and 4).
+/// for the spring pendulum, 64 against 149 for Kepler, but 1.6 µs against 0.56 µs for the
+/// coupled chain of three pendulums (`cargo bench --bench derivatives`, run with this
+/// constant at 0, 2 and 4).
 pub const SCALAR_HESSIAN_UP_TO: usize = 2;
 
 /// ∇f(x) for f: ℝᴺ → ℝ: N forward sweeps with `Dual64` for small N, else one `DualSVec64<N>`

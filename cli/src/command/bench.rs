@@ -1036,22 +1036,7 @@ fn sweep_steps(
         let steps: Vec<f64> = options.steps.iter().map(|&steps| steps as f64).collect();
         return measure_requested(label, &steps, "steps", measure, report, records);
     }
-    let resolved = |steps: usize| matches!(final_error(steps), Ok(e) if e <= 3e-2);
-    let mut steps = 8usize;
-    while steps < MAX_STEPS && !resolved(steps) {
-        steps *= 2;
-    }
-    // The fewest steps (to within 1/16) that still reach 3·10⁻²: between the last count that
-    // did not and the first that did.
-    let mut short = steps / 2;
-    while steps < MAX_STEPS && short >= 8 && steps - short > steps / 16 {
-        let middle = short + (steps - short) / 2;
-        if resolved(middle) {
-            steps = middle;
-        } else {
-            short = middle;
-        }
-    }
+    let mut steps = fewest_resolved_steps(|steps| matches!(final_error(steps), Ok(e) if e <= 3e-2));
     // Two points per halving of the error exponent: 10^(1/(2r)) between step counts.
     let factor = 10f64.powf(0.5 / order);
     let mut stall = Stall::default();
@@ -1075,6 +1060,27 @@ fn sweep_steps(
         steps = ((steps as f64 * factor).ceil() as usize).max(steps + 1);
     }
     Ok(())
+}
+
+/// The fewest step counts (to within 1/16, or one step) from which a method's final error
+/// reaches 3·10⁻² (`resolved`): 8 steps doubled until resolved, then bisected back between
+/// the last count that was not and the first that was; at least [`MAX_STEPS`] if none is.
+fn fewest_resolved_steps(resolved: impl Fn(usize) -> bool) -> usize {
+    let mut steps = 8usize;
+    while steps < MAX_STEPS && !resolved(steps) {
+        steps *= 2;
+    }
+    let mut short = steps / 2;
+    // A bracket of one step cannot be split (below 16 steps 1/16 of a count rounds to 0).
+    while steps < MAX_STEPS && short >= 8 && steps - short > (steps / 16).max(1) {
+        let middle = short + (steps - short) / 2;
+        if resolved(middle) {
+            steps = middle;
+        } else {
+            short = middle;
+        }
+    }
+    steps
 }
 
 /// Measure the points of the method `label` that the user asked for (`--steps` or
@@ -1470,6 +1476,23 @@ mod tests {
             .iter()
             .map(|r| (r.method.as_str(), r.parameter))
             .collect()
+    }
+
+    /// The bisection ends on every bracket, also one of a single step below 16 steps (it
+    /// looped forever on [8, 16] when 9 steps did not resolve: `multiscale` on the stiff
+    /// spring pendulum, 8 steps 9.5e-2, 16 steps 1.7e-3), and lands within 1/16 above the
+    /// least resolving count.
+    #[test]
+    fn the_fewest_resolved_steps_are_found_by_a_bisection_that_ends() {
+        for least in [9, 10, 15, 16, 17, 100, 1000, 12345] {
+            let steps = fewest_resolved_steps(|steps| steps >= least);
+            assert!(
+                steps >= least && steps - least <= (steps / 16).max(1),
+                "least {least}: {steps}"
+            );
+        }
+        assert_eq!(fewest_resolved_steps(|_| true), 8);
+        assert!(fewest_resolved_steps(|_| false) >= MAX_STEPS);
     }
 
     #[test]
