@@ -99,7 +99,7 @@ use crate::nonlinear::{Jacobian, Newton};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::filon::FilonLobatto;
 use crate::spectral::{MAX_POINTS, check_points};
-use nalgebra::{DMatrix, DMatrixView, DMatrixViewMut, DVector, SMatrix, SVector};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// Relative size of a non-decreasing Newton increment that counts as round-off. The Newton
 /// matrix's condition grows as hω falls (the oscillatory functions approach polynomials of
@@ -111,10 +111,7 @@ const STALLED_INCREMENT: f64 = 1e-9;
 /// costs the Hessian blocks of L at every point, several residuals' worth. On the stiff
 /// spring pendulum (6 points, h = 0.31, T = 100; callgrind): 0.4 takes 126 M instructions,
 /// 0.25 141 M, the library's default 0.03 155 M; 0.6 took 109 M but at T = 650 (h = 1/3)
-/// iterated 50 times at a rate of 0.56 without reaching round-off. With the cheaper Hessians
-/// of the scalar dual sweeps 0.4 still wins: at h = 2/3, T = 100, 5.0 ms against 5.9 to 7.9 ms
-/// for 0.1 and 0.2, also with the factors refreshed at each step's start (best of five runs
-/// each).
+/// iterated 50 times at a rate of 0.56 without reaching round-off.
 const REFACTOR_CONTRACTION: f64 = 0.4;
 
 /// Options of the multiscale variational integrator.
@@ -253,13 +250,6 @@ struct Tables {
     /// φ_b and φ̇_b at point p, row-major (n·K) × basis.
     point_values: Vec<f64>,
     point_rates: Vec<f64>,
-    /// The same tables as matrices over the 2·(n·K) rows (p, a), a = 0 for φ, 1 for φ̇ (the
-    /// layout of [`Scratch`]): the equations' basis functions (`row_basis`) as a
-    /// 2nK × U matrix and its transpose, and the unknowns' (`column_basis`) transposed,
-    /// U × 2nK (U unknown blocks).
-    rows: DMatrix<f64>,
-    rows_t: DMatrix<f64>,
-    columns_t: DMatrix<f64>,
     /// Filon node x_p of point p (for its time).
     point_nodes: Vec<f64>,
     /// The CGL nodes x_ν of the polynomial part.
@@ -301,9 +291,6 @@ impl Tables {
             weights: vec![0.0; points],
             point_values: vec![0.0; points * count],
             point_rates: vec![0.0; points * count],
-            rows: DMatrix::zeros(2 * points, count - 1),
-            rows_t: DMatrix::zeros(count - 1, 2 * points),
-            columns_t: DMatrix::zeros(count - 1, 2 * points),
             point_nodes: (0..points).map(|p| filon.nodes()[p / phases]).collect(),
             nodes: basis.nodes().to_vec(),
             extrapolation: row_major(&extrapolation),
@@ -372,19 +359,6 @@ impl Tables {
                     rate[b] = 2.0 / h * ((cos_psi - 1.0) * slope - (cos_end - 1.0) * dl_end)
                         - omega * sin_psi * envelope;
                 }
-            }
-        }
-        for p in 0..self.points() {
-            let value = &self.point_values[p * count..(p + 1) * count];
-            let rate = &self.point_rates[p * count..(p + 1) * count];
-            for u in 0..count - 1 {
-                let (r, c) = (self.row_basis(u), self.column_basis(u));
-                self.rows[(2 * p, u)] = value[r];
-                self.rows[(2 * p + 1, u)] = rate[r];
-                self.rows_t[(u, 2 * p)] = value[r];
-                self.rows_t[(u, 2 * p + 1)] = rate[r];
-                self.columns_t[(u, 2 * p)] = value[c];
-                self.columns_t[(u, 2 * p + 1)] = rate[c];
             }
         }
     }
@@ -505,8 +479,8 @@ pub struct MultiscaleWorkspace<const N: usize> {
     warm: bool,
     /// Scratch of the size of `unknowns` (the extrapolated starting values).
     previous: DVector<f64>,
-    /// Buffers of [`assemble`].
-    scratch: Scratch<N>,
+    /// Second derivatives of L at the quadrature points.
+    derivatives: Vec<SecondDerivatives<N>>,
     newton: Newton,
     /// The fast frequency of the run, once known.
     omega: Option<f64>,
@@ -550,68 +524,24 @@ fn fast_frequency<L: Lagrangian<N>, const N: usize>(
     (estimate.is_finite() && estimate > 0.0).then(|| estimate.sqrt())
 }
 
-/// Buffers of [`assemble`], with the points' 2nK rows (p, a) as columns: q and q̇ at each
-/// point, the weighted gradients w_p ∂L/∂q and w_p ∂L/∂q̇, and one component's Hessian
-/// products (see [`assemble`]).
-#[derive(Debug, Clone)]
-struct Scratch<const N: usize> {
-    /// Second derivatives of L at the quadrature points.
-    derivatives: Vec<SecondDerivatives<N>>,
-    /// N × 2nK: column 2p is q(x_p, ψ_p) − q_k, column 2p + 1 is q̇.
-    positions: DMatrix<f64>,
-    /// N × 2nK: column 2p is w_p ∂L/∂q, column 2p + 1 is w_p ∂L/∂q̇.
-    gradients: DMatrix<f64>,
-    /// 2nK × U·N: row (p, a), column (c, e): w_p Σ_b H^{ab}_{de} φ^b_c(p) for one d.
-    hessian_products: DMatrix<f64>,
-}
-
-impl<const N: usize> Scratch<N> {
-    fn new(tables: &Tables) -> Self {
-        let zero = SecondDerivatives::zeros();
-        let (rows, unknowns) = (2 * tables.points(), tables.basis - 1);
-        Scratch {
-            derivatives: vec![zero; tables.points()],
-            positions: DMatrix::zeros(N, rows),
-            gradients: DMatrix::zeros(N, rows),
-            hessian_products: DMatrix::zeros(rows, unknowns * N),
-        }
-    }
-}
-
 /// Residual of the stationarity conditions and, when `jacobian` is `Some`, its Jacobian in
 /// the unknowns (the residual alone needs only the first derivatives of L: ∂L/∂q and ∂L/∂q̇
 /// at each point, while the Jacobian needs the Hessian blocks).
-///
-/// With the basis values φ^a_b(p) (a = 0: φ, a = 1: φ̇) as the matrices of [`Tables`], every
-/// sum over the points is a matrix product: the points' (q, q̇) are Zᵀ Cᵀ (C the unknowns'
-/// columns), the residual rows g_r = Σ_{p,a} φ^a_r(p) w_p ∂L/∂(q, q̇)(p) are G R, and the
-/// Jacobian's rows of component d are Rᵀ M_d with
-/// M_d[(p, a), (c, e)] = w_p Σ_b H^{ab}_{de}(p) φ^b_c(p), H^{qq} = L_qq, H^{qv} = L_qq̇,
-/// H^{vq} = L_qq̇ᵀ, H^{vv} = L_q̇q̇.
 #[allow(clippy::too_many_arguments)]
 fn assemble<L: Lagrangian<N>, const N: usize>(
     model: &L,
     tables: &Tables,
-    scratch: &mut Scratch<N>,
+    derivatives: &mut [SecondDerivatives<N>],
     t: f64,
     state: &State<N>,
     z: &DVector<f64>,
     jacobian: Option<&mut DMatrix<f64>>,
     residual: &mut DVector<f64>,
 ) {
-    let unknowns = tables.basis - 1;
-    let Scratch {
-        derivatives,
-        positions,
-        gradients,
-        hessian_products,
-    } = scratch;
-    // The unknowns as an N × U matrix (block c is column c).
-    let z_matrix = DMatrixView::from_slice(z.as_slice(), N, unknowns);
-    positions.gemm(1.0, &z_matrix, &tables.columns_t, 0.0);
+    let count = tables.basis;
+    let unknowns = count - 1;
     for (p, point) in derivatives.iter_mut().enumerate() {
-        let q = state.q + positions.fixed_view::<N, 1>(0, 2 * p);
-        let v: SVector<f64, N> = positions.fixed_view::<N, 1>(0, 2 * p + 1).into_owned();
+        let (q, v) = tables.point(p, &state.q, z);
         let time = tables.time(t, p);
         if jacobian.is_some() {
             *point = model.second_derivatives(time, &q, &v);
@@ -621,41 +551,39 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
             point.q = first.q;
             point.v = first.v;
         }
-        let w = tables.weights[p];
-        gradients
-            .fixed_view_mut::<N, 1>(0, 2 * p)
-            .copy_from(&(point.q * w));
-        gradients
-            .fixed_view_mut::<N, 1>(0, 2 * p + 1)
-            .copy_from(&(point.v * w));
     }
-    let mut residual_matrix = DMatrixViewMut::from_slice(residual.as_mut_slice(), N, unknowns);
-    residual_matrix.gemm(1.0, gradients, &tables.rows, 0.0);
-    let mut first = residual.fixed_rows_mut::<N>(0);
-    first += state.y;
+    residual.fill(0.0);
+    residual.fixed_rows_mut::<N>(0).copy_from(&state.y);
+    for (p, d) in derivatives.iter().enumerate() {
+        let w = tables.weights[p];
+        let value = &tables.point_values[p * count..(p + 1) * count];
+        let rate = &tables.point_rates[p * count..(p + 1) * count];
+        for r in 0..unknowns {
+            let b = tables.row_basis(r);
+            let mut row = residual.fixed_rows_mut::<N>(r * N);
+            row += (d.q * value[b] + d.v * rate[b]) * w;
+        }
+    }
     let Some(jacobian) = jacobian else {
         return;
     };
-    for d in 0..N {
-        for (p, point) in derivatives.iter().enumerate() {
-            let w = tables.weights[p];
-            for c in 0..unknowns {
-                let (value, rate) = (
-                    tables.columns_t[(c, 2 * p)],
-                    tables.columns_t[(c, 2 * p + 1)],
-                );
-                for e in 0..N {
-                    let column = c * N + e;
-                    hessian_products[(2 * p, column)] =
-                        w * (point.qq[(d, e)] * value + point.qv[(d, e)] * rate);
-                    hessian_products[(2 * p + 1, column)] =
-                        w * (point.qv[(e, d)] * value + point.vv[(d, e)] * rate);
-                }
+    jacobian.fill(0.0);
+    for (p, d) in derivatives.iter().enumerate() {
+        let w = tables.weights[p];
+        let value = &tables.point_values[p * count..(p + 1) * count];
+        let rate = &tables.point_rates[p * count..(p + 1) * count];
+        let qv_t = d.qv.transpose();
+        for c in 0..unknowns {
+            let bc = tables.column_basis(c);
+            let from_q: SMatrix<f64, N, N> = (d.qq * value[bc] + d.qv * rate[bc]) * w;
+            let from_v: SMatrix<f64, N, N> = (qv_t * value[bc] + d.vv * rate[bc]) * w;
+            for r in 0..unknowns {
+                let b = tables.row_basis(r);
+                let block = from_q * value[b] + from_v * rate[b];
+                let mut target = jacobian.fixed_view_mut::<N, N>(r * N, c * N);
+                target += block;
             }
         }
-        // Rows r·N + d of the Jacobian.
-        let mut rows = jacobian.view_with_steps_mut((d, 0), (unknowns, unknowns * N), (N - 1, 0));
-        rows.gemm(1.0, &tables.rows_t, hessian_products, 0.0);
     }
 }
 
@@ -688,7 +616,7 @@ impl<const N: usize> Method<N> for Multiscale {
         let tables = Tables::new(self)?;
         let size = (tables.basis - 1) * N;
         Ok(MultiscaleWorkspace {
-            scratch: Scratch::new(&tables),
+            derivatives: vec![SecondDerivatives::zeros(); tables.points()],
             tables,
             unknowns: DVector::zeros(size),
             previous: DVector::zeros(size),
@@ -758,11 +686,11 @@ impl<const N: usize> Method<N> for Multiscale {
         // The offsets and amplitudes build positions of the size of q_k.
         ws.newton.set_scale_floor(state.q.amax());
         let tables = &ws.tables;
-        let scratch = &mut ws.scratch;
+        let derivatives = &mut ws.derivatives;
         let solved = ws
             .newton
             .iterate(&mut ws.unknowns, jacobian, |z, jacobian, residual| {
-                assemble(model, tables, scratch, t, state, z, jacobian, residual)
+                assemble(model, tables, derivatives, t, state, z, jacobian, residual)
             })
             .inspect_err(|_| ws.warm = false)?;
         let mut dp = SVector::<f64, N>::zeros();

@@ -11,7 +11,7 @@
 //! `min_batch` seconds, after a warm-up run).
 //!
 //! Fixed-step methods start from 8 steps, double until the error is below 3·10⁻², go back by
-//! bisection to the fewest steps (to within 1/16) with an error below 3·10⁻² — a method that
+//! bisection to the fewest steps (to within 1/16, or one step) with an error below 3·10⁻² — a method that
 //! fails at too few steps, as a reparametrised one whose stage solve does not converge, jumps
 //! from failing to far below it, and its sweep would otherwise start there — then
 //! multiply the step count by 10^(1/(2·order)) per point (about a √10-fold error reduction,
