@@ -67,6 +67,7 @@ pub use derived::LagrangianExt;
 pub use error::Error;
 pub use method::collocation::SpectralCollocation;
 pub use method::registry::MethodSpec;
+pub use method::variational::composition::{Composition, Scheme};
 pub use method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, DiscreteLagrangian, Midpoint, SymplecticEuler, Trapezoid,
 };

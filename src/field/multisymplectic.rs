@@ -7,7 +7,7 @@
 //! With the corners of cell (i, j) numbered 0 = (i, j), 1 = (i + 1, j), 2 = (i, j + 1),
 //! 3 = (i + 1, j + 1) and the quadrature points q of the reference square with weights w_q,
 //!
-//! D_k L_d = ΔxΔt Σ_q w_q [φ_k ∂ℒ/∂u + (∂_τφ_k/Δt) ∂ℒ/∂u_t + (∂_ξφ_k/Δx) ∂ℒ/∂u_x](q),
+//! D_k L_d = ΔxΔt Σ_q w_q \[φ_k ∂ℒ/∂u + (∂_τφ_k/Δt) ∂ℒ/∂u_t + (∂_ξφ_k/Δx) ∂ℒ/∂u_x\](q),
 //!
 //! the level map takes (u^j, p^j) to (u^{j+1}, p^{j+1}) by
 //!

@@ -130,6 +130,14 @@ pub trait Method<const N: usize> {
         None
     }
 
+    /// The step fractions γ_1, …, γ_s if the method is a symmetric composition of
+    /// Störmer–Verlet steps of sizes γ_i h (Störmer–Verlet itself: `[1.0]`); `None` otherwise.
+    /// The logarithmic-Hamiltonian splitting ([`crate::stepping::logh`]) composes its own
+    /// leapfrog with them.
+    fn verlet_fractions(&self) -> Option<&[f64]> {
+        None
+    }
+
     /// Number of interpolation points of a spectral method (polynomial degree + 1); `None`
     /// for methods without a degree.
     fn points(&self) -> Option<usize> {

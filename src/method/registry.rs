@@ -32,6 +32,7 @@ use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::local::LocalMethod;
 use crate::method::multiscale::Multiscale;
+use crate::method::variational::composition::{Composition, Scheme};
 use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
 };
@@ -137,6 +138,24 @@ pub const METHODS: &[Entry] = &[
         options: Options::None,
         space: SpaceKind::Vector,
         summary: "Störmer–Verlet, explicit for constant-mass models",
+    },
+    Entry {
+        name: "yoshida4",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Yoshida's triple jump of Störmer–Verlet: order 4, 3 stages",
+    },
+    Entry {
+        name: "kahan-li6",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Kahan & Li's composition of Störmer–Verlet: order 6, 9 stages",
+    },
+    Entry {
+        name: "kahan-li8",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Kahan & Li's composition of Störmer–Verlet: order 8, 17 stages",
     },
     Entry {
         name: "trapezoid",
@@ -461,6 +480,9 @@ impl MethodSpec {
             }
             "midpoint" => visitor.visit(VariationalIntegrator::new(Midpoint)),
             "verlet" => visitor.visit(StormerVerlet::default()),
+            "yoshida4" => visitor.visit(Composition::new(Scheme::Yoshida4)),
+            "kahan-li6" => visitor.visit(Composition::new(Scheme::KahanLi6)),
+            "kahan-li8" => visitor.visit(Composition::new(Scheme::KahanLi8)),
             "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
             "multiscale" => visitor.visit(Multiscale::new(points)),
             _ => {

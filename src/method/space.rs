@@ -257,6 +257,16 @@ impl<const N: usize> TangentMap<N> {
         m
     }
 
+    /// The Jacobian of this step followed by `next` (the block product next · self).
+    pub fn then(&self, next: &TangentMap<N>) -> TangentMap<N> {
+        TangentMap {
+            qq: next.qq * self.qq + next.qy * self.yq,
+            qy: next.qq * self.qy + next.qy * self.yy,
+            yq: next.yq * self.qq + next.yy * self.yq,
+            yy: next.yq * self.qy + next.yy * self.yy,
+        }
+    }
+
     /// ‖ΦᵀJΦ − J‖_max with J = [[0, I], [−I, 0]]: zero for a symplectic map in (q, p).
     pub fn symplecticity_error(&self) -> f64 {
         let phi = self.matrix();

@@ -185,7 +185,7 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 
     /// Node values of the last step's polynomial as offsets from its first node, at the
-    /// nodes ν = 1, …, s ([`Space::NODE_WIDTH`] numbers per node); `None` for methods without a
+    /// nodes ν = 1, …, s ([`Space::node_width`] numbers per node); `None` for methods without a
     /// degree.
     fn node_offsets<'a>(&self, workspace: &'a mut Self::Workspace) -> Option<&'a [f64]> {
         let _ = workspace;

@@ -4,7 +4,7 @@
 //!
 //! A field u: [a, b] × ℝ → ℝᶜ (C real components) has the action
 //!
-//! S[u] = ∫∫ ℒ(x, t, u, u_t, u_x) dx dt
+//! S\[u\] = ∫∫ ℒ(x, t, u, u_t, u_x) dx dt
 //!
 //! (Leok, *Generalized Variational Integrators*, §5.1.2–5.1.3: the density is a map on the
 //! first jet bundle J¹Y, here written in coordinates). Its Euler–Lagrange equation is

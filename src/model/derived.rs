@@ -50,18 +50,18 @@ pub const SCALAR_SWEEPS_UP_TO: usize = 3;
 /// constant at 0, 2 and 4).
 pub const SCALAR_HESSIAN_UP_TO: usize = 2;
 
-/// ∇f(x) for f: ℝᴺ → ℝ: N forward sweeps with `Dual64` for small N, else one `DualSVec64<N>`
-/// sweep. `f` receives the seeded argument.
+/// f(x) and ∇f(x) for f: ℝᴺ → ℝ: N forward sweeps with `Dual64` for small N, else one
+/// `DualSVec64<N>` sweep. `f` receives the seeded argument.
 #[inline]
 fn gradient_of<const N: usize>(
     f_scalar: impl Fn(SVector<Dual64, N>) -> Dual64,
     f_vector: impl Fn(SVector<DualSVec64<N>, N>) -> DualSVec64<N>,
     x: &SVector<f64, N>,
-) -> SVector<f64, N> {
+) -> (f64, SVector<f64, N>) {
     if N <= SCALAR_SWEEPS_UP_TO {
-        scalar_gradient(f_scalar, x).1
+        scalar_gradient(f_scalar, x)
     } else {
-        gradient(f_vector, x).1
+        gradient(f_vector, x)
     }
 }
 
@@ -270,6 +270,17 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     /// The generalised force ∂L/∂q alone (one gradient).
     #[inline]
     fn force(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
+        self.value_and_force(t, q, v).1
+    }
+
+    /// L and ∂L/∂q from the same sweeps (one gradient).
+    #[inline]
+    fn value_and_force(
+        &self,
+        t: f64,
+        q: &SVector<f64, N>,
+        v: &SVector<f64, N>,
+    ) -> (f64, SVector<f64, N>) {
         gradient_of(
             |x| self.lagrangian(Dual64::from_re(t), &x, &v.map(Dual64::from_re)),
             |x| self.lagrangian(DualVec::from_re(t), &x, &v.map(DualVec::from_re)),
@@ -285,6 +296,7 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
             |y| self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y),
             v,
         )
+        .1
     }
 
     /// L, its gradients and its Hessian blocks.

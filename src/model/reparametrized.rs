@@ -32,8 +32,10 @@
 //! is strong. For a central force μ/r² it is Sundman's monitor, |F|^(−β) = μ^(−β) r^(2β), so
 //! `force:0.75` takes the steps of `sundman:1.5` (Δτ scaled by μ^(3/4)). A point where the
 //! force vanishes (an equilibrium) has g = ∞: the run stops there with a typed error.
-//! [`MonitorSpec`] names the monitors the command line knows (`sundman:ALPHA`,
-//! `force:BETA`).
+//! [`Potential`]: g = 1/U with U(q) = L(q, 0) = −V(q) > 0, whose transformed Hamiltonian
+//! splits into explicit flows when taken logarithmically (Mikkola & Tanikawa 1999; Preto &
+//! Tremaine 1999; [`crate::stepping::logh`]). [`MonitorSpec`] names the monitors the command
+//! line knows (`sundman:ALPHA`, `force:BETA`, `potential`).
 
 use crate::error::Error;
 use crate::model::Lagrangian;
@@ -48,6 +50,13 @@ pub trait Monitor<const N: usize> {
     /// The value g(q) for `model`, written once generic over the scalar (it is
     /// differentiated). Monitors of the positions alone ignore `model`.
     fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D;
+
+    /// Whether g = 1/U with U(q) = L(q, 0) (= −V(q)), the monitor whose transformed
+    /// Hamiltonian, taken logarithmically, splits into explicit flows
+    /// ([`crate::stepping::logh`]). Default `false`.
+    fn logarithmic(&self) -> bool {
+        false
+    }
 }
 
 /// x^(α/2) from x = r² ≥ 0: the exponents α = 1/2, 3/4 (the force monitor's default), 1,
@@ -114,10 +123,35 @@ impl<const N: usize> Monitor<N> for Force {
     }
 }
 
+/// The potential monitor g(q) = 1/U(q), U(q) = L(q, 0) = −V(q) > 0 for L = ½q̇ᵀM(q)q̇ − V(q)
+/// (a potential below zero everywhere, as gravity's −μ/r): dt = dτ/U, so for a central force
+/// μ/r² it is Sundman's g = r/μ. On the energy shell the Poincaré Hamiltonian
+/// K = (H − E₀)/U has the flow of Γ = ln(1 + K) = ln(T(p) − E₀) − ln U(q), a sum of a kinetic
+/// and a potential part: with Störmer–Verlet or one of its compositions on a constant-mass
+/// model, a reparametrised run splits Γ explicitly ([`crate::stepping::logh`]); other methods
+/// run on [`Reparametrized`] with this g.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Potential;
+
+impl<const N: usize> Monitor<N> for Potential {
+    /// 1/L(0, q, 0) (no derivative of L: one evaluation in the caller's scalar).
+    #[inline]
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D {
+        model
+            .lagrangian(constant(0.0), q, &SVector::from_element(constant(0.0)))
+            .recip()
+    }
+
+    fn logarithmic(&self) -> bool {
+        true
+    }
+}
+
 /// The monitors known by name (the command line's `--monitor`).
 ///
 /// Grammar: `sundman:ALPHA` (g = |q|^ALPHA, ALPHA a finite number, e.g. `sundman:1.5`),
-/// `sundman` (α = 3/2), `force:BETA` (g = |∂L/∂q(q, 0)|^(−BETA)) or `force` (β = 3/4).
+/// `sundman` (α = 3/2), `force:BETA` (g = |∂L/∂q(q, 0)|^(−BETA)), `force` (β = 3/4) or
+/// `potential` (g = 1/L(q, 0)).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub enum MonitorSpec {
@@ -125,6 +159,8 @@ pub enum MonitorSpec {
     Sundman(Sundman),
     /// [`Force`].
     Force(Force),
+    /// [`Potential`].
+    Potential(Potential),
 }
 
 impl Default for MonitorSpec {
@@ -140,7 +176,12 @@ impl<const N: usize> Monitor<N> for MonitorSpec {
         match self {
             MonitorSpec::Sundman(sundman) => sundman.monitor(model, q),
             MonitorSpec::Force(force) => force.monitor(model, q),
+            MonitorSpec::Potential(potential) => potential.monitor(model, q),
         }
+    }
+
+    fn logarithmic(&self) -> bool {
+        matches!(self, MonitorSpec::Potential(_))
     }
 }
 
@@ -178,11 +219,18 @@ impl FromStr for MonitorSpec {
             "force" => Ok(MonitorSpec::Force(Force {
                 beta: exponent(0.75, "force:BETA")?,
             })),
+            "potential" => match argument {
+                None => Ok(MonitorSpec::Potential(Potential)),
+                Some(argument) => Err(Error::invalid(
+                    "monitor",
+                    format!("potential takes no argument, not '{argument}'"),
+                )),
+            },
             other => Err(Error::invalid(
                 "monitor",
                 format!(
-                    "unknown monitor {other:?}; use sundman:ALPHA (g = |q|^ALPHA) or force:BETA \
-                     (g = |∂L/∂q(q, 0)|^(−BETA))"
+                    "unknown monitor {other:?}; use sundman:ALPHA (g = |q|^ALPHA), force:BETA \
+                     (g = |∂L/∂q(q, 0)|^(−BETA)) or potential (g = 1/L(q, 0) = −1/V(q))"
                 ),
             )),
         }
@@ -194,6 +242,7 @@ impl fmt::Display for MonitorSpec {
         match self {
             MonitorSpec::Sundman(Sundman { alpha }) => write!(f, "sundman:{alpha}"),
             MonitorSpec::Force(Force { beta }) => write!(f, "force:{beta}"),
+            MonitorSpec::Potential(Potential) => f.write_str("potential"),
         }
     }
 }

@@ -6,6 +6,7 @@
 pub mod adapt;
 pub mod grid;
 pub mod local_observer;
+pub mod logh;
 pub mod observer;
 pub mod reparam;
 pub mod rigid_observer;

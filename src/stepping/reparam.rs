@@ -33,9 +33,9 @@
 use crate::error::{Error, StepFailure};
 use crate::method::space::{Euclidean, Initial, PhasePoint, State};
 use crate::method::{Method, MethodInfo};
-use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::model::reparametrized::{Monitor, Reparametrized};
+use crate::model::{Lagrangian, Structure};
 use crate::spectral::quadrature::GaussLegendre;
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Cursor, Integrator, Run, RunFailure, Statistics};
@@ -129,7 +129,9 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
     /// used (the steps follow from Δτ and the monitor), `options.run` gives the divergence
     /// limit (recovery is not available: a failed τ-step ends the run). `observer` sees the
     /// physical point after every τ-step. [`Solution::adaptivity`] reports the physical step
-    /// sizes.
+    /// sizes. With the [`crate::model::reparametrized::Potential`] monitor, Störmer–Verlet or
+    /// one of its compositions and a constant-mass model, the run takes the explicit
+    /// logarithmic-Hamiltonian splitting of [`crate::stepping::logh`] instead.
     pub fn try_solve_reparametrized<G: Monitor<N>, O: Observer<L, PhasePoint<N>>>(
         &self,
         monitor: &G,
@@ -138,6 +140,12 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         options: &SolveOptions,
         observer: &mut O,
     ) -> Result<Solution<Euclidean<N>>, RunFailure<Euclidean<N>>> {
+        if monitor.logarithmic()
+            && L::STRUCTURE == Structure::ConstantMass
+            && let Some(fractions) = self.method().verlet_fractions()
+        {
+            return self.try_solve_logh(fractions, span, initial, options, observer);
+        }
         let rejected = RunFailure::rejected;
         span.validate().map_err(rejected)?;
         options.validate_reparametrized().map_err(rejected)?;

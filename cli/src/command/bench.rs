@@ -1519,7 +1519,12 @@ mod tests {
                 matches!(&error, SceneError::BenchMethod { text } if text == bad),
                 "{bad}: {error}"
             );
-            assert!(error.to_string().contains("verlet, trapezoid"), "{error}");
+            assert!(
+                error
+                    .to_string()
+                    .contains("verlet, yoshida4, kahan-li6, kahan-li8, trapezoid"),
+                "{error}"
+            );
             assert!(
                 error.to_string().contains("dop853, dopri5, radau5"),
                 "{error}"

@@ -38,7 +38,9 @@
 //!                       # (fixed steps in τ, dt = g(q) dτ: structure-preserving)
 //! # tol = 1e-9          # target final error of adapt = "step" and "degree" (only with them)
 //! # monitor = "sundman:1.5"  # g(q) = |q|^1.5 of adapt = "reparam" (only with it; default),
-//!                       # or "force:BETA": g = |∂L/∂q(q, 0)|^(−BETA), any model
+//!                       # or "force:BETA": g = |∂L/∂q(q, 0)|^(−BETA), any model, or
+//!                       # "potential": g = 1/L(q, 0) = −1/V(q) (explicit with verlet,
+//!                       # yoshida4, kahan-li6 or kahan-li8 on a constant mass)
 //! # min_points = 3      # bounds of adapt = "degree" (defaults 3 and 24; only with it)
 //! # max_points = 24
 //! recovery = "none"     # or "halve-step": retry a failed step as two half steps (adapt =

@@ -70,7 +70,9 @@ pub struct Overrides {
     /// The monitor g(q) > 0 of --adapt reparam: sundman:ALPHA is g = |q|^ALPHA for a central
     /// force about the origin (ALPHA = 1.5 or 1 for Kepler orbits); force:BETA is
     /// g = |∂L/∂q(q, 0)|^(−BETA), the force at rest derived from the model (force:0.75 is
-    /// sundman:1.5 for an inverse-square force) [default: sundman:1.5].
+    /// sundman:1.5 for an inverse-square force); potential is g = 1/L(q, 0) = −1/V(q), with
+    /// verlet, yoshida4, kahan-li6 or kahan-li8 on a constant-mass model the explicit
+    /// logarithmic-Hamiltonian splitting [default: sundman:1.5].
     #[arg(long, value_name = "MONITOR")]
     pub monitor: Option<MonitorSpec>,
     /// Report the states at these times, comma-separated (dense output); with --out the

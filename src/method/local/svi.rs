@@ -11,7 +11,7 @@
 //!   quadrature points (Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν^{k−1}, one m × m
 //!   product); then q_{k+1} − q_k = h M⁻¹p_k + Σ_μ b̄_μ a_μ and
 //!   p_{k+1} − p_k = Σ_μ (h/2) w_μ ∂L/∂q(Q_μ) (the discrete momentum balance). The tables
-//!   are the fixed-size path's ([`crate::method::variational::svi::NystromTables`]), so both
+//!   are the fixed-size path's (`NystromTables` of [`crate::method::variational::svi`]), so both
 //!   take the same steps to round-off; each iteration costs m assemblies of ∂L/∂q, O(m n).
 //! - **sparse Newton** ([`crate::method::local::newton`]), for every other Lagrangian (and
 //!   for constant mass with [`crate::Solver::Newton`]): the stage equations (8a)–(8b) in the

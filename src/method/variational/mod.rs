@@ -8,7 +8,9 @@
 //!   adjoint, midpoint, trapezoid) as plain data.
 //! - [`variational_integrator`]: one implicit discrete Euler–Lagrange solver for any of them.
 //! - [`stormer_verlet`]: the trapezoidal rule, explicit (kick–drift–kick) for a constant mass.
+//! - [`composition`]: symmetric compositions of Störmer–Verlet of orders 4, 6 and 8.
 
+pub mod composition;
 pub mod discrete_lagrangian;
 pub mod stormer_verlet;
 pub mod svi;

@@ -151,6 +151,10 @@ impl<const N: usize> Method<N> for StormerVerlet {
         }
     }
 
+    fn verlet_fractions(&self) -> Option<&[f64]> {
+        Some(&[1.0])
+    }
+
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,

@@ -1,0 +1,332 @@
+//! The logarithmic Hamiltonian: an explicit, symplectic, time-reparametrised splitting for
+//! constant-mass Lagrangians with a potential below zero.
+//!
+//! # Derivation
+//! For L = ½q̇ᵀMq̇ − V(q) (constant M, autonomous) write U(q) = −V(q) = L(q, 0) > 0 and
+//! T(p) = ½pᵀM⁻¹p, so H = T − U. The Poincaré transformation with the monitor g = 1/U
+//! ([`crate::model::reparametrized::Potential`]; Leok, *Generalized Variational
+//! Integrators*, §5.6) gives K = (H − E₀)/U in the time τ, dt/dτ = 1/U. Any function f(K)
+//! with f(0) = 0, f′(0) = 1 has, on the shell K = 0, the same flow; f = ln(1 + ·) gives
+//!
+//! Γ(q, p) = ln(1 + K) = ln(T(p) − E₀) − ln U(q),
+//!
+//! a kinetic part depending on p alone and a potential part depending on q alone
+//! (Mikkola & Tanikawa, MNRAS 310 (1999) 745; Preto & Tremaine, AJ 118 (1999) 2532). Their
+//! flows are exact and explicit:
+//!
+//! - drift by σ: q += σ M⁻¹p / (T(p) − E₀), t += σ / (T(p) − E₀) (p fixed);
+//! - kick by σ: p += σ ∇U(q) / U(q) (q fixed),
+//!
+//! and the leapfrog (drift σ/2, kick σ, drift σ/2) is a symmetric, symplectic step of order 2
+//! for Γ in (q, p), with t carried along (t is the coordinate conjugate to −E₀, held fixed).
+//! Γ is conserved to O(σ²) with no drift (backward error analysis), and with it H: on the
+//! Kepler problem the leapfrog's orbit is the exact ellipse, and only the time along it has
+//! an error (Mikkola & Tanikawa 1999; tested below). Composed with the fractions of
+//! [`crate::method::variational::composition`] the step reaches order 4, 6 or 8 (adjacent
+//! drifts merge: one gradient of L per stage).
+//!
+//! The run needs T(p) − E₀ > 0, true for every bound orbit (E₀ < 0), and U > 0 along the
+//! way; otherwise it stops with a typed error. ∇U = ∂L/∂q and U come from one sweep of
+//! automatic differentiation of L at q̇ = 0.
+//!
+//! # Physical time
+//! t is integrated with the state (compensated sum over the drifts). The last step's size is
+//! found by Newton's method on t(σ) = t_end (slope 1/(T − E₀) at its end), so the run ends at
+//! t_end with a step's accuracy. Output times inside the span are not served: the splitting
+//! has no step polynomial.
+
+use crate::error::{Error, StepFailure};
+use crate::method::Method;
+use crate::method::space::{Euclidean, Initial, PhasePoint, State};
+use crate::model::Lagrangian;
+use crate::model::Structure;
+use crate::model::derived::{LagrangianExt, cached_mass_inverse};
+use crate::model::reparametrized::{Potential, Reparametrized};
+use crate::stepping::observer::Observer;
+use crate::stepping::run::{Integrator, Run, RunFailure, Statistics};
+use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
+use nalgebra::{SMatrix, SVector};
+
+/// Newton iterations allowed for the last step's size.
+const TIME_NEWTON_ITERATIONS: usize = 40;
+
+/// The splitting of Γ for one model at one energy level.
+struct Splitting<'a, L, const N: usize> {
+    model: &'a L,
+    mass_inverse: SMatrix<f64, N, N>,
+    energy: f64,
+    fractions: &'a [f64],
+}
+
+/// A point of the split flow: (q, p) and the physical time, each a compensated sum.
+#[derive(Debug, Clone, Copy)]
+struct Point<const N: usize> {
+    q: SVector<f64, N>,
+    p: SVector<f64, N>,
+    t: f64,
+    compensation: (SVector<f64, N>, SVector<f64, N>, f64),
+}
+
+/// x += d with Kahan compensation c.
+#[inline]
+fn kahan_add<const N: usize>(
+    x: &mut SVector<f64, N>,
+    c: &mut SVector<f64, N>,
+    d: &SVector<f64, N>,
+) {
+    for i in 0..N {
+        let y = d[i] - c[i];
+        let sum = x[i] + y;
+        c[i] = (sum - x[i]) - y;
+        x[i] = sum;
+    }
+}
+
+impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
+    /// 1/(T(p) − E₀), checked positive and finite.
+    fn rate(&self, p: &SVector<f64, N>) -> Result<f64, StepFailure> {
+        let kinetic = 0.5 * p.dot(&(self.mass_inverse * p));
+        let rate = (kinetic - self.energy).recip();
+        if rate.is_finite() && rate > 0.0 {
+            Ok(rate)
+        } else {
+            Err(StepFailure::NonFinite)
+        }
+    }
+
+    /// U(q) = L(q, 0) and ∇U = ∂L/∂q(q, 0), with U checked positive and finite.
+    fn potential(&self, q: &SVector<f64, N>) -> Result<(f64, SVector<f64, N>), Error> {
+        let (potential, gradient) = self.model.value_and_force(0.0, q, &SVector::zeros());
+        if potential.is_finite() && potential > 0.0 {
+            Ok((potential, gradient))
+        } else {
+            Err(Error::invalid(
+                "monitor",
+                format!(
+                    "the potential monitor needs U(q) = L(q, 0) = −V(q) > 0, but U = \
+                     {potential:e} at q = {:?}",
+                    q.as_slice()
+                ),
+            ))
+        }
+    }
+
+    /// One step of size `sigma` from `from`: the composed leapfrog (drift, kick, drift) with
+    /// merged drifts. Returns the step's end and the number of gradients taken.
+    fn step(&self, from: &Point<N>, sigma: f64) -> Result<(Point<N>, usize), Error> {
+        let (mut dq, mut dp, mut dt) = (SVector::<f64, N>::zeros(), SVector::zeros(), 0.0);
+        let stop = |what: &str| Error::invalid("monitor", what.to_string());
+        let mut pending = 0.5 * self.fractions[0] * sigma;
+        for (i, gamma) in self.fractions.iter().enumerate() {
+            let p = from.p + dp;
+            let rate = self.rate(&p).map_err(|_| {
+                stop("the potential monitor needs T(p) − E₀ > 0 (a bound orbit, E₀ < 0)")
+            })?;
+            dq += self.mass_inverse * p * (pending * rate);
+            dt += pending * rate;
+            let (potential, gradient) = self.potential(&(from.q + dq))?;
+            dp += gradient * (gamma * sigma / potential);
+            pending = 0.5 * (gamma + self.fractions.get(i + 1).unwrap_or(&0.0)) * sigma;
+        }
+        let p = from.p + dp;
+        let rate = self.rate(&p).map_err(|_| {
+            stop("the potential monitor needs T(p) − E₀ > 0 (a bound orbit, E₀ < 0)")
+        })?;
+        dq += self.mass_inverse * p * (pending * rate);
+        dt += pending * rate;
+        let mut end = *from;
+        kahan_add(&mut end.q, &mut end.compensation.0, &dq);
+        kahan_add(&mut end.p, &mut end.compensation.1, &dp);
+        let y = dt - end.compensation.2;
+        let t = end.t + y;
+        end.compensation.2 = (t - end.t) - y;
+        end.t = t;
+        Ok((end, self.fractions.len()))
+    }
+
+    /// The physical point (t, q, q̇ = M⁻¹p, p).
+    fn physical(&self, point: &Point<N>) -> PhasePoint<N> {
+        PhasePoint {
+            t: point.t,
+            q: point.q,
+            v: self.mass_inverse * point.p,
+            p: point.p,
+        }
+    }
+}
+
+impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Euclidean<N>> {
+    /// [`Integrator::try_solve_reparametrized`] with the potential monitor and a method that
+    /// composes Störmer–Verlet (`fractions`), on a constant-mass model: the logarithmic
+    /// Hamiltonian split explicitly (see the module docs).
+    pub(crate) fn try_solve_logh<O: Observer<L, PhasePoint<N>>>(
+        &self,
+        fractions: &[f64],
+        span: &Span,
+        initial: Initial<N>,
+        options: &SolveOptions,
+        observer: &mut O,
+    ) -> Result<Solution<Euclidean<N>>, RunFailure<Euclidean<N>>> {
+        let rejected = RunFailure::rejected;
+        debug_assert_eq!(L::STRUCTURE, Structure::ConstantMass);
+        span.validate().map_err(rejected)?;
+        options.validate_reparametrized().map_err(rejected)?;
+        let sigma = options.step().map_err(rejected)?;
+        if let Some(&inside) = span.output_times[..span.output_times.len() - 1]
+            .iter()
+            .find(|&&t| t > span.t0)
+        {
+            return Err(rejected(Error::invalid(
+                "output_times",
+                format!(
+                    "{inside:?} lies inside the span, and the potential monitor's splitting has \
+                     no step polynomial to read it from: ask for output at the ends of the span"
+                ),
+            )));
+        }
+        let model = self.model();
+        let start = self.start(span.t0, &initial).map_err(rejected)?;
+        let first = self
+            .phase_point(span.t0, &start.cursor.state, &start.guess)
+            .map_err(rejected)?;
+        let energy = model.energy(span.t0, &first.q, &first.v);
+        // The model must be autonomous and unforced, the energy finite (as for L̃).
+        Reparametrized::new(model, &Potential, energy).map_err(rejected)?;
+        let mass_inverse = cached_mass_inverse(&mut None, model, span.t0, &first.q, &first.p)
+            .map_err(|_| {
+                rejected(Error::invalid(
+                    "model",
+                    "the potential monitor's splitting needs an invertible mass matrix",
+                ))
+            })?;
+        let splitting = Splitting {
+            model,
+            mass_inverse,
+            energy,
+            fractions,
+        };
+        splitting.potential(&first.q).map_err(rejected)?;
+        let mut statistics = Statistics::default();
+        let mut adaptivity = Adaptivity::default();
+        let mut outputs = Vec::with_capacity(2);
+        if span.output_times[0] == span.t0 {
+            outputs.push(first);
+        }
+        let mut point = Point {
+            q: first.q,
+            p: first.p,
+            t: span.t0,
+            compensation: (SVector::zeros(), SVector::zeros(), 0.0),
+        };
+        let mut last = first;
+        let failure = |error: Error, last: &PhasePoint<N>, statistics: Statistics| RunFailure {
+            error,
+            partial: Some(Run {
+                last: *last,
+                state: State {
+                    q: last.q,
+                    y: last.p,
+                },
+                statistics,
+                stopped: false,
+            }),
+        };
+        if observer.wants(0) && observer.observe(model, 0, &first).is_break() {
+            return Ok(Solution {
+                points: outputs,
+                last: first,
+                statistics,
+                adaptivity,
+                stopped: true,
+            });
+        }
+        let limit = options.run.divergence_limit;
+        let mut k = 0usize;
+        loop {
+            let checked = |end: &Point<N>, k: usize| -> Result<(), Error> {
+                let norm = end.q.amax().max(end.p.amax());
+                if !(norm.is_finite() && end.t.is_finite()) {
+                    return Err(StepFailure::NonFinite.at(k, point.t));
+                }
+                match limit {
+                    Some(limit) if norm > limit => {
+                        Err(StepFailure::Diverged { norm, limit }.at(k, point.t))
+                    }
+                    _ => Ok(()),
+                }
+            };
+            let attempt = |size: f64, statistics: &mut Statistics| {
+                let (end, gradients) = splitting.step(&point, size)?;
+                statistics.evaluations += gradients;
+                checked(&end, k)?;
+                Ok::<_, Error>(end)
+            };
+            let mut end = attempt(sigma, &mut statistics)
+                .map_err(|error| failure(error, &last, statistics))?;
+            let finish = end.t >= span.t_end;
+            if finish {
+                // Newton on the last step's size: t(σ) = t_end, dt/dσ = 1/(T − E₀) at its
+                // end, kept inside the bracket (lo, hi) of sizes that fall short and reach.
+                let tolerance = 4.0 * f64::EPSILON * span.t_end.abs().max(1.0);
+                let (mut lo, mut hi, mut size) = (0.0, sigma, sigma);
+                let mut residual = end.t - span.t_end;
+                let mut iterations = 0;
+                while residual.abs() > tolerance {
+                    if iterations == TIME_NEWTON_ITERATIONS {
+                        let error = Error::NonConvergence {
+                            step: k,
+                            t: point.t,
+                            iterations,
+                            residual,
+                        };
+                        return Err(failure(error, &last, statistics));
+                    }
+                    iterations += 1;
+                    if residual > 0.0 {
+                        hi = size;
+                    } else {
+                        lo = size;
+                    }
+                    let rate = splitting
+                        .rate(&end.p)
+                        .map_err(|failure| failure.at(k, point.t))
+                        .map_err(|error| failure(error, &last, statistics))?;
+                    size -= residual / rate;
+                    if !(size > lo && size < hi) {
+                        size = 0.5 * (lo + hi);
+                    }
+                    end = attempt(size, &mut statistics)
+                        .map_err(|error| failure(error, &last, statistics))?;
+                    residual = end.t - span.t_end;
+                }
+                end.t = span.t_end;
+            }
+            adaptivity.record(end.t - point.t, None);
+            point = end;
+            k += 1;
+            statistics.steps = k;
+            last = splitting.physical(&point);
+            if observer.wants(k) && observer.observe(model, k, &last).is_break() {
+                return Ok(Solution {
+                    points: outputs,
+                    last,
+                    statistics,
+                    adaptivity,
+                    stopped: !finish,
+                });
+            }
+            if finish {
+                if outputs.len() < span.output_times.len() {
+                    outputs.push(last);
+                }
+                return Ok(Solution {
+                    points: outputs,
+                    last,
+                    statistics,
+                    adaptivity,
+                    stopped: false,
+                });
+            }
+        }
+    }
+}
