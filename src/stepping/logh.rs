@@ -37,18 +37,16 @@
 
 use crate::error::{Error, StepFailure};
 use crate::method::Method;
-use crate::method::space::{Euclidean, Initial, PhasePoint, State};
+use crate::method::space::{Euclidean, Initial, PhasePoint};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{LagrangianExt, cached_mass_inverse};
 use crate::model::reparametrized::{Potential, Reparametrized};
 use crate::stepping::observer::Observer;
-use crate::stepping::run::{Integrator, Run, RunFailure, Statistics};
+use crate::stepping::reparam::{failure_after, land_on_horizon};
+use crate::stepping::run::{Integrator, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
 use nalgebra::{SMatrix, SVector};
-
-/// Newton iterations allowed for the last step's size.
-const TIME_NEWTON_ITERATIONS: usize = 40;
 
 /// The splitting of Γ for one model at one energy level.
 struct Splitting<'a, L, const N: usize> {
@@ -115,25 +113,29 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
     /// merged drifts. Returns the step's end and the number of gradients taken.
     fn step(&self, from: &Point<N>, sigma: f64) -> Result<(Point<N>, usize), Error> {
         let (mut dq, mut dp, mut dt) = (SVector::<f64, N>::zeros(), SVector::zeros(), 0.0);
-        let stop = |what: &str| Error::invalid("monitor", what.to_string());
+        // Drift by `length` at the momentum p: q += length M⁻¹p/(T − E₀), t += length/(T − E₀).
+        let drift = |p: SVector<f64, N>, length: f64| {
+            let rate = self.rate(&p).map_err(|_| {
+                Error::invalid(
+                    "monitor",
+                    "the potential monitor needs T(p) − E₀ > 0 (a bound orbit, E₀ < 0)",
+                )
+            })?;
+            Ok::<_, Error>((self.mass_inverse * p * (length * rate), length * rate))
+        };
+        // Each stage drifts by half its own size and half the next one's (merged drifts).
         let mut pending = 0.5 * self.fractions[0] * sigma;
         for (i, gamma) in self.fractions.iter().enumerate() {
-            let p = from.p + dp;
-            let rate = self.rate(&p).map_err(|_| {
-                stop("the potential monitor needs T(p) − E₀ > 0 (a bound orbit, E₀ < 0)")
-            })?;
-            dq += self.mass_inverse * p * (pending * rate);
-            dt += pending * rate;
+            let (q_step, t_step) = drift(from.p + dp, pending)?;
+            dq += q_step;
+            dt += t_step;
             let (potential, gradient) = self.potential(&(from.q + dq))?;
             dp += gradient * (gamma * sigma / potential);
             pending = 0.5 * (gamma + self.fractions.get(i + 1).unwrap_or(&0.0)) * sigma;
         }
-        let p = from.p + dp;
-        let rate = self.rate(&p).map_err(|_| {
-            stop("the potential monitor needs T(p) − E₀ > 0 (a bound orbit, E₀ < 0)")
-        })?;
-        dq += self.mass_inverse * p * (pending * rate);
-        dt += pending * rate;
+        let (q_step, t_step) = drift(from.p + dp, pending)?;
+        dq += q_step;
+        dt += t_step;
         let mut end = *from;
         kahan_add(&mut end.q, &mut end.compensation.0, &dq);
         kahan_add(&mut end.p, &mut end.compensation.1, &dp);
@@ -219,18 +221,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             compensation: (SVector::zeros(), SVector::zeros(), 0.0),
         };
         let mut last = first;
-        let failure = |error: Error, last: &PhasePoint<N>, statistics: Statistics| RunFailure {
-            error,
-            partial: Some(Run {
-                last: *last,
-                state: State {
-                    q: last.q,
-                    y: last.p,
-                },
-                statistics,
-                stopped: false,
-            }),
-        };
+        let failure = failure_after::<N>;
         if observer.wants(0) && observer.observe(model, 0, &first).is_break() {
             return Ok(Solution {
                 points: outputs,
@@ -265,40 +256,19 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                 .map_err(|error| failure(error, &last, statistics))?;
             let finish = end.t >= span.t_end;
             if finish {
-                // Newton on the last step's size: t(σ) = t_end, dt/dσ = 1/(T − E₀) at its
-                // end, kept inside the bracket (lo, hi) of sizes that fall short and reach.
-                let tolerance = 4.0 * f64::EPSILON * span.t_end.abs().max(1.0);
-                let (mut lo, mut hi, mut size) = (0.0, sigma, sigma);
-                let mut residual = end.t - span.t_end;
-                let mut iterations = 0;
-                while residual.abs() > tolerance {
-                    if iterations == TIME_NEWTON_ITERATIONS {
-                        let error = Error::NonConvergence {
-                            step: k,
-                            t: point.t,
-                            iterations,
-                            residual,
-                        };
-                        return Err(failure(error, &last, statistics));
-                    }
-                    iterations += 1;
-                    if residual > 0.0 {
-                        hi = size;
-                    } else {
-                        lo = size;
-                    }
-                    let rate = splitting
-                        .rate(&end.p)
-                        .map_err(|failure| failure.at(k, point.t))
-                        .map_err(|error| failure(error, &last, statistics))?;
-                    size -= residual / rate;
-                    if !(size > lo && size < hi) {
-                        size = 0.5 * (lo + hi);
-                    }
-                    end = attempt(size, &mut statistics)
-                        .map_err(|error| failure(error, &last, statistics))?;
-                    residual = end.t - span.t_end;
-                }
+                // dt/dσ = 1/(T − E₀) at the step's end.
+                let slope = |end: &Point<N>| splitting.rate(&end.p).map_err(|f| f.at(k, point.t));
+                let first = slope(&end).map_err(|error| failure(error, &last, statistics))?;
+                land_on_horizon(
+                    span.t_end,
+                    (sigma, end.t - span.t_end, first),
+                    (k, point.t),
+                    |size| {
+                        end = attempt(size, &mut statistics)?;
+                        Ok((end.t - span.t_end, slope(&end)?))
+                    },
+                )
+                .map_err(|error| failure(error, &last, statistics))?;
                 end.t = span.t_end;
             }
             adaptivity.record(end.t - point.t, None);

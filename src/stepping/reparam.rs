@@ -45,6 +45,68 @@ use nalgebra::SVector;
 /// Newton iterations allowed for the last step's Δτ and for an output time's σ.
 const TIME_NEWTON_ITERATIONS: usize = 40;
 
+/// A failure after the start of a run in physical time: the run up to `last`, the last good
+/// physical point (its state in (q, p)).
+pub(crate) fn failure_after<const N: usize>(
+    error: Error,
+    last: &PhasePoint<N>,
+    statistics: Statistics,
+) -> RunFailure<Euclidean<N>> {
+    RunFailure {
+        error,
+        partial: Some(Run {
+            last: *last,
+            state: State {
+                q: last.q,
+                y: last.p,
+            },
+            statistics,
+            stopped: false,
+        }),
+    }
+}
+
+/// Newton's method on the size σ of a run's last step so that it ends on `t_end`: the step
+/// just taken had size σ₀ and ended at t_end + r₀ with dt/dσ = s₀ there (`first` = (σ₀, r₀,
+/// s₀)); `retake(σ)` takes the step again from its start with size σ and returns its (r, s).
+/// The iterates stay inside the bracket (lo, hi) of sizes that fall short of and reach t_end
+/// (bisection where a Newton step leaves it), until |r| ≤ 4ε max(|t_end|, 1). Returns the
+/// size of the step last taken; [`Error::NonConvergence`] at (`step`, `t`) after
+/// [`TIME_NEWTON_ITERATIONS`].
+pub(crate) fn land_on_horizon(
+    t_end: f64,
+    first: (f64, f64, f64),
+    (step, t): (usize, f64),
+    mut retake: impl FnMut(f64) -> Result<(f64, f64), Error>,
+) -> Result<f64, Error> {
+    let tolerance = 4.0 * f64::EPSILON * t_end.abs().max(1.0);
+    let (mut size, mut residual, mut slope) = first;
+    let (mut lo, mut hi) = (0.0, size);
+    let mut iterations = 0;
+    while residual.abs() > tolerance {
+        if iterations == TIME_NEWTON_ITERATIONS {
+            return Err(Error::NonConvergence {
+                step,
+                t,
+                iterations,
+                residual,
+            });
+        }
+        iterations += 1;
+        if residual > 0.0 {
+            hi = size;
+        } else {
+            lo = size;
+        }
+        size -= residual / slope;
+        if !(size > lo && size < hi) {
+            size = 0.5 * (lo + hi);
+        }
+        (residual, slope) = retake(size)?;
+    }
+    Ok(size)
+}
+
 /// The value g(q), checked positive and finite.
 fn monitor_value<L: Lagrangian<N>, G: Monitor<N>, const N: usize>(
     tilde: &Reparametrized<'_, L, G>,
@@ -187,19 +249,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         };
         let mut last = first;
         let mut increment = State::zeros();
-        // A failure after the start: the run up to the last good (physical) point.
-        let failure = |error: Error, last: &PhasePoint<N>, statistics: Statistics| RunFailure {
-            error,
-            partial: Some(Run {
-                last: *last,
-                state: State {
-                    q: last.q,
-                    y: last.p,
-                },
-                statistics,
-                stopped: false,
-            }),
-        };
+        let failure = failure_after::<N>;
         // The physical point of a τ-state at time t (the inverse Legendre map of L̃, then
         // q̇ = q'/g).
         let physical = |t: f64,
@@ -300,46 +350,26 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                 served += 1;
             }
             if finish {
-                // Newton on the last step's Δτ: t(Δτ) = t_end, dt/dΔτ = g at its end, kept
-                // inside the bracket (lo, hi) of sizes that fall short of and reach t_end.
-                let tolerance = 4.0 * f64::EPSILON * span.t_end.abs().max(1.0);
-                let (mut lo, mut hi) = (0.0, size);
-                let mut residual = clock.t + dt - span.t_end;
-                let mut iterations = 0;
-                while residual.abs() > tolerance {
-                    if iterations == TIME_NEWTON_ITERATIONS {
-                        let error = Error::NonConvergence {
-                            step: k,
-                            t: clock.t,
-                            iterations,
-                            residual,
-                        };
-                        return Err(failure(error, &last, progress.statistics));
-                    }
-                    iterations += 1;
-                    if residual > 0.0 {
-                        hi = size;
-                    } else {
-                        lo = size;
-                    }
-                    let g = monitor_value(inner.model(), &progress.cursor.state.q, tau + size)
-                        .map_err(|error| failure(error, &last, progress.statistics))?;
-                    size -= residual / g;
-                    if !(size > lo && size < hi) {
-                        size = 0.5 * (lo + hi);
-                    }
-                    progress.cursor = begin.clone();
-                    Method::restart(method, &mut workspace);
-                    dt = step(
-                        &mut progress.cursor,
-                        &mut workspace,
-                        &mut increment,
-                        size,
-                        &mut progress.statistics,
-                    )
+                let residual = clock.t + dt - span.t_end;
+                let slope = |size: f64, cursor: &Cursor<Euclidean<N>>| {
+                    monitor_value(inner.model(), &cursor.state.q, tau + size)
+                };
+                let first = slope(size, &progress.cursor)
                     .map_err(|error| failure(error, &last, progress.statistics))?;
-                    residual = clock.t + dt - span.t_end;
-                }
+                size =
+                    land_on_horizon(span.t_end, (size, residual, first), (k, clock.t), |retry| {
+                        progress.cursor = begin.clone();
+                        Method::restart(method, &mut workspace);
+                        dt = step(
+                            &mut progress.cursor,
+                            &mut workspace,
+                            &mut increment,
+                            retry,
+                            &mut progress.statistics,
+                        )?;
+                        Ok((clock.t + dt - span.t_end, slope(retry, &progress.cursor)?))
+                    })
+                    .map_err(|error| failure(error, &last, progress.statistics))?;
             }
             clock.add(dt);
             if finish {

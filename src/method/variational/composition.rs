@@ -31,7 +31,7 @@
 
 use crate::error::{Error, StepFailure};
 use crate::method::variational::stormer_verlet::{StormerVerlet, StormerVerletWorkspace};
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use nalgebra::SVector;
 
@@ -131,18 +131,44 @@ impl Composition {
     pub fn fractions(&self) -> &[f64] {
         &self.fractions
     }
+
+    /// The stages of a step of size `h` from `state` at `t`: `stage(t_i, γ_i h, from)` takes
+    /// stage i from `from` = state + the sum of the increments before it and returns its
+    /// increment; the sum of all of them, the step's increment, is returned (one rounding of
+    /// the state per step, as for any other method).
+    fn stages<const N: usize>(
+        &self,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        mut stage: impl FnMut(f64, f64, &State<N>) -> Result<State<N>, StepFailure>,
+    ) -> Result<State<N>, StepFailure> {
+        let mut total = State::<N>::zeros();
+        let mut elapsed = 0.0;
+        for gamma in &self.fractions {
+            let size = gamma * h;
+            let from = State {
+                q: state.q + total.q,
+                y: state.y + total.y,
+            };
+            let increment = stage(t + elapsed, size, &from)?;
+            total.q += increment.q;
+            total.y += increment.y;
+            elapsed += size;
+        }
+        Ok(total)
+    }
 }
 
 impl<const N: usize> Method<N> for Composition {
     type Workspace = StormerVerletWorkspace<N>;
 
+    /// Störmer–Verlet's properties with the scheme's name and order.
     fn info(&self) -> MethodInfo {
         MethodInfo {
             name: self.scheme.name(),
             order: self.scheme.order(),
-            symmetric: true,
-            symplectic: true,
-            coordinates: Coordinates::Momentum,
+            ..Method::<N>::info(&self.base)
         }
     }
 
@@ -154,8 +180,7 @@ impl<const N: usize> Method<N> for Composition {
         self.base.workspace(model, h)
     }
 
-    /// The stages in turn, each from where the last ended (the stage states are the partial
-    /// sums q + Σ Δq_i, y + Σ Δy_i of the stage increments).
+    /// The stages in turn (see [`Composition::stages`]).
     fn step<L: Lagrangian<N>>(
         &self,
         model: &L,
@@ -166,27 +191,17 @@ impl<const N: usize> Method<N> for Composition {
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         let mut report = StepReport::default();
-        let mut total = State::<N>::zeros();
-        let mut stage = State::<N>::zeros();
-        let mut elapsed = 0.0;
-        for gamma in &self.fractions {
-            let size = gamma * h;
-            let from = State {
-                q: state.q + total.q,
-                y: state.y + total.y,
-            };
+        *increment = self.stages(t, h, state, |t, size, from| {
+            let mut stage = State::zeros();
             let done = self
                 .base
-                .step(model, workspace, t + elapsed, size, &from, &mut stage)?;
+                .step(model, workspace, t, size, from, &mut stage)?;
             report.iterations += done.iterations;
             report.evaluations += done.evaluations;
             report.factorizations += done.factorizations;
             report.analyses += done.analyses;
-            total.q += stage.q;
-            total.y += stage.y;
-            elapsed += size;
-        }
-        *increment = total;
+            Ok(stage)
+        })?;
         Ok(report)
     }
 
@@ -215,26 +230,15 @@ impl<const N: usize> Method<N> for Composition {
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let mut total = State::<N>::zeros();
         let mut product: Option<TangentMap<N>> = None;
-        let mut elapsed = 0.0;
-        for gamma in &self.fractions {
-            let size = gamma * h;
-            let from = State {
-                q: state.q + total.q,
-                y: state.y + total.y,
-            };
-            let (stage, tangent) =
-                self.base
-                    .tangent_map(model, workspace, t + elapsed, size, &from)?;
-            total.q += stage.q;
-            total.y += stage.y;
-            elapsed += size;
-            product = Some(match product {
+        let total = self.stages(t, h, state, |t, size, from| {
+            let (stage, tangent) = self.base.tangent_map(model, workspace, t, size, from)?;
+            product = Some(match &product {
                 None => tangent,
                 Some(before) => before.then(&tangent),
             });
-        }
+            Ok(stage)
+        })?;
         product
             .map(|tangent| (total, tangent))
             .ok_or(StepFailure::SingularMatrix)
