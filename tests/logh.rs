@@ -232,3 +232,27 @@ fn the_potential_monitor_is_named_potential() {
     assert_eq!(spec.to_string(), "potential");
     assert!("potential:2".parse::<MonitorSpec>().is_err());
 }
+
+#[test]
+fn a_step_that_runs_away_is_a_non_finite_state_not_a_monitor_error() {
+    // Δτ = 1e300: the first drift throws q to ~1e300, where U underflows to zero or the
+    // kinetic energy overflows.
+    let (model, q0, v0) = eccentric();
+    let failure = Integrator::new(model, StormerVerlet::default())
+        .try_solve_reparametrized(
+            &Potential,
+            &Span::new(0.0, 1.0),
+            Initial::Velocity { q: q0, v: v0 },
+            &SolveOptions::fixed_step(1e300),
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(failure.error, Error::NonFinite { step: 0, .. }),
+        "{}",
+        failure.error
+    );
+    // The run up to the last good state: the initial one.
+    let partial = failure.partial.unwrap();
+    assert_eq!(partial.last.q, q0);
+}

@@ -25,8 +25,9 @@
 //! [`crate::method::variational::composition`] the step reaches order 4, 6 or 8 (adjacent
 //! drifts merge: one gradient of L per stage).
 //!
-//! The run needs T(p) − E₀ > 0, true for every bound orbit (E₀ < 0), and U > 0 along the
-//! way; otherwise it stops with a typed error. ∇U = ∂L/∂q and U come from one sweep of
+//! The run needs U > 0 along the way, and T(p) − E₀ > 0 at every drift (on the energy shell
+//! it equals U, so only a step that strays far from the shell can violate it); otherwise it
+//! stops with a typed error, as it does when the state runs away to non-finite values. ∇U = ∂L/∂q and U come from one sweep of
 //! automatic differentiation of L at q̇ = 0.
 //!
 //! # Physical time
@@ -81,21 +82,49 @@ fn kahan_add<const N: usize>(
 }
 
 impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
-    /// 1/(T(p) − E₀), checked positive and finite.
-    fn rate(&self, p: &SVector<f64, N>) -> Result<f64, StepFailure> {
-        let kinetic = 0.5 * p.dot(&(self.mass_inverse * p));
-        let rate = (kinetic - self.energy).recip();
-        if rate.is_finite() && rate > 0.0 {
-            Ok(rate)
+    /// 1/(T(p) − E₀): T(p) − E₀ ≤ 0 is an [`Error::InvalidParameter`] named `monitor` (an
+    /// orbit that is not bound), a non-finite value an [`Error::NonFinite`] at (`step`, `t`).
+    fn rate(&self, p: &SVector<f64, N>, (step, t): (usize, f64)) -> Result<f64, Error> {
+        let excess = 0.5 * p.dot(&(self.mass_inverse * p)) - self.energy;
+        if !excess.is_finite() {
+            Err(Error::NonFinite {
+                what: format!("T(p) − E₀ = {excess:e} at p = {:?}", p.as_slice()),
+                step,
+                t,
+            })
+        } else if excess > 0.0 {
+            Ok(excess.recip())
         } else {
-            Err(StepFailure::NonFinite)
+            Err(Error::invalid(
+                "monitor",
+                format!(
+                    "the potential monitor needs T(p) − E₀ > 0 (it equals U > 0 on the energy \
+                     shell: a step strayed far from it), but it is {excess:e} at p = {:?}",
+                    p.as_slice()
+                ),
+            ))
         }
     }
 
-    /// U(q) = L(q, 0) and ∇U = ∂L/∂q(q, 0), with U checked positive and finite.
-    fn potential(&self, q: &SVector<f64, N>) -> Result<(f64, SVector<f64, N>), Error> {
+    /// U(q) = L(q, 0) and ∇U = ∂L/∂q(q, 0): U ≤ 0 is an [`Error::InvalidParameter`] named
+    /// `monitor` (the potential monitor does not apply), a non-finite U or ∇U an
+    /// [`Error::NonFinite`] at (`step`, `t`) (the state ran away).
+    fn potential(
+        &self,
+        q: &SVector<f64, N>,
+        (step, t): (usize, f64),
+    ) -> Result<(f64, SVector<f64, N>), Error> {
         let (potential, gradient) = self.model.value_and_force(0.0, q, &SVector::zeros());
-        if potential.is_finite() && potential > 0.0 {
+        if !(potential.is_finite() && gradient.iter().all(|g| g.is_finite())) {
+            Err(Error::NonFinite {
+                what: format!(
+                    "U(q) = {potential:e} or its gradient at q = {:?}",
+                    q.as_slice()
+                ),
+                step,
+                t,
+            })
+        } else if potential > 0.0 {
             Ok((potential, gradient))
         } else {
             Err(Error::invalid(
@@ -111,16 +140,11 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
 
     /// One step of size `sigma` from `from`: the composed leapfrog (drift, kick, drift) with
     /// merged drifts. Returns the step's end and the number of gradients taken.
-    fn step(&self, from: &Point<N>, sigma: f64) -> Result<(Point<N>, usize), Error> {
+    fn step(&self, from: &Point<N>, sigma: f64, k: usize) -> Result<(Point<N>, usize), Error> {
         let (mut dq, mut dp, mut dt) = (SVector::<f64, N>::zeros(), SVector::zeros(), 0.0);
         // Drift by `length` at the momentum p: q += length M⁻¹p/(T − E₀), t += length/(T − E₀).
         let drift = |p: SVector<f64, N>, length: f64| {
-            let rate = self.rate(&p).map_err(|_| {
-                Error::invalid(
-                    "monitor",
-                    "the potential monitor needs T(p) − E₀ > 0 (a bound orbit, E₀ < 0)",
-                )
-            })?;
+            let rate = self.rate(&p, (k, from.t))?;
             Ok::<_, Error>((self.mass_inverse * p * (length * rate), length * rate))
         };
         // Each stage drifts by half its own size and half the next one's (merged drifts).
@@ -129,7 +153,7 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
             let (q_step, t_step) = drift(from.p + dp, pending)?;
             dq += q_step;
             dt += t_step;
-            let (potential, gradient) = self.potential(&(from.q + dq))?;
+            let (potential, gradient) = self.potential(&(from.q + dq), (k, from.t))?;
             dp += gradient * (gamma * sigma / potential);
             pending = 0.5 * (gamma + self.fractions.get(i + 1).unwrap_or(&0.0)) * sigma;
         }
@@ -207,7 +231,9 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             energy,
             fractions,
         };
-        splitting.potential(&first.q).map_err(rejected)?;
+        splitting
+            .potential(&first.q, (0, span.t0))
+            .map_err(rejected)?;
         let mut statistics = Statistics::default();
         let mut adaptivity = Adaptivity::default();
         let mut outputs = Vec::with_capacity(2);
@@ -247,7 +273,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
                 }
             };
             let attempt = |size: f64, statistics: &mut Statistics| {
-                let (end, gradients) = splitting.step(&point, size)?;
+                let (end, gradients) = splitting.step(&point, size, k)?;
                 statistics.evaluations += gradients;
                 checked(&end, k)?;
                 Ok::<_, Error>(end)
@@ -257,7 +283,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             let finish = end.t >= span.t_end;
             if finish {
                 // dt/dσ = 1/(T − E₀) at the step's end.
-                let slope = |end: &Point<N>| splitting.rate(&end.p).map_err(|f| f.at(k, point.t));
+                let slope = |end: &Point<N>| splitting.rate(&end.p, (k, point.t));
                 let first = slope(&end).map_err(|error| failure(error, &last, statistics))?;
                 land_on_horizon(
                     span.t_end,
