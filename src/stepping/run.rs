@@ -303,7 +303,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             false,
             |_, _, _, _, _| Ok(()),
         )?;
-        self.finish(progress, stopped)
+        self.finish(Some(&workspace), progress, stopped)
     }
 
     /// One step of size `h` from `state` at `t` with a fresh workspace (a cold start): the
@@ -451,15 +451,17 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         }
     }
 
-    /// The finished run at `progress`.
+    /// The finished run at `progress`, its last point completed from `workspace` (of the run
+    /// that reached it) where one is at hand.
     pub(crate) fn finish(
         &self,
+        workspace: Option<&M::Workspace>,
         progress: Progress<S>,
         stopped: bool,
     ) -> Result<Run<S>, RunFailure<S>> {
         let last = self
             .complete(
-                None,
+                workspace,
                 progress.statistics.steps,
                 progress.t,
                 &progress.cursor.state,

@@ -473,7 +473,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             Adapt::Sem => self.solve_sem(span, options, &mut progress, &mut outputs, observer),
         }?;
         // The end point as `try_run` completes it (from the velocity last observed).
-        let run = self.finish(progress, stopped)?;
+        let run = self.finish(None, progress, stopped)?;
         Ok(Solution {
             points: outputs.points,
             last: run.last,

@@ -8,6 +8,7 @@
 
 use crate::error::Error;
 use crate::linalg::sparse::{LinearSolver, Pattern, SparseLu};
+use crate::model::local::{LocalLagrangian, TermWidth};
 use nalgebra::DVector;
 use std::cell::RefCell;
 
@@ -22,37 +23,67 @@ pub enum MassInverse {
 }
 
 impl MassInverse {
-    /// M⁻¹ for M of size n given as (row, column, value) triplets (repeated places add up).
+    /// M⁻¹ of the model's mass matrix ∂²L/∂q̇² at (t, q), q̇ = 0, assembled term by term
+    /// without a list of all entries: the diagonal is summed in place and only the entries
+    /// off it are kept (none for particles with their own masses).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] `structure` when M is singular or not positive on its
     /// diagonal.
-    pub fn new(n: usize, triplets: &[(usize, usize, f64)]) -> Result<Self, Error> {
+    pub fn of_model<L: LocalLagrangian>(
+        model: &L,
+        t: f64,
+        q: &DVector<f64>,
+    ) -> Result<Self, Error> {
+        let n = q.len();
+        let zero = DVector::zeros(n);
+        let mut diagonal = DVector::<f64>::zeros(n);
+        let mut coupled = Vec::new();
+        let mut block = Vec::new();
+        for e in 0..model.term_count() {
+            block.clear();
+            L::Width::mass_triplets(model, e, t, q, &zero, &mut block);
+            for &(i, j, value) in &block {
+                if i == j {
+                    diagonal[i] += value;
+                } else {
+                    coupled.push((i, j, value));
+                }
+            }
+        }
+        Self::from_parts(diagonal, coupled)
+    }
+
+    /// M⁻¹ from M's diagonal and its entries off the diagonal (repeated places add up).
+    fn from_parts(diagonal: DVector<f64>, coupled: Vec<(usize, usize, f64)>) -> Result<Self, Error> {
         let singular = |what: String| {
             Error::invalid(
                 "structure",
                 format!("the mass matrix ∂²L/∂q̇² is {what}: the Legendre map is not invertible"),
             )
         };
-        let mut diagonal = DVector::<f64>::zeros(n);
-        for (i, j, value) in triplets {
-            if i == j {
-                diagonal[*i] += value;
-            }
-        }
         if let Some(i) = diagonal.iter().position(|m| !(*m > 0.0 && m.is_finite())) {
             return Err(singular(format!(
                 "not positive on its diagonal: entry {:e} at coordinate {i}",
                 diagonal[i]
             )));
         }
-        if triplets.iter().all(|(i, j, _)| i == j) {
+        if coupled.is_empty() {
             return Ok(MassInverse::Diagonal(diagonal.map(|m| 1.0 / m)));
         }
-        let places: Vec<(usize, usize)> = triplets.iter().map(|&(i, j, _)| (i, j)).collect();
+        let n = diagonal.len();
+        let places: Vec<(usize, usize)> = (0..n)
+            .map(|i| (i, i))
+            .chain(coupled.iter().map(|&(i, j, _)| (i, j)))
+            .collect();
         let pattern = Pattern::new(n, &places)?;
         let mut values = vec![0.0; pattern.len()];
-        for &(i, j, value) in triplets {
+        let entries = diagonal
+            .iter()
+            .enumerate()
+            .map(|(i, &m)| (i, i, m))
+            .chain(coupled.iter().copied());
+        for (i, j, value) in entries {
             if let Some(slot) = pattern.slot(i, j) {
                 values[slot] += value;
             }

@@ -92,8 +92,7 @@ pub(crate) fn cold_velocity<L: LocalLagrangian>(
     v: &mut DVector<f64>,
 ) -> Result<(), Error> {
     if L::STRUCTURE == Structure::ConstantMass {
-        let zero = DVector::zeros(q.len());
-        MassInverse::new(q.len(), &model.mass_triplets(t, q, &zero))?.apply_into(p, v);
+        MassInverse::of_model(model, t, q)?.apply_into(p, v);
         return Ok(());
     }
     Legendre::new(model, LinearSolverKind::Sparse)?.solve(model, t, q, p, v)
@@ -117,8 +116,7 @@ pub(crate) fn constant_mass<L: LocalLagrangian>(
             ),
         ));
     }
-    let zero = DVector::zeros(q.len());
-    MassInverse::new(q.len(), &model.mass_triplets(t, q, &zero))
+    MassInverse::of_model(model, t, q)
 }
 
 impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
@@ -206,7 +204,7 @@ impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
         }
         let n = state.q.len();
         let zero = DVector::zeros(n);
-        let mass = MassInverse::new(n, &model.mass_triplets(t, &state.q, &zero))?;
+        let mass = MassInverse::of_model(model, t, &state.q)?;
         let v = mass.apply(&state.y);
         let mut p = DVector::zeros(n);
         model.momentum_into(t, &state.q, &v, &mut p);
