@@ -55,7 +55,10 @@ impl MassInverse {
     }
 
     /// M⁻¹ from M's diagonal and its entries off the diagonal (repeated places add up).
-    fn from_parts(diagonal: DVector<f64>, coupled: Vec<(usize, usize, f64)>) -> Result<Self, Error> {
+    fn from_parts(
+        diagonal: DVector<f64>,
+        coupled: Vec<(usize, usize, f64)>,
+    ) -> Result<Self, Error> {
         let singular = |what: String| {
             Error::invalid(
                 "structure",
