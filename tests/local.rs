@@ -6,7 +6,7 @@ use nalgebra::{DVector, SVector};
 use svi::method::DynInitial;
 use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt};
 use svi::observer::EnergyError;
-use svi::{Integrator, Lagrangian, Scalar, StormerVerlet, Structure};
+use svi::{Composition, Integrator, Lagrangian, Scalar, Scheme, StormerVerlet, Structure};
 use svi_models::Fput;
 
 /// The FPUT chain of 8 particles written directly as one fixed-size Lagrangian (an
@@ -118,6 +118,58 @@ fn verlet_on_local_terms_follows_the_fixed_size_verlet_to_round_off() {
         local.statistics.evaluations,
         reference.statistics.evaluations
     );
+}
+
+#[test]
+fn compositions_on_local_terms_follow_the_fixed_size_compositions_to_round_off() {
+    // Kahan–Li 8 (17 stages) and Yoshida's triple jump on the FPUT chain: the same stages as
+    // the fixed-size method on the same L written independently, and order 8 and 4 against a
+    // fine run of Kahan–Li 8.
+    let model = fput(8);
+    let (t0, q0, v0) = model.initial_state();
+    let t_end = 20.0;
+    let local_run = |scheme: Scheme, h: f64| {
+        Integrator::new(model.clone(), Composition::new(scheme))
+            .run(
+                t0,
+                DynInitial::Velocity {
+                    q: q0.clone(),
+                    v: v0.clone(),
+                },
+                h,
+                t_end,
+                &mut (),
+            )
+            .unwrap()
+    };
+    let qs = SVector::<f64, 8>::from_column_slice(q0.as_slice());
+    let vs = SVector::<f64, 8>::from_column_slice(v0.as_slice());
+    for scheme in [Scheme::Yoshida4, Scheme::KahanLi8] {
+        let local = local_run(scheme, 0.1);
+        let fixed = FixedFput {
+            alpha: model.alpha,
+            beta: model.beta,
+        };
+        let reference = Integrator::new(fixed, Composition::new(scheme))
+            .run_from_velocity(t0, qs, vs, 0.1, t_end, &mut ())
+            .unwrap();
+        let difference = (0..8)
+            .map(|i| (local.last.q[i] - reference.last.q[i]).abs())
+            .fold(0.0, f64::max);
+        assert!(difference < 1e-12, "{scheme:?}: {difference:e}");
+        // One assembly of ∂L/∂q per stage, as on fixed-size ℝᴺ.
+        assert_eq!(
+            local.statistics.evaluations,
+            reference.statistics.evaluations
+        );
+    }
+    let exact = local_run(Scheme::KahanLi8, 0.025).last.q;
+    for (scheme, coarse) in [(Scheme::Yoshida4, 0.1), (Scheme::KahanLi8, 0.4)] {
+        let error = |h: f64| (local_run(scheme, h).last.q - &exact).amax();
+        let order = (error(coarse) / error(coarse / 2.0)).log2();
+        let expected = scheme.order() as f64;
+        assert!((order - expected).abs() < 0.5, "{scheme:?}: order {order}");
+    }
 }
 
 #[test]

@@ -87,7 +87,7 @@ fn a_size_that_is_not_a_positive_whole_number_is_bad_input_naming_n() {
 fn methods_and_options_a_chain_cannot_use_are_bad_input_naming_them() {
     let stderr = bad_input(&["run", "fput"], &["--method", "sc"], "'sc'");
     assert!(
-        stderr.contains("take svi, svi-newton or verlet"),
+        stderr.contains("take svi, svi-newton, verlet, yoshida4, kahan-li6 or kahan-li8"),
         "{stderr}"
     );
     assert!(!stderr.contains("  "), "{stderr}");

@@ -461,6 +461,9 @@ impl MethodSpec {
         &self,
         visitor: V,
     ) -> Result<V::Output, Error> {
+        if let Some(scheme) = Scheme::named(self.entry.name) {
+            return Ok(visitor.visit(Composition::new(scheme)));
+        }
         let points = self.points_in_use().unwrap_or_default();
         Ok(match self.entry.name {
             "svi" | "svi-newton" => {
@@ -480,9 +483,6 @@ impl MethodSpec {
             }
             "midpoint" => visitor.visit(VariationalIntegrator::new(Midpoint)),
             "verlet" => visitor.visit(StormerVerlet::default()),
-            "yoshida4" => visitor.visit(Composition::new(Scheme::Yoshida4)),
-            "kahan-li6" => visitor.visit(Composition::new(Scheme::KahanLi6)),
-            "kahan-li8" => visitor.visit(Composition::new(Scheme::KahanLi8)),
             "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
             "multiscale" => visitor.visit(Multiscale::new(points)),
             _ => {
@@ -498,10 +498,13 @@ impl MethodSpec {
     /// Build the method for a runtime-dimension model (a sum of local terms,
     /// [`crate::model::local::LocalLagrangian`]) and hand it to `visitor` as its concrete type:
     /// `svi` (the fixed point for constant mass, else sparse Newton), `svi-newton` (sparse
-    /// Newton always) and `verlet` (constant mass). The other methods of ℝᴺ run on
+    /// Newton always), `verlet` and its compositions (constant mass). The other methods of ℝᴺ run on
     /// fixed-size models only, and asking for one is an error that names it.
     pub fn visit_local<V: LocalMethodVisitor>(&self, visitor: V) -> Result<V::Output, Error> {
         self.check_space(SpaceKind::Vector)?;
+        if let Some(scheme) = Scheme::named(self.entry.name) {
+            return Ok(visitor.visit(Composition::new(scheme)));
+        }
         match self.entry.name {
             "svi" | "svi-newton" => {
                 let mut svi = Svi::new(self.points_in_use().unwrap_or_default());
@@ -518,7 +521,8 @@ impl MethodSpec {
                 "method",
                 format!(
                     "'{self}' runs on fixed-size models only; runtime-dimension models \
-                     (chains, lattices) take svi, svi-newton or verlet (not {name})"
+                     (chains, lattices) take svi, svi-newton, verlet, yoshida4, kahan-li6 or \
+                     kahan-li8 (not {name})"
                 ),
             )),
         }

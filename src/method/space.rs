@@ -25,6 +25,8 @@ pub trait StepState: Clone + Debug + PartialEq {
     fn assign(&mut self, other: &Self);
     /// `self + increment`, entry by entry, without compensation.
     fn plus(&self, increment: &Self) -> Self;
+    /// `self += increment`, entry by entry, without compensation (no allocation).
+    fn add(&mut self, increment: &Self);
     /// `self += increment` with the Kahan compensation carried in `compensation`.
     fn add_compensated(&mut self, compensation: &mut Self, increment: &Self);
     /// [`StepState::add_compensated`] if the sum is finite and, with a `limit`, no component
@@ -173,6 +175,11 @@ impl<const N: usize> StepState for State<N> {
             q: self.q + increment.q,
             y: self.y + increment.y,
         }
+    }
+
+    fn add(&mut self, increment: &Self) {
+        self.q += increment.q;
+        self.y += increment.y;
     }
 
     fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {
@@ -370,6 +377,11 @@ impl StepState for RigidState {
         }
     }
 
+    fn add(&mut self, increment: &Self) {
+        self.r += increment.r;
+        self.momentum += increment.momentum;
+    }
+
     fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {
         compensated_add(
             self.r.as_mut_slice(),
@@ -540,6 +552,11 @@ impl StepState for DynState {
             q: &self.q + &increment.q,
             y: &self.y + &increment.y,
         }
+    }
+
+    fn add(&mut self, increment: &Self) {
+        self.q += &increment.q;
+        self.y += &increment.y;
     }
 
     fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {

@@ -81,8 +81,8 @@ impl LocalMethod for StormerVerlet {
             let inverse = constant_mass(model, "verlet", t, &state.q).map_err(|_| {
                 StepFailure::Unsupported {
                     option: "structure",
-                    reason: "verlet on a runtime-dimension model needs a constant, invertible \
-                             mass matrix",
+                    reason: "verlet and its compositions on a runtime-dimension model need a \
+                             constant, invertible mass matrix",
                 }
             })?;
             workspace.mass_inverse = Some(inverse);

@@ -30,6 +30,7 @@
 //! ([`crate::stepping::logh`]).
 
 use crate::error::{Error, StepFailure};
+use crate::method::space::StepState;
 use crate::method::variational::stormer_verlet::{StormerVerlet, StormerVerletWorkspace};
 use crate::method::{Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
@@ -56,6 +57,14 @@ fn mirrored<const M: usize>(half: [f64; M]) -> Vec<f64> {
 }
 
 impl Scheme {
+    /// Every scheme, by order.
+    pub const ALL: [Scheme; 3] = [Scheme::Yoshida4, Scheme::KahanLi6, Scheme::KahanLi8];
+
+    /// The scheme of a registry name (`yoshida4`, `kahan-li6`, `kahan-li8`).
+    pub fn named(name: &str) -> Option<Scheme> {
+        Scheme::ALL.into_iter().find(|scheme| scheme.name() == name)
+    }
+
     /// The name in the method registry (`yoshida4`, `kahan-li6`, `kahan-li8`).
     pub fn name(self) -> &'static str {
         match self {
@@ -132,31 +141,34 @@ impl Composition {
         &self.fractions
     }
 
-    /// The stages of a step of size `h` from `state` at `t`: `stage(t_i, γ_i h, from)` takes
-    /// stage i from `from` = state + the sum of the increments before it and returns its
-    /// increment; the sum of all of them, the step's increment, is returned (one rounding of
-    /// the state per step, as for any other method).
-    fn stages<const N: usize>(
+    /// The stages of a step of size `h` from `state` at `t`, on any state space: `step(t_i,
+    /// γ_i h, from, increment)` takes stage i from `from` = state + the sum of the increments
+    /// before it and writes its increment; `total` receives the sum of all of them, the
+    /// step's increment (one rounding of the state per step, as for any other method).
+    /// `from` and `stage` are scratch of the state's shape: nothing is allocated.
+    pub(crate) fn stages<S: StepState>(
         &self,
-        t: f64,
-        h: f64,
-        state: &State<N>,
-        mut stage: impl FnMut(f64, f64, &State<N>) -> Result<State<N>, StepFailure>,
-    ) -> Result<State<N>, StepFailure> {
-        let mut total = State::<N>::zeros();
+        (t, h): (f64, f64),
+        state: &S,
+        (from, stage, total): (&mut S, &mut S, &mut S),
+        mut step: impl FnMut(f64, f64, &S, &mut S) -> Result<(), StepFailure>,
+    ) -> Result<(), StepFailure> {
         let mut elapsed = 0.0;
-        for gamma in &self.fractions {
+        for (i, gamma) in self.fractions.iter().enumerate() {
             let size = gamma * h;
-            let from = State {
-                q: state.q + total.q,
-                y: state.y + total.y,
-            };
-            let increment = stage(t + elapsed, size, &from)?;
-            total.q += increment.q;
-            total.y += increment.y;
+            from.assign(state);
+            if i > 0 {
+                from.add(total);
+            }
+            step(t + elapsed, size, from, stage)?;
+            if i == 0 {
+                total.assign(stage);
+            } else {
+                total.add(stage);
+            }
             elapsed += size;
         }
-        Ok(total)
+        Ok(())
     }
 }
 
@@ -191,17 +203,20 @@ impl<const N: usize> Method<N> for Composition {
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         let mut report = StepReport::default();
-        *increment = self.stages(t, h, state, |t, size, from| {
-            let mut stage = State::zeros();
-            let done = self
-                .base
-                .step(model, workspace, t, size, from, &mut stage)?;
-            report.iterations += done.iterations;
-            report.evaluations += done.evaluations;
-            report.factorizations += done.factorizations;
-            report.analyses += done.analyses;
-            Ok(stage)
-        })?;
+        let (mut from, mut stage) = (State::zeros(), State::zeros());
+        self.stages(
+            (t, h),
+            state,
+            (&mut from, &mut stage, increment),
+            |t, size, from, stage| {
+                let done = self.base.step(model, workspace, t, size, from, stage)?;
+                report.iterations += done.iterations;
+                report.evaluations += done.evaluations;
+                report.factorizations += done.factorizations;
+                report.analyses += done.analyses;
+                Ok(())
+            },
+        )?;
         Ok(report)
     }
 
@@ -231,14 +246,22 @@ impl<const N: usize> Method<N> for Composition {
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
         let mut product: Option<TangentMap<N>> = None;
-        let total = self.stages(t, h, state, |t, size, from| {
-            let (stage, tangent) = self.base.tangent_map(model, workspace, t, size, from)?;
-            product = Some(match &product {
-                None => tangent,
-                Some(before) => before.then(&tangent),
-            });
-            Ok(stage)
-        })?;
+        let (mut from, mut stage, mut total) = (State::zeros(), State::zeros(), State::zeros());
+        self.stages(
+            (t, h),
+            state,
+            (&mut from, &mut stage, &mut total),
+            |t, size, from, stage| {
+                let (increment, tangent) =
+                    self.base.tangent_map(model, workspace, t, size, from)?;
+                *stage = increment;
+                product = Some(match &product {
+                    None => tangent,
+                    Some(before) => before.then(&tangent),
+                });
+                Ok(())
+            },
+        )?;
         product
             .map(|tangent| (total, tangent))
             .ok_or(StepFailure::SingularMatrix)
