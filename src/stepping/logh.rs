@@ -37,6 +37,7 @@
 //! has no step polynomial.
 
 use crate::error::{Error, StepFailure};
+use crate::linalg::compensated_add;
 use crate::method::Method;
 use crate::method::space::{Euclidean, Initial, PhasePoint};
 use crate::model::Lagrangian;
@@ -44,7 +45,7 @@ use crate::model::Structure;
 use crate::model::derived::{LagrangianExt, cached_mass_inverse};
 use crate::model::reparametrized::{Potential, Reparametrized};
 use crate::stepping::observer::Observer;
-use crate::stepping::reparam::{failure_after, land_on_horizon};
+use crate::stepping::reparam::{Clock, failure_after, land_on_horizon};
 use crate::stepping::run::{Integrator, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
 use nalgebra::{SMatrix, SVector};
@@ -57,33 +58,20 @@ struct Splitting<'a, L, const N: usize> {
     fractions: &'a [f64],
 }
 
-/// A point of the split flow: (q, p) and the physical time, each a compensated sum.
+/// A point of the split flow: (q, p) with the compensations of their sums, and the
+/// physical time.
 #[derive(Debug, Clone, Copy)]
 struct Point<const N: usize> {
     q: SVector<f64, N>,
     p: SVector<f64, N>,
-    t: f64,
-    compensation: (SVector<f64, N>, SVector<f64, N>, f64),
-}
-
-/// x += d with Kahan compensation c.
-#[inline]
-fn kahan_add<const N: usize>(
-    x: &mut SVector<f64, N>,
-    c: &mut SVector<f64, N>,
-    d: &SVector<f64, N>,
-) {
-    for i in 0..N {
-        let y = d[i] - c[i];
-        let sum = x[i] + y;
-        c[i] = (sum - x[i]) - y;
-        x[i] = sum;
-    }
+    compensation: (SVector<f64, N>, SVector<f64, N>),
+    clock: Clock,
 }
 
 impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
-    /// 1/(T(p) − E₀): T(p) − E₀ ≤ 0 is an [`Error::InvalidParameter`] named `monitor` (an
-    /// orbit that is not bound), a non-finite value an [`Error::NonFinite`] at (`step`, `t`).
+    /// 1/(T(p) − E₀): T(p) − E₀ ≤ 0 is an [`Error::InvalidParameter`] named `monitor` (a
+    /// step far off the energy shell), a non-finite value an [`Error::NonFinite`] at (`step`,
+    /// `t`).
     fn rate(&self, p: &SVector<f64, N>, (step, t): (usize, f64)) -> Result<f64, Error> {
         let excess = 0.5 * p.dot(&(self.mass_inverse * p)) - self.energy;
         if !excess.is_finite() {
@@ -144,7 +132,7 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
         let (mut dq, mut dp, mut dt) = (SVector::<f64, N>::zeros(), SVector::zeros(), 0.0);
         // Drift by `length` at the momentum p: q += length M⁻¹p/(T − E₀), t += length/(T − E₀).
         let drift = |p: SVector<f64, N>, length: f64| {
-            let rate = self.rate(&p, (k, from.t))?;
+            let rate = self.rate(&p, (k, from.clock.t))?;
             Ok::<_, Error>((self.mass_inverse * p * (length * rate), length * rate))
         };
         // Each stage drifts by half its own size and half the next one's (merged drifts).
@@ -153,7 +141,7 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
             let (q_step, t_step) = drift(from.p + dp, pending)?;
             dq += q_step;
             dt += t_step;
-            let (potential, gradient) = self.potential(&(from.q + dq), (k, from.t))?;
+            let (potential, gradient) = self.potential(&(from.q + dq), (k, from.clock.t))?;
             dp += gradient * (gamma * sigma / potential);
             pending = 0.5 * (gamma + self.fractions.get(i + 1).unwrap_or(&0.0)) * sigma;
         }
@@ -161,19 +149,17 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
         dq += q_step;
         dt += t_step;
         let mut end = *from;
-        kahan_add(&mut end.q, &mut end.compensation.0, &dq);
-        kahan_add(&mut end.p, &mut end.compensation.1, &dp);
-        let y = dt - end.compensation.2;
-        let t = end.t + y;
-        end.compensation.2 = (t - end.t) - y;
-        end.t = t;
+        let (cq, cp) = &mut end.compensation;
+        compensated_add(end.q.as_mut_slice(), cq.as_mut_slice(), dq.as_slice());
+        compensated_add(end.p.as_mut_slice(), cp.as_mut_slice(), dp.as_slice());
+        end.clock.add(dt);
         Ok((end, self.fractions.len()))
     }
 
     /// The physical point (t, q, q̇ = M⁻¹p, p).
     fn physical(&self, point: &Point<N>) -> PhasePoint<N> {
         PhasePoint {
-            t: point.t,
+            t: point.clock.t,
             q: point.q,
             v: self.mass_inverse * point.p,
             p: point.p,
@@ -221,7 +207,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let mass_inverse = cached_mass_inverse(&mut None, model, span.t0, &first.q, &first.p)
             .map_err(|_| {
                 rejected(Error::invalid(
-                    "model",
+                    "structure",
                     "the potential monitor's splitting needs an invertible mass matrix",
                 ))
             })?;
@@ -243,8 +229,8 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let mut point = Point {
             q: first.q,
             p: first.p,
-            t: span.t0,
-            compensation: (SVector::zeros(), SVector::zeros(), 0.0),
+            compensation: (SVector::zeros(), SVector::zeros()),
+            clock: Clock::new(span.t0),
         };
         let mut last = first;
         let failure = failure_after::<N>;
@@ -262,12 +248,12 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         loop {
             let checked = |end: &Point<N>, k: usize| -> Result<(), Error> {
                 let norm = end.q.amax().max(end.p.amax());
-                if !(norm.is_finite() && end.t.is_finite()) {
-                    return Err(StepFailure::NonFinite.at(k, point.t));
+                if !(norm.is_finite() && end.clock.t.is_finite()) {
+                    return Err(StepFailure::NonFinite.at(k, point.clock.t));
                 }
                 match limit {
                     Some(limit) if norm > limit => {
-                        Err(StepFailure::Diverged { norm, limit }.at(k, point.t))
+                        Err(StepFailure::Diverged { norm, limit }.at(k, point.clock.t))
                     }
                     _ => Ok(()),
                 }
@@ -280,24 +266,24 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             };
             let mut end = attempt(sigma, &mut statistics)
                 .map_err(|error| failure(error, &last, statistics))?;
-            let finish = end.t >= span.t_end;
+            let finish = end.clock.t >= span.t_end;
             if finish {
                 // dt/dσ = 1/(T − E₀) at the step's end.
-                let slope = |end: &Point<N>| splitting.rate(&end.p, (k, point.t));
+                let slope = |end: &Point<N>| splitting.rate(&end.p, (k, point.clock.t));
                 let first = slope(&end).map_err(|error| failure(error, &last, statistics))?;
                 land_on_horizon(
                     span.t_end,
-                    (sigma, end.t - span.t_end, first),
-                    (k, point.t),
+                    (sigma, end.clock.t - span.t_end, first),
+                    (k, point.clock.t),
                     |size| {
                         end = attempt(size, &mut statistics)?;
-                        Ok((end.t - span.t_end, slope(&end)?))
+                        Ok((end.clock.t - span.t_end, slope(&end)?))
                     },
                 )
                 .map_err(|error| failure(error, &last, statistics))?;
-                end.t = span.t_end;
+                end.clock.t = span.t_end;
             }
-            adaptivity.record(end.t - point.t, None);
+            adaptivity.record(end.clock.t - point.clock.t, None);
             point = end;
             k += 1;
             statistics.steps = k;

@@ -170,13 +170,23 @@ impl TimeRule {
 
 /// A physical time kept as a compensated sum.
 #[derive(Debug, Clone, Copy)]
-struct Clock {
-    t: f64,
+pub(crate) struct Clock {
+    /// The time.
+    pub(crate) t: f64,
     compensation: f64,
 }
 
 impl Clock {
-    fn add(&mut self, dt: f64) {
+    /// A clock at `t`.
+    pub(crate) fn new(t: f64) -> Self {
+        Clock {
+            t,
+            compensation: 0.0,
+        }
+    }
+
+    /// t += dt (Kahan).
+    pub(crate) fn add(&mut self, dt: f64) {
         let y = dt - self.compensation;
         let t = self.t + y;
         self.compensation = (t - self.t) - y;
@@ -243,10 +253,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             outputs.push(first);
             served = 1;
         }
-        let mut clock = Clock {
-            t: span.t0,
-            compensation: 0.0,
-        };
+        let mut clock = Clock::new(span.t0);
         let mut last = first;
         let mut increment = State::zeros();
         let failure = failure_after::<N>;

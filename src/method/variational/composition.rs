@@ -7,10 +7,11 @@
 //!
 //! is symmetric, and of order p when the γ_i solve the order conditions of Yoshida (1990) and
 //! Suzuki (1990) (Hairer, Lubich, Wanner, *Geometric numerical integration*, §II.4 and
-//! §V.3.2). A composition of symplectic maps is symplectic, and a composition of variational
+//! §V.3). A composition of symplectic maps is symplectic, and a composition of variational
 //! integrators is the variational integrator of the composed discrete Lagrangian
-//! L_d(q_0, q_s) = Σ_i L_d^{γ_i h}(q_{i−1}, q_i) extremised over the inner q_i (Marsden & West
-//! 2001, §2.5), so every property of Störmer–Verlet but its order carries over: momenta of
+//! L_d(q_0, q_s) = Σ_i L_d^{γ_i h}(q_{i−1}, q_i) extremised over the inner q_i (Marsden &
+//! West, *Discrete mechanics and variational integrators*, Acta Numerica 2001, on composition
+//! methods), so every property of Störmer–Verlet but its order carries over: momenta of
 //! symmetries conserved, energy error bounded (by backward error analysis) for the whole run.
 //!
 //! The schemes ([`Scheme`]):
@@ -24,7 +25,8 @@
 //! On a constant-mass Lagrangian every stage costs one gradient ∂L/∂q: the force at the end of
 //! a stage is Störmer–Verlet's force at the start of the next one (its cache recognises the
 //! point), so a step of s stages costs s gradients. Other Lagrangians take Störmer–Verlet's
-//! implicit path at every stage. The observed orders are tested on the Kepler problem.
+//! implicit path at every stage. The observed orders are tested on the Kepler problem
+//! (`tests/logh.rs`) and the FPUT chain (`tests/local.rs`).
 //!
 //! The same coefficients split the logarithmic Hamiltonian of a time-reparametrised run
 //! ([`crate::stepping::logh`]).
