@@ -194,7 +194,7 @@ impl<const N: usize> Method<N> for Composition {
         self.base.workspace(model, h)
     }
 
-    /// The stages in turn (see [`Composition::stages`]).
+    /// The stages in turn, each from where the last ended.
     fn step<L: Lagrangian<N>>(
         &self,
         model: &L,
