@@ -233,37 +233,11 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         q: &SVector<f64, N>,
         v: &SVector<f64, N>,
     ) -> FirstDerivatives<N> {
-        if N <= SCALAR_SWEEPS_UP_TO {
-            let (value, dq) = scalar_gradient(
-                |x| self.lagrangian(Dual64::from_re(t), &x, &v.map(Dual64::from_re)),
-                q,
-            );
-            let (_, dv) = scalar_gradient(
-                |y| self.lagrangian(Dual64::from_re(t), &q.map(Dual64::from_re), &y),
-                v,
-            );
-            return FirstDerivatives {
-                value,
-                q: dq,
-                v: dv,
-            };
-        }
-        let (value, dq) = gradient(
-            |x: SVector<DualSVec64<N>, N>| {
-                self.lagrangian(DualVec::from_re(t), &x, &v.map(DualVec::from_re))
-            },
-            q,
-        );
-        let (_, dv) = gradient(
-            |y: SVector<DualSVec64<N>, N>| {
-                self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
-            },
-            v,
-        );
+        let (value, force) = self.value_and_force(t, q, v);
         FirstDerivatives {
             value,
-            q: dq,
-            v: dv,
+            q: force,
+            v: self.momentum(t, q, v),
         }
     }
 

@@ -36,17 +36,16 @@
 //! t_end with a step's accuracy. Output times inside the span are not served: the splitting
 //! has no step polynomial.
 
-use crate::error::{Error, StepFailure};
-use crate::linalg::compensated_add;
+use crate::error::Error;
 use crate::method::Method;
-use crate::method::space::{Euclidean, Initial, PhasePoint};
+use crate::method::space::{Euclidean, Initial, PhasePoint, State, StepState};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{LagrangianExt, cached_mass_inverse};
 use crate::model::reparametrized::{Potential, Reparametrized};
 use crate::stepping::observer::Observer;
 use crate::stepping::reparam::{Clock, failure_after, land_on_horizon};
-use crate::stepping::run::{Integrator, RunFailure, Statistics};
+use crate::stepping::run::{Cursor, Integrator, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
 use nalgebra::{SMatrix, SVector};
 
@@ -58,13 +57,11 @@ struct Splitting<'a, L, const N: usize> {
     fractions: &'a [f64],
 }
 
-/// A point of the split flow: (q, p) with the compensations of their sums, and the
+/// A point of the split flow: the state (q, p) with the compensation of its sums, and the
 /// physical time.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Point<const N: usize> {
-    q: SVector<f64, N>,
-    p: SVector<f64, N>,
-    compensation: (SVector<f64, N>, SVector<f64, N>),
+    cursor: Cursor<Euclidean<N>>,
     clock: Clock,
 }
 
@@ -127,8 +124,9 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
     }
 
     /// One step of size `sigma` from `from`: the composed leapfrog (drift, kick, drift) with
-    /// merged drifts. Returns the step's end and the number of gradients taken.
-    fn step(&self, from: &Point<N>, sigma: f64, k: usize) -> Result<(Point<N>, usize), Error> {
+    /// merged drifts. Returns the increment of (q, p) and of t.
+    fn step(&self, from: &Point<N>, sigma: f64, k: usize) -> Result<(State<N>, f64), Error> {
+        let State { q, y: p } = from.cursor.state;
         let (mut dq, mut dp, mut dt) = (SVector::<f64, N>::zeros(), SVector::zeros(), 0.0);
         // Drift by `length` at the momentum p: q += length M⁻¹p/(T − E₀), t += length/(T − E₀).
         let drift = |p: SVector<f64, N>, length: f64| {
@@ -138,31 +136,31 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
         // Each stage drifts by half its own size and half the next one's (merged drifts).
         let mut pending = 0.5 * self.fractions[0] * sigma;
         for (i, gamma) in self.fractions.iter().enumerate() {
-            let (q_step, t_step) = drift(from.p + dp, pending)?;
+            let (q_step, t_step) = drift(p + dp, pending)?;
             dq += q_step;
             dt += t_step;
-            let (potential, gradient) = self.potential(&(from.q + dq), (k, from.clock.t))?;
+            let (potential, gradient) = self.potential(&(q + dq), (k, from.clock.t))?;
             dp += gradient * (gamma * sigma / potential);
             pending = 0.5 * (gamma + self.fractions.get(i + 1).unwrap_or(&0.0)) * sigma;
         }
-        let (q_step, t_step) = drift(from.p + dp, pending)?;
-        dq += q_step;
-        dt += t_step;
-        let mut end = *from;
-        let (cq, cp) = &mut end.compensation;
-        compensated_add(end.q.as_mut_slice(), cq.as_mut_slice(), dq.as_slice());
-        compensated_add(end.p.as_mut_slice(), cp.as_mut_slice(), dp.as_slice());
-        end.clock.add(dt);
-        Ok((end, self.fractions.len()))
+        let (q_step, t_step) = drift(p + dp, pending)?;
+        Ok((
+            State {
+                q: dq + q_step,
+                y: dp,
+            },
+            dt + t_step,
+        ))
     }
 
     /// The physical point (t, q, q̇ = M⁻¹p, p).
     fn physical(&self, point: &Point<N>) -> PhasePoint<N> {
+        let State { q, y: p } = point.cursor.state;
         PhasePoint {
             t: point.clock.t,
-            q: point.q,
-            v: self.mass_inverse * point.p,
-            p: point.p,
+            q,
+            v: self.mass_inverse * p,
+            p,
         }
     }
 }
@@ -227,9 +225,10 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             outputs.push(first);
         }
         let mut point = Point {
-            q: first.q,
-            p: first.p,
-            compensation: (SVector::zeros(), SVector::zeros()),
+            cursor: Cursor::new(State {
+                q: first.q,
+                y: first.p,
+            }),
             clock: Clock::new(span.t0),
         };
         let mut last = first;
@@ -246,22 +245,20 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let limit = options.run.divergence_limit;
         let mut k = 0usize;
         loop {
-            let checked = |end: &Point<N>, k: usize| -> Result<(), Error> {
-                let norm = end.q.amax().max(end.p.amax());
-                if !(norm.is_finite() && end.clock.t.is_finite()) {
-                    return Err(StepFailure::NonFinite.at(k, point.clock.t));
-                }
-                match limit {
-                    Some(limit) if norm > limit => {
-                        Err(StepFailure::Diverged { norm, limit }.at(k, point.clock.t))
-                    }
-                    _ => Ok(()),
-                }
-            };
+            // The step from `point` with size `size`, added with compensated summation and
+            // checked for finite values and against the divergence limit.
             let attempt = |size: f64, statistics: &mut Statistics| {
-                let (end, gradients) = splitting.step(&point, size, k)?;
-                statistics.evaluations += gradients;
-                checked(&end, k)?;
+                let (increment, dt) = splitting.step(&point, size, k)?;
+                statistics.evaluations += splitting.fractions.len();
+                let mut end = point.clone();
+                let Cursor {
+                    state,
+                    compensation,
+                } = &mut end.cursor;
+                state
+                    .add_checked(compensation, &increment, limit)
+                    .map_err(|failure| failure.at(k, point.clock.t))?;
+                end.clock.add(dt);
                 Ok::<_, Error>(end)
             };
             let mut end = attempt(sigma, &mut statistics)
@@ -269,7 +266,8 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             let finish = end.clock.t >= span.t_end;
             if finish {
                 // dt/dσ = 1/(T − E₀) at the step's end.
-                let slope = |end: &Point<N>| splitting.rate(&end.p, (k, point.clock.t));
+                let slope =
+                    |end: &Point<N>| splitting.rate(&end.cursor.state.y, (k, point.clock.t));
                 let first = slope(&end).map_err(|error| failure(error, &last, statistics))?;
                 land_on_horizon(
                     span.t_end,

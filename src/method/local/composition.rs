@@ -27,8 +27,8 @@ impl LocalMethod for Composition {
 
     fn info(&self) -> MethodInfo {
         MethodInfo {
-            name: self.scheme.name(),
-            order: self.scheme.order(),
+            name: self.scheme().name(),
+            order: self.scheme().order(),
             ..LocalMethod::info(&self.base)
         }
     }

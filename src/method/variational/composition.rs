@@ -118,11 +118,11 @@ impl Scheme {
     }
 }
 
-/// Options of a composition of Störmer–Verlet (see the module docs).
+/// Options of a composition of Störmer–Verlet (see the module docs). The scheme is fixed at
+/// construction: the step fractions are derived from it once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Composition {
-    /// The scheme.
-    pub scheme: Scheme,
+    scheme: Scheme,
     /// The base method.
     pub base: StormerVerlet,
     fractions: Vec<f64>,
@@ -136,6 +136,11 @@ impl Composition {
             base: StormerVerlet::default(),
             fractions: scheme.fractions(),
         }
+    }
+
+    /// The scheme.
+    pub fn scheme(&self) -> Scheme {
+        self.scheme
     }
 
     /// The step fractions γ_1, …, γ_s.
