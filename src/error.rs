@@ -95,6 +95,21 @@ pub enum Error {
         /// The bound that was exceeded.
         limit: f64,
     },
+    /// An adaptive solve used up its step budget
+    /// ([`crate::stepping::solve::SolveOptions::max_steps`]) before the horizon: the steps it
+    /// chose are too small for the span (a stiff or runaway problem, or a tolerance too
+    /// tight for the method).
+    #[error(
+        "the run took its {max_steps} allowed steps and stopped at t = {t:?}, before the horizon: its steps are too small for the span"
+    )]
+    TooManySteps {
+        /// Index of the step that would have exceeded the budget.
+        step: usize,
+        /// Time reached.
+        t: f64,
+        /// The budget.
+        max_steps: usize,
+    },
 }
 
 impl Error {
@@ -108,7 +123,7 @@ impl Error {
 
     /// The kind of error as a stable snake-case name (for machine-readable reports):
     /// `invalid_parameter`, `non_convergence`, `singular_matrix`, `legendre_map`,
-    /// `step_size_too_small`, `non_finite` or `diverged`.
+    /// `step_size_too_small`, `non_finite`, `diverged` or `too_many_steps`.
     pub fn kind(&self) -> &'static str {
         match self {
             Error::InvalidParameter { .. } => "invalid_parameter",
@@ -118,6 +133,7 @@ impl Error {
             Error::StepSizeTooSmall { .. } => "step_size_too_small",
             Error::NonFinite { .. } => "non_finite",
             Error::Diverged { .. } => "diverged",
+            Error::TooManySteps { .. } => "too_many_steps",
         }
     }
 
@@ -127,7 +143,8 @@ impl Error {
             Error::NonConvergence { step, .. }
             | Error::SingularMatrix { step, .. }
             | Error::NonFinite { step, .. }
-            | Error::Diverged { step, .. } => Some(step),
+            | Error::Diverged { step, .. }
+            | Error::TooManySteps { step, .. } => Some(step),
             _ => None,
         }
     }
@@ -141,7 +158,8 @@ impl Error {
             | Error::NonFinite { t, .. }
             | Error::Diverged { t, .. }
             | Error::LegendreMap { t, .. }
-            | Error::StepSizeTooSmall { t, .. } => Some(t),
+            | Error::StepSizeTooSmall { t, .. }
+            | Error::TooManySteps { t, .. } => Some(t),
             Error::InvalidParameter { .. } => None,
         }
     }

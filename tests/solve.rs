@@ -528,3 +528,87 @@ fn a_non_finite_output_point_is_an_error_not_a_silent_nan() {
         other => panic!("expected a non-finite output point, got {other:?}"),
     }
 }
+
+/// The run of `options` on Kepler e = 0.99 over a span of 100 with a budget of `budget`
+/// steps: it ends in `TooManySteps` at the budget, with the run so far kept.
+fn out_of_budget(method: impl Method<2> + Clone, mut options: SolveOptions, budget: usize) {
+    let (model, initial) = kepler(0.99);
+    options.max_steps = budget;
+    let failure = Integrator::new(model, method)
+        .try_solve(&Span::new(0.0, 100.0), initial, &options, &mut ())
+        .unwrap_err();
+    let Error::TooManySteps { step, t, max_steps } = failure.error else {
+        panic!(
+            "{}: expected TooManySteps, got {}",
+            options.adapt, failure.error
+        )
+    };
+    assert_eq!((step, max_steps), (budget, budget), "{}", options.adapt);
+    let partial = failure.partial.expect("the run so far");
+    assert_eq!(partial.statistics.steps, budget, "{}", options.adapt);
+    assert_eq!(partial.last.t, t);
+    assert!(
+        t > 0.0 && t < 100.0,
+        "{}: stopped at t = {t}",
+        options.adapt
+    );
+}
+
+#[test]
+fn an_adaptive_solve_out_of_steps_ends_in_a_typed_error_with_the_run_so_far() {
+    out_of_budget(Svi::new(4), SolveOptions::step_adaptive(1e-10), 50);
+    out_of_budget(
+        Svi::new(4),
+        SolveOptions::degree_adaptive(0.01, 1e-10, 3, 8),
+        40,
+    );
+    out_of_budget(Svi::new(4), SolveOptions::energy_fitted(0.01), 30);
+    // A fixed grid that needs more steps is rejected before it starts.
+    let (model, initial) = kepler(0.5);
+    let mut options = SolveOptions::fixed_step(0.1);
+    options.max_steps = 99;
+    let error = solve(model, Svi::new(3), &Span::new(0.0, 10.0), initial, &options).unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "max_steps"),
+        "{error}"
+    );
+    options.max_steps = 100;
+    assert!(solve(model, Svi::new(3), &Span::new(0.0, 10.0), initial, &options).is_ok());
+    options.max_steps = 0;
+    assert!(solve(model, Svi::new(3), &Span::new(0.0, 10.0), initial, &options).is_err());
+}
+
+#[test]
+fn a_reparametrized_solve_out_of_steps_ends_in_a_typed_error() {
+    use svi::model::reparametrized::{Potential, Sundman};
+    use svi::stepping::reparam::solve_reparametrized;
+    let (model, initial) = kepler(0.9);
+    let mut options = SolveOptions::fixed_step(0.01);
+    options.max_steps = 25;
+    let span = Span::new(0.0, 100.0);
+    for error in [
+        solve_reparametrized(
+            model,
+            Svi::new(4),
+            Sundman { alpha: 1.5 },
+            &span,
+            initial,
+            &options,
+        ),
+        solve_reparametrized(
+            model,
+            svi::StormerVerlet::default(),
+            Potential,
+            &span,
+            initial,
+            &options,
+        ),
+    ]
+    .map(Result::unwrap_err)
+    {
+        assert!(
+            matches!(error, Error::TooManySteps { step: 25, max_steps: 25, t } if t > 0.0),
+            "{error}"
+        );
+    }
+}

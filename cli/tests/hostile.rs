@@ -403,6 +403,7 @@ fn scene_text() -> impl Strategy<Value = String> {
                 "recovery",
                 "max_halvings",
                 "divergence_limit",
+                "max_steps",
                 "adapt",
                 "tol",
                 "min_points",
@@ -510,11 +511,22 @@ fn short(scene: &Scene) -> bool {
         && scene.run.max_halvings.unwrap_or(0) <= 6
 }
 
+/// Most steps of a hostile run in process. A run that [`short`] lets through can still need
+/// steps of any size (a huge parameter makes the model stiff: `double-pendulum --param
+/// g=2.9e18 --adapt step` needs some 10¹¹); the budget ends it with `too_many_steps`.
+const TEST_STEP_BUDGET: usize = 20_000;
+
+/// Cap the scene's step budget at [`TEST_STEP_BUDGET`].
+fn with_test_budget(scene: &mut Scene) {
+    let budget = scene.run.max_steps.unwrap_or(TEST_STEP_BUDGET);
+    scene.run.max_steps = Some(budget.min(TEST_STEP_BUDGET));
+}
+
 /// Parse `text`; if it is a valid scene, run it when it is short. Never panics; a failure
 /// is a message, a success finite numbers.
 fn parse_and_maybe_run(text: &str) -> Result<usize, TestCaseError> {
     let context = [text.to_string()];
-    let scene = match Scene::from_toml(text, "hostile scene") {
+    let mut scene = match Scene::from_toml(text, "hostile scene") {
         Ok(scene) => scene,
         Err(error) => {
             check_error(&error, &context)?;
@@ -525,6 +537,7 @@ fn parse_and_maybe_run(text: &str) -> Result<usize, TestCaseError> {
     if !short(&scene) {
         return Ok(1);
     }
+    with_test_budget(&mut scene);
     match scene.run(false) {
         Ok(summary) => {
             prop_assert!(summary.steps as f64 <= 1e5);
@@ -602,6 +615,7 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         flag("--every", mode.number_or(&["1", "3"])),
         flag("--tol", mode.number_or(&["1e-6", "1e-9"])),
         flag("--divergence-limit", mode.number_or(&["1e3", "10"])),
+        flag("--max-steps", mode.number_or(&["1", "1000"])),
         flag(
             "--output-times",
             prop_oneof![
@@ -717,6 +731,7 @@ fn run_in_process(args: &[String]) -> Result<usize, TestCaseError> {
         }
         outcome = 4;
     }
+    with_test_budget(&mut scene);
     match scene.run(false) {
         Ok(summary) => check_summary(&summary, &format!("{args:?}"))?,
         Err(error) => check_error(&error, args)?,

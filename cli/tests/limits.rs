@@ -399,3 +399,64 @@ fn options_that_would_be_ignored_are_errors() {
         String::from_utf8_lossy(&output.stderr)
     );
 }
+
+/// An adaptive run had no step budget: `svi run double-pendulum --param g=2897664167324477573
+/// --adapt step --tol 1e-9` (a fuzzed case: the pendulum's period is 10⁻⁹) ran for hours.
+/// `--max-steps` (`run.max_steps`, default and cap 10⁹) ends it with `too_many_steps` and the
+/// run so far (exit status 1); a fixed grid that needs more is rejected before it starts.
+#[test]
+fn a_run_takes_at_most_its_step_budget() {
+    let args = [
+        "run",
+        "double-pendulum",
+        "--param",
+        "g=2897664167324477573",
+        "--adapt",
+        "step",
+        "--tol",
+        "1e-9",
+        "--max-steps",
+        "3000",
+        "--json",
+    ];
+    let output = svi_within(&args, HANG).unwrap_or_else(|hang| panic!("{hang}"));
+    assert_eq!(output.status.code(), Some(1));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["status"], "failed");
+    assert_eq!(report["error"]["kind"], "too_many_steps");
+    assert_eq!(report["error"]["step"], 3000);
+    let t = number(&report["error"], "t");
+    assert!(t > 0.0 && t < 1e-3, "stopped at t = {t}");
+    // A fixed grid of 1000 steps against a budget of 999.
+    bad_input(
+        &["run"],
+        &[
+            "kepler",
+            "--h",
+            "0.01",
+            "--t-end",
+            "10",
+            "--max-steps",
+            "999",
+        ],
+        "max_steps",
+    );
+    assert!(
+        svi(&[
+            "run",
+            "kepler",
+            "--h",
+            "0.01",
+            "--t-end",
+            "10",
+            "--max-steps",
+            "1000"
+        ])
+        .status
+        .success()
+    );
+    for bad in ["0", "1000000001"] {
+        bad_input(&["run"], &["kepler", "--max-steps", bad], "--max-steps");
+    }
+    bad_input(&["run"], &["kepler", "--max-steps", "-1"], "--max-steps");
+}

@@ -105,6 +105,7 @@ fn overrides(
     tol: Option<f64>,
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
+    max_steps: Option<usize>,
     form: Option<&str>,
 ) -> PyResult<Overrides> {
     let diagnostics = diagnostics
@@ -130,6 +131,7 @@ fn overrides(
         output_times,
         recovery: choice::<RecoveryKind>("recovery", recovery)?,
         divergence_limit,
+        max_steps,
         form: choice::<FormName>("form", form)?,
         ..Overrides::default()
     })
@@ -196,7 +198,7 @@ type Trajectory = (Vec<String>, Vec<Vec<f64>>);
 #[pyo3(signature = (
     scene, *, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
     initial=None, diagnostics=None, output_times=None, adapt=None, monitor=None, tol=None,
-    recovery=None, divergence_limit=None, form=None, trajectory=true, every=None, progress=false
+    recovery=None, divergence_limit=None, max_steps=None, form=None, trajectory=true, every=None, progress=false
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run(
@@ -216,6 +218,7 @@ fn run(
     tol: Option<f64>,
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
+    max_steps: Option<usize>,
     form: Option<&str>,
     trajectory: bool,
     every: Option<usize>,
@@ -235,6 +238,7 @@ fn run(
         tol,
         recovery,
         divergence_limit,
+        max_steps,
         form,
     )?;
     let mut loaded = load(scene)?;
@@ -323,7 +327,7 @@ type Chunk = (usize, Vec<String>, Vec<Vec<Py<PyAny>>>);
 #[pyo3(signature = (
     scene, *, params=vec![], initial=vec![], random=None, seed=0, start=0, stop=None, threads=0,
     method=None, points=None, quadrature=None, h=None, t_end=None, diagnostics=None,
-    adapt=None, monitor=None, tol=None, recovery=None, divergence_limit=None, form=None
+    adapt=None, monitor=None, tol=None, recovery=None, divergence_limit=None, max_steps=None, form=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble(
@@ -347,6 +351,7 @@ fn ensemble(
     tol: Option<f64>,
     recovery: Option<&str>,
     divergence_limit: Option<f64>,
+    max_steps: Option<usize>,
     form: Option<&str>,
 ) -> PyResult<Chunk> {
     let overrides = overrides(
@@ -363,6 +368,7 @@ fn ensemble(
         tol,
         recovery,
         divergence_limit,
+        max_steps,
         form,
     )?;
     let mut axes = Vec::new();

@@ -41,6 +41,7 @@ __all__ = [
     "Result",
     "SingularMatrixError",
     "StepSizeTooSmallError",
+    "TooManyStepsError",
     "SviError",
     "bench",
     "ensemble",
@@ -59,7 +60,7 @@ class SviError(Exception):
 
     Attributes:
         kind: the error kind: ``invalid_parameter``, ``non_convergence``, ``singular_matrix``,
-            ``legendre_map``, ``step_size_too_small``, ``non_finite``, ``diverged``,
+            ``legendre_map``, ``step_size_too_small``, ``non_finite``, ``diverged``, ``too_many_steps``,
             ``invalid_input``, ``output`` or ``health``.
         message: the message, as ``svi`` prints it.
         step: the index of the failing step (failures in a step), else ``None``.
@@ -115,6 +116,10 @@ class StepSizeTooSmallError(SviError):
     """Adaptivity or recovery that needed a step below the smallest allowed (``step_size_too_small``)."""
 
 
+class TooManyStepsError(SviError):
+    """A run that used up its step budget (``max_steps``) before the horizon (``too_many_steps``)."""
+
+
 class NonFiniteError(SviError):
     """A state or energy that is not a finite number (``non_finite``)."""
 
@@ -140,6 +145,7 @@ _ERRORS: Dict[str, type] = {
     "step_size_too_small": StepSizeTooSmallError,
     "non_finite": NonFiniteError,
     "diverged": DivergedError,
+    "too_many_steps": TooManyStepsError,
     "output": OutputError,
     "health": HealthError,
 }
@@ -255,6 +261,7 @@ def run(
     tol: Optional[float] = None,
     recovery: Optional[str] = None,
     divergence_limit: Optional[float] = None,
+    max_steps: Optional[int] = None,
     form: Optional[str] = None,
     trajectory: bool = True,
     every: Optional[int] = None,
@@ -272,7 +279,7 @@ def run(
             ``rotation``/``quaternion`` and ``omega``/``momentum``).
         diagnostics: any of ``"energy"``, ``"momentum"``, ``"solution"``, or ``["none"]``.
         output_times: report (and record in the trajectory) the states at these times.
-        points, quadrature, adapt, monitor, tol, recovery, divergence_limit, form: as the flags
+        points, quadrature, adapt, monitor, tol, recovery, divergence_limit, max_steps, form: as the flags
             of ``svi run`` of the same names (``adapt="reparam", monitor="sundman:1"``: fixed
             steps ``h`` in computational time τ, dt = |q| dτ).
         trajectory: record every step (or the output times) as arrays ``t``, ``q``, ``v``, ``p``.
@@ -305,6 +312,7 @@ def run(
         tol=tol,
         recovery=recovery,
         divergence_limit=divergence_limit,
+        max_steps=None if max_steps is None else int(max_steps),
         form=form,
         trajectory=trajectory,
         every=every,
@@ -418,6 +426,7 @@ def ensemble(
     tol: Optional[float] = None,
     recovery: Optional[str] = None,
     divergence_limit: Optional[float] = None,
+    max_steps: Optional[int] = None,
     form: Optional[str] = None,
 ) -> Any:
     """Run a scene over grids or random draws of parameters and initial states, as ``svi ensemble``.
@@ -442,7 +451,7 @@ def ensemble(
         as_frame: return a pandas DataFrame (default: when pandas is installed), else a dict
             of column name → NumPy array.
         method, h, t_end, diagnostics, points, quadrature, adapt, monitor, tol, recovery,
-        divergence_limit, form: shared by every member, as the flags of ``svi ensemble``.
+        divergence_limit, max_steps, form: shared by every member, as the flags of ``svi ensemble``.
 
     Returns:
         The member table: one row per member — ``member``, the varied values, ``status``
@@ -471,6 +480,7 @@ def ensemble(
         tol=tol,
         recovery=recovery,
         divergence_limit=divergence_limit,
+        max_steps=None if max_steps is None else int(max_steps),
         form=form,
     )
     count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)

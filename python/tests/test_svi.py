@@ -142,6 +142,17 @@ def test_errors_are_exceptions_with_the_failure_objects_fields():
     with pytest.raises(svi.InvalidInputError):
         svi.run("kepler", adapt="sometimes")
 
+    # A run out of its step budget: the typed error, as from the command line.
+    with pytest.raises(svi.TooManyStepsError) as caught:
+        svi.run("kepler", params={"e": 0.9}, adapt="step", tol=1e-10, t_end=100.0, max_steps=60)
+    status, stdout, _ = cli(
+        "run", "kepler", "--param", "e=0.9", "--adapt", "step", "--tol", "1e-10", "--t-end", "100",
+        "--max-steps", "60", "--json",
+    )
+    reference = json.loads(stdout)["error"]
+    assert status == 1 and reference["kind"] == "too_many_steps" == caught.value.kind
+    assert caught.value.step == 60 == reference["step"] and caught.value.t == reference["t"]
+
 
 def test_models_and_scenes():
     names = [model["name"] for model in svi.models()]

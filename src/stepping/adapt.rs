@@ -107,7 +107,9 @@ fn decay(magnitudes: &[f64]) -> (f64, f64) {
 
 impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// One trial step of an adaptive mode from `from` at `t` with size `h` (counted in
-    /// `statistics.steps`), with the step's index and time attached to a failure.
+    /// `statistics.steps`), with the step's index and time attached to a failure; with the
+    /// divergence limit of `options`, and [`Error::TooManySteps`] instead once the steps
+    /// taken reach `options.max_steps`.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn trial(
         &self,
@@ -117,10 +119,11 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         t: f64,
         h: f64,
         from: &Cursor<S>,
-        divergence_limit: Option<f64>,
+        options: &SolveOptions,
         statistics: &mut Statistics,
     ) -> Result<Cursor<S>, Error> {
         let index = statistics.steps;
+        options.budget(index, t)?;
         let mut next = from.clone();
         self.attempt(
             method,
@@ -129,7 +132,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             t,
             h,
             &mut next,
-            divergence_limit,
+            options.run.divergence_limit,
             statistics,
         )
         .map_err(|failure| failure.at(index, t))?;
@@ -192,7 +195,6 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         }
         .clamp(min_step, max_step);
         let points = method.points();
-        let limit = options.run.divergence_limit;
         let mut half = method.workspace(self.model(), h).map_err(rejected)?;
         let mut full = method.workspace(self.model(), 2.0 * h).map_err(rejected)?;
         let mut increment = progress.cursor.state.zeros_like();
@@ -224,7 +226,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     t,
                     dt,
                     &start,
-                    limit,
+                    options,
                     statistics,
                 )?;
                 self.emit(
@@ -245,7 +247,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     mid,
                     end - mid,
                     &x1,
-                    limit,
+                    options,
                     statistics,
                 )?;
                 self.emit(
@@ -266,7 +268,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     t,
                     end - t,
                     &start,
-                    limit,
+                    options,
                     statistics,
                 )?;
                 let error = w.state.distance(&x2.state);
@@ -414,7 +416,6 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             .iter()
             .map(|(method, _)| method.info().order as f64)
             .collect();
-        let limit = options.run.divergence_limit;
         let mut increment = progress.cursor.state.zeros_like();
         let width = S::node_width(&progress.cursor.state);
         let mut points = initial_points.clamp(low, high);
@@ -442,7 +443,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     t,
                     size,
                     &progress.cursor,
-                    limit,
+                    options,
                     &mut progress.statistics,
                 ) {
                     Ok(next) => next,

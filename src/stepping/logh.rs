@@ -245,6 +245,9 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let limit = options.run.divergence_limit;
         let mut k = 0usize;
         loop {
+            options
+                .budget(k, point.clock.t)
+                .map_err(|error| failure(error, &last, statistics))?;
             // The step from `point` with size `size`, added with compensated summation and
             // checked for finite values and against the divergence limit.
             let attempt = |size: f64, statistics: &mut Statistics| {

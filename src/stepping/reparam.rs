@@ -286,6 +286,9 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         }
         let mut k = 0usize;
         loop {
+            options
+                .budget(k, clock.t)
+                .map_err(|error| failure(error, &last, progress.statistics))?;
             let tau = k as f64 * dtau;
             let begin: Cursor<Euclidean<N>> = progress.cursor.clone();
             let step = |cursor: &mut Cursor<Euclidean<N>>,

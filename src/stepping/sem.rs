@@ -75,7 +75,7 @@ struct Trials<'a, L, M: Step<L, S>, S: Space> {
     increment: &'a mut S::State,
     progress: &'a mut Progress<S>,
     t: f64,
-    limit: Option<f64>,
+    options: &'a SolveOptions,
     /// The size of the last successful trial and its end (the step the workspace holds).
     last: Option<(f64, Cursor<S>)>,
     /// Whether a trial was taken (the next one restarts the method).
@@ -97,7 +97,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Trials<'_, L, M, S> {
             self.t,
             h,
             &self.progress.cursor,
-            self.limit,
+            self.options,
             &mut self.progress.statistics,
         )?;
         let energy = method
@@ -228,7 +228,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 increment: &mut increment,
                 progress,
                 t,
-                limit: options.run.divergence_limit,
+                options,
                 last: None,
                 tried: false,
             };

@@ -32,7 +32,7 @@
 use crate::error::{Error, require_finite, require_positive};
 use crate::method::space::Space;
 use crate::method::step::Step;
-use crate::stepping::grid::{check_span, grid_steps};
+use crate::stepping::grid::{MAX_STEPS, check_span, grid_steps};
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics};
 use std::fmt;
@@ -176,6 +176,12 @@ pub struct SolveOptions {
     pub max_points: usize,
     /// Consecutive rejections of one step before the solve gives up.
     pub max_rejections: usize,
+    /// Most steps a solve may take (at least 1; default [`MAX_STEPS`], as for fixed grids):
+    /// the trial steps of the adaptive modes, accepted or rejected, and the τ-steps of
+    /// [`crate::Integrator::try_solve_reparametrized`]. An adaptive solve that reaches it
+    /// before the horizon ends in [`Error::TooManySteps`] (with the run so far); a fixed grid
+    /// that needs more is rejected before its first step.
+    pub max_steps: usize,
     /// Recovery of failed steps ([`Adapt::None`] only: the adaptive modes retry failed trial
     /// steps themselves) and the divergence limit on the state.
     pub run: RunOptions,
@@ -196,6 +202,7 @@ impl Default for SolveOptions {
             min_points: 3,
             max_points: 24,
             max_rejections: 30,
+            max_steps: MAX_STEPS,
             run: RunOptions::default(),
         }
     }
@@ -242,6 +249,19 @@ impl SolveOptions {
         }
     }
 
+    /// [`Error::TooManySteps`] when `steps`, the steps taken so far, have used up
+    /// `max_steps` (checked before each step whose count is not known in advance).
+    pub(super) fn budget(&self, steps: usize, t: f64) -> Result<(), Error> {
+        if steps >= self.max_steps {
+            return Err(Error::TooManySteps {
+                step: steps,
+                t,
+                max_steps: self.max_steps,
+            });
+        }
+        Ok(())
+    }
+
     pub(super) fn tolerance(&self) -> Result<f64, Error> {
         let tol = self.tol.ok_or_else(|| {
             Error::invalid("tol", format!("adapt = {} needs a tolerance", self.adapt))
@@ -265,9 +285,12 @@ impl SolveOptions {
     }
 
     /// The options [`crate::Integrator::try_solve_reparametrized`] reads: the run options,
-    /// without recovery (a failed τ-step ends the run).
+    /// without recovery (a failed τ-step ends the run), and the step budget.
     pub(super) fn validate_reparametrized(&self) -> Result<(), Error> {
         self.run.validate()?;
+        if self.max_steps == 0 {
+            return Err(Error::invalid("max_steps", "must be at least 1"));
+        }
         if self.run.recovery != Recovery::None {
             return Err(Error::invalid(
                 "recovery",
@@ -298,6 +321,9 @@ impl SolveOptions {
         }
         if self.max_rejections == 0 {
             return Err(Error::invalid("max_rejections", "must be at least 1"));
+        }
+        if self.max_steps == 0 {
+            return Err(Error::invalid("max_steps", "must be at least 1"));
         }
         if let Some(h) = self.min_step {
             require_positive("min_step", h)?;
@@ -557,6 +583,15 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     ) -> Result<(Adaptivity, bool), RunFailure<S>> {
         let h = options.step().map_err(RunFailure::rejected)?;
         let steps = grid_steps(span.t0, span.t_end, h).map_err(RunFailure::rejected)?;
+        if steps > options.max_steps {
+            return Err(RunFailure::rejected(Error::invalid(
+                "max_steps",
+                format!(
+                    "the span needs {steps} steps of h = {h:e}, more than max_steps = {}",
+                    options.max_steps
+                ),
+            )));
+        }
         let mut workspace = self
             .method()
             .workspace(self.model(), h)

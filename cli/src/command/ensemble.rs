@@ -115,6 +115,9 @@ pub struct EnsembleArgs {
     /// Stop a member once a state component exceeds this in absolute value.
     #[arg(long, value_name = "LIMIT", allow_hyphen_values = true)]
     pub divergence_limit: Option<f64>,
+    /// Most steps of each member, 1 to 10⁹ [default: 10⁹] (as for svi run).
+    #[arg(long, value_name = "STEPS", allow_hyphen_values = true)]
+    pub max_steps: Option<usize>,
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]
     pub form: Option<FormName>,
@@ -134,6 +137,7 @@ impl EnsembleArgs {
             tol: self.tol,
             recovery: self.recovery,
             divergence_limit: self.divergence_limit,
+            max_steps: self.max_steps,
             form: self.form,
             ..Overrides::default()
         }

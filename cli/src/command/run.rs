@@ -358,6 +358,9 @@ fn solve_options(scene: &Scene, h: f64) -> Result<SolveOptions, SceneError> {
     if let Some(points) = run.max_points {
         options.max_points = points;
     }
+    if let Some(steps) = run.max_steps {
+        options.max_steps = steps;
+    }
     options.run = run.options()?;
     Ok(options)
 }

@@ -106,7 +106,8 @@ pub enum Status {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct ErrorReport {
     /// `invalid_parameter`, `non_convergence`, `singular_matrix`, `legendre_map`,
-    /// `step_size_too_small`, `non_finite`, `diverged` (the library's error kinds),
+    /// `step_size_too_small`, `non_finite`, `diverged`, `too_many_steps` (the library's
+    /// error kinds),
     /// `invalid_input` (other bad input), `output` (an output that cannot be written) or
     /// `health` (a failed health check under `--strict`).
     pub kind: &'static str,

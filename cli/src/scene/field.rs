@@ -172,6 +172,7 @@ impl FieldScene {
             (overrides.output_times.is_some(), "--output-times"),
             (overrides.recovery.is_some(), "--recovery"),
             (overrides.divergence_limit.is_some(), "--divergence-limit"),
+            (overrides.max_steps.is_some(), "--max-steps"),
             (overrides.form.is_some(), "--form"),
         ];
         if let Some((_, option)) = unused.into_iter().find(|(given, _)| *given) {

@@ -47,6 +47,8 @@
 //!                       # "none" only: the adaptive modes retry failed steps themselves)
 //! # max_halvings = 4    # with "halve-step": successive halvings allowed (default 4)
 //! # divergence_limit = 1e6   # stop once |q_i| or |p_i| exceeds this (default: no limit)
+//! # max_steps = 1000000      # most steps (default and cap 10⁹): an adaptive run that needs
+//!                       # more stops with too_many_steps, a fixed grid that does is rejected
 //!
 //! [output]
 //! trajectory = "kepler.csv"   # write the trajectory as CSV (absent: none)
@@ -414,6 +416,15 @@ impl Scene {
     fn check_run(&self, spec: MethodSpec) -> Result<(), SceneError> {
         let run = &self.run;
         run.options()?;
+        if let Some(steps) = run.max_steps {
+            limits::count(
+                "--max-steps (run.max_steps)",
+                steps,
+                1,
+                svi::stepping::grid::MAX_STEPS,
+                "steps",
+            )?;
+        }
         let adapt = run.adapt.unwrap_or_default();
         let not_applicable =
             |option, reason: String| Err(SceneError::NotApplicable { option, reason });
@@ -568,6 +579,7 @@ impl Scene {
             output_times,
             recovery,
             divergence_limit,
+            max_steps,
             form,
         } = overrides;
         let space = self.space();
@@ -648,6 +660,7 @@ impl Scene {
         }
         set(&mut self.run.recovery, recovery);
         set(&mut self.run.divergence_limit, divergence_limit);
+        set(&mut self.run.max_steps, max_steps);
         if h.is_some() && self.run.adapt == Some(AdaptMode::Step) {
             return Err(SceneError::NotApplicable {
                 option: "--h",
@@ -995,9 +1008,11 @@ pub(crate) mod tests {
                 output_times: None,
                 recovery: None,
                 divergence_limit: None,
+                max_steps: Some(500),
                 form: None,
             })
             .unwrap();
+        assert_eq!(scene.run.max_steps, Some(500));
         assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
         assert_eq!(scene.run.tol, Some(1e-9));
         // Output times replace the thinned steps of the trajectory: not with --every.

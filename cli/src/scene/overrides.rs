@@ -91,6 +91,11 @@ pub struct Overrides {
     /// Stop once a state component exceeds this in absolute value.
     #[arg(long, value_name = "LIMIT", allow_hyphen_values = true)]
     pub divergence_limit: Option<f64>,
+    /// Most steps of the run, 1 to 10⁹ [default: 10⁹]: an adaptive run (--adapt step,
+    /// degree, sem, reparam) that needs more stops with the error too_many_steps and the run
+    /// so far; a fixed-step run that needs more is rejected before it starts.
+    #[arg(long, value_name = "STEPS", allow_hyphen_values = true)]
+    pub max_steps: Option<usize>,
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]
     pub form: Option<FormName>,

@@ -148,6 +148,10 @@ pub struct RunSection {
     /// Stop with an error once a state component exceeds this in absolute value (default:
     /// no limit; NaN and infinity always stop the run).
     pub divergence_limit: Option<f64>,
+    /// Most steps of the run, 1 to [`svi::stepping::grid::MAX_STEPS`] (the default): an
+    /// adaptive run that needs more stops with `too_many_steps` (the run so far reported);
+    /// a fixed-step run that needs more is rejected before it starts.
+    pub max_steps: Option<usize>,
 }
 
 /// The adaptivity modes of [`svi::solve()`], as named in scenes and on the command line.
