@@ -8,6 +8,7 @@
 //! left to right (a periodic mesh does not repeat its first node at the right end). The run
 //! takes the whole number of steps h that reaches t_end (the last level at or after it).
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
@@ -22,12 +23,52 @@ use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_space_time;
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
 use crate::scene::error::SceneError;
-use crate::scene::field::{FieldScene, QuadratureName};
+use crate::scene::field::{FieldRunSection, FieldScene, QuadratureName};
 use crate::scene::limits;
 use crate::scene::overrides::Overrides;
 
 /// The most time levels a field run may take.
 pub const MAX_LEVELS: usize = 100_000_000;
+
+/// The step h of a space–time scene's `[run]` (or `default_step`) and the number of steps
+/// that reaches its t_end (or `default_horizon`): the last level at or after t_end (the time
+/// step is the mesh's: no shorter last step), at most [`MAX_LEVELS`].
+pub fn time_levels(
+    run: &FieldRunSection,
+    default_step: f64,
+    default_horizon: f64,
+) -> Result<(f64, usize), SceneError> {
+    let h = limits::positive("h", run.h.unwrap_or(default_step))?;
+    let t_end = limits::positive("t_end", run.t_end.unwrap_or(default_horizon))?;
+    let levels = (t_end / h * (1.0 - 1e-12)).ceil().max(1.0);
+    if levels > MAX_LEVELS as f64 {
+        return Err(SceneError::InvalidOption {
+            option: "t_end",
+            reason: format!(
+                "{} takes more than {MAX_LEVELS} steps h = {}",
+                Float(t_end),
+                Float(h)
+            ),
+        });
+    }
+    Ok((h, levels as usize))
+}
+
+/// The CSV stream of a space–time scene's field, with `header`, if it writes one.
+pub fn field_stream<'a>(
+    path: Option<&'a PathBuf>,
+    header: &str,
+) -> Result<Option<(&'a PathBuf, CsvStream)>, SceneError> {
+    path.map(|path| {
+        CsvStream::create(path, header)
+            .map(|stream| (path, stream))
+            .map_err(|source| SceneError::Write {
+                path: path.clone(),
+                source,
+            })
+    })
+    .transpose()
+}
 
 /// `svi run` on the field scene `scene` (loaded as `name`): apply the overrides, run, print
 /// the summary as text or JSON (also for failures, as `svi run` does for every scene) and
@@ -139,25 +180,7 @@ impl FieldModelVisitor for FieldRun<'_> {
             model.set_parameter(name, *value)?;
         }
         let points = scene.mesh.points.unwrap_or_else(|| model.default_points());
-        let h = limits::positive("h", scene.run.h.unwrap_or_else(|| model.default_step()))?;
-        let t_end = limits::positive(
-            "t_end",
-            scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
-        )?;
-        // The last level at or after t_end (a field's time step is the mesh's: no shorter
-        // last step).
-        let levels = (t_end / h * (1.0 - 1e-12)).ceil().max(1.0);
-        if levels > MAX_LEVELS as f64 {
-            return Err(SceneError::InvalidOption {
-                option: "t_end",
-                reason: format!(
-                    "{} takes more than {MAX_LEVELS} steps h = {}",
-                    Float(t_end),
-                    Float(h)
-                ),
-            });
-        }
-        let levels = levels as usize;
+        let (h, levels) = time_levels(&scene.run, model.default_step(), model.default_horizon())?;
         let quadrature = scene.mesh.quadrature.unwrap_or(QuadratureName::Trapezoid);
         let mut options = MultisymplecticOptions::default();
         options.quadrature = quadrature.quadrature();
@@ -168,16 +191,7 @@ impl FieldModelVisitor for FieldRun<'_> {
         let integrator = Multisymplectic::new(model.clone(), mesh, options)?;
 
         let every = scene.output.every.unwrap_or(1);
-        let mut csv = match &scene.output.trajectory {
-            Some(path) => Some((
-                path,
-                CsvStream::create(path, "t,x,u\n").map_err(|source| SceneError::Write {
-                    path: path.clone(),
-                    source,
-                })?,
-            )),
-            None => None,
-        };
+        let mut csv = field_stream(scene.output.trajectory.as_ref(), "t,x,u\n")?;
         let mut write_error = None;
         let mut error_max = 0.0f64;
         let start = Instant::now();

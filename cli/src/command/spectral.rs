@@ -14,14 +14,12 @@ use svi::field::fourier::Complex64;
 use svi::field::pseudospectral::{Pseudospectral, PseudospectralOptions, TimeScheme};
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
-use crate::command::field::{MAX_LEVELS, RunSummary, print_outcome};
-use crate::report::csv::{CsvStream, Float};
+use crate::command::field::{RunSummary, field_stream, print_outcome, time_levels};
 use crate::report::health::Warning;
 use crate::report::plot::plot_space_time;
 use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
 use crate::scene::error::SceneError;
-use crate::scene::limits;
 use crate::scene::overrides::Overrides;
 use crate::scene::spectral::{SpectralScene, scheme_name};
 
@@ -79,23 +77,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
         }
         let scheme = scene.scheme()?;
         let points = scene.mesh.points.unwrap_or_else(|| model.default_points());
-        let h = limits::positive("h", scene.run.h.unwrap_or_else(|| model.default_step()))?;
-        let t_end = limits::positive(
-            "t_end",
-            scene.run.t_end.unwrap_or_else(|| model.default_horizon()),
-        )?;
-        let steps = (t_end / h * (1.0 - 1e-12)).ceil().max(1.0);
-        if steps > MAX_LEVELS as f64 {
-            return Err(SceneError::InvalidOption {
-                option: "t_end",
-                reason: format!(
-                    "{} takes more than {MAX_LEVELS} steps h = {}",
-                    Float(t_end),
-                    Float(h)
-                ),
-            });
-        }
-        let steps = steps as usize;
+        let (h, steps) = time_levels(&scene.run, model.default_step(), model.default_horizon())?;
         let Prepared {
             mut integrator,
             nodes: xs,
@@ -104,16 +86,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
         let dx = integrator.fourier().dx();
 
         let every = scene.output.every.unwrap_or(1);
-        let mut csv = match &scene.output.trajectory {
-            Some(path) => Some((
-                path,
-                CsvStream::create(path, "t,x,abs,re,im\n").map_err(|source| SceneError::Write {
-                    path: path.clone(),
-                    source,
-                })?,
-            )),
-            None => None,
-        };
+        let mut csv = field_stream(scene.output.trajectory.as_ref(), "t,x,abs,re,im\n")?;
         let mut write_error = None;
         let (mut error_max, mut error_final) = (0.0f64, 0.0f64);
         let start = Instant::now();

@@ -40,6 +40,7 @@ use svi_models::FIELD_MODEL_NAMES;
 use crate::scene::error::SceneError;
 use crate::scene::limits::read_scene_file;
 use crate::scene::overrides::Overrides;
+use crate::scene::set;
 
 /// The built-in field scenes, as (name, TOML text).
 pub const FIELD_SCENES: &[(&str, &str)] = &[
@@ -161,59 +162,96 @@ impl FieldScene {
     /// `mesh.points`), `--out`, `--every` and `--plot`; any other run flag is
     /// [`SceneError::NotApplicable`].
     pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
-        let unused = [
-            (overrides.method.is_some(), "--method"),
-            (overrides.points.is_some(), "--points"),
-            (overrides.quadrature.is_some(), "--quadrature"),
-            (overrides.diagnostics.is_some(), "--diagnostics"),
-            (overrides.adapt.is_some(), "--adapt"),
-            (overrides.tol.is_some(), "--tol"),
-            (overrides.monitor.is_some(), "--monitor"),
-            (overrides.output_times.is_some(), "--output-times"),
-            (overrides.recovery.is_some(), "--recovery"),
-            (overrides.divergence_limit.is_some(), "--divergence-limit"),
-            (overrides.max_steps.is_some(), "--max-steps"),
-            (overrides.form.is_some(), "--form"),
-        ];
-        if let Some((_, option)) = unused.into_iter().find(|(given, _)| *given) {
-            return Err(SceneError::NotApplicable {
-                option,
-                reason: format!(
-                    "'{}' is a field scene (the multisymplectic integrator): it takes --h, \
-                     --t-end, --param (points=N for the mesh), --out, --every and --plot",
-                    self.model
-                ),
-            });
+        reject_other_flags(overrides, false, || {
+            format!(
+                "'{}' is a field scene (the multisymplectic integrator): it takes --h, \
+                 --t-end, --param (points=N for the mesh), --out, --every and --plot",
+                self.model
+            )
+        })?;
+        SpaceTimeFields {
+            parameters: &mut self.parameters,
+            points: &mut self.mesh.points,
+            run: &mut self.run,
+            trajectory: &mut self.output.trajectory,
+            every: &mut self.output.every,
+            plot: &mut self.output.plot,
         }
+        .apply(overrides, "mesh points")
+    }
+}
+
+/// The first flag of `svi run` that a space–time scene (a field scene, a pseudospectral one)
+/// does not take, as [`SceneError::NotApplicable`] with `reason`: every flag but those
+/// [`SpaceTimeFields::apply`] reads, and `--method` where `takes_method`.
+pub fn reject_other_flags(
+    overrides: &Overrides,
+    takes_method: bool,
+    reason: impl FnOnce() -> String,
+) -> Result<(), SceneError> {
+    let unused = [
+        (overrides.method.is_some() && !takes_method, "--method"),
+        (overrides.points.is_some(), "--points"),
+        (overrides.quadrature.is_some(), "--quadrature"),
+        (overrides.diagnostics.is_some(), "--diagnostics"),
+        (overrides.adapt.is_some(), "--adapt"),
+        (overrides.tol.is_some(), "--tol"),
+        (overrides.monitor.is_some(), "--monitor"),
+        (overrides.output_times.is_some(), "--output-times"),
+        (overrides.recovery.is_some(), "--recovery"),
+        (overrides.divergence_limit.is_some(), "--divergence-limit"),
+        (overrides.max_steps.is_some(), "--max-steps"),
+        (overrides.form.is_some(), "--form"),
+    ];
+    match unused.into_iter().find(|(given, _)| *given) {
+        Some((_, option)) => Err(SceneError::NotApplicable {
+            option,
+            reason: reason(),
+        }),
+        None => Ok(()),
+    }
+}
+
+/// The fields of a space–time scene that the command-line flags set.
+pub struct SpaceTimeFields<'a> {
+    /// Model parameters.
+    pub parameters: &'a mut BTreeMap<String, f64>,
+    /// The nodes in space (`--param points=N`).
+    pub points: &'a mut Option<usize>,
+    /// Step and horizon.
+    pub run: &'a mut FieldRunSection,
+    /// The CSV file of the field.
+    pub trajectory: &'a mut Option<PathBuf>,
+    /// Write every k-th time level.
+    pub every: &'a mut Option<usize>,
+    /// The space-time picture.
+    pub plot: &'a mut Option<PathBuf>,
+}
+
+impl SpaceTimeFields<'_> {
+    /// Put `--param` (`points` a whole number of `unit`), `--h`, `--t-end`, `--out`, `--every`
+    /// and `--plot` on top, then check the outputs: a plot and `every` need the trajectory,
+    /// `every` is positive.
+    pub fn apply(self, overrides: &Overrides, unit: &str) -> Result<(), SceneError> {
         for (name, value) in &overrides.parameters {
             if name == "points" {
                 if value.fract() != 0.0 || *value < 0.0 || *value > usize::MAX as f64 {
                     return Err(SceneError::InvalidOption {
                         option: "points",
-                        reason: format!("{value} is not a whole number of mesh points"),
+                        reason: format!("{value} is not a whole number of {unit}"),
                     });
                 }
-                self.mesh.points = Some(*value as usize);
+                *self.points = Some(*value as usize);
             } else {
                 self.parameters.insert(name.clone(), *value);
             }
         }
-        if let Some(h) = overrides.h {
-            self.run.h = Some(h);
-        }
-        if let Some(t_end) = overrides.t_end {
-            self.run.t_end = Some(t_end);
-        }
-        if let Some(out) = &overrides.out {
-            self.output.trajectory = Some(out.clone());
-        }
-        if let Some(every) = overrides.every {
-            self.output.every = Some(every);
-        }
-        if let Some(plot) = &overrides.plot {
-            self.output.plot = Some(plot.clone());
-        }
-        if self.output.plot.is_some() && self.output.trajectory.is_none() {
+        set(&mut self.run.h, &overrides.h);
+        set(&mut self.run.t_end, &overrides.t_end);
+        set(self.every, &overrides.every);
+        set(self.trajectory, &overrides.out);
+        set(self.plot, &overrides.plot);
+        if self.plot.is_some() && self.trajectory.is_none() {
             return Err(SceneError::NotApplicable {
                 option: "--plot (output.plot)",
                 reason: "draws the field written to the trajectory file: give --out FILE \
@@ -221,10 +259,10 @@ impl FieldScene {
                     .into(),
             });
         }
-        if self.output.every.is_some() && self.output.trajectory.is_none() {
+        if self.every.is_some() && self.trajectory.is_none() {
             return Err(SceneError::EveryWithoutOutput);
         }
-        if self.output.every == Some(0) {
+        if *self.every == Some(0) {
             return Err(SceneError::InvalidOption {
                 option: "every",
                 reason: "0; need a positive number of time levels".into(),

@@ -856,7 +856,7 @@ impl Scene {
 }
 
 /// `target = value` if a value is given.
-fn set<T: Clone>(target: &mut Option<T>, value: &Option<T>) {
+pub(crate) fn set<T: Clone>(target: &mut Option<T>, value: &Option<T>) {
     if let Some(value) = value {
         *target = Some(value.clone());
     }

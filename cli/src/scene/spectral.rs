@@ -38,7 +38,7 @@ use svi::field::pseudospectral::TimeScheme;
 use svi_models::SPECTRAL_MODEL_NAMES;
 
 use crate::scene::error::SceneError;
-use crate::scene::field::FieldRunSection;
+use crate::scene::field::{FieldRunSection, SpaceTimeFields, reject_other_flags};
 use crate::scene::limits::read_scene_file;
 use crate::scene::overrides::Overrides;
 
@@ -182,80 +182,27 @@ impl SpectralScene {
 
     /// Put the command-line flags on top (see the module documentation).
     pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
-        let unused = [
-            (overrides.points.is_some(), "--points"),
-            (overrides.quadrature.is_some(), "--quadrature"),
-            (overrides.diagnostics.is_some(), "--diagnostics"),
-            (overrides.adapt.is_some(), "--adapt"),
-            (overrides.tol.is_some(), "--tol"),
-            (overrides.monitor.is_some(), "--monitor"),
-            (overrides.output_times.is_some(), "--output-times"),
-            (overrides.recovery.is_some(), "--recovery"),
-            (overrides.divergence_limit.is_some(), "--divergence-limit"),
-            (overrides.max_steps.is_some(), "--max-steps"),
-            (overrides.form.is_some(), "--form"),
-        ];
-        if let Some((_, option)) = unused.into_iter().find(|(given, _)| *given) {
-            return Err(SceneError::NotApplicable {
-                option,
-                reason: format!(
-                    "'{}' is a pseudospectral scene: it takes --method (midpoint, svi:P[/M]), \
-                     --h, --t-end, --param (points=N for the Fourier modes), --out, --every \
-                     and --plot",
-                    self.model
-                ),
-            });
-        }
+        reject_other_flags(overrides, true, || {
+            format!(
+                "'{}' is a pseudospectral scene: it takes --method (midpoint, svi:P[/M]), \
+                 --h, --t-end, --param (points=N for the Fourier modes), --out, --every \
+                 and --plot",
+                self.model
+            )
+        })?;
         if let Some(method) = &overrides.method {
             self.method = Some(method.to_string());
         }
         self.scheme()?;
-        for (name, value) in &overrides.parameters {
-            if name == "points" {
-                if value.fract() != 0.0 || *value < 0.0 || *value > usize::MAX as f64 {
-                    return Err(SceneError::InvalidOption {
-                        option: "points",
-                        reason: format!("{value} is not a whole number of Fourier modes"),
-                    });
-                }
-                self.mesh.points = Some(*value as usize);
-            } else {
-                self.parameters.insert(name.clone(), *value);
-            }
+        SpaceTimeFields {
+            parameters: &mut self.parameters,
+            points: &mut self.mesh.points,
+            run: &mut self.run,
+            trajectory: &mut self.output.trajectory,
+            every: &mut self.output.every,
+            plot: &mut self.output.plot,
         }
-        if let Some(h) = overrides.h {
-            self.run.h = Some(h);
-        }
-        if let Some(t_end) = overrides.t_end {
-            self.run.t_end = Some(t_end);
-        }
-        if let Some(out) = &overrides.out {
-            self.output.trajectory = Some(out.clone());
-        }
-        if let Some(every) = overrides.every {
-            self.output.every = Some(every);
-        }
-        if let Some(plot) = &overrides.plot {
-            self.output.plot = Some(plot.clone());
-        }
-        if self.output.plot.is_some() && self.output.trajectory.is_none() {
-            return Err(SceneError::NotApplicable {
-                option: "--plot (output.plot)",
-                reason: "draws the field written to the trajectory file: give --out FILE \
-                         (output.trajectory) too"
-                    .into(),
-            });
-        }
-        if self.output.every.is_some() && self.output.trajectory.is_none() {
-            return Err(SceneError::EveryWithoutOutput);
-        }
-        if self.output.every == Some(0) {
-            return Err(SceneError::InvalidOption {
-                option: "every",
-                reason: "0; need a positive number of time levels".into(),
-            });
-        }
-        Ok(())
+        .apply(overrides, "Fourier modes")
     }
 }
 
