@@ -34,6 +34,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
+use serde::de::DeserializeOwned;
 use svi::field::multisymplectic::CellQuadrature;
 use svi_models::FIELD_MODEL_NAMES;
 
@@ -135,27 +136,7 @@ impl FieldScene {
     /// `model` is a field model; `None` for anything else (the other scenes, and paths that
     /// are no readable file: the scene loader reports those).
     pub fn load(name_or_path: &str) -> Option<Result<FieldScene, SceneError>> {
-        if let Some((name, text)) = FIELD_SCENES.iter().find(|(name, _)| *name == name_or_path) {
-            return Some(FieldScene::from_toml(
-                text,
-                &format!("built-in scene '{name}'"),
-            ));
-        }
-        let path = Path::new(name_or_path);
-        let text = read_scene_file(path).ok()?;
-        let table: toml::Table = toml::from_str(&text).ok()?;
-        let model = table.get("model")?.as_str()?;
-        FIELD_MODEL_NAMES
-            .contains(&model)
-            .then(|| FieldScene::from_toml(&text, &format!("'{}'", path.display())))
-    }
-
-    /// Parse a field scene; `origin` names the source in error messages.
-    pub fn from_toml(text: &str, origin: &str) -> Result<FieldScene, SceneError> {
-        toml::from_str(text).map_err(|source| SceneError::Parse {
-            origin: origin.into(),
-            source,
-        })
+        load_space_time(name_or_path, FIELD_SCENES, FIELD_MODEL_NAMES)
     }
 
     /// Put the command-line flags on top: `--h`, `--t-end`, `--param` (`points` sets
@@ -179,6 +160,34 @@ impl FieldScene {
         }
         .apply(overrides, "mesh points")
     }
+}
+
+/// The space–time scene `name_or_path` names: one of the built-in `scenes` (name, TOML
+/// text), or a scene file whose `model` is one of `models`; `None` for anything else (the
+/// other scenes, and paths that are no readable file: the scene loader reports those).
+pub fn load_space_time<S: DeserializeOwned>(
+    name_or_path: &str,
+    scenes: &[(&str, &str)],
+    models: &[&str],
+) -> Option<Result<S, SceneError>> {
+    if let Some((name, text)) = scenes.iter().find(|(name, _)| *name == name_or_path) {
+        return Some(from_toml(text, &format!("built-in scene '{name}'")));
+    }
+    let path = Path::new(name_or_path);
+    let text = read_scene_file(path).ok()?;
+    let table: toml::Table = toml::from_str(&text).ok()?;
+    let model = table.get("model")?.as_str()?;
+    models
+        .contains(&model)
+        .then(|| from_toml(&text, &format!("'{}'", path.display())))
+}
+
+/// Parse a scene of type `S`; `origin` names the source in error messages.
+fn from_toml<S: DeserializeOwned>(text: &str, origin: &str) -> Result<S, SceneError> {
+    toml::from_str(text).map_err(|source| SceneError::Parse {
+        origin: origin.into(),
+        source,
+    })
 }
 
 /// The first flag of `svi run` that a space–time scene (a field scene, a pseudospectral one)

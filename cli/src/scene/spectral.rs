@@ -31,15 +31,14 @@
 //! apply; every other run flag is an error ([`SceneError::NotApplicable`]).
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use serde::Deserialize;
 use svi::field::pseudospectral::TimeScheme;
 use svi_models::SPECTRAL_MODEL_NAMES;
 
 use crate::scene::error::SceneError;
-use crate::scene::field::{FieldRunSection, SpaceTimeFields, reject_other_flags};
-use crate::scene::limits::read_scene_file;
+use crate::scene::field::{FieldRunSection, SpaceTimeFields, load_space_time, reject_other_flags};
 use crate::scene::overrides::Overrides;
 
 /// The built-in pseudospectral scenes, as (name, TOML text).
@@ -149,30 +148,7 @@ impl SpectralScene {
     /// The pseudospectral scene `name_or_path` names: a built-in one, or a scene file whose
     /// `model` is a complex field model; `None` for anything else.
     pub fn load(name_or_path: &str) -> Option<Result<SpectralScene, SceneError>> {
-        if let Some((name, text)) = SPECTRAL_SCENES
-            .iter()
-            .find(|(name, _)| *name == name_or_path)
-        {
-            return Some(SpectralScene::from_toml(
-                text,
-                &format!("built-in scene '{name}'"),
-            ));
-        }
-        let path = Path::new(name_or_path);
-        let text = read_scene_file(path).ok()?;
-        let table: toml::Table = toml::from_str(&text).ok()?;
-        let model = table.get("model")?.as_str()?;
-        SPECTRAL_MODEL_NAMES
-            .contains(&model)
-            .then(|| SpectralScene::from_toml(&text, &format!("'{}'", path.display())))
-    }
-
-    /// Parse a pseudospectral scene; `origin` names the source in error messages.
-    pub fn from_toml(text: &str, origin: &str) -> Result<SpectralScene, SceneError> {
-        toml::from_str(text).map_err(|source| SceneError::Parse {
-            origin: origin.into(),
-            source,
-        })
+        load_space_time(name_or_path, SPECTRAL_SCENES, SPECTRAL_MODEL_NAMES)
     }
 
     /// The scene's time scheme.
