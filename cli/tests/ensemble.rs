@@ -337,3 +337,33 @@ fn plots_draw_a_sweep_and_a_heat_map() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&missing.stderr).contains("no column 'nothing'"));
 }
+
+/// `--max-steps` bounds every member: an adaptive member that needs more steps is a row with
+/// status `too_many_steps` (and `steps` at the budget); the others run.
+#[test]
+fn the_step_budget_bounds_every_member() {
+    let scratch = Scratch::new("ensemble-budget");
+    let (status, rows) = table(
+        &[
+            "kepler",
+            "--param",
+            "e=0.1,0.95",
+            "--adapt",
+            "step",
+            "--tol",
+            "1e-10",
+            "--t-end",
+            "20",
+            "--max-steps",
+            "300",
+        ],
+        &scratch,
+        "budget.csv",
+    );
+    assert_eq!(status, 1);
+    assert_eq!(rows.len(), 2);
+    assert_eq!(rows[0]["status"], "ok", "{:?}", rows[0]);
+    assert!(cell(&rows[0], "steps") <= 300.0);
+    assert_eq!(rows[1]["status"], "too_many_steps", "{:?}", rows[1]);
+    assert_eq!(cell(&rows[1], "steps"), 300.0);
+}
