@@ -95,7 +95,7 @@ pub enum Error {
         /// The bound that was exceeded.
         limit: f64,
     },
-    /// An adaptive solve used up its step budget
+    /// An adaptive or reparametrised solve used up its step budget
     /// ([`crate::stepping::solve::SolveOptions::max_steps`]) before the horizon: the steps it
     /// chose are too small for the span (a stiff or runaway problem, or a tolerance too
     /// tight for the method).

@@ -249,6 +249,13 @@ impl SolveOptions {
         }
     }
 
+    fn validate_budget(&self) -> Result<(), Error> {
+        if self.max_steps == 0 {
+            return Err(Error::invalid("max_steps", "must be at least 1"));
+        }
+        Ok(())
+    }
+
     /// [`Error::TooManySteps`] when `steps`, the steps taken so far, have used up
     /// `max_steps` (checked before each step whose count is not known in advance).
     pub(super) fn budget(&self, steps: usize, t: f64) -> Result<(), Error> {
@@ -288,9 +295,7 @@ impl SolveOptions {
     /// without recovery (a failed τ-step ends the run), and the step budget.
     pub(super) fn validate_reparametrized(&self) -> Result<(), Error> {
         self.run.validate()?;
-        if self.max_steps == 0 {
-            return Err(Error::invalid("max_steps", "must be at least 1"));
-        }
+        self.validate_budget()?;
         if self.run.recovery != Recovery::None {
             return Err(Error::invalid(
                 "recovery",
@@ -322,9 +327,7 @@ impl SolveOptions {
         if self.max_rejections == 0 {
             return Err(Error::invalid("max_rejections", "must be at least 1"));
         }
-        if self.max_steps == 0 {
-            return Err(Error::invalid("max_steps", "must be at least 1"));
-        }
+        self.validate_budget()?;
         if let Some(h) = self.min_step {
             require_positive("min_step", h)?;
         }
