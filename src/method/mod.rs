@@ -75,6 +75,16 @@ pub struct StepReport {
     pub analyses: usize,
 }
 
+impl std::ops::AddAssign for StepReport {
+    /// The work of two steps (or stages) together.
+    fn add_assign(&mut self, other: StepReport) {
+        self.iterations += other.iterations;
+        self.evaluations += other.evaluations;
+        self.factorizations += other.factorizations;
+        self.analyses += other.analyses;
+    }
+}
+
 /// An integration method for Lagrangians on ℝᴺ.
 pub trait Method<const N: usize> {
     /// Buffers and precomputed tables of one run.

@@ -62,9 +62,7 @@ impl LocalMethod for Composition {
             state,
             (from, stage, increment),
             |t, size, from, stage| {
-                let done = self.base.local_step(model, base, t, size, from, stage)?;
-                report.iterations += done.iterations;
-                report.evaluations += done.evaluations;
+                report += self.base.local_step(model, base, t, size, from, stage)?;
                 Ok(())
             },
         )?;

@@ -216,11 +216,7 @@ impl<const N: usize> Method<N> for Composition {
             state,
             (&mut from, &mut stage, increment),
             |t, size, from, stage| {
-                let done = self.base.step(model, workspace, t, size, from, stage)?;
-                report.iterations += done.iterations;
-                report.evaluations += done.evaluations;
-                report.factorizations += done.factorizations;
-                report.analyses += done.analyses;
+                report += self.base.step(model, workspace, t, size, from, stage)?;
                 Ok(())
             },
         )?;
