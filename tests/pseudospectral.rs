@@ -3,7 +3,8 @@
 //! Gaussian; the soliton η sech(η(x − ct)) e^{i(cx + (η² − c²)t/2)}): the norm to round-off,
 //! spectral convergence in space, the orders in time (2 for the seed's linear-in-time scheme,
 //! 2s for the Galerkin SVI of degree s, 2 for Strang), the equivalence of the Galerkin SVI
-//! with Gauss collocation on the discrete action itself, no allocation per step, and the
+//! with Gauss collocation on the discrete action itself, the seed's normalisation multiplier
+//! (zero on the linear-in-time levels), no allocation per step, and the
 //! typed errors of bad input.
 
 #[path = "common/allocations.rs"]
@@ -322,6 +323,70 @@ fn galerkin_stationarity_holds_on_the_collocation_step() {
         })
         .fold(0.0, f64::max);
     assert!(gap < 1e-9, "{gap:e}");
+}
+
+#[test]
+fn the_seeds_normalisation_multiplier_vanishes_on_the_linear_in_time_scheme() {
+    // The seed's discrete action adds λ_l (N − ⟨ψ_l, ψ_l⟩) to the linear-in-time action, and
+    // its discrete Euler–Lagrange equation at level l is
+    //   D₂L_d(q_{l−1}, q_l) + D₁L_d(q_l, q_{l+1}) − 2λ_l Δx q_l = 0,  ⟨ψ_l, ψ_l⟩ = N.
+    // On the levels of the one-step scheme, straight from the density's gradient (midpoint
+    // quadrature in time): the least-squares λ_l is zero to round-off, the equation holds
+    // without it, and the constraint holds at every level.
+    let model = NlsSoliton::default();
+    let (modes, h, steps) = (64, 0.02, 40);
+    let mut integrator = Pseudospectral::new(
+        model.clone(),
+        model.domain(),
+        model.boundary(),
+        modes,
+        h,
+        options(TimeScheme::Galerkin { degree: 1 }),
+    )
+    .unwrap();
+    let mut fourier = Fourier::new(model.domain(), modes).unwrap();
+    let dx = fourier.dx();
+    let initial: Vec<Complex64> = (0..modes)
+        .map(|j| {
+            let u = model.initial_field(fourier.x(j)).0;
+            Complex64::new(u[0], u[1])
+        })
+        .collect();
+    let mut levels = Vec::new();
+    integrator
+        .run(0.0, &initial, steps, |_, _, psi| levels.push(psi.to_vec()))
+        .unwrap();
+    assert_eq!(levels.len(), steps + 1);
+    assert_eq!(levels[0], initial);
+    let norm = |psi: &[Complex64]| dx * psi.iter().map(|z| z.norm_sqr()).sum::<f64>();
+    // The size of one node's terms in the equation: Δx max |ψ| (the kinetic term θ(q)).
+    let scale = dx * levels[0].iter().map(|z| z.norm()).fold(0.0, f64::max);
+    let n0 = norm(&levels[0]);
+    let times = [0.0, 1.0];
+    let (mut multiplier_max, mut residual_max) = (0.0_f64, 0.0_f64);
+    for l in 1..steps {
+        let before = action_gradient(&model, &mut fourier, h, &times, &levels[l - 1..=l]);
+        let after = action_gradient(&model, &mut fourier, h, &times, &levels[l..=l + 1]);
+        let del: Vec<Complex64> = (0..modes).map(|j| before[1][j] + after[0][j]).collect();
+        // ∇_q (N − ⟨ψ_l, ψ_l⟩) = −2Δx q_l: λ_l by least squares in the real inner product.
+        let g: Vec<Complex64> = levels[l].iter().map(|z| -2.0 * dx * z).collect();
+        let gg: f64 = g.iter().map(|z| z.norm_sqr()).sum();
+        let rg: f64 = del
+            .iter()
+            .zip(&g)
+            .map(|(r, g)| r.re * g.re + r.im * g.im)
+            .sum();
+        let lambda = -rg / gg;
+        multiplier_max = multiplier_max.max(lambda.abs());
+        residual_max = residual_max.max(del.iter().map(|z| z.norm()).fold(0.0, f64::max));
+        assert!((norm(&levels[l]) - n0).abs() < 1e-13 * n0, "level {l}");
+    }
+    eprintln!("seed's multiplier: max |λ| {multiplier_max:e}, max DEL residual {residual_max:e}");
+    assert!(multiplier_max < 1e-12, "{multiplier_max:e}");
+    assert!(
+        residual_max < 1e-12 * scale,
+        "{residual_max:e} against {scale:e}"
+    );
 }
 
 #[test]
