@@ -144,6 +144,10 @@ fn the_bench_compares_the_galerkin_svi_with_strang() {
     assert!(text.contains("time to error 1e-8"), "{text}");
     let picture = std::fs::read_to_string(dir.join("nls-soliton.svg")).unwrap();
     assert!(picture.contains("error against FFTs"));
+    assert!(
+        picture.contains("error 1e-8"),
+        "the crossing error is drawn"
+    );
     bad_input(
         &["bench"],
         &["nls-soliton", "--methods", "rk4"],
