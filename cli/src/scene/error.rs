@@ -161,8 +161,8 @@ pub enum SceneError {
     /// A trajectory thinning factor without a file to write the trajectory to.
     #[error("output.every is set but no trajectory file is (give --out FILE or output.trajectory)")]
     EveryWithoutOutput,
-    /// The trajectory file cannot be written.
-    #[error("cannot write trajectory '{}'", path.display())]
+    /// An output file (trajectory, table, picture) or its directory cannot be written.
+    #[error("cannot write output file '{}'", path.display())]
     Write {
         /// The file.
         path: PathBuf,
