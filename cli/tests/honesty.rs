@@ -107,7 +107,10 @@ fn an_unwritable_trajectory_file_is_reported_before_the_run() {
     ]);
     assert_eq!(output.status.code(), Some(1));
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("cannot write output file '/nonexistent-directory/trajectory.csv'"), "{stderr}");
+    assert!(
+        stderr.contains("cannot write output file '/nonexistent-directory/trajectory.csv'"),
+        "{stderr}"
+    );
 }
 
 #[test]

@@ -75,7 +75,7 @@ fn the_field_is_written_as_t_x_abs_re_im_rows_and_drawn() {
     assert_eq!(rows[64][..2], [0.0, 0.0]);
     assert!((rows[64][2] - 1.0).abs() < 1e-15 && (rows[64][3] - 1.0).abs() < 1e-15);
     let picture = std::fs::read_to_string(&svg).unwrap();
-    assert!(picture.starts_with("<svg") && picture.contains("nls-soliton: u from"));
+    assert!(picture.starts_with("<svg") && picture.contains("nls-soliton: |ψ| from"));
 }
 
 #[test]

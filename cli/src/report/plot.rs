@@ -153,14 +153,15 @@ const SPACE_TIME_CELLS: (usize, usize) = (160, 120);
 /// Draw a field's space-time CSV `csv` (rows `t,x,u` or `t,x,u,…`, the nodes of one time level
 /// after another, as `svi run --out` writes a field scene; further columns are ignored, e.g.
 /// the real and imaginary parts after |ψ|) as an SVG picture at `svg`: u coloured
-/// over the (x, t) plane (blue lowest, white middle, red highest), titled `title`.
+/// over the (x, t) plane (blue lowest, white middle, red highest), titled `title` and named
+/// by its column (`abs` is drawn as |ψ|).
 pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
     let error = |reason: String| PlotError {
         path: svg.display().to_string(),
         reason,
     };
-    let (_, rows) = read_csv(csv, error)?;
-    if rows.iter().any(|row| row.len() < 3) {
+    let (header, rows) = read_csv(csv, error)?;
+    if header.len() < 3 || rows.iter().any(|row| row.len() < 3) {
         return Err(error(format!("'{}' is not a t,x,u table", csv.display())));
     }
     // The nodes of a level share its t: the level's width is the run of equal t's.
@@ -212,7 +213,12 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
     let draw = || -> Result<(), String> {
         let root = SVGBackend::new(svg, (900, 640)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let caption = format!("{title}: u from {low:.3} (blue) to {high:.3} (red)");
+        // The drawn column by its name: u for a real field, |ψ| for a complex one.
+        let name = match header[2].as_str() {
+            "abs" => "|ψ|",
+            other => other,
+        };
+        let caption = format!("{title}: {name} from {low:.3} (blue) to {high:.3} (red)");
         let mut chart = ChartBuilder::on(&root)
             .caption(caption, ("sans-serif", 18))
             .margin(12)
