@@ -92,7 +92,7 @@
 //! *Geometric Numerical Integration*, II.1.3 (Gauss collocation), IV.2 (quadratic invariants),
 //! VIII.6 (GNI_IRK2 starting values); Weideman & Herbst 1986 (split-step Fourier for NLS).
 
-use nalgebra::SVector;
+use nalgebra::{DMatrix, SVector};
 use num_dual::Dual64;
 use rustfft::num_complex::Complex64;
 
@@ -215,40 +215,13 @@ struct Workspace {
     next: Vec<Complex64>,
 }
 
-/// The inverse of the n × n complex matrix `m` (row-major) by Gauss–Jordan elimination with
-/// partial pivoting; `None` if singular.
-fn invert(mut m: Vec<Complex64>, n: usize) -> Option<Vec<Complex64>> {
-    let mut inverse = vec![Complex64::default(); n * n];
-    for i in 0..n {
-        inverse[i * n + i] = Complex64::new(1.0, 0.0);
-    }
-    for col in 0..n {
-        let pivot =
-            (col..n).max_by(|&r, &s| m[r * n + col].norm().total_cmp(&m[s * n + col].norm()))?;
-        if m[pivot * n + col].norm() == 0.0 {
-            return None;
-        }
-        for k in 0..n {
-            m.swap(col * n + k, pivot * n + k);
-            inverse.swap(col * n + k, pivot * n + k);
-        }
-        let scale = m[col * n + col].inv();
-        for k in 0..n {
-            m[col * n + k] *= scale;
-            inverse[col * n + k] *= scale;
-        }
-        for row in 0..n {
-            if row != col {
-                let factor = m[row * n + col];
-                for k in 0..n {
-                    let (mk, ik) = (m[col * n + k], inverse[col * n + k]);
-                    m[row * n + k] -= factor * mk;
-                    inverse[row * n + k] -= factor * ik;
-                }
-            }
-        }
-    }
-    Some(inverse)
+/// The inverse of the s × s matrix with entries `entry(m, j)`, row-major; `None` if singular.
+fn inverse_row_major<T: nalgebra::ComplexField + Copy>(
+    s: usize,
+    entry: impl Fn(usize, usize) -> T,
+) -> Option<Vec<T>> {
+    let inverse = DMatrix::from_fn(s, s, entry).try_inverse()?;
+    Some(inverse.transpose().iter().copied().collect())
 }
 
 /// The Lagrange basis polynomial of `nodes[j]` at τ.
@@ -276,15 +249,10 @@ impl GaussTableau {
                         .sum::<f64>();
             }
         }
-        let complex = |v: &[f64]| {
-            v.iter()
-                .map(|&x| Complex64::new(x, 0.0))
-                .collect::<Vec<_>>()
-        };
         let singular = || Error::invalid("degree", "singular Gauss collocation matrix");
-        let a_inverse = invert(complex(&a), s).ok_or_else(singular)?;
+        let a_inverse = inverse_row_major(s, |m, j| a[m * s + j]).ok_or_else(singular)?;
         let d = (0..s)
-            .map(|j| (0..s).map(|m| weights[m] * a_inverse[m * s + j].re).sum())
+            .map(|j| (0..s).map(|m| weights[m] * a_inverse[m * s + j]).sum())
             .collect();
         let mut with_zero = vec![0.0];
         with_zero.extend(&nodes);
@@ -297,13 +265,10 @@ impl GaussTableau {
         }
         let mut preconditioner = Vec::with_capacity(frequencies.len() * s * s);
         for &omega in frequencies {
-            let matrix = (0..s * s)
-                .map(|e| {
-                    let identity = if e / s == e % s { 1.0 } else { 0.0 };
-                    Complex64::new(identity, h * omega * a[e])
-                })
-                .collect();
-            preconditioner.extend(invert(matrix, s).ok_or_else(singular)?);
+            let block = inverse_row_major(s, |m, j| {
+                Complex64::new(f64::from(m == j), h * omega * a[m * s + j])
+            });
+            preconditioner.extend(block.ok_or_else(singular)?);
         }
         Ok(GaussTableau {
             stages: s,
