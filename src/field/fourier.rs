@@ -142,12 +142,19 @@ impl Fourier {
     }
 
     /// v ↦ v̂ in place (unnormalised).
+    ///
+    /// # Panics
+    /// If `values` does not hold [`Fourier::modes`] entries (or a multiple of it, which
+    /// transforms each block; [`Fourier::ffts`] then counts one): rustfft refuses other lengths.
     pub fn forward_in_place(&mut self, values: &mut [Complex64]) {
         self.forward.process_with_scratch(values, &mut self.scratch);
         self.ffts += 1;
     }
 
     /// v̂ ↦ v in place (with the 1/M of the inverse transform).
+    ///
+    /// # Panics
+    /// As [`Fourier::forward_in_place`], for a length other than a multiple of the modes.
     pub fn inverse_in_place(&mut self, values: &mut [Complex64]) {
         self.inverse.process_with_scratch(values, &mut self.scratch);
         let scale = 1.0 / self.modes as f64;
@@ -159,6 +166,9 @@ impl Fourier {
 
     /// v ↦ Dv in place: the nodal values of the derivative of the trigonometric interpolant
     /// (two FFTs). D acts on real and imaginary parts separately (it is a real matrix).
+    ///
+    /// # Panics
+    /// If `values` does not hold exactly [`Fourier::modes`] entries.
     pub fn derivative_in_place(&mut self, values: &mut [Complex64]) {
         self.forward_in_place(values);
         for (slot, value) in values.iter_mut().enumerate() {
