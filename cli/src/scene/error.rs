@@ -18,15 +18,15 @@ use crate::scene::schema::UnknownDiagnostic;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SceneError {
-    /// The scene is not valid TOML or does not fit the scene format (the source names the
-    /// line and column).
-    #[error("cannot parse scene {origin}")]
+    /// The scene is not valid TOML or does not fit the scene format. The message quotes the
+    /// parser's, which names the line and column, with its long numbers written short.
+    #[error("cannot parse scene {origin}: {}", shorten_long_numbers(&parser.to_string()))]
     Parse {
         /// Where the text came from (a file path or `built-in scene 'name'`).
         origin: String,
-        /// The TOML parser's message.
-        #[source]
-        source: toml::de::Error,
+        /// The TOML parser's error. Not the error's `source`: its message writes a value such
+        /// as 1e-300 with all its digits, so the message above carries a shortened copy.
+        parser: toml::de::Error,
     },
     /// Neither a built-in scene name nor an existing file.
     #[error(
@@ -285,4 +285,27 @@ impl SceneError {
 /// a run (a solve that does not converge, a state that diverges, ...).
 pub fn is_bad_input(error: &svi::Error) -> bool {
     matches!(error, svi::Error::InvalidParameter { .. })
+}
+
+/// Numbers of 17 or more digits in `text` (the TOML parser writes 1e-300 as 0.000…1 with
+/// 300 zeros) rewritten in the shortest exponent form, `1e-300`; the rest unchanged.
+fn shorten_long_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        out.push_str(&rest[..start]);
+        let token = &rest[start..];
+        let end = token
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(token.len());
+        let (number, tail) = token.split_at(end);
+        let digits = number.chars().filter(char::is_ascii_digit).count();
+        match number.parse::<f64>() {
+            Ok(value) if digits >= 17 => out.push_str(&format!("{value:e}")),
+            _ => out.push_str(number),
+        }
+        rest = tail;
+    }
+    out.push_str(rest);
+    out
 }

@@ -160,9 +160,9 @@ pub struct Scene {
 impl Scene {
     /// Parse a scene from TOML and check it; `origin` names the source in error messages.
     pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|source| SceneError::Parse {
+        let scene: Scene = toml::from_str(text).map_err(|parser| SceneError::Parse {
             origin: origin.into(),
-            source,
+            parser,
         })?;
         scene.check()?;
         Ok(scene)
@@ -1100,32 +1100,49 @@ pub(crate) mod tests {
     fn scene_format_errors_name_the_line() {
         let text = "model = \"kepler\"\n[run]\nh = 0.1\nstep = 3\n";
         let error = Scene::from_toml(text, "'test.toml'").unwrap_err();
-        let SceneError::Parse { origin, source } = &error else {
+        let SceneError::Parse { origin, parser } = &error else {
             panic!("{error}")
         };
         assert_eq!(origin, "'test.toml'");
-        let message = source.to_string();
+        let message = parser.to_string();
         assert!(message.contains("line 4"), "{message}");
         assert!(message.contains("step"), "{message}");
+    }
+
+    #[test]
+    fn a_parse_error_writes_long_numbers_short() {
+        // The TOML parser writes the float 1e-300 with its 300 digits; the message does not.
+        let text = "model = \"kepler\"\n[method]\nname = 1e-300\n";
+        let message = Scene::from_toml(text, "'t.toml'").unwrap_err().to_string();
+        assert!(
+            message.starts_with("cannot parse scene 't.toml': "),
+            "{message}"
+        );
+        assert!(message.contains("line 3"), "{message}");
+        assert!(message.contains("floating point `1e-300`"), "{message}");
+        assert!(message.len() < 300, "{message}");
+        let text = "model = \"kepler\"\n[run]\nh = \"1e-22\"\nt_end = 123456789012345678901234.5\n";
+        let message = Scene::from_toml(text, "t").unwrap_err().to_string();
+        assert!(message.contains("string \"1e-22\""), "{message}");
     }
 
     #[test]
     fn unknown_method_and_diagnostic_names_are_listed() {
         let error =
             Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk4\"\n", "t").unwrap_err();
-        let SceneError::Parse { source, .. } = &error else {
+        let SceneError::Parse { parser, .. } = &error else {
             panic!("{error}")
         };
         assert!(
-            source
+            parser
                 .to_string()
                 .contains("unknown method 'rk4' (known: svi, svi-newton, sc, symplectic-euler,")
         );
         let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
-        let SceneError::Parse { source, .. } = Scene::from_toml(text, "t").unwrap_err() else {
+        let SceneError::Parse { parser, .. } = Scene::from_toml(text, "t").unwrap_err() else {
             panic!()
         };
-        let message = source.to_string();
+        let message = parser.to_string();
         assert!(
             message.contains("unknown diagnostic 'angular'"),
             "{message}"
