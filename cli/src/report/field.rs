@@ -65,18 +65,9 @@ pub struct FieldSummary {
 
 impl fmt::Display for FieldSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parameters: Vec<String> = self
-            .parameters
-            .0
-            .iter()
-            .map(|(name, value)| format!("{name} = {value}"))
-            .collect();
         let optional = |value: Option<f64>| value.map_or("n/a".into(), |v| format!("{v:.3e}"));
         let mut rows = vec![
-            (
-                "model",
-                format!("{} ({})", self.model, parameters.join(", ")),
-            ),
+            ("model", format!("{} ({})", self.model, self.parameters)),
             (
                 "method",
                 format!(

@@ -68,17 +68,8 @@ pub struct SpectralSummary {
 
 impl fmt::Display for SpectralSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parameters: Vec<String> = self
-            .parameters
-            .0
-            .iter()
-            .map(|(name, value)| format!("{name} = {value}"))
-            .collect();
         let mut rows = vec![
-            (
-                "model",
-                format!("{} ({})", self.model, parameters.join(", ")),
-            ),
+            ("model", format!("{} ({})", self.model, self.parameters)),
             (
                 "method",
                 format!(

@@ -437,6 +437,18 @@ pub struct AdaptivitySummary {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parameters(pub Vec<(&'static str, f64)>);
 
+impl fmt::Display for Parameters {
+    /// `name = value, …` in the model's order, each value as [`Float`] writes it (1e-300, not
+    /// its 300 digits).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, (name, value)) in self.0.iter().enumerate() {
+            let separator = if i == 0 { "" } else { ", " };
+            write!(f, "{separator}{name} = {}", Float(*value))?;
+        }
+        Ok(())
+    }
+}
+
 impl Serialize for Parameters {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeMap;
@@ -524,21 +536,12 @@ impl Summary {
 impl fmt::Display for Summary {
     /// An aligned block of labelled lines, the labels as wide as the longest plus two.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parameters: Vec<String> = self
-            .parameters
-            .0
-            .iter()
-            .map(|(name, value)| format!("{name} = {value}"))
-            .collect();
         let retries = match self.retries {
             Some(retries) if retries > 0 => format!(", {retries} steps retried with h/2"),
             _ => String::new(),
         };
         let mut rows = vec![
-            (
-                "model",
-                format!("{} ({})", self.model, parameters.join(", ")),
-            ),
+            ("model", format!("{} ({})", self.model, self.parameters)),
             ("method", self.method_line()),
             ("step h", Float(self.h).to_string()),
             (
@@ -597,5 +600,17 @@ impl fmt::Display for Summary {
             )?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parameters_read_as_name_value_pairs_with_short_numbers() {
+        let parameters = Parameters(vec![("e", 0.9), ("mu", 1.0), ("omega", 1e-300)]);
+        assert_eq!(parameters.to_string(), "e = 0.9, mu = 1, omega = 1e-300");
+        assert_eq!(Parameters(Vec::new()).to_string(), "");
     }
 }
