@@ -289,7 +289,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             if !u.iter().chain(v.iter()).all(|x| x.is_finite()) {
                 return Err(Error::invalid(
                     "initial",
-                    format!("the initial field is not finite at x = {}", mesh.x(n)),
+                    format!("the initial field is not finite at x = {:?}", mesh.x(n)),
                 ));
             }
         }
@@ -448,7 +448,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
                 return Err(Error::invalid(
                     "structure",
                     format!(
-                        "the density is declared ConstantMass but ∂²ℒ/∂u_t² is not one constant matrix independent of u and u_x (at x = {x})"
+                        "the density is declared ConstantMass but ∂²ℒ/∂u_t² is not one constant matrix independent of u and u_x (at x = {x:?})"
                     ),
                 ));
             }
@@ -458,7 +458,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
             let Some(inverse) = invert_small(&tt) else {
                 return Err(Error::invalid(
                     "structure",
-                    format!("∂²ℒ/∂u_t² is singular at x = {x}"),
+                    format!("∂²ℒ/∂u_t² is singular at x = {x:?}"),
                 ));
             };
             let stiffness = inverse * (xx * (-4.0 / (dx * dx)) - uu);
@@ -468,7 +468,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
                 return Err(Error::invalid(
                     "dt",
                     format!(
-                        "Δt = {dt} exceeds the stability limit 2/√μ = {} of the explicit scheme at x = {x} (wave speed c = {speed}, Δx/c = {}); take a smaller Δt or the midpoint quadrature",
+                        "Δt = {dt:?} exceeds the stability limit 2/√μ = {:?} of the explicit scheme at x = {x:?} (wave speed c = {speed:?}, Δx/c = {:?}); take a smaller Δt or the midpoint quadrature",
                         2.0 / mu.sqrt(),
                         dx / speed
                     ),

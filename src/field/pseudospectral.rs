@@ -475,7 +475,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                 return Err(Error::invalid(
                     "density",
                     format!(
-                        "∂ℒ/∂u_t ≠ c(b, −a) at x = {x}: not first order in time as \
+                        "∂ℒ/∂u_t ≠ c(b, −a) at x = {x:?}: not first order in time as \
                          c(b a_t − a b_t) − W(x, t, u, u_x)"
                     ),
                 ));
@@ -492,7 +492,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
                         "method",
                         format!(
                             "Strang splitting needs W = (α/2)|u_x|² + P(x, t, |u|²); the density \
-                             breaks it at x = {x}"
+                             breaks it at x = {x:?}"
                         ),
                     ));
                 }
@@ -537,7 +537,7 @@ impl<F: LagrangianDensity<2>> Pseudospectral<F> {
             return Err(Error::invalid(
                 "initial",
                 format!(
-                    "the initial field is not finite at x = {}",
+                    "the initial field is not finite at x = {:?}",
                     self.fourier.x(j)
                 ),
             ));

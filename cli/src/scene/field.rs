@@ -184,9 +184,9 @@ pub fn load_space_time<S: DeserializeOwned>(
 
 /// Parse a scene of type `S`; `origin` names the source in error messages.
 fn from_toml<S: DeserializeOwned>(text: &str, origin: &str) -> Result<S, SceneError> {
-    toml::from_str(text).map_err(|source| SceneError::Parse {
+    toml::from_str(text).map_err(|parser| SceneError::Parse {
         origin: origin.into(),
-        source,
+        parser,
     })
 }
 
@@ -247,7 +247,7 @@ impl SpaceTimeFields<'_> {
                 if value.fract() != 0.0 || *value < 0.0 || *value > usize::MAX as f64 {
                     return Err(SceneError::InvalidOption {
                         option: "points",
-                        reason: format!("{value} is not a whole number of {unit}"),
+                        reason: format!("{value:?} is not a whole number of {unit}"),
                     });
                 }
                 *self.points = Some(*value as usize);
