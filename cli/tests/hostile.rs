@@ -1,5 +1,5 @@
 //! The hostile suite of the command line (issue #14): scene files (structured TOML with
-//! hostile values, and arbitrary text), hostile numbers in every numeric option of `svi run`,
+//! hostile values, and arbitrary text; field and pseudospectral scenes too), hostile numbers in every numeric option of `svi run`,
 //! `svi bench`, `svi stability` and `svi stress`, hostile file paths, and the binary itself.
 //!
 //! In process, through the parsers and checks the binary uses (the commands' clap structs,
@@ -577,6 +577,256 @@ fn arbitrary_scene_text_never_panics() {
     run_counting("arbitrary text", 3000, &OUTCOMES, text, |text| {
         parse_and_maybe_run(&text)
     });
+}
+
+// ---- field and pseudospectral scene files -------------------------------------------------
+
+/// A field or pseudospectral scene: one of their models (or an unknown one), hostile
+/// parameters, a method, the mesh, step and horizon, mostly valid and some hostile; and
+/// `svi run` flags to apply on top.
+fn space_time_scene_text() -> impl Strategy<Value = (String, Vec<String>)> {
+    let model = select(vec![
+        "wave",
+        "sine-gordon-kink",
+        "sine-gordon-breather",
+        "phi4-kink",
+        "schrodinger-packet",
+        "nls-soliton",
+        "kepler",
+    ]);
+    let parameter = (
+        select(vec![
+            "c", "speed", "position", "omega", "sigma", "k0", "x0", "eta", "mass",
+        ]),
+        mostly(select(vec!["0.5", "1.0", "-0.3", "2.0"]).prop_map(String::from)),
+    );
+    let method = prop_oneof![
+        2 => Just(None),
+        3 => select(vec!["\"midpoint\"", "\"svi:2\"", "\"svi:4\"", "\"svi:4/3\"", "\"strang\""])
+            .prop_map(|m| Some(m.to_string())),
+        1 => toml_value().prop_map(Some),
+    ];
+    let points = prop_oneof![
+        1 => Just(None),
+        3 => mostly(select(vec!["8", "16", "33", "64", "101"]).prop_map(String::from)).prop_map(Some),
+    ];
+    let quadrature = prop_oneof![
+        3 => Just(None),
+        1 => mostly(select(vec!["\"trapezoid\"", "\"midpoint\""]).prop_map(String::from))
+            .prop_map(Some),
+    ];
+    let h = mostly(select(vec!["0.01", "0.02", "0.05"]).prop_map(String::from));
+    let t_end = mostly(select(vec!["0.1", "0.5", "1.0"]).prop_map(String::from));
+    let text = (model, few(parameter), method, points, quadrature, h, t_end).prop_map(
+        |(model, parameters, method, points, quadrature, h, t_end)| {
+            let mut text = format!("model = \"{model}\"\n");
+            if let Some(method) = method {
+                text.push_str(&format!("method = {method}\n"));
+            }
+            text.push_str("[parameters]\n");
+            for (name, value) in parameters {
+                text.push_str(&format!("{name} = {value}\n"));
+            }
+            text.push_str("[mesh]\n");
+            if let Some(points) = points {
+                text.push_str(&format!("points = {points}\n"));
+            }
+            if let Some(quadrature) = quadrature {
+                text.push_str(&format!("quadrature = {quadrature}\n"));
+            }
+            text.push_str(&format!("[run]\nh = {h}\nt_end = {t_end}\n"));
+            text
+        },
+    );
+    // `svi run`'s flags on top: --param (the mesh points too), --h, --t-end, --every, and
+    // --method (on a field scene an error naming it).
+    let mode = Mode::InProcess;
+    let flags = prop_oneof![
+        1 => Just(Vec::new()),
+        1 => vec![
+            flag(
+                "--param",
+                (
+                    select(vec!["points", "eta", "c", "speed", "omega", "sigma"]),
+                    mode.number_or(&["16", "64", "0.5"]),
+                )
+                    .prop_map(|(name, value)| format!("{name}={value}"))
+                    .boxed(),
+            ),
+            flag("--h", mode.number_or(&["0.01", "0.05"])),
+            flag("--t-end", mode.number_or(&["0.2", "1"])),
+            flag("--every", mode.number_or(&["1", "3"])),
+            flag(
+                "--method",
+                select(vec!["midpoint", "svi:3", "svi:4/3", "verlet"])
+                    .prop_map(String::from)
+                    .boxed(),
+            ),
+        ]
+        .prop_map(|flags| flags.concat()),
+    ];
+    (text, flags)
+}
+
+/// Most nodes × time levels of a hostile field or pseudospectral run in process.
+const MAX_TEST_NODE_LEVELS: f64 = 2e5;
+
+/// Nodes × time levels of a run of `model` with `parameters` on `points` nodes with step h
+/// to t_end (the model's defaults where absent), from the model's own defaults; `None` for
+/// an unknown model or a rejected parameter (the run is then rejected at once).
+fn node_levels(
+    model: &str,
+    parameters: &std::collections::BTreeMap<String, f64>,
+    points: Option<usize>,
+    run: &svi_cli::scene::field::FieldRunSection,
+) -> Option<f64> {
+    struct Defaults<'a>(&'a std::collections::BTreeMap<String, f64>);
+    fn defaults<const C: usize>(
+        mut model: impl svi::model::density::FieldDefaults<C>,
+        parameters: &std::collections::BTreeMap<String, f64>,
+    ) -> Option<(usize, f64, f64)> {
+        for (name, value) in parameters {
+            model.set_parameter(name, *value).ok()?;
+        }
+        Some((
+            model.default_points(),
+            model.default_step(),
+            model.default_horizon(),
+        ))
+    }
+    impl svi_models::FieldModelVisitor for Defaults<'_> {
+        type Output = Option<(usize, f64, f64)>;
+        fn visit<M: svi_models::FieldZooModel>(self, model: M) -> Self::Output {
+            defaults(model, self.0)
+        }
+    }
+    impl svi_models::SpectralModelVisitor for Defaults<'_> {
+        type Output = Option<(usize, f64, f64)>;
+        fn visit<M: svi_models::SpectralZooModel>(self, model: M) -> Self::Output {
+            defaults(model, self.0)
+        }
+    }
+    let (default_points, default_step, default_horizon) =
+        svi_models::visit_field_model(model, Defaults(parameters))
+            .or_else(|| svi_models::visit_spectral_model(model, Defaults(parameters)))??;
+    let h = run.h.unwrap_or(default_step);
+    let t_end = run.t_end.unwrap_or(default_horizon);
+    Some(points.unwrap_or(default_points) as f64 * (t_end / h).ceil())
+}
+
+/// Whether a run of `node_levels` is short enough to run here; a step or span the run
+/// rejects at once (not finite, not positive) is short too.
+fn short_space_time(node_levels: Option<f64>) -> bool {
+    node_levels.is_none_or(|work| !(work.is_finite() && work > 0.0) || work <= MAX_TEST_NODE_LEVELS)
+}
+
+/// Load `text` from a file as the binary does (a field scene, else a pseudospectral one, else
+/// a scene on ℝᴺ or SO(3), which such a file is not); run it when it is short. Never panics;
+/// a failure is a message, a success finite numbers.
+fn load_and_maybe_run_space_time(
+    text: &str,
+    args: &[String],
+    file: &std::path::Path,
+) -> Result<usize, TestCaseError> {
+    use svi_cli::scene::field::FieldScene;
+    use svi_cli::scene::spectral::SpectralScene;
+    let mut context = args.to_vec();
+    context.push(text.to_string());
+    let overrides = match RunCli::try_parse_from(
+        ["run", "scene.toml"]
+            .into_iter()
+            .chain(args.iter().map(String::as_str)),
+    ) {
+        Ok(parsed) => parsed.overrides,
+        Err(error) => {
+            check_message(&error.to_string(), &context)?;
+            return Ok(0);
+        }
+    };
+    std::fs::write(file, text).map_err(|e| TestCaseError::fail(e.to_string()))?;
+    let path = file.to_str().unwrap_or_default();
+    let rejected = |error: SceneError| -> Result<usize, TestCaseError> {
+        check_error(&error, &context)?;
+        Ok(0)
+    };
+    let outcome = if let Some(scene) = FieldScene::load(path) {
+        let scene = match scene.and_then(|mut scene| scene.apply(&overrides).map(|()| scene)) {
+            Ok(scene) => scene,
+            Err(error) => return rejected(error),
+        };
+        let work = node_levels(
+            &scene.model,
+            &scene.parameters,
+            scene.mesh.points,
+            &scene.run,
+        );
+        if !short_space_time(work) {
+            return Ok(1);
+        }
+        scene
+            .run()
+            .map(|summary| serde_json::to_value(summary).unwrap())
+    } else if let Some(scene) = SpectralScene::load(path) {
+        let scene = match scene.and_then(|mut scene| scene.apply(&overrides).map(|()| scene)) {
+            Ok(scene) => scene,
+            Err(error) => return rejected(error),
+        };
+        let work = node_levels(
+            &scene.model,
+            &scene.parameters,
+            scene.mesh.points,
+            &scene.run,
+        );
+        let cheap_scheme = scene.scheme().map_or(true, |scheme| scheme.order() <= 8);
+        if !(short_space_time(work) && cheap_scheme) {
+            return Ok(1);
+        }
+        scene
+            .run()
+            .map(|summary| serde_json::to_value(summary).unwrap())
+    } else {
+        return match Scene::load(path) {
+            Ok(scene) => Err(TestCaseError::fail(format!("{text} loaded as {scene:?}"))),
+            Err(error) => rejected(error),
+        };
+    };
+    match outcome {
+        Ok(json) => {
+            // Every number a successful run reports is finite: serde prints NaN and ±∞ as
+            // null, so null is allowed only where a field is optional.
+            const OPTIONAL: [&str; 3] = ["multisymplectic_residual_max", "trajectory", "error"];
+            for (key, value) in json.as_object().into_iter().flatten() {
+                prop_assert!(
+                    value.as_f64().is_some_and(f64::is_finite)
+                        || !(value.is_number() || value.is_null())
+                        || (value.is_null() && OPTIONAL.contains(&key.as_str())),
+                    "{}: {} = {}",
+                    text,
+                    key,
+                    value
+                );
+            }
+            prop_assert_eq!(&json["status"], "ok");
+        }
+        Err(error) => check_error(&error, &context)?,
+    }
+    Ok(2)
+}
+
+#[test]
+fn hostile_field_and_pseudospectral_scenes_never_panic() {
+    let scratch = Scratch::new("hostile-space-time");
+    let file = scratch.join("scene.toml");
+    let counts = run_counting(
+        "field and pseudospectral scenes",
+        1500,
+        &OUTCOMES,
+        space_time_scene_text(),
+        |(text, args)| load_and_maybe_run_space_time(&text, &args, &file),
+    );
+    let total: usize = counts.iter().sum();
+    assert!(counts[0] > total / 20, "{counts:?}");
+    assert!(counts[2] > total / 10, "{counts:?}");
 }
 
 // ---- svi run's arguments ------------------------------------------------------------------
