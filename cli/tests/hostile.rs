@@ -1,6 +1,7 @@
 //! The hostile suite of the command line (issue #14): scene files (structured TOML with
-//! hostile values, and arbitrary text; field and pseudospectral scenes too), hostile numbers in every numeric option of `svi run`,
-//! `svi bench`, `svi stability` and `svi stress`, hostile file paths, and the binary itself.
+//! hostile values, and arbitrary text; field and pseudospectral scenes too), hostile numbers
+//! in every numeric option of `svi run`, `svi bench`, `svi stability` and `svi stress`,
+//! hostile file paths, and the binary itself.
 //!
 //! In process, through the parsers and checks the binary uses (the commands' clap structs,
 //! [`Scene::load`], `apply`, the commands' `check`), nothing may panic; a rejection is a
