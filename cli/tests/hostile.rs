@@ -750,41 +750,35 @@ fn load_and_maybe_run_space_time(
         check_error(&error, &context)?;
         Ok(0)
     };
+    // Apply the flags, skip a long run (or a costly `cheap`-failing one), run the rest.
+    macro_rules! run_if_short {
+        ($loaded:expr, $cheap:expr) => {{
+            let scene = match $loaded.and_then(|mut scene| scene.apply(&overrides).map(|()| scene))
+            {
+                Ok(scene) => scene,
+                Err(error) => return rejected(error),
+            };
+            let work = node_levels(
+                &scene.model,
+                &scene.parameters,
+                scene.mesh.points,
+                &scene.run,
+            );
+            if !(short_space_time(work) && $cheap(&scene)) {
+                return Ok(1);
+            }
+            scene
+                .run()
+                .map(|summary| serde_json::to_value(summary).unwrap())
+        }};
+    }
     let outcome = if let Some(scene) = FieldScene::load(path) {
-        let scene = match scene.and_then(|mut scene| scene.apply(&overrides).map(|()| scene)) {
-            Ok(scene) => scene,
-            Err(error) => return rejected(error),
-        };
-        let work = node_levels(
-            &scene.model,
-            &scene.parameters,
-            scene.mesh.points,
-            &scene.run,
-        );
-        if !short_space_time(work) {
-            return Ok(1);
-        }
-        scene
-            .run()
-            .map(|summary| serde_json::to_value(summary).unwrap())
+        run_if_short!(scene, |_: &FieldScene| true)
     } else if let Some(scene) = SpectralScene::load(path) {
-        let scene = match scene.and_then(|mut scene| scene.apply(&overrides).map(|()| scene)) {
-            Ok(scene) => scene,
-            Err(error) => return rejected(error),
-        };
-        let work = node_levels(
-            &scene.model,
-            &scene.parameters,
-            scene.mesh.points,
-            &scene.run,
-        );
-        let cheap_scheme = scene.scheme().map_or(true, |scheme| scheme.order() <= 8);
-        if !(short_space_time(work) && cheap_scheme) {
-            return Ok(1);
-        }
-        scene
-            .run()
-            .map(|summary| serde_json::to_value(summary).unwrap())
+        // High Galerkin degrees cost many stages per step.
+        run_if_short!(scene, |scene: &SpectralScene| scene
+            .scheme()
+            .map_or(true, |scheme| scheme.order() <= 8))
     } else {
         return match Scene::load(path) {
             Ok(scene) => Err(TestCaseError::fail(format!("{text} loaded as {scene:?}"))),
