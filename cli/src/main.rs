@@ -77,9 +77,65 @@ fn quit_quietly_when_the_reader_goes() {
     }
 }
 
+/// Remove the temporaries of outputs not yet written when Ctrl-C or SIGTERM ends the run, so
+/// an interrupted run leaves every output file as it was and no stray file beside it; exit
+/// with status 130, as a shell reports an interrupted command.
+fn clean_up_when_interrupted() {
+    // A handler that cannot be installed (one is already) leaves the default: the process
+    // ends, the outputs are still untouched and only a hidden `.svi-*.tmp` file may remain.
+    let _ = ctrlc::set_handler(|| {
+        svi_cli::report::output::remove_pending();
+        std::process::exit(130);
+    });
+}
+
+/// The arguments, or the exit status of a command line the parser rejects or answers itself
+/// (`--help`, `--version`). A rejected command line with `--json` also prints the one JSON
+/// failure object of bad input on stdout, as every failure of a command with `--json` does.
+fn parse_arguments() -> Result<Cli, ExitCode> {
+    let error = match Cli::try_parse() {
+        Ok(cli) => return Ok(cli),
+        Err(error) => error,
+    };
+    let code = error.exit_code();
+    let answered = matches!(
+        error.kind(),
+        clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
+    );
+    if !answered && std::env::args_os().any(|arg| arg == "--json") {
+        let text = error.render().to_string();
+        let message = text
+            .lines()
+            .next()
+            .unwrap_or("invalid arguments")
+            .trim_start_matches("error: ")
+            .to_string();
+        let report = svi_cli::report::summary::ErrorReport {
+            kind: "invalid_input",
+            message,
+            step: None,
+            t: None,
+        };
+        let object = command::run::failure_object(&report);
+        // Nothing is left to report a failed write with: the exit status still says it.
+        let _ = svi_cli::report::output::print(format_args!("{object}\n"));
+    }
+    // Help, version and the parser's message, written as clap writes them; a failed write
+    // (a full device) is an error, not a panic.
+    if error.print().is_err() {
+        svi_cli::report::output::warn("error: cannot write to standard output");
+        return Err(ExitCode::from(1));
+    }
+    Err(ExitCode::from(u8::try_from(code).unwrap_or(2)))
+}
+
 fn main() -> ExitCode {
     quit_quietly_when_the_reader_goes();
-    let cli = Cli::parse();
+    clean_up_when_interrupted();
+    let cli = match parse_arguments() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
     let result = match cli.command {
         Command::Run(args) => {
             let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
@@ -91,10 +147,8 @@ fn main() -> ExitCode {
                 command::run::execute(name, &args.overrides, args.json, args.strict)
             }
         }
-        Command::List => {
-            command::list::print();
-            Ok(())
-        }
+        Command::List => svi_cli::report::output::print(command::list::listing())
+            .map_err(|error| SceneError::from(error).into()),
         Command::Bench(args) => match args
             .scene
             .as_deref()
@@ -111,7 +165,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("error: {error:#}");
+            svi_cli::report::output::warn(format_args!("error: {error:#}"));
             ExitCode::from(exit_status(&error))
         }
     }

@@ -13,7 +13,6 @@
 //! run up to its last good state, for a run that failed after it started).
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use clap::ValueEnum;
 use pyo3::create_exception;
@@ -246,25 +245,18 @@ fn run(
     if let Some(initial) = initial {
         set_initial(&mut loaded, initial)?;
     }
-    // The trajectory is the run's own CSV file (its numbers read back exactly), in a
-    // scratch file removed afterwards.
-    let file = trajectory.then(scratch_file);
-    loaded.output.trajectory = file.clone();
+    // The trajectory is the rows the run path writes, kept in memory: no file is written.
+    loaded.output.trajectory = None;
+    loaded.output.plot = None;
+    loaded.output.record = trajectory;
     loaded.output.every = every;
     loaded.check().map_err(failure)?;
     let result = py.detach(|| loaded.run(progress));
-    let rows = match &file {
-        Some(path) => {
-            let text = std::fs::read_to_string(path);
-            let _ = std::fs::remove_file(path);
-            match (&result, text) {
-                (Ok(_), Ok(text)) => Some(parse_trajectory(&text)?),
-                _ => None,
-            }
-        }
-        None => None,
-    };
     let mut summary = result.map_err(failure)?;
+    let rows = summary
+        .recorded
+        .take()
+        .map(|recorded| (recorded.columns, recorded.rows));
     summary.trajectory = None;
     let json =
         serde_json::to_string(&summary).map_err(|error| invalid("summary", error.to_string()))?;
@@ -287,34 +279,6 @@ fn load(name: &str) -> PyResult<Scene> {
         }
         result => result.map_err(failure),
     }
-}
-
-/// A fresh scratch file for a trajectory.
-fn scratch_file() -> PathBuf {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    static NEXT: AtomicUsize = AtomicUsize::new(0);
-    let n = NEXT.fetch_add(1, Ordering::Relaxed);
-    std::env::temp_dir().join(format!("svi-python-{}-{n}.csv", std::process::id()))
-}
-
-/// The header and rows of a trajectory CSV.
-fn parse_trajectory(text: &str) -> PyResult<Trajectory> {
-    let mut lines = text.lines();
-    let header = lines
-        .next()
-        .unwrap_or("")
-        .split(',')
-        .map(String::from)
-        .collect();
-    let rows = lines
-        .map(|line| {
-            line.split(',')
-                .map(|x| x.parse::<f64>())
-                .collect::<Result<Vec<f64>, _>>()
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|error| invalid("trajectory", error.to_string()))?;
-    Ok((header, rows))
 }
 
 /// An ensemble's table chunk: (total members, column names, rows).
@@ -501,10 +465,11 @@ fn work_precision(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
         .unwrap_or(svi_cli::DEFAULT_SCENE);
     let mut scene = load(name)?;
     scene.apply(&overrides).map_err(failure)?;
-    let records = py
+    let sweeps = py
         .detach(|| svi_cli::command::bench::work_precision(&scene, &options))
         .map_err(failure)?;
-    serde_json::to_string(&records).map_err(|error| invalid("bench", error.to_string()))
+    let object = serde_json::json!({ "records": sweeps.records, "failures": sweeps.failures });
+    Ok(object.to_string())
 }
 
 /// The svi version.

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -43,6 +44,7 @@ __all__ = [
     "StepSizeTooSmallError",
     "TooManyStepsError",
     "SviError",
+    "SviWarning",
     "bench",
     "ensemble",
     "models",
@@ -90,6 +92,11 @@ class SviError(Exception):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(kind={self.kind!r}, message={self.message!r}, step={self.step!r}, t={self.t!r})"
+
+
+class SviWarning(UserWarning):
+    """A warning of svi: part of a result is missing (a method of :func:`bench` that measured
+    no point), or a run's health check failed."""
 
 
 class InvalidParameterError(SviError, ValueError):
@@ -581,7 +588,9 @@ def bench(
 ) -> Any:
     """A work–precision sweep, as ``svi bench``: one row per (method, step count or tolerance)
     with the final error, energy and momentum errors, evaluations, iterations and median wall
-    time. The scene's model needs an exact solution."""
+    time. The scene's model needs an exact solution. A method none of whose points could be
+    measured is left out of the table with an :class:`SviWarning` naming its error; the call
+    raises :class:`SviError` only when no method measured any point."""
     args = [scene]
     if methods is not None:
         args += ["--methods", methods if isinstance(methods, str) else ",".join(methods)]
@@ -596,7 +605,14 @@ def bench(
     for flag, value in (("--batches", batches), ("--min-batch", min_batch), ("--target", target), ("--max-run", max_run)):
         if value is not None:
             args += [flag, str(value)]
-    records = json.loads(_call(_svi.bench, args))
+    outcome = json.loads(_call(_svi.bench, args))
+    for failure in outcome["failures"]:
+        warnings.warn(
+            f"{failure['method']} measured no point ({failure['kind']}): {failure['message']}",
+            SviWarning,
+            stacklevel=2,
+        )
+    records = outcome["records"]
     columns = list(records[0]) if records else []
     table = {name: _column([record[name] for record in records]) for name in columns}
     return _frame(table, columns, as_frame)

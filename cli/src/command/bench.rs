@@ -42,7 +42,8 @@
 use crate::command::molly;
 use crate::command::peers::{FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
 use crate::report::csv;
-use crate::report::plot::{Panel, Series, write_svg};
+use crate::report::output::{self, OutputDirectory};
+use crate::report::plot::{Panel, Series, render_svg};
 use crate::scene::builtin::DEFAULT_SCENE;
 use crate::scene::limits::{
     self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS, MIN_PEER_TOLERANCE,
@@ -53,7 +54,7 @@ use anyhow::Context;
 use nalgebra::SVector;
 use serde::Serialize;
 use std::fmt;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::Instant;
 
@@ -472,9 +473,33 @@ pub struct Record {
     pub seconds: f64,
 }
 
-/// Sweep every method of `options` on `scene`. With `verbose`, every point is printed to
-/// stderr under a progress bar over the methods (drawn only on a terminal).
-pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Vec<Record>, SceneError> {
+/// A method whose sweep failed (no point of it measured): the other methods' records are
+/// kept, and this is reported beside them.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MethodFailure {
+    /// The method configuration, e.g. `svi:6`.
+    pub method: String,
+    /// The error kind, as in `svi run --json`.
+    pub kind: &'static str,
+    /// The error message.
+    pub message: String,
+}
+
+/// The outcome of a sweep: the measured points of every method, and the methods that failed.
+#[derive(Debug, Default)]
+pub struct Sweeps {
+    /// The measured points, method by method.
+    pub records: Vec<Record>,
+    /// The methods none of whose points could be measured.
+    pub failures: Vec<MethodFailure>,
+}
+
+/// Sweep every method of `options` on `scene`. A method that fails is reported in
+/// [`Sweeps::failures`] (and as a warning on stderr) while the others go on; the sweep is an
+/// error when the input is bad or when no method measured any point (the first method's
+/// error). With `verbose`, every point is printed to stderr under a progress bar over the
+/// methods (drawn only on a terminal).
+pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, SceneError> {
     options.check()?;
     scene.check()?;
     if scene.space() == SpaceKind::Rotation {
@@ -612,7 +637,7 @@ fn resolved_reference<M: ZooModel<N>, const N: usize>(
 }
 
 impl ModelVisitor for Bench<'_> {
-    type Output = Result<Vec<Record>, SceneError>;
+    type Output = Result<Sweeps, SceneError>;
 
     fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
         let (t0, initial, _, t_end) = self.scene.resolve(&mut model)?;
@@ -663,7 +688,8 @@ impl ModelVisitor for Bench<'_> {
             exact,
             coordinate,
         };
-        let mut records = Vec::new();
+        let mut sweeps = Sweeps::default();
+        let mut first_error = None;
         for spec in &self.options.methods {
             let label = spec.to_string();
             self.progress.set_message(label.clone());
@@ -679,18 +705,38 @@ impl ModelVisitor for Bench<'_> {
                 options: self.options,
                 report,
             };
-            match (Mode::of(spec), spec) {
-                (Some((method, mode)), _) => records.extend(method.visit_vector(sweep(mode))??),
+            let mut records = Vec::new();
+            let swept = match (Mode::of(spec), spec) {
+                (Some((method, mode)), _) => method
+                    .visit_vector(sweep(mode))
+                    .map_err(SceneError::from)
+                    .and_then(|swept| swept.map(|points| records.extend(points))),
                 (None, BenchMethod::Molly) => {
-                    sweep_molly(&model, &problem, self.options, report, &mut records)?
+                    sweep_molly(&model, &problem, self.options, report, &mut records)
                 }
                 (None, _) => {
-                    sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)?
+                    sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)
+                }
+            };
+            match swept {
+                Ok(()) => sweeps.records.extend(records),
+                Err(error) if error.is_bad_input() => return Err(error),
+                Err(error) => {
+                    report.warn(&format!("{label} measured no point: {error}"));
+                    sweeps.failures.push(MethodFailure {
+                        method: label.clone(),
+                        kind: crate::command::run::error_report(&error).kind,
+                        message: error.to_string(),
+                    });
+                    first_error.get_or_insert(error);
                 }
             }
             self.progress.inc(1);
         }
-        Ok(records)
+        match first_error {
+            Some(error) if sweeps.records.is_empty() => Err(error),
+            _ => Ok(sweeps),
+        }
     }
 }
 
@@ -1370,15 +1416,14 @@ pub fn to_csv(records: &[Record]) -> String {
     text
 }
 
-/// Error against time and error against evaluations, one curve per method, as SVG (runs
+/// Error against time and error against evaluations, one curve per method, as SVG text (runs
 /// with an error above 1 are left to the CSV); `coordinate` names the one coordinate the
 /// error was measured in (`--coordinate`), if any.
 pub fn plot(
     records: &[Record],
     title: &str,
     coordinate: Option<&str>,
-    path: &Path,
-) -> Result<(), crate::report::plot::PlotError> {
+) -> Result<String, crate::report::plot::PlotError> {
     let y_label = coordinate.map_or_else(
         || "final position error".to_string(),
         |name| format!("final error in {name}"),
@@ -1412,8 +1457,7 @@ pub fn plot(
         y_log: true,
         series: series(x),
     };
-    write_svg(
-        path,
+    render_svg(
         &[
             panel("run time", "seconds per run", |r| r.seconds),
             panel("evaluations", "derivative evaluations", |r| {
@@ -1438,7 +1482,9 @@ pub fn execute_args(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 /// `svi bench`: sweep `options.methods` on the scene `name` (with the parameter and horizon
-/// overrides), write `<scene>.csv` and `<scene>.svg` into `out_dir` and print the CSV.
+/// overrides), write `<scene>.csv` and `<scene>.svg` into `out_dir` (created, with its files,
+/// before the sweep) and print the CSV. A method that measured no point is a warning; the
+/// others' rows are kept.
 pub fn execute(
     name: &str,
     overrides: &Overrides,
@@ -1448,21 +1494,28 @@ pub fn execute(
     options.check()?;
     let mut scene = Scene::load(name)?;
     scene.apply(overrides)?;
-    let records = work_precision(&scene, options)
-        .with_context(|| format!("benchmark of scene '{name}' failed"))?;
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("cannot create {}", out_dir.display()))?;
     let stem = Path::new(name)
         .file_stem()
         .and_then(|s| s.to_str())
         .unwrap_or("bench");
-    let csv = out_dir.join(format!("{stem}.csv"));
-    std::fs::write(&csv, to_csv(&records))
-        .with_context(|| format!("cannot write {}", csv.display()))?;
-    let svg = out_dir.join(format!("{stem}.svg"));
-    plot(&records, stem, options.coordinate.as_deref(), &svg)?;
-    print!("{}", to_csv(&records));
-    eprintln!("wrote {} and {}", csv.display(), svg.display());
+    let (csv, svg) = (format!("{stem}.csv"), format!("{stem}.svg"));
+    let inputs: Vec<&Path> = scene.source.iter().map(PathBuf::as_path).collect();
+    let mut dir = OutputDirectory::create("--out-dir", out_dir, &[csv.clone(), svg.clone()], &inputs)
+        .map_err(SceneError::from)?;
+    let records = work_precision(&scene, options)
+        .with_context(|| format!("benchmark of scene '{name}' failed"))?
+        .records;
+    let table = to_csv(&records);
+    dir.write(&csv, table.as_bytes()).map_err(SceneError::from)?;
+    let picture = plot(&records, stem, options.coordinate.as_deref())?;
+    dir.write(&svg, picture.as_bytes()).map_err(SceneError::from)?;
+    dir.commit().map_err(SceneError::from)?;
+    output::print(&table).map_err(SceneError::from)?;
+    output::warn(format_args!(
+        "wrote {} and {}",
+        out_dir.join(&csv).display(),
+        out_dir.join(&svg).display()
+    ));
     Ok(())
 }
 
@@ -1584,7 +1637,7 @@ mod tests {
             min_batch: 0.0,
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         let svi: Vec<&Record> = records.iter().filter(|r| r.method == "svi:3/2").collect();
         assert!(svi.len() >= 3, "{records:?}");
         assert!(svi.last().unwrap().final_error < 1e-9);
@@ -1621,7 +1674,7 @@ mod tests {
             tolerances: vec![1e-8],
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         let steps: Vec<usize> = records
             .iter()
             .filter(|r| r.h.is_some())
@@ -1670,7 +1723,7 @@ mod tests {
             tolerances: vec![1e-6, 1e-8],
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         assert_eq!(
             labels(&records),
             [
@@ -1706,7 +1759,7 @@ mod tests {
             steps: vec![2, 40],
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         assert_eq!(labels(&records), [("svi:5@sundman:1", 40.0)]);
         let alone = BenchOptions {
             steps: vec![2],
@@ -1731,7 +1784,7 @@ mod tests {
             coordinate: Some("theta".into()),
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         assert_eq!(records.len(), 1);
         assert!(records[0].final_error < 1e-5, "{records:?}");
         let unknown = BenchOptions {
@@ -1767,7 +1820,7 @@ mod tests {
             tolerances: Vec::new(),
             ..single
         };
-        let records = work_precision(&scene, &sweep).unwrap();
+        let records = work_precision(&scene, &sweep).unwrap().records;
         assert!(!records.is_empty());
         assert!(records[0].parameter < 1e-3, "{records:?}");
         assert!(records.last().unwrap().final_error < 1e-3, "{records:?}");
@@ -1789,7 +1842,7 @@ mod tests {
             coordinate: Some("theta".into()),
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         assert_eq!(labels(&records), [("molly", 100.0), ("molly", 1000.0)]);
         let (coarse, fine) = (&records[0], &records[1]);
         assert!(coarse.final_error < 1.3e-5, "{coarse:?}");
@@ -1815,7 +1868,7 @@ mod tests {
             target: Some(1e-7),
             ..options
         };
-        let records = work_precision(&scene, &sweep).unwrap();
+        let records = work_precision(&scene, &sweep).unwrap().records;
         assert!(records.len() >= 5, "{records:?}");
         assert!(records.windows(2).all(|pair| pair[1].steps > pair[0].steps));
         assert!(records.last().unwrap().final_error < 1e-7, "{records:?}");
@@ -1867,7 +1920,7 @@ mod tests {
             tolerances: vec![1e-4, 1e-7, 1e-10],
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         assert_eq!(
             labels(&records),
             [("radau5", 1e-4), ("radau5", 1e-7), ("radau5", 1e-10)]
@@ -1891,7 +1944,7 @@ mod tests {
             target: Some(1e-9),
             ..options
         };
-        let records = work_precision(&scene, &sweep).unwrap();
+        let records = work_precision(&scene, &sweep).unwrap().records;
         assert!(records.len() >= 3, "{records:?}");
         for (k, record) in records.iter().enumerate() {
             assert_eq!(record.parameter, 10f64.powf(-3.0 - k as f64), "{records:?}");
@@ -1919,7 +1972,7 @@ mod tests {
             coordinate: Some("theta".into()),
             ..BenchOptions::default()
         };
-        let records = work_precision(&scene, &options).unwrap();
+        let records = work_precision(&scene, &options).unwrap().records;
         assert_eq!(records.len(), 2);
         assert!(records[0].final_error < STIFF_BOUNDS[0], "{records:?}");
         assert!(records[1].final_error < STIFF_BOUNDS[1], "{records:?}");

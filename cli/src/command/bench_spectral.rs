@@ -22,7 +22,8 @@ use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spe
 
 use crate::command::bench::{BenchArgs, DEFAULT_MAX_RUN, DEFAULT_METHODS};
 use crate::command::spectral::{Prepared, error_against_exact, prepare};
-use crate::report::plot::{Panel, Series, write_svg};
+use crate::report::output::{self, OutputDirectory};
+use crate::report::plot::{Panel, Series, render_svg};
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
 use crate::scene::spectral::{SpectralScene, scheme_name, time_scheme};
@@ -92,6 +93,18 @@ pub fn execute(
         }
         .into());
     }
+    let stem = Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("bench");
+    let (csv, svg) = (format!("{stem}.csv"), format!("{stem}.svg"));
+    let mut dir = OutputDirectory::create(
+        "--out-dir",
+        &args.out_dir,
+        &[csv.clone(), svg.clone()],
+        &[Path::new(name)],
+    )
+    .map_err(SceneError::from)?;
     let sweep = Sweep {
         scene: &scene,
         schemes,
@@ -107,21 +120,17 @@ pub fn execute(
             }))
         })
         .with_context(|| format!("benchmark of scene '{name}' failed"))?;
-    let out_dir = &args.out_dir;
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("cannot create {}", out_dir.display()))?;
-    let stem = Path::new(name)
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("bench");
-    let csv = out_dir.join(format!("{stem}.csv"));
-    std::fs::write(&csv, to_csv(&records))
-        .with_context(|| format!("cannot write {}", csv.display()))?;
-    let svg = out_dir.join(format!("{stem}.svg"));
-    plot(&records, stem, &svg)?;
-    print!("{}", to_csv(&records));
-    println!("{}", crossing_note(&records));
-    eprintln!("wrote {} and {}", csv.display(), svg.display());
+    let table = to_csv(&records);
+    dir.write(&csv, table.as_bytes()).map_err(SceneError::from)?;
+    dir.write(&svg, plot(&records, stem)?.as_bytes())
+        .map_err(SceneError::from)?;
+    dir.commit().map_err(SceneError::from)?;
+    output::print(format_args!("{table}{}\n", crossing_note(&records))).map_err(SceneError::from)?;
+    output::warn(format_args!(
+        "wrote {} and {}",
+        args.out_dir.join(&csv).display(),
+        args.out_dir.join(&svg).display()
+    ));
     Ok(())
 }
 
@@ -337,8 +346,7 @@ pub fn crossing_note(records: &[SpectralRecord]) -> String {
 fn plot(
     records: &[SpectralRecord],
     title: &str,
-    path: &Path,
-) -> Result<(), crate::report::plot::PlotError> {
+) -> Result<String, crate::report::plot::PlotError> {
     let labels = labels(records);
     let series = |x: fn(&SpectralRecord) -> f64| -> Vec<Series> {
         labels
@@ -387,8 +395,7 @@ fn plot(
             t_rival / t_first
         );
     }
-    write_svg(
-        path,
+    render_svg(
         &[time_panel, panel("FFTs", "FFTs per run", |r| r.ffts as f64)],
         640,
         480,
@@ -429,10 +436,7 @@ mod tests {
         );
         assert_eq!(time_to_error(&records[..1], "svi:4/3", 1e-8), None);
         // The picture names the winner over the wall-time panel and draws the crossing error.
-        let svg = std::env::temp_dir().join(format!("svi-crossing-{}.svg", std::process::id()));
-        plot(&records, "soliton", &svg).unwrap();
-        let picture = std::fs::read_to_string(&svg).unwrap();
-        std::fs::remove_file(&svg).unwrap();
+        let picture = plot(&records, "soliton").unwrap();
         assert!(
             picture.contains("soliton: svi:4/3 reaches 1e-8 first, 316.2× faster than strang"),
             "{picture}"

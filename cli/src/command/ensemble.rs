@@ -9,7 +9,7 @@
 //! error kind and never stops or loses the others. Members are independent and their results
 //! are collected in member order, so the table is the same for every thread count.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -20,7 +20,8 @@ use serde::Serialize;
 
 use crate::command::run::error_report;
 use crate::report::map::{self, Heatmap};
-use crate::report::plot::{Panel, Series, write_svg};
+use crate::report::output::{self, OutputFile};
+use crate::report::plot::{Panel, Series, render_svg};
 use crate::report::summary::ErrorReport;
 use crate::report::table::{MemberOutcome, Schema, Table};
 use crate::scene::ensemble::{
@@ -355,6 +356,29 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
     if let (Some(plot), Some(column)) = (&args.plot, &args.plot_value) {
         check_plot(&ensemble, plot, column, random.is_some())?;
     }
+    // The output files exist (as temporaries) before any member runs: an unwritable path is
+    // reported first, and an existing file is replaced only once the table is complete.
+    let outputs: Vec<(&'static str, &Path)> = [("--out", &args.out), ("--plot", &args.plot)]
+        .into_iter()
+        .filter_map(|(option, path)| Some((option, path.as_deref()?)))
+        .collect();
+    let inputs: Vec<&Path> = ensemble.scene.source.iter().map(PathBuf::as_path).collect();
+    output::check_distinct(&outputs, &inputs).map_err(SceneError::from)?;
+    if let Some(out) = &args.out {
+        output::check_not_a_picture("--out", out).map_err(SceneError::from)?;
+    }
+    let mut out_file = args
+        .out
+        .as_deref()
+        .map(|path| OutputFile::create("--out", path))
+        .transpose()
+        .map_err(SceneError::from)?;
+    let plot_file = args
+        .plot
+        .as_deref()
+        .map(|path| OutputFile::create("--plot", path))
+        .transpose()
+        .map_err(SceneError::from)?;
     let threads = args.threads.unwrap_or(0);
     let pool_threads = thread_pool(threads)?.current_num_threads();
     let count = ensemble.members.len();
@@ -403,13 +427,28 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         .into());
     }
     let table = ensemble.table(0, &outcomes);
-    match &args.out {
-        Some(path) => write_table(&table, path)?,
-        None if !args.json => table.write_csv(&mut std::io::stdout().lock())?,
-        None => {}
+    match (out_file.as_mut(), args.json) {
+        (Some(file), _) => {
+            let path = file.path().to_path_buf();
+            table
+                .write_csv(file)
+                .map_err(|source| SceneError::Write { path, source })?;
+        }
+        (None, false) => {
+            let mut stdout = std::io::stdout().lock();
+            table
+                .write_csv(&mut stdout)
+                .and_then(|()| stdout.flush())
+                .map_err(SceneError::Stdout)?;
+        }
+        (None, true) => {}
     }
-    if let (Some(path), Some(column)) = (&args.plot, &args.plot_value) {
-        draw(&ensemble, &table, path, column, args.plot_cyclic)?;
+    if let Some(file) = out_file {
+        file.commit().map_err(SceneError::from)?;
+    }
+    if let (Some(mut file), Some(column)) = (plot_file, &args.plot_value) {
+        draw(&ensemble, &table, &mut file, column, args.plot_cyclic)?;
+        file.commit().map_err(SceneError::from)?;
     }
     let mut failures = std::collections::BTreeMap::new();
     for outcome in &outcomes {
@@ -431,12 +470,14 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         plot: args.plot.as_ref().map(|path| path.display().to_string()),
     };
     if args.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        output::print(format_args!("{}\n", serde_json::to_string(&summary)?))
+            .map_err(SceneError::from)?;
     } else if args.out.is_some() {
-        println!(
-            "{} members ({} ok, {} failed) on {} threads in {:.3} s",
+        output::print(format_args!(
+            "{} members ({} ok, {} failed) on {} threads in {:.3} s\n",
             count, summary.ok, failed, pool_threads, seconds
-        );
+        ))
+        .map_err(SceneError::from)?;
     }
     if failed > 0 {
         let kinds: Vec<String> = summary
@@ -452,19 +493,6 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         .into());
     }
     Ok(())
-}
-
-/// Write the table to `path`.
-fn write_table(table: &Table, path: &Path) -> Result<(), SceneError> {
-    let write = || -> std::io::Result<()> {
-        let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
-        table.write_csv(&mut out)?;
-        std::io::Write::flush(&mut out)
-    };
-    write().map_err(|source| SceneError::Write {
-        path: path.into(),
-        source,
-    })
 }
 
 /// Check before running that the plot can be drawn: a column of the table, over a grid (not
@@ -510,15 +538,20 @@ fn check_plot(
     }
 }
 
-/// Draw the column `column` of `table`: a line over one axis (SVG) or a heat map over two
-/// (PNG).
+/// Draw the column `column` of `table` into `file`: a line over one axis (SVG) or a heat map
+/// over two (PNG).
 fn draw(
     ensemble: &Ensemble,
     table: &Table,
-    path: &Path,
+    file: &mut OutputFile,
     column: &str,
     cyclic: bool,
 ) -> Result<(), SceneError> {
+    let path = file.path().to_path_buf();
+    let write_error = |source| SceneError::Write {
+        path: path.clone(),
+        source,
+    };
     let index = table
         .column(column)
         .ok_or_else(|| SceneError::InvalidOption {
@@ -554,7 +587,8 @@ fn draw(
                 points,
             }],
         };
-        Ok(write_svg(path, &[panel], 800, 500)?)
+        let svg = render_svg(&[panel], 800, 500)?;
+        file.write_all(svg.as_bytes()).map_err(write_error)
     } else {
         let size = |axis: &Axis| match axis.values {
             Values::Grid { count, .. } => count,
@@ -569,16 +603,6 @@ fn draw(
             values: &values,
             cyclic,
         };
-        let file = std::fs::File::create(path).map_err(|source| SceneError::Write {
-            path: path.into(),
-            source,
-        })?;
-        let mut out = std::io::BufWriter::new(file);
-        map::write_png(&heatmap, &mut out)
-            .and_then(|()| std::io::Write::flush(&mut out))
-            .map_err(|source| SceneError::Write {
-                path: path.into(),
-                source,
-            })
+        map::write_png(&heatmap, file).map_err(write_error)
     }
 }

@@ -11,12 +11,11 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Context;
 use svi::field::mesh::Mesh;
 use svi::field::multisymplectic::{CellQuadrature, Multisymplectic, MultisymplecticOptions};
 use svi_models::{FieldModelVisitor, FieldZooModel, UnknownModel, visit_field_model};
 
-use crate::command::run::error_report;
+use crate::command::run::{RunSummary, print_outcome};
 use crate::report::csv::{CsvStream, Float};
 use crate::report::field::FieldSummary;
 use crate::report::health::{self, Measured, Warning};
@@ -60,14 +59,38 @@ pub fn field_stream<'a>(
     header: &str,
 ) -> Result<Option<(&'a PathBuf, CsvStream)>, SceneError> {
     path.map(|path| {
-        CsvStream::create(path, header)
+        CsvStream::create("--out (output.trajectory)", path, header)
             .map(|stream| (path, stream))
-            .map_err(|source| SceneError::Write {
-                path: path.clone(),
-                source,
-            })
+            .map_err(SceneError::from)
     })
     .transpose()
+}
+
+/// Put the field CSV of a space–time run in place (or report the write error that stopped
+/// it): the trajectory output of the summary.
+pub fn finish_field_stream(
+    csv: Option<(&PathBuf, CsvStream)>,
+    write_error: Option<std::io::Error>,
+    every: usize,
+) -> Result<Option<TrajectoryOutput>, SceneError> {
+    let Some((path, stream)) = csv else {
+        return Ok(None);
+    };
+    let rows = match write_error {
+        Some(source) => Err(SceneError::Write {
+            path: path.clone(),
+            source,
+        }),
+        None => stream
+            .finish()
+            .map(|(rows, _)| rows)
+            .map_err(SceneError::from),
+    }?;
+    Ok(Some(TrajectoryOutput {
+        path: path.display().to_string(),
+        every,
+        rows,
+    }))
 }
 
 /// `svi run` on the field scene `scene` (loaded as `name`): apply the overrides, run, print
@@ -89,14 +112,6 @@ pub fn execute(
     print_outcome(name, result, ran, json, strict)
 }
 
-/// The summary of a run of a field-like scene, as [`print_outcome`] prints it.
-pub trait RunSummary: serde::Serialize + std::fmt::Display {
-    /// The health checks the run failed.
-    fn warnings(&self) -> &[Warning];
-    /// Mark the run failed with `report` (a failed health check under `--strict`).
-    fn fail(&mut self, report: ErrorReport);
-}
-
 impl RunSummary for FieldSummary {
     fn warnings(&self) -> &[Warning] {
         &self.warnings
@@ -105,53 +120,8 @@ impl RunSummary for FieldSummary {
         self.status = Status::Failed;
         self.error = Some(report);
     }
-}
-
-/// Print the outcome of a field-like run (`ran`: whether it started, after the scene was
-/// loaded and the flags applied) as text or JSON (also for failures, as `svi run` does for
-/// every scene), the warnings on stderr, and return the error, if any, for the exit status.
-pub fn print_outcome<S: RunSummary>(
-    name: &str,
-    result: Result<S, SceneError>,
-    ran: bool,
-    json: bool,
-    strict: bool,
-) -> anyhow::Result<()> {
-    let (summary, error) = match result {
-        Ok(mut summary) => {
-            let error = (strict && !summary.warnings().is_empty()).then(|| SceneError::Unhealthy {
-                warnings: summary
-                    .warnings()
-                    .iter()
-                    .map(|w| w.message.clone())
-                    .collect(),
-            });
-            if let Some(error) = &error {
-                summary.fail(error_report(error));
-            }
-            (Some(summary), error)
-        }
-        Err(error) => (None, Some(error)),
-    };
-    for warning in summary.iter().flat_map(|summary| summary.warnings()) {
-        eprintln!("warning: {}", warning.message);
-    }
-    match (&summary, json) {
-        (Some(summary), true) => println!("{}", serde_json::to_string(summary)?),
-        (Some(summary), false) if error.is_none() => print!("{summary}"),
-        (None, true) => {
-            let report = error.as_ref().map(error_report);
-            println!(
-                "{}",
-                serde_json::json!({ "status": Status::Failed, "error": report })
-            );
-        }
-        _ => {}
-    }
-    match error {
-        None => Ok(()),
-        Some(error) if ran => Err(error).with_context(|| format!("scene '{name}' failed")),
-        Some(error) => Err(error.into()),
+    fn partial(_: &SceneError) -> Option<Self> {
+        None
     }
 }
 
@@ -218,24 +188,7 @@ impl FieldModelVisitor for FieldRun<'_> {
             },
         )?;
         let seconds = start.elapsed().as_secs_f64();
-        let trajectory = match csv {
-            Some((path, stream)) => {
-                let rows = match write_error {
-                    Some(error) => Err(error),
-                    None => stream.finish(),
-                }
-                .map_err(|source| SceneError::Write {
-                    path: path.clone(),
-                    source,
-                })?;
-                Some(TrajectoryOutput {
-                    path: path.display().to_string(),
-                    every,
-                    rows,
-                })
-            }
-            None => None,
-        };
+        let trajectory = finish_field_stream(csv, write_error, every)?;
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
             plot_space_time(csv, svg, model.name())?;
         }

@@ -86,10 +86,11 @@ fn description(text: &str) -> &str {
         .trim()
 }
 
-/// Print the built-in scenes and the models (on ℝᴺ, chains of runtime dimension and rigid
-/// bodies) with their parameters.
-pub fn print() {
-    println!("Built-in scenes (svi run NAME):");
+/// The listing of `svi list`: the built-in scenes and the models (on ℝᴺ, chains of runtime
+/// dimension and rigid bodies) with their parameters.
+pub fn listing() -> String {
+    let mut out = String::new();
+    push_line(&mut out, format_args!("Built-in scenes (svi run NAME):"));
     let vector = scenes(SpaceKind::Vector, false);
     let width = vector
         .iter()
@@ -98,10 +99,10 @@ pub fn print() {
         .unwrap_or(0)
         .max(18);
     for (name, description) in vector {
-        println!("  {name:<width$}{description}");
+        push_line(&mut out, format_args!("  {name:<width$}{description}"));
     }
-    println!();
-    println!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):");
+    out.push('\n');
+    push_line(&mut out, format_args!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):"));
     for model in describe_models() {
         let parameters: Vec<String> = model
             .parameters
@@ -121,61 +122,68 @@ pub fn print() {
         if model.exact_solution {
             facts.push("exact solution".into());
         }
-        println!(
+        push_line(&mut out, format_args!(
             "  {:<18}{}; h = {}, t_end = {}; {}",
             model.name,
             parameters.join(", "),
             Float(model.h),
             Float(model.t_end),
             facts.join(", ")
-        );
+        ));
     }
-    println!();
-    println!(
+    out.push('\n');
+    push_line(&mut out, format_args!(
         "Chains and lattices of any size n (svi run NAME --param n=N; methods svi, svi-newton, \
          verlet):"
-    );
+    ));
     for (name, description) in scenes(SpaceKind::Vector, true) {
-        println!("  {name:<18}{description}");
+        push_line(&mut out, format_args!("  {name:<18}{description}"));
     }
-    println!();
-    println!(
+    out.push('\n');
+    push_line(&mut out, format_args!(
         "Runtime-dimension models (model = \"NAME\"; parameters, default step and horizon; \
          trajectory columns t, energy and these observables):"
-    );
+    ));
     for name in LOCAL_MODEL_NAMES {
         if let Some(line) = visit_local_model(name, DescribeLocal) {
-            println!("{line}");
+            push_line(&mut out, format_args!("{line}"));
         }
     }
-    println!();
-    println!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):");
+    out.push('\n');
+    push_line(&mut out, format_args!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):"));
     for (name, description) in scenes(SpaceKind::Rotation, false) {
-        println!("  {name:<18}{description}");
+        push_line(&mut out, format_args!("  {name:<18}{description}"));
     }
-    println!();
-    println!("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):");
+    out.push('\n');
+    push_line(&mut out, format_args!("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):"));
     for name in RIGID_MODEL_NAMES {
         if let Some(line) = visit_rigid_model(name, DescribeRigid) {
-            println!("{line}");
+            push_line(&mut out, format_args!("{line}"));
         }
     }
-    println!();
-    println!(
+    out.push('\n');
+    push_line(&mut out, format_args!(
         "Field scenes in 1 + 1 dimensions (svi run NAME --param points=N; the multisymplectic \
          integrator; the models of the same names, with their parameters):"
-    );
+    ));
     for (name, text) in FIELD_SCENES {
-        println!("  {name:<22}{}", description(text));
+        push_line(&mut out, format_args!("  {name:<22}{}", description(text)));
     }
-    println!();
-    println!(
+    out.push('\n');
+    push_line(&mut out, format_args!(
         "Pseudospectral scenes, complex fields (svi run NAME --method midpoint|svi:P \
          --param points=N):"
-    );
+    ));
     for (name, text) in SPECTRAL_SCENES {
-        println!("  {name:<22}{}", description(text));
+        push_line(&mut out, format_args!("  {name:<22}{}", description(text)));
     }
+    out
+}
+
+/// Append `text` and a newline to `out`.
+fn push_line(out: &mut String, text: std::fmt::Arguments<'_>) {
+    use std::fmt::Write;
+    let _ = writeln!(out, "{text}");
 }
 
 /// Describes a runtime-dimension model in one line.

@@ -37,10 +37,12 @@ use svi_models::{
 };
 
 use crate::command::space::RunSpace;
-use crate::report::csv::CsvStream;
+use crate::report::csv::{CsvStream, Recorded};
 use crate::report::health::{self, Measured};
 use crate::report::plot::plot_csv;
 use crate::report::progress::Progress;
+use crate::report::health::Warning;
+use crate::report::output;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
     TrajectoryOutput,
@@ -67,36 +69,89 @@ pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> a
         ran = true;
         scene.run(std::io::stderr().is_terminal())
     });
+    print_outcome(name, result, ran, json, strict)
+}
+
+/// The summary of a run of any kind of scene, as [`print_outcome`] prints it.
+pub trait RunSummary: serde::Serialize + std::fmt::Display + Sized {
+    /// The health checks the run failed.
+    fn warnings(&self) -> &[Warning];
+    /// Mark the run failed with `report` (a failed health check under `--strict`).
+    fn fail(&mut self, report: ErrorReport);
+    /// The summary of the run up to its last good state that `error` carries, if any.
+    fn partial(error: &SceneError) -> Option<Self>;
+}
+
+impl RunSummary for Summary {
+    fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+    fn fail(&mut self, report: ErrorReport) {
+        self.status = Status::Failed;
+        self.error = Some(report);
+    }
+    fn partial(error: &SceneError) -> Option<Self> {
+        match error {
+            SceneError::RunFailed { partial, .. } => Some((**partial).clone()),
+            _ => None,
+        }
+    }
+}
+
+/// The one JSON object of a command that failed before it ran anything (bad input, also
+/// arguments the parser rejects): `{"status": "failed", "error": {kind, message, step, t}}`.
+pub fn failure_object(report: &ErrorReport) -> serde_json::Value {
+    serde_json::json!({ "status": Status::Failed, "error": report })
+}
+
+/// Print the outcome of a run (`ran`: whether it started, after the scene was loaded and
+/// the flags applied) as text or as one JSON object, the warnings on stderr, and return the
+/// error, if any, for the exit status.
+///
+/// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
+/// run that failed after it started, the summary up to its last good state with
+/// `"status": "failed"` and the `error` (kind, message, step, t); bad input, only `status`
+/// and `error` ([`failure_object`]). With `strict` a failed health check is an error.
+pub fn print_outcome<S: RunSummary>(
+    name: &str,
+    result: Result<S, SceneError>,
+    ran: bool,
+    json: bool,
+    strict: bool,
+) -> anyhow::Result<()> {
     let (summary, error) = match result {
         Ok(mut summary) => {
-            let error = (strict && !summary.warnings.is_empty()).then(|| SceneError::Unhealthy {
-                warnings: summary.warnings.iter().map(|w| w.message.clone()).collect(),
+            let error = (strict && !summary.warnings().is_empty()).then(|| SceneError::Unhealthy {
+                warnings: summary
+                    .warnings()
+                    .iter()
+                    .map(|w| w.message.clone())
+                    .collect(),
             });
             if let Some(error) = &error {
-                summary.status = Status::Failed;
-                summary.error = Some(error_report(error));
+                summary.fail(error_report(error));
             }
             (Some(summary), error)
         }
-        Err(SceneError::RunFailed { partial, source }) => (
-            Some((*partial).clone()),
-            Some(SceneError::RunFailed { partial, source }),
-        ),
-        Err(error) => (None, Some(error)),
+        Err(error) => (S::partial(&error), Some(error)),
     };
-    for warning in summary.iter().flat_map(|summary| &summary.warnings) {
-        eprintln!("warning: {}", warning.message);
+    for warning in summary.iter().flat_map(|summary| summary.warnings()) {
+        output::warn(format_args!("warning: {}", warning.message));
     }
-    match (&summary, json) {
-        (Some(summary), true) => println!("{}", serde_json::to_string(summary)?),
-        (Some(summary), false) if error.is_none() => print!("{summary}"),
+    let printed = match (&summary, json) {
+        (Some(summary), true) => output::print(format_args!("{}\n", serde_json::to_string(summary)?)),
+        (Some(summary), false) if error.is_none() => output::print(summary),
         (None, true) => {
             let report = error.as_ref().map(error_report);
-            let object = serde_json::json!({ "status": Status::Failed, "error": report });
-            println!("{object}");
+            let object = report.as_ref().map(failure_object);
+            output::print(format_args!("{}\n", object.unwrap_or_default()))
         }
-        _ => {}
-    }
+        _ => Ok(()),
+    };
+    let error = match (error, printed) {
+        (None, Err(stdout)) => Some(SceneError::from(stdout)),
+        (error, _) => error,
+    };
     match error {
         None => Ok(()),
         Some(error) if ran => Err(error).with_context(|| format!("scene '{name}' failed")),
@@ -112,7 +167,7 @@ pub fn error_report(error: &SceneError) -> ErrorReport {
             return ErrorReport::of(error);
         }
         SceneError::Unhealthy { .. } => "health",
-        SceneError::Write { .. } | SceneError::Plot(_) => "output",
+        SceneError::Write { .. } | SceneError::Stdout(_) | SceneError::Plot(_) => "output",
         _ => "invalid_input",
     };
     ErrorReport {
@@ -397,9 +452,10 @@ where
     let options = solve_options(scene, plan.h)?;
     // The trajectory file is opened before the first step and written as the run goes; with
     // output times it holds the states at those times (written after the run).
-    let mut stream = match &scene.output.trajectory {
-        Some(path) => Some(TrajectoryStream::<S>::create(model, path)?),
-        None => None,
+    let mut stream = match (&scene.output.trajectory, scene.output.record) {
+        (Some(path), record) => Some(TrajectoryStream::<S>::create(model, path, record)?),
+        (None, true) => Some(TrajectoryStream::<S>::create(model, Path::new(""), true)?),
+        (None, false) => None,
     };
     let trajectory = stream
         .as_mut()
@@ -469,6 +525,10 @@ where
         }
         None => None,
     };
+    let (trajectory, recorded) = match trajectory {
+        Some((output, recorded)) => (Some(output).filter(|_| recorded.is_none()), recorded),
+        None => (None, None),
+    };
     if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
         plot_csv(csv, svg, &format!("{} ({})", scene.model, plan.method.name))?;
     }
@@ -530,6 +590,7 @@ where
         status: Status::Ok,
         warnings,
         error: None,
+        recorded,
     };
     match failure {
         None => Ok(summary),
@@ -544,8 +605,9 @@ where
     }
 }
 
-/// The trajectory file of a run on the space `S`, written as the run goes: an observer of
-/// the thinned step points (a write error stops the run and is reported after it).
+/// The trajectory of a run on the space `S`, written as the run goes (to its file, or kept in
+/// memory): an observer of the thinned step points (a write error stops the run and is
+/// reported after it).
 struct TrajectoryStream<S> {
     path: std::path::PathBuf,
     stream: CsvStream,
@@ -554,18 +616,21 @@ struct TrajectoryStream<S> {
 }
 
 impl<S: Space> TrajectoryStream<S> {
-    /// Create the file at `path` with the header of the space.
-    fn create<L>(model: &L, path: &Path) -> Result<Self, SceneError>
+    /// Create the file at `path` with the header of the space (or, with `path` empty, keep
+    /// the rows in memory).
+    fn create<L>(model: &L, path: &Path, record: bool) -> Result<Self, SceneError>
     where
         S: RunSpace<L>,
     {
-        let write_error = |source| SceneError::Write {
-            path: path.into(),
-            source,
+        let header = S::csv_header(model);
+        let stream = if record {
+            CsvStream::in_memory(&header)
+        } else {
+            CsvStream::create("--out (output.trajectory)", path, &header)?
         };
         Ok(TrajectoryStream {
             path: path.into(),
-            stream: CsvStream::create(path, &S::csv_header(model)).map_err(write_error)?,
+            stream,
             error: None,
             space: PhantomData,
         })
@@ -587,18 +652,18 @@ impl<S: Space> TrajectoryStream<S> {
         self.stream.last_time()
     }
 
-    /// Flush the file (or report the write error that stopped the run).
-    fn finish(self, every: usize) -> Result<TrajectoryOutput, SceneError> {
-        let path = self.path.display().to_string();
-        let error = |source| SceneError::Write {
-            path: self.path.clone(),
-            source,
-        };
+    /// Put the file in place (or report the write error that stopped the run); the rows kept
+    /// in memory.
+    fn finish(self, every: usize) -> Result<(TrajectoryOutput, Option<Recorded>), SceneError> {
         if let Some(source) = self.error {
-            return Err(error(source));
+            return Err(SceneError::Write {
+                path: self.path,
+                source,
+            });
         }
-        let rows = self.stream.finish().map_err(error)?;
-        Ok(TrajectoryOutput { path, every, rows })
+        let (rows, recorded) = self.stream.finish()?;
+        let path = self.path.display().to_string();
+        Ok((TrajectoryOutput { path, every, rows }, recorded))
     }
 
     /// The error of a failed write, as a scene error.

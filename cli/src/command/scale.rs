@@ -18,8 +18,10 @@
 //! `--out-dir`.
 
 use crate::report::csv::Float;
-use crate::report::plot::{Panel, Series, write_svg};
+use crate::report::output::{self, OutputDirectory};
+use crate::report::plot::{Panel, Series, render_svg};
 use crate::scene::SceneError;
+use crate::scene::limits;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -33,28 +35,79 @@ use svi_models::{Fput, RelativisticChain};
 /// factors).
 pub const MAX_SIZE: usize = 1_000_000;
 
-/// The largest K.
-const MAX_STEPS: usize = 1 << 20;
+/// The smallest n.
+pub const MIN_SIZE: usize = 10;
+
+/// The most sizes of one call.
+pub const MAX_SIZES: usize = 100;
+
+/// The largest K (`--steps`, and where the doubling stops).
+pub const MAX_STEPS: usize = 1 << 20;
+
+/// The most timed runs of each length.
+pub const MAX_BATCHES: usize = 100;
+
+/// The longest `--min-run`, in seconds.
+pub const MAX_MIN_RUN: f64 = 60.0;
+
+/// The longest a call may be estimated to take, in seconds ([`ScaleArgs::estimated_seconds`]):
+/// one hour.
+pub const MAX_ESTIMATED_SECONDS: f64 = 3600.0;
+
+/// Seconds per step and degree of freedom of the three configurations (`svi:6/5` and
+/// `verlet` on FPUT, `svi:4/3` on the relativistic chain), measured on a 2-core machine at
+/// n = 10⁵ (`benches/results/scale.csv`, 2026-11-24): the basis of the estimate.
+const SECONDS_PER_DOF_STEP: [f64; 3] = [1.3e-7, 1.6e-8, 5.6e-7];
+
+/// The help of `--sizes`, from the limits above.
+fn sizes_help() -> String {
+    format!(
+        "Numbers of particles n, comma-separated, each {MIN_SIZE} to {MAX_SIZE} (at most \
+         {MAX_SIZES} sizes)"
+    )
+}
+
+/// The help of `--steps`.
+fn steps_help() -> String {
+    format!(
+        "K: the timed runs take K and 2K steps (1 to {MAX_STEPS}), K doubled (up to \
+         {MAX_STEPS}) until the longer run lasts --min-run"
+    )
+}
+
+/// The help of `--batches`.
+fn batches_help() -> String {
+    format!("Timed runs of each length; the median is used (1 to {MAX_BATCHES})")
+}
+
+/// The help of `--min-run`.
+fn min_run_help() -> String {
+    format!(
+        "K doubles until the run of 2K steps lasts this many seconds (0 to {MAX_MIN_RUN}); a \
+         call estimated to take more than {} s in all is refused with its estimate",
+        MAX_ESTIMATED_SECONDS
+    )
+}
 
 /// The arguments of `svi scale`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ScaleArgs {
-    /// Numbers of particles n, comma-separated, each 10 to 10⁶.
+    /// Numbers of particles n, comma-separated.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "1000,3162,10000,31623,100000"
+        default_value = "1000,3162,10000,31623,100000",
+        help = sizes_help()
     )]
     pub sizes: Vec<usize>,
-    /// K: the timed runs take K and 2K steps (1 to 2²⁰), K doubled until the longer run
-    /// lasts 0.2 s.
-    #[arg(long, default_value_t = 10)]
+    /// K: the timed runs take K and 2K steps.
+    #[arg(long, default_value_t = 10, help = steps_help())]
     pub steps: usize,
-    /// Timed runs of each length; the median is used (1 to 100).
-    #[arg(long, default_value_t = 3)]
+    /// Timed runs of each length.
+    #[arg(long, default_value_t = 3, help = batches_help())]
     pub batches: usize,
-    /// K doubles until the run of 2K steps lasts this many seconds (0 to 60).
-    #[arg(long, default_value_t = 0.2)]
+    /// K doubles until the run of 2K steps lasts this many seconds.
+    #[arg(long, default_value_t = 0.2, allow_hyphen_values = true, help = min_run_help())]
     pub min_run: f64,
     /// Where `scale.csv` and `scale.svg` are written.
     #[arg(long, default_value = "benches/results")]
@@ -79,28 +132,52 @@ pub struct Measurement {
 }
 
 impl ScaleArgs {
-    /// Check every option before anything runs.
+    /// Check every option before anything runs: each in its range, and the whole call
+    /// estimated at most [`MAX_ESTIMATED_SECONDS`].
     pub fn check(&self) -> Result<(), SceneError> {
-        let bad = |name: &str, reason: String| SceneError::Svi(Error::invalid(name, reason));
         if self.sizes.is_empty() {
-            return Err(bad("sizes", "give at least one size".into()));
+            return Err(SceneError::InvalidOption {
+                option: "--sizes",
+                reason: "no size; give at least one".into(),
+            });
         }
-        if let Some(n) = self.sizes.iter().find(|n| !(10..=MAX_SIZE).contains(*n)) {
-            return Err(bad("sizes", format!("{n} is not from 10 to {MAX_SIZE}")));
+        limits::count("--sizes", self.sizes.len(), 1, MAX_SIZES, "sizes")?;
+        for &n in &self.sizes {
+            limits::count("--sizes", n, MIN_SIZE, MAX_SIZE, "particles")?;
         }
-        if !(1..=10_000).contains(&self.steps) {
-            return Err(bad(
-                "steps",
-                format!("{} is not from 1 to 10000", self.steps),
-            ));
-        }
-        if !(1..=100).contains(&self.batches) {
-            return Err(bad(
-                "batches",
-                format!("{} is not from 1 to 100", self.batches),
-            ));
+        limits::count("--steps", self.steps, 1, MAX_STEPS, "steps")?;
+        limits::count("--batches", self.batches, 1, MAX_BATCHES, "batches")?;
+        limits::seconds("--min-run", self.min_run, true, MAX_MIN_RUN)?;
+        let estimate = self.estimated_seconds();
+        if estimate > MAX_ESTIMATED_SECONDS {
+            return Err(SceneError::InvalidOption {
+                option: "--sizes/--steps/--batches/--min-run",
+                reason: format!(
+                    "the measurements would take about {:.0} s on a 2-core machine, more than \
+                     the {MAX_ESTIMATED_SECONDS} s svi scale runs; take fewer or smaller sizes, \
+                     fewer steps or batches, or a shorter --min-run",
+                    estimate
+                ),
+            });
         }
         Ok(())
+    }
+
+    /// The estimated duration of the call, in seconds: for every size and configuration,
+    /// `batches` runs of K and 2K steps for each K doubled from `--steps` until the longer
+    /// run lasts `--min-run` (about 6·K·c·n or 3·min_run per batch, whichever is larger, with
+    /// c the configuration's measured cost per degree of freedom and step).
+    pub fn estimated_seconds(&self) -> f64 {
+        let batches = self.batches as f64;
+        self.sizes
+            .iter()
+            .flat_map(|&n| {
+                SECONDS_PER_DOF_STEP.map(|cost| {
+                    let first = 6.0 * self.steps as f64 * cost * n as f64;
+                    batches * first.max(3.0 * self.min_run)
+                })
+            })
+            .sum()
     }
 }
 
@@ -219,14 +296,15 @@ pub fn scale(args: &ScaleArgs) -> Result<Vec<Measurement>, SceneError> {
     Ok(measurements)
 }
 
-/// `svi scale`: measure, print a table with the fitted exponents, write CSV and SVG.
+/// `svi scale`: measure, print a table with the fitted exponents, write CSV and SVG (the
+/// output directory and its files are created before the measurements).
 pub fn execute_args(args: &ScaleArgs) -> anyhow::Result<()> {
-    let measurements = scale(args)?;
+    args.check()?;
     let directory = Path::new(&args.out_dir);
-    std::fs::create_dir_all(directory).map_err(|source| SceneError::Write {
-        path: directory.to_path_buf(),
-        source,
-    })?;
+    let names = ["scale.csv".to_string(), "scale.svg".to_string()];
+    let mut dir = OutputDirectory::create("--out-dir", directory, &names, &[])
+        .map_err(SceneError::from)?;
+    let measurements = scale(args)?;
     let mut csv =
         String::from("method,model,n,seconds_per_step,iterations_per_step,peak_memory_mb\n");
     for m in &measurements {
@@ -241,37 +319,34 @@ pub fn execute_args(args: &ScaleArgs) -> anyhow::Result<()> {
             Float(m.peak_memory_mb)
         )?;
     }
-    let csv_path = directory.join("scale.csv");
-    std::fs::write(&csv_path, csv).map_err(|source| SceneError::Write {
-        path: csv_path.clone(),
-        source,
-    })?;
     let mut series = Vec::new();
-    println!("method    model               n  seconds/step  iterations/step  peak MB");
+    let mut table =
+        String::from("method    model               n  seconds/step  iterations/step  peak MB\n");
     for method in ["svi:6/5", "verlet", "svi:4/3"] {
         let rows: Vec<&Measurement> = measurements.iter().filter(|m| m.method == method).collect();
         for m in &rows {
-            println!(
+            writeln!(
+                table,
                 "{:<9} {:<18} {:>7}  {:>12.3e}  {:>15.2}  {:>7.0}",
                 m.method, m.model, m.n, m.seconds_per_step, m.iterations_per_step, m.peak_memory_mb
-            );
+            )?;
         }
         let points: Vec<(f64, f64)> = rows
             .iter()
             .map(|m| (m.n as f64, m.seconds_per_step))
             .collect();
         if points.len() > 1 {
-            println!(
+            writeln!(
+                table,
                 "{method}: time per step ∝ n^{:.3}",
                 fitted_exponent(&points)
-            );
+            )?;
         }
         series.push(Series {
             label: format!("{method} ({})", rows.first().map_or("", |m| m.model)),
             points,
         });
     }
-    let svg_path = directory.join("scale.svg");
     let panel = Panel {
         title: "Time per step against degrees of freedom".into(),
         x_label: "n".into(),
@@ -280,8 +355,18 @@ pub fn execute_args(args: &ScaleArgs) -> anyhow::Result<()> {
         y_log: true,
         series,
     };
-    write_svg(&svg_path, &[panel], 640, 480)?;
-    println!("wrote {} and {}", csv_path.display(), svg_path.display());
+    dir.write("scale.csv", csv.as_bytes())
+        .map_err(SceneError::from)?;
+    dir.write("scale.svg", render_svg(&[panel], 640, 480)?.as_bytes())
+        .map_err(SceneError::from)?;
+    dir.commit().map_err(SceneError::from)?;
+    writeln!(
+        table,
+        "wrote {} and {}",
+        directory.join("scale.csv").display(),
+        directory.join("scale.svg").display()
+    )?;
+    output::print(table).map_err(SceneError::from)?;
     Ok(())
 }
 

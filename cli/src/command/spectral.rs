@@ -14,11 +14,12 @@ use svi::field::fourier::Complex64;
 use svi::field::pseudospectral::{Pseudospectral, PseudospectralOptions, TimeScheme};
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
-use crate::command::field::{RunSummary, field_stream, print_outcome, time_levels};
+use crate::command::field::{field_stream, finish_field_stream, time_levels};
+use crate::command::run::{RunSummary, print_outcome};
 use crate::report::health::Warning;
 use crate::report::plot::plot_space_time;
 use crate::report::spectral::SpectralSummary;
-use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
+use crate::report::summary::{ErrorReport, Parameters, Status};
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
 use crate::scene::spectral::{SpectralScene, scheme_name};
@@ -30,6 +31,9 @@ impl RunSummary for SpectralSummary {
     fn fail(&mut self, report: ErrorReport) {
         self.status = Status::Failed;
         self.error = Some(report);
+    }
+    fn partial(_: &SceneError) -> Option<Self> {
+        None
     }
 }
 
@@ -108,24 +112,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             }
         })?;
         let seconds = start.elapsed().as_secs_f64();
-        let trajectory = match csv {
-            Some((path, stream)) => {
-                let rows = match write_error {
-                    Some(error) => Err(error),
-                    None => stream.finish(),
-                }
-                .map_err(|source| SceneError::Write {
-                    path: path.clone(),
-                    source,
-                })?;
-                Some(TrajectoryOutput {
-                    path: path.display().to_string(),
-                    every,
-                    rows,
-                })
-            }
-            None => None,
-        };
+        let trajectory = finish_field_stream(csv, write_error, every)?;
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
             plot_space_time(csv, svg, model.name())?;
         }

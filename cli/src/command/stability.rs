@@ -5,11 +5,11 @@
 //! |tr S| − det S − 1 against z as SVG (Li, Wu, Leok 2018, Figs. 3–6), and prints the
 //! stability, periodicity and strong-stability regions of Definition 4.1.
 
-use crate::report::plot::{Panel, Series, write_svg};
+use crate::report::output::{self, OutputDirectory};
+use crate::report::plot::{Panel, Series, render_svg};
 use crate::scene::SceneError;
 use crate::scene::limits::{self, MAX_SAMPLES};
 use crate::scene::overrides::method_help;
-use anyhow::Context;
 use std::fmt::Write as _;
 use std::path::Path;
 use svi::method::registry::VectorMethodVisitor;
@@ -102,8 +102,7 @@ pub fn describe(label: &str, report: &StabilityReport) -> String {
 /// The four diagnostics against z, one curve per labelled report, as SVG.
 pub fn plot(
     reports: &[(String, StabilityReport)],
-    path: &Path,
-) -> Result<(), crate::report::plot::PlotError> {
+) -> Result<String, crate::report::plot::PlotError> {
     type Pick = fn(&StabilityPoint) -> f64;
     let quantities: [(&str, Pick); 4] = [
         ("spectral radius ρ(S)", |p| p.rho),
@@ -128,7 +127,7 @@ pub fn plot(
                 .collect(),
         })
         .collect();
-    write_svg(path, &panels, 520, 420)
+    render_svg(&panels, 520, 420)
 }
 
 /// Analyse `method` on [z_min, z_max] with `samples` grid points.
@@ -275,7 +274,7 @@ pub fn execute(
     if let Request::Values(_) = request {
         let spec: MethodSpec = method.parse()?;
         if let Answer::Points(points) = run(spec, &request)? {
-            print!("{}", to_csv(&points));
+            output::print(to_csv(&points)).map_err(SceneError::from)?;
         }
         return Ok(());
     }
@@ -287,24 +286,29 @@ pub fn execute(
     } else {
         vec![(method.to_string(), method.parse()?)]
     };
+    let mut names = vec!["stability.svg".to_string()];
+    if !figures {
+        names.push("stability.csv".into());
+    }
+    let mut dir =
+        OutputDirectory::create("--out-dir", out_dir, &names, &[]).map_err(SceneError::from)?;
     let mut reports = Vec::new();
     for (label, spec) in configurations {
         if let Answer::Report(report) = run(spec, &request)? {
-            print!("{}", describe(&label, &report));
+            output::print(describe(&label, &report)).map_err(SceneError::from)?;
             reports.push((label, report));
         }
     }
-    std::fs::create_dir_all(out_dir)
-        .with_context(|| format!("cannot create {}", out_dir.display()))?;
     if let [(_, report)] = reports.as_slice() {
-        let csv = out_dir.join("stability.csv");
-        std::fs::write(&csv, to_csv(&report.points))
-            .with_context(|| format!("cannot write {}", csv.display()))?;
-        eprintln!("wrote {}", csv.display());
+        dir.write("stability.csv", to_csv(&report.points).as_bytes())
+            .map_err(SceneError::from)?;
     }
-    let svg = out_dir.join("stability.svg");
-    plot(&reports, &svg)?;
-    eprintln!("wrote {}", svg.display());
+    dir.write("stability.svg", plot(&reports)?.as_bytes())
+        .map_err(SceneError::from)?;
+    dir.commit().map_err(SceneError::from)?;
+    for name in names.iter().rev() {
+        output::warn(format_args!("wrote {}", out_dir.join(name).display()));
+    }
     Ok(())
 }
 

@@ -36,7 +36,8 @@
 use crate::command::bench::{BenchMethod, Mode, parse_methods, run_mode};
 use crate::command::peers::{FirstOrder, dop853};
 use crate::report::csv::Float;
-use crate::report::plot::{Panel, PlotError, Series, write_svg};
+use crate::report::output::{self, OutputDirectory};
+use crate::report::plot::{Panel, PlotError, Series, render_svg};
 use crate::scene::limits::{self, MAX_BISECTIONS, MAX_DRIFT_STEPS, MIN_PEER_TOLERANCE};
 use crate::scene::overrides::method_help;
 use crate::scene::{Scene, SceneError};
@@ -885,10 +886,11 @@ pub fn windows_csv(records: &[StressRecord]) -> String {
     out
 }
 
-/// One panel per scene: the largest |E − E₀| in each window against time, per method. Every
+/// One panel per scene, as SVG text: the largest |E − E₀| in each window against time, per
+/// method. Every
 /// panel lists every method in the same order (so a method keeps its colour); a long run that
 /// failed is an empty series labelled "(failed)".
-pub fn plot(records: &[StressRecord], path: &Path) -> Result<(), PlotError> {
+pub fn plot(records: &[StressRecord]) -> Result<String, PlotError> {
     let mut panels: Vec<Panel> = Vec::new();
     for r in records {
         let series = match &r.drift {
@@ -917,26 +919,20 @@ pub fn plot(records: &[StressRecord], path: &Path) -> Result<(), PlotError> {
             }),
         }
     }
-    write_svg(path, &panels, 480, 400)
+    render_svg(&panels, 480, 400)
 }
 
-/// Write `stress.md`, `stress.csv`, `windows.csv` and `drift.svg` into `dir`.
-pub fn write_outputs(records: &[StressRecord], dir: &Path) -> Result<(), SceneError> {
-    let write = |name: &str, text: String| {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|source| SceneError::Write { path, source })
-    };
-    std::fs::create_dir_all(dir).map_err(|source| SceneError::Write {
-        path: dir.into(),
-        source,
-    })?;
-    write("stress.md", to_markdown(records))?;
-    write("stress.csv", to_csv(records))?;
-    write("windows.csv", windows_csv(records))?;
-    plot(records, &dir.join("drift.svg")).map_err(|e| SceneError::Write {
-        path: dir.join("drift.svg"),
-        source: std::io::Error::other(e.to_string()),
-    })
+/// The files `svi stress` writes into its output directory.
+pub const OUTPUT_FILES: [&str; 4] = ["stress.md", "stress.csv", "windows.csv", "drift.svg"];
+
+/// Write `stress.md`, `stress.csv`, `windows.csv` and `drift.svg` into `dir` (created before
+/// the cases run).
+pub fn write_outputs(records: &[StressRecord], mut dir: OutputDirectory) -> Result<(), SceneError> {
+    dir.write("stress.md", to_markdown(records).as_bytes())?;
+    dir.write("stress.csv", to_csv(records).as_bytes())?;
+    dir.write("windows.csv", windows_csv(records).as_bytes())?;
+    dir.write("drift.svg", plot(records)?.as_bytes())?;
+    Ok(dir.commit()?)
 }
 
 /// `svi stress` with the arguments `args`: [`execute`] on their options and output directory.
@@ -945,15 +941,19 @@ pub fn execute_args(args: &StressArgs) -> anyhow::Result<()> {
 }
 
 /// `svi stress`: run the cases of `options`, write `stress.md`, `stress.csv`, `windows.csv`
-/// and `drift.svg` into `out_dir` and print the table.
+/// and `drift.svg` into `out_dir` (its files are created before the cases run) and print the
+/// table.
 pub fn execute(options: &StressOptions, out_dir: &Path) -> anyhow::Result<()> {
+    options.check()?;
+    let names = OUTPUT_FILES.map(String::from);
+    let dir = OutputDirectory::create("--out-dir", out_dir, &names, &[])?;
     let records = stress(options)?;
-    write_outputs(&records, out_dir)?;
-    print!("{}", to_markdown(&records));
-    eprintln!(
+    write_outputs(&records, dir)?;
+    output::print(to_markdown(&records)).map_err(SceneError::from)?;
+    output::warn(format_args!(
         "wrote stress.md, stress.csv, windows.csv and drift.svg to {}",
         out_dir.display()
-    );
+    ));
     Ok(())
 }
 

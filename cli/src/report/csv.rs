@@ -5,9 +5,10 @@
 //! [`RIGID_CSV_HEADER`] on SO(3).
 
 use std::fmt;
-use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
+
+use crate::report::output::{OutputError, OutputFile};
 
 /// The CSV header line (with its newline) for the given coordinate names.
 pub fn csv_header(names: &[&str]) -> String {
@@ -26,32 +27,63 @@ pub fn csv_header(names: &[&str]) -> String {
 pub const RIGID_CSV_HEADER: &str = "t,qw,qx,qy,qz,r11,r12,r13,r21,r22,r23,r31,r32,r33,\
 omega_1,omega_2,omega_3,pi_1,pi_2,pi_3,energy,orthogonality\n";
 
-/// A CSV file written row by row as a run computes it: created (and its header written)
-/// before the first step, so an unwritable path is reported before any work, and flushed
-/// every [`CsvStream::FLUSH_ROWS`] rows, so memory stays flat and a killed run keeps its rows.
+/// A CSV trajectory written row by row as a run computes it: to an [`OutputFile`] created
+/// (and its header written) before the first step, so an unwritable path is reported before
+/// any work, and renamed into place by [`CsvStream::finish`], so a killed run leaves no torn
+/// row; or kept in memory ([`CsvStream::in_memory`], for the Python package).
 #[derive(Debug)]
 pub struct CsvStream {
-    out: BufWriter<File>,
+    sink: Sink,
     values: Vec<f64>,
     rows: usize,
     last_time: Option<f64>,
 }
 
-impl CsvStream {
-    /// Rows between two flushes.
-    pub const FLUSH_ROWS: usize = 256;
+/// Where a [`CsvStream`]'s rows go.
+#[derive(Debug)]
+enum Sink {
+    File(OutputFile),
+    Memory(Recorded),
+}
 
-    /// Create (or truncate) the file at `path` and write `header` (with its newline).
-    pub fn create(path: &Path, header: &str) -> std::io::Result<Self> {
-        let mut out = BufWriter::new(File::create(path)?);
-        out.write_all(header.as_bytes())?;
-        out.flush()?;
-        Ok(CsvStream {
-            out,
+/// A trajectory kept in memory: its column names and rows.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Recorded {
+    /// The column names.
+    pub columns: Vec<String>,
+    /// The rows, each with one number per column.
+    pub rows: Vec<Vec<f64>>,
+}
+
+impl CsvStream {
+    /// Create the output `path` of `option` (a temporary until [`CsvStream::finish`]) and
+    /// write `header` (with its newline).
+    pub fn create(option: &'static str, path: &Path, header: &str) -> Result<Self, OutputError> {
+        let mut out = OutputFile::create(option, path)?;
+        out.write_all(header.as_bytes())
+            .map_err(|source| OutputError::Write {
+                path: path.into(),
+                source,
+            })?;
+        Ok(CsvStream::new(Sink::File(out)))
+    }
+
+    /// A stream that keeps its rows in memory, with the columns of `header`.
+    pub fn in_memory(header: &str) -> Self {
+        let columns = header.trim_end().split(',').map(String::from).collect();
+        CsvStream::new(Sink::Memory(Recorded {
+            columns,
+            rows: Vec::new(),
+        }))
+    }
+
+    fn new(sink: Sink) -> Self {
+        CsvStream {
+            sink,
             values: Vec::new(),
             rows: 0,
             last_time: None,
-        })
+        }
     }
 
     /// Append the row of the point at `time`, whose numbers `fill` puts into its buffer.
@@ -62,16 +94,18 @@ impl CsvStream {
     ) -> std::io::Result<()> {
         self.values.clear();
         fill(&mut self.values);
-        for (i, x) in self.values.iter().enumerate() {
-            let separator = if i == 0 { "" } else { "," };
-            write!(self.out, "{separator}{}", Float(*x))?;
+        match &mut self.sink {
+            Sink::File(out) => {
+                for (i, x) in self.values.iter().enumerate() {
+                    let separator = if i == 0 { "" } else { "," };
+                    write!(out, "{separator}{}", Float(*x))?;
+                }
+                writeln!(out)?;
+            }
+            Sink::Memory(recorded) => recorded.rows.push(self.values.clone()),
         }
-        writeln!(self.out)?;
         self.rows += 1;
         self.last_time = Some(time);
-        if self.rows.is_multiple_of(Self::FLUSH_ROWS) {
-            self.out.flush()?;
-        }
         Ok(())
     }
 
@@ -85,10 +119,15 @@ impl CsvStream {
         self.last_time
     }
 
-    /// Flush what is left; the number of rows.
-    pub fn finish(mut self) -> std::io::Result<usize> {
-        self.out.flush()?;
-        Ok(self.rows)
+    /// Put the file in place (or hand over the rows kept in memory); the number of rows.
+    pub fn finish(self) -> Result<(usize, Option<Recorded>), OutputError> {
+        match self.sink {
+            Sink::File(out) => {
+                out.commit()?;
+                Ok((self.rows, None))
+            }
+            Sink::Memory(recorded) => Ok((self.rows, Some(recorded))),
+        }
     }
 }
 

@@ -5,6 +5,7 @@ pub mod csv;
 pub mod field;
 pub mod health;
 pub mod map;
+pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod spectral;

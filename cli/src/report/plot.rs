@@ -4,6 +4,8 @@
 use plotters::prelude::*;
 use std::path::Path;
 
+use crate::report::output;
+
 /// One curve: a label and its (x, y) points.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
@@ -72,18 +74,45 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
 
 /// Draw `panels` side by side into an SVG file of `width` × `height` pixels per panel.
 pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Result<(), PlotError> {
-    let error = |reason: String| PlotError {
+    let svg = render_svg(panels, width, height).map_err(|error| PlotError {
         path: path.display().to_string(),
+        reason: error.reason,
+    })?;
+    write_picture(path, &svg)
+}
+
+/// Draw `panels` side by side as the text of an SVG picture of `width` × `height` pixels per
+/// panel.
+pub fn render_svg(panels: &[Panel], width: u32, height: u32) -> Result<String, PlotError> {
+    let error = |reason: String| PlotError {
+        path: "the picture".into(),
         reason,
     };
     let count = panels.len().max(1) as u32;
-    let root = SVGBackend::new(path, (width * count, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| error(e.to_string()))?;
-    let areas = root.split_evenly((1, count as usize));
-    for (panel, area) in panels.iter().zip(areas.iter()) {
-        draw_panel(panel, area).map_err(error)?;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width * count, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| error(e.to_string()))?;
+        let areas = root.split_evenly((1, count as usize));
+        for (panel, area) in panels.iter().zip(areas.iter()) {
+            draw_panel(panel, area).map_err(error)?;
+        }
+        root.present().map_err(|e| error(e.to_string()))?;
     }
-    root.present().map_err(|e| error(e.to_string()))
+    Ok(svg)
+}
+
+/// Write the drawn picture `svg` to `path`, atomically ([`output::write_file`]).
+fn write_picture(path: &Path, svg: &str) -> Result<(), PlotError> {
+    output::write_file("--plot", path, svg.as_bytes()).map_err(|error| PlotError {
+        path: path.display().to_string(),
+        reason: match &error {
+            output::OutputError::Write { source, .. } | output::OutputError::Stdout(source) => {
+                source.to_string()
+            }
+            output::OutputError::Unusable { reason, .. } => reason.clone(),
+        },
+    })
 }
 
 /// A numeric CSV file as written by `svi run --out`: its column names and rows.
@@ -210,8 +239,9 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
             mix(from.2, to.2, w),
         )
     };
-    let draw = || -> Result<(), String> {
-        let root = SVGBackend::new(svg, (900, 640)).into_drawing_area();
+    let mut picture = String::new();
+    let draw = |picture: &mut String| -> Result<(), String> {
+        let root = SVGBackend::with_string(picture, (900, 640)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| e.to_string())?;
         // The drawn column by its name: u for a real field, |ψ| for a complex one.
         let name = match header[2].as_str() {
@@ -251,7 +281,8 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
             .map_err(|e| e.to_string())?;
         root.present().map_err(|e| e.to_string())
     };
-    draw().map_err(error)
+    draw(&mut picture).map_err(error)?;
+    write_picture(svg, &picture)
 }
 
 fn draw_panel(
@@ -329,7 +360,8 @@ mod tests {
 
     #[test]
     fn writes_an_svg_with_every_series_label() {
-        let path = std::env::temp_dir().join(format!("svi-plot-{}.svg", std::process::id()));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("plot.svg");
         let panel = |log| Panel {
             title: "test".into(),
             x_label: "x".into(),
@@ -349,7 +381,6 @@ mod tests {
         };
         write_svg(&path, &[panel(true), panel(false)], 400, 300).unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
-        std::fs::remove_file(&path).unwrap();
         assert!(text.starts_with("<svg"));
         assert_eq!(text.matches(">\nfirst\n<").count(), 2, "{text}");
         assert_eq!(text.matches(">\nsecond\n<").count(), 2);

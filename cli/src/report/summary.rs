@@ -12,7 +12,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::report::csv::{Float, brief_vector as vector};
+use crate::report::csv::{Float, Recorded, brief_vector as vector};
 use crate::report::health::Warning;
 
 /// The result of running a scene (`svi run --json` prints it as one JSON object).
@@ -90,6 +90,10 @@ pub struct Summary {
     /// Why the run failed (`status` = `failed`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<ErrorReport>,
+    /// The trajectory kept in memory, for a scene that asks for it (`output.record`, the
+    /// Python package) instead of a file; never printed.
+    #[serde(skip)]
+    pub recorded: Option<Recorded>,
 }
 
 /// Whether a run ended well.

@@ -9,6 +9,7 @@ use svi::method::registry::{self, SpaceKind};
 use svi_models::{LOCAL_MODEL_NAMES, MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel};
 
 use crate::report::csv::Float;
+use crate::report::output::OutputError;
 use crate::report::plot::PlotError;
 use crate::report::summary::Summary;
 use crate::scene::builtin::builtin_scene_names;
@@ -170,6 +171,21 @@ pub enum SceneError {
         #[source]
         source: std::io::Error,
     },
+    /// Standard output could not be written (a full device, a closed pipe).
+    #[error("cannot write to standard output")]
+    Stdout(#[source] std::io::Error),
+    /// An output path that cannot be used (a link, a directory, a FIFO, a device, the scene
+    /// file, another output's file, a name of another format): bad input, named before any
+    /// work.
+    #[error("cannot write {option} to '{}': {reason}", path.display())]
+    Output {
+        /// The option, as written on the command line.
+        option: &'static str,
+        /// The path given.
+        path: PathBuf,
+        /// Why not.
+        reason: String,
+    },
     /// A plot (`--plot`, `svi ensemble --plot`) cannot be drawn or written.
     #[error(transparent)]
     Plot(#[from] PlotError),
@@ -235,6 +251,24 @@ pub enum SceneError {
     },
 }
 
+impl From<OutputError> for SceneError {
+    fn from(error: OutputError) -> SceneError {
+        match error {
+            OutputError::Unusable {
+                option,
+                path,
+                reason,
+            } => SceneError::Output {
+                option,
+                path,
+                reason,
+            },
+            OutputError::Write { path, source } => SceneError::Write { path, source },
+            OutputError::Stdout(source) => SceneError::Stdout(source),
+        }
+    }
+}
+
 impl From<UnknownModel> for SceneError {
     fn from(error: UnknownModel) -> SceneError {
         SceneError::UnknownModel(error)
@@ -274,6 +308,7 @@ impl SceneError {
             SceneError::Svi(error) => is_bad_input(error),
             SceneError::RunFailed { .. }
             | SceneError::Write { .. }
+            | SceneError::Stdout(_)
             | SceneError::Plot(_)
             | SceneError::Unhealthy { .. } => false,
             _ => true,

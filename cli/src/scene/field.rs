@@ -75,6 +75,10 @@ pub struct FieldScene {
     /// Outputs.
     #[serde(default)]
     pub output: FieldOutputSection,
+    /// The scene file it was read from (none for a built-in scene): no output may be
+    /// written over it. Not a scene field.
+    #[serde(skip)]
+    pub source: Option<PathBuf>,
 }
 
 /// `[mesh]` of a field scene.
@@ -136,7 +140,8 @@ impl FieldScene {
     /// `model` is a field model; `None` for anything else (the other scenes, and paths that
     /// are no readable file: the scene loader reports those).
     pub fn load(name_or_path: &str) -> Option<Result<FieldScene, SceneError>> {
-        load_space_time(name_or_path, FIELD_SCENES, FIELD_MODEL_NAMES)
+        let loaded = load_space_time(name_or_path, FIELD_SCENES, FIELD_MODEL_NAMES)?;
+        Some(loaded.map(|(scene, source)| FieldScene { source, ..scene }))
     }
 
     /// Put the command-line flags on top: `--h`, `--t-end`, `--param` (`points` sets
@@ -157,29 +162,31 @@ impl FieldScene {
             trajectory: &mut self.output.trajectory,
             every: &mut self.output.every,
             plot: &mut self.output.plot,
+            source: self.source.as_deref(),
         }
         .apply(overrides, "mesh points")
     }
 }
 
-/// The space–time scene `name_or_path` names: one of the built-in `scenes` (name, TOML
-/// text), or a scene file whose `model` is one of `models`; `None` for anything else (the
-/// other scenes, and paths that are no readable file: the scene loader reports those).
+/// The space–time scene `name_or_path` names, with the path of its file: one of the
+/// built-in `scenes` (name, TOML text), or a scene file whose `model` is one of `models`;
+/// `None` for anything else (the other scenes, and paths that are no readable file: the
+/// scene loader reports those).
 pub fn load_space_time<S: DeserializeOwned>(
     name_or_path: &str,
     scenes: &[(&str, &str)],
     models: &[&str],
-) -> Option<Result<S, SceneError>> {
+) -> Option<Result<(S, Option<PathBuf>), SceneError>> {
     if let Some((name, text)) = scenes.iter().find(|(name, _)| *name == name_or_path) {
-        return Some(from_toml(text, &format!("built-in scene '{name}'")));
+        return Some(from_toml(text, &format!("built-in scene '{name}'")).map(|s| (s, None)));
     }
     let path = Path::new(name_or_path);
     let text = read_scene_file(path).ok()?;
     let table: toml::Table = toml::from_str(&text).ok()?;
     let model = table.get("model")?.as_str()?;
-    models
-        .contains(&model)
-        .then(|| from_toml(&text, &format!("'{}'", path.display())))
+    models.contains(&model).then(|| {
+        from_toml(&text, &format!("'{}'", path.display())).map(|s| (s, Some(path.into())))
+    })
 }
 
 /// Parse a scene of type `S`; `origin` names the source in error messages.
@@ -235,6 +242,8 @@ pub struct SpaceTimeFields<'a> {
     pub every: &'a mut Option<usize>,
     /// The space-time picture.
     pub plot: &'a mut Option<PathBuf>,
+    /// The scene file, which no output may overwrite.
+    pub source: Option<&'a Path>,
 }
 
 impl SpaceTimeFields<'_> {
@@ -277,7 +286,11 @@ impl SpaceTimeFields<'_> {
                 reason: "0; need a positive number of time levels".into(),
             });
         }
-        Ok(())
+        Ok(crate::report::output::check_run_outputs(
+            self.trajectory.as_deref(),
+            self.plot.as_deref(),
+            self.source,
+        )?)
     }
 }
 

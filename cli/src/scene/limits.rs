@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use crate::report::csv::Float;
+use crate::report::output::file_kind;
 use crate::scene::error::SceneError;
 
 /// Largest scene file read (1 MiB): a scene is a short TOML file.
@@ -150,32 +151,6 @@ pub fn read_scene_file(path: &Path) -> Result<String, SceneError> {
             format!("not UTF-8 text ({error})"),
         ))
     })
-}
-
-/// What a file that is not a regular file is, in words.
-fn file_kind(metadata: &std::fs::Metadata) -> &'static str {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        let kind = metadata.file_type();
-        if kind.is_fifo() {
-            return "a FIFO (named pipe)";
-        }
-        if kind.is_char_device() {
-            return "a character device";
-        }
-        if kind.is_block_device() {
-            return "a block device";
-        }
-        if kind.is_socket() {
-            return "a socket";
-        }
-    }
-    if metadata.is_dir() {
-        "a directory"
-    } else {
-        "not a regular file"
-    }
 }
 
 #[cfg(test)]

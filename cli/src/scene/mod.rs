@@ -155,6 +155,10 @@ pub struct Scene {
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
+    /// The scene file it was read from (none for a built-in scene or a text): no output may
+    /// be written over it. Not a scene field.
+    #[serde(skip)]
+    pub source: Option<std::path::PathBuf>,
 }
 
 impl Scene {
@@ -181,7 +185,12 @@ impl Scene {
         }
         let path = Path::new(name_or_path);
         match limits::read_scene_file(path) {
-            Ok(text) => Scene::from_toml(&text, &format!("'{}'", path.display())),
+            Ok(text) => Scene::from_toml(&text, &format!("'{}'", path.display())).map(|scene| {
+                Scene {
+                    source: Some(path.into()),
+                    ..scene
+                }
+            }),
             Err(SceneError::Read { source, .. })
                 if source.kind() == std::io::ErrorKind::NotFound
                     && path.extension().is_none()
@@ -542,12 +551,18 @@ impl Scene {
                 reason: "draws the trajectory file: give --out FILE (output.trajectory) too".into(),
             });
         }
-        match (output.every, &output.trajectory) {
-            (Some(_), None) => Err(SceneError::EveryWithoutOutput),
-            (Some(0), Some(_)) => {
+        crate::report::output::check_run_outputs(
+            output.trajectory.as_deref(),
+            output.plot.as_deref(),
+            self.source.as_deref(),
+        )?;
+        let kept = output.trajectory.is_some() || output.record;
+        match (output.every, kept) {
+            (Some(_), false) => Err(SceneError::EveryWithoutOutput),
+            (Some(0), true) => {
                 Err(svi::Error::invalid("every", "0 steps; need at least 1").into())
             }
-            (Some(_), Some(_)) if output.output_times.is_some() => Err(SceneError::NotApplicable {
+            (Some(_), true) if output.output_times.is_some() => Err(SceneError::NotApplicable {
                 option: "--every (output.every)",
                 reason: "thins the steps written to the trajectory; with --output-times \
                              the trajectory holds the states at those times"

@@ -260,4 +260,9 @@ pub struct OutputSection {
     pub diagnostics: Option<Vec<Diagnostic>>,
     /// Report the states at these times, read off each step's polynomial (dense output).
     pub output_times: Option<Vec<f64>>,
+    /// Keep the trajectory in memory (the summary's `recorded`) instead of writing a file:
+    /// the Python package's runs, which never touch the file system. `every` and
+    /// `output_times` apply as to a file. Not a scene field.
+    #[serde(skip)]
+    pub record: bool,
 }

@@ -74,6 +74,10 @@ pub struct SpectralScene {
     /// Outputs.
     #[serde(default)]
     pub output: SpectralOutputSection,
+    /// The scene file it was read from (none for a built-in scene): no output may be
+    /// written over it. Not a scene field.
+    #[serde(skip)]
+    pub source: Option<std::path::PathBuf>,
 }
 
 /// `[mesh]` of a pseudospectral scene.
@@ -148,7 +152,8 @@ impl SpectralScene {
     /// The pseudospectral scene `name_or_path` names: a built-in one, or a scene file whose
     /// `model` is a complex field model; `None` for anything else.
     pub fn load(name_or_path: &str) -> Option<Result<SpectralScene, SceneError>> {
-        load_space_time(name_or_path, SPECTRAL_SCENES, SPECTRAL_MODEL_NAMES)
+        let loaded = load_space_time(name_or_path, SPECTRAL_SCENES, SPECTRAL_MODEL_NAMES)?;
+        Some(loaded.map(|(scene, source)| SpectralScene { source, ..scene }))
     }
 
     /// The scene's time scheme.
@@ -177,6 +182,7 @@ impl SpectralScene {
             trajectory: &mut self.output.trajectory,
             every: &mut self.output.every,
             plot: &mut self.output.plot,
+            source: self.source.as_deref(),
         }
         .apply(overrides, "Fourier modes")
     }
