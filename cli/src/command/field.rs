@@ -200,7 +200,7 @@ impl FieldModelVisitor for FieldRun<'_> {
         };
         let energy_initial = run.energy[0];
         let energy_error_max = spread(&run.energy);
-        let warnings = health::check(&Measured {
+        let mut warnings = health::check(&Measured {
             conserves_energy: true,
             energy_initial,
             energy_final: run.energy[run.energy.len() - 1],
@@ -209,6 +209,12 @@ impl FieldModelVisitor for FieldRun<'_> {
             extent: None,
             retries: 0,
         });
+        let momentum_error_max = spread(&run.momentum);
+        warnings.extend(health::non_finite(&[
+            ("momentum_error_max", Some(momentum_error_max)),
+            ("multisymplectic_residual_max", run.multisymplectic_residual_max),
+            ("error_max", Some(error_max)),
+        ]));
         Ok(FieldSummary {
             model: model.name().into(),
             parameters: Parameters(model.parameters()),
@@ -225,7 +231,7 @@ impl FieldModelVisitor for FieldRun<'_> {
             energy_initial,
             energy_error_max,
             momentum_initial: run.momentum[0],
-            momentum_error_max: spread(&run.momentum),
+            momentum_error_max,
             multisymplectic_residual_max: run.multisymplectic_residual_max,
             error_max,
             newton_iterations: run.newton_iterations,

@@ -549,7 +549,7 @@ where
                 t: S::time(&last),
             })
     });
-    let warnings = health::check(&Measured {
+    let mut warnings = health::check(&Measured {
         conserves_energy: S::conserves_energy(model),
         energy_initial,
         energy_final,
@@ -558,6 +558,9 @@ where
         extent: S::extent(&first).zip(S::extent(&last)),
         retries: outcome.statistics.retries,
     });
+    let mut numbers = conservation.numbers();
+    numbers.push(("energy_error_max", energy_error_max));
+    warnings.extend(health::non_finite(&numbers));
     let info = integrator.method().info();
     let summary = Summary {
         model: S::model_name(model).into(),

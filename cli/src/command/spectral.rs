@@ -16,7 +16,7 @@ use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spe
 
 use crate::command::field::{field_stream, finish_field_stream, time_levels};
 use crate::command::run::{RunSummary, print_outcome};
-use crate::report::health::Warning;
+use crate::report::health::{self, FieldMeasured, Warning};
 use crate::report::plot::plot_space_time;
 use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Parameters, Status};
@@ -116,6 +116,17 @@ impl SpectralModelVisitor for SpectralRun<'_> {
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
             plot_space_time(csv, svg, model.name())?;
         }
+        let energy_error = (run.energy_final - run.energy_initial).abs();
+        let size = initial.iter().map(|psi| psi.norm()).fold(0.0, f64::max);
+        let mut warnings = health::check_field(&FieldMeasured {
+            norm_error_relative: run.norm_error_max,
+            energy: (energy_error, run.energy_initial.abs()),
+            solution: (error_max, size),
+        });
+        warnings.extend(health::non_finite(&[
+            ("norm_initial", Some(run.norm_initial)),
+            ("energy_initial", Some(run.energy_initial)),
+        ]));
         Ok(SpectralSummary {
             model: model.name().into(),
             parameters: Parameters(model.parameters()),
@@ -129,7 +140,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             norm_initial: run.norm_initial,
             norm_error_max: run.norm_error_max,
             energy_initial: run.energy_initial,
-            energy_error: (run.energy_final - run.energy_initial).abs(),
+            energy_error,
             error_max,
             error_final,
             ffts: run.ffts,
@@ -137,7 +148,7 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             seconds,
             trajectory,
             status: Status::Ok,
-            warnings: Vec::new(),
+            warnings,
             error: None,
         })
     }

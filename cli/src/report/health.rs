@@ -10,6 +10,12 @@
 //! - **escape**: the configuration's largest component grown beyond [`ESCAPE_FACTOR`] times
 //!   its initial size (at least 1): a bound motion that flew off (on ℝᴺ).
 //!
+//! - **non-finite diagnostics** ([`non_finite`]): a diagnostic that came out NaN or infinite
+//!   (an invariant that overflows while the state does not) means nothing; JSON would print
+//!   it as `null`, the mark of a diagnostic not measured;
+//! - **fields** ([`check_field`], pseudospectral runs): the discrete norm, the energy and the
+//!   error against the exact solution, each above [`ENERGY_TOLERANCE`] of its scale.
+//!
 //! A failing check is a [`Warning`]: printed on stderr as `warning: …`, listed in the JSON
 //! summary's `warnings`, and with `svi run --strict` an error (exit status 1). A run that
 //! recovered failed steps and then fails a check says so.
@@ -115,6 +121,76 @@ pub fn check(measured: &Measured) -> Vec<Warning> {
     warnings
 }
 
+/// A warning for each diagnostic `(name, value)` that was measured but is not a finite
+/// number.
+pub fn non_finite(diagnostics: &[(&str, Option<f64>)]) -> Vec<Warning> {
+    diagnostics
+        .iter()
+        .filter(|(_, value)| value.is_some_and(|x| !x.is_finite()))
+        .map(|(name, value)| Warning {
+            kind: "non_finite",
+            message: format!(
+                "{name} is {} (JSON null): the diagnostic overflowed and means nothing",
+                value.unwrap_or(f64::NAN)
+            ),
+        })
+        .collect()
+}
+
+/// What the check of a pseudospectral run looks at: each a deviation and the scale it is
+/// measured against.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldMeasured {
+    /// Largest relative deviation of the discrete norm (mass), |N − N₀|/N₀.
+    pub norm_error_relative: f64,
+    /// |H − H₀| and the energy's scale |H₀|.
+    pub energy: (f64, f64),
+    /// Largest |ψ − ψ_exact| and the field's scale max|ψ₀|.
+    pub solution: (f64, f64),
+}
+
+/// The checks a pseudospectral run fails: a norm, energy or solution error above
+/// [`ENERGY_TOLERANCE`] of its scale (a NaN never passes).
+pub fn check_field(measured: &FieldMeasured) -> Vec<Warning> {
+    let within = |error: f64, scale: f64| error <= ENERGY_TOLERANCE * scale;
+    let mut warnings = Vec::new();
+    if !within(measured.norm_error_relative, 1.0) {
+        warnings.push(Warning {
+            kind: "norm",
+            message: format!(
+                "the norm changed by {:.3e} of its initial value (more than {} %): the \
+                 scheme lost unitarity, and the result is not to be trusted",
+                measured.norm_error_relative,
+                100.0 * ENERGY_TOLERANCE
+            ),
+        });
+    }
+    let (error, scale) = measured.energy;
+    if !within(error, scale) {
+        warnings.push(Warning {
+            kind: "energy",
+            message: format!(
+                "the energy error {error:.3e} is more than {} % of the energy's scale \
+                 {scale:.3e}: the step does not resolve the motion",
+                100.0 * ENERGY_TOLERANCE
+            ),
+        });
+    }
+    let (error, scale) = measured.solution;
+    if !within(error, scale) {
+        warnings.push(Warning {
+            kind: "solution",
+            message: format!(
+                "the error against the exact solution, {error:.3e}, is more than {} % of the \
+                 field's size {scale:.3e}: the grid or the step does not resolve the field, \
+                 and the result is not to be trusted",
+                100.0 * ENERGY_TOLERANCE
+            ),
+        });
+    }
+    warnings
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -149,6 +225,37 @@ mod tests {
             ..measured(1.0, 0.5)
         };
         assert!(check(&forced).is_empty());
+    }
+
+    #[test]
+    fn non_finite_diagnostics_are_named() {
+        let warnings = non_finite(&[
+            ("energy_error_max", Some(1e-3)),
+            ("momentum_error_max", Some(f64::NAN)),
+            ("solution_error_max", None),
+            ("invariant_error_max", Some(f64::INFINITY)),
+        ]);
+        let messages: Vec<&str> = warnings.iter().map(|w| w.message.as_str()).collect();
+        assert_eq!(messages.len(), 2);
+        assert!(messages[0].starts_with("momentum_error_max is NaN"));
+        assert!(messages[1].starts_with("invariant_error_max is inf"));
+    }
+
+    #[test]
+    fn a_field_run_is_checked_for_norm_energy_and_solution() {
+        let healthy = FieldMeasured {
+            norm_error_relative: 1e-14,
+            energy: (1e-10, 2.0),
+            solution: (1e-8, 1.0),
+        };
+        assert!(check_field(&healthy).is_empty());
+        let lost = FieldMeasured {
+            norm_error_relative: f64::NAN,
+            energy: (0.5, 2.0),
+            solution: (0.9, 1.0),
+        };
+        let kinds: Vec<&str> = check_field(&lost).iter().map(|w| w.kind).collect();
+        assert_eq!(kinds, ["norm", "energy", "solution"]);
     }
 
     #[test]

@@ -305,6 +305,35 @@ impl Conservation {
         }
     }
 
+    /// Every measured number, by its JSON name (for the check that none is non-finite).
+    pub fn numbers(&self) -> Vec<(&'static str, Option<f64>)> {
+        let mut numbers = vec![
+            ("momentum_error_max", self.momentum_error_max()),
+            ("solution_error_max", self.solution_error_max()),
+            ("solution_error_final", self.solution_error_final()),
+        ];
+        match self {
+            Conservation::Vector { .. } => {}
+            Conservation::Local {
+                invariant_error_max,
+                ..
+            } => numbers.push(("invariant_error_max", *invariant_error_max)),
+            Conservation::Rigid {
+                momentum_error_relative,
+                invariant_error_max,
+                orthogonality_error_max,
+                orthogonality_error_final,
+                ..
+            } => numbers.extend([
+                ("momentum_error_relative", *momentum_error_relative),
+                ("invariant_error_max", *invariant_error_max),
+                ("orthogonality_error_max", *orthogonality_error_max),
+                ("orthogonality_error_final", Some(*orthogonality_error_final)),
+            ]),
+        }
+        numbers
+    }
+
     /// Largest position error against the exact solution (ℝᴺ; `None` on SO(3)).
     pub fn solution_error_max(&self) -> Option<f64> {
         match self {
