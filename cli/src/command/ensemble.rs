@@ -336,7 +336,39 @@ pub struct MembersFailed {
 /// summary. Exit status 0 when every member is `ok`; 1 when some failed (everything is still
 /// written); 2 for bad input of the ensemble itself, including options that every member
 /// rejects before it starts (then nothing is written).
+///
+/// With `--json` every outcome prints one JSON object: the summary, also when members failed;
+/// for an ensemble that could not start, the failure object of `svi run --json`.
 pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
+    let result = run_and_write(args);
+    if let Err(error) = &result
+        && args.json
+        && !error.is::<MembersFailed>()
+    {
+        let object = crate::command::run::failure_object(&report_of(error));
+        // Stdout that cannot be written leaves the exit status to tell.
+        let _ = output::print(format_args!("{object}\n"));
+    }
+    result
+}
+
+/// The JSON `error` object of any error of a command: that of the scene error in its chain
+/// ([`error_report`]), else an `output` error.
+pub fn report_of(error: &anyhow::Error) -> ErrorReport {
+    error
+        .chain()
+        .find_map(|cause| cause.downcast_ref::<SceneError>())
+        .map(error_report)
+        .unwrap_or_else(|| ErrorReport {
+            kind: "output",
+            message: format!("{error:#}"),
+            step: None,
+            t: None,
+        })
+}
+
+/// [`execute_args`] without the JSON failure object.
+fn run_and_write(args: &EnsembleArgs) -> anyhow::Result<()> {
     let name = args
         .scene
         .as_deref()

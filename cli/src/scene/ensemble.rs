@@ -207,7 +207,17 @@ fn parse_values(option: &'static str, text: &str, spec: &str) -> Result<Values, 
                         "a range LO:HI cannot be part of a list (give LO:HI:COUNT)",
                     ));
                 }
-                item => values.extend(item.points().unwrap_or_default()),
+                item => {
+                    // Counted before the values are made: no list longer than an ensemble.
+                    if item.len().unwrap_or(0) > MAX_MEMBERS - values.len() {
+                        return Err(malformed(
+                            option,
+                            text,
+                            format!("the list has more than {MAX_MEMBERS} values (the most members)"),
+                        ));
+                    }
+                    values.extend(item.points().unwrap_or_default())
+                }
             }
         }
         return Ok(Values::List(values));
@@ -241,8 +251,12 @@ fn parse_values(option: &'static str, text: &str, spec: &str) -> Result<Values, 
                             format!("COUNT '{}' is not a whole number", count.trim()),
                         )
                     })?;
-                    if count == 0 {
-                        return Err(malformed(option, text, "COUNT is 0; need at least 1"));
+                    if !(1..=MAX_MEMBERS).contains(&count) {
+                        return Err(malformed(
+                            option,
+                            text,
+                            format!("COUNT is {count}; need 1 to {MAX_MEMBERS} (the most members)"),
+                        ));
                     }
                     Ok(Values::Grid { lo, hi, count })
                 }
@@ -593,6 +607,8 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
         SpaceKind::Rotation => svi_models::visit_rigid_model(&scene.model, ModelNamesOf)
             .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
     };
+    // The components varied so far, as (field, index) and as written.
+    let mut varied: Vec<((InitialField, usize), String)> = Vec::new();
     for axis in axes {
         match &axis.target {
             Target::Parameter(name) if !names.parameters.contains(&name.as_str()) => {
@@ -605,7 +621,7 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
                     ),
                 });
             }
-            Target::Initial { coordinate, .. } => {
+            Target::Initial { field, coordinate } => {
                 let Some(coordinates) = &names.coordinates else {
                     return Err(SceneError::NotApplicable {
                         option: "--initial",
@@ -615,7 +631,7 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
                         ),
                     });
                 };
-                if coordinate_index(coordinates, coordinate).is_none() {
+                let Some(index) = coordinate_index(coordinates, coordinate) else {
                     return Err(SceneError::InvalidOption {
                         option: "--initial",
                         reason: format!(
@@ -625,7 +641,21 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
                             coordinates.join(", ")
                         ),
                     });
+                };
+                let key = (*field, index);
+                if let Some((_, first)) = varied.iter().find(|(seen, _)| *seen == key) {
+                    return Err(SceneError::InvalidOption {
+                        option: "--initial",
+                        reason: format!(
+                            "{} and {first} vary the same component ({} of coordinate {}); \
+                             give it once",
+                            axis.name(),
+                            field.name(),
+                            coordinates[index]
+                        ),
+                    });
                 }
+                varied.push((key, axis.name()));
             }
             Target::Parameter(_) => {}
         }
