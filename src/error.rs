@@ -40,10 +40,9 @@ pub enum Error {
         /// Time at the start of the failing step.
         t: f64,
     },
-    /// The inverse Legendre map q̇(q, p) did not converge (or met a singular mass matrix).
-    #[error(
-        "inverse Legendre map did not converge at t = {t:?}: {iterations} iterations, last increment {residual:e}"
-    )]
+    /// The inverse Legendre map q̇(q, p) did not converge, or met a singular mass matrix
+    /// (`residual` infinite).
+    #[error("{}", legendre_message(*t, *iterations, *residual))]
     LegendreMap {
         /// Time of the state being converted.
         t: f64,
@@ -162,6 +161,23 @@ impl Error {
             | Error::TooManySteps { t, .. } => Some(t),
             Error::InvalidParameter { .. } => None,
         }
+    }
+}
+
+/// The message of [`Error::LegendreMap`]: a singular mass matrix (an infinite `residual`) is
+/// named as such.
+fn legendre_message(t: f64, iterations: usize, residual: f64) -> String {
+    if residual.is_finite() {
+        format!(
+            "inverse Legendre map did not converge at t = {t:?}: {iterations} iterations, last \
+             increment {residual:e}"
+        )
+    } else {
+        format!(
+            "inverse Legendre map failed at t = {t:?}: the mass matrix (the Hessian of L in the \
+             velocities) is singular there: L must depend on every velocity, at least \
+             quadratically, for the velocities to follow from the momenta"
+        )
     }
 }
 

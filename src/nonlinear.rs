@@ -36,6 +36,17 @@ const CONVERGED: f64 = 1e-10;
 const STALLED: f64 = 1e-6;
 /// Relative increment below which a non-decreasing fixed-point increment means round-off.
 const FIXED_POINT_NOISE: f64 = 1e-13;
+/// Absolute increment below which a non-decreasing increment means round-off, whatever the
+/// unknowns' size: at a state at rest the unknowns vanish (their size is no scale at all),
+/// while the residual still carries the round-off of order-one terms (a chain's fixed ends,
+/// a potential's constants), so the increments stall near 1e-17 instead of reaching zero.
+pub(crate) const ABSOLUTE_NOISE: f64 = 1e-13;
+
+/// Whether a non-decreasing increment `size` (after `previous`) is round-off: below `noise`
+/// times the unknowns' size `scale`, or below [`ABSOLUTE_NOISE`].
+pub(crate) fn stalled(size: f64, previous: f64, noise: f64, scale: f64) -> bool {
+    size >= previous && (size <= noise * scale || size <= ABSOLUTE_NOISE)
+}
 
 /// Contraction rate θ above which the simplified Newton method refactorises its Jacobian at
 /// the current iterate. Chosen by instruction counts (callgrind) of SVI 4/3 and 7/6 on the
@@ -195,13 +206,13 @@ impl Newton {
             let scale = z.amax().max(self.scale_floor);
             let converged = match jacobian {
                 Jacobian::Exact => {
-                    size <= CONVERGED * scale || (size >= previous && size <= STALLED * scale)
+                    size <= CONVERGED * scale || stalled(size, previous, STALLED, scale)
                 }
                 // θ ‖Δ‖ predicts the next increment (θ is unknown at the first iteration).
                 Jacobian::Kept => {
                     size <= 2.0 * f64::EPSILON * scale
                         || (previous.is_finite() && size * size <= f64::EPSILON * scale * previous)
-                        || (size >= previous && size <= self.noise * scale)
+                        || stalled(size, previous, self.noise, scale)
                 }
             };
             if converged || size == 0.0 {
@@ -253,7 +264,7 @@ impl FixedPoint {
             return Err(StepFailure::NonFinite);
         }
         if size <= 2.0 * f64::EPSILON * scale
-            || (size >= self.previous && size <= FIXED_POINT_NOISE * scale)
+            || stalled(size, self.previous, FIXED_POINT_NOISE, scale)
         {
             return Ok(true);
         }
@@ -357,6 +368,34 @@ mod tests {
         assert_eq!(iterations, 3);
         assert!((residual - 1.0 / 408.0).abs() < 1e-15, "{residual}");
         assert!((z[0] - 577.0 / 408.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn increments_stalled_at_round_off_of_a_vanishing_solution_converge() {
+        // F(z) = z − δ_k with δ_k = ±1e-17 alternating: the solution is 0 up to a residual
+        // round-off of 1e-17 (a state at rest whose equations carry order-one terms). The
+        // increments stall at 2e-17 while z itself is 1e-17: no relative test passes, and
+        // before the absolute floor every such solve ended in NonConvergence.
+        let mut k = 0;
+        let mut rest = |z: &DVector<f64>, jacobian: &mut DMatrix<f64>, residual: &mut DVector<f64>| {
+            k += 1;
+            let noise = if k % 2 == 0 { 1e-17 } else { -1e-17 };
+            jacobian.fill_with_identity();
+            residual[0] = z[0] - noise;
+        };
+        let mut newton = Newton::new(1, 50);
+        let mut z = DVector::from_vec(vec![0.0]);
+        let iterations = newton.solve(&mut z, &mut rest).unwrap();
+        assert!(iterations <= 3, "{iterations}");
+        assert!(z[0].abs() <= 1e-17);
+        // The fixed point's control alike.
+        let mut control = FixedPoint::new(50);
+        assert_eq!(control.converged(2e-17, 1e-17), Ok(false));
+        assert_eq!(control.converged(2e-17, 1e-17), Ok(true));
+        // A stalled increment above the floor in a problem of size 1e-17 is no convergence.
+        let mut control = FixedPoint::new(2);
+        assert_eq!(control.converged(2e-12, 1e-17), Ok(false));
+        assert!(control.converged(2e-12, 1e-17).is_err());
     }
 
     #[test]

@@ -177,6 +177,38 @@ fn kepler_from_text_matches_the_zoo_model_at_t_2000() {
     assert!(difference < 1e-10, "|Δq| = {difference:e}");
 }
 
+/// A Lagrangian in which a velocity does not appear has a singular mass matrix: refused at
+/// parse, naming the velocity, instead of an inverse Legendre map that "did not converge".
+#[test]
+fn a_lagrangian_without_a_velocity_is_refused_naming_it() {
+    let error = TextModel::new(&spec("0.5*vx^2 - x^2 - y^2", &["x", "y"], &[])).unwrap_err();
+    assert!(
+        error.to_string().starts_with("the lagrangian does not depend on vy"),
+        "{error}"
+    );
+    let error = TextModel::new(&spec("-0.5*x^2", &["x"], &[])).unwrap_err();
+    assert!(error.to_string().contains("vx"), "{error}");
+}
+
+/// Integer powers beyond num-dual's i32 factor arithmetic (n(n − 1)(n − 2) overflows for
+/// n ≳ 1290): L = ½ẋ² − x¹⁰⁰⁰⁰¹/100001 has ∂L/∂x = −x¹⁰⁰⁰⁰⁰ and ∂²L/∂x² = −100000 x⁹⁹⁹⁹⁹,
+/// against their closed forms at x = 1 − 10⁻⁵.
+#[test]
+fn huge_integer_powers_have_the_closed_form_derivatives() {
+    let model = TextModel::new(&spec("0.5*vx^2 - x^100001/100001", &["x"], &[])).unwrap();
+    let model = TextLagrangian::<1>::new(model).unwrap();
+    let x = 1.0 - 1e-5;
+    let second = model.second_derivatives(0.0, &SVector::from([x]), &SVector::from([0.0]));
+    let force = -x.powi(100_000);
+    let stiffness = -100_000.0 * x.powi(99_999);
+    assert!((second.q[0] - force).abs() <= 1e-10 * force.abs(), "{}", second.q[0]);
+    assert!(
+        (second.qq[(0, 0)] - stiffness).abs() <= 1e-9 * stiffness.abs(),
+        "{} against {stiffness}",
+        second.qq[(0, 0)]
+    );
+}
+
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(2000))]
 

@@ -943,14 +943,20 @@ mod tests {
         let (q, v) = (SVector::from([0.1, 0.2]), SVector::from([0.3, 0.4]));
         assert!(Degenerate.acceleration(0.0, &q, &v).is_none());
         assert!(Degenerate.acceleration_jacobian(0.0, &q, &v).is_none());
+        let error = Degenerate.velocity(0.5, &q, &v, &v).unwrap_err();
         assert!(matches!(
-            Degenerate.velocity(0.5, &q, &v, &v),
-            Err(Error::LegendreMap {
+            error,
+            Error::LegendreMap {
                 t: 0.5,
                 iterations: 1,
                 ..
-            })
+            }
         ));
+        // Named as what it is, not as an infinite increment.
+        assert!(
+            error.to_string().contains("the mass matrix (the Hessian of L in the velocities) is singular"),
+            "{error}"
+        );
     }
 
     #[test]

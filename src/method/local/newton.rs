@@ -31,6 +31,7 @@ use crate::linalg::sparse::{DenseSolver, LinearSolver, LinearSolverKind, Pattern
 use crate::method::space::DynState;
 use crate::method::variational::svi::Tables;
 use crate::model::local::{LocalLagrangian, TermDerivatives, TermWidth};
+use crate::nonlinear::stalled;
 use nalgebra::DVector;
 
 /// A linear solver of either kind.
@@ -210,7 +211,7 @@ impl Legendre {
             if !size.is_finite() {
                 return Err(failure(iteration, size));
             }
-            if size <= 4.0 * f64::EPSILON * scale || (size >= previous && size <= 1e-12 * scale) {
+            if size <= 4.0 * f64::EPSILON * scale || stalled(size, previous, 1e-12, scale) {
                 return Ok(());
             }
             previous = size;
@@ -447,7 +448,6 @@ impl StageNewton {
         z: &mut DVector<f64>,
     ) -> Result<NewtonReport, StepFailure> {
         let mut report = NewtonReport::default();
-        let scale = state.q.amax() + z.amax();
         let mut previous = f64::INFINITY;
         loop {
             let refactor = !self.factored;
@@ -472,11 +472,13 @@ impl StageNewton {
             *z -= &self.residual;
             report.iterations += 1;
             let size = self.residual.amax();
+            // The positions the offsets build, as they are now (from rest they start at 0).
+            let scale = state.q.amax() + z.amax();
             if !size.is_finite() {
                 self.factored = false;
                 return Err(StepFailure::NonFinite);
             }
-            if size <= 2.0 * f64::EPSILON * scale || (size >= previous && size <= 1e-13 * scale) {
+            if size <= 2.0 * f64::EPSILON * scale || stalled(size, previous, 1e-13, scale) {
                 return Ok(report);
             }
             if report.iterations >= self.max_iterations {

@@ -121,6 +121,13 @@ impl Expression {
         self.properties
     }
 
+    /// Whether the velocity of coordinate `i` appears in the expression.
+    pub fn uses_velocity(&self, i: usize) -> bool {
+        self.nodes
+            .iter()
+            .any(|node| matches!(node, Node::Symbol(Symbol::Velocity(j)) if *j == i))
+    }
+
     /// The tape of the expression with the parameter values `parameters` folded in.
     pub fn compile(&self, parameters: &[f64], velocities: Velocities) -> Tape {
         let folding = Folding {
@@ -206,7 +213,7 @@ impl Tape {
                 Op::DivideBy(c) => x / c,
                 Op::Reciprocal => x.recip(),
                 Op::Square => x * x,
-                Op::PowerInteger(n) => x.powi(n),
+                Op::PowerInteger(n) => power_integer(x, n),
                 // The square root of norms is inlined: as a call it cost a quarter of a
                 // Kepler run.
                 Op::Call(Function::Sqrt) => x.sqrt(),
@@ -397,11 +404,60 @@ fn stack_depth(tape: &[Op]) -> usize {
     deepest
 }
 
+/// The largest |n| for which num-dual's `powi` is used: its derivative factors n(n − 1) and
+/// n(n − 1)(n − 2) are computed in `i32` and overflow beyond about 1290.
+const POWI_LIMIT: u32 = 1000;
+
+/// xⁿ for an integer exponent n, with exact derivatives for every n: num-dual's `powi` up to
+/// [`POWI_LIMIT`], beyond it by repeated squaring (at most 62 products, no integer
+/// arithmetic that could overflow). A huge power of |x| > 1 is infinite, which the run
+/// reports as a non-finite state.
+fn power_integer<D: Scalar>(x: D, n: i32) -> D {
+    if n.unsigned_abs() <= POWI_LIMIT {
+        return x.powi(n);
+    }
+    let (mut base, mut power, mut exponent) = (x, D::one(), n.unsigned_abs());
+    while exponent > 0 {
+        if exponent & 1 == 1 {
+            power *= base;
+        }
+        base = base * base;
+        exponent >>= 1;
+    }
+    if n < 0 { power.recip() } else { power }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::text::structure::VelocityForm;
     use crate::model::text::tree::MAX_NODES;
+
+    #[test]
+    fn huge_integer_powers_have_exact_derivatives() {
+        // d/dx xⁿ = n xⁿ⁻¹, d²/dx² = n(n − 1) xⁿ⁻²: at x = 1 the factors themselves, which
+        // num-dual's powi computes in i32 and overflows for n ≳ 1290.
+        for n in [3, 1000, 1001, 99_999, 2_000_000_000, -99_999] {
+            let (value, first, second) =
+                num_dual::second_derivative(|x| power_integer(x, n), 1.0);
+            let n = f64::from(n);
+            assert_eq!(value, 1.0);
+            assert!((first - n).abs() <= 1e-12 * n.abs(), "{n}: {first}");
+            assert!(
+                (second - n * (n - 1.0)).abs() <= 1e-9 * (n * n).abs(),
+                "{n}: {second}"
+            );
+        }
+        // Away from 1 the value and its derivatives follow the closed forms.
+        let x: f64 = 1.0 - 1e-5;
+        let (value, first, _) = num_dual::second_derivative(|x| power_integer(x, 100_001), x);
+        let exact = x.powi(100_001);
+        assert!((value - exact).abs() <= 1e-11 * exact);
+        assert!((first - 100_001.0 * x.powi(100_000)).abs() <= 1e-9 * first.abs());
+        // A huge power of |x| > 1 overflows to infinity, never to a wrapped garbage factor.
+        let (value, _, _) = num_dual::second_derivative(|x| power_integer(x, i32::MAX), 2.0);
+        assert_eq!(value, f64::INFINITY);
+    }
 
     const COORDINATES: [&str; 2] = ["x", "y"];
     const VELOCITIES: [&str; 2] = ["vx", "vy"];

@@ -203,6 +203,19 @@ pub enum TextError {
     /// A model without coordinates.
     #[error("a text model needs at least one coordinate")]
     NoCoordinates,
+    /// A Lagrangian in which a coordinate's velocity does not appear: its mass matrix
+    /// ∂²L/∂q̇² is singular, and the equations of motion do not determine that coordinate.
+    #[error(
+        "the lagrangian does not depend on {velocity}: its mass matrix ∂²L/∂q̇² is singular, so \
+         the motion of {coordinate} is not determined (every coordinate's velocity must appear \
+         in L, e.g. 0.5*{velocity}^2)"
+    )]
+    NoVelocity {
+        /// The coordinate.
+        coordinate: String,
+        /// Its velocity's name.
+        velocity: String,
+    },
     /// A list of expressions (forces, a symmetry generator) whose length is not the number
     /// of coordinates.
     #[error("{field} has {found} expressions, but the model has {expected} coordinates")]
@@ -413,6 +426,12 @@ impl TextModel {
                 .collect::<Result<Vec<_>, _>>()
         };
         let lagrangian = Expression::parse(&spec.lagrangian, "lagrangian", &phase_space)?;
+        if let Some(i) = (0..n).find(|&i| !lagrangian.uses_velocity(i)) {
+            return Err(TextError::NoVelocity {
+                coordinate: spec.coordinates[i].clone(),
+                velocity: velocity_names[i].clone(),
+            });
+        }
         let forces = if spec.forces.is_empty() {
             Vec::new()
         } else {
