@@ -30,7 +30,7 @@ use svi::model::reparametrized::MonitorSpec;
 use svi::observer::{Every, Observer};
 use svi::solve::{Solution, SolveOptions, Span};
 use svi::stepping::run::RunFailure;
-use svi::{Integrator, Method, Statistics};
+use svi::{Integrator, LagrangianExt, Method, Statistics};
 use svi_models::{
     LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
     visit_local_model, visit_model, visit_rigid_model, visit_text_model,
@@ -212,6 +212,8 @@ struct Plan<'a, S: svi::method::space::Space> {
     t_end: f64,
     /// The method as the summary names it.
     method: MethodFields,
+    /// Warnings known before the run (a symmetry generator that is none).
+    warnings: Vec<Warning>,
 }
 
 /// The method's fields of the summary that the built method does not tell.
@@ -244,6 +246,7 @@ impl<'a> SceneRun<'a> {
             h,
             t_end,
             method,
+            warnings: Vec::new(),
         }
     }
 }
@@ -260,9 +263,60 @@ impl ModelVisitor for SceneRun<'_> {
             points: spec.points_in_use(),
             quadrature: spec.quadrature_in_use(),
         };
-        let plan = self.plan(resolved, method);
+        let mut plan = self.plan(resolved, method);
+        plan.warnings = symmetry_warnings(&model, plan.t0, &plan.initial);
         spec.visit_vector(VectorMethod { model, plan })?
     }
+}
+
+/// Largest relative variation of L along a symmetry generator accepted as a symmetry
+/// ([`svi::LagrangianExt::symmetry_defect`]: round-off and the central difference give
+/// about 1e-10).
+const SYMMETRY_DEFECT: f64 = 1e-6;
+
+/// A warning for each symmetry generator of `model` that is not a symmetry of L near the
+/// initial state (at it and at two points around it): its "momentum error" would measure
+/// nothing (a text model's `symmetries` are the user's claim).
+fn symmetry_warnings<M: ZooModel<N>, const N: usize>(
+    model: &M,
+    t0: f64,
+    initial: &svi::Initial<N>,
+) -> Vec<Warning> {
+    let (q, v) = match *initial {
+        svi::Initial::Velocity { q, v } => (q, v),
+        svi::Initial::Momentum { q, p } => match model.velocity(t0, &q, &p, &p) {
+            Ok(v) => (q, v),
+            Err(_) => return Vec::new(),
+        },
+    };
+    // Two fixed points around the initial state, so that a state where δL vanishes by
+    // accident (at rest, at the origin) does not pass a generator that is none.
+    let offset = |k: usize| {
+        nalgebra::SVector::<f64, N>::from_fn(|i, _| ((i + 1) as f64 * (0.7 + k as f64)).sin())
+    };
+    let points = [
+        (q, v),
+        (q + offset(1) * 0.1, v + offset(2)),
+        (q + offset(3) * 0.2, v - offset(4)),
+    ];
+    (0..model.generator_count())
+        .filter_map(|index| {
+            let defect = points
+                .iter()
+                .map(|(q, v)| model.symmetry_defect(index, t0, q, v))
+                .fold(0.0, |worst: f64, d| if d.is_nan() { f64::NAN } else { worst.max(d) });
+            (defect.is_nan() || defect > SYMMETRY_DEFECT).then(|| Warning {
+                kind: "symmetry",
+                message: format!(
+                    "the generator of {} is not a symmetry of L: near the initial state L \
+                     changes along it by {defect:.1e} of its terms, so {} is not conserved and \
+                     its momentum error measures nothing",
+                    model.momentum_name(index),
+                    model.momentum_name(index)
+                ),
+            })
+        })
+        .collect()
 }
 
 /// Runs a scene's model on ℝᴺ with the visited method.
@@ -549,7 +603,8 @@ where
                 t: S::time(&last),
             })
     });
-    let mut warnings = health::check(&Measured {
+    let mut warnings = plan.warnings.clone();
+    warnings.extend(health::check(&Measured {
         conserves_energy: S::conserves_energy(model),
         energy_initial,
         energy_final,
@@ -557,7 +612,7 @@ where
         energy_scale,
         extent: S::extent(&first).zip(S::extent(&last)),
         retries: outcome.statistics.retries,
-    });
+    }));
     let mut numbers = conservation.numbers();
     numbers.push(("energy_error_max", energy_error_max));
     warnings.extend(health::non_finite(&numbers));
