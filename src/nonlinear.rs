@@ -377,12 +377,13 @@ mod tests {
         // increments stall at 2e-17 while z itself is 1e-17: no relative test passes, and
         // before the absolute floor every such solve ended in NonConvergence.
         let mut k = 0;
-        let mut rest = |z: &DVector<f64>, jacobian: &mut DMatrix<f64>, residual: &mut DVector<f64>| {
-            k += 1;
-            let noise = if k % 2 == 0 { 1e-17 } else { -1e-17 };
-            jacobian.fill_with_identity();
-            residual[0] = z[0] - noise;
-        };
+        let mut rest =
+            |z: &DVector<f64>, jacobian: &mut DMatrix<f64>, residual: &mut DVector<f64>| {
+                k += 1;
+                let noise = if k % 2 == 0 { 1e-17 } else { -1e-17 };
+                jacobian.fill_with_identity();
+                residual[0] = z[0] - noise;
+            };
         let mut newton = Newton::new(1, 50);
         let mut z = DVector::from_vec(vec![0.0]);
         let iterations = newton.solve(&mut z, &mut rest).unwrap();

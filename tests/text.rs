@@ -183,7 +183,9 @@ fn kepler_from_text_matches_the_zoo_model_at_t_2000() {
 fn a_lagrangian_without_a_velocity_is_refused_naming_it() {
     let error = TextModel::new(&spec("0.5*vx^2 - x^2 - y^2", &["x", "y"], &[])).unwrap_err();
     assert!(
-        error.to_string().starts_with("the lagrangian does not depend on vy"),
+        error
+            .to_string()
+            .starts_with("the lagrangian does not depend on vy"),
         "{error}"
     );
     let error = TextModel::new(&spec("-0.5*x^2", &["x"], &[])).unwrap_err();
@@ -201,7 +203,11 @@ fn huge_integer_powers_have_the_closed_form_derivatives() {
     let second = model.second_derivatives(0.0, &SVector::from([x]), &SVector::from([0.0]));
     let force = -x.powi(100_000);
     let stiffness = -100_000.0 * x.powi(99_999);
-    assert!((second.q[0] - force).abs() <= 1e-10 * force.abs(), "{}", second.q[0]);
+    assert!(
+        (second.q[0] - force).abs() <= 1e-10 * force.abs(),
+        "{}",
+        second.q[0]
+    );
     assert!(
         (second.qq[(0, 0)] - stiffness).abs() <= 1e-9 * stiffness.abs(),
         "{} against {stiffness}",

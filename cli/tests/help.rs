@@ -5,13 +5,15 @@ mod common;
 use common::*;
 
 /// The subcommands of `svi`, and the top level.
-const COMMANDS: [&[&str]; 6] = [
+const COMMANDS: [&[&str]; 8] = [
     &[],
     &["run"],
     &["list"],
     &["bench"],
     &["stability"],
     &["stress"],
+    &["ensemble"],
+    &["scale"],
 ];
 
 /// The help text of `svi ARGS FLAG`.
@@ -84,4 +86,173 @@ fn every_method_option_lists_the_registry() {
     // The stability default is stated once, by clap.
     let text = help(&["stability"], "--help");
     assert_eq!(text.matches("[default: svi:5/4]").count(), 1, "{text}");
+}
+
+/// The text between `start` and `end` in the block of `option` of `svi ARGS --help`.
+fn stated(args: &[&str], option: &str, start: &str, end: &str) -> String {
+    let text = help(args, "--help");
+    let block = blocks(&text)
+        .into_iter()
+        .find(|block| block.trim_start().starts_with(option))
+        .unwrap_or_else(|| panic!("svi {args:?}: no {option}:\n{text}"));
+    let from = block
+        .find(start)
+        .unwrap_or_else(|| panic!("svi {args:?} {option}: no '{start}' in\n{block}"))
+        + start.len();
+    let rest = &block[from..];
+    rest[..rest.find(end).unwrap_or(rest.len())]
+        .trim()
+        .to_string()
+}
+
+/// Issue #34, item 8: every default and cap a help text states is what the binary does —
+/// read off the help text, then observed in a run (or a rejection one past the cap).
+#[test]
+fn help_texts_state_the_defaults_and_caps_the_binary_has() {
+    // svi run: the diagnostics measured without --diagnostics are exactly those stated.
+    let defaults = stated(&["run"], "--diagnostics", "[default: ", "]");
+    let summary = json(&["run", "kepler", "--t-end", "1", "--json"]);
+    for (diagnostic, field) in [
+        ("energy", "energy_error_max"),
+        ("momentum", "momentum_error_max"),
+        ("solution", "solution_error_max"),
+    ] {
+        let measured = !summary[field].is_null();
+        let listed = defaults.split(',').any(|name| name == diagnostic);
+        assert_eq!(
+            measured, listed,
+            "{diagnostic}: stated {defaults}, {summary}"
+        );
+    }
+    // svi ensemble: its own default, a column measured or empty.
+    let defaults = stated(&["ensemble"], "--diagnostics", "[default: ", "]");
+    let output = svi(&["ensemble", "kepler", "--param", "e=0.5", "--t-end", "1"]);
+    assert!(output.status.success());
+    let table = String::from_utf8(output.stdout).unwrap();
+    let mut lines = table.lines();
+    let columns: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for (diagnostic, column) in [
+        ("energy", "energy_error_max"),
+        ("momentum", "momentum_error_max"),
+    ] {
+        let index = columns.iter().position(|c| *c == column).unwrap();
+        let listed = defaults.split(',').any(|name| name == diagnostic);
+        assert_eq!(
+            !row[index].is_empty(),
+            listed,
+            "{diagnostic}: stated {defaults}"
+        );
+    }
+    // --tol and --monitor: the defaults a run reports.
+    let tol: f64 = stated(&["run"], "--tol", "[default: ", "]")
+        .parse()
+        .unwrap();
+    let adaptive = json(&["run", "kepler", "--t-end", "1", "--adapt", "step", "--json"]);
+    assert_eq!(number(&adaptive, "tol"), tol);
+    let monitor = stated(&["run"], "--monitor", "[default: ", "]");
+    let reparam = json(&[
+        "run", "kepler", "--t-end", "1", "--adapt", "reparam", "--json",
+    ]);
+    assert_eq!(reparam["monitor"], monitor.as_str());
+    // --max-steps: the cap is accepted, one more is not, and the cap is the default (a
+    // fixed grid of more steps is rejected without the flag).
+    let cap: usize = stated(&["run"], "--max-steps", "1 to ", " ")
+        .parse()
+        .unwrap();
+    assert_eq!(
+        stated(&["run"], "--max-steps", "[default: ", "]"),
+        cap.to_string()
+    );
+    let beyond = (cap + 1).to_string();
+    bad_input(&["run", "--max-steps", &beyond], &[], "--max-steps");
+    let (cap_text, h) = (cap.to_string(), (2.0 / cap as f64).to_string());
+    let more = format!("more than {:e} steps", cap as f64);
+    bad_input(
+        &["run", "oscillator", "--t-end", "4", "--h", &h],
+        &[],
+        &more,
+    );
+    let summary = json(&["run", "--max-steps", &cap_text, "--t-end", "1", "--json"]);
+    assert_eq!(summary["status"], "ok");
+    // svi ensemble takes every adaptivity svi run takes.
+    for command in ["run", "ensemble"] {
+        let short = help(&[command], "-h");
+        let line: String = short
+            .lines()
+            .skip_while(|line| !line.trim_start().starts_with("--adapt"))
+            .take(2)
+            .collect();
+        assert!(
+            line.contains("[possible values: none, step, degree, reparam, sem]"),
+            "svi {command} -h: {line}"
+        );
+    }
+    // svi scale: each stated cap is accepted by its check, and one more is not.
+    use svi_cli::command::scale::ScaleArgs;
+    let cheap = ScaleArgs {
+        sizes: vec![10],
+        steps: 1,
+        batches: 1,
+        min_run: 0.0,
+        out_dir: String::new(),
+    };
+    let size: usize = stated(&["scale"], "--sizes", " to ", " ").parse().unwrap();
+    let steps: usize = stated(&["scale"], "--steps", "(1 to ", ")")
+        .parse()
+        .unwrap();
+    let batches: usize = stated(&["scale"], "--batches", "(1 to ", ")")
+        .parse()
+        .unwrap();
+    let min_run: f64 = stated(&["scale"], "--min-run", "(0 to ", ")")
+        .parse()
+        .unwrap();
+    for (at_cap, beyond) in [
+        (
+            ScaleArgs {
+                sizes: vec![size],
+                ..cheap.clone()
+            },
+            ScaleArgs {
+                sizes: vec![size + 1],
+                ..cheap.clone()
+            },
+        ),
+        (
+            ScaleArgs {
+                steps,
+                ..cheap.clone()
+            },
+            ScaleArgs {
+                steps: steps + 1,
+                ..cheap.clone()
+            },
+        ),
+        (
+            ScaleArgs {
+                batches,
+                ..cheap.clone()
+            },
+            ScaleArgs {
+                batches: batches + 1,
+                ..cheap.clone()
+            },
+        ),
+        (
+            ScaleArgs {
+                min_run,
+                ..cheap.clone()
+            },
+            ScaleArgs {
+                min_run: min_run * 1.01,
+                ..cheap.clone()
+            },
+        ),
+    ] {
+        assert!(at_cap.check().is_ok(), "{at_cap:?}: {:?}", at_cap.check());
+        assert!(beyond.check().is_err(), "{beyond:?}");
+    }
+    for bad in ["nan", "-1", "inf"] {
+        bad_input(&["scale", "--min-run", bad], &[], "--min-run");
+    }
 }

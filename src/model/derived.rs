@@ -451,8 +451,8 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         let derivatives = self.first_derivatives(t, q, v);
         let xi = self.generator(index, q);
         let s = 1e-4 * (1.0 + q.amax()) / (1.0 + v.amax());
-        let lifted = (self.generator(index, &(q + v * s)) - self.generator(index, &(q - v * s)))
-            / (2.0 * s);
+        let lifted =
+            (self.generator(index, &(q + v * s)) - self.generator(index, &(q - v * s))) / (2.0 * s);
         let (along_q, along_v) = (derivatives.q.dot(&xi), derivatives.v.dot(&lifted));
         let scale = derivatives.q.abs().dot(&xi.abs()) + derivatives.v.abs().dot(&lifted.abs());
         let defect = (along_q + along_v).abs();
@@ -975,7 +975,9 @@ mod tests {
         ));
         // Named as what it is, not as an infinite increment.
         assert!(
-            error.to_string().contains("the mass matrix (the Hessian of L in the velocities) is singular"),
+            error
+                .to_string()
+                .contains("the mass matrix (the Hessian of L in the velocities) is singular"),
             "{error}"
         );
     }

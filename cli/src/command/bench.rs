@@ -1500,15 +1500,18 @@ pub fn execute(
         .unwrap_or("bench");
     let (csv, svg) = (format!("{stem}.csv"), format!("{stem}.svg"));
     let inputs: Vec<&Path> = scene.source.iter().map(PathBuf::as_path).collect();
-    let mut dir = OutputDirectory::create("--out-dir", out_dir, &[csv.clone(), svg.clone()], &inputs)
-        .map_err(SceneError::from)?;
+    let mut dir =
+        OutputDirectory::create("--out-dir", out_dir, &[csv.clone(), svg.clone()], &inputs)
+            .map_err(SceneError::from)?;
     let records = work_precision(&scene, options)
         .with_context(|| format!("benchmark of scene '{name}' failed"))?
         .records;
     let table = to_csv(&records);
-    dir.write(&csv, table.as_bytes()).map_err(SceneError::from)?;
+    dir.write(&csv, table.as_bytes())
+        .map_err(SceneError::from)?;
     let picture = plot(&records, stem, options.coordinate.as_deref())?;
-    dir.write(&svg, picture.as_bytes()).map_err(SceneError::from)?;
+    dir.write(&svg, picture.as_bytes())
+        .map_err(SceneError::from)?;
     dir.commit().map_err(SceneError::from)?;
     output::print(&table).map_err(SceneError::from)?;
     output::warn(format_args!(

@@ -121,11 +121,13 @@ pub fn execute(
         })
         .with_context(|| format!("benchmark of scene '{name}' failed"))?;
     let table = to_csv(&records);
-    dir.write(&csv, table.as_bytes()).map_err(SceneError::from)?;
+    dir.write(&csv, table.as_bytes())
+        .map_err(SceneError::from)?;
     dir.write(&svg, plot(&records, stem)?.as_bytes())
         .map_err(SceneError::from)?;
     dir.commit().map_err(SceneError::from)?;
-    output::print(format_args!("{table}{}\n", crossing_note(&records))).map_err(SceneError::from)?;
+    output::print(format_args!("{table}{}\n", crossing_note(&records)))
+        .map_err(SceneError::from)?;
     output::warn(format_args!(
         "wrote {} and {}",
         args.out_dir.join(&csv).display(),
@@ -343,10 +345,7 @@ pub fn crossing_note(records: &[SpectralRecord]) -> String {
 }
 
 /// The SVG: error against wall time and against FFTs, log–log.
-fn plot(
-    records: &[SpectralRecord],
-    title: &str,
-) -> Result<String, crate::report::plot::PlotError> {
+fn plot(records: &[SpectralRecord], title: &str) -> Result<String, crate::report::plot::PlotError> {
     let labels = labels(records);
     let series = |x: fn(&SpectralRecord) -> f64| -> Vec<Series> {
         labels

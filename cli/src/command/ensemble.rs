@@ -27,9 +27,12 @@ use crate::report::table::{MemberOutcome, Schema, Table};
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
-use crate::scene::overrides::{Overrides, method_help};
+use crate::scene::overrides::{
+    Overrides, diagnostics_help, max_steps_help, method_help, monitor_help, tol_help,
+};
 use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
 use crate::scene::{Scene, SceneError};
+use svi::model::reparametrized::MonitorSpec;
 
 /// The most threads `--threads` accepts.
 pub const MAX_THREADS: usize = 1024;
@@ -101,23 +104,32 @@ pub struct EnsembleArgs {
     /// Final time.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<f64>,
-    /// Diagnostics of every member, comma-separated, or none [default: energy].
-    #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
+    /// Diagnostics of every member, comma-separated, or none.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "LIST",
+        value_delimiter = ',',
+        help = diagnostics_help(&DEFAULT_DIAGNOSTICS)
+    )]
     pub diagnostics: Option<Vec<Diagnostic>>,
-    /// Adaptivity: none, step or degree.
+    /// Adaptivity of every member (the modes below, as for svi run; the default: none).
     #[arg(long, value_enum)]
     pub adapt: Option<AdaptMode>,
     /// Target final error of --adapt step and --adapt degree.
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true, help = tol_help())]
     pub tol: Option<f64>,
+    /// The monitor g(q) > 0 of --adapt reparam.
+    #[arg(long, value_name = "MONITOR", help = monitor_help())]
+    pub monitor: Option<MonitorSpec>,
     /// Recovery policy for failed steps.
     #[arg(long, value_enum)]
     pub recovery: Option<RecoveryKind>,
     /// Stop a member once a state component exceeds this in absolute value.
     #[arg(long, value_name = "LIMIT", allow_hyphen_values = true)]
     pub divergence_limit: Option<f64>,
-    /// Most steps of each member, 1 to 10⁹ [default: 10⁹] (as for svi run).
-    #[arg(long, value_name = "STEPS", allow_hyphen_values = true)]
+    /// Most steps of each member.
+    #[arg(long, value_name = "STEPS", allow_hyphen_values = true, help = max_steps_help())]
     pub max_steps: Option<usize>,
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]
@@ -135,6 +147,7 @@ impl EnsembleArgs {
             t_end: self.t_end,
             diagnostics: self.diagnostics.clone(),
             adapt: self.adapt,
+            monitor: self.monitor,
             tol: self.tol,
             recovery: self.recovery,
             divergence_limit: self.divergence_limit,

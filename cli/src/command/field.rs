@@ -212,7 +212,10 @@ impl FieldModelVisitor for FieldRun<'_> {
         let momentum_error_max = spread(&run.momentum);
         warnings.extend(health::non_finite(&[
             ("momentum_error_max", Some(momentum_error_max)),
-            ("multisymplectic_residual_max", run.multisymplectic_residual_max),
+            (
+                "multisymplectic_residual_max",
+                run.multisymplectic_residual_max,
+            ),
             ("error_max", Some(error_max)),
         ]));
         Ok(FieldSummary {

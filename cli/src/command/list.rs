@@ -102,7 +102,10 @@ pub fn listing() -> String {
         push_line(&mut out, format_args!("  {name:<width$}{description}"));
     }
     out.push('\n');
-    push_line(&mut out, format_args!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):"));
+    push_line(
+        &mut out,
+        format_args!("Models (model = \"NAME\" in a scene; parameters, default step and horizon):"),
+    );
     for model in describe_models() {
         let parameters: Vec<String> = model
             .parameters
@@ -122,58 +125,79 @@ pub fn listing() -> String {
         if model.exact_solution {
             facts.push("exact solution".into());
         }
-        push_line(&mut out, format_args!(
-            "  {:<18}{}; h = {}, t_end = {}; {}",
-            model.name,
-            parameters.join(", "),
-            Float(model.h),
-            Float(model.t_end),
-            facts.join(", ")
-        ));
+        push_line(
+            &mut out,
+            format_args!(
+                "  {:<18}{}; h = {}, t_end = {}; {}",
+                model.name,
+                parameters.join(", "),
+                Float(model.h),
+                Float(model.t_end),
+                facts.join(", ")
+            ),
+        );
     }
     out.push('\n');
-    push_line(&mut out, format_args!(
-        "Chains and lattices of any size n (svi run NAME --param n=N; methods svi, svi-newton, \
+    push_line(
+        &mut out,
+        format_args!(
+            "Chains and lattices of any size n (svi run NAME --param n=N; methods svi, svi-newton, \
          verlet):"
-    ));
+        ),
+    );
     for (name, description) in scenes(SpaceKind::Vector, true) {
         push_line(&mut out, format_args!("  {name:<18}{description}"));
     }
     out.push('\n');
-    push_line(&mut out, format_args!(
-        "Runtime-dimension models (model = \"NAME\"; parameters, default step and horizon; \
+    push_line(
+        &mut out,
+        format_args!(
+            "Runtime-dimension models (model = \"NAME\"; parameters, default step and horizon; \
          trajectory columns t, energy and these observables):"
-    ));
+        ),
+    );
     for name in LOCAL_MODEL_NAMES {
         if let Some(line) = visit_local_model(name, DescribeLocal) {
             push_line(&mut out, format_args!("{line}"));
         }
     }
     out.push('\n');
-    push_line(&mut out, format_args!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):"));
+    push_line(
+        &mut out,
+        format_args!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):"),
+    );
     for (name, description) in scenes(SpaceKind::Rotation, false) {
         push_line(&mut out, format_args!("  {name:<18}{description}"));
     }
     out.push('\n');
-    push_line(&mut out, format_args!("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):"));
+    push_line(
+        &mut out,
+        format_args!("Rigid-body models (model = \"NAME\"; parameters, default step and horizon):"),
+    );
     for name in RIGID_MODEL_NAMES {
         if let Some(line) = visit_rigid_model(name, DescribeRigid) {
             push_line(&mut out, format_args!("{line}"));
         }
     }
     out.push('\n');
-    push_line(&mut out, format_args!(
-        "Field scenes in 1 + 1 dimensions (svi run NAME --param points=N; the multisymplectic \
+    push_line(
+        &mut out,
+        format_args!(
+            "Field scenes in 1 + 1 dimensions (svi run NAME --param points=N; the multisymplectic \
          integrator; the models of the same names, with their parameters):"
-    ));
+        ),
+    );
     for (name, text) in FIELD_SCENES {
         push_line(&mut out, format_args!("  {name:<22}{}", description(text)));
     }
     out.push('\n');
-    push_line(&mut out, format_args!(
-        "Pseudospectral scenes, complex fields (svi run NAME --method midpoint|svi:P \
+    push_line(
+        &mut out,
+        format_args!(
+            "Pseudospectral scenes, complex fields (svi run NAME --method midpoint|svi:P \
          --param points=N):"
-    ));
+        ),
+    );
     for (name, text) in SPECTRAL_SCENES {
         push_line(&mut out, format_args!("  {name:<22}{}", description(text)));
     }

@@ -38,11 +38,11 @@ use svi_models::{
 
 use crate::command::space::RunSpace;
 use crate::report::csv::{CsvStream, Recorded};
+use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
+use crate::report::output;
 use crate::report::plot::plot_csv;
 use crate::report::progress::Progress;
-use crate::report::health::Warning;
-use crate::report::output;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
     TrajectoryOutput,
@@ -139,7 +139,9 @@ pub fn print_outcome<S: RunSummary>(
         output::warn(format_args!("warning: {}", warning.message));
     }
     let printed = match (&summary, json) {
-        (Some(summary), true) => output::print(format_args!("{}\n", serde_json::to_string(summary)?)),
+        (Some(summary), true) => {
+            output::print(format_args!("{}\n", serde_json::to_string(summary)?))
+        }
         (Some(summary), false) if error.is_none() => output::print(summary),
         (None, true) => {
             let report = error.as_ref().map(error_report);
@@ -304,7 +306,10 @@ fn symmetry_warnings<M: ZooModel<N>, const N: usize>(
             let defect = points
                 .iter()
                 .map(|(q, v)| model.symmetry_defect(index, t0, q, v))
-                .fold(0.0, |worst: f64, d| if d.is_nan() { f64::NAN } else { worst.max(d) });
+                .fold(
+                    0.0,
+                    |worst: f64, d| if d.is_nan() { f64::NAN } else { worst.max(d) },
+                );
             (defect.is_nan() || defect > SYMMETRY_DEFECT).then(|| Warning {
                 kind: "symmetry",
                 message: format!(

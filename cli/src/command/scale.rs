@@ -302,8 +302,8 @@ pub fn execute_args(args: &ScaleArgs) -> anyhow::Result<()> {
     args.check()?;
     let directory = Path::new(&args.out_dir);
     let names = ["scale.csv".to_string(), "scale.svg".to_string()];
-    let mut dir = OutputDirectory::create("--out-dir", directory, &names, &[])
-        .map_err(SceneError::from)?;
+    let mut dir =
+        OutputDirectory::create("--out-dir", directory, &names, &[]).map_err(SceneError::from)?;
     let measurements = scale(args)?;
     let mut csv =
         String::from("method,model,n,seconds_per_step,iterations_per_step,peak_memory_mb\n");

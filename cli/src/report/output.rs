@@ -120,7 +120,11 @@ pub fn check_file(option: &'static str, path: &Path) -> Result<(), OutputError> 
     }
     match std::fs::symlink_metadata(path) {
         Ok(metadata) if metadata.is_file() => Ok(()),
-        Ok(metadata) => Err(unusable(option, path, format!("it is {}", file_kind(&metadata)))),
+        Ok(metadata) => Err(unusable(
+            option,
+            path,
+            format!("it is {}", file_kind(&metadata)),
+        )),
         Err(error) if error.kind() == io::ErrorKind::NotFound => Ok(()),
         // Unreadable metadata (a name too long, a parent that is a file): the write will
         // report it; nothing has been opened.
@@ -173,7 +177,10 @@ pub fn check_extension(
     Err(unusable(
         option,
         path,
-        format!("{option} writes {format}: give a name ending in {}", allowed.join(" or ")),
+        format!(
+            "{option} writes {format}: give a name ending in {}",
+            allowed.join(" or ")
+        ),
     ))
 }
 
@@ -224,7 +231,10 @@ fn identities(path: &Path) -> Vec<Identity> {
 
 /// Check that no two of `outputs` (option, path) are the same file, and that none is one of
 /// the `inputs` (the scene file): writing one would clobber the other.
-pub fn check_distinct(outputs: &[(&'static str, &Path)], inputs: &[&Path]) -> Result<(), OutputError> {
+pub fn check_distinct(
+    outputs: &[(&'static str, &Path)],
+    inputs: &[&Path],
+) -> Result<(), OutputError> {
     for input in inputs {
         let input_identities = identities(input);
         for (option, path) in outputs {
@@ -235,7 +245,10 @@ pub fn check_distinct(outputs: &[(&'static str, &Path)], inputs: &[&Path]) -> Re
                 return Err(unusable(
                     option,
                     path,
-                    format!("it is the scene file '{}', which the run reads", input.display()),
+                    format!(
+                        "it is the scene file '{}', which the run reads",
+                        input.display()
+                    ),
                 ));
             }
         }
@@ -523,7 +536,12 @@ mod tests {
         file.write_all(b"output\n").unwrap();
         file.commit().unwrap();
         assert_eq!(std::fs::read_to_string(&victim).unwrap(), "precious\n");
-        assert!(!std::fs::symlink_metadata(&other).unwrap().file_type().is_symlink());
+        assert!(
+            !std::fs::symlink_metadata(&other)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
         assert_eq!(std::fs::read_to_string(&other).unwrap(), "output\n");
     }
 
@@ -560,7 +578,10 @@ mod tests {
         let csv = dir.path().join("out.csv");
         let same = dir.path().join(".").join("out.csv");
         let error = check_distinct(&[("--out", &csv), ("--plot", &same)], &[]).unwrap_err();
-        assert!(error.to_string().contains("--out writes the same file"), "{error}");
+        assert!(
+            error.to_string().contains("--out writes the same file"),
+            "{error}"
+        );
         let error = check_distinct(&[("--out", &scene)], &[&scene]).unwrap_err();
         assert!(error.to_string().contains("is the scene file"), "{error}");
         assert!(check_distinct(&[("--out", &csv)], &[&scene]).is_ok());

@@ -328,7 +328,10 @@ impl Conservation {
                 ("momentum_error_relative", *momentum_error_relative),
                 ("invariant_error_max", *invariant_error_max),
                 ("orthogonality_error_max", *orthogonality_error_max),
-                ("orthogonality_error_final", Some(*orthogonality_error_final)),
+                (
+                    "orthogonality_error_final",
+                    Some(*orthogonality_error_final),
+                ),
             ]),
         }
         numbers

@@ -213,7 +213,9 @@ fn parse_values(option: &'static str, text: &str, spec: &str) -> Result<Values, 
                         return Err(malformed(
                             option,
                             text,
-                            format!("the list has more than {MAX_MEMBERS} values (the most members)"),
+                            format!(
+                                "the list has more than {MAX_MEMBERS} values (the most members)"
+                            ),
                         ));
                     }
                     values.extend(item.points().unwrap_or_default())

@@ -184,9 +184,9 @@ pub fn load_space_time<S: DeserializeOwned>(
     let text = read_scene_file(path).ok()?;
     let table: toml::Table = toml::from_str(&text).ok()?;
     let model = table.get("model")?.as_str()?;
-    models.contains(&model).then(|| {
-        from_toml(&text, &format!("'{}'", path.display())).map(|s| (s, Some(path.into())))
-    })
+    models
+        .contains(&model)
+        .then(|| from_toml(&text, &format!("'{}'", path.display())).map(|s| (s, Some(path.into()))))
 }
 
 /// Parse a scene of type `S`; `origin` names the source in error messages.

@@ -185,12 +185,12 @@ impl Scene {
         }
         let path = Path::new(name_or_path);
         match limits::read_scene_file(path) {
-            Ok(text) => Scene::from_toml(&text, &format!("'{}'", path.display())).map(|scene| {
-                Scene {
+            Ok(text) => {
+                Scene::from_toml(&text, &format!("'{}'", path.display())).map(|scene| Scene {
                     source: Some(path.into()),
                     ..scene
-                }
-            }),
+                })
+            }
             Err(SceneError::Read { source, .. })
                 if source.kind() == std::io::ErrorKind::NotFound
                     && path.extension().is_none()
@@ -559,9 +559,7 @@ impl Scene {
         let kept = output.trajectory.is_some() || output.record;
         match (output.every, kept) {
             (Some(_), false) => Err(SceneError::EveryWithoutOutput),
-            (Some(0), true) => {
-                Err(svi::Error::invalid("every", "0 steps; need at least 1").into())
-            }
+            (Some(0), true) => Err(svi::Error::invalid("every", "0 steps; need at least 1").into()),
             (Some(_), true) if output.output_times.is_some() => Err(SceneError::NotApplicable {
                 option: "--every (output.every)",
                 reason: "thins the steps written to the trajectory; with --output-times \

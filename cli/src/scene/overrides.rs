@@ -6,12 +6,65 @@ use svi::MethodSpec;
 use svi::method::registry;
 use svi::model::reparametrized::MonitorSpec;
 
+use crate::report::csv::Float;
 use crate::scene::error::SceneError;
 use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
 
 /// The help of an option taking a method: `intro`, then the grammar and every method.
 pub fn method_help(intro: &str) -> String {
     format!("{intro}\n\n{}", registry::grammar_help())
+}
+
+/// `a,b,c` of diagnostics' names.
+pub fn diagnostic_names(diagnostics: &[Diagnostic]) -> String {
+    use clap::ValueEnum;
+    let names: Vec<String> = diagnostics
+        .iter()
+        .filter_map(|d| d.to_possible_value())
+        .map(|value| value.get_name().to_string())
+        .collect();
+    names.join(",")
+}
+
+/// The help of `--diagnostics`, with the default of `svi run` (a [`Scene`](crate::Scene)
+/// without `output.diagnostics`) or of `svi ensemble`.
+pub fn diagnostics_help(default: &[Diagnostic]) -> String {
+    format!(
+        "Diagnostics to compute, comma-separated, or none [default: {}]",
+        diagnostic_names(default)
+    )
+}
+
+/// The help of `--tol`, with the library's default tolerance.
+pub fn tol_help() -> String {
+    format!(
+        "Target final error of --adapt step and --adapt degree [default: {}]; an error without \
+         them",
+        Float(svi::solve::SolveOptions::default().tol.unwrap_or(f64::NAN))
+    )
+}
+
+/// The help of `--monitor`, with the default monitor.
+pub fn monitor_help() -> String {
+    format!(
+        "The monitor g(q) > 0 of --adapt reparam: sundman:ALPHA is g = |q|^ALPHA for a central \
+         force about the origin (ALPHA = 1.5 or 1 for Kepler orbits); force:BETA is \
+         g = |∂L/∂q(q, 0)|^(−BETA), the force at rest derived from the model (force:0.75 is \
+         sundman:1.5 for an inverse-square force); potential is g = 1/L(q, 0) = −1/V(q), with \
+         verlet, yoshida4, kahan-li6 or kahan-li8 on a constant-mass model the explicit \
+         logarithmic-Hamiltonian splitting [default: {}]",
+        MonitorSpec::default()
+    )
+}
+
+/// The help of `--max-steps`, with the cap (the default) of the library.
+pub fn max_steps_help() -> String {
+    let cap = svi::stepping::grid::MAX_STEPS;
+    format!(
+        "Most steps of the run, 1 to {cap} [default: {cap}]: an adaptive run (--adapt step, \
+         degree, sem, reparam) that needs more stops with the error too_many_steps and the run \
+         so far; a fixed-step run that needs more is rejected before it starts"
+    )
 }
 
 /// Scene fields set from the command line.
@@ -52,28 +105,28 @@ pub struct Overrides {
     /// against t (on chains the energy and the observables, e.g. FPUT's mode energies).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
-    /// Diagnostics to compute, comma-separated, or none (default: energy,momentum,solution).
-    ///
-    /// none computes no per-step diagnostic at all (on rigid bodies also no invariant and
-    /// orthogonality errors); their summary fields are null.
-    #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
+    /// Diagnostics to compute, comma-separated, or none.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "LIST",
+        value_delimiter = ',',
+        help = diagnostics_help(&crate::Scene::DEFAULT_DIAGNOSTICS),
+        long_help = format!(
+            "{}\n\nnone computes no per-step diagnostic at all (on rigid bodies also no \
+             invariant and orthogonality errors); their summary fields are null.",
+            diagnostics_help(&crate::Scene::DEFAULT_DIAGNOSTICS)
+        )
+    )]
     pub diagnostics: Option<Vec<Diagnostic>>,
-    /// Adaptivity: none (fixed step), step (step doubling), degree (points per step),
-    /// reparam (fixed steps --h in computational time τ, dt = g(q) dτ; see --monitor) or sem
-    /// (svi's steps fixed by discrete energy conservation, the first of size --h).
+    /// Adaptivity (the modes below; the default: none).
     #[arg(long, value_enum)]
     pub adapt: Option<AdaptMode>,
-    /// Target final error of --adapt step and --adapt degree [default: 1e-8]; an error
-    /// without them.
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    /// Target final error of --adapt step and --adapt degree.
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true, help = tol_help())]
     pub tol: Option<f64>,
-    /// The monitor g(q) > 0 of --adapt reparam: sundman:ALPHA is g = |q|^ALPHA for a central
-    /// force about the origin (ALPHA = 1.5 or 1 for Kepler orbits); force:BETA is
-    /// g = |∂L/∂q(q, 0)|^(−BETA), the force at rest derived from the model (force:0.75 is
-    /// sundman:1.5 for an inverse-square force); potential is g = 1/L(q, 0) = −1/V(q), with
-    /// verlet, yoshida4, kahan-li6 or kahan-li8 on a constant-mass model the explicit
-    /// logarithmic-Hamiltonian splitting [default: sundman:1.5].
-    #[arg(long, value_name = "MONITOR")]
+    /// The monitor g(q) > 0 of --adapt reparam.
+    #[arg(long, value_name = "MONITOR", help = monitor_help())]
     pub monitor: Option<MonitorSpec>,
     /// Report the states at these times, comma-separated (dense output); with --out the
     /// trajectory holds them instead of the steps.
@@ -91,10 +144,8 @@ pub struct Overrides {
     /// Stop once a state component exceeds this in absolute value.
     #[arg(long, value_name = "LIMIT", allow_hyphen_values = true)]
     pub divergence_limit: Option<f64>,
-    /// Most steps of the run, 1 to 10⁹ [default: 10⁹]: an adaptive run (--adapt step,
-    /// degree, sem, reparam) that needs more stops with the error too_many_steps and the run
-    /// so far; a fixed-step run that needs more is rejected before it starts.
-    #[arg(long, value_name = "STEPS", allow_hyphen_values = true)]
+    /// Most steps of the run.
+    #[arg(long, value_name = "STEPS", allow_hyphen_values = true, help = max_steps_help())]
     pub max_steps: Option<usize>,
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]

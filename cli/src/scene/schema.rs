@@ -255,8 +255,8 @@ pub struct OutputSection {
     /// SVG file for a line chart of the trajectory file's columns against t (needs
     /// `trajectory`; absent: no plot).
     pub plot: Option<PathBuf>,
-    /// Diagnostics to compute (default: energy, momentum and solution; `["none"]` or `[]`:
-    /// none at all).
+    /// Diagnostics to compute (default: [`Scene::DEFAULT_DIAGNOSTICS`](crate::Scene::DEFAULT_DIAGNOSTICS),
+    /// energy and momentum; `["none"]` or `[]`: none at all).
     pub diagnostics: Option<Vec<Diagnostic>>,
     /// Report the states at these times, read off each step's polynomial (dense output).
     pub output_times: Option<Vec<f64>>,

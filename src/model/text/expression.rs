@@ -438,8 +438,7 @@ mod tests {
         // d/dx xⁿ = n xⁿ⁻¹, d²/dx² = n(n − 1) xⁿ⁻²: at x = 1 the factors themselves, which
         // num-dual's powi computes in i32 and overflows for n ≳ 1290.
         for n in [3, 1000, 1001, 99_999, 2_000_000_000, -99_999] {
-            let (value, first, second) =
-                num_dual::second_derivative(|x| power_integer(x, n), 1.0);
+            let (value, first, second) = num_dual::second_derivative(|x| power_integer(x, n), 1.0);
             let n = f64::from(n);
             assert_eq!(value, 1.0);
             assert!((first - n).abs() <= 1e-12 * n.abs(), "{n}: {first}");
