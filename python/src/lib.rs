@@ -22,6 +22,8 @@ use svi_cli::command::ensemble::Ensemble;
 use svi_cli::command::run::error_report;
 use svi_cli::report::table::Cell;
 use svi_cli::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
+use svi_cli::scene::field::FieldScene;
+use svi_cli::scene::spectral::SpectralScene;
 use svi_cli::{AdaptMode, Diagnostic, FormName, Overrides, RecoveryKind, Scene, SceneError};
 
 create_exception!(
@@ -263,11 +265,23 @@ fn run(
     Ok((json, rows))
 }
 
-/// The scene `name`: a built-in scene or a scene file (as `svi run` loads it), else the text
-/// of a scene (TOML: it has a line break or `=`), else a zoo model with its defaults.
+/// The scene `name`: a built-in scene or an existing scene file (as `svi run` loads it), else
+/// the text of a scene (TOML: it has a line break or `=`), else a zoo model with its
+/// defaults. A field or pseudospectral scene is named as such: the package runs the ODE and
+/// rigid-body scenes.
 fn load(name: &str) -> PyResult<Scene> {
-    if name.contains(['\n', '=']) {
+    let is_file = std::path::Path::new(name).is_file();
+    if !is_file && name.contains(['\n', '=']) {
         return Scene::from_toml(name, "a scene text").map_err(failure);
+    }
+    if FieldScene::load(name).is_some() || SpectralScene::load(name).is_some() {
+        return Err(failure(SceneError::NotApplicable {
+            option: "scene",
+            reason: format!(
+                "'{name}' is a field or pseudospectral scene; the Python package runs the ODE and \
+                 rigid-body scenes (run it with `svi run {name}`)"
+            ),
+        }));
     }
     match Scene::load(name) {
         Err(SceneError::UnknownScene { .. })

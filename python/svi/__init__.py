@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import warnings
 from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -30,6 +31,7 @@ __version__: str = _svi.version()
 
 __all__ = [
     "DEFAULT_SCENE",
+    "ArgumentTypeError",
     "DivergedError",
     "HealthError",
     "InvalidInputError",
@@ -107,6 +109,11 @@ class InvalidInputError(SviError, ValueError):
     """Other bad input (``invalid_input``): an unknown scene or model, an option the scene cannot use."""
 
 
+class ArgumentTypeError(InvalidInputError, TypeError):
+    """An argument of the wrong type (``invalid_input``): a bool or a string where a number
+    goes, a fractional count, a number where a name goes. Also a :class:`TypeError`."""
+
+
 class NonConvergenceError(SviError):
     """A nonlinear solve of a step that did not converge (``non_convergence``)."""
 
@@ -172,6 +179,75 @@ def _error(failure: Exception) -> SviError:
     )
 
 
+def _wrong_type(name: str, expected: str, value: Any) -> ArgumentTypeError:
+    """The error of argument ``name`` given ``value`` where ``expected`` goes."""
+    message = f"invalid {name}: {value!r} is a {type(value).__name__}, not {expected}"
+    return ArgumentTypeError("invalid_input", message, bad_input=True)
+
+
+def _is_number(value: Any) -> bool:
+    """Whether ``value`` is a real number (not a bool, which Python counts as one)."""
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def _real(name: str, value: Any) -> Optional[float]:
+    """``value`` as a float, ``None`` kept; anything but a real number is an :class:`ArgumentTypeError`."""
+    if value is None:
+        return None
+    if not _is_number(value):
+        raise _wrong_type(name, "a number", value)
+    return float(value)
+
+
+def _count(name: str, value: Any) -> Optional[int]:
+    """``value`` as a whole number of 0 or more, ``None`` kept."""
+    if value is None:
+        return None
+    if not _is_number(value) or not float(value).is_integer():
+        raise _wrong_type(name, "a whole number", value)
+    count = int(value)
+    if not 0 <= count < 2**63:
+        raise InvalidParameterError("invalid_parameter", f"invalid {name}: {count}; need a whole number from 0 to 2^63 - 1", bad_input=True)
+    return count
+
+
+def _text(name: str, value: Any) -> Optional[str]:
+    """``value`` as a string (a path-like object as its path), ``None`` kept."""
+    if value is None:
+        return None
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
+    if not isinstance(value, str):
+        raise _wrong_type(name, "a string", value)
+    return value
+
+
+def _reals(name: str, values: Any) -> Optional[List[float]]:
+    """A sequence (or array) of real numbers as a list of floats, ``None`` kept."""
+    if values is None:
+        return None
+    if isinstance(values, (str, bytes)) or _is_number(values):
+        raise _wrong_type(name, "a sequence of numbers", values)
+    try:
+        items = list(np.asarray(values).ravel())
+    except (TypeError, ValueError):
+        raise _wrong_type(name, "a sequence of numbers", values) from None
+    return [_real(name, x) for x in items]
+
+
+def _names(name: str, values: Any) -> Optional[List[str]]:
+    """Names as a list: a sequence of strings, or one string of comma-separated names."""
+    if values is None:
+        return None
+    if isinstance(values, str):
+        return [item.strip() for item in values.split(",")]
+    try:
+        items = list(values)
+    except TypeError:
+        raise _wrong_type(name, "a list of names", values) from None
+    return [_text(name, item) for item in items]
+
+
 def _call(function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
     """Call a native function, raising its failures as :class:`SviError`."""
     try:
@@ -209,7 +285,9 @@ class Result:
             times), a NumPy array (an :class:`Array`, which prints every digit); ``None``
             without a trajectory.
         q, v, p: configuration, velocity and momentum at those times, arrays of shape
-            (points, N) (scenes on ℝᴺ; ``None`` for rigid bodies).
+            (points, N) (scenes on ℝᴺ; ``None`` for rigid bodies). A chain's trajectory holds
+            its observables instead (``trajectory``), and asking for ``q`` says so; its final
+            state is ``summary["q"]``.
         energy: energy at those times.
         trajectory: every column of the trajectory by name (``t``, ``q_q1``, ..., on SO(3)
             ``qw``, ..., ``omega_1``, ...).
@@ -219,22 +297,35 @@ class Result:
         self.summary: Dict[str, Any] = summary
         self.trajectory: Dict[str, np.ndarray] = {}
         self.t: Optional[np.ndarray] = None
-        self.q: Optional[np.ndarray] = None
-        self.v: Optional[np.ndarray] = None
-        self.p: Optional[np.ndarray] = None
         self.energy: Optional[np.ndarray] = None
+        # A chain's trajectory holds t, energy and its observables, not its n coordinates.
+        chain = "coordinates" not in summary and "form" not in summary
+        self._chain_columns: Optional[List[str]] = None
+        if not chain:
+            self.q: Optional[np.ndarray] = None
+            self.v: Optional[np.ndarray] = None
+            self.p: Optional[np.ndarray] = None
         if trajectory is not None:
             columns, rows = trajectory
             data = _exact(np.array(rows, dtype=float).reshape(len(rows), len(columns)))
             self.trajectory = {name: data[:, i] for i, name in enumerate(columns)}
             self.t = self.trajectory.get("t")
             self.energy = self.trajectory.get("energy")
+            if chain:
+                self._chain_columns = columns
             for field in ("q", "v", "p"):
                 indices = [i for i, name in enumerate(columns) if name.startswith(field + "_")]
-                if indices:
+                if indices and not chain:
                     setattr(self, field, data[:, indices])
 
     def __getattr__(self, name: str) -> Any:
+        columns = self.__dict__.get("_chain_columns")
+        if name in ("q", "v", "p") and columns is not None:
+            raise AttributeError(
+                f"a chain's trajectory holds the columns {', '.join(columns)}, not its n coordinates: "
+                f"the final {name} is result.summary[{name!r}], and the states at output_times are in "
+                "result.summary['outputs']"
+            )
         summary = self.__dict__.get("summary", {})
         if name in summary:
             return summary[name]
@@ -300,32 +391,64 @@ def run(
     initial_lists = None
     if initial is not None:
         initial_lists = {
-            name: [float(x) for x in np.atleast_1d(np.asarray(value, dtype=float))] for name, value in initial.items()
+            _text("initial", name): _reals(f"initial[{name!r}]", [value] if _is_number(value) else value)
+            for name, value in _mapping("initial", initial).items()
         }
     summary, rows = _call(
         _svi.run,
-        scene,
-        method=method,
-        points=points,
-        quadrature=quadrature,
-        h=None if h is None else float(h),
-        t_end=None if t_end is None else float(t_end),
-        params=None if params is None else {k: float(v) for k, v in params.items()},
+        _text("scene", scene),
+        method=_text("method", method),
+        points=_count("points", points),
+        quadrature=_count("quadrature", quadrature),
+        h=_real("h", h),
+        t_end=_real("t_end", t_end),
+        params=_parameters(params),
         initial=initial_lists,
-        diagnostics=None if diagnostics is None else list(diagnostics),
-        output_times=None if output_times is None else [float(t) for t in output_times],
-        adapt=adapt,
-        monitor=monitor,
-        tol=tol,
-        recovery=recovery,
-        divergence_limit=divergence_limit,
-        max_steps=None if max_steps is None else int(max_steps),
-        form=form,
-        trajectory=trajectory,
-        every=every,
-        progress=_stderr_is_terminal() if progress is None else bool(progress),
+        diagnostics=_names("diagnostics", diagnostics),
+        output_times=_reals("output_times", output_times),
+        adapt=_text("adapt", adapt),
+        monitor=_text("monitor", monitor),
+        tol=_real("tol", tol),
+        recovery=_text("recovery", recovery),
+        divergence_limit=_real("divergence_limit", divergence_limit),
+        max_steps=_count("max_steps", max_steps),
+        form=_text("form", form),
+        trajectory=_flag("trajectory", trajectory),
+        every=_count("every", every),
+        progress=_stderr_is_terminal() if progress is None else _flag("progress", progress),
     )
     return Result(json.loads(summary), rows)
+
+
+def _mapping(name: str, values: Any) -> Mapping[str, Any]:
+    """``values`` if it is a mapping (a dict), else an :class:`ArgumentTypeError`."""
+    if not isinstance(values, Mapping):
+        raise _wrong_type(name, "a dict", values)
+    return values
+
+
+def _sequence(name: str, values: Any) -> List[Any]:
+    """``values`` as a list, if it is a sequence (not a string)."""
+    if isinstance(values, (str, bytes)):
+        raise _wrong_type(name, "a sequence", values)
+    try:
+        return list(values)
+    except TypeError:
+        raise _wrong_type(name, "a sequence", values) from None
+
+
+def _parameters(params: Any) -> Optional[Dict[str, float]]:
+    """Model parameters, name → number, ``None`` kept."""
+    if params is None:
+        return None
+    return {_text("params", name): _real(f"params[{name!r}]", value) for name, value in _mapping("params", params).items()}
+
+
+def _flag(name: str, value: Any) -> bool:
+    """``value`` if it is a bool."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise _wrong_type(name, "True or False", value)
+    return bool(value)
 
 
 def _stderr_is_terminal() -> bool:
@@ -365,14 +488,18 @@ def _spec(name: str, values: ValuesSpec) -> str:
     - a tuple ``(lo, hi)``: a range to draw from (``random=N``);
     - a number, a list or an array: these values.
     """
+    name = _text("axis name", name)
     if isinstance(values, str):
         return f"{name}={values}"
-    if isinstance(values, tuple) and len(values) == 3 and isinstance(values[2], (int, np.integer)) and not isinstance(values[2], bool):
-        return f"{name}={_number(values[0])}:{_number(values[1])}:{int(values[2])}"
+    if isinstance(values, tuple) and len(values) == 3:
+        lo, hi = _real(f"{name} (lo)", values[0]), _real(f"{name} (hi)", values[1])
+        if not _is_number(values[2]) or isinstance(values[2], (float, np.floating)):
+            raise _wrong_type(f"{name} (count)", "an int (a tuple (lo, hi, count) is a grid)", values[2])
+        return f"{name}={_number(lo)}:{_number(hi)}:{_count(f'{name} (count)', values[2])}"
     if isinstance(values, tuple) and len(values) == 2:
-        return f"{name}={_number(values[0])}:{_number(values[1])}"
-    array = np.atleast_1d(np.asarray(values, dtype=float))
-    return f"{name}={','.join(_number(x) for x in array)}"
+        return f"{name}={_number(_real(f'{name} (lo)', values[0]))}:{_number(_real(f'{name} (hi)', values[1]))}"
+    points = _reals(name, [values] if _is_number(values) else values)
+    return f"{name}={','.join(_number(x) for x in points)}"
 
 
 def _column(values: List[Any]) -> Any:
@@ -470,25 +597,25 @@ def ensemble(
         malformed values).
     """
     arguments: Dict[str, Any] = dict(
-        scene=scene,
-        params=[_spec(name, values) for name, values in (params or {}).items()],
-        initial=[_spec(name, values) for name, values in (initial or {}).items()],
-        random=random,
-        seed=int(seed),
-        threads=int(threads),
-        method=method,
-        points=points,
-        quadrature=quadrature,
-        h=None if h is None else float(h),
-        t_end=None if t_end is None else float(t_end),
-        diagnostics=None if diagnostics is None else list(diagnostics),
-        adapt=adapt,
-        monitor=monitor,
-        tol=tol,
-        recovery=recovery,
-        divergence_limit=divergence_limit,
-        max_steps=None if max_steps is None else int(max_steps),
-        form=form,
+        scene=_text("scene", scene),
+        params=[_spec(name, values) for name, values in _mapping("params", params or {}).items()],
+        initial=[_spec(name, values) for name, values in _mapping("initial", initial or {}).items()],
+        random=_count("random", random),
+        seed=_count("seed", seed),
+        threads=_count("threads", threads),
+        method=_text("method", method),
+        points=_count("points", points),
+        quadrature=_count("quadrature", quadrature),
+        h=_real("h", h),
+        t_end=_real("t_end", t_end),
+        diagnostics=_names("diagnostics", diagnostics),
+        adapt=_text("adapt", adapt),
+        monitor=_text("monitor", monitor),
+        tol=_real("tol", tol),
+        recovery=_text("recovery", recovery),
+        divergence_limit=_real("divergence_limit", divergence_limit),
+        max_steps=_count("max_steps", max_steps),
+        form=_text("form", form),
     )
     count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)
     rows: List[List[Any]] = []
@@ -554,14 +681,14 @@ def stability(
         range ``stable``, ``periodic``, ``strongly_stable`` (lists of [lower, upper]),
         ``a_stable`` and ``p_stable``.
     """
-    args = ["--method", method]
+    args = ["--method", _text("method", method)]
     if z is not None:
-        args += ["--z", ",".join(_number(x) for x in z)]
-    for flag, value in (("--z-min", z_min), ("--z-max", z_max)):
+        args += ["--z", ",".join(_number(x) for x in _reals("z", z))]
+    for flag, value in (("--z-min", _real("z_min", z_min)), ("--z-max", _real("z_max", z_max))):
         if value is not None:
             args += [flag, _number(value)]
     if samples is not None:
-        args += ["--samples", str(int(samples))]
+        args += ["--samples", str(_count("samples", samples))]
     csv, regions = _call(_svi.stability, args)
     lines = csv.strip().splitlines()
     columns = lines[0].split(",")
@@ -591,20 +718,22 @@ def bench(
     time. The scene's model needs an exact solution. A method none of whose points could be
     measured is left out of the table with an :class:`SviWarning` naming its error; the call
     raises :class:`SviError` only when no method measured any point."""
-    args = [scene]
+    args = [_text("scene", scene)]
     if methods is not None:
-        args += ["--methods", methods if isinstance(methods, str) else ",".join(methods)]
+        args += ["--methods", ",".join(_names("methods", methods))]
     if steps is not None:
-        args += ["--steps", ",".join(str(int(n)) for n in steps)]
+        args += ["--steps", ",".join(str(_count("steps", n)) for n in _sequence("steps", steps))]
     if tolerances is not None:
-        args += ["--tolerances", ",".join(_number(x) for x in tolerances)]
+        args += ["--tolerances", ",".join(_number(x) for x in _reals("tolerances", tolerances))]
     if t_end is not None:
-        args += ["--t-end", _number(t_end)]
-    for name, value in (params or {}).items():
+        args += ["--t-end", _number(_real("t_end", t_end))]
+    for name, value in (_parameters(params) or {}).items():
         args += ["--param", f"{name}={_number(value)}"]
-    for flag, value in (("--batches", batches), ("--min-batch", min_batch), ("--target", target), ("--max-run", max_run)):
+    if batches is not None:
+        args += ["--batches", str(_count("batches", batches))]
+    for flag, name, value in (("--min-batch", "min_batch", min_batch), ("--target", "target", target), ("--max-run", "max_run", max_run)):
         if value is not None:
-            args += [flag, str(value)]
+            args += [flag, _number(_real(name, value))]
     outcome = json.loads(_call(_svi.bench, args))
     for failure in outcome["failures"]:
         warnings.warn(

@@ -818,6 +818,28 @@ impl Scene {
         for (name, value) in &self.parameters {
             model.set_parameter(name, *value)?;
         }
+        // The memory is checked before any vector of n components is made.
+        let spec = self.method_spec()?;
+        let outputs = self.output.output_times.as_ref().map_or(0, Vec::len);
+        let n = model.dimension();
+        let estimate = limits::chain_memory(
+            n,
+            spec.name(),
+            spec.points_in_use(),
+            M::STRUCTURE == svi::Structure::ConstantMass,
+            outputs,
+        );
+        let what = format!(
+            "{} with n = {n}, {}{}",
+            model.name(),
+            spec.name(),
+            if outputs > 0 {
+                format!(" and {outputs} output times of 3n numbers each")
+            } else {
+                String::new()
+            }
+        );
+        limits::check_memory("n (--param n, or --output-times)", estimate, &what)?;
         let (default_t0, default_q, default_v) = model.initial_state();
         let initial = vector::local_initial(&self.initial, model.name(), default_q, default_v)?;
         Ok((
