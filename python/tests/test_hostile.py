@@ -1,0 +1,165 @@
+"""Hostile input to the Python API (issue #34): arguments of every wrong type and value, scene
+names and paths, and planted links. Whatever the arguments, a call returns a result whose
+numbers are finite (or warned about) or raises an :class:`svi.SviError` naming what is wrong;
+never another exception, and it never writes a file.
+
+The cases are drawn from a seeded generator: ``SVI_HOSTILE_SEED`` picks the seed (default
+20261124, as CI's) and ``SVI_HOSTILE_CASES`` multiplies the count, as for the Rust suites.
+"""
+
+import math
+import os
+import random
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import svi
+
+SEED = int(os.environ.get("SVI_HOSTILE_SEED", "20261124"))
+FACTOR = max(1, int(os.environ.get("SVI_HOSTILE_CASES", "1")))
+
+#: Values of every type a caller might pass where a number, a count or a name goes.
+HOSTILE = [
+    None, True, False, 0, -1, 1, 2, 3, 7, 2**64, -(2**70), 0.5, 2.5, -0.3, 1e-300, 1e300, math.inf, -math.inf,
+    math.nan, "1", "0.1", "", "kepler", "energy", "svi:6", "svi:1000", [], [1.0], [0.1, 0.2], (0.1, 0.9, 3),
+    (0.1, 0.9, 3.0), (0.0, 1.0), {}, {"e": 0.5}, np.float64(0.2), np.int64(3), np.array([0.5, 0.6]),
+    np.bool_(True), object(), b"bytes", 1j,
+]
+
+#: Keyword arguments of svi.run and svi.ensemble that take numbers, counts or names.
+RUN_KEYWORDS = [
+    "method", "h", "t_end", "params", "initial", "diagnostics", "output_times", "points", "quadrature",
+    "adapt", "monitor", "tol", "recovery", "divergence_limit", "max_steps", "form", "every", "trajectory",
+]
+ENSEMBLE_KEYWORDS = [
+    "params", "initial", "random", "seed", "threads", "method", "h", "t_end", "diagnostics", "points",
+    "adapt", "tol", "max_steps",
+]
+SCENES = ["kepler", "oscillator", "pendulum", "fput", "rigid-body", "wave", "kepler-text", "nosuch", "", "/", "a=b"]
+
+
+def finite(value):
+    """Whether every number in a JSON-like value is finite (None for a diagnostic not measured)."""
+    if isinstance(value, float):
+        return math.isfinite(value)
+    if isinstance(value, dict):
+        return all(finite(v) for v in value.values())
+    if isinstance(value, list):
+        return all(finite(v) for v in value)
+    return True
+
+
+def short(kwargs):
+    """Keep a case short whatever it asks for: a horizon of at most 2 and a step budget."""
+    kwargs = dict(kwargs)
+    if not isinstance(kwargs.get("t_end"), (int, float)) or isinstance(kwargs.get("t_end"), bool) or not 0 < kwargs["t_end"] <= 2:
+        kwargs["t_end"] = 1.0
+    kwargs["max_steps"] = 20_000
+    return kwargs
+
+
+def call(function, *args, **kwargs):
+    """Call the API; anything but a result or an SviError fails the case."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return function(*args, **kwargs)
+    except svi.SviError as error:
+        assert error.message and error.kind, repr(error)
+        assert "panicked" not in error.message
+        return error
+
+
+def test_hostile_arguments_raise_svi_errors_only(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    rng = random.Random(SEED)
+    outcomes = {"result": 0, "error": 0}
+    for _ in range(300 * FACTOR):
+        scene = rng.choice(SCENES)
+        if rng.random() < 0.5:
+            keywords = {name: rng.choice(HOSTILE) for name in rng.sample(RUN_KEYWORDS, rng.randint(1, 3))}
+            outcome = call(svi.run, scene, **short(keywords))
+            if isinstance(outcome, svi.Result):
+                assert finite(outcome.summary) or outcome.summary["warnings"], outcome.summary
+        else:
+            keywords = {name: rng.choice(HOSTILE) for name in rng.sample(ENSEMBLE_KEYWORDS, rng.randint(1, 3))}
+            keywords.setdefault("params", {"e": [0.1, 0.5]} if scene == "kepler" else None)
+            keywords = short(keywords)
+            keywords.update(as_frame=False, progress=False)
+            outcome = call(svi.ensemble, scene, **keywords)
+        outcomes["error" if isinstance(outcome, svi.SviError) else "result"] += 1
+    # Nothing was written where the calls ran.
+    assert list(tmp_path.iterdir()) == []
+    assert outcomes["result"] > 0 and outcomes["error"] > 0, outcomes
+
+
+def test_wrong_types_are_named_not_converted():
+    for keywords, name in [
+        ({"h": True}, "h"),
+        ({"t_end": "10"}, "t_end"),
+        ({"points": 2.5}, "points"),
+        ({"max_steps": -1}, "max_steps"),
+        ({"params": {"e": "0.5"}}, "params"),
+        ({"output_times": "1,2"}, "output_times"),
+        ({"trajectory": 1}, "trajectory"),
+    ]:
+        with pytest.raises(svi.InvalidInputError if name != "max_steps" else svi.InvalidParameterError) as caught:
+            svi.run("kepler", **keywords)
+        assert name in caught.value.message, caught.value.message
+        if name != "max_steps":
+            assert isinstance(caught.value, TypeError)
+    # A grid's count must be a whole number: (lo, hi, 3.0) is not read as three values.
+    with pytest.raises(svi.ArgumentTypeError) as caught:
+        svi.ensemble("kepler", params={"e": (0.1, 0.5, 3.0)}, t_end=1.0, as_frame=False)
+    assert "count" in caught.value.message
+    # Diagnostics as one comma-separated string, as on the command line.
+    result = svi.run("kepler", t_end=1.0, diagnostics="energy,momentum", trajectory=False)
+    assert result.momentum_error_max is not None and result.solution_error_max is None
+
+
+def test_scenes_are_named_for_what_they_are(tmp_path):
+    # A field scene is one, not "no such scene".
+    with pytest.raises(svi.InvalidInputError) as caught:
+        svi.run("wave")
+    assert "field or pseudospectral scene" in caught.value.message
+    # A path with '=' in its name is the file it names, not TOML text.
+    path = tmp_path / "e=0.3.toml"
+    path.write_text('model = "kepler"\n[parameters]\ne = 0.3\n[run]\nt_end = 1.0\n')
+    assert svi.run(str(path), trajectory=False).summary["parameters"] == {"e": 0.3}
+    assert svi.run(path, trajectory=False).summary["parameters"] == {"e": 0.3}
+    # A chain's trajectory has no coordinates, and asking for them says where the state is.
+    chain = svi.run("fput", params={"n": 8}, t_end=1.0)
+    with pytest.raises(AttributeError, match="summary\\['q'\\]"):
+        chain.q
+    assert len(chain.summary["q"]) == 8 and "mode_1" in chain.trajectory
+
+
+def test_a_run_writes_no_file_and_follows_no_link(tmp_path, monkeypatch):
+    # The trajectory stays in memory: a link planted where the old scratch file went, in the
+    # temporary directory, is never written through.
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious\n")
+    for n in range(8):
+        (tmp_path / f"svi-python-{os.getpid()}-{n}.csv").symlink_to(victim)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    result = svi.run("kepler", t_end=2.0)
+    assert result.q.shape == (11, 2)
+    assert victim.read_text() == "precious\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
+    # A scene file whose trajectory names a link: the package writes no file at all.
+    scene = tmp_path / "scene.toml"
+    scene.write_text('model = "kepler"\n[run]\nt_end = 1.0\n[output]\ntrajectory = "out.csv"\n')
+    (tmp_path / "out.csv").symlink_to(victim)
+    svi.run(str(scene))
+    assert victim.read_text() == "precious\n"
+
+
+def test_bench_keeps_the_methods_that_measure():
+    with pytest.warns(svi.SviWarning, match="svi:6 measured no point"):
+        table = svi.bench("kepler", methods="svi:6,verlet", steps=[100, 200], batches=1, min_batch=0.0, as_frame=False)
+    assert list(table["method"]) == ["verlet", "verlet"]
+    assert all(np.isfinite(table["final_error"]))
