@@ -479,7 +479,7 @@ fn load_and_maybe_run_space_time(
                 return Ok(1);
             }
             scene
-                .run()
+                .run(false)
                 .map(|summary| serde_json::to_value(summary).unwrap())
         }};
     }

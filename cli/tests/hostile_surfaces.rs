@@ -20,9 +20,9 @@ use clap::Parser;
 use proptest::prelude::*;
 use proptest::sample::select;
 use serde_json::Value;
+use svi_cli::Scene;
 use svi_cli::command::ensemble::{Ensemble, EnsembleArgs};
 use svi_cli::command::scale::{MAX_ESTIMATED_SECONDS, ScaleArgs};
-use svi_cli::Scene;
 
 #[path = "../../tests/common/hostile_cases.rs"]
 mod hostile_cases;
@@ -186,13 +186,17 @@ fn spec() -> BoxedStrategy<String> {
 /// them.
 fn ensemble_arguments() -> impl Strategy<Value = Vec<String>> {
     let scene = select(vec![
-        "kepler", "double-pendulum", "pendulum", "oscillator", "rigid-body", "fput", "wave",
-        "kepler-text", "nosuch",
+        "kepler",
+        "double-pendulum",
+        "pendulum",
+        "oscillator",
+        "rigid-body",
+        "fput",
+        "wave",
+        "kepler-text",
+        "nosuch",
     ]);
-    let parameter = (
-        select(vec!["e", "g", "m1", "sigma", "nosuch", "n"]),
-        spec(),
-    )
+    let parameter = (select(vec!["e", "g", "m1", "sigma", "nosuch", "n"]), spec())
         .prop_map(|(name, spec)| vec!["--param".to_string(), format!("{name}={spec}")]);
     let initial = (
         select(vec![
@@ -251,15 +255,12 @@ fn ensemble_case(args: &[String]) -> Result<usize, TestCaseError> {
             return Ok(0);
         }
     };
-    let random = parsed
-        .random
-        .map(|count| svi_cli::scene::ensemble::Random {
-            count,
-            seed: parsed.seed.unwrap_or(0),
-        });
-    let built = Scene::load(parsed.scene.as_deref().unwrap_or("kepler")).and_then(|scene| {
-        Ensemble::new(scene, &parsed.overrides(), parsed.axes(), random)
+    let random = parsed.random.map(|count| svi_cli::scene::ensemble::Random {
+        count,
+        seed: parsed.seed.unwrap_or(0),
     });
+    let built = Scene::load(parsed.scene.as_deref().unwrap_or("kepler"))
+        .and_then(|scene| Ensemble::new(scene, &parsed.overrides(), parsed.axes(), random));
     let mut ensemble = match built {
         Ok(ensemble) => ensemble,
         Err(error) => {
@@ -438,14 +439,18 @@ fn output_case() -> impl Strategy<Value = OutputCase> {
         Existing::Fifo,
         Existing::Directory,
     ]);
-    (command, existing.clone(), existing, proptest::bool::weighted(0.2)).prop_map(
-        |(command, out, plot, full_stdout)| OutputCase {
+    (
+        command,
+        existing.clone(),
+        existing,
+        proptest::bool::weighted(0.2),
+    )
+        .prop_map(|(command, out, plot, full_stdout)| OutputCase {
             args: command.split(' ').map(String::from).collect(),
             out,
             plot,
             full_stdout,
-        },
-    )
+        })
 }
 
 /// Put `existing` at `path`, pointing a link at `victim`.
@@ -490,15 +495,35 @@ fn output_run(case: &OutputCase) -> Result<usize, TestCaseError> {
     let stderr = String::from_utf8_lossy(&output.stderr);
     let code = output.status.code();
     prop_assert!(!stderr.contains("panicked"), "{:?}: {}", case, stderr);
-    prop_assert!(matches!(code, Some(0..=2)), "{:?}: {:?} {}", case, code, stderr);
-    prop_assert_eq!(std::fs::read_to_string(&victim).unwrap(), PRECIOUS, "{:?}", case);
-    prop_assert_eq!(std::fs::read_to_string(&scene).unwrap(), scene_text, "{:?}", case);
+    prop_assert!(
+        matches!(code, Some(0..=2)),
+        "{:?}: {:?} {}",
+        case,
+        code,
+        stderr
+    );
+    prop_assert_eq!(
+        std::fs::read_to_string(&victim).unwrap(),
+        PRECIOUS,
+        "{:?}",
+        case
+    );
+    prop_assert_eq!(
+        std::fs::read_to_string(&scene).unwrap(),
+        scene_text,
+        "{:?}",
+        case
+    );
     for (path, existing) in [(&out, case.out), (&plot, case.plot)] {
         let kind = std::fs::symlink_metadata(path).map(|m| m.file_type());
         match existing {
             Existing::Fifo => {
                 use std::os::unix::fs::FileTypeExt;
-                prop_assert!(kind.is_ok_and(|k| k.is_fifo()), "{:?}: a FIFO replaced", case);
+                prop_assert!(
+                    kind.is_ok_and(|k| k.is_fifo()),
+                    "{:?}: a FIFO replaced",
+                    case
+                );
             }
             Existing::Link => prop_assert!(
                 kind.is_ok_and(|k| k.is_symlink()),

@@ -8,6 +8,7 @@
 //! left to right (a periodic mesh does not repeat its first node at the right end). The run
 //! takes the whole number of steps h that reaches t_end (the last level at or after it).
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -20,6 +21,7 @@ use crate::report::csv::{CsvStream, Float};
 use crate::report::field::FieldSummary;
 use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_space_time;
+use crate::report::progress::Progress;
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
 use crate::scene::error::SceneError;
 use crate::scene::field::{FieldRunSection, FieldScene, QuadratureName};
@@ -107,7 +109,7 @@ pub fn execute(
     let result = scene.and_then(|mut scene| {
         scene.apply(overrides)?;
         ran = true;
-        scene.run()
+        scene.run(std::io::stderr().is_terminal())
     });
     print_outcome(name, result, ran, json, strict)
 }
@@ -127,8 +129,17 @@ impl RunSummary for FieldSummary {
 
 impl FieldScene {
     /// Run the scene and summarise it.
-    pub fn run(&self) -> Result<FieldSummary, SceneError> {
-        visit_field_model(&self.model, FieldRun { scene: self }).unwrap_or_else(|| {
+    ///
+    /// `progress` allows a progress bar on stderr over the time levels of a long run.
+    pub fn run(&self, progress: bool) -> Result<FieldSummary, SceneError> {
+        visit_field_model(
+            &self.model,
+            FieldRun {
+                scene: self,
+                progress,
+            },
+        )
+        .unwrap_or_else(|| {
             Err(SceneError::UnknownModel(UnknownModel {
                 name: self.model.clone(),
             }))
@@ -138,6 +149,7 @@ impl FieldScene {
 
 /// Runs a field scene on the model it is handed.
 struct FieldRun<'a> {
+    progress: bool,
     scene: &'a FieldScene,
 }
 
@@ -164,12 +176,19 @@ impl FieldModelVisitor for FieldRun<'_> {
         let mut csv = field_stream(scene.output.trajectory.as_ref(), "t,x,u\n")?;
         let mut write_error = None;
         let mut error_max = 0.0f64;
+        let bar = self
+            .progress
+            .then(|| Progress::for_levels(levels, points))
+            .flatten();
         let start = Instant::now();
         let run = integrator.run(
             0.0,
             |x| model.initial_field(x),
             levels,
             |level, t, u| {
+                if let Some(bar) = &bar {
+                    bar.advance(level);
+                }
                 for (x, value) in xs.iter().zip(u) {
                     error_max = error_max.max((value[0] - model.exact_field(*x, t)[0]).abs());
                 }
@@ -188,6 +207,9 @@ impl FieldModelVisitor for FieldRun<'_> {
             },
         )?;
         let seconds = start.elapsed().as_secs_f64();
+        if let Some(bar) = &bar {
+            bar.finish();
+        }
         let trajectory = finish_field_stream(csv, write_error, every)?;
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
             plot_space_time(csv, svg, model.name())?;

@@ -8,6 +8,7 @@
 //! left to right (the periodic grid does not repeat its first node). `--plot` draws |ψ| over
 //! space and time. The run takes the whole number of steps h that reaches t_end.
 
+use std::io::IsTerminal;
 use std::time::Instant;
 
 use svi::field::fourier::Complex64;
@@ -18,9 +19,11 @@ use crate::command::field::{field_stream, finish_field_stream, time_levels};
 use crate::command::run::{RunSummary, print_outcome};
 use crate::report::health::{self, FieldMeasured, Warning};
 use crate::report::plot::plot_space_time;
+use crate::report::progress::Progress;
 use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Parameters, Status};
 use crate::scene::error::SceneError;
+use crate::scene::limits;
 use crate::scene::overrides::Overrides;
 use crate::scene::spectral::{SpectralScene, scheme_name};
 
@@ -50,15 +53,24 @@ pub fn execute(
     let result = scene.and_then(|mut scene| {
         scene.apply(overrides)?;
         ran = true;
-        scene.run()
+        scene.run(std::io::stderr().is_terminal())
     });
     print_outcome(name, result, ran, json, strict)
 }
 
 impl SpectralScene {
     /// Run the scene and summarise it.
-    pub fn run(&self) -> Result<SpectralSummary, SceneError> {
-        visit_spectral_model(&self.model, SpectralRun { scene: self }).unwrap_or_else(|| {
+    ///
+    /// `progress` allows a progress bar on stderr over the time levels of a long run.
+    pub fn run(&self, progress: bool) -> Result<SpectralSummary, SceneError> {
+        visit_spectral_model(
+            &self.model,
+            SpectralRun {
+                scene: self,
+                progress,
+            },
+        )
+        .unwrap_or_else(|| {
             Err(SceneError::UnknownModel(UnknownModel {
                 name: self.model.clone(),
             }))
@@ -68,6 +80,7 @@ impl SpectralScene {
 
 /// Runs a pseudospectral scene on the model it is handed.
 struct SpectralRun<'a> {
+    progress: bool,
     scene: &'a SpectralScene,
 }
 
@@ -93,8 +106,15 @@ impl SpectralModelVisitor for SpectralRun<'_> {
         let mut csv = field_stream(scene.output.trajectory.as_ref(), "t,x,abs,re,im\n")?;
         let mut write_error = None;
         let (mut error_max, mut error_final) = (0.0f64, 0.0f64);
+        let bar = self
+            .progress
+            .then(|| Progress::for_levels(steps, points))
+            .flatten();
         let start = Instant::now();
         let run = integrator.run(0.0, &initial, steps, |level, t, psi| {
+            if let Some(bar) = &bar {
+                bar.advance(level);
+            }
             error_final = error_against_exact(&model, &xs, t, psi);
             error_max = error_max.max(error_final);
             let Some((_, stream)) = csv.as_mut() else {
@@ -112,6 +132,9 @@ impl SpectralModelVisitor for SpectralRun<'_> {
             }
         })?;
         let seconds = start.elapsed().as_secs_f64();
+        if let Some(bar) = &bar {
+            bar.finish();
+        }
         let trajectory = finish_field_stream(csv, write_error, every)?;
         if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
             plot_space_time(csv, svg, model.name())?;
@@ -172,6 +195,18 @@ pub fn prepare<M: SpectralZooModel>(
     points: usize,
     h: f64,
 ) -> Result<Prepared<M>, SceneError> {
+    let stages = match scheme {
+        TimeScheme::Galerkin { degree } => degree,
+        TimeScheme::Strang => 1,
+    };
+    limits::check_memory(
+        "points (--param points, or --method)",
+        limits::spectral_memory(points, stages),
+        &format!(
+            "{} with {points} Fourier modes and {stages} stages",
+            model.name()
+        ),
+    )?;
     let mut options = PseudospectralOptions::default();
     options.scheme = scheme;
     let integrator = Pseudospectral::new(

@@ -46,6 +46,21 @@ impl Progress {
         long.then(|| Progress::new(steps))
     }
 
+    /// A progress bar over `levels` time levels of a field of `nodes` nodes, or `None` if
+    /// the run is short in both senses of [`Progress::for_run`].
+    pub fn for_levels(levels: usize, nodes: usize) -> Option<Self> {
+        let long =
+            levels >= PROGRESS_MIN_STEPS || levels.saturating_mul(nodes) >= PROGRESS_MIN_WORK;
+        long.then(|| Progress::new(levels))
+    }
+
+    /// Show `step` done (about every 1 % of the steps).
+    pub fn advance(&self, step: usize) {
+        if step > 0 && step.is_multiple_of(self.stride) {
+            self.bar.set_position(step as u64);
+        }
+    }
+
     /// Remove the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();

@@ -302,4 +302,3 @@ pub fn run_counting<S: Strategy>(
     assert_eq!(counts.iter().sum::<usize>(), total);
     counts
 }
-
