@@ -21,7 +21,6 @@ use common::*;
 use clap::Parser;
 use proptest::prelude::*;
 use proptest::sample::select;
-use proptest::test_runner::TestRunner;
 use serde_json::Value;
 use svi_cli::bench::{BenchArgs, BenchMethod, work_precision};
 use svi_cli::scene::limits::{
@@ -30,7 +29,7 @@ use svi_cli::scene::limits::{
 };
 use svi_cli::stability::{Answer, Request, StabilityArgs};
 use svi_cli::stress::{StressArgs, stress};
-use svi_cli::{Overrides, Scene, SceneError, Summary, parse_parameter};
+use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
 
 #[path = "../../tests/common/hostile_cases.rs"]
 mod hostile_cases;
@@ -849,7 +848,7 @@ fn bench_in_process(args: &[String]) -> Result<usize, TestCaseError> {
         .and_then(|scene| work_precision(&scene, &options));
     match result {
         Ok(records) => {
-            for record in &records {
+            for record in &records.records {
                 prop_assert!(record.steps > 0 && record.seconds >= 0.0, "{:?}", record);
             }
         }
@@ -934,16 +933,6 @@ fn stability_in_process(args: &[String]) -> Result<usize, TestCaseError> {
         }
     };
     let request = parsed.request();
-    if let Err(error) = request.check() {
-        check_error(&error, args)?;
-        return Ok(1);
-    }
-    if let Request::Range { samples, .. } = request {
-        prop_assert!((2..=MAX_SAMPLES).contains(&samples));
-        if samples > 50 {
-            return Ok(2);
-        }
-    }
     let methods: Vec<svi::MethodSpec> = if parsed.figures {
         svi_cli::stability::figure_configurations()
             .into_iter()
@@ -958,6 +947,16 @@ fn stability_in_process(args: &[String]) -> Result<usize, TestCaseError> {
             }
         }
     };
+    if let Some(error) = methods.iter().find_map(|spec| request.check(*spec).err()) {
+        check_error(&error, args)?;
+        return Ok(1);
+    }
+    if let Request::Range { samples, .. } = request {
+        prop_assert!((2..=MAX_SAMPLES).contains(&samples));
+        if samples > 50 {
+            return Ok(2);
+        }
+    }
     for spec in methods {
         match svi_cli::stability::run(spec, &request) {
             Ok(Answer::Report(report)) => {

@@ -156,12 +156,49 @@ pub enum Request {
     Values(Vec<f64>),
 }
 
+/// The longest analysis `svi stability` runs, in seconds ([`estimated_seconds`]): 10 minutes.
+pub const MAX_ESTIMATED_SECONDS: f64 = 600.0;
+
+/// The estimated time of analysing `spec` at `samples` values of z, in seconds: per value
+/// 2.5·10⁻⁷ s × P² max(P, M) for a method of P CGL points and M Gauss points (the stage
+/// system of the oscillator, assembled and factorised), 10⁻⁵ s for the classic methods;
+/// measured on a 2-core machine for svi:P/P, P = 16 … 128 (svi:128/128: 0.49 s a value) and
+/// sc:64, sc:128 (2026-11-27).
+pub fn estimated_seconds(spec: MethodSpec, samples: usize) -> f64 {
+    let per_value = match spec.points_in_use() {
+        Some(points) => {
+            let p = points as f64;
+            let m = spec.quadrature_in_use().unwrap_or(points) as f64;
+            2.5e-7 * p * p * p.max(m)
+        }
+        None => 1e-5,
+    };
+    per_value * samples as f64
+}
+
 impl Request {
     /// Check the request's size: at most [`MAX_SAMPLES`] grid points (the z values are the
-    /// library's to check). An error names `--samples`.
-    pub fn check(&self) -> Result<(), SceneError> {
-        if let Request::Range { samples, .. } = self {
-            limits::count("--samples", *samples, 2, MAX_SAMPLES, "grid points")?;
+    /// library's to check), and for `spec` an analysis estimated at most
+    /// [`MAX_ESTIMATED_SECONDS`]. An error names `--samples` (or `--z`).
+    pub fn check(&self, spec: MethodSpec) -> Result<(), SceneError> {
+        let (option, count) = match self {
+            Request::Range { samples, .. } => {
+                limits::count("--samples", *samples, 2, MAX_SAMPLES, "grid points")?;
+                ("--samples", *samples)
+            }
+            Request::Values(values) => ("--z", values.len()),
+        };
+        let estimate = estimated_seconds(spec, count);
+        if estimate > MAX_ESTIMATED_SECONDS {
+            return Err(SceneError::InvalidOption {
+                option,
+                reason: format!(
+                    "{count} values of z with {spec} would take about {:.0} s on a 2-core \
+                     machine, more than the {MAX_ESTIMATED_SECONDS} s svi stability runs; \
+                     take fewer samples or fewer points",
+                    estimate
+                ),
+            });
         }
         Ok(())
     }
@@ -199,7 +236,11 @@ pub struct StabilityArgs {
         long,
         default_value_t = 900,
         allow_hyphen_values = true,
-        help = format!("Grid points on the z range, 2 to {MAX_SAMPLES}")
+        help = format!(
+            "Grid points on the z range, 2 to {MAX_SAMPLES}; an analysis estimated above \
+             {MAX_ESTIMATED_SECONDS} s (about 2.5e-7 s × P² max(P, M) per point for P CGL and M \
+             Gauss points) is refused with its estimate"
+        )
     )]
     pub samples: usize,
     /// The six configurations of the paper's Figs. 3–6 instead of --method (not with
@@ -237,7 +278,7 @@ pub enum Answer {
 /// Run `request` for the method `spec` (a method for models on ℝᴺ; an error names a
 /// rigid-body method) after checking it ([`Request::check`]).
 pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, SceneError> {
-    request.check()?;
+    request.check(spec)?;
     /// Answers the request for the visited method.
     struct Answering<'a>(&'a Request);
     impl VectorMethodVisitor<1> for Answering<'_> {
