@@ -360,11 +360,19 @@ impl OutputFile {
         };
         let mut builder = tempfile::Builder::new();
         builder.prefix(".svi-").suffix(".tmp");
-        // Readable as a file made by `File::create` is (the umask applies).
+        // The permissions of the file replaced (a private file stays private), else those of
+        // a file made by `File::create` (0666 less the umask).
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;
-            builder.permissions(std::fs::Permissions::from_mode(0o666));
+            let permissions = std::fs::symlink_metadata(path)
+                .ok()
+                .filter(Metadata::is_file)
+                .map_or_else(
+                    || std::fs::Permissions::from_mode(0o666),
+                    |existing| existing.permissions(),
+                );
+            builder.permissions(permissions);
         }
         let file = builder
             .tempfile_in(directory)
@@ -516,6 +524,20 @@ mod tests {
         drop(file);
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new\n");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_replaced_file_keeps_its_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = scratch("mode");
+        let path = dir.path().join("private.csv");
+        std::fs::write(&path, "old\n").unwrap();
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600)).unwrap();
+        write_file("--out", &path, b"new\n").unwrap();
+        let mode = std::fs::metadata(&path).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o600);
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new\n");
     }
 
     #[cfg(unix)]
