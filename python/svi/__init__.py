@@ -397,27 +397,39 @@ def run(
     summary, rows = _call(
         _svi.run,
         _text("scene", scene),
-        method=_text("method", method),
-        points=_count("points", points),
-        quadrature=_count("quadrature", quadrature),
-        h=_real("h", h),
-        t_end=_real("t_end", t_end),
         params=_parameters(params),
         initial=initial_lists,
-        diagnostics=_names("diagnostics", diagnostics),
         output_times=_reals("output_times", output_times),
-        adapt=_text("adapt", adapt),
-        monitor=_text("monitor", monitor),
-        tol=_real("tol", tol),
-        recovery=_text("recovery", recovery),
-        divergence_limit=_real("divergence_limit", divergence_limit),
-        max_steps=_count("max_steps", max_steps),
-        form=_text("form", form),
+        **_shared_options(locals()),
         trajectory=_flag("trajectory", trajectory),
         every=_count("every", every),
         progress=_stderr_is_terminal() if progress is None else _flag("progress", progress),
     )
     return Result(json.loads(summary), rows)
+
+
+#: The options :func:`run` and :func:`ensemble` share (the flags of ``svi run``), each with
+#: the check of its type.
+_SHARED_OPTIONS: Dict[str, Callable[[str, Any], Any]] = {
+    "method": _text,
+    "points": _count,
+    "quadrature": _count,
+    "h": _real,
+    "t_end": _real,
+    "diagnostics": _names,
+    "adapt": _text,
+    "monitor": _text,
+    "tol": _real,
+    "recovery": _text,
+    "divergence_limit": _real,
+    "max_steps": _count,
+    "form": _text,
+}
+
+
+def _shared_options(arguments: Mapping[str, Any]) -> Dict[str, Any]:
+    """The shared options among a call's ``arguments`` (its ``locals()``), their types checked."""
+    return {name: check(name, arguments[name]) for name, check in _SHARED_OPTIONS.items()}
 
 
 def _mapping(name: str, values: Any) -> Mapping[str, Any]:
@@ -603,19 +615,7 @@ def ensemble(
         random=_count("random", random),
         seed=_count("seed", seed),
         threads=_count("threads", threads),
-        method=_text("method", method),
-        points=_count("points", points),
-        quadrature=_count("quadrature", quadrature),
-        h=_real("h", h),
-        t_end=_real("t_end", t_end),
-        diagnostics=_names("diagnostics", diagnostics),
-        adapt=_text("adapt", adapt),
-        monitor=_text("monitor", monitor),
-        tol=_real("tol", tol),
-        recovery=_text("recovery", recovery),
-        divergence_limit=_real("divergence_limit", divergence_limit),
-        max_steps=_count("max_steps", max_steps),
-        form=_text("form", form),
+        **_shared_options(locals()),
     )
     count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)
     rows: List[List[Any]] = []

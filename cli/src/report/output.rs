@@ -186,18 +186,14 @@ pub fn check_extension(
 
 /// Check that `path` is not a picture's name (`.svg`, `.png`), for an output of CSV text.
 pub fn check_not_a_picture(option: &'static str, path: &Path) -> Result<(), OutputError> {
-    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-    if ["svg", "png"]
-        .iter()
-        .any(|picture| extension.eq_ignore_ascii_case(picture))
-    {
-        return Err(unusable(
+    match check_extension(option, path, &["svg", "png"], "") {
+        Ok(()) => Err(unusable(
             option,
             path,
-            format!("{option} writes CSV text, not a picture (.{extension})"),
-        ));
+            format!("{option} writes CSV text, not a picture"),
+        )),
+        Err(_) => Ok(()),
     }
-    Ok(())
 }
 
 /// Where a path leads, to compare two outputs: the canonical directory and the file name
@@ -235,37 +231,17 @@ pub fn check_distinct(
     outputs: &[(&'static str, &Path)],
     inputs: &[&Path],
 ) -> Result<(), OutputError> {
-    for input in inputs {
-        let input_identities = identities(input);
-        for (option, path) in outputs {
-            if identities(path)
-                .iter()
-                .any(|identity| input_identities.contains(identity))
-            {
-                return Err(unusable(
-                    option,
-                    path,
-                    format!(
-                        "it is the scene file '{}', which the run reads",
-                        input.display()
-                    ),
-                ));
-            }
-        }
-    }
+    let same = |a: &Path, b: &Path| {
+        let theirs = identities(b);
+        identities(a).iter().any(|identity| theirs.contains(identity))
+    };
     for (i, (option, path)) in outputs.iter().enumerate() {
-        let mine = identities(path);
-        for (other, other_path) in &outputs[..i] {
-            if identities(other_path)
-                .iter()
-                .any(|identity| mine.contains(identity))
-            {
-                return Err(unusable(
-                    option,
-                    path,
-                    format!("{other} writes the same file"),
-                ));
-            }
+        if let Some(input) = inputs.iter().find(|input| same(path, input)) {
+            let reason = format!("it is the scene file '{}', which the run reads", input.display());
+            return Err(unusable(option, path, reason));
+        }
+        if let Some((other, _)) = outputs[..i].iter().find(|(_, other)| same(path, other)) {
+            return Err(unusable(option, path, format!("{other} writes the same file")));
         }
     }
     Ok(())

@@ -798,7 +798,7 @@ mod tests {
             TextModel::new(&spec("x", &[])),
             Err(TextError::NoCoordinates)
         );
-        let error = TextModel::new(&spec("x", &["x", "y"])).map(|_| ());
+        let error = TextModel::new(&spec("vx^2 + vy^2 - x", &["x", "y"])).map(|_| ());
         assert_eq!(error, Ok(()));
     }
 
