@@ -53,27 +53,54 @@ fn token() -> BoxedStrategy<String> {
     .boxed()
 }
 
-/// A text model's scene: an expression of tokens (after a kinetic part, mostly), one to
-/// four coordinates (from a pool with odd and doubled names), maybe forces and symmetries,
-/// an initial state of any length, a step and a horizon.
+/// A term of a Lagrangian: mostly a valid one (some with huge powers, singular points,
+/// overflowing constants), sometimes a soup of tokens.
+fn term() -> BoxedStrategy<String> {
+    prop_oneof![
+        6 => select(vec![
+            "k*x^2", "0.5*(x^2+y^2)", "sin(x)*y", "cos(x-y)", "x^4", "x*y", "exp(x)", "1/x",
+            "1/sqrt(x^2+y^2)", "ln(x)", "atan2(y, x)", "x^99999", "y^2147483647", "x^-99999",
+            "1e308*x^2", "x^1e300", "tanh(y)^2", "abs(x)", "k*t*x", "vx*y", "vx*vy",
+            "sqrt(1 - vx^2 - vy^2)", "exp(vx)", "vx^4",
+        ])
+        .prop_map(String::from),
+        1 => proptest::collection::vec(token(), 1..6).prop_map(|tokens| tokens.concat()),
+    ]
+    .boxed()
+}
+
+/// A text model's scene: a kinetic part (mostly) and terms, one to four coordinates (from a
+/// pool with odd and doubled names; mostly x and y), maybe forces and symmetries, an initial
+/// state (mostly of the right length), a step and a horizon.
 fn text_scene() -> impl Strategy<Value = String> {
     let expression = (
         prop_oneof![
-            4 => Just("0.5*(vx^2+vy^2) - ".to_string()),
+            6 => Just("0.5*(vx^2+vy^2)".to_string()),
+            1 => Just("-sqrt(1 - vx^2 - vy^2)".to_string()),
             1 => Just(String::new()),
         ],
-        proptest::collection::vec(token(), 1..10),
+        proptest::collection::vec((select(vec![" - ", " + ", " * "]), term()), 1..4),
     )
-        .prop_map(|(kinetic, tokens)| format!("{kinetic}{}", tokens.concat()));
+        .prop_map(|(kinetic, terms)| {
+            let mut text = kinetic;
+            for (operator, term) in terms {
+                text.push_str(operator);
+                text.push_str(&term);
+            }
+            text
+        });
     let coordinates = prop_oneof![
-        6 => Just(r#"["x", "y"]"#.to_string()),
+        8 => Just(r#"["x", "y"]"#.to_string()),
         1 => Just(r#"["x"]"#.to_string()),
         1 => Just(r#"["x", "y", "z", "w"]"#.to_string()),
         1 => select(vec![r#"["x", "x"]"#, r#"["vx", "x"]"#, r#"["sin"]"#, "[]", r#"["t"]"#])
             .prop_map(String::from),
     ];
-    let list = |len: std::ops::Range<usize>| {
-        mostly(proptest::collection::vec(-2.0f64..2.0, len).prop_map(|v| format!("{v:?}")))
+    let pair = || {
+        prop_oneof![
+            4 => proptest::collection::vec(-1.0f64..1.0, 2..3).prop_map(|v| format!("{v:?}")),
+            1 => mostly(proptest::collection::vec(-2.0f64..2.0, 0..4).prop_map(|v| format!("{v:?}"))),
+        ]
     };
     (
         expression,
@@ -87,7 +114,7 @@ fn text_scene() -> impl Strategy<Value = String> {
             r#"symmetries = [["y"]]"#,
         ])),
         mostly((0.0f64..3.0).prop_map(|k| format!("{k:?}"))),
-        (list(0..4), list(0..4)),
+        (pair(), pair()),
         (
             mostly((0.001f64..0.5).prop_map(|h| format!("{h:?}"))),
             mostly((0.0f64..5.0).prop_map(|t| format!("{t:?}"))),
@@ -166,7 +193,7 @@ struct EnsembleCli {
 /// overflowing).
 fn spec() -> BoxedStrategy<String> {
     prop_oneof![
-        3 => select(vec![
+        8 => select(vec![
             "0.1:0.5:3", "0.2,0.4", "0:0.9", "0.3", "0:1:1", "0:0.5:2,0.7", "-3:3:4",
         ])
         .prop_map(String::from),
@@ -177,6 +204,15 @@ fn spec() -> BoxedStrategy<String> {
         ])
         .prop_map(String::from),
         1 => (hostile_number(), hostile_number()).prop_map(|(a, b)| format!("{a}:{b}")),
+    ]
+    .boxed()
+}
+
+/// Mostly one of `valid`, sometimes a hostile number.
+fn mostly_valid(valid: &[&'static str]) -> BoxedStrategy<String> {
+    prop_oneof![
+        6 => select(valid.to_vec()).prop_map(String::from),
+        1 => hostile_number(),
     ]
     .boxed()
 }
@@ -207,13 +243,13 @@ fn ensemble_arguments() -> impl Strategy<Value = Vec<String>> {
         .prop_map(|(name, spec)| vec!["--initial".to_string(), format!("{name}={spec}")]);
     (
         scene,
-        proptest::collection::vec(prop_oneof![parameter, initial], 0..4),
-        proptest::option::of(Mode::InProcess.number_or(&["3", "5"])),
-        flag("--seed", Mode::InProcess.number_or(&["0", "7"])),
-        flag("--threads", Mode::InProcess.number_or(&["1", "2"])),
-        flag("--h", Mode::InProcess.number_or(&["0.1", "0.05"])),
-        flag("--t-end", Mode::InProcess.number_or(&["0.5", "1"])),
-        flag("--max-steps", Mode::InProcess.number_or(&["100", "1000"])),
+        proptest::collection::vec(prop_oneof![parameter, initial], 0..3),
+        proptest::option::weighted(0.2, mostly_valid(&["3", "5"])),
+        flag("--seed", mostly_valid(&["0", "7"])),
+        flag("--threads", mostly_valid(&["1", "2"])),
+        flag("--h", mostly_valid(&["0.1", "0.05"])),
+        flag("--t-end", mostly_valid(&["0.5", "1"])),
+        flag("--max-steps", mostly_valid(&["100", "1000"])),
         proptest::option::of(select(vec!["step", "degree", "reparam", "sem", "none"])),
     )
         .prop_map(
@@ -434,6 +470,9 @@ fn output_case() -> impl Strategy<Value = OutputCase> {
     ]);
     let existing = select(vec![
         Existing::Nothing,
+        Existing::Nothing,
+        Existing::Nothing,
+        Existing::File,
         Existing::File,
         Existing::Link,
         Existing::Fifo,
@@ -483,9 +522,12 @@ fn output_run(case: &OutputCase) -> Result<usize, TestCaseError> {
     let out = dir.path().join("OUT");
     let plot = dir.path().join("PLOT");
     plant(&out, case.out, &victim);
-    if case.args.iter().any(|arg| arg == "PLOT") {
+    let plot_existing = if case.args.iter().any(|arg| arg == "PLOT") {
         plant(&plot, case.plot, &victim);
-    }
+        case.plot
+    } else {
+        Existing::Nothing
+    };
     let args: Vec<&str> = case.args.iter().map(String::as_str).collect();
     let output = if case.full_stdout {
         svi_to_full_stdout(dir.path(), &args)
@@ -514,7 +556,7 @@ fn output_run(case: &OutputCase) -> Result<usize, TestCaseError> {
         "{:?}",
         case
     );
-    for (path, existing) in [(&out, case.out), (&plot, case.plot)] {
+    for (path, existing) in [(&out, case.out), (&plot, plot_existing)] {
         let kind = std::fs::symlink_metadata(path).map(|m| m.file_type());
         match existing {
             Existing::Fifo => {

@@ -151,7 +151,7 @@ impl ScaleArgs {
         let estimate = self.estimated_seconds();
         if estimate > MAX_ESTIMATED_SECONDS {
             return Err(SceneError::InvalidOption {
-                option: "--sizes/--steps/--batches/--min-run",
+                option: "the call (--sizes, --steps, --batches, --min-run together)",
                 reason: format!(
                     "the measurements would take about {:.0} s on a 2-core machine, more than \
                      the {MAX_ESTIMATED_SECONDS} s svi scale runs; take fewer or smaller sizes, \

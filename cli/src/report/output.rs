@@ -233,15 +233,24 @@ pub fn check_distinct(
 ) -> Result<(), OutputError> {
     let same = |a: &Path, b: &Path| {
         let theirs = identities(b);
-        identities(a).iter().any(|identity| theirs.contains(identity))
+        identities(a)
+            .iter()
+            .any(|identity| theirs.contains(identity))
     };
     for (i, (option, path)) in outputs.iter().enumerate() {
         if let Some(input) = inputs.iter().find(|input| same(path, input)) {
-            let reason = format!("it is the scene file '{}', which the run reads", input.display());
+            let reason = format!(
+                "it is the scene file '{}', which the run reads",
+                input.display()
+            );
             return Err(unusable(option, path, reason));
         }
         if let Some((other, _)) = outputs[..i].iter().find(|(_, other)| same(path, other)) {
-            return Err(unusable(option, path, format!("{other} writes the same file")));
+            return Err(unusable(
+                option,
+                path,
+                format!("{other} writes the same file"),
+            ));
         }
     }
     Ok(())

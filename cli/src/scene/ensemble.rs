@@ -20,6 +20,7 @@ use rand::{RngExt, SeedableRng};
 use svi::method::registry::SpaceKind;
 use svi_models::{ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel};
 
+use crate::report::csv::Float;
 use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
@@ -187,7 +188,7 @@ fn number(option: &'static str, text: &str, item: &str) -> Result<f64, SceneErro
         Err(malformed(
             option,
             text,
-            format!("{value} is not a finite number"),
+            format!("{} is not a finite number", Float(value)),
         ))
     }
 }
@@ -233,7 +234,7 @@ fn parse_values(option: &'static str, text: &str, spec: &str) -> Result<Values, 
                 return Err(malformed(
                     option,
                     text,
-                    format!("LO = {lo} exceeds HI = {hi}"),
+                    format!("LO = {} exceeds HI = {}", Float(lo), Float(hi)),
                 ));
             }
             if !(hi - lo).is_finite() {
