@@ -610,8 +610,8 @@ def ensemble(
     """
     arguments: Dict[str, Any] = dict(
         scene=_text("scene", scene),
-        params=[_spec(name, values) for name, values in _mapping("params", params or {}).items()],
-        initial=[_spec(name, values) for name, values in _mapping("initial", initial or {}).items()],
+        params=[_spec(name, values) for name, values in _mapping("params", {} if params is None else params).items()],
+        initial=[_spec(name, values) for name, values in _mapping("initial", {} if initial is None else initial).items()],
         random=_count("random", random),
         seed=_count("seed", seed),
         threads=_count("threads", threads),
