@@ -97,7 +97,7 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> ODE<f64, [f64; S]>
 
 /// The tolerance at and below which `radau5` does not run: the crate, as Hairer & Wanner's
 /// RADAU5, rejects rtol ≤ 10·uround with uround = 10⁻¹⁶.
-pub(crate) const RADAU5_TOLERANCE_FLOOR: f64 = 1e-15;
+pub const RADAU5_TOLERANCE_FLOOR: f64 = 1e-15;
 
 /// Outcome of one adaptive peer run to the horizon.
 pub(crate) struct PeerRun<const S: usize> {

@@ -426,22 +426,4 @@ mod tests {
             assert!(bad.check().unwrap_err().to_string().contains(name));
         }
     }
-
-    #[test]
-    fn a_small_measurement_runs_every_configuration() {
-        let args = ScaleArgs {
-            sizes: vec![50, 20],
-            steps: 2,
-            batches: 1,
-            min_run: 0.0,
-            out_dir: "unused".into(),
-        };
-        let measurements = scale(&args).unwrap();
-        assert_eq!(measurements.len(), 6);
-        assert_eq!((measurements[0].n, measurements[5].n), (20, 50));
-        assert!(measurements.iter().all(|m| m.seconds_per_step.is_finite()));
-        // The fixed point and Verlet need no Newton iteration of Verlet, SVI a few.
-        assert_eq!(measurements[1].iterations_per_step, 0.0);
-        assert!(measurements[2].iterations_per_step >= 1.0);
-    }
 }

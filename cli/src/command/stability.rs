@@ -376,55 +376,6 @@ mod tests {
     }
 
     #[test]
-    fn classic_methods_have_their_known_intervals() {
-        // Störmer–Verlet and symplectic Euler on the oscillator: stable exactly for z < 4
-        // (tr S = 2 − z); the variational midpoint rule is the implicit midpoint rule there:
-        // |eigenvalues| = 1 for every z.
-        for name in ["verlet", "symplectic-euler", "trapezoid"] {
-            let Answer::Report(report) = run(
-                name.parse().unwrap(),
-                &Request::Range {
-                    z_min: 1e-6,
-                    z_max: 10.0,
-                    samples: 200,
-                },
-            )
-            .unwrap() else {
-                unreachable!()
-            };
-            assert_eq!(report.stable.len(), 1, "{name}: {:?}", report.stable);
-            assert!(
-                (report.stable[0].upper - 4.0).abs() < 1e-9,
-                "{name}: {:?}",
-                report.stable
-            );
-        }
-        let Answer::Report(midpoint) = run(
-            "midpoint".parse().unwrap(),
-            &Request::Range {
-                z_min: 1e-6,
-                z_max: 900.0,
-                samples: 300,
-            },
-        )
-        .unwrap() else {
-            unreachable!()
-        };
-        assert!(
-            midpoint.a_stable && midpoint.p_stable,
-            "{:?}",
-            midpoint.stable
-        );
-    }
-
-    #[test]
-    fn every_figure_configuration_parses_and_rigid_methods_are_refused() {
-        assert_eq!(figure_configurations().len(), 6);
-        let error = run("lie-svi".parse().unwrap(), &Request::Values(vec![1.0])).unwrap_err();
-        assert!(error.to_string().contains("'lie-svi'"), "{error}");
-    }
-
-    #[test]
     fn describe_names_the_regions() {
         let report = report(&Svi::new(2).with_quadrature(2), 1e-6, 20.0, 50).unwrap();
         let text = describe("Cheb 2, Gau 2", &report);
