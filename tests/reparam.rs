@@ -4,7 +4,7 @@
 
 use nalgebra::SVector;
 use std::ops::ControlFlow;
-use svi::model::reparametrized::{Force, Monitor, MonitorSpec, Reparametrized, Sundman};
+use svi::model::reparametrized::{Force, Monitor, MonitorSpec, Potential, Reparametrized, Sundman};
 use svi::observer::Observer;
 use svi::solve::{SolveOptions, Span};
 use svi::stepping::reparam::solve_reparametrized;
@@ -286,4 +286,59 @@ fn the_force_monitor_at_an_equilibrium_is_a_typed_error() {
         matches!(&error, Error::InvalidParameter { name, .. } if name == "monitor"),
         "{error}"
     );
+}
+
+/// An oscillator whose stiffness grows with t: L = ½q̇² − ½(1 + t)q² (time-dependent).
+#[derive(Clone, Copy)]
+struct Stiffening;
+
+impl Lagrangian<1> for Stiffening {
+    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+        (v[0] * v[0] - (t + 1.0) * q[0] * q[0]) * 0.5
+    }
+}
+
+/// Reparametrisation needs an autonomous, unforced model: a time-dependent and a forced
+/// (damped) oscillator are refused with the reason, by every method (for Störmer–Verlet also
+/// with the potential monitor, whose splitting is taken before anything else).
+#[test]
+fn time_dependent_and_forced_models_are_refused_with_the_reason() {
+    fn refusal<L: Lagrangian<1> + Copy, M: Method<1> + Clone>(model: L, method: M) -> String {
+        let initial = Initial::Velocity {
+            q: SVector::from([1.0]),
+            v: SVector::from([0.0]),
+        };
+        let (span, options) = (Span::new(0.0, 1.0), SolveOptions::fixed_step(0.1));
+        let sundman = Sundman { alpha: 1.0 };
+        let error = solve_reparametrized(model, method.clone(), sundman, &span, initial, &options)
+            .unwrap_err();
+        let potential = Potential;
+        let other =
+            solve_reparametrized(model, method, potential, &span, initial, &options).unwrap_err();
+        assert_eq!(error.to_string(), other.to_string());
+        assert!(
+            matches!(&error, Error::InvalidParameter { name, .. } if name == "adapt"),
+            "{error}"
+        );
+        error.to_string()
+    }
+    let damped = svi_models::DampedOscillator::default();
+    for message in [
+        refusal(Stiffening, StormerVerlet::default()),
+        refusal(Stiffening, Svi::new(4)),
+    ] {
+        assert!(
+            message.contains("reparam needs an autonomous Lagrangian"),
+            "{message}"
+        );
+    }
+    for message in [
+        refusal(damped, StormerVerlet::default()),
+        refusal(damped, Svi::new(4)),
+    ] {
+        assert!(
+            message.contains("reparam needs an unforced model"),
+            "{message}"
+        );
+    }
 }

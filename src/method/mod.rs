@@ -140,6 +140,11 @@ pub trait Method<const N: usize> {
         None
     }
 
+    /// Whether the method is Störmer–Verlet or a composition of it
+    /// ([`Method::verlet_fractions`] is `Some`). A constant, so that the
+    /// logarithmic-Hamiltonian splitting is compiled only for these methods.
+    const COMPOSES_VERLET: bool = false;
+
     /// The step fractions γ_1, …, γ_s if the method is a symmetric composition of
     /// Störmer–Verlet steps of sizes γ_i h (Störmer–Verlet itself: `[1.0]`); `None` otherwise.
     /// The logarithmic-Hamiltonian splitting ([`crate::stepping::logh`]) composes its own
@@ -147,6 +152,11 @@ pub trait Method<const N: usize> {
     fn verlet_fractions(&self) -> Option<&[f64]> {
         None
     }
+
+    /// `true` promises that [`Method::points`] is always `None` (a method without a degree):
+    /// degree adaptivity is then not compiled for the method. The default (`false`) is
+    /// always correct.
+    const WITHOUT_POINTS: bool = false;
 
     /// Number of interpolation points of a spectral method (polynomial degree + 1); `None`
     /// for methods without a degree.

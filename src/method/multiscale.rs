@@ -588,6 +588,8 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
 }
 
 impl<const N: usize> Method<N> for Multiscale {
+    const WITHOUT_POINTS: bool = true;
+
     type Workspace = MultiscaleWorkspace<N>;
 
     fn info(&self) -> MethodInfo {

@@ -870,6 +870,14 @@ mod tests {
     impl VectorMethodVisitor<2> for OneStep {
         type Output = Result<(), Error>;
         fn visit<M: Method<2> + Clone>(self, method: M) -> Result<(), Error> {
+            // The constants that decide what is compiled for the method tell the truth.
+            let name = method.info().name;
+            assert!(!M::WITHOUT_POINTS || method.points().is_none(), "{name}");
+            assert_eq!(
+                M::COMPOSES_VERLET,
+                method.verlet_fractions().is_some(),
+                "{name}"
+            );
             // The multiscale method needs steps of about a fast period or more (ω = 1 here).
             let h = if method.info().name == "multiscale" {
                 7.0

@@ -62,6 +62,10 @@ pub trait Step<L: ?Sized, S: Space> {
     /// Buffers and precomputed tables of one run.
     type Workspace;
 
+    /// `true` promises that [`Step::points`] is always `None`: degree adaptivity is then
+    /// not compiled for the method. The default (`false`) is always correct.
+    const WITHOUT_POINTS: bool = false;
+
     /// Name, order and geometric properties.
     fn info(&self) -> MethodInfo;
 
@@ -211,6 +215,7 @@ pub trait Step<L: ?Sized, S: Space> {
 
 impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M {
     type Workspace = M::Workspace;
+    const WITHOUT_POINTS: bool = <M as Method<N>>::WITHOUT_POINTS;
 
     fn info(&self) -> MethodInfo {
         Method::info(self)

@@ -141,6 +141,16 @@ pub enum Structure {
     ConstantMass,
 }
 
+/// Whether `L` declares [`Structure::ConstantMass`], as a boolean constant: a branch on it
+/// is decided when the code is instantiated for `L`, so a path that only constant-mass
+/// models take is not compiled for the others.
+pub(crate) struct ConstantMass<L, const N: usize>(std::marker::PhantomData<L>);
+
+impl<L: Lagrangian<N>, const N: usize> ConstantMass<L, N> {
+    /// `L::STRUCTURE == Structure::ConstantMass`.
+    pub(crate) const DECLARED: bool = matches!(L::STRUCTURE, Structure::ConstantMass);
+}
+
 /// Infinitesimal symmetry generators of a Lagrangian.
 ///
 /// Generator `i` is the vector field ξᵢ(q) of a one-parameter group acting on configurations

@@ -247,6 +247,25 @@ impl fmt::Display for MonitorSpec {
     }
 }
 
+/// Why `L` cannot be reparametrized in time, for a model that is time-dependent or forced
+/// (the callers test [`Lagrangian::TIME_DEPENDENT`] and [`Lagrangian::FORCED`] themselves,
+/// as constants, so that no reparametrized run is compiled for such a model).
+pub(crate) fn not_reparametrizable<L: Lagrangian<N>, const N: usize>() -> Error {
+    if L::TIME_DEPENDENT {
+        Error::invalid(
+            "adapt",
+            "reparam needs an autonomous Lagrangian (TIME_DEPENDENT = false): the Poincaré \
+             transformation conserves the energy",
+        )
+    } else {
+        Error::invalid(
+            "adapt",
+            "reparam needs an unforced model: with an external force the energy is not \
+             conserved",
+        )
+    }
+}
+
 /// The τ-Lagrangian L̃(q, q') = g(q) (L(q, q'/g(q)) + E₀) of an autonomous, unforced `L`
 /// with the monitor `G` on the energy level E₀ (see the module docs).
 #[derive(Debug, Clone, Copy)]
@@ -264,19 +283,8 @@ impl<'a, L, G> Reparametrized<'a, L, G> {
     where
         L: Lagrangian<N>,
     {
-        if L::TIME_DEPENDENT {
-            return Err(Error::invalid(
-                "adapt",
-                "reparam needs an autonomous Lagrangian (TIME_DEPENDENT = false): the \
-                 Poincaré transformation conserves the energy",
-            ));
-        }
-        if L::FORCED {
-            return Err(Error::invalid(
-                "adapt",
-                "reparam needs an unforced model: with an external force the energy is not \
-                 conserved",
-            ));
+        if L::TIME_DEPENDENT || L::FORCED {
+            return Err(not_reparametrizable::<L, N>());
         }
         if !energy.is_finite() {
             return Err(Error::invalid(

@@ -377,17 +377,24 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         observer: &mut O,
     ) -> Result<(Adaptivity, bool), RunFailure<S>> {
         let rejected = RunFailure::rejected;
-        let tol = options.tolerance().map_err(rejected)?;
-        let h = options.step().map_err(rejected)?;
         let base = self.method();
-        let Some(initial_points) = base.points() else {
-            return Err(rejected(Error::invalid(
+        let no_degree = || {
+            rejected(Error::invalid(
                 "adapt",
                 format!(
                     "method {} has no polynomial degree to adapt",
                     base.info().name
                 ),
-            )));
+            ))
+        };
+        // A constant: for a method without points nothing below is compiled.
+        if M::WITHOUT_POINTS {
+            return Err(no_degree());
+        }
+        let tol = options.tolerance().map_err(rejected)?;
+        let h = options.step().map_err(rejected)?;
+        let Some(initial_points) = base.points() else {
+            return Err(no_degree());
         };
         let (low, high) = (options.min_points, options.max_points);
         if !(2..=MAX_POINTS).contains(&low) || !(low..=MAX_POINTS).contains(&high) {

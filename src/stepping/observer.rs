@@ -49,7 +49,7 @@ impl<L: ?Sized, P, O: Observer<L, P>> Observer<L, P> for Option<O> {
     }
 }
 
-impl<L: ?Sized, P, O: Observer<L, P>> Observer<L, P> for &mut O {
+impl<L: ?Sized, P, O: Observer<L, P> + ?Sized> Observer<L, P> for &mut O {
     fn wants(&self, step: usize) -> bool {
         (**self).wants(step)
     }

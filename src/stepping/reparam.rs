@@ -34,8 +34,8 @@ use crate::error::{Error, StepFailure};
 use crate::method::space::{Euclidean, Initial, PhasePoint, State};
 use crate::method::{Method, MethodInfo};
 use crate::model::derived::LagrangianExt;
-use crate::model::reparametrized::{Monitor, Reparametrized};
-use crate::model::{Lagrangian, Structure};
+use crate::model::reparametrized::{Monitor, Reparametrized, not_reparametrizable};
+use crate::model::{ConstantMass, Lagrangian};
 use crate::spectral::quadrature::GaussLegendre;
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Cursor, Integrator, Run, RunFailure, Statistics};
@@ -212,8 +212,28 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         options: &SolveOptions,
         observer: &mut O,
     ) -> Result<Solution<Euclidean<N>>, RunFailure<Euclidean<N>>> {
-        if monitor.logarithmic()
-            && L::STRUCTURE == Structure::ConstantMass
+        let mut observer: &mut dyn Observer<L, PhasePoint<N>> = observer;
+        self.solve_in_tau(monitor, span, initial, options, &mut observer)
+    }
+
+    /// [`Integrator::try_solve_reparametrized`] with the observer behind a trait object
+    /// (compiled once per model, method and monitor, as [`Integrator::try_solve`] is).
+    fn solve_in_tau<G: Monitor<N>>(
+        &self,
+        monitor: &G,
+        span: &Span,
+        initial: Initial<N>,
+        options: &SolveOptions,
+        observer: &mut &mut dyn Observer<L, PhasePoint<N>>,
+    ) -> Result<Solution<Euclidean<N>>, RunFailure<Euclidean<N>>> {
+        // Tested on constants first: for a model or method they exclude, nothing below
+        // (the method on the τ-Lagrangian, the splitting) is compiled.
+        if L::TIME_DEPENDENT || L::FORCED {
+            return Err(RunFailure::rejected(not_reparametrizable::<L, N>()));
+        }
+        if M::COMPOSES_VERLET
+            && ConstantMass::<L, N>::DECLARED
+            && monitor.logarithmic()
             && let Some(fractions) = self.method().verlet_fractions()
         {
             return self.try_solve_logh(fractions, span, initial, options, observer);

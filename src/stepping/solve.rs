@@ -474,6 +474,21 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         options: &SolveOptions,
         observer: &mut O,
     ) -> Result<Solution<S>, RunFailure<S>> {
+        let mut observer: &mut dyn Observer<L, S::Point> = observer;
+        self.solve_observed(span, initial, options, &mut observer)
+    }
+
+    /// [`Integrator::try_solve`] with the observer behind a trait object, so that the
+    /// drivers (fixed, step- and degree-adaptive, energy-fitted) are compiled once per model
+    /// and method whatever observers the callers use: a call per accepted step, next to a
+    /// step's nonlinear solve.
+    fn solve_observed(
+        &self,
+        span: &Span,
+        initial: S::Initial,
+        options: &SolveOptions,
+        observer: &mut &mut dyn Observer<L, S::Point>,
+    ) -> Result<Solution<S>, RunFailure<S>> {
         span.validate().map_err(RunFailure::rejected)?;
         options.validate().map_err(RunFailure::rejected)?;
         let mut progress = self

@@ -180,6 +180,9 @@ impl Composition {
 }
 
 impl<const N: usize> Method<N> for Composition {
+    const WITHOUT_POINTS: bool = true;
+    const COMPOSES_VERLET: bool = true;
+
     type Workspace = StormerVerletWorkspace<N>;
 
     /// Störmer–Verlet's properties with the scheme's name and order.

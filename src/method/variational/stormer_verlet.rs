@@ -107,6 +107,9 @@ pub struct StormerVerletWorkspace<const N: usize> {
 }
 
 impl<const N: usize> Method<N> for StormerVerlet {
+    const WITHOUT_POINTS: bool = true;
+    const COMPOSES_VERLET: bool = true;
+
     type Workspace = StormerVerletWorkspace<N>;
 
     fn info(&self) -> MethodInfo {

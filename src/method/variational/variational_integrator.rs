@@ -194,6 +194,8 @@ impl<const N: usize> VariationalWorkspace<N> {
 }
 
 impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator<Ld> {
+    const WITHOUT_POINTS: bool = true;
+
     type Workspace = VariationalWorkspace<N>;
 
     fn info(&self) -> MethodInfo {
