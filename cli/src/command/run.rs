@@ -340,35 +340,68 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for VectorMethod<'_,
                 integrator: &integrator,
                 monitor,
             };
-            run_scene(&integrator, &self.plan, &solver)
+            run_scene(&self.plan, &solver)
         } else {
-            run_scene(&integrator, &self.plan, &integrator)
+            run_scene(&self.plan, &integrator)
         }
     }
 }
 
 /// How [`run_scene`] solves: the one loop ([`Integrator::try_solve`]), or fixed steps in
-/// computational time ([`InTau`]).
+/// computational time ([`InTau`]). A trait object, so that [`run_scene`] is compiled once
+/// per model and space, not once per method as well.
 trait Solver<L, S: Space> {
     /// Solve over `span` from `initial`, reporting the accepted steps to `observer`.
-    fn solve<O: Observer<L, S::Point>>(
+    fn solve(
         &self,
         span: &Span,
         initial: S::Initial,
         options: &SolveOptions,
-        observer: &mut O,
+        observer: &mut dyn Observer<L, S::Point>,
     ) -> Result<Solution<S>, RunFailure<S>>;
+
+    /// The model.
+    fn model(&self) -> &L;
+
+    /// The phase point of `initial` at `t0` (`guess`: the start of an inverse Legendre map).
+    fn first_point(
+        &self,
+        t0: f64,
+        initial: &S::Initial,
+        guess: &S::Velocity,
+    ) -> Result<S::Point, svi::Error>;
+
+    /// The method's name, order and properties.
+    fn info(&self) -> svi::MethodInfo;
 }
 
 impl<L, M: Step<L, S> + Clone, S: Space> Solver<L, S> for Integrator<L, M, S> {
-    fn solve<O: Observer<L, S::Point>>(
+    fn solve(
         &self,
         span: &Span,
         initial: S::Initial,
         options: &SolveOptions,
-        observer: &mut O,
+        mut observer: &mut dyn Observer<L, S::Point>,
     ) -> Result<Solution<S>, RunFailure<S>> {
-        self.try_solve(span, initial, options, observer)
+        self.try_solve(span, initial, options, &mut observer)
+    }
+
+    fn model(&self) -> &L {
+        Integrator::model(self)
+    }
+
+    fn first_point(
+        &self,
+        t0: f64,
+        initial: &S::Initial,
+        guess: &S::Velocity,
+    ) -> Result<S::Point, svi::Error> {
+        let first = self.initial_state(t0, initial)?;
+        self.phase_point(t0, &first, guess)
+    }
+
+    fn info(&self) -> svi::MethodInfo {
+        self.method().info()
     }
 }
 
@@ -382,15 +415,37 @@ struct InTau<'a, L, M, const N: usize> {
 impl<L: svi::Lagrangian<N>, M: Method<N> + Clone, const N: usize> Solver<L, svi::Euclidean<N>>
     for InTau<'_, L, M, N>
 {
-    fn solve<O: Observer<L, svi::PhasePoint<N>>>(
+    fn solve(
         &self,
         span: &Span,
         initial: svi::Initial<N>,
         options: &SolveOptions,
-        observer: &mut O,
+        mut observer: &mut dyn Observer<L, svi::PhasePoint<N>>,
     ) -> Result<Solution<svi::Euclidean<N>>, RunFailure<svi::Euclidean<N>>> {
-        self.integrator
-            .try_solve_reparametrized(&self.monitor, span, initial, options, observer)
+        self.integrator.try_solve_reparametrized(
+            &self.monitor,
+            span,
+            initial,
+            options,
+            &mut observer,
+        )
+    }
+
+    fn model(&self) -> &L {
+        self.integrator.model()
+    }
+
+    fn first_point(
+        &self,
+        t0: f64,
+        initial: &svi::Initial<N>,
+        guess: &nalgebra::SVector<f64, N>,
+    ) -> Result<svi::PhasePoint<N>, svi::Error> {
+        Solver::first_point(self.integrator, t0, initial, guess)
+    }
+
+    fn info(&self) -> svi::MethodInfo {
+        Solver::info(self.integrator)
     }
 }
 
@@ -433,7 +488,7 @@ impl<M: LocalZooModel> LocalMethodVisitor for LocalRun<'_, M> {
     type Output = Result<Summary, SceneError>;
     fn visit<Me: LocalMethod + Clone>(self, method: Me) -> Self::Output {
         let integrator = Integrator::new(self.model, method);
-        run_scene(&integrator, &self.plan, &integrator)
+        run_scene(&self.plan, &integrator)
     }
 }
 
@@ -451,7 +506,7 @@ impl RigidModelVisitor for SceneRun<'_> {
         };
         let plan = self.plan(resolved, method);
         let integrator = RigidBodyIntegrator::new(model, lie_svi);
-        run_scene(&integrator, &plan, &integrator)
+        run_scene(&plan, &integrator)
     }
 }
 
@@ -493,17 +548,12 @@ struct Outcome<P> {
 ///
 /// With fixed steps and no output times inside the span this is [`Integrator::try_run`]'s
 /// loop: the same steps, points and statistics.
-fn run_scene<L, M, S>(
-    integrator: &Integrator<L, M, S>,
+fn run_scene<L, S: RunSpace<L>>(
     plan: &Plan<'_, S>,
-    solver: &impl Solver<L, S>,
-) -> Result<Summary, SceneError>
-where
-    M: Step<L, S> + Clone,
-    S: RunSpace<L>,
-{
+    solver: &dyn Solver<L, S>,
+) -> Result<Summary, SceneError> {
     let scene = plan.scene;
-    let model = integrator.model();
+    let model = solver.model();
     let (t0, t_end) = (plan.t0, plan.t_end);
     let adapt = scene.run.adapt.unwrap_or_default();
     let output_times = scene.output.output_times.as_ref();
@@ -564,8 +614,7 @@ where
         }) => return Err(error.into()),
     };
     let last = outcome.last.clone();
-    let first = integrator.initial_state(t0, &plan.initial)?;
-    let first = integrator.phase_point(t0, &first, &S::initial_guess_at_rest(&plan.initial))?;
+    let first = solver.first_point(t0, &plan.initial, &S::initial_guess_at_rest(&plan.initial))?;
 
     let trajectory = match stream {
         Some(mut stream) => {
@@ -621,7 +670,7 @@ where
     let mut numbers = conservation.numbers();
     numbers.push(("energy_error_max", energy_error_max));
     warnings.extend(health::non_finite(&numbers));
-    let info = integrator.method().info();
+    let info = solver.info();
     let summary = Summary {
         model: S::model_name(model).into(),
         parameters: Parameters(S::parameters(model)),
