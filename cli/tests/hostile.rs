@@ -694,16 +694,28 @@ fn run_in_process(args: &[String]) -> Result<usize, TestCaseError> {
     Ok(outcome)
 }
 
-#[test]
-fn hostile_numbers_in_svi_run_never_panic() {
-    let counts = run_counting(
-        "svi run arguments",
-        3000,
+/// `svi run` arguments in process, 1500 cases of the `stream`-th sequence (two tests, so
+/// that the 3000 cases of a CI run take both cores).
+fn hostile_numbers_in_svi_run(stream: u64) {
+    let counts = run_counting_stream(
+        &format!("svi run arguments ({})", stream + 1),
+        stream,
+        1500,
         &RUN_OUTCOMES,
         run_arguments(Mode::InProcess),
         |args| run_in_process(&args),
     );
     assert!(counts[1] > 0 && counts[3] + counts[4] > 0, "{counts:?}");
+}
+
+#[test]
+fn hostile_numbers_in_svi_run_never_panic() {
+    hostile_numbers_in_svi_run(0);
+}
+
+#[test]
+fn hostile_numbers_in_svi_run_never_panic_more() {
+    hostile_numbers_in_svi_run(1);
 }
 
 proptest! {

@@ -282,7 +282,23 @@ pub fn run_counting<S: Strategy>(
     strategy: S,
     test: impl Fn(S::Value) -> Result<usize, TestCaseError>,
 ) -> Vec<usize> {
-    let config = cases(base);
+    run_counting_stream(name, 0, base, labels, strategy, test)
+}
+
+/// [`run_counting`] on the `stream`-th sequence of cases of a fixed seed (the seed plus
+/// `stream`): a long search split into tests that run in parallel, each drawing other cases.
+pub fn run_counting_stream<S: Strategy>(
+    name: &str,
+    stream: u64,
+    base: u32,
+    labels: &[&str],
+    strategy: S,
+    test: impl Fn(S::Value) -> Result<usize, TestCaseError>,
+) -> Vec<usize> {
+    let mut config = cases(base);
+    if let proptest::test_runner::RngSeed::Fixed(seed) = config.rng_seed {
+        config.rng_seed = proptest::test_runner::RngSeed::Fixed(seed.wrapping_add(stream));
+    }
     let total = config.cases as usize;
     let counts = std::cell::RefCell::new(vec![0usize; labels.len()]);
     TestRunner::new(config)
