@@ -45,16 +45,23 @@ pub struct PlotError {
 /// Series with at most this many points get a marker at each point.
 const MARKED_POINTS: usize = 60;
 
-/// Tick label: powers of ten on a log axis, short decimals otherwise.
+/// Tick label: powers of ten on a log axis, short decimals otherwise (in scientific
+/// notation beyond 10⁷ or below 10⁻⁴).
 fn tick(value: f64, log: bool) -> String {
-    if log {
+    if log || (value != 0.0 && !(1e-4..1e7).contains(&value.abs())) {
         format!("{value:.0e}")
     } else {
         format!("{}", (value * 1e6).round() / 1e6)
     }
 }
 
-/// Range of the finite (and, on a log axis, positive) coordinates, padded a little.
+/// Smallest width of an axis relative to its largest coordinate: plotters' tick search does
+/// not end on an axis whose ends agree to round-off (a constant series of 10³⁰⁰, say).
+const RELATIVE_WIDTH: f64 = 1e-9;
+
+/// Range of the finite (and, on a log axis, positive) coordinates, padded a little: finite
+/// ends, a width at least [`RELATIVE_WIDTH`] of the largest coordinate, and no overflow (a
+/// linear axis up to 1.8·10³⁰⁸ is drawn to `f64::MAX / 2`, a log axis within 10^±150).
 fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
     let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite() && (!log || *v > 0.0)) {
@@ -65,10 +72,17 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         return if log { (1e-16, 1.0) } else { (0.0, 1.0) };
     }
     if log {
-        (low / 2.0, high * 2.0)
+        // At least a factor 4, within 10^±150 (a subnormal halved is zero, log 0 = −∞;
+        // plotters' ticks do not end on an axis whose ends' ratio overflows).
+        let high = (high * 2.0).clamp(1e-146, 1e150);
+        ((low / 2.0).clamp(1e-150, high / 4.0), high)
     } else {
-        let pad = 0.05 * (high - low).max(1e-12);
-        (low - pad, high + pad)
+        // Midpoint and half-width in halves: neither overflows.
+        let (mid, half) = (low / 2.0 + high / 2.0, high / 2.0 - low / 2.0);
+        let largest = low.abs().max(high.abs());
+        let half = (1.05 * half).max(RELATIVE_WIDTH * largest).max(1e-12);
+        let limit = f64::MAX / 2.0;
+        ((mid - half).max(-limit), (mid + half).min(limit))
     }
 }
 
@@ -357,6 +371,50 @@ fn draw_panel(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Axes that plotters' tick search never finished on (a stability plot up to z =
+    /// 1.8·10³⁰⁸ ran forever), or that overflow: drawn, with finite ranges of a width it
+    /// resolves.
+    #[test]
+    fn extreme_and_constant_coordinates_are_drawn() {
+        let extremes: [&[f64]; 6] = [
+            &[1e300, 1e300],
+            &[3.4e18, f64::MAX],
+            &[-f64::MAX, f64::MAX],
+            &[5e-324, f64::MAX],
+            &[1.0, 1.0 + 1e-15],
+            &[-0.0, 0.0],
+        ];
+        for values in extremes {
+            for log in [false, true] {
+                let (low, high) = range(values.iter().copied(), log);
+                assert!(
+                    low.is_finite() && high.is_finite() && low < high,
+                    "{values:?}"
+                );
+                assert!(
+                    high - low >= RELATIVE_WIDTH * low.abs().max(high.abs()),
+                    "{values:?}"
+                );
+            }
+            let points: Vec<(f64, f64)> = values.iter().map(|&v| (v, v)).collect();
+            for (x_log, y_log) in [(false, false), (true, true)] {
+                let panel = Panel {
+                    title: "extreme".into(),
+                    x_label: "x".into(),
+                    y_label: "y".into(),
+                    x_log,
+                    y_log,
+                    series: vec![Series {
+                        label: "s".into(),
+                        points: points.clone(),
+                    }],
+                };
+                let svg = render_svg(&[panel], 300, 200).unwrap();
+                assert!(svg.contains("extreme"));
+            }
+        }
+    }
 
     #[test]
     fn writes_an_svg_with_every_series_label() {
