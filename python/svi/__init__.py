@@ -211,6 +211,14 @@ def _count(name: str, value: Any) -> Optional[int]:
     return count
 
 
+def _whole(name: str, value: Any) -> int:
+    """``value`` as a whole number of 0 or more, where ``None`` is not one (an argument with
+    a numeric default)."""
+    if value is None:
+        raise _wrong_type(name, "a whole number", value)
+    return _count(name, value)
+
+
 def _text(name: str, value: Any) -> Optional[str]:
     """``value`` as a string (a path-like object as its path), ``None`` kept."""
     if value is None:
@@ -613,8 +621,8 @@ def ensemble(
         params=[_spec(name, values) for name, values in _mapping("params", {} if params is None else params).items()],
         initial=[_spec(name, values) for name, values in _mapping("initial", {} if initial is None else initial).items()],
         random=_count("random", random),
-        seed=_count("seed", seed),
-        threads=_count("threads", threads),
+        seed=_whole("seed", seed),
+        threads=_whole("threads", threads),
         **_shared_options(locals()),
     )
     count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)
