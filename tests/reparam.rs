@@ -323,21 +323,20 @@ fn time_dependent_and_forced_models_are_refused_with_the_reason() {
         error.to_string()
     }
     let damped = svi_models::DampedOscillator::default();
-    for message in [
-        refusal(Stiffening, StormerVerlet::default()),
-        refusal(Stiffening, Svi::new(4)),
+    for (message, reason) in [
+        (
+            refusal(Stiffening, StormerVerlet::default()),
+            "an autonomous Lagrangian",
+        ),
+        (refusal(Stiffening, Svi::new(4)), "an autonomous Lagrangian"),
+        (
+            refusal(damped, StormerVerlet::default()),
+            "an unforced model",
+        ),
+        (refusal(damped, Svi::new(4)), "an unforced model"),
     ] {
         assert!(
-            message.contains("reparam needs an autonomous Lagrangian"),
-            "{message}"
-        );
-    }
-    for message in [
-        refusal(damped, StormerVerlet::default()),
-        refusal(damped, Svi::new(4)),
-    ] {
-        assert!(
-            message.contains("reparam needs an unforced model"),
+            message.contains(&format!("reparam needs {reason}")),
             "{message}"
         );
     }

@@ -80,7 +80,8 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
         // Midpoint and half-width in halves: neither overflows.
         let (mid, half) = (low / 2.0 + high / 2.0, high / 2.0 - low / 2.0);
         let largest = low.abs().max(high.abs());
-        let half = (1.05 * half).max(RELATIVE_WIDTH * largest).max(1e-12);
+        // A twentieth of the width on each side.
+        let half = (1.1 * half).max(RELATIVE_WIDTH * largest).max(1e-12);
         let limit = f64::MAX / 2.0;
         ((mid - half).max(-limit), (mid + half).min(limit))
     }
