@@ -44,6 +44,7 @@
 
 // The layers, bottom up; each imports only from the ones above it in this list.
 pub mod analysis;
+pub mod dimension;
 pub mod error;
 pub mod field;
 pub mod lie_group;

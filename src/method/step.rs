@@ -14,9 +14,11 @@
 use crate::error::{Error, StepFailure, require_finite_entries};
 use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, TangentMap};
 use crate::method::{Coordinates, Method, MethodInfo, StepReport};
+use crate::dimension::{Dimension, dimension_of};
 use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure};
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector};
 
 /// The cubic Hermite basis on a step [t_a, t_b] of length h at s = (time − t_a)/h: the
 /// interpolant of (q_a, q̇_a, q_b, q̇_b) is q = w₀q_a + h w₁q̇_a + w₂q_b + h w₃q̇_b, its
@@ -213,7 +215,10 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 }
 
-impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M {
+impl<L: Lagrangian<N>, M: Method<N>, N: Dimension> Step<L, Euclidean<N>> for M
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Workspace = M::Workspace;
     const WITHOUT_POINTS: bool = <M as Method<N>>::WITHOUT_POINTS;
 
@@ -257,15 +262,25 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
             Initial::Velocity { q, v } => (q, v, "initial velocity"),
             Initial::Momentum { q, p } => (q, p, "initial momentum"),
         };
+        let size = model.dimension();
+        dimension_of::<N>(size).map_err(|reason| Error::invalid("model", reason))?;
+        for (what, x) in [("initial position", q), (name, second)] {
+            if x.len() != size {
+                return Err(Error::invalid(
+                    "initial state",
+                    format!("the {what} has {} entries, the model {size} coordinates", x.len()),
+                ));
+            }
+        }
         require_finite_entries("initial position", q)?;
         require_finite_entries(name, second)?;
         let y = match (Method::info(self).coordinates, initial) {
-            (Coordinates::Momentum, Initial::Momentum { p, .. }) => *p,
-            (Coordinates::Velocity, Initial::Velocity { v, .. }) => *v,
+            (Coordinates::Momentum, Initial::Momentum { p, .. }) => p.clone(),
+            (Coordinates::Velocity, Initial::Velocity { v, .. }) => v.clone(),
             (Coordinates::Momentum, Initial::Velocity { q, v }) => model.momentum(t0, q, v),
             (Coordinates::Velocity, Initial::Momentum { q, p }) => model.velocity(t0, q, p, p)?,
         };
-        let state = State { q: *q, y };
+        let state = State { q: q.clone(), y };
         if !state.is_finite() {
             return Err(Error::NonFinite {
                 what: format!(
@@ -291,13 +306,13 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         if L::STRUCTURE != Structure::ConstantMass {
             return Ok(());
         }
-        let shifted = state.y * 2.0 + SVector::repeat(1.0);
+        let shifted = state.y.map(|y| 2.0 * y + 1.0);
         let first = model.second_derivatives(t, &state.q, &state.y);
         let second = model.second_derivatives(t, &state.q, &shifted);
         let scale = 1.0 + first.vv.amax() + first.qq.amax();
         let coupling = first.qv.amax().max(second.qv.amax());
-        let change = (first.vv - second.vv).amax();
-        let linear = model.momentum(t, &state.q, &SVector::zeros()).amax();
+        let change = (&first.vv - &second.vv).amax();
+        let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
         if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
             return Err(Error::invalid(
                 "structure",
@@ -317,7 +332,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         workspace: Option<&M::Workspace>,
         t: f64,
         state: &State<N>,
-        guess: &SVector<f64, N>,
+        guess: &OVector<f64, N>,
     ) -> Result<PhasePoint<N>, Error> {
         let (v, p) = match Method::info(self).coordinates {
             Coordinates::Momentum => {
@@ -326,26 +341,26 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
                     Some(v) => v,
                     None => model.velocity(t, &state.q, &state.y, guess)?,
                 };
-                (v, state.y)
+                (v, state.y.clone())
             }
-            Coordinates::Velocity => (state.y, model.momentum(t, &state.q, &state.y)),
+            Coordinates::Velocity => (state.y.clone(), model.momentum(t, &state.q, &state.y)),
         };
         Ok(PhasePoint {
             t,
-            q: state.q,
+            q: state.q.clone(),
             v,
             p,
         })
     }
 
-    fn incomplete(&self, t: f64, state: &State<N>, guess: &SVector<f64, N>) -> PhasePoint<N> {
+    fn incomplete(&self, t: f64, state: &State<N>, guess: &OVector<f64, N>) -> PhasePoint<N> {
         let (v, p) = match Method::info(self).coordinates {
-            Coordinates::Momentum => (*guess, state.y),
-            Coordinates::Velocity => (state.y, *guess),
+            Coordinates::Momentum => (guess.clone(), state.y.clone()),
+            Coordinates::Velocity => (state.y.clone(), guess.clone()),
         };
         PhasePoint {
             t,
-            q: state.q,
+            q: state.q.clone(),
             v,
             p,
         }
@@ -366,12 +381,8 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
     ) -> Option<PhasePoint<N>> {
         let theta = ((time - t) / h).clamp(0.0, 1.0);
         let (q, v) = Method::dense_output(self, workspace, start, h, theta)?;
-        Some(PhasePoint {
-            t: time,
-            q,
-            v,
-            p: model.momentum(time, &q, &v),
-        })
+        let p = model.momentum(time, &q, &v);
+        Some(PhasePoint { t: time, q, v, p })
     }
 
     /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map.
@@ -387,14 +398,10 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
             value: w,
             rate: d,
         } = Hermite::new(a.t, b.t, time);
-        let q = a.q * w[0] + a.v * (h * w[1]) + b.q * w[2] + b.v * (h * w[3]);
-        let v = (a.q * d[0] + b.q * d[2]) / h + a.v * d[1] + b.v * d[3];
-        Some(PhasePoint {
-            t: time,
-            q,
-            v,
-            p: model.momentum(time, &q, &v),
-        })
+        let q = &a.q * w[0] + &a.v * (h * w[1]) + &b.q * w[2] + &b.v * (h * w[3]);
+        let v = (&a.q * d[0] + &b.q * d[2]) / h + &a.v * d[1] + &b.v * d[3];
+        let p = model.momentum(time, &q, &v);
+        Some(PhasePoint { t: time, q, v, p })
     }
 
     fn points(&self) -> Option<usize> {

@@ -3,16 +3,16 @@
 //! Nothing here is written per model: every quantity comes from the one generic function
 //! [`Lagrangian::lagrangian`] evaluated with num-dual's dual numbers.
 //!
-//! - first derivatives ∂L/∂q and p = ∂L/∂q̇: one gradient sweep each with `DualSVec64<N>`,
-//!   or for N ≤ [`SCALAR_SWEEPS_UP_TO`] N sweeps of the scalar `Dual64` (whose derivative is a
-//!   plain f64, not an optional vector: Kepler's force costs 6.8 ns that way against 16 ns
-//!   with one `DualSVec64<2>` sweep and 5.5 ns by hand, `cargo bench --bench derivatives --
-//!   kepler/force`);
-//! - the Hessian blocks L_qq, L_qv, L_vv: for N ≤ [`SCALAR_HESSIAN_UP_TO`] one sweep of the
-//!   scalar `HyperDual64` per Hessian entry in (q, q̇) (three times faster there),
-//!   else `hessian` in q, `hessian` in q̇ and one `partial_hessian` (`2N` is not a const
-//!   expression on stable Rust, so the full second derivative is assembled from three
-//!   N-sized sweeps);
+//! Which dual numbers carry the derivatives is the dimension's choice
+//! ([`crate::dimension::Dimension`]: vector duals for a fixed N, scalar sweeps for a run-time
+//! one); what is derived, and how, is written here once for both:
+//!
+//! - first derivatives ∂L/∂q and p = ∂L/∂q̇ (one gradient each);
+//! - the Hessian blocks L_qq, L_qv, L_vv: for N ≤ [`SCALAR_HESSIAN_UP_TO`], and for a
+//!   run-time N, one sweep of the scalar `HyperDual64` per Hessian entry in (q, q̇) (three
+//!   times faster for small N), else a Hessian in q, one in q̇ and the mixed block (`2N` is
+//!   not a const expression on stable Rust, so the full second derivative is assembled from
+//!   three N-sized sweeps);
 //! - the energy E = p·q̇ − L and the inverse Legendre map q̇(q, p) (Newton with L_vv);
 //! - the Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L) (Li–Wu–Leok
 //!   eq. 2 solved for q̈, the right-hand side f of eq. 12; the external force f_L of the
@@ -25,79 +25,80 @@
 //! The methods live on the blanket extension trait [`LagrangianExt`], implemented for every
 //! [`Lagrangian`].
 
+use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
 use crate::model::{Lagrangian, Symmetries};
 use crate::scalar::Scalar;
-use nalgebra::{Const, SMatrix, SVector};
-use num_dual::{
-    Dual2Vec, Dual64, DualSVec64, DualVec, HyperDual64, HyperDualVec, gradient, hessian, jacobian,
-    partial_hessian,
-};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
+use num_dual::HyperDual64;
 
-/// Largest dimension whose gradients are taken as N scalar-dual sweeps rather than one
-/// vector-dual sweep. Scalar sweeps are cheap where the compiler inlines L into each and
-/// shares its transcendental functions between them (`cargo bench --bench derivatives --
-/// chain`, run with this constant at 2, 3 and 4: on the coupled chain of pendulums the force
-/// costs 50 ns by scalar sweeps against 81 ns by one vector sweep at N = 3, but 334 ns
-/// against 189 ns at N = 4).
-pub const SCALAR_SWEEPS_UP_TO: usize = 3;
-
-/// Largest dimension whose Hessian blocks are taken as one scalar hyper-dual sweep per entry
-/// in (q, q̇), (2N)(2N + 1)/2 sweeps, rather than three vector sweeps: 138 ns against 411 ns
-/// for the spring pendulum, 64 against 149 for Kepler, but 1.6 µs against 0.56 µs for the
-/// coupled chain of three pendulums (`cargo bench --bench derivatives`, run with this
+/// Largest fixed dimension whose Hessian blocks are taken as one scalar hyper-dual sweep per
+/// entry in (q, q̇), (2N)(2N + 1)/2 sweeps, rather than three vector sweeps: 138 ns against
+/// 411 ns for the spring pendulum, 64 against 149 for Kepler, but 1.6 µs against 0.56 µs for
+/// the coupled chain of three pendulums (`cargo bench --bench derivatives`, run with this
 /// constant at 0, 2 and 4).
 pub const SCALAR_HESSIAN_UP_TO: usize = 2;
 
-/// f(x) and ∇f(x) for f: ℝᴺ → ℝ: N forward sweeps with `Dual64` for small N, else one
-/// `DualSVec64<N>` sweep. `f` receives the seeded argument.
-#[inline]
-fn gradient_of<const N: usize>(
-    f_scalar: impl Fn(SVector<Dual64, N>) -> Dual64,
-    f_vector: impl Fn(SVector<DualSVec64<N>, N>) -> DualSVec64<N>,
-    x: &SVector<f64, N>,
-) -> (f64, SVector<f64, N>) {
-    if N <= SCALAR_SWEEPS_UP_TO {
-        scalar_gradient(f_scalar, x)
-    } else {
-        gradient(f_vector, x)
+/// L as a [`PhaseFunction`], for the sweeps of [`Dimension`].
+struct Action<'a, L: ?Sized>(&'a L);
+
+impl<L: Lagrangian<N> + ?Sized, N: Dimension> PhaseFunction<N> for Action<'_, L>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    #[inline]
+    fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> S {
+        self.0.lagrangian(t, q, v)
     }
 }
 
-/// f(x) and ∇f(x) by N forward sweeps with the scalar `Dual64` (N ≥ 1).
-#[inline]
-fn scalar_gradient<const N: usize>(
-    f: impl Fn(SVector<Dual64, N>) -> Dual64,
-    x: &SVector<f64, N>,
-) -> (f64, SVector<f64, N>) {
-    let mut value = 0.0;
-    let mut gradient = SVector::zeros();
-    for i in 0..N {
-        let y = f(SVector::from_fn(|j, _| {
-            Dual64::new(x[j], if i == j { 1.0 } else { 0.0 })
-        }));
-        value = y.re;
-        gradient[i] = y.eps;
+/// The external force f_L as a [`PhaseMap`].
+struct ExternalForce<'a, L: ?Sized>(&'a L);
+
+impl<L: Lagrangian<N> + ?Sized, N: Dimension> PhaseMap<N> for ExternalForce<'_, L>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    #[inline]
+    fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> OVector<S, N> {
+        self.0.external_force(t, q, v)
     }
-    (value, gradient)
+}
+
+/// The Euler–Lagrange acceleration as a [`PhaseMap`] (NaN where L_vv is singular).
+struct Acceleration<'a, L: ?Sized>(&'a L);
+
+impl<L: Lagrangian<N> + ?Sized, N: Dimension> PhaseMap<N> for Acceleration<'_, L>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    #[inline]
+    fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> OVector<S, N> {
+        acceleration_generic(self.0, t, q, v)
+            .unwrap_or_else(|| OVector::from_element_generic(q.shape_generic().0, U1, S::from(f64::NAN)))
+    }
 }
 
 /// L, its gradients and Hessian blocks by (2N)(2N + 1)/2 sweeps of the scalar hyper-dual
 /// number `HyperDual64`, one per entry (i ≤ j) of the Hessian in x = (q, q̇): the sweep seeded
 /// with ε₁ on xᵢ and ε₂ on xⱼ carries ∂²L/∂xᵢ∂xⱼ in its ε₁ε₂ part, and with i = j also
-/// ∂L/∂xᵢ in ε₁. Used for N ≤ [`SCALAR_HESSIAN_UP_TO`].
+/// ∂L/∂xᵢ in ε₁. Used for N ≤ [`SCALAR_HESSIAN_UP_TO`] and for run-time dimensions.
 #[inline]
-fn scalar_second_derivatives<L, const N: usize>(
+fn scalar_second_derivatives<L, N: Dimension>(
     model: &L,
     t: f64,
-    q: &SVector<f64, N>,
-    v: &SVector<f64, N>,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
 ) -> SecondDerivatives<N>
 where
     L: Lagrangian<N> + ?Sized,
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let mut d = SecondDerivatives::zeros();
+    let (dim, _) = q.shape_generic();
+    let n = dim.value();
+    let mut d = SecondDerivatives::zeros(dim);
     let seed = |k: usize, x: f64, i: usize, j: usize| {
         HyperDual64::new(
             x,
@@ -106,29 +107,29 @@ where
             0.0,
         )
     };
-    for i in 0..2 * N {
-        for j in i..2 * N {
-            let x = SVector::from_fn(|k, _| seed(k, q[k], i, j));
-            let y = SVector::from_fn(|k, _| seed(k + N, v[k], i, j));
+    for i in 0..2 * n {
+        for j in i..2 * n {
+            let x = OVector::from_fn_generic(dim, U1, |k, _| seed(k, q[k], i, j));
+            let y = OVector::from_fn_generic(dim, U1, |k, _| seed(k + n, v[k], i, j));
             let l = model.lagrangian(HyperDual64::from_re(t), &x, &y);
             let second = l.eps1eps2;
             if i == j {
                 d.value = l.re;
-                if i < N {
+                if i < n {
                     d.q[i] = l.eps1;
                 } else {
-                    d.v[i - N] = l.eps1;
+                    d.v[i - n] = l.eps1;
                 }
             }
-            match (i < N, j < N) {
+            match (i < n, j < n) {
                 (true, true) => {
                     d.qq[(i, j)] = second;
                     d.qq[(j, i)] = second;
                 }
-                (true, false) => d.qv[(i, j - N)] = second,
+                (true, false) => d.qv[(i, j - n)] = second,
                 _ => {
-                    d.vv[(i - N, j - N)] = second;
-                    d.vv[(j - N, i - N)] = second;
+                    d.vv[(i - n, j - n)] = second;
+                    d.vv[(j - n, i - n)] = second;
                 }
             }
         }
@@ -137,101 +138,120 @@ where
 }
 
 /// Value and first derivatives of L at one point.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FirstDerivatives<const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct FirstDerivatives<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// L(t, q, q̇).
     pub value: f64,
     /// ∂L/∂q.
-    pub q: SVector<f64, N>,
+    pub q: OVector<f64, N>,
     /// ∂L/∂q̇ (the momentum p).
-    pub v: SVector<f64, N>,
+    pub v: OVector<f64, N>,
 }
 
-/// Value, first and second derivatives of L at one point.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SecondDerivatives<const N: usize> {
+/// Value, first derivatives and Hessian blocks of L at one point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SecondDerivatives<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// L(t, q, q̇).
     pub value: f64,
     /// ∂L/∂q.
-    pub q: SVector<f64, N>,
-    /// ∂L/∂q̇ (the momentum p).
-    pub v: SVector<f64, N>,
-    /// ∂²L/∂q∂q.
-    pub qq: SMatrix<f64, N, N>,
-    /// ∂²L/∂q∂q̇: entry (i, j) is ∂²L/∂qᵢ∂q̇ⱼ.
-    pub qv: SMatrix<f64, N, N>,
-    /// ∂²L/∂q̇∂q̇ (the mass matrix of a mechanical Lagrangian).
-    pub vv: SMatrix<f64, N, N>,
+    pub q: OVector<f64, N>,
+    /// ∂L/∂q̇.
+    pub v: OVector<f64, N>,
+    /// ∂²L/∂q².
+    pub qq: OMatrix<f64, N, N>,
+    /// ∂²L/∂q∂q̇ (entry (i, j) = ∂²L/∂qᵢ∂q̇ⱼ).
+    pub qv: OMatrix<f64, N, N>,
+    /// ∂²L/∂q̇² (the mass matrix).
+    pub vv: OMatrix<f64, N, N>,
 }
 
-impl<const N: usize> SecondDerivatives<N> {
-    /// All zeros (a buffer's initial value).
-    pub fn zeros() -> Self {
+impl<N: Dimension> SecondDerivatives<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// All zeros (a buffer to be filled), of dimension `n`.
+    pub fn zeros(n: N) -> Self {
         SecondDerivatives {
             value: 0.0,
-            q: SVector::zeros(),
-            v: SVector::zeros(),
-            qq: SMatrix::zeros(),
-            qv: SMatrix::zeros(),
-            vv: SMatrix::zeros(),
+            q: OVector::zeros_generic(n, U1),
+            v: OVector::zeros_generic(n, U1),
+            qq: OMatrix::zeros_generic(n, n),
+            qv: OMatrix::zeros_generic(n, n),
+            vv: OMatrix::zeros_generic(n, n),
         }
     }
 }
 
-/// The Euler–Lagrange acceleration and its Jacobian.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AccelerationJacobian<const N: usize> {
+/// The Euler–Lagrange acceleration and its Jacobian at one point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccelerationJacobian<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// q̈ = f(t, q, q̇).
-    pub value: SVector<f64, N>,
-    /// ∂q̈/∂q.
-    pub q: SMatrix<f64, N, N>,
-    /// ∂q̈/∂q̇.
-    pub v: SMatrix<f64, N, N>,
+    pub value: OVector<f64, N>,
+    /// ∂f/∂q.
+    pub q: OMatrix<f64, N, N>,
+    /// ∂f/∂q̇.
+    pub v: OMatrix<f64, N, N>,
 }
 
-/// The external force f_L of a [`Lagrangian::FORCED`] model and its Jacobian.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ForceJacobian<const N: usize> {
+/// The external force f_L and its Jacobian at one point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceJacobian<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// f_L(t, q, q̇).
-    pub value: SVector<f64, N>,
-    /// ∂f_L/∂q: entry (i, j) is ∂f_i/∂q_j.
-    pub q: SMatrix<f64, N, N>,
-    /// ∂f_L/∂q̇: entry (i, j) is ∂f_i/∂q̇_j.
-    pub v: SMatrix<f64, N, N>,
+    pub value: OVector<f64, N>,
+    /// ∂f_L/∂q.
+    pub q: OMatrix<f64, N, N>,
+    /// ∂f_L/∂q̇.
+    pub v: OMatrix<f64, N, N>,
 }
 
-impl<const N: usize> ForceJacobian<N> {
-    /// The zero force (the value for unforced models).
-    pub fn zeros() -> Self {
+impl<N: Dimension> ForceJacobian<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// The force of an unforced model: zero, with zero derivatives, of dimension `n`.
+    pub fn zeros(n: N) -> Self {
         ForceJacobian {
-            value: SVector::zeros(),
-            q: SMatrix::zeros(),
-            v: SMatrix::zeros(),
+            value: OVector::zeros_generic(n, U1),
+            q: OMatrix::zeros_generic(n, n),
+            v: OMatrix::zeros_generic(n, n),
         }
     }
 }
 
-/// Iteration cap of the inverse Legendre map.
+/// Cap on Newton iterations of the inverse Legendre map.
 const LEGENDRE_MAX_ITERATIONS: usize = 50;
 
-/// Derived quantities of a Lagrangian, by automatic differentiation.
-///
-/// Implemented for every [`Lagrangian`]; the methods are provided defaults. All arguments
-/// are `f64` time, configuration q and velocity q̇.
-pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
-    /// L(t, q, q̇).
+/// Everything derived from a [`Lagrangian`] by automatic differentiation. Implemented for
+/// every Lagrangian; import it to call these methods on a model.
+pub trait LagrangianExt<N: Dimension>: Lagrangian<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// L(t, q, q̇) in `f64`.
     #[inline]
-    fn value(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
+    fn value(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {
         self.lagrangian(t, q, v)
     }
 
-    /// L, ∂L/∂q and p = ∂L/∂q̇.
+    /// L, ∂L/∂q and ∂L/∂q̇.
     #[inline]
     fn first_derivatives(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
     ) -> FirstDerivatives<N> {
         let (value, force) = self.value_and_force(t, q, v);
         FirstDerivatives {
@@ -241,95 +261,90 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         }
     }
 
-    /// The generalised force ∂L/∂q alone (one gradient).
+    /// The generalised force ∂L/∂q.
     #[inline]
-    fn force(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
+    fn force(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OVector<f64, N> {
         self.value_and_force(t, q, v).1
     }
 
-    /// L and ∂L/∂q from the same sweeps (one gradient).
+    /// L and ∂L/∂q from one gradient.
     #[inline]
     fn value_and_force(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
-    ) -> (f64, SVector<f64, N>) {
-        gradient_of(
-            |x| self.lagrangian(Dual64::from_re(t), &x, &v.map(Dual64::from_re)),
-            |x| self.lagrangian(DualVec::from_re(t), &x, &v.map(DualVec::from_re)),
-            q,
-        )
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+    ) -> (f64, OVector<f64, N>) {
+        N::gradient(&Action(self), t, q, v, Wrt::Position)
     }
 
-    /// The canonical momentum p = ∂L/∂q̇.
+    /// The momentum p = ∂L/∂q̇.
     #[inline]
-    fn momentum(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SVector<f64, N> {
-        gradient_of(
-            |y| self.lagrangian(Dual64::from_re(t), &q.map(Dual64::from_re), &y),
-            |y| self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y),
-            v,
-        )
-        .1
+    fn momentum(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OVector<f64, N> {
+        N::gradient(&Action(self), t, q, v, Wrt::Velocity).1
     }
 
-    /// L, its gradients and its Hessian blocks.
+    /// L, its gradients and the Hessian blocks L_qq, L_qv, L_vv.
     #[inline]
     fn second_derivatives(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
     ) -> SecondDerivatives<N> {
-        if N <= SCALAR_HESSIAN_UP_TO {
+        if N::try_to_usize().is_none_or(|n| n <= SCALAR_HESSIAN_UP_TO) {
             scalar_second_derivatives(self, t, q, v)
         } else {
-            second_derivatives_generic(self, t, q, v).into()
+            let (value, dq, dv, qv) = N::mixed(&Action(self), t, q, v);
+            let (_, _, qq) = N::hessian(&Action(self), t, q, v, Wrt::Position);
+            let vv = self.mass_matrix(t, q, v);
+            SecondDerivatives {
+                value,
+                q: dq,
+                v: dv,
+                qq,
+                qv,
+                vv,
+            }
         }
     }
 
     /// The mass matrix ∂²L/∂q̇².
     #[inline]
-    fn mass_matrix(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> SMatrix<f64, N, N> {
-        velocity_hessian(self, t, q, v)
+    fn mass_matrix(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OMatrix<f64, N, N> {
+        N::hessian(&Action(self), t, q, v, Wrt::Velocity).2
     }
 
     /// The energy E = p·q̇ − L.
     #[inline]
-    fn energy(&self, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
-        let (value, p) = gradient(
-            |y: SVector<DualSVec64<N>, N>| {
-                self.lagrangian(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
-            },
-            v,
-        );
+    fn energy(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {
+        let (value, p) = N::gradient(&Action(self), t, q, v, Wrt::Velocity);
         p.dot(v) - value
     }
 
     /// The inverse Legendre map: the velocity q̇ with ∂L/∂q̇(t, q, q̇) = p, by Newton's method
-    /// started at `guess` (for a Lagrangian quadratic in q̇ one iteration is exact).
+    /// with the mass matrix, started at `guess`.
+    ///
+    /// # Errors
+    /// [`Error::LegendreMap`] if Newton's method does not converge (a singular mass matrix, or
+    /// no velocity for this momentum).
     fn velocity(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        p: &SVector<f64, N>,
-        guess: &SVector<f64, N>,
-    ) -> Result<SVector<f64, N>, Error> {
-        let mut v = *guess;
+        q: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+        guess: &OVector<f64, N>,
+    ) -> Result<OVector<f64, N>, Error> {
+        let mut v = guess.clone();
         let mut last = f64::INFINITY;
         for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
-            let (_, momentum, mass) = hessian(
-                |y: SVector<Dual2Vec<f64, Const<N>>, N>| {
-                    self.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
-                },
-                &v,
-            );
+            let (_, momentum, mass) = N::hessian(&Action(self), t, q, &v, Wrt::Velocity);
             let delta = solve_small(mass, p - momentum).ok_or(Error::LegendreMap {
                 t,
                 iterations: iteration,
                 residual: f64::INFINITY,
             })?;
-            v += delta;
+            v += &delta;
             let size = delta.amax();
             if !size.is_finite() {
                 break;
@@ -348,42 +363,32 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         })
     }
 
-    /// The Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L), or `None`
-    /// where the mass matrix L_vv is singular (f_L only for [`Lagrangian::FORCED`] models).
+    /// The Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L); `None` where
+    /// the mass matrix is singular.
     #[inline]
     fn acceleration(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
-    ) -> Option<SVector<f64, N>> {
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+    ) -> Option<OVector<f64, N>> {
         acceleration_generic(self, t, q, v)
     }
 
-    /// The external force f_L and its Jacobian ∂f_L/∂q, ∂f_L/∂q̇ (two N-sized dual sweeps);
-    /// all zero, without evaluating anything, unless the model is [`Lagrangian::FORCED`].
+    /// The external force f_L and its Jacobian in q and q̇ (zero, at no cost, for a model
+    /// that is not [`Lagrangian::FORCED`]).
     #[inline]
     fn external_force_jacobian(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
     ) -> ForceJacobian<N> {
         if !Self::FORCED {
-            return ForceJacobian::zeros();
+            return ForceJacobian::zeros(q.shape_generic().0);
         }
-        let (value, dq) = jacobian(
-            |x: SVector<DualSVec64<N>, N>| {
-                self.external_force(DualVec::from_re(t), &x, &v.map(DualVec::from_re))
-            },
-            q,
-        );
-        let (_, dv) = jacobian(
-            |y: SVector<DualSVec64<N>, N>| {
-                self.external_force(DualVec::from_re(t), &q.map(DualVec::from_re), &y)
-            },
-            v,
-        );
+        let (value, dq) = N::jacobian(&ExternalForce(self), t, q, v, Wrt::Position);
+        let (_, dv) = N::jacobian(&ExternalForce(self), t, q, v, Wrt::Velocity);
         ForceJacobian {
             value,
             q: dq,
@@ -391,29 +396,16 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         }
     }
 
-    /// The acceleration and its exact Jacobian ∂q̈/∂q, ∂q̈/∂q̇ (third derivatives of L, and
-    /// first derivatives of the external force of a [`Lagrangian::FORCED`] model, by nested
-    /// dual numbers), or `None` where L_vv is singular.
+    /// The Euler–Lagrange acceleration and its exact Jacobian in q and q̇ (third derivatives
+    /// of L by nested duals); `None` where the mass matrix is singular.
     fn acceleration_jacobian(
         &self,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
     ) -> Option<AccelerationJacobian<N>> {
-        let (value, dq) = jacobian(
-            |x: SVector<DualSVec64<N>, N>| {
-                acceleration_generic(self, DualVec::from_re(t), &x, &v.map(DualVec::from_re))
-                    .unwrap_or_else(|| SVector::from_element(DualVec::from_re(f64::NAN)))
-            },
-            q,
-        );
-        let (_, dv) = jacobian(
-            |y: SVector<DualSVec64<N>, N>| {
-                acceleration_generic(self, DualVec::from_re(t), &q.map(DualVec::from_re), &y)
-                    .unwrap_or_else(|| SVector::from_element(DualVec::from_re(f64::NAN)))
-            },
-            v,
-        );
+        let (value, dq) = N::jacobian(&Acceleration(self), t, q, v, Wrt::Position);
+        let (_, dv) = N::jacobian(&Acceleration(self), t, q, v, Wrt::Velocity);
         value
             .iter()
             .all(|a| a.is_finite())
@@ -424,13 +416,13 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
             })
     }
 
-    /// The Noether momentum Jᵢ = p·ξᵢ(q) of symmetry generator `index`.
+    /// The Noether momentum J = p·ξ(q) of symmetry generator `index`.
     fn noether_momentum(
         &self,
         index: usize,
         t: f64,
-        q: &SVector<f64, N>,
-        v: &SVector<f64, N>,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
     ) -> f64
     where
         Self: Symmetries<N>,
@@ -438,21 +430,24 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
         self.momentum(t, q, v).dot(&self.generator(index, q))
     }
 
-    /// How far generator `index` is from a symmetry of L at (t, q, q̇): the variation
-    /// δL = ∂L/∂q·ξ(q) + ∂L/∂q̇·(Dξ(q) q̇) of L along the lifted generator, relative to the
-    /// size of its two terms (0 for a symmetry, up to round-off; of order 1 for a generator
-    /// that is none, whose "Noether momentum" is then not conserved and measures nothing).
-    /// Dξ q̇ is a central difference of ξ along q̇ (ξ is given in `f64` only), accurate to
-    /// about 1e-10 relative.
-    fn symmetry_defect(&self, index: usize, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64
+    /// How far generator `index` is from a symmetry of L at (t, q, q̇): the relative size of
+    /// the derivative of L along the lifted vector field, |L_q·ξ + L_q̇·(Dξ q̇)| /
+    /// (|L_q|·|ξ| + |L_q̇|·|Dξ q̇|), zero for a symmetry (Dξ q̇ by central differences).
+    fn symmetry_defect(
+        &self,
+        index: usize,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+    ) -> f64
     where
         Self: Symmetries<N>,
     {
         let derivatives = self.first_derivatives(t, q, v);
         let xi = self.generator(index, q);
         let s = 1e-4 * (1.0 + q.amax()) / (1.0 + v.amax());
-        let lifted =
-            (self.generator(index, &(q + v * s)) - self.generator(index, &(q - v * s))) / (2.0 * s);
+        let lifted = (self.generator(index, &(q + v * s)) - self.generator(index, &(q - v * s)))
+            / (2.0 * s);
         let (along_q, along_v) = (derivatives.q.dot(&xi), derivatives.v.dot(&lifted));
         let scale = derivatives.q.abs().dot(&xi.abs()) + derivatives.v.abs().dot(&lifted.abs());
         let defect = (along_q + along_v).abs();
@@ -460,140 +455,30 @@ pub trait LagrangianExt<const N: usize>: Lagrangian<N> {
     }
 }
 
-impl<L: Lagrangian<N> + ?Sized, const N: usize> LagrangianExt<N> for L {}
+impl<L: Lagrangian<N> + ?Sized, N: Dimension> LagrangianExt<N> for L where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>
+{
+}
 
-/// L, ∂L/∂q, ∂L/∂q̇ and ∂²L/∂q∂q̇ in any scalar type (one partial-Hessian sweep).
-#[allow(clippy::type_complexity)]
-fn mixed_derivatives<L, D, const N: usize>(
+/// The Euler–Lagrange acceleration at a point of any scalar type (dual numbers give its
+/// Jacobian): q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L).
+fn acceleration_generic<L, D, N: Dimension>(
     model: &L,
     t: D,
-    q: &SVector<D, N>,
-    v: &SVector<D, N>,
-) -> (D, SVector<D, N>, SVector<D, N>, SMatrix<D, N, N>)
+    q: &OVector<D, N>,
+    v: &OVector<D, N>,
+) -> Option<OVector<D, N>>
 where
     L: Lagrangian<N> + ?Sized,
     D: Scalar,
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    partial_hessian(
-        |(x, y): (
-            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
-            SVector<HyperDualVec<D, Const<N>, Const<N>>, N>,
-        )| model.lagrangian(HyperDualVec::from_re(t), &x, &y),
-        (q, v),
-    )
-}
-
-/// ∂²L/∂q̇² in any scalar type (one Hessian sweep in q̇).
-fn velocity_hessian<L, D, const N: usize>(
-    model: &L,
-    t: D,
-    q: &SVector<D, N>,
-    v: &SVector<D, N>,
-) -> SMatrix<D, N, N>
-where
-    L: Lagrangian<N> + ?Sized,
-    D: Scalar,
-{
-    hessian(
-        |y: SVector<Dual2Vec<D, Const<N>>, N>| {
-            model.lagrangian(Dual2Vec::from_re(t), &q.map(Dual2Vec::from_re), &y)
-        },
-        v,
-    )
-    .2
-}
-
-/// Value, gradients and Hessian blocks of L in any scalar type (three N-sized sweeps).
-fn second_derivatives_generic<L, D, const N: usize>(
-    model: &L,
-    t: D,
-    q: &SVector<D, N>,
-    v: &SVector<D, N>,
-) -> SecondDerivativesOf<D, N>
-where
-    L: Lagrangian<N> + ?Sized,
-    D: Scalar,
-{
-    let (value, dq, dv, qv) = mixed_derivatives(model, t, q, v);
-    let (_, _, qq) = hessian(
-        |x: SVector<Dual2Vec<D, Const<N>>, N>| {
-            model.lagrangian(Dual2Vec::from_re(t), &x, &v.map(Dual2Vec::from_re))
-        },
-        q,
-    );
-    let vv = velocity_hessian(model, t, q, v);
-    SecondDerivativesOf {
-        value,
-        q: dq,
-        v: dv,
-        qq,
-        qv,
-        vv,
-    }
-}
-
-/// [`SecondDerivatives`] in a generic scalar type.
-struct SecondDerivativesOf<D: Scalar, const N: usize> {
-    value: D,
-    q: SVector<D, N>,
-    v: SVector<D, N>,
-    qq: SMatrix<D, N, N>,
-    qv: SMatrix<D, N, N>,
-    vv: SMatrix<D, N, N>,
-}
-
-impl<const N: usize> From<SecondDerivativesOf<f64, N>> for SecondDerivatives<N> {
-    fn from(d: SecondDerivativesOf<f64, N>) -> Self {
-        SecondDerivatives {
-            value: d.value,
-            q: d.q,
-            v: d.v,
-            qq: d.qq,
-            qv: d.qv,
-            vv: d.vv,
-        }
-    }
-}
-
-/// ∂²L/∂q̇∂t in any scalar type.
-#[allow(clippy::type_complexity)]
-fn velocity_time_derivative<L, D, const N: usize>(
-    model: &L,
-    t: D,
-    q: &SVector<D, N>,
-    v: &SVector<D, N>,
-) -> SVector<D, N>
-where
-    L: Lagrangian<N> + ?Sized,
-    D: Scalar,
-{
-    let (_, _, _, vt) = partial_hessian(
-        |(y, s): (
-            SVector<HyperDualVec<D, Const<N>, Const<1>>, N>,
-            SVector<HyperDualVec<D, Const<N>, Const<1>>, 1>,
-        )| model.lagrangian(s[0], &q.map(HyperDualVec::from_re), &y),
-        (v, &SVector::from([t])),
-    );
-    vt.column(0).into_owned()
-}
-
-/// The (forced) Euler–Lagrange acceleration in any scalar type.
-fn acceleration_generic<L, D, const N: usize>(
-    model: &L,
-    t: D,
-    q: &SVector<D, N>,
-    v: &SVector<D, N>,
-) -> Option<SVector<D, N>>
-where
-    L: Lagrangian<N> + ?Sized,
-    D: Scalar,
-{
-    // L_q, L_qv from one partial Hessian and L_vv from the Hessian in q̇: L_qq is not needed.
-    let (_, lq, _, qv) = mixed_derivatives(model, t, q, v);
-    let vv = velocity_hessian(model, t, q, v);
+    // L_q, L_qv from the mixed derivatives and L_vv from the Hessian in q̇: L_qq is not needed.
+    let (_, lq, _, qv) = N::mixed(&Action(model), t, q, v);
+    let (_, _, vv) = N::hessian(&Action(model), t, q, v, Wrt::Velocity);
     let mut rhs = lq - qv.transpose() * v;
     if L::TIME_DEPENDENT {
-        rhs -= velocity_time_derivative(model, t, q, v);
+        rhs -= N::velocity_time(&Action(model), t, q, v);
     }
     if L::FORCED {
         rhs += model.external_force(t, q, v);
@@ -603,20 +488,25 @@ where
 
 /// M⁻¹ of a [`crate::model::Structure::ConstantMass`] Lagrangian, computed at the first step
 /// (at (t, q), with `y` standing in for q̇, which M does not depend on) and cached in `cache`.
-pub(crate) fn cached_mass_inverse<L: Lagrangian<N>, const N: usize>(
-    cache: &mut Option<SMatrix<f64, N, N>>,
+pub(crate) fn cached_mass_inverse<'c, L: Lagrangian<N>, N: Dimension>(
+    cache: &'c mut Option<OMatrix<f64, N, N>>,
     model: &L,
     t: f64,
-    q: &SVector<f64, N>,
-    y: &SVector<f64, N>,
-) -> Result<SMatrix<f64, N, N>, crate::error::StepFailure> {
-    if let Some(inverse) = cache {
-        return Ok(*inverse);
+    q: &OVector<f64, N>,
+    y: &OVector<f64, N>,
+) -> Result<&'c OMatrix<f64, N, N>, crate::error::StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    match *cache {
+        Some(ref inverse) => Ok(inverse),
+        None => {
+            let mass = model.mass_matrix(t, q, y);
+            let inverse = crate::linalg::invert_small(&mass)
+                .ok_or(crate::error::StepFailure::SingularMatrix)?;
+            Ok(cache.insert(inverse))
+        }
     }
-    let mass = model.mass_matrix(t, q, y);
-    let inverse =
-        crate::linalg::invert_small(&mass).ok_or(crate::error::StepFailure::SingularMatrix)?;
-    Ok(*cache.insert(inverse))
 }
 
 #[cfg(test)]
