@@ -92,7 +92,12 @@ pub trait Dimension: Dim {
         t: D,
         q: &OVector<D, Self>,
         v: &OVector<D, Self>,
-    ) -> (D, OVector<D, Self>, OVector<D, Self>, OMatrix<D, Self, Self>)
+    ) -> (
+        D,
+        OVector<D, Self>,
+        OVector<D, Self>,
+        OMatrix<D, Self, Self>,
+    )
     where
         DefaultAllocator: Allocator<Self> + Allocator<Self, Self>;
 
@@ -125,45 +130,17 @@ pub fn dimension_of<N: Dim>(size: usize) -> Result<N, String> {
         Some(fixed) if fixed != size => Err(format!(
             "the model says it has {size} coordinates but its type fixes {fixed}"
         )),
-        _ if size == 0 => Err("the model has no coordinates (a run-time-size model must say its \
+        _ if size == 0 => Err(
+            "the model has no coordinates (a run-time-size model must say its \
                                size through `Lagrangian::dimension`)"
-            .into()),
+                .into(),
+        ),
         _ => Ok(N::from_usize(size)),
     }
 }
 
-/// `x` with coordinate `seeded` (if any) seeded by `seed` and every other entry lifted by
-/// `plain`.
-#[inline]
-fn lift<D: Scalar, E: Scalar, N: Dim>(
-    x: &OVector<D, N>,
-    seeded: Option<usize>,
-    seed: impl Fn(D) -> E,
-    plain: impl Fn(D) -> E,
-) -> OVector<E, N>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    let (n, _) = x.shape_generic();
-    OVector::from_fn_generic(n, U1, |k, _| {
-        if Some(k) == seeded {
-            seed(x[k])
-        } else {
-            plain(x[k])
-        }
-    })
-}
-
-/// The coordinate of (q, q̇) a sweep seeds: `Some(i)` in the argument `wrt`.
-#[inline]
-fn pick(wrt: Wrt, i: usize) -> (Option<usize>, Option<usize>) {
-    match wrt {
-        Wrt::Position => (Some(i), None),
-        Wrt::Velocity => (None, Some(i)),
-    }
-}
-
-/// [`Dimension::gradient`] by n sweeps of the scalar dual `Dual<D>`.
+/// [`Dimension::gradient`] by n sweeps of the scalar dual `Dual<D>`: (q, q̇) are lifted once,
+/// and each sweep seeds one coordinate and clears it again.
 pub fn scalar_gradient<N: Dim, D: Scalar, F: PhaseFunction<N> + ?Sized>(
     f: &F,
     t: D,
@@ -175,17 +152,24 @@ where
     DefaultAllocator: Allocator<N>,
 {
     let (n, _) = q.shape_generic();
+    let (mut x, mut y) = (q.map(Dual::from_re), v.map(Dual::from_re));
+    let time = Dual::from_re(t);
     let mut value = D::zero();
-    let gradient = OVector::from_fn_generic(n, U1, |i, _| {
-        let (at_q, at_v) = pick(wrt, i);
-        let y = f.eval(
-            Dual::from_re(t),
-            &lift(q, at_q, |x| Dual::new(x, D::one()), Dual::from_re),
-            &lift(v, at_v, |x| Dual::new(x, D::one()), Dual::from_re),
-        );
-        value = y.re;
-        y.eps
-    });
+    let mut gradient = OVector::zeros_generic(n, U1);
+    for i in 0..n.value() {
+        let seeded = match wrt {
+            Wrt::Position => &mut x[i],
+            Wrt::Velocity => &mut y[i],
+        };
+        seeded.eps = D::one();
+        let result = f.eval(time, &x, &y);
+        match wrt {
+            Wrt::Position => x[i].eps = D::zero(),
+            Wrt::Velocity => y[i].eps = D::zero(),
+        }
+        value = result.re;
+        gradient[i] = result.eps;
+    }
     (value, gradient)
 }
 
@@ -204,38 +188,32 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     let (n, _) = q.shape_generic();
-    let x = match wrt {
-        Wrt::Position => q,
-        Wrt::Velocity => v,
-    };
+    let (mut x, mut y) = (q.map(HyperDual::from_re), v.map(HyperDual::from_re));
+    let time = HyperDual::from_re(t);
     let mut value = D::zero();
     let mut gradient = OVector::zeros_generic(n, U1);
     let mut hessian = OMatrix::zeros_generic(n, n);
     for i in 0..n.value() {
         for j in i..n.value() {
-            let seeded = OVector::from_fn_generic(n, U1, |k, _| {
-                HyperDual::new(
-                    x[k],
-                    if k == i { D::one() } else { D::zero() },
-                    if k == j { D::one() } else { D::zero() },
-                    D::zero(),
-                )
-            });
-            let fixed = match wrt {
-                Wrt::Position => v,
-                Wrt::Velocity => q,
-            }
-            .map(HyperDual::from_re);
-            let y = match wrt {
-                Wrt::Position => f.eval(HyperDual::from_re(t), &seeded, &fixed),
-                Wrt::Velocity => f.eval(HyperDual::from_re(t), &fixed, &seeded),
+            let seeded = match wrt {
+                Wrt::Position => &mut x,
+                Wrt::Velocity => &mut y,
             };
+            seeded[i].eps1 = D::one();
+            seeded[j].eps2 = D::one();
+            let result = f.eval(time, &x, &y);
+            let seeded = match wrt {
+                Wrt::Position => &mut x,
+                Wrt::Velocity => &mut y,
+            };
+            seeded[i].eps1 = D::zero();
+            seeded[j].eps2 = D::zero();
             if i == j {
-                value = y.re;
-                gradient[i] = y.eps1;
+                value = result.re;
+                gradient[i] = result.eps1;
             }
-            hessian[(i, j)] = y.eps1eps2;
-            hessian[(j, i)] = y.eps1eps2;
+            hessian[(i, j)] = result.eps1eps2;
+            hessian[(j, i)] = result.eps1eps2;
         }
     }
     (value, gradient, hessian)
@@ -253,29 +231,24 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     let (n, _) = q.shape_generic();
+    let (mut x, mut y) = (q.map(HyperDual::from_re), v.map(HyperDual::from_re));
+    let time = HyperDual::from_re(t);
     let mut value = D::zero();
     let mut dq = OVector::zeros_generic(n, U1);
     let mut dv = OVector::zeros_generic(n, U1);
     let mut qv = OMatrix::zeros_generic(n, n);
-    let seed = |x: &OVector<D, N>, at: usize, first: bool| {
-        OVector::from_fn_generic(n, U1, |k, _| {
-            let one = if k == at { D::one() } else { D::zero() };
-            if first {
-                HyperDual::new(x[k], one, D::zero(), D::zero())
-            } else {
-                HyperDual::new(x[k], D::zero(), one, D::zero())
-            }
-        })
-    };
     for i in 0..n.value() {
-        let seeded_q = seed(q, i, true);
+        x[i].eps1 = D::one();
         for j in 0..n.value() {
-            let y = f.eval(HyperDual::from_re(t), &seeded_q, &seed(v, j, false));
-            value = y.re;
-            dq[i] = y.eps1;
-            dv[j] = y.eps2;
-            qv[(i, j)] = y.eps1eps2;
+            y[j].eps2 = D::one();
+            let result = f.eval(time, &x, &y);
+            y[j].eps2 = D::zero();
+            value = result.re;
+            dq[i] = result.eps1;
+            dv[j] = result.eps2;
+            qv[(i, j)] = result.eps1eps2;
         }
+        x[i].eps1 = D::zero();
     }
     (value, dq, dv, qv)
 }
@@ -292,16 +265,14 @@ where
 {
     let (n, _) = q.shape_generic();
     let time = HyperDual::new(t, D::zero(), D::one(), D::zero());
-    let lifted_q = q.map(HyperDual::from_re);
-    OVector::from_fn_generic(n, U1, |i, _| {
-        let seeded = lift(
-            v,
-            Some(i),
-            |x| HyperDual::new(x, D::one(), D::zero(), D::zero()),
-            HyperDual::from_re,
-        );
-        f.eval(time, &lifted_q, &seeded).eps1eps2
-    })
+    let (x, mut y) = (q.map(HyperDual::from_re), v.map(HyperDual::from_re));
+    let mut mixed = OVector::zeros_generic(n, U1);
+    for i in 0..n.value() {
+        y[i].eps1 = D::one();
+        mixed[i] = f.eval(time, &x, &y).eps1eps2;
+        y[i].eps1 = D::zero();
+    }
+    mixed
 }
 
 /// [`Dimension::jacobian`] by n sweeps of the scalar dual `Dual<D>`, one column each.
@@ -316,18 +287,23 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     let (n, _) = q.shape_generic();
+    let (mut x, mut y) = (q.map(Dual::from_re), v.map(Dual::from_re));
+    let time = Dual::from_re(t);
     let mut value = OVector::zeros_generic(n, U1);
     let mut jacobian = OMatrix::zeros_generic(n, n);
     for j in 0..n.value() {
-        let (at_q, at_v) = pick(wrt, j);
-        let y = f.eval(
-            Dual::from_re(t),
-            &lift(q, at_q, |x| Dual::new(x, D::one()), Dual::from_re),
-            &lift(v, at_v, |x| Dual::new(x, D::one()), Dual::from_re),
-        );
+        match wrt {
+            Wrt::Position => x[j].eps = D::one(),
+            Wrt::Velocity => y[j].eps = D::one(),
+        }
+        let result = f.eval(time, &x, &y);
+        match wrt {
+            Wrt::Position => x[j].eps = D::zero(),
+            Wrt::Velocity => y[j].eps = D::zero(),
+        }
         for i in 0..n.value() {
-            value[i] = y[i].re;
-            jacobian[(i, j)] = y[i].eps;
+            value[i] = result[i].re;
+            jacobian[(i, j)] = result[i].eps;
         }
     }
     (value, jacobian)
@@ -362,7 +338,12 @@ impl Dimension for Dyn {
         t: D,
         q: &OVector<D, Self>,
         v: &OVector<D, Self>,
-    ) -> (D, OVector<D, Self>, OVector<D, Self>, OMatrix<D, Self, Self>) {
+    ) -> (
+        D,
+        OVector<D, Self>,
+        OVector<D, Self>,
+        OMatrix<D, Self, Self>,
+    ) {
         scalar_mixed(f, t, q, v)
     }
 
@@ -446,7 +427,12 @@ impl<const K: usize> Dimension for Const<K> {
         t: D,
         q: &OVector<D, Self>,
         v: &OVector<D, Self>,
-    ) -> (D, OVector<D, Self>, OVector<D, Self>, OMatrix<D, Self, Self>) {
+    ) -> (
+        D,
+        OVector<D, Self>,
+        OVector<D, Self>,
+        OMatrix<D, Self, Self>,
+    ) {
         num_dual::partial_hessian(
             |(x, y): (
                 OVector<HyperDualVec<D, Self, Self>, Self>,

@@ -13,7 +13,7 @@ pub mod sparse;
 
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, U1};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 /// Solve A x = b for a small system (of fixed or run-time size); `None` if A is singular (a
 /// zero pivot) or the result is not finite.
@@ -249,6 +249,7 @@ pub fn compensated_sum_extent(sum: &[f64], compensation: &[f64], increment: &[f6
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use nalgebra::{SMatrix, SVector};
     use num_dual::{DualNum, DualSVec64, jacobian};
 
     #[test]

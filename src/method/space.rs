@@ -10,9 +10,9 @@
 //! (Kahan) summation, so a run of 10⁶ steps keeps the accuracy of its steps (on SO(3) this is
 //! what keeps R orthogonal to round-off without re-orthonormalisation).
 
+use crate::dimension::Dimension;
 use crate::error::StepFailure;
 use crate::linalg::{compensated_add, compensated_sum_extent};
-use crate::dimension::Dimension;
 use crate::model::so3::{Matrix3, Vector3};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, SMatrix, U1};
@@ -245,7 +245,9 @@ where
 
     fn distance(&self, other: &Self) -> f64 {
         let apart = |a: &OVector<f64, N>, b: &OVector<f64, N>| {
-            a.iter().zip(b.iter()).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+            a.iter()
+                .zip(b.iter())
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
         };
         apart(&self.q, &other.q).max(apart(&self.y, &other.y))
     }

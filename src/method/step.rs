@@ -11,10 +11,10 @@
 //! blanket implementation below; the Lie-group integrator implements [`Step`] on
 //! [`crate::method::SO3`] itself ([`crate::lie_group::LieSvi`]).
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure, require_finite_entries};
 use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, TangentMap};
 use crate::method::{Coordinates, Method, MethodInfo, StepReport};
-use crate::dimension::{Dimension, dimension_of};
 use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure};
 use nalgebra::allocator::Allocator;
@@ -268,7 +268,10 @@ where
             if x.len() != size {
                 return Err(Error::invalid(
                     "initial state",
-                    format!("the {what} has {} entries, the model {size} coordinates", x.len()),
+                    format!(
+                        "the {what} has {} entries, the model {size} coordinates",
+                        x.len()
+                    ),
                 ));
             }
         }

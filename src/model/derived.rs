@@ -76,8 +76,9 @@ where
 {
     #[inline]
     fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> OVector<S, N> {
-        acceleration_generic(self.0, t, q, v)
-            .unwrap_or_else(|| OVector::from_element_generic(q.shape_generic().0, U1, S::from(f64::NAN)))
+        acceleration_generic(self.0, t, q, v).unwrap_or_else(|| {
+            OVector::from_element_generic(q.shape_generic().0, U1, S::from(f64::NAN))
+        })
     }
 }
 
@@ -433,21 +434,15 @@ where
     /// How far generator `index` is from a symmetry of L at (t, q, q̇): the relative size of
     /// the derivative of L along the lifted vector field, |L_q·ξ + L_q̇·(Dξ q̇)| /
     /// (|L_q|·|ξ| + |L_q̇|·|Dξ q̇|), zero for a symmetry (Dξ q̇ by central differences).
-    fn symmetry_defect(
-        &self,
-        index: usize,
-        t: f64,
-        q: &OVector<f64, N>,
-        v: &OVector<f64, N>,
-    ) -> f64
+    fn symmetry_defect(&self, index: usize, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64
     where
         Self: Symmetries<N>,
     {
         let derivatives = self.first_derivatives(t, q, v);
         let xi = self.generator(index, q);
         let s = 1e-4 * (1.0 + q.amax()) / (1.0 + v.amax());
-        let lifted = (self.generator(index, &(q + v * s)) - self.generator(index, &(q - v * s)))
-            / (2.0 * s);
+        let lifted =
+            (self.generator(index, &(q + v * s)) - self.generator(index, &(q - v * s))) / (2.0 * s);
         let (along_q, along_v) = (derivatives.q.dot(&xi), derivatives.v.dot(&lifted));
         let scale = derivatives.q.abs().dot(&xi.abs()) + derivatives.v.abs().dot(&lifted.abs());
         let defect = (along_q + along_v).abs();
@@ -513,7 +508,8 @@ where
 mod tests {
     use super::*;
     use crate::model::Structure;
-    use crate::test_models::{Oscillator, VariableMass};
+    use crate::test_models::{AsDyn, Oscillator, VariableMass};
+    use nalgebra::{Const, DVector, SMatrix, SVector, U2};
 
     /// The closed forms of [`VariableMass`], derived by hand.
     mod variable_mass {
@@ -563,7 +559,7 @@ mod tests {
     /// Time-dependent mass: L = ½ (2 + sin t) q̇² − ½ q², whose Euler–Lagrange equation
     /// (2 + sin t) q̈ + cos t · q̇ = −q needs the L_vt term.
     struct TimeDependentMass;
-    impl Lagrangian<1> for TimeDependentMass {
+    impl Lagrangian<U1> for TimeDependentMass {
         fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
             (t.sin() + 2.0) * v[0] * v[0] * 0.5 - q[0] * q[0] * 0.5
         }
@@ -574,7 +570,7 @@ mod tests {
     const DAMPING: f64 = 0.3;
     const CUBIC: f64 = 0.2;
     const DRIVE: f64 = 0.5;
-    impl Lagrangian<1> for Forced {
+    impl Lagrangian<U1> for Forced {
         const TIME_DEPENDENT: bool = false;
         const FORCED: bool = true;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
@@ -593,7 +589,7 @@ mod tests {
     /// Relativistic particle in a well: L = −√(1 − q̇²) − q²/2, p = q̇/√(1 − q̇²), whose
     /// inverse Legendre map q̇ = p/√(1 + p²) needs several Newton iterations.
     struct Relativistic;
-    impl Lagrangian<1> for Relativistic {
+    impl Lagrangian<U1> for Relativistic {
         const TIME_DEPENDENT: bool = false;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
             -(-(v[0] * v[0]) + 1.0).sqrt() - q[0] * q[0] * 0.5
@@ -602,7 +598,7 @@ mod tests {
 
     /// Singular mass matrix: L = ½ q̇₀² − ½ q₀² − ½ q₁² (q₁ has no kinetic term).
     struct Degenerate;
-    impl Lagrangian<2> for Degenerate {
+    impl Lagrangian<U2> for Degenerate {
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
             (v[0] * v[0] - q[0] * q[0] - q[1] * q[1]) * 0.5
         }
@@ -611,12 +607,12 @@ mod tests {
     /// Planar isotropic oscillator L = ½|q̇|² − ½|q|², invariant under rotations
     /// ξ(q) = (−q₁, q₀): the Noether momentum is the angular momentum q₀ q̇₁ − q₁ q̇₀.
     struct Planar;
-    impl Lagrangian<2> for Planar {
+    impl Lagrangian<U2> for Planar {
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
             (v.dot(v) - q.dot(q)) * 0.5
         }
     }
-    impl Symmetries<2> for Planar {
+    impl Symmetries<U2> for Planar {
         fn generator_count(&self) -> usize {
             1
         }
@@ -630,7 +626,7 @@ mod tests {
 
     /// Constant, non-diagonal mass M = [[2, 1], [1, 3]]: L = ½ q̇ᵀMq̇ − ½|q|².
     struct ConstantMass;
-    impl Lagrangian<2> for ConstantMass {
+    impl Lagrangian<U2> for ConstantMass {
         const STRUCTURE: Structure = Structure::ConstantMass;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
             (v[0] * v[0] * 2.0 + v[0] * v[1] * 2.0 + v[1] * v[1] * 3.0 - q.dot(q)) * 0.5
@@ -692,13 +688,14 @@ mod tests {
             assert_close(&second.qv, &variable_mass::lqv(&q, &v), 1e-15);
             assert_close(&second.vv, &variable_mass::lvv(&q), 1e-15);
             // N = 2 takes the scalar hyper-dual sweeps; the vector sweeps of larger N agree.
-            let vector: SecondDerivatives<2> =
-                second_derivatives_generic(&model, 0.0, &q, &v).into();
-            assert_close(&vector.q, &second.q, 1e-15);
-            assert_close(&vector.v, &second.v, 1e-15);
-            assert_close(&vector.qq, &second.qq, 1e-15);
-            assert_close(&vector.qv, &second.qv, 1e-15);
-            assert_close(&vector.vv, &second.vv, 1e-15);
+            let (_, lq, lv, qv) = U2::mixed(&Action(&model), 0.0, &q, &v);
+            let (_, _, qq) = U2::hessian(&Action(&model), 0.0, &q, &v, Wrt::Position);
+            let (_, _, vv) = U2::hessian(&Action(&model), 0.0, &q, &v, Wrt::Velocity);
+            assert_close(&lq, &second.q, 1e-15);
+            assert_close(&lv, &second.v, 1e-15);
+            assert_close(&qq, &second.qq, 1e-15);
+            assert_close(&qv, &second.qv, 1e-15);
+            assert_close(&vv, &second.vv, 1e-15);
             assert_close(
                 &model.mass_matrix(0.0, &q, &v),
                 &variable_mass::lvv(&q),
@@ -759,7 +756,7 @@ mod tests {
     /// Central differences of the acceleration in q and q̇ with step δ = 1e-5: truncation
     /// error δ²/6 · |f'''| ≈ 1e-10 and round-off ε |f| / δ ≈ 1e-11 for these O(1) states,
     /// so the Jacobian must agree to 1e-8 (relative to max(1, |entry|)).
-    fn assert_jacobian_matches_central_differences<L: Lagrangian<N>, const N: usize>(
+    fn assert_jacobian_matches_central_differences<L: Lagrangian<Const<N>>, const N: usize>(
         model: &L,
         t: f64,
         q: &SVector<f64, N>,
@@ -845,7 +842,7 @@ mod tests {
         // Unforced models report an exact zero without evaluating anything.
         assert_eq!(
             Oscillator::<false>.external_force_jacobian(t, &q, &v),
-            ForceJacobian::zeros()
+            ForceJacobian::zeros(U1)
         );
     }
 
@@ -883,12 +880,12 @@ mod tests {
     fn a_symmetry_has_no_defect_and_a_generator_that_is_none_has_one() {
         // Rotations are a symmetry of the planar isotropic oscillator; translations are not.
         struct Translated;
-        impl Lagrangian<2> for Translated {
+        impl Lagrangian<U2> for Translated {
             fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
                 Planar.lagrangian(t, q, v)
             }
         }
-        impl Symmetries<2> for Translated {
+        impl Symmetries<U2> for Translated {
             fn generator_count(&self) -> usize {
                 1
             }
@@ -914,11 +911,89 @@ mod tests {
         let mut cache = None;
         let (q, y) = (SVector::from([0.3, 0.1]), SVector::from([1.0, -2.0]));
         let inverse = cached_mass_inverse(&mut cache, &ConstantMass, 0.0, &q, &y).unwrap();
-        assert_close(&inverse, &expected, 1e-15);
+        assert_close(inverse, &expected, 1e-15);
         // A cached value is returned as is: a stale cache proves no recomputation.
         let stale = SMatrix::<f64, 2, 2>::identity();
         cache = Some(stale);
         let again = cached_mass_inverse(&mut cache, &ConstantMass, 1.0, &q, &y).unwrap();
-        assert_eq!(again, stale);
+        assert_eq!(*again, stale);
+    }
+
+    /// Every derived quantity of a run-time-size model (scalar sweeps) equals the one of the
+    /// same Lagrangian with a fixed size (vector duals), to round-off: the variable-mass model
+    /// (third derivatives in the acceleration Jacobian) and the forced, time-dependent one.
+    #[test]
+    fn run_time_size_derivatives_match_the_fixed_size_ones() {
+        let dynamic = |x: &SVector<f64, 2>| DVector::from_column_slice(x.as_slice());
+        let close = |a: &[f64], b: &[f64]| {
+            let gap = a
+                .iter()
+                .zip(b)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max);
+            assert!(a.len() == b.len() && gap <= 1e-13, "{a:?} vs {b:?}");
+        };
+        let (fixed, run_time) = (VariableMass, AsDyn::<_, U2>::new(VariableMass));
+        assert_eq!(run_time.dimension(), 2);
+        for (q, v) in points() {
+            let (qd, vd) = (dynamic(&q), dynamic(&v));
+            let (a, b) = (
+                fixed.second_derivatives(0.3, &q, &v),
+                run_time.second_derivatives(0.3, &qd, &vd),
+            );
+            close(&[a.value], &[b.value]);
+            for (x, y) in [
+                (a.q.as_slice(), b.q.as_slice()),
+                (a.v.as_slice(), b.v.as_slice()),
+            ] {
+                close(x, y);
+            }
+            for (x, y) in [(&a.qq, &b.qq), (&a.qv, &b.qv), (&a.vv, &b.vv)] {
+                close(x.as_slice(), y.as_slice());
+            }
+            close(
+                fixed.momentum(0.3, &q, &v).as_slice(),
+                run_time.momentum(0.3, &qd, &vd).as_slice(),
+            );
+            close(
+                &[fixed.energy(0.3, &q, &v)],
+                &[run_time.energy(0.3, &qd, &vd)],
+            );
+            let (a, b) = (
+                fixed.acceleration_jacobian(0.3, &q, &v).unwrap(),
+                run_time.acceleration_jacobian(0.3, &qd, &vd).unwrap(),
+            );
+            close(a.value.as_slice(), b.value.as_slice());
+            close(a.q.as_slice(), b.q.as_slice());
+            close(a.v.as_slice(), b.v.as_slice());
+            let p = fixed.momentum(0.3, &q, &v);
+            close(
+                fixed
+                    .velocity(0.3, &q, &p, &SVector::zeros())
+                    .unwrap()
+                    .as_slice(),
+                run_time
+                    .velocity(0.3, &qd, &dynamic(&p), &DVector::zeros(2))
+                    .unwrap()
+                    .as_slice(),
+            );
+        }
+        let (fixed, run_time) = (Forced, AsDyn::<_, U1>::new(Forced));
+        let (q, v) = (SVector::from([0.4]), SVector::from([-0.7]));
+        let (qd, vd) = (
+            DVector::from_element(1, 0.4),
+            DVector::from_element(1, -0.7),
+        );
+        let (a, b) = (
+            fixed.external_force_jacobian(1.1, &q, &v),
+            run_time.external_force_jacobian(1.1, &qd, &vd),
+        );
+        close(a.value.as_slice(), b.value.as_slice());
+        close(a.q.as_slice(), b.q.as_slice());
+        close(a.v.as_slice(), b.v.as_slice());
+        close(
+            fixed.acceleration(1.1, &q, &v).unwrap().as_slice(),
+            run_time.acceleration(1.1, &qd, &vd).unwrap().as_slice(),
+        );
     }
 }

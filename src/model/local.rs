@@ -181,7 +181,7 @@ pub struct Term<'a, L: ?Sized> {
     pub index: usize,
 }
 
-impl<L, const K: usize> Lagrangian<K> for Term<'_, L>
+impl<L, const K: usize> Lagrangian<Const<K>> for Term<'_, L>
 where
     L: LocalLagrangian<Width = Const<K>> + ?Sized,
 {

@@ -111,7 +111,7 @@ use svi::model::reparametrized::MonitorSpec;
 use svi::model::text::{TextError, TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
 use svi_models::{
-    LOCAL_MODEL_NAMES, LocalZooModel, MAX_TEXT_DIMENSION, RIGID_MODEL_NAMES, RigidZooModel,
+    LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel,
     ZooModel,
 };
 
@@ -273,13 +273,6 @@ impl Scene {
         ];
         if let Some((_, field)) = needed.into_iter().find(|(missing, _)| *missing) {
             return Err(SceneError::TextModelNeeds { field });
-        }
-        if let Some(max) = Some(MAX_TEXT_DIMENSION).filter(|max| model.dimension() > *max) {
-            return Err(TextError::TooManyCoordinates {
-                found: model.dimension(),
-                max,
-            }
-            .into());
         }
         Ok(())
     }

@@ -36,9 +36,11 @@
 //!
 //! All are symplectic without forces (a discrete Lagrangian is a type-I generating function).
 
+use crate::dimension::Dimension;
 use crate::model::Lagrangian;
 use crate::scalar::Scalar;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
 
 /// Static facts about a discrete Lagrangian and the integrator it generates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,12 +58,22 @@ pub struct DiscreteLagrangianInfo {
 
 /// The discrete forces (f_d⁻, f_d⁺) of one step: the virtual work ∫ f_L·δq dt over the step
 /// is approximated by f_d⁻·δq_k + f_d⁺·δq_{k+1}.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DiscreteForces<D: Scalar, const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiscreteForces<D: Scalar, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// f_d⁻, conjugate to δq_k.
-    pub minus: SVector<D, N>,
+    pub minus: OVector<D, N>,
     /// f_d⁺, conjugate to δq_{k+1}.
-    pub plus: SVector<D, N>,
+    pub plus: OVector<D, N>,
+}
+
+impl<D: Scalar, N: Dimension> Copy for DiscreteForces<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    OVector<D, N>: Copy,
+{
 }
 
 /// A discrete Lagrangian L_d(q_k, q_{k+1}, h) ≈ ∫_{t_k}^{t_k+h} L dt and its discrete forces.
@@ -75,26 +87,30 @@ pub trait DiscreteLagrangian {
     fn info(&self) -> DiscreteLagrangianInfo;
 
     /// L_d(q0, q1, h) for the step from `t` to `t + h`.
-    fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, const N: usize>(
+    fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, N: Dimension>(
         &self,
         model: &L,
         t: D,
         h: D,
-        q0: &SVector<D, N>,
-        q1: &SVector<D, N>,
-    ) -> D;
+        q0: &OVector<D, N>,
+        q1: &OVector<D, N>,
+    ) -> D
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>;
 
     /// The discrete forces (f_d⁻, f_d⁺) of the model's external force
     /// ([`Lagrangian::external_force`]) over the step, by the same quadrature as the action.
     /// Only called for [`Lagrangian::FORCED`] models.
-    fn discrete_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
+    fn discrete_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
         &self,
         model: &L,
         t: D,
         h: D,
-        q0: &SVector<D, N>,
-        q1: &SVector<D, N>,
-    ) -> DiscreteForces<D, N>;
+        q0: &OVector<D, N>,
+        q1: &OVector<D, N>,
+    ) -> DiscreteForces<D, N>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>;
 }
 
 /// A quadrature node on the segment from q_k to q_{k+1}: position τ ∈ [0, 1] and weight b.
@@ -108,15 +124,18 @@ pub struct SegmentNode {
 
 /// The point (1 − τ) q0 + τ q1, exact at the end points and at the midpoint.
 #[inline]
-fn segment_point<D: Scalar, const N: usize>(
+fn segment_point<D: Scalar, N: Dimension>(
     position: f64,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> SVector<D, N> {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> OVector<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     if position == 0.0 {
-        *q0
+        q0.clone()
     } else if position == 1.0 {
-        *q1
+        q1.clone()
     } else {
         q0.zip_map(q1, |a, b| a * (1.0 - position) + b * position)
     }
@@ -124,11 +143,14 @@ fn segment_point<D: Scalar, const N: usize>(
 
 /// The velocity (q1 − q0)/h of the segment.
 #[inline]
-fn segment_velocity<D: Scalar, const N: usize>(
+fn segment_velocity<D: Scalar, N: Dimension>(
     h: D,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> SVector<D, N> {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> OVector<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let rate = h.recip();
     q1.zip_map(q0, |b, a| (b - a) * rate)
 }
@@ -136,14 +158,17 @@ fn segment_velocity<D: Scalar, const N: usize>(
 /// The action h Σ_i b_i L(t + τ_i h, (1 − τ_i) q0 + τ_i q1, (q1 − q0)/h) of the straight
 /// segment from q0 to q1 under the quadrature rule `nodes`.
 #[inline]
-pub fn segment_action<L: Lagrangian<N>, D: Scalar, const N: usize>(
+pub fn segment_action<L: Lagrangian<N>, D: Scalar, N: Dimension>(
     model: &L,
     nodes: &[SegmentNode],
     t: D,
     h: D,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> D {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> D
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let v = segment_velocity(h, q0, q1);
     let mut action = D::from(0.0);
     for node in nodes {
@@ -157,17 +182,21 @@ pub fn segment_action<L: Lagrangian<N>, D: Scalar, const N: usize>(
 /// The discrete forces of the straight segment under the quadrature rule `nodes`:
 /// f_d⁻ = h Σ_i b_i (1 − τ_i) f_L(t_i, q(τ_i), v), f_d⁺ = h Σ_i b_i τ_i f_L(t_i, q(τ_i), v).
 #[inline]
-pub fn segment_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
+pub fn segment_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
     model: &L,
     nodes: &[SegmentNode],
     t: D,
     h: D,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> DiscreteForces<D, N> {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> DiscreteForces<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let v = segment_velocity(h, q0, q1);
-    let mut minus = SVector::<D, N>::zeros();
-    let mut plus = SVector::<D, N>::zeros();
+    let (n, _) = q0.shape_generic();
+    let mut minus = OVector::<D, N>::zeros_generic(n, U1);
+    let mut plus = OVector::<D, N>::zeros_generic(n, U1);
     for node in nodes {
         let q = segment_point(node.position, q0, q1);
         let time = t + h * node.position;
@@ -177,10 +206,14 @@ pub fn segment_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
             node.weight * node.position,
         );
         if left != 0.0 {
-            minus += force.map(|f| f * h * left);
+            for (target, f) in minus.iter_mut().zip(force.iter()) {
+                *target += *f * h * left;
+            }
         }
         if right != 0.0 {
-            plus += force.map(|f| f * h * right);
+            for (target, f) in plus.iter_mut().zip(force.iter()) {
+                *target += *f * h * right;
+            }
         }
     }
     DiscreteForces { minus, plus }
@@ -205,26 +238,32 @@ macro_rules! segment_rule {
             }
 
             #[inline]
-            fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, const N: usize>(
+            fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, N: Dimension>(
                 &self,
                 model: &L,
                 t: D,
                 h: D,
-                q0: &SVector<D, N>,
-                q1: &SVector<D, N>,
-            ) -> D {
+                q0: &OVector<D, N>,
+                q1: &OVector<D, N>,
+            ) -> D
+            where
+                DefaultAllocator: Allocator<N> + Allocator<N, N>,
+            {
                 segment_action(model, Self::NODES, t, h, q0, q1)
             }
 
             #[inline]
-            fn discrete_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
+            fn discrete_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
                 &self,
                 model: &L,
                 t: D,
                 h: D,
-                q0: &SVector<D, N>,
-                q1: &SVector<D, N>,
-            ) -> DiscreteForces<D, N> {
+                q0: &OVector<D, N>,
+                q1: &OVector<D, N>,
+            ) -> DiscreteForces<D, N>
+            where
+                DefaultAllocator: Allocator<N> + Allocator<N, N>,
+            {
                 segment_forces(model, Self::NODES, t, h, q0, q1)
             }
         }
@@ -366,10 +405,11 @@ segment_rule!(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{SVector, U1};
 
     /// L = q̇²/2 − q²/2 with friction f = −c q̇ + a t.
     struct Damped;
-    impl Lagrangian<1> for Damped {
+    impl Lagrangian<U1> for Damped {
         const FORCED: bool = true;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
             (v[0] * v[0] - q[0] * q[0]) * 0.5
