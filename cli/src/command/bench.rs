@@ -39,6 +39,9 @@
 //! steps ([`svi::stepping::sem`]), swept over its first step (t_end − t0)/n like a fixed-step
 //! method (its `steps` count every trial step of the energy equation).
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use crate::command::molly;
 use crate::command::peers::{FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
 use crate::report::csv;
@@ -563,17 +566,23 @@ struct Bench<'a> {
 
 /// The problem of a sweep: initial state, horizon, the reference final position and the
 /// coordinate the error is measured in.
-struct Problem<const N: usize> {
+struct Problem<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     t0: f64,
-    q0: SVector<f64, N>,
-    v0: SVector<f64, N>,
+    q0: OVector<f64, N>,
+    v0: OVector<f64, N>,
     t_end: f64,
-    exact: SVector<f64, N>,
+    exact: OVector<f64, N>,
     /// The one coordinate of `--coordinate` (`None`: the Euclidean norm of all).
     coordinate: Option<usize>,
 }
 
-impl<const N: usize> Problem<N> {
+impl<N: Dimension> Problem<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The initial time and state.
     fn start(&self) -> (f64, Initial<N>) {
         (
@@ -587,7 +596,7 @@ impl<const N: usize> Problem<N> {
 
     /// The final error of a run that ends at `q`: in the chosen coordinate, or the Euclidean
     /// position error.
-    fn error(&self, q: &SVector<f64, N>) -> f64 {
+    fn error(&self, q: &OVector<f64, N>) -> f64 {
         match self.coordinate {
             Some(i) => (q[i] - self.exact[i]).abs(),
             None => (q - self.exact).norm(),
@@ -604,13 +613,16 @@ fn reference_method() -> svi::Svi {
 /// The final position of a model without an exact solution, from the resolved reference run
 /// ([`reference_method`] at the model's default step h and at h/2: the second is the
 /// reference, their difference its error estimate, which must be below 10⁻¹¹ relative).
-fn resolved_reference<M: ZooModel<N>, const N: usize>(
+fn resolved_reference<M: ZooModel<N>, N: Dimension>(
     model: &M,
     t0: f64,
-    q0: SVector<f64, N>,
-    v0: SVector<f64, N>,
+    q0: OVector<f64, N>,
+    v0: OVector<f64, N>,
     t_end: f64,
-) -> Result<(SVector<f64, N>, f64), SceneError> {
+) -> Result<(OVector<f64, N>, f64), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let integrator = Integrator::new(model.clone(), reference_method());
     let h = model.default_step();
     let run = |h: f64| {
@@ -639,7 +651,10 @@ fn resolved_reference<M: ZooModel<N>, const N: usize>(
 impl ModelVisitor for Bench<'_> {
     type Output = Result<Sweeps, SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (t0, initial, _, t_end) = self.scene.resolve(&mut model)?;
         check_horizon(t0, t_end, model.default_step())?;
         let (q0, v0) = match initial {
@@ -801,7 +816,10 @@ impl Mode {
 }
 
 /// Sweeps the visited library method in its mode.
-struct Sweep<'a, M, const N: usize> {
+struct Sweep<'a, M, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a M,
     label: &'a str,
     mode: Mode,
@@ -810,7 +828,10 @@ struct Sweep<'a, M, const N: usize> {
     report: Report<'a>,
 }
 
-impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> {
+impl<M: ZooModel<N>, N: Dimension> VectorMethodVisitor<N> for Sweep<'_, M, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Output = Result<Vec<Record>, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
         let mut records = Vec::new();
@@ -822,16 +843,17 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> 
 /// One run of `integrator` in `mode` from `start` = (t0, initial) to `t_end`: at step (or Δτ)
 /// `h`, or for step doubling at tolerance `h`, under `run` (the divergence limit); the final
 /// position and the statistics.
-pub(crate) fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, const N: usize>(
+pub(crate) fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, N: Dimension>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     mode: Mode,
     (start, t_end): ((f64, Initial<N>), f64),
     h: f64,
     run: &RunOptions,
     observer: &mut O,
-) -> Result<(SVector<f64, N>, svi::Statistics), svi::Error>
+) -> Result<(OVector<f64, N>, svi::Statistics), svi::Error>
 where
     O: Observer<L, svi::PhasePoint<N>>,
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     let (t0, initial) = start;
     let span = Span::new(t0, t_end);
@@ -969,11 +991,14 @@ impl Report<'_> {
 
 /// Sweep a library method in its mode: over step counts (fixed steps, steps in τ) or
 /// tolerances (step doubling).
-fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, N: Dimension>(
     sweep: Sweep<'_, M, N>,
     method: Me,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let Sweep {
         model,
         label,
@@ -1165,13 +1190,16 @@ fn measure_requested(
 /// of order 2; a model other than the spring pendulum is an error naming `molly`. Its energy
 /// error is measured at every step of a separate run, its evaluations are the slow-force
 /// evaluations ([`molly::EVALUATIONS_PER_STEP`] per step).
-fn sweep_molly<M: ZooModel<N>, const N: usize>(
+fn sweep_molly<M: ZooModel<N>, N: Dimension>(
     model: &M,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let pendulum = molly::spring_pendulum(model)?;
     let position = |q: &SVector<f64, 2>| SVector::<f64, N>::from_fn(|i, _| q[i]);
     let start = molly::State::from_velocity(
@@ -1222,12 +1250,15 @@ fn sweep_molly<M: ZooModel<N>, const N: usize>(
 }
 
 /// One DOP853 / Dopri5 / Radau5 run to the horizon (`None` if it fails or stops short).
-fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
+fn adaptive_run<M: ZooModel<N>, N: Dimension, const S: usize>(
     system: FirstOrder<'_, M, N, S>,
     spec: BenchMethod,
     problem: &Problem<N>,
     tol: f64,
-) -> Option<PeerRun<S>> {
+) -> Option<PeerRun<S>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(
         problem.q0.iter().chain(problem.v0.iter()).copied(),
     );
@@ -1256,14 +1287,17 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
 }
 
 /// Sweep an adaptive peer over tolerances (models with N ≤ 3).
-fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
+fn sweep_adaptive<M: ZooModel<N>, N: Dimension>(
     model: &M,
     spec: BenchMethod,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     // `2 * N` is not a const expression on stable Rust: dispatch on the size at run time.
     match N {
         1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
@@ -1277,14 +1311,17 @@ fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
 }
 
 /// [`sweep_adaptive`] with the state size S = 2N as a type parameter.
-fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
+fn sweep_adaptive_sized<M: ZooModel<N>, N: Dimension, const S: usize>(
     model: &M,
     spec: BenchMethod,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     assert_eq!(S, 2 * N, "state size");
     let system = || FirstOrder::<M, N, S>::new(model, problem.t0, &problem.q0, &problem.v0);
     let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);

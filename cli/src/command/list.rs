@@ -1,6 +1,9 @@
 //! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ (fixed N and
 //! runtime dimension) and on SO(3).
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use serde::Serialize;
 use svi::method::registry::SpaceKind;
 use svi_models::{
@@ -41,7 +44,10 @@ struct Describe;
 impl ModelVisitor for Describe {
     type Output = ModelDescription;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> ModelDescription {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> ModelDescription
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (t0, q0, v0) = model.initial_state();
         ModelDescription {
             name: model.name(),

@@ -78,6 +78,9 @@
 //! - J. A. Izaguirre, S. Reich, R. D. Skeel, *Longer time steps for molecular dynamics*,
 //!   J. Chem. Phys. 110 (1999) 9853–9864.
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use crate::scene::SceneError;
 use nalgebra::SVector;
 use svi::{Defaults, LagrangianExt};
@@ -255,9 +258,12 @@ pub(crate) fn check_model(model: &str) -> Result<(), SceneError> {
 
 /// The spring pendulum of a zoo model named [`SpringPendulum::NAME`], with its parameters;
 /// for any other model the error of [`check_model`].
-pub(crate) fn spring_pendulum<M: Defaults<N>, const N: usize>(
+pub(crate) fn spring_pendulum<M: Defaults<N>, N: Dimension>(
     model: &M,
-) -> Result<SpringPendulum, SceneError> {
+) -> Result<SpringPendulum, SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     check_model(model.name())?;
     if N != 2 {
         return Err(SceneError::MethodNotApplicable {

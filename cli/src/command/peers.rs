@@ -4,6 +4,9 @@
 //! Hairer & Wanner's RADAU5) with the exact Jacobian of the first-order form by automatic
 //! differentiation.
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use differential_equations::prelude::{IVP, ImplicitRungeKutta, Matrix, ODE};
 use nalgebra::{SMatrix, SVector};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
@@ -14,16 +17,22 @@ use svi_models::ZooModel;
 /// `differential-equations`, with a fixed-size state of S = 2N components (as a user of these
 /// crates would write it: a heap-allocated `DVector` state would cost the peers a factor of
 /// several).
-pub(crate) struct FirstOrder<'a, M, const N: usize, const S: usize> {
+pub(crate) struct FirstOrder<'a, M, N: Dimension, const S: usize>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a M,
     /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
-    mass_inverse: Option<SMatrix<f64, N, N>>,
+    mass_inverse: Option<OMatrix<f64, N, N>>,
 }
 
-impl<'a, M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'a, M, N, S> {
+impl<'a, M: ZooModel<N>, N: Dimension, const S: usize> FirstOrder<'a, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The first-order form of `model`; a constant-mass model's mass matrix is inverted once,
     /// at (t0, q0, v0).
-    pub(crate) fn new(model: &'a M, t0: f64, q0: &SVector<f64, N>, v0: &SVector<f64, N>) -> Self {
+    pub(crate) fn new(model: &'a M, t0: f64, q0: &OVector<f64, N>, v0: &OVector<f64, N>) -> Self {
         let mass_inverse = match M::STRUCTURE {
             Structure::ConstantMass => invert_small(&model.mass_matrix(t0, q0, v0)),
             Structure::General => None,
@@ -35,7 +44,10 @@ impl<'a, M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'a, M, N, S>
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'_, M, N, S> {
+impl<M: ZooModel<N>, N: Dimension, const S: usize> FirstOrder<'_, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// (q̇, q̈) at the state y = (q, q̇), written into `dy` (NaN where the mass matrix is
     /// singular).
     fn rates(&self, t: f64, y: &[f64], dy: &mut [f64]) {
@@ -55,8 +67,10 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'_, M, N, S> {
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
+impl<M: ZooModel<N>, N: Dimension, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
     for FirstOrder<'_, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn system(
         &self,
@@ -68,8 +82,9 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SV
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> ODE<f64, [f64; S]>
-    for FirstOrder<'_, M, N, S>
+impl<M: ZooModel<N>, N: Dimension, const S: usize> ODE<f64, [f64; S]> for FirstOrder<'_, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn diff(&self, t: f64, y: &[f64; S], dydt: &mut [f64; S]) {
         self.rates(t, y, dydt);
@@ -117,13 +132,16 @@ pub(crate) struct PeerRun<const S: usize> {
 /// Jacobian of the first-order form, output at every accepted step and a high step cap (as the
 /// `ode_solvers` peers); `None` if it fails (also for `tol` ≤ [`RADAU5_TOLERANCE_FLOOR`]) or
 /// stops short.
-pub(crate) fn radau5<M: ZooModel<N>, const N: usize, const S: usize>(
+pub(crate) fn radau5<M: ZooModel<N>, N: Dimension, const S: usize>(
     system: &FirstOrder<'_, M, N, S>,
     t0: f64,
     t_end: f64,
     y0: [f64; S],
     tol: f64,
-) -> Option<PeerRun<S>> {
+) -> Option<PeerRun<S>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let solution = IVP::ode(system, t0, t_end, y0)
         .method(
             ImplicitRungeKutta::radau5()

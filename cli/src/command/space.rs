@@ -3,6 +3,9 @@
 //! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use nalgebra::SVector;
 use svi::lie_group::so3::orthogonality_error;
 use svi::lie_group::{
@@ -87,7 +90,10 @@ pub trait RunSpace<L>: Space {
     fn csv_row(model: &L, point: &Self::Point, row: &mut Vec<f64>);
 }
 
-impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
+impl<L: ZooModel<N>, N: Dimension> RunSpace<L> for Euclidean<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const LISTS_RUN_FIELDS: bool = true;
 
     /// Energy, Noether momenta (for models with symmetries), error against the exact
@@ -163,7 +169,7 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
         }
     }
 
-    fn initial_guess_at_rest(initial: &Initial<N>) -> SVector<f64, N> {
+    fn initial_guess_at_rest(initial: &Initial<N>) -> OVector<f64, N> {
         <Self as Space>::initial_guess(initial)
     }
 

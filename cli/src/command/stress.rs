@@ -33,6 +33,9 @@
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use crate::command::bench::{BenchMethod, Mode, parse_methods, run_mode};
 use crate::command::peers::{FirstOrder, dop853};
 use crate::report::csv::Float;
@@ -419,7 +422,10 @@ struct CaseRunner<'a> {
 }
 
 /// A resolved case.
-struct Setup<'a, const N: usize> {
+struct Setup<'a, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     scene: &'a str,
     probe_time: f64,
     t0: f64,
@@ -431,7 +437,10 @@ struct Setup<'a, const N: usize> {
 impl ModelVisitor for CaseRunner<'_> {
     type Output = Result<Vec<StressRecord>, SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (t0, initial, h, _) = self.scene.resolve(&mut model)?;
         let setup = Setup {
             scene: self.case.scene,
@@ -478,14 +487,20 @@ impl ModelVisitor for CaseRunner<'_> {
 }
 
 /// Runs one case with the visited method in its mode.
-struct MethodRunner<'a, M, const N: usize> {
+struct MethodRunner<'a, M, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a M,
     setup: &'a Setup<'a, N>,
     label: &'a str,
     mode: Mode,
 }
 
-impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_, M, N> {
+impl<M: ZooModel<N>, N: Dimension> VectorMethodVisitor<N> for MethodRunner<'_, M, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Output = Result<StressRecord, SceneError>;
 
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
@@ -647,12 +662,15 @@ fn describe(error: &Error) -> String {
 /// The long run of an svi method in `mode` over `drift_steps` scene steps: at the scene's
 /// step (Δτ = h for a reparametrised method, the first step for SEM), or at the peers'
 /// tolerance for step doubling.
-fn svi_drift<L: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+fn svi_drift<L: ZooModel<N>, Me: Method<N> + Clone, N: Dimension>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     mode: Mode,
     setup: &Setup<'_, N>,
     options: &RunOptions,
-) -> Result<Drift, String> {
+) -> Result<Drift, String>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let steps = setup.options.drift_steps;
     let stride = steps.div_ceil(SAMPLES).max(1);
     let samples = steps / stride + 1;
@@ -701,10 +719,13 @@ fn drift(
 }
 
 /// DOP853 over the horizon of the long run.
-fn dop853_drift<M: ZooModel<N>, const N: usize>(
+fn dop853_drift<M: ZooModel<N>, N: Dimension>(
     model: &M,
     setup: &Setup<'_, N>,
-) -> Result<Drift, String> {
+) -> Result<Drift, String>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     match N {
         1 => dop853_drift_sized::<M, N, 2>(model, setup),
         2 => dop853_drift_sized::<M, N, 4>(model, setup),
@@ -714,10 +735,13 @@ fn dop853_drift<M: ZooModel<N>, const N: usize>(
 }
 
 /// [`dop853_drift`] with the state size S = 2N as a type parameter.
-fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
+fn dop853_drift_sized<M: ZooModel<N>, N: Dimension, const S: usize>(
     model: &M,
     setup: &Setup<'_, N>,
-) -> Result<Drift, String> {
+) -> Result<Drift, String>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let (q0, v0) = match setup.initial {
         Initial::Velocity { q, v } => (q, v),
         Initial::Momentum { q, p } => (

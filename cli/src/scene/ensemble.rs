@@ -13,6 +13,9 @@
 //! same overrides as `svi run --param` and the scene's `[initial]` fields: a member's run is
 //! exactly `svi run` of that scene.
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use std::fmt;
 
 use rand::rngs::Xoshiro256PlusPlus;
@@ -539,10 +542,13 @@ struct ResolveInitial<'a> {
 impl ModelVisitor for ResolveInitial<'_> {
     type Output = Result<(Vec<&'static str>, InitialVectors), SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (_, initial, _, _) = self.scene.resolve(&mut model)?;
         let names = model.coordinate_names().to_vec();
-        let vector = |x: &nalgebra::SVector<f64, N>| x.iter().copied().collect::<Vec<f64>>();
+        let vector = |x: &nalgebra::OVector<f64, N>| x.iter().copied().collect::<Vec<f64>>();
         Ok((
             names,
             match initial {
@@ -570,7 +576,10 @@ pub struct ModelNames {
 
 impl ModelVisitor for ModelNamesOf {
     type Output = ModelNames;
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> ModelNames {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> ModelNames
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         ModelNames {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
             coordinates: Some(model.coordinate_names().to_vec()),

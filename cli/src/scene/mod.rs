@@ -97,6 +97,9 @@ pub mod vector;
 
 pub use error::SceneError;
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use error::methods_with;
 
 use std::collections::BTreeMap;
@@ -110,10 +113,7 @@ use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
 use svi::model::text::{TextError, TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
-use svi_models::{
-    LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel,
-    ZooModel,
-};
+use svi_models::{LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
@@ -761,10 +761,13 @@ impl Scene {
 
     /// Apply the scene's parameters to a model on ℝᴺ and resolve the initial time and state,
     /// the step and the horizon (scene values, else the model's defaults).
-    pub fn resolve<M: ZooModel<N>, const N: usize>(
+    pub fn resolve<M: ZooModel<N>, N: Dimension>(
         &self,
         model: &mut M,
-    ) -> Result<(f64, Initial<N>, f64, f64), SceneError> {
+    ) -> Result<(f64, Initial<N>, f64, f64), SceneError>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         for (name, value) in &self.parameters {
             model.set_parameter(name, *value)?;
         }

@@ -1,6 +1,9 @@
 //! The initial state of a scene on ℝᴺ: `[initial]`'s t0, q and one of v, p, against the
 //! model's dimension and defaults (fixed N, or the n of a runtime-dimension model).
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 use nalgebra::{DVector, SVector};
 use svi::Initial;
 use svi::method::DynInitial;
@@ -11,12 +14,15 @@ use crate::scene::schema::InitialSection;
 /// The initial state of `section` for a model of dimension `N` named `model`: the given q
 /// (else `default_q`) with the given v or p (else `default_v`). An error names a vector whose
 /// length is not `N`, or both v and p.
-pub fn initial<const N: usize>(
+pub fn initial<N: Dimension>(
     section: &InitialSection,
     model: &str,
-    default_q: SVector<f64, N>,
-    default_v: SVector<f64, N>,
-) -> Result<Initial<N>, SceneError> {
+    default_q: OVector<f64, N>,
+    default_v: OVector<f64, N>,
+) -> Result<Initial<N>, SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let vector = |field: &'static str, values: &Option<Vec<f64>>| {
         values
             .as_ref()

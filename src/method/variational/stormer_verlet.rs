@@ -141,9 +141,9 @@ where
         model: &L,
         h: f64,
     ) -> Result<StormerVerletWorkspace<N>, Error> {
+        let implicit = self.implicit().workspace(model, h)?;
         let n: N =
             dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
-        let implicit = self.implicit().workspace(model, h)?;
         let explicit = (L::STRUCTURE == Structure::ConstantMass).then(|| Explicit {
             mass_inverse: None,
             cache: None,
