@@ -202,3 +202,31 @@ fn run_time_size_kepler_has_the_zoo_energy() {
     );
     assert!((fixed - run_time).abs() <= 1e-15, "{fixed} vs {run_time}");
 }
+
+/// A dense method on a run-time-size model too large for dense matrices is refused before
+/// anything is allocated, with an error that names the method and the size and says what
+/// serves; the same model of moderate size runs.
+#[test]
+fn a_dense_method_refuses_a_model_too_large_for_it() {
+    for (entry, n) in [("svi", 100_000), ("midpoint", 100_000), ("verlet", 20_000)] {
+        let spec = svi::method::registry::find(entry).unwrap().spec();
+        let mut q = vec![0.0; n];
+        q[0] = 1.0;
+        let error = spec
+            .visit_vector::<_, Dyn>(Run {
+                model: KeplerDyn { n },
+                q,
+                v: vec![0.0; n],
+                h: 0.1,
+                steps: 1,
+            })
+            .unwrap()
+            .unwrap_err();
+        assert!(
+            error.contains(entry)
+                && error.contains(&format!("{n} coordinates"))
+                && error.contains("local terms"),
+            "{error}"
+        );
+    }
+}

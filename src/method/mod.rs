@@ -12,7 +12,9 @@
 //!
 //! Families, one folder or file each: [`variational`] (SVI and the classic variational
 //! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
-//! (the multiscale variational integrator for stiff oscillations), and [`local`] (SVI and
+//! (the multiscale variational integrator for stiff oscillations), [`reference`] (explicit
+//! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references),
+//! and [`local`] (SVI and
 //! Störmer–Verlet on runtime-dimension models: chains, lattices, up to 10⁵ degrees of freedom
 //! and beyond).
 
@@ -20,6 +22,7 @@ pub mod collocation;
 pub mod lie_svi;
 pub mod local;
 pub mod multiscale;
+pub mod reference;
 pub mod registry;
 pub mod space;
 pub mod step;

@@ -33,6 +33,7 @@ use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::local::LocalMethod;
 use crate::method::multiscale::Multiscale;
+use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
 use crate::method::variational::composition::{Composition, Scheme};
 use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
@@ -165,6 +166,26 @@ pub const METHODS: &[Entry] = &[
         options: Options::None,
         space: SpaceKind::Vector,
         summary: "trapezoidal discrete Lagrangian, always implicit",
+    },
+    Entry {
+        name: "explicit-euler",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "explicit Euler on the Euler–Lagrange equations: a non-symplectic reference",
+    },
+    Entry {
+        name: "implicit-euler",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "implicit Euler on the Euler–Lagrange equations (Newton): a non-symplectic \
+                  reference",
+    },
+    Entry {
+        name: "rk4",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "classical Runge–Kutta of order 4 on the Euler–Lagrange equations: a \
+                  non-symplectic reference",
     },
     Entry {
         name: "multiscale",
@@ -495,6 +516,9 @@ impl MethodSpec {
             "verlet" => visitor.visit(StormerVerlet::default()),
             "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
             "multiscale" => visitor.visit(Multiscale::new(points)),
+            "explicit-euler" => visitor.visit(ExplicitEuler),
+            "implicit-euler" => visitor.visit(ImplicitEuler::default()),
+            "rk4" => visitor.visit(RungeKutta4),
             _ => {
                 self.check_space(SpaceKind::Vector)?;
                 return Err(Error::invalid(
@@ -802,7 +826,7 @@ mod tests {
             assert_eq!(name, "method", "{bad}");
             assert!(reason.contains(&format!("'{bad}'")), "{bad}: {reason}");
         }
-        let unknown = "rk4".parse::<MethodSpec>().unwrap_err().to_string();
+        let unknown = "rk45".parse::<MethodSpec>().unwrap_err().to_string();
         assert!(
             unknown.contains("known: svi, svi-newton, sc, symplectic-euler,"),
             "{unknown}"

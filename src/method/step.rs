@@ -215,6 +215,38 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 }
 
+/// Most entries of one dense matrix a method on ℝᴺ may hold: 2²⁷ (1 GiB of `f64`). The methods
+/// on ℝᴺ keep dense N × N matrices (the mass matrix and its inverse, the tangent map) and the
+/// spectral ones a dense (N·P)² Newton matrix; a run-time-size model beyond this is refused
+/// before anything is allocated.
+pub const MAX_DENSE_ENTRIES: usize = 1 << 27;
+
+/// Refuse `method` with `points` interpolation points on a model of `size` coordinates when
+/// its dense Newton matrix, (2·size·points)² entries at most, would exceed
+/// [`MAX_DENSE_ENTRIES`]: the error names the method, the size and the reason, and says what
+/// serves.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] `model`.
+pub fn dense_size(method: &str, size: usize, points: usize) -> Result<(), Error> {
+    let rows = size.saturating_mul(points.max(1)).saturating_mul(2);
+    let entries = rows.saturating_mul(rows);
+    if entries <= MAX_DENSE_ENTRIES {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "model",
+        format!(
+            "{method} on a model of {size} coordinates would hold a dense {rows} × {rows} \
+             matrix ({:.1} GiB, more than the {} GiB a dense method may take); a model this \
+             large runs when it is written as a sum of local terms (a chain or lattice: sparse \
+             Newton and explicit Störmer–Verlet)",
+            entries as f64 * 8.0 / f64::from(1 << 30),
+            MAX_DENSE_ENTRIES * 8 >> 30
+        ),
+    ))
+}
+
 impl<L: Lagrangian<N>, M: Method<N>, N: Dimension> Step<L, Euclidean<N>> for M
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -226,7 +258,11 @@ where
         Method::info(self)
     }
 
+    /// The method's workspace, after checking that its dense matrices fit
+    /// ([`dense_size`]).
     fn workspace(&self, model: &L, h: f64) -> Result<M::Workspace, Error> {
+        let points = Method::points(self).unwrap_or(1);
+        dense_size(Method::info(self).name, model.dimension(), points)?;
         Method::workspace(self, model, h)
     }
 

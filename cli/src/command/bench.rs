@@ -39,11 +39,10 @@
 //! steps ([`svi::stepping::sem`]), swept over its first step (t_end − t0)/n like a fixed-step
 //! method (its `steps` count every trial step of the energy equation).
 
-use nalgebra::DefaultAllocator;
-use nalgebra::allocator::Allocator;
-use svi::Dimension;
 use crate::command::molly;
-use crate::command::peers::{FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
+use crate::command::peers::{
+    FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5, split, wired_for,
+};
 use crate::report::csv;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
@@ -54,7 +53,8 @@ use crate::scene::limits::{
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, SVector, U1};
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -66,7 +66,7 @@ use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::model::reparametrized::MonitorSpec;
 use svi::observer::{EnergyError, MomentumError, Observer};
 use svi::solve::{SolveOptions, Span};
-use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec, RunOptions};
+use svi::{Dimension, Initial, Integrator, LagrangianExt, Method, MethodSpec, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A method configuration to sweep: a method of svi's registry, or a peer (`ode_solvers`'
@@ -588,8 +588,8 @@ where
         (
             self.t0,
             Initial::Velocity {
-                q: self.q0,
-                v: self.v0,
+                q: self.q0.clone(),
+                v: self.v0.clone(),
             },
         )
     }
@@ -599,7 +599,7 @@ where
     fn error(&self, q: &OVector<f64, N>) -> f64 {
         match self.coordinate {
             Some(i) => (q[i] - self.exact[i]).abs(),
-            None => (q - self.exact).norm(),
+            None => (q - &self.exact).norm(),
         }
     }
 }
@@ -616,8 +616,8 @@ fn reference_method() -> svi::Svi {
 fn resolved_reference<M: ZooModel<N>, N: Dimension>(
     model: &M,
     t0: f64,
-    q0: OVector<f64, N>,
-    v0: OVector<f64, N>,
+    q0: &OVector<f64, N>,
+    v0: &OVector<f64, N>,
     t_end: f64,
 ) -> Result<(OVector<f64, N>, f64), SceneError>
 where
@@ -627,7 +627,7 @@ where
     let h = model.default_step();
     let run = |h: f64| {
         integrator
-            .run_from_velocity(t0, q0, v0, h, t_end, &mut ())
+            .run_from_velocity(t0, q0.clone(), v0.clone(), h, t_end, &mut ())
             .map(|run| run.state.q)
             .map_err(|error| SceneError::NoReference {
                 model: model.name().into(),
@@ -635,7 +635,7 @@ where
             })
     };
     let (coarse, fine) = (run(h)?, run(0.5 * h)?);
-    let discrepancy = (coarse - fine).amax();
+    let discrepancy = (coarse - &fine).amax();
     if discrepancy > 1e-11 * fine.amax().max(1.0) {
         return Err(SceneError::NoReference {
             model: model.name().into(),
@@ -659,7 +659,10 @@ impl ModelVisitor for Bench<'_> {
         check_horizon(t0, t_end, model.default_step())?;
         let (q0, v0) = match initial {
             Initial::Velocity { q, v } => (q, v),
-            Initial::Momentum { q, p } => (q, model.velocity(t0, &q, &p, &p)?),
+            Initial::Momentum { q, p } => {
+                let v = model.velocity(t0, &q, &p, &p)?;
+                (q, v)
+            }
         };
         let coordinate = match &self.options.coordinate {
             None => None,
@@ -682,7 +685,7 @@ impl ModelVisitor for Bench<'_> {
         let exact = match model.exact_solution(t0, &q0, &v0, t_end) {
             Some((q, _)) => q,
             None => {
-                let (q, discrepancy) = resolved_reference(&model, t0, q0, v0, t_end)?;
+                let (q, discrepancy) = resolved_reference(&model, t0, &q0, &v0, t_end)?;
                 if self.options.verbose {
                     self.progress.suspend(|| {
                         eprintln!(
@@ -846,7 +849,7 @@ where
 pub(crate) fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, N: Dimension>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     mode: Mode,
-    (start, t_end): ((f64, Initial<N>), f64),
+    ((t0, initial), t_end): &((f64, Initial<N>), f64),
     h: f64,
     run: &RunOptions,
     observer: &mut O,
@@ -855,7 +858,7 @@ where
     O: Observer<L, svi::PhasePoint<N>>,
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let (t0, initial) = start;
+    let (t0, t_end, initial) = (*t0, *t_end, initial.clone());
     let span = Span::new(t0, t_end);
     let with_run = |mut options: SolveOptions| {
         options.run = *run;
@@ -1013,8 +1016,15 @@ where
     let from = (problem.start(), problem.t_end);
     let free = RunOptions::default();
     let final_error = |steps: usize| {
-        run_mode(&integrator, mode, from, span / steps as f64, &free, &mut ())
-            .map(|(q, _)| problem.error(&q))
+        run_mode(
+            &integrator,
+            mode,
+            &from,
+            span / steps as f64,
+            &free,
+            &mut (),
+        )
+        .map(|(q, _)| problem.error(&q))
     };
     // `parameter`: a step count, or a tolerance of step doubling.
     let measure = |parameter: f64| -> Result<Record, svi::Error> {
@@ -1028,17 +1038,17 @@ where
             run_mode(
                 &integrator,
                 mode,
-                from,
+                &from,
                 h,
                 &free,
                 &mut (&mut energy, &mut momentum),
             )
         } else {
-            run_mode(&integrator, mode, from, h, &free, &mut energy)
+            run_mode(&integrator, mode, &from, h, &free, &mut energy)
         }?;
         let seconds = median_seconds(
             || {
-                let _ = run_mode(&integrator, mode, from, h, &free, &mut ());
+                let _ = run_mode(&integrator, mode, &from, h, &free, &mut ());
             },
             options,
         );
@@ -1201,7 +1211,9 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     let pendulum = molly::spring_pendulum(model)?;
-    let position = |q: &SVector<f64, 2>| SVector::<f64, N>::from_fn(|i, _| q[i]);
+    // A model of dimension 2 ([`molly::spring_pendulum`]).
+    let n = problem.q0.shape_generic().0;
+    let position = |q: &SVector<f64, 2>| OVector::<f64, N>::from_fn_generic(n, U1, |i, _| q[i]);
     let start = molly::State::from_velocity(
         &pendulum,
         &SVector::from_fn(|i, _| problem.q0[i]),
@@ -1299,14 +1311,19 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     // `2 * N` is not a const expression on stable Rust: dispatch on the size at run time.
-    match N {
-        1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
-        2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
-        3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
-        _ => Err(SceneError::MethodNotApplicable {
-            method: spec.to_string(),
-            reason: "the peers are wired for models of dimension ≤ 3".into(),
-        }),
+    match N::try_to_usize() {
+        Some(1) => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
+        Some(2) => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
+        Some(3) => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
+        _ => Err(not_wired::<N>(spec)),
+    }
+}
+
+/// The error of a peer asked to run a model of a dimension it is not wired for.
+fn not_wired<N: Dimension>(spec: BenchMethod) -> SceneError {
+    SceneError::MethodNotApplicable {
+        method: spec.to_string(),
+        reason: format!("the peers are wired for {}", wired_for::<N>()),
     }
 }
 
@@ -1322,8 +1339,11 @@ fn sweep_adaptive_sized<M: ZooModel<N>, N: Dimension, const S: usize>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    assert_eq!(S, 2 * N, "state size");
     let system = || FirstOrder::<M, N, S>::new(model, problem.t0, &problem.q0, &problem.v0);
+    if system().is_none() {
+        return Err(not_wired::<N>(spec));
+    }
+    let n = problem.q0.shape_generic().0;
     let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);
     let measure = |tol: f64| -> Option<Record> {
         let PeerRun {
@@ -1331,14 +1351,12 @@ where
             evaluations,
             iterations,
             states,
-        } = adaptive_run(system(), spec, problem, tol)?;
-        let last = states.last()?;
-        let q = SVector::<f64, N>::from_fn(|i, _| last[i]);
+        } = adaptive_run(system()?, spec, problem, tol)?;
+        let (q, _) = split(n, states.last()?.as_slice());
         let energy_error_max = states
             .iter()
             .map(|y| {
-                let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-                let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+                let (q, v) = split(n, y.as_slice());
                 (model.energy(problem.t_end, &q, &v) - energy0).abs()
             })
             .fold(0.0, f64::max);
@@ -1348,8 +1366,7 @@ where
                 .collect();
             let mut largest: f64 = 0.0;
             for y in &states {
-                let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-                let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+                let (q, v) = split(n, y.as_slice());
                 for (i, start) in initial.iter().enumerate() {
                     largest = largest.max((model.noether_momentum(i, 0.0, &q, &v) - start).abs());
                 }
@@ -1358,7 +1375,7 @@ where
         });
         let seconds = median_seconds(
             || {
-                let _ = adaptive_run(system(), spec, problem, tol);
+                let _ = system().and_then(|system| adaptive_run(system, spec, problem, tol));
             },
             options,
         );

@@ -3,8 +3,8 @@
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use svi::Dimension;
 use serde::Serialize;
+use svi::Dimension;
 use svi::method::registry::SpaceKind;
 use svi_models::{
     LOCAL_MODEL_NAMES, LocalModelVisitor, LocalZooModel, MODEL_NAMES, ModelVisitor,
@@ -25,7 +25,7 @@ pub struct ModelDescription {
     /// Name.
     pub name: &'static str,
     /// Configuration coordinate names.
-    pub coordinates: Vec<&'static str>,
+    pub coordinates: Vec<String>,
     /// Default parameters.
     pub parameters: Parameters,
     /// Default step.
@@ -51,7 +51,7 @@ impl ModelVisitor for Describe {
         let (t0, q0, v0) = model.initial_state();
         ModelDescription {
             name: model.name(),
-            coordinates: model.coordinate_names().to_vec(),
+            coordinates: model.coordinate_names(),
             parameters: Parameters(model.parameters()),
             h: model.default_step(),
             t_end: model.default_horizon(),

@@ -78,11 +78,10 @@
 //! - J. A. Izaguirre, S. Reich, R. D. Skeel, *Longer time steps for molecular dynamics*,
 //!   J. Chem. Phys. 110 (1999) 9853–9864.
 
-use nalgebra::DefaultAllocator;
-use nalgebra::allocator::Allocator;
-use svi::Dimension;
 use crate::scene::SceneError;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, SVector};
+use svi::Dimension;
 use svi::{Defaults, LagrangianExt};
 use svi_models::SpringPendulum;
 
@@ -265,10 +264,12 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     check_model(model.name())?;
-    if N != 2 {
+    if N::try_to_usize() != Some(2) {
+        let dimension = N::try_to_usize()
+            .map_or_else(|| "run-time dimension".into(), |n| format!("dimension {n}"));
         return Err(SceneError::MethodNotApplicable {
             method: NAME.into(),
-            reason: format!("a model of dimension {N} named '{}'", model.name()),
+            reason: format!("a model of {dimension} named '{}'", model.name()),
         });
     }
     let mut pendulum = SpringPendulum::default();

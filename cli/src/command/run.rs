@@ -15,12 +15,12 @@
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use svi::Dimension;
 use std::io::IsTerminal;
 use std::marker::PhantomData;
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
+use svi::Dimension;
 
 use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
@@ -293,23 +293,24 @@ fn symmetry_warnings<M: ZooModel<N>, N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let (q, v) = match *initial {
-        svi::Initial::Velocity { q, v } => (q, v),
-        svi::Initial::Momentum { q, p } => match model.velocity(t0, &q, &p, &p) {
+    let (q, v) = match initial {
+        svi::Initial::Velocity { q, v } => (q, v.clone()),
+        svi::Initial::Momentum { q, p } => match model.velocity(t0, q, p, p) {
             Ok(v) => (q, v),
             Err(_) => return Vec::new(),
         },
     };
     // Two fixed points around the initial state, so that a state where δL vanishes by
     // accident (at rest, at the origin) does not pass a generator that is none.
+    let n = q.shape_generic().0;
     let offset = |k: usize| {
-        nalgebra::SVector::<f64, N>::from_fn(|i, _| ((i + 1) as f64 * (0.7 + k as f64)).sin())
+        nalgebra::OVector::<f64, N>::from_fn_generic(n, nalgebra::U1, |i, _| {
+            ((i + 1) as f64 * (0.7 + k as f64)).sin()
+        })
     };
-    let points = [
-        (q, v),
-        (q + offset(1) * 0.1, v + offset(2)),
-        (q + offset(3) * 0.2, v - offset(4)),
-    ];
+    let near = (q + offset(1) * 0.1, &v + offset(2));
+    let far = (q + offset(3) * 0.2, &v - offset(4));
+    let points = [(q.clone(), v), near, far];
     (0..model.generator_count())
         .filter_map(|index| {
             let defect = points

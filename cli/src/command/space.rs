@@ -3,10 +3,9 @@
 //! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
-use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, SVector};
 use svi::Dimension;
-use nalgebra::SVector;
 use svi::lie_group::so3::orthogonality_error;
 use svi::lie_group::{
     AngularMomentumError, OrthogonalityError, RigidBodyDefaults, RigidBodyExt, RigidInitial,
@@ -127,7 +126,7 @@ where
             Conservation::Vector {
                 momentum_error_max: momentum.map(|m| m.max),
                 solution_error_max: solution.and_then(|s| s.max),
-                solution_error_final: exact.map(|(q, _)| (last.q - q).norm()),
+                solution_error_final: exact.map(|(q, _)| (&last.q - q).norm()),
             },
         )
     }
@@ -141,7 +140,7 @@ where
     }
 
     fn coordinates(model: &L) -> Option<Vec<String>> {
-        Some(model.coordinate_names().map(String::from).to_vec())
+        Some(model.coordinate_names())
     }
 
     fn energy(model: &L, point: &PhasePoint<N>) -> f64 {
@@ -173,8 +172,8 @@ where
         <Self as Space>::initial_guess(initial)
     }
 
-    fn coordinate_count(_: &Initial<N>) -> usize {
-        N
+    fn coordinate_count(initial: &Initial<N>) -> usize {
+        initial.position().len()
     }
 
     /// `t,q_<name>…,v_<name>…,p_<name>…,energy`.

@@ -33,18 +33,16 @@
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
-use nalgebra::DefaultAllocator;
-use nalgebra::allocator::Allocator;
-use svi::Dimension;
 use crate::command::bench::{BenchMethod, Mode, parse_methods, run_mode};
-use crate::command::peers::{FirstOrder, dop853};
+use crate::command::peers::{FirstOrder, dop853, split, wired_for};
 use crate::report::csv::Float;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, PlotError, Series, render_svg};
 use crate::scene::limits::{self, MAX_BISECTIONS, MAX_DRIFT_STEPS, MIN_PEER_TOLERANCE};
 use crate::scene::overrides::method_help;
 use crate::scene::{Scene, SceneError};
-use nalgebra::SVector;
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -52,7 +50,7 @@ use std::time::Instant;
 use svi::drift::{DriftFit, EnergyWindows, Window};
 use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, Every};
-use svi::{Error, Initial, Integrator, LagrangianExt, Method, RunOptions};
+use svi::{Dimension, Error, Initial, Integrator, LagrangianExt, Method, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A stress case: a built-in scene and the horizon of its stability probes.
@@ -519,8 +517,11 @@ where
                 return p.clone();
             }
             let mut energy = EnergyError::default();
-            let from = ((setup.t0, setup.initial), setup.t0 + setup.probe_time);
-            let result = run_mode(&integrator, mode, from, h, &options, &mut energy);
+            let from = (
+                (setup.t0, setup.initial.clone()),
+                setup.t0 + setup.probe_time,
+            );
+            let result = run_mode(&integrator, mode, &from, h, &options, &mut energy);
             let p = Probe {
                 failure: result.err().map(|error| describe(&error)),
                 energy_error: energy.max / scale,
@@ -684,7 +685,7 @@ where
     let (_, statistics) = run_mode(
         integrator,
         mode,
-        ((setup.t0, setup.initial), t_end),
+        &((setup.t0, setup.initial.clone()), t_end),
         h,
         options,
         &mut windows,
@@ -726,12 +727,17 @@ fn dop853_drift<M: ZooModel<N>, N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    match N {
-        1 => dop853_drift_sized::<M, N, 2>(model, setup),
-        2 => dop853_drift_sized::<M, N, 4>(model, setup),
-        3 => dop853_drift_sized::<M, N, 6>(model, setup),
-        _ => Err("dop853 is wired for models of dimension ≤ 3".into()),
+    match N::try_to_usize() {
+        Some(1) => dop853_drift_sized::<M, N, 2>(model, setup),
+        Some(2) => dop853_drift_sized::<M, N, 4>(model, setup),
+        Some(3) => dop853_drift_sized::<M, N, 6>(model, setup),
+        _ => Err(not_wired::<N>()),
     }
+}
+
+/// The failure of DOP853 on a model of a dimension it is not wired for.
+fn not_wired<N: Dimension>() -> String {
+    format!("dop853 is wired for {}", wired_for::<N>())
 }
 
 /// [`dop853_drift`] with the state size S = 2N as a type parameter.
@@ -742,16 +748,17 @@ fn dop853_drift_sized<M: ZooModel<N>, N: Dimension, const S: usize>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let (q0, v0) = match setup.initial {
-        Initial::Velocity { q, v } => (q, v),
+    let (q0, v0) = match &setup.initial {
+        Initial::Velocity { q, v } => (q, v.clone()),
         Initial::Momentum { q, p } => (
             q,
             model
-                .velocity(setup.t0, &q, &p, &p)
+                .velocity(setup.t0, q, p, p)
                 .map_err(|e| e.to_string())?,
         ),
     };
-    let system = FirstOrder::<M, N, S>::new(model, setup.t0, &q0, &v0);
+    let system = FirstOrder::<M, N, S>::new(model, setup.t0, q0, &v0).ok_or_else(not_wired::<N>)?;
+    let n = q0.shape_generic().0;
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(q0.iter().chain(v0.iter()).copied());
     let t_end = setup.t0 + setup.options.drift_steps as f64 * setup.h;
     let tol = setup.options.tolerance();
@@ -771,8 +778,7 @@ where
     let samples = times.len().div_ceil(stride);
     let mut windows = EnergyWindows::new(samples.div_ceil(WINDOWS));
     for (t, y) in times.iter().zip(states).step_by(stride) {
-        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+        let (q, v) = split(n, y.as_slice());
         windows.push(*t, model.energy(*t, &q, &v));
     }
     let steps = (stats.accepted_steps + stats.rejected_steps) as usize;

@@ -15,8 +15,8 @@
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use svi::Dimension;
 use std::fmt;
+use svi::Dimension;
 
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -518,7 +518,7 @@ impl Member {
 }
 
 /// The index of `coordinate` among `names`, or `coordinate` read as a 0-based index.
-fn coordinate_index(names: &[&str], coordinate: &str) -> Option<usize> {
+fn coordinate_index(names: &[String], coordinate: &str) -> Option<usize> {
     names
         .iter()
         .position(|name| *name == coordinate)
@@ -540,14 +540,14 @@ struct ResolveInitial<'a> {
 }
 
 impl ModelVisitor for ResolveInitial<'_> {
-    type Output = Result<(Vec<&'static str>, InitialVectors), SceneError>;
+    type Output = Result<(Vec<String>, InitialVectors), SceneError>;
 
     fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
     where
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
         let (_, initial, _, _) = self.scene.resolve(&mut model)?;
-        let names = model.coordinate_names().to_vec();
+        let names = model.coordinate_names();
         let vector = |x: &nalgebra::OVector<f64, N>| x.iter().copied().collect::<Vec<f64>>();
         Ok((
             names,
@@ -571,7 +571,7 @@ pub struct ModelNames {
     /// The model's parameter names.
     pub parameters: Vec<&'static str>,
     /// The configuration coordinates (`None` for a rigid body on SO(3)).
-    pub coordinates: Option<Vec<&'static str>>,
+    pub coordinates: Option<Vec<String>>,
 }
 
 impl ModelVisitor for ModelNamesOf {
@@ -582,7 +582,7 @@ impl ModelVisitor for ModelNamesOf {
     {
         ModelNames {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
-            coordinates: Some(model.coordinate_names().to_vec()),
+            coordinates: Some(model.coordinate_names()),
         }
     }
 }

@@ -97,10 +97,10 @@ pub mod vector;
 
 pub use error::SceneError;
 
+use error::methods_with;
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
 use svi::Dimension;
-use error::methods_with;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -111,7 +111,7 @@ use svi::lie_group::{LieSvi, RigidInitial};
 use svi::method::DynInitial;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
-use svi::model::text::{TextError, TextModel, TextSpec};
+use svi::model::text::{TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
 use svi_models::{LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
@@ -257,7 +257,7 @@ impl Scene {
                 model: self.model.clone(),
             });
         }
-        let model = model?;
+        model?;
         let initial = &self.initial;
         let needed = [
             (initial.q.is_none(), "initial.q"),
@@ -781,15 +781,15 @@ impl Scene {
             ));
         }
         if self.wants_explicitly(Diagnostic::Solution) {
-            let velocity = match initial {
-                Initial::Velocity { v, .. } => Some(v),
-                Initial::Momentum { q, p } => model.velocity(t0, &q, &p, &p).ok(),
+            let velocity = match &initial {
+                Initial::Velocity { v, .. } => Some(v.clone()),
+                Initial::Momentum { q, p } => model.velocity(t0, q, p, p).ok(),
             };
-            let q = match initial {
+            let q = match &initial {
                 Initial::Velocity { q, .. } | Initial::Momentum { q, .. } => q,
             };
             // A velocity that cannot be computed is the run's to report.
-            if velocity.is_some_and(|v| model.exact_solution(t0, &q, &v, t0).is_none()) {
+            if velocity.is_some_and(|v| model.exact_solution(t0, q, &v, t0).is_none()) {
                 return Err(self.not_measurable(
                     "--diagnostics solution (output.diagnostics)",
                     "has no exact solution for this initial state to measure against",
