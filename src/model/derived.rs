@@ -28,7 +28,7 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
-use crate::model::{Lagrangian, Symmetries};
+use crate::model::{Lagrangian, Structure, Symmetries};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
@@ -468,13 +468,20 @@ where
     D: Scalar,
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    // L_q, L_qv from the mixed derivatives and L_vv from the Hessian in q̇: L_qq is not needed.
-    let (_, lq, _, qv) = N::mixed(&Action(model), t, q, v);
     let (_, _, vv) = N::hessian(&Action(model), t, q, v, Wrt::Velocity);
-    let mut rhs = lq - qv.transpose() * v;
-    if L::TIME_DEPENDENT {
-        rhs -= N::velocity_time(&Action(model), t, q, v);
-    }
+    let mut rhs = if matches!(L::STRUCTURE, Structure::ConstantMass) {
+        // L = ½ q̇ᵀMq̇ − V(t, q): L_vq = 0 and L_vt = 0, only the gradient L_q is needed.
+        N::gradient(&Action(model), t, q, v, Wrt::Position).1
+    } else {
+        // L_q, L_qv from the mixed derivatives and L_vv from the Hessian in q̇: L_qq is not
+        // needed.
+        let (_, lq, _, qv) = N::mixed(&Action(model), t, q, v);
+        let mut rhs = lq - qv.transpose() * v;
+        if L::TIME_DEPENDENT {
+            rhs -= N::velocity_time(&Action(model), t, q, v);
+        }
+        rhs
+    };
     if L::FORCED {
         rhs += model.external_force(t, q, v);
     }
@@ -507,7 +514,6 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Structure;
     use crate::test_models::{AsDyn, Oscillator, VariableMass};
     use nalgebra::{Const, DVector, SMatrix, SVector, U2};
 

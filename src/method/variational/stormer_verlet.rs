@@ -174,6 +174,17 @@ where
         Some(&[1.0])
     }
 
+    /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked once
+    /// per run); `None` on the implicit path.
+    fn velocity(
+        &self,
+        workspace: &StormerVerletWorkspace<N>,
+        p: &OVector<f64, N>,
+    ) -> Option<OVector<f64, N>> {
+        let inverse = workspace.explicit.as_ref()?.mass_inverse.as_ref()?;
+        Some(inverse * p)
+    }
+
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
