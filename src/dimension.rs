@@ -369,6 +369,9 @@ impl Dimension for Dyn {
     }
 }
 
+/// The two seeded arguments of num-dual's `partial_hessian`.
+type Pair<T, A, B> = (OVector<T, A>, OVector<T, B>);
+
 impl<const K: usize> Dimension for Const<K> {
     #[inline]
     fn gradient<D: Scalar, F: PhaseFunction<Self> + ?Sized>(
@@ -434,10 +437,9 @@ impl<const K: usize> Dimension for Const<K> {
         OMatrix<D, Self, Self>,
     ) {
         num_dual::partial_hessian(
-            |(x, y): (
-                OVector<HyperDualVec<D, Self, Self>, Self>,
-                OVector<HyperDualVec<D, Self, Self>, Self>,
-            )| f.eval(HyperDualVec::from_re(t), &x, &y),
+            |(x, y): Pair<HyperDualVec<D, Self, Self>, Self, Self>| {
+                f.eval(HyperDualVec::from_re(t), &x, &y)
+            },
             (q, v),
         )
     }
@@ -450,10 +452,9 @@ impl<const K: usize> Dimension for Const<K> {
         v: &OVector<D, Self>,
     ) -> OVector<D, Self> {
         let (_, _, _, vt) = num_dual::partial_hessian(
-            |(y, s): (
-                OVector<HyperDualVec<D, Self, U1>, Self>,
-                OVector<HyperDualVec<D, Self, U1>, U1>,
-            )| f.eval(s[0], &q.map(HyperDualVec::from_re), &y),
+            |(y, s): Pair<HyperDualVec<D, Self, U1>, Self, U1>| {
+                f.eval(s[0], &q.map(HyperDualVec::from_re), &y)
+            },
             (v, &OVector::<D, U1>::from_element(t)),
         );
         vt.column(0).into_owned()

@@ -627,7 +627,7 @@ where
     fn info(&self) -> MethodInfo {
         MethodInfo {
             name: "multiscale",
-            order: 2 * self.points.saturating_sub(1),
+            order: self.points.saturating_sub(1).saturating_mul(2),
             symmetric: false,
             symplectic: true,
             coordinates: Coordinates::Momentum,

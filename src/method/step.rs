@@ -17,6 +17,7 @@ use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, Tangent
 use crate::method::{Coordinates, Method, MethodInfo, StepReport};
 use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure};
+use crate::spectral::MAX_POINTS;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
 
@@ -242,7 +243,7 @@ pub fn dense_size(method: &str, size: usize, points: usize) -> Result<(), Error>
              large runs when it is written as a sum of local terms (a chain or lattice: sparse \
              Newton and explicit Störmer–Verlet)",
             entries as f64 * 8.0 / f64::from(1 << 30),
-            MAX_DENSE_ENTRIES * 8 >> 30
+            (MAX_DENSE_ENTRIES * 8) >> 30
         ),
     ))
 }
@@ -258,11 +259,15 @@ where
         Method::info(self)
     }
 
-    /// The method's workspace, after checking that its dense matrices fit
-    /// ([`dense_size`]).
+    /// The method's workspace, after checking that the dense matrices of a run-time-size model
+    /// fit ([`dense_size`]).
     fn workspace(&self, model: &L, h: f64) -> Result<M::Workspace, Error> {
-        let points = Method::points(self).unwrap_or(1);
-        dense_size(Method::info(self).name, model.dimension(), points)?;
+        // Only a run-time size can be too large (a fixed one is compiled in), and options out
+        // of range are the method's to report.
+        if N::try_to_usize().is_none() {
+            let points = Method::points(self).unwrap_or(1).min(MAX_POINTS);
+            dense_size(Method::info(self).name, model.dimension(), points)?;
+        }
         Method::workspace(self, model, h)
     }
 

@@ -237,7 +237,7 @@ macro_rules! segment_rule {
                 }
             }
 
-            #[inline]
+            #[inline(always)]
             fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, N: Dimension>(
                 &self,
                 model: &L,
@@ -252,7 +252,7 @@ macro_rules! segment_rule {
                 segment_action(model, Self::NODES, t, h, q0, q1)
             }
 
-            #[inline]
+            #[inline(always)]
             fn discrete_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
                 &self,
                 model: &L,

@@ -816,7 +816,7 @@ where
                 Solver::Auto => "svi",
                 Solver::Newton => "svi-newton",
             },
-            order: 2 * degree.min(self.quadrature_points()),
+            order: degree.min(self.quadrature_points()).saturating_mul(2),
             symmetric: true,
             symplectic: true,
             coordinates: Coordinates::Momentum,

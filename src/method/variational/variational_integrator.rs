@@ -344,7 +344,7 @@ impl<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension> PhaseFunction<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    #[inline]
+    #[inline(always)]
     fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> S {
         self.discrete
             .discrete_lagrangian(self.model, t, S::from(self.h), q, v)
@@ -369,7 +369,7 @@ impl<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension> PhaseFunction<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    #[inline]
+    #[inline(always)]
     fn eval<S: Scalar>(&self, t: S, shift: &OVector<S, N>, _v: &OVector<S, N>) -> S {
         let start = self.q0.map(S::from) + shift;
         let end = self.q1.map(S::from) + shift;
@@ -391,7 +391,7 @@ impl<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension> PhaseMap<N> for Ste
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    #[inline]
+    #[inline(always)]
     fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> OVector<S, N> {
         let forces = self
             .discrete
