@@ -200,7 +200,7 @@ fn a_text_model_of_four_coordinates_runs() {
     );
     let energy = number(&summary, "energy_error_max");
     assert!(
-        energy.is_finite() && energy < 1e-8,
+        energy.is_finite() && energy < 1e-12,
         "energy error {energy:e}"
     );
     assert!(number(&summary, "momentum_error_max") < 1e-12, "{summary}");
@@ -208,7 +208,7 @@ fn a_text_model_of_four_coordinates_runs() {
     assert_eq!(q.len(), 4);
     for (i, (found, exact)) in q.iter().zip(coupled_exact(10.0)).enumerate() {
         assert!(
-            (found - exact).abs() < 1e-6,
+            (found - exact).abs() < 1e-10,
             "q[{i}] = {found} against {exact}"
         );
     }

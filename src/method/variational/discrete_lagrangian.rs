@@ -122,22 +122,24 @@ pub struct SegmentNode {
     pub weight: f64,
 }
 
-/// The point (1 − τ) q0 + τ q1, exact at the end points and at the midpoint.
+/// The point (1 − τ) q0 + τ q1, exact at the end points and at the midpoint: `q0` or `q1`
+/// itself at an end point (no copy), else the interpolated point, kept in `storage`.
 #[inline]
-fn segment_point<D: Scalar, N: Dimension>(
+fn segment_point<'a, D: Scalar, N: Dimension>(
     position: f64,
-    q0: &OVector<D, N>,
-    q1: &OVector<D, N>,
-) -> OVector<D, N>
+    q0: &'a OVector<D, N>,
+    q1: &'a OVector<D, N>,
+    storage: &'a mut Option<OVector<D, N>>,
+) -> &'a OVector<D, N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     if position == 0.0 {
-        q0.clone()
+        q0
     } else if position == 1.0 {
-        q1.clone()
+        q1
     } else {
-        q0.zip_map(q1, |a, b| a * (1.0 - position) + b * position)
+        storage.insert(q0.zip_map(q1, |a, b| a * (1.0 - position) + b * position))
     }
 }
 
@@ -157,7 +159,7 @@ where
 
 /// The action h Σ_i b_i L(t + τ_i h, (1 − τ_i) q0 + τ_i q1, (q1 − q0)/h) of the straight
 /// segment from q0 to q1 under the quadrature rule `nodes`.
-#[inline]
+#[inline(always)]
 pub fn segment_action<L: Lagrangian<N>, D: Scalar, N: Dimension>(
     model: &L,
     nodes: &[SegmentNode],
@@ -172,16 +174,17 @@ where
     let v = segment_velocity(h, q0, q1);
     let mut action = D::from(0.0);
     for node in nodes {
-        let q = segment_point(node.position, q0, q1);
+        let mut storage = None;
+        let q = segment_point(node.position, q0, q1, &mut storage);
         let time = t + h * node.position;
-        action += model.lagrangian(time, &q, &v) * node.weight;
+        action += model.lagrangian(time, q, &v) * node.weight;
     }
     action * h
 }
 
 /// The discrete forces of the straight segment under the quadrature rule `nodes`:
 /// f_d⁻ = h Σ_i b_i (1 − τ_i) f_L(t_i, q(τ_i), v), f_d⁺ = h Σ_i b_i τ_i f_L(t_i, q(τ_i), v).
-#[inline]
+#[inline(always)]
 pub fn segment_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
     model: &L,
     nodes: &[SegmentNode],
@@ -198,20 +201,21 @@ where
     let mut minus = OVector::<D, N>::zeros_generic(n, U1);
     let mut plus = OVector::<D, N>::zeros_generic(n, U1);
     for node in nodes {
-        let q = segment_point(node.position, q0, q1);
+        let mut storage = None;
+        let q = segment_point(node.position, q0, q1, &mut storage);
         let time = t + h * node.position;
-        let force = model.external_force(time, &q, &v);
+        let force = model.external_force(time, q, &v);
         let (left, right) = (
             node.weight * (1.0 - node.position),
             node.weight * node.position,
         );
         if left != 0.0 {
-            for (target, f) in minus.iter_mut().zip(force.iter()) {
+            for (target, f) in minus.as_mut_slice().iter_mut().zip(force.as_slice()) {
                 *target += *f * h * left;
             }
         }
         if right != 0.0 {
-            for (target, f) in plus.iter_mut().zip(force.iter()) {
+            for (target, f) in plus.as_mut_slice().iter_mut().zip(force.as_slice()) {
                 *target += *f * h * right;
             }
         }

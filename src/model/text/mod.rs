@@ -8,7 +8,7 @@
 //! with derivatives by automatic differentiation, not by hand.
 //!
 //! ```
-//! use nalgebra::SVector;
+//! use nalgebra::{SVector, U2};
 //! use svi::model::text::{TextLagrangian, TextModel, TextSpec};
 //! use svi::{Integrator, Svi, Symmetries};
 //!
@@ -21,7 +21,7 @@
 //! };
 //! let model = TextModel::new(&spec)?;
 //! // Autonomous, unforced, ½q̇ᵀMq̇ − V(q): all three may be declared.
-//! let kepler = TextLagrangian::<2, false, false, true>::new(model)?;
+//! let kepler = TextLagrangian::<U2, false, false, true>::new(model)?;
 //! assert_eq!(kepler.generator_count(), 1);
 //! let integrator = Integrator::new(kepler, Svi::new(6));
 //! let (q, v) = (SVector::from([1.0, 0.0]), SVector::from([0.0, 1.0]));
