@@ -124,7 +124,7 @@ pub struct SegmentNode {
 
 /// The point (1 − τ) q0 + τ q1, exact at the end points and at the midpoint: `q0` or `q1`
 /// itself at an end point (no copy), else the interpolated point, kept in `storage`.
-#[inline]
+#[inline(always)]
 fn segment_point<'a, D: Scalar, N: Dimension>(
     position: f64,
     q0: &'a OVector<D, N>,
@@ -144,7 +144,7 @@ where
 }
 
 /// The velocity (q1 − q0)/h of the segment.
-#[inline]
+#[inline(always)]
 fn segment_velocity<D: Scalar, N: Dimension>(
     h: D,
     q0: &OVector<D, N>,
