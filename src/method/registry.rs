@@ -794,7 +794,7 @@ mod tests {
     fn bad_spellings_are_typed_errors_naming_the_text() {
         for bad in [
             "",
-            "rk4",
+            "dopri5",
             "svi:",
             "svi:x",
             "svi:6/",
