@@ -3,8 +3,7 @@
 //! tables), for every method, both solver paths (fixed point and Newton) and the forced
 //! paths.
 
-#[path = "common/allocations.rs"]
-mod allocations;
+use crate::allocations;
 
 use nalgebra::{Const, SVector};
 use svi::method::multiscale::Multiscale;

@@ -24,8 +24,7 @@ use svi_models::{DoublePendulum, Kepler, ModelVisitor, Pendulum, ZooModel, visit
 /// Steps after which every hostile run is stopped.
 const STEP_CAP: usize = 60;
 
-#[path = "common/hostile_cases.rs"]
-mod hostile_cases;
+use crate::hostile_cases;
 use hostile_cases::cases;
 
 /// Any f64, biased towards the hostile ones.

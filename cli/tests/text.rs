@@ -2,7 +2,7 @@
 //! built-in `kepler-text` scene against the built-in `kepler` (the same orbit from the zoo
 //! model: the reference), parameters, diagnostics, and errors that name the column.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// A text scene: the Kepler problem as in `cli/scenes/kepler-text.toml`, with `extra` lines

@@ -1615,7 +1615,7 @@ mod tests {
             assert!(error.to_string().contains(bad), "{error}");
         }
         // Unknown names list the registry and the peers.
-        for bad in ["rk4", "dop853:3", ""] {
+        for bad in ["rk45", "dop853:3", ""] {
             let error = bad.parse::<BenchMethod>().unwrap_err();
             assert!(
                 matches!(&error, SceneError::BenchMethod { text } if text == bad),

@@ -1161,7 +1161,7 @@ pub(crate) mod tests {
     #[test]
     fn unknown_method_and_diagnostic_names_are_listed() {
         let error =
-            Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk4\"\n", "t").unwrap_err();
+            Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk45\"\n", "t").unwrap_err();
         let SceneError::Parse { parser, .. } = &error else {
             panic!("{error}")
         };
