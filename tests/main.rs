@@ -32,3 +32,4 @@ mod stability;
 mod step_doubling;
 mod stress;
 mod text;
+mod text_chain;

@@ -36,7 +36,7 @@ use svi::stepping::run::RunFailure;
 use svi::{Integrator, LagrangianExt, Method, Statistics};
 use svi_models::{
     LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
-    visit_local_model, visit_model, visit_rigid_model, visit_text_model,
+    visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
 use crate::command::space::RunSpace;
@@ -53,7 +53,7 @@ use crate::report::summary::{
 use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};
-use crate::scene::{Scene, SceneError};
+use crate::scene::{Scene, SceneError, Text};
 
 /// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
 /// run it and print its summary as text or as one JSON object, and the failed health checks
@@ -194,8 +194,11 @@ impl Scene {
             progress,
         };
         match self.space() {
-            SpaceKind::Vector => match self.text_model() {
-                Some(model) => visit_text_model(model?, run)?,
+            SpaceKind::Vector => match self.text() {
+                Some(text) => match text? {
+                    Text::Model(model) => visit_text_model(model, run)?,
+                    Text::Chain(chain) => visit_text_chain(chain, run)?,
+                },
                 None if self.is_local() => visit_local_model(&self.model, run)
                     .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
                 None => visit_model(&self.model, run)?,

@@ -62,6 +62,7 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
     ),
     ("fput", include_str!("../../scenes/fput.toml")),
+    ("fput-text", include_str!("../../scenes/fput-text.toml")),
     ("fput-stiff", include_str!("../../scenes/fput-stiff.toml")),
     ("toda", include_str!("../../scenes/toda.toml")),
     (
