@@ -6,7 +6,9 @@
 
 use nalgebra::DVector;
 use svi::method::DynInitial;
-use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt, force_by_terms};
+use svi::model::local::{
+    LocalDefaults, LocalLagrangian, LocalLagrangianExt, force_by_terms, value_by_terms,
+};
 use svi::model::text::{
     Boundary, TextChain, TextChainModel, TextError, TextModel, TextSpec, site_values,
 };
@@ -141,7 +143,7 @@ const EVERYTHING: &str = "sum(i, 1, n, 0.5*vx[i]^2 + 0.5*vy[i]^2*(1 + 0.1*x[i]^2
      - sum(i, 0, 0, k*x[i+1]^2) + y[n]*vy[n]";
 
 #[test]
-fn the_compiled_force_is_the_term_by_term_force() {
+fn the_compiled_value_and_force_are_the_term_by_term_ones() {
     let relative = |a: &DVector<f64>, b: &DVector<f64>| (a - b).amax() / b.amax().max(1.0);
     for boundary in [Boundary::Fixed, Boundary::Periodic] {
         for n in [1, 2, 3, 70] {
@@ -181,6 +183,11 @@ fn the_compiled_force_is_the_term_by_term_force() {
         text.force_into(0.0, &q, &v, &mut compiled);
         force_by_terms(&text, 0.0, &q, &v, &mut by_terms);
         assert!(relative(&compiled, &by_terms) < 1e-15, "n = {n}");
+        let (value, reference) = (text.value(0.0, &q, &v), value_by_terms(&text, 0.0, &q, &v));
+        assert!(
+            (value - reference).abs() <= 1e-15 * reference.abs(),
+            "{value} {reference}"
+        );
     }
 }
 
@@ -366,10 +373,10 @@ fn misuses_of_indices_and_sums_are_errors_naming_the_column_and_symbol() {
         TextModel::new(&plain),
         Err(TextError::Indexing { column: 1, .. })
     ));
-    // Syntax that is not an index at all.
+    // A bound that runs on, and a sum left open.
     assert!(matches!(
         error("sum(i, 1, n vq[i]^2)"),
-        TextError::Syntax { column: 12, .. }
+        TextError::Indexing { column: 11, .. }
     ));
     assert!(matches!(
         error("sum(i, 1, n, vq[i]^2"),

@@ -67,7 +67,9 @@
 //! A Lagrangian written as text ([`svi::model::text`]) has its dimension and declarations
 //! known only at run time: [`visit_text_model`] hands it to the same visitor as a
 //! [`TextLagrangian`] of run-time dimension ([`svi::Dyn`], any number of coordinates) with
-//! its declarations.
+//! its declarations. A chain written as text (indexed coordinates and sums,
+//! [`svi::model::text::chain`]) goes to a [`LocalModelVisitor`] by [`visit_text_chain`], as a
+//! [`TextChain`] of its width with its declarations.
 //!
 //! Field theories in 1 + 1 dimensions are Lagrangian densities ℒ(x, t, u, u_t, u_x)
 //! ([`svi::model::density`]) on a domain with a boundary condition, integrated by the

@@ -4,7 +4,7 @@
 //!    checks them ([`Scene::apply`]).
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
 //!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
-//!    runtime-sized ℝⁿ (chains, lattices), [`svi_models::visit_rigid_model`] on SO(3). The visitor resolves the initial state, the step and the horizon, builds the
+//!    runtime-sized ℝⁿ (chains, lattices; [`svi_models::visit_text_chain`] for a chain written as text), [`svi_models::visit_rigid_model`] on SO(3). The visitor resolves the initial state, the step and the horizon, builds the
 //!    method (on ℝᴺ as its concrete type through [`svi::MethodSpec::visit_vector`]; on SO(3) the
 //!    Lie-group integrator) and pairs both in an [`Integrator`].
 //! 3. `run_scene`, generic over the space ([`RunSpace`]), builds the observers the scene

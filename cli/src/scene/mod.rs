@@ -83,6 +83,26 @@
 //! [parameters]
 //! mu = 1.0
 //! ```
+//!
+//! With indexed coordinates (`q[1..n]`, n a parameter) the text is a chain of local terms
+//! ([`svi::model::text::chain`]), run like the zoo's chains by the large-system methods;
+//! `boundary` (`"fixed"`, the default, or `"periodic"`) says what an index outside 1..n
+//! reads. The `[initial]` vectors of every chain, written as text or not, may be expressions
+//! in the site index `i` (from 1) and the parameters, evaluated at every site (a list of
+//! them, one per family, for several):
+//!
+//! ```toml
+//! lagrangian = "sum(i, 1, n, 0.5*vq[i]^2) - sum(i, 0, n, 0.5*(q[i+1] - q[i])^2)"
+//! coordinates = ["q[1..n]"]
+//! boundary = "fixed"
+//!
+//! [parameters]
+//! n = 1000
+//!
+//! [initial]
+//! q = "sin(pi*i/(n+1))"
+//! v = "0"
+//! ```
 
 pub mod builtin;
 pub mod ensemble;

@@ -56,6 +56,16 @@
 //! window wraps its indices instead (with n below the window's span a coordinate fills
 //! several slots, and the derivatives scattered there add up, as the chain rule asks).
 //!
+//! The force ∂L/∂q — the one derivative Störmer–Verlet and SVI's fixed point take at every
+//! stage — and the value of L — the energy diagnostic's, at every step — do not run term by
+//! term ([`LocalLagrangian::force_into`] and [`LocalLagrangian::value`] are overridden): each
+//! kind's tape is compiled once into straight-line programs, the force's by reverse-mode
+//! differentiation, that run on batches of 32 sites at once (the private module `batch`
+//! explains them); within a segment each slot's index grows by the number of families from
+//! one site to the next, so a batch reads and writes evenly spaced entries. The other
+//! derivatives (momenta, the mass matrix, the Hessian blocks of sparse Newton) are taken
+//! term by term, by the dual numbers of every [`LocalLagrangian`].
+//!
 //! K is a compile-time constant of [`LocalLagrangian`]; [`TextChain<K, …>`] exists for
 //! K = 1 … [`MAX_WIDTH`], and `svi_models::visit_text_chain` picks the one a model needs.
 //!
@@ -77,16 +87,14 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Const, DVector, SVector};
 
+use super::batch::{LANES, Lanes, MAX_REGISTERS, Program, Registers};
 use super::expression::{Expression, Split, Tape, Velocities};
-use super::gradient::{Gradient, LANES, Lanes, MAX_REGISTERS, Registers};
 use super::parse::parse;
 use super::tree::{Base, Index, Names, Node, Site, Symbol};
 use super::{Declared, TextError, TextModel, TextSpec, intern};
 use crate::error::Error;
 use crate::model::Structure;
-use crate::model::local::{
-    LocalDefaults, LocalInvariants, LocalLagrangian, TermWidth, force_by_terms,
-};
+use crate::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian, TermWidth};
 use crate::scalar::Scalar;
 
 /// The widest term a chain compiles to: K ≤ 4 coordinates (families × sites of a window).
@@ -187,8 +195,10 @@ struct Kind {
     tape: Tape,
     /// For a constant-mass kind: its two parts.
     split: Option<Split>,
-    /// Its force ∂ℓ/∂q as a program on batches of sites (`None`: too many registers).
-    gradient: Option<Gradient>,
+    /// Its value and its force ∂ℓ/∂q as programs on batches of sites (`None`: too many
+    /// registers).
+    value: Option<Program>,
+    force: Option<Program>,
 }
 
 impl TextChainModel {
@@ -692,17 +702,18 @@ impl Compiled {
 }
 
 impl Kind {
-    /// The tape, the constant-mass split and the force's program of `expression` over
-    /// `width` slots.
+    /// The tape, the constant-mass split and the programs of `expression` over `width`
+    /// slots.
     fn of(expression: &Expression, values: &[f64], width: usize) -> Kind {
         let tape = expression.compile(values, Velocities::Read);
         let split = Split::of(expression, values, width);
         // ∂ℓ/∂q of a constant-mass term is its potential's.
-        let gradient = Gradient::of(split.as_ref().map_or(&tape, Split::potential), width);
+        let force = Program::force(split.as_ref().map_or(&tape, Split::potential), width);
         Kind {
+            value: Program::value(&tape),
             tape,
             split,
-            gradient,
+            force,
         }
     }
 }
@@ -1048,21 +1059,57 @@ impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> 
         kind.tape.evaluate(t, q.as_slice(), v.as_slice())
     }
 
-    /// Each segment of sites of one kind in batches of [`LANES`] by its compiled gradient
-    /// (see [`super::gradient`]); a kind without one, and the rest's term, term by term.
+    /// Each segment of sites of one kind in batches of [`LANES`] by its program (see
+    /// [the module docs](self)); a kind without one, and the rest's term, term by term.
+    fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        let mut sum = 0.0;
+        self.batches(
+            &mut sum,
+            |kind| kind.value.as_ref(),
+            |sum, program, registers, lanes| {
+                *sum += program.sum(registers, lanes, t, q.as_slice(), v.as_slice());
+            },
+            |sum, term| *sum += Const::<WIDTH>::value(self, term, t, q, v),
+        );
+        sum
+    }
+
+    /// Each segment of sites of one kind in batches of [`LANES`] by its program (see
+    /// [the module docs](self)); a kind without one, and the rest's term, term by term.
     fn force_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
-        let compiled = &self.model.compiled;
-        if compiled.kinds.iter().all(|kind| kind.gradient.is_none()) {
-            return force_by_terms(self, t, q, v, out);
-        }
         out.as_mut_slice().fill(0.0);
+        self.batches(
+            out,
+            |kind| kind.force.as_ref(),
+            |out, program, registers, lanes| {
+                let (q, v) = (q.as_slice(), v.as_slice());
+                program.add_force(registers, lanes, t, q, v, out.as_mut_slice());
+            },
+            |out, term| Const::<WIDTH>::scatter_gradient(self, term, t, q, v, false, out),
+        );
+    }
+}
+
+impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool>
+    TextChain<WIDTH, TIME_DEPENDENT, CONSTANT_MASS>
+{
+    /// Walk the terms with `state`: each segment of sites whose kind has a `program` in
+    /// batches of [`LANES`] (`batch`), the other terms and the rest's one by one (`term`).
+    #[inline]
+    fn batches<'a, S>(
+        &'a self,
+        state: &mut S,
+        program: impl Fn(&'a Kind) -> Option<&'a Program>,
+        mut batch: impl FnMut(&mut S, &'a Program, &mut Registers, Lanes<'_>),
+        mut term: impl FnMut(&mut S, usize),
+    ) {
+        let compiled = &self.model.compiled;
         let stride = self.model.families.len();
         let mut registers: Registers = [[0.0; LANES]; MAX_REGISTERS];
         let mut start = 0;
         for segment in &compiled.segments {
-            let kind = &compiled.kinds[segment.kind];
-            match &kind.gradient {
-                Some(gradient) => {
+            match program(&compiled.kinds[segment.kind]) {
+                Some(program) => {
                     for first in (start..segment.end).step_by(LANES) {
                         // Within a segment each slot's index grows by `stride` a site.
                         let bases = self.indices(first);
@@ -1071,27 +1118,14 @@ impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> 
                             bases: &bases,
                             stride,
                         };
-                        gradient.add_into(
-                            &mut registers,
-                            lanes,
-                            t,
-                            q.as_slice(),
-                            v.as_slice(),
-                            out.as_mut_slice(),
-                        );
+                        batch(state, program, &mut registers, lanes);
                     }
                 }
-                None => {
-                    for term in start..segment.end {
-                        Const::<WIDTH>::scatter_gradient(self, term, t, q, v, false, out);
-                    }
-                }
+                None => (start..segment.end).for_each(|e| term(state, e)),
             }
             start = segment.end;
         }
-        for term in compiled.site_terms..self.term_count() {
-            Const::<WIDTH>::scatter_gradient(self, term, t, q, v, false, out);
-        }
+        (compiled.site_terms..self.term_count()).for_each(|e| term(state, e));
     }
 }
 

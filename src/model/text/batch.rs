@@ -1,31 +1,35 @@
-//! The force ∂ℓ/∂q of a chain's term, compiled from its [`Tape`] by reverse-mode automatic
-//! differentiation into a straight-line program, and run on batches of sites at once.
+//! A chain's terms on batches of sites: the value ℓ and the force ∂ℓ/∂q of one kind of term,
+//! compiled from its [`Tape`] into straight-line programs (the force by reverse-mode
+//! automatic differentiation), each run on [`LANES`] sites at once.
 //!
 //! # Why
 //!
-//! A chain's force assembled term by term ([`crate::model::local::force_by_terms`]) runs
-//! each term's tape once per slot, in forward-mode dual numbers: for FPUT two interpreted
+//! Assembled term by term ([`crate::model::local::force_by_terms`]), a chain's force runs
+//! each term's tape once per slot in forward-mode dual numbers: for FPUT two interpreted
 //! sweeps of fifteen instructions per spring, against a handful of multiplications in a
-//! model written in Rust. Here the tape of a kind of term is differentiated once, when it is
-//! compiled, and the derivative program runs over [`LANES`] sites of that kind together:
-//! every instruction is a loop over the lanes, which the compiler vectorises, so the cost
-//! of interpreting it is paid once per batch instead of once per term.
+//! model written in Rust; its value (the energy diagnostic, at every step) one interpreted
+//! sweep. Here each kind of term is compiled once, and its programs run over [`LANES`] sites
+//! of that kind together: every instruction is a loop over the lanes, which the compiler
+//! vectorises, so the cost of interpreting it is paid once per batch instead of once per
+//! term.
 //!
 //! # How
 //!
 //! 1. The postfix tape becomes a list of instructions in static single assignment, equal
 //!    instructions shared (`q[i+1] - q[i]`, written three times in FPUT, is computed once).
-//! 2. Reverse mode, from the end: each instruction adds its operands' share of its adjoint,
-//!    ∂ℓ/∂x = Σ (∂ℓ/∂y)(∂y/∂x), as new instructions. Adjoints that are constants stay
-//!    numbers (the adjoint of ℓ is 1, of `0.5*d^2` then 0.5), so the derivative of a
-//!    polynomial folds to the polynomial's derivative: FPUT's force is d + α d² + β d³ in
-//!    eight instructions.
-//! 3. What the gradient does not need is dropped (ℓ's value among it), and the values are
-//!    given registers, reused once dead: at most [`MAX_REGISTERS`] of [`LANES`] numbers, a
-//!    register file on the stack. A kind that needs more runs term by term.
+//! 2. For the force, reverse mode from the end: each instruction adds its operands' share of
+//!    its adjoint, ∂ℓ/∂x = Σ (∂ℓ/∂y)(∂y/∂x), as new instructions. Adjoints that are
+//!    constants stay numbers (the adjoint of ℓ is 1, of `0.5*d^2` then 0.5), so the
+//!    derivative of a polynomial folds to the polynomial's derivative: FPUT's spring force
+//!    is ±(d + α d² + β d³), d = q_{i+1} − q_i, in eleven instructions with the two loads —
+//!    against two sweeps of fifteen on dual numbers.
+//! 3. What the outputs (the value, or the force on each slot) do not need is dropped — ℓ's
+//!    value from the force —, and the values are given registers, reused once dead: at most
+//!    [`MAX_REGISTERS`] of [`LANES`] numbers, a register file on the stack. A kind that
+//!    needs more runs term by term.
 //!
-//! The program computes ∂ℓ/∂q in another order than the dual numbers do: the two agree to
-//! round-off (tested), not bit for bit.
+//! The programs compute in another order than the tape and the dual numbers do: they agree
+//! to round-off (tested), not bit for bit.
 
 use std::collections::HashMap;
 
@@ -145,6 +149,17 @@ impl Builder {
         })
     }
 
+    /// xⁿ: x, its square, its reciprocal, or an integer power (one instruction, whose
+    /// derivative n xⁿ⁻¹ is one more: FPUT's d⁴ differentiates to the d³ it has already).
+    fn power(&mut self, x: usize, n: i32) -> usize {
+        match n {
+            1 => x,
+            2 => self.emit(Instruction::Square(x)),
+            -1 => self.emit(Instruction::Reciprocal(x)),
+            _ => self.emit(Instruction::PowerInteger(x, n)),
+        }
+    }
+
     /// a · x.
     fn times(&mut self, a: Adjoint, x: usize) -> Adjoint {
         match a {
@@ -225,7 +240,10 @@ impl Builder {
                         Op::DivideBy(c) => Instruction::DivideBy(x, c),
                         Op::Reciprocal => Instruction::Reciprocal(x),
                         Op::Square => Instruction::Square(x),
-                        Op::PowerInteger(n) => Instruction::PowerInteger(x, n),
+                        Op::PowerInteger(n) => {
+                            stack.push(self.power(x, n));
+                            continue;
+                        }
                         Op::Call(function) => Instruction::Call(function, x),
                         _ => return None,
                     })
@@ -334,13 +352,8 @@ impl Builder {
                     let share = self.scaled(a, f64::from(n));
                     let share = match n - 1 {
                         0 => share,
-                        1 => self.times(share, x),
-                        2 => {
-                            let square = self.emit(Instruction::Square(x));
-                            self.times(share, square)
-                        }
                         m => {
-                            let power = self.emit(Instruction::PowerInteger(x, m));
+                            let power = self.power(x, m);
                             self.times(share, power)
                         }
                     };
@@ -425,13 +438,13 @@ enum Output {
     Register(usize),
 }
 
-/// The force ∂ℓ/∂q of one kind of term as a straight-line program on registers of
-/// [`LANES`] sites (see the [module docs](self)).
+/// The value or the force ∂ℓ/∂q of one kind of term as a straight-line program on registers
+/// of [`LANES`] sites (see the [module docs](self)).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Gradient {
+pub struct Program {
     /// (destination register, instruction on registers).
     steps: Vec<(usize, Instruction)>,
-    /// ∂ℓ/∂q of each slot.
+    /// ℓ (one output), or ∂ℓ/∂q of each slot.
     outputs: Vec<Output>,
 }
 
@@ -447,18 +460,30 @@ pub struct Lanes<'a> {
     pub stride: usize,
 }
 
-impl Gradient {
-    /// The program of `tape`'s gradient in the coordinates of its `width` slots; `None` if
-    /// it needs more than [`MAX_REGISTERS`] registers.
-    pub fn of(tape: &Tape, width: usize) -> Option<Gradient> {
+impl Program {
+    /// The program of `tape`'s value; `None` if it needs more than [`MAX_REGISTERS`]
+    /// registers.
+    pub fn value(tape: &Tape) -> Option<Program> {
+        let mut builder = Builder::default();
+        let output = builder.forward(tape)?;
+        Program::compile(builder.instructions, &[Adjoint::Value(output)])
+    }
+
+    /// The program of `tape`'s force ∂ℓ/∂q in the coordinates of its `width` slots; `None`
+    /// if it needs more than [`MAX_REGISTERS`] registers.
+    pub fn force(tape: &Tape, width: usize) -> Option<Program> {
         let mut builder = Builder::default();
         let output = builder.forward(tape)?;
         let gradient = builder.reverse(output, width)?;
-        let instructions = builder.instructions;
-        // The instructions the gradient needs, each after its operands.
+        Program::compile(builder.instructions, &gradient)
+    }
+
+    /// The program of the `instructions` that `outputs` need, on registers.
+    fn compile(instructions: Vec<Instruction>, outputs: &[Adjoint]) -> Option<Program> {
+        // The instructions the outputs need, each after its operands.
         let mut needed = vec![false; instructions.len()];
-        for adjoint in &gradient {
-            if let Adjoint::Value(x) = adjoint {
+        for output in outputs {
+            if let Adjoint::Value(x) = output {
                 needed[*x] = true;
             }
         }
@@ -477,8 +502,8 @@ impl Gradient {
                 }
             }
         }
-        for adjoint in &gradient {
-            if let Adjoint::Value(x) = adjoint {
+        for output in outputs {
+            if let Adjoint::Value(x) = output {
                 last_use[*x] = usize::MAX;
             }
         }
@@ -507,21 +532,41 @@ impl Gradient {
         if count > MAX_REGISTERS {
             return None;
         }
-        let outputs = gradient
+        let outputs = outputs
             .iter()
-            .map(|adjoint| match *adjoint {
+            .map(|output| match *output {
                 Adjoint::Zero => Output::Zero,
                 Adjoint::Constant(c) => Output::Constant(c),
                 Adjoint::Value(x) => Output::Register(register[x]),
             })
             .collect();
-        Some(Gradient { steps, outputs })
+        Some(Program { steps, outputs })
     }
 
-    /// Add the force ∂ℓ/∂q of the sites of `lanes` at time `t` to `force`, reading their
-    /// coordinates and velocities from `q` and `v`, with `registers` as scratch.
+    /// The sum of ℓ over the sites of `lanes` at time `t` (a [`Program::value`]), reading
+    /// their coordinates and velocities from `q` and `v`, with `registers` as scratch.
     #[inline]
-    pub fn add_into(
+    pub fn sum(
+        &self,
+        registers: &mut Registers,
+        lanes: Lanes<'_>,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> f64 {
+        self.execute(registers, lanes, t, q, v);
+        match self.outputs.first() {
+            Some(Output::Register(r)) => registers[*r][..lanes.count].iter().sum(),
+            Some(Output::Constant(c)) => c * lanes.count as f64,
+            Some(Output::Zero) | None => 0.0,
+        }
+    }
+
+    /// Add the force ∂ℓ/∂q of the sites of `lanes` at time `t` (a [`Program::force`]) to
+    /// `force`, reading their coordinates and velocities from `q` and `v`, with `registers`
+    /// as scratch.
+    #[inline]
+    pub fn add_force(
         &self,
         registers: &mut Registers,
         lanes: Lanes<'_>,
@@ -530,6 +575,23 @@ impl Gradient {
         v: &[f64],
         force: &mut [f64],
     ) {
+        self.execute(registers, lanes, t, q, v);
+        for (&output, &base) in self.outputs.iter().zip(lanes.bases) {
+            let entries = force[base..]
+                .iter_mut()
+                .step_by(lanes.stride)
+                .take(lanes.count);
+            match output {
+                Output::Zero => {}
+                Output::Constant(c) => entries.for_each(|f| *f += c),
+                Output::Register(r) => entries.zip(&registers[r]).for_each(|(f, g)| *f += g),
+            }
+        }
+    }
+
+    /// Run the steps on the sites of `lanes`.
+    #[inline]
+    fn execute(&self, registers: &mut Registers, lanes: Lanes<'_>, t: f64, q: &[f64], v: &[f64]) {
         let Lanes {
             count,
             bases,
@@ -565,6 +627,9 @@ impl Gradient {
                 Instruction::DivideBy(x, c) => map(target, read(x), |x| x / c),
                 Instruction::Reciprocal(x) => map(target, read(x), f64::recip),
                 Instruction::Square(x) => map(target, read(x), |x| x * x),
+                // Small powers by products, as fast as written out.
+                Instruction::PowerInteger(x, 3) => map(target, read(x), |x| x * x * x),
+                Instruction::PowerInteger(x, 4) => map(target, read(x), |x| (x * x) * (x * x)),
                 Instruction::PowerInteger(x, n) => map(target, read(x), |x| x.powi(n)),
                 Instruction::Call(function, x) => map(target, read(x), |x| function.apply(x)),
                 Instruction::Sign(x) => map(target, read(x), |x| if x < 0.0 { -1.0 } else { 1.0 }),
@@ -578,14 +643,6 @@ impl Gradient {
                         other => zip(target, x, y, |x, y| other.apply(x, y)),
                     }
                 }
-            }
-        }
-        for (&output, &base) in self.outputs.iter().zip(bases) {
-            let lanes = force[base..].iter_mut().step_by(stride).take(count);
-            match output {
-                Output::Zero => {}
-                Output::Constant(c) => lanes.for_each(|f| *f += c),
-                Output::Register(r) => lanes.zip(&registers[r]).for_each(|(f, g)| *f += g),
             }
         }
     }
@@ -604,5 +661,97 @@ fn map(target: &mut [f64; LANES], x: &[f64; LANES], f: impl Fn(f64) -> f64) {
 fn zip(target: &mut [f64; LANES], x: &[f64; LANES], y: &[f64; LANES], f: impl Fn(f64, f64) -> f64) {
     for ((t, x), y) in target.iter_mut().zip(x).zip(y) {
         *t = f(*x, *y);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::text::expression::{Expression, Velocities};
+    use crate::model::text::tree::Names;
+
+    /// The tape of `text` in the coordinates x, y with the parameters a, b = `values`.
+    fn tape(text: &str, values: &[f64]) -> Tape {
+        let names = Names {
+            coordinates: &["x", "y"],
+            velocities: &["vx", "vy"],
+            parameters: &["a", "b"],
+            phase_space: true,
+            families: &[],
+            size: None,
+        };
+        Expression::parse(text, "lagrangian", &names)
+            .unwrap()
+            .compile(values, Velocities::Read)
+    }
+
+    #[test]
+    fn the_fput_spring_force_folds_to_its_polynomial() {
+        let (alpha, beta) = (0.25, 0.5);
+        let spring = tape("-(0.5*(y-x)^2 + a/3*(y-x)^3 + b/4*(y-x)^4)", &[alpha, beta]);
+        let gradient = Program::force(&spring, 2).unwrap();
+        // The loads, d = y − x, d², d³, −d − α d² − β d³ in five, and its negative: neither
+        // ℓ's value nor d⁴, and d computed once.
+        assert_eq!(gradient.steps.len(), 11, "{:?}", gradient.steps);
+        // A chain of springs: lane l reads x = q[l], y = q[l + 1].
+        let q: Vec<f64> = (0..6).map(|i| 0.3 * (1.7 * f64::from(i)).sin()).collect();
+        let mut force = vec![0.0; 6];
+        let mut registers = [[0.0; LANES]; MAX_REGISTERS];
+        let lanes = Lanes {
+            count: 5,
+            bases: &[0, 1],
+            stride: 1,
+        };
+        gradient.add_force(&mut registers, lanes, 0.0, &q, &[0.0; 6], &mut force);
+        let derivative = |d: f64| d + alpha * d * d + beta * d * d * d;
+        for (j, f) in force.iter().enumerate() {
+            let right = if j < 5 {
+                derivative(q[j + 1] - q[j])
+            } else {
+                0.0
+            };
+            let left = if j > 0 {
+                derivative(q[j] - q[j - 1])
+            } else {
+                0.0
+            };
+            assert!((f - (right - left)).abs() <= 1e-16, "{j}: {f}");
+        }
+    }
+
+    #[test]
+    fn every_instruction_has_the_dual_numbers_derivative() {
+        let text = "sin(x)*cos(y) + tan(0.1*x) - asin(0.2*y) + acos(0.1*x) + atan(y)/4 \
+                    + sinh(x)*cosh(y)*tanh(x) + exp(y)*ln(2 + x^2) + sqrt(3 + y^2) \
+                    + abs(x - y)^1.5 + (1 + x^2)^y + atan2(x, 2 + y) + 1/(2 + x^2) \
+                    - (1 + y^2)^-2 + x^5 + x*y*a + b - x/3 + vx*x^2";
+        let tape = tape(text, &[0.7, 1.9]);
+        let gradient = Program::force(&tape, 2).unwrap();
+        for (x, y) in [(0.3, -0.4), (-0.8, 0.6)] {
+            let mut force = [0.0; 2];
+            let mut registers = [[0.0; LANES]; MAX_REGISTERS];
+            let lanes = Lanes {
+                count: 1,
+                bases: &[0, 1],
+                stride: 1,
+            };
+            gradient.add_force(&mut registers, lanes, 0.0, &[x, y], &[0.5, 0.0], &mut force);
+            let (_, dx) = num_dual::first_derivative(
+                |x| tape.evaluate(0.0.into(), &[x, y.into()], &[0.5.into(), 0.0.into()]),
+                x,
+            );
+            let (_, dy) = num_dual::first_derivative(
+                |y| tape.evaluate(0.0.into(), &[x.into(), y], &[0.5.into(), 0.0.into()]),
+                y,
+            );
+            assert!(
+                (force[0] - dx).abs() <= 1e-14 * dx.abs().max(1.0),
+                "{force:?} {dx}"
+            );
+            assert!(
+                (force[1] - dy).abs() <= 1e-14 * dy.abs().max(1.0),
+                "{force:?} {dy}"
+            );
+        }
     }
 }
