@@ -113,20 +113,6 @@ pub enum Boundary {
     Periodic,
 }
 
-impl Boundary {
-    /// The names, as written in scenes.
-    pub const NAMES: [&'static str; 2] = ["fixed", "periodic"];
-
-    /// The boundary named `name` (`fixed`, `periodic`).
-    pub fn named(name: &str) -> Option<Boundary> {
-        match name {
-            "fixed" => Some(Boundary::Fixed),
-            "periodic" => Some(Boundary::Periodic),
-            _ => None,
-        }
-    }
-}
-
 /// One sum of L: its sign, range and body (a node of the model's parse tree).
 #[derive(Debug, Clone, PartialEq)]
 struct SumTerm {
