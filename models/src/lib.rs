@@ -175,7 +175,7 @@ where
         + Send
         + Sync
         + std::fmt::Debug
-        + 'static
+        + 'static,
 {
 }
 

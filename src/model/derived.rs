@@ -28,7 +28,7 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
-use crate::model::{Lagrangian, Structure, Symmetries};
+use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
@@ -276,12 +276,21 @@ where
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
     ) -> (f64, OVector<f64, N>) {
+        if let Some(terms) = self.terms() {
+            return (
+                terms.value(t, q, v),
+                assembled_gradient(terms, t, q, v, Wrt::Position),
+            );
+        }
         N::gradient(&Action(self), t, q, v, Wrt::Position)
     }
 
     /// The momentum p = ∂L/∂q̇.
     #[inline]
     fn momentum(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OVector<f64, N> {
+        if let Some(terms) = self.terms() {
+            return assembled_gradient(terms, t, q, v, Wrt::Velocity);
+        }
         N::gradient(&Action(self), t, q, v, Wrt::Velocity).1
     }
 
@@ -293,6 +302,9 @@ where
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
     ) -> SecondDerivatives<N> {
+        if let Some(terms) = self.terms() {
+            return assembled_second_derivatives(terms, t, q, v);
+        }
         if N::try_to_usize().is_none_or(|n| n <= SCALAR_HESSIAN_UP_TO) {
             scalar_second_derivatives(self, t, q, v)
         } else {
@@ -313,12 +325,19 @@ where
     /// The mass matrix ∂²L/∂q̇².
     #[inline]
     fn mass_matrix(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OMatrix<f64, N, N> {
+        if let Some(terms) = self.terms() {
+            return assembled_second_derivatives(terms, t, q, v).vv;
+        }
         N::hessian(&Action(self), t, q, v, Wrt::Velocity).2
     }
 
     /// The energy E = p·q̇ − L.
     #[inline]
     fn energy(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {
+        if let Some(terms) = self.terms() {
+            let p = assembled_gradient(terms, t, q, v, Wrt::Velocity);
+            return p.dot(v) - terms.value(t, q, v);
+        }
         let (value, p) = N::gradient(&Action(self), t, q, v, Wrt::Velocity);
         p.dot(v) - value
     }
@@ -453,6 +472,53 @@ where
 impl<L: Lagrangian<N> + ?Sized, N: Dimension> LagrangianExt<N> for L where
     DefaultAllocator: Allocator<N> + Allocator<N, N>
 {
+}
+
+/// ∂L/∂q or ∂L/∂q̇ of a sum of local terms, assembled term by term.
+fn assembled_gradient<N: Dimension>(
+    terms: &dyn TermSum<N>,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+    wrt: Wrt,
+) -> OVector<f64, N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    let mut out = OVector::zeros_generic(q.shape_generic().0, U1);
+    terms.gradient_into(t, q, v, wrt, &mut out);
+    out
+}
+
+/// L, its gradients and its Hessian blocks, dense, from a sum of local terms (the blocks'
+/// triplets added into n × n matrices).
+fn assembled_second_derivatives<N: Dimension>(
+    terms: &dyn TermSum<N>,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+) -> SecondDerivatives<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = q.shape_generic().0;
+    let mut blocks = [Vec::new(), Vec::new(), Vec::new()];
+    terms.hessian_triplets(t, q, v, &mut blocks);
+    let [qq, qv, vv] = blocks.map(|triplets| {
+        let mut block = OMatrix::zeros_generic(n, n);
+        for (i, j, value) in triplets {
+            block[(i, j)] += value;
+        }
+        block
+    });
+    SecondDerivatives {
+        value: terms.value(t, q, v),
+        q: assembled_gradient(terms, t, q, v, Wrt::Position),
+        v: assembled_gradient(terms, t, q, v, Wrt::Velocity),
+        qq,
+        qv,
+        vv,
+    }
 }
 
 /// The Euler–Lagrange acceleration at a point of any scalar type (dual numbers give its
