@@ -30,7 +30,7 @@
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Const, SMatrix, SVector, U2};
 use num_dual::{DualSVec64, DualVec};
 use std::hint::black_box;
 use std::time::Duration;
@@ -44,7 +44,7 @@ const T: f64 = 0.3;
 
 /// Open the group `derivatives/<name>` and time the six AD quantities of `model` at (q, v).
 /// The group is returned so that a caller can add hand-written variants before finishing it.
-fn model_group<'a, L: Lagrangian<N>, const N: usize>(
+fn model_group<'a, L: Lagrangian<Const<N>>, const N: usize>(
     c: &'a mut Criterion,
     name: &str,
     model: L,
@@ -80,7 +80,7 @@ fn model_group<'a, L: Lagrangian<N>, const N: usize>(
 /// Σᵢ q̇ᵢ q̇ᵢ₊₁ cos(qᵢ − qᵢ₊₁)/10.
 struct CoupledChain;
 
-impl<const N: usize> Lagrangian<N> for CoupledChain {
+impl<const N: usize> Lagrangian<Const<N>> for CoupledChain {
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
         let mut l = D::from(0.0);
         for i in 0..N {
@@ -121,7 +121,7 @@ fn kepler_hessian_hand(q: &SVector<f64, 2>) -> SMatrix<f64, 2, 2> {
 fn kepler_second_derivatives_hand(
     q: &SVector<f64, 2>,
     v: &SVector<f64, 2>,
-) -> SecondDerivatives<2> {
+) -> SecondDerivatives<U2> {
     let inverse_radius = q.dot(q).sqrt().recip();
     let inverse_radius2 = inverse_radius * inverse_radius;
     let inverse_radius3 = inverse_radius2 * inverse_radius;
@@ -137,7 +137,7 @@ fn kepler_second_derivatives_hand(
 }
 
 /// Everything [`LagrangianExt::acceleration_jacobian`] returns for Kepler, by hand.
-fn kepler_acceleration_jacobian_hand(q: &SVector<f64, 2>) -> AccelerationJacobian<2> {
+fn kepler_acceleration_jacobian_hand(q: &SVector<f64, 2>) -> AccelerationJacobian<U2> {
     AccelerationJacobian {
         value: kepler_force_hand(q),
         q: kepler_hessian_hand(q),

@@ -40,6 +40,7 @@
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
+use nalgebra::{Const, U2};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 use svi::method::StepReport;
@@ -53,16 +54,16 @@ const SEGMENT: u64 = 1000;
 
 /// One trajectory of `method` on `model`: the workspace, the current state and the step
 /// counter, re-seeded from the model's default initial state every [`SEGMENT`] timed steps.
-struct Trajectory<'a, L, M: Method<N>, const N: usize> {
+struct Trajectory<'a, L, M: Method<Const<N>>, const N: usize> {
     id: &'a str,
     model: L,
     method: M,
     h: f64,
     t0: f64,
-    initial: State<N>,
+    initial: State<Const<N>>,
     workspace: M::Workspace,
-    state: State<N>,
-    increment: State<N>,
+    state: State<Const<N>>,
+    increment: State<Const<N>>,
     /// Steps since the last seed.
     k: usize,
     /// Timed steps since the last seed.
@@ -71,8 +72,8 @@ struct Trajectory<'a, L, M: Method<N>, const N: usize> {
 
 impl<'a, L, M, const N: usize> Trajectory<'a, L, M, N>
 where
-    L: Lagrangian<N> + Defaults<N> + Clone,
-    M: Method<N> + Clone,
+    L: Lagrangian<Const<N>> + Defaults<Const<N>> + Clone,
+    M: Method<Const<N>> + Clone,
 {
     fn new(id: &'a str, model: L, method: M, h: f64) -> Self {
         let (t0, q0, v0) = model.initial_state();
@@ -89,7 +90,7 @@ where
             initial,
             workspace,
             state: initial,
-            increment: State::zeros(),
+            increment: State::zeros(Const::<N>),
             k: 0,
             timed: 0,
         };
@@ -163,8 +164,8 @@ fn bench_step<L, M, const N: usize>(
     method: M,
     h: f64,
 ) where
-    L: Lagrangian<N> + Defaults<N> + Clone,
-    M: Method<N> + Clone,
+    L: Lagrangian<Const<N>> + Defaults<Const<N>> + Clone,
+    M: Method<Const<N>> + Clone,
 {
     let mut trajectory = Trajectory::new(id, model, method, h);
     // Work per step over exactly one timed segment (untimed here), then start afresh.
@@ -187,7 +188,7 @@ fn bench_step<L, M, const N: usize>(
 /// Every method configuration of the per-step benches, on one model.
 fn bench_model<L, const N: usize>(c: &mut Criterion, name: &str, model: L, h: f64)
 where
-    L: Lagrangian<N> + Defaults<N> + Clone,
+    L: Lagrangian<Const<N>> + Defaults<Const<N>> + Clone,
 {
     let mut group = c.benchmark_group(format!("step/{name}"));
     for points in [3, 6, 9] {
@@ -219,7 +220,7 @@ fn steps(c: &mut Criterion) {
 }
 
 /// Time a whole run of the Kepler scene (e = 0.5, h = 0.2, T = 200) with `method`.
-fn bench_run<M: Method<2> + Clone>(group: &mut BenchmarkGroup<'_, WallTime>, id: &str, method: M) {
+fn bench_run<M: Method<U2> + Clone>(group: &mut BenchmarkGroup<'_, WallTime>, id: &str, method: M) {
     const H: f64 = 0.2;
     const T_END: f64 = 200.0;
     let model = Kepler::new(0.5).expect("valid eccentricity");

@@ -11,17 +11,17 @@
 //! Issue #20 asks for the text run within 3× the zoo's. Run with `cargo bench --bench text`;
 //! the medians are in `target/criterion/kepler_T2000/{zoo,text}/new/estimates.json`.
 
+use nalgebra::{SVector, U2};
 use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nalgebra::SVector;
 use svi::model::text::{TextLagrangian, TextModel, TextSpec};
 use svi::{Integrator, Lagrangian, Svi};
 use svi_models::Kepler;
 
 /// One run of the scene with `model`; its final q.
-fn run<L: Lagrangian<2>>(model: L) -> SVector<f64, 2> {
+fn run<L: Lagrangian<U2>>(model: L) -> SVector<f64, 2> {
     let (q, v) = (SVector::from([0.5, 0.0]), SVector::from([0.0, 3f64.sqrt()]));
     Integrator::new(model, Svi::new(6))
         .run_from_velocity(0.0, q, v, 0.2, 2000.0, &mut ())
@@ -37,7 +37,7 @@ fn kepler(c: &mut Criterion) {
         parameters: vec![("mu".into(), 1.0)],
         ..TextSpec::default()
     };
-    let text = TextLagrangian::<2, false, false, true>::new(TextModel::new(&spec).unwrap())
+    let text = TextLagrangian::<U2, false, false, true>::new(TextModel::new(&spec).unwrap())
         .expect("Kepler is autonomous, unforced and constant-mass");
     let mut group = c.benchmark_group("kepler_T2000");
     group

@@ -23,12 +23,12 @@
 //! Newton per time level, with the discrete multisymplectic conservation law as a diagnostic.
 //!
 //! ```
-//! use nalgebra::SVector;
+//! use nalgebra::{SVector, U1};
 //! use svi::{Integrator, Lagrangian, Scalar, Svi};
 //!
 //! /// Harmonic oscillator L = q̇²/2 − q²/2.
 //! struct Oscillator;
-//! impl Lagrangian<1> for Oscillator {
+//! impl Lagrangian<U1> for Oscillator {
 //!     const TIME_DEPENDENT: bool = false;
 //!     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
 //!         (v[0] * v[0] - q[0] * q[0]) * 0.5
@@ -44,6 +44,7 @@
 
 // The layers, bottom up; each imports only from the ones above it in this list.
 pub mod analysis;
+pub mod dimension;
 pub mod error;
 pub mod field;
 pub mod lie_group;
@@ -64,6 +65,7 @@ pub use spectral::{basis, quadrature};
 pub use stepping::{observer, solve};
 
 pub use derived::LagrangianExt;
+pub use dimension::{Dimension, Dyn};
 pub use error::Error;
 pub use method::collocation::SpectralCollocation;
 pub use method::registry::MethodSpec;
@@ -85,12 +87,12 @@ pub use stepping::grid::step_count;
 pub use stepping::run::{Integrator, Recovery, RunOptions, Statistics};
 pub use stepping::solve::{Adapt, SolveOptions, Span, solve};
 
-/// A run on ℝᴺ: [`stepping::run::Run`] on [`Euclidean<N>`].
-pub type Run<const N: usize> = stepping::run::Run<Euclidean<N>>;
+/// A run on ℝᴺ: [`stepping::run::Run`] on [`Euclidean<N>`] (`N` = `U2`, …, or [`Dyn`]).
+pub type Run<N> = stepping::run::Run<Euclidean<N>>;
 /// A failed run on ℝᴺ: [`stepping::run::RunFailure`] on [`Euclidean<N>`].
-pub type RunFailure<const N: usize> = stepping::run::RunFailure<Euclidean<N>>;
+pub type RunFailure<N> = stepping::run::RunFailure<Euclidean<N>>;
 /// A solution on ℝᴺ: [`stepping::solve::Solution`] on [`Euclidean<N>`].
-pub type Solution<const N: usize> = stepping::solve::Solution<Euclidean<N>>;
+pub type Solution<N> = stepping::solve::Solution<Euclidean<N>>;
 
 /// The README's examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

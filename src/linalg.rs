@@ -12,18 +12,23 @@
 pub mod sparse;
 
 use crate::scalar::Scalar;
-use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
-/// Solve A x = b for a small fixed-size system; `None` if A is singular (a zero pivot) or the
-/// result is not finite.
-pub fn solve_small<D: Scalar, const N: usize>(
-    mut a: SMatrix<D, N, N>,
-    mut b: SVector<D, N>,
-) -> Option<SVector<D, N>> {
-    for k in 0..N {
+/// Solve A x = b for a small system (of fixed or run-time size); `None` if A is singular (a
+/// zero pivot) or the result is not finite.
+pub fn solve_small<D: Scalar, N: Dim>(
+    mut a: OMatrix<D, N, N>,
+    mut b: OVector<D, N>,
+) -> Option<OVector<D, N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = b.len();
+    for k in 0..n {
         let mut pivot = k;
         let mut largest = a[(k, k)].re().abs();
-        for i in k + 1..N {
+        for i in k + 1..n {
             let size = a[(i, k)].re().abs();
             if size > largest {
                 largest = size;
@@ -38,9 +43,9 @@ pub fn solve_small<D: Scalar, const N: usize>(
             b.swap_rows(k, pivot);
         }
         let inverse = a[(k, k)].recip();
-        for i in k + 1..N {
+        for i in k + 1..n {
             let factor = a[(i, k)] * inverse;
-            for j in k + 1..N {
+            for j in k + 1..n {
                 let update = factor * a[(k, j)];
                 a[(i, j)] -= update;
             }
@@ -48,9 +53,9 @@ pub fn solve_small<D: Scalar, const N: usize>(
             b[i] -= update;
         }
     }
-    for k in (0..N).rev() {
+    for k in (0..n).rev() {
         let mut sum = b[k];
-        for j in k + 1..N {
+        for j in k + 1..n {
             sum -= a[(k, j)] * b[j];
         }
         b[k] = sum / a[(k, k)];
@@ -58,11 +63,16 @@ pub fn solve_small<D: Scalar, const N: usize>(
     b.iter().all(|x| x.re().is_finite()).then_some(b)
 }
 
-/// The inverse of a small fixed-size matrix, or `None` if it is singular.
-pub fn invert_small<const N: usize>(a: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>> {
-    let mut inverse = SMatrix::<f64, N, N>::zeros();
-    for j in 0..N {
-        let column = solve_small(*a, SVector::<f64, N>::from_fn(|i, _| f64::from(i == j)))?;
+/// The inverse of a small matrix (of fixed or run-time size), or `None` if it is singular.
+pub fn invert_small<N: Dim>(a: &OMatrix<f64, N, N>) -> Option<OMatrix<f64, N, N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (n, _) = a.shape_generic();
+    let mut inverse = OMatrix::zeros_generic(n, n);
+    for j in 0..n.value() {
+        let unit = OVector::from_fn_generic(n, U1, |i, _| f64::from(i == j));
+        let column = solve_small(a.clone(), unit)?;
         inverse.set_column(j, &column);
     }
     Some(inverse)
@@ -239,6 +249,7 @@ pub fn compensated_sum_extent(sum: &[f64], compensation: &[f64], increment: &[f6
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use nalgebra::{SMatrix, SVector};
     use num_dual::{DualNum, DualSVec64, jacobian};
 
     #[test]

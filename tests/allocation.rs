@@ -3,10 +3,9 @@
 //! tables), for every method, both solver paths (fixed point and Newton) and the forced
 //! paths.
 
-#[path = "common/allocations.rs"]
-mod allocations;
+use crate::allocations;
 
-use nalgebra::SVector;
+use nalgebra::{Const, SVector};
 use svi::method::multiscale::Multiscale;
 use svi::{
     Integrator, Lagrangian, Method, Midpoint, SpectralCollocation, StormerVerlet, Svi,
@@ -15,7 +14,7 @@ use svi::{
 use svi_models::{DampedPendulum, DoublePendulum, Kepler, SpringPendulum};
 
 /// Allocations of a run of `steps` steps of size 0.01.
-fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+fn allocations<L: Lagrangian<Const<N>> + Clone, M: Method<Const<N>> + Clone, const N: usize>(
     model: &L,
     method: &M,
     q: SVector<f64, N>,
@@ -30,7 +29,11 @@ fn allocations<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
     allocations::count() - before
 }
 
-fn assert_loop_allocates_nothing<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+fn assert_loop_allocates_nothing<
+    L: Lagrangian<Const<N>> + Clone,
+    M: Method<Const<N>> + Clone,
+    const N: usize,
+>(
     model: L,
     method: M,
     q: SVector<f64, N>,

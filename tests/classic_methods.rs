@@ -8,7 +8,7 @@
 //! the step; Noether's theorem (Kepler's angular momentum); the adjoint relation of the two
 //! symplectic Euler methods.
 
-use nalgebra::SVector;
+use nalgebra::{Const, SVector, U1, U2};
 use svi::observer::{MomentumError, SolutionError};
 use svi::verify::observed_order;
 use svi::{
@@ -49,7 +49,7 @@ macro_rules! for_each_method {
 }
 
 /// Largest position error over [0, t_end] on the oscillator σ = 1 from q0 = 1, p0 = 0.
-fn oscillator_error<M: Method<1>>(method: M, h: f64, t_end: f64) -> f64 {
+fn oscillator_error<M: Method<U1>>(method: M, h: f64, t_end: f64) -> f64 {
     let integrator = Integrator::new(HarmonicOscillator::default(), method);
     let mut error = SolutionError::default();
     integrator
@@ -69,7 +69,7 @@ fn oscillator_error<M: Method<1>>(method: M, h: f64, t_end: f64) -> f64 {
 fn observed_orders_on_the_oscillator_match_the_declared_ones() {
     let steps = [0.2, 0.1, 0.05, 0.025, 0.0125];
     for_each_method!(|name, method| {
-        let declared = Method::<1>::info(&method).order;
+        let declared = Method::<U1>::info(&method).order;
         let errors: Vec<f64> = steps
             .iter()
             .map(|&h| oscillator_error(method.clone(), h, 10.0))
@@ -89,13 +89,13 @@ fn observed_orders_on_the_oscillator_match_the_declared_ones() {
         ("verlet", 2),
     ] {
         let order = match name {
-            "symplectic-euler" => Method::<1>::info(&VariationalIntegrator::new(SymplecticEuler)),
+            "symplectic-euler" => Method::<U1>::info(&VariationalIntegrator::new(SymplecticEuler)),
             "symplectic-euler-adjoint" => {
-                Method::<1>::info(&VariationalIntegrator::new(AdjointSymplecticEuler))
+                Method::<U1>::info(&VariationalIntegrator::new(AdjointSymplecticEuler))
             }
-            "midpoint" => Method::<1>::info(&VariationalIntegrator::new(Midpoint)),
-            "trapezoid" => Method::<1>::info(&VariationalIntegrator::new(Trapezoid)),
-            _ => Method::<1>::info(&StormerVerlet::default()),
+            "midpoint" => Method::<U1>::info(&VariationalIntegrator::new(Midpoint)),
+            "trapezoid" => Method::<U1>::info(&VariationalIntegrator::new(Trapezoid)),
+            _ => Method::<U1>::info(&StormerVerlet::default()),
         };
         assert_eq!((order.name, order.order), (name, expected));
         assert!(order.symplectic);
@@ -142,10 +142,10 @@ fn stormer_verlet_reproduces_the_slides_error_table() {
 
 /// Symplecticity error of the tangent map and its largest relative difference from central
 /// differences of the step map.
-fn tangent_check<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+fn tangent_check<L: Lagrangian<Const<N>> + Clone, M: Method<Const<N>> + Clone, const N: usize>(
     model: &L,
     method: &M,
-    state: State<N>,
+    state: State<Const<N>>,
     h: f64,
 ) -> (f64, f64) {
     let integrator = Integrator::new(model.clone(), method.clone());
@@ -263,14 +263,14 @@ fn symmetric_methods_undo_a_step_and_the_euler_methods_undo_each_other() {
     };
     let h = 0.1;
     /// One step of `first` with h, then one of `second` with −h.
-    fn there_and_back<A: Method<2>, B: Method<2>>(
+    fn there_and_back<A: Method<U2>, B: Method<U2>>(
         model: &Kepler,
         first: &A,
         second: &B,
-        state: State<2>,
+        state: State<U2>,
         h: f64,
     ) -> f64 {
-        let mut increment = State::zeros();
+        let mut increment = State::zeros(U2);
         let mut workspace = first.workspace(model, h).unwrap();
         first
             .step(model, &mut workspace, 0.0, h, &state, &mut increment)
@@ -290,7 +290,7 @@ fn symmetric_methods_undo_a_step_and_the_euler_methods_undo_each_other() {
         (back.q - state.q).amax().max((back.y - state.y).amax())
     }
     for_each_method!(|name, method| {
-        if Method::<2>::info(&method).symmetric {
+        if Method::<U2>::info(&method).symmetric {
             let error = there_and_back(&model, &method, &method, state, h);
             assert!(error < 1e-14, "{name}: {error:e}");
         }

@@ -3,14 +3,14 @@
 //! References: the harmonic oscillator's closed form q(t) = sin t (σ = 1, q0 = 0, p0 = 1) and
 //! the Kepler problem's solution through Kepler's equation (`svi_models::Kepler`).
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::observer::SolutionError;
 use svi::verify::observed_order;
 use svi::{Integrator, Method, SpectralCollocation, Svi};
 use svi_models::{HarmonicOscillator, Kepler};
 
 /// Final position error of a method on the oscillator q0 = 0, p0 = 1 over [0, 10].
-fn oscillator_error<M: Method<1>>(method: M, h: f64) -> f64 {
+fn oscillator_error<M: Method<U1>>(method: M, h: f64) -> f64 {
     let integrator = Integrator::new(HarmonicOscillator::default(), method);
     let run = integrator
         .run_from_velocity(
@@ -36,7 +36,7 @@ fn svi_with_one_more_gauss_point_than_its_degree_has_order_twice_the_degree() {
             .map(|&h| oscillator_error(method.clone(), h))
             .collect();
         let order = observed_order(&steps, &errors, 1e-12).unwrap();
-        let declared = Method::<1>::info(&method).order;
+        let declared = Method::<U1>::info(&method).order;
         assert_eq!(declared, 2 * degree);
         assert!(
             (order - declared as f64).abs() < 0.3,
@@ -56,7 +56,7 @@ fn svi_with_paper_quadrature_reaches_its_declared_order() {
             .map(|&h| oscillator_error(method.clone(), h))
             .collect();
         let order = observed_order(&steps, &errors, 1e-12).unwrap();
-        let declared = Method::<1>::info(&method).order as f64;
+        let declared = Method::<U1>::info(&method).order as f64;
         assert!(
             (order - declared).abs() < 0.3,
             "points {points}: {order} vs {declared}"
@@ -74,7 +74,7 @@ fn collocation_reaches_its_declared_order() {
             .map(|&h| oscillator_error(method.clone(), h))
             .collect();
         let order = observed_order(&steps, &errors, 1e-12).unwrap();
-        let declared = Method::<1>::info(&method).order as f64;
+        let declared = Method::<U1>::info(&method).order as f64;
         assert!(
             (order - declared).abs() < 0.35,
             "points {points}: observed {order:.3}, declared {declared}, errors {errors:?}"
@@ -83,7 +83,7 @@ fn collocation_reaches_its_declared_order() {
 }
 
 /// Max position error over the run of the paper's oscillator (h = 1, T = 100).
-fn oscillator_max_error<M: Method<1>>(method: M) -> f64 {
+fn oscillator_max_error<M: Method<U1>>(method: M) -> f64 {
     let integrator = Integrator::new(HarmonicOscillator::default(), method);
     let mut error = SolutionError::default();
     integrator

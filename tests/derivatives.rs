@@ -21,7 +21,7 @@
 
 use std::f64::consts::PI;
 
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{Const, SMatrix, SVector};
 use proptest::prelude::*;
 use svi::{Lagrangian, LagrangianExt};
 use svi_models::{DoublePendulum, HarmonicOscillator, Kepler, Pendulum, SpringPendulum};
@@ -101,7 +101,7 @@ fn finite_difference_jacobian<A: Analytic<N>, const N: usize>(
 /// Compares every derived quantity of `model` at (t, q, q̇) with its analytic counterpart.
 fn check_all<M, const N: usize>(model: &M, t: f64, q: SVector<f64, N>, v: SVector<f64, N>)
 where
-    M: Lagrangian<N> + Analytic<N>,
+    M: Lagrangian<Const<N>> + Analytic<N>,
 {
     let tol = DERIVATIVE_TOLERANCE;
     let scalar = |x: f64| SMatrix::<f64, 1, 1>::from_element(x);

@@ -1,6 +1,6 @@
 //! Bad input gives typed errors naming the problem, never a panic.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Error, Integrator, SpectralCollocation, Svi};
 use svi_models::{HarmonicOscillator, Kepler};
 
@@ -107,7 +107,7 @@ fn newton_failure_is_reported_with_step_time_and_residual() {
 /// A degenerate Lagrangian with no kinetic term: its mass matrix is singular.
 struct Degenerate;
 
-impl svi::Lagrangian<1> for Degenerate {
+impl svi::Lagrangian<U1> for Degenerate {
     fn lagrangian<D: svi::Scalar>(&self, _t: D, q: &SVector<D, 1>, _v: &SVector<D, 1>) -> D {
         q[0] * q[0]
     }
@@ -142,7 +142,7 @@ struct Declared {
     stiffening: f64,
 }
 
-impl svi::Lagrangian<1> for Declared {
+impl svi::Lagrangian<U1> for Declared {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: svi::Structure = svi::Structure::ConstantMass;
     fn lagrangian<D: svi::Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {

@@ -3,8 +3,7 @@
 //! 2, the discrete multisymplectic conservation law, bounded energy, explicit against
 //! Newton, and the typed errors of bad input.
 
-#[path = "common/allocations.rs"]
-mod allocations;
+use crate::allocations;
 
 use nalgebra::SVector;
 use svi::Error;

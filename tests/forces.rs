@@ -7,7 +7,7 @@
 //! reference for the zero-force runs (bit for bit), and central differences of the step the
 //! reference for the tangent maps.
 
-use nalgebra::SVector;
+use nalgebra::{Const, SVector, U1};
 use svi::observer::Trajectory;
 use svi::verify::observed_order;
 use svi::{
@@ -25,7 +25,7 @@ use svi_models::{
 #[derive(Debug, Clone, Copy)]
 struct General<M>(M);
 
-impl<M: Lagrangian<N>, const N: usize> Lagrangian<N> for General<M> {
+impl<M: Lagrangian<Const<N>>, const N: usize> Lagrangian<Const<N>> for General<M> {
     const TIME_DEPENDENT: bool = M::TIME_DEPENDENT;
     const FORCED: bool = M::FORCED;
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
@@ -45,7 +45,7 @@ impl<M: Lagrangian<N>, const N: usize> Lagrangian<N> for General<M> {
 #[derive(Debug, Clone, Copy)]
 struct ZeroForce<M>(M);
 
-impl<M: Lagrangian<N>, const N: usize> Lagrangian<N> for ZeroForce<M> {
+impl<M: Lagrangian<Const<N>>, const N: usize> Lagrangian<Const<N>> for ZeroForce<M> {
     const TIME_DEPENDENT: bool = M::TIME_DEPENDENT;
     const STRUCTURE: Structure = M::STRUCTURE;
     const FORCED: bool = true;
@@ -97,14 +97,14 @@ macro_rules! for_each_method {
 }
 
 /// The trajectory of a run from (q0, q̇0) at t = 0.
-fn trajectory<L: Lagrangian<N>, M: Method<N>, const N: usize>(
+fn trajectory<L: Lagrangian<Const<N>>, M: Method<Const<N>>, const N: usize>(
     model: L,
     method: M,
     q0: SVector<f64, N>,
     v0: SVector<f64, N>,
     h: f64,
     t_end: f64,
-) -> (Vec<svi::PhasePoint<N>>, svi::Run<N>) {
+) -> (Vec<svi::PhasePoint<Const<N>>>, svi::Run<Const<N>>) {
     let mut points = Trajectory::new();
     let run = Integrator::new(model, method)
         .run_from_velocity(0.0, q0, v0, h, t_end, &mut points)
@@ -113,14 +113,19 @@ fn trajectory<L: Lagrangian<N>, M: Method<N>, const N: usize>(
 }
 
 /// The final states of the same run of `model` and of `forced` (equal up to a zero force).
-fn same_runs<A: Lagrangian<N>, B: Lagrangian<N>, M: Method<N> + Clone, const N: usize>(
+fn same_runs<
+    A: Lagrangian<Const<N>>,
+    B: Lagrangian<Const<N>>,
+    M: Method<Const<N>> + Clone,
+    const N: usize,
+>(
     model: A,
     forced: B,
     method: &M,
     q0: SVector<f64, N>,
     v0: SVector<f64, N>,
     h: f64,
-) -> (svi::Run<N>, svi::Run<N>) {
+) -> (svi::Run<Const<N>>, svi::Run<Const<N>>) {
     let plain = Integrator::new(model, method.clone())
         .run_from_velocity(0.0, q0, v0, h, 5.0, &mut ())
         .unwrap();
@@ -192,10 +197,15 @@ fn a_zero_force_reproduces_the_unforced_integrators_bit_for_bit() {
 
 /// Largest position error and largest energy error, against the exact solution, over a run
 /// of the damped (or driven) oscillator.
-fn oscillator_errors<L, M>(model: L, exact: &impl ExactSolution<1>, method: M, h: f64) -> (f64, f64)
+fn oscillator_errors<L, M>(
+    model: L,
+    exact: &impl ExactSolution<U1>,
+    method: M,
+    h: f64,
+) -> (f64, f64)
 where
-    L: Lagrangian<1>,
-    M: Method<1>,
+    L: Lagrangian<U1>,
+    M: Method<U1>,
 {
     let (q0, v0) = (SVector::from([1.0]), SVector::from([0.0]));
     let (points, _) = trajectory(model, method, q0, v0, h, 10.0);
@@ -213,9 +223,9 @@ where
 }
 
 /// Observed orders of the position and energy errors over a step ladder.
-fn orders<L: Lagrangian<1> + Copy, M: Method<1> + Clone>(
+fn orders<L: Lagrangian<U1> + Copy, M: Method<U1> + Clone>(
     model: L,
-    exact: &impl ExactSolution<1>,
+    exact: &impl ExactSolution<U1>,
     method: &M,
     steps: &[f64],
 ) -> (f64, f64, Vec<f64>) {
@@ -238,7 +248,7 @@ fn damped_oscillator_converges_to_the_exact_solution_at_each_methods_order() {
             Svi::new(3).with_quadrature(3),
             SpectralCollocation::new(5),
             |name, method| {
-                let declared = Method::<1>::info(&method).order as f64;
+                let declared = Method::<U1>::info(&method).order as f64;
                 let steps: &[f64] = if declared > 2.0 {
                     &[0.2, 0.1, 0.05, 0.025]
                 } else {
@@ -275,7 +285,7 @@ fn a_time_dependent_drive_converges_at_each_methods_order() {
         Svi::new(3).with_quadrature(3),
         SpectralCollocation::new(5),
         |name, method| {
-            let declared = Method::<1>::info(&method).order as f64;
+            let declared = Method::<U1>::info(&method).order as f64;
             let steps: &[f64] = if declared > 2.0 {
                 &[0.2, 0.1, 0.05, 0.025]
             } else {
@@ -307,7 +317,7 @@ fn damped_pendulum_converges_to_a_high_order_reference() {
         Svi::new(3).with_quadrature(3),
         SpectralCollocation::new(5),
         |name, method| {
-            let declared = Method::<1>::info(&method).order as f64;
+            let declared = Method::<U1>::info(&method).order as f64;
             let steps: &[f64] = if declared > 2.0 {
                 &[0.2, 0.1, 0.05, 0.025]
             } else {
@@ -329,10 +339,10 @@ fn damped_pendulum_converges_to_a_high_order_reference() {
 
 /// The tangent map of a forced step against central differences; returns (symplecticity
 /// error, largest relative difference).
-fn forced_tangent<L: Lagrangian<1> + Copy, M: Method<1> + Clone>(
+fn forced_tangent<L: Lagrangian<U1> + Copy, M: Method<U1> + Clone>(
     model: L,
     method: &M,
-    state: State<1>,
+    state: State<U1>,
     h: f64,
 ) -> (f64, f64) {
     let integrator = Integrator::new(model, method.clone());
@@ -492,11 +502,11 @@ fn forced_stormer_verlet_stays_hessian_free() {
 
 /// The damped pendulum's energy at a phase point.
 trait EnergyAt {
-    fn energy_at(&self, point: &svi::PhasePoint<1>) -> f64;
+    fn energy_at(&self, point: &svi::PhasePoint<U1>) -> f64;
 }
 
 impl EnergyAt for DampedPendulum {
-    fn energy_at(&self, point: &svi::PhasePoint<1>) -> f64 {
+    fn energy_at(&self, point: &svi::PhasePoint<U1>) -> f64 {
         let (m, l, g) = (self.m, self.l, self.g);
         0.5 * m * l * l * point.v[0] * point.v[0] - m * g * l * point.q[0].cos()
     }

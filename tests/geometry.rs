@@ -3,16 +3,20 @@
 //! The tangent map of a step comes from automatic differentiation and the implicit function
 //! theorem; it is checked against ΦᵀJΦ = J and against central differences of the step.
 
-use nalgebra::SVector;
+use nalgebra::{Const, SVector, U2};
 use svi::observer::{EnergyError, MomentumError, Trajectory};
 use svi::{Defaults, Integrator, Lagrangian, Method, SpectralCollocation, State, Svi};
 use svi_models::{DoublePendulum, Kepler, Pendulum};
 
 /// Largest difference between the tangent map and central differences of the step map.
-fn tangent_against_differences<L: Lagrangian<N> + Clone, M: Method<N> + Clone, const N: usize>(
+fn tangent_against_differences<
+    L: Lagrangian<Const<N>> + Clone,
+    M: Method<Const<N>> + Clone,
+    const N: usize,
+>(
     model: &L,
     method: &M,
-    state: State<N>,
+    state: State<Const<N>>,
     h: f64,
 ) -> (f64, f64) {
     let integrator = Integrator::new(model.clone(), method.clone());
@@ -102,7 +106,7 @@ fn collocation_tangent_map_matches_differences_and_is_not_symplectic() {
 }
 
 /// Energy error over the first and the second half of a run, and the momentum error.
-fn kepler_run<M: Method<2>>(method: M) -> (f64, f64, f64) {
+fn kepler_run<M: Method<U2>>(method: M) -> (f64, f64, f64) {
     let model = Kepler::default();
     let (t0, q0, v0) = model.initial_state();
     let integrator = Integrator::new(model, method);
@@ -121,7 +125,7 @@ fn kepler_run<M: Method<2>>(method: M) -> (f64, f64, f64) {
         .unwrap();
     let e0 = -0.5;
     let half = trajectory.points.len() / 2;
-    let window = |points: &[svi::PhasePoint<2>]| {
+    let window = |points: &[svi::PhasePoint<U2>]| {
         points
             .iter()
             .map(|p| (0.5 * p.v.dot(&p.v) - 1.0 / p.q.norm() - e0).abs())

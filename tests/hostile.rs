@@ -7,7 +7,8 @@
 //! Runs are bounded by an observer that stops after [`STEP_CAP`] steps, so a tiny step over
 //! a long horizon cannot hang a test.
 
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, SVector};
 use proptest::prelude::*;
 use std::ops::ControlFlow;
 use svi::basis::{LagrangeBasis, chebyshev_gauss_lobatto};
@@ -15,16 +16,15 @@ use svi::drift::EnergyWindows;
 use svi::observer::{EnergyError, Observer};
 use svi::quadrature::GaussLegendre;
 use svi::{
-    Defaults, Error, Initial, Integrator, Lagrangian, Method, Midpoint, PhasePoint, Recovery,
-    RunOptions, SpectralCollocation, StormerVerlet, Svi, VariationalIntegrator,
+    Defaults, Dimension, Error, Initial, Integrator, Lagrangian, Method, Midpoint, PhasePoint,
+    Recovery, RunOptions, SpectralCollocation, StormerVerlet, Svi, VariationalIntegrator,
 };
 use svi_models::{DoublePendulum, Kepler, ModelVisitor, Pendulum, ZooModel, visit_model};
 
 /// Steps after which every hostile run is stopped.
 const STEP_CAP: usize = 60;
 
-#[path = "common/hostile_cases.rs"]
-mod hostile_cases;
+use crate::hostile_cases;
 use hostile_cases::cases;
 
 /// Any f64, biased towards the hostile ones.
@@ -60,7 +60,10 @@ struct Cap {
     finite: bool,
 }
 
-impl<L, const N: usize> Observer<L, PhasePoint<N>> for Cap {
+impl<L, N: Dimension> Observer<L, PhasePoint<N>> for Cap
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     fn observe(&mut self, _: &L, step: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         if self.points == 0 {
             self.finite = true;
@@ -81,7 +84,7 @@ impl<L, const N: usize> Observer<L, PhasePoint<N>> for Cap {
 }
 
 /// Run with hostile inputs; any outcome but a panic is fine, and the outcome is consistent.
-fn hostile_run<L: Lagrangian<N> + Clone, M: Method<N>, const N: usize>(
+fn hostile_run<L: Lagrangian<Const<N>> + Clone, M: Method<Const<N>>, const N: usize>(
     model: L,
     method: M,
     inputs: &Inputs<N>,
@@ -237,7 +240,10 @@ struct SetParameter {
 impl ModelVisitor for SetParameter {
     type Output = Result<(), TestCaseError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let known: Vec<&str> = model.parameters().iter().map(|(n, _)| *n).collect();
         match model.set_parameter(&self.name, self.value) {
             Ok(()) => {

@@ -7,8 +7,7 @@
 //! hand, with a step 100 times smaller than the smallest step tested (its error, O(h⁴), is
 //! far below the errors measured).
 
-#[path = "common/allocations.rs"]
-mod allocations;
+use crate::allocations;
 
 use nalgebra::{SMatrix, SVector};
 use std::ops::ControlFlow;

@@ -2,7 +2,7 @@
 //! chain against the same chain written as a fixed-size Lagrangian, energy behaviour, and
 //! bad input.
 
-use nalgebra::{DVector, SVector};
+use nalgebra::{DVector, SVector, U8};
 use svi::method::DynInitial;
 use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt};
 use svi::observer::EnergyError;
@@ -16,7 +16,7 @@ struct FixedFput {
     beta: f64,
 }
 
-impl Lagrangian<8> for FixedFput {
+impl Lagrangian<U8> for FixedFput {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 8>, v: &SVector<D, 8>) -> D {

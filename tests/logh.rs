@@ -4,7 +4,7 @@
 //! (Mikkola & Tanikawa 1999: the leapfrog of the logarithmic Hamiltonian follows the exact
 //! ellipse), observed orders.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use std::ops::ControlFlow;
 use svi::model::reparametrized::{MonitorSpec, Potential};
 use svi::observer::Observer;
@@ -26,7 +26,7 @@ fn eccentric() -> (Kepler, SVector<f64, 2>, SVector<f64, 2>) {
 }
 
 /// Position error at `t_end` of the potential-monitor run of `method` with Δτ, and its steps.
-fn final_error<M: Method<2> + Clone>(method: M, dtau: f64, t_end: f64) -> (f64, usize) {
+fn final_error<M: Method<U2> + Clone>(method: M, dtau: f64, t_end: f64) -> (f64, usize) {
     let (model, q0, v0) = eccentric();
     let solution = solve_reparametrized(
         model,
@@ -49,12 +49,12 @@ struct Invariants {
     worst: [f64; 2],
 }
 
-fn angular_momentum(point: &PhasePoint<2>) -> f64 {
+fn angular_momentum(point: &PhasePoint<U2>) -> f64 {
     point.q[0] * point.p[1] - point.q[1] * point.p[0]
 }
 
-impl Observer<Kepler, PhasePoint<2>> for Invariants {
-    fn observe(&mut self, _: &Kepler, _: usize, point: &PhasePoint<2>) -> ControlFlow<()> {
+impl Observer<Kepler, PhasePoint<U2>> for Invariants {
+    fn observe(&mut self, _: &Kepler, _: usize, point: &PhasePoint<U2>) -> ControlFlow<()> {
         let energy = (Kepler::energy(&point.q, &point.v) - self.energy).abs();
         let momentum = (angular_momentum(point) - self.momentum).abs();
         self.worst[0] = self.worst[0].max(energy);
@@ -178,7 +178,7 @@ fn a_composition_step_is_symplectic() {
     let integrator = Integrator::new(model, Composition::new(Scheme::KahanLi6));
     let state = svi::State { q: q0, y: v0 };
     let method = integrator.method();
-    let mut workspace = Method::<2>::workspace(method, &model, 0.01).unwrap();
+    let mut workspace = Method::<U2>::workspace(method, &model, 0.01).unwrap();
     let (_, tangent) = method
         .tangent_map(&model, &mut workspace, 0.0, 0.01, &state)
         .unwrap();

@@ -6,7 +6,7 @@
 //! Reference: SVI with 7 CGL and 6 Gauss points (order 12) at h = 10⁻³, checked against the
 //! same method at h = 2·10⁻³.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2, U6};
 use svi::drift::EnergyWindows;
 use svi::method::multiscale::Multiscale;
 use svi::{Defaults, Integrator, Svi};
@@ -24,7 +24,7 @@ fn resolved(h: f64) -> SVector<f64, 2> {
 }
 
 /// |θ(10) − θ_ref(10)| of `method` with step `h`, or infinity if the run fails.
-fn angle_error<M: svi::Method<2> + Clone>(method: M, h: f64, reference: f64) -> f64 {
+fn angle_error<M: svi::Method<U2> + Clone>(method: M, h: f64, reference: f64) -> f64 {
     let model = SpringPendulum::default();
     let (t0, q0, v0) = model.initial_state();
     match Integrator::new(model, method).run_from_velocity(t0, q0, v0, h, 10.0, &mut ()) {
@@ -105,7 +105,7 @@ struct StiffSoftChain {
     omega: f64,
 }
 
-impl svi::Lagrangian<6> for StiffSoftChain {
+impl svi::Lagrangian<U6> for StiffSoftChain {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: svi::Structure = svi::Structure::ConstantMass;
     fn lagrangian<D: svi::Scalar>(&self, _t: D, q: &SVector<D, 6>, v: &SVector<D, 6>) -> D {
@@ -126,7 +126,7 @@ impl svi::Lagrangian<6> for StiffSoftChain {
 
 /// The oscillatory energies (I₁, I₂, I₃) at T = 200 of `method` with step `h` on the
 /// stiff–soft chain from HLW's initial state, or `None` if the run fails.
-fn stiff_soft_energies<M: svi::Method<6> + Clone>(method: M, h: f64) -> Option<Vec<f64>> {
+fn stiff_soft_energies<M: svi::Method<U6> + Clone>(method: M, h: f64) -> Option<Vec<f64>> {
     use svi::model::local::LocalDefaults;
     let model = svi_models::FputStiff::default();
     let (t0, q0, v0) = model.initial_state();

@@ -7,8 +7,7 @@
 //! (zero on the linear-in-time levels), no allocation per step, and the
 //! typed errors of bad input.
 
-#[path = "common/allocations.rs"]
-mod allocations;
+use crate::allocations;
 
 use nalgebra::{DMatrix, DVector, SVector};
 use svi::Error;

@@ -2,7 +2,7 @@
 //! fixed steps in τ, dt = g(q) dτ. References: the exact Kepler orbit (`KeplerOrbit`,
 //! Kepler's equation), the symplectic form ΦᵀJΦ = J of the step's AD Jacobian.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1, U2};
 use std::ops::ControlFlow;
 use svi::model::reparametrized::{Force, Monitor, MonitorSpec, Potential, Reparametrized, Sundman};
 use svi::observer::Observer;
@@ -22,7 +22,12 @@ fn eccentric() -> (Kepler, SVector<f64, 2>, SVector<f64, 2>) {
 }
 
 /// Position error at the end of a reparametrised run of `method` over [0, t_end] with Δτ.
-fn final_error<M: Method<2> + Clone>(method: M, alpha: f64, dtau: f64, t_end: f64) -> (f64, usize) {
+fn final_error<M: Method<U2> + Clone>(
+    method: M,
+    alpha: f64,
+    dtau: f64,
+    t_end: f64,
+) -> (f64, usize) {
     let (model, q0, v0) = eccentric();
     let solution = solve_reparametrized(
         model,
@@ -119,8 +124,8 @@ struct EnergyHalves {
     worst: [f64; 2],
 }
 
-impl Observer<Kepler, PhasePoint<2>> for EnergyHalves {
-    fn observe(&mut self, _: &Kepler, _: usize, point: &PhasePoint<2>) -> ControlFlow<()> {
+impl Observer<Kepler, PhasePoint<U2>> for EnergyHalves {
+    fn observe(&mut self, _: &Kepler, _: usize, point: &PhasePoint<U2>) -> ControlFlow<()> {
         let error = (Kepler::energy(&point.q, &point.v) - self.energy).abs();
         let half = usize::from(point.t >= self.half);
         self.worst[half] = self.worst[half].max(error);
@@ -163,8 +168,8 @@ fn the_energy_error_stays_bounded() {
 
 /// g = −1: not a monitor.
 struct Negative;
-impl Monitor<2> for Negative {
-    fn monitor<D: Scalar, L: Lagrangian<2> + ?Sized>(&self, _model: &L, q: &SVector<D, 2>) -> D {
+impl Monitor<U2> for Negative {
+    fn monitor<D: Scalar, L: Lagrangian<U2> + ?Sized>(&self, _model: &L, q: &SVector<D, 2>) -> D {
         q[0] * 0.0 - 1.0
     }
 }
@@ -292,7 +297,7 @@ fn the_force_monitor_at_an_equilibrium_is_a_typed_error() {
 #[derive(Clone, Copy)]
 struct Stiffening;
 
-impl Lagrangian<1> for Stiffening {
+impl Lagrangian<U1> for Stiffening {
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
         (v[0] * v[0] - (t + 1.0) * q[0] * q[0]) * 0.5
     }
@@ -303,7 +308,7 @@ impl Lagrangian<1> for Stiffening {
 /// with the potential monitor, whose splitting is taken before anything else).
 #[test]
 fn time_dependent_and_forced_models_are_refused_with_the_reason() {
-    fn refusal<L: Lagrangian<1> + Copy, M: Method<1> + Clone>(model: L, method: M) -> String {
+    fn refusal<L: Lagrangian<U1> + Copy, M: Method<U1> + Clone>(model: L, method: M) -> String {
         let initial = Initial::Velocity {
             q: SVector::from([1.0]),
             v: SVector::from([0.0]),

@@ -3,7 +3,7 @@
 //! E_d of the midpoint rule recomputed from the observed step points (an independent
 //! formula), the exact Kepler orbit and its angular momentum.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use std::ops::ControlFlow;
 use svi::observer::Observer;
 use svi::solve::{SolveOptions, Span};
@@ -17,8 +17,8 @@ use svi_models::{DrivenOscillator, Kepler};
 #[derive(Default)]
 struct Points(Vec<(f64, SVector<f64, 2>)>);
 
-impl<L> Observer<L, PhasePoint<2>> for Points {
-    fn observe(&mut self, _model: &L, _step: usize, point: &PhasePoint<2>) -> ControlFlow<()> {
+impl<L> Observer<L, PhasePoint<U2>> for Points {
+    fn observe(&mut self, _model: &L, _step: usize, point: &PhasePoint<U2>) -> ControlFlow<()> {
         self.0.push((point.t, point.q));
         ControlFlow::Continue(())
     }
@@ -35,7 +35,7 @@ fn kepler_sem(
     periods: f64,
     method: Svi,
     options: SolveOptions,
-) -> (Kepler, svi::solve::Solution<svi::Euclidean<2>>, Points) {
+) -> (Kepler, svi::solve::Solution<svi::Euclidean<U2>>, Points) {
     let model = Kepler::new(e).unwrap();
     let (_, q0, v0) = model.initial_state();
     // The semi-major axis is 1: the period is 2π.

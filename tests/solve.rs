@@ -2,7 +2,7 @@
 //!
 //! Reference: the exact Kepler solution through Kepler's equation (`svi_models::Kepler`).
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use svi::solve::{Adapt, SolveOptions, Span, solve};
 use svi::{
     Defaults, Error, ExactSolution, Initial, Integrator, LagrangianExt, Method, Midpoint,
@@ -10,14 +10,14 @@ use svi::{
 };
 use svi_models::Kepler;
 
-fn kepler(e: f64) -> (Kepler, Initial<2>) {
+fn kepler(e: f64) -> (Kepler, Initial<U2>) {
     let model = Kepler::new(e).unwrap();
     let (_, q, v) = model.initial_state();
     (model, Initial::Velocity { q, v })
 }
 
 /// Position error of a solution point against the exact Kepler orbit.
-fn kepler_error(model: &Kepler, initial: &Initial<2>, t: f64, q: &SVector<f64, 2>) -> f64 {
+fn kepler_error(model: &Kepler, initial: &Initial<U2>, t: f64, q: &SVector<f64, 2>) -> f64 {
     let Initial::Velocity { q: q0, v: v0 } = initial else {
         unreachable!("the tests start from velocities")
     };
@@ -73,7 +73,7 @@ fn fixed_step_output_at_grid_times_is_the_stepping_loops_result() {
 
 /// Dense output at 1000 random times inside the steps, against the exact solution: its error
 /// is within a small multiple of the error at the step points.
-fn dense_output_check<M: Method<2> + Clone>(method: M, h: f64, t_end: f64, factor: f64) {
+fn dense_output_check<M: Method<U2> + Clone>(method: M, h: f64, t_end: f64, factor: f64) {
     let (model, initial) = kepler(0.5);
     let times = sorted_times(1000, t_end);
     let steps = (t_end / h).round() as usize;
@@ -137,9 +137,9 @@ fn classic_methods_interpolate_their_end_points() {
 
 /// Fewest force evaluations of a fixed-step run of `method` reaching final error ≤ `target`
 /// (a sweep over the number of steps).
-fn best_fixed_step<M: Method<2> + Clone>(
+fn best_fixed_step<M: Method<U2> + Clone>(
     model: &Kepler,
-    initial: Initial<2>,
+    initial: Initial<U2>,
     method: M,
     t_end: f64,
     target: f64,
@@ -332,12 +332,12 @@ struct StopAt {
     seen: Vec<(usize, f64)>,
 }
 
-impl<L> svi::observer::Observer<L, svi::PhasePoint<2>> for StopAt {
+impl<L> svi::observer::Observer<L, svi::PhasePoint<U2>> for StopAt {
     fn observe(
         &mut self,
         _: &L,
         step: usize,
-        point: &svi::PhasePoint<2>,
+        point: &svi::PhasePoint<U2>,
     ) -> std::ops::ControlFlow<()> {
         self.seen.push((step, point.t));
         if point.t >= self.at {
@@ -531,7 +531,7 @@ fn a_non_finite_output_point_is_an_error_not_a_silent_nan() {
 
 /// The run of `options` on Kepler e = 0.99 over a span of 100 with a budget of `budget`
 /// steps: it ends in `TooManySteps` at the budget, with the run so far kept.
-fn out_of_budget(method: impl Method<2> + Clone, mut options: SolveOptions, budget: usize) {
+fn out_of_budget(method: impl Method<U2> + Clone, mut options: SolveOptions, budget: usize) {
     let (model, initial) = kepler(0.99);
     options.max_steps = budget;
     let failure = Integrator::new(model, method)

@@ -7,7 +7,7 @@
 //! bisection on the closed forms, and 40-digit mpmath evaluations of the same closed forms with
 //! exact quadrature (reference values quoted below, each with its source).
 //!
-//! Run with `cargo test --release --test stability -- --nocapture` to see the regions of every
+//! Run with `cargo test --release --test integration stability:: -- --nocapture` to see the regions of every
 //! configuration of Figs. 3–6.
 
 use nalgebra::{Complex, DMatrix, DVector, Matrix2};

@@ -6,7 +6,7 @@
 //! observers keep everything seen before. The recovery policy retries a failed step with
 //! half steps and keeps the time grid.
 
-use nalgebra::SVector;
+use nalgebra::{Const, SVector, U1, U2};
 use svi::drift::EnergyWindows;
 use svi::observer::{EnergyError, Every, Trajectory};
 use svi::{
@@ -19,7 +19,7 @@ use svi_models::{HarmonicOscillator, Kepler};
 #[derive(Debug, Clone, Copy)]
 struct ExpiringSpring;
 
-impl Lagrangian<1> for ExpiringSpring {
+impl Lagrangian<U1> for ExpiringSpring {
     const TIME_DEPENDENT: bool = true;
     fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
         let stiffness = (D::from(1.05) - t).sqrt();
@@ -27,7 +27,7 @@ impl Lagrangian<1> for ExpiringSpring {
     }
 }
 
-fn kepler_start(e: f64) -> Initial<2> {
+fn kepler_start(e: f64) -> Initial<U2> {
     Initial::Velocity {
         q: SVector::from([1.0 - e, 0.0]),
         v: SVector::from([0.0, ((1.0 + e) / (1.0 - e)).sqrt()]),
@@ -47,7 +47,11 @@ fn step_and_time(error: &Error) -> (usize, f64) {
 
 /// Checks shared by every failure: the partial run ends at the start of the failing step,
 /// and the trajectory observer holds every step point up to it.
-fn check_partial<const N: usize>(failure: &RunFailure<N>, trajectory: &Trajectory<N>, h: f64) {
+fn check_partial<const N: usize>(
+    failure: &RunFailure<Const<N>>,
+    trajectory: &Trajectory<Const<N>>,
+    h: f64,
+) {
     let (step, t) = step_and_time(&failure.error);
     let partial = failure.partial.as_ref().expect("a partial run");
     assert_eq!(partial.statistics.steps, step);
@@ -89,7 +93,7 @@ fn a_non_converging_solve_returns_the_run_so_far() {
     );
     // Everything computed before the failure is a valid orbit point: the angular momentum is
     // conserved to round-off up to the failure.
-    let momentum = |p: &svi::PhasePoint<2>| Kepler::angular_momentum(&p.q, &p.v);
+    let momentum = |p: &svi::PhasePoint<U2>| Kepler::angular_momentum(&p.q, &p.v);
     let first = momentum(&trajectory.points[0]);
     for point in &trajectory.points {
         assert!((momentum(point) - first).abs() < 1e-12);
@@ -254,7 +258,7 @@ fn recovery_halves_failed_steps_and_keeps_the_time_grid() {
     // conserved through the recovered steps (each half step is itself a symplectic,
     // momentum-preserving step).
     assert!(energy.max.is_finite() && energy.max > 0.5, "{}", energy.max);
-    let momentum = |p: &svi::PhasePoint<2>| Kepler::angular_momentum(&p.q, &p.v);
+    let momentum = |p: &svi::PhasePoint<U2>| Kepler::angular_momentum(&p.q, &p.v);
     let first = momentum(&trajectory.points[0]);
     for point in &trajectory.points {
         assert!((momentum(point) - first).abs() < 1e-11);
@@ -314,7 +318,7 @@ fn invalid_run_options_are_rejected_before_the_first_step() {
 }
 
 /// Energy windows of `steps` steps of Kepler e = 0.5 with h = 0.2.
-fn kepler_windows<M: svi::Method<2>>(method: M, steps: usize) -> svi::drift::DriftFit {
+fn kepler_windows<M: svi::Method<U2>>(method: M, steps: usize) -> svi::drift::DriftFit {
     let integrator = Integrator::new(Kepler::new(0.5).unwrap(), method);
     let mut windows = Every::new(1, EnergyWindows::new(steps / 50));
     integrator

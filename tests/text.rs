@@ -2,7 +2,7 @@
 //! derivatives agree to round-off, and a whole run of the paper's Kepler scene agrees to
 //! 1e-10 in q. The references are the zoo models, whose closed forms have their own tests.
 
-use nalgebra::SVector;
+use nalgebra::{Const, SVector, U1, U2};
 use svi::model::text::{TextLagrangian, TextModel, TextSpec};
 use svi::{Defaults, Integrator, LagrangianExt, Structure, Svi, Symmetries};
 use svi_models::{DampedOscillator, Kepler, Pendulum};
@@ -21,7 +21,7 @@ fn spec(lagrangian: &str, coordinates: &[&str], parameters: &[(&str, f64)]) -> T
 }
 
 /// Kepler as in `cli/scenes/kepler-text.toml`.
-fn kepler_text() -> TextLagrangian<2, false, false, true> {
+fn kepler_text() -> TextLagrangian<U2, false, false, true> {
     let mut spec = spec(
         "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)",
         &["x", "y"],
@@ -52,8 +52,8 @@ fn assert_close<const R: usize, const C: usize>(
 /// Value, gradients and Hessian blocks of `text` and `rust` agree to 1e-14 at `points`.
 fn same_derivatives<A, B, const N: usize>(text: &A, rust: &B, points: &[(f64, [f64; N], [f64; N])])
 where
-    A: LagrangianExt<N>,
-    B: LagrangianExt<N>,
+    A: LagrangianExt<Const<N>>,
+    B: LagrangianExt<Const<N>>,
 {
     for &(t, q, v) in points {
         let (q, v) = (SVector::from(q), SVector::from(v));
@@ -114,7 +114,7 @@ fn pendulum_from_text_has_the_zoo_models_derivatives() {
     );
     let model = TextModel::new(&spec).unwrap();
     assert_eq!(model.structure(), Structure::ConstantMass);
-    let text = TextLagrangian::<1, false, false, true>::new(model).unwrap();
+    let text = TextLagrangian::<U1, false, false, true>::new(model).unwrap();
     same_derivatives(
         &text,
         &zoo,
@@ -138,11 +138,11 @@ fn a_forced_model_from_text_has_the_zoo_models_force() {
         &[("sigma", sigma), ("zeta", zeta)],
     );
     spec.forces = vec!["-2*zeta*sigma*vq".into()];
-    let text = TextLagrangian::<1>::new(TextModel::new(&spec).unwrap()).unwrap();
+    let text = TextLagrangian::<U1>::new(TextModel::new(&spec).unwrap()).unwrap();
     let points = [(0.0, [0.3], [1.1]), (2.0, [-2.9], [-0.4])];
     same_derivatives(&text, &zoo, &points);
     // A short run with the force: the same states to round-off.
-    fn run<L: svi::Lagrangian<1>>(model: L) -> svi::PhasePoint<1> {
+    fn run<L: svi::Lagrangian<U1>>(model: L) -> svi::PhasePoint<U1> {
         Integrator::new(model, Svi::new(6))
             .run_from_velocity(
                 0.0,
@@ -198,7 +198,7 @@ fn a_lagrangian_without_a_velocity_is_refused_naming_it() {
 #[test]
 fn huge_integer_powers_have_the_closed_form_derivatives() {
     let model = TextModel::new(&spec("0.5*vx^2 - x^100001/100001", &["x"], &[])).unwrap();
-    let model = TextLagrangian::<1>::new(model).unwrap();
+    let model = TextLagrangian::<U1>::new(model).unwrap();
     let x = 1.0 - 1e-5;
     let second = model.second_derivatives(0.0, &SVector::from([x]), &SVector::from([0.0]));
     let force = -x.powi(100_000);
@@ -231,8 +231,8 @@ proptest::proptest! {
         let Ok(model) = TextModel::new(&spec) else { return Ok(()) };
         let structure = model.structure();
         let split = (structure == Structure::ConstantMass)
-            .then(|| TextLagrangian::<2, true, true, true>::new(model.clone()).unwrap());
-        let text_model = TextLagrangian::<2>::new(model).unwrap();
+            .then(|| TextLagrangian::<U2, true, true, true>::new(model.clone()).unwrap());
+        let text_model = TextLagrangian::<U2>::new(model).unwrap();
         let (q, v) = (SVector::from(q), SVector::from(v));
         let value = text_model.value(0.3, &q, &v);
         let second = text_model.second_derivatives(0.3, &q, &v);

@@ -3,7 +3,7 @@
 //! p0 = 1, σ = 1) and the Kepler orbit's energy −1/2 and angular momentum √(1 − e²) (the
 //! default state is the pericentre of an orbit with semi-major axis 1).
 
-mod common;
+use crate::common;
 use common::*;
 
 const REQUIRED: [&str; 16] = [
@@ -378,8 +378,8 @@ fn invalid_parameters_are_rejected() {
     assert!(stderr.contains("malformed parameter 'e'"), "{stderr}");
     let stderr = failure(&["run", "kepler", "--param", "e=x"]);
     assert!(stderr.contains("'x' is not a number"), "{stderr}");
-    let stderr = failure(&["run", "kepler", "--method", "rk4"]);
-    assert!(stderr.contains("rk4"), "{stderr}");
+    let stderr = failure(&["run", "kepler", "--method", "rk45"]);
+    assert!(stderr.contains("rk45"), "{stderr}");
 }
 
 #[test]
@@ -797,7 +797,7 @@ fn stability_and_bench_take_the_same_grammar() {
     );
     let csv = String::from_utf8(output.stdout).unwrap();
     assert_eq!(csv.lines().count(), 3, "{csv}");
-    for (method, needle) in [("lie-svi", "'lie-svi'"), ("rk4", "unknown method 'rk4'")] {
+    for (method, needle) in [("lie-svi", "'lie-svi'"), ("rk45", "unknown method 'rk45'")] {
         let stderr = failure(&["stability", "--method", method, "--z", "1"]);
         assert!(stderr.contains(needle), "{stderr}");
     }
@@ -833,7 +833,7 @@ fn stability_and_bench_take_the_same_grammar() {
         .collect();
     assert_eq!(methods, ["svi:7/6", "sc:9", "verlet"]);
     for (methods, needle) in [
-        ("svi:7/6,rk4", "unknown method 'rk4'"),
+        ("svi:7/6,rk45", "unknown method 'rk45'"),
         ("midpoint:3", "midpoint takes no options"),
         ("lie-svi", "'lie-svi' integrates rigid bodies"),
     ] {
@@ -849,7 +849,7 @@ fn stability_and_bench_take_the_same_grammar() {
         ]);
         assert!(stderr.contains(needle), "{methods}: {stderr}");
     }
-    let stderr = failure(&["bench", "kepler", "--methods", "rk4", "--out-dir", out]);
+    let stderr = failure(&["bench", "kepler", "--methods", "rk45", "--out-dir", out]);
     assert!(stderr.contains("dop853, dopri5"), "{stderr}");
 }
 

@@ -3,7 +3,7 @@
 //! the table does not depend on the thread count; a failed member is recorded and never stops
 //! the others; bad input names its option with exit status 2; the plots are written.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::collections::HashMap;

@@ -1,7 +1,7 @@
 //! `svi run` on the field scenes (issue 19): the built-in scenes with their diagnostics, the
 //! field CSV, field scene files, and bad input with exit status 2.
 
-mod common;
+use crate::common;
 
 use common::{Scratch, bad_input, json, number, scene_file, svi};
 

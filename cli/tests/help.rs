@@ -1,7 +1,7 @@
 //! Every subcommand's `--help` and `-h` are plain text: no rustdoc link syntax ("[`Svi`]")
 //! leaked from doc comments, and each option states its default at most once.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The subcommands of `svi`, and the top level.

@@ -2,7 +2,7 @@
 //! run, one JSON object also for a failed run, trajectories written as they are computed, and
 //! a health check that never lets garbage pass silently.
 
-mod common;
+use crate::common;
 
 use common::{Scratch, json, number, scene_file, svi};
 use serde_json::Value;

@@ -15,7 +15,7 @@
 //! few seconds); `SVI_HOSTILE_CASES=K` multiplies every count by K (K = 10: about 160 000
 //! inputs, the "full run").
 
-mod common;
+use crate::common;
 use common::*;
 
 use clap::Parser;
@@ -31,11 +31,9 @@ use svi_cli::stability::{Answer, Request, StabilityArgs};
 use svi_cli::stress::{StressArgs, stress};
 use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
 
-#[path = "../../tests/common/hostile_cases.rs"]
-mod hostile_cases;
+use crate::hostile_cases;
+use crate::hostile_support;
 use hostile_cases::cases;
-#[path = "common/hostile.rs"]
-mod hostile_support;
 use hostile_support::*;
 
 // ---- scene files --------------------------------------------------------------------------

@@ -13,7 +13,7 @@
 //!
 //! Case counts come from [`cases`] (`SVI_HOSTILE_CASES=K` multiplies them).
 
-mod common;
+use crate::common;
 use common::*;
 
 use clap::Parser;
@@ -24,10 +24,7 @@ use svi_cli::Scene;
 use svi_cli::command::ensemble::{Ensemble, EnsembleArgs};
 use svi_cli::command::scale::{MAX_ESTIMATED_SECONDS, ScaleArgs};
 
-#[path = "../../tests/common/hostile_cases.rs"]
-mod hostile_cases;
-#[path = "common/hostile.rs"]
-mod hostile_support;
+use crate::hostile_support;
 use hostile_support::*;
 
 // ---- Lagrangians written as text -------------------------------------------------------

@@ -3,7 +3,7 @@
 //! value the user gave and names the option (item 8), and no option is accepted and then
 //! ignored (item 10). Each test names the item it checks; each failed before the fix.
 
-mod common;
+use crate::common;
 use common::*;
 
 use svi_cli::scene::limits::{

@@ -5,7 +5,7 @@
 //! is ¼ (n + 1) ω₁² A² with ω₁ = 2 sin(π/(2(n + 1))) (the cubic springs add Σ r³ = 0 for
 //! that shape) and all in mode 1; the Toda lattice's Lax traces, conserved exactly.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// The energy of the FPUT chain of n particles in its lowest mode of amplitude 1.

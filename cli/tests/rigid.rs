@@ -4,7 +4,7 @@
 //! body, vertical angular momentum of the tops, ‖RᵀR − I‖ = 0) and the agreement of the
 //! full and reduced forms on the free body.
 
-mod common;
+use crate::common;
 use common::*;
 
 #[test]

@@ -2,7 +2,7 @@
 //! packet and the NLS soliton with their norm and errors, the space-time CSV and picture, the
 //! work–precision bench of the Galerkin SVI against Strang, and bad input with exit status 2.
 
-mod common;
+use crate::common;
 
 use common::{Scratch, bad_input, json, number, scene_file, svi};
 

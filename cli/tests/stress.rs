@@ -1,7 +1,7 @@
 //! Stress scenes, failure reporting and `svi stress`. Hostile input to the command line is
 //! `hostile.rs`.
 
-mod common;
+use crate::common;
 use common::*;
 
 use svi_cli::Scene;
@@ -200,7 +200,7 @@ fn svi_stress_rejects_unknown_cases_and_too_few_steps() {
     for args in [
         vec!["stress", "--cases", "nope"],
         vec!["stress", "--cases", "oscillator", "--steps", "10"],
-        vec!["stress", "--methods", "rk4"],
+        vec!["stress", "--methods", "rk45"],
         vec!["stress", "--cases", "oscillator", "--tolerance", "-1"],
     ] {
         let output = svi(&args);

@@ -2,7 +2,7 @@
 //! built-in `kepler-text` scene against the built-in `kepler` (the same orbit from the zoo
 //! model: the reference), parameters, diagnostics, and errors that name the column.
 
-mod common;
+use crate::common;
 use common::*;
 
 /// A text scene: the Kepler problem as in `cli/scenes/kepler-text.toml`, with `extra` lines
@@ -125,11 +125,17 @@ fn what_a_text_scene_must_give_is_named() {
             "run.t_end is needed",
         ),
         (
-            kepler_scene(kepler, "").replace("coordinates = [\"x\", \"y\"]", "coordinates = [\"x\", \"x\"]"),
+            kepler_scene(kepler, "").replace(
+                "coordinates = [\"x\", \"y\"]",
+                "coordinates = [\"x\", \"x\"]",
+            ),
             "invalid coordinate name 'x': given twice",
         ),
         (
-            kepler_scene(kepler, "").replace("coordinates = [\"x\", \"y\"]", "coordinates = [\"x\", \"sin\"]"),
+            kepler_scene(kepler, "").replace(
+                "coordinates = [\"x\", \"y\"]",
+                "coordinates = [\"x\", \"sin\"]",
+            ),
             "invalid coordinate name 'sin': it is a function",
         ),
         (
@@ -145,14 +151,80 @@ fn what_a_text_scene_must_give_is_named() {
             "coordinates: belongs to a Lagrangian written as text",
         ),
         ("[run]\nh = 0.1\n".into(), "the scene names no model"),
-        (
-            "lagrangian = \"va^2 + vb^2 + vc^2 + vd^2\"\ncoordinates = [\"a\", \"b\", \"c\", \"d\"]\n\
-             [initial]\nq = [0, 0, 0, 0]\nv = [0, 0, 0, 0]\n[run]\nh = 0.1\nt_end = 1.0\n"
-                .into(),
-            "4 coordinates: text models have at most 3",
-        ),
     ] {
         let scene = scene_file("text-needs", &text);
         bad_input(&["run", &scene.path], &[], needle);
+    }
+}
+
+/// Two planar oscillators of unit frequency coupled by a spring of stiffness k = 1/2, in four
+/// coordinates (x1, y1, x2, y2), with the rotation about the origin as a symmetry: the sums
+/// x1 + x2, y1 + y2 oscillate at frequency 1, the differences at √(1 + 2k) = √2.
+const COUPLED: &str = "lagrangian = \"0.5*(vx1^2 + vy1^2 + vx2^2 + vy2^2) \
+    - 0.5*(x1^2 + y1^2 + x2^2 + y2^2) - 0.5*k*((x1 - x2)^2 + (y1 - y2)^2)\"\n\
+    coordinates = [\"x1\", \"y1\", \"x2\", \"y2\"]\n\
+    symmetries = [[\"-y1\", \"x1\", \"-y2\", \"x2\"]]\n\
+    [parameters]\nk = 0.5\n\
+    [initial]\nq = [1.0, 0.0, 0.0, 0.5]\nv = [0.0, 1.0, 0.0, 0.0]\n\
+    [run]\nh = 0.05\nt_end = 10.0\n";
+
+/// The exact (x1, y1, x2, y2) of [`COUPLED`] at time t, from its normal modes.
+fn coupled_exact(t: f64) -> [f64; 4] {
+    let w = 2f64.sqrt();
+    let (sum_x, difference_x) = (t.cos(), (w * t).cos());
+    let sum_y = 0.5 * t.cos() + t.sin();
+    let difference_y = -0.5 * (w * t).cos() + (w * t).sin() / w;
+    [
+        0.5 * (sum_x + difference_x),
+        0.5 * (sum_y + difference_y),
+        0.5 * (sum_x - difference_x),
+        0.5 * (sum_y - difference_y),
+    ]
+}
+
+#[test]
+fn a_text_model_of_four_coordinates_runs() {
+    let scene = scene_file("text-coupled", COUPLED);
+    let summary = json(&["run", &scene.path, "--json"]);
+    assert_eq!(summary["status"], "ok", "{summary}");
+    assert_eq!(summary["model"], "text");
+    assert_eq!(
+        summary["coordinates"],
+        serde_json::json!(["x1", "y1", "x2", "y2"])
+    );
+    assert_eq!(number(&summary, "steps"), 200.0);
+    // E = |v|²/2 + |q|²/2 + k|q1 − q2|²/2 at t0: 1/2 + 5/8 + 5/16.
+    assert!(
+        (number(&summary, "energy_initial") - 1.4375).abs() < 1e-14,
+        "{summary}"
+    );
+    let energy = number(&summary, "energy_error_max");
+    assert!(
+        energy.is_finite() && energy < 1e-12,
+        "energy error {energy:e}"
+    );
+    assert!(number(&summary, "momentum_error_max") < 1e-12, "{summary}");
+    let q = vector(&summary, "q");
+    assert_eq!(q.len(), 4);
+    for (i, (found, exact)) in q.iter().zip(coupled_exact(10.0)).enumerate() {
+        assert!(
+            (found - exact).abs() < 1e-10,
+            "q[{i}] = {found} against {exact}"
+        );
+    }
+    // Every family of methods runs the model of run-time dimension, and stays near the orbit.
+    for method in ["sc", "midpoint", "verlet", "trapezoid", "svi@step"] {
+        let (method, adapt) = method.split_once('@').unwrap_or((method, ""));
+        let mut args = vec!["run", &scene.path, "--json", "--method", method];
+        if !adapt.is_empty() {
+            args.extend(["--adapt", adapt]);
+        }
+        let summary = json(&args);
+        assert_eq!(summary["status"], "ok", "{method}: {summary}");
+        let energy = number(&summary, "energy_error_max");
+        assert!(
+            energy.is_finite() && energy < 1e-2,
+            "{method}: energy error {energy:e}"
+        );
     }
 }

@@ -30,7 +30,7 @@
 //! (2001), §3.2 (the discrete Lagrange–d'Alembert principle). The closed form is the
 //! textbook solution of a linear second-order ODE with constant coefficients.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::params;
@@ -80,7 +80,7 @@ impl Default for DampedOscillator {
     }
 }
 
-impl Lagrangian<1> for DampedOscillator {
+impl Lagrangian<U1> for DampedOscillator {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
     const FORCED: bool = true;
@@ -137,12 +137,12 @@ pub(crate) fn free_response(sigma: f64, zeta: f64, q0: f64, v0: f64, tau: f64) -
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<1> for DampedOscillator {}
+impl Symmetries<U1> for DampedOscillator {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<1> for DampedOscillator {}
+impl Invariants<U1> for DampedOscillator {}
 
-impl ExactSolution<1> for DampedOscillator {
+impl ExactSolution<U1> for DampedOscillator {
     /// The closed form of the module documentation, for every initial state (also backwards
     /// in time, where it grows).
     fn exact_solution(
@@ -157,13 +157,13 @@ impl ExactSolution<1> for DampedOscillator {
     }
 }
 
-impl Defaults<1> for DampedOscillator {
+impl Defaults<U1> for DampedOscillator {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 1] {
-        ["q"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["q"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

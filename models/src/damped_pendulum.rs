@@ -27,7 +27,7 @@
 //! mechanics": the simple pendulum damped with friction-type forcing; J. E. Marsden,
 //! M. West, *Discrete mechanics and variational integrators*, Acta Numerica (2001), §3.2.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::{Pendulum, params};
@@ -73,7 +73,7 @@ impl Default for DampedPendulum {
     }
 }
 
-impl Lagrangian<1> for DampedPendulum {
+impl Lagrangian<U1> for DampedPendulum {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
     const FORCED: bool = true;
@@ -97,12 +97,12 @@ impl Lagrangian<1> for DampedPendulum {
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<1> for DampedPendulum {}
+impl Symmetries<U1> for DampedPendulum {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<1> for DampedPendulum {}
+impl Invariants<U1> for DampedPendulum {}
 
-impl ExactSolution<1> for DampedPendulum {
+impl ExactSolution<U1> for DampedPendulum {
     /// The undamped pendulum's solution when c = 0; `None` otherwise.
     fn exact_solution(
         &self,
@@ -119,13 +119,13 @@ impl ExactSolution<1> for DampedPendulum {
     }
 }
 
-impl Defaults<1> for DampedPendulum {
+impl Defaults<U1> for DampedPendulum {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 1] {
-        ["theta"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["theta"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

@@ -31,7 +31,7 @@
 //!
 //! M. Porcù, T. Penati, *Spectral variational integrators*, OctConf 2013 (slides), example.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Symmetries};
 
 use crate::params;
@@ -71,7 +71,7 @@ impl Default for DoublePendulum {
     }
 }
 
-impl Lagrangian<2> for DoublePendulum {
+impl Lagrangian<U2> for DoublePendulum {
     const TIME_DEPENDENT: bool = false;
 
     #[inline]
@@ -88,12 +88,12 @@ impl Lagrangian<2> for DoublePendulum {
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<2> for DoublePendulum {}
+impl Symmetries<U2> for DoublePendulum {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<2> for DoublePendulum {}
+impl Invariants<U2> for DoublePendulum {}
 
-impl ExactSolution<2> for DoublePendulum {
+impl ExactSolution<U2> for DoublePendulum {
     /// Always `None`: the double pendulum is not integrable.
     fn exact_solution(
         &self,
@@ -106,13 +106,13 @@ impl ExactSolution<2> for DoublePendulum {
     }
 }
 
-impl Defaults<2> for DoublePendulum {
+impl Defaults<U2> for DoublePendulum {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 2] {
-        ["alpha1", "alpha2"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["alpha1", "alpha2"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

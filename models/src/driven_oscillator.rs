@@ -30,7 +30,7 @@
 //! variational integrators*, Acta Numerica (2001), §3.2. The steady state: the textbook
 //! solution of the forced linear oscillator.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::damped_oscillator::free_response;
@@ -86,7 +86,7 @@ impl Default for DrivenOscillator {
     }
 }
 
-impl Lagrangian<1> for DrivenOscillator {
+impl Lagrangian<U1> for DrivenOscillator {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
     const FORCED: bool = true;
@@ -110,12 +110,12 @@ impl Lagrangian<1> for DrivenOscillator {
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<1> for DrivenOscillator {}
+impl Symmetries<U1> for DrivenOscillator {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<1> for DrivenOscillator {}
+impl Invariants<U1> for DrivenOscillator {}
 
-impl ExactSolution<1> for DrivenOscillator {
+impl ExactSolution<U1> for DrivenOscillator {
     /// Steady state plus free response (module documentation), for every initial state.
     fn exact_solution(
         &self,
@@ -132,13 +132,13 @@ impl ExactSolution<1> for DrivenOscillator {
     }
 }
 
-impl Defaults<1> for DrivenOscillator {
+impl Defaults<U1> for DrivenOscillator {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 1] {
-        ["q"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["q"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

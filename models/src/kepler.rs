@@ -32,7 +32,7 @@
 //! §5.2, eq. (38). Kepler's equation and the perifocal frame: e.g. R. H. Battin, *An
 //! Introduction to the Mathematics and Methods of Astrodynamics* (1999), ch. 4–5.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::params;
@@ -94,7 +94,7 @@ impl Default for Kepler {
     }
 }
 
-impl Lagrangian<2> for Kepler {
+impl Lagrangian<U2> for Kepler {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
 
@@ -109,7 +109,7 @@ impl Lagrangian<2> for Kepler {
     }
 }
 
-impl Symmetries<2> for Kepler {
+impl Symmetries<U2> for Kepler {
     /// One: rotations about the origin.
     fn generator_count(&self) -> usize {
         1
@@ -138,7 +138,7 @@ impl Symmetries<2> for Kepler {
     }
 }
 
-impl Invariants<2> for Kepler {
+impl Invariants<U2> for Kepler {
     /// Three: the length of the Runge–Lenz vector (the eccentricity) and its two
     /// components (their drift measures the precession of the pericentre).
     fn invariant_count(&self) -> usize {
@@ -171,7 +171,7 @@ impl Invariants<2> for Kepler {
     }
 }
 
-impl ExactSolution<2> for Kepler {
+impl ExactSolution<U2> for Kepler {
     /// The bound orbit through (q₀, v₀) at t₀ ([`KeplerOrbit`]); `None` for unbound
     /// (E ≥ 0) or radial (M = 0) states, a state at the origin, or non-finite input.
     fn exact_solution(
@@ -189,13 +189,13 @@ impl ExactSolution<2> for Kepler {
     }
 }
 
-impl Defaults<2> for Kepler {
+impl Defaults<U2> for Kepler {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 2] {
-        ["q1", "q2"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["q1", "q2"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

@@ -38,10 +38,13 @@
 //!
 //! A model chosen by name at run time is handed, as its concrete type, to a
 //! [`ModelVisitor`] by [`visit_model`]: no trait objects, so everything stays monomorphised
-//! (the model dimension `N` is a const generic).
+//! (the model dimension `N` is a type: `U1`, `U2`, … for the zoo, [`svi::Dyn`] for text
+//! models).
 //!
 //! ```
-//! use svi::Defaults;
+//! use nalgebra::DefaultAllocator;
+//! use nalgebra::allocator::Allocator;
+//! use svi::{Defaults, Dimension, Lagrangian};
 //! use svi_models::{ModelVisitor, ZooModel, visit_model};
 //!
 //! /// Reports a model's name and dimension.
@@ -49,8 +52,11 @@
 //!
 //! impl ModelVisitor for Describe {
 //!     type Output = String;
-//!     fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> String {
-//!         format!("{} (N = {N})", model.name())
+//!     fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> String
+//!     where
+//!         DefaultAllocator: Allocator<N> + Allocator<N, N>,
+//!     {
+//!         format!("{} (N = {})", model.name(), model.dimension())
 //!     }
 //! }
 //!
@@ -60,7 +66,8 @@
 //!
 //! A Lagrangian written as text ([`svi::model::text`]) has its dimension and declarations
 //! known only at run time: [`visit_text_model`] hands it to the same visitor as a
-//! [`TextLagrangian`] of its dimension (up to [`MAX_TEXT_DIMENSION`]) and declarations.
+//! [`TextLagrangian`] of run-time dimension ([`svi::Dyn`], any number of coordinates) with
+//! its declarations.
 //!
 //! Field theories in 1 + 1 dimensions are Lagrangian densities ℒ(x, t, u, u_t, u_x)
 //! ([`svi::model::density`]) on a domain with a boundary condition, integrated by the
@@ -99,6 +106,7 @@ pub mod fields;
 pub mod fput;
 pub mod fput_stiff;
 pub mod kepler;
+pub mod nbody;
 pub mod oscillator;
 pub mod pendulum;
 pub mod relativistic_chain;
@@ -119,6 +127,7 @@ pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
 pub use fput::Fput;
 pub use fput_stiff::FputStiff;
 pub use kepler::{Kepler, KeplerOrbit};
+pub use nbody::{Body, NBody};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use relativistic_chain::RelativisticChain;
@@ -131,13 +140,14 @@ pub use heavy_top::HeavyTop;
 pub use pendulum_3d::Pendulum3d;
 pub use rigid_body::FreeRigidBody;
 
-use nalgebra::DVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator};
 use svi::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian};
 use svi::model::text::{TextError, TextLagrangian, TextModel};
-use svi::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
+use svi::{Defaults, Dimension, Dyn, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 
 /// Everything a zoo model implements (blanket impl for any type with all the bounds).
-pub trait ZooModel<const N: usize>:
+pub trait ZooModel<N: Dimension>:
     Lagrangian<N>
     + Symmetries<N>
     + Invariants<N>
@@ -148,10 +158,14 @@ pub trait ZooModel<const N: usize>:
     + Sync
     + std::fmt::Debug
     + 'static
+where
+    DefaultAllocator: Allocator<N>,
 {
 }
 
-impl<T, const N: usize> ZooModel<N> for T where
+impl<T, N: Dimension> ZooModel<N> for T
+where
+    DefaultAllocator: Allocator<N>,
     T: Lagrangian<N>
         + Symmetries<N>
         + Invariants<N>
@@ -161,7 +175,7 @@ impl<T, const N: usize> ZooModel<N> for T where
         + Send
         + Sync
         + std::fmt::Debug
-        + 'static
+        + 'static,
 {
 }
 
@@ -171,7 +185,9 @@ pub trait ModelVisitor {
     type Output;
 
     /// Called once with the model, as its concrete type and dimension.
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> Self::Output;
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>;
 }
 
 /// The zoo on ℝᴺ: [`MODEL_NAMES`] and [`visit_model`] from one list of model types (adding
@@ -213,53 +229,29 @@ vector_zoo!(
     DrivenOscillator,
 );
 
-/// Most coordinates of a text model that [`visit_text_model`] dispatches on: each
-/// dimension monomorphises every method for three text Lagrangians, and the command line's
-/// compile time grows with them.
-pub const MAX_TEXT_DIMENSION: usize = 3;
-
-/// Hand a text model to the visitor as a [`TextLagrangian`] of its dimension N, with the
-/// tightest declarations it allows among three: autonomous, unforced and constant-mass
-/// (`TextLagrangian<N, false, false, true>`: the Hessian-free iterations and explicit
-/// Störmer–Verlet); autonomous and unforced (`TextLagrangian<N, false, false, false>`:
-/// energy is conserved, and checked); anything else (`TextLagrangian<N>`: time-dependent and
-/// forced, correct for every model).
+/// Hand a text model to the visitor as a [`TextLagrangian`] of run-time dimension ([`Dyn`]:
+/// any number of coordinates), with the tightest declarations it allows among three:
+/// autonomous, unforced and constant-mass (`TextLagrangian<Dyn, false, false, true>`: the
+/// Hessian-free iterations and explicit Störmer–Verlet); autonomous and unforced
+/// (`TextLagrangian<Dyn, false, false, false>`: energy is conserved, and checked); anything
+/// else (`TextLagrangian<Dyn>`: time-dependent and forced, correct for every model).
 ///
 /// # Errors
-/// [`TextError::TooManyCoordinates`] above [`MAX_TEXT_DIMENSION`] coordinates.
+/// [`TextError::Declaration`] if the model breaks a declaration (which cannot happen for the
+/// one chosen here).
 pub fn visit_text_model<V: ModelVisitor>(
-    model: TextModel,
-    visitor: V,
-) -> Result<V::Output, TextError> {
-    /// One arm per dimension.
-    macro_rules! dimensions {
-        ($($n:literal),+) => {
-            match model.dimension() {
-                $($n => visit_text_dimension::<V, $n>(model, visitor),)+
-                found => Err(TextError::TooManyCoordinates {
-                    found,
-                    max: MAX_TEXT_DIMENSION,
-                }),
-            }
-        };
-    }
-    dimensions!(1, 2, 3)
-}
-
-/// [`visit_text_model`] for a model of dimension `N`.
-fn visit_text_dimension<V: ModelVisitor, const N: usize>(
     model: TextModel,
     visitor: V,
 ) -> Result<V::Output, TextError> {
     let conservative = !model.time_dependent() && !model.forced();
     Ok(match (conservative, model.structure()) {
         (true, Structure::ConstantMass) => {
-            visitor.visit(TextLagrangian::<N, false, false, true>::new(model)?)
+            visitor.visit(TextLagrangian::<Dyn, false, false, true>::new(model)?)
         }
         (true, Structure::General) => {
-            visitor.visit(TextLagrangian::<N, false, false, false>::new(model)?)
+            visitor.visit(TextLagrangian::<Dyn, false, false, false>::new(model)?)
         }
-        (false, _) => visitor.visit(TextLagrangian::<N>::new(model)?),
+        (false, _) => visitor.visit(TextLagrangian::<Dyn>::new(model)?),
     })
 }
 

@@ -22,7 +22,7 @@
 //! variational integrators and spectral collocation methods*, Appl. Numer. Math. (2018),
 //! eq. (26) and §5.1.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::params;
@@ -55,7 +55,7 @@ impl Default for HarmonicOscillator {
     }
 }
 
-impl Lagrangian<1> for HarmonicOscillator {
+impl Lagrangian<U1> for HarmonicOscillator {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
 
@@ -66,12 +66,12 @@ impl Lagrangian<1> for HarmonicOscillator {
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<1> for HarmonicOscillator {}
+impl Symmetries<U1> for HarmonicOscillator {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<1> for HarmonicOscillator {}
+impl Invariants<U1> for HarmonicOscillator {}
 
-impl ExactSolution<1> for HarmonicOscillator {
+impl ExactSolution<U1> for HarmonicOscillator {
     /// q(t) = q₀ cos στ + (q̇₀/σ) sin στ, q̇(t) = −σ q₀ sin στ + q̇₀ cos στ, τ = t − t₀;
     /// available for every initial state.
     fn exact_solution(
@@ -89,13 +89,13 @@ impl ExactSolution<1> for HarmonicOscillator {
     }
 }
 
-impl Defaults<1> for HarmonicOscillator {
+impl Defaults<U1> for HarmonicOscillator {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 1] {
-        ["q"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["q"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

@@ -35,7 +35,7 @@
 
 use std::f64::consts::TAU;
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
 
 use crate::{elliptic, params};
@@ -74,7 +74,7 @@ impl Default for Pendulum {
     }
 }
 
-impl Lagrangian<1> for Pendulum {
+impl Lagrangian<U1> for Pendulum {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: Structure = Structure::ConstantMass;
 
@@ -86,12 +86,12 @@ impl Lagrangian<1> for Pendulum {
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<1> for Pendulum {}
+impl Symmetries<U1> for Pendulum {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<1> for Pendulum {}
+impl Invariants<U1> for Pendulum {}
 
-impl ExactSolution<1> for Pendulum {
+impl ExactSolution<U1> for Pendulum {
     /// The Jacobi elliptic solution (see the module documentation) for libration and
     /// rotation; `None` on the separatrix (k = 1 exactly, including the upright
     /// equilibrium) and for non-finite input.
@@ -151,13 +151,13 @@ impl ExactSolution<1> for Pendulum {
     }
 }
 
-impl Defaults<1> for Pendulum {
+impl Defaults<U1> for Pendulum {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 1] {
-        ["theta"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["theta"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

@@ -33,7 +33,7 @@
 //! M. Leok, *Generalized Variational Integrators*, ch. 5 of *Foundations of Computational
 //! Geometric Mechanics*, PhD thesis, Caltech (2004), §5.7.2.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Symmetries};
 
 use crate::params;
@@ -86,7 +86,7 @@ impl Default for SpringPendulum {
     }
 }
 
-impl Lagrangian<2> for SpringPendulum {
+impl Lagrangian<U2> for SpringPendulum {
     const TIME_DEPENDENT: bool = false;
 
     /// Written as in §5.7.2, through the Cartesian position and velocity of the bob.
@@ -106,12 +106,12 @@ impl Lagrangian<2> for SpringPendulum {
 }
 
 /// No continuous symmetry: no conserved Noether momentum.
-impl Symmetries<2> for SpringPendulum {}
+impl Symmetries<U2> for SpringPendulum {}
 
 /// No known invariants besides (possibly) the energy.
-impl Invariants<2> for SpringPendulum {}
+impl Invariants<U2> for SpringPendulum {}
 
-impl ExactSolution<2> for SpringPendulum {
+impl ExactSolution<U2> for SpringPendulum {
     /// Always `None`: the spring pendulum is not integrable.
     fn exact_solution(
         &self,
@@ -124,13 +124,13 @@ impl ExactSolution<2> for SpringPendulum {
     }
 }
 
-impl Defaults<2> for SpringPendulum {
+impl Defaults<U2> for SpringPendulum {
     fn name(&self) -> &'static str {
         Self::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; 2] {
-        ["a", "theta"]
+    fn coordinate_names(&self) -> Vec<String> {
+        ["a", "theta"].map(String::from).to_vec()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {

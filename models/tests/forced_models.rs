@@ -2,7 +2,7 @@
 //! (central differences), their forces against the derived Euler–Lagrange acceleration, and
 //! their defaults.
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U1};
 use svi::{Defaults, ExactSolution, Lagrangian, LagrangianExt};
 use svi_models::{
     DampedOscillator, DampedPendulum, DrivenOscillator, HarmonicOscillator, Pendulum,
@@ -11,7 +11,7 @@ use svi_models::{
 /// Relative residual of q̈ + 2ζσ q̇ + σ² q − drive(t) along the exact solution, by central
 /// differences of the exact position (step 1e-4: truncation ~1e-9 · q''''), and of q̇ against
 /// dq/dt.
-fn ode_residual<M: ExactSolution<1>>(
+fn ode_residual<M: ExactSolution<U1>>(
     model: &M,
     sigma: f64,
     zeta: f64,
@@ -152,7 +152,7 @@ fn forces_enter_the_derived_euler_lagrange_acceleration() {
     assert!((acceleration - expected).abs() < 1e-14);
     // An unforced model's force is never evaluated: all zero.
     let none = Pendulum::default().external_force_jacobian(0.0, &q, &v);
-    assert_eq!(none, svi::derived::ForceJacobian::zeros());
+    assert_eq!(none, svi::derived::ForceJacobian::zeros(U1));
 }
 
 #[test]

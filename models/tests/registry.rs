@@ -1,7 +1,9 @@
 //! The registry and the `Defaults` contract of every zoo model: names, parameter
 //! validation, default states.
 
-use svi::{Defaults, Error, Invariants, Symmetries};
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::{Defaults, Dimension, Error, Invariants, Symmetries};
 use svi_models::{
     DoublePendulum, HarmonicOscillator, Kepler, MODEL_NAMES, ModelVisitor, Pendulum,
     SpringPendulum, UnknownModel, ZooModel, visit_model,
@@ -20,7 +22,10 @@ struct Name;
 
 impl ModelVisitor for Name {
     type Output = &'static str;
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> &'static str {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> &'static str
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         model.name()
     }
 }
@@ -70,7 +75,10 @@ struct CheckContract;
 impl ModelVisitor for CheckContract {
     type Output = usize;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> usize {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> usize
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let name = model.name();
 
         // Default state, step and horizon.

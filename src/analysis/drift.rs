@@ -23,10 +23,13 @@
 //! assert!(fit.drift.abs() < fit.amplitude);
 //! ```
 
+use crate::dimension::Dimension;
 use crate::method::PhasePoint;
 use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::stepping::observer::Observer;
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use std::ops::ControlFlow;
 
 /// Statistics of the energy error over one window of samples.
@@ -132,7 +135,10 @@ impl EnergyWindows {
     }
 }
 
-impl<L: Lagrangian<N>, const N: usize> Observer<L, PhasePoint<N>> for EnergyWindows {
+impl<L: Lagrangian<N>, N: Dimension> Observer<L, PhasePoint<N>> for EnergyWindows
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
         self.push(point.t, energy);

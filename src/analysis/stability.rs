@@ -5,7 +5,7 @@
 //! scaled coordinates (q, h·p) — (q, h·q̇) for collocation; p = q̇ for this L — it depends on
 //! h and σ only through z = σ²h²: (q_{k+1}, h p_{k+1}) = S(z) (q_k, h p_k) (eqs. 33, 36).
 //!
-//! [`stability_matrix`] computes S(z) for any [`Method<1>`] from its tangent map Φ (the exact
+//! [`stability_matrix`] computes S(z) for any [`Method<U1>`] from its tangent map Φ (the exact
 //! Jacobian of one step, [`Method::tangent_map`]) with σ = 1, h = √z, as
 //! S = diag(1, h) Φ diag(1, 1/h). The map is linear, so Φ does not depend on the state; it is
 //! taken at the equilibrium, where the nonlinear solve of the step is trivially exact.
@@ -156,7 +156,7 @@ use argmin::core::{
     CostFunction, Executor, IterState, Solver, State as _, TerminationReason, TerminationStatus,
 };
 use argmin::solver::brent::{BrentOpt, BrentRoot};
-use nalgebra::{DMatrix, DVector, Matrix2, SVector};
+use nalgebra::{DMatrix, DVector, Matrix2, SVector, U1};
 
 /// Round-off tolerance δ of the region conditions: |det S − 1| ≤ δ counts as det S = 1, and the
 /// Jury margins and the discriminant are compared with ±δ (see the module docs).
@@ -180,7 +180,7 @@ const BRENT_ITERATIONS: u64 = 1000;
 /// iterations would not converge for the stiff steps (h = √z up to 30) of a stability map.
 struct Oscillator;
 
-impl Lagrangian<1> for Oscillator {
+impl Lagrangian<U1> for Oscillator {
     const TIME_DEPENDENT: bool = false;
 
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
@@ -198,12 +198,12 @@ impl Lagrangian<1> for Oscillator {
 /// validation errors; a failure of the step's nonlinear solve ([`Error::NonConvergence`],
 /// [`Error::SingularMatrix`], reported at step 0, t = 0); [`Error::NonFinite`] if the tangent
 /// map is not finite.
-pub fn stability_matrix<M: Method<1>>(method: &M, z: f64) -> Result<Matrix2<f64>, Error> {
+pub fn stability_matrix<M: Method<U1>>(method: &M, z: f64) -> Result<Matrix2<f64>, Error> {
     require_positive("z", z)?;
     let h = z.sqrt();
     let mut workspace = method.workspace(&Oscillator, h)?;
     let (_, tangent) = method
-        .tangent_map(&Oscillator, &mut workspace, 0.0, h, &State::zeros())
+        .tangent_map(&Oscillator, &mut workspace, 0.0, h, &State::zeros(U1))
         .map_err(|failure| failure.at(0, 0.0))?;
     let matrix = Matrix2::new(
         tangent.qq[(0, 0)],
@@ -418,7 +418,7 @@ pub struct StabilityReport {
 /// [`Error::InvalidParameter`] named `"z_min"` or `"z_max"` unless 0 < z_min < z_max < ∞,
 /// `"samples"` if `samples` < 2; any error of [`stability_matrix`] at a sample or during the
 /// refinement.
-pub fn analyse<M: Method<1>>(
+pub fn analyse<M: Method<U1>>(
     method: &M,
     z_min: f64,
     z_max: f64,
@@ -540,7 +540,7 @@ impl Condition {
     /// Where the condition holds within `range`, from the samples `points`: every change of
     /// verdict between neighbouring samples, and every narrow band around a sampled extremum
     /// of the indicator that [`suggests_excursion`], located by Brent's method.
-    fn intervals<M: Method<1>>(
+    fn intervals<M: Method<U1>>(
         self,
         method: &M,
         points: &[StabilityPoint],
@@ -596,7 +596,7 @@ impl Condition {
     /// Where the verdict changes between `left` and `right` (it does): the zero of the
     /// measure if it changes sign from beyond the round-off band on one side to beyond it on
     /// the other, else the zero of the indicator (the edge of the band). By Brent's method.
-    fn crossing<M: Method<1>>(
+    fn crossing<M: Method<U1>>(
         self,
         method: &M,
         left: &StabilityPoint,
@@ -630,7 +630,7 @@ impl Condition {
 
     /// The largest (`maximum`) or smallest indicator on [lower, upper], by Brent's
     /// minimisation.
-    fn extremum<M: Method<1>>(
+    fn extremum<M: Method<U1>>(
         self,
         method: &M,
         lower: f64,
@@ -670,7 +670,7 @@ fn suggests_excursion(g0: f64, g1: f64, g2: f64) -> bool {
 
 /// Run an argmin solver on an indicator over [lower, upper]; errors of the stability matrix
 /// come back as they are.
-fn run<'a, M: Method<1>, S>(
+fn run<'a, M: Method<U1>, S>(
     problem: Indicator<'a, M>,
     solver: S,
     lower: f64,
@@ -702,7 +702,7 @@ struct Indicator<'a, M> {
     sign: f64,
 }
 
-impl<M: Method<1>> CostFunction for Indicator<'_, M> {
+impl<M: Method<U1>> CostFunction for Indicator<'_, M> {
     type Param = f64;
     type Output = f64;
 

@@ -30,6 +30,7 @@
 //! # References
 //! Li, Wu, Leok (2018), §3, eqs. (12)–(25).
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
@@ -43,7 +44,10 @@ use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use crate::spectral::starting_values::StartingValues;
 use crate::spectral::{MAX_POINTS, check_options};
-use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{
+    DMatrix, DVector, DefaultAllocator, Dim, MatrixView, MatrixViewMut, OMatrix, OVector, U1,
+};
 use std::ops::ControlFlow;
 
 /// Options of the spectral collocation method.
@@ -138,7 +142,10 @@ fn collocation_quadrature(points: usize) -> Option<(Vec<f64>, Vec<f64>)> {
 /// q̇_{k+1} − q̇_k = ∫ y′ = h Σ_i b_i f_i (y′ interpolates f at c_1..c_s), which, unlike
 /// yˢ − q̇_k, has no cancellation.
 #[derive(Debug, Clone)]
-struct ConstantMass<const N: usize> {
+struct ConstantMass<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// E = (D*)⁻², row-major s × s.
     inverse: Vec<f64>,
     /// e_i.
@@ -146,15 +153,18 @@ struct ConstantMass<const N: usize> {
     /// Quadrature weights b_i on the collocation nodes.
     weights: Vec<f64>,
     /// M⁻¹, from the first step.
-    mass_inverse: Option<SMatrix<f64, N, N>>,
+    mass_inverse: Option<OMatrix<f64, N, N>>,
     /// f at the collocation nodes.
-    accelerations: Vec<SVector<f64, N>>,
+    accelerations: Vec<OVector<f64, N>>,
     /// Offsets Z_i during the iteration.
-    stages: Vec<SVector<f64, N>>,
+    stages: Vec<OVector<f64, N>>,
 }
 
-impl<const N: usize> ConstantMass<N> {
-    fn new(tables: &Tables, points: usize) -> Option<Self> {
+impl<N: Dimension> ConstantMass<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    fn new(tables: &Tables, points: usize, n: N) -> Option<Self> {
         let s = tables.degree;
         let d = &tables.differentiation;
         let star = d.view((1, 1), (s, s)).into_owned();
@@ -167,8 +177,8 @@ impl<const N: usize> ConstantMass<N> {
             velocity_coefficients: velocity_coefficients.collect(),
             weights,
             mass_inverse: None,
-            accelerations: vec![SVector::zeros(); s],
-            stages: vec![SVector::zeros(); s],
+            accelerations: vec![OVector::zeros_generic(n, U1); s],
+            stages: vec![OVector::zeros_generic(n, U1); s],
         })
     }
 }
@@ -223,27 +233,55 @@ impl Tables {
     }
 
     /// y at collocation node i (1-based) from node offsets z: Σ_j Λ*_ij z_j.
-    fn velocity<const N: usize>(&self, i: usize, z: &DVector<f64>) -> SVector<f64, N> {
-        let mut y = SVector::zeros();
+    fn velocity<N: Dimension>(&self, n: N, i: usize, z: &DVector<f64>) -> OVector<f64, N>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        let mut y = OVector::zeros_generic(n, U1);
         for j in 1..=self.degree {
-            y += z.fixed_rows::<N>((j - 1) * N) * self.lambda[(i - 1, j - 1)];
+            y.axpy(self.lambda[(i - 1, j - 1)], &node(z, n, j - 1), 1.0);
         }
         y
     }
 }
 
-/// Placeholder node data before the first evaluation.
-const fn zero_node<const N: usize>() -> AccelerationJacobian<N> {
+/// Node `index` (0-based: the offset of CGL node index + 1) of stacked node vectors `z`, N
+/// numbers each.
+fn node<N: Dim>(
+    z: &DVector<f64>,
+    n: N,
+    index: usize,
+) -> MatrixView<'_, f64, N, U1, U1, nalgebra::Dyn> {
+    z.generic_view((index * n.value(), 0), (n, U1))
+}
+
+/// Node `index` of stacked node vectors `z`, to be written.
+fn node_mut<N: Dim>(
+    z: &mut DVector<f64>,
+    n: N,
+    index: usize,
+) -> MatrixViewMut<'_, f64, N, U1, U1, nalgebra::Dyn> {
+    z.generic_view_mut((index * n.value(), 0), (n, U1))
+}
+
+/// Placeholder node data before the first evaluation, of dimension `n`.
+fn zero_node<N: Dimension>(n: N) -> AccelerationJacobian<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     AccelerationJacobian {
-        value: SVector::from_array_storage(nalgebra::ArrayStorage([[0.0; N]; 1])),
-        q: SMatrix::from_array_storage(nalgebra::ArrayStorage([[0.0; N]; N])),
-        v: SMatrix::from_array_storage(nalgebra::ArrayStorage([[0.0; N]; N])),
+        value: OVector::zeros_generic(n, U1),
+        q: OMatrix::zeros_generic(n, n),
+        v: OMatrix::zeros_generic(n, n),
     }
 }
 
 /// Buffers of an SC run.
 #[derive(Debug, Clone)]
-pub struct CollocationWorkspace<const N: usize> {
+pub struct CollocationWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     tables: Tables,
     /// Node offsets qⁱ − q_k, i = 1..s, stacked.
     offsets: DVector<f64>,
@@ -260,20 +298,24 @@ pub struct CollocationWorkspace<const N: usize> {
 
 /// Acceleration data at every collocation node; `false` if the mass matrix is singular
 /// somewhere.
-fn evaluate_nodes<L: Lagrangian<N>, const N: usize>(
+fn evaluate_nodes<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     tables: &Tables,
     nodes: &mut [AccelerationJacobian<N>],
     t: f64,
     state: &State<N>,
     z: &DVector<f64>,
-) -> bool {
-    for (index, node) in nodes.iter_mut().enumerate() {
+) -> bool
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = state.dimension();
+    for (index, data) in nodes.iter_mut().enumerate() {
         let i = index + 1;
-        let q = state.q + z.fixed_rows::<N>(index * N);
-        let y = tables.velocity::<N>(i, z);
+        let q = &state.q + node(z, n, index);
+        let y = tables.velocity(n, i, z);
         match model.acceleration_jacobian(tables.time(t, i), &q, &y) {
-            Some(value) => *node = value,
+            Some(value) => *data = value,
             None => return false,
         }
     }
@@ -281,36 +323,44 @@ fn evaluate_nodes<L: Lagrangian<N>, const N: usize>(
 }
 
 /// Assemble the residual of eq. (25) in offsets and its Jacobian.
-fn assemble<const N: usize>(
+fn assemble<N: Dimension>(
     tables: &Tables,
     nodes: &[AccelerationJacobian<N>],
     state: &State<N>,
     z: &DVector<f64>,
     jacobian: &mut DMatrix<f64>,
     residual: &mut DVector<f64>,
-) {
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = state.dimension();
+    let size = n.value();
     let s = tables.degree;
-    for (i, node) in nodes.iter().enumerate().take(s) {
-        let mut r = state.y * tables.lambda0[i] - node.value;
+    for (i, data) in nodes.iter().enumerate().take(s) {
+        let mut r = &state.y * tables.lambda0[i] - &data.value;
         for j in 0..s {
-            r += z.fixed_rows::<N>(j * N) * tables.lambda_squared[(i, j)];
-            let mut block = -node.v * tables.lambda[(i, j)];
-            if i == j {
-                block -= node.q;
+            r.axpy(tables.lambda_squared[(i, j)], &node(z, n, j), 1.0);
+            // −λ*_ij ∂f/∂q̇ − δ_ij ∂f/∂q + (Λ*²)_ij I, written in place.
+            let mut block = jacobian.generic_view_mut((i * size, j * size), (n, n));
+            for column in 0..size {
+                for row in 0..size {
+                    let mut entry = -data.v[(row, column)] * tables.lambda[(i, j)];
+                    if i == j {
+                        entry -= data.q[(row, column)];
+                    }
+                    if row == column {
+                        entry += tables.lambda_squared[(i, j)];
+                    }
+                    block[(row, column)] = entry;
+                }
             }
-            for d in 0..N {
-                block[(d, d)] += tables.lambda_squared[(i, j)];
-            }
-            jacobian
-                .fixed_view_mut::<N, N>(i * N, j * N)
-                .copy_from(&block);
         }
-        residual.fixed_rows_mut::<N>(i * N).copy_from(&r);
+        node_mut(residual, n, i).copy_from(&r);
     }
 }
 
 /// One step of a constant-mass Lagrangian by fixed-point iteration (no Jacobian).
-fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
+fn fixed_point_step<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     max_iterations: usize,
     workspace: &mut CollocationWorkspace<N>,
@@ -318,7 +368,10 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     h: f64,
     state: &State<N>,
     increment: &mut State<N>,
-) -> Result<StepReport, StepFailure> {
+) -> Result<StepReport, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let CollocationWorkspace {
         tables,
         offsets,
@@ -330,10 +383,11 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         return Err(StepFailure::SingularMatrix);
     };
     let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
+    let n = state.dimension();
     let s = tables.degree;
     let quarter = 0.25 * h * h;
     for (i, stage) in data.stages.iter_mut().enumerate() {
-        *stage = offsets.fixed_rows::<N>(i * N).into_owned();
+        stage.copy_from(&node(offsets, n, i));
     }
     let position_scale = state.q.amax();
     let mut control = FixedPoint::new(max_iterations);
@@ -342,12 +396,12 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             data.accelerations.iter_mut().zip(&data.stages).enumerate()
         {
             let time = tables.time(t, i + 1);
-            let position = state.q + stage;
+            let position = &state.q + stage;
             let mut force = model.force(time, &position, &state.y);
             if L::FORCED {
-                let mut velocity = SVector::<f64, N>::zeros();
+                let mut velocity = OVector::zeros_generic(n, U1);
                 for (j, other) in data.stages.iter().enumerate() {
-                    velocity += other * tables.lambda[(i, j)];
+                    velocity.axpy(tables.lambda[(i, j)], other, 1.0);
                 }
                 force += model.external_force(time, &position, &velocity);
             }
@@ -357,12 +411,12 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         let mut size: f64 = 0.0;
         for (i, stage) in data.stages.iter_mut().enumerate() {
             let row = &data.inverse[i * s..(i + 1) * s];
-            let mut sum = SVector::<f64, N>::zeros();
+            let mut sum = OVector::zeros_generic(n, U1);
             for (e, acceleration) in row.iter().zip(&data.accelerations) {
-                sum += acceleration * *e;
+                sum.axpy(*e, acceleration, 1.0);
             }
-            let next = state.y * (h * data.velocity_coefficients[i]) + sum * quarter;
-            change = change.max((next - *stage).amax());
+            let next = &state.y * (h * data.velocity_coefficients[i]) + sum * quarter;
+            change = change.max((&next - &*stage).amax());
             size = size.max(next.amax());
             *stage = next;
         }
@@ -372,20 +426,20 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             Err(failure) => {
                 // Newton takes over from the last iterate (see `after_fixed_point`).
                 for (i, stage) in data.stages.iter().enumerate() {
-                    offsets.fixed_rows_mut::<N>(i * N).copy_from(stage);
+                    node_mut(offsets, n, i).copy_from(stage);
                 }
                 return Err(failure);
             }
         }
     }
-    let mut dv = SVector::<f64, N>::zeros();
+    let mut dv = OVector::zeros_generic(n, U1);
     for (b, acceleration) in data.weights.iter().zip(&data.accelerations) {
-        dv += acceleration * (h * b);
+        dv.axpy(h * b, acceleration, 1.0);
     }
     for (i, stage) in data.stages.iter().enumerate() {
-        offsets.fixed_rows_mut::<N>(i * N).copy_from(stage);
+        node_mut(offsets, n, i).copy_from(stage);
     }
-    increment.q = data.stages[s - 1];
+    increment.q.copy_from(&data.stages[s - 1]);
     increment.y = dv;
     start.remember(offsets, h);
     let iterations = control.iterations();
@@ -397,7 +451,10 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     })
 }
 
-impl<const N: usize> Method<N> for SpectralCollocation {
+impl<N: Dimension> Method<N> for SpectralCollocation
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Workspace = CollocationWorkspace<N>;
 
     fn info(&self) -> MethodInfo {
@@ -412,16 +469,19 @@ impl<const N: usize> Method<N> for SpectralCollocation {
 
     fn workspace<L: Lagrangian<N>>(
         &self,
-        _model: &L,
+        model: &L,
         h: f64,
     ) -> Result<CollocationWorkspace<N>, Error> {
         self.validate()?;
         crate::error::require_positive("h", h)?;
+        let n: N =
+            dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
+        let size = n.value();
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
         let s = self.points - 1;
         let tables = Tables::new(&basis, h);
         let constant_mass = match L::STRUCTURE {
-            Structure::ConstantMass => ConstantMass::new(&tables, self.points),
+            Structure::ConstantMass => ConstantMass::new(&tables, self.points, n),
             Structure::General => None,
         };
         // Newton's buffers exist for every model: a constant-mass model falls back to Newton
@@ -429,10 +489,10 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         let nodes = s;
         Ok(CollocationWorkspace {
             tables,
-            offsets: DVector::zeros(s * N),
-            start: StartingValues::new(&basis, N),
-            nodes: vec![zero_node(); nodes],
-            newton: Newton::new(s * N, self.max_iterations),
+            offsets: DVector::zeros(s * size),
+            start: StartingValues::new(&basis, size),
+            nodes: vec![zero_node(n); nodes],
+            newton: Newton::new(s * size, self.max_iterations),
             constant_mass,
             newton_only: false,
         })
@@ -499,8 +559,9 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         let factorizations = iterations?;
         let iterations = factorizations + spent;
         let s = tables.degree;
-        increment.q = offsets.fixed_rows::<N>((s - 1) * N).into_owned();
-        increment.y = tables.velocity::<N>(s, offsets) - state.y;
+        let n = state.dimension();
+        increment.q.copy_from(&node(offsets, n, s - 1));
+        increment.y = tables.velocity(n, s, offsets) - &state.y;
         start.remember(offsets, h);
         Ok(StepReport {
             iterations,
@@ -522,22 +583,25 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         state: &State<N>,
         _h: f64,
         theta: f64,
-    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
         let mut values = [0.0; MAX_POINTS];
+        let n = state.dimension();
         let (offset, _) = workspace
             .start
             .last_step::<N>(2.0 * theta - 1.0, &mut values)?;
         let offsets = workspace.start.last_offsets()?;
         let lambda = &workspace.tables.lambda;
-        let mut v = state.y * values[0];
-        for (j, node) in offsets.chunks_exact(N).enumerate() {
+        let mut v = &state.y * values[0];
+        for (j, node) in offsets.chunks_exact(n.value()).enumerate() {
             // Σ_i l_i(τ) Λ*_ij, i = 1..s: the weight of Z_j in y(τ).
             let weight: f64 = (0..lambda.nrows())
                 .map(|i| values[i + 1] * lambda[(i, j)])
                 .sum();
-            v += SVector::<f64, N>::from_column_slice(node) * weight;
+            for (x, z) in v.iter_mut().zip(node) {
+                *x += z * weight;
+            }
         }
-        Some((state.q + offset, v))
+        Some((&state.q + offset, v))
     }
 
     fn points(&self) -> Option<usize> {
@@ -563,16 +627,18 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let mut increment = State::zeros();
+        let n = state.dimension();
+        let dimension = n.value();
+        let mut increment = State::zeros(n);
         self.step(model, workspace, t, h, state, &mut increment)?;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
         // The fixed-point path keeps no Jacobians: evaluate them at the converged nodes.
-        ws.nodes.resize(s, zero_node());
+        ws.nodes.resize(s, zero_node(n));
         if !evaluate_nodes(model, &ws.tables, &mut ws.nodes, t, state, &ws.offsets) {
             return Err(StepFailure::SingularMatrix);
         }
-        let size = s * N;
+        let size = s * dimension;
         let mut lu = crate::linalg::DenseLu::new(size);
         let mut residual = DVector::zeros(size);
         assemble(
@@ -585,31 +651,32 @@ impl<const N: usize> Method<N> for SpectralCollocation {
         );
         lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
         // Columns: −∂R/∂q_k (N), then −∂R/∂q̇_k (N).
-        let mut sensitivity = DMatrix::zeros(size, 2 * N);
+        let mut sensitivity = DMatrix::zeros(size, 2 * dimension);
         for i in 0..s {
-            let from_q = ws.nodes[i].v * ws.tables.lambda0[i]
-                - SMatrix::<f64, N, N>::identity() * ws.tables.lambda_lambda0[i];
+            let from_q = &ws.nodes[i].v * ws.tables.lambda0[i]
+                - OMatrix::<f64, N, N>::identity_generic(n, n) * ws.tables.lambda_lambda0[i];
             sensitivity
-                .fixed_view_mut::<N, N>(i * N, 0)
+                .generic_view_mut((i * dimension, 0), (n, n))
                 .copy_from(&from_q);
-            for d in 0..N {
-                sensitivity[(i * N + d, N + d)] = -ws.tables.lambda0[i];
+            for d in 0..dimension {
+                sensitivity[(i * dimension + d, dimension + d)] = -ws.tables.lambda0[i];
             }
         }
         lu.solve_columns_in_place(&mut sensitivity);
-        let last = sensitivity.view(((s - 1) * N, 0), (N, 2 * N));
-        let mut velocity = DMatrix::zeros(N, 2 * N);
+        let last = sensitivity.view(((s - 1) * dimension, 0), (dimension, 2 * dimension));
+        let mut velocity = DMatrix::zeros(dimension, 2 * dimension);
         for j in 0..s {
-            velocity += sensitivity.view((j * N, 0), (N, 2 * N)) * ws.tables.lambda[(s - 1, j)];
+            velocity += sensitivity.view((j * dimension, 0), (dimension, 2 * dimension))
+                * ws.tables.lambda[(s - 1, j)];
         }
-        for d in 0..N {
+        for d in 0..dimension {
             velocity[(d, d)] += ws.tables.lambda0[s - 1];
         }
         let tangent = TangentMap {
-            qq: last.fixed_view::<N, N>(0, 0).into_owned(),
-            qy: last.fixed_view::<N, N>(0, N).into_owned(),
-            yq: velocity.fixed_view::<N, N>(0, 0).into_owned(),
-            yy: velocity.fixed_view::<N, N>(0, N).into_owned(),
+            qq: last.generic_view((0, 0), (n, n)).into_owned(),
+            qy: last.generic_view((0, dimension), (n, n)).into_owned(),
+            yq: velocity.generic_view((0, 0), (n, n)).into_owned(),
+            yy: velocity.generic_view((0, dimension), (n, n)).into_owned(),
         };
         Ok((increment, tangent))
     }
@@ -670,7 +737,7 @@ mod tests {
         (w.re, -w.im)
     }
 
-    fn assert_stability_step<L: Lagrangian<1>>(model: &L, points: usize) {
+    fn assert_stability_step<L: Lagrangian<U1>>(model: &L, points: usize) {
         let method = SpectralCollocation::new(points);
         let (q0, v0) = (0.6f64, 0.8);
         // The fixed-point path updates q̇ by the collocation quadrature h Σ bᵢ fᵢ: a few ulps.
@@ -695,7 +762,7 @@ mod tests {
             errors.push((after.q[0] - exact[0]).hypot(after.y[0] - exact[1]));
         }
         // A method of order p has local error C h^{p+1}: halving h divides it by 2^{p+1}.
-        let order = Method::<1>::info(&method).order as f64;
+        let order = Method::<U1>::info(&method).order as f64;
         let slope = (errors[0] / errors[1]).log2();
         assert!(
             (slope - (order + 1.0)).abs() < 0.1,
@@ -728,7 +795,7 @@ mod tests {
                 )
                 .unwrap();
             let r = collocation_stability(&cgl_collocation_nodes(points), Complex::new(0.0, h));
-            let expected = SMatrix::<f64, 2, 2>::new(r.re, r.im, -r.im, r.re);
+            let expected = nalgebra::SMatrix::<f64, 2, 2>::new(r.re, r.im, -r.im, r.re);
             let difference = (tangent.matrix() - expected).amax();
             // Round-off amplified by ‖Λ*‖ h ~ s², as in the velocity update: 7e-15 at 6 points.
             assert!(difference <= 2e-14, "points {points}: {difference:e}");
@@ -741,7 +808,7 @@ mod tests {
 
     /// Observed order (least-squares slope) of `method` on the oscillator from (q, q̇) = (0, 1)
     /// over [0, 4], against the exact solution (sin t, cos t).
-    fn oscillator_order<L: Lagrangian<1>>(method: &SpectralCollocation, model: &L) -> f64 {
+    fn oscillator_order<L: Lagrangian<U1>>(method: &SpectralCollocation, model: &L) -> f64 {
         let steps = [0.5, 0.25, 0.125, 0.0625];
         let errors: Vec<f64> = steps
             .iter()
@@ -758,7 +825,7 @@ mod tests {
     fn observed_order_on_the_oscillator_equals_declared_order() {
         for points in 3..=6 {
             let method = SpectralCollocation::new(points);
-            let declared = Method::<1>::info(&method).order as f64;
+            let declared = Method::<U1>::info(&method).order as f64;
             for order in [
                 oscillator_order(&method, &Oscillator::<false>),
                 oscillator_order(&method, &Oscillator::<true>),

@@ -12,7 +12,9 @@
 //!
 //! Families, one folder or file each: [`variational`] (SVI and the classic variational
 //! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
-//! (the multiscale variational integrator for stiff oscillations), and [`local`] (SVI and
+//! (the multiscale variational integrator for stiff oscillations), [`reference`] (explicit
+//! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references),
+//! and [`local`] (SVI and
 //! Störmer–Verlet on runtime-dimension models: chains, lattices, up to 10⁵ degrees of freedom
 //! and beyond).
 
@@ -20,6 +22,7 @@ pub mod collocation;
 pub mod lie_svi;
 pub mod local;
 pub mod multiscale;
+pub mod reference;
 pub mod registry;
 pub mod space;
 pub mod step;
@@ -31,9 +34,11 @@ pub use space::{
 };
 pub use step::Step;
 
+use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::model::Lagrangian;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector};
 
 /// Which second coordinate a method carries besides q.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,8 +90,12 @@ impl std::ops::AddAssign for StepReport {
     }
 }
 
-/// An integration method for Lagrangians on ℝᴺ.
-pub trait Method<const N: usize> {
+/// An integration method for Lagrangians on ℝᴺ, of fixed or run-time dimension: written once,
+/// generic over the [`Dimension`].
+pub trait Method<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// Buffers and precomputed tables of one run.
     type Workspace;
 
@@ -123,7 +132,7 @@ pub trait Method<const N: usize> {
         state: &State<N>,
         h: f64,
         theta: f64,
-    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
         let _ = (workspace, state, h, theta);
         None
     }
@@ -134,8 +143,8 @@ pub trait Method<const N: usize> {
     fn velocity(
         &self,
         workspace: &Self::Workspace,
-        p: &SVector<f64, N>,
-    ) -> Option<SVector<f64, N>> {
+        p: &OVector<f64, N>,
+    ) -> Option<OVector<f64, N>> {
         let _ = (workspace, p);
         None
     }

@@ -90,6 +90,7 @@
 //! quadrature of highly-oscillating integrals I: Fourier transforms*, IMA J. Numer. Anal.
 //! (2004).
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::linalg::invert_small;
 use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
@@ -99,7 +100,8 @@ use crate::nonlinear::{Jacobian, Newton};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::filon::FilonLobatto;
 use crate::spectral::{MAX_POINTS, check_points};
-use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
 
 /// Relative size of a non-decreasing Newton increment that counts as round-off. The Newton
 /// matrix's condition grows as hω falls (the oscillatory functions approach polynomials of
@@ -371,18 +373,23 @@ impl Tables {
     /// (A_e s + B_e c), and the polynomial part P(x) = q_k + Σ_ν z_ν l_ν(x) − Σ_e (A_e s +
     /// B_e (c − 1)) l_s(x) − Σ_e B_e xᵉ of the last step gives the new offsets
     /// z′_ν = P(x_ν + 2) + Σ_j B̂_j x_νʲ + δ_νs Σ_j (Â_j s + B̂_j (c − 1)) − q_{k+1}.
-    fn extrapolate<const N: usize>(&self, z: &DVector<f64>, next: &mut DVector<f64>) {
+    fn extrapolate<N: Dimension>(&self, n: N, z: &DVector<f64>, next: &mut DVector<f64>)
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let s = self.degree;
         let amplitudes = self.envelope + 1;
         let theta = 0.5 * self.h * self.omega;
         let (sin_end, cos_end) = (2.0 * theta).sin_cos();
-        let block = |v: &DVector<f64>, c: usize| v.fixed_rows::<N>(c * N).into_owned();
+        let size = n.value();
+        let block =
+            |v: &DVector<f64>, c: usize| v.generic_view((c * size, 0), (n, U1)).into_owned();
         let (a_col, b_col) = (|e: usize| s + e, |e: usize| s + amplitudes + e);
         next.fill(0.0);
         // Â and B̂ (binomial re-expansion of the envelopes about x′ = x − 2).
         for j in 0..amplitudes {
-            let mut a_hat = SVector::<f64, N>::zeros();
-            let mut b_hat = SVector::<f64, N>::zeros();
+            let mut a_hat = OVector::<f64, N>::zeros_generic(n, U1);
+            let mut b_hat = OVector::<f64, N>::zeros_generic(n, U1);
             let mut binomial = 1.0;
             for e in j..amplitudes {
                 // C(e, j) 2^{e−j}, built up from e = j.
@@ -390,19 +397,21 @@ impl Tables {
                     binomial *= e as f64 / (e - j) as f64 * 2.0;
                 }
                 let (a, b) = (block(z, a_col(e)), block(z, b_col(e)));
-                a_hat += (a * cos_end - b * sin_end) * binomial;
+                a_hat += (&a * cos_end - &b * sin_end) * binomial;
                 b_hat += (a * sin_end + b * cos_end) * binomial;
             }
-            next.fixed_rows_mut::<N>(a_col(j) * N).copy_from(&a_hat);
-            next.fixed_rows_mut::<N>(b_col(j) * N).copy_from(&b_hat);
+            next.generic_view_mut((a_col(j) * size, 0), (n, U1))
+                .copy_from(&a_hat);
+            next.generic_view_mut((b_col(j) * size, 0), (n, U1))
+                .copy_from(&b_hat);
         }
         let end = block(z, s - 1);
-        let mut end_shift = SVector::<f64, N>::zeros();
+        let mut end_shift = OVector::<f64, N>::zeros_generic(n, U1);
         for j in 0..amplitudes {
             let (a_hat, b_hat) = (block(next, a_col(j)), block(next, b_col(j)));
             end_shift += a_hat * sin_end + b_hat * (cos_end - 1.0);
         }
-        let mut last_shift = SVector::<f64, N>::zeros();
+        let mut last_shift = OVector::<f64, N>::zeros_generic(n, U1);
         for e in 0..amplitudes {
             last_shift += block(z, a_col(e)) * sin_end + block(z, b_col(e)) * (cos_end - 1.0);
         }
@@ -410,7 +419,7 @@ impl Tables {
             let x = self.nodes[nu];
             let row = &self.extrapolation[nu * (s + 1)..(nu + 1) * (s + 1)];
             // P(x_ν + 2) − q_{k+1}, with P relative to q_k.
-            let mut value = -end - last_shift * row[s];
+            let mut value = -&end - &last_shift * row[s];
             for (mu, &l) in row.iter().enumerate().skip(1) {
                 value += block(z, mu - 1) * l;
             }
@@ -421,9 +430,10 @@ impl Tables {
                 power *= x;
             }
             if nu == s {
-                value += end_shift;
+                value += &end_shift;
             }
-            next.fixed_rows_mut::<N>((nu - 1) * N).copy_from(&value);
+            next.generic_view_mut(((nu - 1) * size, 0), (n, U1))
+                .copy_from(&value);
         }
     }
 
@@ -438,25 +448,29 @@ impl Tables {
     }
 
     /// q and q̇ at point p for the unknowns z (offsets Z_ν − q_k, then amplitudes).
-    fn point<const N: usize>(
+    fn point<N: Dimension>(
         &self,
         p: usize,
-        q0: &SVector<f64, N>,
+        q0: &OVector<f64, N>,
         z: &DVector<f64>,
-    ) -> (SVector<f64, N>, SVector<f64, N>) {
+    ) -> (OVector<f64, N>, OVector<f64, N>)
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let count = self.basis;
         let value = &self.point_values[p * count..(p + 1) * count];
         let rate = &self.point_rates[p * count..(p + 1) * count];
-        let mut q = *q0;
-        let mut v = SVector::<f64, N>::zeros();
+        let (n, _) = q0.shape_generic();
+        let mut q = q0.clone();
+        let mut v = OVector::<f64, N>::zeros_generic(n, U1);
         // Unknown column c multiplies basis function c + 1 (`column_basis`).
         for ((zc, &value), &rate) in z
             .as_slice()
-            .chunks_exact(N)
+            .chunks_exact(n.value())
             .zip(&value[1..])
             .zip(&rate[1..])
         {
-            for d in 0..N {
+            for d in 0..n.value() {
                 q[d] += value * zc[d];
                 v[d] += rate * zc[d];
             }
@@ -471,7 +485,10 @@ impl Tables {
 
 /// Buffers of a multiscale run.
 #[derive(Debug, Clone)]
-pub struct MultiscaleWorkspace<const N: usize> {
+pub struct MultiscaleWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     tables: Tables,
     /// Unknowns: offsets Z_ν − q_k (ν = 1..s), then the amplitudes A_e, B_e (N each).
     unknowns: DVector<f64>,
@@ -486,7 +503,10 @@ pub struct MultiscaleWorkspace<const N: usize> {
     omega: Option<f64>,
 }
 
-impl<const N: usize> MultiscaleWorkspace<N> {
+impl<N: Dimension> MultiscaleWorkspace<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The fast angular frequency ω in use (after the first step, or as given).
     pub fn frequency(&self) -> Option<f64> {
         self.omega
@@ -495,26 +515,29 @@ impl<const N: usize> MultiscaleWorkspace<N> {
 
 /// The largest ω² of K x = ω² M x, M = L_q̇q̇, K = −L_qq at (t, q, q̇), by power iteration on
 /// M⁻¹K; `None` if M is singular or no positive ω² dominates.
-fn fast_frequency<L: Lagrangian<N>, const N: usize>(
+fn fast_frequency<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     t: f64,
-    q: &SVector<f64, N>,
-    v: &SVector<f64, N>,
-) -> Option<f64> {
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+) -> Option<f64>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let d = model.second_derivatives(t, q, v);
-    let stiffness: SMatrix<f64, N, N> = -d.qq;
-    let operator = invert_small(&d.vv)? * stiffness;
-    let mut x = SVector::<f64, N>::from_element(1.0);
+    let stiffness: OMatrix<f64, N, N> = -d.qq;
+    let operator = invert_small(&d.vv)? * &stiffness;
+    let mut x = OVector::<f64, N>::from_element_generic(q.shape_generic().0, U1, 1.0);
     let mut estimate = f64::NAN;
     for _ in 0..500 {
-        let y = operator * x;
+        let y = &operator * &x;
         let norm = y.amax();
         if !(norm.is_finite() && norm > 0.0) {
             return None;
         }
         x = y / norm;
         // Rayleigh quotient of the symmetric pencil (K, M).
-        let next = x.dot(&(stiffness * x)) / x.dot(&(d.vv * x));
+        let next = x.dot(&(&stiffness * &x)) / x.dot(&(&d.vv * &x));
         if (next - estimate).abs() <= 1e-14 * next.abs() {
             estimate = next;
             break;
@@ -528,7 +551,7 @@ fn fast_frequency<L: Lagrangian<N>, const N: usize>(
 /// the unknowns (the residual alone needs only the first derivatives of L: ∂L/∂q and ∂L/∂q̇
 /// at each point, while the Jacobian needs the Hessian blocks).
 #[allow(clippy::too_many_arguments)]
-fn assemble<L: Lagrangian<N>, const N: usize>(
+fn assemble<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     tables: &Tables,
     derivatives: &mut [SecondDerivatives<N>],
@@ -537,7 +560,11 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
     z: &DVector<f64>,
     jacobian: Option<&mut DMatrix<f64>>,
     residual: &mut DVector<f64>,
-) {
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = state.dimension();
+    let size = n.value();
     let count = tables.basis;
     let unknowns = count - 1;
     for (p, point) in derivatives.iter_mut().enumerate() {
@@ -553,15 +580,17 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
         }
     }
     residual.fill(0.0);
-    residual.fixed_rows_mut::<N>(0).copy_from(&state.y);
+    residual
+        .generic_view_mut((0, 0), (n, U1))
+        .copy_from(&state.y);
     for (p, d) in derivatives.iter().enumerate() {
         let w = tables.weights[p];
         let value = &tables.point_values[p * count..(p + 1) * count];
         let rate = &tables.point_rates[p * count..(p + 1) * count];
         for r in 0..unknowns {
             let b = tables.row_basis(r);
-            let mut row = residual.fixed_rows_mut::<N>(r * N);
-            row += (d.q * value[b] + d.v * rate[b]) * w;
+            let mut row = residual.generic_view_mut((r * size, 0), (n, U1));
+            row += (&d.q * value[b] + &d.v * rate[b]) * w;
         }
     }
     let Some(jacobian) = jacobian else {
@@ -575,19 +604,22 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
         let qv_t = d.qv.transpose();
         for c in 0..unknowns {
             let bc = tables.column_basis(c);
-            let from_q: SMatrix<f64, N, N> = (d.qq * value[bc] + d.qv * rate[bc]) * w;
-            let from_v: SMatrix<f64, N, N> = (qv_t * value[bc] + d.vv * rate[bc]) * w;
+            let from_q: OMatrix<f64, N, N> = (&d.qq * value[bc] + &d.qv * rate[bc]) * w;
+            let from_v: OMatrix<f64, N, N> = (&qv_t * value[bc] + &d.vv * rate[bc]) * w;
             for r in 0..unknowns {
                 let b = tables.row_basis(r);
-                let block = from_q * value[b] + from_v * rate[b];
-                let mut target = jacobian.fixed_view_mut::<N, N>(r * N, c * N);
+                let block = &from_q * value[b] + &from_v * rate[b];
+                let mut target = jacobian.generic_view_mut((r * size, c * size), (n, n));
                 target += block;
             }
         }
     }
 }
 
-impl<const N: usize> Method<N> for Multiscale {
+impl<N: Dimension> Method<N> for Multiscale
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const WITHOUT_POINTS: bool = true;
 
     type Workspace = MultiscaleWorkspace<N>;
@@ -595,7 +627,7 @@ impl<const N: usize> Method<N> for Multiscale {
     fn info(&self) -> MethodInfo {
         MethodInfo {
             name: "multiscale",
-            order: 2 * self.points.saturating_sub(1),
+            order: self.points.saturating_sub(1).saturating_mul(2),
             symmetric: false,
             symplectic: true,
             coordinates: Coordinates::Momentum,
@@ -604,7 +636,7 @@ impl<const N: usize> Method<N> for Multiscale {
 
     fn workspace<L: Lagrangian<N>>(
         &self,
-        _model: &L,
+        model: &L,
         h: f64,
     ) -> Result<MultiscaleWorkspace<N>, Error> {
         self.validate()?;
@@ -615,10 +647,12 @@ impl<const N: usize> Method<N> for Multiscale {
                 "multiscale does not support external forces (Lagrange–d'Alembert)",
             ));
         }
+        let n: N =
+            dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
         let tables = Tables::new(self)?;
-        let size = (tables.basis - 1) * N;
+        let size = (tables.basis - 1) * n.value();
         Ok(MultiscaleWorkspace {
-            derivatives: vec![SecondDerivatives::zeros(); tables.points()],
+            derivatives: vec![SecondDerivatives::zeros(n); tables.points()],
             tables,
             unknowns: DVector::zeros(size),
             previous: DVector::zeros(size),
@@ -640,6 +674,8 @@ impl<const N: usize> Method<N> for Multiscale {
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         let ws = workspace;
+        let n = state.dimension();
+        let size = n.value();
         // A cold start (first step, new h, after a restart) needs the velocity: the inverse
         // Legendre map, solved only then.
         let cold = !ws.warm || ws.omega.is_none() || ws.tables.h != h;
@@ -648,7 +684,7 @@ impl<const N: usize> Method<N> for Multiscale {
                 .velocity(t, &state.q, &state.y, &state.y)
                 .map_err(|_| StepFailure::NonFinite)?
         } else {
-            SVector::zeros()
+            OVector::zeros_generic(n, U1)
         };
         let omega = match ws.omega {
             Some(omega) => omega,
@@ -666,15 +702,15 @@ impl<const N: usize> Method<N> for Multiscale {
         }
         let s = ws.tables.degree;
         if ws.warm {
-            ws.tables.extrapolate::<N>(&ws.unknowns, &mut ws.previous);
+            ws.tables.extrapolate(n, &ws.unknowns, &mut ws.previous);
             std::mem::swap(&mut ws.unknowns, &mut ws.previous);
         } else {
             // Uniform motion with the initial velocity, no oscillation.
             ws.unknowns.fill(0.0);
             for nu in 1..=s {
-                let offset = velocity * (0.5 * h * (ws.tables.nodes[nu] + 1.0));
+                let offset = &velocity * (0.5 * h * (ws.tables.nodes[nu] + 1.0));
                 ws.unknowns
-                    .fixed_rows_mut::<N>((nu - 1) * N)
+                    .generic_view_mut(((nu - 1) * size, 0), (n, U1))
                     .copy_from(&offset);
             }
         }
@@ -695,12 +731,14 @@ impl<const N: usize> Method<N> for Multiscale {
                 assemble(model, tables, derivatives, t, state, z, jacobian, residual)
             })
             .inspect_err(|_| ws.warm = false)?;
-        let mut dp = SVector::<f64, N>::zeros();
+        let mut dp = OVector::<f64, N>::zeros_generic(n, U1);
         for p in 0..tables.points() {
             let (q, v) = tables.point(p, &state.q, &ws.unknowns);
             dp += model.force(tables.time(t, p), &q, &v) * tables.weights[p];
         }
-        increment.q = ws.unknowns.fixed_rows::<N>((s - 1) * N).into_owned();
+        increment
+            .q
+            .copy_from(&ws.unknowns.generic_view(((s - 1) * size, 0), (n, U1)));
         increment.y = dp;
         ws.warm = true;
         Ok(StepReport {
@@ -729,12 +767,14 @@ impl<const N: usize> Method<N> for Multiscale {
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let mut increment = State::zeros();
+        let n = state.dimension();
+        let dimension = n.value();
+        let mut increment = State::zeros(n);
         self.step(model, workspace, t, h, state, &mut increment)?;
         let tables = &workspace.tables;
         let count = tables.basis;
         let s = tables.degree;
-        let mut hessian = DMatrix::<f64>::zeros(count * N, count * N);
+        let mut hessian = DMatrix::<f64>::zeros(count * dimension, count * dimension);
         for p in 0..tables.points() {
             let (q, v) = tables.point(p, &state.q, &workspace.unknowns);
             let d = model.second_derivatives(tables.time(t, p), &q, &v);
@@ -742,50 +782,54 @@ impl<const N: usize> Method<N> for Multiscale {
             let value = &tables.point_values[p * count..(p + 1) * count];
             let rate = &tables.point_rates[p * count..(p + 1) * count];
             for c in 0..count {
-                let from_q: SMatrix<f64, N, N> = (d.qq * value[c] + d.qv * rate[c]) * w;
-                let from_v: SMatrix<f64, N, N> = (d.qv.transpose() * value[c] + d.vv * rate[c]) * w;
+                let from_q: OMatrix<f64, N, N> = (&d.qq * value[c] + &d.qv * rate[c]) * w;
+                let from_v: OMatrix<f64, N, N> =
+                    (d.qv.transpose() * value[c] + &d.vv * rate[c]) * w;
                 for r in 0..count {
-                    let mut target = hessian.fixed_view_mut::<N, N>(r * N, c * N);
-                    target += from_q * value[r] + from_v * rate[r];
+                    let mut target =
+                        hessian.generic_view_mut((r * dimension, c * dimension), (n, n));
+                    target += &from_q * value[r] + &from_v * rate[r];
                 }
             }
         }
         let unknowns = count - 1;
-        let size = unknowns * N;
+        let size = unknowns * dimension;
         let mut lu = crate::linalg::DenseLu::new(size);
-        let mut sensitivity = DMatrix::<f64>::zeros(size, 2 * N);
+        let mut sensitivity = DMatrix::<f64>::zeros(size, 2 * dimension);
         for r in 0..unknowns {
             let row = tables.row_basis(r);
             for c in 0..unknowns {
                 let column = tables.column_basis(c);
                 lu.matrix_mut()
-                    .fixed_view_mut::<N, N>(r * N, c * N)
-                    .copy_from(&hessian.fixed_view::<N, N>(row * N, column * N));
+                    .generic_view_mut((r * dimension, c * dimension), (n, n))
+                    .copy_from(
+                        &hessian.generic_view((row * dimension, column * dimension), (n, n)),
+                    );
             }
             sensitivity
-                .fixed_view_mut::<N, N>(r * N, 0)
-                .copy_from(&(-hessian.fixed_view::<N, N>(row * N, 0)));
+                .generic_view_mut((r * dimension, 0), (n, n))
+                .copy_from(&(-hessian.generic_view((row * dimension, 0), (n, n))));
         }
-        for i in 0..N {
-            sensitivity[(i, N + i)] = -1.0;
+        for i in 0..dimension {
+            sensitivity[(i, dimension + i)] = -1.0;
         }
         lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
         lu.solve_columns_in_place(&mut sensitivity);
         // Z_s is unknown column s − 1: its rows of the sensitivity are dq_{k+1}.
-        let last = sensitivity.view(((s - 1) * N, 0), (N, 2 * N));
-        let mut momentum = DMatrix::<f64>::zeros(N, 2 * N);
+        let last = sensitivity.view(((s - 1) * dimension, 0), (dimension, 2 * dimension));
+        let mut momentum = DMatrix::<f64>::zeros(dimension, 2 * dimension);
         for c in 0..unknowns {
             let column = tables.column_basis(c);
-            momentum += hessian.view((s * N, column * N), (N, N))
-                * sensitivity.view((c * N, 0), (N, 2 * N));
+            momentum += hessian.view((s * dimension, column * dimension), (dimension, dimension))
+                * sensitivity.view((c * dimension, 0), (dimension, 2 * dimension));
         }
-        let mut from_q0 = momentum.view_mut((0, 0), (N, N));
-        from_q0 += hessian.view((s * N, 0), (N, N));
+        let mut from_q0 = momentum.view_mut((0, 0), (dimension, dimension));
+        from_q0 += hessian.view((s * dimension, 0), (dimension, dimension));
         let tangent = TangentMap {
-            qq: last.fixed_view::<N, N>(0, 0).into_owned(),
-            qy: last.fixed_view::<N, N>(0, N).into_owned(),
-            yq: momentum.fixed_view::<N, N>(0, 0).into_owned(),
-            yy: momentum.fixed_view::<N, N>(0, N).into_owned(),
+            qq: last.generic_view((0, 0), (n, n)).into_owned(),
+            qy: last.generic_view((0, dimension), (n, n)).into_owned(),
+            yq: momentum.generic_view((0, 0), (n, n)).into_owned(),
+            yy: momentum.generic_view((0, dimension), (n, n)).into_owned(),
         };
         Ok((increment, tangent))
     }
@@ -795,6 +839,7 @@ impl<const N: usize> Method<N> for Multiscale {
 mod tests {
     use super::*;
     use crate::test_models::{Damped, HenonHeiles, Oscillator, VariableMass, advance, state};
+    use nalgebra::SVector;
 
     /// The harmonic oscillator's solution cos t lies in the function space, and along it the
     /// integrands of the stationarity conditions, (−q φ_b + q̇ φ̇_b)(x, ψ), are trigonometric
@@ -830,7 +875,7 @@ mod tests {
         assert!((omega - exact).abs() <= 1e-14, "{omega} vs {exact}");
         // An inverted oscillator has no positive ω².
         struct Inverted;
-        impl Lagrangian<1> for Inverted {
+        impl Lagrangian<nalgebra::U1> for Inverted {
             fn lagrangian<D: crate::scalar::Scalar>(
                 &self,
                 _t: D,
@@ -890,11 +935,14 @@ mod tests {
 
     #[test]
     fn invalid_options_are_typed_errors() {
-        let name =
-            |method: Multiscale| match Method::<1>::workspace(&method, &Oscillator::<false>, 1.0) {
-                Err(Error::InvalidParameter { name, .. }) => name,
-                other => panic!("expected InvalidParameter, got {other:?}"),
-            };
+        let name = |method: Multiscale| match Method::<U1>::workspace(
+            &method,
+            &Oscillator::<false>,
+            1.0,
+        ) {
+            Err(Error::InvalidParameter { name, .. }) => name,
+            other => panic!("expected InvalidParameter, got {other:?}"),
+        };
         assert_eq!(name(Multiscale::new(1)), "points");
         assert_eq!(name(Multiscale::new(3).with_filon(1)), "filon");
         assert_eq!(name(Multiscale::new(3).with_envelope(3)), "envelope");
@@ -905,11 +953,11 @@ mod tests {
         );
         assert_eq!(name(Multiscale::new(3).with_frequency(-1.0)), "frequency");
         assert!(matches!(
-            Method::<1>::workspace(&Multiscale::default(), &Oscillator::<false>, 0.0),
+            Method::<U1>::workspace(&Multiscale::default(), &Oscillator::<false>, 0.0),
             Err(Error::InvalidParameter { ref name, .. }) if name == "h"
         ));
         assert!(matches!(
-            Method::<1>::workspace(&Multiscale::default(), &Damped::<false> { c: 0.1 }, 1.0),
+            Method::<U1>::workspace(&Multiscale::default(), &Damped::<false> { c: 0.1 }, 1.0),
             Err(Error::InvalidParameter { ref name, .. }) if name == "method"
         ));
     }

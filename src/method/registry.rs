@@ -27,11 +27,13 @@
 use std::fmt;
 use std::str::FromStr;
 
+use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::local::LocalMethod;
 use crate::method::multiscale::Multiscale;
+use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
 use crate::method::variational::composition::{Composition, Scheme};
 use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
@@ -41,6 +43,8 @@ use crate::method::variational::svi::{Solver, Svi};
 use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::{Method, MethodInfo};
 use crate::spectral::{check_points, check_quadrature};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, U1};
 
 /// The numeric options a method's name takes in the grammar, with their defaults (read off
 /// the method type's `Default`).
@@ -162,6 +166,26 @@ pub const METHODS: &[Entry] = &[
         options: Options::None,
         space: SpaceKind::Vector,
         summary: "trapezoidal discrete Lagrangian, always implicit",
+    },
+    Entry {
+        name: "explicit-euler",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "explicit Euler on the Euler–Lagrange equations: a non-symplectic reference",
+    },
+    Entry {
+        name: "implicit-euler",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "implicit Euler on the Euler–Lagrange equations (Newton): a non-symplectic \
+                  reference",
+    },
+    Entry {
+        name: "rk4",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "classical Runge–Kutta of order 4 on the Euler–Lagrange equations: a \
+                  non-symplectic reference",
     },
     Entry {
         name: "multiscale",
@@ -307,8 +331,12 @@ impl Default for MethodSpec {
     }
 }
 
-/// Receives the method of a [`MethodSpec`] for models on ℝᴺ as its concrete type.
-pub trait VectorMethodVisitor<const N: usize> {
+/// Receives the method of a [`MethodSpec`] for models on ℝᴺ as its concrete type; N is fixed
+/// (`Const<N>`) or chosen at run time ([`crate::dimension::Dyn`]).
+pub trait VectorMethodVisitor<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// What the visit returns.
     type Output;
     /// Use `method`.
@@ -327,9 +355,9 @@ pub trait LocalMethodVisitor {
 /// Reads the [`MethodInfo`] of the visited method.
 struct InfoOf;
 
-impl VectorMethodVisitor<1> for InfoOf {
+impl VectorMethodVisitor<U1> for InfoOf {
     type Output = MethodInfo;
-    fn visit<M: Method<1> + Clone>(self, method: M) -> MethodInfo {
+    fn visit<M: Method<U1> + Clone>(self, method: M) -> MethodInfo {
         method.info()
     }
 }
@@ -457,10 +485,13 @@ impl MethodSpec {
     /// Build the method for models on ℝᴺ and hand it to `visitor`: the one place where a
     /// method name becomes a type (no trait objects). An error names the method if it
     /// integrates rigid bodies.
-    pub fn visit_vector<V: VectorMethodVisitor<N>, const N: usize>(
+    pub fn visit_vector<V: VectorMethodVisitor<N>, N: Dimension>(
         &self,
         visitor: V,
-    ) -> Result<V::Output, Error> {
+    ) -> Result<V::Output, Error>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         if let Some(scheme) = Scheme::named(self.entry.name) {
             return Ok(visitor.visit(Composition::new(scheme)));
         }
@@ -485,6 +516,9 @@ impl MethodSpec {
             "verlet" => visitor.visit(StormerVerlet::default()),
             "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
             "multiscale" => visitor.visit(Multiscale::new(points)),
+            "explicit-euler" => visitor.visit(ExplicitEuler),
+            "implicit-euler" => visitor.visit(ImplicitEuler::default()),
+            "rk4" => visitor.visit(RungeKutta4),
             _ => {
                 self.check_space(SpaceKind::Vector)?;
                 return Err(Error::invalid(
@@ -659,18 +693,40 @@ impl FromStr for MethodSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dimension::{Dyn, dimension_of};
     use crate::lie_group::RigidBodyLagrangian;
+    use crate::method::State;
     use crate::model::Lagrangian;
     use crate::scalar::Scalar;
     use crate::spectral::MAX_POINTS;
-    use nalgebra::{Matrix3, SVector, Vector3};
+    use crate::test_models::{AsDyn, HenonHeiles, VariableMass};
+    use nalgebra::{Matrix3, OVector, SVector, U2, Vector3};
 
     /// A tiny model on ℝ²: two uncoupled oscillators.
     struct Oscillators;
-    impl Lagrangian<2> for Oscillators {
+    impl Lagrangian<U2> for Oscillators {
         const TIME_DEPENDENT: bool = false;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
             (v.dot(v) - q.dot(q)) * 0.5
+        }
+    }
+
+    /// Hénon–Heiles with a constant mass (the explicit and fixed-point paths) and a force
+    /// f_L = (−0.2 q̇₀, 0.1 cos t − 0.3 q₀ q̇₁).
+    struct Pushed;
+    impl Lagrangian<U2> for Pushed {
+        const STRUCTURE: crate::model::Structure = crate::model::Structure::ConstantMass;
+        const FORCED: bool = true;
+        fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            HenonHeiles::<true>.lagrangian(t, q, v)
+        }
+        fn external_force<D: Scalar>(
+            &self,
+            t: D,
+            q: &SVector<D, 2>,
+            v: &SVector<D, 2>,
+        ) -> SVector<D, 2> {
+            SVector::from([v[0] * (-0.2), t.cos() * 0.1 - q[0] * v[1] * 0.3])
         }
     }
 
@@ -738,7 +794,7 @@ mod tests {
     fn bad_spellings_are_typed_errors_naming_the_text() {
         for bad in [
             "",
-            "rk4",
+            "dopri5",
             "svi:",
             "svi:x",
             "svi:6/",
@@ -770,7 +826,7 @@ mod tests {
             assert_eq!(name, "method", "{bad}");
             assert!(reason.contains(&format!("'{bad}'")), "{bad}: {reason}");
         }
-        let unknown = "rk4".parse::<MethodSpec>().unwrap_err().to_string();
+        let unknown = "rk45".parse::<MethodSpec>().unwrap_err().to_string();
         assert!(
             unknown.contains("known: svi, svi-newton, sc, symplectic-euler,"),
             "{unknown}"
@@ -787,7 +843,7 @@ mod tests {
         for points in [0, 1, 2, 3, MAX_POINTS, MAX_POINTS + 1] {
             let text = format!("svi:{points}/1");
             let workspace =
-                Method::<2>::workspace(&Svi::new(points).with_quadrature(1), &Oscillators, 0.1);
+                Method::<U2>::workspace(&Svi::new(points).with_quadrature(1), &Oscillators, 0.1);
             assert_eq!(
                 text.parse::<MethodSpec>().is_ok(),
                 workspace.is_ok(),
@@ -795,7 +851,7 @@ mod tests {
             );
             let text = format!("sc:{points}");
             let workspace =
-                Method::<2>::workspace(&SpectralCollocation::new(points), &Oscillators, 0.1);
+                Method::<U2>::workspace(&SpectralCollocation::new(points), &Oscillators, 0.1);
             assert_eq!(
                 text.parse::<MethodSpec>().is_ok(),
                 workspace.is_ok(),
@@ -804,8 +860,11 @@ mod tests {
         }
         for quadrature in [0, 1, MAX_POINTS, MAX_POINTS + 1] {
             let text = format!("svi:2/{quadrature}");
-            let workspace =
-                Method::<2>::workspace(&Svi::new(2).with_quadrature(quadrature), &Oscillators, 0.1);
+            let workspace = Method::<U2>::workspace(
+                &Svi::new(2).with_quadrature(quadrature),
+                &Oscillators,
+                0.1,
+            );
             assert_eq!(
                 text.parse::<MethodSpec>().is_ok(),
                 workspace.is_ok(),
@@ -853,7 +912,7 @@ mod tests {
         let sc = spec("sc:9").info().unwrap();
         assert_eq!(
             sc.order,
-            Method::<1>::info(&SpectralCollocation::new(9)).order
+            Method::<U1>::info(&SpectralCollocation::new(9)).order
         );
         assert!(!sc.symplectic);
         assert_eq!(spec("midpoint").info().unwrap().order, 2);
@@ -867,9 +926,9 @@ mod tests {
 
     /// Runs one step of the visited method on [`Oscillators`].
     struct OneStep;
-    impl VectorMethodVisitor<2> for OneStep {
+    impl VectorMethodVisitor<U2> for OneStep {
         type Output = Result<(), Error>;
-        fn visit<M: Method<2> + Clone>(self, method: M) -> Result<(), Error> {
+        fn visit<M: Method<U2> + Clone>(self, method: M) -> Result<(), Error> {
             // The constants that decide what is compiled for the method tell the truth.
             let name = method.info().name;
             assert!(!M::WITHOUT_POINTS || method.points().is_none(), "{name}");
@@ -942,6 +1001,110 @@ mod tests {
             Form::Reduced
         );
         assert_eq!(spec("lie-svi:3/2").lie_svi().unwrap().quadrature, Some(2));
+    }
+
+    /// Four steps of the visited method from (q, y), then the tangent map of a fifth, on a
+    /// model of fixed or run-time size: the end state, the fifth increment and the tangent
+    /// map's entries, or the error that stopped it.
+    struct Trace<L> {
+        model: L,
+        q: [f64; 2],
+        y: [f64; 2],
+    }
+
+    impl<L: Lagrangian<N>, N: Dimension> VectorMethodVisitor<N> for Trace<L>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        type Output = Result<Vec<f64>, String>;
+        fn visit<M: Method<N> + Clone>(self, method: M) -> Result<Vec<f64>, String> {
+            // The multiscale method needs steps of a fast period or more.
+            let h = if method.info().name == "multiscale" {
+                7.0
+            } else {
+                0.1
+            };
+            let n: N = dimension_of(self.model.dimension())?;
+            let start = State {
+                q: OVector::from_column_slice_generic(n, U1, &self.q),
+                y: OVector::from_column_slice_generic(n, U1, &self.y),
+            };
+            let mut workspace = method
+                .workspace(&self.model, h)
+                .map_err(|error| error.to_string())?;
+            let (mut state, mut increment) = (start.clone(), State::zeros(n));
+            for k in 0..4 {
+                method
+                    .step(
+                        &self.model,
+                        &mut workspace,
+                        k as f64 * h,
+                        h,
+                        &state,
+                        &mut increment,
+                    )
+                    .map_err(|failure| format!("{failure:?}"))?;
+                state.q += &increment.q;
+                state.y += &increment.y;
+            }
+            let (fifth, tangent) = method
+                .tangent_map(&self.model, &mut workspace, 4.0 * h, h, &state)
+                .map_err(|failure| format!("{failure:?}"))?;
+            Ok([&state.q, &state.y, &fifth.q, &fifth.y]
+                .into_iter()
+                .flat_map(|x| x.iter().copied())
+                .chain(tangent.matrix().iter().copied())
+                .collect())
+        }
+    }
+
+    /// Every method of ℝᴺ takes the same steps, to round-off, on a model of run-time size
+    /// ([`Dyn`]: scalar dual sweeps, heap vectors) as on the same model of fixed size, on each
+    /// of its paths: a general Lagrangian, a constant mass matrix (explicit Störmer–Verlet,
+    /// the fixed-point iterations of svi and sc) and an external force.
+    #[test]
+    fn every_vector_method_steps_alike_at_fixed_and_run_time_size() {
+        fn compare<L: Lagrangian<U2>>(entry: &'static Entry, model: fn() -> L, must_run: bool) {
+            let spec = entry.spec();
+            let (q, y) = ([0.3, -0.2], [0.1, 0.4]);
+            let fixed = spec
+                .visit_vector::<_, U2>(Trace {
+                    model: model(),
+                    q,
+                    y,
+                })
+                .unwrap();
+            let run_time = spec
+                .visit_vector::<_, Dyn>(Trace {
+                    model: AsDyn::<_, U2>::new(model()),
+                    q,
+                    y,
+                })
+                .unwrap();
+            match (fixed, run_time) {
+                (Ok(a), Ok(b)) => {
+                    assert_eq!(a.len(), b.len(), "{}", entry.name);
+                    for (x, z) in a.iter().zip(&b) {
+                        assert!(
+                            (x - z).abs() <= 1e-12 * x.abs().max(1.0),
+                            "{}: {x} vs {z}\n{a:?}\n{b:?}",
+                            entry.name
+                        );
+                    }
+                }
+                (Err(a), Err(b)) if !must_run => assert_eq!(a, b, "{}", entry.name),
+                (a, b) => panic!("{}: {a:?} vs {b:?}", entry.name),
+            }
+        }
+        for entry in METHODS
+            .iter()
+            .filter(|entry| entry.space == SpaceKind::Vector)
+        {
+            compare(entry, || Oscillators, true);
+            compare(entry, || VariableMass, entry.name != "multiscale");
+            compare(entry, || HenonHeiles::<true>, entry.name != "multiscale");
+            compare(entry, || Pushed, entry.name != "multiscale");
+        }
     }
 
     #[test]

@@ -10,10 +10,12 @@
 //! (Kahan) summation, so a run of 10⁶ steps keeps the accuracy of its steps (on SO(3) this is
 //! what keeps R orthogonal to round-off without re-orthonormalisation).
 
+use crate::dimension::Dimension;
 use crate::error::StepFailure;
 use crate::linalg::{compensated_add, compensated_sum_extent};
 use crate::model::so3::{Matrix3, Vector3};
-use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, SMatrix, U1};
 use std::fmt::Debug;
 
 /// What the stepping core does with a state in a method's coordinates.
@@ -96,33 +98,49 @@ pub trait Space: Copy + Debug + PartialEq + Default + 'static {
     fn size_and_speed(point: &Self::Point) -> (f64, f64);
 }
 
-/// ℝᴺ: configurations q ∈ ℝᴺ, models [`crate::Lagrangian`]`<N>`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Euclidean<const N: usize>;
+/// ℝᴺ: configurations q ∈ ℝᴺ, models [`crate::Lagrangian`]`<N>`, with N fixed (`Const<N>`)
+/// or chosen at run time ([`crate::dimension::Dyn`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Euclidean<N>(std::marker::PhantomData<N>);
 
-impl<const N: usize> Space for Euclidean<N> {
+impl<N> Default for Euclidean<N> {
+    fn default() -> Self {
+        Euclidean(std::marker::PhantomData)
+    }
+}
+
+impl<N: PartialEq> Eq for Euclidean<N> {}
+
+impl<N: Dimension> Space for Euclidean<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type State = State<N>;
     type Point = PhasePoint<N>;
     type Initial = Initial<N>;
-    type Velocity = SVector<f64, N>;
+    type Velocity = OVector<f64, N>;
     type Tangent = TangentMap<N>;
 
-    fn node_width(_state: &State<N>) -> usize {
-        N
+    fn node_width(state: &State<N>) -> usize {
+        state.q.len()
     }
 
     fn time(point: &PhasePoint<N>) -> f64 {
         point.t
     }
 
-    fn velocity(point: &PhasePoint<N>) -> SVector<f64, N> {
-        point.v
+    fn velocity(point: &PhasePoint<N>) -> OVector<f64, N> {
+        point.v.clone()
     }
 
-    fn initial_guess(initial: &Initial<N>) -> SVector<f64, N> {
+    fn assign_velocity(velocity: &mut OVector<f64, N>, point: &PhasePoint<N>) {
+        velocity.copy_from(&point.v);
+    }
+
+    fn initial_guess(initial: &Initial<N>) -> OVector<f64, N> {
         match initial {
-            Initial::Velocity { v, .. } => *v,
-            Initial::Momentum { p, .. } => *p,
+            Initial::Velocity { v, .. } => v.clone(),
+            Initial::Momentum { p, .. } => p.clone(),
         }
     }
 
@@ -138,21 +156,39 @@ impl<const N: usize> Space for Euclidean<N> {
 /// The state a method on ℝᴺ advances: configuration `q` and `y`, which is the momentum p for
 /// [`crate::Coordinates::Momentum`] methods and the velocity q̇ for
 /// [`crate::Coordinates::Velocity`] ones.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct State<const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct State<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// Configuration q.
-    pub q: SVector<f64, N>,
+    pub q: OVector<f64, N>,
     /// Momentum p or velocity q̇, according to the method's [`crate::Coordinates`].
-    pub y: SVector<f64, N>,
+    pub y: OVector<f64, N>,
 }
 
-impl<const N: usize> State<N> {
-    /// The zero state (used for increments).
-    pub fn zeros() -> Self {
+impl<N: Dimension> Copy for State<N>
+where
+    DefaultAllocator: Allocator<N>,
+    OVector<f64, N>: Copy,
+{
+}
+
+impl<N: Dimension> State<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// The zero state of dimension `n` (used for increments).
+    pub fn zeros(n: N) -> Self {
         State {
-            q: SVector::zeros(),
-            y: SVector::zeros(),
+            q: OVector::zeros_generic(n, U1),
+            y: OVector::zeros_generic(n, U1),
         }
+    }
+
+    /// The dimension of the state.
+    pub fn dimension(&self) -> N {
+        self.q.shape_generic().0
     }
 
     /// Whether every component is finite.
@@ -161,25 +197,29 @@ impl<const N: usize> State<N> {
     }
 }
 
-impl<const N: usize> StepState for State<N> {
+impl<N: Dimension> StepState for State<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
     fn zeros_like(&self) -> Self {
-        State::zeros()
+        State::zeros(self.dimension())
     }
 
     fn assign(&mut self, other: &Self) {
-        *self = *other;
+        self.q.copy_from(&other.q);
+        self.y.copy_from(&other.y);
     }
 
     fn plus(&self, increment: &Self) -> Self {
         State {
-            q: self.q + increment.q,
-            y: self.y + increment.y,
+            q: &self.q + &increment.q,
+            y: &self.y + &increment.y,
         }
     }
 
     fn add(&mut self, increment: &Self) {
-        self.q += increment.q;
-        self.y += increment.y;
+        self.q += &increment.q;
+        self.y += &increment.y;
     }
 
     fn add_compensated(&mut self, compensation: &mut Self, increment: &Self) {
@@ -204,83 +244,168 @@ impl<const N: usize> StepState for State<N> {
     }
 
     fn distance(&self, other: &Self) -> f64 {
-        (self.q - other.q).amax().max((self.y - other.y).amax())
+        let apart = |a: &OVector<f64, N>, b: &OVector<f64, N>| {
+            a.iter()
+                .zip(b.iter())
+                .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        };
+        apart(&self.q, &other.q).max(apart(&self.y, &other.y))
     }
 }
 
 /// A complete phase-space point on ℝᴺ: time, configuration, velocity and momentum.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PhasePoint<const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhasePoint<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// Time t.
     pub t: f64,
     /// Configuration q.
-    pub q: SVector<f64, N>,
+    pub q: OVector<f64, N>,
     /// Velocity q̇.
-    pub v: SVector<f64, N>,
+    pub v: OVector<f64, N>,
     /// Momentum p = ∂L/∂q̇.
-    pub p: SVector<f64, N>,
+    pub p: OVector<f64, N>,
 }
 
 /// An initial state on ℝᴺ: configuration with either velocity or momentum.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Initial<const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub enum Initial<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// (q0, q̇0).
     Velocity {
         /// Configuration.
-        q: SVector<f64, N>,
+        q: OVector<f64, N>,
         /// Velocity.
-        v: SVector<f64, N>,
+        v: OVector<f64, N>,
     },
     /// (q0, p0).
     Momentum {
         /// Configuration.
-        q: SVector<f64, N>,
+        q: OVector<f64, N>,
         /// Momentum.
-        p: SVector<f64, N>,
+        p: OVector<f64, N>,
     },
 }
 
 /// The Jacobian Φ of one step (q, y) ↦ (q', y') on ℝᴺ, in blocks.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TangentMap<const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct TangentMap<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// ∂q'/∂q.
-    pub qq: SMatrix<f64, N, N>,
+    pub qq: OMatrix<f64, N, N>,
     /// ∂q'/∂y.
-    pub qy: SMatrix<f64, N, N>,
+    pub qy: OMatrix<f64, N, N>,
     /// ∂y'/∂q.
-    pub yq: SMatrix<f64, N, N>,
+    pub yq: OMatrix<f64, N, N>,
     /// ∂y'/∂y.
-    pub yy: SMatrix<f64, N, N>,
+    pub yy: OMatrix<f64, N, N>,
 }
 
-impl<const N: usize> TangentMap<N> {
+impl<N: Dimension> Copy for PhasePoint<N>
+where
+    DefaultAllocator: Allocator<N>,
+    OVector<f64, N>: Copy,
+{
+}
+
+impl<N: Dimension> Copy for Initial<N>
+where
+    DefaultAllocator: Allocator<N>,
+    OVector<f64, N>: Copy,
+{
+}
+
+impl<N: Dimension> Copy for TangentMap<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    OMatrix<f64, N, N>: Copy,
+{
+}
+
+impl<N: Dimension> PhasePoint<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// The point of dimension `n` at t = 0 with every coordinate zero (a buffer).
+    pub fn zeros(n: N) -> Self {
+        PhasePoint {
+            t: 0.0,
+            q: OVector::zeros_generic(n, U1),
+            v: OVector::zeros_generic(n, U1),
+            p: OVector::zeros_generic(n, U1),
+        }
+    }
+}
+
+impl<N: Dimension> Initial<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// The configuration q0.
+    pub fn position(&self) -> &OVector<f64, N> {
+        match self {
+            Initial::Velocity { q, .. } | Initial::Momentum { q, .. } => q,
+        }
+    }
+}
+
+impl<N: Dimension> TangentMap<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// The identity map of dimension `n`.
+    pub fn identity(n: N) -> Self {
+        TangentMap {
+            qq: OMatrix::identity_generic(n, n),
+            qy: OMatrix::zeros_generic(n, n),
+            yq: OMatrix::zeros_generic(n, n),
+            yy: OMatrix::identity_generic(n, n),
+        }
+    }
+
+    /// The dimension N (the map is 2N × 2N).
+    pub fn dimension(&self) -> usize {
+        self.qq.nrows()
+    }
+
     /// The full 2N×2N matrix [[qq, qy], [yq, yy]].
     pub fn matrix(&self) -> DMatrix<f64> {
-        let mut m = DMatrix::zeros(2 * N, 2 * N);
-        m.view_mut((0, 0), (N, N)).copy_from(&self.qq);
-        m.view_mut((0, N), (N, N)).copy_from(&self.qy);
-        m.view_mut((N, 0), (N, N)).copy_from(&self.yq);
-        m.view_mut((N, N), (N, N)).copy_from(&self.yy);
-        m
+        let n = self.dimension();
+        DMatrix::from_fn(2 * n, 2 * n, |i, j| {
+            let block = match (i < n, j < n) {
+                (true, true) => &self.qq,
+                (true, false) => &self.qy,
+                (false, true) => &self.yq,
+                (false, false) => &self.yy,
+            };
+            block[(i % n, j % n)]
+        })
     }
 
     /// The Jacobian of this step followed by `next` (the block product next · self).
     pub fn then(&self, next: &TangentMap<N>) -> TangentMap<N> {
         TangentMap {
-            qq: next.qq * self.qq + next.qy * self.yq,
-            qy: next.qq * self.qy + next.qy * self.yy,
-            yq: next.yq * self.qq + next.yy * self.yq,
-            yy: next.yq * self.qy + next.yy * self.yy,
+            qq: &next.qq * &self.qq + &next.qy * &self.yq,
+            qy: &next.qq * &self.qy + &next.qy * &self.yy,
+            yq: &next.yq * &self.qq + &next.yy * &self.yq,
+            yy: &next.yq * &self.qy + &next.yy * &self.yy,
         }
     }
 
     /// ‖ΦᵀJΦ − J‖_max with J = [[0, I], [−I, 0]]: zero for a symplectic map in (q, p).
     pub fn symplecticity_error(&self) -> f64 {
         let phi = self.matrix();
-        let mut j = DMatrix::zeros(2 * N, 2 * N);
-        for i in 0..N {
-            j[(i, N + i)] = 1.0;
-            j[(N + i, i)] = -1.0;
+        let n = self.dimension();
+        let mut j = DMatrix::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            j[(i, n + i)] = 1.0;
+            j[(n + i, i)] = -1.0;
         }
         (phi.transpose() * &j * &phi - j).amax()
     }

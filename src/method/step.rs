@@ -11,12 +11,15 @@
 //! blanket implementation below; the Lie-group integrator implements [`Step`] on
 //! [`crate::method::SO3`] itself ([`crate::lie_group::LieSvi`]).
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure, require_finite_entries};
 use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, TangentMap};
 use crate::method::{Coordinates, Method, MethodInfo, StepReport};
 use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure};
-use nalgebra::SVector;
+use crate::spectral::MAX_POINTS;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector};
 
 /// The cubic Hermite basis on a step [t_a, t_b] of length h at s = (time − t_a)/h: the
 /// interpolant of (q_a, q̇_a, q_b, q̇_b) is q = w₀q_a + h w₁q̇_a + w₂q_b + h w₃q̇_b, its
@@ -213,7 +216,42 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 }
 
-impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M {
+/// Most entries of one dense matrix a method on ℝᴺ may hold: 2²⁷ (1 GiB of `f64`). The methods
+/// on ℝᴺ keep dense N × N matrices (the mass matrix and its inverse, the tangent map) and the
+/// spectral ones a dense (N·P)² Newton matrix; a run-time-size model beyond this is refused
+/// before anything is allocated.
+pub const MAX_DENSE_ENTRIES: usize = 1 << 27;
+
+/// Refuse `method` with `points` interpolation points on a model of `size` coordinates when
+/// its dense Newton matrix, (2·size·points)² entries at most, would exceed
+/// [`MAX_DENSE_ENTRIES`]: the error names the method, the size and the reason, and says what
+/// serves.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] `model`.
+pub fn dense_size(method: &str, size: usize, points: usize) -> Result<(), Error> {
+    let rows = size.saturating_mul(points.max(1)).saturating_mul(2);
+    let entries = rows.saturating_mul(rows);
+    if entries <= MAX_DENSE_ENTRIES {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "model",
+        format!(
+            "{method} on a model of {size} coordinates would hold a dense {rows} × {rows} \
+             matrix ({:.1} GiB, more than the {} GiB a dense method may take); a model this \
+             large runs when it is written as a sum of local terms (a chain or lattice: sparse \
+             Newton and explicit Störmer–Verlet)",
+            entries as f64 * 8.0 / f64::from(1 << 30),
+            (MAX_DENSE_ENTRIES * 8) >> 30
+        ),
+    ))
+}
+
+impl<L: Lagrangian<N>, M: Method<N>, N: Dimension> Step<L, Euclidean<N>> for M
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Workspace = M::Workspace;
     const WITHOUT_POINTS: bool = <M as Method<N>>::WITHOUT_POINTS;
 
@@ -221,7 +259,15 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         Method::info(self)
     }
 
+    /// The method's workspace, after checking that the dense matrices of a run-time-size model
+    /// fit ([`dense_size`]).
     fn workspace(&self, model: &L, h: f64) -> Result<M::Workspace, Error> {
+        // Only a run-time size can be too large (a fixed one is compiled in), and options out
+        // of range are the method's to report.
+        if N::try_to_usize().is_none() {
+            let points = Method::points(self).unwrap_or(1).min(MAX_POINTS);
+            dense_size(Method::info(self).name, model.dimension(), points)?;
+        }
         Method::workspace(self, model, h)
     }
 
@@ -257,15 +303,28 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
             Initial::Velocity { q, v } => (q, v, "initial velocity"),
             Initial::Momentum { q, p } => (q, p, "initial momentum"),
         };
+        let size = model.dimension();
+        dimension_of::<N>(size).map_err(|reason| Error::invalid("model", reason))?;
+        for (what, x) in [("initial position", q), (name, second)] {
+            if x.len() != size {
+                return Err(Error::invalid(
+                    "initial state",
+                    format!(
+                        "the {what} has {} entries, the model {size} coordinates",
+                        x.len()
+                    ),
+                ));
+            }
+        }
         require_finite_entries("initial position", q)?;
         require_finite_entries(name, second)?;
         let y = match (Method::info(self).coordinates, initial) {
-            (Coordinates::Momentum, Initial::Momentum { p, .. }) => *p,
-            (Coordinates::Velocity, Initial::Velocity { v, .. }) => *v,
+            (Coordinates::Momentum, Initial::Momentum { p, .. }) => p.clone(),
+            (Coordinates::Velocity, Initial::Velocity { v, .. }) => v.clone(),
             (Coordinates::Momentum, Initial::Velocity { q, v }) => model.momentum(t0, q, v),
             (Coordinates::Velocity, Initial::Momentum { q, p }) => model.velocity(t0, q, p, p)?,
         };
-        let state = State { q: *q, y };
+        let state = State { q: q.clone(), y };
         if !state.is_finite() {
             return Err(Error::NonFinite {
                 what: format!(
@@ -291,13 +350,13 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         if L::STRUCTURE != Structure::ConstantMass {
             return Ok(());
         }
-        let shifted = state.y * 2.0 + SVector::repeat(1.0);
+        let shifted = state.y.map(|y| 2.0 * y + 1.0);
         let first = model.second_derivatives(t, &state.q, &state.y);
         let second = model.second_derivatives(t, &state.q, &shifted);
         let scale = 1.0 + first.vv.amax() + first.qq.amax();
         let coupling = first.qv.amax().max(second.qv.amax());
-        let change = (first.vv - second.vv).amax();
-        let linear = model.momentum(t, &state.q, &SVector::zeros()).amax();
+        let change = (&first.vv - &second.vv).amax();
+        let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
         if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
             return Err(Error::invalid(
                 "structure",
@@ -317,7 +376,7 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
         workspace: Option<&M::Workspace>,
         t: f64,
         state: &State<N>,
-        guess: &SVector<f64, N>,
+        guess: &OVector<f64, N>,
     ) -> Result<PhasePoint<N>, Error> {
         let (v, p) = match Method::info(self).coordinates {
             Coordinates::Momentum => {
@@ -326,26 +385,26 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
                     Some(v) => v,
                     None => model.velocity(t, &state.q, &state.y, guess)?,
                 };
-                (v, state.y)
+                (v, state.y.clone())
             }
-            Coordinates::Velocity => (state.y, model.momentum(t, &state.q, &state.y)),
+            Coordinates::Velocity => (state.y.clone(), model.momentum(t, &state.q, &state.y)),
         };
         Ok(PhasePoint {
             t,
-            q: state.q,
+            q: state.q.clone(),
             v,
             p,
         })
     }
 
-    fn incomplete(&self, t: f64, state: &State<N>, guess: &SVector<f64, N>) -> PhasePoint<N> {
+    fn incomplete(&self, t: f64, state: &State<N>, guess: &OVector<f64, N>) -> PhasePoint<N> {
         let (v, p) = match Method::info(self).coordinates {
-            Coordinates::Momentum => (*guess, state.y),
-            Coordinates::Velocity => (state.y, *guess),
+            Coordinates::Momentum => (guess.clone(), state.y.clone()),
+            Coordinates::Velocity => (state.y.clone(), guess.clone()),
         };
         PhasePoint {
             t,
-            q: state.q,
+            q: state.q.clone(),
             v,
             p,
         }
@@ -366,12 +425,8 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
     ) -> Option<PhasePoint<N>> {
         let theta = ((time - t) / h).clamp(0.0, 1.0);
         let (q, v) = Method::dense_output(self, workspace, start, h, theta)?;
-        Some(PhasePoint {
-            t: time,
-            q,
-            v,
-            p: model.momentum(time, &q, &v),
-        })
+        let p = model.momentum(time, &q, &v);
+        Some(PhasePoint { t: time, q, v, p })
     }
 
     /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map.
@@ -387,14 +442,10 @@ impl<L: Lagrangian<N>, M: Method<N>, const N: usize> Step<L, Euclidean<N>> for M
             value: w,
             rate: d,
         } = Hermite::new(a.t, b.t, time);
-        let q = a.q * w[0] + a.v * (h * w[1]) + b.q * w[2] + b.v * (h * w[3]);
-        let v = (a.q * d[0] + b.q * d[2]) / h + a.v * d[1] + b.v * d[3];
-        Some(PhasePoint {
-            t: time,
-            q,
-            v,
-            p: model.momentum(time, &q, &v),
-        })
+        let q = &a.q * w[0] + &a.v * (h * w[1]) + &b.q * w[2] + &b.v * (h * w[3]);
+        let v = (&a.q * d[0] + &b.q * d[2]) / h + &a.v * d[1] + &b.v * d[3];
+        let p = model.momentum(time, &q, &v);
+        Some(PhasePoint { t: time, q, v, p })
     }
 
     fn points(&self) -> Option<usize> {

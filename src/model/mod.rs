@@ -22,13 +22,13 @@
 //!
 //! # Example
 //! ```
-//! use nalgebra::SVector;
+//! use nalgebra::{SVector, U1};
 //! use svi::{Lagrangian, Scalar};
 //!
 //! /// A particle in a quartic well: L = q̇²/2 − q⁴/4.
 //! struct Quartic;
 //!
-//! impl Lagrangian<1> for Quartic {
+//! impl Lagrangian<U1> for Quartic {
 //!     const TIME_DEPENDENT: bool = false;
 //!     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
 //!         v[0] * v[0] * 0.5 - q[0].powi(4) * 0.25
@@ -44,11 +44,54 @@ pub mod rigid_body;
 pub mod so3;
 pub mod text;
 
+use crate::dimension::{Dimension, Wrt};
 use crate::scalar::Scalar;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
+
+/// The derivatives of a Lagrangian that is a sum of local terms, L = Σₑ ℓₑ, assembled term
+/// by term ([`crate::model::local`]): what [`Lagrangian::terms`] hands the integrators so
+/// that no derivative of L costs more than O(n) and the Hessian blocks keep their sparsity.
+pub trait TermSum<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// L(t, q, q̇).
+    fn value(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64;
+
+    /// ∂L/∂q (`Wrt::Position`) or p = ∂L/∂q̇ (`Wrt::Velocity`) at (t, q, q̇), written into
+    /// `out`.
+    fn gradient_into(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        wrt: Wrt,
+        out: &mut OVector<f64, N>,
+    );
+
+    /// The Hessian blocks ∂²L/∂q², ∂²L/∂q∂q̇ (row q, column q̇) and ∂²L/∂q̇² at (t, q, q̇) as
+    /// (row, column, value) triplets, appended to `blocks[0]`, `blocks[1]` and `blocks[2]`
+    /// (entries of one place add up).
+    fn hessian_triplets(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        blocks: &mut [Vec<(usize, usize, f64)>; 3],
+    );
+}
 
 /// A Lagrangian L(t, q, q̇) on ℝᴺ, written once, generic over the scalar type.
-pub trait Lagrangian<const N: usize> {
+///
+/// The dimension `N` is a type ([`Dimension`]): `U1`, `U2`, … (nalgebra's `Const<N>`) when it
+/// is fixed at compile time — the signatures then read `&SVector<D, N>` —, or
+/// [`crate::dimension::Dyn`] when it is chosen at run time (the signatures read
+/// `&DVector<D>`, and [`Lagrangian::dimension`] says the size). Every method runs on both.
+pub trait Lagrangian<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// Whether L depends explicitly on t.
     ///
     /// The default (`true`) is always correct; a model that sets it to `false` lets the
@@ -72,12 +115,28 @@ pub trait Lagrangian<const N: usize> {
     /// results equal, bit for bit, to the same model with `FORCED = false`.
     const FORCED: bool = false;
 
+    /// The number of coordinates. The default is right for a fixed dimension; a run-time-size
+    /// model ([`crate::dimension::Dyn`]) returns its size.
+    fn dimension(&self) -> usize {
+        N::try_to_usize().unwrap_or(0)
+    }
+
+    /// L as a sum of local terms, when it is one: the integrators then take ∂L/∂q, ∂L/∂q̇ and
+    /// the Hessian blocks from [`TermSum`], assembled term by term in O(n), instead of
+    /// differentiating the whole L. `None` (the default) for every other Lagrangian; every
+    /// [`crate::model::local::LocalLagrangian`] answers `Some` (its blanket implementation of
+    /// `Lagrangian<Dyn>`).
+    #[inline]
+    fn terms(&self) -> Option<&dyn TermSum<N>> {
+        None
+    }
+
     /// The value L(t, q, q̇).
     ///
     /// Mark it `#[inline]`: the integrators evaluate it (with dual numbers) in their inner
     /// loops, and letting the compiler inline it there is worth a factor of two on small
     /// models.
-    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D;
+    fn lagrangian<D: Scalar>(&self, t: D, q: &OVector<D, N>, v: &OVector<D, N>) -> D;
 
     /// The non-conservative generalised force f_L(t, q, q̇) of the Lagrange–d'Alembert
     /// principle
@@ -95,7 +154,7 @@ pub trait Lagrangian<const N: usize> {
     ///
     /// # Example
     /// ```
-    /// use nalgebra::SVector;
+    /// use nalgebra::{SVector, U1};
     /// use svi::{Lagrangian, Scalar};
     ///
     /// /// A damped oscillator: L = q̇²/2 − q²/2 with friction f = −c q̇.
@@ -103,7 +162,7 @@ pub trait Lagrangian<const N: usize> {
     ///     c: f64,
     /// }
     ///
-    /// impl Lagrangian<1> for Damped {
+    /// impl Lagrangian<U1> for Damped {
     ///     const TIME_DEPENDENT: bool = false;
     ///     const FORCED: bool = true;
     ///     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
@@ -123,11 +182,11 @@ pub trait Lagrangian<const N: usize> {
     fn external_force<D: Scalar>(
         &self,
         t: D,
-        q: &SVector<D, N>,
-        v: &SVector<D, N>,
-    ) -> SVector<D, N> {
-        let _ = (t, q, v);
-        SVector::zeros()
+        q: &OVector<D, N>,
+        v: &OVector<D, N>,
+    ) -> OVector<D, N> {
+        let _ = (t, v);
+        OVector::zeros_generic(q.shape_generic().0, U1)
     }
 }
 
@@ -144,9 +203,12 @@ pub enum Structure {
 /// Whether `L` declares [`Structure::ConstantMass`], as a boolean constant: a branch on it
 /// is decided when the code is instantiated for `L`, so a path that only constant-mass
 /// models take is not compiled for the others.
-pub(crate) struct ConstantMass<L, const N: usize>(std::marker::PhantomData<L>);
+pub(crate) struct ConstantMass<L, N>(std::marker::PhantomData<(L, N)>);
 
-impl<L: Lagrangian<N>, const N: usize> ConstantMass<L, N> {
+impl<L: Lagrangian<N>, N: Dimension> ConstantMass<L, N>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// `L::STRUCTURE == Structure::ConstantMass`.
     pub(crate) const DECLARED: bool = matches!(L::STRUCTURE, Structure::ConstantMass);
 }
@@ -156,7 +218,10 @@ impl<L: Lagrangian<N>, const N: usize> ConstantMass<L, N> {
 /// Generator `i` is the vector field ξᵢ(q) of a one-parameter group acting on configurations
 /// that leaves L invariant. By Noether's theorem the momentum Jᵢ = p·ξᵢ(q) is conserved, and
 /// variational integrators conserve it exactly (to round-off).
-pub trait Symmetries<const N: usize>: Lagrangian<N> {
+pub trait Symmetries<N: Dimension>: Lagrangian<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// Number of generators (default: none, so a model without symmetries writes
     /// `impl Symmetries<N> for Model {}`).
     fn generator_count(&self) -> usize {
@@ -173,14 +238,17 @@ pub trait Symmetries<const N: usize>: Lagrangian<N> {
     ///
     /// # Panics
     /// If `index >= generator_count()` (the default panics for every index).
-    fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N> {
+    fn generator(&self, index: usize, q: &OVector<f64, N>) -> OVector<f64, N> {
         let _ = q;
         panic!("no symmetry generator with index {index}")
     }
 }
 
 /// Other known conserved quantities of a model (besides energy and Noether momenta).
-pub trait Invariants<const N: usize>: Lagrangian<N> {
+pub trait Invariants<N: Dimension>: Lagrangian<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// Number of invariants (default: none, so a model without known invariants writes
     /// `impl Invariants<N> for Model {}`).
     fn invariant_count(&self) -> usize {
@@ -197,38 +265,44 @@ pub trait Invariants<const N: usize>: Lagrangian<N> {
     ///
     /// # Panics
     /// If `index >= invariant_count()` (the default panics for every index).
-    fn invariant(&self, index: usize, t: f64, q: &SVector<f64, N>, v: &SVector<f64, N>) -> f64 {
+    fn invariant(&self, index: usize, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {
         let _ = (t, q, v);
         panic!("no invariant with index {index}")
     }
 }
 
 /// A closed-form solution of the Euler–Lagrange equations.
-pub trait ExactSolution<const N: usize>: Lagrangian<N> {
+pub trait ExactSolution<N: Dimension>: Lagrangian<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// The state (q(t), q̇(t)) of the solution through (q0, q̇0) at time t0, or `None` when
     /// no closed form is available for that initial state (for example an unbound orbit).
     fn exact_solution(
         &self,
         t0: f64,
-        q0: &SVector<f64, N>,
-        v0: &SVector<f64, N>,
+        q0: &OVector<f64, N>,
+        v0: &OVector<f64, N>,
         t: f64,
-    ) -> Option<(SVector<f64, N>, SVector<f64, N>)>;
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)>;
 }
 
 /// Named parameters and literature defaults of a model.
-pub trait Defaults<const N: usize>: Lagrangian<N> {
+pub trait Defaults<N: Dimension>: Lagrangian<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// Short name (as used by the CLI, e.g. `"kepler"`).
     fn name(&self) -> &'static str;
-    /// Names of the configuration coordinates.
-    fn coordinate_names(&self) -> [&'static str; N];
+    /// Names of the configuration coordinates, one per coordinate.
+    fn coordinate_names(&self) -> Vec<String>;
     /// Current parameter values, by name.
     fn parameters(&self) -> Vec<(&'static str, f64)>;
     /// Set one parameter; an unknown name or an out-of-range value is an
     /// [`crate::Error::InvalidParameter`].
     fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), crate::error::Error>;
     /// Default initial state (t0, q0, q̇0) for the current parameters.
-    fn initial_state(&self) -> (f64, SVector<f64, N>, SVector<f64, N>);
+    fn initial_state(&self) -> (f64, OVector<f64, N>, OVector<f64, N>);
     /// Default step size.
     fn default_step(&self) -> f64;
     /// Default final time.

@@ -37,19 +37,23 @@
 //! Tremaine 1999; [`crate::stepping::logh`]). [`MonitorSpec`] names the monitors the command
 //! line knows (`sundman:ALPHA`, `force:BETA`, `potential`).
 
+use crate::dimension::{Dimension, PhaseFunction, Wrt};
 use crate::error::Error;
 use crate::model::Lagrangian;
 use crate::scalar::{Scalar, constant};
-use nalgebra::{Const, SVector};
-use num_dual::{DualVec, gradient};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
 use std::fmt;
 use std::str::FromStr;
 
 /// A time monitor g(q) > 0: dt/dτ = g(q) (small where the motion is fast).
-pub trait Monitor<const N: usize> {
+pub trait Monitor<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The value g(q) for `model`, written once generic over the scalar (it is
     /// differentiated). Monitors of the positions alone ignore `model`.
-    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D;
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &OVector<D, N>) -> D;
 
     /// Whether g = 1/U with U(q) = L(q, 0) (= −V(q)), the monitor whose transformed
     /// Hamiltonian, taken logarithmically, splits into explicit flows
@@ -88,10 +92,13 @@ pub struct Sundman {
     pub alpha: f64,
 }
 
-impl<const N: usize> Monitor<N> for Sundman {
+impl<N: Dimension> Monitor<N> for Sundman
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// |q|^α from r² = |q|².
     #[inline]
-    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, _model: &L, q: &SVector<D, N>) -> D {
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, _model: &L, q: &OVector<D, N>) -> D {
         half_power(q.dot(q), self.alpha)
     }
 }
@@ -104,21 +111,34 @@ pub struct Force {
     pub beta: f64,
 }
 
-impl<const N: usize> Monitor<N> for Force {
-    /// (|F|²)^(−β/2) from F = ∂L/∂q at q̇ = 0, t = 0 (one gradient sweep in dual numbers
-    /// over the caller's scalar).
+/// U(q) = L(0, q, 0), a function of q alone, as a [`PhaseFunction`]: the time and velocity
+/// it is handed are not read (t = 0 and q̇ = 0 are put in their place).
+struct AtRest<'a, L: ?Sized>(&'a L);
+
+impl<L: Lagrangian<N> + ?Sized, N: Dimension> PhaseFunction<N> for AtRest<'_, L>
+where
+    DefaultAllocator: Allocator<N>,
+{
     #[inline]
-    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D {
-        let (_, force) = gradient(
-            |x: SVector<DualVec<D, Const<N>>, N>| {
-                model.lagrangian(
-                    DualVec::from_re(constant(0.0)),
-                    &x,
-                    &SVector::from_element(DualVec::from_re(constant(0.0))),
-                )
-            },
+    fn eval<S: Scalar>(&self, _t: S, q: &OVector<S, N>, _v: &OVector<S, N>) -> S {
+        self.0.lagrangian(
+            constant(0.0),
             q,
-        );
+            &OVector::from_element_generic(q.shape_generic().0, U1, constant(0.0)),
+        )
+    }
+}
+
+impl<N: Dimension> Monitor<N> for Force
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// (|F|²)^(−β/2) from F = ∂L/∂q at q̇ = 0, t = 0 (one gradient of [`Dimension::gradient`]
+    /// in dual numbers over the caller's scalar).
+    #[inline]
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &OVector<D, N>) -> D {
+        // `AtRest` reads neither t nor q̇: `q` stands in for the velocity argument.
+        let (_, force) = N::gradient(&AtRest(model), constant(0.0), q, q, Wrt::Position);
         half_power(force.dot(&force), self.beta).recip()
     }
 }
@@ -133,12 +153,19 @@ impl<const N: usize> Monitor<N> for Force {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Potential;
 
-impl<const N: usize> Monitor<N> for Potential {
+impl<N: Dimension> Monitor<N> for Potential
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// 1/L(0, q, 0) (no derivative of L: one evaluation in the caller's scalar).
     #[inline]
-    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D {
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &OVector<D, N>) -> D {
         model
-            .lagrangian(constant(0.0), q, &SVector::from_element(constant(0.0)))
+            .lagrangian(
+                constant(0.0),
+                q,
+                &OVector::from_element_generic(q.shape_generic().0, U1, constant(0.0)),
+            )
             .recip()
     }
 
@@ -170,9 +197,12 @@ impl Default for MonitorSpec {
     }
 }
 
-impl<const N: usize> Monitor<N> for MonitorSpec {
+impl<N: Dimension> Monitor<N> for MonitorSpec
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     #[inline]
-    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &SVector<D, N>) -> D {
+    fn monitor<D: Scalar, L: Lagrangian<N> + ?Sized>(&self, model: &L, q: &OVector<D, N>) -> D {
         match self {
             MonitorSpec::Sundman(sundman) => sundman.monitor(model, q),
             MonitorSpec::Force(force) => force.monitor(model, q),
@@ -250,7 +280,10 @@ impl fmt::Display for MonitorSpec {
 /// Why `L` cannot be reparametrized in time, for a model that is time-dependent or forced
 /// (the callers test [`Lagrangian::TIME_DEPENDENT`] and [`Lagrangian::FORCED`] themselves,
 /// as constants, so that no reparametrized run is compiled for such a model).
-pub(crate) fn not_reparametrizable<L: Lagrangian<N>, const N: usize>() -> Error {
+pub(crate) fn not_reparametrizable<L: Lagrangian<N>, N: Dimension>() -> Error
+where
+    DefaultAllocator: Allocator<N>,
+{
     if L::TIME_DEPENDENT {
         Error::invalid(
             "adapt",
@@ -279,9 +312,10 @@ impl<'a, L, G> Reparametrized<'a, L, G> {
     /// L̃ for `model` with `monitor` on the energy level `energy` (the initial energy E₀).
     /// `model` must be autonomous and unforced (`TIME_DEPENDENT` and `FORCED` false) and
     /// `energy` finite: otherwise [`Error::InvalidParameter`].
-    pub fn new<const N: usize>(model: &'a L, monitor: &'a G, energy: f64) -> Result<Self, Error>
+    pub fn new<N: Dimension>(model: &'a L, monitor: &'a G, energy: f64) -> Result<Self, Error>
     where
         L: Lagrangian<N>,
+        DefaultAllocator: Allocator<N>,
     {
         if L::TIME_DEPENDENT || L::FORCED {
             return Err(not_reparametrizable::<L, N>());
@@ -306,20 +340,29 @@ impl<'a, L, G> Reparametrized<'a, L, G> {
 
     /// The monitor's value g(q) for the model.
     #[inline]
-    pub fn monitor_value<D: Scalar, const N: usize>(&self, q: &SVector<D, N>) -> D
+    pub fn monitor_value<D: Scalar, N: Dimension>(&self, q: &OVector<D, N>) -> D
     where
         L: Lagrangian<N>,
         G: Monitor<N>,
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
         self.monitor.monitor(self.model, q)
     }
 }
 
-impl<L: Lagrangian<N>, G: Monitor<N>, const N: usize> Lagrangian<N> for Reparametrized<'_, L, G> {
+impl<L: Lagrangian<N>, G: Monitor<N>, N: Dimension> Lagrangian<N> for Reparametrized<'_, L, G>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const TIME_DEPENDENT: bool = false;
 
+    /// The model's number of coordinates.
+    fn dimension(&self) -> usize {
+        self.model.dimension()
+    }
+
     #[inline]
-    fn lagrangian<D: Scalar>(&self, _tau: D, q: &SVector<D, N>, w: &SVector<D, N>) -> D {
+    fn lagrangian<D: Scalar>(&self, _tau: D, q: &OVector<D, N>, w: &OVector<D, N>) -> D {
         let g = self.monitor_value(q);
         let inverse = g.recip();
         let v = w.map(|x| x * inverse);
@@ -331,6 +374,7 @@ impl<L: Lagrangian<N>, G: Monitor<N>, const N: usize> Lagrangian<N> for Reparame
 mod tests {
     use super::*;
     use crate::model::derived::LagrangianExt;
+    use nalgebra::{SVector, U1, U2};
 
     #[test]
     fn sundman_is_the_power_of_the_distance_for_every_exponent_and_its_derivative() {
@@ -339,7 +383,7 @@ mod tests {
         for alpha in [1.0, 1.5, 2.0, 3.0, 0.7, -1.0] {
             let g = Sundman { alpha };
             let q = SVector::from([Dual64::from_re(3.0).derivative(), Dual64::from_re(4.0)]);
-            let value = Monitor::<2>::monitor(&g, &Kepler, &q);
+            let value = Monitor::<U2>::monitor(&g, &Kepler, &q);
             let (exact, slope) = (5f64.powf(alpha), alpha * 5f64.powf(alpha - 2.0) * 3.0);
             assert!(
                 (value.re - exact).abs() <= 4.0 * f64::EPSILON * exact,
@@ -360,7 +404,7 @@ mod tests {
         use num_dual::Dual64;
         struct Spring;
         const K: f64 = 50.0;
-        impl Lagrangian<2> for Spring {
+        impl Lagrangian<U2> for Spring {
             fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
                 let length = q[0] + 1.0;
                 (v[0] * v[0] + length * length * v[1] * v[1]) * 0.5 + length * q[1].cos() * 9.81
@@ -374,7 +418,7 @@ mod tests {
         for beta in [0.75, 0.5, 1.0, 0.4] {
             let monitor = Force { beta };
             let q = SVector::from([Dual64::from_re(a).derivative(), Dual64::from_re(theta)]);
-            let g = Monitor::<2>::monitor(&monitor, &Spring, &q);
+            let g = Monitor::<U2>::monitor(&monitor, &Spring, &q);
             let exact = force(a).norm().powf(-beta);
             // d|F|^(−β)/da = −β |F|^(−β−2) F·∂F/∂a, ∂F/∂a = (−k, −g sin θ).
             let slope = -beta
@@ -387,10 +431,45 @@ mod tests {
 
     /// L = |v|²/2 + 1/|q| (Kepler).
     struct Kepler;
-    impl Lagrangian<2> for Kepler {
+    impl Lagrangian<U2> for Kepler {
         const TIME_DEPENDENT: bool = false;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
             v.dot(v) * 0.5 + q.dot(q).sqrt().recip()
+        }
+    }
+
+    #[test]
+    fn monitors_and_the_tau_lagrangian_agree_on_a_run_time_size_model() {
+        // Kepler as a `Lagrangian<Dyn>`: every monitor and L̃'s momentum as on `U2`, and L̃
+        // reports the model's size.
+        use crate::test_models::AsDyn;
+        use nalgebra::{DVector, Dyn};
+        let dynamic = AsDyn::new(Kepler);
+        let (q, w) = (
+            SVector::<f64, 2>::from([0.3, -0.4]),
+            SVector::<f64, 2>::from([1.1, 0.7]),
+        );
+        let (q_dyn, w_dyn) = (
+            DVector::from_column_slice(q.as_slice()),
+            DVector::from_column_slice(w.as_slice()),
+        );
+        let specs = [
+            MonitorSpec::default(),
+            MonitorSpec::Force(Force { beta: 0.75 }),
+            MonitorSpec::Potential(Potential),
+        ];
+        for spec in specs {
+            let fixed = Monitor::<U2>::monitor(&spec, &Kepler, &q);
+            let run_time = Monitor::<Dyn>::monitor(&spec, &dynamic, &q_dyn);
+            assert!((fixed - run_time).abs() <= 1e-15 * fixed.abs(), "{spec}");
+            let tilde = Reparametrized::new(&Kepler, &spec, -0.6).unwrap();
+            let tilde_dyn = Reparametrized::new(&dynamic, &spec, -0.6).unwrap();
+            assert_eq!(Lagrangian::<Dyn>::dimension(&tilde_dyn), 2);
+            let momentum = tilde.momentum(0.0, &q, &w);
+            let momentum_dyn = tilde_dyn.momentum(0.0, &q_dyn, &w_dyn);
+            for i in 0..2 {
+                assert!((momentum[i] - momentum_dyn[i]).abs() <= 1e-15, "{spec}");
+            }
         }
     }
 
@@ -438,7 +517,7 @@ mod tests {
     #[test]
     fn time_dependent_models_and_non_finite_energies_are_refused() {
         struct Driven;
-        impl Lagrangian<1> for Driven {
+        impl Lagrangian<U1> for Driven {
             fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
                 v[0] * v[0] * 0.5 - q[0] * t.cos()
             }

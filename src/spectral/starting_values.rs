@@ -10,8 +10,10 @@
 //!
 //! Node values are stored as offsets qᵛ − q_k (ν = 1, …, s; q⁰ − q_k = 0 is implicit).
 
+use crate::dimension::Dimension;
 use crate::spectral::basis::LagrangeBasis;
-use nalgebra::{DVector, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator, OVector, U1};
 
 /// Extrapolation table and the previous step's node offsets.
 #[derive(Debug, Clone)]
@@ -25,6 +27,9 @@ pub(crate) struct StartingValues {
     ratio: f64,
     /// Node offsets of the previous step (ν = 1..s, stacked).
     previous: DVector<f64>,
+    /// The dimension N of the configuration space (numbers per node), as given to
+    /// [`StartingValues::new`]; a fixed dimension type overrides it.
+    dimension: usize,
     /// Size of the previous step; `None` when there is no previous step to continue.
     previous_step: Option<f64>,
 }
@@ -37,6 +42,7 @@ impl StartingValues {
             extrapolation: vec![0.0; s * s],
             ratio: f64::NAN,
             previous: DVector::zeros(s * dimension),
+            dimension,
             previous_step: None,
         };
         start.build(1.0);
@@ -75,6 +81,13 @@ impl StartingValues {
         true
     }
 
+    /// The numbers per node for the dimension type `N`: its size if fixed, else the
+    /// dimension given to [`StartingValues::new`].
+    #[inline]
+    fn width<N: Dimension>(&self) -> usize {
+        N::try_to_usize().unwrap_or(self.dimension)
+    }
+
     /// Remember the converged offsets of a step of size `h`.
     pub(crate) fn remember(&mut self, offsets: &DVector<f64>, h: f64) {
         self.previous.copy_from(offsets);
@@ -95,13 +108,16 @@ impl StartingValues {
 
     /// Offsets from the previous step's polynomial, relative to the new start q_{k+1}, for
     /// the step size last given to [`StartingValues::prepare`].
-    pub(crate) fn extrapolate<const N: usize>(&self, offsets: &mut DVector<f64>) {
+    /// `N` is the dimension type of the configuration space (a fixed size is known to the
+    /// compiler).
+    pub(crate) fn extrapolate<N: Dimension>(&self, offsets: &mut DVector<f64>) {
         let s = self.basis.len() - 1;
+        let width = self.width::<N>();
         let previous = self.previous.as_slice();
-        for (nu, target) in offsets.as_mut_slice().chunks_exact_mut(N).enumerate() {
+        for (nu, target) in offsets.as_mut_slice().chunks_exact_mut(width).enumerate() {
             let row = &self.extrapolation[nu * s..(nu + 1) * s];
             target.fill(0.0);
-            for (x, node) in row.iter().zip(previous.chunks_exact(N)) {
+            for (x, node) in row.iter().zip(previous.chunks_exact(width)) {
                 for (t, z) in target.iter_mut().zip(node) {
                     *t += x * z;
                 }
@@ -124,53 +140,69 @@ impl StartingValues {
     /// Σ_j l_j(τ) Z_j from the step's start and its τ-derivative Σ_j l̇_j(τ) Z_j, with the
     /// basis values l_j(τ) written to `values` (length s + 1). `None` without a remembered
     /// step.
-    pub(crate) fn last_step<const N: usize>(
+    pub(crate) fn last_step<N: Dimension>(
         &self,
         tau: f64,
         values: &mut [f64],
-    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         self.previous_step?;
+        let width = self.width::<N>();
+        let dimension = N::from_usize(width);
         let previous = self.previous.as_slice();
         Some(self.polynomial(tau, values, |j| {
-            SVector::from_column_slice(&previous[j * N..(j + 1) * N])
+            OVector::from_column_slice_generic(dimension, U1, &previous[j * width..(j + 1) * width])
         }))
     }
 
     /// The polynomial with node offsets `node(j)` (j = 0..s − 1 for the nodes 1..s) at
     /// τ ∈ [−1, 1]: Σ_j l_j(τ) Z_j and Σ_j l̇_j(τ) Z_j, with the basis values l_j(τ) written to
-    /// `values` (length s + 1).
-    pub(crate) fn polynomial<const N: usize>(
+    /// `values` (length s + 1). The vectors are of the dimension type `N` (for a run-time
+    /// size, the dimension given to [`StartingValues::new`]).
+    pub(crate) fn polynomial<N: Dimension>(
         &self,
         tau: f64,
         values: &mut [f64],
-        node: impl Fn(usize) -> SVector<f64, N>,
-    ) -> (SVector<f64, N>, SVector<f64, N>) {
+        node: impl Fn(usize) -> OVector<f64, N>,
+    ) -> (OVector<f64, N>, OVector<f64, N>)
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let mut derivatives = [0.0; crate::spectral::MAX_POINTS];
         let points = self.basis.len();
         self.basis.values_into(tau, &mut values[..points]);
         self.basis.derivatives_into(tau, &mut derivatives[..points]);
-        let mut offset = SVector::zeros();
-        let mut rate = SVector::zeros();
+        let dimension = N::from_usize(self.width::<N>());
+        let mut offset = OVector::zeros_generic(dimension, U1);
+        let mut rate = OVector::zeros_generic(dimension, U1);
         for j in 0..points - 1 {
             let node = node(j);
-            offset += node * values[j + 1];
-            rate += node * derivatives[j + 1];
+            offset += &node * values[j + 1];
+            rate += &node * derivatives[j + 1];
         }
         (offset, rate)
     }
 
     /// Offsets of the Taylor polynomial with velocity `v` and acceleration `a`.
-    pub(crate) fn taylor<const N: usize>(
+    pub(crate) fn taylor<N: Dimension>(
         &self,
         h: f64,
-        v: &SVector<f64, N>,
-        a: &SVector<f64, N>,
+        v: &OVector<f64, N>,
+        a: &OVector<f64, N>,
         offsets: &mut DVector<f64>,
-    ) {
+    ) where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        let width = v.len();
         for (nu, x) in self.basis.nodes().iter().enumerate().skip(1) {
             let dt = 0.5 * h * (x + 1.0);
-            let guess = v * dt + a * (0.5 * dt * dt);
-            offsets.fixed_rows_mut::<N>((nu - 1) * N).copy_from(&guess);
+            let half_square = 0.5 * dt * dt;
+            let target = &mut offsets.as_mut_slice()[(nu - 1) * width..nu * width];
+            for ((guess, v), a) in target.iter_mut().zip(v.as_slice()).zip(a.as_slice()) {
+                *guess = v * dt + a * half_square;
+            }
         }
     }
 }

@@ -36,6 +36,7 @@
 //! t_end with a step's accuracy. Output times inside the span are not served: the splitting
 //! has no step polynomial.
 
+use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::method::Method;
 use crate::method::space::{Euclidean, Initial, PhasePoint, State, StepState};
@@ -47,12 +48,16 @@ use crate::stepping::observer::Observer;
 use crate::stepping::reparam::{Clock, failure_after, land_on_horizon};
 use crate::stepping::run::{Cursor, Integrator, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
 
 /// The splitting of Γ for one model at one energy level.
-struct Splitting<'a, L, const N: usize> {
+struct Splitting<'a, L, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a L,
-    mass_inverse: SMatrix<f64, N, N>,
+    mass_inverse: OMatrix<f64, N, N>,
     energy: f64,
     fractions: &'a [f64],
 }
@@ -60,17 +65,23 @@ struct Splitting<'a, L, const N: usize> {
 /// A point of the split flow: the state (q, p) with the compensation of its sums, and the
 /// physical time.
 #[derive(Debug, Clone)]
-struct Point<const N: usize> {
+struct Point<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     cursor: Cursor<Euclidean<N>>,
     clock: Clock,
 }
 
-impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
+impl<L: Lagrangian<N>, N: Dimension> Splitting<'_, L, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// 1/(T(p) − E₀): T(p) − E₀ ≤ 0 is an [`Error::InvalidParameter`] named `monitor` (a
     /// step far off the energy shell), a non-finite value an [`Error::NonFinite`] at (`step`,
     /// `t`).
-    fn rate(&self, p: &SVector<f64, N>, (step, t): (usize, f64)) -> Result<f64, Error> {
-        let excess = 0.5 * p.dot(&(self.mass_inverse * p)) - self.energy;
+    fn rate(&self, p: &OVector<f64, N>, (step, t): (usize, f64)) -> Result<f64, Error> {
+        let excess = 0.5 * p.dot(&(&self.mass_inverse * p)) - self.energy;
         if !excess.is_finite() {
             Err(Error::NonFinite {
                 what: format!("T(p) − E₀ = {excess:e} at p = {:?}", p.as_slice()),
@@ -96,10 +107,11 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
     /// [`Error::NonFinite`] at (`step`, `t`) (the state ran away).
     fn potential(
         &self,
-        q: &SVector<f64, N>,
+        q: &OVector<f64, N>,
         (step, t): (usize, f64),
-    ) -> Result<(f64, SVector<f64, N>), Error> {
-        let (potential, gradient) = self.model.value_and_force(0.0, q, &SVector::zeros());
+    ) -> Result<(f64, OVector<f64, N>), Error> {
+        let rest = OVector::zeros_generic(q.shape_generic().0, U1);
+        let (potential, gradient) = self.model.value_and_force(0.0, q, &rest);
         if !(potential.is_finite() && gradient.iter().all(|g| g.is_finite())) {
             Err(Error::NonFinite {
                 what: format!(
@@ -126,24 +138,29 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
     /// One step of size `sigma` from `from`: the composed leapfrog (drift, kick, drift) with
     /// merged drifts. Returns the increment of (q, p) and of t.
     fn step(&self, from: &Point<N>, sigma: f64, k: usize) -> Result<(State<N>, f64), Error> {
-        let State { q, y: p } = from.cursor.state;
-        let (mut dq, mut dp, mut dt) = (SVector::<f64, N>::zeros(), SVector::zeros(), 0.0);
+        let State { q, y: p } = &from.cursor.state;
+        let n = from.cursor.state.dimension();
+        let (mut dq, mut dp, mut dt) = (
+            OVector::<f64, N>::zeros_generic(n, U1),
+            OVector::<f64, N>::zeros_generic(n, U1),
+            0.0,
+        );
         // Drift by `length` at the momentum p: q += length M⁻¹p/(T − E₀), t += length/(T − E₀).
-        let drift = |p: SVector<f64, N>, length: f64| {
-            let rate = self.rate(&p, (k, from.clock.t))?;
-            Ok::<_, Error>((self.mass_inverse * p * (length * rate), length * rate))
+        let drift = |p: &OVector<f64, N>, length: f64| {
+            let rate = self.rate(p, (k, from.clock.t))?;
+            Ok::<_, Error>((&self.mass_inverse * p * (length * rate), length * rate))
         };
         // Each stage drifts by half its own size and half the next one's (merged drifts).
         let mut pending = 0.5 * self.fractions[0] * sigma;
         for (i, gamma) in self.fractions.iter().enumerate() {
-            let (q_step, t_step) = drift(p + dp, pending)?;
+            let (q_step, t_step) = drift(&(p + &dp), pending)?;
             dq += q_step;
             dt += t_step;
-            let (potential, gradient) = self.potential(&(q + dq), (k, from.clock.t))?;
+            let (potential, gradient) = self.potential(&(q + &dq), (k, from.clock.t))?;
             dp += gradient * (gamma * sigma / potential);
             pending = 0.5 * (gamma + self.fractions.get(i + 1).unwrap_or(&0.0)) * sigma;
         }
-        let (q_step, t_step) = drift(p + dp, pending)?;
+        let (q_step, t_step) = drift(&(p + &dp), pending)?;
         Ok((
             State {
                 q: dq + q_step,
@@ -155,17 +172,20 @@ impl<L: Lagrangian<N>, const N: usize> Splitting<'_, L, N> {
 
     /// The physical point (t, q, q̇ = M⁻¹p, p).
     fn physical(&self, point: &Point<N>) -> PhasePoint<N> {
-        let State { q, y: p } = point.cursor.state;
+        let State { q, y: p } = &point.cursor.state;
         PhasePoint {
             t: point.clock.t,
-            q,
-            v: self.mass_inverse * p,
-            p,
+            q: q.clone(),
+            v: &self.mass_inverse * p,
+            p: p.clone(),
         }
     }
 }
 
-impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Euclidean<N>> {
+impl<L: Lagrangian<N>, M: Method<N> + Clone, N: Dimension> Integrator<L, M, Euclidean<N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// [`Integrator::try_solve_reparametrized`] with the potential monitor and a method that
     /// composes Störmer–Verlet (`fractions`), on a constant-mass model: the logarithmic
     /// Hamiltonian split explicitly (see the module docs).
@@ -203,6 +223,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         // The model must be autonomous and unforced, the energy finite (as for L̃).
         Reparametrized::new(model, &Potential, energy).map_err(rejected)?;
         let mass_inverse = cached_mass_inverse(&mut None, model, span.t0, &first.q, &first.p)
+            .cloned()
             .map_err(|_| {
                 rejected(Error::invalid(
                     "structure",
@@ -222,16 +243,16 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let mut adaptivity = Adaptivity::default();
         let mut outputs = Vec::with_capacity(2);
         if span.output_times[0] == span.t0 {
-            outputs.push(first);
+            outputs.push(first.clone());
         }
         let mut point = Point {
             cursor: Cursor::new(State {
-                q: first.q,
-                y: first.p,
+                q: first.q.clone(),
+                y: first.p.clone(),
             }),
             clock: Clock::new(span.t0),
         };
-        let mut last = first;
+        let mut last = first.clone();
         let failure = failure_after::<N>;
         if observer.wants(0) && observer.observe(model, 0, &first).is_break() {
             return Ok(Solution {
@@ -300,7 +321,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             }
             if finish {
                 if outputs.len() < span.output_times.len() {
-                    outputs.push(last);
+                    outputs.push(last.clone());
                 }
                 return Ok(Solution {
                     points: outputs,

@@ -10,9 +10,12 @@
 //! (max |J − J₀| over the Noether momenta), [`InvariantError`] (max over known invariants),
 //! [`SolutionError`] (max position error against the exact solution).
 
+use crate::dimension::Dimension;
 use crate::method::space::PhasePoint;
 use crate::model::derived::LagrangianExt;
 use crate::model::{ExactSolution, Invariants, Lagrangian, Symmetries};
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use std::ops::ControlFlow;
 
 /// Receives points of type `P` of a run of model `L`: [`PhasePoint`]s here,
@@ -142,7 +145,7 @@ impl<L: ?Sized, P: Clone> Observer<L, P> for Points<P> {
 }
 
 /// Stores the observed phase points of a run on ℝᴺ.
-pub type Trajectory<const N: usize> = Points<PhasePoint<N>>;
+pub type Trajectory<N> = Points<PhasePoint<N>>;
 
 /// The larger of a running maximum and a new deviation, where NaN (an overflowed quantity)
 /// wins: `f64::max` would drop it and report the maximum before the overflow.
@@ -164,7 +167,10 @@ pub struct EnergyError {
     pub max: f64,
 }
 
-impl<L: Lagrangian<N>, const N: usize> Observer<L, PhasePoint<N>> for EnergyError {
+impl<L: Lagrangian<N>, N: Dimension> Observer<L, PhasePoint<N>> for EnergyError
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
         let initial = *self.initial.get_or_insert(energy);
@@ -183,7 +189,10 @@ pub struct MomentumError {
     pub max: f64,
 }
 
-impl<L: Symmetries<N>, const N: usize> Observer<L, PhasePoint<N>> for MomentumError {
+impl<L: Symmetries<N>, N: Dimension> Observer<L, PhasePoint<N>> for MomentumError
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         let count = model.generator_count();
         let first = self.initial.is_empty();
@@ -224,7 +233,10 @@ impl InvariantError {
     }
 }
 
-impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantError {
+impl<L: Invariants<N>, N: Dimension> Observer<L, PhasePoint<N>> for InvariantError
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
         self.record(
             (0..model.invariant_count()).map(|i| model.invariant(i, point.t, &point.q, &point.v)),
@@ -235,8 +247,11 @@ impl<L: Invariants<N>, const N: usize> Observer<L, PhasePoint<N>> for InvariantE
 /// Largest Euclidean position error ‖q − q_exact‖ over the observed points, against the exact
 /// solution through the first observed point. `max` stays `None` when the model has no
 /// closed form for that initial state.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct SolutionError<const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolutionError<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     /// The first observed point.
     pub initial: Option<PhasePoint<N>>,
     /// Largest error seen, if the exact solution exists.
@@ -245,11 +260,28 @@ pub struct SolutionError<const N: usize> {
     pub last: Option<f64>,
 }
 
-impl<L: ExactSolution<N>, const N: usize> Observer<L, PhasePoint<N>> for SolutionError<N> {
+impl<N: Dimension> Default for SolutionError<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// Nothing observed yet.
+    fn default() -> Self {
+        SolutionError {
+            initial: None,
+            max: None,
+            last: None,
+        }
+    }
+}
+
+impl<L: ExactSolution<N>, N: Dimension> Observer<L, PhasePoint<N>> for SolutionError<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
-        let start = *self.initial.get_or_insert(*point);
+        let start = self.initial.get_or_insert_with(|| point.clone());
         if let Some((q, _)) = model.exact_solution(start.t, &start.q, &start.v, point.t) {
-            let error = (point.q - q).norm();
+            let error = (&point.q - q).norm();
             self.max = Some(worst(self.max.unwrap_or(0.0), error));
             self.last = Some(error);
         }

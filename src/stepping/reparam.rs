@@ -30,8 +30,9 @@
 //!
 //! Observers receive physical points (t, q, q̇ = q'/g, p), counted by τ-steps.
 
+use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
-use crate::method::space::{Euclidean, Initial, PhasePoint, State};
+use crate::method::space::{Euclidean, Initial, PhasePoint, State, StepState};
 use crate::method::{Method, MethodInfo};
 use crate::model::derived::LagrangianExt;
 use crate::model::reparametrized::{Monitor, Reparametrized, not_reparametrizable};
@@ -40,25 +41,29 @@ use crate::spectral::quadrature::GaussLegendre;
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Cursor, Integrator, Run, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector};
 
 /// Newton iterations allowed for the last step's Δτ and for an output time's σ.
 const TIME_NEWTON_ITERATIONS: usize = 40;
 
 /// A failure after the start of a run in physical time: the run up to `last`, the last good
 /// physical point (its state in (q, p)).
-pub(crate) fn failure_after<const N: usize>(
+pub(crate) fn failure_after<N: Dimension>(
     error: Error,
     last: &PhasePoint<N>,
     statistics: Statistics,
-) -> RunFailure<Euclidean<N>> {
+) -> RunFailure<Euclidean<N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     RunFailure {
         error,
         partial: Some(Run {
-            last: *last,
+            last: last.clone(),
             state: State {
-                q: last.q,
-                y: last.p,
+                q: last.q.clone(),
+                y: last.p.clone(),
             },
             statistics,
             stopped: false,
@@ -108,11 +113,14 @@ pub(crate) fn land_on_horizon(
 }
 
 /// The value g(q), checked positive and finite.
-fn monitor_value<L: Lagrangian<N>, G: Monitor<N>, const N: usize>(
+fn monitor_value<L: Lagrangian<N>, G: Monitor<N>, N: Dimension>(
     tilde: &Reparametrized<'_, L, G>,
-    q: &SVector<f64, N>,
+    q: &OVector<f64, N>,
     tau: f64,
-) -> Result<f64, Error> {
+) -> Result<f64, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let g = tilde.monitor_value(q);
     if g.is_finite() && g > 0.0 {
         Ok(g)
@@ -140,7 +148,7 @@ impl TimeRule {
     /// ∫₀^{θΔτ} g(q(σ)) dσ over the step just taken from `start` with size `dtau`, for
     /// θ ∈ (0, 1]; `end` is the step's end state (used without a step polynomial, θ = 1).
     #[allow(clippy::too_many_arguments)]
-    fn elapsed<L: Lagrangian<N>, M: Method<N>, G: Monitor<N>, const N: usize>(
+    fn elapsed<L: Lagrangian<N>, M: Method<N>, G: Monitor<N>, N: Dimension>(
         &self,
         method: &M,
         workspace: &M::Workspace,
@@ -150,7 +158,10 @@ impl TimeRule {
         dtau: f64,
         theta: f64,
         tau: f64,
-    ) -> Result<Option<f64>, Error> {
+    ) -> Result<Option<f64>, Error>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let mut sum = 0.0;
         for (&x, &w) in self.rule.nodes().iter().zip(self.rule.weights()) {
             let at = 0.5 * theta * (x + 1.0);
@@ -194,7 +205,10 @@ impl Clock {
     }
 }
 
-impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Euclidean<N>> {
+impl<L: Lagrangian<N>, M: Method<N> + Clone, N: Dimension> Integrator<L, M, Euclidean<N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// Solve over `span` with fixed steps Δτ = `options.h` in computational time τ, dt = g(q)
     /// dτ (see the module docs): the method runs on [`Reparametrized`] at the initial energy.
     /// The model must be autonomous and unforced; `options.adapt` and `options.tol` are not
@@ -256,12 +270,12 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             .start(
                 0.0,
                 &Initial::Momentum {
-                    q: first.q,
-                    p: first.p,
+                    q: first.q.clone(),
+                    p: first.p.clone(),
                 },
             )
             .map_err(rejected)?;
-        progress.guess = first.v * g0;
+        progress.guess = &first.v * g0;
         let mut workspace = Method::workspace(method, inner.model(), dtau).map_err(rejected)?;
         let time = TimeRule::new(&Method::info(method)).map_err(rejected)?;
         let limit = options.run.divergence_limit;
@@ -270,27 +284,27 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
         let mut outputs: Vec<PhasePoint<N>> = Vec::with_capacity(span.output_times.len());
         let mut served = 0;
         if span.output_times[0] == span.t0 {
-            outputs.push(first);
+            outputs.push(first.clone());
             served = 1;
         }
         let mut clock = Clock::new(span.t0);
-        let mut last = first;
-        let mut increment = State::zeros();
+        let mut last = first.clone();
+        let mut increment = progress.cursor.state.zeros_like();
         let failure = failure_after::<N>;
         // The physical point of a τ-state at time t (the inverse Legendre map of L̃, then
         // q̇ = q'/g).
         let physical = |t: f64,
                         tau: f64,
                         state: &State<N>,
-                        guess: &SVector<f64, N>,
+                        guess: &OVector<f64, N>,
                         workspace: &M::Workspace|
-         -> Result<(PhasePoint<N>, SVector<f64, N>), Error> {
+         -> Result<(PhasePoint<N>, OVector<f64, N>), Error> {
             let point = inner.complete(Some(workspace), 0, tau, state, guess)?;
             let g = monitor_value(inner.model(), &point.q, tau)?;
             let physical = PhasePoint {
                 t,
                 q: point.q,
-                v: point.v / g,
+                v: &point.v / g,
                 p: point.p,
             };
             Ok((physical, point.v))
@@ -305,12 +319,15 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             });
         }
         let mut k = 0usize;
+        // The cursor at the start of the current step (its memory reused from step to step).
+        let mut begin: Cursor<Euclidean<N>> = progress.cursor.clone();
         loop {
             options
                 .budget(k, clock.t)
                 .map_err(|error| failure(error, &last, progress.statistics))?;
             let tau = k as f64 * dtau;
-            let begin: Cursor<Euclidean<N>> = progress.cursor.clone();
+            begin.state.assign(&progress.cursor.state);
+            begin.compensation.assign(&progress.cursor.compensation);
             let step = |cursor: &mut Cursor<Euclidean<N>>,
                         workspace: &mut M::Workspace,
                         increment: &mut State<N>,
@@ -430,7 +447,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
             }
             if finish {
                 if served < span.output_times.len() {
-                    outputs.push(last);
+                    outputs.push(last.clone());
                 }
                 return Ok(Solution {
                     points: outputs,
@@ -511,7 +528,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
 /// [`Integrator::try_solve_reparametrized`] for `model` and `method` without observers.
 ///
 /// ```
-/// use nalgebra::SVector;
+/// use nalgebra::{SVector, U2};
 /// use svi::model::reparametrized::Sundman;
 /// use svi::solve::{SolveOptions, Span};
 /// use svi::stepping::reparam::solve_reparametrized;
@@ -519,7 +536,7 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
 ///
 /// /// Kepler: L = |v|²/2 + 1/|q|, an orbit of eccentricity 0.9 from its pericentre.
 /// struct Kepler;
-/// impl Lagrangian<2> for Kepler {
+/// impl Lagrangian<U2> for Kepler {
 ///     const TIME_DEPENDENT: bool = false;
 ///     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
 ///         v.dot(v) * 0.5 + q.dot(q).sqrt().recip()
@@ -536,19 +553,17 @@ impl<L: Lagrangian<N>, M: Method<N> + Clone, const N: usize> Integrator<L, M, Eu
 /// assert!((solution.last.q - SVector::from([0.1, 0.0])).norm() < 1e-6);
 /// # Ok::<(), svi::Error>(())
 /// ```
-pub fn solve_reparametrized<
-    L: Lagrangian<N>,
-    M: Method<N> + Clone,
-    G: Monitor<N>,
-    const N: usize,
->(
+pub fn solve_reparametrized<L: Lagrangian<N>, M: Method<N> + Clone, G: Monitor<N>, N: Dimension>(
     model: L,
     method: M,
     monitor: G,
     span: &Span,
     initial: Initial<N>,
     options: &SolveOptions,
-) -> Result<Solution<Euclidean<N>>, Error> {
+) -> Result<Solution<Euclidean<N>>, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     Integrator::new(model, method)
         .try_solve_reparametrized(&monitor, span, initial, options, &mut ())
         .map_err(|failure| failure.error)

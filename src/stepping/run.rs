@@ -14,13 +14,15 @@
 //! [`RunFailure`], which carries the run up to the last good state besides the typed error.
 //! [`Integrator::run`] is `try_run` with default options, keeping only the error.
 
+use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure, require_finite, require_positive};
 use crate::method::space::{Initial, PhasePoint, Space, StepState};
 use crate::method::step::Step;
 use crate::method::{Euclidean, StepReport};
 use crate::stepping::grid::{grid_step, grid_steps};
 use crate::stepping::observer::Observer;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector};
 use std::marker::PhantomData;
 
 /// Totals of a run.
@@ -626,13 +628,16 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     }
 }
 
-impl<L, M: Step<L, Euclidean<N>>, const N: usize> Integrator<L, M, Euclidean<N>> {
+impl<L, M: Step<L, Euclidean<N>>, N: Dimension> Integrator<L, M, Euclidean<N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// [`Integrator::run`] from (q0, q̇0).
     pub fn run_from_velocity<O: Observer<L, PhasePoint<N>>>(
         &self,
         t0: f64,
-        q0: SVector<f64, N>,
-        v0: SVector<f64, N>,
+        q0: OVector<f64, N>,
+        v0: OVector<f64, N>,
         h: f64,
         t_end: f64,
         observer: &mut O,
@@ -644,8 +649,8 @@ impl<L, M: Step<L, Euclidean<N>>, const N: usize> Integrator<L, M, Euclidean<N>>
     pub fn run_from_momentum<O: Observer<L, PhasePoint<N>>>(
         &self,
         t0: f64,
-        q0: SVector<f64, N>,
-        p0: SVector<f64, N>,
+        q0: OVector<f64, N>,
+        p0: OVector<f64, N>,
         h: f64,
         t_end: f64,
         observer: &mut O,

@@ -407,13 +407,13 @@ pub struct Solution<S: Space> {
 /// Solve from `initial` over `span` with `method`: the states at the span's output times.
 ///
 /// ```
-/// use nalgebra::SVector;
+/// use nalgebra::{SVector, U1};
 /// use svi::solve::{Span, SolveOptions, solve};
 /// use svi::{Initial, Lagrangian, Scalar, Svi};
 ///
 /// /// Harmonic oscillator L = q̇²/2 − q²/2.
 /// struct Oscillator;
-/// impl Lagrangian<1> for Oscillator {
+/// impl Lagrangian<U1> for Oscillator {
 ///     const TIME_DEPENDENT: bool = false;
 ///     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
 ///         (v[0] * v[0] - q[0] * q[0]) * 0.5

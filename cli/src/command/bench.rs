@@ -40,7 +40,9 @@
 //! method (its `steps` count every trial step of the energy equation).
 
 use crate::command::molly;
-use crate::command::peers::{FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5};
+use crate::command::peers::{
+    FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5, split, wired_for,
+};
 use crate::report::csv;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
@@ -51,7 +53,8 @@ use crate::scene::limits::{
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, SVector, U1};
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -63,7 +66,7 @@ use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::model::reparametrized::MonitorSpec;
 use svi::observer::{EnergyError, MomentumError, Observer};
 use svi::solve::{SolveOptions, Span};
-use svi::{Initial, Integrator, LagrangianExt, Method, MethodSpec, RunOptions};
+use svi::{Dimension, Initial, Integrator, LagrangianExt, Method, MethodSpec, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A method configuration to sweep: a method of svi's registry, or a peer (`ode_solvers`'
@@ -563,34 +566,40 @@ struct Bench<'a> {
 
 /// The problem of a sweep: initial state, horizon, the reference final position and the
 /// coordinate the error is measured in.
-struct Problem<const N: usize> {
+struct Problem<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     t0: f64,
-    q0: SVector<f64, N>,
-    v0: SVector<f64, N>,
+    q0: OVector<f64, N>,
+    v0: OVector<f64, N>,
     t_end: f64,
-    exact: SVector<f64, N>,
+    exact: OVector<f64, N>,
     /// The one coordinate of `--coordinate` (`None`: the Euclidean norm of all).
     coordinate: Option<usize>,
 }
 
-impl<const N: usize> Problem<N> {
+impl<N: Dimension> Problem<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The initial time and state.
     fn start(&self) -> (f64, Initial<N>) {
         (
             self.t0,
             Initial::Velocity {
-                q: self.q0,
-                v: self.v0,
+                q: self.q0.clone(),
+                v: self.v0.clone(),
             },
         )
     }
 
     /// The final error of a run that ends at `q`: in the chosen coordinate, or the Euclidean
     /// position error.
-    fn error(&self, q: &SVector<f64, N>) -> f64 {
+    fn error(&self, q: &OVector<f64, N>) -> f64 {
         match self.coordinate {
             Some(i) => (q[i] - self.exact[i]).abs(),
-            None => (q - self.exact).norm(),
+            None => (q - &self.exact).norm(),
         }
     }
 }
@@ -604,18 +613,21 @@ fn reference_method() -> svi::Svi {
 /// The final position of a model without an exact solution, from the resolved reference run
 /// ([`reference_method`] at the model's default step h and at h/2: the second is the
 /// reference, their difference its error estimate, which must be below 10⁻¹¹ relative).
-fn resolved_reference<M: ZooModel<N>, const N: usize>(
+fn resolved_reference<M: ZooModel<N>, N: Dimension>(
     model: &M,
     t0: f64,
-    q0: SVector<f64, N>,
-    v0: SVector<f64, N>,
+    q0: &OVector<f64, N>,
+    v0: &OVector<f64, N>,
     t_end: f64,
-) -> Result<(SVector<f64, N>, f64), SceneError> {
+) -> Result<(OVector<f64, N>, f64), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let integrator = Integrator::new(model.clone(), reference_method());
     let h = model.default_step();
     let run = |h: f64| {
         integrator
-            .run_from_velocity(t0, q0, v0, h, t_end, &mut ())
+            .run_from_velocity(t0, q0.clone(), v0.clone(), h, t_end, &mut ())
             .map(|run| run.state.q)
             .map_err(|error| SceneError::NoReference {
                 model: model.name().into(),
@@ -623,7 +635,7 @@ fn resolved_reference<M: ZooModel<N>, const N: usize>(
             })
     };
     let (coarse, fine) = (run(h)?, run(0.5 * h)?);
-    let discrepancy = (coarse - fine).amax();
+    let discrepancy = (coarse - &fine).amax();
     if discrepancy > 1e-11 * fine.amax().max(1.0) {
         return Err(SceneError::NoReference {
             model: model.name().into(),
@@ -639,12 +651,18 @@ fn resolved_reference<M: ZooModel<N>, const N: usize>(
 impl ModelVisitor for Bench<'_> {
     type Output = Result<Sweeps, SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (t0, initial, _, t_end) = self.scene.resolve(&mut model)?;
         check_horizon(t0, t_end, model.default_step())?;
         let (q0, v0) = match initial {
             Initial::Velocity { q, v } => (q, v),
-            Initial::Momentum { q, p } => (q, model.velocity(t0, &q, &p, &p)?),
+            Initial::Momentum { q, p } => {
+                let v = model.velocity(t0, &q, &p, &p)?;
+                (q, v)
+            }
         };
         let coordinate = match &self.options.coordinate {
             None => None,
@@ -667,7 +685,7 @@ impl ModelVisitor for Bench<'_> {
         let exact = match model.exact_solution(t0, &q0, &v0, t_end) {
             Some((q, _)) => q,
             None => {
-                let (q, discrepancy) = resolved_reference(&model, t0, q0, v0, t_end)?;
+                let (q, discrepancy) = resolved_reference(&model, t0, &q0, &v0, t_end)?;
                 if self.options.verbose {
                     self.progress.suspend(|| {
                         eprintln!(
@@ -801,7 +819,10 @@ impl Mode {
 }
 
 /// Sweeps the visited library method in its mode.
-struct Sweep<'a, M, const N: usize> {
+struct Sweep<'a, M, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a M,
     label: &'a str,
     mode: Mode,
@@ -810,7 +831,10 @@ struct Sweep<'a, M, const N: usize> {
     report: Report<'a>,
 }
 
-impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> {
+impl<M: ZooModel<N>, N: Dimension> VectorMethodVisitor<N> for Sweep<'_, M, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Output = Result<Vec<Record>, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
         let mut records = Vec::new();
@@ -822,18 +846,19 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for Sweep<'_, M, N> 
 /// One run of `integrator` in `mode` from `start` = (t0, initial) to `t_end`: at step (or Δτ)
 /// `h`, or for step doubling at tolerance `h`, under `run` (the divergence limit); the final
 /// position and the statistics.
-pub(crate) fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, const N: usize>(
+pub(crate) fn run_mode<L: svi::Lagrangian<N>, Me: Method<N> + Clone, O, N: Dimension>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     mode: Mode,
-    (start, t_end): ((f64, Initial<N>), f64),
+    ((t0, initial), t_end): &((f64, Initial<N>), f64),
     h: f64,
     run: &RunOptions,
     observer: &mut O,
-) -> Result<(SVector<f64, N>, svi::Statistics), svi::Error>
+) -> Result<(OVector<f64, N>, svi::Statistics), svi::Error>
 where
     O: Observer<L, svi::PhasePoint<N>>,
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let (t0, initial) = start;
+    let (t0, t_end, initial) = (*t0, *t_end, initial.clone());
     let span = Span::new(t0, t_end);
     let with_run = |mut options: SolveOptions| {
         options.run = *run;
@@ -969,11 +994,14 @@ impl Report<'_> {
 
 /// Sweep a library method in its mode: over step counts (fixed steps, steps in τ) or
 /// tolerances (step doubling).
-fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, N: Dimension>(
     sweep: Sweep<'_, M, N>,
     method: Me,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let Sweep {
         model,
         label,
@@ -988,8 +1016,15 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     let from = (problem.start(), problem.t_end);
     let free = RunOptions::default();
     let final_error = |steps: usize| {
-        run_mode(&integrator, mode, from, span / steps as f64, &free, &mut ())
-            .map(|(q, _)| problem.error(&q))
+        run_mode(
+            &integrator,
+            mode,
+            &from,
+            span / steps as f64,
+            &free,
+            &mut (),
+        )
+        .map(|(q, _)| problem.error(&q))
     };
     // `parameter`: a step count, or a tolerance of step doubling.
     let measure = |parameter: f64| -> Result<Record, svi::Error> {
@@ -1003,17 +1038,17 @@ fn sweep_library<M: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
             run_mode(
                 &integrator,
                 mode,
-                from,
+                &from,
                 h,
                 &free,
                 &mut (&mut energy, &mut momentum),
             )
         } else {
-            run_mode(&integrator, mode, from, h, &free, &mut energy)
+            run_mode(&integrator, mode, &from, h, &free, &mut energy)
         }?;
         let seconds = median_seconds(
             || {
-                let _ = run_mode(&integrator, mode, from, h, &free, &mut ());
+                let _ = run_mode(&integrator, mode, &from, h, &free, &mut ());
             },
             options,
         );
@@ -1165,15 +1200,20 @@ fn measure_requested(
 /// of order 2; a model other than the spring pendulum is an error naming `molly`. Its energy
 /// error is measured at every step of a separate run, its evaluations are the slow-force
 /// evaluations ([`molly::EVALUATIONS_PER_STEP`] per step).
-fn sweep_molly<M: ZooModel<N>, const N: usize>(
+fn sweep_molly<M: ZooModel<N>, N: Dimension>(
     model: &M,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let pendulum = molly::spring_pendulum(model)?;
-    let position = |q: &SVector<f64, 2>| SVector::<f64, N>::from_fn(|i, _| q[i]);
+    // A model of dimension 2 ([`molly::spring_pendulum`]).
+    let n = problem.q0.shape_generic().0;
+    let position = |q: &SVector<f64, 2>| OVector::<f64, N>::from_fn_generic(n, U1, |i, _| q[i]);
     let start = molly::State::from_velocity(
         &pendulum,
         &SVector::from_fn(|i, _| problem.q0[i]),
@@ -1222,12 +1262,15 @@ fn sweep_molly<M: ZooModel<N>, const N: usize>(
 }
 
 /// One DOP853 / Dopri5 / Radau5 run to the horizon (`None` if it fails or stops short).
-fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
+fn adaptive_run<M: ZooModel<N>, N: Dimension, const S: usize>(
     system: FirstOrder<'_, M, N, S>,
     spec: BenchMethod,
     problem: &Problem<N>,
     tol: f64,
-) -> Option<PeerRun<S>> {
+) -> Option<PeerRun<S>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(
         problem.q0.iter().chain(problem.v0.iter()).copied(),
     );
@@ -1256,37 +1299,51 @@ fn adaptive_run<M: ZooModel<N>, const N: usize, const S: usize>(
 }
 
 /// Sweep an adaptive peer over tolerances (models with N ≤ 3).
-fn sweep_adaptive<M: ZooModel<N>, const N: usize>(
+fn sweep_adaptive<M: ZooModel<N>, N: Dimension>(
     model: &M,
     spec: BenchMethod,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     // `2 * N` is not a const expression on stable Rust: dispatch on the size at run time.
-    match N {
-        1 => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
-        2 => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
-        3 => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
-        _ => Err(SceneError::MethodNotApplicable {
-            method: spec.to_string(),
-            reason: "the peers are wired for models of dimension ≤ 3".into(),
-        }),
+    match N::try_to_usize() {
+        Some(1) => sweep_adaptive_sized::<M, N, 2>(model, spec, problem, options, report, records),
+        Some(2) => sweep_adaptive_sized::<M, N, 4>(model, spec, problem, options, report, records),
+        Some(3) => sweep_adaptive_sized::<M, N, 6>(model, spec, problem, options, report, records),
+        _ => Err(not_wired::<N>(spec)),
+    }
+}
+
+/// The error of a peer asked to run a model of a dimension it is not wired for.
+fn not_wired<N: Dimension>(spec: BenchMethod) -> SceneError {
+    SceneError::MethodNotApplicable {
+        method: spec.to_string(),
+        reason: format!("the peers are wired for {}", wired_for::<N>()),
     }
 }
 
 /// [`sweep_adaptive`] with the state size S = 2N as a type parameter.
-fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
+fn sweep_adaptive_sized<M: ZooModel<N>, N: Dimension, const S: usize>(
     model: &M,
     spec: BenchMethod,
     problem: &Problem<N>,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-) -> Result<(), SceneError> {
-    assert_eq!(S, 2 * N, "state size");
+) -> Result<(), SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let system = || FirstOrder::<M, N, S>::new(model, problem.t0, &problem.q0, &problem.v0);
+    if system().is_none() {
+        return Err(not_wired::<N>(spec));
+    }
+    let n = problem.q0.shape_generic().0;
     let energy0 = model.energy(problem.t0, &problem.q0, &problem.v0);
     let measure = |tol: f64| -> Option<Record> {
         let PeerRun {
@@ -1294,14 +1351,12 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
             evaluations,
             iterations,
             states,
-        } = adaptive_run(system(), spec, problem, tol)?;
-        let last = states.last()?;
-        let q = SVector::<f64, N>::from_fn(|i, _| last[i]);
+        } = adaptive_run(system()?, spec, problem, tol)?;
+        let (q, _) = split(n, states.last()?.as_slice());
         let energy_error_max = states
             .iter()
             .map(|y| {
-                let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-                let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+                let (q, v) = split(n, y.as_slice());
                 (model.energy(problem.t_end, &q, &v) - energy0).abs()
             })
             .fold(0.0, f64::max);
@@ -1311,8 +1366,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
                 .collect();
             let mut largest: f64 = 0.0;
             for y in &states {
-                let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-                let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+                let (q, v) = split(n, y.as_slice());
                 for (i, start) in initial.iter().enumerate() {
                     largest = largest.max((model.noether_momentum(i, 0.0, &q, &v) - start).abs());
                 }
@@ -1321,7 +1375,7 @@ fn sweep_adaptive_sized<M: ZooModel<N>, const N: usize, const S: usize>(
         });
         let seconds = median_seconds(
             || {
-                let _ = adaptive_run(system(), spec, problem, tol);
+                let _ = system().and_then(|system| adaptive_run(system, spec, problem, tol));
             },
             options,
         );
@@ -1561,7 +1615,7 @@ mod tests {
             assert!(error.to_string().contains(bad), "{error}");
         }
         // Unknown names list the registry and the peers.
-        for bad in ["rk4", "dop853:3", ""] {
+        for bad in ["rk45", "dop853:3", ""] {
             let error = bad.parse::<BenchMethod>().unwrap_err();
             assert!(
                 matches!(&error, SceneError::BenchMethod { text } if text == bad),

@@ -1,7 +1,10 @@
 //! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ (fixed N and
 //! runtime dimension) and on SO(3).
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use serde::Serialize;
+use svi::Dimension;
 use svi::method::registry::SpaceKind;
 use svi_models::{
     LOCAL_MODEL_NAMES, LocalModelVisitor, LocalZooModel, MODEL_NAMES, ModelVisitor,
@@ -22,7 +25,7 @@ pub struct ModelDescription {
     /// Name.
     pub name: &'static str,
     /// Configuration coordinate names.
-    pub coordinates: Vec<&'static str>,
+    pub coordinates: Vec<String>,
     /// Default parameters.
     pub parameters: Parameters,
     /// Default step.
@@ -41,11 +44,14 @@ struct Describe;
 impl ModelVisitor for Describe {
     type Output = ModelDescription;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> ModelDescription {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> ModelDescription
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (t0, q0, v0) = model.initial_state();
         ModelDescription {
             name: model.name(),
-            coordinates: model.coordinate_names().to_vec(),
+            coordinates: model.coordinate_names(),
             parameters: Parameters(model.parameters()),
             h: model.default_step(),
             t_end: model.default_horizon(),

@@ -79,7 +79,9 @@
 //!   J. Chem. Phys. 110 (1999) 9853–9864.
 
 use crate::scene::SceneError;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, SVector};
+use svi::Dimension;
 use svi::{Defaults, LagrangianExt};
 use svi_models::SpringPendulum;
 
@@ -255,14 +257,19 @@ pub(crate) fn check_model(model: &str) -> Result<(), SceneError> {
 
 /// The spring pendulum of a zoo model named [`SpringPendulum::NAME`], with its parameters;
 /// for any other model the error of [`check_model`].
-pub(crate) fn spring_pendulum<M: Defaults<N>, const N: usize>(
+pub(crate) fn spring_pendulum<M: Defaults<N>, N: Dimension>(
     model: &M,
-) -> Result<SpringPendulum, SceneError> {
+) -> Result<SpringPendulum, SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     check_model(model.name())?;
-    if N != 2 {
+    if N::try_to_usize() != Some(2) {
+        let dimension = N::try_to_usize()
+            .map_or_else(|| "run-time dimension".into(), |n| format!("dimension {n}"));
         return Err(SceneError::MethodNotApplicable {
             method: NAME.into(),
-            reason: format!("a model of dimension {N} named '{}'", model.name()),
+            reason: format!("a model of {dimension} named '{}'", model.name()),
         });
     }
     let mut pendulum = SpringPendulum::default();

@@ -5,58 +5,86 @@
 //! differentiation.
 
 use differential_equations::prelude::{IVP, ImplicitRungeKutta, Matrix, ODE};
-use nalgebra::{SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
 use ode_solvers::{Dop853, Dopri5, OutputType, System};
-use svi::{LagrangianExt, Structure, linalg::invert_small};
+use svi::{Dimension, LagrangianExt, Structure, linalg::invert_small};
 use svi_models::ZooModel;
 
 /// The first-order form q̇ = v, v̇ = q̈(t, q, v) of a Lagrangian, for `ode_solvers` and
 /// `differential-equations`, with a fixed-size state of S = 2N components (as a user of these
 /// crates would write it: a heap-allocated `DVector` state would cost the peers a factor of
-/// several).
-pub(crate) struct FirstOrder<'a, M, const N: usize, const S: usize> {
+/// several). Built only for models of a fixed dimension N with 2N = S ([`FirstOrder::new`]).
+pub(crate) struct FirstOrder<'a, M, N: Dimension, const S: usize>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a M,
+    /// The dimension N of the model (S = 2N).
+    n: N,
     /// M⁻¹ for constant-mass models (q̈ = M⁻¹ ∂L/∂q, one gradient sweep).
-    mass_inverse: Option<SMatrix<f64, N, N>>,
+    mass_inverse: Option<OMatrix<f64, N, N>>,
 }
 
-impl<'a, M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'a, M, N, S> {
+impl<'a, M: ZooModel<N>, N: Dimension, const S: usize> FirstOrder<'a, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The first-order form of `model`; a constant-mass model's mass matrix is inverted once,
-    /// at (t0, q0, v0).
-    pub(crate) fn new(model: &'a M, t0: f64, q0: &SVector<f64, N>, v0: &SVector<f64, N>) -> Self {
+    /// at (t0, q0, v0). `None` unless q0 has S/2 components (the state y = (q, q̇) is a fixed
+    /// array of S numbers).
+    pub(crate) fn new(
+        model: &'a M,
+        t0: f64,
+        q0: &OVector<f64, N>,
+        v0: &OVector<f64, N>,
+    ) -> Option<Self> {
+        let n = q0.shape_generic().0;
+        if 2 * n.value() != S {
+            return None;
+        }
         let mass_inverse = match M::STRUCTURE {
             Structure::ConstantMass => invert_small(&model.mass_matrix(t0, q0, v0)),
             Structure::General => None,
         };
-        FirstOrder {
+        Some(FirstOrder {
             model,
+            n,
             mass_inverse,
-        }
+        })
+    }
+
+    /// The configuration q and velocity q̇ of the state y = (q, q̇).
+    fn split(&self, y: &[f64]) -> (OVector<f64, N>, OVector<f64, N>) {
+        split(self.n, y)
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> FirstOrder<'_, M, N, S> {
+impl<M: ZooModel<N>, N: Dimension, const S: usize> FirstOrder<'_, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// (q̇, q̈) at the state y = (q, q̇), written into `dy` (NaN where the mass matrix is
     /// singular).
     fn rates(&self, t: f64, y: &[f64], dy: &mut [f64]) {
-        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
-        let a = match self.mass_inverse {
+        let (q, v) = self.split(y);
+        let a = match &self.mass_inverse {
             Some(inverse) => inverse * self.model.force(t, &q, &v),
             None => self
                 .model
                 .acceleration(t, &q, &v)
-                .unwrap_or_else(|| SVector::repeat(f64::NAN)),
+                .unwrap_or_else(|| OVector::from_element_generic(self.n, U1, f64::NAN)),
         };
-        for i in 0..N {
-            dy[i] = v[i];
-            dy[N + i] = a[i];
-        }
+        let n = self.n.value();
+        dy[..n].copy_from_slice(v.as_slice());
+        dy[n..2 * n].copy_from_slice(a.as_slice());
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
+impl<M: ZooModel<N>, N: Dimension, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
     for FirstOrder<'_, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn system(
         &self,
@@ -68,8 +96,9 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> System<f64, ode_solvers::SV
     }
 }
 
-impl<M: ZooModel<N>, const N: usize, const S: usize> ODE<f64, [f64; S]>
-    for FirstOrder<'_, M, N, S>
+impl<M: ZooModel<N>, N: Dimension, const S: usize> ODE<f64, [f64; S]> for FirstOrder<'_, M, N, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn diff(&self, t: f64, y: &[f64; S], dydt: &mut [f64; S]) {
         self.rates(t, y, dydt);
@@ -78,19 +107,43 @@ impl<M: ZooModel<N>, const N: usize, const S: usize> ODE<f64, [f64; S]>
     /// [[0, I], [∂q̈/∂q, ∂q̈/∂q̇]], the acceleration's Jacobian by automatic differentiation
     /// (NaN where the mass matrix is singular).
     fn jacobian(&self, t: f64, y: &[f64; S], j: &mut Matrix<f64>) {
-        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+        let (q, v) = self.split(y);
         let derivative = self.model.acceleration_jacobian(t, &q, &v);
-        for r in 0..N {
-            for c in 0..N {
+        let n = self.n.value();
+        for r in 0..n {
+            for c in 0..n {
                 j[(r, c)] = 0.0;
-                j[(r, N + c)] = if r == c { 1.0 } else { 0.0 };
+                j[(r, n + c)] = if r == c { 1.0 } else { 0.0 };
                 let (dq, dv) = derivative
                     .as_ref()
                     .map_or((f64::NAN, f64::NAN), |d| (d.q[(r, c)], d.v[(r, c)]));
-                j[(N + r, c)] = dq;
-                j[(N + r, N + c)] = dv;
+                j[(n + r, c)] = dq;
+                j[(n + r, n + c)] = dv;
             }
+        }
+    }
+}
+
+/// The configuration q and velocity q̇ (`n` components each) of a peer's state y = (q, q̇).
+pub(crate) fn split<N: Dimension>(n: N, y: &[f64]) -> (OVector<f64, N>, OVector<f64, N>)
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let size = n.value();
+    (
+        OVector::from_column_slice_generic(n, U1, &y[..size]),
+        OVector::from_column_slice_generic(n, U1, &y[size..2 * size]),
+    )
+}
+
+/// What the peers are wired for, in a message about a model of dimension N that they cannot
+/// run (their states are arrays of S = 2N numbers, S a constant): models of a fixed N ≤ 3.
+pub(crate) fn wired_for<N: Dimension>() -> &'static str {
+    match N::try_to_usize() {
+        Some(_) => "models of dimension ≤ 3",
+        None => {
+            "models of a fixed dimension ≤ 3, not for a model whose number of coordinates is \
+             known at run time only"
         }
     }
 }
@@ -117,13 +170,16 @@ pub(crate) struct PeerRun<const S: usize> {
 /// Jacobian of the first-order form, output at every accepted step and a high step cap (as the
 /// `ode_solvers` peers); `None` if it fails (also for `tol` ≤ [`RADAU5_TOLERANCE_FLOOR`]) or
 /// stops short.
-pub(crate) fn radau5<M: ZooModel<N>, const N: usize, const S: usize>(
+pub(crate) fn radau5<M: ZooModel<N>, N: Dimension, const S: usize>(
     system: &FirstOrder<'_, M, N, S>,
     t0: f64,
     t_end: f64,
     y0: [f64; S],
     tol: f64,
-) -> Option<PeerRun<S>> {
+) -> Option<PeerRun<S>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let solution = IVP::ode(system, t0, t_end, y0)
         .method(
             ImplicitRungeKutta::radau5()

@@ -13,11 +13,14 @@
 //!    assembles the one [`Summary`]. A run that fails after it started still writes its
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use std::io::IsTerminal;
 use std::marker::PhantomData;
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
+use svi::Dimension;
 
 use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
@@ -256,7 +259,10 @@ impl<'a> SceneRun<'a> {
 impl ModelVisitor for SceneRun<'_> {
     type Output = Result<Summary, SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let resolved = self.scene.resolve(&mut model)?;
         let spec = self.scene.method_spec()?;
         let method = MethodFields {
@@ -279,28 +285,32 @@ const SYMMETRY_DEFECT: f64 = 1e-6;
 /// A warning for each symmetry generator of `model` that is not a symmetry of L near the
 /// initial state (at it and at two points around it): its "momentum error" would measure
 /// nothing (a text model's `symmetries` are the user's claim).
-fn symmetry_warnings<M: ZooModel<N>, const N: usize>(
+fn symmetry_warnings<M: ZooModel<N>, N: Dimension>(
     model: &M,
     t0: f64,
     initial: &svi::Initial<N>,
-) -> Vec<Warning> {
-    let (q, v) = match *initial {
-        svi::Initial::Velocity { q, v } => (q, v),
-        svi::Initial::Momentum { q, p } => match model.velocity(t0, &q, &p, &p) {
+) -> Vec<Warning>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (q, v) = match initial {
+        svi::Initial::Velocity { q, v } => (q, v.clone()),
+        svi::Initial::Momentum { q, p } => match model.velocity(t0, q, p, p) {
             Ok(v) => (q, v),
             Err(_) => return Vec::new(),
         },
     };
     // Two fixed points around the initial state, so that a state where δL vanishes by
     // accident (at rest, at the origin) does not pass a generator that is none.
+    let n = q.shape_generic().0;
     let offset = |k: usize| {
-        nalgebra::SVector::<f64, N>::from_fn(|i, _| ((i + 1) as f64 * (0.7 + k as f64)).sin())
+        nalgebra::OVector::<f64, N>::from_fn_generic(n, nalgebra::U1, |i, _| {
+            ((i + 1) as f64 * (0.7 + k as f64)).sin()
+        })
     };
-    let points = [
-        (q, v),
-        (q + offset(1) * 0.1, v + offset(2)),
-        (q + offset(3) * 0.2, v - offset(4)),
-    ];
+    let near = (q + offset(1) * 0.1, &v + offset(2));
+    let far = (q + offset(3) * 0.2, &v - offset(4));
+    let points = [(q.clone(), v), near, far];
     (0..model.generator_count())
         .filter_map(|index| {
             let defect = points
@@ -325,12 +335,18 @@ fn symmetry_warnings<M: ZooModel<N>, const N: usize>(
 }
 
 /// Runs a scene's model on ℝᴺ with the visited method.
-struct VectorMethod<'a, M, const N: usize> {
+struct VectorMethod<'a, M, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: M,
     plan: Plan<'a, svi::Euclidean<N>>,
 }
 
-impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for VectorMethod<'_, M, N> {
+impl<M: ZooModel<N>, N: Dimension> VectorMethodVisitor<N> for VectorMethod<'_, M, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Output = Result<Summary, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
         let integrator = Integrator::new(self.model, method);
@@ -407,13 +423,18 @@ impl<L, M: Step<L, S> + Clone, S: Space> Solver<L, S> for Integrator<L, M, S> {
 
 /// `adapt = "reparam"`: the integrator on ℝᴺ in computational time τ with its monitor
 /// ([`Integrator::try_solve_reparametrized`]).
-struct InTau<'a, L, M, const N: usize> {
+struct InTau<'a, L, M, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     integrator: &'a Integrator<L, M, svi::Euclidean<N>>,
     monitor: MonitorSpec,
 }
 
-impl<L: svi::Lagrangian<N>, M: Method<N> + Clone, const N: usize> Solver<L, svi::Euclidean<N>>
+impl<L: svi::Lagrangian<N>, M: Method<N> + Clone, N: Dimension> Solver<L, svi::Euclidean<N>>
     for InTau<'_, L, M, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn solve(
         &self,
@@ -439,7 +460,7 @@ impl<L: svi::Lagrangian<N>, M: Method<N> + Clone, const N: usize> Solver<L, svi:
         &self,
         t0: f64,
         initial: &svi::Initial<N>,
-        guess: &nalgebra::SVector<f64, N>,
+        guess: &nalgebra::OVector<f64, N>,
     ) -> Result<svi::PhasePoint<N>, svi::Error> {
         Solver::first_point(self.integrator, t0, initial, guess)
     }

@@ -3,7 +3,9 @@
 //! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, SVector};
+use svi::Dimension;
 use svi::lie_group::so3::orthogonality_error;
 use svi::lie_group::{
     AngularMomentumError, OrthogonalityError, RigidBodyDefaults, RigidBodyExt, RigidInitial,
@@ -87,7 +89,10 @@ pub trait RunSpace<L>: Space {
     fn csv_row(model: &L, point: &Self::Point, row: &mut Vec<f64>);
 }
 
-impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
+impl<L: ZooModel<N>, N: Dimension> RunSpace<L> for Euclidean<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const LISTS_RUN_FIELDS: bool = true;
 
     /// Energy, Noether momenta (for models with symmetries), error against the exact
@@ -121,7 +126,7 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
             Conservation::Vector {
                 momentum_error_max: momentum.map(|m| m.max),
                 solution_error_max: solution.and_then(|s| s.max),
-                solution_error_final: exact.map(|(q, _)| (last.q - q).norm()),
+                solution_error_final: exact.map(|(q, _)| (&last.q - q).norm()),
             },
         )
     }
@@ -135,7 +140,7 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
     }
 
     fn coordinates(model: &L) -> Option<Vec<String>> {
-        Some(model.coordinate_names().map(String::from).to_vec())
+        Some(model.coordinate_names())
     }
 
     fn energy(model: &L, point: &PhasePoint<N>) -> f64 {
@@ -163,12 +168,12 @@ impl<L: ZooModel<N>, const N: usize> RunSpace<L> for Euclidean<N> {
         }
     }
 
-    fn initial_guess_at_rest(initial: &Initial<N>) -> SVector<f64, N> {
+    fn initial_guess_at_rest(initial: &Initial<N>) -> OVector<f64, N> {
         <Self as Space>::initial_guess(initial)
     }
 
-    fn coordinate_count(_: &Initial<N>) -> usize {
-        N
+    fn coordinate_count(initial: &Initial<N>) -> usize {
+        initial.position().len()
     }
 
     /// `t,q_<name>…,v_<name>…,p_<name>…,energy`.

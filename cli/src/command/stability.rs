@@ -10,6 +10,7 @@ use crate::report::plot::{Panel, Series, render_svg};
 use crate::scene::SceneError;
 use crate::scene::limits::{self, MAX_SAMPLES};
 use crate::scene::overrides::method_help;
+use nalgebra::U1;
 use std::fmt::Write as _;
 use std::path::Path;
 use svi::method::registry::VectorMethodVisitor;
@@ -32,7 +33,7 @@ pub fn figure_configurations() -> Vec<(&'static str, MethodSpec)> {
 }
 
 /// S(z) diagnostics at each listed z.
-pub fn evaluate<M: Method<1>>(
+pub fn evaluate<M: Method<U1>>(
     method: &M,
     values: &[f64],
 ) -> Result<Vec<StabilityPoint>, svi::Error> {
@@ -131,7 +132,7 @@ pub fn plot(
 }
 
 /// Analyse `method` on [z_min, z_max] with `samples` grid points.
-pub fn report<M: Method<1>>(
+pub fn report<M: Method<U1>>(
     method: &M,
     z_min: f64,
     z_max: f64,
@@ -281,9 +282,9 @@ pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, SceneError> {
     request.check(spec)?;
     /// Answers the request for the visited method.
     struct Answering<'a>(&'a Request);
-    impl VectorMethodVisitor<1> for Answering<'_> {
+    impl VectorMethodVisitor<U1> for Answering<'_> {
         type Output = Result<Answer, svi::Error>;
-        fn visit<M: Method<1> + Clone>(self, method: M) -> Self::Output {
+        fn visit<M: Method<U1> + Clone>(self, method: M) -> Self::Output {
             match self.0 {
                 Request::Range {
                     z_min,

@@ -34,14 +34,15 @@
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
 use crate::command::bench::{BenchMethod, Mode, parse_methods, run_mode};
-use crate::command::peers::{FirstOrder, dop853};
+use crate::command::peers::{FirstOrder, dop853, split, wired_for};
 use crate::report::csv::Float;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, PlotError, Series, render_svg};
 use crate::scene::limits::{self, MAX_BISECTIONS, MAX_DRIFT_STEPS, MIN_PEER_TOLERANCE};
 use crate::scene::overrides::method_help;
 use crate::scene::{Scene, SceneError};
-use nalgebra::SVector;
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -49,7 +50,7 @@ use std::time::Instant;
 use svi::drift::{DriftFit, EnergyWindows, Window};
 use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, Every};
-use svi::{Error, Initial, Integrator, LagrangianExt, Method, RunOptions};
+use svi::{Dimension, Error, Initial, Integrator, LagrangianExt, Method, RunOptions};
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 /// A stress case: a built-in scene and the horizon of its stability probes.
@@ -419,7 +420,10 @@ struct CaseRunner<'a> {
 }
 
 /// A resolved case.
-struct Setup<'a, const N: usize> {
+struct Setup<'a, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     scene: &'a str,
     probe_time: f64,
     t0: f64,
@@ -431,7 +435,10 @@ struct Setup<'a, const N: usize> {
 impl ModelVisitor for CaseRunner<'_> {
     type Output = Result<Vec<StressRecord>, SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (t0, initial, h, _) = self.scene.resolve(&mut model)?;
         let setup = Setup {
             scene: self.case.scene,
@@ -478,14 +485,20 @@ impl ModelVisitor for CaseRunner<'_> {
 }
 
 /// Runs one case with the visited method in its mode.
-struct MethodRunner<'a, M, const N: usize> {
+struct MethodRunner<'a, M, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     model: &'a M,
     setup: &'a Setup<'a, N>,
     label: &'a str,
     mode: Mode,
 }
 
-impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_, M, N> {
+impl<M: ZooModel<N>, N: Dimension> VectorMethodVisitor<N> for MethodRunner<'_, M, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Output = Result<StressRecord, SceneError>;
 
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
@@ -504,8 +517,11 @@ impl<M: ZooModel<N>, const N: usize> VectorMethodVisitor<N> for MethodRunner<'_,
                 return p.clone();
             }
             let mut energy = EnergyError::default();
-            let from = ((setup.t0, setup.initial), setup.t0 + setup.probe_time);
-            let result = run_mode(&integrator, mode, from, h, &options, &mut energy);
+            let from = (
+                (setup.t0, setup.initial.clone()),
+                setup.t0 + setup.probe_time,
+            );
+            let result = run_mode(&integrator, mode, &from, h, &options, &mut energy);
             let p = Probe {
                 failure: result.err().map(|error| describe(&error)),
                 energy_error: energy.max / scale,
@@ -647,12 +663,15 @@ fn describe(error: &Error) -> String {
 /// The long run of an svi method in `mode` over `drift_steps` scene steps: at the scene's
 /// step (Δτ = h for a reparametrised method, the first step for SEM), or at the peers'
 /// tolerance for step doubling.
-fn svi_drift<L: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
+fn svi_drift<L: ZooModel<N>, Me: Method<N> + Clone, N: Dimension>(
     integrator: &Integrator<L, Me, svi::Euclidean<N>>,
     mode: Mode,
     setup: &Setup<'_, N>,
     options: &RunOptions,
-) -> Result<Drift, String> {
+) -> Result<Drift, String>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let steps = setup.options.drift_steps;
     let stride = steps.div_ceil(SAMPLES).max(1);
     let samples = steps / stride + 1;
@@ -666,7 +685,7 @@ fn svi_drift<L: ZooModel<N>, Me: Method<N> + Clone, const N: usize>(
     let (_, statistics) = run_mode(
         integrator,
         mode,
-        ((setup.t0, setup.initial), t_end),
+        &((setup.t0, setup.initial.clone()), t_end),
         h,
         options,
         &mut windows,
@@ -701,33 +720,45 @@ fn drift(
 }
 
 /// DOP853 over the horizon of the long run.
-fn dop853_drift<M: ZooModel<N>, const N: usize>(
+fn dop853_drift<M: ZooModel<N>, N: Dimension>(
     model: &M,
     setup: &Setup<'_, N>,
-) -> Result<Drift, String> {
-    match N {
-        1 => dop853_drift_sized::<M, N, 2>(model, setup),
-        2 => dop853_drift_sized::<M, N, 4>(model, setup),
-        3 => dop853_drift_sized::<M, N, 6>(model, setup),
-        _ => Err("dop853 is wired for models of dimension ≤ 3".into()),
+) -> Result<Drift, String>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    match N::try_to_usize() {
+        Some(1) => dop853_drift_sized::<M, N, 2>(model, setup),
+        Some(2) => dop853_drift_sized::<M, N, 4>(model, setup),
+        Some(3) => dop853_drift_sized::<M, N, 6>(model, setup),
+        _ => Err(not_wired::<N>()),
     }
 }
 
+/// The failure of DOP853 on a model of a dimension it is not wired for.
+fn not_wired<N: Dimension>() -> String {
+    format!("dop853 is wired for {}", wired_for::<N>())
+}
+
 /// [`dop853_drift`] with the state size S = 2N as a type parameter.
-fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
+fn dop853_drift_sized<M: ZooModel<N>, N: Dimension, const S: usize>(
     model: &M,
     setup: &Setup<'_, N>,
-) -> Result<Drift, String> {
-    let (q0, v0) = match setup.initial {
-        Initial::Velocity { q, v } => (q, v),
+) -> Result<Drift, String>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (q0, v0) = match &setup.initial {
+        Initial::Velocity { q, v } => (q, v.clone()),
         Initial::Momentum { q, p } => (
             q,
             model
-                .velocity(setup.t0, &q, &p, &p)
+                .velocity(setup.t0, q, p, p)
                 .map_err(|e| e.to_string())?,
         ),
     };
-    let system = FirstOrder::<M, N, S>::new(model, setup.t0, &q0, &v0);
+    let system = FirstOrder::<M, N, S>::new(model, setup.t0, q0, &v0).ok_or_else(not_wired::<N>)?;
+    let n = q0.shape_generic().0;
     let y0 = ode_solvers::SVector::<f64, S>::from_iterator(q0.iter().chain(v0.iter()).copied());
     let t_end = setup.t0 + setup.options.drift_steps as f64 * setup.h;
     let tol = setup.options.tolerance();
@@ -747,8 +778,7 @@ fn dop853_drift_sized<M: ZooModel<N>, const N: usize, const S: usize>(
     let samples = times.len().div_ceil(stride);
     let mut windows = EnergyWindows::new(samples.div_ceil(WINDOWS));
     for (t, y) in times.iter().zip(states).step_by(stride) {
-        let q = SVector::<f64, N>::from_fn(|i, _| y[i]);
-        let v = SVector::<f64, N>::from_fn(|i, _| y[N + i]);
+        let (q, v) = split(n, y.as_slice());
         windows.push(*t, model.energy(*t, &q, &v));
     }
     let steps = (stats.accepted_steps + stats.rejected_steps) as usize;

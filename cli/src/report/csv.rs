@@ -11,7 +11,7 @@ use std::path::Path;
 use crate::report::output::{OutputError, OutputFile};
 
 /// The CSV header line (with its newline) for the given coordinate names.
-pub fn csv_header(names: &[&str]) -> String {
+pub fn csv_header(names: &[String]) -> String {
     let mut header = String::from("t");
     for prefix in ["q", "v", "p"] {
         for name in names {
@@ -192,10 +192,10 @@ mod tests {
     #[test]
     fn csv_header_prefixes_the_coordinate_names() {
         assert_eq!(
-            csv_header(&["q1", "q2"]),
+            csv_header(&["q1".into(), "q2".into()]),
             "t,q_q1,q_q2,v_q1,v_q2,p_q1,p_q2,energy\n"
         );
-        assert_eq!(csv_header(&["q"]), "t,q_q,v_q,p_q,energy\n");
+        assert_eq!(csv_header(&["q".into()]), "t,q_q,v_q,p_q,energy\n");
     }
 
     #[test]

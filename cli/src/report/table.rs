@@ -137,7 +137,7 @@ pub struct Schema {
 
 impl Schema {
     /// The columns of a model on ℝᴺ with these coordinate names.
-    pub fn vector(coordinates: &[&str]) -> Schema {
+    pub fn vector(coordinates: &[String]) -> Schema {
         let mut fields = vec![
             ("t_end".into(), "t_end", None),
             ("steps".into(), "steps", None),
@@ -297,7 +297,7 @@ mod tests {
                 "error"
             ]
         );
-        let columns = Table::new(&Schema::vector(&["x"]), &[], 0, &[], &[]).columns;
+        let columns = Table::new(&Schema::vector(&["x".to_string()]), &[], 0, &[], &[]).columns;
         assert_eq!(columns[2..7], ["t_end", "steps", "q_x", "v_x", "p_x"]);
         let mut csv = Vec::new();
         table.write_csv(&mut csv).unwrap();

@@ -13,7 +13,10 @@
 //! same overrides as `svi run --param` and the scene's `[initial]` fields: a member's run is
 //! exactly `svi run` of that scene.
 
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
 use std::fmt;
+use svi::Dimension;
 
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -515,7 +518,7 @@ impl Member {
 }
 
 /// The index of `coordinate` among `names`, or `coordinate` read as a 0-based index.
-fn coordinate_index(names: &[&str], coordinate: &str) -> Option<usize> {
+fn coordinate_index(names: &[String], coordinate: &str) -> Option<usize> {
     names
         .iter()
         .position(|name| *name == coordinate)
@@ -537,12 +540,15 @@ struct ResolveInitial<'a> {
 }
 
 impl ModelVisitor for ResolveInitial<'_> {
-    type Output = Result<(Vec<&'static str>, InitialVectors), SceneError>;
+    type Output = Result<(Vec<String>, InitialVectors), SceneError>;
 
-    fn visit<M: ZooModel<N>, const N: usize>(self, mut model: M) -> Self::Output {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, mut model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let (_, initial, _, _) = self.scene.resolve(&mut model)?;
-        let names = model.coordinate_names().to_vec();
-        let vector = |x: &nalgebra::SVector<f64, N>| x.iter().copied().collect::<Vec<f64>>();
+        let names = model.coordinate_names();
+        let vector = |x: &nalgebra::OVector<f64, N>| x.iter().copied().collect::<Vec<f64>>();
         Ok((
             names,
             match initial {
@@ -565,15 +571,18 @@ pub struct ModelNames {
     /// The model's parameter names.
     pub parameters: Vec<&'static str>,
     /// The configuration coordinates (`None` for a rigid body on SO(3)).
-    pub coordinates: Option<Vec<&'static str>>,
+    pub coordinates: Option<Vec<String>>,
 }
 
 impl ModelVisitor for ModelNamesOf {
     type Output = ModelNames;
-    fn visit<M: ZooModel<N>, const N: usize>(self, model: M) -> ModelNames {
+    fn visit<M: ZooModel<N>, N: Dimension>(self, model: M) -> ModelNames
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         ModelNames {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
-            coordinates: Some(model.coordinate_names().to_vec()),
+            coordinates: Some(model.coordinate_names()),
         }
     }
 }

@@ -98,6 +98,9 @@ pub mod vector;
 pub use error::SceneError;
 
 use error::methods_with;
+use nalgebra::DefaultAllocator;
+use nalgebra::allocator::Allocator;
+use svi::Dimension;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -108,12 +111,9 @@ use svi::lie_group::{LieSvi, RigidInitial};
 use svi::method::DynInitial;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
-use svi::model::text::{TextError, TextModel, TextSpec};
+use svi::model::text::{TextModel, TextSpec};
 use svi::{Initial, LagrangianExt};
-use svi_models::{
-    LOCAL_MODEL_NAMES, LocalZooModel, MAX_TEXT_DIMENSION, RIGID_MODEL_NAMES, RigidZooModel,
-    ZooModel,
-};
+use svi_models::{LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
@@ -257,7 +257,7 @@ impl Scene {
                 model: self.model.clone(),
             });
         }
-        let model = model?;
+        model?;
         let initial = &self.initial;
         let needed = [
             (initial.q.is_none(), "initial.q"),
@@ -273,13 +273,6 @@ impl Scene {
         ];
         if let Some((_, field)) = needed.into_iter().find(|(missing, _)| *missing) {
             return Err(SceneError::TextModelNeeds { field });
-        }
-        if let Some(max) = Some(MAX_TEXT_DIMENSION).filter(|max| model.dimension() > *max) {
-            return Err(TextError::TooManyCoordinates {
-                found: model.dimension(),
-                max,
-            }
-            .into());
         }
         Ok(())
     }
@@ -768,10 +761,13 @@ impl Scene {
 
     /// Apply the scene's parameters to a model on ℝᴺ and resolve the initial time and state,
     /// the step and the horizon (scene values, else the model's defaults).
-    pub fn resolve<M: ZooModel<N>, const N: usize>(
+    pub fn resolve<M: ZooModel<N>, N: Dimension>(
         &self,
         model: &mut M,
-    ) -> Result<(f64, Initial<N>, f64, f64), SceneError> {
+    ) -> Result<(f64, Initial<N>, f64, f64), SceneError>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         for (name, value) in &self.parameters {
             model.set_parameter(name, *value)?;
         }
@@ -785,15 +781,15 @@ impl Scene {
             ));
         }
         if self.wants_explicitly(Diagnostic::Solution) {
-            let velocity = match initial {
-                Initial::Velocity { v, .. } => Some(v),
-                Initial::Momentum { q, p } => model.velocity(t0, &q, &p, &p).ok(),
+            let velocity = match &initial {
+                Initial::Velocity { v, .. } => Some(v.clone()),
+                Initial::Momentum { q, p } => model.velocity(t0, q, p, p).ok(),
             };
-            let q = match initial {
+            let q = match &initial {
                 Initial::Velocity { q, .. } | Initial::Momentum { q, .. } => q,
             };
             // A velocity that cannot be computed is the run's to report.
-            if velocity.is_some_and(|v| model.exact_solution(t0, &q, &v, t0).is_none()) {
+            if velocity.is_some_and(|v| model.exact_solution(t0, q, &v, t0).is_none()) {
                 return Err(self.not_measurable(
                     "--diagnostics solution (output.diagnostics)",
                     "has no exact solution for this initial state to measure against",
@@ -1165,14 +1161,14 @@ pub(crate) mod tests {
     #[test]
     fn unknown_method_and_diagnostic_names_are_listed() {
         let error =
-            Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk4\"\n", "t").unwrap_err();
+            Scene::from_toml("model = \"kepler\"\n[method]\nname = \"rk45\"\n", "t").unwrap_err();
         let SceneError::Parse { parser, .. } = &error else {
             panic!("{error}")
         };
         assert!(
             parser
                 .to_string()
-                .contains("unknown method 'rk4' (known: svi, svi-newton, sc, symplectic-euler,")
+                .contains("unknown method 'rk45' (known: svi, svi-newton, sc, symplectic-euler,")
         );
         let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
         let SceneError::Parse { parser, .. } = Scene::from_toml(text, "t").unwrap_err() else {

@@ -1,33 +1,44 @@
 //! The initial state of a scene on ℝᴺ: `[initial]`'s t0, q and one of v, p, against the
 //! model's dimension and defaults (fixed N, or the n of a runtime-dimension model).
 
-use nalgebra::{DVector, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator, OVector, U1};
+use svi::Dimension;
 use svi::Initial;
 use svi::method::DynInitial;
 
 use crate::scene::error::SceneError;
 use crate::scene::schema::InitialSection;
 
-/// The initial state of `section` for a model of dimension `N` named `model`: the given q
-/// (else `default_q`) with the given v or p (else `default_v`). An error names a vector whose
-/// length is not `N`, or both v and p.
-pub fn initial<const N: usize>(
+/// The initial state of `section` for a model of dimension `N` named `model` (whose number of
+/// coordinates is the length of `default_q`): the given q (else `default_q`) with the given v
+/// or p (else `default_v`). An error names a vector whose length is not that number, or both
+/// v and p.
+pub fn initial<N: Dimension>(
     section: &InitialSection,
     model: &str,
-    default_q: SVector<f64, N>,
-    default_v: SVector<f64, N>,
-) -> Result<Initial<N>, SceneError> {
+    default_q: OVector<f64, N>,
+    default_v: OVector<f64, N>,
+) -> Result<Initial<N>, SceneError>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = default_q.shape_generic().0;
     let vector = |field: &'static str, values: &Option<Vec<f64>>| {
         values
             .as_ref()
             .map(|values| {
-                if values.len() == N {
-                    Ok(SVector::<f64, N>::from_iterator(values.iter().copied()))
+                if values.len() == n.value() {
+                    Ok(OVector::<f64, N>::from_iterator_generic(
+                        n,
+                        U1,
+                        values.iter().copied(),
+                    ))
                 } else {
                     Err(SceneError::Dimension {
                         model: model.into(),
                         field,
-                        expected: N,
+                        expected: n.value(),
                         found: values.len(),
                     })
                 }

@@ -258,7 +258,11 @@ pub fn conserves_energy(model: &str) -> bool {
     struct Conserves;
     impl svi_models::ModelVisitor for Conserves {
         type Output = bool;
-        fn visit<M: svi_models::ZooModel<N>, const N: usize>(self, _: M) -> bool {
+        fn visit<M: svi_models::ZooModel<N>, N: svi::Dimension>(self, _: M) -> bool
+        where
+            nalgebra::DefaultAllocator:
+                nalgebra::allocator::Allocator<N> + nalgebra::allocator::Allocator<N, N>,
+        {
             !M::FORCED && !M::TIME_DEPENDENT
         }
     }

@@ -31,12 +31,14 @@
 //! The same coefficients split the logarithmic Hamiltonian of a time-reparametrised run
 //! ([`crate::stepping::logh`]).
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::space::StepState;
 use crate::method::variational::stormer_verlet::{StormerVerlet, StormerVerletWorkspace};
 use crate::method::{Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector};
 
 /// A symmetric composition scheme: its name and the step fractions γ_1, …, γ_s.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -179,11 +181,26 @@ impl Composition {
     }
 }
 
-impl<const N: usize> Method<N> for Composition {
+/// Buffers of a composition run: Störmer–Verlet's, and the start and increment of one
+/// stage.
+#[derive(Debug, Clone)]
+pub struct CompositionWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    base: StormerVerletWorkspace<N>,
+    from: State<N>,
+    stage: State<N>,
+}
+
+impl<N: Dimension> Method<N> for Composition
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const WITHOUT_POINTS: bool = true;
     const COMPOSES_VERLET: bool = true;
 
-    type Workspace = StormerVerletWorkspace<N>;
+    type Workspace = CompositionWorkspace<N>;
 
     /// Störmer–Verlet's properties with the scheme's name and order.
     fn info(&self) -> MethodInfo {
@@ -198,28 +215,35 @@ impl<const N: usize> Method<N> for Composition {
         &self,
         model: &L,
         h: f64,
-    ) -> Result<StormerVerletWorkspace<N>, Error> {
-        self.base.workspace(model, h)
+    ) -> Result<CompositionWorkspace<N>, Error> {
+        let base = self.base.workspace(model, h)?;
+        let n: N =
+            dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
+        Ok(CompositionWorkspace {
+            base,
+            from: State::zeros(n),
+            stage: State::zeros(n),
+        })
     }
 
     /// The stages in turn, each from where the last ended.
     fn step<L: Lagrangian<N>>(
         &self,
         model: &L,
-        workspace: &mut StormerVerletWorkspace<N>,
+        workspace: &mut CompositionWorkspace<N>,
         t: f64,
         h: f64,
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
+        let CompositionWorkspace { base, from, stage } = workspace;
         let mut report = StepReport::default();
-        let (mut from, mut stage) = (State::zeros(), State::zeros());
         self.stages(
             (t, h),
             state,
-            (&mut from, &mut stage, increment),
+            (from, stage, increment),
             |t, size, from, stage| {
-                report += self.base.step(model, workspace, t, size, from, stage)?;
+                report += self.base.step(model, base, t, size, from, stage)?;
                 Ok(())
             },
         )?;
@@ -230,36 +254,37 @@ impl<const N: usize> Method<N> for Composition {
         Some(&self.fractions)
     }
 
-    fn restart(&self, workspace: &mut StormerVerletWorkspace<N>) {
-        Method::<N>::restart(&self.base, workspace);
+    fn restart(&self, workspace: &mut CompositionWorkspace<N>) {
+        Method::<N>::restart(&self.base, &mut workspace.base);
     }
 
     fn velocity(
         &self,
-        workspace: &StormerVerletWorkspace<N>,
-        p: &SVector<f64, N>,
-    ) -> Option<SVector<f64, N>> {
-        self.base.velocity(workspace, p)
+        workspace: &CompositionWorkspace<N>,
+        p: &OVector<f64, N>,
+    ) -> Option<OVector<f64, N>> {
+        self.base.velocity(&workspace.base, p)
     }
 
     /// The product of the stages' tangent maps.
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
-        workspace: &mut StormerVerletWorkspace<N>,
+        workspace: &mut CompositionWorkspace<N>,
         t: f64,
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let base = &mut workspace.base;
         let mut product: Option<TangentMap<N>> = None;
-        let (mut from, mut stage, mut total) = (State::zeros(), State::zeros(), State::zeros());
+        let n = state.dimension();
+        let (mut from, mut stage, mut total) = (State::zeros(n), State::zeros(n), State::zeros(n));
         self.stages(
             (t, h),
             state,
             (&mut from, &mut stage, &mut total),
             |t, size, from, stage| {
-                let (increment, tangent) =
-                    self.base.tangent_map(model, workspace, t, size, from)?;
+                let (increment, tangent) = self.base.tangent_map(model, base, t, size, from)?;
                 *stage = increment;
                 product = Some(match &product {
                     None => tangent,

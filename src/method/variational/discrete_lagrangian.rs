@@ -36,9 +36,11 @@
 //!
 //! All are symplectic without forces (a discrete Lagrangian is a type-I generating function).
 
+use crate::dimension::Dimension;
 use crate::model::Lagrangian;
 use crate::scalar::Scalar;
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
 
 /// Static facts about a discrete Lagrangian and the integrator it generates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,12 +58,22 @@ pub struct DiscreteLagrangianInfo {
 
 /// The discrete forces (f_d⁻, f_d⁺) of one step: the virtual work ∫ f_L·δq dt over the step
 /// is approximated by f_d⁻·δq_k + f_d⁺·δq_{k+1}.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DiscreteForces<D: Scalar, const N: usize> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiscreteForces<D: Scalar, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// f_d⁻, conjugate to δq_k.
-    pub minus: SVector<D, N>,
+    pub minus: OVector<D, N>,
     /// f_d⁺, conjugate to δq_{k+1}.
-    pub plus: SVector<D, N>,
+    pub plus: OVector<D, N>,
+}
+
+impl<D: Scalar, N: Dimension> Copy for DiscreteForces<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    OVector<D, N>: Copy,
+{
 }
 
 /// A discrete Lagrangian L_d(q_k, q_{k+1}, h) ≈ ∫_{t_k}^{t_k+h} L dt and its discrete forces.
@@ -75,26 +87,30 @@ pub trait DiscreteLagrangian {
     fn info(&self) -> DiscreteLagrangianInfo;
 
     /// L_d(q0, q1, h) for the step from `t` to `t + h`.
-    fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, const N: usize>(
+    fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, N: Dimension>(
         &self,
         model: &L,
         t: D,
         h: D,
-        q0: &SVector<D, N>,
-        q1: &SVector<D, N>,
-    ) -> D;
+        q0: &OVector<D, N>,
+        q1: &OVector<D, N>,
+    ) -> D
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>;
 
     /// The discrete forces (f_d⁻, f_d⁺) of the model's external force
     /// ([`Lagrangian::external_force`]) over the step, by the same quadrature as the action.
     /// Only called for [`Lagrangian::FORCED`] models.
-    fn discrete_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
+    fn discrete_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
         &self,
         model: &L,
         t: D,
         h: D,
-        q0: &SVector<D, N>,
-        q1: &SVector<D, N>,
-    ) -> DiscreteForces<D, N>;
+        q0: &OVector<D, N>,
+        q1: &OVector<D, N>,
+    ) -> DiscreteForces<D, N>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>;
 }
 
 /// A quadrature node on the segment from q_k to q_{k+1}: position τ ∈ [0, 1] and weight b.
@@ -106,81 +122,102 @@ pub struct SegmentNode {
     pub weight: f64,
 }
 
-/// The point (1 − τ) q0 + τ q1, exact at the end points and at the midpoint.
-#[inline]
-fn segment_point<D: Scalar, const N: usize>(
+/// The point (1 − τ) q0 + τ q1, exact at the end points and at the midpoint: `q0` or `q1`
+/// itself at an end point (no copy), else the interpolated point, kept in `storage`.
+#[inline(always)]
+fn segment_point<'a, D: Scalar, N: Dimension>(
     position: f64,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> SVector<D, N> {
+    q0: &'a OVector<D, N>,
+    q1: &'a OVector<D, N>,
+    storage: &'a mut Option<OVector<D, N>>,
+) -> &'a OVector<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     if position == 0.0 {
-        *q0
+        q0
     } else if position == 1.0 {
-        *q1
+        q1
     } else {
-        q0.zip_map(q1, |a, b| a * (1.0 - position) + b * position)
+        storage.insert(q0.zip_map(q1, |a, b| a * (1.0 - position) + b * position))
     }
 }
 
 /// The velocity (q1 − q0)/h of the segment.
-#[inline]
-fn segment_velocity<D: Scalar, const N: usize>(
+#[inline(always)]
+fn segment_velocity<D: Scalar, N: Dimension>(
     h: D,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> SVector<D, N> {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> OVector<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let rate = h.recip();
     q1.zip_map(q0, |b, a| (b - a) * rate)
 }
 
 /// The action h Σ_i b_i L(t + τ_i h, (1 − τ_i) q0 + τ_i q1, (q1 − q0)/h) of the straight
 /// segment from q0 to q1 under the quadrature rule `nodes`.
-#[inline]
-pub fn segment_action<L: Lagrangian<N>, D: Scalar, const N: usize>(
+#[inline(always)]
+pub fn segment_action<L: Lagrangian<N>, D: Scalar, N: Dimension>(
     model: &L,
     nodes: &[SegmentNode],
     t: D,
     h: D,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> D {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> D
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let v = segment_velocity(h, q0, q1);
     let mut action = D::from(0.0);
     for node in nodes {
-        let q = segment_point(node.position, q0, q1);
+        let mut storage = None;
+        let q = segment_point(node.position, q0, q1, &mut storage);
         let time = t + h * node.position;
-        action += model.lagrangian(time, &q, &v) * node.weight;
+        action += model.lagrangian(time, q, &v) * node.weight;
     }
     action * h
 }
 
 /// The discrete forces of the straight segment under the quadrature rule `nodes`:
 /// f_d⁻ = h Σ_i b_i (1 − τ_i) f_L(t_i, q(τ_i), v), f_d⁺ = h Σ_i b_i τ_i f_L(t_i, q(τ_i), v).
-#[inline]
-pub fn segment_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
+#[inline(always)]
+pub fn segment_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
     model: &L,
     nodes: &[SegmentNode],
     t: D,
     h: D,
-    q0: &SVector<D, N>,
-    q1: &SVector<D, N>,
-) -> DiscreteForces<D, N> {
+    q0: &OVector<D, N>,
+    q1: &OVector<D, N>,
+) -> DiscreteForces<D, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let v = segment_velocity(h, q0, q1);
-    let mut minus = SVector::<D, N>::zeros();
-    let mut plus = SVector::<D, N>::zeros();
+    let (n, _) = q0.shape_generic();
+    let mut minus = OVector::<D, N>::zeros_generic(n, U1);
+    let mut plus = OVector::<D, N>::zeros_generic(n, U1);
     for node in nodes {
-        let q = segment_point(node.position, q0, q1);
+        let mut storage = None;
+        let q = segment_point(node.position, q0, q1, &mut storage);
         let time = t + h * node.position;
-        let force = model.external_force(time, &q, &v);
+        let force = model.external_force(time, q, &v);
         let (left, right) = (
             node.weight * (1.0 - node.position),
             node.weight * node.position,
         );
         if left != 0.0 {
-            minus += force.map(|f| f * h * left);
+            for (target, f) in minus.as_mut_slice().iter_mut().zip(force.as_slice()) {
+                *target += *f * h * left;
+            }
         }
         if right != 0.0 {
-            plus += force.map(|f| f * h * right);
+            for (target, f) in plus.as_mut_slice().iter_mut().zip(force.as_slice()) {
+                *target += *f * h * right;
+            }
         }
     }
     DiscreteForces { minus, plus }
@@ -204,27 +241,33 @@ macro_rules! segment_rule {
                 }
             }
 
-            #[inline]
-            fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, const N: usize>(
+            #[inline(always)]
+            fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, N: Dimension>(
                 &self,
                 model: &L,
                 t: D,
                 h: D,
-                q0: &SVector<D, N>,
-                q1: &SVector<D, N>,
-            ) -> D {
+                q0: &OVector<D, N>,
+                q1: &OVector<D, N>,
+            ) -> D
+            where
+                DefaultAllocator: Allocator<N> + Allocator<N, N>,
+            {
                 segment_action(model, Self::NODES, t, h, q0, q1)
             }
 
-            #[inline]
-            fn discrete_forces<L: Lagrangian<N>, D: Scalar, const N: usize>(
+            #[inline(always)]
+            fn discrete_forces<L: Lagrangian<N>, D: Scalar, N: Dimension>(
                 &self,
                 model: &L,
                 t: D,
                 h: D,
-                q0: &SVector<D, N>,
-                q1: &SVector<D, N>,
-            ) -> DiscreteForces<D, N> {
+                q0: &OVector<D, N>,
+                q1: &OVector<D, N>,
+            ) -> DiscreteForces<D, N>
+            where
+                DefaultAllocator: Allocator<N> + Allocator<N, N>,
+            {
                 segment_forces(model, Self::NODES, t, h, q0, q1)
             }
         }
@@ -366,10 +409,11 @@ segment_rule!(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{SVector, U1};
 
     /// L = q̇²/2 − q²/2 with friction f = −c q̇ + a t.
     struct Damped;
-    impl Lagrangian<1> for Damped {
+    impl Lagrangian<U1> for Damped {
         const FORCED: bool = true;
         fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
             (v[0] * v[0] - q[0] * q[0]) * 0.5

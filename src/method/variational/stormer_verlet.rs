@@ -34,6 +34,7 @@
 //! integration* (2006), §I.3 and eq. VI.6.9; Hairer, Lubich, Wanner, *Geometric numerical
 //! integration illustrated by the Störmer–Verlet method*, Acta Numerica (2003).
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::method::Method;
@@ -48,7 +49,8 @@ use crate::model::Structure;
 use crate::model::derived::LagrangianExt;
 use crate::model::derived::cached_mass_inverse;
 use crate::nonlinear::Newton;
-use nalgebra::{DVector, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
 
 /// Options of the Störmer–Verlet method.
 #[derive(Debug, Clone, PartialEq)]
@@ -78,19 +80,25 @@ impl StormerVerlet {
 }
 
 /// ∂L/∂q at the end of the previous step.
-#[derive(Debug, Clone, Copy)]
-struct CachedForce<const N: usize> {
+#[derive(Debug, Clone)]
+struct CachedForce<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     t: f64,
-    q: SVector<f64, N>,
+    q: OVector<f64, N>,
     tolerance: f64,
-    force: SVector<f64, N>,
+    force: OVector<f64, N>,
 }
 
 /// Buffers of the explicit kick–drift–kick path.
 #[derive(Debug, Clone)]
-struct Explicit<const N: usize> {
+struct Explicit<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// M⁻¹, from the first step.
-    mass_inverse: Option<SMatrix<f64, N, N>>,
+    mass_inverse: Option<OMatrix<f64, N, N>>,
     cache: Option<CachedForce<N>>,
     /// Newton on the half-step momentum (forced models).
     newton: Newton,
@@ -99,14 +107,20 @@ struct Explicit<const N: usize> {
 
 /// Buffers of a Störmer–Verlet run.
 #[derive(Debug, Clone)]
-pub struct StormerVerletWorkspace<const N: usize> {
+pub struct StormerVerletWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The implicit path (Lagrangians without constant mass matrix).
     implicit: VariationalWorkspace<N>,
     /// The explicit path ([`Structure::ConstantMass`]).
     explicit: Option<Explicit<N>>,
 }
 
-impl<const N: usize> Method<N> for StormerVerlet {
+impl<N: Dimension> Method<N> for StormerVerlet
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const WITHOUT_POINTS: bool = true;
     const COMPOSES_VERLET: bool = true;
 
@@ -128,11 +142,13 @@ impl<const N: usize> Method<N> for StormerVerlet {
         h: f64,
     ) -> Result<StormerVerletWorkspace<N>, Error> {
         let implicit = self.implicit().workspace(model, h)?;
+        let n: N =
+            dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
         let explicit = (L::STRUCTURE == Structure::ConstantMass).then(|| Explicit {
             mass_inverse: None,
             cache: None,
-            newton: Newton::new(N, self.max_iterations),
-            half: DVector::zeros(N),
+            newton: Newton::new(n.value(), self.max_iterations),
+            half: DVector::zeros(n.value()),
         });
         Ok(StormerVerletWorkspace { implicit, explicit })
     }
@@ -158,6 +174,17 @@ impl<const N: usize> Method<N> for StormerVerlet {
         Some(&[1.0])
     }
 
+    /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked once
+    /// per run); `None` on the implicit path.
+    fn velocity(
+        &self,
+        workspace: &StormerVerletWorkspace<N>,
+        p: &OVector<f64, N>,
+    ) -> Option<OVector<f64, N>> {
+        let inverse = workspace.explicit.as_ref()?.mass_inverse.as_ref()?;
+        Some(inverse * p)
+    }
+
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
@@ -166,23 +193,27 @@ impl<const N: usize> Method<N> for StormerVerlet {
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let mut increment = State::zeros();
+        let mut increment = State::zeros(state.dimension());
         self.step(model, workspace, t, h, state, &mut increment)?;
-        let q1 = state.q + increment.q;
+        let q1 = &state.q + &increment.q;
         let tangent = discrete_tangent_map(&Trapezoid, model, t, h, &state.q, &q1)?;
         Ok((increment, tangent))
     }
 }
 
 /// One explicit step of a constant-mass Lagrangian.
-fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
+fn kick_drift_kick<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     explicit: &mut Explicit<N>,
     t: f64,
     h: f64,
     state: &State<N>,
     increment: &mut State<N>,
-) -> Result<StepReport, StepFailure> {
+) -> Result<StepReport, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = state.dimension();
     let mass_inverse =
         cached_mass_inverse(&mut explicit.mass_inverse, model, t, &state.q, &state.y)?;
     let half = 0.5 * h;
@@ -190,55 +221,60 @@ fn kick_drift_kick<L: Lagrangian<N>, const N: usize>(
     let cached = explicit.cache.take().filter(|cache| {
         (!L::TIME_DEPENDENT
             || (cache.t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cache.t.abs()))
-            && (state.q - cache.q).amax() <= cache.tolerance
+            && (&state.q - &cache.q).amax() <= cache.tolerance
     });
     let start_force = match cached {
         Some(cache) => cache.force,
         None => {
             evaluations += 1;
-            model.force(t, &state.q, &(mass_inverse * state.y))
+            model.force(t, &state.q, &(mass_inverse * &state.y))
         }
     };
     // Kick: p_{k+½} = p_k + (h/2)(∂L/∂q + f_L) at the start.
-    let mut kick = state.y + start_force * half;
+    let mut kick = &state.y + &start_force * half;
     let mut start = start_force;
     let mut iterations = 0;
     if L::FORCED {
         let rest = kick;
-        let predicted = rest + model.external_force(t, &state.q, &(mass_inverse * rest)) * half;
+        let predicted = &rest + model.external_force(t, &state.q, &(mass_inverse * &rest)) * half;
         explicit.half.copy_from_slice(predicted.as_slice());
         iterations = explicit
             .newton
             .solve(&mut explicit.half, |z, matrix, residual| {
-                let momentum = SVector::<f64, N>::from_column_slice(z.as_slice());
-                let force = model.external_force_jacobian(t, &state.q, &(mass_inverse * momentum));
-                let value = momentum - rest - force.value * half;
+                let momentum = OVector::<f64, N>::from_column_slice_generic(n, U1, z.as_slice());
+                let force = model.external_force_jacobian(t, &state.q, &(mass_inverse * &momentum));
+                let value = &momentum - &rest - force.value * half;
                 residual.copy_from_slice(value.as_slice());
-                let jacobian = SMatrix::<f64, N, N>::identity() - force.v * mass_inverse * half;
-                matrix.copy_from(&jacobian);
+                let jacobian =
+                    OMatrix::<f64, N, N>::identity_generic(n, n) - &force.v * mass_inverse * half;
+                // Both column-major and N × N.
+                matrix.as_mut_slice().copy_from_slice(jacobian.as_slice());
             })?;
-        kick = SVector::from_column_slice(explicit.half.as_slice());
-        start += model.external_force(t, &state.q, &(mass_inverse * kick));
+        kick = OVector::from_column_slice_generic(n, U1, explicit.half.as_slice());
+        start += model.external_force(t, &state.q, &(mass_inverse * &kick));
     }
     // Drift.
-    let velocity = mass_inverse * kick;
-    let drift = velocity * h;
-    let end_q = state.q + drift;
+    let velocity = mass_inverse * &kick;
+    let drift = &velocity * h;
+    let end_q = &state.q + &drift;
     let end_t = t + h;
     // Kick: p_{k+1} = p_{k+½} + (h/2)(∂L/∂q + f_L) at the end.
     let end_force = model.force(end_t, &end_q, &velocity);
+    // (start + end) (h/2), end = ∂L/∂q + f_L.
+    let mut sum = start;
+    if L::FORCED {
+        sum += &end_force + model.external_force(end_t, &end_q, &velocity);
+    } else {
+        sum += &end_force;
+    }
     explicit.cache = Some(CachedForce {
         t: end_t,
-        q: end_q,
         tolerance: continuation_tolerance(&state.q, &end_q),
+        q: end_q,
         force: end_force,
     });
-    let mut end = end_force;
-    if L::FORCED {
-        end += model.external_force(end_t, &end_q, &velocity);
-    }
     increment.q = drift;
-    increment.y = (start + end) * half;
+    increment.y = sum * half;
     Ok(StepReport {
         iterations,
         evaluations,

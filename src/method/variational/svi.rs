@@ -59,6 +59,7 @@
 //! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
@@ -73,7 +74,8 @@ use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use crate::spectral::starting_values::StartingValues;
 use crate::spectral::{MAX_POINTS, check_options};
-use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
 use std::ops::ControlFlow;
 
 /// Options of the spectral variational integrator.
@@ -239,20 +241,37 @@ impl Tables {
     /// summing the z_j directly left q̇ off by tens of ulps, and the Newton path's energy
     /// random-walked ten times faster than the fixed point's (Kepler, T = 2000: final errors
     /// 5e-11 to 1.3e-10 against 6e-12).
-    fn point<const N: usize>(
+    fn point<N: Dimension>(
         &self,
         mu: usize,
-        q0: &SVector<f64, N>,
+        q0: &OVector<f64, N>,
         z: &DVector<f64>,
-    ) -> (SVector<f64, N>, SVector<f64, N>) {
+    ) -> (OVector<f64, N>, OVector<f64, N>)
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let s = self.degree;
-        let end = z.fixed_rows::<N>((s - 1) * N).into_owned();
-        let mut q = *q0 + end * self.unit_nodes[mu];
-        let mut v = end / self.h;
+        let (n, _) = q0.shape_generic();
+        let width = n.value();
+        let end =
+            OVector::from_column_slice_generic(n, U1, &z.as_slice()[(s - 1) * width..s * width]);
+        let mut q = q0 + &end * self.unit_nodes[mu];
+        let mut v = &end / self.h;
         for nu in 1..s {
-            let node = z.fixed_rows::<N>((nu - 1) * N) - end * self.unit_points[nu];
-            q += node * self.values[(mu, nu)];
-            v += node * self.derivatives[(mu, nu)];
+            let offsets = &z.as_slice()[(nu - 1) * width..nu * width];
+            let (b, c) = (self.values[(mu, nu)], self.derivatives[(mu, nu)]);
+            let position = self.unit_points[nu];
+            for (((q, v), z), end) in q
+                .as_mut_slice()
+                .iter_mut()
+                .zip(v.as_mut_slice())
+                .zip(offsets)
+                .zip(end.as_slice())
+            {
+                let node = z - end * position;
+                *q += node * b;
+                *v += node * c;
+            }
         }
         (q, v)
     }
@@ -326,30 +345,33 @@ pub(crate) struct NystromTables {
 /// The fixed-point iteration's tables and buffers on ℝᴺ (the iteration is described above
 /// [`NystromTables`]).
 #[derive(Debug, Clone)]
-struct ConstantMass<const N: usize> {
+struct ConstantMass<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The dimension-free tables.
     nystrom: NystromTables,
     /// h M⁻¹p_k of the last converged step.
-    last_velocity: SVector<f64, N>,
+    last_velocity: OVector<f64, N>,
     /// The scaled accelerations h² M⁻¹ ∂L/∂q(τ_μ) of the last converged step: with
     /// `last_velocity` they determine its node offsets, Z_j = c_j h M⁻¹p_k + Σ_μ P_jμ a_μ.
-    last_accelerations: Vec<SVector<f64, N>>,
+    last_accelerations: Vec<OVector<f64, N>>,
     /// Whether the last step is remembered only by `last_velocity` and `last_accelerations`:
     /// its node offsets in [`StartingValues`] are still to be written ([`ConstantMass::settle`])
     /// before anything reads them.
     pending: bool,
     /// M⁻¹, from the first step.
-    mass_inverse: Option<SMatrix<f64, N, N>>,
+    mass_inverse: Option<OMatrix<f64, N, N>>,
     /// ∂L/∂q at the quadrature points.
-    forces: Vec<SVector<f64, N>>,
+    forces: Vec<OVector<f64, N>>,
     /// M⁻¹ ∂L/∂q at the quadrature points.
-    accelerations: Vec<SVector<f64, N>>,
+    accelerations: Vec<OVector<f64, N>>,
     /// Positions Q_μ at the quadrature points.
-    positions: Vec<SVector<f64, N>>,
+    positions: Vec<OVector<f64, N>>,
     /// q_k + h c'_μ M⁻¹p_k, the force-free part of Q_μ (fixed within a step).
-    bases: Vec<SVector<f64, N>>,
+    bases: Vec<OVector<f64, N>>,
     /// Velocities V_μ at the quadrature points (forced models).
-    velocities: Vec<SVector<f64, N>>,
+    velocities: Vec<OVector<f64, N>>,
 }
 
 impl NystromTables {
@@ -451,31 +473,39 @@ impl NystromTables {
     }
 }
 
-impl<const N: usize> ConstantMass<N> {
-    /// `None` when K̃* is singular (too few Gauss points): Newton's method is used instead.
-    fn new(tables: &Tables) -> Option<Self> {
+impl<N: Dimension> ConstantMass<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// Buffers of dimension `n`; `None` when K̃* is singular (too few Gauss points):
+    /// Newton's method is used instead.
+    fn new(tables: &Tables, n: N) -> Option<Self> {
         let m = tables.nodes.len();
+        let zero = OVector::zeros_generic(n, U1);
         Some(ConstantMass {
             nystrom: NystromTables::new(tables)?,
-            last_velocity: SVector::zeros(),
-            last_accelerations: vec![SVector::zeros(); m],
+            last_velocity: zero.clone(),
+            last_accelerations: vec![zero.clone(); m],
             pending: false,
             mass_inverse: None,
-            forces: vec![SVector::zeros(); m],
-            accelerations: vec![SVector::zeros(); m],
-            positions: vec![SVector::zeros(); m],
-            bases: vec![SVector::zeros(); m],
-            velocities: vec![SVector::zeros(); m],
+            forces: vec![zero.clone(); m],
+            accelerations: vec![zero.clone(); m],
+            positions: vec![zero.clone(); m],
+            bases: vec![zero.clone(); m],
+            velocities: vec![zero; m],
         })
     }
 }
 
-impl<const N: usize> ConstantMass<N> {
+impl<N: Dimension> ConstantMass<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// Q_μ = q_k + Σ_j T_μj Z_j for node offsets Z_j (j = 1..s, stacked), with T the
     /// extrapolation W (`extrapolated`) or the interpolation l_j(τ_μ).
     fn set_positions(
         &mut self,
-        q: &SVector<f64, N>,
+        q: &OVector<f64, N>,
         extrapolated: bool,
         offsets: &[f64],
         s: usize,
@@ -486,10 +516,10 @@ impl<const N: usize> ConstantMass<N> {
             &self.nystrom.stage_values
         };
         for (position, row) in self.positions.iter_mut().zip(table.chunks_exact(s)) {
-            let mut sum = *q;
-            for (w, offset) in row.iter().zip(offsets.chunks_exact(N)) {
-                for d in 0..N {
-                    sum[d] += w * offset[d];
+            let mut sum = q.clone();
+            for (w, offset) in row.iter().zip(offsets.chunks_exact(q.len())) {
+                for (total, x) in sum.as_mut_slice().iter_mut().zip(offset) {
+                    *total += w * x;
                 }
             }
             *position = sum;
@@ -497,7 +527,7 @@ impl<const N: usize> ConstantMass<N> {
     }
 
     /// Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν from the last step's pending data.
-    fn extrapolate_positions(&mut self, q: &SVector<f64, N>) {
+    fn extrapolate_positions(&mut self, q: &OVector<f64, N>) {
         let m = self.positions.len();
         for ((position, row), gamma) in self
             .positions
@@ -506,7 +536,7 @@ impl<const N: usize> ConstantMass<N> {
             .zip(&self.nystrom.start_velocity)
         {
             // Accumulated in a local (registers), not through the reference.
-            let mut sum = *q;
+            let mut sum = q.clone();
             add_scaled(&mut sum, *gamma, &self.last_velocity);
             for (e, acceleration) in row.iter().zip(&self.last_accelerations) {
                 add_scaled(&mut sum, *e, acceleration);
@@ -517,9 +547,9 @@ impl<const N: usize> ConstantMass<N> {
 
     /// Node offset Z_j (j = 0..s − 1 for the nodes 1..s) of the last converged step, from
     /// its velocity term and accelerations.
-    fn last_offset(&self, j: usize) -> SVector<f64, N> {
+    fn last_offset(&self, j: usize) -> OVector<f64, N> {
         let m = self.last_accelerations.len();
-        let mut offset = self.last_velocity * self.nystrom.velocity_coefficients[j];
+        let mut offset = &self.last_velocity * self.nystrom.velocity_coefficients[j];
         let row = &self.nystrom.propagation[j * m..(j + 1) * m];
         for (p, acceleration) in row.iter().zip(&self.last_accelerations) {
             add_scaled(&mut offset, *p, acceleration);
@@ -532,7 +562,8 @@ impl<const N: usize> ConstantMass<N> {
         if !self.pending {
             return;
         }
-        for (j, target) in start.previous_mut().chunks_exact_mut(N).enumerate() {
+        let width = self.last_velocity.len();
+        for (j, target) in start.previous_mut().chunks_exact_mut(width).enumerate() {
             target.copy_from_slice(self.last_offset(j).as_slice());
         }
         self.pending = false;
@@ -590,7 +621,10 @@ fn gauss_nystrom_matrix(nodes: &[f64]) -> Option<Vec<f64>> {
 
 /// Buffers of an SVI run.
 #[derive(Debug, Clone)]
-pub struct SviWorkspace<const N: usize> {
+pub struct SviWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     tables: Tables,
     /// Node offsets qᵛ − q_k, ν = 1..s, stacked.
     offsets: DVector<f64>,
@@ -608,7 +642,10 @@ pub struct SviWorkspace<const N: usize> {
     newton_only: bool,
 }
 
-impl<const N: usize> SviWorkspace<N> {
+impl<N: Dimension> SviWorkspace<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// Rescale the tables for a new step size (the kept Newton factors scale with it).
     fn set_step(&mut self, h: f64) {
         if self.tables.h != h {
@@ -648,23 +685,26 @@ impl<const N: usize> SviWorkspace<N> {
 }
 
 /// [`SviWorkspace::start`] on the workspace's parts.
-fn starting_offsets<L: Lagrangian<N>, const N: usize>(
+fn starting_offsets<L: Lagrangian<N>, N: Dimension>(
     start: &mut StartingValues,
     h: f64,
     offsets: &mut DVector<f64>,
     model: &L,
     t: f64,
     state: &State<N>,
-) {
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     if start.prepare(h) {
         start.extrapolate::<N>(offsets);
     } else {
+        let n = state.dimension();
         let v = model
             .velocity(t, &state.q, &state.y, &state.y)
-            .unwrap_or_else(|_| SVector::zeros());
+            .unwrap_or_else(|_| OVector::zeros_generic(n, U1));
         let a = model
             .acceleration(t, &state.q, &v)
-            .unwrap_or_else(SVector::zeros);
+            .unwrap_or_else(|| OVector::zeros_generic(n, U1));
         start.taylor(h, &v, &a, offsets);
     }
 }
@@ -672,7 +712,7 @@ fn starting_offsets<L: Lagrangian<N>, const N: usize>(
 /// Assemble the residual of (8a)–(8b) and, when `jacobian` is `Some`, its Jacobian with
 /// respect to the offsets (the residual alone needs only first derivatives of L).
 #[allow(clippy::too_many_arguments)]
-fn assemble<L: Lagrangian<N>, const N: usize>(
+fn assemble<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     tables: &Tables,
     points: &mut [SecondDerivatives<N>],
@@ -682,8 +722,11 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
     z: &DVector<f64>,
     jacobian: Option<&mut DMatrix<f64>>,
     residual: &mut DVector<f64>,
-) {
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let s = tables.degree;
+    let width = state.q.len();
     for (mu, point) in points.iter_mut().enumerate() {
         let (q, v) = tables.point(mu, &state.q, z);
         let time = tables.time(t, mu);
@@ -711,17 +754,23 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
     for (mu, d) in points.iter().enumerate() {
         let w = tables.weights[mu];
         // ∂L/∂q + f_L.
+        let forced;
         let lq = if L::FORCED {
-            d.q + forces[mu].value
+            forced = &d.q + &forces[mu].value;
+            &forced
         } else {
-            d.q
+            &d.q
         };
-        let momentum = d.v - state.y;
+        let momentum = &d.v - &state.y;
         for nu in 0..s {
             let b = tables.values[(mu, nu)];
             let c = tables.derivatives[(mu, nu)];
-            let mut row = residual.fixed_rows_mut::<N>(nu * N);
-            row += (lq * b + momentum * c) * w;
+            let row = &mut residual.as_mut_slice()[nu * width..(nu + 1) * width];
+            for ((target, lq), momentum) in
+                row.iter_mut().zip(lq.as_slice()).zip(momentum.as_slice())
+            {
+                *target += (lq * b + momentum * c) * w;
+            }
         }
     }
     let Some(jacobian) = jacobian else {
@@ -732,28 +781,32 @@ fn assemble<L: Lagrangian<N>, const N: usize>(
         let w = tables.weights[mu];
         let qv_t = d.qv.transpose();
         // The derivatives of ∂L/∂q + f_L in q and q̇.
+        let forced;
         let (lqq, lqv) = if L::FORCED {
             let f = &forces[mu];
-            (d.qq + f.q, d.qv + f.v)
+            forced = (&d.qq + &f.q, &d.qv + &f.v);
+            (&forced.0, &forced.1)
         } else {
-            (d.qq, d.qv)
+            (&d.qq, &d.qv)
         };
         for j in 1..=s {
             let bj = tables.values[(mu, j)];
             let cj = tables.derivatives[(mu, j)];
-            let from_q: SMatrix<f64, N, N> = (lqq * bj + lqv * cj) * w;
-            let from_v: SMatrix<f64, N, N> = (qv_t * bj + d.vv * cj) * w;
+            let from_q: OMatrix<f64, N, N> = (lqq * bj + lqv * cj) * w;
+            let from_v: OMatrix<f64, N, N> = (&qv_t * bj + &d.vv * cj) * w;
             for nu in 0..s {
                 let block =
-                    from_q * tables.values[(mu, nu)] + from_v * tables.derivatives[(mu, nu)];
-                let mut target = jacobian.fixed_view_mut::<N, N>(nu * N, (j - 1) * N);
-                target += block;
+                    &from_q * tables.values[(mu, nu)] + &from_v * tables.derivatives[(mu, nu)];
+                add_block(jacobian, nu * width, (j - 1) * width, &block);
             }
         }
     }
 }
 
-impl<const N: usize> Method<N> for Svi {
+impl<N: Dimension> Method<N> for Svi
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     type Workspace = SviWorkspace<N>;
 
     fn info(&self) -> MethodInfo {
@@ -763,23 +816,25 @@ impl<const N: usize> Method<N> for Svi {
                 Solver::Auto => "svi",
                 Solver::Newton => "svi-newton",
             },
-            order: 2 * degree.min(self.quadrature_points()),
+            order: degree.min(self.quadrature_points()).saturating_mul(2),
             symmetric: true,
             symplectic: true,
             coordinates: Coordinates::Momentum,
         }
     }
 
-    fn workspace<L: Lagrangian<N>>(&self, _model: &L, h: f64) -> Result<SviWorkspace<N>, Error> {
+    fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<SviWorkspace<N>, Error> {
         self.validate()?;
         crate::error::require_positive("h", h)?;
+        let n = dimension_of::<N>(model.dimension())
+            .map_err(|reason| Error::invalid("model", reason))?;
         let m = self.quadrature_points();
-        let size = (self.points - 1) * N;
-        let zero = SecondDerivatives::zeros();
+        let size = (self.points - 1) * n.value();
+        let zero = SecondDerivatives::zeros(n);
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
         let tables = Tables::new(&basis, m, h)?;
         let constant_mass = match L::STRUCTURE {
-            Structure::ConstantMass => ConstantMass::new(&tables),
+            Structure::ConstantMass => ConstantMass::new(&tables, n),
             Structure::General => None,
         };
         // Newton's buffers exist for every model: a constant-mass model falls back to Newton
@@ -789,9 +844,9 @@ impl<const N: usize> Method<N> for Svi {
         Ok(SviWorkspace {
             tables,
             offsets: DVector::zeros(size),
-            start: StartingValues::new(&basis, N),
+            start: StartingValues::new(&basis, n.value()),
             points: vec![zero; points],
-            forces: vec![ForceJacobian::zeros(); forces],
+            forces: vec![ForceJacobian::zeros(n); forces],
             newton: Newton::new(size, self.max_iterations),
             constant_mass,
             newton_only: false,
@@ -841,9 +896,16 @@ impl<const N: usize> Method<N> for Svi {
         let iterations = solved.iterations + spent;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
-        let mut dp = SVector::<f64, N>::zeros();
+        let n = state.dimension();
+        let width = n.value();
+        // The momentum increment p_{k+1} − p_k.
+        let dp = &mut increment.y;
+        dp.fill(0.0);
         // Σ_μ P_sμ (∂L/∂q + f_L)(τ_μ), for the end point of a constant-mass model.
-        let mut end_load = SVector::<f64, N>::zeros();
+        let mut end_load = ws
+            .constant_mass
+            .as_ref()
+            .map(|_| OVector::<f64, N>::zeros_generic(n, U1));
         for mu in 0..ws.tables.nodes.len() {
             let (q, v) = ws.tables.point(mu, &state.q, &ws.offsets);
             let time = ws.tables.time(t, mu);
@@ -851,9 +913,9 @@ impl<const N: usize> Method<N> for Svi {
             if L::FORCED {
                 force += model.external_force(time, &q, &v);
             }
-            dp += force * ws.tables.weights[mu];
-            if let Some(data) = ws.constant_mass.as_ref() {
-                add_scaled(&mut end_load, data.nystrom.end_weights[mu], &force);
+            add_scaled(dp, ws.tables.weights[mu], &force);
+            if let (Some(data), Some(end_load)) = (ws.constant_mass.as_ref(), end_load.as_mut()) {
+                add_scaled(end_load, data.nystrom.end_weights[mu], &force);
             }
         }
         // With a constant mass matrix the end point follows from the converged forces without
@@ -862,15 +924,20 @@ impl<const N: usize> Method<N> for Svi {
         // the same number up to the round-off of the residual (8a)–(8b), whose O(|p|) terms
         // cancel through the differentiation matrix: taking Z_s made the energy error
         // random-walk 5–10 times faster than the fixed point's (Kepler, T = 2000).
-        increment.q = match ws.constant_mass.as_mut() {
-            Some(data) => {
+        match (ws.constant_mass.as_mut(), end_load) {
+            (Some(data), Some(end_load)) => {
                 let inverse =
                     cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
-                inverse * (state.y * h + end_load * (h * h))
+                increment.q = inverse * (&state.y * h + end_load * (h * h));
             }
-            None => ws.offsets.fixed_rows::<N>((s - 1) * N).into_owned(),
-        };
-        increment.y = dp;
+            _ => {
+                increment.q = OVector::from_column_slice_generic(
+                    n,
+                    U1,
+                    &ws.offsets.as_slice()[(s - 1) * width..s * width],
+                );
+            }
+        }
         ws.remember(h);
         let m = ws.tables.nodes.len();
         Ok(StepReport {
@@ -896,7 +963,7 @@ impl<const N: usize> Method<N> for Svi {
         state: &State<N>,
         h: f64,
         theta: f64,
-    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
         let mut values = [0.0; MAX_POINTS];
         let tau = 2.0 * theta - 1.0;
         let (offset, rate) = match workspace.constant_mass.as_ref() {
@@ -905,7 +972,7 @@ impl<const N: usize> Method<N> for Svi {
                 .polynomial(tau, &mut values, |j| data.last_offset(j)),
             _ => workspace.start.last_step::<N>(tau, &mut values)?,
         };
-        Some((state.q + offset, rate * (2.0 / h)))
+        Some((&state.q + offset, rate * (2.0 / h)))
     }
 
     /// q̇ = M⁻¹p once the fixed-point iteration has cached M⁻¹ (a constant-mass model,
@@ -914,9 +981,9 @@ impl<const N: usize> Method<N> for Svi {
     fn velocity(
         &self,
         workspace: &SviWorkspace<N>,
-        p: &SVector<f64, N>,
-    ) -> Option<SVector<f64, N>> {
-        let inverse = workspace.constant_mass.as_ref()?.mass_inverse?;
+        p: &OVector<f64, N>,
+    ) -> Option<OVector<f64, N>> {
+        let inverse = workspace.constant_mass.as_ref()?.mass_inverse.as_ref()?;
         Some(inverse * p)
     }
 
@@ -982,7 +1049,7 @@ impl<const N: usize> Method<N> for Svi {
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let mut increment = State::zeros();
+        let mut increment = State::zeros(state.dimension());
         self.step(model, workspace, t, h, state, &mut increment)?;
         // The converged node offsets (a fixed-point step leaves them pending).
         workspace.settle();
@@ -992,50 +1059,51 @@ impl<const N: usize> Method<N> for Svi {
         let ws = &*workspace;
         let tables = &ws.tables;
         let s = tables.degree;
+        let n = state.dimension();
+        let w = n.value();
         // Full block Hessian H_{νj} = ∂(g_ν + f_ν)/∂qʲ, ν, j = 0..s, at the converged nodes
         // (the force terms vanish for unforced models).
-        let size = (s + 1) * N;
+        let size = (s + 1) * w;
         let mut hessian = DMatrix::zeros(size, size);
         for mu in 0..tables.nodes.len() {
             let (q, v) = tables.point(mu, &state.q, &ws.offsets);
             let d = model.second_derivatives(tables.time(t, mu), &q, &v);
             let f = model.external_force_jacobian(tables.time(t, mu), &q, &v);
-            let w = tables.weights[mu];
+            let weight = tables.weights[mu];
             for j in 0..=s {
                 let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
-                let from_q = ((d.qq + f.q) * bj + (d.qv + f.v) * cj) * w;
-                let from_v = (d.qv.transpose() * bj + d.vv * cj) * w;
+                let from_q = ((&d.qq + &f.q) * bj + (&d.qv + &f.v) * cj) * weight;
+                let from_v = (d.qv.transpose() * bj + &d.vv * cj) * weight;
                 for nu in 0..=s {
                     let block =
-                        from_q * tables.values[(mu, nu)] + from_v * tables.derivatives[(mu, nu)];
-                    let mut target = hessian.fixed_view_mut::<N, N>(nu * N, j * N);
-                    target += block;
+                        &from_q * tables.values[(mu, nu)] + &from_v * tables.derivatives[(mu, nu)];
+                    add_block(&mut hessian, nu * w, j * w, &block);
                 }
             }
         }
-        let inner = s * N;
+        let inner = s * w;
         let mut lu = crate::linalg::DenseLu::new(inner);
         lu.matrix_mut()
-            .copy_from(&hessian.view((0, N), (inner, inner)));
+            .copy_from(&hessian.view((0, w), (inner, inner)));
         lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
         // Columns: d/dq_k (N), then d/dp_k (N).
-        let mut sensitivity = DMatrix::zeros(inner, 2 * N);
+        let mut sensitivity = DMatrix::zeros(inner, 2 * w);
         sensitivity
-            .view_mut((0, 0), (inner, N))
-            .copy_from(&(-hessian.view((0, 0), (inner, N))));
-        for i in 0..N {
-            sensitivity[(i, N + i)] = -1.0;
+            .view_mut((0, 0), (inner, w))
+            .copy_from(&(-hessian.view((0, 0), (inner, w))));
+        for i in 0..w {
+            sensitivity[(i, w + i)] = -1.0;
         }
         lu.solve_columns_in_place(&mut sensitivity);
-        let last = sensitivity.view(((s - 1) * N, 0), (N, 2 * N));
-        let mut momentum = hessian.view((s * N, N), (N, inner)) * &sensitivity;
-        let mut from_q0 = momentum.view_mut((0, 0), (N, N));
-        from_q0 += hessian.view((s * N, 0), (N, N));
+        let last = sensitivity.view(((s - 1) * w, 0), (w, 2 * w));
+        let mut momentum = hessian.view((s * w, w), (w, inner)) * &sensitivity;
+        let mut from_q0 = momentum.view_mut((0, 0), (w, w));
+        from_q0 += hessian.view((s * w, 0), (w, w));
         let tangent = TangentMap {
-            qq: last.fixed_view::<N, N>(0, 0).into_owned(),
-            qy: last.fixed_view::<N, N>(0, N).into_owned(),
-            yq: momentum.fixed_view::<N, N>(0, 0).into_owned(),
-            yy: momentum.fixed_view::<N, N>(0, N).into_owned(),
+            qq: OMatrix::from_fn_generic(n, n, |i, j| last[(i, j)]),
+            qy: OMatrix::from_fn_generic(n, n, |i, j| last[(i, w + j)]),
+            yq: OMatrix::from_fn_generic(n, n, |i, j| momentum[(i, j)]),
+            yy: OMatrix::from_fn_generic(n, n, |i, j| momentum[(i, w + j)]),
         };
         Ok((increment, tangent))
     }
@@ -1043,9 +1111,34 @@ impl<const N: usize> Method<N> for Svi {
 
 /// `y += a x`, written out so that it compiles to N fused multiply-adds in the inner loops.
 #[inline(always)]
-fn add_scaled<const N: usize>(y: &mut SVector<f64, N>, a: f64, x: &SVector<f64, N>) {
-    for d in 0..N {
-        y[d] += a * x[d];
+fn add_scaled<N: Dimension>(y: &mut OVector<f64, N>, a: f64, x: &OVector<f64, N>)
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    for (y, x) in y.as_mut_slice().iter_mut().zip(x.as_slice()) {
+        *y += a * x;
+    }
+}
+
+/// `matrix[row..row + N, column..column + N] += block`, column by column (a fixed-size
+/// block cannot be added to a view of a run-time-size matrix in generic code).
+#[inline]
+fn add_block<N: Dimension>(
+    matrix: &mut DMatrix<f64>,
+    row: usize,
+    column: usize,
+    block: &OMatrix<f64, N, N>,
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = block.nrows();
+    let rows = matrix.nrows();
+    let target = matrix.as_mut_slice();
+    for (j, source) in block.as_slice().chunks_exact(n).enumerate() {
+        let start = (column + j) * rows + row;
+        for (x, y) in target[start..start + n].iter_mut().zip(source) {
+            *x += y;
+        }
     }
 }
 
@@ -1055,13 +1148,16 @@ fn add_scaled<const N: usize>(y: &mut SVector<f64, N>, a: f64, x: &SVector<f64, 
 /// extrapolation of a Gauss–Legendre code), else from its node offsets (Q_μ = q_k + Σ_j W_μj
 /// Z_j), or at a cold start from the starting values' offsets (the Taylor polynomial,
 /// written to `offsets`). Returns whether the start was warm.
-fn starting_positions<L: Lagrangian<N>, const N: usize>(
+fn starting_positions<L: Lagrangian<N>, N: Dimension>(
     (start, tables, offsets): (&mut StartingValues, &Tables, &mut DVector<f64>),
     data: &mut ConstantMass<N>,
     model: &L,
     t: f64,
     state: &State<N>,
-) -> bool {
+) -> bool
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let s = tables.degree;
     if !start.prepare(tables.h) {
         starting_offsets(start, tables.h, offsets, model, t, state);
@@ -1082,7 +1178,7 @@ fn starting_positions<L: Lagrangian<N>, const N: usize>(
 
 /// One step of a constant-mass Lagrangian by fixed-point iteration (no Hessian; an external
 /// force is evaluated at the quadrature points' positions and velocities).
-fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
+fn fixed_point_step<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     max_iterations: usize,
     workspace: &mut SviWorkspace<N>,
@@ -1090,7 +1186,10 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     h: f64,
     state: &State<N>,
     increment: &mut State<N>,
-) -> Result<StepReport, StepFailure> {
+) -> Result<StepReport, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     workspace.set_step(h);
     if L::FORCED {
         // The velocities at the quadrature points start from the extrapolated offsets.
@@ -1109,7 +1208,8 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
     let warm = starting_positions((start, tables, offsets), data, model, t, state);
     let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
     let m = tables.nodes.len();
-    let velocity = mass_inverse * state.y * h;
+    let width = state.q.len();
+    let velocity = mass_inverse * &state.y * h;
     let scaled_inverse = mass_inverse * (h * h);
     if L::FORCED {
         // The velocities of the starting polynomial, from its offsets (the previous step's
@@ -1118,16 +1218,18 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             start.extrapolate::<N>(offsets);
         }
         for (mu, rate) in data.velocities.iter_mut().enumerate() {
-            *rate = SVector::zeros();
-            for (j, offset) in offsets.as_slice().chunks_exact(N).enumerate() {
-                let offset = SVector::<f64, N>::from_column_slice(offset);
-                *rate += offset * tables.derivatives[(mu, j + 1)];
+            rate.fill(0.0);
+            for (j, offset) in offsets.as_slice().chunks_exact(width).enumerate() {
+                let c = tables.derivatives[(mu, j + 1)];
+                for (r, x) in rate.as_mut_slice().iter_mut().zip(offset) {
+                    *r += x * c;
+                }
             }
         }
     }
     let mut size: f64 = 0.0;
     for (base, c) in data.bases.iter_mut().zip(&data.nystrom.stage_velocity) {
-        *base = state.q;
+        base.copy_from(&state.q);
         add_scaled(base, *c, &velocity);
         size = size.max(base.amax());
     }
@@ -1144,7 +1246,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             if L::FORCED {
                 *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
             }
-            *acceleration = scaled_inverse * *force;
+            *acceleration = &scaled_inverse * &*force;
         }
         // The largest change by plain comparisons (no NaN-aware max in the hot loop): a NaN
         // force is caught by the finiteness check below.
@@ -1152,16 +1254,16 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         let mut finite = true;
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.nystrom.stage_matrix[mu * m..(mu + 1) * m];
-            let mut next = *base;
+            let mut next = base.clone();
             for (a, acceleration) in row.iter().zip(&data.accelerations) {
                 add_scaled(&mut next, *a, acceleration);
             }
-            for d in 0..N {
-                let difference = (next[d] - position[d]).abs();
+            for (next, position) in next.as_slice().iter().zip(position.as_slice()) {
+                let difference = (next - position).abs();
                 if difference > change {
                     change = difference;
                 }
-                finite &= next[d].is_finite();
+                finite &= next.is_finite();
             }
             *position = next;
         }
@@ -1171,7 +1273,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
         if L::FORCED {
             for (mu, rate) in data.velocities.iter_mut().enumerate() {
                 let row = &data.nystrom.rate_matrix[mu * m..(mu + 1) * m];
-                let mut next = velocity * data.nystrom.stage_rate[mu];
+                let mut next = &velocity * data.nystrom.stage_rate[mu];
                 for (b, acceleration) in row.iter().zip(&data.accelerations) {
                     add_scaled(&mut next, *b, acceleration);
                 }
@@ -1187,31 +1289,29 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
             // iteration (see `after_fixed_point`).
             for ((target, row), c) in offsets
                 .as_mut_slice()
-                .chunks_exact_mut(N)
+                .chunks_exact_mut(width)
                 .zip(data.nystrom.propagation.chunks_exact(m))
                 .zip(&data.nystrom.velocity_coefficients)
             {
-                let mut offset = velocity * *c;
+                let mut offset = &velocity * *c;
                 for (p, acceleration) in row.iter().zip(&data.accelerations) {
                     add_scaled(&mut offset, *p, acceleration);
                 }
-                for d in 0..N {
-                    target[d] = offset[d];
-                }
+                target.copy_from_slice(offset.as_slice());
             }
             return Err(failure);
         }
     }
-    let mut dp = SVector::<f64, N>::zeros();
+    let dp = &mut increment.y;
+    dp.fill(0.0);
     for (force, w) in data.forces.iter().zip(&tables.weights) {
-        add_scaled(&mut dp, *w, force);
+        add_scaled(dp, *w, force);
     }
-    let mut dq = velocity;
+    let dq = &mut increment.q;
+    dq.copy_from(&velocity);
     for (w, acceleration) in data.nystrom.end_weights.iter().zip(&data.accelerations) {
-        add_scaled(&mut dq, *w, acceleration);
+        add_scaled(dq, *w, acceleration);
     }
-    increment.q = dq;
-    increment.y = dp;
     // The step's polynomial is remembered by its velocity term and accelerations; its node
     // offsets are written only if something reads them (see `ConstantMass::pending`).
     data.last_velocity = velocity;
@@ -1228,7 +1328,7 @@ fn fixed_point_step<L: Lagrangian<N>, const N: usize>(
 }
 
 /// Solve (8a)–(8b) for the node offsets by Newton's method with `jacobian`.
-fn solve<L: Lagrangian<N>, const N: usize>(
+fn solve<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     workspace: &mut SviWorkspace<N>,
     t: f64,
@@ -1236,7 +1336,10 @@ fn solve<L: Lagrangian<N>, const N: usize>(
     state: &State<N>,
     warm: bool,
     jacobian: Jacobian,
-) -> Result<Solved, StepFailure> {
+) -> Result<Solved, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     if !warm {
         workspace.set_step(h);
         workspace.start(model, t, state);
@@ -1258,11 +1361,12 @@ fn solve<L: Lagrangian<N>, const N: usize>(
 mod tests {
     use super::*;
     use crate::analysis::verify::observed_order;
+    use crate::scalar::Scalar;
     use crate::test_models::{
-        Damped, HenonHeiles, Oscillator, VariableMass, advance,
+        AsDyn, Damped, HenonHeiles, Oscillator, VariableMass, advance,
         assert_tangent_matches_central_differences, distance, factorial, state,
     };
-    use nalgebra::Complex;
+    use nalgebra::{Complex, Const, DVector, Dyn, SMatrix, SVector, U1, U2};
 
     /// The hand-derived Euler–Lagrange equations of [`VariableMass`]:
     /// q̈₀ = (−q₀ − q₀³ − 2 q₁ q̇₁ q̇₀) / (1 + q₁²), q̈₁ = q₁ q̇₀² − q₁.
@@ -1294,13 +1398,13 @@ mod tests {
         numerator(z) / numerator(-z)
     }
 
-    fn assert_pade_step<L: Lagrangian<1>>(model: &L, s: usize) {
+    fn assert_pade_step<L: Lagrangian<U1>>(model: &L, s: usize) {
         // SVI with s + 1 CGL points and m = s Gauss points is the s-stage Gauss method. On
         // q̇ = p, ṗ = −q the variable w = q − i p obeys ẇ = i w, so one step maps w to
         // R(ih) w with R the (s, s) Padé approximant, and the local error is
         // |R(ih) − e^{ih}| |w| = C_s h^{2s+1} (1 + O(h²)), C_s = (s!)² / ((2s)! (2s + 1)!).
         let method = Svi::new(s + 1).with_quadrature(s);
-        assert_eq!(Method::<1>::info(&method).order, 2 * s);
+        assert_eq!(Method::<U1>::info(&method).order, 2 * s);
         let (h, q0, p0) = (0.5f64, 0.6, 0.8);
         let (after, _) = advance(&method, model, h, 1, state([q0], [p0]));
         let w = pade(s, Complex::new(0.0, h)) * Complex::new(q0, -p0);
@@ -1336,7 +1440,7 @@ mod tests {
 
     /// Observed order (least-squares slope) of `method` on the oscillator from (q, p) = (0, 1)
     /// over [0, 4], against the exact solution (sin t, cos t).
-    fn oscillator_order<L: Lagrangian<1>>(method: &Svi, model: &L) -> f64 {
+    fn oscillator_order<L: Lagrangian<U1>>(method: &Svi, model: &L) -> f64 {
         let steps = [1.0, 0.5, 0.25, 0.125];
         let errors: Vec<f64> = steps
             .iter()
@@ -1354,7 +1458,7 @@ mod tests {
         for (points, quadrature, declared) in [(3, Some(2), 4), (4, Some(3), 6), (4, None, 6)] {
             let mut method = Svi::new(points);
             method.quadrature = quadrature;
-            assert_eq!(Method::<1>::info(&method).order, declared);
+            assert_eq!(Method::<U1>::info(&method).order, declared);
             for order in [
                 oscillator_order(&method, &Oscillator::<false>),
                 oscillator_order(&method, &Oscillator::<true>),
@@ -1370,7 +1474,7 @@ mod tests {
     /// The state of [`VariableMass`] at t = 2 from q = (0.5, −0.3), q̇ = (0.4, 0.6), by
     /// classical Runge–Kutta on the hand-derived equations with h = 1/2000 (global error
     /// about 1e-14).
-    fn variable_mass_reference() -> State<2> {
+    fn variable_mass_reference() -> State<U2> {
         let f = |x: &SVector<f64, 4>| {
             let (q, v) = (
                 x.fixed_rows::<2>(0).into_owned(),
@@ -1427,7 +1531,7 @@ mod tests {
                 })
                 .collect();
             let order = observed_order(&steps, &errors, 1e-11).unwrap();
-            let declared = Method::<2>::info(&method).order as f64;
+            let declared = Method::<U2>::info(&method).order as f64;
             assert!(
                 (order - declared).abs() < 0.2,
                 "{points}/{quadrature} {solver:?}: observed {order:.3}, declared {declared}, \
@@ -1454,7 +1558,7 @@ mod tests {
         for solver in [Solver::Auto, Solver::Newton] {
             let method = Svi::new(6).with_quadrature(5).with_solver(solver);
             let mut workspace = method.workspace(&VariableMass, h).unwrap();
-            let (mut current, mut increment) = (start, State::zeros());
+            let (mut current, mut increment) = (start, State::zeros(U2));
             let mut total = StepReport::default();
             for k in 0..200 {
                 let report = method
@@ -1513,17 +1617,17 @@ mod tests {
         let (end, mut workspace) = advance(&method, &model, h, 3, state([0.3, -0.2], [0.1, 0.4]));
         let (before, _) = advance(&method, &model, h, 2, state([0.3, -0.2], [0.1, 0.4]));
         assert!(workspace.constant_mass.as_ref().unwrap().pending);
-        let (q, v) = Method::<2>::dense_output(&method, &workspace, &before, h, 1.0).unwrap();
+        let (q, v) = Method::<U2>::dense_output(&method, &workspace, &before, h, 1.0).unwrap();
         assert!((q - end.q).amax() <= 1e-15, "{q:?} {:?}", end.q);
         // The end velocity of the step polynomial is M⁻¹p to the method's accuracy.
         let mass_inverse = SMatrix::<f64, 2, 2>::new(0.6, -0.2, -0.2, 0.4);
         assert!((v - mass_inverse * end.y).amax() <= 1e-9, "{v:?}");
         let mut settled = workspace.clone();
-        let offsets = Method::<2>::node_offsets(&method, &mut settled).unwrap();
+        let offsets = Method::<U2>::node_offsets(&method, &mut settled).unwrap();
         let last = SVector::<f64, 2>::from_column_slice(&offsets[offsets.len() - 2..]);
         assert!((before.q + last - end.q).amax() <= 1e-15);
         assert!(!settled.constant_mass.as_ref().unwrap().pending);
-        let mut increments = [State::zeros(), State::zeros()];
+        let mut increments = [State::zeros(U2), State::zeros(U2)];
         for (ws, increment) in [&mut workspace, &mut settled]
             .into_iter()
             .zip(&mut increments)
@@ -1541,14 +1645,14 @@ mod tests {
         let method = Svi::new(6);
         let model = HenonHeiles::<true>;
         let (end, workspace) = advance(&method, &model, 0.1, 4, state([0.3, -0.2], [0.1, 0.4]));
-        let cached = Method::<2>::velocity(&method, &workspace, &end.y).unwrap();
+        let cached = Method::<U2>::velocity(&method, &workspace, &end.y).unwrap();
         let solved = model
             .velocity(0.4, &end.q, &end.y, &SVector::zeros())
             .unwrap();
         assert!((cached - solved).amax() <= 1e-15, "{cached:?} {solved:?}");
         // Not before a step has cached M⁻¹, and never for a general Lagrangian.
-        let fresh = Method::<2>::workspace(&method, &model, 0.1).unwrap();
-        assert!(Method::<2>::velocity(&method, &fresh, &end.y).is_none());
+        let fresh = Method::<U2>::workspace(&method, &model, 0.1).unwrap();
+        assert!(Method::<U2>::velocity(&method, &fresh, &end.y).is_none());
         let (_, general) = advance(
             &method,
             &VariableMass,
@@ -1556,7 +1660,7 @@ mod tests {
             2,
             state([0.3, -0.2], [0.1, 0.4]),
         );
-        assert!(Method::<2>::velocity(&method, &general, &end.y).is_none());
+        assert!(Method::<U2>::velocity(&method, &general, &end.y).is_none());
     }
 
     #[test]
@@ -1574,7 +1678,7 @@ mod tests {
         assert!(difference <= 1e-13, "paths differ by {difference:e}");
         // The step's report counts both iterations.
         let mut workspace = capped.workspace(&HenonHeiles::<true>, 0.2).unwrap();
-        let mut increment = State::zeros();
+        let mut increment = State::zeros(U2);
         let report = capped
             .step(
                 &HenonHeiles::<true>,
@@ -1608,7 +1712,7 @@ mod tests {
         );
     }
 
-    fn assert_symplectic<L: Lagrangian<2>>(method: &Svi, model: &L, start: State<2>) {
+    fn assert_symplectic<L: Lagrangian<U2>>(method: &Svi, model: &L, start: State<U2>) {
         let h = 0.3;
         let mut workspace = method.workspace(model, h).unwrap();
         let (_, tangent) = method
@@ -1674,5 +1778,99 @@ mod tests {
             Svi::new(4).workspace(&Oscillator::<false>, 0.0),
             Err(Error::InvalidParameter { name, .. }) if name == "h"
         ));
+    }
+
+    /// `state` as a state of a run-time-size model.
+    fn run_time<const K: usize>(state: &State<Const<K>>) -> State<Dyn> {
+        State {
+            q: DVector::from_column_slice(state.q.as_slice()),
+            y: DVector::from_column_slice(state.y.as_slice()),
+        }
+    }
+
+    /// ‖a − b‖∞ over q and y, between a fixed-size state and a run-time-size one.
+    fn apart<const K: usize>(a: &State<Const<K>>, b: &State<Dyn>) -> f64 {
+        assert_eq!(b.q.len(), K);
+        let a = a.q.iter().chain(a.y.iter());
+        a.zip(b.q.iter().chain(b.y.iter()))
+            .fold(0.0, |m, (x, y)| m.max((x - y).abs()))
+    }
+
+    /// Steps and tangent map of `method` on `model` and on the same model seen as a
+    /// run-time-size one agree to round-off (the derivatives are taken by other sweeps).
+    fn assert_run_time_size_agrees<L: Lagrangian<Const<K>>, const K: usize>(
+        method: &Svi,
+        model: L,
+        start: State<Const<K>>,
+    ) {
+        let h = 0.1;
+        let (fixed, fixed_workspace) = advance(method, &model, h, 10, start);
+        let mut workspace = method.workspace(&model, h).unwrap();
+        let (_, tangent) = method
+            .tangent_map(&model, &mut workspace, 0.0, h, &start)
+            .unwrap();
+        let dynamic = AsDyn::<L, Const<K>>::new(model);
+        let (other, other_workspace) = advance(method, &dynamic, h, 10, run_time(&start));
+        assert_eq!(
+            fixed_workspace.constant_mass.is_some(),
+            other_workspace.constant_mass.is_some()
+        );
+        let difference = apart(&fixed, &other);
+        assert!(difference <= 1e-13, "{method:?}: {difference:e}");
+        // Dense output (of the last step, taken from either end state) and the cached M⁻¹p
+        // of a constant-mass model.
+        let (q, v) =
+            Method::<Const<K>>::dense_output(method, &fixed_workspace, &fixed, h, 0.3).unwrap();
+        let (p, w) = Method::<Dyn>::dense_output(method, &other_workspace, &other, h, 0.3).unwrap();
+        assert!((DVector::from_column_slice(q.as_slice()) - p).amax() <= 1e-13);
+        assert!((DVector::from_column_slice(v.as_slice()) - w).amax() <= 1e-12);
+        let velocity = Method::<Const<K>>::velocity(method, &fixed_workspace, &fixed.y);
+        let other_velocity = Method::<Dyn>::velocity(method, &other_workspace, &other.y);
+        assert_eq!(velocity.is_some(), other_velocity.is_some());
+        if let (Some(a), Some(b)) = (velocity, other_velocity) {
+            assert!((DVector::from_column_slice(a.as_slice()) - b).amax() <= 1e-13);
+        }
+        let mut other_workspace = method.workspace(&dynamic, h).unwrap();
+        let (_, other_tangent) = method
+            .tangent_map(&dynamic, &mut other_workspace, 0.0, h, &run_time(&start))
+            .unwrap();
+        let difference = (tangent.matrix() - other_tangent.matrix()).amax();
+        assert!(
+            difference <= 1e-12,
+            "{method:?}: tangent maps differ by {difference:e}"
+        );
+    }
+
+    /// A model on ℝ² that says it has three coordinates.
+    struct Misdeclared;
+    impl Lagrangian<U2> for Misdeclared {
+        fn dimension(&self) -> usize {
+            3
+        }
+        fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            VariableMass.lagrangian(t, q, v)
+        }
+    }
+
+    #[test]
+    fn a_run_time_size_model_takes_the_same_steps() {
+        let start = state([0.5, -0.3], [0.4, 0.6]);
+        for method in [
+            Svi::new(4).with_quadrature(3),
+            Svi::new(5),
+            Svi::new(5).with_solver(Solver::Newton),
+        ] {
+            assert_run_time_size_agrees(&method, VariableMass, start);
+            assert_run_time_size_agrees(&method, HenonHeiles::<true>, start);
+            assert_run_time_size_agrees(&method, HenonHeiles::<false>, start);
+            let start = state([1.0], [0.2]);
+            assert_run_time_size_agrees(&method, Damped::<true> { c: 0.3 }, start);
+            assert_run_time_size_agrees(&method, Damped::<false> { c: 0.3 }, start);
+        }
+        // A model whose size contradicts its dimension type is refused by name.
+        match Method::<U2>::workspace(&Svi::new(4), &Misdeclared, 0.1) {
+            Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, "model"),
+            other => panic!("expected InvalidParameter, got {other:?}"),
+        }
     }
 }

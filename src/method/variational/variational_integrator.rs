@@ -9,8 +9,9 @@
 //! p_{k+1} = D2 L_d(q_k, q_{k+1}) + f_d⁺(q_k, q_{k+1}).
 //!
 //! The first is solved for q_{k+1} by Newton's method with the exact Jacobian
-//! D12 L_d + ∂f_d⁻/∂q_{k+1} (num-dual: one `partial_hessian` sweep gives D1 L_d, D2 L_d and
-//! D12 L_d together; one `jacobian` sweep gives f_d⁻ and its derivative), iterated to
+//! D12 L_d + ∂f_d⁻/∂q_{k+1} (automatic differentiation by the dimension's sweeps,
+//! [`crate::dimension::Dimension`]: one mixed second derivative gives D1 L_d, D2 L_d and
+//! D12 L_d together; one Jacobian gives f_d⁻ and its derivative), iterated to
 //! round-off with the stopping rule shared by all implicit methods of `svi`. The unknown is
 //! the increment q_{k+1} − q_k. The first step starts from the Taylor predictor
 //! q_k + h q̇ + (h²/2) q̈ (q̇ from the inverse Legendre map of p_k, q̈ from the forced
@@ -37,6 +38,7 @@
 //! integrators*, Acta Numerica (2001), §1.2, §2.7 and §3.2; Porcù & Penati (OctConf 2013),
 //! "Discrete mechanics" and "Forced mechanics".
 
+use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert_small;
@@ -46,20 +48,18 @@ use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::nonlinear::Newton;
-use nalgebra::{Const, DVector, SMatrix, SVector};
-use num_dual::{Dual2Vec, DualSVec64, DualVec, HyperDualVec, gradient, hessian, jacobian};
-
-/// Hyper-dual numbers for the mixed second derivative D12 L_d.
-type Hyper<const N: usize> = HyperDualVec<f64, Const<N>, Const<N>>;
+use crate::scalar::Scalar;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
 
 /// Options of the variational integrator of a discrete Lagrangian.
 ///
 /// ```
-/// use nalgebra::SVector;
+/// use nalgebra::{SVector, U1};
 /// use svi::{Integrator, Lagrangian, Midpoint, Scalar, VariationalIntegrator};
 ///
 /// struct Oscillator;
-/// impl Lagrangian<1> for Oscillator {
+/// impl Lagrangian<U1> for Oscillator {
 ///     const TIME_DEPENDENT: bool = false;
 ///     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
 ///         (v[0] * v[0] - q[0] * q[0]) * 0.5
@@ -105,95 +105,158 @@ impl<Ld> VariationalIntegrator<Ld> {
 
 /// The increments of the previous steps, for the predictor.
 #[derive(Debug, Clone)]
-struct History<const N: usize> {
-    /// Step size of the recorded steps.
+struct History<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// Step size of the recorded steps (NaN before the first step: nothing continues it).
     h: f64,
     /// Where the last step ended: the next step continues the run if it starts there.
-    end: SVector<f64, N>,
+    end: OVector<f64, N>,
     /// Round-off tolerance for recognising `end`.
     tolerance: f64,
     /// Δ_{k−1}.
-    last: SVector<f64, N>,
-    /// Δ_{k−2}, if the step before the last one was recorded too.
-    before: Option<SVector<f64, N>>,
+    last: OVector<f64, N>,
+    /// Δ_{k−2}, if `has_before` (the step before the last one was recorded too).
+    before: OVector<f64, N>,
+    /// Whether `before` holds Δ_{k−2}.
+    has_before: bool,
+}
+
+impl<N: Dimension> History<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// No step recorded yet (buffers of dimension `n`).
+    fn empty(n: N) -> Self {
+        History {
+            h: f64::NAN,
+            end: OVector::zeros_generic(n, U1),
+            tolerance: 0.0,
+            last: OVector::zeros_generic(n, U1),
+            before: OVector::zeros_generic(n, U1),
+            has_before: false,
+        }
+    }
+
+    /// Whether a step of size `h` from `q` continues the recorded steps.
+    fn continued_by(&self, h: f64, q: &OVector<f64, N>) -> bool {
+        self.h == h && largest_difference(q, &self.end) <= self.tolerance
+    }
+}
+
+/// ‖a − b‖∞, as `(a − b).amax()` (the same maximum, NaN handling included) without the
+/// difference vector.
+#[inline]
+fn largest_difference<N: Dimension>(a: &OVector<f64, N>, b: &OVector<f64, N>) -> f64
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let mut differences = a
+        .as_slice()
+        .iter()
+        .zip(b.as_slice())
+        .map(|(x, y)| (x - y).abs());
+    let first = differences.next().unwrap_or(0.0);
+    differences.fold(first, f64::max)
 }
 
 /// A tolerance for recognising a position after the stepping loop's compensated summation:
 /// its result differs from the plain sum q + Δ by the rounding of the two additions.
-pub(crate) fn continuation_tolerance<const N: usize>(
-    start: &SVector<f64, N>,
-    end: &SVector<f64, N>,
-) -> f64 {
+pub(crate) fn continuation_tolerance<N: Dimension>(
+    start: &OVector<f64, N>,
+    end: &OVector<f64, N>,
+) -> f64
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     4.0 * f64::EPSILON * start.amax().max(end.amax())
 }
 
 /// Buffers of a run of a [`VariationalIntegrator`].
 #[derive(Debug, Clone)]
-pub struct VariationalWorkspace<const N: usize> {
+pub struct VariationalWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     /// The unknown increment q_{k+1} − q_k.
     offset: DVector<f64>,
     newton: Newton,
-    history: Option<History<N>>,
+    history: History<N>,
 }
 
-impl<const N: usize> VariationalWorkspace<N> {
-    pub(crate) fn new(max_iterations: usize) -> Self {
+impl<N: Dimension> VariationalWorkspace<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// Buffers for a configuration space of dimension `n`.
+    pub(crate) fn new(n: N, max_iterations: usize) -> Self {
         VariationalWorkspace {
-            offset: DVector::zeros(N),
-            newton: Newton::new(N, max_iterations),
-            history: None,
+            offset: DVector::zeros(n.value()),
+            newton: Newton::new(n.value(), max_iterations),
+            history: History::empty(n),
         }
     }
 
-    /// The predicted increment: extrapolated from the previous steps when this step
-    /// continues them, else the Taylor polynomial of the continuous flow.
-    fn predict<L: Lagrangian<N>>(
-        &self,
-        model: &L,
-        t: f64,
-        h: f64,
-        state: &State<N>,
-    ) -> SVector<f64, N> {
-        if let Some(history) = &self.history
-            && history.h == h
-            && (state.q - history.end).amax() <= history.tolerance
-        {
-            return match history.before {
-                Some(before) => history.last * 2.0 - before,
-                None => history.last,
-            };
+    /// Write the predicted increment into `offset`: extrapolated from the previous steps
+    /// when this step continues them, else the Taylor polynomial of the continuous flow.
+    fn predict<L: Lagrangian<N>>(&mut self, model: &L, t: f64, h: f64, state: &State<N>) {
+        let history = &self.history;
+        let offset = self.offset.as_mut_slice();
+        if history.continued_by(h, &state.q) {
+            if history.has_before {
+                for ((target, last), before) in offset
+                    .iter_mut()
+                    .zip(history.last.as_slice())
+                    .zip(history.before.as_slice())
+                {
+                    *target = last * 2.0 - before;
+                }
+            } else {
+                offset.copy_from_slice(history.last.as_slice());
+            }
+            return;
         }
+        let n = state.dimension();
         let v = model
             .velocity(t, &state.q, &state.y, &state.y)
-            .unwrap_or_else(|_| SVector::zeros());
+            .unwrap_or_else(|_| OVector::zeros_generic(n, U1));
         let a = model
             .acceleration(t, &state.q, &v)
-            .unwrap_or_else(SVector::zeros);
-        v * h + a * (0.5 * h * h)
+            .unwrap_or_else(|| OVector::zeros_generic(n, U1));
+        let half_square = 0.5 * h * h;
+        for ((target, v), a) in offset.iter_mut().zip(v.as_slice()).zip(a.as_slice()) {
+            *target = v * h + a * half_square;
+        }
     }
 
     /// Record a completed step.
-    pub(crate) fn remember(&mut self, h: f64, state: &State<N>, increment: &SVector<f64, N>) {
-        let end = state.q + increment;
-        let before = match &self.history {
-            Some(history)
-                if history.h == h && (state.q - history.end).amax() <= history.tolerance =>
-            {
-                Some(history.last)
-            }
-            _ => None,
-        };
-        self.history = Some(History {
-            h,
-            end,
-            tolerance: continuation_tolerance(&state.q, &end),
-            last: *increment,
-            before,
-        });
+    pub(crate) fn remember(&mut self, h: f64, state: &State<N>, increment: &OVector<f64, N>) {
+        let history = &mut self.history;
+        let continued = history.continued_by(h, &state.q);
+        if continued {
+            history.before.copy_from(&history.last);
+        }
+        history.has_before = continued;
+        history.h = h;
+        for ((end, q), dq) in history
+            .end
+            .as_mut_slice()
+            .iter_mut()
+            .zip(state.q.as_slice())
+            .zip(increment.as_slice())
+        {
+            *end = q + dq;
+        }
+        history.tolerance = continuation_tolerance(&state.q, &history.end);
+        history.last.copy_from(increment);
     }
 }
 
-impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator<Ld> {
+impl<Ld: DiscreteLagrangian, N: Dimension> Method<N> for VariationalIntegrator<Ld>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     const WITHOUT_POINTS: bool = true;
 
     type Workspace = VariationalWorkspace<N>;
@@ -216,14 +279,16 @@ impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator
 
     fn workspace<L: Lagrangian<N>>(
         &self,
-        _model: &L,
+        model: &L,
         h: f64,
     ) -> Result<VariationalWorkspace<N>, Error> {
         crate::error::require_positive("h", h)?;
         if self.max_iterations == 0 {
             return Err(Error::invalid("max_iterations", "must be at least 1"));
         }
-        Ok(VariationalWorkspace::new(self.max_iterations))
+        let n = dimension_of::<N>(model.dimension())
+            .map_err(|reason| Error::invalid("model", reason))?;
+        Ok(VariationalWorkspace::new(n, self.max_iterations))
     }
 
     fn step<L: Lagrangian<N>>(
@@ -236,11 +301,11 @@ impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         let iterations = solve_position(&self.discrete_lagrangian, model, workspace, t, h, state)?;
-        let offset = SVector::<f64, N>::from_column_slice(workspace.offset.as_slice());
-        let q1 = state.q + offset;
-        increment.q = offset;
+        let offset = &workspace.offset;
+        let q1 = OVector::from_fn_generic(state.dimension(), U1, |i, _| state.q[i] + offset[i]);
+        increment.q = OVector::from_column_slice_generic(state.dimension(), U1, offset.as_slice());
         increment.y = momentum_increment(&self.discrete_lagrangian, model, t, h, &state.q, &q1);
-        workspace.remember(h, state, &offset);
+        workspace.remember(h, state, &increment.q);
         let points = self.discrete_lagrangian.info().points;
         Ok(StepReport {
             iterations,
@@ -258,99 +323,164 @@ impl<Ld: DiscreteLagrangian, const N: usize> Method<N> for VariationalIntegrator
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let mut increment = State::zeros();
+        let mut increment = State::zeros(state.dimension());
         self.step(model, workspace, t, h, state, &mut increment)?;
-        let q1 = state.q + increment.q;
+        let q1 = &state.q + &increment.q;
         let tangent = discrete_tangent_map(&self.discrete_lagrangian, model, t, h, &state.q, &q1)?;
         Ok((increment, tangent))
     }
 }
 
+/// L_d(t, q0, q1) of a step of size `h` as a [`PhaseFunction`] of (t, q, q̇) = (t, q0, q1),
+/// for the sweeps of [`Dimension`]: ∂/∂q is D1 L_d, ∂/∂q̇ is D2 L_d, the mixed block D12 L_d.
+struct StepAction<'a, Ld, L> {
+    discrete: &'a Ld,
+    model: &'a L,
+    h: f64,
+}
+
+impl<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension> PhaseFunction<N>
+    for StepAction<'_, Ld, L>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    #[inline(always)]
+    fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> S {
+        self.discrete
+            .discrete_lagrangian(self.model, t, S::from(self.h), q, v)
+    }
+}
+
+/// L_d(t, q0 + ε, q1 + ε) as a function of the common shift ε (passed as q; q̇ is unused):
+/// its gradient at ε = 0 is (D1 + D2) L_d(q0, q1).
+struct ShiftedAction<'a, Ld, L, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    discrete: &'a Ld,
+    model: &'a L,
+    h: f64,
+    q0: &'a OVector<f64, N>,
+    q1: &'a OVector<f64, N>,
+}
+
+impl<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension> PhaseFunction<N>
+    for ShiftedAction<'_, Ld, L, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    #[inline(always)]
+    fn eval<S: Scalar>(&self, t: S, shift: &OVector<S, N>, _v: &OVector<S, N>) -> S {
+        let start = self.q0.map(S::from) + shift;
+        let end = self.q1.map(S::from) + shift;
+        self.discrete
+            .discrete_lagrangian(self.model, t, S::from(self.h), &start, &end)
+    }
+}
+
+/// One of the discrete forces f_d⁺ (`plus`) or f_d⁻ of a step of size `h` as a [`PhaseMap`]
+/// of (t, q, q̇) = (t, q0, q1).
+struct StepForce<'a, Ld, L> {
+    discrete: &'a Ld,
+    model: &'a L,
+    h: f64,
+    plus: bool,
+}
+
+impl<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension> PhaseMap<N> for StepForce<'_, Ld, L>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    #[inline(always)]
+    fn eval<S: Scalar>(&self, t: S, q: &OVector<S, N>, v: &OVector<S, N>) -> OVector<S, N> {
+        let forces = self
+            .discrete
+            .discrete_forces(self.model, t, S::from(self.h), q, v);
+        if self.plus { forces.plus } else { forces.minus }
+    }
+}
+
 /// Solve p_k + D1 L_d(q_k, q_k + Δ) + f_d⁻ = 0 for Δ (left in `workspace.offset`); returns
 /// the Newton iterations.
-fn solve_position<Ld: DiscreteLagrangian, L: Lagrangian<N>, const N: usize>(
+fn solve_position<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension>(
     discrete: &Ld,
     model: &L,
     workspace: &mut VariationalWorkspace<N>,
     t: f64,
     h: f64,
     state: &State<N>,
-) -> Result<usize, StepFailure> {
-    let guess = workspace.predict(model, t, h, state);
-    workspace.offset.copy_from_slice(guess.as_slice());
-    let (q0, p0) = (state.q, state.y);
+) -> Result<usize, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    workspace.predict(model, t, h, state);
+    let (q0, p0) = (&state.q, &state.y);
+    let n = state.dimension();
+    let minus = StepForce {
+        discrete,
+        model,
+        h,
+        plus: false,
+    };
     workspace
         .newton
         .solve(&mut workspace.offset, |z, matrix, residual| {
-            let q1 = q0 + SVector::<f64, N>::from_column_slice(z.as_slice());
-            let (d1, _, d12) = mixed_derivatives(discrete, model, t, h, &q0, &q1);
+            let q1 = OVector::from_fn_generic(n, U1, |i, _| q0[i] + z[i]);
+            let (d1, _, d12) = mixed_derivatives(discrete, model, t, h, q0, &q1);
             let mut value = p0 + d1;
             let mut jacobian_matrix = d12;
             if L::FORCED {
-                let (minus, d_minus) = jacobian(
-                    |y: SVector<DualSVec64<N>, N>| {
-                        discrete
-                            .discrete_forces(
-                                model,
-                                DualVec::from_re(t),
-                                DualVec::from_re(h),
-                                &q0.map(DualVec::from_re),
-                                &y,
-                            )
-                            .minus
-                    },
-                    &q1,
-                );
-                value += minus;
-                jacobian_matrix += d_minus;
+                let (force, d_force) = N::jacobian(&minus, t, q0, &q1, Wrt::Velocity);
+                value += force;
+                jacobian_matrix += d_force;
             }
             residual.copy_from_slice(value.as_slice());
-            matrix.copy_from(&jacobian_matrix);
+            matrix
+                .as_mut_slice()
+                .copy_from_slice(jacobian_matrix.as_slice());
         })
 }
 
 /// D1 L_d, D2 L_d and D12 L_d (entry (i, j) = ∂²L_d/∂q0_i∂q1_j) in one sweep.
-fn mixed_derivatives<Ld: DiscreteLagrangian, L: Lagrangian<N>, const N: usize>(
+#[allow(clippy::type_complexity)]
+fn mixed_derivatives<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension>(
     discrete: &Ld,
     model: &L,
     t: f64,
     h: f64,
-    q0: &SVector<f64, N>,
-    q1: &SVector<f64, N>,
-) -> (SVector<f64, N>, SVector<f64, N>, SMatrix<f64, N, N>) {
-    let (_, d1, d2, d12) = num_dual::partial_hessian(
-        |(x, y): (SVector<Hyper<N>, N>, SVector<Hyper<N>, N>)| {
-            discrete.discrete_lagrangian(model, Hyper::from_re(t), Hyper::from_re(h), &x, &y)
-        },
-        (q0, q1),
-    );
+    q0: &OVector<f64, N>,
+    q1: &OVector<f64, N>,
+) -> (OVector<f64, N>, OVector<f64, N>, OMatrix<f64, N, N>)
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let action = StepAction { discrete, model, h };
+    let (_, d1, d2, d12) = N::mixed(&action, t, q0, q1);
     (d1, d2, d12)
 }
 
 /// p_{k+1} − p_k = (D1 + D2) L_d(q0, q1) + f_d⁻ + f_d⁺, with (D1 + D2) L_d the derivative of
 /// L_d along the common shift (q0 + ε, q1 + ε): no O(|p|) cancellation.
-pub(crate) fn momentum_increment<Ld: DiscreteLagrangian, L: Lagrangian<N>, const N: usize>(
+pub(crate) fn momentum_increment<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension>(
     discrete: &Ld,
     model: &L,
     t: f64,
     h: f64,
-    q0: &SVector<f64, N>,
-    q1: &SVector<f64, N>,
-) -> SVector<f64, N> {
-    let (_, mut increment) = gradient(
-        |shift: SVector<DualSVec64<N>, N>| {
-            let start = q0.map(DualVec::from_re) + shift;
-            let end = q1.map(DualVec::from_re) + shift;
-            discrete.discrete_lagrangian(
-                model,
-                DualVec::from_re(t),
-                DualVec::from_re(h),
-                &start,
-                &end,
-            )
-        },
-        &SVector::zeros(),
-    );
+    q0: &OVector<f64, N>,
+    q1: &OVector<f64, N>,
+) -> OVector<f64, N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let zero = OVector::zeros_generic(q0.shape_generic().0, U1);
+    let shifted = ShiftedAction {
+        discrete,
+        model,
+        h,
+        q0,
+        q1,
+    };
+    let (_, mut increment) = N::gradient(&shifted, t, &zero, &zero, Wrt::Position);
     if L::FORCED {
         let forces = discrete.discrete_forces(model, t, h, q0, q1);
         increment += forces.minus + forces.plus;
@@ -365,72 +495,146 @@ pub(crate) fn momentum_increment<Ld: DiscreteLagrangian, L: Lagrangian<N>, const
 /// ∂p_{k+1}/∂(·) = (D21 L_d + ∂f_d⁺/∂q_k) ∂q_k/∂(·) + (D22 L_d + ∂f_d⁺/∂q_{k+1}) ∂q_{k+1}/∂(·),
 ///
 /// with J = D12 L_d + ∂f_d⁻/∂q_{k+1}.
-pub(crate) fn discrete_tangent_map<Ld: DiscreteLagrangian, L: Lagrangian<N>, const N: usize>(
+pub(crate) fn discrete_tangent_map<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension>(
     discrete: &Ld,
     model: &L,
     t: f64,
     h: f64,
-    q0: &SVector<f64, N>,
-    q1: &SVector<f64, N>,
-) -> Result<TangentMap<N>, StepFailure> {
+    q0: &OVector<f64, N>,
+    q1: &OVector<f64, N>,
+) -> Result<TangentMap<N>, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
     let (_, _, d12) = mixed_derivatives(discrete, model, t, h, q0, q1);
-    let second = |first: bool| {
-        hessian(
-            |x: SVector<Dual2Vec<f64, Const<N>>, N>| {
-                let (a, b) = if first {
-                    (x, q1.map(Dual2Vec::from_re))
-                } else {
-                    (q0.map(Dual2Vec::from_re), x)
-                };
-                discrete.discrete_lagrangian(
-                    model,
-                    Dual2Vec::from_re(t),
-                    Dual2Vec::from_re(h),
-                    &a,
-                    &b,
-                )
-            },
-            if first { q0 } else { q1 },
-        )
-        .2
-    };
-    let (d11, d22) = (second(true), second(false));
-    let mut minus_q0 = SMatrix::<f64, N, N>::zeros();
-    let mut minus_q1 = SMatrix::<f64, N, N>::zeros();
-    let mut plus_q0 = SMatrix::<f64, N, N>::zeros();
-    let mut plus_q1 = SMatrix::<f64, N, N>::zeros();
+    let action = StepAction { discrete, model, h };
+    let (_, _, d11) = N::hessian(&action, t, q0, q1, Wrt::Position);
+    let (_, _, d22) = N::hessian(&action, t, q0, q1, Wrt::Velocity);
+    let n = q0.shape_generic().0;
+    let mut minus_q0 = OMatrix::zeros_generic(n, n);
+    let mut minus_q1 = OMatrix::zeros_generic(n, n);
+    let mut plus_q0 = OMatrix::zeros_generic(n, n);
+    let mut plus_q1 = OMatrix::zeros_generic(n, n);
     if L::FORCED {
-        let forces = |plus: bool, first: bool| {
-            jacobian(
-                |x: SVector<DualSVec64<N>, N>| {
-                    let (a, b) = if first {
-                        (x, q1.map(DualVec::from_re))
-                    } else {
-                        (q0.map(DualVec::from_re), x)
-                    };
-                    let f = discrete.discrete_forces(
-                        model,
-                        DualVec::from_re(t),
-                        DualVec::from_re(h),
-                        &a,
-                        &b,
-                    );
-                    if plus { f.plus } else { f.minus }
-                },
-                if first { q0 } else { q1 },
-            )
-            .1
+        let forces = |plus: bool, wrt: Wrt| {
+            let force = StepForce {
+                discrete,
+                model,
+                h,
+                plus,
+            };
+            N::jacobian(&force, t, q0, q1, wrt).1
         };
-        minus_q0 = forces(false, true);
-        minus_q1 = forces(false, false);
-        plus_q0 = forces(true, true);
-        plus_q1 = forces(true, false);
+        minus_q0 = forces(false, Wrt::Position);
+        minus_q1 = forces(false, Wrt::Velocity);
+        plus_q0 = forces(true, Wrt::Position);
+        plus_q1 = forces(true, Wrt::Velocity);
     }
-    let inverse = invert_small(&(d12 + minus_q1)).ok_or(StepFailure::SingularMatrix)?;
-    let qq = -(inverse * (d11 + minus_q0));
+    let inverse = invert_small(&(&d12 + &minus_q1)).ok_or(StepFailure::SingularMatrix)?;
+    let qq = -(&inverse * (d11 + minus_q0));
     let qy = -inverse;
     let end = d22 + plus_q1;
-    let yq = d12.transpose() + plus_q0 + end * qq;
-    let yy = end * qy;
+    let yq = d12.transpose() + plus_q0 + &end * &qq;
+    let yy = &end * &qy;
     Ok(TangentMap { qq, qy, yq, yy })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::method::variational::discrete_lagrangian::{Midpoint, SymplecticEuler, Trapezoid};
+    use crate::test_models::{AsDyn, Damped, HenonHeiles, VariableMass, advance, state};
+    use nalgebra::{Const, Dyn};
+
+    /// `state` as a state of a run-time-size model.
+    fn run_time<const K: usize>(state: &State<Const<K>>) -> State<Dyn> {
+        State {
+            q: DVector::from_column_slice(state.q.as_slice()),
+            y: DVector::from_column_slice(state.y.as_slice()),
+        }
+    }
+
+    /// Steps and tangent map of `method` on `model` and on the same model seen as a
+    /// run-time-size one agree to round-off (the derivatives are taken by other sweeps).
+    fn assert_run_time_size_agrees<Ld, L, const K: usize>(
+        method: &VariationalIntegrator<Ld>,
+        model: L,
+        start: State<Const<K>>,
+    ) where
+        Ld: DiscreteLagrangian + std::fmt::Debug,
+        L: Lagrangian<Const<K>>,
+    {
+        let h = 0.1;
+        let (fixed, _) = advance(method, &model, h, 10, start);
+        let mut workspace = method.workspace(&model, h).unwrap();
+        let (_, tangent) = method
+            .tangent_map(&model, &mut workspace, 0.0, h, &start)
+            .unwrap();
+        let dynamic = AsDyn::<L, Const<K>>::new(model);
+        let (other, _) = advance(method, &dynamic, h, 10, run_time(&start));
+        let fixed = fixed.q.iter().chain(fixed.y.iter());
+        let difference = fixed
+            .zip(other.q.iter().chain(other.y.iter()))
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(difference <= 1e-13, "{method:?}: {difference:e}");
+        let mut workspace = method.workspace(&dynamic, h).unwrap();
+        let (_, other_tangent) = method
+            .tangent_map(&dynamic, &mut workspace, 0.0, h, &run_time(&start))
+            .unwrap();
+        let difference = (tangent.matrix() - other_tangent.matrix()).amax();
+        assert!(
+            difference <= 1e-12,
+            "{method:?}: tangent maps differ by {difference:e}"
+        );
+    }
+
+    #[test]
+    fn a_run_time_size_model_takes_the_same_steps() {
+        let start = state([0.5, -0.3], [0.4, 0.6]);
+        let forced = state([1.0], [0.2]);
+        assert_run_time_size_agrees(&VariationalIntegrator::new(Midpoint), VariableMass, start);
+        assert_run_time_size_agrees(
+            &VariationalIntegrator::new(Trapezoid),
+            HenonHeiles::<false>,
+            start,
+        );
+        assert_run_time_size_agrees(
+            &VariationalIntegrator::new(SymplecticEuler),
+            VariableMass,
+            start,
+        );
+        assert_run_time_size_agrees(
+            &VariationalIntegrator::new(Midpoint),
+            Damped::<false> { c: 0.3 },
+            forced,
+        );
+        assert_run_time_size_agrees(
+            &VariationalIntegrator::new(Trapezoid),
+            Damped::<false> { c: 0.3 },
+            forced,
+        );
+    }
+
+    #[test]
+    fn the_predictor_continues_only_the_recorded_steps() {
+        // Two steps recorded: the next one from the end of the last is predicted by linear
+        // extrapolation of the increments; one from elsewhere, or of another size, by the
+        // Taylor polynomial.
+        let method = VariationalIntegrator::new(Midpoint);
+        let model = VariableMass;
+        let h = 0.1;
+        let (end, mut workspace) = advance(&method, &model, h, 2, state([0.5, -0.3], [0.4, 0.6]));
+        assert!(workspace.history.has_before);
+        let expected = workspace.history.last * 2.0 - workspace.history.before;
+        workspace.predict(&model, 0.2, h, &end);
+        assert_eq!(workspace.offset.as_slice(), expected.as_slice());
+        workspace.predict(&model, 0.2, 0.5 * h, &end);
+        assert_ne!(workspace.offset.as_slice(), expected.as_slice());
+        let elsewhere = state([0.1, 0.2], [0.4, 0.6]);
+        workspace.predict(&model, 0.2, h, &elsewhere);
+        assert_ne!(workspace.offset.as_slice(), expected.as_slice());
+        // A fresh workspace has no history.
+        let fresh = Method::<nalgebra::U2>::workspace(&method, &model, h).unwrap();
+        assert!(fresh.history.h.is_nan() && !fresh.history.has_before);
+    }
 }

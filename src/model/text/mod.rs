@@ -8,7 +8,7 @@
 //! with derivatives by automatic differentiation, not by hand.
 //!
 //! ```
-//! use nalgebra::SVector;
+//! use nalgebra::{SVector, U2};
 //! use svi::model::text::{TextLagrangian, TextModel, TextSpec};
 //! use svi::{Integrator, Svi, Symmetries};
 //!
@@ -21,7 +21,7 @@
 //! };
 //! let model = TextModel::new(&spec)?;
 //! // Autonomous, unforced, ½q̇ᵀMq̇ − V(q): all three may be declared.
-//! let kepler = TextLagrangian::<2, false, false, true>::new(model)?;
+//! let kepler = TextLagrangian::<U2, false, false, true>::new(model)?;
 //! assert_eq!(kepler.generator_count(), 1);
 //! let integrator = Integrator::new(kepler, Svi::new(6));
 //! let (q, v) = (SVector::from([1.0, 0.0]), SVector::from([0.0, 1.0]));
@@ -112,8 +112,10 @@ pub use tree::MAX_NODES;
 use std::collections::BTreeSet;
 use std::sync::Mutex;
 
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
 
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 use crate::scalar::Scalar;
@@ -226,14 +228,6 @@ pub enum TextError {
         expected: usize,
         /// The number of expressions given.
         found: usize,
-    },
-    /// More coordinates than the caller can dispatch on (see `svi_models::visit_text_model`).
-    #[error("{found} coordinates: text models have at most {max}")]
-    TooManyCoordinates {
-        /// The number of coordinates.
-        found: usize,
-        /// The most supported.
-        max: usize,
     },
     /// A [`TextLagrangian`] whose dimension or declarations do not fit its model.
     #[error("TextLagrangian cannot hold this model: {reason}")]
@@ -577,8 +571,10 @@ fn intern(name: &str) -> &'static str {
     leaked
 }
 
-/// A [`TextModel`] of dimension `N` as a [`Lagrangian<N>`] (with [`Symmetries`],
-/// [`Invariants`] — none —, [`ExactSolution`] — none — and [`Defaults`]).
+/// A [`TextModel`] as a [`Lagrangian<N>`] (with [`Symmetries`], [`Invariants`] — none —,
+/// [`ExactSolution`] — none — and [`Defaults`]), of any number of coordinates: `N` is
+/// [`crate::dimension::Dyn`] (the size is the model's, chosen at run time; what the command
+/// line uses) or a fixed `Const<N>` equal to the model's size.
 ///
 /// The other parameters are the model's declarations ([`Lagrangian::TIME_DEPENDENT`],
 /// [`Lagrangian::FORCED`], and `CONSTANT_MASS` for [`Structure::ConstantMass`]): constants
@@ -587,30 +583,31 @@ fn intern(name: &str) -> &'static str {
 /// rejects declarations the model does not allow.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextLagrangian<
-    const N: usize,
+    N,
     const TIME_DEPENDENT: bool = true,
     const FORCED: bool = true,
     const CONSTANT_MASS: bool = false,
 > {
     model: TextModel,
+    dimension: std::marker::PhantomData<N>,
 }
 
-impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+where
+    DefaultAllocator: Allocator<N>,
 {
     /// `model` as a Lagrangian on ℝᴺ with the type's declarations.
     ///
     /// # Errors
-    /// [`TextError::Declaration`] if the model's dimension is not `N`, or a declaration does
+    /// [`TextError::Declaration`] if `N` is fixed to another size than the model's, or a
+    /// declaration does
     /// not hold: `TIME_DEPENDENT = false` with `t` in L, `FORCED = false` with forces,
     /// `CONSTANT_MASS = true` for L not recognised as constant-mass.
     pub fn new(model: TextModel) -> Result<Self, TextError> {
         let declaration = |reason: String| Err(TextError::Declaration { reason });
-        if model.dimension() != N {
-            return declaration(format!(
-                "the model has {} coordinates, the Lagrangian N = {N}",
-                model.dimension()
-            ));
+        if let Err(reason) = dimension_of::<N>(model.dimension()) {
+            return declaration(reason);
         }
         if model.time_dependent() && !TIME_DEPENDENT {
             return declaration("L depends on t, but TIME_DEPENDENT = false".into());
@@ -623,7 +620,10 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
                 "CONSTANT_MASS = true, but L is not recognised as ½q̇ᵀMq̇ − V(t, q)".into(),
             );
         }
-        Ok(TextLagrangian { model })
+        Ok(TextLagrangian {
+            model,
+            dimension: std::marker::PhantomData,
+        })
     }
 
     /// The model.
@@ -632,8 +632,10 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
     }
 }
 
-impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     Lagrangian<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+where
+    DefaultAllocator: Allocator<N>,
 {
     const TIME_DEPENDENT: bool = TIME_DEPENDENT;
     const FORCED: bool = FORCED;
@@ -643,8 +645,12 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
         Structure::General
     };
 
+    fn dimension(&self) -> usize {
+        self.model.dimension()
+    }
+
     #[inline]
-    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, N>, v: &SVector<D, N>) -> D {
+    fn lagrangian<D: Scalar>(&self, t: D, q: &OVector<D, N>, v: &OVector<D, N>) -> D {
         let tapes = &self.model.tapes;
         if CONSTANT_MASS && let Some(split) = &tapes.constant_mass {
             // ½q̇ᵀMq̇ without a tape, plus U(t, q).
@@ -661,19 +667,24 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
     fn external_force<D: Scalar>(
         &self,
         t: D,
-        q: &SVector<D, N>,
-        v: &SVector<D, N>,
-    ) -> SVector<D, N> {
+        q: &OVector<D, N>,
+        v: &OVector<D, N>,
+    ) -> OVector<D, N> {
         let forces = &self.model.tapes.forces;
+        let (n, _) = q.shape_generic();
         if forces.is_empty() {
-            return SVector::zeros();
+            return OVector::zeros_generic(n, U1);
         }
-        SVector::from_fn(|i, _| forces[i].evaluate(t, q.as_slice(), v.as_slice()))
+        OVector::from_fn_generic(n, U1, |i, _| {
+            forces[i].evaluate(t, q.as_slice(), v.as_slice())
+        })
     }
 }
 
-impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     Symmetries<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+where
+    DefaultAllocator: Allocator<N>,
 {
     fn generator_count(&self) -> usize {
         self.model.generators.len()
@@ -689,42 +700,54 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
 
     /// # Panics
     /// If `index >= generator_count()`.
-    fn generator(&self, index: usize, q: &SVector<f64, N>) -> SVector<f64, N> {
+    fn generator(&self, index: usize, q: &OVector<f64, N>) -> OVector<f64, N> {
         let generator = &self.model.tapes.generators[index];
-        SVector::from_fn(|i, _| generator[i].evaluate(0.0, q.as_slice(), &[]))
+        OVector::from_fn_generic(q.shape_generic().0, U1, |i, _| {
+            generator[i].evaluate(0.0, q.as_slice(), &[])
+        })
     }
 }
 
-impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     Invariants<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+where
+    DefaultAllocator: Allocator<N>,
 {
 }
 
-impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     ExactSolution<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+where
+    DefaultAllocator: Allocator<N>,
 {
     /// None: a text model has no closed-form solution.
     fn exact_solution(
         &self,
         _t0: f64,
-        _q0: &SVector<f64, N>,
-        _v0: &SVector<f64, N>,
+        _q0: &OVector<f64, N>,
+        _v0: &OVector<f64, N>,
         _t: f64,
-    ) -> Option<(SVector<f64, N>, SVector<f64, N>)> {
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
         None
     }
 }
 
-impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     Defaults<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
+where
+    DefaultAllocator: Allocator<N>,
 {
     /// [`TextModel::NAME`].
     fn name(&self) -> &'static str {
         TextModel::NAME
     }
 
-    fn coordinate_names(&self) -> [&'static str; N] {
-        std::array::from_fn(|i| self.model.coordinates[i])
+    fn coordinate_names(&self) -> Vec<String> {
+        self.model
+            .coordinates
+            .iter()
+            .map(|name| name.to_string())
+            .collect()
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {
@@ -737,8 +760,13 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
 
     /// A text model has no literature defaults: at rest at the origin at t = 0 (give the
     /// initial state).
-    fn initial_state(&self) -> (f64, SVector<f64, N>, SVector<f64, N>) {
-        (0.0, SVector::zeros(), SVector::zeros())
+    fn initial_state(&self) -> (f64, OVector<f64, N>, OVector<f64, N>) {
+        let n = N::from_usize(self.model.dimension());
+        (
+            0.0,
+            OVector::zeros_generic(n, U1),
+            OVector::zeros_generic(n, U1),
+        )
     }
 
     /// A placeholder, 0.01 (give the step).
@@ -756,12 +784,58 @@ impl<const N: usize, const TIME_DEPENDENT: bool, const FORCED: bool, const CONST
 mod tests {
     use super::*;
     use crate::model::derived::LagrangianExt;
+    use nalgebra::{DVector, SVector, U1, U2};
 
     fn spec(lagrangian: &str, coordinates: &[&str]) -> TextSpec {
         TextSpec {
             lagrangian: lagrangian.into(),
             coordinates: coordinates.iter().map(|name| (*name).into()).collect(),
             ..TextSpec::default()
+        }
+    }
+
+    /// A planar double pendulum in Cartesian coordinates with stiff rods replaced by springs
+    /// (four coordinates, no size limit): the momentum and the Euler–Lagrange acceleration of
+    /// the run-time-size text model are the hand-derived ones,
+    /// q̈ = M⁻¹(−∂V/∂q) with M = diag(m1, m1, m2, m2).
+    #[test]
+    fn a_text_model_of_four_coordinates_runs_at_run_time_size() {
+        let text = spec(
+            "0.5*m1*(vx1^2 + vy1^2) + 0.5*m2*(vx2^2 + vy2^2) - m1*g*y1 - m2*g*y2 \
+             - 0.5*k*(sqrt(x1^2 + y1^2) - 1)^2 - 0.5*k*(sqrt((x2-x1)^2 + (y2-y1)^2) - 1)^2",
+            &["x1", "y1", "x2", "y2"],
+        );
+        let text = TextSpec {
+            parameters: [("m1", 1.0), ("m2", 2.0), ("g", 9.81), ("k", 50.0)]
+                .iter()
+                .map(|(name, value)| ((*name).into(), *value))
+                .collect(),
+            ..text
+        };
+        let model = TextModel::new(&text).unwrap();
+        assert_eq!(model.structure(), Structure::ConstantMass);
+        let model =
+            TextLagrangian::<crate::dimension::Dyn, false, false, true>::new(model).unwrap();
+        assert_eq!(Lagrangian::dimension(&model), 4);
+        let q = DVector::from_vec(vec![0.6, -0.9, 1.3, -1.5]);
+        let v = DVector::from_vec(vec![0.2, -0.1, 0.4, 0.3]);
+        let p = model.momentum(0.0, &q, &v);
+        assert_eq!(p.as_slice(), &[0.2, -0.1, 0.8, 0.6]);
+        let (k, g) = (50.0, 9.81);
+        let (r1, r2) = (
+            (0.6f64.powi(2) + 0.9f64.powi(2)).sqrt(),
+            (0.7f64.powi(2) + 0.6f64.powi(2)).sqrt(),
+        );
+        let (s1, s2) = (k * (r1 - 1.0) / r1, k * (r2 - 1.0) / r2);
+        let expected = [
+            (-s1 * 0.6 + s2 * 0.7) / 1.0,
+            (-g * 1.0 - s1 * -0.9 + s2 * -0.6) / 1.0,
+            (-s2 * 0.7) / 2.0,
+            (-g * 2.0 - s2 * -0.6) / 2.0,
+        ];
+        let a = model.acceleration(0.0, &q, &v).unwrap();
+        for (a, e) in a.iter().zip(expected) {
+            assert!((a - e).abs() <= 1e-12, "{a} vs {e}");
         }
     }
 
@@ -827,16 +901,16 @@ mod tests {
         let model = TextModel::new(&spec("vx^2/2 - x^2/2", &["x"])).unwrap();
         assert!(!model.time_dependent() && !model.forced());
         assert_eq!(model.structure(), Structure::ConstantMass);
-        assert!(TextLagrangian::<1, false, false, true>::new(model.clone()).is_ok());
-        assert!(TextLagrangian::<1>::new(model.clone()).is_ok());
-        assert!(TextLagrangian::<2>::new(model).is_err());
+        assert!(TextLagrangian::<U1, false, false, true>::new(model.clone()).is_ok());
+        assert!(TextLagrangian::<U1>::new(model.clone()).is_ok());
+        assert!(TextLagrangian::<U2>::new(model).is_err());
         let mut driven = spec("vx^2/2 - x^2/2 + x*cos(t)", &["x"]);
         driven.forces = vec!["-0.1*vx".into()];
         let model = TextModel::new(&driven).unwrap();
         assert!(model.time_dependent() && model.forced());
-        assert!(TextLagrangian::<1, false, true, true>::new(model.clone()).is_err());
-        assert!(TextLagrangian::<1, true, false, true>::new(model.clone()).is_err());
-        let driven = TextLagrangian::<1, true, true, true>::new(model).unwrap();
+        assert!(TextLagrangian::<U1, false, true, true>::new(model.clone()).is_err());
+        assert!(TextLagrangian::<U1, true, false, true>::new(model.clone()).is_err());
+        let driven = TextLagrangian::<U1, true, true, true>::new(model).unwrap();
         let (q, v) = (SVector::from([0.5]), SVector::from([2.0]));
         assert_eq!(driven.external_force(0.0, &q, &v)[0], -0.2);
         assert_eq!(driven.value(0.0, &q, &v), 2.0 - 0.125 + 0.5);
@@ -846,7 +920,7 @@ mod tests {
     fn parameters_are_read_at_every_evaluation() {
         let mut kepler = spec("(vx^2 + vy^2)/2 + mu/sqrt(x^2 + y^2)", &["x", "y"]);
         kepler.parameters = vec![("mu".into(), 1.0)];
-        let mut model = TextLagrangian::<2>::new(TextModel::new(&kepler).unwrap()).unwrap();
+        let mut model = TextLagrangian::<U2>::new(TextModel::new(&kepler).unwrap()).unwrap();
         let (q, v) = (SVector::from([3.0, 4.0]), SVector::from([0.0, 0.0]));
         assert_eq!(model.value(0.0, &q, &v), 0.2);
         model.set_parameter("mu", 5.0).unwrap();

@@ -1,0 +1,26 @@
+//! Tests of the `svi` command: the binary run as a user runs it, and the library in process.
+//!
+//! All integration tests of this crate are modules of this one test binary (`cargo test
+//! --release --test integration [FILTER]`): one link, and each generic function the tests
+//! share is compiled once instead of once per file.
+
+mod common;
+#[path = "../../tests/common/hostile_cases.rs"]
+mod hostile_cases;
+#[path = "common/hostile.rs"]
+mod hostile_support;
+
+mod cli;
+mod ensemble;
+mod field;
+mod help;
+mod honesty;
+mod hostile;
+mod hostile_surfaces;
+mod in_process;
+mod limits;
+mod local;
+mod rigid;
+mod spectral;
+mod stress;
+mod text;

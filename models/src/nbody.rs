@@ -1,0 +1,369 @@
+//! N bodies under Newtonian gravity, of any number of bodies in the plane or in space: a
+//! model of run-time size (`Lagrangian<Dyn>`).
+//!
+//! With positions qᵢ ∈ ℝᵈ (d = 2 or 3) and masses mᵢ,
+//!
+//! L = Σᵢ ½ mᵢ |q̇ᵢ|² + Σ_{i<j} G mᵢ mⱼ / |qᵢ − qⱼ|,
+//!
+//! a constant mass matrix (Störmer–Verlet is explicit, the spectral methods need no Hessian).
+//! Translations and rotations leave L invariant: the total linear momentum P = Σ mᵢ q̇ᵢ and
+//! angular momentum Σ mᵢ qᵢ × q̇ᵢ are the Noether momenta (d + 1 of them in the plane, d + 3 in
+//! space), and the energy is conserved.
+//!
+//! The default is the outer Solar System of Hairer, Lubich & Wanner, *Geometric Numerical
+//! Integration*, §I.2.4, Table 2.2: the Sun (with the inner planets' mass added), Jupiter,
+//! Saturn, Uranus, Neptune and Pluto, 18 coordinates, in astronomical units and days
+//! (G = 2.95912208286e-4), initial values of 5 September 1994; h = 10 days over 200 000
+//! days, as in Fig. I.2.4.
+
+use nalgebra::DVector;
+use svi::{
+    Defaults, Dyn, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
+};
+
+/// One body: a name, a mass and its initial position and velocity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Body {
+    /// The name, which prefixes its coordinates (`jupiter_x`, …).
+    pub name: String,
+    /// The mass m > 0.
+    pub mass: f64,
+    /// Initial position (d entries).
+    pub position: Vec<f64>,
+    /// Initial velocity (d entries).
+    pub velocity: Vec<f64>,
+}
+
+/// N bodies under Newtonian gravity (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct NBody {
+    /// The gravitational constant G > 0.
+    pub g: f64,
+    /// d = 2 or 3.
+    space: usize,
+    bodies: Vec<Body>,
+}
+
+/// Names of the momenta: linear in x, y (, z), then angular.
+const PLANAR_MOMENTA: [&str; 3] = ["Px", "Py", "L"];
+/// Names of the momenta in space.
+const SPATIAL_MOMENTA: [&str; 6] = ["Px", "Py", "Pz", "Lx", "Ly", "Lz"];
+
+impl NBody {
+    /// The model's name.
+    pub const NAME: &'static str = "nbody";
+
+    /// Its parameters.
+    pub const PARAMETERS: [&'static str; 1] = ["G"];
+
+    /// Bodies in d = `space` dimensions with the gravitational constant `g`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for d other than 2 or 3, fewer than two bodies, a mass or
+    /// G not positive and finite, or a position or velocity without d finite entries.
+    pub fn new(g: f64, space: usize, bodies: Vec<Body>) -> Result<Self, Error> {
+        if !(g.is_finite() && g > 0.0) {
+            return Err(Error::invalid(
+                "G",
+                format!("{g} is not positive and finite"),
+            ));
+        }
+        if !(space == 2 || space == 3) {
+            return Err(Error::invalid(
+                "space",
+                format!("{space}: bodies move in 2 or 3 dimensions"),
+            ));
+        }
+        if bodies.len() < 2 {
+            return Err(Error::invalid("bodies", "at least two bodies"));
+        }
+        for body in &bodies {
+            if !(body.mass.is_finite() && body.mass > 0.0) {
+                return Err(Error::invalid(
+                    "mass",
+                    format!("{}: {} is not positive", body.name, body.mass),
+                ));
+            }
+            for x in [&body.position, &body.velocity] {
+                if x.len() != space || !x.iter().all(|x| x.is_finite()) {
+                    return Err(Error::invalid(
+                        "bodies",
+                        format!("{}: {x:?} is not {space} finite numbers", body.name),
+                    ));
+                }
+            }
+        }
+        Ok(NBody { g, space, bodies })
+    }
+
+    /// The outer Solar System of HLW, Table I.2.2 (see the module docs).
+    pub fn outer_solar_system() -> Self {
+        let body = |name: &str, mass: f64, position: [f64; 3], velocity: [f64; 3]| Body {
+            name: name.into(),
+            mass,
+            position: position.to_vec(),
+            velocity: velocity.to_vec(),
+        };
+        let bodies = vec![
+            body("sun", 1.00000597682, [0.0; 3], [0.0; 3]),
+            body(
+                "jupiter",
+                0.000954786104043,
+                [-3.5023653, -3.8169847, -1.5507963],
+                [0.00565429, -0.00412490, -0.00190589],
+            ),
+            body(
+                "saturn",
+                0.000285583733151,
+                [9.0755314, -3.0458353, -1.6483708],
+                [0.00168318, 0.00483525, 0.00192462],
+            ),
+            body(
+                "uranus",
+                0.0000437273164546,
+                [8.3101420, -16.2901086, -7.2521278],
+                [0.00354178, 0.00137102, 0.00055029],
+            ),
+            body(
+                "neptune",
+                0.0000517759138449,
+                [11.4707666, -25.7294829, -10.8169456],
+                [0.00288930, 0.00114527, 0.00039677],
+            ),
+            body(
+                "pluto",
+                1.0 / 1.3e8,
+                [-15.5387357, -25.2225594, -3.1902382],
+                [0.00276725, -0.00170702, -0.00136504],
+            ),
+        ];
+        NBody {
+            g: 2.95912208286e-4,
+            space: 3,
+            bodies,
+        }
+    }
+
+    /// The bodies.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// d, the dimension each body moves in.
+    pub fn space(&self) -> usize {
+        self.space
+    }
+}
+
+impl Default for NBody {
+    fn default() -> Self {
+        NBody::outer_solar_system()
+    }
+}
+
+impl Lagrangian<Dyn> for NBody {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
+
+    fn dimension(&self) -> usize {
+        self.bodies.len() * self.space
+    }
+
+    #[inline]
+    fn lagrangian<D: Scalar>(&self, _t: D, q: &DVector<D>, v: &DVector<D>) -> D {
+        let d = self.space;
+        let mut kinetic = D::from(0.0);
+        let mut potential = D::from(0.0);
+        for (i, a) in self.bodies.iter().enumerate() {
+            let mut speed = D::from(0.0);
+            for k in 0..d {
+                speed += v[d * i + k] * v[d * i + k];
+            }
+            kinetic += speed * (0.5 * a.mass);
+            for (j, b) in self.bodies.iter().enumerate().skip(i + 1) {
+                let mut r2 = D::from(0.0);
+                for k in 0..d {
+                    let x = q[d * i + k] - q[d * j + k];
+                    r2 += x * x;
+                }
+                potential += r2.sqrt().recip() * (self.g * a.mass * b.mass);
+            }
+        }
+        kinetic + potential
+    }
+}
+
+impl Symmetries<Dyn> for NBody {
+    fn generator_count(&self) -> usize {
+        if self.space == 2 { 3 } else { 6 }
+    }
+
+    /// `Px`, `Py` (, `Pz`): linear momentum; `L` (in the plane) or `Lx`, `Ly`, `Lz`: angular.
+    ///
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn momentum_name(&self, index: usize) -> &'static str {
+        if self.space == 2 {
+            PLANAR_MOMENTA[index]
+        } else {
+            SPATIAL_MOMENTA[index]
+        }
+    }
+
+    /// Translations of every body along axis k (index k < d), and rotations of every body
+    /// about the origin (in the plane (x, y) ↦ (−y, x); in space about axis index − d).
+    ///
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn generator(&self, index: usize, q: &DVector<f64>) -> DVector<f64> {
+        let d = self.space;
+        assert!(
+            index < self.generator_count(),
+            "no symmetry generator with index {index}"
+        );
+        DVector::from_fn(q.len(), |row, _| {
+            let (body, k) = (row / d, row % d);
+            let x = |axis: usize| q[d * body + axis];
+            if index < d {
+                return f64::from(k == index);
+            }
+            // ω × x with ω the unit vector of the rotation axis (the plane: ω = e_z).
+            let axis = if d == 2 { 2 } else { index - d };
+            match (axis, k) {
+                (0, 1) => -x(2),
+                (0, 2) => x(1),
+                (1, 0) => x(2),
+                (1, 2) => -x(0),
+                (2, 0) => -x(1),
+                (2, 1) => x(0),
+                _ => 0.0,
+            }
+        })
+    }
+}
+
+impl Invariants<Dyn> for NBody {}
+
+impl ExactSolution<Dyn> for NBody {
+    /// None: the N-body problem has no closed form.
+    fn exact_solution(
+        &self,
+        _t0: f64,
+        _q0: &DVector<f64>,
+        _v0: &DVector<f64>,
+        _t: f64,
+    ) -> Option<(DVector<f64>, DVector<f64>)> {
+        None
+    }
+}
+
+impl Defaults<Dyn> for NBody {
+    fn name(&self) -> &'static str {
+        Self::NAME
+    }
+
+    /// `<body>_x`, `<body>_y` (, `<body>_z`) for each body.
+    fn coordinate_names(&self) -> Vec<String> {
+        let axes = &["x", "y", "z"][..self.space];
+        self.bodies
+            .iter()
+            .flat_map(|body| axes.iter().map(move |axis| format!("{}_{axis}", body.name)))
+            .collect()
+    }
+
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        vec![("G", self.g)]
+    }
+
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        match name {
+            "G" if value.is_finite() && value > 0.0 => {
+                self.g = value;
+                Ok(())
+            }
+            "G" => Err(Error::invalid(
+                "G",
+                format!("{value} is not positive and finite"),
+            )),
+            _ => Err(Error::invalid(
+                name,
+                format!("unknown parameter (known: {})", Self::PARAMETERS.join(", ")),
+            )),
+        }
+    }
+
+    /// The bodies' initial positions and velocities at t = 0.
+    fn initial_state(&self) -> (f64, DVector<f64>, DVector<f64>) {
+        let stack = |part: fn(&Body) -> &Vec<f64>| {
+            DVector::from_iterator(
+                self.dimension(),
+                self.bodies
+                    .iter()
+                    .flat_map(|body| part(body).iter().copied()),
+            )
+        };
+        (
+            0.0,
+            stack(|body| &body.position),
+            stack(|body| &body.velocity),
+        )
+    }
+
+    /// h = 10 (days for the Solar System).
+    fn default_step(&self) -> f64 {
+        10.0
+    }
+
+    /// 200 000 (days: HLW's Fig. I.2.4).
+    fn default_horizon(&self) -> f64 {
+        200_000.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use svi::LagrangianExt;
+
+    /// Two bodies in the plane: the force on each is G m₁ m₂ / r² toward the other, and each
+    /// generator leaves L unchanged to first order.
+    #[test]
+    fn two_bodies_attract_by_the_inverse_square_law_and_keep_their_symmetries() {
+        let body = |name: &str, mass: f64, x: f64| Body {
+            name: name.into(),
+            mass,
+            position: vec![x, 0.5],
+            velocity: vec![0.1 * x, -0.2],
+        };
+        let model = NBody::new(2.0, 2, vec![body("a", 3.0, 1.0), body("b", 5.0, -1.0)]).unwrap();
+        let (_, q, v) = model.initial_state();
+        let force = model.force(0.0, &q, &v);
+        // r = 2 along x: |F| = G m₁ m₂ / r² = 2·3·5/4 = 7.5, body a pulled toward −x.
+        let expected = [-7.5, 0.0, 7.5, 0.0];
+        for (f, e) in force.iter().zip(expected) {
+            assert!((f - e).abs() <= 1e-14, "{force}");
+        }
+        for index in 0..model.generator_count() {
+            assert!(
+                model.symmetry_defect(index, 0.0, &q, &v) <= 1e-12,
+                "{index}"
+            );
+        }
+        assert_eq!(model.coordinate_names(), ["a_x", "a_y", "b_x", "b_y"]);
+        assert!(NBody::new(2.0, 4, model.bodies().to_vec()).is_err());
+        assert!(NBody::new(-2.0, 2, model.bodies().to_vec()).is_err());
+    }
+
+    #[test]
+    fn the_outer_solar_system_keeps_its_momenta_as_symmetries() {
+        let model = NBody::default();
+        assert_eq!(Lagrangian::dimension(&model), 18);
+        let (_, q, v) = model.initial_state();
+        for index in 0..6 {
+            assert!(
+                model.symmetry_defect(index, 0.0, &q, &v) <= 1e-10,
+                "{index}"
+            );
+        }
+    }
+}

@@ -1,0 +1,487 @@
+//! Non-symplectic reference methods on the Euler–Lagrange equations, for the comparisons of
+//! Hairer, Lubich & Wanner, *Geometric Numerical Integration*, §I.1–I.2 (Fig. I.2.4: explicit
+//! Euler's planets spiral out, symplectic Euler and Störmer–Verlet keep their orbits).
+//!
+//! Each integrates the first-order system y = (q, q̇), ẏ = F(t, y) = (q̇, f(t, q, q̇)), with the
+//! acceleration f = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L) derived from L
+//! ([`crate::LagrangianExt::acceleration`]), in the coordinates (q, q̇):
+//!
+//! | type | step | order |
+//! | --- | --- | --- |
+//! | [`ExplicitEuler`] | y' = y + h F(t, y) | 1 |
+//! | [`ImplicitEuler`] | y' = y + h F(t + h, y') | 1 |
+//! | [`RungeKutta4`] | the classical four-stage Runge–Kutta method | 4 |
+//!
+//! Implicit Euler writes y' = (q + h w, w) and solves w − q̇ − h f(t + h, q + h w, w) = 0 for
+//! the new velocity w by Newton's method with the exact Jacobian I − h(h f_q + f_v) (the
+//! acceleration Jacobian, [`crate::LagrangianExt::acceleration_jacobian`]). None of the three
+//! is symplectic or symmetric; they are here to be compared with the methods that are.
+//!
+//! Tangent maps: explicit Euler's is [[I, hI], [h f_q, I + h f_v]]; Runge–Kutta's follows its
+//! stages, dkᵢ/dy = J(yᵢ)(I + cᵢ h dkᵢ₋₁/dy) with J = [[0, I], [f_q, f_v]]; implicit Euler's
+//! is the implicit function theorem on its equation: dw/dq = K⁻¹ h f_q, dw/dq̇ = K⁻¹ with
+//! K = I − h(h f_q + f_v).
+
+use crate::dimension::{Dimension, dimension_of};
+use crate::error::{Error, StepFailure};
+use crate::method::space::StepState;
+use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::model::Lagrangian;
+use crate::model::derived::{AccelerationJacobian, LagrangianExt};
+use crate::nonlinear::Newton;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
+
+/// Explicit Euler on the Euler–Lagrange equations (order 1, not symplectic).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ExplicitEuler;
+
+/// Implicit Euler on the Euler–Lagrange equations (order 1, not symplectic), by Newton's
+/// method on the new velocity.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImplicitEuler {
+    /// Cap on Newton iterations per step.
+    pub max_iterations: usize,
+}
+
+impl Default for ImplicitEuler {
+    fn default() -> Self {
+        ImplicitEuler { max_iterations: 50 }
+    }
+}
+
+/// The classical Runge–Kutta method of order 4 on the Euler–Lagrange equations (not
+/// symplectic).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RungeKutta4;
+
+/// The dimension of a run, and for implicit Euler its Newton buffers.
+#[derive(Debug, Clone)]
+pub struct ReferenceWorkspace<N> {
+    n: N,
+    newton: Option<(Newton, DVector<f64>)>,
+}
+
+/// The workspace of a reference method on `model`.
+fn workspace<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    h: f64,
+    implicit: Option<usize>,
+) -> Result<ReferenceWorkspace<N>, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    if !(h.is_finite() && h != 0.0) {
+        return Err(Error::invalid(
+            "h",
+            format!("{h} is not a finite non-zero step"),
+        ));
+    }
+    let n =
+        dimension_of::<N>(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
+    let size = n.value();
+    Ok(ReferenceWorkspace {
+        n,
+        newton: implicit.map(|iterations| (Newton::new(size, iterations), DVector::zeros(size))),
+    })
+}
+
+/// The acceleration f(t, q, q̇), or the failure of a singular mass matrix.
+fn acceleration<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+) -> Result<OVector<f64, N>, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    model
+        .acceleration(t, q, v)
+        .ok_or(StepFailure::SingularMatrix)
+}
+
+/// The acceleration and its Jacobian, or the failure of a singular mass matrix.
+fn jacobian<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+) -> Result<AccelerationJacobian<N>, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    model
+        .acceleration_jacobian(t, q, v)
+        .ok_or(StepFailure::SingularMatrix)
+}
+
+/// The facts every reference method shares: coordinates (q, q̇), neither symmetric nor
+/// symplectic.
+fn info(name: &'static str, order: usize) -> MethodInfo {
+    MethodInfo {
+        name,
+        order,
+        symmetric: false,
+        symplectic: false,
+        coordinates: Coordinates::Velocity,
+    }
+}
+
+/// A 2N × 2N matrix in blocks.
+fn blocks<N: Dimension>(matrix: &DMatrix<f64>, n: N) -> TangentMap<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let size = n.value();
+    let block = |r: usize, c: usize| OMatrix::from_fn_generic(n, n, |i, j| matrix[(r + i, c + j)]);
+    TangentMap {
+        qq: block(0, 0),
+        qy: block(0, size),
+        yq: block(size, 0),
+        yy: block(size, size),
+    }
+}
+
+/// J = [[0, I], [f_q, f_v]], the Jacobian of F(t, y) = (q̇, f).
+fn first_order_jacobian<N: Dimension>(a: &AccelerationJacobian<N>) -> DMatrix<f64>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = a.value.len();
+    DMatrix::from_fn(2 * n, 2 * n, |i, j| match (i < n, j < n) {
+        (true, true) => 0.0,
+        (true, false) => f64::from(i == j - n),
+        (false, true) => a.q[(i - n, j)],
+        (false, false) => a.v[(i - n, j - n)],
+    })
+}
+
+impl<N: Dimension> Method<N> for ExplicitEuler
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    type Workspace = ReferenceWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        info("explicit-euler", 1)
+    }
+
+    fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
+        workspace(model, h, None)
+    }
+
+    fn step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        _workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        let a = acceleration(model, t, &state.q, &state.y)?;
+        increment.q.copy_from(&state.y);
+        increment.q *= h;
+        increment.y.copy_from(&a);
+        increment.y *= h;
+        Ok(StepReport {
+            evaluations: 1,
+            ..StepReport::default()
+        })
+    }
+
+    fn tangent_map<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let a = jacobian(model, t, &state.q, &state.y)?;
+        let mut increment = State::zeros(workspace.n);
+        self.step(model, workspace, t, h, state, &mut increment)?;
+        let n = workspace.n;
+        let identity = OMatrix::<f64, N, N>::identity_generic(n, n);
+        let map = TangentMap {
+            qq: identity.clone(),
+            qy: &identity * h,
+            yq: &a.q * h,
+            yy: identity + &a.v * h,
+        };
+        Ok((state.plus(&increment), map))
+    }
+}
+
+impl<N: Dimension> Method<N> for RungeKutta4
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    type Workspace = ReferenceWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        info("rk4", 4)
+    }
+
+    fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
+        workspace(model, h, None)
+    }
+
+    fn step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        _workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        // Stage i at y + cᵢ h kᵢ₋₁ with k = (dq, dv) = (q̇ of the stage, f of the stage).
+        let (q, v) = (&state.q, &state.y);
+        let a1 = acceleration(model, t, q, v)?;
+        let (q2, v2) = (q + v * (0.5 * h), v + &a1 * (0.5 * h));
+        let a2 = acceleration(model, t + 0.5 * h, &q2, &v2)?;
+        let (q3, v3) = (q + &v2 * (0.5 * h), v + &a2 * (0.5 * h));
+        let a3 = acceleration(model, t + 0.5 * h, &q3, &v3)?;
+        let (q4, v4) = (q + &v3 * h, v + &a3 * h);
+        let a4 = acceleration(model, t + h, &q4, &v4)?;
+        increment
+            .q
+            .copy_from(&((v + (&v2 + &v3) * 2.0 + &v4) * (h / 6.0)));
+        increment
+            .y
+            .copy_from(&((&a1 + (&a2 + &a3) * 2.0 + &a4) * (h / 6.0)));
+        Ok(StepReport {
+            evaluations: 4,
+            ..StepReport::default()
+        })
+    }
+
+    fn tangent_map<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let n = workspace.n;
+        let size = n.value();
+        let identity = DMatrix::<f64>::identity(2 * size, 2 * size);
+        // Stage points and the derivatives dkᵢ/dy of the stage slopes.
+        let (mut q, mut v) = (state.q.clone(), state.y.clone());
+        let mut sum = DMatrix::<f64>::zeros(2 * size, 2 * size);
+        let mut previous: Option<DMatrix<f64>> = None;
+        for (c, weight, shift) in [
+            (0.0, 1.0, 0.5),
+            (0.5, 2.0, 0.5),
+            (0.5, 2.0, 1.0),
+            (1.0, 1.0, 0.0),
+        ] {
+            let a = jacobian(model, t + c * h, &q, &v)?;
+            let j = first_order_jacobian(&a);
+            let slope = match &previous {
+                None => j,
+                Some(dk) => &j * (&identity + dk * (c * h)),
+            };
+            sum += &slope * weight;
+            // The next stage's point y + shift·h·kᵢ.
+            (q, v) = (
+                &state.q + &v * (shift * h),
+                &state.y + &a.value * (shift * h),
+            );
+            previous = Some(slope);
+        }
+        let map = blocks(&(identity + sum * (h / 6.0)), n);
+        let mut increment = State::zeros(n);
+        self.step(model, workspace, t, h, state, &mut increment)?;
+        Ok((state.plus(&increment), map))
+    }
+}
+
+impl ImplicitEuler {
+    /// Solve for the new velocity w: w − q̇ − h f(t + h, q + h w, w) = 0, started from the
+    /// explicit Euler velocity. Returns w, the Jacobian at the solution and the iterations.
+    fn solve<L: Lagrangian<N>, N: Dimension>(
+        &self,
+        model: &L,
+        workspace: &mut ReferenceWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(OVector<f64, N>, usize), StepFailure>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        let n = workspace.n;
+        let (newton, z) = workspace.newton.as_mut().ok_or(StepFailure::Unsupported {
+            option: "workspace",
+            reason: "not built for implicit Euler",
+        })?;
+        let start = &state.y + acceleration(model, t, &state.q, &state.y)? * h;
+        z.copy_from_slice(start.as_slice());
+        let mut failed = None;
+        let iterations = newton.solve(z, |z, jacobian, residual| {
+            let w = OVector::<f64, N>::from_column_slice_generic(n, U1, z.as_slice());
+            let q = &state.q + &w * h;
+            match model.acceleration_jacobian(t + h, &q, &w) {
+                Some(a) => {
+                    let r = &w - &state.y - &a.value * h;
+                    residual.copy_from_slice(r.as_slice());
+                    let size = n.value();
+                    for i in 0..size {
+                        for j in 0..size {
+                            jacobian[(i, j)] =
+                                f64::from(i == j) - h * (h * a.q[(i, j)] + a.v[(i, j)]);
+                        }
+                    }
+                }
+                None => {
+                    failed = Some(StepFailure::SingularMatrix);
+                    residual.fill(f64::NAN);
+                }
+            }
+        });
+        if let Some(failure) = failed {
+            return Err(failure);
+        }
+        let iterations = iterations?;
+        Ok((
+            OVector::<f64, N>::from_column_slice_generic(n, U1, z.as_slice()),
+            iterations,
+        ))
+    }
+}
+
+impl<N: Dimension> Method<N> for ImplicitEuler
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    type Workspace = ReferenceWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        info("implicit-euler", 1)
+    }
+
+    fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
+        if self.max_iterations == 0 {
+            return Err(Error::invalid(
+                "max_iterations",
+                "at least one Newton iteration",
+            ));
+        }
+        workspace(model, h, Some(self.max_iterations))
+    }
+
+    fn step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure> {
+        let (w, iterations) = self.solve(model, workspace, t, h, state)?;
+        increment.q.copy_from(&(&w * h));
+        increment.y.copy_from(&(w - &state.y));
+        Ok(StepReport {
+            iterations,
+            evaluations: iterations + 1,
+            factorizations: iterations,
+            analyses: 0,
+        })
+    }
+
+    fn tangent_map<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+        let (w, _) = self.solve(model, workspace, t, h, state)?;
+        let q = &state.q + &w * h;
+        let a = jacobian(model, t + h, &q, &w)?;
+        let n = workspace.n;
+        let identity = OMatrix::<f64, N, N>::identity_generic(n, n);
+        // K dw = h f_q dq + dq̇, K = I − h(h f_q + f_v).
+        let k = &identity - (&a.q * h + &a.v) * h;
+        let inverse = crate::linalg::invert_small(&k).ok_or(StepFailure::SingularMatrix)?;
+        let dw_dq = &inverse * &a.q * h;
+        let map = TangentMap {
+            qq: &identity + &dw_dq * h,
+            qy: &inverse * h,
+            yq: dw_dq,
+            yy: inverse,
+        };
+        let end = State { q, y: w };
+        Ok((end, map))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_models::{
+        HenonHeiles, VariableMass, assert_tangent_matches_central_differences, state,
+    };
+
+    #[test]
+    fn the_tangent_maps_match_central_differences() {
+        for start in [
+            state([0.3, -0.2], [0.1, 0.4]),
+            state([-0.5, 0.4], [0.6, -0.3]),
+        ] {
+            assert_tangent_matches_central_differences(&ExplicitEuler, &VariableMass, start);
+            assert_tangent_matches_central_differences(&RungeKutta4, &VariableMass, start);
+            assert_tangent_matches_central_differences(
+                &ImplicitEuler::default(),
+                &VariableMass,
+                start,
+            );
+            assert_tangent_matches_central_differences(&RungeKutta4, &HenonHeiles::<false>, start);
+        }
+    }
+
+    /// One step of each on q̈ = −q from (1, 0): explicit Euler (1, −h), implicit Euler
+    /// (1, −h)/(1 + h²), and RK4 the Taylor polynomial of (cos h, −sin h) to h⁴.
+    #[test]
+    fn one_step_on_the_oscillator_is_the_closed_form() {
+        use crate::test_models::Oscillator;
+        let (h, start) = (0.1, state([1.0], [0.0]));
+        let end = |method: &dyn Fn(&mut State<nalgebra::U1>)| {
+            let mut increment = State::zeros(nalgebra::U1);
+            method(&mut increment);
+            (start.q[0] + increment.q[0], start.y[0] + increment.y[0])
+        };
+        let model = Oscillator::<false>;
+        let explicit = end(&|inc| {
+            let mut ws = Method::workspace(&ExplicitEuler, &model, h).unwrap();
+            ExplicitEuler
+                .step(&model, &mut ws, 0.0, h, &start, inc)
+                .unwrap();
+        });
+        assert_eq!(explicit, (1.0, -h));
+        let implicit = end(&|inc| {
+            let method = ImplicitEuler::default();
+            let mut ws = Method::workspace(&method, &model, h).unwrap();
+            method.step(&model, &mut ws, 0.0, h, &start, inc).unwrap();
+        });
+        let d = 1.0 + h * h;
+        assert!((implicit.0 - 1.0 / d).abs() < 1e-15 && (implicit.1 + h / d).abs() < 1e-15);
+        let rk4 = end(&|inc| {
+            let mut ws = Method::workspace(&RungeKutta4, &model, h).unwrap();
+            RungeKutta4
+                .step(&model, &mut ws, 0.0, h, &start, inc)
+                .unwrap();
+        });
+        let (c, s) = (1.0 - h * h / 2.0 + h.powi(4) / 24.0, h - h.powi(3) / 6.0);
+        assert!(
+            (rk4.0 - c).abs() < 1e-15 && (rk4.1 + s).abs() < 1e-15,
+            "{rk4:?}"
+        );
+    }
+}

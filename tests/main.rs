@@ -1,0 +1,34 @@
+//! Integration tests of `svi` (they may use the zoo, `svi-models`).
+//!
+//! All integration tests of this crate are modules of this one test binary (`cargo test
+//! --release --test integration [FILTER]`): one link, and each generic function the tests
+//! share is compiled once instead of once per file.
+
+#[path = "common/allocations.rs"]
+mod allocations;
+#[path = "common/hostile_cases.rs"]
+mod hostile_cases;
+
+mod allocation;
+mod any_size;
+mod classic_methods;
+mod convergence;
+mod derivatives;
+mod errors;
+mod field;
+mod forces;
+mod geometry;
+mod hostile;
+mod lie_group;
+mod local;
+mod logh;
+mod multiscale;
+mod newton;
+mod pseudospectral;
+mod reparam;
+mod sem;
+mod solve;
+mod stability;
+mod step_doubling;
+mod stress;
+mod text;
