@@ -207,22 +207,32 @@ enum Failure {
 /// `svi compare`: check the scene and every method, run each, draw the picture (`--plot`)
 /// and print the table (or, with `--json`, one JSON object, also when the command fails).
 pub fn execute_args(args: &CompareArgs) -> anyhow::Result<()> {
+    let bad_input = |error: SceneError| {
+        if args.json {
+            // Stdout that cannot be written leaves the exit status to tell.
+            let object = failure_object(&error_report(&error));
+            let _ = output::print(format_args!("{object}\n"));
+        }
+        Err(error.into())
+    };
     let (scenes, plot) = match prepare(args) {
         Ok(prepared) => prepared,
-        Err(error) => {
-            if args.json {
-                // Stdout that cannot be written leaves the exit status to tell.
-                let object = failure_object(&error_report(&error));
-                let _ = output::print(format_args!("{object}\n"));
-            }
-            return Err(error.into());
-        }
+        Err(error) => return bad_input(error),
     };
     let progress = std::io::stderr().is_terminal();
-    let outcomes: Vec<Outcome> = scenes
+    let mut outcomes: Vec<Outcome> = scenes
         .into_iter()
         .map(|(method, scene)| run_method(method, &scene, plot.is_some(), progress))
         .collect();
+    // No method could start (a shared value the model rejects, as --param G=-1): bad input of
+    // the comparison itself, as the same `svi run` would be; nothing is drawn.
+    let refused = |outcome: &Outcome| matches!(&outcome.failure, Some(Failure::Refused(error)) if error.is_bad_input());
+    if !outcomes.is_empty()
+        && outcomes.iter().all(refused)
+        && let Some(Failure::Refused(error)) = outcomes.swap_remove(0).failure
+    {
+        return bad_input(error);
+    }
     let picture = plot.map(|file| draw(file, &outcomes));
     let drawn = picture.as_ref().and_then(|picture| picture.as_ref().ok());
     let comparison = comparison(args, &outcomes, drawn);
@@ -347,10 +357,12 @@ fn outcome(outcomes: Vec<Outcome>, rows: &[MethodRow]) -> anyhow::Result<()> {
             Some(format!("{} ({kind})", row.method))
         })
         .collect();
-    let refused = outcomes.into_iter().find_map(|outcome| match outcome.failure {
-        Some(Failure::Refused(error)) if error.is_bad_input() => Some((outcome.method, error)),
-        _ => None,
-    });
+    let refused = outcomes
+        .into_iter()
+        .find_map(|outcome| match outcome.failure {
+            Some(Failure::Refused(error)) if error.is_bad_input() => Some((outcome.method, error)),
+            _ => None,
+        });
     match refused {
         Some((method, error)) => {
             Err(anyhow::Error::new(error).context(format!("method {method} cannot run the scene")))
@@ -394,7 +406,8 @@ fn text_table(comparison: &Comparison) -> String {
                     Status::Ok => "ok".into(),
                     Status::Failed => "failed".into(),
                 },
-                row.steps.map_or_else(|| "n/a".into(), |steps| steps.to_string()),
+                row.steps
+                    .map_or_else(|| "n/a".into(), |steps| steps.to_string()),
                 row.t_end
                     .map_or_else(|| "n/a".into(), |t| Float(t).to_string()),
                 row.seconds
@@ -555,8 +568,7 @@ fn bodies(coordinates: &[String]) -> Option<Vec<String>> {
     for name in coordinates {
         let (body, axis) = name.rsplit_once('_')?;
         let grouped = |axis: &str| coordinates.contains(&format!("{body}_{axis}"));
-        if !matches!(axis, "x" | "y" | "z") || !grouped("x") || !grouped("y") || body.is_empty()
-        {
+        if !matches!(axis, "x" | "y" | "z") || !grouped("x") || !grouped("y") || body.is_empty() {
             return None;
         }
         if !bodies.iter().any(|known| known == body) {

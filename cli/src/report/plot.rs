@@ -329,11 +329,7 @@ const CAPTION: u32 = 28;
 /// The ranges `x` and `y` widened about their midpoints so that one unit takes as many of
 /// the `pixels` (width, height) of the plotting area on both axes (within ±`f64::MAX / 2`,
 /// as [`range`]).
-fn equal_scale(
-    x: (f64, f64),
-    y: (f64, f64),
-    pixels: (f64, f64),
-) -> ((f64, f64), (f64, f64)) {
+fn equal_scale(x: (f64, f64), y: (f64, f64), pixels: (f64, f64)) -> ((f64, f64), (f64, f64)) {
     let per_pixel = ((x.1 - x.0) / pixels.0).max((y.1 - y.0) / pixels.1);
     let widen = |(low, high): (f64, f64), pixels: f64| {
         let (mid, half) = (low / 2.0 + high / 2.0, per_pixel * pixels / 2.0);
