@@ -32,8 +32,8 @@ use svi_cli::stress::{StressArgs, stress};
 use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
 
 use crate::hostile_cases;
-use hostile_cases::cases;
 use crate::hostile_support;
+use hostile_cases::cases;
 use hostile_support::*;
 
 // ---- scene files --------------------------------------------------------------------------

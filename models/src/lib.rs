@@ -176,7 +176,7 @@ where
         + Send
         + Sync
         + std::fmt::Debug
-        + 'static
+        + 'static,
 {
 }
 

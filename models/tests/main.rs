@@ -4,7 +4,6 @@
 //! --release --test integration [FILTER]`): one link, and each generic function the tests
 //! share is compiled once instead of once per file.
 
-
 mod exact_solutions;
 mod forced_models;
 mod registry;
