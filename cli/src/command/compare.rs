@@ -10,7 +10,8 @@
 //! method or model of its own. Every method is checked against the scene before the first
 //! runs (bad input: exit status 2, nothing run); a method that fails as it runs has its row
 //! say so, the others still run, and the exit status is 1 (2 if a method refused the scene's
-//! model as it started, e.g. a method that needs a fast frequency the model does not have).
+//! model before its first step, as a dense method refuses a model too large for its
+//! matrices; 2 and no table if every method did, as for a parameter the model rejects).
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -158,7 +159,7 @@ impl MethodRow {
 pub struct Comparison {
     /// The scene as named.
     pub scene: String,
-    /// The model's name.
+    /// The model's name (`text` for a Lagrangian written as text).
     pub model: String,
     /// The model's parameters in effect (`null` if no method started).
     pub parameters: Option<Parameters>,
@@ -219,6 +220,9 @@ pub fn execute_args(args: &CompareArgs) -> anyhow::Result<()> {
         Ok(prepared) => prepared,
         Err(error) => return bad_input(error),
     };
+    let model = scenes
+        .first()
+        .map_or_else(String::new, |(_, scene)| scene.model_name().to_owned());
     let progress = std::io::stderr().is_terminal();
     let mut outcomes: Vec<Outcome> = scenes
         .into_iter()
@@ -235,7 +239,7 @@ pub fn execute_args(args: &CompareArgs) -> anyhow::Result<()> {
     }
     let picture = plot.map(|file| draw(file, &outcomes));
     let drawn = picture.as_ref().and_then(|picture| picture.as_ref().ok());
-    let comparison = comparison(args, &outcomes, drawn);
+    let comparison = comparison(args, model, &outcomes, drawn);
     for row in &comparison.methods {
         for warning in &row.warnings {
             output::warn(format_args!("warning: {}: {}", row.method, warning.message));
@@ -320,8 +324,14 @@ fn run_method(method: MethodSpec, scene: &Scene, draw: bool, progress: bool) -> 
     }
 }
 
-/// The comparison of `outcomes`, with the picture's path if it was drawn.
-fn comparison(args: &CompareArgs, outcomes: &[Outcome], plot: Option<&PathBuf>) -> Comparison {
+/// The comparison of `outcomes` of the scene's `model`, with the picture's path if it was
+/// drawn.
+fn comparison(
+    args: &CompareArgs,
+    model: String,
+    outcomes: &[Outcome],
+    plot: Option<&PathBuf>,
+) -> Comparison {
     let first = outcomes.iter().find_map(|outcome| outcome.summary.as_ref());
     let methods: Vec<MethodRow> = outcomes
         .iter()
@@ -337,7 +347,7 @@ fn comparison(args: &CompareArgs, outcomes: &[Outcome], plot: Option<&PathBuf>) 
     let ok = methods.iter().all(|row| row.status == Status::Ok);
     Comparison {
         scene: args.scene.clone(),
-        model: first.map_or_else(String::new, |summary| summary.model.clone()),
+        model,
         parameters: first.map(|summary| summary.parameters.clone()),
         h: first.map(|summary| summary.h),
         t0: first.map(|summary| summary.t0),
