@@ -28,7 +28,7 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
-use crate::model::{Lagrangian, Structure, Symmetries};
+use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
@@ -276,12 +276,21 @@ where
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
     ) -> (f64, OVector<f64, N>) {
+        if let Some(terms) = self.terms() {
+            return (
+                terms.value(t, q, v),
+                assembled_gradient(terms, t, q, v, Wrt::Position),
+            );
+        }
         N::gradient(&Action(self), t, q, v, Wrt::Position)
     }
 
     /// The momentum p = ∂L/∂q̇.
     #[inline]
     fn momentum(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OVector<f64, N> {
+        if let Some(terms) = self.terms() {
+            return assembled_gradient(terms, t, q, v, Wrt::Velocity);
+        }
         N::gradient(&Action(self), t, q, v, Wrt::Velocity).1
     }
 
@@ -293,6 +302,9 @@ where
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
     ) -> SecondDerivatives<N> {
+        if let Some(terms) = self.terms() {
+            return assembled_second_derivatives(terms, t, q, v);
+        }
         if N::try_to_usize().is_none_or(|n| n <= SCALAR_HESSIAN_UP_TO) {
             scalar_second_derivatives(self, t, q, v)
         } else {
@@ -313,12 +325,19 @@ where
     /// The mass matrix ∂²L/∂q̇².
     #[inline]
     fn mass_matrix(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> OMatrix<f64, N, N> {
+        if let Some(terms) = self.terms() {
+            return assembled_second_derivatives(terms, t, q, v).vv;
+        }
         N::hessian(&Action(self), t, q, v, Wrt::Velocity).2
     }
 
     /// The energy E = p·q̇ − L.
     #[inline]
     fn energy(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {
+        if let Some(terms) = self.terms() {
+            let p = assembled_gradient(terms, t, q, v, Wrt::Velocity);
+            return p.dot(v) - terms.value(t, q, v);
+        }
         let (value, p) = N::gradient(&Action(self), t, q, v, Wrt::Velocity);
         p.dot(v) - value
     }
@@ -336,26 +355,59 @@ where
         p: &OVector<f64, N>,
         guess: &OVector<f64, N>,
     ) -> Result<OVector<f64, N>, Error> {
+        // ∂L/∂q̇ and ∂²L/∂q̇² at v, and whether both are finite.
+        let legendre = |v: &OVector<f64, N>| {
+            let (momentum, mass) = match self.terms() {
+                Some(terms) => (
+                    assembled_gradient(terms, t, q, v, Wrt::Velocity),
+                    assembled_second_derivatives(terms, t, q, v).vv,
+                ),
+                None => {
+                    let (_, momentum, mass) = N::hessian(&Action(self), t, q, v, Wrt::Velocity);
+                    (momentum, mass)
+                }
+            };
+            let finite = momentum.iter().chain(mass.iter()).all(|x| x.is_finite());
+            (momentum, mass, finite)
+        };
+        // A guess where ∂L/∂q̇ is not finite (p itself beyond the light cone) is replaced by
+        // rest, q̇ = 0.
         let mut v = guess.clone();
+        let (mut momentum, mut mass, finite) = legendre(&v);
+        if !finite {
+            v.fill(0.0);
+            (momentum, mass, _) = legendre(&v);
+        }
         let mut last = f64::INFINITY;
         for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
-            let (_, momentum, mass) = N::hessian(&Action(self), t, q, &v, Wrt::Velocity);
-            let delta = solve_small(mass, p - momentum).ok_or(Error::LegendreMap {
+            let delta = solve_small(mass, p - &momentum).ok_or(Error::LegendreMap {
                 t,
                 iterations: iteration,
                 residual: f64::INFINITY,
             })?;
-            v += &delta;
             let size = delta.amax();
             if !size.is_finite() {
                 break;
             }
-            let scale = 1.0 + v.amax();
+            let scale = 1.0 + (&v + &delta).amax();
             // Converged: at round-off, or the increment stopped decreasing near it.
             if size <= f64::EPSILON * scale || (size >= last && size <= 1e-10 * scale) {
-                return Ok(v);
+                return Ok(v + delta);
             }
-            last = size;
+            // Otherwise the step is halved until ∂L/∂q̇ is finite again: a relativistic kinetic
+            // energy is defined only inside the light cone, and a guess such as p itself may
+            // lie outside.
+            let mut fraction = 1.0;
+            v = loop {
+                let trial = &v + &delta * fraction;
+                let (next_momentum, next_mass, finite) = legendre(&trial);
+                if finite || fraction < 1e-6 {
+                    (momentum, mass) = (next_momentum, next_mass);
+                    break trial;
+                }
+                fraction *= 0.5;
+            };
+            last = size * fraction;
         }
         Err(Error::LegendreMap {
             t,
@@ -453,6 +505,53 @@ where
 impl<L: Lagrangian<N> + ?Sized, N: Dimension> LagrangianExt<N> for L where
     DefaultAllocator: Allocator<N> + Allocator<N, N>
 {
+}
+
+/// ∂L/∂q or ∂L/∂q̇ of a sum of local terms, assembled term by term.
+fn assembled_gradient<N: Dimension>(
+    terms: &dyn TermSum<N>,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+    wrt: Wrt,
+) -> OVector<f64, N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    let mut out = OVector::zeros_generic(q.shape_generic().0, U1);
+    terms.gradient_into(t, q, v, wrt, &mut out);
+    out
+}
+
+/// L, its gradients and its Hessian blocks, dense, from a sum of local terms (the blocks'
+/// triplets added into n × n matrices).
+fn assembled_second_derivatives<N: Dimension>(
+    terms: &dyn TermSum<N>,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+) -> SecondDerivatives<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let n = q.shape_generic().0;
+    let mut blocks = [Vec::new(), Vec::new(), Vec::new()];
+    terms.hessian_triplets(t, q, v, &mut blocks);
+    let [qq, qv, vv] = blocks.map(|triplets| {
+        let mut block = OMatrix::zeros_generic(n, n);
+        for (i, j, value) in triplets {
+            block[(i, j)] += value;
+        }
+        block
+    });
+    SecondDerivatives {
+        value: terms.value(t, q, v),
+        q: assembled_gradient(terms, t, q, v, Wrt::Position),
+        v: assembled_gradient(terms, t, q, v, Wrt::Velocity),
+        qq,
+        qv,
+        vv,
+    }
 }
 
 /// The Euler–Lagrange acceleration at a point of any scalar type (dual numbers give its
@@ -818,17 +917,21 @@ mod tests {
         // Relativistic: q̇ = p/√(1 + p²) in closed form, several Newton iterations. The
         // guess 0.99 sign(p) lies beyond the root on the branch where p(q̇) is convex (concave
         // for p < 0), so Newton converges monotonically without leaving |q̇| < 1.
+        // Started at p itself or at rest, the first Newton steps leave |q̇| < 1 and are halved
+        // back inside.
         for p in [0.3f64, -1.7, 4.0] {
             let q = SVector::from([0.2]);
-            let guess = SVector::from([0.99 * p.signum()]);
-            let v = Relativistic
-                .velocity(0.0, &q, &SVector::from([p]), &guess)
-                .unwrap()[0];
             let expected = p / (1.0 + p * p).sqrt();
-            assert!(
-                (v - expected).abs() <= 2.0 * f64::EPSILON,
-                "{v} vs {expected}"
-            );
+            for guess in [0.99 * p.signum(), p, 0.0] {
+                let v = Relativistic
+                    .velocity(0.0, &q, &SVector::from([p]), &SVector::from([guess]))
+                    .unwrap()[0];
+                assert!(
+                    (v - expected).abs() <= 2.0 * f64::EPSILON,
+                    "guess {guess}: {v} vs {expected}"
+                );
+            }
+            let v = expected;
             let back = Relativistic.momentum(0.0, &q, &SVector::from([v]))[0];
             assert!(
                 (back - p).abs() <= 8.0 * f64::EPSILON * p.abs(),

@@ -55,9 +55,10 @@
 //! }
 //! ```
 
+use crate::dimension::{Dyn, Wrt};
 use crate::error::Error;
 use crate::model::derived::LagrangianExt;
-use crate::model::{Lagrangian, Structure};
+use crate::model::{Lagrangian, Structure, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::{Const, DVector, SVector};
 use num_dual::HyperDual64;
@@ -87,14 +88,14 @@ pub trait TermWidth {
         out: &mut DVector<f64>,
     );
 
-    /// The term's value ℓₑ(t, q_{I(e)}, q̇_{I(e)}).
-    fn value<L: LocalLagrangian<Width = Self> + ?Sized>(
+    /// The term's value ℓₑ(t, q_{I(e)}, q̇_{I(e)}), over any scalar.
+    fn value<L: LocalLagrangian<Width = Self> + ?Sized, D: Scalar>(
         model: &L,
         term: usize,
-        t: f64,
-        q: &DVector<f64>,
-        v: &DVector<f64>,
-    ) -> f64;
+        t: D,
+        q: &DVector<D>,
+        v: &DVector<D>,
+    ) -> D;
 
     /// The term's first derivatives ∂ℓ/∂q, ∂ℓ/∂q̇ at (t, q, q̇) (local coordinates), written
     /// to the first 2K entries of `out` in the layout of [`TermDerivatives`].
@@ -196,11 +197,11 @@ where
 
 /// The term's coordinates and velocities, gathered from the global vectors.
 #[inline]
-fn gather<const K: usize>(
+fn gather<D: Scalar, const K: usize>(
     indices: &[usize; K],
-    q: &DVector<f64>,
-    v: &DVector<f64>,
-) -> (SVector<f64, K>, SVector<f64, K>) {
+    q: &DVector<D>,
+    v: &DVector<D>,
+) -> (SVector<D, K>, SVector<D, K>) {
     let (q, v) = (q.as_slice(), v.as_slice());
     (
         SVector::from_fn(|i, _| q[indices[i]]),
@@ -238,13 +239,13 @@ impl<const K: usize> TermWidth for Const<K> {
     }
 
     #[inline]
-    fn value<L: LocalLagrangian<Width = Self> + ?Sized>(
+    fn value<L: LocalLagrangian<Width = Self> + ?Sized, D: Scalar>(
         model: &L,
         term: usize,
-        t: f64,
-        q: &DVector<f64>,
-        v: &DVector<f64>,
-    ) -> f64 {
+        t: D,
+        q: &DVector<D>,
+        v: &DVector<D>,
+    ) -> D {
         let (ql, vl) = gather(&model.indices(term), q, v);
         model.term(term, t, &ql, &vl)
     }
@@ -427,6 +428,111 @@ pub trait LocalLagrangianExt: LocalLagrangian {
 }
 
 impl<L: LocalLagrangian + ?Sized> LocalLagrangianExt for L {}
+
+/// A sum of local terms as a Lagrangian of run-time size, for the methods of ℝᴺ: L = Σₑ ℓₑ
+/// over any scalar, with its derivatives assembled term by term ([`Lagrangian::terms`]), so
+/// that every method of ℝᴺ runs on it — while the second implementations of
+/// [`crate::method::local`] (Störmer–Verlet, its compositions and SVI for 10⁵ coordinates and
+/// more) still take the bare model.
+///
+/// ```
+/// use svi::model::local::Terms;
+/// # use nalgebra::{Const, DVector, SVector};
+/// # use svi::model::local::LocalLagrangian;
+/// # use svi::{Integrator, Midpoint, Scalar, VariationalIntegrator};
+/// # struct Springs;
+/// # impl LocalLagrangian for Springs {
+/// #     type Width = Const<1>;
+/// #     fn dimension(&self) -> usize { 3 }
+/// #     fn term_count(&self) -> usize { 3 }
+/// #     fn indices(&self, e: usize) -> [usize; 1] { [e] }
+/// #     fn term<D: Scalar>(&self, _e: usize, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+/// #         (v[0] * v[0] - q[0] * q[0]) * 0.5
+/// #     }
+/// # }
+/// // Three independent unit oscillators, by the implicit midpoint rule.
+/// let integrator = Integrator::new(Terms(Springs), VariationalIntegrator::new(Midpoint));
+/// let (q, v) = (DVector::from_element(3, 1.0), DVector::zeros(3));
+/// let run = integrator.run_from_velocity(0.0, q, v, 0.01, 1.0, &mut ()).unwrap();
+/// assert!((run.last.q[2] - 1f64.cos()).abs() < 1e-4);
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Terms<L>(pub L);
+
+impl<L: LocalLagrangian> Lagrangian<Dyn> for Terms<L> {
+    const TIME_DEPENDENT: bool = L::TIME_DEPENDENT;
+    const STRUCTURE: Structure = L::STRUCTURE;
+
+    #[inline]
+    fn dimension(&self) -> usize {
+        self.0.dimension()
+    }
+
+    #[inline]
+    fn lagrangian<D: Scalar>(&self, t: D, q: &DVector<D>, v: &DVector<D>) -> D {
+        (0..self.0.term_count()).fold(D::from(0.0), |sum, e| {
+            sum + L::Width::value(&self.0, e, t, q, v)
+        })
+    }
+
+    #[inline]
+    fn terms(&self) -> Option<&dyn TermSum<Dyn>> {
+        Some(self)
+    }
+}
+
+impl<L: LocalLagrangian> TermSum<Dyn> for Terms<L> {
+    fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        self.0.value(t, q, v)
+    }
+
+    fn gradient_into(
+        &self,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        wrt: Wrt,
+        out: &mut DVector<f64>,
+    ) {
+        match wrt {
+            Wrt::Position => self.0.force_into(t, q, v, out),
+            Wrt::Velocity => self.0.momentum_into(t, q, v, out),
+        }
+    }
+
+    fn hessian_triplets(
+        &self,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        blocks: &mut [Vec<(usize, usize, f64)>; 3],
+    ) {
+        let k = L::Width::WIDTH;
+        let (mut ql, mut vl) = (vec![0.0; k], vec![0.0; k]);
+        let mut local = vec![0.0; 2 * k + 3 * k * k];
+        for e in 0..self.0.term_count() {
+            let indices = self.0.indices(e);
+            let indices = indices.as_ref();
+            for (a, &i) in indices.iter().enumerate() {
+                ql[a] = q[i];
+                vl[a] = v[i];
+            }
+            L::Width::second_derivatives(&self.0, e, t, &ql, &vl, &mut local);
+            let hessians = &local[2 * k..];
+            for (block, values) in blocks.iter_mut().zip(hessians.chunks_exact(k * k)) {
+                // Column-major K × K: entry (a, b) at a + K b.
+                for (b, &j) in indices.iter().enumerate() {
+                    for (a, &i) in indices.iter().enumerate() {
+                        let value = values[a + k * b];
+                        if value != 0.0 {
+                            block.push((i, j, value));
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
 
 /// Named parameters and defaults of a [`LocalLagrangian`] (as [`crate::Defaults`] for
 /// fixed-size models).

@@ -44,10 +44,43 @@ pub mod rigid_body;
 pub mod so3;
 pub mod text;
 
-use crate::dimension::Dimension;
+use crate::dimension::{Dimension, Wrt};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector, U1};
+
+/// The derivatives of a Lagrangian that is a sum of local terms, L = Σₑ ℓₑ, assembled term
+/// by term ([`crate::model::local`]): what [`Lagrangian::terms`] hands the integrators so
+/// that no derivative of L costs more than O(n) and the Hessian blocks keep their sparsity.
+pub trait TermSum<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// L(t, q, q̇).
+    fn value(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64;
+
+    /// ∂L/∂q (`Wrt::Position`) or p = ∂L/∂q̇ (`Wrt::Velocity`) at (t, q, q̇), written into
+    /// `out`.
+    fn gradient_into(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        wrt: Wrt,
+        out: &mut OVector<f64, N>,
+    );
+
+    /// The Hessian blocks ∂²L/∂q², ∂²L/∂q∂q̇ (row q, column q̇) and ∂²L/∂q̇² at (t, q, q̇) as
+    /// (row, column, value) triplets, appended to `blocks[0]`, `blocks[1]` and `blocks[2]`
+    /// (entries of one place add up).
+    fn hessian_triplets(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        blocks: &mut [Vec<(usize, usize, f64)>; 3],
+    );
+}
 
 /// A Lagrangian L(t, q, q̇) on ℝᴺ, written once, generic over the scalar type.
 ///
@@ -86,6 +119,16 @@ where
     /// model ([`crate::dimension::Dyn`]) returns its size.
     fn dimension(&self) -> usize {
         N::try_to_usize().unwrap_or(0)
+    }
+
+    /// L as a sum of local terms, when it is one: the integrators then take ∂L/∂q, ∂L/∂q̇ and
+    /// the Hessian blocks from [`TermSum`], assembled term by term in O(n), instead of
+    /// differentiating the whole L. `None` (the default) for every other Lagrangian; every
+    /// [`crate::model::local::LocalLagrangian`] answers `Some` (its blanket implementation of
+    /// `Lagrangian<Dyn>`).
+    #[inline]
+    fn terms(&self) -> Option<&dyn TermSum<N>> {
+        None
     }
 
     /// The value L(t, q, q̇).

@@ -1172,7 +1172,7 @@ pub(crate) mod tests {
         assert!(
             parser
                 .to_string()
-                .contains("unknown method 'rk4' (known: svi, svi-newton, sc, symplectic-euler,")
+                .contains("unknown method 'rk45' (known: svi, svi-newton, sc, symplectic-euler,")
         );
         let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
         let SceneError::Parse { parser, .. } = Scene::from_toml(text, "t").unwrap_err() else {
