@@ -296,7 +296,7 @@ pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, SceneError> {
             }
         }
     }
-    Ok(spec.visit_vector(Answering(request))??)
+    Ok(Answering(request).visit(spec.vector_method()?)?)
 }
 
 /// `svi stability` with the arguments `args`: [`execute`] on their method, request, figures
