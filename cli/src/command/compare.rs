@@ -257,11 +257,12 @@ pub fn execute_args(args: &CompareArgs) -> anyhow::Result<()> {
     outcome(outcomes, &comparison.methods)
 }
 
+/// Each method with its scene, ready to run.
+type Prepared = Vec<(MethodSpec, Scene)>;
+
 /// The scene of every method, checked (the shared flags, then the method's), and the picture's
 /// file created (a temporary until it is drawn). Every error is bad input.
-fn prepare(
-    args: &CompareArgs,
-) -> Result<(Vec<(MethodSpec, Scene)>, Option<OutputFile>), SceneError> {
+fn prepare(args: &CompareArgs) -> Result<(Prepared, Option<OutputFile>), SceneError> {
     let mut scene = Scene::load(&args.scene)?;
     let output = &scene.output;
     if output.trajectory.is_some() || output.output_times.is_some() {
