@@ -1510,6 +1510,7 @@ pub fn plot(
         y_label: y_label.clone(),
         x_log: true,
         y_log: true,
+        equal_scale: false,
         series: series(x),
     };
     render_svg(

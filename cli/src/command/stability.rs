@@ -119,6 +119,7 @@ pub fn plot(
             y_label: (*name).into(),
             x_log: false,
             y_log: false,
+            equal_scale: false,
             series: reports
                 .iter()
                 .map(|(label, report)| Series {

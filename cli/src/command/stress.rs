@@ -946,6 +946,7 @@ pub fn plot(records: &[StressRecord]) -> Result<String, PlotError> {
                 y_label: "max |E − E₀| per window".into(),
                 x_log: false,
                 y_log: true,
+                equal_scale: false,
                 series: vec![series],
             }),
         }
