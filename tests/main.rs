@@ -24,6 +24,7 @@ mod local;
 mod logh;
 mod multiscale;
 mod newton;
+mod pendulum_chain;
 mod pseudospectral;
 mod reparam;
 mod sem;

@@ -3,7 +3,7 @@
 //! - [`scene`]: what to simulate — the scene format (TOML), the built-in scenes, the
 //!   command-line overrides, and every check of a scene's input;
 //! - [`command`]: what `svi` does with it — `run` (the one run path for every space), `list`,
-//!   `bench`, `stability`, `stress`;
+//!   `bench`, `compare`, `stability`, `stress`;
 //! - [`report`]: what comes out — the one run summary, trajectory CSV and number format,
 //!   plots, the progress bar.
 //!

@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use svi_cli::command;
 use svi_cli::command::bench::BenchArgs;
+use svi_cli::command::compare::CompareArgs;
 use svi_cli::command::ensemble::EnsembleArgs;
 use svi_cli::command::scale::ScaleArgs;
 use svi_cli::command::stability::StabilityArgs;
@@ -38,6 +39,10 @@ enum Command {
     List,
     /// Work–precision sweep: run time and evaluations against error, per method.
     Bench(BenchArgs),
+    /// Run a scene once per method (the same step, horizon and initial state): steps, wall
+    /// time, energy and momentum errors per method, and a picture of the trajectories and
+    /// energy errors (exit status 1 if a method failed; every method is still reported).
+    Compare(CompareArgs),
     /// Linear stability on the harmonic oscillator: S(z), regions, plots.
     Stability(StabilityArgs),
     /// Stress tests: largest stable step, failure mode and long-time energy drift per method.
@@ -157,6 +162,7 @@ fn main() -> ExitCode {
             Some((name, Some(scene))) => command::bench_spectral::execute(name, scene, &args),
             _ => command::bench::execute_args(&args),
         },
+        Command::Compare(args) => command::compare::execute_args(&args),
         Command::Stability(args) => command::stability::execute_args(&args),
         Command::Stress(args) => command::stress::execute_args(&args),
         Command::Ensemble(args) => command::ensemble::execute_args(&args),

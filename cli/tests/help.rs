@@ -5,11 +5,12 @@ use crate::common;
 use common::*;
 
 /// The subcommands of `svi`, and the top level.
-const COMMANDS: [&[&str]; 8] = [
+const COMMANDS: [&[&str]; 9] = [
     &[],
     &["run"],
     &["list"],
     &["bench"],
+    &["compare"],
     &["stability"],
     &["stress"],
     &["ensemble"],
@@ -68,6 +69,7 @@ fn every_method_option_lists_the_registry() {
         (&["run"][..], "--method"),
         (&["stability"], "--method"),
         (&["bench"], "--methods"),
+        (&["compare"], "--methods"),
         (&["stress"], "--methods"),
     ] {
         let text = help(args, "--help");

@@ -11,6 +11,7 @@ mod hostile_cases;
 mod hostile_support;
 
 mod cli;
+mod compare;
 mod ensemble;
 mod field;
 mod help;

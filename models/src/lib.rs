@@ -13,6 +13,7 @@
 //! | `damped-oscillator` | [`DampedOscillator`] | 1 | — | — | yes |
 //! | `damped-pendulum` | [`DampedPendulum`] | 1 | — | — | only undamped (c = 0) |
 //! | `driven-oscillator` | [`DrivenOscillator`] | 1 | — | — | yes |
+//! | `nbody` | [`NBody`] | 18 (d per body, at run time: [`svi::Dyn`]) | translations, rotations | — | — |
 //!
 //! Chains and lattices have their dimension n at run time (a parameter, `n`): each is a sum
 //! of local terms ([`svi::model::local::LocalLagrangian`]) on runtime-sized ℝⁿ, integrated by
@@ -38,8 +39,8 @@
 //!
 //! A model chosen by name at run time is handed, as its concrete type, to a
 //! [`ModelVisitor`] by [`visit_model`]: no trait objects, so everything stays monomorphised
-//! (the model dimension `N` is a type: `U1`, `U2`, … for the zoo, [`svi::Dyn`] for text
-//! models).
+//! (the model dimension `N` is a type: `U1`, `U2`, … for most of the zoo, [`svi::Dyn`] for
+//! `nbody`, sized by its bodies, and for text models).
 //!
 //! ```
 //! use nalgebra::DefaultAllocator;
@@ -231,6 +232,7 @@ vector_zoo!(
     DampedOscillator,
     DampedPendulum,
     DrivenOscillator,
+    NBody,
 );
 
 /// Hand a text model to the visitor as a [`TextLagrangian`] of run-time dimension ([`Dyn`]:

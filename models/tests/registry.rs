@@ -42,7 +42,8 @@ fn every_registered_name_visits_the_model_of_that_name() {
             "double-pendulum",
             "damped-oscillator",
             "damped-pendulum",
-            "driven-oscillator"
+            "driven-oscillator",
+            "nbody"
         ]
     );
     for &name in MODEL_NAMES {
@@ -62,7 +63,7 @@ fn an_unknown_name_is_an_error_listing_the_known_ones() {
     assert_eq!(
         error.to_string(),
         "unknown model 'pendulm' (known: oscillator, pendulum, spring-pendulum, kepler, \
-         double-pendulum, damped-oscillator, damped-pendulum, driven-oscillator)"
+         double-pendulum, damped-oscillator, damped-pendulum, driven-oscillator, nbody)"
     );
     assert!(visit_model("", Name).is_err());
     assert!(visit_model("Kepler", Name).is_err());
@@ -172,7 +173,7 @@ fn every_model_honours_the_defaults_contract() {
         .iter()
         .map(|name| visit_model(name, CheckContract).unwrap())
         .collect();
-    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4]);
+    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4, 1]);
 }
 
 #[test]

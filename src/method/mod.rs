@@ -10,7 +10,8 @@
 //! blanket implementation, and the Lie-group integrator [`lie_svi::LieSvi`] implements
 //! [`Step`] on [`SO3`] directly.
 //!
-//! Families, one folder or file each: [`variational`] (SVI and the classic variational
+//! A method chosen at run time is one value, [`any::AnyMethod`]. Families, one folder or file
+//! each: [`variational`] (SVI and the classic variational
 //! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
 //! (the multiscale variational integrator for stiff oscillations), [`reference`] (explicit
 //! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references),
@@ -18,6 +19,7 @@
 //! Störmer–Verlet on runtime-dimension models: chains, lattices, up to 10⁵ degrees of freedom
 //! and beyond).
 
+pub mod any;
 pub mod collocation;
 pub mod lie_svi;
 pub mod local;
@@ -149,9 +151,9 @@ where
         None
     }
 
-    /// Whether the method is Störmer–Verlet or a composition of it
-    /// ([`Method::verlet_fractions`] is `Some`). A constant, so that the
-    /// logarithmic-Hamiltonian splitting is compiled only for these methods.
+    /// `false` promises that [`Method::verlet_fractions`] is always `None` (the method is not
+    /// Störmer–Verlet or a composition of it): the logarithmic-Hamiltonian splitting is then
+    /// not compiled for the method. `true` is always correct.
     const COMPOSES_VERLET: bool = false;
 
     /// The step fractions γ_1, …, γ_s if the method is a symmetric composition of

@@ -8,11 +8,12 @@
 //! - `name:P` — P Chebyshev–Gauss–Lobatto points (`svi:7`, `sc:9`, `lie-svi-reduced:3`);
 //! - `name:P/M` — and M Gauss–Legendre points (`svi:7/6`, `lie-svi:3/3`).
 //!
-//! A spec becomes a method in one place: [`MethodSpec::visit_vector`] hands a method for
-//! models on ℝᴺ ([`crate::Lagrangian`]) to a [`VectorMethodVisitor`] as its concrete type,
-//! and [`MethodSpec::lie_svi`] builds the rigid-body method on SO(3)
+//! A spec becomes a method in one place: [`MethodSpec::vector_method`] builds a method for
+//! models on ℝᴺ ([`crate::Lagrangian`]) as an [`AnyMethod`] ([`MethodSpec::visit_vector`]
+//! hands it on as its own type), and [`MethodSpec::lie_svi`] builds the rigid-body method on SO(3)
 //! ([`crate::lie_group::RigidBodyLagrangian`]). Adding a method touches its own file, one
-//! entry of [`METHODS`] and one arm of one of those two functions.
+//! entry of [`METHODS`], one arm of one of those two functions and, on ℝᴺ, one variant of
+//! [`AnyMethod`].
 //!
 //! ```
 //! use svi::MethodSpec;
@@ -29,6 +30,7 @@ use std::str::FromStr;
 
 use crate::dimension::Dimension;
 use crate::error::Error;
+use crate::method::any::AnyMethod;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::local::LocalMethod;
@@ -482,18 +484,11 @@ impl MethodSpec {
         ))
     }
 
-    /// Build the method for models on ℝᴺ and hand it to `visitor`: the one place where a
-    /// method name becomes a type (no trait objects). An error names the method if it
-    /// integrates rigid bodies.
-    pub fn visit_vector<V: VectorMethodVisitor<N>, N: Dimension>(
-        &self,
-        visitor: V,
-    ) -> Result<V::Output, Error>
-    where
-        DefaultAllocator: Allocator<N> + Allocator<N, N>,
-    {
+    /// Build the method for models on ℝᴺ: the one place where a method name becomes a
+    /// method. An error names the method if it integrates rigid bodies.
+    pub fn vector_method(&self) -> Result<AnyMethod, Error> {
         if let Some(scheme) = Scheme::named(self.entry.name) {
-            return Ok(visitor.visit(Composition::new(scheme)));
+            return Ok(Composition::new(scheme).into());
         }
         let points = self.points_in_use().unwrap_or_default();
         Ok(match self.entry.name {
@@ -505,20 +500,18 @@ impl MethodSpec {
                 if self.entry.name == "svi-newton" {
                     svi = svi.with_solver(Solver::Newton);
                 }
-                visitor.visit(svi)
+                svi.into()
             }
-            "sc" => visitor.visit(SpectralCollocation::new(points)),
-            "symplectic-euler" => visitor.visit(VariationalIntegrator::new(SymplecticEuler)),
-            "symplectic-euler-adjoint" => {
-                visitor.visit(VariationalIntegrator::new(AdjointSymplecticEuler))
-            }
-            "midpoint" => visitor.visit(VariationalIntegrator::new(Midpoint)),
-            "verlet" => visitor.visit(StormerVerlet::default()),
-            "trapezoid" => visitor.visit(VariationalIntegrator::new(Trapezoid)),
-            "multiscale" => visitor.visit(Multiscale::new(points)),
-            "explicit-euler" => visitor.visit(ExplicitEuler),
-            "implicit-euler" => visitor.visit(ImplicitEuler::default()),
-            "rk4" => visitor.visit(RungeKutta4),
+            "sc" => SpectralCollocation::new(points).into(),
+            "symplectic-euler" => VariationalIntegrator::new(SymplecticEuler).into(),
+            "symplectic-euler-adjoint" => VariationalIntegrator::new(AdjointSymplecticEuler).into(),
+            "midpoint" => VariationalIntegrator::new(Midpoint).into(),
+            "verlet" => StormerVerlet::default().into(),
+            "trapezoid" => VariationalIntegrator::new(Trapezoid).into(),
+            "multiscale" => Multiscale::new(points).into(),
+            "explicit-euler" => ExplicitEuler.into(),
+            "implicit-euler" => ImplicitEuler::default().into(),
+            "rk4" => RungeKutta4.into(),
             _ => {
                 self.check_space(SpaceKind::Vector)?;
                 return Err(Error::invalid(
@@ -527,6 +520,18 @@ impl MethodSpec {
                 ));
             }
         })
+    }
+
+    /// Build the method for models on ℝᴺ ([`MethodSpec::vector_method`]) and hand it to
+    /// `visitor` as its own type.
+    pub fn visit_vector<V: VectorMethodVisitor<N>, N: Dimension>(
+        &self,
+        visitor: V,
+    ) -> Result<V::Output, Error>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        Ok(self.vector_method()?.visit(visitor))
     }
 
     /// Build the method for a runtime-dimension model (a sum of local terms,
@@ -924,17 +929,16 @@ mod tests {
         }
     }
 
-    /// Runs one step of the visited method on [`Oscillators`].
+    /// Runs one step of the visited method on [`Oscillators`]: the state after it.
     struct OneStep;
     impl VectorMethodVisitor<U2> for OneStep {
-        type Output = Result<(), Error>;
-        fn visit<M: Method<U2> + Clone>(self, method: M) -> Result<(), Error> {
+        type Output = Result<crate::method::State<U2>, Error>;
+        fn visit<M: Method<U2> + Clone>(self, method: M) -> Self::Output {
             // The constants that decide what is compiled for the method tell the truth.
             let name = method.info().name;
             assert!(!M::WITHOUT_POINTS || method.points().is_none(), "{name}");
-            assert_eq!(
-                M::COMPOSES_VERLET,
-                method.verlet_fractions().is_some(),
+            assert!(
+                M::COMPOSES_VERLET || method.verlet_fractions().is_none(),
                 "{name}"
             );
             // The multiscale method needs steps of about a fast period or more (ω = 1 here).
@@ -952,7 +956,7 @@ mod tests {
                     h,
                     &mut (),
                 )
-                .map(|_| ())
+                .map(|run| run.state)
         }
     }
 
@@ -971,9 +975,15 @@ mod tests {
             let spec = entry.spec();
             match entry.space {
                 SpaceKind::Vector => {
-                    spec.visit_vector(OneStep)
+                    let own = spec
+                        .visit_vector(OneStep)
                         .unwrap_or_else(|error| panic!("{}: {error}", entry.name))
                         .unwrap_or_else(|error| panic!("{}: {error}", entry.name));
+                    // The method as an `AnyMethod` takes the very same step.
+                    let any = OneStep
+                        .visit(spec.vector_method().unwrap())
+                        .unwrap_or_else(|error| panic!("{}: {error}", entry.name));
+                    assert_eq!(any, own, "{}", entry.name);
                     let error = spec.lie_svi().unwrap_err().to_string();
                     assert!(error.contains(entry.name), "{error}");
                 }

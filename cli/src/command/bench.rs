@@ -726,7 +726,8 @@ impl ModelVisitor for Bench<'_> {
             let mut records = Vec::new();
             let swept = match (Mode::of(spec), spec) {
                 (Some((method, mode)), _) => method
-                    .visit_vector(sweep(mode))
+                    .vector_method()
+                    .map(|any| sweep(mode).visit(any))
                     .map_err(SceneError::from)
                     .and_then(|swept| swept.map(|points| records.extend(points))),
                 (None, BenchMethod::Molly) => {
@@ -1509,6 +1510,7 @@ pub fn plot(
         y_label: y_label.clone(),
         x_log: true,
         y_log: true,
+        equal_scale: false,
         series: series(x),
     };
     render_svg(

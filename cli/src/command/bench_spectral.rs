@@ -377,6 +377,7 @@ fn plot(records: &[SpectralRecord], title: &str) -> Result<String, crate::report
             y_label: "final error max|ψ − ψ_exact|".into(),
             x_log: true,
             y_log: true,
+            equal_scale: false,
             series,
         }
     };

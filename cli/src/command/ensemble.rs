@@ -627,6 +627,7 @@ fn draw(
             y_label: column.into(),
             x_log: false,
             y_log: positive && high > 100.0 * low,
+            equal_scale: false,
             series: vec![Series {
                 label: column.into(),
                 points,

@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod bench_spectral;
+pub mod compare;
 pub mod ensemble;
 pub mod field;
 pub mod list;

@@ -353,6 +353,7 @@ pub fn execute_args(args: &ScaleArgs) -> anyhow::Result<()> {
         y_label: "seconds per step".into(),
         x_log: true,
         y_log: true,
+        equal_scale: false,
         series,
     };
     dir.write("scale.csv", csv.as_bytes())

@@ -119,6 +119,7 @@ pub fn plot(
             y_label: (*name).into(),
             x_log: false,
             y_log: false,
+            equal_scale: false,
             series: reports
                 .iter()
                 .map(|(label, report)| Series {
@@ -295,7 +296,7 @@ pub fn run(spec: MethodSpec, request: &Request) -> Result<Answer, SceneError> {
             }
         }
     }
-    Ok(spec.visit_vector(Answering(request))??)
+    Ok(Answering(request).visit(spec.vector_method()?)?)
 }
 
 /// `svi stability` with the arguments `args`: [`execute`] on their method, request, figures

@@ -453,12 +453,13 @@ impl ModelVisitor for CaseRunner<'_> {
             let label = spec.to_string();
             let start = Instant::now();
             let record = match (Mode::of(spec), spec) {
-                (Some((method, mode)), _) => method.visit_vector(MethodRunner {
+                (Some((method, mode)), _) => MethodRunner {
                     model: &model,
                     setup: &setup,
                     label: &label,
                     mode,
-                })??,
+                }
+                .visit(method.vector_method()?)?,
                 (None, BenchMethod::Dop853) => StressRecord {
                     scene: setup.scene.into(),
                     method: label.clone(),
@@ -945,6 +946,7 @@ pub fn plot(records: &[StressRecord]) -> Result<String, PlotError> {
                 y_label: "max |E − E₀| per window".into(),
                 x_log: false,
                 y_log: true,
+                equal_scale: false,
                 series: vec![series],
             }),
         }

@@ -28,6 +28,9 @@ pub struct Panel {
     pub x_log: bool,
     /// Logarithmic vertical axis.
     pub y_log: bool,
+    /// One unit is as long on both axes (orbits in a plane keep their shape); linear axes
+    /// only.
+    pub equal_scale: bool,
     /// The curves.
     pub series: Vec<Series>,
 }
@@ -99,16 +102,29 @@ pub fn write_svg(path: &Path, panels: &[Panel], width: u32, height: u32) -> Resu
 /// Draw `panels` side by side as the text of an SVG picture of `width` × `height` pixels per
 /// panel.
 pub fn render_svg(panels: &[Panel], width: u32, height: u32) -> Result<String, PlotError> {
+    render_svg_grid(panels, panels.len(), width, height)
+}
+
+/// Draw `panels` as the text of an SVG picture of `width` × `height` pixels per panel, in
+/// rows of `columns` panels (the last row filled from the left).
+pub fn render_svg_grid(
+    panels: &[Panel],
+    columns: usize,
+    width: u32,
+    height: u32,
+) -> Result<String, PlotError> {
     let error = |reason: String| PlotError {
         path: "the picture".into(),
         reason,
     };
-    let count = panels.len().max(1) as u32;
+    let columns = columns.clamp(1, panels.len().max(1));
+    let rows = panels.len().div_ceil(columns).max(1);
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (width * count, height)).into_drawing_area();
+        let size = (width * columns as u32, height * rows as u32);
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         root.fill(&WHITE).map_err(|e| error(e.to_string()))?;
-        let areas = root.split_evenly((1, count as usize));
+        let areas = root.split_evenly((rows, columns));
         for (panel, area) in panels.iter().zip(areas.iter()) {
             draw_panel(panel, area).map_err(error)?;
         }
@@ -185,6 +201,7 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
             .map_or(String::new(), |names| names.join(", ")),
         x_log: false,
         y_log: false,
+        equal_scale: false,
         series,
     };
     write_svg(svg, &[panel], 900, 560)
@@ -300,19 +317,49 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
     write_picture(svg, &picture)
 }
 
+/// A panel's margin, in pixels.
+const MARGIN: u32 = 12;
+/// The height of the horizontal axis' labels, in pixels.
+const X_LABELS: u32 = 45;
+/// The width of the vertical axis' labels, in pixels.
+const Y_LABELS: u32 = 70;
+/// About the height of a panel's caption (18-pixel text), in pixels.
+const CAPTION: u32 = 28;
+
+/// The ranges `x` and `y` widened about their midpoints so that one unit takes as many of
+/// the `pixels` (width, height) of the plotting area on both axes (within ±`f64::MAX / 2`,
+/// as [`range`]).
+fn equal_scale(x: (f64, f64), y: (f64, f64), pixels: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+    let per_pixel = ((x.1 - x.0) / pixels.0).max((y.1 - y.0) / pixels.1);
+    let widen = |(low, high): (f64, f64), pixels: f64| {
+        let (mid, half) = (low / 2.0 + high / 2.0, per_pixel * pixels / 2.0);
+        let limit = f64::MAX / 2.0;
+        ((mid - half).max(-limit), (mid + half).min(limit))
+    };
+    (widen(x, pixels.0), widen(y, pixels.1))
+}
+
 fn draw_panel(
     panel: &Panel,
     area: &DrawingArea<SVGBackend, plotters::coord::Shift>,
 ) -> Result<(), String> {
     let points = || panel.series.iter().flat_map(|s| s.points.iter());
-    let (x0, x1) = range(points().map(|p| p.0), panel.x_log);
-    let (y0, y1) = range(points().map(|p| p.1), panel.y_log);
+    let (mut x0, mut x1) = range(points().map(|p| p.0), panel.x_log);
+    let (mut y0, mut y1) = range(points().map(|p| p.1), panel.y_log);
+    if panel.equal_scale && !panel.x_log && !panel.y_log {
+        let (width, height) = area.dim_in_pixel();
+        let pixels = (
+            f64::from(width.saturating_sub(MARGIN * 2 + Y_LABELS)).max(1.0),
+            f64::from(height.saturating_sub(MARGIN * 2 + X_LABELS + CAPTION)).max(1.0),
+        );
+        ((x0, x1), (y0, y1)) = equal_scale((x0, x1), (y0, y1), pixels);
+    }
     let mut builder = ChartBuilder::on(area);
     builder
         .caption(&panel.title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(70);
+        .margin(MARGIN)
+        .x_label_area_size(X_LABELS)
+        .y_label_area_size(Y_LABELS);
     macro_rules! draw {
         ($x:expr, $y:expr) => {{
             let mut chart = builder
@@ -406,6 +453,7 @@ mod tests {
                     y_label: "y".into(),
                     x_log,
                     y_log,
+                    equal_scale: false,
                     series: vec![Series {
                         label: "s".into(),
                         points: points.clone(),
@@ -427,6 +475,7 @@ mod tests {
             y_label: "y".into(),
             x_log: log,
             y_log: log,
+            equal_scale: false,
             series: vec![
                 Series {
                     label: "first".into(),

@@ -61,6 +61,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "oscillator-beyond-stability",
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
     ),
+    (
+        "outer-solar-system",
+        include_str!("../../scenes/outer-solar-system.toml"),
+    ),
     ("fput", include_str!("../../scenes/fput.toml")),
     ("fput-text", include_str!("../../scenes/fput-text.toml")),
     ("fput-stiff", include_str!("../../scenes/fput-stiff.toml")),

@@ -1014,6 +1014,7 @@ pub(crate) mod tests {
                 "kepler-recovery",
                 "double-pendulum-chaotic",
                 "oscillator-beyond-stability",
+                "outer-solar-system",
                 "fput",
                 "fput-text",
                 "fput-stiff",
@@ -1043,6 +1044,9 @@ pub(crate) mod tests {
             if MODEL_NAMES.contains(&name) || LOCAL_MODEL_NAMES.contains(&name) {
                 assert_eq!(scene.model, name);
                 assert_eq!(scene.method.name, Some(method("svi")));
+            } else if name == "outer-solar-system" {
+                // Named after the bodies HLW integrate.
+                assert_eq!(scene.model, "nbody");
             } else {
                 // The stress scenes are named after their model.
                 assert!(name.contains(scene.model_name()), "{name}");
