@@ -13,7 +13,9 @@ use svi::method::registry::{Entry, METHODS, SpaceKind, VectorMethodVisitor};
 use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::model::text::{TextLagrangian, TextModel, TextSpec};
 use svi::verify::observed_order;
-use svi::{Defaults, Dimension, Dyn, Integrator, Lagrangian, Method, Scalar, Structure};
+use svi::{
+    Defaults, Dimension, Dyn, Integrator, Lagrangian, Method, MethodSpec, Scalar, Structure,
+};
 use svi_models::{Fput, Kepler, RelativisticChain};
 
 /// Kepler written as a run-time-size model: L = |q̇|²/2 + 1/|q| on ℝⁿ with n = 2 chosen when
@@ -85,6 +87,19 @@ where
     }
 }
 
+/// `visitor` with `spec`'s method as an [`svi::method::any::AnyMethod`], as the command line
+/// runs it: the stepping loop is compiled once per model, not per model and method (that
+/// both take the same steps is `svi`'s registry test).
+fn visit<V: VectorMethodVisitor<N>, N: Dimension>(
+    spec: &MethodSpec,
+    visitor: V,
+) -> Result<V::Output, svi::Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    Ok(visitor.visit(spec.vector_method()?))
+}
+
 fn vector_methods() -> impl Iterator<Item = &'static Entry> {
     METHODS
         .iter()
@@ -99,27 +114,36 @@ fn every_method_runs_kepler_alike_compiled_at_run_time_size_and_as_text() {
         let (q, v, h, steps) = (q.clone(), v.clone(), 0.01, 100);
         let spec = entry.spec();
         match which {
-            0 => spec.visit_vector::<_, U2>(Run {
-                model: Kepler::default(),
-                q,
-                v,
-                h,
-                steps,
-            }),
-            1 => spec.visit_vector::<_, Dyn>(Run {
-                model: KeplerDyn { n: 2 },
-                q,
-                v,
-                h,
-                steps,
-            }),
-            _ => spec.visit_vector::<_, Dyn>(Run {
-                model: text("0.5*(vx^2 + vy^2) + 1/sqrt(x^2 + y^2)", &["x", "y"]),
-                q,
-                v,
-                h,
-                steps,
-            }),
+            0 => visit::<_, U2>(
+                &spec,
+                Run {
+                    model: Kepler::default(),
+                    q,
+                    v,
+                    h,
+                    steps,
+                },
+            ),
+            1 => visit::<_, Dyn>(
+                &spec,
+                Run {
+                    model: KeplerDyn { n: 2 },
+                    q,
+                    v,
+                    h,
+                    steps,
+                },
+            ),
+            _ => visit::<_, Dyn>(
+                &spec,
+                Run {
+                    model: text("0.5*(vx^2 + vy^2) + 1/sqrt(x^2 + y^2)", &["x", "y"]),
+                    q,
+                    v,
+                    h,
+                    steps,
+                },
+            ),
         }
         .unwrap()
     };
@@ -157,16 +181,18 @@ fn every_method_reaches_its_registry_order_on_a_run_time_size_text_model() {
         let spec = entry.spec();
         let order = spec.info().unwrap().order;
         let error = |h: f64| {
-            let end = spec
-                .visit_vector::<_, Dyn>(Run {
+            let end = visit::<_, Dyn>(
+                &spec,
+                Run {
                     model: model(),
                     q: vec![1.0],
                     v: vec![0.0],
                     h,
                     steps: (2.0 / h).round() as usize,
-                })
-                .unwrap()
-                .unwrap();
+                },
+            )
+            .unwrap()
+            .unwrap();
             (end[0] - 2f64.cos()).abs()
         };
         // Halve the step from one step over [0, 2] until the error is below 1e-5 (1e-3 for
@@ -215,16 +241,18 @@ fn a_dense_method_refuses_a_model_too_large_for_it() {
         let spec = svi::method::registry::find(entry).unwrap().spec();
         let mut q = vec![0.0; n];
         q[0] = 1.0;
-        let error = spec
-            .visit_vector::<_, Dyn>(Run {
+        let error = visit::<_, Dyn>(
+            &spec,
+            Run {
                 model: KeplerDyn { n },
                 q,
                 v: vec![0.0; n],
                 h: 0.1,
                 steps: 1,
-            })
-            .unwrap()
-            .unwrap_err();
+            },
+        )
+        .unwrap()
+        .unwrap_err();
         assert!(
             error.contains(entry)
                 && error.contains(&format!("{n} coordinates"))
@@ -272,7 +300,7 @@ mod outer_solar_system {
             }
         }
         let spec = svi::method::registry::find(method).unwrap().spec();
-        spec.visit_vector::<_, Dyn>(Orbit { h, t_end }).unwrap()
+        visit::<_, Dyn>(&spec, Orbit { h, t_end }).unwrap()
     }
 
     /// Jupiter's distance from the Sun.
@@ -351,20 +379,26 @@ mod outer_solar_system {
             let run = |which: usize| {
                 let (q, v) = (q.clone(), v.clone());
                 match which {
-                    0 => spec.visit_vector::<_, Dyn>(Run {
-                        model: NBody::default(),
-                        q,
-                        v,
-                        h,
-                        steps,
-                    }),
-                    _ => spec.visit_vector::<_, Dyn>(Run {
-                        model: as_text(&model),
-                        q,
-                        v,
-                        h,
-                        steps,
-                    }),
+                    0 => visit::<_, Dyn>(
+                        &spec,
+                        Run {
+                            model: NBody::default(),
+                            q,
+                            v,
+                            h,
+                            steps,
+                        },
+                    ),
+                    _ => visit::<_, Dyn>(
+                        &spec,
+                        Run {
+                            model: as_text(&model),
+                            q,
+                            v,
+                            h,
+                            steps,
+                        },
+                    ),
                 }
                 .unwrap()
                 .unwrap()
@@ -409,24 +443,28 @@ fn assert_terms_run_as_the_whole<L: LocalLagrangian + LocalDefaults + Clone>(mod
     let (h, steps) = (model.default_step(), 40);
     for entry in vector_methods() {
         let spec = entry.spec();
-        let terms = spec
-            .visit_vector::<_, Dyn>(Run {
+        let terms = visit::<_, Dyn>(
+            &spec,
+            Run {
                 model: Terms(model.clone()),
                 q: q.clone(),
                 v: v.clone(),
                 h,
                 steps,
-            })
-            .unwrap();
-        let whole = spec
-            .visit_vector::<_, Dyn>(Run {
+            },
+        )
+        .unwrap();
+        let whole = visit::<_, Dyn>(
+            &spec,
+            Run {
                 model: Whole(Terms(model.clone())),
                 q: q.clone(),
                 v: v.clone(),
                 h,
                 steps,
-            })
-            .unwrap();
+            },
+        )
+        .unwrap();
         match (terms, whole) {
             (Ok(a), Ok(b)) => {
                 let gap = a

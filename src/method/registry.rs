@@ -346,7 +346,7 @@ where
 }
 
 /// Receives a method for runtime-dimension models ([`crate::model::local::LocalLagrangian`])
-/// as its concrete type (see [`MethodSpec::visit_local`]).
+/// ([`MethodSpec::local_method`]).
 pub trait LocalMethodVisitor {
     /// What the visit returns.
     type Output;
@@ -535,36 +535,25 @@ impl MethodSpec {
     }
 
     /// Build the method for a runtime-dimension model (a sum of local terms,
-    /// [`crate::model::local::LocalLagrangian`]) and hand it to `visitor` as its concrete type:
-    /// `svi` (the fixed point for constant mass, else sparse Newton), `svi-newton` (sparse
-    /// Newton always), `verlet` and its compositions (constant mass). The other methods of ℝᴺ run on
-    /// fixed-size models only, and asking for one is an error that names it.
-    pub fn visit_local<V: LocalMethodVisitor>(&self, visitor: V) -> Result<V::Output, Error> {
-        self.check_space(SpaceKind::Vector)?;
-        if let Some(scheme) = Scheme::named(self.entry.name) {
-            return Ok(visitor.visit(Composition::new(scheme)));
+    /// [`crate::model::local::LocalLagrangian`]), as an [`AnyMethod`] that is a
+    /// [`LocalMethod`]: `svi` (the fixed point for constant mass, else sparse Newton),
+    /// `svi-newton` (sparse Newton always), `verlet` and its compositions (constant mass). The
+    /// other methods of ℝᴺ run on fixed-size models only, and asking for one is an error that
+    /// names it.
+    pub fn local_method(&self) -> Result<AnyMethod, Error> {
+        let method = self.vector_method()?;
+        if method.is_local() {
+            return Ok(method);
         }
-        match self.entry.name {
-            "svi" | "svi-newton" => {
-                let mut svi = Svi::new(self.points_in_use().unwrap_or_default());
-                if let Some(quadrature) = self.quadrature {
-                    svi = svi.with_quadrature(quadrature);
-                }
-                if self.entry.name == "svi-newton" {
-                    svi = svi.with_solver(Solver::Newton);
-                }
-                Ok(visitor.visit(svi))
-            }
-            "verlet" => Ok(visitor.visit(StormerVerlet::default())),
-            name => Err(Error::invalid(
-                "method",
-                format!(
-                    "'{self}' runs on fixed-size models only; runtime-dimension models \
-                     (chains, lattices) take svi, svi-newton, verlet, yoshida4, kahan-li6 or \
-                     kahan-li8 (not {name})"
-                ),
-            )),
-        }
+        Err(Error::invalid(
+            "method",
+            format!(
+                "'{self}' runs on fixed-size models only; runtime-dimension models \
+                 (chains, lattices) take svi, svi-newton, verlet, yoshida4, kahan-li6 or \
+                 kahan-li8 (not {})",
+                self.entry.name
+            ),
+        ))
     }
 
     /// Build the rigid-body method on SO(3). An error names the method if it integrates
@@ -1077,20 +1066,24 @@ mod tests {
         fn compare<L: Lagrangian<U2>>(entry: &'static Entry, model: fn() -> L, must_run: bool) {
             let spec = entry.spec();
             let (q, y) = ([0.3, -0.2], [0.1, 0.4]);
-            let fixed = spec
-                .visit_vector::<_, U2>(Trace {
+            // As `AnyMethod`: the stepping loop compiled once per model, not per method.
+            let method = spec.vector_method().unwrap();
+            let fixed = VectorMethodVisitor::<U2>::visit(
+                Trace {
                     model: model(),
                     q,
                     y,
-                })
-                .unwrap();
-            let run_time = spec
-                .visit_vector::<_, Dyn>(Trace {
+                },
+                method.clone(),
+            );
+            let run_time = VectorMethodVisitor::<Dyn>::visit(
+                Trace {
                     model: AsDyn::<_, U2>::new(model()),
                     q,
                     y,
-                })
-                .unwrap();
+                },
+                method,
+            );
             match (fixed, run_time) {
                 (Ok(a), Ok(b)) => {
                     assert_eq!(a.len(), b.len(), "{}", entry.name);

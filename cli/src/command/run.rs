@@ -501,7 +501,7 @@ impl LocalModelVisitor for SceneRun<'_> {
             quadrature: spec.quadrature_in_use(),
         };
         let plan = self.plan(resolved, method);
-        spec.visit_local(LocalRun { model, plan })?
+        LocalRun { model, plan }.visit(spec.local_method()?)
     }
 }
 

@@ -359,17 +359,11 @@ impl Scene {
 
     /// The options a runtime-dimension scene cannot use: a method other than svi, svi-newton
     /// or verlet
-    /// (the library's [`MethodSpec::visit_local`] decides, naming the method), degree
+    /// (the library's [`MethodSpec::local_method`] decides, naming the method), degree
     /// adaptivity (its methods have a fixed degree), and the diagnostics it has nothing for
     /// (momentum, solution).
     fn check_local(&self, spec: MethodSpec) -> Result<(), SceneError> {
-        /// Accepts any method the library builds for runtime-dimension models.
-        struct Accepts;
-        impl registry::LocalMethodVisitor for Accepts {
-            type Output = ();
-            fn visit<M: svi::method::local::LocalMethod + Clone>(self, _: M) {}
-        }
-        spec.visit_local(Accepts)?;
+        spec.local_method()?;
         if self.run.adapt == Some(AdaptMode::Degree) {
             return Err(SceneError::NotApplicable {
                 option: "--adapt degree (run.adapt)",
