@@ -715,7 +715,8 @@ mod tests {
             } else {
                 0.0
             };
-            assert!((f - (right - left)).abs() <= 1e-16, "{j}: {f}");
+            // The same polynomial evaluated in another order: equal to a few ulps.
+            assert!((f - (right - left)).abs() <= 1e-15, "{j}: {f}");
         }
     }
 
