@@ -13,7 +13,7 @@
 //! # `chain_force/<implementation>/10⁴`
 //!
 //! The force ∂L/∂q alone at the default state: svi's term-by-term assembly
-//! (`LocalLagrangianExt::force_into`) against the hand-written loop.
+//! (`LocalLagrangian::force_into`, by default term by term) against the hand-written loop.
 //!
 //! Each measured unit of `chain_verlet` is 100 steps of h = 0.1 from the default (mode 1) state; both end at
 //! the same state to 1e-12 (checked before timing). Run with `cargo bench --bench chain`;
@@ -24,7 +24,7 @@ use nalgebra::DVector;
 use std::hint::black_box;
 use std::time::Duration;
 use svi::method::DynInitial;
-use svi::model::local::{LocalDefaults, LocalLagrangianExt};
+use svi::model::local::{LocalDefaults, LocalLagrangian};
 use svi::{Integrator, StormerVerlet};
 use svi_models::Fput;
 

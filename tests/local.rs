@@ -66,7 +66,7 @@ fn local_terms_assemble_the_fixed_size_lagrangians_derivatives() {
         assert!((force[i] - reference.q[i]).abs() < 1e-15, "∂L/∂q[{i}]");
         assert!((momentum[i] - reference.v[i]).abs() < 1e-15, "p[{i}]");
     }
-    assert!((LocalLagrangianExt::value(&model, 0.0, &q, &v) - reference.value).abs() < 1e-15);
+    assert!((LocalLagrangian::value(&model, 0.0, &q, &v) - reference.value).abs() < 1e-15);
     assert!(
         (LocalLagrangianExt::energy(&model, 0.0, &q, &v) - fixed.energy(0.0, &qs, &vs)).abs()
             < 1e-15

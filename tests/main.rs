@@ -33,3 +33,4 @@ mod stability;
 mod step_doubling;
 mod stress;
 mod text;
+mod text_chain;

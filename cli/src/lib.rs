@@ -24,7 +24,7 @@ pub use report::summary::{
 pub use scene::builtin::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, builtin_scene_names};
 pub use scene::overrides::{Overrides, method_help, parse_parameter};
 pub use scene::schema::{
-    AdaptMode, DEFAULT_MAX_HALVINGS, Diagnostic, FormName, InitialSection, MethodSection,
-    OutputSection, RecoveryKind, RunSection,
+    AdaptMode, BoundaryName, Components, DEFAULT_MAX_HALVINGS, Diagnostic, FormName,
+    InitialSection, MethodSection, OutputSection, RecoveryKind, RunSection,
 };
 pub use scene::{Scene, SceneError};

@@ -228,3 +228,132 @@ fn a_text_model_of_four_coordinates_runs() {
         );
     }
 }
+
+#[test]
+fn fput_written_as_one_line_of_text_runs_as_the_zoo_chain() {
+    // The built-in fput-text scene against the built-in fput (the reference: the same chain
+    // in Rust) at n = 1000, ten steps of svi's fixed point and of verlet.
+    for method in ["svi", "verlet"] {
+        let run = |scene: &str| {
+            json(&[
+                "run", scene, "--json", "--param", "n=1000", "--t-end", "1", "--method", method,
+            ])
+        };
+        let (text, zoo) = (run("fput-text"), run("fput"));
+        assert_eq!(text["model"], "text");
+        assert_eq!(text["status"], "ok", "{text}");
+        assert_eq!(text["steps"], 10);
+        assert_eq!(text["parameters"]["n"], 1000.0);
+        let (q, reference) = (vector(&text, "q"), vector(&zoo, "q"));
+        assert_eq!(q.len(), 1000);
+        for (a, b) in q.iter().zip(&reference) {
+            assert!((a - b).abs() < 1e-13, "{method}: {a} against {b}");
+        }
+        let energy = number(&text, "energy_initial");
+        assert!((energy - number(&zoo, "energy_initial")).abs() < 1e-13);
+        assert!(number(&text, "energy_error_max") < 1e-12, "{text}");
+    }
+}
+
+#[test]
+fn a_periodic_chain_of_two_families_runs_from_per_site_expressions() {
+    // Two families on a ring, coupled on each site: x and y harmonic chains with a cross
+    // spring; started at rest in the lowest ring mode of x, energy E = Σ (k/2)(Δx)².
+    let text = "lagrangian = \"sum(i, 1, n, (vx[i]^2 + vy[i]^2)/2 - k/2*(x[i+1]-x[i])^2 \
+                - k/2*(y[i+1]-y[i])^2 - c/2*(x[i]-y[i])^2)\"\n\
+                coordinates = [\"x[1..n]\", \"y[1..n]\"]\nboundary = \"periodic\"\n\
+                [parameters]\nn = 50\nk = 1.0\nc = 0.0\n\
+                [initial]\nq = [\"cos(2*pi*i/n)\", \"0\"]\nv = [\"0\", \"0\"]\n\
+                [method]\nname = \"verlet\"\n[run]\nh = 0.05\nt_end = 5.0\n";
+    let scene = scene_file("text-ring", text);
+    let summary = json(&["run", &scene.path, "--json"]);
+    assert_eq!(summary["status"], "ok", "{summary}");
+    let q = vector(&summary, "q");
+    assert_eq!(q.len(), 100);
+    // With c = 0 each x mode is a harmonic oscillator of frequency ω = 2 sin(π/n):
+    // x_i(t) = cos(ωt) cos(2πi/n), y = 0 (Verlet's phase error is O(h²ω³t)).
+    let omega = 2.0 * (std::f64::consts::PI / 50.0).sin();
+    for i in 0..50 {
+        let exact =
+            (omega * 5.0).cos() * (2.0 * std::f64::consts::PI * (i + 1) as f64 / 50.0).cos();
+        assert!(
+            (q[2 * i] - exact).abs() < 1e-4,
+            "x[{}]: {} {exact}",
+            i + 1,
+            q[2 * i]
+        );
+        assert_eq!(q[2 * i + 1], 0.0);
+    }
+    assert!(number(&summary, "energy_error_max") < 1e-5, "{summary}");
+}
+
+#[test]
+fn misused_indices_and_chain_options_are_bad_input_naming_them() {
+    let chain = |lagrangian: &str, extra: &str| {
+        format!(
+            "lagrangian = \"{lagrangian}\"\ncoordinates = [\"q[1..n]\"]\n{extra}\n\
+             [parameters]\nn = 8\n[initial]\nq = \"sin(i)\"\nv = \"0\"\n\
+             [run]\nh = 0.1\nt_end = 1.0\n"
+        )
+    };
+    let kinetic = "sum(i, 1, n, vq[i]^2/2)";
+    for (name, lagrangian, needle) in [
+        (
+            "text-index",
+            "sum(i, 1, n, vq[2*i]^2/2)".to_string(),
+            "indexing error at column 17 of lagrangian ('2*i')",
+        ),
+        (
+            "text-nested",
+            "sum(i, 1, n, vq[i]^2 + sum(j, 1, n, q[j]))".to_string(),
+            "column 24 of lagrangian ('sum'): a sum inside a sum",
+        ),
+        (
+            "text-outside",
+            format!("{kinetic} - q[i]^2"),
+            "column 29 of lagrangian ('i')",
+        ),
+        (
+            "text-wide",
+            format!("{kinetic} - sum(i, 1, n, q[i]*q[i+4])"),
+            "reads 5 coordinates",
+        ),
+    ] {
+        let scene = scene_file(name, &chain(&lagrangian, ""));
+        bad_input(&["run", &scene.path], &[], needle);
+    }
+    let scene = scene_file(
+        "text-chain",
+        &chain(&format!("{kinetic} - sum(i, 1, n, q[i]^2)"), ""),
+    );
+    bad_input(
+        &["run", &scene.path],
+        &["--param", "n=2.5"],
+        "not a whole number",
+    );
+    bad_input(&["run", &scene.path], &["--method", "sc"], "'sc'");
+    let periodic = scene_file(
+        "text-boundary",
+        &kepler_scene(
+            "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)",
+            "boundary = \"periodic\"",
+        ),
+    );
+    bad_input(&["run", &periodic.path], &[], "boundary");
+    let expression = scene_file(
+        "text-expression",
+        &kepler_scene("0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)", "")
+            .replace("q = [0.5, 0.0]", "q = \"i\""),
+    );
+    bad_input(&["run", &expression.path], &[], "initial.q");
+    let unknown = scene_file(
+        "text-initial",
+        &chain(&format!("{kinetic} - sum(i, 1, n, q[i]^2)"), "")
+            .replace("q = \"sin(i)\"", "q = \"sin(j)\""),
+    );
+    bad_input(
+        &["run", &unknown.path],
+        &[],
+        "unknown symbol 'j' at column 5 of initial.q",
+    );
+}

@@ -68,7 +68,9 @@
 //! A Lagrangian written as text ([`svi::model::text`]) has its dimension and declarations
 //! known only at run time: [`visit_text_model`] hands it to the same visitor as a
 //! [`TextLagrangian`] of run-time dimension ([`svi::Dyn`], any number of coordinates) with
-//! its declarations.
+//! its declarations. A chain written as text (indexed coordinates and sums,
+//! [`svi::model::text::chain`]) goes to a [`LocalModelVisitor`] by [`visit_text_chain`], as a
+//! [`TextChain`] of its width with its declarations.
 //!
 //! Field theories in 1 + 1 dimensions are Lagrangian densities ℒ(x, t, u, u_t, u_x)
 //! ([`svi::model::density`]) on a domain with a boundary condition, integrated by the
@@ -144,7 +146,9 @@ pub use rigid_body::FreeRigidBody;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator};
 use svi::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian};
-use svi::model::text::{TextError, TextLagrangian, TextModel};
+use svi::model::text::{
+    MAX_WIDTH, TextChain, TextChainModel, TextError, TextLagrangian, TextModel,
+};
 use svi::{Defaults, Dimension, Dyn, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 
 /// Everything a zoo model implements (blanket impl for any type with all the bounds).
@@ -257,6 +261,41 @@ pub fn visit_text_model<V: ModelVisitor>(
     })
 }
 
+/// Hand a chain written as text to the visitor as a [`TextChain`] of its width K (1 to
+/// [`MAX_WIDTH`]: one monomorphisation each) with the tighter of two declarations it allows:
+/// autonomous and constant-mass (`TextChain<K, false, true>`: Störmer–Verlet explicit, SVI's
+/// Hessian-free fixed point), or general (`TextChain<K>`: time-dependent, SVI by sparse
+/// Newton; correct for every chain).
+///
+/// # Errors
+/// [`TextError::Declaration`] if the model breaks a declaration (which cannot happen for the
+/// one chosen here), [`TextError::TooWide`] beyond [`MAX_WIDTH`] (which
+/// [`TextChainModel::new`] has refused already).
+pub fn visit_text_chain<V: LocalModelVisitor>(
+    model: TextChainModel,
+    visitor: V,
+) -> Result<V::Output, TextError> {
+    let explicit = !model.time_dependent() && model.structure() == Structure::ConstantMass;
+    macro_rules! widths {
+        ($($width:literal),+) => {
+            match (model.width(), explicit) {
+                $(
+                    ($width, true) => visitor.visit(TextChain::<$width, false, true>::new(model)?),
+                    ($width, false) => visitor.visit(TextChain::<$width>::new(model)?),
+                )+
+                (width, _) => {
+                    return Err(TextError::TooWide {
+                        width,
+                        what: "the chain's terms".into(),
+                        limit: MAX_WIDTH,
+                    })
+                }
+            }
+        };
+    }
+    Ok(widths!(1, 2, 3, 4))
+}
+
 /// A model name that is not in [`MODEL_NAMES`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("unknown model '{name}' (known: {})", MODEL_NAMES.join(", "))]
@@ -329,15 +368,7 @@ pub fn visit_rigid_model<V: RigidModelVisitor>(name: &str, visitor: V) -> Option
 /// trajectory writes besides time and energy (n coordinates per row would make a file of
 /// 10⁵ columns; a few quantities that summarise the state are written instead).
 pub trait LocalZooModel:
-    LocalLagrangian
-    + LocalDefaults
-    + LocalInvariants
-    + Default
-    + Clone
-    + Send
-    + Sync
-    + std::fmt::Debug
-    + 'static
+    LocalLagrangian + LocalDefaults + LocalInvariants + Clone + Send + Sync + std::fmt::Debug + 'static
 {
     /// The names of the observables, in the order of [`LocalZooModel::observables_into`]
     /// (CSV column names: letters, digits and `_`).
@@ -425,6 +456,17 @@ impl LocalZooModel for SineGordonChain {
     fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
         out.push(self.kink_position(q));
     }
+}
+
+impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> LocalZooModel
+    for TextChain<WIDTH, TIME_DEPENDENT, CONSTANT_MASS>
+{
+    /// None: a chain written as text names no summary of its state.
+    fn observable_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    fn observables_into(&self, _: f64, _: &DVector<f64>, _: &DVector<f64>, _: &mut Vec<f64>) {}
 }
 
 /// Receives a concrete runtime-dimension model chosen by name at run time (see

@@ -24,7 +24,9 @@ use svi_cli::report::table::Cell;
 use svi_cli::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
 use svi_cli::scene::field::FieldScene;
 use svi_cli::scene::spectral::SpectralScene;
-use svi_cli::{AdaptMode, Diagnostic, FormName, Overrides, RecoveryKind, Scene, SceneError};
+use svi_cli::{
+    AdaptMode, Components, Diagnostic, FormName, Overrides, RecoveryKind, Scene, SceneError,
+};
 
 create_exception!(
     _svi,
@@ -145,9 +147,12 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
     // A field given replaces the scene's exclusive partner (v for p, omega for momentum, ...)
     // unless both are given, which the scene's check rejects.
     let section = &mut scene.initial;
+    for (given, partner) in [("v", &mut section.p), ("p", &mut section.v)] {
+        if initial.contains_key(given) {
+            *partner = None;
+        }
+    }
     for (given, partner) in [
-        ("v", &mut section.p),
-        ("p", &mut section.v),
         ("rotation", &mut section.quaternion),
         ("quaternion", &mut section.rotation),
         ("omega", &mut section.momentum),
@@ -167,9 +172,15 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
                 section.t0 = Some(*t0);
                 continue;
             }
-            "q" => &mut section.q,
-            "v" => &mut section.v,
-            "p" => &mut section.p,
+            "q" | "v" | "p" => {
+                let vector = match name.as_str() {
+                    "q" => &mut section.q,
+                    "v" => &mut section.v,
+                    _ => &mut section.p,
+                };
+                *vector = Some(Components::Values(values));
+                continue;
+            }
             "rotation" => &mut section.rotation,
             "quaternion" => &mut section.quaternion,
             "omega" => &mut section.omega,

@@ -358,26 +358,56 @@ pub trait LocalLagrangian {
         q: &<Self::Width as TermWidth>::Vector<D>,
         v: &<Self::Width as TermWidth>::Vector<D>,
     ) -> D;
+
+    /// L(t, q, q̇): by default [`value_by_terms`], term by term; a model that can sum its
+    /// terms faster may override it (the two must agree to round-off).
+    #[inline]
+    fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        value_by_terms(self, t, q, v)
+    }
+
+    /// ∂L/∂q at (t, q, q̇), written into `out`: the one derivative the explicit methods and
+    /// SVI's fixed point take at every stage. By default [`force_by_terms`], term by term; a
+    /// model that can assemble the same sum faster may override it (a chain written as text
+    /// runs a compiled gradient on batches of sites). The two must agree to round-off.
+    #[inline]
+    fn force_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
+        force_by_terms(self, t, q, v, out);
+    }
+}
+
+/// L of `model` at (t, q, q̇), term by term ([`LocalLagrangian::value`]'s default).
+#[inline]
+pub fn value_by_terms<L: LocalLagrangian + ?Sized>(
+    model: &L,
+    t: f64,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+) -> f64 {
+    (0..model.term_count())
+        .map(|e| L::Width::value(model, e, t, q, v))
+        .sum()
+}
+
+/// ∂L/∂q of `model` at (t, q, q̇), written into `out`: each term's gradient by the
+/// fixed-size automatic differentiation of [`crate::model::derived`], scattered at its
+/// indices ([`LocalLagrangian::force_into`]'s default).
+#[inline]
+pub fn force_by_terms<L: LocalLagrangian + ?Sized>(
+    model: &L,
+    t: f64,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    out: &mut DVector<f64>,
+) {
+    out.as_mut_slice().fill(0.0);
+    for e in 0..model.term_count() {
+        L::Width::scatter_gradient(model, e, t, q, v, false, out);
+    }
 }
 
 /// Quantities of a whole [`LocalLagrangian`], assembled term by term (each in O(n)).
 pub trait LocalLagrangianExt: LocalLagrangian {
-    /// L(t, q, q̇).
-    fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
-        (0..self.term_count())
-            .map(|e| Self::Width::value(self, e, t, q, v))
-            .sum()
-    }
-
-    /// ∂L/∂q, written into `out`.
-    #[inline]
-    fn force_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
-        out.as_mut_slice().fill(0.0);
-        for e in 0..self.term_count() {
-            Self::Width::scatter_gradient(self, e, t, q, v, false, out);
-        }
-    }
-
     /// p = ∂L/∂q̇, written into `out`.
     fn momentum_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
         out.as_mut_slice().fill(0.0);

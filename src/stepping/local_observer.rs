@@ -3,7 +3,7 @@
 //! invariants, each O(n) per observed point.
 
 use crate::method::space::DynPoint;
-use crate::model::local::{LocalInvariants, LocalLagrangian, LocalLagrangianExt};
+use crate::model::local::{LocalInvariants, LocalLagrangian};
 use crate::stepping::observer::{EnergyError, InvariantError, Observer, worst};
 use std::ops::ControlFlow;
 

@@ -521,7 +521,7 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, S
             reason: format!(
                 "'{}' is a chain of runtime dimension with no exact solution to measure errors \
                  against (svi run runs it)",
-                scene.model
+                scene.model_name()
             ),
         });
     }

@@ -4,7 +4,9 @@
 //!    checks them ([`Scene::apply`]).
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
 //!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
-//!    runtime-sized ℝⁿ (chains, lattices), [`svi_models::visit_rigid_model`] on SO(3). The visitor resolves the initial state, the step and the horizon, builds the
+//!    runtime-sized ℝⁿ (chains, lattices; [`svi_models::visit_text_chain`] for a chain
+//!    written as text), [`svi_models::visit_rigid_model`] on SO(3). The visitor resolves the
+//!    initial state, the step and the horizon, builds the
 //!    method (on ℝᴺ one [`svi::method::any::AnyMethod`] through
 //!    [`svi::MethodSpec::vector_method`], so the run is compiled once per model; on SO(3) the
 //!    Lie-group integrator) and pairs both in an [`Integrator`].
@@ -37,7 +39,7 @@ use svi::stepping::run::RunFailure;
 use svi::{Integrator, LagrangianExt, Method, Statistics};
 use svi_models::{
     LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
-    visit_local_model, visit_model, visit_rigid_model, visit_text_model,
+    visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
 use crate::command::space::RunSpace;
@@ -54,7 +56,7 @@ use crate::report::summary::{
 use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};
-use crate::scene::{Scene, SceneError};
+use crate::scene::{Scene, SceneError, Text};
 
 /// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
 /// run it and print its summary as text or as one JSON object, and the failed health checks
@@ -195,8 +197,11 @@ impl Scene {
             progress,
         };
         match self.space() {
-            SpaceKind::Vector => match self.text_model() {
-                Some(model) => visit_text_model(model?, run)?,
+            SpaceKind::Vector => match self.text() {
+                Some(text) => match text? {
+                    Text::Model(model) => visit_text_model(model, run)?,
+                    Text::Chain(chain) => visit_text_chain(chain, run)?,
+                },
                 None if self.is_local() => visit_local_model(&self.model, run)
                     .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
                 None => visit_model(&self.model, run)?,

@@ -13,7 +13,7 @@ use svi::lie_group::{
 };
 use svi::method::space::Space;
 use svi::method::{DynEuclidean, DynInitial, DynPoint};
-use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt};
+use svi::model::local::{LocalDefaults, LocalLagrangian};
 use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
 use svi::{Defaults, Euclidean, Initial, LagrangianExt, PhasePoint};
 use svi_models::{LocalZooModel, RigidZooModel, ZooModel};

@@ -66,6 +66,7 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/outer-solar-system.toml"),
     ),
     ("fput", include_str!("../../scenes/fput.toml")),
+    ("fput-text", include_str!("../../scenes/fput-text.toml")),
     ("fput-stiff", include_str!("../../scenes/fput-stiff.toml")),
     ("toda", include_str!("../../scenes/toda.toml")),
     (

@@ -27,6 +27,7 @@ use crate::report::csv::Float;
 use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
+use crate::scene::schema::Components;
 
 /// The largest number of members of one ensemble (each keeps its summary until the table is
 /// written: about 2 kB).
@@ -504,12 +505,12 @@ impl Member {
         }
         match state {
             InitialVectors::Velocity { q, v } => {
-                scene.initial.q = Some(q);
-                scene.initial.v = Some(v);
+                scene.initial.q = Some(Components::Values(q));
+                scene.initial.v = Some(Components::Values(v));
             }
             InitialVectors::Momentum { q, p } => {
-                scene.initial.q = Some(q);
-                scene.initial.p = Some(p);
+                scene.initial.q = Some(Components::Values(q));
+                scene.initial.p = Some(Components::Values(p));
             }
         }
         scene.check()?;
@@ -802,8 +803,8 @@ mod tests {
         };
         let applied = member.apply(&axes, &scene).unwrap();
         assert_eq!(applied.parameters["g"], 1.0);
-        assert_eq!(applied.initial.q, Some(vec![1.0, 0.25]));
-        assert_eq!(applied.initial.v, Some(vec![0.5, 0.0]));
+        assert_eq!(applied.initial.q, Some(Components::Values(vec![1.0, 0.25])));
+        assert_eq!(applied.initial.v, Some(Components::Values(vec![0.5, 0.0])));
         let unknown = [parse_parameter_axis("x=1").unwrap()];
         let message = check_axes(&scene, &unknown).unwrap_err().to_string();
         assert!(message.contains("no parameter 'x'"), "{message}");

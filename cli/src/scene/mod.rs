@@ -83,6 +83,26 @@
 //! [parameters]
 //! mu = 1.0
 //! ```
+//!
+//! With indexed coordinates (`q[1..n]`, n a parameter) the text is a chain of local terms
+//! ([`svi::model::text::chain`]), run like the zoo's chains by the large-system methods;
+//! `boundary` (`"fixed"`, the default, or `"periodic"`) says what an index outside 1..n
+//! reads. The `[initial]` vectors of every chain, written as text or not, may be expressions
+//! in the site index `i` (from 1) and the parameters, evaluated at every site (a list of
+//! them, one per family, for several):
+//!
+//! ```toml
+//! lagrangian = "sum(i, 1, n, 0.5*vq[i]^2) - sum(i, 0, n, 0.5*(q[i+1] - q[i])^2)"
+//! coordinates = ["q[1..n]"]
+//! boundary = "fixed"
+//!
+//! [parameters]
+//! n = 1000
+//!
+//! [initial]
+//! q = "sin(pi*i/(n+1))"
+//! v = "0"
+//! ```
 
 pub mod builtin;
 pub mod ensemble;
@@ -111,14 +131,15 @@ use svi::lie_group::{LieSvi, RigidInitial};
 use svi::method::DynInitial;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
-use svi::model::text::{TextModel, TextSpec};
+use svi::model::text::{TextChainModel, TextModel, TextSpec, site_values};
 use svi::{Initial, LagrangianExt};
 use svi_models::{LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
 use schema::{
-    AdaptMode, Diagnostic, InitialSection, MethodSection, OutputSection, RecoveryKind, RunSection,
+    AdaptMode, BoundaryName, Diagnostic, InitialSection, MethodSection, OutputSection,
+    RecoveryKind, RunSection,
 };
 
 /// A scene: what to simulate and what to report. Absent fields fall back to the model's
@@ -139,6 +160,8 @@ pub struct Scene {
     pub forces: Option<Vec<String>>,
     /// Symmetry generators ξ(q) of `lagrangian`, each one expression per coordinate.
     pub symmetries: Option<Vec<Vec<String>>>,
+    /// What the indexed coordinates of `lagrangian` read outside 1..n (default fixed).
+    pub boundary: Option<BoundaryName>,
     /// Model parameters, name → value, applied on top of the model's defaults; for a
     /// Lagrangian written as text, its parameters.
     #[serde(default)]
@@ -213,11 +236,11 @@ impl Scene {
         }
     }
 
-    /// The scene's Lagrangian written as text, parsed with the scene's parameters (`None`
-    /// for a zoo model).
-    pub fn text_model(&self) -> Option<Result<TextModel, SceneError>> {
+    /// The scene's Lagrangian written as text, as the library reads it (`None` for a zoo
+    /// model).
+    pub fn text_spec(&self) -> Option<TextSpec> {
         let lagrangian = self.lagrangian.as_ref()?;
-        let spec = TextSpec {
+        Some(TextSpec {
             lagrangian: lagrangian.clone(),
             coordinates: self.coordinates.clone().unwrap_or_default(),
             parameters: self
@@ -227,19 +250,39 @@ impl Scene {
                 .collect(),
             forces: self.forces.clone().unwrap_or_default(),
             symmetries: self.symmetries.clone().unwrap_or_default(),
-        };
-        Some(TextModel::new(&spec).map_err(SceneError::from))
+            boundary: self.boundary.map(Into::into).unwrap_or_default(),
+        })
+    }
+
+    /// The scene's Lagrangian written as text, parsed with the scene's parameters: a model
+    /// on ℝᴺ, or a chain if its coordinates are indexed (`q[1..n]`); `None` for a zoo model.
+    pub fn text(&self) -> Option<Result<Text, SceneError>> {
+        let spec = self.text_spec()?;
+        Some(
+            if spec.is_indexed() {
+                TextChainModel::new(&spec).map(Text::Chain)
+            } else {
+                TextModel::new(&spec).map(Text::Model)
+            }
+            .map_err(SceneError::from),
+        )
+    }
+
+    /// Whether the scene's Lagrangian is written as text with indexed coordinates: a chain.
+    pub fn is_text_chain(&self) -> bool {
+        self.text_spec().is_some_and(|spec| spec.is_indexed())
     }
 
     /// The model fields: a zoo `model` or a `lagrangian` (parsed, with the initial state,
     /// step and horizon it has no defaults for), and the fields of a text model only with
     /// one.
     fn check_model(&self) -> Result<(), SceneError> {
-        let Some(model) = self.text_model() else {
+        let Some(model) = self.text() else {
             let text_fields = [
                 (self.coordinates.is_some(), "coordinates"),
                 (self.forces.is_some(), "forces"),
                 (self.symmetries.is_some(), "symmetries"),
+                (self.boundary.is_some(), "boundary"),
             ];
             if let Some((_, option)) = text_fields.into_iter().find(|(given, _)| *given) {
                 return Err(SceneError::NotApplicable {
@@ -258,6 +301,13 @@ impl Scene {
             });
         }
         model?;
+        if self.boundary.is_some() && !self.is_text_chain() {
+            return Err(SceneError::NotApplicable {
+                option: "boundary",
+                reason: "belongs to a chain of indexed coordinates (coordinates = [\"q[1..n]\"])"
+                    .into(),
+            });
+        }
         let initial = &self.initial;
         let needed = [
             (initial.q.is_none(), "initial.q"),
@@ -297,10 +347,14 @@ impl Scene {
     }
 
     /// Whether the scene's model is a runtime-dimension one (a chain or lattice of
-    /// [`svi_models::LOCAL_MODEL_NAMES`], on ℝⁿ with n a parameter): it runs with the
-    /// large-system methods, and its `[initial]` vectors have n components.
+    /// [`svi_models::LOCAL_MODEL_NAMES`], or a chain written as text, on ℝⁿ with n a
+    /// parameter): it runs with the large-system methods, and its `[initial]` vectors have n
+    /// components or are expressions per site.
     pub fn is_local(&self) -> bool {
-        self.lagrangian.is_none() && LOCAL_MODEL_NAMES.contains(&self.model.as_str())
+        match self.lagrangian {
+            None => LOCAL_MODEL_NAMES.contains(&self.model.as_str()),
+            Some(_) => self.is_text_chain(),
+        }
     }
 
     /// The options a runtime-dimension scene cannot use: a method other than svi, svi-newton
@@ -316,7 +370,7 @@ impl Scene {
                 reason: format!(
                     "'{}' is a runtime-dimension model, whose methods ({}) keep their degree; \
                      use --adapt step or none",
-                    self.model,
+                    self.model_name(),
                     spec.name()
                 ),
             });
@@ -831,7 +885,25 @@ impl Scene {
         );
         limits::check_memory("n (--param n, or --output-times)", estimate, &what)?;
         let (default_t0, default_q, default_v) = model.initial_state();
-        let initial = vector::local_initial(&self.initial, model.name(), default_q, default_v)?;
+        // A chain written as text stores its families site by site; a zoo chain is one.
+        let families = if self.is_text_chain() {
+            self.coordinates.as_ref().map_or(1, Vec::len)
+        } else {
+            1
+        };
+        let parameters = model.parameters();
+        let sites = |field: &'static str, expressions: &[String]| {
+            site_values(
+                expressions,
+                families,
+                &format!("initial.{field}"),
+                &parameters,
+                n / families,
+            )
+            .map_err(SceneError::from)
+        };
+        let initial =
+            vector::local_initial(&self.initial, model.name(), default_q, default_v, &sites)?;
         Ok((
             self.initial.t0.unwrap_or(default_t0),
             initial,
@@ -878,6 +950,15 @@ impl Scene {
             reason: format!("the model '{}' {what}", self.model_name()),
         }
     }
+}
+
+/// A Lagrangian written as text, parsed: a model on ℝᴺ or a chain of indexed coordinates.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Text {
+    /// Named coordinates: a [`svi::model::text::TextLagrangian`] of run-time size.
+    Model(TextModel),
+    /// Indexed coordinates and sums: a [`svi::model::text::TextChain`] of local terms.
+    Chain(TextChainModel),
 }
 
 /// `target = value` if a value is given.
@@ -929,6 +1010,7 @@ pub(crate) mod tests {
                 "oscillator-beyond-stability",
                 "outer-solar-system",
                 "fput",
+                "fput-text",
                 "fput-stiff",
                 "toda",
                 "relativistic-chain",
@@ -950,7 +1032,7 @@ pub(crate) mod tests {
             );
             assert_eq!(
                 scene.is_local(),
-                LOCAL_MODEL_NAMES.contains(&model),
+                LOCAL_MODEL_NAMES.contains(&model) || scene.is_text_chain(),
                 "{name}"
             );
             if MODEL_NAMES.contains(&name) || LOCAL_MODEL_NAMES.contains(&name) {
@@ -972,8 +1054,8 @@ pub(crate) mod tests {
         let scene = scene("oscillator");
         assert_eq!(scene.parameters["sigma"], 1.0);
         assert_eq!(scene.initial.t0, Some(0.0));
-        assert_eq!(scene.initial.q, Some(vec![0.0]));
-        assert_eq!(scene.initial.p, Some(vec![1.0]));
+        assert_eq!(scene.initial.q, Some(schema::Components::Values(vec![0.0])));
+        assert_eq!(scene.initial.p, Some(schema::Components::Values(vec![1.0])));
         assert_eq!(scene.initial.v, None);
         assert_eq!(scene.run.h, Some(1.0));
         assert_eq!(scene.run.t_end, Some(100.0));

@@ -67,6 +67,51 @@ impl TryFrom<String> for Diagnostic {
     }
 }
 
+/// An initial vector on ℝᴺ: its components, or — for a chain — an expression in the site
+/// index `i` (from 1) and the parameters, evaluated at every site (`q = "A*sin(pi*i/(n+1))"`),
+/// or one such expression per family of a chain written with several (`["0", "0.1*i"]`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Components {
+    /// The components.
+    Values(Vec<f64>),
+    /// One expression for every site (a chain of one family).
+    Expression(String),
+    /// One expression per family, for every site.
+    Expressions(Vec<String>),
+}
+
+impl Components {
+    /// The expressions, one per family, if the components are given by expressions.
+    pub fn expressions(&self) -> Option<Vec<String>> {
+        match self {
+            Components::Values(_) => None,
+            Components::Expression(text) => Some(vec![text.clone()]),
+            Components::Expressions(texts) => Some(texts.clone()),
+        }
+    }
+}
+
+/// The boundary rule of a chain written as text, as named in scenes (see
+/// [`svi::model::text::Boundary`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BoundaryName {
+    /// Indices outside 1..n read zero.
+    Fixed,
+    /// Indices wrap modulo n.
+    Periodic,
+}
+
+impl From<BoundaryName> for svi::model::text::Boundary {
+    fn from(name: BoundaryName) -> Self {
+        match name {
+            BoundaryName::Fixed => svi::model::text::Boundary::Fixed,
+            BoundaryName::Periodic => svi::model::text::Boundary::Periodic,
+        }
+    }
+}
+
 /// `[initial]`: on ℝᴺ t0, q and one of v, p; on SO(3) t0, one of rotation, quaternion and
 /// one of omega, momentum. Absent fields come from the model's default state.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
@@ -75,11 +120,11 @@ pub struct InitialSection {
     /// Initial time.
     pub t0: Option<f64>,
     /// Initial configuration (ℝᴺ).
-    pub q: Option<Vec<f64>>,
+    pub q: Option<Components>,
     /// Initial velocity (ℝᴺ; excludes `p`).
-    pub v: Option<Vec<f64>>,
+    pub v: Option<Components>,
     /// Initial momentum (ℝᴺ; excludes `v`).
-    pub p: Option<Vec<f64>>,
+    pub p: Option<Components>,
     /// R₀ as a rotation vector, R₀ = exp(rotation^) (SO(3); excludes `quaternion`).
     pub rotation: Option<Vec<f64>>,
     /// R₀ as a unit quaternion (w, x, y, z) (SO(3); excludes `rotation`).

@@ -32,7 +32,7 @@ use crate::method::space::DynState;
 use crate::method::variational::svi::{NystromTables, Solver, Tables};
 use crate::method::{Coordinates, MethodInfo, StepReport};
 use crate::model::Structure;
-use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
+use crate::model::local::LocalLagrangian;
 use crate::nonlinear::FixedPoint;
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::starting_values::StartingValues;

@@ -14,7 +14,7 @@ use crate::method::local::mass::MassInverse;
 use crate::method::local::{LocalMethod, cold_velocity, constant_mass};
 use crate::method::space::DynState;
 use crate::method::{Coordinates, MethodInfo, StepReport};
-use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
+use crate::model::local::LocalLagrangian;
 use nalgebra::DVector;
 
 /// Buffers of a Störmer–Verlet run on runtime-sized ℝⁿ.

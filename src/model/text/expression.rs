@@ -4,7 +4,7 @@
 //! fixed-size array (no allocation per evaluation), generic over [`Scalar`].
 
 use super::TextError;
-use super::parse::Parser;
+use super::parse::parse;
 use super::structure::{Polynomial, Properties, properties};
 use super::tree::{Binary, Function, Names, Node, Symbol};
 use crate::scalar::Scalar;
@@ -18,7 +18,7 @@ pub const MAX_STACK: usize = 64;
 /// (the accumulator): a load pushes the accumulator and replaces it, a unary operation
 /// changes it in place, a binary one combines it with the value it pops.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Op {
+pub enum Op {
     /// Load a number.
     Number(f64),
     /// Load a symbol's value.
@@ -71,42 +71,31 @@ impl Expression {
     /// Parse `text`, the field `field` of a text model (named in errors), with the symbols
     /// of `names`.
     pub fn parse(text: &str, field: &str, names: &Names<'_>) -> Result<Expression, TextError> {
-        let mut parser = Parser {
-            text,
-            field,
-            names,
-            position: 0,
-            nodes: Vec::new(),
-            nesting: 0,
-        };
-        parser.skip_space();
-        if parser.position == text.len() {
-            return Err(TextError::Empty {
-                field: field.into(),
-            });
-        }
-        let root = parser.sum()?;
-        parser.skip_space();
-        if parser.position < text.len() {
-            let found = parser.peek_char().unwrap_or(' ');
-            return Err(parser.syntax(
-                parser.position,
-                if found == ')' {
-                    "unbalanced ')': no '(' to close".into()
-                } else {
-                    format!("unexpected '{found}' after a complete expression")
-                },
-            ));
-        }
+        // Without indexed families the parser reads no sum: the tree is the expression.
+        let tree = parse(text, field, names)?;
+        Expression::from_tree(tree.nodes, tree.root, field, names.parameters.len())
+    }
+
+    /// The expression of the parse tree `nodes` at `root` (no [`Symbol::Site`] left), with
+    /// `parameter_count` parameters, as the field `field`.
+    ///
+    /// # Errors
+    /// [`TextError::TooDeep`] if its tape may need more than [`MAX_STACK`] values at once.
+    pub fn from_tree(
+        nodes: Vec<Node>,
+        root: usize,
+        field: &str,
+        parameter_count: usize,
+    ) -> Result<Expression, TextError> {
         let expression = Expression {
-            properties: properties(&parser.nodes, root),
-            nodes: parser.nodes,
+            properties: properties(&nodes, root),
+            nodes,
             root,
         };
         // The deepest tape for any parameter values: NaN is neither 0 nor 1, so no
         // instruction folds away for it (x + 0 is x, 1/x a reciprocal; for other values the
         // tape is as deep or less).
-        let parameters = vec![f64::NAN; names.parameters.len()];
+        let parameters = vec![f64::NAN; parameter_count];
         if expression.compile(&parameters, Velocities::Read).depth > MAX_STACK {
             return Err(TextError::TooDeep {
                 field: field.into(),
@@ -155,6 +144,59 @@ impl Expression {
     }
 }
 
+/// A constant-mass L = ½q̇ᵀMq̇ + U(t, q) in two parts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Split {
+    /// The tape of U(t, q) = L(t, q, 0).
+    potential: Tape,
+    /// The terms (i, j, c) of ½q̇ᵀMq̇ = Σ c q̇ᵢq̇ⱼ (i ≤ j, c ≠ 0), evaluated without a tape.
+    kinetic: Vec<(usize, usize, f64)>,
+}
+
+impl Split {
+    /// `expression` of `n` coordinates with `parameters` in two parts, if its structure is
+    /// constant-mass (no term linear in q̇, constant coefficients of the quadratic ones).
+    pub fn of(expression: &Expression, parameters: &[f64], n: usize) -> Option<Split> {
+        expression
+            .properties()
+            .velocity
+            .filter(|form| form.fits_constant_mass())?;
+        let q = expression.quadratic_form(parameters, n)?;
+        let mut kinetic = Vec::new();
+        for i in 0..n {
+            for j in i..n {
+                let c = if i == j {
+                    q[i * n + i]
+                } else {
+                    q[i * n + j] + q[j * n + i]
+                };
+                if c != 0.0 {
+                    kinetic.push((i, j, c));
+                }
+            }
+        }
+        Some(Split {
+            potential: expression.compile(parameters, Velocities::Zero),
+            kinetic,
+        })
+    }
+
+    /// The tape of U(t, q), the part free of q̇.
+    pub fn potential(&self) -> &Tape {
+        &self.potential
+    }
+
+    /// ½q̇ᵀMq̇ (a sum of products, without a tape) plus U(t, q).
+    #[inline]
+    pub fn evaluate<D: Scalar>(&self, t: D, q: &[D], v: &[D]) -> D {
+        let mut sum = self.potential.evaluate(t, q, v);
+        for &(i, j, c) in &self.kinetic {
+            sum += v[i] * v[j] * c;
+        }
+        sum
+    }
+}
+
 /// An expression compiled for given parameter values: a postfix program of [`Op`]s.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
@@ -163,6 +205,11 @@ pub struct Tape {
 }
 
 impl Tape {
+    /// The instructions.
+    pub fn ops(&self) -> &[Op] {
+        &self.ops
+    }
+
     /// The value at (t, q, q̇).
     #[inline]
     pub fn evaluate<D: Scalar>(&self, t: D, q: &[D], v: &[D]) -> D {
@@ -185,6 +232,7 @@ impl Tape {
             Symbol::Velocity(i) => v[i],
             Symbol::Time => t,
             Symbol::Parameter(_) => unreachable!("parameters are folded into numbers"),
+            Symbol::Site(_) => unreachable!("sites are rewritten to slots before compiling"),
         };
         // The accumulator holds the top of the stack; `stack[..top]` the values below it (the
         // first load pushes the accumulator's initial zero, never read).
@@ -430,7 +478,6 @@ fn power_integer<D: Scalar>(x: D, n: i32) -> D {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::text::structure::VelocityForm;
     use crate::model::text::tree::MAX_NODES;
 
     #[test]
@@ -468,6 +515,8 @@ mod tests {
             velocities: &VELOCITIES,
             parameters: &PARAMETERS,
             phase_space: true,
+            families: &[],
+            size: None,
         }
     }
 
@@ -620,7 +669,7 @@ mod tests {
         let constant_mass = |text: &str| {
             properties(text)
                 .velocity
-                .is_some_and(VelocityForm::is_constant_mass)
+                .is_some_and(|form| form.quadratic && form.fits_constant_mass())
         };
         for text in [
             "0.5*(vx^2 + vy^2) + 1/sqrt(x^2 + y^2)",

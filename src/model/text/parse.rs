@@ -3,7 +3,77 @@
 //! out), into an arena of [`Node`]s.
 
 use super::TextError;
-use super::tree::{Binary, FUNCTION_NAMES, Function, MAX_NESTING, MAX_NODES, Names, Node, Symbol};
+use super::tree::{
+    Base, Binary, CONSTANT_NAMES, FUNCTION_NAMES, Function, Index, MAX_NESTING, MAX_NODES, Names,
+    Node, Site, Symbol,
+};
+
+/// The largest integer of an index or a sum's bound (far from overflowing any sum of them).
+const MAX_INDEX: i64 = 1 << 40;
+
+/// A parsed expression: the arena of its nodes, its root, and its indexed sums.
+pub struct Tree {
+    /// The nodes, each after its children.
+    pub nodes: Vec<Node>,
+    /// The root.
+    pub root: usize,
+    /// The sums `sum(i, lower, upper, body)`, in the order they were read.
+    pub sums: Vec<SumCall>,
+}
+
+/// One `sum(i, lower, upper, body)`: its body's root and bounds. In the arena the sum stands
+/// as the number 0 at `placeholder` (the chains take the sums apart from the rest).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SumCall {
+    /// The node standing for the sum.
+    pub placeholder: usize,
+    /// The root of the body.
+    pub body: usize,
+    /// The first index.
+    pub lower: Index,
+    /// The last index.
+    pub upper: Index,
+    /// Column of `sum`, in characters from 1.
+    pub column: usize,
+}
+
+/// Parse `text`, the field `field` (named in errors), with the symbols of `names`.
+pub fn parse(text: &str, field: &str, names: &Names<'_>) -> Result<Tree, TextError> {
+    let mut parser = Parser {
+        text,
+        field,
+        names,
+        position: 0,
+        nodes: Vec::new(),
+        nesting: 0,
+        sums: Vec::new(),
+        index: None,
+    };
+    parser.skip_space();
+    if parser.position == text.len() {
+        return Err(TextError::Empty {
+            field: field.into(),
+        });
+    }
+    let root = parser.sum()?;
+    parser.skip_space();
+    if parser.position < text.len() {
+        let found = parser.peek_char().unwrap_or(' ');
+        return Err(parser.syntax(
+            parser.position,
+            if found == ')' {
+                "unbalanced ')': no '(' to close".into()
+            } else {
+                format!("unexpected '{found}' after a complete expression")
+            },
+        ));
+    }
+    Ok(Tree {
+        nodes: parser.nodes,
+        root,
+        sums: parser.sums,
+    })
+}
 
 /// The recursive-descent parser over `text`, building the arena `nodes`.
 pub struct Parser<'a> {
@@ -15,9 +85,24 @@ pub struct Parser<'a> {
     pub nodes: Vec<Node>,
     /// Current nesting of the recursion.
     pub nesting: usize,
+    /// The sums read so far.
+    pub sums: Vec<SumCall>,
+    /// The index of the sum whose body is being read.
+    pub index: Option<&'a str>,
 }
 
-impl Parser<'_> {
+/// Where an [`Index`] is read, which decides what it may be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum IndexRole {
+    /// In `q[...]` inside a sum's body: `i + c`.
+    Relative,
+    /// In `q[...]` outside sums: `c` or `n + c`.
+    Constant,
+    /// A sum's bound: `c` or `n + c`.
+    Bound,
+}
+
+impl<'a> Parser<'a> {
     /// The 1-based character column of the byte offset `offset`.
     pub fn column(&self, offset: usize) -> usize {
         self.text[..offset].chars().count() + 1
@@ -224,27 +309,59 @@ impl Parser<'_> {
         self.push(Node::Number(value))
     }
 
-    /// A name: a symbol, a constant, or a function applied to its arguments.
-    pub fn name(&mut self, start: usize) -> Result<usize, TextError> {
+    /// An identifier starting at byte `start`.
+    fn identifier(&self, start: usize) -> &'a str {
         let rest = &self.text[start..];
         let length = rest
             .find(|c: char| !(c.is_alphanumeric() || c == '_'))
             .unwrap_or(rest.len());
-        let name = &rest[..length];
-        self.position = start + length;
-        let call = {
-            let save = self.position;
-            let open = self.eat('(');
-            if !open {
-                self.position = save;
+        &rest[..length]
+    }
+
+    /// Skip spaces and consume `c` if it comes next; else stay where the parser stood.
+    fn eat_after_name(&mut self, c: char) -> bool {
+        let save = self.position;
+        let found = self.eat(c);
+        if !found {
+            self.position = save;
+        }
+        found
+    }
+
+    /// A name: a symbol, a constant, a function applied to its arguments, an indexed
+    /// coordinate `q[...]` or a sum `sum(i, lower, upper, body)`.
+    pub fn name(&mut self, start: usize) -> Result<usize, TextError> {
+        let name = self.identifier(start);
+        self.position = start + name.len();
+        if self.eat_after_name('(') {
+            if name == "sum" {
+                return self.sum_call(start);
             }
-            open
-        };
-        if call {
             return self.call(name, start);
+        }
+        if self.eat_after_name('[') {
+            return self.site(name, start);
         }
         if let Some(symbol) = self.names.symbol(name) {
             return self.push(Node::Symbol(symbol));
+        }
+        if self.names.family(name).is_some() {
+            return Err(self.indexing(
+                start,
+                name,
+                format!(
+                    "'{name}' is an indexed coordinate: write {name}[i], {name}[i+1], {name}[1]"
+                ),
+            ));
+        }
+        if self.index == Some(name) {
+            return Err(self.indexing(
+                start,
+                name,
+                format!(
+                    "the index '{name}' of a sum is read only inside brackets, as in q[{name}+1]"
+                ),
+            ));
         }
         match name {
             "pi" => return self.push(Node::Number(std::f64::consts::PI)),
@@ -263,6 +380,232 @@ impl Parser<'_> {
             symbol: name.into(),
             known: self.names.known(),
         })
+    }
+
+    /// An error about indices or sums at byte `start`, at the symbol `symbol`.
+    fn indexing(&self, start: usize, symbol: &str, message: String) -> TextError {
+        TextError::Indexing {
+            field: self.field.into(),
+            column: self.column(start),
+            symbol: symbol.into(),
+            message,
+        }
+    }
+
+    /// `name[index]` (`name` at byte `start`), after its '['.
+    fn site(&mut self, name: &str, start: usize) -> Result<usize, TextError> {
+        let Some((family, velocity)) = self.names.family(name) else {
+            let message = if self.names.families.is_empty() {
+                format!("'{name}' is not indexed: the model declares no indexed coordinates")
+            } else {
+                format!(
+                    "'{name}' is not an indexed coordinate (indexed: {})",
+                    self.names.families.join(", ")
+                )
+            };
+            return Err(self.indexing(start, name, message));
+        };
+        let role = if self.index.is_some() {
+            IndexRole::Relative
+        } else {
+            IndexRole::Constant
+        };
+        let index = self.index_expression(role, ']')?;
+        self.eat(']');
+        self.push(Node::Symbol(Symbol::Site(Site {
+            family,
+            velocity,
+            index,
+        })))
+    }
+
+    /// An index or a bound, `c`, `n + c` or `i + c`, written with integers, the size n and
+    /// the sum's index i, added and subtracted in any order, up to `closing` (not consumed);
+    /// what it may be depends on `role`.
+    fn index_expression(&mut self, role: IndexRole, closing: char) -> Result<Index, TextError> {
+        self.skip_space();
+        let start = self.position;
+        let (mut sum_coefficient, mut size_coefficient, mut offset) = (0i64, 0i64, 0i64);
+        let mut sign = if self.eat('-') {
+            -1
+        } else {
+            self.eat('+');
+            1
+        };
+        loop {
+            self.skip_space();
+            let at = self.position;
+            match self.peek_char() {
+                Some(c) if c.is_ascii_digit() => {
+                    let digits = self.text[at..]
+                        .find(|c: char| !c.is_ascii_digit())
+                        .map_or(&self.text[at..], |end| &self.text[at..at + end]);
+                    self.position += digits.len();
+                    let value = digits
+                        .parse::<i64>()
+                        .ok()
+                        .filter(|value| *value <= MAX_INDEX)
+                        .ok_or_else(|| {
+                            self.indexing(
+                                at,
+                                digits,
+                                format!("an index or bound beyond {MAX_INDEX}"),
+                            )
+                        })?;
+                    offset += sign * value;
+                }
+                Some(c) if c.is_alphabetic() || c == '_' => {
+                    let name = self.identifier(at);
+                    self.position += name.len();
+                    if Some(name) == self.index {
+                        sum_coefficient += sign;
+                    } else if Some(name) == self.names.size {
+                        size_coefficient += sign;
+                    } else {
+                        let mut allowed = vec!["integers"];
+                        allowed.extend(self.names.size);
+                        allowed.extend(self.index);
+                        return Err(self.indexing(
+                            at,
+                            name,
+                            format!(
+                                "an index or bound is made of {} with + and -",
+                                allowed.join(", ")
+                            ),
+                        ));
+                    }
+                }
+                _ => return Err(self.index_error(start, role, closing)),
+            }
+            if offset.abs() > MAX_INDEX || sum_coefficient.abs() > 1 || size_coefficient.abs() > 1 {
+                return Err(self.index_error(start, role, closing));
+            }
+            sign = if self.eat('+') {
+                1
+            } else if self.eat('-') {
+                -1
+            } else {
+                break;
+            };
+        }
+        let base = match (sum_coefficient, size_coefficient) {
+            (0, 0) => Base::Zero,
+            (0, 1) => Base::Size,
+            (1, 0) => Base::Sum,
+            _ => return Err(self.index_error(start, role, closing)),
+        };
+        let fits = match role {
+            IndexRole::Relative => base == Base::Sum,
+            IndexRole::Constant | IndexRole::Bound => base != Base::Sum,
+        };
+        self.skip_space();
+        if !fits || self.peek_char() != Some(closing) {
+            return Err(self.index_error(start, role, closing));
+        }
+        Ok(Index { base, offset })
+    }
+
+    /// The error of an index (or bound) from byte `start` up to `closing` (or the end) that is
+    /// not what `role` allows.
+    fn index_error(&self, start: usize, role: IndexRole, closing: char) -> TextError {
+        let size = self.names.size.unwrap_or("n");
+        let index = self.index.unwrap_or("i");
+        let message = match role {
+            IndexRole::Relative => format!(
+                "inside sum({index}, ...) an index is {index} plus or minus an integer \
+                 ({index}, {index}+1, {index}-2): a term reads its neighbours only"
+            ),
+            IndexRole::Constant => format!(
+                "outside a sum an index is an integer or {size} plus or minus an integer (1, {size}, \
+                 {size}-1)"
+            ),
+            IndexRole::Bound => format!(
+                "a sum's bound is an integer or {size} plus or minus an integer (0, 1, {size}, {size}-1)"
+            ),
+        };
+        let end = self.text[start..]
+            .find(closing)
+            .map_or(self.text.len(), |end| start + end);
+        self.indexing(start, self.text[start..end].trim(), message)
+    }
+
+    /// `sum(i, lower, upper, body)` (`sum` at byte `start`), after its '('.
+    fn sum_call(&mut self, start: usize) -> Result<usize, TextError> {
+        let open = self.position - 1;
+        if self.names.families.is_empty() {
+            return Err(self.indexing(
+                start,
+                "sum",
+                "sum(i, lower, upper, body) needs indexed coordinates (coordinates = \
+                 [\"q[1..n]\"])"
+                    .into(),
+            ));
+        }
+        if self.index.is_some() {
+            return Err(self.indexing(
+                start,
+                "sum",
+                "a sum inside a sum: a chain's terms are one sum deep".into(),
+            ));
+        }
+        self.enter()?;
+        self.skip_space();
+        let at = self.position;
+        let index = self.identifier(at);
+        self.position += index.len();
+        let taken = self.names.symbol(index).is_some()
+            || self.names.family(index).is_some()
+            || Some(index) == self.names.size
+            || FUNCTION_NAMES.contains(&index)
+            || CONSTANT_NAMES.contains(&index)
+            || index == "sum";
+        let identifier = index
+            .chars()
+            .next()
+            .is_some_and(|c| c.is_alphabetic() || c == '_');
+        if !identifier || taken {
+            return Err(self.indexing(
+                at,
+                index,
+                "the first argument of sum is a new name for its index, as in sum(i, 1, n, ...)"
+                    .into(),
+            ));
+        }
+        let mut bounds = [Index {
+            base: Base::Zero,
+            offset: 0,
+        }; 2];
+        for bound in &mut bounds {
+            if !self.eat(',') {
+                return Err(self.syntax(
+                    self.position,
+                    "sum takes four arguments: sum(i, lower, upper, body)".into(),
+                ));
+            }
+            *bound = self.index_expression(IndexRole::Bound, ',')?;
+        }
+        if !self.eat(',') {
+            return Err(self.syntax(
+                self.position,
+                "sum takes four arguments: sum(i, lower, upper, body)".into(),
+            ));
+        }
+        self.index = Some(index);
+        let body = self.sum()?;
+        self.index = None;
+        if !self.eat(')') {
+            return Err(self.unclosed(open));
+        }
+        self.nesting -= 1;
+        let placeholder = self.push(Node::Number(0.0))?;
+        self.sums.push(SumCall {
+            placeholder,
+            body,
+            lower: bounds[0],
+            upper: bounds[1],
+            column: self.column(start),
+        });
+        Ok(placeholder)
     }
 
     /// The call of `name` (at byte `start`), after its '('.

@@ -44,10 +44,11 @@ impl VelocityForm {
         self.linear || self.quadratic
     }
 
-    /// Whether the expression is ½q̇ᵀMq̇ − V(t, q) with M constant: quadratic terms in q̇
-    /// with constant coefficients, no linear ones.
-    pub fn is_constant_mass(self) -> bool {
-        self.quadratic && !self.linear
+    /// Whether the expression is ½q̇ᵀMq̇ − V(t, q) with M constant, or a part of such an L
+    /// (a sum's body, which may hold no q̇): no term linear in q̇, and the quadratic terms, if
+    /// any, with constant coefficients (as a [`VelocityForm`] has them).
+    pub fn fits_constant_mass(self) -> bool {
+        !self.linear
     }
 
     /// The form of a sum or difference.

@@ -98,6 +98,54 @@ pub enum Symbol {
     Time,
     /// Parameter i (its current value is read at every evaluation).
     Parameter(usize),
+    /// A coordinate or velocity of an indexed family, `q[i+1]` or `vq[n]` (the chains of
+    /// [`super::chain`]: rewritten to a term's slots, as `Coordinate` and `Velocity`, before
+    /// anything is compiled or analysed).
+    Site(Site),
+}
+
+/// `q[index]` (or `vq[index]`): which family, coordinate or velocity, and at which index.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Site {
+    /// The family, in the order of the declared coordinates.
+    pub family: usize,
+    /// Whether the velocity `vq[...]` is read.
+    pub velocity: bool,
+    /// The index.
+    pub index: Index,
+}
+
+/// An index or a bound of a sum: `base + offset`, an integer written `c`, `n + c` (n the size
+/// parameter) or, inside `sum(i, ...)`, `i + c`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Index {
+    /// What the offset is added to.
+    pub base: Base,
+    /// The integer c.
+    pub offset: i64,
+}
+
+/// What an [`Index`]'s offset is added to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Base {
+    /// Nothing: the index is the integer c.
+    Zero,
+    /// The size parameter n.
+    Size,
+    /// The index of the enclosing sum.
+    Sum,
+}
+
+impl Index {
+    /// The value for the size `n` (`None` for an index relative to a sum's).
+    pub fn resolve(self, n: usize) -> Option<i64> {
+        match self.base {
+            Base::Zero => Some(self.offset),
+            // n ≤ the largest size, far below 2⁶³.
+            Base::Size => Some(n as i64 + self.offset),
+            Base::Sum => None,
+        }
+    }
 }
 
 /// The names an expression may use, in the order of their indices.
@@ -112,6 +160,23 @@ pub struct Names<'a> {
     /// Whether `t` and the velocities may be used (a symmetry generator ξ(q) depends on q
     /// and the parameters only).
     pub phase_space: bool,
+    /// The indexed families (`q` of `q[1..n]`) and, after them, their velocities (`vq`):
+    /// names read with an index, `q[i+1]`. Empty for a model without (then `sum` is unknown).
+    pub families: &'a [&'static str],
+    /// The size parameter n of the families (`None` without families).
+    pub size: Option<&'static str>,
+}
+
+impl Names<'_> {
+    /// The family named `name` (coordinate or velocity), if any, as (family, velocity).
+    pub fn family(&self, name: &str) -> Option<(usize, bool)> {
+        let count = self.families.len() / 2;
+        let position = self.families.iter().position(|known| *known == name)?;
+        if position >= count && !self.phase_space {
+            return None;
+        }
+        Some((position % count.max(1), position >= count))
+    }
 }
 
 impl Names<'_> {
@@ -133,14 +198,23 @@ impl Names<'_> {
         (name == "t").then_some(Symbol::Time)
     }
 
-    /// The known symbols, as listed in an error message.
+    /// The known symbols, as listed in an error message (a family with `[...]`).
     pub fn known(&self) -> String {
-        let mut names: Vec<&str> = self.coordinates.to_vec();
+        let mut names: Vec<String> = self.coordinates.iter().map(|s| s.to_string()).collect();
+        let count = self.families.len() / 2;
+        let indexed = |names: &[&str]| {
+            names
+                .iter()
+                .map(|name| format!("{name}[...]"))
+                .collect::<Vec<_>>()
+        };
+        names.extend(indexed(&self.families[..count]));
         if self.phase_space {
-            names.extend(self.velocities);
-            names.push("t");
+            names.extend(self.velocities.iter().map(|s| s.to_string()));
+            names.extend(indexed(&self.families[count..]));
+            names.push("t".into());
         }
-        names.extend(self.parameters);
+        names.extend(self.parameters.iter().map(|s| s.to_string()));
         names.join(", ")
     }
 }

@@ -1,0 +1,758 @@
+//! A chain's terms on batches of sites: the value ℓ and the force ∂ℓ/∂q of one kind of term,
+//! compiled from its [`Tape`] into straight-line programs (the force by reverse-mode
+//! automatic differentiation), each run on [`LANES`] sites at once.
+//!
+//! # Why
+//!
+//! Assembled term by term ([`crate::model::local::force_by_terms`]), a chain's force runs
+//! each term's tape once per slot in forward-mode dual numbers: for FPUT two interpreted
+//! sweeps of fifteen instructions per spring, against a handful of multiplications in a
+//! model written in Rust; its value (the energy diagnostic, at every step) one interpreted
+//! sweep. Here each kind of term is compiled once, and its programs run over [`LANES`] sites
+//! of that kind together: every instruction is a loop over the lanes, which the compiler
+//! vectorises, so the cost of interpreting it is paid once per batch instead of once per
+//! term.
+//!
+//! # How
+//!
+//! 1. The postfix tape becomes a list of instructions in static single assignment, equal
+//!    instructions shared (`q[i+1] - q[i]`, written three times in FPUT, is computed once).
+//! 2. For the force, reverse mode from the end: each instruction adds its operands' share of
+//!    its adjoint, ∂ℓ/∂x = Σ (∂ℓ/∂y)(∂y/∂x), as new instructions. Adjoints that are
+//!    constants stay numbers (the adjoint of ℓ is 1, of `0.5*d^2` then 0.5), so the
+//!    derivative of a polynomial folds to the polynomial's derivative: FPUT's spring force
+//!    is ±(d + α d² + β d³), d = q_{i+1} − q_i, in eleven instructions with the two loads —
+//!    against two sweeps of fifteen on dual numbers.
+//! 3. What the outputs (the value, or the force on each slot) do not need is dropped — ℓ's
+//!    value from the force —, and the values are given registers, reused once dead: at most
+//!    [`MAX_REGISTERS`] of [`LANES`] numbers, a register file on the stack. A kind that
+//!    needs more runs term by term.
+//!
+//! The programs compute in another order than the tape and the dual numbers do: they agree
+//! to round-off (tested), not bit for bit.
+
+use std::collections::HashMap;
+
+use super::expression::{Op, Tape};
+use super::tree::{Binary, Function, Symbol};
+
+/// Sites evaluated together: the length of a register.
+pub const LANES: usize = 32;
+
+/// Most registers of a program (8 KB of registers on the stack).
+pub const MAX_REGISTERS: usize = 32;
+
+/// A register file: [`MAX_REGISTERS`] registers of [`LANES`] numbers.
+pub type Registers = [[f64; LANES]; MAX_REGISTERS];
+
+/// One instruction, its operands by value (in the building) or register (in a program).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Instruction {
+    Number(f64),
+    Coordinate(usize),
+    Velocity(usize),
+    Time,
+    Negate(usize),
+    Scale(usize, f64),
+    Shift(usize, f64),
+    DivideBy(usize, f64),
+    Reciprocal(usize),
+    Square(usize),
+    PowerInteger(usize, i32),
+    Call(Function, usize),
+    /// x ↦ −1 for x < 0, else 1: the derivative of `abs` as the dual numbers take it.
+    Sign(usize),
+    Binary(Binary, usize, usize),
+}
+
+impl Instruction {
+    /// The operands.
+    fn operands(self) -> [Option<usize>; 2] {
+        match self {
+            Instruction::Number(_)
+            | Instruction::Coordinate(_)
+            | Instruction::Velocity(_)
+            | Instruction::Time => [None, None],
+            Instruction::Negate(x)
+            | Instruction::Scale(x, _)
+            | Instruction::Shift(x, _)
+            | Instruction::DivideBy(x, _)
+            | Instruction::Reciprocal(x)
+            | Instruction::Square(x)
+            | Instruction::PowerInteger(x, _)
+            | Instruction::Call(_, x)
+            | Instruction::Sign(x) => [Some(x), None],
+            Instruction::Binary(_, x, y) => [Some(x), Some(y)],
+        }
+    }
+
+    /// The instruction with its operands renamed by `rename`.
+    fn renamed(self, rename: impl Fn(usize) -> usize) -> Instruction {
+        match self {
+            Instruction::Negate(x) => Instruction::Negate(rename(x)),
+            Instruction::Scale(x, c) => Instruction::Scale(rename(x), c),
+            Instruction::Shift(x, c) => Instruction::Shift(rename(x), c),
+            Instruction::DivideBy(x, c) => Instruction::DivideBy(rename(x), c),
+            Instruction::Reciprocal(x) => Instruction::Reciprocal(rename(x)),
+            Instruction::Square(x) => Instruction::Square(rename(x)),
+            Instruction::PowerInteger(x, n) => Instruction::PowerInteger(rename(x), n),
+            Instruction::Call(function, x) => Instruction::Call(function, rename(x)),
+            Instruction::Sign(x) => Instruction::Sign(rename(x)),
+            Instruction::Binary(binary, x, y) => Instruction::Binary(binary, rename(x), rename(y)),
+            leaf => leaf,
+        }
+    }
+
+    /// A key equal for equal instructions (numbers by their bits).
+    fn key(self) -> (u8, usize, usize, u64) {
+        let none = usize::MAX;
+        match self {
+            Instruction::Number(c) => (0, none, none, c.to_bits()),
+            Instruction::Coordinate(u) => (1, u, none, 0),
+            Instruction::Velocity(u) => (2, u, none, 0),
+            Instruction::Time => (3, none, none, 0),
+            Instruction::Negate(x) => (4, x, none, 0),
+            Instruction::Scale(x, c) => (5, x, none, c.to_bits()),
+            Instruction::Shift(x, c) => (6, x, none, c.to_bits()),
+            Instruction::DivideBy(x, c) => (7, x, none, c.to_bits()),
+            Instruction::Reciprocal(x) => (8, x, none, 0),
+            Instruction::Square(x) => (9, x, none, 0),
+            Instruction::PowerInteger(x, n) => (10, x, none, u64::from(n as u32)),
+            Instruction::Call(function, x) => (11, x, none, function as u64),
+            Instruction::Sign(x) => (12, x, none, 0),
+            Instruction::Binary(binary, x, y) => (13, x, y, binary as u64),
+        }
+    }
+}
+
+/// An adjoint while the program is built: zero, a number, or a value's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Adjoint {
+    Zero,
+    Constant(f64),
+    Value(usize),
+}
+
+/// Instructions in static single assignment, equal ones shared.
+#[derive(Default)]
+struct Builder {
+    instructions: Vec<Instruction>,
+    known: HashMap<(u8, usize, usize, u64), usize>,
+}
+
+impl Builder {
+    /// The value of `instruction`: an equal earlier one's, or a new one.
+    fn emit(&mut self, instruction: Instruction) -> usize {
+        *self.known.entry(instruction.key()).or_insert_with(|| {
+            self.instructions.push(instruction);
+            self.instructions.len() - 1
+        })
+    }
+
+    /// xⁿ: x, its square, its reciprocal, or an integer power (one instruction, whose
+    /// derivative n xⁿ⁻¹ is one more: FPUT's d⁴ differentiates to the d³ it has already).
+    fn power(&mut self, x: usize, n: i32) -> usize {
+        match n {
+            1 => x,
+            2 => self.emit(Instruction::Square(x)),
+            -1 => self.emit(Instruction::Reciprocal(x)),
+            _ => self.emit(Instruction::PowerInteger(x, n)),
+        }
+    }
+
+    /// a · x.
+    fn times(&mut self, a: Adjoint, x: usize) -> Adjoint {
+        match a {
+            Adjoint::Zero => Adjoint::Zero,
+            Adjoint::Constant(1.0) => Adjoint::Value(x),
+            Adjoint::Constant(c) => Adjoint::Value(self.emit(Instruction::Scale(x, c))),
+            Adjoint::Value(a) => {
+                Adjoint::Value(self.emit(Instruction::Binary(Binary::Multiply, a, x)))
+            }
+        }
+    }
+
+    /// c · a.
+    fn scaled(&mut self, a: Adjoint, c: f64) -> Adjoint {
+        match a {
+            Adjoint::Zero => Adjoint::Zero,
+            Adjoint::Constant(d) => Adjoint::Constant(c * d),
+            Adjoint::Value(x) if c == -1.0 => Adjoint::Value(self.emit(Instruction::Negate(x))),
+            Adjoint::Value(x) => Adjoint::Value(self.emit(Instruction::Scale(x, c))),
+        }
+    }
+
+    /// a + b.
+    fn plus(&mut self, a: Adjoint, b: Adjoint) -> Adjoint {
+        match (a, b) {
+            (Adjoint::Zero, other) | (other, Adjoint::Zero) => other,
+            (Adjoint::Constant(c), Adjoint::Constant(d)) => Adjoint::Constant(c + d),
+            (Adjoint::Constant(c), Adjoint::Value(x))
+            | (Adjoint::Value(x), Adjoint::Constant(c)) => {
+                Adjoint::Value(self.emit(Instruction::Shift(x, c)))
+            }
+            (Adjoint::Value(x), Adjoint::Value(y)) => {
+                Adjoint::Value(self.emit(Instruction::Binary(Binary::Add, x, y)))
+            }
+        }
+    }
+
+    /// The values of `tape`'s instructions; the last is its result. `None` for a tape that
+    /// reads what a compiled tape does not (a parameter, a site).
+    fn forward(&mut self, tape: &Tape) -> Option<usize> {
+        let load = |symbol: Symbol| match symbol {
+            Symbol::Coordinate(u) => Some(Instruction::Coordinate(u)),
+            Symbol::Velocity(u) => Some(Instruction::Velocity(u)),
+            Symbol::Time => Some(Instruction::Time),
+            Symbol::Parameter(_) | Symbol::Site(_) => None,
+        };
+        let mut stack: Vec<usize> = Vec::new();
+        for op in tape.ops() {
+            let value = match *op {
+                Op::Number(c) => self.emit(Instruction::Number(c)),
+                Op::Load(symbol) => self.emit(load(symbol)?),
+                Op::LoadSquare(symbol) => {
+                    let x = self.emit(load(symbol)?);
+                    self.emit(Instruction::Square(x))
+                }
+                Op::Binary(binary) => {
+                    let y = stack.pop()?;
+                    let x = stack.pop()?;
+                    self.emit(Instruction::Binary(binary, x, y))
+                }
+                Op::WithSymbol(binary, symbol) => {
+                    let x = stack.pop()?;
+                    let y = self.emit(load(symbol)?);
+                    self.emit(Instruction::Binary(binary, x, y))
+                }
+                Op::WithSquare(binary, symbol) => {
+                    let x = stack.pop()?;
+                    let y = self.emit(load(symbol)?);
+                    let y = self.emit(Instruction::Square(y));
+                    self.emit(Instruction::Binary(binary, x, y))
+                }
+                unary => {
+                    let x = stack.pop()?;
+                    self.emit(match unary {
+                        Op::Negate => Instruction::Negate(x),
+                        Op::Scale(c) => Instruction::Scale(x, c),
+                        Op::Shift(c) => Instruction::Shift(x, c),
+                        Op::DivideBy(c) => Instruction::DivideBy(x, c),
+                        Op::Reciprocal => Instruction::Reciprocal(x),
+                        Op::Square => Instruction::Square(x),
+                        Op::PowerInteger(n) => {
+                            stack.push(self.power(x, n));
+                            continue;
+                        }
+                        Op::Call(function) => Instruction::Call(function, x),
+                        _ => return None,
+                    })
+                }
+            };
+            stack.push(value);
+        }
+        stack.pop()
+    }
+
+    /// The derivative of `function` at the value `x`, whose result is the value `y`.
+    fn derivative(&mut self, function: Function, x: usize, y: usize) -> usize {
+        let one_minus_square = |builder: &mut Builder, z: usize| {
+            let square = builder.emit(Instruction::Square(z));
+            let negated = builder.emit(Instruction::Negate(square));
+            builder.emit(Instruction::Shift(negated, 1.0))
+        };
+        match function {
+            Function::Sin => self.emit(Instruction::Call(Function::Cos, x)),
+            Function::Cos => {
+                let sine = self.emit(Instruction::Call(Function::Sin, x));
+                self.emit(Instruction::Negate(sine))
+            }
+            Function::Tan => {
+                let square = self.emit(Instruction::Square(y));
+                self.emit(Instruction::Shift(square, 1.0))
+            }
+            Function::Asin | Function::Acos => {
+                let root = one_minus_square(self, x);
+                let root = self.emit(Instruction::Call(Function::Sqrt, root));
+                let reciprocal = self.emit(Instruction::Reciprocal(root));
+                match function {
+                    Function::Asin => reciprocal,
+                    _ => self.emit(Instruction::Negate(reciprocal)),
+                }
+            }
+            Function::Atan => {
+                let square = self.emit(Instruction::Square(x));
+                let denominator = self.emit(Instruction::Shift(square, 1.0));
+                self.emit(Instruction::Reciprocal(denominator))
+            }
+            Function::Sinh => self.emit(Instruction::Call(Function::Cosh, x)),
+            Function::Cosh => self.emit(Instruction::Call(Function::Sinh, x)),
+            Function::Tanh => one_minus_square(self, y),
+            Function::Exp => y,
+            Function::Ln => self.emit(Instruction::Reciprocal(x)),
+            Function::Sqrt => {
+                let reciprocal = self.emit(Instruction::Reciprocal(y));
+                self.emit(Instruction::Scale(reciprocal, 0.5))
+            }
+            Function::Abs => self.emit(Instruction::Sign(x)),
+        }
+    }
+
+    /// The gradient of the value `output` with respect to the coordinates of `width` slots,
+    /// by reverse mode over the instructions before it. `None` for an exponent that is not a
+    /// number where one must be.
+    fn reverse(&mut self, output: usize, width: usize) -> Option<Vec<Adjoint>> {
+        let mut adjoints = vec![Adjoint::Zero; output + 1];
+        adjoints[output] = Adjoint::Constant(1.0);
+        let mut gradient = vec![Adjoint::Zero; width];
+        for value in (0..=output).rev() {
+            let a = adjoints[value];
+            if a == Adjoint::Zero {
+                continue;
+            }
+            let mut add = |builder: &mut Builder, to: usize, share: Adjoint| {
+                adjoints[to] = builder.plus(adjoints[to], share);
+            };
+            match self.instructions[value] {
+                Instruction::Number(_)
+                | Instruction::Time
+                | Instruction::Velocity(_)
+                | Instruction::Sign(_) => {}
+                Instruction::Coordinate(u) => gradient[u] = self.plus(gradient[u], a),
+                Instruction::Negate(x) => {
+                    let share = self.scaled(a, -1.0);
+                    add(self, x, share);
+                }
+                Instruction::Scale(x, c) => {
+                    let share = self.scaled(a, c);
+                    add(self, x, share);
+                }
+                Instruction::Shift(x, _) => add(self, x, a),
+                Instruction::DivideBy(x, c) => {
+                    let share = match a {
+                        Adjoint::Value(r) => Adjoint::Value(self.emit(Instruction::DivideBy(r, c))),
+                        Adjoint::Constant(d) => Adjoint::Constant(d / c),
+                        Adjoint::Zero => Adjoint::Zero,
+                    };
+                    add(self, x, share);
+                }
+                Instruction::Reciprocal(x) => {
+                    // d(1/x) = −(1/x)².
+                    let square = self.emit(Instruction::Square(value));
+                    let share = self.times(a, square);
+                    let share = self.scaled(share, -1.0);
+                    add(self, x, share);
+                }
+                Instruction::Square(x) => {
+                    let share = self.scaled(a, 2.0);
+                    let share = self.times(share, x);
+                    add(self, x, share);
+                }
+                Instruction::PowerInteger(x, n) => {
+                    let share = self.scaled(a, f64::from(n));
+                    let share = match n - 1 {
+                        0 => share,
+                        m => {
+                            let power = self.power(x, m);
+                            self.times(share, power)
+                        }
+                    };
+                    add(self, x, share);
+                }
+                Instruction::Call(function, x) => {
+                    let derivative = self.derivative(function, x, value);
+                    let share = self.times(a, derivative);
+                    add(self, x, share);
+                }
+                Instruction::Binary(binary, x, y) => {
+                    for (to, share) in self.binary_shares(binary, x, y, value, a)? {
+                        add(self, to, share);
+                    }
+                }
+            }
+        }
+        Some(gradient)
+    }
+
+    /// The shares of the adjoint `a` of `value` = x ∘ y that go to x and to y.
+    fn binary_shares(
+        &mut self,
+        binary: Binary,
+        x: usize,
+        y: usize,
+        value: usize,
+        a: Adjoint,
+    ) -> Option<[(usize, Adjoint); 2]> {
+        Some(match binary {
+            Binary::Add => [(x, a), (y, a)],
+            Binary::Subtract => [(x, a), (y, self.scaled(a, -1.0))],
+            Binary::Multiply => [(x, self.times(a, y)), (y, self.times(a, x))],
+            Binary::Divide => {
+                // d(x/y) = dx/y − (x/y) dy/y.
+                let reciprocal = self.emit(Instruction::Reciprocal(y));
+                let to_x = self.times(a, reciprocal);
+                let to_y = self.times(to_x, value);
+                [(x, to_x), (y, self.scaled(to_y, -1.0))]
+            }
+            Binary::Power => {
+                // x^y = exp(y ln x): d = y x^y / x dx + x^y ln x dy.
+                let reciprocal = self.emit(Instruction::Reciprocal(x));
+                let to_x = self.times(a, y);
+                let to_x = self.times(to_x, value);
+                let to_x = self.times(to_x, reciprocal);
+                let logarithm = self.emit(Instruction::Call(Function::Ln, x));
+                let to_y = self.times(a, value);
+                [(x, to_x), (y, self.times(to_y, logarithm))]
+            }
+            Binary::PowerConstant => {
+                // x^c, c a number: c x^(c−1) dx; the exponent's share is not needed.
+                let Instruction::Number(c) = self.instructions[y] else {
+                    return None;
+                };
+                let exponent = self.emit(Instruction::Number(c - 1.0));
+                let power = self.emit(Instruction::Binary(Binary::PowerConstant, x, exponent));
+                let share = self.scaled(a, c);
+                [(x, self.times(share, power)), (y, Adjoint::Zero)]
+            }
+            Binary::Atan2 => {
+                // atan2(x, y) = the angle of (y, x): dx y/(x² + y²) − dy x/(x² + y²).
+                let (xx, yy) = (
+                    self.emit(Instruction::Square(x)),
+                    self.emit(Instruction::Square(y)),
+                );
+                let radius = self.emit(Instruction::Binary(Binary::Add, xx, yy));
+                let reciprocal = self.emit(Instruction::Reciprocal(radius));
+                let share = self.times(a, reciprocal);
+                let to_y = self.times(share, x);
+                [(x, self.times(share, y)), (y, self.scaled(to_y, -1.0))]
+            }
+        })
+    }
+}
+
+/// Where a slot's gradient comes from in a program.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Output {
+    Zero,
+    Constant(f64),
+    Register(usize),
+}
+
+/// The value or the force ∂ℓ/∂q of one kind of term as a straight-line program on registers
+/// of [`LANES`] sites (see the [module docs](self)).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Program {
+    /// (destination register, instruction on registers).
+    steps: Vec<(usize, Instruction)>,
+    /// ℓ (one output), or ∂ℓ/∂q of each slot.
+    outputs: Vec<Output>,
+}
+
+/// Where the lanes of a batch read their coordinates and write their forces: slot u of
+/// lane l is entry `bases[u] + l · stride` of q, q̇ and the force.
+#[derive(Debug, Clone, Copy)]
+pub struct Lanes<'a> {
+    /// The number of sites in the batch (at most [`LANES`]).
+    pub count: usize,
+    /// Each slot's entry at the first site.
+    pub bases: &'a [usize],
+    /// The distance between the entries of neighbouring sites.
+    pub stride: usize,
+}
+
+impl Program {
+    /// The program of `tape`'s value; `None` if it needs more than [`MAX_REGISTERS`]
+    /// registers.
+    pub fn value(tape: &Tape) -> Option<Program> {
+        let mut builder = Builder::default();
+        let output = builder.forward(tape)?;
+        Program::compile(builder.instructions, &[Adjoint::Value(output)])
+    }
+
+    /// The program of `tape`'s force ∂ℓ/∂q in the coordinates of its `width` slots; `None`
+    /// if it needs more than [`MAX_REGISTERS`] registers.
+    pub fn force(tape: &Tape, width: usize) -> Option<Program> {
+        let mut builder = Builder::default();
+        let output = builder.forward(tape)?;
+        let gradient = builder.reverse(output, width)?;
+        Program::compile(builder.instructions, &gradient)
+    }
+
+    /// The program of the `instructions` that `outputs` need, on registers.
+    fn compile(instructions: Vec<Instruction>, outputs: &[Adjoint]) -> Option<Program> {
+        // The instructions the outputs need, each after its operands.
+        let mut needed = vec![false; instructions.len()];
+        for output in outputs {
+            if let Adjoint::Value(x) = output {
+                needed[*x] = true;
+            }
+        }
+        for value in (0..instructions.len()).rev() {
+            if needed[value] {
+                for operand in instructions[value].operands().into_iter().flatten() {
+                    needed[operand] = true;
+                }
+            }
+        }
+        let mut last_use = vec![0; instructions.len()];
+        for (value, instruction) in instructions.iter().enumerate() {
+            if needed[value] {
+                for operand in instruction.operands().into_iter().flatten() {
+                    last_use[operand] = value;
+                }
+            }
+        }
+        for output in outputs {
+            if let Adjoint::Value(x) = output {
+                last_use[*x] = usize::MAX;
+            }
+        }
+        // Registers, reused once their value is dead (never as the destination of the
+        // instruction that reads them last: operands and destination stay apart).
+        let mut register = vec![usize::MAX; instructions.len()];
+        let mut free: Vec<usize> = Vec::new();
+        let mut count = 0;
+        let mut steps = Vec::new();
+        for (value, instruction) in instructions.iter().enumerate() {
+            if !needed[value] {
+                continue;
+            }
+            let destination = free.pop().unwrap_or_else(|| {
+                count += 1;
+                count - 1
+            });
+            register[value] = destination;
+            steps.push((destination, instruction.renamed(|x| register[x])));
+            for operand in instruction.operands().into_iter().flatten() {
+                if last_use[operand] == value && !free.contains(&register[operand]) {
+                    free.push(register[operand]);
+                }
+            }
+        }
+        if count > MAX_REGISTERS {
+            return None;
+        }
+        let outputs = outputs
+            .iter()
+            .map(|output| match *output {
+                Adjoint::Zero => Output::Zero,
+                Adjoint::Constant(c) => Output::Constant(c),
+                Adjoint::Value(x) => Output::Register(register[x]),
+            })
+            .collect();
+        Some(Program { steps, outputs })
+    }
+
+    /// The sum of ℓ over the sites of `lanes` at time `t` (a [`Program::value`]), reading
+    /// their coordinates and velocities from `q` and `v`, with `registers` as scratch.
+    #[inline]
+    pub fn sum(
+        &self,
+        registers: &mut Registers,
+        lanes: Lanes<'_>,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+    ) -> f64 {
+        self.execute(registers, lanes, t, q, v);
+        match self.outputs.first() {
+            Some(Output::Register(r)) => registers[*r][..lanes.count].iter().sum(),
+            Some(Output::Constant(c)) => c * lanes.count as f64,
+            Some(Output::Zero) | None => 0.0,
+        }
+    }
+
+    /// Add the force ∂ℓ/∂q of the sites of `lanes` at time `t` (a [`Program::force`]) to
+    /// `force`, reading their coordinates and velocities from `q` and `v`, with `registers`
+    /// as scratch.
+    #[inline]
+    pub fn add_force(
+        &self,
+        registers: &mut Registers,
+        lanes: Lanes<'_>,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        force: &mut [f64],
+    ) {
+        self.execute(registers, lanes, t, q, v);
+        for (&output, &base) in self.outputs.iter().zip(lanes.bases) {
+            let entries = force[base..]
+                .iter_mut()
+                .step_by(lanes.stride)
+                .take(lanes.count);
+            match output {
+                Output::Zero => {}
+                Output::Constant(c) => entries.for_each(|f| *f += c),
+                Output::Register(r) => entries.zip(&registers[r]).for_each(|(f, g)| *f += g),
+            }
+        }
+    }
+
+    /// Run the steps on the sites of `lanes`.
+    #[inline]
+    fn execute(&self, registers: &mut Registers, lanes: Lanes<'_>, t: f64, q: &[f64], v: &[f64]) {
+        let Lanes {
+            count,
+            bases,
+            stride,
+        } = lanes;
+        let gather = |target: &mut [f64; LANES], from: &[f64], base: usize| {
+            if stride == 1 {
+                target[..count].copy_from_slice(&from[base..base + count]);
+            } else {
+                for (lane, x) in target[..count].iter_mut().enumerate() {
+                    *x = from[base + lane * stride];
+                }
+            }
+        };
+        for &(destination, instruction) in &self.steps {
+            let (before, after) = registers.split_at_mut(destination);
+            let (target, after) = after.split_first_mut().unwrap_or_else(|| unreachable!());
+            let read = |x: usize| -> &[f64; LANES] {
+                if x < destination {
+                    &before[x]
+                } else {
+                    &after[x - destination - 1]
+                }
+            };
+            match instruction {
+                Instruction::Number(c) => target.fill(c),
+                Instruction::Time => target.fill(t),
+                Instruction::Coordinate(u) => gather(target, q, bases[u]),
+                Instruction::Velocity(u) => gather(target, v, bases[u]),
+                Instruction::Negate(x) => map(target, read(x), |x| -x),
+                Instruction::Scale(x, c) => map(target, read(x), |x| x * c),
+                Instruction::Shift(x, c) => map(target, read(x), |x| x + c),
+                Instruction::DivideBy(x, c) => map(target, read(x), |x| x / c),
+                Instruction::Reciprocal(x) => map(target, read(x), f64::recip),
+                Instruction::Square(x) => map(target, read(x), |x| x * x),
+                // Small powers by products, as fast as written out.
+                Instruction::PowerInteger(x, 3) => map(target, read(x), |x| x * x * x),
+                Instruction::PowerInteger(x, 4) => map(target, read(x), |x| (x * x) * (x * x)),
+                Instruction::PowerInteger(x, n) => map(target, read(x), |x| x.powi(n)),
+                Instruction::Call(function, x) => map(target, read(x), |x| function.apply(x)),
+                Instruction::Sign(x) => map(target, read(x), |x| if x < 0.0 { -1.0 } else { 1.0 }),
+                Instruction::Binary(binary, x, y) => {
+                    let (x, y) = (read(x), read(y));
+                    match binary {
+                        Binary::Add => zip(target, x, y, |x, y| x + y),
+                        Binary::Subtract => zip(target, x, y, |x, y| x - y),
+                        Binary::Multiply => zip(target, x, y, |x, y| x * y),
+                        Binary::Divide => zip(target, x, y, |x, y| x / y),
+                        other => zip(target, x, y, |x, y| other.apply(x, y)),
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// target = f(x), lane by lane.
+#[inline(always)]
+fn map(target: &mut [f64; LANES], x: &[f64; LANES], f: impl Fn(f64) -> f64) {
+    for (t, x) in target.iter_mut().zip(x) {
+        *t = f(*x);
+    }
+}
+
+/// target = f(x, y), lane by lane.
+#[inline(always)]
+fn zip(target: &mut [f64; LANES], x: &[f64; LANES], y: &[f64; LANES], f: impl Fn(f64, f64) -> f64) {
+    for ((t, x), y) in target.iter_mut().zip(x).zip(y) {
+        *t = f(*x, *y);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::text::expression::{Expression, Velocities};
+    use crate::model::text::tree::Names;
+
+    /// The tape of `text` in the coordinates x, y with the parameters a, b = `values`.
+    fn tape(text: &str, values: &[f64]) -> Tape {
+        let names = Names {
+            coordinates: &["x", "y"],
+            velocities: &["vx", "vy"],
+            parameters: &["a", "b"],
+            phase_space: true,
+            families: &[],
+            size: None,
+        };
+        Expression::parse(text, "lagrangian", &names)
+            .unwrap()
+            .compile(values, Velocities::Read)
+    }
+
+    #[test]
+    fn the_fput_spring_force_folds_to_its_polynomial() {
+        let (alpha, beta) = (0.25, 0.5);
+        let spring = tape("-(0.5*(y-x)^2 + a/3*(y-x)^3 + b/4*(y-x)^4)", &[alpha, beta]);
+        let gradient = Program::force(&spring, 2).unwrap();
+        // The loads, d = y − x, d², d³, −d − α d² − β d³ in five, and its negative: neither
+        // ℓ's value nor d⁴, and d computed once.
+        assert_eq!(gradient.steps.len(), 11, "{:?}", gradient.steps);
+        // A chain of springs: lane l reads x = q[l], y = q[l + 1].
+        let q: Vec<f64> = (0..6).map(|i| 0.3 * (1.7 * f64::from(i)).sin()).collect();
+        let mut force = vec![0.0; 6];
+        let mut registers = [[0.0; LANES]; MAX_REGISTERS];
+        let lanes = Lanes {
+            count: 5,
+            bases: &[0, 1],
+            stride: 1,
+        };
+        gradient.add_force(&mut registers, lanes, 0.0, &q, &[0.0; 6], &mut force);
+        let derivative = |d: f64| d + alpha * d * d + beta * d * d * d;
+        for (j, f) in force.iter().enumerate() {
+            let right = if j < 5 {
+                derivative(q[j + 1] - q[j])
+            } else {
+                0.0
+            };
+            let left = if j > 0 {
+                derivative(q[j] - q[j - 1])
+            } else {
+                0.0
+            };
+            // The same polynomial evaluated in another order: equal to a few ulps.
+            assert!((f - (right - left)).abs() <= 1e-15, "{j}: {f}");
+        }
+    }
+
+    #[test]
+    fn every_instruction_has_the_dual_numbers_derivative() {
+        let text = "sin(x)*cos(y) + tan(0.1*x) - asin(0.2*y) + acos(0.1*x) + atan(y)/4 \
+                    + sinh(x)*cosh(y)*tanh(x) + exp(y)*ln(2 + x^2) + sqrt(3 + y^2) \
+                    + abs(x - y)^1.5 + (1 + x^2)^y + atan2(x, 2 + y) + 1/(2 + x^2) \
+                    - (1 + y^2)^-2 + x^5 + x*y*a + b - x/3 + vx*x^2";
+        let tape = tape(text, &[0.7, 1.9]);
+        let gradient = Program::force(&tape, 2).unwrap();
+        for (x, y) in [(0.3, -0.4), (-0.8, 0.6)] {
+            let mut force = [0.0; 2];
+            let mut registers = [[0.0; LANES]; MAX_REGISTERS];
+            let lanes = Lanes {
+                count: 1,
+                bases: &[0, 1],
+                stride: 1,
+            };
+            gradient.add_force(&mut registers, lanes, 0.0, &[x, y], &[0.5, 0.0], &mut force);
+            let (_, dx) = num_dual::first_derivative(
+                |x| tape.evaluate(0.0.into(), &[x, y.into()], &[0.5.into(), 0.0.into()]),
+                x,
+            );
+            let (_, dy) = num_dual::first_derivative(
+                |y| tape.evaluate(0.0.into(), &[x.into(), y], &[0.5.into(), 0.0.into()]),
+                y,
+            );
+            assert!(
+                (force[0] - dx).abs() <= 1e-14 * dx.abs().max(1.0),
+                "{force:?} {dx}"
+            );
+            assert!(
+                (force[1] - dy).abs() <= 1e-14 * dy.abs().max(1.0),
+                "{force:?} {dy}"
+            );
+        }
+    }
+}
