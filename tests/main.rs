@@ -34,3 +34,4 @@ mod step_doubling;
 mod stress;
 mod text;
 mod text_chain;
+mod text_tangent;

@@ -91,7 +91,7 @@ use super::batch::{LANES, Lanes, MAX_REGISTERS, Program, Registers};
 use super::expression::{Expression, Split, Tape, Velocities};
 use super::parse::parse;
 use super::tree::{Base, Index, Names, Node, Site, Symbol};
-use super::{Declared, TextError, TextModel, TextSpec, intern};
+use super::{Declared, TextError, TextModel, TextSpec, intern, named_values, parameter_index};
 use crate::error::Error;
 use crate::model::Structure;
 use crate::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian, TermWidth};
@@ -375,11 +375,7 @@ impl TextChainModel {
 
     /// The parameters, name and current value (the size among them).
     pub fn parameters(&self) -> Vec<(&'static str, f64)> {
-        self.parameter_names
-            .iter()
-            .copied()
-            .zip(self.parameter_values.iter().copied())
-            .collect()
+        named_values(&self.parameter_names, &self.parameter_values)
     }
 
     /// Set the parameter `name` (the size resizes the chain) and recompile the terms.
@@ -389,21 +385,7 @@ impl TextChainModel {
     /// finite, a size that is not a whole number from 1 to [`MAX_SITES`], or a size for which
     /// the terms do not determine every coordinate's motion; the model is then unchanged.
     pub fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
-        let Some(index) = self.parameter_names.iter().position(|known| *known == name) else {
-            return Err(Error::invalid(
-                name,
-                format!(
-                    "not a parameter of the text model (parameters: {})",
-                    self.parameter_names.join(", ")
-                ),
-            ));
-        };
-        if !value.is_finite() {
-            return Err(Error::invalid(
-                name,
-                format!("{value} is not a finite number"),
-            ));
-        }
+        let index = parameter_index(&self.parameter_names, name, value)?;
         if index == self.size {
             check_size(name, value).map_err(|error| Error::invalid(name, error.to_string()))?;
         }

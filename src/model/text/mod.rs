@@ -513,11 +513,7 @@ impl TextModel {
 
     /// The parameters, name and current value.
     pub fn parameters(&self) -> Vec<(&'static str, f64)> {
-        self.parameter_names
-            .iter()
-            .copied()
-            .zip(self.parameter_values.iter().copied())
-            .collect()
+        named_values(&self.parameter_names, &self.parameter_values)
     }
 
     /// Set the parameter `name`.
@@ -526,25 +522,7 @@ impl TextModel {
     /// [`Error::InvalidParameter`] for a name that is not a parameter or a value that is not
     /// finite.
     pub fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
-        let Some(index) = self.parameter_names.iter().position(|known| *known == name) else {
-            return Err(Error::invalid(
-                name,
-                format!(
-                    "not a parameter of the text model (parameters: {})",
-                    if self.parameter_names.is_empty() {
-                        "none".into()
-                    } else {
-                        self.parameter_names.join(", ")
-                    }
-                ),
-            ));
-        };
-        if !value.is_finite() {
-            return Err(Error::invalid(
-                name,
-                format!("{value} is not a finite number"),
-            ));
-        }
+        let index = parameter_index(&self.parameter_names, name, value)?;
         self.parameter_values[index] = value;
         self.tapes = Tapes::compile(
             &self.lagrangian,
@@ -555,6 +533,37 @@ impl TextModel {
         );
         Ok(())
     }
+}
+
+/// Each parameter's name with its value.
+fn named_values(names: &[&'static str], values: &[f64]) -> Vec<(&'static str, f64)> {
+    names.iter().copied().zip(values.iter().copied()).collect()
+}
+
+/// The index of the parameter `name` among `names`, for the new value `value`.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for a name that is not a parameter or a value that is not
+/// finite.
+fn parameter_index(names: &[&'static str], name: &str, value: f64) -> Result<usize, Error> {
+    let Some(index) = names.iter().position(|known| *known == name) else {
+        let known = if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        };
+        return Err(Error::invalid(
+            name,
+            format!("not a parameter of the text model (parameters: {known})"),
+        ));
+    };
+    if !value.is_finite() {
+        return Err(Error::invalid(
+            name,
+            format!("{value} is not a finite number"),
+        ));
+    }
+    Ok(index)
 }
 
 /// The checked names of a model: its coordinates (or indexed families), their velocities and
