@@ -17,7 +17,6 @@ use crate::method::collocation::SpectralCollocation;
 use crate::method::local::LocalMethod;
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
-use crate::method::registry::VectorMethodVisitor;
 use crate::method::space::{DynState, State, TangentMap};
 use crate::method::variational::composition::Composition;
 use crate::method::variational::discrete_lagrangian::{
@@ -31,6 +30,19 @@ use crate::model::Lagrangian;
 use crate::model::local::LocalLagrangian;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector};
+
+/// Receives a method on ℝᴺ as its concrete type ([`AnyMethod::visit`],
+/// [`crate::MethodSpec::visit_vector`]); N is fixed (`Const<N>`) or chosen at run time
+/// ([`crate::dimension::Dyn`]).
+pub trait VectorMethodVisitor<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// What the visit returns.
+    type Output;
+    /// Use `method`.
+    fn visit<M: Method<N> + Clone>(self, method: M) -> Self::Output;
+}
 
 /// The failure of a step handed a workspace that another method built (a misuse of
 /// [`Method`], never a numerical failure).

@@ -31,6 +31,7 @@ use std::str::FromStr;
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::method::any::AnyMethod;
+pub use crate::method::any::VectorMethodVisitor;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::local::LocalMethod;
@@ -331,18 +332,6 @@ impl Default for MethodSpec {
     fn default() -> Self {
         METHODS[0].spec()
     }
-}
-
-/// Receives the method of a [`MethodSpec`] for models on ℝᴺ as its concrete type; N is fixed
-/// (`Const<N>`) or chosen at run time ([`crate::dimension::Dyn`]).
-pub trait VectorMethodVisitor<N: Dimension>
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    /// What the visit returns.
-    type Output;
-    /// Use `method`.
-    fn visit<M: Method<N> + Clone>(self, method: M) -> Self::Output;
 }
 
 /// Receives a method for runtime-dimension models ([`crate::model::local::LocalLagrangian`])
