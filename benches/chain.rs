@@ -6,9 +6,17 @@
 //! - `svi`: [`Integrator::run`] of [`StormerVerlet`] on [`svi_models::Fput`] (α = 0.25,
 //!   β = 0.5), no observer: ∂L/∂q assembled from the spring terms by automatic
 //!   differentiation, the stepping loop's compensated summation included;
+//! - `terms`: the same run by the one implementation of ℝᴺ on `Terms(Fput)` (the chain as a
+//!   run-time-size [`svi::Lagrangian`] whose derivatives are assembled term by term);
 //! - `hand_written`: kick–drift–kick with the force F_i = V'(q_{i+1} − q_i) − V'(q_i − q_{i−1})
 //!   written by hand, one force evaluation per step, plain summation (what a user writes
 //!   without a library).
+//!
+//! # `chain_svi/<implementation>/10⁴`
+//!
+//! Ten steps (h = 0.2) of SVI's fixed point with 6 CGL points: `local` (the large-system
+//! path of `svi::method::local`) against `terms` (the one implementation of ℝᴺ on
+//! `Terms(Fput)`).
 //!
 //! # `chain_force/<implementation>/10⁴`
 //!
@@ -24,8 +32,8 @@ use nalgebra::DVector;
 use std::hint::black_box;
 use std::time::Duration;
 use svi::method::DynInitial;
-use svi::model::local::{LocalDefaults, LocalLagrangian};
-use svi::{Integrator, StormerVerlet};
+use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
+use svi::{Integrator, StormerVerlet, Svi};
 use svi_models::Fput;
 
 const STEPS: usize = 100;
@@ -108,6 +116,17 @@ fn bench(c: &mut Criterion) {
                 )
             })
         });
+        // The one implementation of ℝᴺ on the chain as a sum of terms.
+        let terms = Integrator::new(Terms(model.clone()), StormerVerlet::default());
+        group.bench_function(BenchmarkId::new("terms", n), |b| {
+            b.iter(|| {
+                black_box(
+                    terms
+                        .run_from_velocity(t0, q0.clone(), v0.clone(), H, t_end, &mut ())
+                        .unwrap(),
+                )
+            })
+        });
         group.bench_function(BenchmarkId::new("hand_written", n), |b| {
             b.iter(|| {
                 let (mut q, mut p) = (q0.as_slice().to_vec(), v0.as_slice().to_vec());
@@ -116,6 +135,38 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    group.finish();
+
+    // SVI's fixed point (6 CGL points, 12 Gauss points), 10 steps of h = 0.2 at n = 10⁴: the
+    // large-system path of `method::local` against the one implementation of ℝᴺ on the
+    // chain as a sum of terms.
+    let mut group = c.benchmark_group("chain_svi");
+    group
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500))
+        .sample_size(20);
+    let n = 10_000;
+    let chain = model(n);
+    let (t0, q0, v0) = chain.initial_state();
+    let t_end = t0 + 10.0 * 0.2;
+    let local = Integrator::new(chain.clone(), Svi::new(6));
+    let initial = DynInitial::Velocity {
+        q: q0.clone(),
+        v: v0.clone(),
+    };
+    group.bench_function(BenchmarkId::new("local", n), |b| {
+        b.iter(|| black_box(local.run(t0, initial.clone(), 0.2, t_end, &mut ()).unwrap()))
+    });
+    let terms = Integrator::new(Terms(chain), Svi::new(6));
+    group.bench_function(BenchmarkId::new("terms", n), |b| {
+        b.iter(|| {
+            black_box(
+                terms
+                    .run_from_velocity(t0, q0.clone(), v0.clone(), 0.2, t_end, &mut ())
+                    .unwrap(),
+            )
+        })
+    });
     group.finish();
 
     // The force alone: ∂L/∂q assembled term by term by AD against the hand-written force.

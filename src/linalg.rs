@@ -100,10 +100,11 @@ pub struct DenseLu {
 }
 
 impl DenseLu {
-    /// Workspace for `size`×`size` systems.
+    /// Workspace for `size`×`size` systems; the matrix is allocated at its first use
+    /// ([`DenseLu::matrix_mut`]), so a Newton iteration that never runs costs no n² memory.
     pub fn new(size: usize) -> Self {
         DenseLu {
-            factors: DMatrix::zeros(size, size),
+            factors: DMatrix::zeros(0, 0),
             pivots: vec![0; size],
         }
     }
@@ -115,6 +116,10 @@ impl DenseLu {
 
     /// The matrix to be factored; fill it, then call [`DenseLu::factor`].
     pub fn matrix_mut(&mut self) -> &mut DMatrix<f64> {
+        let n = self.size();
+        if self.factors.nrows() != n {
+            self.factors = DMatrix::zeros(n, n);
+        }
         &mut self.factors
     }
 

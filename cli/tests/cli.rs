@@ -291,6 +291,10 @@ fn list_names_scenes_and_models() {
         assert!(text.contains(name), "{name}: {text}");
     }
     assert!(text.contains("e = 0.5"), "{text}");
+    // Every name stands apart from its description, the longest included.
+    for name in svi_models::LOCAL_MODEL_NAMES {
+        assert!(text.contains(&format!("  {name} ")), "{name}: {text}");
+    }
 }
 
 #[test]

@@ -195,6 +195,12 @@ macro_rules! any_method {
                 }
             }
 
+            fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+                match self {
+                    $(AnyMethod::$variant(method) => Method::<N>::keeps_sparsity(method, model),)+
+                }
+            }
+
             fn with_points(&self, points: usize) -> Option<Self> {
                 match self {
                     $(AnyMethod::$variant(method) => {

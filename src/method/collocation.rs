@@ -39,6 +39,7 @@ use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
+use crate::model::mass_inverse::MassInverse;
 use crate::nonlinear::{FixedPoint, Newton, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
@@ -153,7 +154,7 @@ where
     /// Quadrature weights b_i on the collocation nodes.
     weights: Vec<f64>,
     /// M⁻¹, from the first step.
-    mass_inverse: Option<OMatrix<f64, N, N>>,
+    mass_inverse: Option<MassInverse<N>>,
     /// f at the collocation nodes.
     accelerations: Vec<OVector<f64, N>>,
     /// Offsets Z_i during the iteration.
@@ -405,7 +406,7 @@ where
                 }
                 force += model.external_force(time, &position, &velocity);
             }
-            *acceleration = mass_inverse * force;
+            mass_inverse.apply_into(&force, acceleration);
         }
         let mut change: f64 = 0.0;
         let mut size: f64 = 0.0;

@@ -151,6 +151,16 @@ where
         None
     }
 
+    /// Whether the method runs `model` without any dense n × n matrix: `model` is a sum of
+    /// local terms ([`Lagrangian::terms`]) and the method's path for it keeps their sparsity
+    /// (O(n) memory and work per step). Such a run takes a model of any size; every other
+    /// run-time-size run is capped by [`crate::method::step::dense_size`]. The default
+    /// (`false`) is always correct.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        let _ = model;
+        false
+    }
+
     /// `false` promises that [`Method::verlet_fractions`] is always `None` (the method is not
     /// Störmer–Verlet or a composition of it): the logarithmic-Hamiltonian splitting is then
     /// not compiled for the method. `true` is always correct.

@@ -216,6 +216,20 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 }
 
+/// Triplets with the entries of one place added up, sorted by (row, column), zeros dropped.
+fn summed_triplets(mut triplets: Vec<(usize, usize, f64)>) -> Vec<(usize, usize, f64)> {
+    triplets.sort_by_key(|&(i, j, _)| (i, j));
+    let mut summed: Vec<(usize, usize, f64)> = Vec::with_capacity(triplets.len());
+    for (i, j, value) in triplets {
+        match summed.last_mut() {
+            Some(last) if (last.0, last.1) == (i, j) => last.2 += value,
+            _ => summed.push((i, j, value)),
+        }
+    }
+    summed.retain(|entry| entry.2 != 0.0);
+    summed
+}
+
 /// Most entries of one dense matrix a method on ℝᴺ may hold: 2²⁷ (1 GiB of `f64`). The methods
 /// on ℝᴺ keep dense N × N matrices (the mass matrix and its inverse, the tangent map) and the
 /// spectral ones a dense (N·P)² Newton matrix; a run-time-size model beyond this is refused
@@ -264,7 +278,7 @@ where
     fn workspace(&self, model: &L, h: f64) -> Result<M::Workspace, Error> {
         // Only a run-time size can be too large (a fixed one is compiled in), and options out
         // of range are the method's to report.
-        if N::try_to_usize().is_none() {
+        if N::try_to_usize().is_none() && !Method::keeps_sparsity(self, model) {
             let points = Method::points(self).unwrap_or(1).min(MAX_POINTS);
             dense_size(Method::info(self).name, model.dimension(), points)?;
         }
@@ -351,11 +365,47 @@ where
             return Ok(());
         }
         let shifted = state.y.map(|y| 2.0 * y + 1.0);
-        let first = model.second_derivatives(t, &state.q, &state.y);
-        let second = model.second_derivatives(t, &state.q, &shifted);
-        let scale = 1.0 + first.vv.amax() + first.qq.amax();
-        let coupling = first.qv.amax().max(second.qv.amax());
-        let change = (&first.vv - &second.vv).amax();
+        let (scale, coupling, change) = match model.terms() {
+            // From the terms' blocks, in O(n log n): no n × n matrix.
+            Some(terms) => {
+                let blocks = |v: &OVector<f64, N>| {
+                    let mut blocks = [Vec::new(), Vec::new(), Vec::new()];
+                    terms.hessian_triplets(t, &state.q, v, &mut blocks);
+                    blocks.map(summed_triplets)
+                };
+                let (first, second) = (blocks(&state.y), blocks(&shifted));
+                let largest = |entries: &[(usize, usize, f64)]| {
+                    entries.iter().fold(0.0, |m: f64, e| m.max(e.2.abs()))
+                };
+                let change = if first[2].len() == second[2].len()
+                    && first[2]
+                        .iter()
+                        .zip(&second[2])
+                        .all(|(a, b)| (a.0, a.1) == (b.0, b.1))
+                {
+                    first[2]
+                        .iter()
+                        .zip(&second[2])
+                        .fold(0.0, |m: f64, (a, b)| m.max((a.2 - b.2).abs()))
+                } else {
+                    f64::INFINITY
+                };
+                (
+                    1.0 + largest(&first[2]) + largest(&first[0]),
+                    largest(&first[1]).max(largest(&second[1])),
+                    change,
+                )
+            }
+            None => {
+                let first = model.second_derivatives(t, &state.q, &state.y);
+                let second = model.second_derivatives(t, &state.q, &shifted);
+                (
+                    1.0 + first.vv.amax() + first.qq.amax(),
+                    first.qv.amax().max(second.qv.amax()),
+                    (&first.vv - &second.vv).amax(),
+                )
+            }
+        };
         let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
         if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
             return Err(Error::invalid(

@@ -28,6 +28,7 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
+use crate::model::mass_inverse::MassInverse;
 use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
@@ -268,6 +269,22 @@ where
         self.value_and_force(t, q, v).1
     }
 
+    /// The generalised force ∂L/∂q, written into `out`: assembled in place for a sum of
+    /// terms (no n-vector allocated in a step loop of a large system).
+    #[inline]
+    fn force_into(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        out: &mut OVector<f64, N>,
+    ) {
+        match self.terms() {
+            Some(terms) => terms.gradient_into(t, q, v, Wrt::Position, out),
+            None => *out = N::gradient(&Action(self), t, q, v, Wrt::Position).1,
+        }
+    }
+
     /// L and ∂L/∂q from one gradient.
     #[inline]
     fn value_and_force(
@@ -355,6 +372,16 @@ where
         p: &OVector<f64, N>,
         guess: &OVector<f64, N>,
     ) -> Result<OVector<f64, N>, Error> {
+        // A constant mass matrix of a sum of terms: M⁻¹p from the terms' blocks, in O(n).
+        if self.terms().is_some() && Self::STRUCTURE == Structure::ConstantMass {
+            let inverse =
+                MassInverse::of_model(self, t, q, guess).map_err(|_| Error::LegendreMap {
+                    t,
+                    iterations: 0,
+                    residual: f64::INFINITY,
+                })?;
+            return Ok(inverse.apply(p));
+        }
         // ∂L/∂q̇ and ∂²L/∂q̇² at v, and whether both are finite.
         let legendre = |v: &OVector<f64, N>| {
             let (momentum, mass) = match self.terms() {
@@ -588,23 +615,23 @@ where
 }
 
 /// M⁻¹ of a [`crate::model::Structure::ConstantMass`] Lagrangian, computed at the first step
-/// (at (t, q), with `y` standing in for q̇, which M does not depend on) and cached in `cache`.
+/// (at (t, q), with `y` standing in for q̇, which M does not depend on) and cached in `cache`:
+/// dense, or from the terms' blocks for a sum of local terms ([`MassInverse`]).
 pub(crate) fn cached_mass_inverse<'c, L: Lagrangian<N>, N: Dimension>(
-    cache: &'c mut Option<OMatrix<f64, N, N>>,
+    cache: &'c mut Option<MassInverse<N>>,
     model: &L,
     t: f64,
     q: &OVector<f64, N>,
     y: &OVector<f64, N>,
-) -> Result<&'c OMatrix<f64, N, N>, crate::error::StepFailure>
+) -> Result<&'c MassInverse<N>, crate::error::StepFailure>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     match *cache {
         Some(ref inverse) => Ok(inverse),
         None => {
-            let mass = model.mass_matrix(t, q, y);
-            let inverse = crate::linalg::invert_small(&mass)
-                .ok_or(crate::error::StepFailure::SingularMatrix)?;
+            let inverse = MassInverse::of_model(model, t, q, y)
+                .map_err(|_| crate::error::StepFailure::SingularMatrix)?;
             Ok(cache.insert(inverse))
         }
     }
@@ -1020,12 +1047,12 @@ mod tests {
         let mut cache = None;
         let (q, y) = (SVector::from([0.3, 0.1]), SVector::from([1.0, -2.0]));
         let inverse = cached_mass_inverse(&mut cache, &ConstantMass, 0.0, &q, &y).unwrap();
-        assert_close(inverse, &expected, 1e-15);
+        assert_close(inverse.dense().unwrap(), &expected, 1e-15);
         // A cached value is returned as is: a stale cache proves no recomputation.
         let stale = SMatrix::<f64, 2, 2>::identity();
-        cache = Some(stale);
+        cache = Some(MassInverse::Dense(stale));
         let again = cached_mass_inverse(&mut cache, &ConstantMass, 1.0, &q, &y).unwrap();
-        assert_eq!(*again, stale);
+        assert_eq!(again.dense(), Some(&stale));
     }
 
     /// Every derived quantity of a run-time-size model (scalar sweeps) equals the one of the

@@ -507,13 +507,15 @@ impl<L: LocalLagrangian> Lagrangian<Dyn> for Terms<L> {
 
     #[inline]
     fn terms(&self) -> Option<&dyn TermSum<Dyn>> {
-        Some(self)
+        Some(&self.0)
     }
 }
 
-impl<L: LocalLagrangian> TermSum<Dyn> for Terms<L> {
+/// Every sum of local terms hands its terms to the methods of ℝᴺ ([`Lagrangian::terms`] of
+/// [`Terms`]).
+impl<L: LocalLagrangian> TermSum<Dyn> for L {
     fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
-        self.0.value(t, q, v)
+        LocalLagrangian::value(self, t, q, v)
     }
 
     fn gradient_into(
@@ -525,41 +527,36 @@ impl<L: LocalLagrangian> TermSum<Dyn> for Terms<L> {
         out: &mut DVector<f64>,
     ) {
         match wrt {
-            Wrt::Position => self.0.force_into(t, q, v, out),
-            Wrt::Velocity => self.0.momentum_into(t, q, v, out),
+            Wrt::Position => self.force_into(t, q, v, out),
+            Wrt::Velocity => self.momentum_into(t, q, v, out),
         }
     }
 
-    fn hessian_triplets(
+    fn width(&self) -> usize {
+        L::Width::WIDTH
+    }
+
+    fn term_count(&self) -> usize {
+        LocalLagrangian::term_count(self)
+    }
+
+    fn term_indices(&self, e: usize, out: &mut [usize]) {
+        out.copy_from_slice(self.indices(e).as_ref());
+    }
+
+    fn term_derivatives(
         &self,
+        e: usize,
         t: f64,
-        q: &DVector<f64>,
-        v: &DVector<f64>,
-        blocks: &mut [Vec<(usize, usize, f64)>; 3],
+        q: &[f64],
+        v: &[f64],
+        second: bool,
+        out: &mut [f64],
     ) {
-        let k = L::Width::WIDTH;
-        let (mut ql, mut vl) = (vec![0.0; k], vec![0.0; k]);
-        let mut local = vec![0.0; 2 * k + 3 * k * k];
-        for e in 0..self.0.term_count() {
-            let indices = self.0.indices(e);
-            let indices = indices.as_ref();
-            for (a, &i) in indices.iter().enumerate() {
-                ql[a] = q[i];
-                vl[a] = v[i];
-            }
-            L::Width::second_derivatives(&self.0, e, t, &ql, &vl, &mut local);
-            let hessians = &local[2 * k..];
-            for (block, values) in blocks.iter_mut().zip(hessians.chunks_exact(k * k)) {
-                // Column-major K × K: entry (a, b) at a + K b.
-                for (b, &j) in indices.iter().enumerate() {
-                    for (a, &i) in indices.iter().enumerate() {
-                        let value = values[a + k * b];
-                        if value != 0.0 {
-                            block.push((i, j, value));
-                        }
-                    }
-                }
-            }
+        if second {
+            L::Width::second_derivatives(self, e, t, q, v, out);
+        } else {
+            L::Width::first_derivatives(self, e, t, q, v, out);
         }
     }
 }

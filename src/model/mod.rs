@@ -39,6 +39,7 @@
 pub mod density;
 pub mod derived;
 pub mod local;
+pub mod mass_inverse;
 pub mod reparametrized;
 pub mod rigid_body;
 pub mod so3;
@@ -70,16 +71,63 @@ where
         out: &mut OVector<f64, N>,
     );
 
+    /// K, the number of coordinates one term reads.
+    fn width(&self) -> usize;
+
+    /// The number of terms.
+    fn term_count(&self) -> usize;
+
+    /// The coordinates term `e` reads, written into `out` (length [`TermSum::width`]).
+    fn term_indices(&self, e: usize, out: &mut [usize]);
+
+    /// Term `e`'s derivatives at its own (t, q, q̇) (slices of length K), flattened into
+    /// `out` in the layout of [`crate::model::local::TermDerivatives`]: ∂ℓ/∂q and ∂ℓ/∂q̇
+    /// only (`second == false`, the first 2K entries), or with the Hessian blocks as well
+    /// (2K + 3K² entries).
+    fn term_derivatives(
+        &self,
+        e: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        second: bool,
+        out: &mut [f64],
+    );
+
     /// The Hessian blocks ∂²L/∂q², ∂²L/∂q∂q̇ (row q, column q̇) and ∂²L/∂q̇² at (t, q, q̇) as
     /// (row, column, value) triplets, appended to `blocks[0]`, `blocks[1]` and `blocks[2]`
-    /// (entries of one place add up).
+    /// (entries of one place add up), term by term.
     fn hessian_triplets(
         &self,
         t: f64,
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
         blocks: &mut [Vec<(usize, usize, f64)>; 3],
-    );
+    ) {
+        let k = self.width();
+        let (mut indices, mut ql, mut vl) = (vec![0; k], vec![0.0; k], vec![0.0; k]);
+        let mut local = vec![0.0; 2 * k + 3 * k * k];
+        for e in 0..self.term_count() {
+            self.term_indices(e, &mut indices);
+            for (a, &i) in indices.iter().enumerate() {
+                ql[a] = q[i];
+                vl[a] = v[i];
+            }
+            self.term_derivatives(e, t, &ql, &vl, true, &mut local);
+            let hessians = &local[2 * k..];
+            for (block, values) in blocks.iter_mut().zip(hessians.chunks_exact(k * k)) {
+                // Column-major K × K: entry (a, b) at a + K b.
+                for (b, &j) in indices.iter().enumerate() {
+                    for (a, &i) in indices.iter().enumerate() {
+                        let value = values[a + k * b];
+                        if value != 0.0 {
+                            block.push((i, j, value));
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// A Lagrangian L(t, q, q̇) on ℝᴺ, written once, generic over the scalar type.

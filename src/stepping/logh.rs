@@ -43,13 +43,14 @@ use crate::method::space::{Euclidean, Initial, PhasePoint, State, StepState};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{LagrangianExt, cached_mass_inverse};
+use crate::model::mass_inverse::MassInverse;
 use crate::model::reparametrized::{Potential, Reparametrized};
 use crate::stepping::observer::Observer;
 use crate::stepping::reparam::{Clock, failure_after, land_on_horizon};
 use crate::stepping::run::{Cursor, Integrator, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, Solution, SolveOptions, Span};
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
+use nalgebra::{DefaultAllocator, OVector, U1};
 
 /// The splitting of Γ for one model at one energy level.
 struct Splitting<'a, L, N: Dimension>
@@ -57,7 +58,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     model: &'a L,
-    mass_inverse: OMatrix<f64, N, N>,
+    mass_inverse: MassInverse<N>,
     energy: f64,
     fractions: &'a [f64],
 }
@@ -81,7 +82,7 @@ where
     /// step far off the energy shell), a non-finite value an [`Error::NonFinite`] at (`step`,
     /// `t`).
     fn rate(&self, p: &OVector<f64, N>, (step, t): (usize, f64)) -> Result<f64, Error> {
-        let excess = 0.5 * p.dot(&(&self.mass_inverse * p)) - self.energy;
+        let excess = 0.5 * p.dot(&self.mass_inverse.apply(p)) - self.energy;
         if !excess.is_finite() {
             Err(Error::NonFinite {
                 what: format!("T(p) − E₀ = {excess:e} at p = {:?}", p.as_slice()),
@@ -148,7 +149,7 @@ where
         // Drift by `length` at the momentum p: q += length M⁻¹p/(T − E₀), t += length/(T − E₀).
         let drift = |p: &OVector<f64, N>, length: f64| {
             let rate = self.rate(p, (k, from.clock.t))?;
-            Ok::<_, Error>((&self.mass_inverse * p * (length * rate), length * rate))
+            Ok::<_, Error>((self.mass_inverse.apply(p) * (length * rate), length * rate))
         };
         // Each stage drifts by half its own size and half the next one's (merged drifts).
         let mut pending = 0.5 * self.fractions[0] * sigma;
@@ -176,7 +177,7 @@ where
         PhasePoint {
             t: point.clock.t,
             q: q.clone(),
-            v: &self.mass_inverse * p,
+            v: self.mass_inverse.apply(p),
             p: p.clone(),
         }
     }

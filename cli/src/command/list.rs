@@ -92,6 +92,9 @@ fn description(text: &str) -> &str {
         .trim()
 }
 
+/// The width of the name column of the listing: the longest model name and two spaces.
+const NAME_COLUMN: usize = 20;
+
 /// The listing of `svi list`: the built-in scenes and the models (on ℝᴺ, chains of runtime
 /// dimension and rigid bodies) with their parameters.
 pub fn listing() -> String {
@@ -103,7 +106,7 @@ pub fn listing() -> String {
         .map(|(name, _)| name.len() + 2)
         .max()
         .unwrap_or(0)
-        .max(18);
+        .max(NAME_COLUMN);
     for (name, description) in vector {
         push_line(&mut out, format_args!("  {name:<width$}{description}"));
     }
@@ -134,7 +137,7 @@ pub fn listing() -> String {
         push_line(
             &mut out,
             format_args!(
-                "  {:<18}{}; h = {}, t_end = {}; {}",
+                "  {:<NAME_COLUMN$}{}; h = {}, t_end = {}; {}",
                 model.name,
                 parameters.join(", "),
                 Float(model.h),
@@ -152,7 +155,10 @@ pub fn listing() -> String {
         ),
     );
     for (name, description) in scenes(SpaceKind::Vector, true) {
-        push_line(&mut out, format_args!("  {name:<18}{description}"));
+        push_line(
+            &mut out,
+            format_args!("  {name:<NAME_COLUMN$}{description}"),
+        );
     }
     out.push('\n');
     push_line(
@@ -173,7 +179,10 @@ pub fn listing() -> String {
         format_args!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):"),
     );
     for (name, description) in scenes(SpaceKind::Rotation, false) {
-        push_line(&mut out, format_args!("  {name:<18}{description}"));
+        push_line(
+            &mut out,
+            format_args!("  {name:<NAME_COLUMN$}{description}"),
+        );
     }
     out.push('\n');
     push_line(
@@ -238,7 +247,7 @@ impl LocalModelVisitor for DescribeLocal {
             facts.push(format!("conserves {}", invariants.join(", ")));
         }
         format!(
-            "  {:<18}{}; h = {}, t_end = {}; {}",
+            "  {:<NAME_COLUMN$}{}; h = {}, t_end = {}; {}",
             model.name(),
             parameters.join(", "),
             Float(model.default_step()),
@@ -270,7 +279,7 @@ impl RigidModelVisitor for DescribeRigid {
             facts.push(format!("conserves {}", momenta.join(", ")));
         }
         format!(
-            "  {:<18}{}; h = {}, t_end = {}; {}",
+            "  {:<NAME_COLUMN$}{}; h = {}, t_end = {}; {}",
             model.name(),
             parameters.join(", "),
             Float(model.default_step()),

@@ -254,6 +254,10 @@ where
         Some(&self.fractions)
     }
 
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        Method::<N>::keeps_sparsity(&self.base, model)
+    }
+
     fn restart(&self, workspace: &mut CompositionWorkspace<N>) {
         Method::<N>::restart(&self.base, &mut workspace.base);
     }

@@ -48,6 +48,7 @@ use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::LagrangianExt;
 use crate::model::derived::cached_mass_inverse;
+use crate::model::mass_inverse::MassInverse;
 use crate::nonlinear::Newton;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
@@ -79,29 +80,30 @@ impl StormerVerlet {
     }
 }
 
-/// ∂L/∂q at the end of the previous step.
-#[derive(Debug, Clone)]
-struct CachedForce<N: Dimension>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    t: f64,
-    q: OVector<f64, N>,
-    tolerance: f64,
-    force: OVector<f64, N>,
-}
-
-/// Buffers of the explicit kick–drift–kick path.
+/// Buffers of the explicit kick–drift–kick path, sized once per run.
 #[derive(Debug, Clone)]
 struct Explicit<N: Dimension>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     /// M⁻¹, from the first step.
-    mass_inverse: Option<OMatrix<f64, N, N>>,
-    cache: Option<CachedForce<N>>,
-    /// Newton on the half-step momentum (forced models).
-    newton: Newton,
+    mass_inverse: Option<MassInverse<N>>,
+    /// ∂L/∂q at the start of the step; after a step, at its end (the next step's start when
+    /// it starts there, see `reusable`).
+    start_force: OVector<f64, N>,
+    end_force: OVector<f64, N>,
+    /// Where `start_force` was evaluated after the last step: (t, tolerance on q) and the
+    /// position in `reusable_at`; `None` when it is not reusable.
+    reusable: Option<(f64, f64)>,
+    reusable_at: OVector<f64, N>,
+    /// The half-step momentum, and q̇ = M⁻¹ of it.
+    kick: OVector<f64, N>,
+    velocity: OVector<f64, N>,
+    /// The end position q_{k+1}.
+    end: OVector<f64, N>,
+    /// Newton on the half-step momentum (forced models only; n × n, made on first use).
+    newton: Option<Newton>,
+    max_iterations: usize,
     half: DVector<f64>,
 }
 
@@ -112,7 +114,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     /// The implicit path (Lagrangians without constant mass matrix).
-    implicit: VariationalWorkspace<N>,
+    implicit: Option<VariationalWorkspace<N>>,
     /// The explicit path ([`Structure::ConstantMass`]).
     explicit: Option<Explicit<N>>,
 }
@@ -141,14 +143,26 @@ where
         model: &L,
         h: f64,
     ) -> Result<StormerVerletWorkspace<N>, Error> {
-        let implicit = self.implicit().workspace(model, h)?;
+        // The implicit path's buffers (a Newton matrix of n × n) only where it runs.
+        let implicit = match L::STRUCTURE {
+            Structure::General => Some(self.implicit().workspace(model, h)?),
+            Structure::ConstantMass => None,
+        };
         let n: N =
             dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
+        let zero = || OVector::<f64, N>::zeros_generic(n, U1);
         let explicit = (L::STRUCTURE == Structure::ConstantMass).then(|| Explicit {
             mass_inverse: None,
-            cache: None,
-            newton: Newton::new(n.value(), self.max_iterations),
-            half: DVector::zeros(n.value()),
+            start_force: zero(),
+            end_force: zero(),
+            reusable: None,
+            reusable_at: zero(),
+            kick: zero(),
+            velocity: zero(),
+            end: zero(),
+            newton: None,
+            max_iterations: self.max_iterations,
+            half: DVector::zeros(if L::FORCED { n.value() } else { 0 }),
         });
         Ok(StormerVerletWorkspace { implicit, explicit })
     }
@@ -162,16 +176,26 @@ where
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
-        match &mut workspace.explicit {
-            Some(explicit) => kick_drift_kick(model, explicit, t, h, state, increment),
-            None => self
+        match (&mut workspace.explicit, &mut workspace.implicit) {
+            (Some(explicit), _) => kick_drift_kick(model, explicit, t, h, state, increment),
+            (None, Some(implicit)) => self
                 .implicit()
-                .step(model, &mut workspace.implicit, t, h, state, increment),
+                .step(model, implicit, t, h, state, increment),
+            (None, None) => Err(StepFailure::Unsupported {
+                option: "workspace",
+                reason: "a Störmer–Verlet workspace has neither path",
+            }),
         }
     }
 
     fn verlet_fractions(&self) -> Option<&[f64]> {
         Some(&[1.0])
+    }
+
+    /// The explicit path on an unforced sum of terms: M⁻¹ from the terms' blocks, forces
+    /// assembled in place.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        model.terms().is_some() && L::STRUCTURE == Structure::ConstantMass && !L::FORCED
     }
 
     /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked once
@@ -182,7 +206,7 @@ where
         p: &OVector<f64, N>,
     ) -> Option<OVector<f64, N>> {
         let inverse = workspace.explicit.as_ref()?.mass_inverse.as_ref()?;
-        Some(inverse * p)
+        Some(inverse.apply(p))
     }
 
     fn tangent_map<L: Lagrangian<N>>(
@@ -201,7 +225,8 @@ where
     }
 }
 
-/// One explicit step of a constant-mass Lagrangian.
+/// One explicit step of a constant-mass Lagrangian, in the workspace's buffers (nothing
+/// allocated per step).
 fn kick_drift_kick<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     explicit: &mut Explicit<N>,
@@ -214,67 +239,77 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     let n = state.dimension();
-    let mass_inverse =
-        cached_mass_inverse(&mut explicit.mass_inverse, model, t, &state.q, &state.y)?;
+    let Explicit {
+        mass_inverse,
+        start_force,
+        end_force,
+        reusable,
+        reusable_at,
+        kick,
+        velocity,
+        end,
+        newton,
+        max_iterations,
+        half: half_momentum,
+    } = explicit;
+    let mass_inverse = cached_mass_inverse(mass_inverse, model, t, &state.q, &state.y)?;
     let half = 0.5 * h;
     let mut evaluations = 1;
-    let cached = explicit.cache.take().filter(|cache| {
-        (!L::TIME_DEPENDENT
-            || (cache.t - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(cache.t.abs()))
-            && (&state.q - &cache.q).amax() <= cache.tolerance
+    // The force at q_k is the last step's end force when the step starts where that one
+    // ended (to within the rounding of the stepping loop's compensated summation).
+    let reuse = reusable.take().is_some_and(|(time, tolerance)| {
+        (!L::TIME_DEPENDENT || (time - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(time.abs()))
+            && max_difference(&state.q, reusable_at) <= tolerance
     });
-    let start_force = match cached {
-        Some(cache) => cache.force,
-        None => {
-            evaluations += 1;
-            model.force(t, &state.q, &(mass_inverse * &state.y))
-        }
-    };
+    if !reuse {
+        evaluations += 1;
+        mass_inverse.apply_into(&state.y, velocity);
+        model.force_into(t, &state.q, velocity, start_force);
+    }
     // Kick: p_{k+½} = p_k + (h/2)(∂L/∂q + f_L) at the start.
-    let mut kick = &state.y + &start_force * half;
-    let mut start = start_force;
+    kick.copy_from(&state.y);
+    kick.axpy(half, start_force, 1.0);
     let mut iterations = 0;
     if L::FORCED {
-        let rest = kick;
-        let predicted = &rest + model.external_force(t, &state.q, &(mass_inverse * &rest)) * half;
-        explicit.half.copy_from_slice(predicted.as_slice());
-        iterations = explicit
-            .newton
-            .solve(&mut explicit.half, |z, matrix, residual| {
+        let rest = kick.clone();
+        let predicted =
+            &rest + model.external_force(t, &state.q, &mass_inverse.apply(&rest)) * half;
+        half_momentum.copy_from_slice(predicted.as_slice());
+        let dense = mass_inverse.to_dense();
+        iterations = newton
+            .get_or_insert_with(|| Newton::new(n.value(), *max_iterations))
+            .solve(half_momentum, |z, matrix, residual| {
                 let momentum = OVector::<f64, N>::from_column_slice_generic(n, U1, z.as_slice());
-                let force = model.external_force_jacobian(t, &state.q, &(mass_inverse * &momentum));
+                let force = model.external_force_jacobian(t, &state.q, &(&dense * &momentum));
                 let value = &momentum - &rest - force.value * half;
                 residual.copy_from_slice(value.as_slice());
                 let jacobian =
-                    OMatrix::<f64, N, N>::identity_generic(n, n) - &force.v * mass_inverse * half;
+                    OMatrix::<f64, N, N>::identity_generic(n, n) - &force.v * &dense * half;
                 // Both column-major and N × N.
                 matrix.as_mut_slice().copy_from_slice(jacobian.as_slice());
             })?;
-        kick = OVector::from_column_slice_generic(n, U1, explicit.half.as_slice());
-        start += model.external_force(t, &state.q, &(mass_inverse * &kick));
+        kick.copy_from_slice(half_momentum.as_slice());
+        *start_force += model.external_force(t, &state.q, &mass_inverse.apply(kick));
     }
     // Drift.
-    let velocity = mass_inverse * &kick;
-    let drift = &velocity * h;
-    let end_q = &state.q + &drift;
+    mass_inverse.apply_into(kick, velocity);
+    increment.q.copy_from(velocity);
+    increment.q *= h;
+    end.copy_from(&state.q);
+    *end += &increment.q;
     let end_t = t + h;
     // Kick: p_{k+1} = p_{k+½} + (h/2)(∂L/∂q + f_L) at the end.
-    let end_force = model.force(end_t, &end_q, &velocity);
+    model.force_into(end_t, end, velocity, end_force);
     // (start + end) (h/2), end = ∂L/∂q + f_L.
-    let mut sum = start;
+    increment.y.copy_from(start_force);
+    increment.y += &*end_force;
     if L::FORCED {
-        sum += &end_force + model.external_force(end_t, &end_q, &velocity);
-    } else {
-        sum += &end_force;
+        increment.y += model.external_force(end_t, end, velocity);
     }
-    explicit.cache = Some(CachedForce {
-        t: end_t,
-        tolerance: continuation_tolerance(&state.q, &end_q),
-        q: end_q,
-        force: end_force,
-    });
-    increment.q = drift;
-    increment.y = sum * half;
+    increment.y *= half;
+    *reusable = Some((end_t, continuation_tolerance(&state.q, end)));
+    std::mem::swap(reusable_at, end);
+    std::mem::swap(start_force, end_force);
     Ok(StepReport {
         iterations,
         evaluations,
@@ -282,4 +317,15 @@ where
         factorizations: iterations,
         analyses: 0,
     })
+}
+
+/// max |aᵢ − bᵢ|, without a temporary vector.
+#[inline]
+fn max_difference<N: Dimension>(a: &OVector<f64, N>, b: &OVector<f64, N>) -> f64
+where
+    DefaultAllocator: Allocator<N>,
+{
+    a.iter()
+        .zip(b.iter())
+        .fold(0.0, |m: f64, (x, y)| m.max((x - y).abs()))
 }

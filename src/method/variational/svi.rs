@@ -65,10 +65,12 @@ use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
+use crate::method::step::dense_size;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
+use crate::model::mass_inverse::MassInverse;
 use crate::nonlinear::{FixedPoint, Jacobian, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
@@ -361,7 +363,11 @@ where
     /// before anything reads them.
     pending: bool,
     /// M⁻¹, from the first step.
-    mass_inverse: Option<OMatrix<f64, N, N>>,
+    mass_inverse: Option<MassInverse<N>>,
+    /// h M⁻¹p_k of this step.
+    velocity: OVector<f64, N>,
+    /// A stage buffer (the next iterate at run-time size, where no local is free).
+    scratch: OVector<f64, N>,
     /// ∂L/∂q at the quadrature points.
     forces: Vec<OVector<f64, N>>,
     /// M⁻¹ ∂L/∂q at the quadrature points.
@@ -485,6 +491,8 @@ where
         Some(ConstantMass {
             nystrom: NystromTables::new(tables)?,
             last_velocity: zero.clone(),
+            velocity: zero.clone(),
+            scratch: zero.clone(),
             last_accelerations: vec![zero.clone(); m],
             pending: false,
             mass_inverse: None,
@@ -516,13 +524,13 @@ where
             &self.nystrom.stage_values
         };
         for (position, row) in self.positions.iter_mut().zip(table.chunks_exact(s)) {
-            let mut sum = q.clone();
-            for (w, offset) in row.iter().zip(offsets.chunks_exact(q.len())) {
-                for (total, x) in sum.as_mut_slice().iter_mut().zip(offset) {
-                    *total += w * x;
+            sum_into(position, q, |sum| {
+                for (w, offset) in row.iter().zip(offsets.chunks_exact(q.len())) {
+                    for (total, x) in sum.as_mut_slice().iter_mut().zip(offset) {
+                        *total += w * x;
+                    }
                 }
-            }
-            *position = sum;
+            });
         }
     }
 
@@ -535,13 +543,12 @@ where
             .zip(self.nystrom.start_matrix.chunks_exact(m))
             .zip(&self.nystrom.start_velocity)
         {
-            // Accumulated in a local (registers), not through the reference.
-            let mut sum = q.clone();
-            add_scaled(&mut sum, *gamma, &self.last_velocity);
-            for (e, acceleration) in row.iter().zip(&self.last_accelerations) {
-                add_scaled(&mut sum, *e, acceleration);
-            }
-            *position = sum;
+            sum_into(position, q, |sum| {
+                add_scaled(sum, *gamma, &self.last_velocity);
+                for (e, acceleration) in row.iter().zip(&self.last_accelerations) {
+                    add_scaled(sum, *e, acceleration);
+                }
+            });
         }
     }
 
@@ -702,8 +709,12 @@ fn starting_offsets<L: Lagrangian<N>, N: Dimension>(
         let v = model
             .velocity(t, &state.q, &state.y, &state.y)
             .unwrap_or_else(|_| OVector::zeros_generic(n, U1));
+        // A sum of terms starts from uniform motion: its acceleration is a dense solve.
         let a = model
-            .acceleration(t, &state.q, &v)
+            .terms()
+            .is_none()
+            .then(|| model.acceleration(t, &state.q, &v))
+            .flatten()
             .unwrap_or_else(|| OVector::zeros_generic(n, U1));
         start.taylor(h, &v, &a, offsets);
     }
@@ -830,7 +841,6 @@ where
             .map_err(|reason| Error::invalid("model", reason))?;
         let m = self.quadrature_points();
         let size = (self.points - 1) * n.value();
-        let zero = SecondDerivatives::zeros(n);
         let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
         let tables = Tables::new(&basis, m, h)?;
         let constant_mass = match L::STRUCTURE {
@@ -839,14 +849,17 @@ where
         };
         // Newton's buffers exist for every model: a constant-mass model falls back to Newton
         // where the fixed point fails.
-        let points = m;
-        let forces = if L::FORCED { points } else { 0 };
         Ok(SviWorkspace {
             tables,
             offsets: DVector::zeros(size),
             start: StartingValues::new(&basis, n.value()),
-            points: vec![zero; points],
-            forces: vec![ForceJacobian::zeros(n); forces],
+            // Made by the first Newton solve (none for a fixed point that converges).
+            points: Vec::new(),
+            // n × n each: only for a forced model.
+            forces: match L::FORCED {
+                true => vec![ForceJacobian::zeros(n); m],
+                false => Vec::new(),
+            },
             newton: Newton::new(size, self.max_iterations),
             constant_mass,
             newton_only: false,
@@ -879,6 +892,15 @@ where
             match after_fixed_point(result, L::FORCED, &mut workspace.newton_only) {
                 ControlFlow::Break(result) => return result,
                 ControlFlow::Continue(iterations) => spent = iterations,
+            }
+            // Newton's dense matrix does not fit a large sum of terms.
+            if N::try_to_usize().is_none() && dense_size("svi", state.q.len(), self.points).is_err()
+            {
+                return Err(StepFailure::Unsupported {
+                    option: "h",
+                    reason: "svi's fixed point did not converge, and Newton's dense matrix \
+                             does not fit a model this large: take a smaller step",
+                });
             }
         }
         // After a capped fixed point Newton starts from its last iterate; after a diverging
@@ -928,7 +950,7 @@ where
             (Some(data), Some(end_load)) => {
                 let inverse =
                     cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
-                increment.q = inverse * (&state.y * h + end_load * (h * h));
+                inverse.apply_into(&(&state.y * h + end_load * (h * h)), &mut increment.q);
             }
             _ => {
                 increment.q = OVector::from_column_slice_generic(
@@ -984,11 +1006,21 @@ where
         p: &OVector<f64, N>,
     ) -> Option<OVector<f64, N>> {
         let inverse = workspace.constant_mass.as_ref()?.mass_inverse.as_ref()?;
-        Some(inverse * p)
+        Some(inverse.apply(p))
     }
 
     fn points(&self) -> Option<usize> {
         Some(self.points)
+    }
+
+    /// The fixed point on an unforced constant-mass sum of terms: M⁻¹ from the terms'
+    /// blocks, forces assembled in place (Newton's dense matrices are made only if the
+    /// fixed point fails).
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        model.terms().is_some()
+            && L::STRUCTURE == Structure::ConstantMass
+            && self.solver == Solver::Auto
+            && !L::FORCED
     }
 
     /// Keeps an explicit quadrature's offset m − (s + 1) from the number of points.
@@ -1120,6 +1152,27 @@ where
     }
 }
 
+/// `target` = `start` + what `accumulate` adds to it: summed in a local for a fixed size
+/// (kept in registers, not written through the reference), in place at run-time size (no
+/// allocation).
+#[inline(always)]
+fn sum_into<N: Dimension>(
+    target: &mut OVector<f64, N>,
+    start: &OVector<f64, N>,
+    accumulate: impl FnOnce(&mut OVector<f64, N>),
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    if N::try_to_usize().is_some() {
+        let mut sum = start.clone();
+        accumulate(&mut sum);
+        *target = sum;
+    } else {
+        target.copy_from(start);
+        accumulate(target);
+    }
+}
+
 /// `matrix[row..row + N, column..column + N] += block`, column by column (a fixed-size
 /// block cannot be added to a view of a run-time-size matrix in generic code).
 #[inline]
@@ -1209,8 +1262,10 @@ where
     let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
     let m = tables.nodes.len();
     let width = state.q.len();
-    let velocity = mass_inverse * &state.y * h;
-    let scaled_inverse = mass_inverse * (h * h);
+    mass_inverse.apply_into(&state.y, &mut data.velocity);
+    data.velocity *= h;
+    let velocity = &data.velocity;
+    let scaled_inverse = mass_inverse.scaled(h * h);
     if L::FORCED {
         // The velocities of the starting polynomial, from its offsets (the previous step's
         // polynomial extrapolated, as the positions).
@@ -1230,7 +1285,7 @@ where
     let mut size: f64 = 0.0;
     for (base, c) in data.bases.iter_mut().zip(&data.nystrom.stage_velocity) {
         base.copy_from(&state.q);
-        add_scaled(base, *c, &velocity);
+        add_scaled(base, *c, velocity);
         size = size.max(base.amax());
     }
     let mut control = FixedPoint::new(max_iterations);
@@ -1242,11 +1297,11 @@ where
             .enumerate()
         {
             let time = tables.time(t, mu);
-            *force = model.force(time, &data.positions[mu], &state.y);
+            model.force_into(time, &data.positions[mu], &state.y, force);
             if L::FORCED {
                 *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
             }
-            *acceleration = &scaled_inverse * &*force;
+            scaled_inverse.apply_into(force, acceleration);
         }
         // The largest change by plain comparisons (no NaN-aware max in the hot loop): a NaN
         // force is caught by the finiteness check below.
@@ -1254,18 +1309,33 @@ where
         let mut finite = true;
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.nystrom.stage_matrix[mu * m..(mu + 1) * m];
-            let mut next = base.clone();
-            for (a, acceleration) in row.iter().zip(&data.accelerations) {
-                add_scaled(&mut next, *a, acceleration);
-            }
-            for (next, position) in next.as_slice().iter().zip(position.as_slice()) {
-                let difference = (next - position).abs();
-                if difference > change {
-                    change = difference;
+            let update = |next: &mut OVector<f64, N>| {
+                for (a, acceleration) in row.iter().zip(&data.accelerations) {
+                    add_scaled(next, *a, acceleration);
                 }
-                finite &= next.is_finite();
+            };
+            let mut compare = |next: &OVector<f64, N>, position: &OVector<f64, N>| {
+                for (next, position) in next.as_slice().iter().zip(position.as_slice()) {
+                    let difference = (next - position).abs();
+                    if difference > change {
+                        change = difference;
+                    }
+                    finite &= next.is_finite();
+                }
+            };
+            if N::try_to_usize().is_some() {
+                // In a local, kept in registers.
+                let mut next = base.clone();
+                update(&mut next);
+                compare(&next, position);
+                *position = next;
+            } else {
+                // In the workspace's buffer: no allocation at run-time size.
+                data.scratch.copy_from(base);
+                update(&mut data.scratch);
+                compare(&data.scratch, position);
+                std::mem::swap(position, &mut data.scratch);
             }
-            *position = next;
         }
         if !finite {
             return Err(StepFailure::NonFinite);
@@ -1273,7 +1343,7 @@ where
         if L::FORCED {
             for (mu, rate) in data.velocities.iter_mut().enumerate() {
                 let row = &data.nystrom.rate_matrix[mu * m..(mu + 1) * m];
-                let mut next = &velocity * data.nystrom.stage_rate[mu];
+                let mut next = velocity * data.nystrom.stage_rate[mu];
                 for (b, acceleration) in row.iter().zip(&data.accelerations) {
                     add_scaled(&mut next, *b, acceleration);
                 }
@@ -1293,7 +1363,7 @@ where
                 .zip(data.nystrom.propagation.chunks_exact(m))
                 .zip(&data.nystrom.velocity_coefficients)
             {
-                let mut offset = &velocity * *c;
+                let mut offset = velocity * *c;
                 for (p, acceleration) in row.iter().zip(&data.accelerations) {
                     add_scaled(&mut offset, *p, acceleration);
                 }
@@ -1308,13 +1378,13 @@ where
         add_scaled(dp, *w, force);
     }
     let dq = &mut increment.q;
-    dq.copy_from(&velocity);
+    dq.copy_from(velocity);
     for (w, acceleration) in data.nystrom.end_weights.iter().zip(&data.accelerations) {
         add_scaled(dq, *w, acceleration);
     }
     // The step's polynomial is remembered by its velocity term and accelerations; its node
     // offsets are written only if something reads them (see `ConstantMass::pending`).
-    data.last_velocity = velocity;
+    std::mem::swap(&mut data.velocity, &mut data.last_velocity);
     std::mem::swap(&mut data.accelerations, &mut data.last_accelerations);
     data.pending = true;
     start.remember_size(h);
@@ -1352,6 +1422,9 @@ where
         newton,
         ..
     } = workspace;
+    if points.is_empty() {
+        *points = vec![SecondDerivatives::zeros(state.dimension()); tables.weights.len()];
+    }
     newton.iterate(offsets, jacobian, |z, matrix, residual| {
         assemble(model, tables, points, forces, t, state, z, matrix, residual)
     })
