@@ -124,7 +124,7 @@ where
 
     /// M⁻¹ from the blocks of a sum of terms: the diagonal summed in place, and only the
     /// entries off it kept (none for particles with their own masses).
-    fn of_terms(
+    pub(crate) fn of_terms(
         terms: &dyn TermSum<N>,
         t: f64,
         q: &OVector<f64, N>,

@@ -19,7 +19,6 @@
 //! systems) for now; asking for them on a runtime-dimension model is an error that says so.
 
 pub mod composition;
-pub mod mass;
 pub mod newton;
 pub mod svi;
 
@@ -32,8 +31,7 @@ use crate::method::step::{Hermite, Step};
 use crate::method::{MethodInfo, StepReport};
 use crate::model::Structure;
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
-use mass::MassInverse;
-use nalgebra::DVector;
+use nalgebra::{DVector, Dyn};
 use newton::Legendre;
 
 /// An integration method for [`LocalLagrangian`] models on runtime-sized ℝⁿ, in the
@@ -83,6 +81,19 @@ pub trait LocalMethod {
     ) -> Result<(), Error>;
 }
 
+/// M⁻¹ of a constant mass matrix on runtime-sized ℝⁿ (diagonal or sparse LU, from the terms'
+/// blocks).
+pub(crate) type MassInverse = crate::model::mass_inverse::MassInverse<Dyn>;
+
+/// M⁻¹ of `model`'s mass matrix at (t, q) (q̇ = 0), from its terms' blocks.
+fn mass_inverse<L: LocalLagrangian>(
+    model: &L,
+    t: f64,
+    q: &DVector<f64>,
+) -> Result<MassInverse, Error> {
+    MassInverse::of_terms(model, t, q, &DVector::zeros(q.len()))
+}
+
 /// The velocity q̇ of the momentum `p` at (t, q) without a run's workspace, written into
 /// `v`: M⁻¹p for a constant mass matrix, else the inverse Legendre map by sparse Newton
 /// from `v`'s value on entry.
@@ -94,7 +105,7 @@ pub(crate) fn cold_velocity<L: LocalLagrangian>(
     v: &mut DVector<f64>,
 ) -> Result<(), Error> {
     if L::STRUCTURE == Structure::ConstantMass {
-        MassInverse::of_model(model, t, q)?.apply_into(p, v);
+        mass_inverse(model, t, q)?.apply_into(p, v);
         return Ok(());
     }
     Legendre::new(model, LinearSolverKind::Sparse)?.solve(model, t, q, p, v)
@@ -118,7 +129,7 @@ pub(crate) fn constant_mass<L: LocalLagrangian>(
             ),
         ));
     }
-    MassInverse::of_model(model, t, q)
+    mass_inverse(model, t, q)
 }
 
 impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
@@ -206,7 +217,7 @@ impl<L: LocalLagrangian, M: LocalMethod> Step<L, DynEuclidean> for M {
         }
         let n = state.q.len();
         let zero = DVector::zeros(n);
-        let mass = MassInverse::of_model(model, t, &state.q)?;
+        let mass = mass_inverse(model, t, &state.q)?;
         let v = mass.apply(&state.y);
         let mut p = DVector::zeros(n);
         model.momentum_into(t, &state.q, &v, &mut p);

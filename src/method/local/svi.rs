@@ -25,7 +25,7 @@ use std::cell::RefCell;
 
 use crate::Svi;
 use crate::error::{Error, StepFailure};
-use crate::method::local::mass::MassInverse;
+use crate::method::local::MassInverse;
 use crate::method::local::newton::{Legendre, StageNewton};
 use crate::method::local::{LocalMethod, cold_velocity, constant_mass};
 use crate::method::space::DynState;

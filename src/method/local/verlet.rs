@@ -10,7 +10,7 @@
 use crate::StormerVerlet;
 use crate::error::{Error, StepFailure};
 use crate::linalg::lane_extent;
-use crate::method::local::mass::MassInverse;
+use crate::method::local::MassInverse;
 use crate::method::local::{LocalMethod, cold_velocity, constant_mass};
 use crate::method::space::DynState;
 use crate::method::{Coordinates, MethodInfo, StepReport};
@@ -218,7 +218,7 @@ fn kick_drift(
                 .zip(force.as_slice().iter().zip(inverse.as_slice()))
                 .for_each(|((v, p), (f, m))| *v = (p + dt * f) * m);
         }
-        MassInverse::Coupled(_) => {
+        MassInverse::Coupled(_) | MassInverse::Dense(_) => {
             for ((k, p), f) in half
                 .as_mut_slice()
                 .iter_mut()
