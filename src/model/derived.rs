@@ -348,6 +348,24 @@ where
         N::hessian(&Action(self), t, q, v, Wrt::Velocity).2
     }
 
+    /// M⁻¹ of the mass matrix ∂²L/∂q̇² at (t, q, q̇): from the terms' blocks for a sum of
+    /// terms (diagonal or sparse LU, never an n × n matrix), else the dense inverse.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] `structure` when M is singular (or, for a sum of terms,
+    /// not positive on its diagonal).
+    fn mass_inverse(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+    ) -> Result<MassInverse<N>, Error> {
+        match self.terms() {
+            Some(terms) => MassInverse::of_terms(terms, t, q, v),
+            None => MassInverse::of_dense(&self.mass_matrix(t, q, v)),
+        }
+    }
+
     /// The energy E = p·q̇ − L.
     #[inline]
     fn energy(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {
@@ -374,8 +392,9 @@ where
     ) -> Result<OVector<f64, N>, Error> {
         // A constant mass matrix of a sum of terms: M⁻¹p from the terms' blocks, in O(n).
         if self.terms().is_some() && Self::STRUCTURE == Structure::ConstantMass {
-            let inverse =
-                MassInverse::of_model(self, t, q, guess).map_err(|_| Error::LegendreMap {
+            let inverse = self
+                .mass_inverse(t, q, guess)
+                .map_err(|_| Error::LegendreMap {
                     t,
                     iterations: 0,
                     residual: f64::INFINITY,
@@ -630,7 +649,8 @@ where
     match *cache {
         Some(ref inverse) => Ok(inverse),
         None => {
-            let inverse = MassInverse::of_model(model, t, q, y)
+            let inverse = model
+                .mass_inverse(t, q, y)
                 .map_err(|_| crate::error::StepFailure::SingularMatrix)?;
             Ok(cache.insert(inverse))
         }

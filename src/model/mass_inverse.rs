@@ -17,8 +17,7 @@ use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::invert_small;
 use crate::linalg::sparse::{LinearSolver, Pattern, SparseLu};
-use crate::model::derived::LagrangianExt;
-use crate::model::{Lagrangian, TermSum};
+use crate::model::TermSum;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
 use std::cell::RefCell;
@@ -101,30 +100,26 @@ impl<N: Dimension> MassInverse<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    /// M⁻¹ of the model's mass matrix ∂²L/∂q̇² at (t, q, q̇): from the terms' blocks for a
-    /// sum of terms (never an n × n matrix), else the dense inverse.
+    /// The dense inverse of a dense mass matrix M (a model that is not a sum of terms; the
+    /// model's M⁻¹ is [`crate::LagrangianExt::mass_inverse`]).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] `structure` when M is singular (or, for a sum of terms,
-    /// not positive on its diagonal).
-    pub fn of_model<L: Lagrangian<N> + ?Sized>(
-        model: &L,
-        t: f64,
-        q: &OVector<f64, N>,
-        v: &OVector<f64, N>,
-    ) -> Result<Self, Error> {
-        match model.terms() {
-            Some(terms) => Self::of_terms(terms, t, q, v),
-            None => invert_small(&model.mass_matrix(t, q, v))
-                .filter(|inverse| inverse.iter().all(|x| x.is_finite()))
-                .map(MassInverse::Dense)
-                .ok_or_else(|| singular("singular")),
-        }
+    /// [`Error::InvalidParameter`] `structure` when M is singular.
+    pub fn of_dense(mass: &OMatrix<f64, N, N>) -> Result<Self, Error> {
+        invert_small(mass)
+            .filter(|inverse| inverse.iter().all(|x| x.is_finite()))
+            .map(MassInverse::Dense)
+            .ok_or_else(|| singular("singular"))
     }
 
-    /// M⁻¹ from the blocks of a sum of terms: the diagonal summed in place, and only the
-    /// entries off it kept (none for particles with their own masses).
-    pub(crate) fn of_terms(
+    /// M⁻¹ at (t, q, q̇) from the blocks of a sum of terms (never an n × n matrix): the
+    /// diagonal summed in place, and only the entries off it kept (none for particles with
+    /// their own masses).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] `structure` when M is singular or not positive on its
+    /// diagonal.
+    pub fn of_terms(
         terms: &dyn TermSum<N>,
         t: f64,
         q: &OVector<f64, N>,
@@ -291,9 +286,9 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::local::{LocalLagrangian, Terms};
+    use crate::model::local::LocalLagrangian;
     use crate::scalar::Scalar;
-    use nalgebra::{Const, Dyn, SVector};
+    use nalgebra::{Const, DMatrix, Dyn, SVector};
 
     /// Particles of masses 1, 2, 3, … joined by springs, with an optional coupling c q̇ᵢq̇ᵢ₊₁
     /// of neighbouring velocities (a tridiagonal M).
@@ -328,17 +323,23 @@ mod tests {
     #[test]
     fn term_sums_invert_like_the_dense_matrix() {
         for coupling in [0.0, 0.3] {
-            let model = Terms(Chain { n: 7, coupling });
+            let model = Chain { n: 7, coupling };
             let q = DVector::from_fn(7, |i, _| 0.1 * i as f64);
             let zero = DVector::zeros(7);
             let p = DVector::from_fn(7, |i, _| 1.0 - 0.2 * i as f64);
-            let inverse = MassInverse::<Dyn>::of_model(&model, 0.0, &q, &zero).unwrap();
+            let inverse = MassInverse::<Dyn>::of_terms(&model, 0.0, &q, &zero).unwrap();
             assert_eq!(
                 matches!(inverse, MassInverse::Diagonal(_)),
                 coupling == 0.0,
                 "{inverse:?}"
             );
-            let dense = invert_small(&model.mass_matrix(0.0, &q, &zero)).unwrap();
+            // M by hand: masses 1, …, 7 on the diagonal, the coupling beside it.
+            let mass = DMatrix::from_fn(7, 7, |i, j| match i.abs_diff(j) {
+                0 => (i + 1) as f64,
+                1 => coupling,
+                _ => 0.0,
+            });
+            let dense = invert_small(&mass).unwrap();
             let expected = &dense * &p * 2.0;
             let mut out = DVector::zeros(7);
             inverse.scaled(2.0).apply_into(&p, &mut out);
@@ -371,7 +372,7 @@ mod tests {
             }
         }
         let zero = DVector::zeros(3);
-        let error = MassInverse::<Dyn>::of_model(&Terms(Massless), 0.0, &zero, &zero).unwrap_err();
+        let error = MassInverse::<Dyn>::of_terms(&Massless, 0.0, &zero, &zero).unwrap_err();
         assert!(error.to_string().contains("coordinate 1"), "{error}");
     }
 }
