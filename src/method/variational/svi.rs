@@ -847,8 +847,8 @@ where
             Structure::ConstantMass => ConstantMass::new(&tables, n),
             Structure::General => None,
         };
-        // Newton's buffers exist for every model: a constant-mass model falls back to Newton
-        // where the fixed point fails.
+        // Newton's buffers exist for every model (a constant-mass model falls back to Newton
+        // where the fixed point fails); its n-squared matrices are made at their first use.
         Ok(SviWorkspace {
             tables,
             offsets: DVector::zeros(size),
