@@ -18,6 +18,11 @@
 //! path of `svi::method::local`) against `terms` (the one implementation of ℝᴺ on
 //! `Terms(Fput)`).
 //!
+//! # `chain_svi_newton/<implementation>/10³`
+//!
+//! Ten steps (h = 0.1) of SVI by sparse Newton with 6 CGL points on the relativistic chain
+//! (a mass matrix that depends on q̇): `local` against `terms`, as above.
+//!
 //! # `chain_force/<implementation>/10⁴`
 //!
 //! The force ∂L/∂q alone at the default state: svi's term-by-term assembly
@@ -34,7 +39,7 @@ use std::time::Duration;
 use svi::method::DynInitial;
 use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::{Integrator, StormerVerlet, Svi};
-use svi_models::Fput;
+use svi_models::{Fput, RelativisticChain};
 
 const STEPS: usize = 100;
 const H: f64 = 0.1;
@@ -163,6 +168,38 @@ fn bench(c: &mut Criterion) {
             black_box(
                 terms
                     .run_from_velocity(t0, q0.clone(), v0.clone(), 0.2, t_end, &mut ())
+                    .unwrap(),
+            )
+        })
+    });
+    group.finish();
+
+    // SVI by sparse Newton (6 CGL points), 10 steps of h = 0.1 on the relativistic chain of
+    // 10³ particles: the large-system path against the one implementation of ℝᴺ.
+    let mut group = c.benchmark_group("chain_svi_newton");
+    group
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500))
+        .sample_size(20);
+    let n = 1000;
+    let mut chain = RelativisticChain::default();
+    chain.set_parameter("n", n as f64).unwrap();
+    let (t0, q0, v0) = chain.initial_state();
+    let t_end = t0 + 10.0 * 0.1;
+    let local = Integrator::new(chain.clone(), Svi::new(6));
+    let initial = DynInitial::Velocity {
+        q: q0.clone(),
+        v: v0.clone(),
+    };
+    group.bench_function(BenchmarkId::new("local", n), |b| {
+        b.iter(|| black_box(local.run(t0, initial.clone(), 0.1, t_end, &mut ()).unwrap()))
+    });
+    let terms = Integrator::new(Terms(chain), Svi::new(6));
+    group.bench_function(BenchmarkId::new("terms", n), |b| {
+        b.iter(|| {
+            black_box(
+                terms
+                    .run_from_velocity(t0, q0.clone(), v0.clone(), 0.1, t_end, &mut ())
                     .unwrap(),
             )
         })

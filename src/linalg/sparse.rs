@@ -208,6 +208,33 @@ impl LinearSolver for SparseLu {
     }
 }
 
+/// A linear solver of the [`LinearSolverKind`] a run asked for.
+#[derive(Debug)]
+pub(crate) enum AnySolver {
+    Sparse(Box<SparseLu>),
+    Dense(DenseSolver),
+}
+
+impl AnySolver {
+    /// A solver of `kind`, analysed for `pattern`.
+    pub(crate) fn analysed(kind: LinearSolverKind, pattern: &Pattern) -> Result<Self, Error> {
+        let mut solver = match kind {
+            LinearSolverKind::Sparse => AnySolver::Sparse(Box::default()),
+            LinearSolverKind::Dense => AnySolver::Dense(DenseSolver::default()),
+        };
+        solver.get().analyse(pattern)?;
+        Ok(solver)
+    }
+
+    /// The solver.
+    pub(crate) fn get(&mut self) -> &mut dyn LinearSolver {
+        match self {
+            AnySolver::Sparse(solver) => solver.as_mut(),
+            AnySolver::Dense(solver) => solver,
+        }
+    }
+}
+
 /// [`Singular`] unless every entry of a solution is finite.
 fn finite(x: &DVector<f64>) -> Result<(), Singular> {
     if x.iter().all(|x| x.is_finite()) {

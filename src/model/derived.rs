@@ -28,6 +28,8 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
+use crate::linalg::sparse::LinearSolverKind;
+use crate::model::legendre::Legendre;
 use crate::model::mass_inverse::MassInverse;
 use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
 use crate::scalar::Scalar;
@@ -378,11 +380,13 @@ where
     }
 
     /// The inverse Legendre map: the velocity q̇ with ∂L/∂q̇(t, q, q̇) = p, by Newton's method
-    /// with the mass matrix, started at `guess`.
+    /// with the mass matrix, started at `guess` (for a sum of terms the sparse mass matrix of
+    /// their blocks, assembled in O(n)).
     ///
     /// # Errors
     /// [`Error::LegendreMap`] if Newton's method does not converge (a singular mass matrix, or
-    /// no velocity for this momentum).
+    /// no velocity for this momentum); [`Error::InvalidParameter`] `width` for terms wider
+    /// than sparse Newton takes.
     fn velocity(
         &self,
         t: f64,
@@ -390,29 +394,32 @@ where
         p: &OVector<f64, N>,
         guess: &OVector<f64, N>,
     ) -> Result<OVector<f64, N>, Error> {
-        // A constant mass matrix of a sum of terms: M⁻¹p from the terms' blocks, in O(n).
-        if self.terms().is_some() && Self::STRUCTURE == Structure::ConstantMass {
-            let inverse = self
-                .mass_inverse(t, q, guess)
-                .map_err(|_| Error::LegendreMap {
-                    t,
-                    iterations: 0,
-                    residual: f64::INFINITY,
-                })?;
-            return Ok(inverse.apply(p));
+        if let Some(terms) = self.terms() {
+            // A constant mass matrix of a sum of terms: M⁻¹p from the terms' blocks, in O(n).
+            if Self::STRUCTURE == Structure::ConstantMass {
+                let inverse = self
+                    .mass_inverse(t, q, guess)
+                    .map_err(|_| Error::LegendreMap {
+                        t,
+                        iterations: 0,
+                        residual: f64::INFINITY,
+                    })?;
+                return Ok(inverse.apply(p));
+            }
+            // Any other sum of terms: Newton with the sparse ∂²L/∂q̇², in O(n).
+            let mut v = guess.clone();
+            Legendre::new(terms, q.len(), LinearSolverKind::Sparse)?.solve(
+                terms,
+                t,
+                q.as_slice(),
+                p.as_slice(),
+                v.as_mut_slice(),
+            )?;
+            return Ok(v);
         }
         // ∂L/∂q̇ and ∂²L/∂q̇² at v, and whether both are finite.
         let legendre = |v: &OVector<f64, N>| {
-            let (momentum, mass) = match self.terms() {
-                Some(terms) => (
-                    assembled_gradient(terms, t, q, v, Wrt::Velocity),
-                    assembled_second_derivatives(terms, t, q, v).vv,
-                ),
-                None => {
-                    let (_, momentum, mass) = N::hessian(&Action(self), t, q, v, Wrt::Velocity);
-                    (momentum, mass)
-                }
-            };
+            let (_, momentum, mass) = N::hessian(&Action(self), t, q, v, Wrt::Velocity);
             let finite = momentum.iter().chain(mass.iter()).all(|x| x.is_finite());
             (momentum, mass, finite)
         };

@@ -57,6 +57,7 @@
 
 use crate::dimension::{Dyn, Wrt};
 use crate::error::Error;
+pub use crate::model::TermDerivatives;
 use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure, TermSum};
 use crate::scalar::Scalar;
@@ -128,48 +129,6 @@ pub trait TermWidth {
         v: &DVector<f64>,
         out: &mut Vec<(usize, usize, f64)>,
     );
-}
-
-/// The layout of one term's derivatives as [`TermWidth::second_derivatives`] writes them:
-/// ∂ℓ/∂q (K), ∂ℓ/∂q̇ (K), then the column-major K × K blocks ∂²ℓ/∂q∂q, ∂²ℓ/∂q∂q̇ (entry
-/// (a, b) = ∂²ℓ/∂q_a∂q̇_b) and ∂²ℓ/∂q̇∂q̇.
-#[derive(Debug, Clone, Copy)]
-pub struct TermDerivatives {
-    /// K.
-    pub width: usize,
-}
-
-impl TermDerivatives {
-    /// The length 2K + 3K² of the flattened derivatives.
-    pub fn len(&self) -> usize {
-        2 * self.width + 3 * self.width * self.width
-    }
-    /// Whether the layout is empty (K = 0).
-    pub fn is_empty(&self) -> bool {
-        self.width == 0
-    }
-    /// ∂ℓ/∂q_a.
-    pub fn q(&self, d: &[f64], a: usize) -> f64 {
-        d[a]
-    }
-    /// ∂ℓ/∂q̇_a.
-    pub fn v(&self, d: &[f64], a: usize) -> f64 {
-        d[self.width + a]
-    }
-    /// ∂²ℓ/∂q_a∂q_b.
-    pub fn qq(&self, d: &[f64], a: usize, b: usize) -> f64 {
-        d[2 * self.width + a + self.width * b]
-    }
-    /// ∂²ℓ/∂q_a∂q̇_b.
-    pub fn qv(&self, d: &[f64], a: usize, b: usize) -> f64 {
-        let k = self.width;
-        d[2 * k + k * k + a + k * b]
-    }
-    /// ∂²ℓ/∂q̇_a∂q̇_b.
-    pub fn vv(&self, d: &[f64], a: usize, b: usize) -> f64 {
-        let k = self.width;
-        d[2 * k + 2 * k * k + a + k * b]
-    }
 }
 
 /// One term of a [`LocalLagrangian`] as a fixed-size [`Lagrangian<K>`] in its own K

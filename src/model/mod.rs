@@ -38,11 +38,13 @@
 
 pub mod density;
 pub mod derived;
+pub(crate) mod legendre;
 pub mod local;
 pub mod mass_inverse;
 pub mod reparametrized;
 pub mod rigid_body;
 pub mod so3;
+pub(crate) mod term_pattern;
 pub mod text;
 
 use crate::dimension::{Dimension, Wrt};
@@ -81,7 +83,7 @@ where
     fn term_indices(&self, e: usize, out: &mut [usize]);
 
     /// Term `e`'s derivatives at its own (t, q, q̇) (slices of length K), flattened into
-    /// `out` in the layout of [`crate::model::local::TermDerivatives`]: ∂ℓ/∂q and ∂ℓ/∂q̇
+    /// `out` in the layout of [`TermDerivatives`]: ∂ℓ/∂q and ∂ℓ/∂q̇
     /// only (`second == false`, the first 2K entries), or with the Hessian blocks as well
     /// (2K + 3K² entries).
     fn term_derivatives(
@@ -127,6 +129,49 @@ where
                 }
             }
         }
+    }
+}
+
+/// The layout of one term's derivatives as [`crate::model::local::TermWidth::second_derivatives`] and
+/// [`TermSum::term_derivatives`] write them:
+/// ∂ℓ/∂q (K), ∂ℓ/∂q̇ (K), then the column-major K × K blocks ∂²ℓ/∂q∂q, ∂²ℓ/∂q∂q̇ (entry
+/// (a, b) = ∂²ℓ/∂q_a∂q̇_b) and ∂²ℓ/∂q̇∂q̇.
+#[derive(Debug, Clone, Copy)]
+pub struct TermDerivatives {
+    /// K.
+    pub width: usize,
+}
+
+impl TermDerivatives {
+    /// The length 2K + 3K² of the flattened derivatives.
+    pub fn len(&self) -> usize {
+        2 * self.width + 3 * self.width * self.width
+    }
+    /// Whether the layout is empty (K = 0).
+    pub fn is_empty(&self) -> bool {
+        self.width == 0
+    }
+    /// ∂ℓ/∂q_a.
+    pub fn q(&self, d: &[f64], a: usize) -> f64 {
+        d[a]
+    }
+    /// ∂ℓ/∂q̇_a.
+    pub fn v(&self, d: &[f64], a: usize) -> f64 {
+        d[self.width + a]
+    }
+    /// ∂²ℓ/∂q_a∂q_b.
+    pub fn qq(&self, d: &[f64], a: usize, b: usize) -> f64 {
+        d[2 * self.width + a + self.width * b]
+    }
+    /// ∂²ℓ/∂q_a∂q̇_b.
+    pub fn qv(&self, d: &[f64], a: usize, b: usize) -> f64 {
+        let k = self.width;
+        d[2 * k + k * k + a + k * b]
+    }
+    /// ∂²ℓ/∂q̇_a∂q̇_b.
+    pub fn vv(&self, d: &[f64], a: usize, b: usize) -> f64 {
+        let k = self.width;
+        d[2 * k + 2 * k * k + a + k * b]
     }
 }
 

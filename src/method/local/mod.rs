@@ -13,13 +13,12 @@
 //! What runs on large systems: Störmer–Verlet ([`verlet`], explicit kick–drift–kick for a
 //! constant mass matrix) and its compositions of orders 4, 6 and 8 ([`composition`]), SVI by
 //! the Hessian-free fixed point for a constant mass matrix and by sparse Newton for every
-//! other Lagrangian ([`svi`], [`newton`]; the linear solves go through the seam of
+//! other Lagrangian ([`svi`], sparse Newton in `crate::method::variational::stage_newton`; the linear solves go through the seam of
 //! [`crate::linalg::sparse`]). Spectral collocation, the implicit classic variational
 //! integrators, linear stability analysis and the tangent map stay on fixed-size ℝᴺ (small
 //! systems) for now; asking for them on a runtime-dimension model is an error that says so.
 
 pub mod composition;
-pub mod newton;
 pub mod svi;
 
 pub mod verlet;
@@ -30,9 +29,9 @@ use crate::method::space::{DynEuclidean, DynInitial, DynPoint, DynState};
 use crate::method::step::{Hermite, Step};
 use crate::method::{MethodInfo, StepReport};
 use crate::model::Structure;
+use crate::model::legendre::Legendre;
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
 use nalgebra::{DVector, Dyn};
-use newton::Legendre;
 
 /// An integration method for [`LocalLagrangian`] models on runtime-sized ℝⁿ, in the
 /// coordinates (q, p).
@@ -108,7 +107,13 @@ pub(crate) fn cold_velocity<L: LocalLagrangian>(
         mass_inverse(model, t, q)?.apply_into(p, v);
         return Ok(());
     }
-    Legendre::new(model, LinearSolverKind::Sparse)?.solve(model, t, q, p, v)
+    Legendre::new::<Dyn>(model, q.len(), LinearSolverKind::Sparse)?.solve::<Dyn>(
+        model,
+        t,
+        q.as_slice(),
+        p.as_slice(),
+        v.as_mut_slice(),
+    )
 }
 
 /// The constant mass matrix of `model` at (t, q), inverted, after checking that the model

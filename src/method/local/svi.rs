@@ -13,7 +13,7 @@
 //!   p_{k+1} − p_k = Σ_μ (h/2) w_μ ∂L/∂q(Q_μ) (the discrete momentum balance). The tables
 //!   are the fixed-size path's (`NystromTables` of [`crate::method::variational::svi`]), so both
 //!   take the same steps to round-off; each iteration costs m assemblies of ∂L/∂q, O(m n).
-//! - **sparse Newton** ([`crate::method::local::newton`]), for every other Lagrangian (and
+//! - **sparse Newton** (`crate::method::variational::stage_newton`), for every other Lagrangian (and
 //!   for constant mass with [`crate::Solver::Newton`]): the stage equations (8a)–(8b) in the
 //!   node offsets with the exact Jacobian assembled term by term, factored by faer's sparse
 //!   LU (symbolic analysis once per run, numeric factorisation only when the simplified
@@ -26,17 +26,19 @@ use std::cell::RefCell;
 use crate::Svi;
 use crate::error::{Error, StepFailure};
 use crate::method::local::MassInverse;
-use crate::method::local::newton::{Legendre, StageNewton};
 use crate::method::local::{LocalMethod, cold_velocity, constant_mass};
 use crate::method::space::DynState;
-use crate::method::variational::svi::{NystromTables, Solver, Tables};
+use crate::method::variational::stage_newton::StageNewton;
+use crate::method::variational::svi::{NystromTables, Solver};
+use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, StepReport};
 use crate::model::Structure;
+use crate::model::legendre::Legendre;
 use crate::model::local::LocalLagrangian;
-use crate::nonlinear::FixedPoint;
+use crate::nonlinear::{FixedPoint, Jacobian};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::starting_values::StartingValues;
-use nalgebra::DVector;
+use nalgebra::{DVector, Dyn};
 
 /// Buffers of an SVI run on runtime-sized ℝⁿ.
 #[derive(Debug)]
@@ -139,8 +141,14 @@ impl LocalMethod for Svi {
             }))
         } else {
             Path::Newton(Box::new(NewtonData {
-                stage: StageNewton::new(model, s, m, self.linear_solver, self.max_iterations)?,
-                legendre: RefCell::new(Legendre::new(model, self.linear_solver)?),
+                stage: StageNewton::new::<Dyn>(
+                    model,
+                    n,
+                    (s, m),
+                    self.linear_solver,
+                    self.max_iterations,
+                )?,
+                legendre: RefCell::new(Legendre::new::<Dyn>(model, n, self.linear_solver)?),
                 offsets: DVector::zeros(s * n),
                 previous: DVector::zeros(s * n),
                 velocity: DVector::zeros(n),
@@ -203,7 +211,13 @@ impl LocalMethod for Svi {
                 }
                 None => cold_velocity(model, t, q, p, v),
             },
-            Path::Newton(data) => data.legendre.borrow_mut().solve(model, t, q, p, v),
+            Path::Newton(data) => data.legendre.borrow_mut().solve::<Dyn>(
+                model,
+                t,
+                q.as_slice(),
+                p.as_slice(),
+                v.as_mut_slice(),
+            ),
         }
     }
 }
@@ -236,7 +250,13 @@ fn newton_step<L: LocalLagrangian>(
     } else {
         data.legendre
             .borrow_mut()
-            .solve(model, t, &state.q, &state.y, &mut data.velocity)
+            .solve::<Dyn>(
+                model,
+                t,
+                state.q.as_slice(),
+                state.y.as_slice(),
+                data.velocity.as_mut_slice(),
+            )
             .map_err(|_| StepFailure::NonConvergence {
                 iterations: 0,
                 residual: f64::NAN,
@@ -248,17 +268,28 @@ fn newton_step<L: LocalLagrangian>(
                 .copy_from(&(&data.velocity * c));
         }
     }
-    let report = data
-        .stage
-        .solve(model, tables, t, state, &mut data.offsets)?;
+    let report = data.stage.solve::<Dyn>(
+        model,
+        tables,
+        t,
+        (state.q.as_slice(), state.y.as_slice()),
+        &mut data.offsets,
+        Jacobian::Kept,
+    )?;
     increment.q.copy_from(&data.offsets.rows((s - 1) * n, n));
-    data.stage
-        .momentum_increment(model, tables, t, &state.q, &data.offsets, &mut increment.y);
+    data.stage.momentum_increment::<Dyn>(
+        model,
+        tables,
+        t,
+        state.q.as_slice(),
+        &data.offsets,
+        increment.y.as_mut_slice(),
+    );
     std::mem::swap(&mut data.offsets, &mut data.previous);
     start.remember_size(h);
     Ok(StepReport {
         iterations: report.iterations,
-        evaluations: report.evaluations + tables.weights.len() * model.term_count(),
+        evaluations: tables.weights.len() * data.stage.term_count() * (report.iterations + 1),
         factorizations: report.factorizations,
         analyses: std::mem::take(&mut data.analyses),
     })

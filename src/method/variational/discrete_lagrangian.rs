@@ -86,6 +86,14 @@ pub trait DiscreteLagrangian {
     /// Name, order, symmetry and cost.
     fn info(&self) -> DiscreteLagrangianInfo;
 
+    /// The quadrature rule on the straight segment, for a discrete Lagrangian of the segment
+    /// construction ([`segment_action`]): the methods then solve its discrete Euler–Lagrange
+    /// equations as the stage equations of a degree-1 Galerkin integrator (sparse Newton for
+    /// a sum of local terms). `None` (the default) for any other discrete Lagrangian.
+    fn segment(&self) -> Option<&'static [SegmentNode]> {
+        None
+    }
+
     /// L_d(q0, q1, h) for the step from `t` to `t + h`.
     fn discrete_lagrangian<L: Lagrangian<N>, D: Scalar, N: Dimension>(
         &self,
@@ -239,6 +247,10 @@ macro_rules! segment_rule {
                     symmetric: $symmetric,
                     points: Self::NODES.len(),
                 }
+            }
+
+            fn segment(&self) -> Option<&'static [SegmentNode]> {
+                Some(Self::NODES)
             }
 
             #[inline(always)]

@@ -4,14 +4,20 @@
 //!
 //! - [`svi`]: the Galerkin spectral variational integrator (eqs. 6–11), L_d from a polynomial
 //!   on Chebyshev–Gauss–Lobatto points and Gauss–Legendre quadrature.
+//! - `tables`: a Galerkin integrator's basis and quadrature tables, shared by SVI and the
+//!   sparse Newton of the classic discrete Lagrangians.
 //! - [`discrete_lagrangian`]: the classic discrete Lagrangians (symplectic Euler and its
 //!   adjoint, midpoint, trapezoid) as plain data.
 //! - [`variational_integrator`]: one implicit discrete Euler–Lagrange solver for any of them.
+//! - `stage_newton`: sparse Newton on the stage equations of a sum of local terms, for SVI
+//!   and the classic variational integrators.
 //! - [`stormer_verlet`]: the trapezoidal rule, explicit (kick–drift–kick) for a constant mass.
 //! - [`composition`]: symmetric compositions of Störmer–Verlet of orders 4, 6 and 8.
 
 pub mod composition;
 pub mod discrete_lagrangian;
+pub(crate) mod stage_newton;
 pub mod stormer_verlet;
 pub mod svi;
+pub(crate) mod tables;
 pub mod variational_integrator;

@@ -192,10 +192,10 @@ where
         Some(&[1.0])
     }
 
-    /// The explicit path on an unforced sum of terms: M⁻¹ from the terms' blocks, forces
-    /// assembled in place.
+    /// An unforced sum of terms: the explicit path (M⁻¹ from the terms' blocks, forces
+    /// assembled in place) for a constant mass, else the implicit trapezoid by sparse Newton.
     fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
-        model.terms().is_some() && L::STRUCTURE == Structure::ConstantMass && !L::FORCED
+        model.terms().is_some() && !L::FORCED
     }
 
     /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked once

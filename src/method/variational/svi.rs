@@ -65,12 +65,14 @@ use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
-use crate::method::step::dense_size;
+use crate::method::variational::stage_newton::{LazyStageNewton, StageNewton, sparse_terms};
+use crate::method::variational::tables::{Tables, unit_nodes};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::model::mass_inverse::MassInverse;
+use crate::model::term_pattern::check_width;
+use crate::model::{Lagrangian, TermSum};
 use crate::nonlinear::{FixedPoint, Jacobian, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
@@ -93,8 +95,9 @@ pub struct Svi {
     pub max_iterations: usize,
     /// How the stage equations (8a)–(8b) are solved.
     pub solver: Solver,
-    /// The linear solver of Newton's method on runtime-dimension models
-    /// ([`crate::method::local`]; fixed-size models always take svi's dense LU).
+    /// The linear solver of sparse Newton, which solves the stage equations of an unforced sum
+    /// of local terms of run-time size ([`Lagrangian::terms`]); every other model takes svi's
+    /// dense LU.
     pub linear_solver: LinearSolverKind,
 }
 
@@ -174,108 +177,66 @@ impl Svi {
     }
 }
 
-/// Tables of one SVI configuration, scaled for the current step size.
-#[derive(Debug, Clone)]
-pub(crate) struct Tables {
-    pub(crate) degree: usize,
-    pub(crate) h: f64,
-    /// Gauss nodes τ_μ on [−1, 1].
-    nodes: Vec<f64>,
-    /// Gauss weights w_μ.
-    reference_weights: Vec<f64>,
-    /// (h/2) w_μ.
-    pub(crate) weights: Vec<f64>,
-    /// l_ν(τ_μ), m × (s + 1).
-    pub(crate) values: DMatrix<f64>,
-    /// l̇_ν(τ_μ), m × (s + 1).
-    reference_derivatives: DMatrix<f64>,
-    /// (2/h) l̇_ν(τ_μ), m × (s + 1).
-    pub(crate) derivatives: DMatrix<f64>,
-    /// CGL nodes x_ν.
-    interpolation_nodes: Vec<f64>,
-    /// c'_μ = (τ_μ + 1)/2, the quadrature nodes on [0, 1].
-    unit_nodes: Vec<f64>,
-    /// c_ν = (x_ν + 1)/2, the CGL nodes on [0, 1].
-    pub(crate) unit_points: Vec<f64>,
-}
-
-impl Tables {
-    pub(crate) fn new(basis: &LagrangeBasis, quadrature: usize, h: f64) -> Result<Self, Error> {
-        let points = basis.len();
-        let gauss = GaussLegendre::new(quadrature)?;
-        let mut tables = Tables {
-            degree: points - 1,
-            h: f64::NAN,
-            nodes: gauss.nodes().to_vec(),
-            reference_weights: gauss.weights().to_vec(),
-            weights: vec![0.0; quadrature],
-            values: basis.value_matrix(gauss.nodes()),
-            reference_derivatives: basis.derivative_matrix(gauss.nodes()),
-            derivatives: DMatrix::zeros(quadrature, points),
-            interpolation_nodes: basis.nodes().to_vec(),
-            unit_nodes: unit_nodes(gauss.nodes()),
-            unit_points: basis.nodes().iter().map(|x| 0.5 * (x + 1.0)).collect(),
-        };
-        tables.rescale(h);
-        Ok(tables)
-    }
-
-    pub(crate) fn rescale(&mut self, h: f64) {
-        self.h = h;
-        for (w, r) in self.weights.iter_mut().zip(&self.reference_weights) {
-            *w = 0.5 * h * r;
-        }
-        self.derivatives
-            .zip_apply(&self.reference_derivatives, |d, r| *d = 2.0 / h * r);
-    }
-
-    pub(crate) fn time(&self, t: f64, mu: usize) -> f64 {
-        t + 0.5 * self.h * (self.nodes[mu] + 1.0)
-    }
-
-    /// q and q̇ at quadrature point μ for node offsets z (q⁰ = q_k implicit).
-    ///
-    /// Relative to the uniform motion through the step's end points, z_j = c_j Z_s + d_j
-    /// (c_j = (x_j + 1)/2): q(τ_μ) = q_k + c'_μ Z_s + Σ_j l_j(τ_μ) d_j and
-    /// q̇(τ_μ) = Z_s/h + Σ_j (2/h) l̇_j(τ_μ) d_j, since the interpolant reproduces the
-    /// linear function exactly. The large uniform part then passes through one rounding
-    /// instead of the sums over the differentiation matrix (whose entries grow like s²):
-    /// summing the z_j directly left q̇ off by tens of ulps, and the Newton path's energy
-    /// random-walked ten times faster than the fixed point's (Kepler, T = 2000: final errors
-    /// 5e-11 to 1.3e-10 against 6e-12).
-    fn point<N: Dimension>(
+impl Svi {
+    /// One step of an unforced sum of terms of run-time size by sparse Newton
+    /// ([`crate::method::variational::stage_newton`]), after `spent` fixed-point iterations
+    /// (`warm`: Newton starts from their last iterate, else from the starting values):
+    /// q_{k+1} − q_k = Z_s and the discrete momentum balance.
+    #[allow(clippy::too_many_arguments)]
+    fn sparse_step<L: Lagrangian<N>, N: Dimension>(
         &self,
-        mu: usize,
-        q0: &OVector<f64, N>,
-        z: &DVector<f64>,
-    ) -> (OVector<f64, N>, OVector<f64, N>)
+        model: &L,
+        terms: &dyn TermSum<N>,
+        workspace: &mut SviWorkspace<N>,
+        (t, h): (f64, f64),
+        state: &State<N>,
+        increment: &mut State<N>,
+        (warm, spent, jacobian): (bool, usize, Jacobian),
+    ) -> Result<StepReport, StepFailure>
     where
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
-        let s = self.degree;
-        let (n, _) = q0.shape_generic();
-        let width = n.value();
-        let end =
-            OVector::from_column_slice_generic(n, U1, &z.as_slice()[(s - 1) * width..s * width]);
-        let mut q = q0 + &end * self.unit_nodes[mu];
-        let mut v = &end / self.h;
-        for nu in 1..s {
-            let offsets = &z.as_slice()[(nu - 1) * width..nu * width];
-            let (b, c) = (self.values[(mu, nu)], self.derivatives[(mu, nu)]);
-            let position = self.unit_points[nu];
-            for (((q, v), z), end) in q
-                .as_mut_slice()
-                .iter_mut()
-                .zip(v.as_mut_slice())
-                .zip(offsets)
-                .zip(end.as_slice())
-            {
-                let node = z - end * position;
-                *q += node * b;
-                *v += node * c;
-            }
+        if !warm {
+            workspace.set_step(h);
+            workspace.start(model, t, state);
         }
-        (q, v)
+        let ws = workspace;
+        let (n, s, m) = (state.q.len(), ws.tables.degree, ws.tables.weights.len());
+        let mut analyses = 0;
+        if ws.sparse.0.is_none() {
+            let stage = StageNewton::new(terms, n, (s, m), self.linear_solver, self.max_iterations)
+                .map_err(|_| StepFailure::Unsupported {
+                    option: "model",
+                    reason: "the pattern of its terms' indices does not fit its dimension",
+                })?;
+            ws.sparse.0 = Some(Box::new(stage));
+            analyses = 1;
+        }
+        let Some(stage) = ws.sparse.0.as_mut() else {
+            return Err(StepFailure::SingularMatrix);
+        };
+        let point = (state.q.as_slice(), state.y.as_slice());
+        let solved = stage.solve(terms, &ws.tables, t, point, &mut ws.offsets, jacobian)?;
+        increment
+            .q
+            .as_mut_slice()
+            .copy_from_slice(&ws.offsets.as_slice()[(s - 1) * n..s * n]);
+        stage.momentum_increment(
+            terms,
+            &ws.tables,
+            t,
+            state.q.as_slice(),
+            &ws.offsets,
+            increment.y.as_mut_slice(),
+        );
+        ws.remember(h);
+        let iterations = solved.iterations + spent;
+        Ok(StepReport {
+            iterations,
+            evaluations: m * (iterations + 1),
+            factorizations: solved.factorizations,
+            analyses,
+        })
     }
 }
 
@@ -577,23 +538,6 @@ where
     }
 }
 
-/// The quadrature nodes on [0, 1], c_μ = (τ_μ + 1)/2, with the symmetry c_{m−1−μ} = 1 − c_μ
-/// made exact (rounding (τ + 1)/2 and (1 − τ)/2 separately breaks it by an ulp). A
-/// symmetric method whose coefficients are not symmetric in floating point is not
-/// reversible at round-off: on Kepler (T = 2000, 40 000 steps of SVI 7/6) the energy then
-/// drifted by 6·10⁻¹⁵, and the resulting phase error capped the final error near 10⁻¹¹.
-fn unit_nodes(nodes: &[f64]) -> Vec<f64> {
-    let m = nodes.len();
-    let mut c: Vec<f64> = nodes.iter().map(|tau| 0.5 * (tau + 1.0)).collect();
-    for i in 0..m / 2 {
-        c[m - 1 - i] = 1.0 - c[i];
-    }
-    if m % 2 == 1 {
-        c[m / 2] = 0.5;
-    }
-    c
-}
-
 /// Ā = A² of the Gauss–Legendre collocation method on the nodes c_μ = (τ_μ + 1)/2, with
 /// A_μν = ∫₀^{c_μ} ℓ_ν (ℓ the Lagrange basis on c), row-major.
 ///
@@ -642,6 +586,8 @@ where
     /// External force and its Jacobian at the quadrature points (forced models).
     forces: Vec<ForceJacobian<N>>,
     newton: Newton,
+    /// Sparse Newton for an unforced sum of terms of run-time size, made at its first use.
+    sparse: LazyStageNewton,
     /// Fixed-point data, for constant-mass Lagrangians.
     constant_mass: Option<ConstantMass<N>>,
     /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
@@ -657,7 +603,15 @@ where
     fn set_step(&mut self, h: f64) {
         if self.tables.h != h {
             self.tables.rescale(h);
-            self.newton.invalidate();
+            self.invalidate_newton();
+        }
+    }
+
+    /// Drop Newton's kept factors, dense and sparse.
+    fn invalidate_newton(&mut self) {
+        self.newton.invalidate();
+        if let Some(stage) = self.sparse.0.as_mut() {
+            stage.invalidate();
         }
     }
 
@@ -847,6 +801,9 @@ where
             Structure::ConstantMass => ConstantMass::new(&tables, n),
             Structure::General => None,
         };
+        if let Some(terms) = sparse_terms(model) {
+            check_width(terms.width())?;
+        }
         // Newton's buffers exist for every model (a constant-mass model falls back to Newton
         // where the fixed point fails); its n-squared matrices are made at their first use.
         Ok(SviWorkspace {
@@ -861,6 +818,7 @@ where
                 false => Vec::new(),
             },
             newton: Newton::new(size, self.max_iterations),
+            sparse: LazyStageNewton::default(),
             constant_mass,
             newton_only: false,
         })
@@ -893,27 +851,22 @@ where
                 ControlFlow::Break(result) => return result,
                 ControlFlow::Continue(iterations) => spent = iterations,
             }
-            // Newton's dense matrix does not fit a large sum of terms.
-            if N::try_to_usize().is_none() && dense_size("svi", state.q.len(), self.points).is_err()
-            {
-                return Err(StepFailure::Unsupported {
-                    option: "h",
-                    reason: "svi's fixed point did not converge, and Newton's dense matrix \
-                             does not fit a model this large: take a smaller step",
-                });
-            }
         }
         // After a capped fixed point Newton starts from its last iterate; after a diverging
         // one, or for a model that always uses Newton, from the starting values. Factors kept
         // from an earlier fallback belong to another state.
         let warm = spent > 0;
         if self.solver == Solver::Auto && workspace.constant_mass.is_some() {
-            workspace.newton.invalidate();
+            workspace.invalidate_newton();
         }
         let jacobian = match self.solver {
             Solver::Auto => Jacobian::Kept,
             Solver::Newton => Jacobian::Exact,
         };
+        if let Some(terms) = sparse_terms(model) {
+            let guess = (warm, spent, jacobian);
+            return self.sparse_step(model, terms, workspace, (t, h), state, increment, guess);
+        }
         let solved = solve(model, workspace, t, h, state, warm, jacobian)?;
         let iterations = solved.iterations + spent;
         let ws = &mut *workspace;
@@ -972,7 +925,7 @@ where
 
     fn restart(&self, workspace: &mut SviWorkspace<N>) {
         workspace.start.invalidate();
-        workspace.newton.invalidate();
+        workspace.invalidate_newton();
         if let Some(data) = workspace.constant_mass.as_mut() {
             data.pending = false;
         }
@@ -1013,14 +966,11 @@ where
         Some(self.points)
     }
 
-    /// The fixed point on an unforced constant-mass sum of terms: M⁻¹ from the terms'
-    /// blocks, forces assembled in place (Newton's dense matrices are made only if the
-    /// fixed point fails).
+    /// An unforced sum of terms: the fixed point (M⁻¹ from the terms' blocks, forces
+    /// assembled in place) for a constant mass, and sparse Newton (`stage_newton`) for every
+    /// other one and wherever the fixed point fails.
     fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
-        model.terms().is_some()
-            && L::STRUCTURE == Structure::ConstantMass
-            && self.solver == Solver::Auto
-            && !L::FORCED
+        model.terms().is_some() && !L::FORCED
     }
 
     /// Keeps an explicit quadrature's offset m − (s + 1) from the number of points.

@@ -27,6 +27,13 @@
 //! segment rules of [`crate::method::variational::discrete_lagrangian`] it is h Σ_i b_i ∂L/∂q(τ_i), the discrete
 //! momentum balance, whereas D2 L_d + D1 L_d term by term cancels O(|p|) each step.
 //!
+//! # Sums of local terms
+//! For an unforced sum of local terms of run-time size ([`Lagrangian::terms`]) the discrete
+//! Euler–Lagrange equations of a segment rule are the stage equations of a degree-1 Galerkin
+//! integrator (the two-point basis with the rule as its quadrature), solved by sparse Newton
+//! with the Jacobian assembled term by term (`stage_newton`): O(n) work and memory per step
+//! for a chain of any size, and p_{k+1} − p_k = h Σ_i b_i ∂L/∂q(τ_i) as above.
+//!
 //! # Properties
 //! The order and symmetry of the discrete Lagrangian ([`DiscreteLagrangianInfo`]);
 //! symplectic (L_d is a type-I generating function of the step), and Noether momenta of
@@ -42,12 +49,16 @@ use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert_small;
+use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
 use crate::method::variational::discrete_lagrangian::{DiscreteLagrangian, DiscreteLagrangianInfo};
+use crate::method::variational::stage_newton::{LazyStageNewton, StageNewton, sparse_terms};
+use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
-use crate::nonlinear::Newton;
+use crate::model::term_pattern::check_width;
+use crate::model::{Lagrangian, TermSum};
+use crate::nonlinear::{Jacobian, Newton};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
@@ -183,6 +194,15 @@ where
     offset: DVector<f64>,
     newton: Newton,
     history: History<N>,
+    /// Sparse Newton, for an unforced sum of terms of run-time size and a segment rule.
+    sparse: Option<SparseSegment>,
+}
+
+/// The stage tables of a segment rule and the sparse Newton solver of its equations.
+#[derive(Debug, Clone)]
+struct SparseSegment {
+    tables: Tables,
+    stage: LazyStageNewton,
 }
 
 impl<N: Dimension> VariationalWorkspace<N>
@@ -195,6 +215,7 @@ where
             offset: DVector::zeros(n.value()),
             newton: Newton::new(n.value(), max_iterations),
             history: History::empty(n),
+            sparse: None,
         }
     }
 
@@ -221,8 +242,12 @@ where
         let v = model
             .velocity(t, &state.q, &state.y, &state.y)
             .unwrap_or_else(|_| OVector::zeros_generic(n, U1));
+        // A sum of terms starts from uniform motion: its acceleration is a dense solve.
         let a = model
-            .acceleration(t, &state.q, &v)
+            .terms()
+            .is_none()
+            .then(|| model.acceleration(t, &state.q, &v))
+            .flatten()
             .unwrap_or_else(|| OVector::zeros_generic(n, U1));
         let half_square = 0.5 * h * h;
         for ((target, v), a) in offset.iter_mut().zip(v.as_slice()).zip(a.as_slice()) {
@@ -288,7 +313,17 @@ where
         }
         let n = dimension_of::<N>(model.dimension())
             .map_err(|reason| Error::invalid("model", reason))?;
-        Ok(VariationalWorkspace::new(n, self.max_iterations))
+        let mut workspace = VariationalWorkspace::new(n, self.max_iterations);
+        if let (Some(terms), Some(nodes)) =
+            (sparse_terms(model), self.discrete_lagrangian.segment())
+        {
+            check_width(terms.width())?;
+            workspace.sparse = Some(SparseSegment {
+                tables: Tables::segment(nodes, h)?,
+                stage: LazyStageNewton::default(),
+            });
+        }
+        Ok(workspace)
     }
 
     fn step<L: Lagrangian<N>>(
@@ -300,6 +335,11 @@ where
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
+        if let Some(terms) = sparse_terms(model)
+            && workspace.sparse.is_some()
+        {
+            return self.sparse_step(terms, model, workspace, (t, h), state, increment);
+        }
         let iterations = solve_position(&self.discrete_lagrangian, model, workspace, t, h, state)?;
         let offset = &workspace.offset;
         let q1 = OVector::from_fn_generic(state.dimension(), U1, |i, _| state.q[i] + offset[i]);
@@ -315,6 +355,11 @@ where
         })
     }
 
+    /// A segment rule on an unforced sum of terms: sparse Newton.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        model.terms().is_some() && !L::FORCED && self.discrete_lagrangian.segment().is_some()
+    }
+
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
@@ -328,6 +373,70 @@ where
         let q1 = &state.q + &increment.q;
         let tangent = discrete_tangent_map(&self.discrete_lagrangian, model, t, h, &state.q, &q1)?;
         Ok((increment, tangent))
+    }
+}
+
+impl<Ld: DiscreteLagrangian> VariationalIntegrator<Ld> {
+    /// One step of an unforced sum of terms by sparse Newton on the segment rule's stage
+    /// equations (see the module docs).
+    fn sparse_step<L: Lagrangian<N>, N: Dimension>(
+        &self,
+        terms: &dyn TermSum<N>,
+        model: &L,
+        workspace: &mut VariationalWorkspace<N>,
+        (t, h): (f64, f64),
+        state: &State<N>,
+        increment: &mut State<N>,
+    ) -> Result<StepReport, StepFailure>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        workspace.predict(model, t, h, state);
+        let VariationalWorkspace { offset, sparse, .. } = workspace;
+        let Some(SparseSegment { tables, stage }) = sparse.as_mut() else {
+            return Err(StepFailure::SingularMatrix);
+        };
+        if tables.h != h {
+            tables.rescale(h);
+            if let Some(stage) = stage.0.as_mut() {
+                stage.invalidate();
+            }
+        }
+        let (n, m) = (state.q.len(), tables.weights.len());
+        let mut analyses = 0;
+        if stage.0.is_none() {
+            let made = StageNewton::new(
+                terms,
+                n,
+                (1, m),
+                LinearSolverKind::Sparse,
+                self.max_iterations,
+            )
+            .map_err(|_| StepFailure::Unsupported {
+                option: "model",
+                reason: "the pattern of its terms' indices does not fit its dimension",
+            })?;
+            stage.0 = Some(Box::new(made));
+            analyses = 1;
+        }
+        let Some(stage) = stage.0.as_mut() else {
+            return Err(StepFailure::SingularMatrix);
+        };
+        let point = (state.q.as_slice(), state.y.as_slice());
+        let solved = stage.solve(terms, tables, t, point, offset, Jacobian::Kept)?;
+        increment
+            .q
+            .as_mut_slice()
+            .copy_from_slice(offset.as_slice());
+        let q0 = state.q.as_slice();
+        stage.momentum_increment(terms, tables, t, q0, offset, increment.y.as_mut_slice());
+        workspace.remember(h, state, &increment.q);
+        Ok(StepReport {
+            iterations: solved.iterations,
+            evaluations: m * (solved.iterations + 1),
+            factorizations: solved.factorizations,
+            analyses,
+        })
     }
 }
 

@@ -1,0 +1,353 @@
+//! Sparse Newton on the stage equations (8a)–(8b) of a Galerkin variational integrator, for a
+//! Lagrangian that is a sum of local terms ([`crate::model::TermSum`]): the Jacobian is
+//! assembled term by term into a sparsity pattern fixed once per run and solved through the
+//! linear-solver seam ([`crate::linalg::sparse`]), so a step costs O(n) memory and work for a
+//! chain or lattice of any size.
+//!
+//! # The stage equations
+//! The unknowns are the node offsets Z_j = qʲ − q_k, j = 1, …, s, stored node-major
+//! (Z_j occupies entries (j − 1)n … jn − 1). With b_μν = l_ν(τ_μ), d_μν = (2/h) l̇_ν(τ_μ) and
+//! W_μ = (h/2) w_μ, the residual of node ν = 0, …, s − 1 is
+//!
+//! r_ν = δ_ν0 p_k + Σ_μ W_μ (b_μν ∂L/∂q + d_μν ∂L/∂q̇)(t_μ, q_μ, q̇_μ),
+//!
+//! q_μ = q_k + Σ_j b_μj Z_j, q̇_μ = Σ_j d_μj Z_j, and its Jacobian block (ν, j) is
+//!
+//! ∂r_ν/∂Z_j = Σ_μ W_μ [b_μν (L_qq b_μj + L_qq̇ d_μj) + d_μν (L_q̇q b_μj + L_q̇q̇ d_μj)].
+//!
+//! The same equations with s = 1, the two-point linear basis and a segment quadrature rule
+//! are the discrete Euler–Lagrange equations p_k = −D1 L_d(q_k, q_{k+1}) of the classic
+//! variational integrators ([`crate::method::variational::discrete_lagrangian`]): symplectic
+//! Euler, midpoint and trapezoid run on this solver too.
+//!
+//! Every block has the pattern P of L's Hessian (the union of the terms' index sets), so the
+//! (s n)² Jacobian has s² n·(nonzeros of P per row) entries; in node-major order the entry
+//! ((ν, r), (j, c)) sits at slot colptr((j − 1)n + c) + ν·|P column c| + rank of r in it, which
+//! each term's pair finds from its slot in P. Assembly is O(m s² K² · terms); the
+//! factorisation is faer's sparse LU (fill-reducing ordering found once, in the symbolic
+//! analysis).
+//!
+//! # Simplified Newton
+//! The factored Jacobian is kept across iterations and steps while the iteration contracts
+//! (‖Δ_k‖ ≤ ½‖Δ_{k−1}‖), and refactored otherwise or when the step size changes; only the
+//! residual defines the solution, so a stale Jacobian costs iterations, never accuracy.
+//! p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) is the discrete momentum balance.
+
+use crate::dimension::Dimension;
+use crate::error::{Error, StepFailure};
+use crate::linalg::sparse::{AnySolver, LinearSolverKind, Pattern};
+use crate::method::variational::tables::Tables;
+use crate::model::term_pattern::{MAX_WIDTH, TermPattern};
+use crate::model::{Lagrangian, TermDerivatives, TermSum};
+use crate::nonlinear::{Jacobian, Solved, stalled};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator};
+
+/// The terms of `model` when the stage equations are solved by sparse Newton: an unforced sum
+/// of local terms of run-time size (a forced model, or a fixed size, takes the dense Newton
+/// matrix).
+pub(crate) fn sparse_terms<L: Lagrangian<N>, N: Dimension>(model: &L) -> Option<&dyn TermSum<N>>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    if N::try_to_usize().is_some() || L::FORCED {
+        return None;
+    }
+    model.terms()
+}
+
+/// A run's [`StageNewton`], made at its first use. A clone starts without one (it holds a
+/// factorisation of its own run) and makes its own.
+#[derive(Debug, Default)]
+pub(crate) struct LazyStageNewton(pub(crate) Option<Box<StageNewton>>);
+
+impl Clone for LazyStageNewton {
+    fn clone(&self) -> Self {
+        LazyStageNewton(None)
+    }
+}
+
+/// The stage equations' pattern, solver and buffers.
+#[derive(Debug)]
+pub(crate) struct StageNewton {
+    n: usize,
+    s: usize,
+    terms: TermPattern,
+    /// The (s n)² Jacobian's pattern and values.
+    pattern: Pattern,
+    values: Vec<f64>,
+    solver: AnySolver,
+    /// Whether `solver` holds a factorisation for the current step size.
+    factored: bool,
+    /// Residual, then Newton correction.
+    residual: DVector<f64>,
+    /// q_μ and q̇_μ for every quadrature point.
+    positions: Vec<DVector<f64>>,
+    velocities: Vec<DVector<f64>>,
+    derivatives: Vec<f64>,
+    max_iterations: usize,
+}
+
+impl StageNewton {
+    /// The solver of `terms` on `n` coordinates, for `s` unknown nodes and `m` quadrature
+    /// points, its pattern analysed by a solver of `kind`.
+    ///
+    /// # Errors
+    /// As [`TermPattern::new`], or when the symbolic analysis fails.
+    pub(crate) fn new<N: Dimension>(
+        terms: &dyn TermSum<N>,
+        n: usize,
+        (s, m): (usize, usize),
+        kind: LinearSolverKind,
+        max_iterations: usize,
+    ) -> Result<Self, Error>
+    where
+        DefaultAllocator: Allocator<N>,
+    {
+        let terms = TermPattern::new(terms, n)?;
+        let small = &terms.pattern;
+        let mut entries = Vec::with_capacity(s * s * small.len());
+        for j in 0..s {
+            for col in 0..n {
+                for nu in 0..s {
+                    for row in small.column(col) {
+                        entries.push((nu * n + row, j * n + col));
+                    }
+                }
+            }
+        }
+        let pattern = Pattern::new(s * n, &entries)?;
+        let solver = AnySolver::analysed(kind, &pattern)?;
+        Ok(StageNewton {
+            n,
+            s,
+            values: vec![0.0; pattern.len()],
+            pattern,
+            derivatives: vec![
+                0.0;
+                TermDerivatives {
+                    width: terms.width()
+                }
+                .len()
+            ],
+            terms,
+            solver,
+            factored: false,
+            residual: DVector::zeros(s * n),
+            positions: vec![DVector::zeros(n); m],
+            velocities: vec![DVector::zeros(n); m],
+            max_iterations,
+        })
+    }
+
+    /// Forget the factorisation (the step size changed).
+    pub(crate) fn invalidate(&mut self) {
+        self.factored = false;
+    }
+
+    /// The number of terms (for the evaluation counts).
+    pub(crate) fn term_count(&self) -> usize {
+        self.terms.term_count()
+    }
+
+    /// The slot of ((ν, row), (j, col)) whose slot in P is `small_slot` in column `col`.
+    #[inline]
+    fn slot(&self, nu: usize, j: usize, col: usize, small_slot: usize) -> usize {
+        let small = &self.terms.pattern;
+        let start = small.column_start(col);
+        let count = small.column_start(col + 1) - start;
+        self.pattern.column_start(j * self.n + col) + nu * count + (small_slot - start)
+    }
+
+    /// q_μ, q̇_μ at every quadrature point from the offsets `z`.
+    fn points(&mut self, tables: &Tables, q0: &[f64], z: &DVector<f64>) {
+        let (n, s) = (self.n, self.s);
+        for (mu, (q, v)) in self
+            .positions
+            .iter_mut()
+            .zip(&mut self.velocities)
+            .enumerate()
+        {
+            q.as_mut_slice().copy_from_slice(q0);
+            v.as_mut_slice().fill(0.0);
+            for j in 1..=s {
+                let node = z.rows((j - 1) * n, n);
+                q.axpy(tables.values[(mu, j)], &node, 1.0);
+                v.axpy(tables.derivatives[(mu, j)], &node, 1.0);
+            }
+        }
+    }
+
+    /// The residual r(z) into `self.residual`, and with `jacobian` the Jacobian's values.
+    #[allow(clippy::too_many_arguments)]
+    fn assemble<N: Dimension>(
+        &mut self,
+        model: &dyn TermSum<N>,
+        tables: &Tables,
+        t: f64,
+        (q0, p0): (&[f64], &[f64]),
+        z: &DVector<f64>,
+        jacobian: bool,
+    ) where
+        DefaultAllocator: Allocator<N>,
+    {
+        self.points(tables, q0, z);
+        let (n, s, k) = (self.n, self.s, self.terms.width());
+        let layout = TermDerivatives { width: k };
+        self.residual.as_mut_slice().fill(0.0);
+        self.residual.as_mut_slice()[..n].copy_from_slice(p0);
+        if jacobian {
+            self.values.fill(0.0);
+        }
+        let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
+        let mut derivatives = std::mem::take(&mut self.derivatives);
+        for mu in 0..self.positions.len() {
+            let w = tables.weights[mu];
+            let time = tables.time(t, mu);
+            for e in 0..self.terms.term_count() {
+                self.terms.gather(
+                    e,
+                    self.positions[mu].as_slice(),
+                    self.velocities[mu].as_slice(),
+                    &mut ql,
+                    &mut vl,
+                );
+                model.term_derivatives(e, time, &ql[..k], &vl[..k], jacobian, &mut derivatives);
+                let indices = self.terms.indices(e);
+                for nu in 0..s {
+                    let (b, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+                    for (a, &i) in indices.iter().enumerate() {
+                        self.residual[nu * n + i] +=
+                            w * (b * layout.q(&derivatives, a) + c * layout.v(&derivatives, a));
+                    }
+                }
+                if !jacobian {
+                    continue;
+                }
+                for (bb, &col) in indices.iter().enumerate() {
+                    for a in 0..k {
+                        let small_slot = self.terms.slot(e, a, bb);
+                        let (qq, qv) = (
+                            layout.qq(&derivatives, a, bb),
+                            layout.qv(&derivatives, a, bb),
+                        );
+                        let (vq, vv) = (
+                            layout.qv(&derivatives, bb, a),
+                            layout.vv(&derivatives, a, bb),
+                        );
+                        for j in 1..=s {
+                            let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
+                            let from_q = w * (qq * bj + qv * cj);
+                            let from_v = w * (vq * bj + vv * cj);
+                            for nu in 0..s {
+                                let value = from_q * tables.values[(mu, nu)]
+                                    + from_v * tables.derivatives[(mu, nu)];
+                                let slot = self.slot(nu, j - 1, col, small_slot);
+                                self.values[slot] += value;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        self.derivatives = derivatives;
+    }
+
+    /// Solve the stage equations at the state (q_k, p_k) = `state` for the offsets `z` (on
+    /// entry the starting values), refactoring the Jacobian at every iteration
+    /// ([`Jacobian::Exact`]) or as the simplified Newton method ([`Jacobian::Kept`]).
+    pub(crate) fn solve<N: Dimension>(
+        &mut self,
+        model: &dyn TermSum<N>,
+        tables: &Tables,
+        t: f64,
+        state: (&[f64], &[f64]),
+        z: &mut DVector<f64>,
+        jacobian: Jacobian,
+    ) -> Result<Solved, StepFailure>
+    where
+        DefaultAllocator: Allocator<N>,
+    {
+        let mut report = Solved {
+            iterations: 0,
+            factorizations: 0,
+        };
+        let mut previous = f64::INFINITY;
+        let q_size = state.0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        loop {
+            let refactor = !self.factored || jacobian == Jacobian::Exact;
+            self.assemble(model, tables, t, state, z, refactor);
+            let solver = self.solver.get();
+            if refactor {
+                solver
+                    .factor(&self.pattern, &self.values)
+                    .map_err(|_| StepFailure::SingularMatrix)?;
+                self.factored = true;
+                report.factorizations += 1;
+            }
+            if solver.solve_in_place(&mut self.residual).is_err() {
+                self.factored = false;
+                return Err(StepFailure::SingularMatrix);
+            }
+            *z -= &self.residual;
+            report.iterations += 1;
+            let size = self.residual.amax();
+            // The positions the offsets build, as they are now (from rest they start at 0).
+            let scale = q_size + z.amax();
+            if !size.is_finite() {
+                self.factored = false;
+                return Err(StepFailure::NonFinite);
+            }
+            if size <= 2.0 * f64::EPSILON * scale || stalled(size, previous, 1e-13, scale) {
+                return Ok(report);
+            }
+            if report.iterations >= self.max_iterations {
+                self.factored = false;
+                return Err(StepFailure::NonConvergence {
+                    iterations: report.iterations,
+                    residual: size,
+                });
+            }
+            // A stale Jacobian that contracts slowly is refreshed for the next iteration.
+            if report.iterations > 1 && size > 0.5 * previous {
+                self.factored = false;
+            }
+            previous = size;
+        }
+    }
+
+    /// p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) at the offsets `z`, into `dp`.
+    pub(crate) fn momentum_increment<N: Dimension>(
+        &mut self,
+        model: &dyn TermSum<N>,
+        tables: &Tables,
+        t: f64,
+        q0: &[f64],
+        z: &DVector<f64>,
+        dp: &mut [f64],
+    ) where
+        DefaultAllocator: Allocator<N>,
+    {
+        self.points(tables, q0, z);
+        let k = self.terms.width();
+        let layout = TermDerivatives { width: k };
+        let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
+        dp.fill(0.0);
+        for mu in 0..self.positions.len() {
+            let (w, time) = (tables.weights[mu], tables.time(t, mu));
+            for e in 0..self.terms.term_count() {
+                self.terms.gather(
+                    e,
+                    self.positions[mu].as_slice(),
+                    self.velocities[mu].as_slice(),
+                    &mut ql,
+                    &mut vl,
+                );
+                model.term_derivatives(e, time, &ql[..k], &vl[..k], false, &mut self.derivatives);
+                for (a, &i) in self.terms.indices(e).iter().enumerate() {
+                    dp[i] += w * layout.q(&self.derivatives, a);
+                }
+            }
+        }
+    }
+}
