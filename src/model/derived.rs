@@ -28,8 +28,7 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
-use crate::linalg::sparse::LinearSolverKind;
-use crate::model::legendre::Legendre;
+use crate::model::legendre;
 use crate::model::mass_inverse::MassInverse;
 use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
 use crate::scalar::Scalar;
@@ -406,16 +405,12 @@ where
                     })?;
                 return Ok(inverse.apply(p));
             }
-            // Any other sum of terms: Newton with the sparse ∂²L/∂q̇², in O(n).
-            let mut v = guess.clone();
-            Legendre::new(terms, q.len(), LinearSolverKind::Sparse)?.solve(
-                terms,
-                t,
-                q.as_slice(),
-                p.as_slice(),
-                v.as_mut_slice(),
-            )?;
-            return Ok(v);
+            // Any other sum of terms of run-time size: Newton with the sparse ∂²L/∂q̇², in O(n).
+            if let Some(terms) = terms.as_run_time() {
+                let mut v = guess.clone();
+                legendre::velocity(terms, t, q.as_slice(), p.as_slice(), v.as_mut_slice())?;
+                return Ok(v);
+            }
         }
         // ∂L/∂q̇ and ∂²L/∂q̇² at v, and whether both are finite.
         let legendre = |v: &OVector<f64, N>| {

@@ -8,14 +8,13 @@
 //! Each Newton step is halved until ∂L/∂q̇ is finite again: a relativistic kinetic energy is
 //! defined only for |q̇| < c, and a full step from rest can leave that domain.
 
-use crate::dimension::Dimension;
+use crate::dimension::Dyn;
 use crate::error::Error;
 use crate::linalg::sparse::{AnySolver, LinearSolverKind};
 use crate::model::term_pattern::{MAX_WIDTH, TermPattern};
 use crate::model::{TermDerivatives, TermSum};
 use crate::nonlinear::stalled;
-use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator};
+use nalgebra::DVector;
 
 /// The pattern, solver and buffers of the inverse Legendre map of one sum of terms.
 #[derive(Debug)]
@@ -36,14 +35,11 @@ impl Legendre {
     ///
     /// # Errors
     /// As [`TermPattern::new`], or when the symbolic analysis fails.
-    pub(crate) fn new<N: Dimension>(
-        terms: &dyn TermSum<N>,
+    pub(crate) fn new(
+        terms: &dyn TermSum<Dyn>,
         n: usize,
         kind: LinearSolverKind,
-    ) -> Result<Self, Error>
-    where
-        DefaultAllocator: Allocator<N>,
-    {
+    ) -> Result<Self, Error> {
         let pattern = TermPattern::new(terms, n)?;
         let solver = AnySolver::analysed(kind, &pattern.pattern)?;
         Ok(Legendre {
@@ -65,19 +61,15 @@ impl Legendre {
 
     /// ∂L/∂q̇(t, q, v) − p into `self.residual` (and with `matrix` the values of ∂²L/∂q̇²);
     /// its largest absolute entry, NaN when one is not finite.
-    #[allow(clippy::too_many_arguments)]
-    fn residual<N: Dimension>(
+    fn residual(
         &mut self,
-        terms: &dyn TermSum<N>,
+        terms: &dyn TermSum<Dyn>,
         t: f64,
         q: &[f64],
         p: &[f64],
         v: &[f64],
         matrix: bool,
-    ) -> f64
-    where
-        DefaultAllocator: Allocator<N>,
-    {
+    ) -> f64 {
         let k = self.terms.width();
         let layout = TermDerivatives { width: k };
         let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
@@ -112,17 +104,14 @@ impl Legendre {
     /// # Errors
     /// [`Error::LegendreMap`] when the iteration does not converge or meets a singular mass
     /// matrix.
-    pub(crate) fn solve<N: Dimension>(
+    pub(crate) fn solve(
         &mut self,
-        terms: &dyn TermSum<N>,
+        terms: &dyn TermSum<Dyn>,
         t: f64,
         q: &[f64],
         p: &[f64],
         v: &mut [f64],
-    ) -> Result<(), Error>
-    where
-        DefaultAllocator: Allocator<N>,
-    {
+    ) -> Result<(), Error> {
         let scale = p
             .iter()
             .fold(0.0f64, |m, x| m.max(x.abs()))
@@ -171,4 +160,19 @@ impl Legendre {
         }
         Err(failure(self.max_iterations, previous))
     }
+}
+
+/// The velocity of the momentum `p` at (t, q) by a [`Legendre`] map made for this call (faer's
+/// sparse LU), started from `v`'s value on entry and written into `v`.
+///
+/// # Errors
+/// As [`Legendre::new`] and [`Legendre::solve`].
+pub(crate) fn velocity(
+    terms: &dyn TermSum<Dyn>,
+    t: f64,
+    q: &[f64],
+    p: &[f64],
+    v: &mut [f64],
+) -> Result<(), Error> {
+    Legendre::new(terms, q.len(), LinearSolverKind::Sparse)?.solve(terms, t, q, p, v)
 }

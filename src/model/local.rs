@@ -491,6 +491,10 @@ impl<L: LocalLagrangian> TermSum<Dyn> for L {
         }
     }
 
+    fn as_run_time(&self) -> Option<&dyn TermSum<Dyn>> {
+        Some(self)
+    }
+
     fn width(&self) -> usize {
         L::Width::WIDTH
     }

@@ -96,6 +96,14 @@ where
         out: &mut [f64],
     );
 
+    /// These terms as the terms of a run-time-size model (`Some` for every
+    /// [`crate::model::local::LocalLagrangian`]; the default `None` for a fixed size, whose
+    /// models the methods run densely): the sparse paths are compiled once, for
+    /// [`crate::dimension::Dyn`], not once per size.
+    fn as_run_time(&self) -> Option<&dyn TermSum<crate::dimension::Dyn>> {
+        None
+    }
+
     /// The Hessian blocks ∂²L/∂q², ∂²L/∂q∂q̇ (row q, column q̇) and ∂²L/∂q̇² at (t, q, q̇) as
     /// (row, column, value) triplets, appended to `blocks[0]`, `blocks[1]` and `blocks[2]`
     /// (entries of one place add up), term by term.

@@ -5,12 +5,10 @@
 //! term in O(K² · terms), without a search ([`crate::model::legendre`], and the stage
 //! equations of the spectral and classic variational integrators).
 
-use crate::dimension::Dimension;
+use crate::dimension::Dyn;
 use crate::error::Error;
 use crate::linalg::sparse::Pattern;
 use crate::model::TermSum;
-use nalgebra::DefaultAllocator;
-use nalgebra::allocator::Allocator;
 
 /// The widest term a sparse Newton iteration takes (its local buffers are this long).
 pub(crate) const MAX_WIDTH: usize = 16;
@@ -48,10 +46,7 @@ impl TermPattern {
     /// # Errors
     /// [`Error::InvalidParameter`] `width` for terms wider than [`MAX_WIDTH`], `pattern` for
     /// an index out of range.
-    pub(crate) fn new<N: Dimension>(terms: &dyn TermSum<N>, n: usize) -> Result<Self, Error>
-    where
-        DefaultAllocator: Allocator<N>,
-    {
+    pub(crate) fn new(terms: &dyn TermSum<Dyn>, n: usize) -> Result<Self, Error> {
         let width = terms.width();
         check_width(width)?;
         let count = terms.term_count();

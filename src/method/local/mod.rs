@@ -24,12 +24,11 @@ pub mod svi;
 pub mod verlet;
 
 use crate::error::{Error, StepFailure, require_finite_entries};
-use crate::linalg::sparse::LinearSolverKind;
 use crate::method::space::{DynEuclidean, DynInitial, DynPoint, DynState};
 use crate::method::step::{Hermite, Step};
 use crate::method::{MethodInfo, StepReport};
 use crate::model::Structure;
-use crate::model::legendre::Legendre;
+use crate::model::legendre;
 use crate::model::local::{LocalLagrangian, LocalLagrangianExt};
 use nalgebra::{DVector, Dyn};
 
@@ -107,13 +106,7 @@ pub(crate) fn cold_velocity<L: LocalLagrangian>(
         mass_inverse(model, t, q)?.apply_into(p, v);
         return Ok(());
     }
-    Legendre::new::<Dyn>(model, q.len(), LinearSolverKind::Sparse)?.solve::<Dyn>(
-        model,
-        t,
-        q.as_slice(),
-        p.as_slice(),
-        v.as_mut_slice(),
-    )
+    legendre::velocity(model, t, q.as_slice(), p.as_slice(), v.as_mut_slice())
 }
 
 /// The constant mass matrix of `model` at (t, q), inverted, after checking that the model

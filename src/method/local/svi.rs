@@ -38,7 +38,7 @@ use crate::model::local::LocalLagrangian;
 use crate::nonlinear::{FixedPoint, Jacobian};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::starting_values::StartingValues;
-use nalgebra::{DVector, Dyn};
+use nalgebra::DVector;
 
 /// Buffers of an SVI run on runtime-sized ℝⁿ.
 #[derive(Debug)]
@@ -141,14 +141,8 @@ impl LocalMethod for Svi {
             }))
         } else {
             Path::Newton(Box::new(NewtonData {
-                stage: StageNewton::new::<Dyn>(
-                    model,
-                    n,
-                    (s, m),
-                    self.linear_solver,
-                    self.max_iterations,
-                )?,
-                legendre: RefCell::new(Legendre::new::<Dyn>(model, n, self.linear_solver)?),
+                stage: StageNewton::new(model, n, (s, m), self.linear_solver, self.max_iterations)?,
+                legendre: RefCell::new(Legendre::new(model, n, self.linear_solver)?),
                 offsets: DVector::zeros(s * n),
                 previous: DVector::zeros(s * n),
                 velocity: DVector::zeros(n),
@@ -211,7 +205,7 @@ impl LocalMethod for Svi {
                 }
                 None => cold_velocity(model, t, q, p, v),
             },
-            Path::Newton(data) => data.legendre.borrow_mut().solve::<Dyn>(
+            Path::Newton(data) => data.legendre.borrow_mut().solve(
                 model,
                 t,
                 q.as_slice(),
@@ -250,7 +244,7 @@ fn newton_step<L: LocalLagrangian>(
     } else {
         data.legendre
             .borrow_mut()
-            .solve::<Dyn>(
+            .solve(
                 model,
                 t,
                 state.q.as_slice(),
@@ -268,7 +262,7 @@ fn newton_step<L: LocalLagrangian>(
                 .copy_from(&(&data.velocity * c));
         }
     }
-    let report = data.stage.solve::<Dyn>(
+    let report = data.stage.solve(
         model,
         tables,
         t,
@@ -277,7 +271,7 @@ fn newton_step<L: LocalLagrangian>(
         Jacobian::Kept,
     )?;
     increment.q.copy_from(&data.offsets.rows((s - 1) * n, n));
-    data.stage.momentum_increment::<Dyn>(
+    data.stage.momentum_increment(
         model,
         tables,
         t,

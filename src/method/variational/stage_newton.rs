@@ -33,7 +33,7 @@
 //! residual defines the solution, so a stale Jacobian costs iterations, never accuracy.
 //! p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) is the discrete momentum balance.
 
-use crate::dimension::Dimension;
+use crate::dimension::{Dimension, Dyn};
 use crate::error::{Error, StepFailure};
 use crate::linalg::sparse::{AnySolver, LinearSolverKind, Pattern};
 use crate::method::variational::tables::Tables;
@@ -46,14 +46,14 @@ use nalgebra::{DVector, DefaultAllocator};
 /// The terms of `model` when the stage equations are solved by sparse Newton: an unforced sum
 /// of local terms of run-time size (a forced model, or a fixed size, takes the dense Newton
 /// matrix).
-pub(crate) fn sparse_terms<L: Lagrangian<N>, N: Dimension>(model: &L) -> Option<&dyn TermSum<N>>
+pub(crate) fn sparse_terms<L: Lagrangian<N>, N: Dimension>(model: &L) -> Option<&dyn TermSum<Dyn>>
 where
     DefaultAllocator: Allocator<N>,
 {
-    if N::try_to_usize().is_some() || L::FORCED {
+    if L::FORCED {
         return None;
     }
-    model.terms()
+    model.terms()?.as_run_time()
 }
 
 /// A run's [`StageNewton`], made at its first use. A clone starts without one (it holds a
@@ -67,101 +67,19 @@ impl Clone for LazyStageNewton {
     }
 }
 
-/// The stage equations' pattern, solver and buffers.
+/// The quadrature points of a step, q_μ and q̇_μ, and each term's derivatives there.
 #[derive(Debug)]
-pub(crate) struct StageNewton {
-    n: usize,
-    s: usize,
+struct Points {
     terms: TermPattern,
-    /// The (s n)² Jacobian's pattern and values.
-    pattern: Pattern,
-    values: Vec<f64>,
-    solver: AnySolver,
-    /// Whether `solver` holds a factorisation for the current step size.
-    factored: bool,
-    /// Residual, then Newton correction.
-    residual: DVector<f64>,
-    /// q_μ and q̇_μ for every quadrature point.
     positions: Vec<DVector<f64>>,
     velocities: Vec<DVector<f64>>,
     derivatives: Vec<f64>,
-    max_iterations: usize,
 }
 
-impl StageNewton {
-    /// The solver of `terms` on `n` coordinates, for `s` unknown nodes and `m` quadrature
-    /// points, its pattern analysed by a solver of `kind`.
-    ///
-    /// # Errors
-    /// As [`TermPattern::new`], or when the symbolic analysis fails.
-    pub(crate) fn new<N: Dimension>(
-        terms: &dyn TermSum<N>,
-        n: usize,
-        (s, m): (usize, usize),
-        kind: LinearSolverKind,
-        max_iterations: usize,
-    ) -> Result<Self, Error>
-    where
-        DefaultAllocator: Allocator<N>,
-    {
-        let terms = TermPattern::new(terms, n)?;
-        let small = &terms.pattern;
-        let mut entries = Vec::with_capacity(s * s * small.len());
-        for j in 0..s {
-            for col in 0..n {
-                for nu in 0..s {
-                    for row in small.column(col) {
-                        entries.push((nu * n + row, j * n + col));
-                    }
-                }
-            }
-        }
-        let pattern = Pattern::new(s * n, &entries)?;
-        let solver = AnySolver::analysed(kind, &pattern)?;
-        Ok(StageNewton {
-            n,
-            s,
-            values: vec![0.0; pattern.len()],
-            pattern,
-            derivatives: vec![
-                0.0;
-                TermDerivatives {
-                    width: terms.width()
-                }
-                .len()
-            ],
-            terms,
-            solver,
-            factored: false,
-            residual: DVector::zeros(s * n),
-            positions: vec![DVector::zeros(n); m],
-            velocities: vec![DVector::zeros(n); m],
-            max_iterations,
-        })
-    }
-
-    /// Forget the factorisation (the step size changed).
-    pub(crate) fn invalidate(&mut self) {
-        self.factored = false;
-    }
-
-    /// The number of terms (for the evaluation counts).
-    pub(crate) fn term_count(&self) -> usize {
-        self.terms.term_count()
-    }
-
-    /// The slot of ((ν, row), (j, col)) whose slot in P is `small_slot` in column `col`.
-    #[inline]
-    fn slot(&self, nu: usize, j: usize, col: usize, small_slot: usize) -> usize {
-        let small = &self.terms.pattern;
-        let start = small.column_start(col);
-        let count = small.column_start(col + 1) - start;
-        self.pattern.column_start(j * self.n + col) + nu * count + (small_slot - start)
-    }
-
-    /// q_μ, q̇_μ at every quadrature point from the offsets `z`.
-    fn points(&mut self, tables: &Tables, q0: &[f64], z: &DVector<f64>) {
-        let (n, s) = (self.n, self.s);
+impl Points {
+    /// q_μ = q_k + Σ_j b_μj Z_j and q̇_μ = Σ_j d_μj Z_j from the `s` offsets `z` of length n.
+    fn set(&mut self, tables: &Tables, q0: &[f64], z: &DVector<f64>, s: usize) {
+        let n = q0.len();
         for (mu, (q, v)) in self
             .positions
             .iter_mut()
@@ -178,96 +96,176 @@ impl StageNewton {
         }
     }
 
+    /// Each term's derivatives at each point (with `second` the Hessian blocks too), handed
+    /// to `visit(μ, terms, e, derivatives)` in the layout of [`TermDerivatives`].
+    fn visit_terms(
+        &mut self,
+        model: &dyn TermSum<Dyn>,
+        tables: &Tables,
+        t: f64,
+        second: bool,
+        mut visit: impl FnMut(usize, &TermPattern, usize, &[f64]),
+    ) {
+        let k = self.terms.width();
+        let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
+        for (mu, (q, v)) in self.positions.iter().zip(&self.velocities).enumerate() {
+            let time = tables.time(t, mu);
+            for e in 0..self.terms.term_count() {
+                self.terms
+                    .gather(e, q.as_slice(), v.as_slice(), &mut ql, &mut vl);
+                model.term_derivatives(e, time, &ql[..k], &vl[..k], second, &mut self.derivatives);
+                visit(mu, &self.terms, e, &self.derivatives);
+            }
+        }
+    }
+}
+
+/// The stage equations' pattern, solver and buffers.
+#[derive(Debug)]
+pub(crate) struct StageNewton {
+    n: usize,
+    s: usize,
+    points: Points,
+    /// The (s n)² Jacobian's pattern and values.
+    pattern: Pattern,
+    values: Vec<f64>,
+    solver: AnySolver,
+    /// Whether `solver` holds a factorisation for the current step size.
+    factored: bool,
+    /// Residual, then Newton correction.
+    residual: DVector<f64>,
+    max_iterations: usize,
+}
+
+impl StageNewton {
+    /// The solver of `terms` on `n` coordinates, for `s` unknown nodes and `m` quadrature
+    /// points, its pattern analysed by a solver of `kind`.
+    ///
+    /// # Errors
+    /// As [`TermPattern::new`], or when the symbolic analysis fails.
+    pub(crate) fn new(
+        terms: &dyn TermSum<Dyn>,
+        n: usize,
+        (s, m): (usize, usize),
+        kind: LinearSolverKind,
+        max_iterations: usize,
+    ) -> Result<Self, Error> {
+        let terms = TermPattern::new(terms, n)?;
+        let small = &terms.pattern;
+        let mut entries = Vec::with_capacity(s * s * small.len());
+        for j in 0..s {
+            for col in 0..n {
+                for nu in 0..s {
+                    for row in small.column(col) {
+                        entries.push((nu * n + row, j * n + col));
+                    }
+                }
+            }
+        }
+        let pattern = Pattern::new(s * n, &entries)?;
+        let solver = AnySolver::analysed(kind, &pattern)?;
+        let width = terms.width();
+        Ok(StageNewton {
+            n,
+            s,
+            values: vec![0.0; pattern.len()],
+            pattern,
+            points: Points {
+                terms,
+                positions: vec![DVector::zeros(n); m],
+                velocities: vec![DVector::zeros(n); m],
+                derivatives: vec![0.0; TermDerivatives { width }.len()],
+            },
+            solver,
+            factored: false,
+            residual: DVector::zeros(s * n),
+            max_iterations,
+        })
+    }
+
+    /// Forget the factorisation (the step size changed).
+    pub(crate) fn invalidate(&mut self) {
+        self.factored = false;
+    }
+
+    /// The number of terms (for the evaluation counts).
+    pub(crate) fn term_count(&self) -> usize {
+        self.points.terms.term_count()
+    }
+
     /// The residual r(z) into `self.residual`, and with `jacobian` the Jacobian's values.
     #[allow(clippy::too_many_arguments)]
-    fn assemble<N: Dimension>(
+    fn assemble(
         &mut self,
-        model: &dyn TermSum<N>,
+        model: &dyn TermSum<Dyn>,
         tables: &Tables,
         t: f64,
         (q0, p0): (&[f64], &[f64]),
         z: &DVector<f64>,
         jacobian: bool,
-    ) where
-        DefaultAllocator: Allocator<N>,
-    {
-        self.points(tables, q0, z);
-        let (n, s, k) = (self.n, self.s, self.terms.width());
-        let layout = TermDerivatives { width: k };
+    ) {
+        let (n, s) = (self.n, self.s);
+        self.points.set(tables, q0, z, s);
         self.residual.as_mut_slice().fill(0.0);
         self.residual.as_mut_slice()[..n].copy_from_slice(p0);
         if jacobian {
             self.values.fill(0.0);
         }
-        let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
-        let mut derivatives = std::mem::take(&mut self.derivatives);
-        for mu in 0..self.positions.len() {
+        let (residual, values, pattern) = (&mut self.residual, &mut self.values, &self.pattern);
+        let visit = |mu: usize, terms: &TermPattern, e: usize, derivatives: &[f64]| {
+            let k = terms.width();
+            let layout = TermDerivatives { width: k };
             let w = tables.weights[mu];
-            let time = tables.time(t, mu);
-            for e in 0..self.terms.term_count() {
-                self.terms.gather(
-                    e,
-                    self.positions[mu].as_slice(),
-                    self.velocities[mu].as_slice(),
-                    &mut ql,
-                    &mut vl,
-                );
-                model.term_derivatives(e, time, &ql[..k], &vl[..k], jacobian, &mut derivatives);
-                let indices = self.terms.indices(e);
-                for nu in 0..s {
-                    let (b, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
-                    for (a, &i) in indices.iter().enumerate() {
-                        self.residual[nu * n + i] +=
-                            w * (b * layout.q(&derivatives, a) + c * layout.v(&derivatives, a));
-                    }
+            let indices = terms.indices(e);
+            for nu in 0..s {
+                let (b, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+                for (a, &i) in indices.iter().enumerate() {
+                    residual[nu * n + i] +=
+                        w * (b * layout.q(derivatives, a) + c * layout.v(derivatives, a));
                 }
-                if !jacobian {
-                    continue;
-                }
-                for (bb, &col) in indices.iter().enumerate() {
-                    for a in 0..k {
-                        let small_slot = self.terms.slot(e, a, bb);
-                        let (qq, qv) = (
-                            layout.qq(&derivatives, a, bb),
-                            layout.qv(&derivatives, a, bb),
-                        );
-                        let (vq, vv) = (
-                            layout.qv(&derivatives, bb, a),
-                            layout.vv(&derivatives, a, bb),
-                        );
-                        for j in 1..=s {
-                            let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
-                            let from_q = w * (qq * bj + qv * cj);
-                            let from_v = w * (vq * bj + vv * cj);
-                            for nu in 0..s {
-                                let value = from_q * tables.values[(mu, nu)]
-                                    + from_v * tables.derivatives[(mu, nu)];
-                                let slot = self.slot(nu, j - 1, col, small_slot);
-                                self.values[slot] += value;
-                            }
+            }
+            if !jacobian {
+                return;
+            }
+            // The entry ((ν, row), (j, col)) of a pair whose slot in P is `small` (see the
+            // module docs).
+            let small_pattern = &terms.pattern;
+            for (bb, &col) in indices.iter().enumerate() {
+                let start = small_pattern.column_start(col);
+                let count = small_pattern.column_start(col + 1) - start;
+                for a in 0..k {
+                    let rank = terms.slot(e, a, bb) - start;
+                    let (qq, qv) = (layout.qq(derivatives, a, bb), layout.qv(derivatives, a, bb));
+                    let (vq, vv) = (layout.qv(derivatives, bb, a), layout.vv(derivatives, a, bb));
+                    for j in 1..=s {
+                        let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
+                        let from_q = w * (qq * bj + qv * cj);
+                        let from_v = w * (vq * bj + vv * cj);
+                        let column = pattern.column_start((j - 1) * n + col);
+                        for nu in 0..s {
+                            let value = from_q * tables.values[(mu, nu)]
+                                + from_v * tables.derivatives[(mu, nu)];
+                            values[column + nu * count + rank] += value;
                         }
                     }
                 }
             }
-        }
-        self.derivatives = derivatives;
+        };
+        self.points.visit_terms(model, tables, t, jacobian, visit);
     }
 
     /// Solve the stage equations at the state (q_k, p_k) = `state` for the offsets `z` (on
     /// entry the starting values), refactoring the Jacobian at every iteration
     /// ([`Jacobian::Exact`]) or as the simplified Newton method ([`Jacobian::Kept`]).
-    pub(crate) fn solve<N: Dimension>(
+    pub(crate) fn solve(
         &mut self,
-        model: &dyn TermSum<N>,
+        model: &dyn TermSum<Dyn>,
         tables: &Tables,
         t: f64,
         state: (&[f64], &[f64]),
         z: &mut DVector<f64>,
         jacobian: Jacobian,
-    ) -> Result<Solved, StepFailure>
-    where
-        DefaultAllocator: Allocator<N>,
-    {
+    ) -> Result<Solved, StepFailure> {
         let mut report = Solved {
             iterations: 0,
             factorizations: 0,
@@ -317,37 +315,26 @@ impl StageNewton {
     }
 
     /// p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) at the offsets `z`, into `dp`.
-    pub(crate) fn momentum_increment<N: Dimension>(
+    pub(crate) fn momentum_increment(
         &mut self,
-        model: &dyn TermSum<N>,
+        model: &dyn TermSum<Dyn>,
         tables: &Tables,
         t: f64,
         q0: &[f64],
         z: &DVector<f64>,
         dp: &mut [f64],
-    ) where
-        DefaultAllocator: Allocator<N>,
-    {
-        self.points(tables, q0, z);
-        let k = self.terms.width();
-        let layout = TermDerivatives { width: k };
-        let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
+    ) {
+        self.points.set(tables, q0, z, self.s);
         dp.fill(0.0);
-        for mu in 0..self.positions.len() {
-            let (w, time) = (tables.weights[mu], tables.time(t, mu));
-            for e in 0..self.terms.term_count() {
-                self.terms.gather(
-                    e,
-                    self.positions[mu].as_slice(),
-                    self.velocities[mu].as_slice(),
-                    &mut ql,
-                    &mut vl,
-                );
-                model.term_derivatives(e, time, &ql[..k], &vl[..k], false, &mut self.derivatives);
-                for (a, &i) in self.terms.indices(e).iter().enumerate() {
-                    dp[i] += w * layout.q(&self.derivatives, a);
-                }
+        let visit = |mu: usize, terms: &TermPattern, e: usize, derivatives: &[f64]| {
+            let layout = TermDerivatives {
+                width: terms.width(),
+            };
+            let w = tables.weights[mu];
+            for (a, &i) in terms.indices(e).iter().enumerate() {
+                dp[i] += w * layout.q(derivatives, a);
             }
-        }
+        };
+        self.points.visit_terms(model, tables, t, false, visit);
     }
 }

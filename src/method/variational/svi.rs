@@ -59,7 +59,7 @@
 //! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
-use crate::dimension::{Dimension, dimension_of};
+use crate::dimension::{Dimension, Dyn, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
@@ -177,67 +177,46 @@ impl Svi {
     }
 }
 
-impl Svi {
-    /// One step of an unforced sum of terms of run-time size by sparse Newton
-    /// ([`crate::method::variational::stage_newton`]), after `spent` fixed-point iterations
-    /// (`warm`: Newton starts from their last iterate, else from the starting values):
-    /// q_{k+1} − q_k = Z_s and the discrete momentum balance.
-    #[allow(clippy::too_many_arguments)]
-    fn sparse_step<L: Lagrangian<N>, N: Dimension>(
-        &self,
-        model: &L,
-        terms: &dyn TermSum<N>,
-        workspace: &mut SviWorkspace<N>,
-        (t, h): (f64, f64),
-        state: &State<N>,
-        increment: &mut State<N>,
-        (warm, spent, jacobian): (bool, usize, Jacobian),
-    ) -> Result<StepReport, StepFailure>
-    where
-        DefaultAllocator: Allocator<N> + Allocator<N, N>,
-    {
-        if !warm {
-            workspace.set_step(h);
-            workspace.start(model, t, state);
-        }
-        let ws = workspace;
-        let (n, s, m) = (state.q.len(), ws.tables.degree, ws.tables.weights.len());
-        let mut analyses = 0;
-        if ws.sparse.0.is_none() {
-            let stage = StageNewton::new(terms, n, (s, m), self.linear_solver, self.max_iterations)
-                .map_err(|_| StepFailure::Unsupported {
-                    option: "model",
-                    reason: "the pattern of its terms' indices does not fit its dimension",
-                })?;
-            ws.sparse.0 = Some(Box::new(stage));
-            analyses = 1;
-        }
-        let Some(stage) = ws.sparse.0.as_mut() else {
-            return Err(StepFailure::SingularMatrix);
-        };
-        let point = (state.q.as_slice(), state.y.as_slice());
-        let solved = stage.solve(terms, &ws.tables, t, point, &mut ws.offsets, jacobian)?;
-        increment
-            .q
-            .as_mut_slice()
-            .copy_from_slice(&ws.offsets.as_slice()[(s - 1) * n..s * n]);
-        stage.momentum_increment(
+/// The stage equations of a step of an unforced sum of terms of run-time size by sparse Newton
+/// ([`crate::method::variational::stage_newton`]), from the offsets in `offsets` (the
+/// starting values, or a capped fixed point's last iterate): q_{k+1} − q_k = Z_s into `dq`
+/// and the discrete momentum balance into `dp`. Written for [`Dyn`] only (compiled once);
+/// returns the solve's work and the symbolic analyses it made.
+#[allow(clippy::too_many_arguments)]
+fn sparse_stage_step(
+    method: &Svi,
+    terms: &dyn TermSum<Dyn>,
+    stage: &mut LazyStageNewton,
+    tables: &Tables,
+    offsets: &mut DVector<f64>,
+    (t, q, p): (f64, &[f64], &[f64]),
+    (dq, dp): (&mut [f64], &mut [f64]),
+    jacobian: Jacobian,
+) -> Result<(Solved, usize), StepFailure> {
+    let (n, s, m) = (q.len(), tables.degree, tables.weights.len());
+    let mut analyses = 0;
+    if stage.0.is_none() {
+        let made = StageNewton::new(
             terms,
-            &ws.tables,
-            t,
-            state.q.as_slice(),
-            &ws.offsets,
-            increment.y.as_mut_slice(),
-        );
-        ws.remember(h);
-        let iterations = solved.iterations + spent;
-        Ok(StepReport {
-            iterations,
-            evaluations: m * (iterations + 1),
-            factorizations: solved.factorizations,
-            analyses,
-        })
+            n,
+            (s, m),
+            method.linear_solver,
+            method.max_iterations,
+        )
+        .map_err(|_| StepFailure::Unsupported {
+            option: "model",
+            reason: "the pattern of its terms' indices does not fit its dimension",
+        })?;
+        stage.0 = Some(Box::new(made));
+        analyses = 1;
     }
+    let Some(stage) = stage.0.as_mut() else {
+        return Err(StepFailure::SingularMatrix);
+    };
+    let solved = stage.solve(terms, tables, t, (q, p), offsets, jacobian)?;
+    dq.copy_from_slice(&offsets.as_slice()[(s - 1) * n..s * n]);
+    stage.momentum_increment(terms, tables, t, q, offsets, dp);
+    Ok((solved, analyses))
 }
 
 /// Tables and buffers of the fixed-point iteration for [`Structure::ConstantMass`]
@@ -864,8 +843,29 @@ where
             Solver::Newton => Jacobian::Exact,
         };
         if let Some(terms) = sparse_terms(model) {
-            let guess = (warm, spent, jacobian);
-            return self.sparse_step(model, terms, workspace, (t, h), state, increment, guess);
+            if !warm {
+                workspace.set_step(h);
+                workspace.start(model, t, state);
+            }
+            let ws = &mut *workspace;
+            let (solved, analyses) = sparse_stage_step(
+                self,
+                terms,
+                &mut ws.sparse,
+                &ws.tables,
+                &mut ws.offsets,
+                (t, state.q.as_slice(), state.y.as_slice()),
+                (increment.q.as_mut_slice(), increment.y.as_mut_slice()),
+                jacobian,
+            )?;
+            ws.remember(h);
+            let iterations = solved.iterations + spent;
+            return Ok(StepReport {
+                iterations,
+                evaluations: ws.tables.weights.len() * (iterations + 1),
+                factorizations: solved.factorizations,
+                analyses,
+            });
         }
         let solved = solve(model, workspace, t, h, state, warm, jacobian)?;
         let iterations = solved.iterations + spent;

@@ -45,7 +45,7 @@
 //! integrators*, Acta Numerica (2001), §1.2, §2.7 and §3.2; Porcù & Penati (OctConf 2013),
 //! "Discrete mechanics" and "Forced mechanics".
 
-use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt, dimension_of};
+use crate::dimension::{Dimension, Dyn, PhaseFunction, PhaseMap, Wrt, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert_small;
@@ -58,7 +58,7 @@ use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::derived::LagrangianExt;
 use crate::model::term_pattern::check_width;
 use crate::model::{Lagrangian, TermSum};
-use crate::nonlinear::{Jacobian, Newton};
+use crate::nonlinear::{Jacobian, Newton, Solved};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
@@ -338,7 +338,27 @@ where
         if let Some(terms) = sparse_terms(model)
             && workspace.sparse.is_some()
         {
-            return self.sparse_step(terms, model, workspace, (t, h), state, increment);
+            workspace.predict(model, t, h, state);
+            let VariationalWorkspace { offset, sparse, .. } = workspace;
+            let Some(sparse) = sparse.as_mut() else {
+                return Err(StepFailure::SingularMatrix);
+            };
+            let points = sparse.tables.weights.len();
+            let (solved, analyses) = sparse_segment_step(
+                terms,
+                sparse,
+                offset,
+                (t, h, self.max_iterations),
+                (state.q.as_slice(), state.y.as_slice()),
+                (increment.q.as_mut_slice(), increment.y.as_mut_slice()),
+            )?;
+            workspace.remember(h, state, &increment.q);
+            return Ok(StepReport {
+                iterations: solved.iterations,
+                evaluations: points * (solved.iterations + 1),
+                factorizations: solved.factorizations,
+                analyses,
+            });
         }
         let iterations = solve_position(&self.discrete_lagrangian, model, workspace, t, h, state)?;
         let offset = &workspace.offset;
@@ -376,68 +396,43 @@ where
     }
 }
 
-impl<Ld: DiscreteLagrangian> VariationalIntegrator<Ld> {
-    /// One step of an unforced sum of terms by sparse Newton on the segment rule's stage
-    /// equations (see the module docs).
-    fn sparse_step<L: Lagrangian<N>, N: Dimension>(
-        &self,
-        terms: &dyn TermSum<N>,
-        model: &L,
-        workspace: &mut VariationalWorkspace<N>,
-        (t, h): (f64, f64),
-        state: &State<N>,
-        increment: &mut State<N>,
-    ) -> Result<StepReport, StepFailure>
-    where
-        DefaultAllocator: Allocator<N> + Allocator<N, N>,
-    {
-        workspace.predict(model, t, h, state);
-        let VariationalWorkspace { offset, sparse, .. } = workspace;
-        let Some(SparseSegment { tables, stage }) = sparse.as_mut() else {
-            return Err(StepFailure::SingularMatrix);
-        };
-        if tables.h != h {
-            tables.rescale(h);
-            if let Some(stage) = stage.0.as_mut() {
-                stage.invalidate();
-            }
+/// One step of an unforced sum of terms of run-time size by sparse Newton on a segment rule's
+/// stage equations from the predicted increment in `offset` (see the module docs): the
+/// increment q_{k+1} − q_k into `dq` (and `offset`), the momentum balance into `dp`. Written for
+/// [`Dyn`] only (compiled once); returns the solve's work and the symbolic analyses it made.
+fn sparse_segment_step(
+    terms: &dyn TermSum<Dyn>,
+    sparse: &mut SparseSegment,
+    offset: &mut DVector<f64>,
+    (t, h, max_iterations): (f64, f64, usize),
+    (q, p): (&[f64], &[f64]),
+    (dq, dp): (&mut [f64], &mut [f64]),
+) -> Result<(Solved, usize), StepFailure> {
+    let SparseSegment { tables, stage } = sparse;
+    if tables.h != h {
+        tables.rescale(h);
+        if let Some(stage) = stage.0.as_mut() {
+            stage.invalidate();
         }
-        let (n, m) = (state.q.len(), tables.weights.len());
-        let mut analyses = 0;
-        if stage.0.is_none() {
-            let made = StageNewton::new(
-                terms,
-                n,
-                (1, m),
-                LinearSolverKind::Sparse,
-                self.max_iterations,
-            )
+    }
+    let (n, m) = (q.len(), tables.weights.len());
+    let mut analyses = 0;
+    if stage.0.is_none() {
+        let made = StageNewton::new(terms, n, (1, m), LinearSolverKind::Sparse, max_iterations)
             .map_err(|_| StepFailure::Unsupported {
                 option: "model",
                 reason: "the pattern of its terms' indices does not fit its dimension",
             })?;
-            stage.0 = Some(Box::new(made));
-            analyses = 1;
-        }
-        let Some(stage) = stage.0.as_mut() else {
-            return Err(StepFailure::SingularMatrix);
-        };
-        let point = (state.q.as_slice(), state.y.as_slice());
-        let solved = stage.solve(terms, tables, t, point, offset, Jacobian::Kept)?;
-        increment
-            .q
-            .as_mut_slice()
-            .copy_from_slice(offset.as_slice());
-        let q0 = state.q.as_slice();
-        stage.momentum_increment(terms, tables, t, q0, offset, increment.y.as_mut_slice());
-        workspace.remember(h, state, &increment.q);
-        Ok(StepReport {
-            iterations: solved.iterations,
-            evaluations: m * (solved.iterations + 1),
-            factorizations: solved.factorizations,
-            analyses,
-        })
+        stage.0 = Some(Box::new(made));
+        analyses = 1;
     }
+    let Some(stage) = stage.0.as_mut() else {
+        return Err(StepFailure::SingularMatrix);
+    };
+    let solved = stage.solve(terms, tables, t, (q, p), offset, Jacobian::Kept)?;
+    dq.copy_from_slice(offset.as_slice());
+    stage.momentum_increment(terms, tables, t, q, offset, dp);
+    Ok((solved, analyses))
 }
 
 /// L_d(t, q0, q1) of a step of size `h` as a [`PhaseFunction`] of (t, q, q̇) = (t, q0, q1),
