@@ -150,3 +150,56 @@ fn runtime_dimension_paths_do_not_allocate_per_step_or_per_observed_point() {
         "svi, sparse Newton"
     );
 }
+
+/// Allocations of an unobserved run of `steps` steps of size 0.01 of a sum of local terms from
+/// its default state, by the one implementation of ℝᴺ (`Terms`).
+fn terms_allocations<L, M>(model: &L, method: &M, steps: usize) -> usize
+where
+    L: svi::model::local::LocalDefaults + Clone,
+    M: svi::Method<svi::Dyn> + Clone,
+{
+    let (t0, q, v) = model.initial_state();
+    let integrator = Integrator::new(svi::model::local::Terms(model.clone()), method.clone());
+    let before = allocations::count();
+    integrator
+        .run_from_velocity(t0, q, v, 0.01, t0 + 0.01 * steps as f64, &mut ())
+        .unwrap();
+    allocations::count() - before
+}
+
+/// The one implementation of ℝᴺ runs a sum of local terms of run-time size without
+/// allocating per step: Verlet, SVI's fixed point and SVI and midpoint by sparse Newton (the
+/// stepping loop's checked compensated sum included).
+#[test]
+fn sums_of_terms_do_not_allocate_per_step() {
+    use svi::model::local::LocalDefaults;
+    use svi_models::{Fput, RelativisticChain};
+    let mut fput = Fput::default();
+    fput.set_parameter("n", 64.0).unwrap();
+    let mut relativistic = RelativisticChain::default();
+    relativistic.set_parameter("n", 16.0).unwrap();
+    let verlet = StormerVerlet::default();
+    assert_eq!(
+        terms_allocations(&fput, &verlet, 20),
+        terms_allocations(&fput, &verlet, 2000),
+        "verlet"
+    );
+    let svi = Svi::new(6).with_quadrature(5);
+    assert_eq!(
+        terms_allocations(&fput, &svi, 20),
+        terms_allocations(&fput, &svi, 2000),
+        "svi, fixed point"
+    );
+    let svi = Svi::new(4).with_quadrature(3);
+    assert_eq!(
+        terms_allocations(&relativistic, &svi, 20),
+        terms_allocations(&relativistic, &svi, 200),
+        "svi, sparse Newton"
+    );
+    let midpoint = VariationalIntegrator::new(Midpoint);
+    assert_eq!(
+        terms_allocations(&relativistic, &midpoint, 20),
+        terms_allocations(&relativistic, &midpoint, 200),
+        "midpoint, sparse Newton"
+    );
+}

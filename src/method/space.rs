@@ -235,6 +235,50 @@ where
         );
     }
 
+    /// At run-time size one read-only pass computes the sums exactly as the compensated
+    /// addition will (t = s + (δ − c)) and checks them; only then are they written: no copy
+    /// of the state. A fixed size checks a copy on the stack, as every state.
+    fn add_checked(
+        &mut self,
+        compensation: &mut Self,
+        increment: &Self,
+        limit: Option<f64>,
+    ) -> Result<(), StepFailure> {
+        if N::try_to_usize().is_some() {
+            let (mut next, mut carried) = (self.clone(), compensation.clone());
+            next.add_compensated(&mut carried, increment);
+            if !next.is_finite() {
+                return Err(StepFailure::NonFinite);
+            }
+            if let Some(limit) = limit {
+                let norm = next.max_abs();
+                if norm > limit {
+                    return Err(StepFailure::Diverged { norm, limit });
+                }
+            }
+            *self = next;
+            *compensation = carried;
+            return Ok(());
+        }
+        // A NaN sum is caught by `finite`.
+        let sums = |s: &OVector<f64, N>, c: &OVector<f64, N>, d: &OVector<f64, N>| {
+            compensated_sum_extent(s.as_slice(), c.as_slice(), d.as_slice())
+        };
+        let (q_norm, q_finite) = sums(&self.q, &compensation.q, &increment.q);
+        let (y_norm, y_finite) = sums(&self.y, &compensation.y, &increment.y);
+        if !(q_finite && y_finite) {
+            return Err(StepFailure::NonFinite);
+        }
+        let norm = q_norm.max(y_norm);
+        if let Some(limit) = limit
+            && norm > limit
+        {
+            return Err(StepFailure::Diverged { norm, limit });
+        }
+        self.add_compensated(compensation, increment);
+        Ok(())
+    }
+
     fn is_finite(&self) -> bool {
         State::is_finite(self)
     }
