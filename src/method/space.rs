@@ -40,20 +40,7 @@ pub trait StepState: Clone + Debug + PartialEq {
         increment: &Self,
         limit: Option<f64>,
     ) -> Result<(), StepFailure> {
-        let (mut next, mut carried) = (self.clone(), compensation.clone());
-        next.add_compensated(&mut carried, increment);
-        if !next.is_finite() {
-            return Err(StepFailure::NonFinite);
-        }
-        if let Some(limit) = limit {
-            let norm = next.max_abs();
-            if norm > limit {
-                return Err(StepFailure::Diverged { norm, limit });
-            }
-        }
-        self.assign(&next);
-        compensation.assign(&carried);
-        Ok(())
+        add_checked_on_copy(self, compensation, increment, limit)
     }
     /// Whether every component is finite.
     fn is_finite(&self) -> bool;
@@ -61,6 +48,30 @@ pub trait StepState: Clone + Debug + PartialEq {
     fn max_abs(&self) -> f64;
     /// ‖self − other‖∞ over all components (for step-doubling error estimates).
     fn distance(&self, other: &Self) -> f64;
+}
+
+/// [`StepState::add_checked`] by checking a copy: the sum is formed in a copy of the state
+/// and written back only if it passes (a fixed-size state's copy lives on the stack).
+fn add_checked_on_copy<S: StepState>(
+    state: &mut S,
+    compensation: &mut S,
+    increment: &S,
+    limit: Option<f64>,
+) -> Result<(), StepFailure> {
+    let (mut next, mut carried) = (state.clone(), compensation.clone());
+    next.add_compensated(&mut carried, increment);
+    if !next.is_finite() {
+        return Err(StepFailure::NonFinite);
+    }
+    if let Some(limit) = limit {
+        let norm = next.max_abs();
+        if norm > limit {
+            return Err(StepFailure::Diverged { norm, limit });
+        }
+    }
+    state.assign(&next);
+    compensation.assign(&carried);
+    Ok(())
 }
 
 /// A phase space: the types a method and the stepping core exchange on it. Implemented by
@@ -245,38 +256,14 @@ where
         limit: Option<f64>,
     ) -> Result<(), StepFailure> {
         if N::try_to_usize().is_some() {
-            let (mut next, mut carried) = (self.clone(), compensation.clone());
-            next.add_compensated(&mut carried, increment);
-            if !next.is_finite() {
-                return Err(StepFailure::NonFinite);
-            }
-            if let Some(limit) = limit {
-                let norm = next.max_abs();
-                if norm > limit {
-                    return Err(StepFailure::Diverged { norm, limit });
-                }
-            }
-            *self = next;
-            *compensation = carried;
-            return Ok(());
+            return add_checked_on_copy(self, compensation, increment, limit);
         }
-        // A NaN sum is caught by `finite`.
-        let sums = |s: &OVector<f64, N>, c: &OVector<f64, N>, d: &OVector<f64, N>| {
-            compensated_sum_extent(s.as_slice(), c.as_slice(), d.as_slice())
-        };
-        let (q_norm, q_finite) = sums(&self.q, &compensation.q, &increment.q);
-        let (y_norm, y_finite) = sums(&self.y, &compensation.y, &increment.y);
-        if !(q_finite && y_finite) {
-            return Err(StepFailure::NonFinite);
-        }
-        let norm = q_norm.max(y_norm);
-        if let Some(limit) = limit
-            && norm > limit
-        {
-            return Err(StepFailure::Diverged { norm, limit });
-        }
-        self.add_compensated(compensation, increment);
-        Ok(())
+        add_checked_in_place(
+            [self.q.as_mut_slice(), self.y.as_mut_slice()],
+            [compensation.q.as_mut_slice(), compensation.y.as_mut_slice()],
+            [increment.q.as_slice(), increment.y.as_slice()],
+            limit,
+        )
     }
 
     fn is_finite(&self) -> bool {
@@ -749,23 +736,12 @@ impl StepState for DynState {
         increment: &Self,
         limit: Option<f64>,
     ) -> Result<(), StepFailure> {
-        // A NaN sum is caught by `finite`.
-        let sums = |s: &DVector<f64>, c: &DVector<f64>, d: &DVector<f64>| {
-            compensated_sum_extent(s.as_slice(), c.as_slice(), d.as_slice())
-        };
-        let (q_norm, q_finite) = sums(&self.q, &compensation.q, &increment.q);
-        let (y_norm, y_finite) = sums(&self.y, &compensation.y, &increment.y);
-        if !(q_finite && y_finite) {
-            return Err(StepFailure::NonFinite);
-        }
-        let norm = q_norm.max(y_norm);
-        if let Some(limit) = limit
-            && norm > limit
-        {
-            return Err(StepFailure::Diverged { norm, limit });
-        }
-        self.add_compensated(compensation, increment);
-        Ok(())
+        add_checked_in_place(
+            [self.q.as_mut_slice(), self.y.as_mut_slice()],
+            [compensation.q.as_mut_slice(), compensation.y.as_mut_slice()],
+            [increment.q.as_slice(), increment.y.as_slice()],
+            limit,
+        )
     }
 
     fn is_finite(&self) -> bool {
@@ -816,4 +792,33 @@ pub enum DynInitial {
         /// Momentum.
         p: DVector<f64>,
     },
+}
+
+/// The checked compensated sum of a run-time-size state ([`StepState::add_checked`]): one
+/// read-only pass computes the sums exactly as the compensated addition will (t = s + (δ − c))
+/// and checks them; only then are they written: no copy of the state.
+fn add_checked_in_place(
+    sums: [&mut [f64]; 2],
+    compensations: [&mut [f64]; 2],
+    increments: [&[f64]; 2],
+    limit: Option<f64>,
+) -> Result<(), StepFailure> {
+    let mut norm: f64 = 0.0;
+    for ((sum, compensation), increment) in sums.iter().zip(&compensations).zip(&increments) {
+        // A NaN sum is caught by `finite`.
+        let (extent, finite) = compensated_sum_extent(sum, compensation, increment);
+        if !finite {
+            return Err(StepFailure::NonFinite);
+        }
+        norm = norm.max(extent);
+    }
+    if let Some(limit) = limit
+        && norm > limit
+    {
+        return Err(StepFailure::Diverged { norm, limit });
+    }
+    for ((sum, compensation), increment) in sums.into_iter().zip(compensations).zip(increments) {
+        compensated_add(sum, compensation, increment);
+    }
+    Ok(())
 }

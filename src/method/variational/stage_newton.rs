@@ -61,6 +61,36 @@ where
 #[derive(Debug, Default)]
 pub(crate) struct LazyStageNewton(pub(crate) Option<Box<StageNewton>>);
 
+impl LazyStageNewton {
+    /// The solver, made at the first call for `terms` on `n` coordinates, `shape` = (s, m)
+    /// (see [`StageNewton::new`]); and the symbolic analyses this call made (1 when it made
+    /// the solver, else 0).
+    pub(crate) fn get_or_make(
+        &mut self,
+        terms: &dyn TermSum<Dyn>,
+        n: usize,
+        shape: (usize, usize),
+        kind: LinearSolverKind,
+        max_iterations: usize,
+    ) -> Result<(&mut StageNewton, usize), StepFailure> {
+        let mut analyses = 0;
+        if self.0.is_none() {
+            let made = StageNewton::new(terms, n, shape, kind, max_iterations).map_err(|_| {
+                StepFailure::Unsupported {
+                    option: "model",
+                    reason: "the pattern of its terms' indices does not fit its dimension",
+                }
+            })?;
+            self.0 = Some(Box::new(made));
+            analyses = 1;
+        }
+        match self.0.as_deref_mut() {
+            Some(stage) => Ok((stage, analyses)),
+            None => Err(StepFailure::SingularMatrix),
+        }
+    }
+}
+
 impl Clone for LazyStageNewton {
     fn clone(&self) -> Self {
         LazyStageNewton(None)

@@ -65,7 +65,7 @@ use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
-use crate::method::variational::stage_newton::{LazyStageNewton, StageNewton, sparse_terms};
+use crate::method::variational::stage_newton::{LazyStageNewton, sparse_terms};
 use crate::method::variational::tables::{Tables, unit_nodes};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Structure;
@@ -194,25 +194,13 @@ fn sparse_stage_step(
     jacobian: Jacobian,
 ) -> Result<(Solved, usize), StepFailure> {
     let (n, s, m) = (q.len(), tables.degree, tables.weights.len());
-    let mut analyses = 0;
-    if stage.0.is_none() {
-        let made = StageNewton::new(
-            terms,
-            n,
-            (s, m),
-            method.linear_solver,
-            method.max_iterations,
-        )
-        .map_err(|_| StepFailure::Unsupported {
-            option: "model",
-            reason: "the pattern of its terms' indices does not fit its dimension",
-        })?;
-        stage.0 = Some(Box::new(made));
-        analyses = 1;
-    }
-    let Some(stage) = stage.0.as_mut() else {
-        return Err(StepFailure::SingularMatrix);
-    };
+    let (stage, analyses) = stage.get_or_make(
+        terms,
+        n,
+        (s, m),
+        method.linear_solver,
+        method.max_iterations,
+    )?;
     let solved = stage.solve(terms, tables, t, (q, p), offsets, jacobian)?;
     dq.copy_from_slice(&offsets.as_slice()[(s - 1) * n..s * n]);
     stage.momentum_increment(terms, tables, t, q, offsets, dp);

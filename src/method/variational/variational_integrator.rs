@@ -52,7 +52,7 @@ use crate::linalg::invert_small;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
 use crate::method::variational::discrete_lagrangian::{DiscreteLagrangian, DiscreteLagrangianInfo};
-use crate::method::variational::stage_newton::{LazyStageNewton, StageNewton, sparse_terms};
+use crate::method::variational::stage_newton::{LazyStageNewton, sparse_terms};
 use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::derived::LagrangianExt;
@@ -416,19 +416,8 @@ fn sparse_segment_step(
         }
     }
     let (n, m) = (q.len(), tables.weights.len());
-    let mut analyses = 0;
-    if stage.0.is_none() {
-        let made = StageNewton::new(terms, n, (1, m), LinearSolverKind::Sparse, max_iterations)
-            .map_err(|_| StepFailure::Unsupported {
-                option: "model",
-                reason: "the pattern of its terms' indices does not fit its dimension",
-            })?;
-        stage.0 = Some(Box::new(made));
-        analyses = 1;
-    }
-    let Some(stage) = stage.0.as_mut() else {
-        return Err(StepFailure::SingularMatrix);
-    };
+    let (stage, analyses) =
+        stage.get_or_make(terms, n, (1, m), LinearSolverKind::Sparse, max_iterations)?;
     let solved = stage.solve(terms, tables, t, (q, p), offset, Jacobian::Kept)?;
     dq.copy_from_slice(offset.as_slice());
     stage.momentum_increment(terms, tables, t, q, offset, dp);
