@@ -20,8 +20,8 @@
 //!
 //! # `chain_svi_newton/<implementation>/10³`
 //!
-//! Ten steps (h = 0.1) of SVI by sparse Newton with 6 CGL points on the relativistic chain
-//! (a mass matrix that depends on q̇): `local` against `terms`, as above.
+//! Ten steps (h = 0.1) of SVI by sparse Newton with 6 CGL points on the relativistic
+//! chain (a mass matrix that depends on q̇): `local` against `terms`, as above.
 //!
 //! # `chain_force/<implementation>/10⁴`
 //!
@@ -142,69 +142,13 @@ fn bench(c: &mut Criterion) {
     }
     group.finish();
 
-    // SVI's fixed point (6 CGL points, 12 Gauss points), 10 steps of h = 0.2 at n = 10⁴: the
-    // large-system path of `method::local` against the one implementation of ℝᴺ on the
-    // chain as a sum of terms.
-    let mut group = c.benchmark_group("chain_svi");
-    group
-        .measurement_time(Duration::from_secs(3))
-        .warm_up_time(Duration::from_millis(500))
-        .sample_size(20);
-    let n = 10_000;
-    let chain = model(n);
-    let (t0, q0, v0) = chain.initial_state();
-    let t_end = t0 + 10.0 * 0.2;
-    let local = Integrator::new(chain.clone(), Svi::new(6));
-    let initial = DynInitial::Velocity {
-        q: q0.clone(),
-        v: v0.clone(),
-    };
-    group.bench_function(BenchmarkId::new("local", n), |b| {
-        b.iter(|| black_box(local.run(t0, initial.clone(), 0.2, t_end, &mut ()).unwrap()))
-    });
-    let terms = Integrator::new(Terms(chain), Svi::new(6));
-    group.bench_function(BenchmarkId::new("terms", n), |b| {
-        b.iter(|| {
-            black_box(
-                terms
-                    .run_from_velocity(t0, q0.clone(), v0.clone(), 0.2, t_end, &mut ())
-                    .unwrap(),
-            )
-        })
-    });
-    group.finish();
-
-    // SVI by sparse Newton (6 CGL points), 10 steps of h = 0.1 on the relativistic chain of
-    // 10³ particles: the large-system path against the one implementation of ℝᴺ.
-    let mut group = c.benchmark_group("chain_svi_newton");
-    group
-        .measurement_time(Duration::from_secs(3))
-        .warm_up_time(Duration::from_millis(500))
-        .sample_size(20);
-    let n = 1000;
+    // SVI's fixed point (6 CGL points, 12 Gauss points), 10 steps of h = 0.2 on FPUT at
+    // n = 10⁴, and SVI by sparse Newton (6 CGL points), 10 steps of h = 0.1 on the
+    // relativistic chain at n = 10³.
+    svi_local_against_terms(c, "chain_svi", model(10_000), 0.2);
     let mut chain = RelativisticChain::default();
-    chain.set_parameter("n", n as f64).unwrap();
-    let (t0, q0, v0) = chain.initial_state();
-    let t_end = t0 + 10.0 * 0.1;
-    let local = Integrator::new(chain.clone(), Svi::new(6));
-    let initial = DynInitial::Velocity {
-        q: q0.clone(),
-        v: v0.clone(),
-    };
-    group.bench_function(BenchmarkId::new("local", n), |b| {
-        b.iter(|| black_box(local.run(t0, initial.clone(), 0.1, t_end, &mut ()).unwrap()))
-    });
-    let terms = Integrator::new(Terms(chain), Svi::new(6));
-    group.bench_function(BenchmarkId::new("terms", n), |b| {
-        b.iter(|| {
-            black_box(
-                terms
-                    .run_from_velocity(t0, q0.clone(), v0.clone(), 0.1, t_end, &mut ())
-                    .unwrap(),
-            )
-        })
-    });
-    group.finish();
+    chain.set_parameter("n", 1000.0).unwrap();
+    svi_local_against_terms(c, "chain_svi_newton", chain, 0.1);
 
     // The force alone: ∂L/∂q assembled term by term by AD against the hand-written force.
     let mut group = c.benchmark_group("chain_force");
@@ -222,6 +166,44 @@ fn bench(c: &mut Criterion) {
     let mut f = vec![0.0; n];
     group.bench_function(BenchmarkId::new("hand_written", n), |b| {
         b.iter(|| force(&model, black_box(q0.as_slice()), &mut f))
+    });
+    group.finish();
+}
+
+/// `<name>/local/<n>` and `<name>/terms/<n>`: 10 steps of size `h` of SVI with 6 CGL points
+/// on `chain`, by the large-system path of `method::local` and by the one implementation of
+/// ℝᴺ on `Terms(chain)`.
+fn svi_local_against_terms<L: LocalLagrangian + LocalDefaults + Clone>(
+    c: &mut Criterion,
+    name: &str,
+    chain: L,
+    h: f64,
+) {
+    let mut group = c.benchmark_group(name);
+    group
+        .measurement_time(Duration::from_secs(3))
+        .warm_up_time(Duration::from_millis(500))
+        .sample_size(20);
+    let n = chain.dimension();
+    let (t0, q0, v0) = chain.initial_state();
+    let t_end = t0 + 10.0 * h;
+    let local = Integrator::new(chain.clone(), Svi::new(6));
+    let initial = DynInitial::Velocity {
+        q: q0.clone(),
+        v: v0.clone(),
+    };
+    group.bench_function(BenchmarkId::new("local", n), |b| {
+        b.iter(|| black_box(local.run(t0, initial.clone(), h, t_end, &mut ()).unwrap()))
+    });
+    let terms = Integrator::new(Terms(chain), Svi::new(6));
+    group.bench_function(BenchmarkId::new("terms", n), |b| {
+        b.iter(|| {
+            black_box(
+                terms
+                    .run_from_velocity(t0, q0.clone(), v0.clone(), h, t_end, &mut ())
+                    .unwrap(),
+            )
+        })
     });
     group.finish();
 }

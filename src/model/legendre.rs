@@ -143,22 +143,23 @@ impl Legendre {
                 .solve_in_place(&mut self.residual)
                 .map_err(|_| failure(iteration, f64::INFINITY))?;
             std::mem::swap(&mut self.residual, &mut self.correction);
+            // The full step, halved (half of it given back) until ∂L/∂q̇ is finite again.
             let mut fraction = 1.0;
-            loop {
-                for (v, c) in v.iter_mut().zip(self.correction.iter()) {
-                    *v -= fraction * c;
-                }
-                if self.residual(terms, t, q, p, v, false).is_finite() || fraction < 1e-6 {
-                    break;
-                }
-                for (v, c) in v.iter_mut().zip(self.correction.iter()) {
-                    *v += fraction * c;
-                }
+            shift(v, -fraction, &self.correction);
+            while !self.residual(terms, t, q, p, v, false).is_finite() && fraction >= 1e-6 {
                 fraction *= 0.5;
+                shift(v, fraction, &self.correction);
             }
             size = self.residual(terms, t, q, p, v, true);
         }
         Err(failure(self.max_iterations, previous))
+    }
+}
+
+/// `v += a c`.
+fn shift(v: &mut [f64], a: f64, c: &DVector<f64>) {
+    for (v, c) in v.iter_mut().zip(c.iter()) {
+        *v += a * c;
     }
 }
 

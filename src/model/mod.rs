@@ -140,9 +140,9 @@ where
     }
 }
 
-/// The layout of one term's derivatives as [`crate::model::local::TermWidth::second_derivatives`] and
-/// [`TermSum::term_derivatives`] write them:
-/// ∂ℓ/∂q (K), ∂ℓ/∂q̇ (K), then the column-major K × K blocks ∂²ℓ/∂q∂q, ∂²ℓ/∂q∂q̇ (entry
+/// The layout of one term's derivatives as
+/// [`crate::model::local::TermWidth::second_derivatives`] and [`TermSum::term_derivatives`]
+/// write them: ∂ℓ/∂q (K), ∂ℓ/∂q̇ (K), then the column-major K × K blocks ∂²ℓ/∂q∂q, ∂²ℓ/∂q∂q̇ (entry
 /// (a, b) = ∂²ℓ/∂q_a∂q̇_b) and ∂²ℓ/∂q̇∂q̇.
 #[derive(Debug, Clone, Copy)]
 pub struct TermDerivatives {

@@ -112,3 +112,18 @@ impl TermPattern {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn terms_wider_than_sparse_newton_takes_are_an_error_naming_the_width() {
+        assert!(check_width(MAX_WIDTH).is_ok());
+        let error = check_width(MAX_WIDTH + 1).unwrap_err().to_string();
+        assert!(
+            error.contains("width") && error.contains("17") && error.contains("16"),
+            "{error}"
+        );
+    }
+}

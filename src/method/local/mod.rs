@@ -13,7 +13,8 @@
 //! What runs on large systems: Störmer–Verlet ([`verlet`], explicit kick–drift–kick for a
 //! constant mass matrix) and its compositions of orders 4, 6 and 8 ([`composition`]), SVI by
 //! the Hessian-free fixed point for a constant mass matrix and by sparse Newton for every
-//! other Lagrangian ([`svi`], sparse Newton in `crate::method::variational::stage_newton`; the linear solves go through the seam of
+//! other Lagrangian ([`svi`], with the sparse Newton of
+//! `crate::method::variational::stage_newton`; the linear solves go through the seam of
 //! [`crate::linalg::sparse`]). Spectral collocation, the implicit classic variational
 //! integrators, linear stability analysis and the tangent map stay on fixed-size ℝᴺ (small
 //! systems) for now; asking for them on a runtime-dimension model is an error that says so.

@@ -13,9 +13,9 @@
 //!   p_{k+1} − p_k = Σ_μ (h/2) w_μ ∂L/∂q(Q_μ) (the discrete momentum balance). The tables
 //!   are the fixed-size path's (`NystromTables` of [`crate::method::variational::svi`]), so both
 //!   take the same steps to round-off; each iteration costs m assemblies of ∂L/∂q, O(m n).
-//! - **sparse Newton** (`crate::method::variational::stage_newton`), for every other Lagrangian (and
-//!   for constant mass with [`crate::Solver::Newton`]): the stage equations (8a)–(8b) in the
-//!   node offsets with the exact Jacobian assembled term by term, factored by faer's sparse
+//! - **sparse Newton** (`crate::method::variational::stage_newton`), for every other
+//!   Lagrangian (and for constant mass with [`crate::Solver::Newton`]): the stage equations
+//!   (8a)–(8b) in the node offsets with the exact Jacobian assembled term by term, factored by faer's sparse
 //!   LU (symbolic analysis once per run, numeric factorisation only when the simplified
 //!   Newton iteration stops contracting), started from the previous step's polynomial
 //!   extrapolated (or, at a cold start, uniform motion with q̇ from the inverse Legendre map).

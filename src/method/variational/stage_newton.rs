@@ -62,31 +62,47 @@ where
 pub(crate) struct LazyStageNewton(pub(crate) Option<Box<StageNewton>>);
 
 impl LazyStageNewton {
-    /// The solver, made at the first call for `terms` on `n` coordinates, `shape` = (s, m)
-    /// (see [`StageNewton::new`]); and the symbolic analyses this call made (1 when it made
-    /// the solver, else 0).
-    pub(crate) fn get_or_make(
+    /// One step by sparse Newton: the stage equations at (q_k, p_k) = (`q`, `p`) solved for the
+    /// offsets `z` (on entry the starting values), then q_{k+1} − q_k = Z_s into `dq` and the
+    /// discrete momentum balance into `dp`. The solver is made at the first step, with
+    /// `solver` = (linear solver, iteration cap). Returns the solve's work and the symbolic
+    /// analyses this step made (1 at the first step, else 0).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn step(
         &mut self,
         terms: &dyn TermSum<Dyn>,
-        n: usize,
-        shape: (usize, usize),
-        kind: LinearSolverKind,
-        max_iterations: usize,
-    ) -> Result<(&mut StageNewton, usize), StepFailure> {
-        let mut analyses = 0;
-        if self.0.is_none() {
-            let made = StageNewton::new(terms, n, shape, kind, max_iterations).map_err(|_| {
-                StepFailure::Unsupported {
-                    option: "model",
-                    reason: "the pattern of its terms' indices does not fit its dimension",
-                }
-            })?;
-            self.0 = Some(Box::new(made));
-            analyses = 1;
-        }
-        match self.0.as_deref_mut() {
-            Some(stage) => Ok((stage, analyses)),
-            None => Err(StepFailure::SingularMatrix),
+        tables: &Tables,
+        (t, q, p): (f64, &[f64], &[f64]),
+        z: &mut DVector<f64>,
+        (dq, dp): (&mut [f64], &mut [f64]),
+        jacobian: Jacobian,
+        (kind, max_iterations): (LinearSolverKind, usize),
+    ) -> Result<(Solved, usize), StepFailure> {
+        let (n, s, m) = (q.len(), tables.degree, tables.weights.len());
+        let analyses = usize::from(self.0.is_none());
+        let stage = match &mut self.0 {
+            Some(stage) => stage,
+            empty => {
+                let made =
+                    StageNewton::new(terms, n, (s, m), kind, max_iterations).map_err(|_| {
+                        StepFailure::Unsupported {
+                            option: "model",
+                            reason: "the pattern of its terms' indices does not fit its dimension",
+                        }
+                    })?;
+                empty.insert(Box::new(made))
+            }
+        };
+        let solved = stage.solve(terms, tables, t, (q, p), z, jacobian)?;
+        dq.copy_from_slice(&z.as_slice()[(s - 1) * n..s * n]);
+        stage.momentum_increment(terms, tables, t, q, z, dp);
+        Ok((solved, analyses))
+    }
+
+    /// Forget the factorisation, if there is one (the step size changed).
+    pub(crate) fn invalidate(&mut self) {
+        if let Some(stage) = self.0.as_mut() {
+            stage.invalidate();
         }
     }
 }

@@ -59,7 +59,7 @@
 //! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
-use crate::dimension::{Dimension, Dyn, dimension_of};
+use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
@@ -68,11 +68,11 @@ use crate::method::Method;
 use crate::method::variational::stage_newton::{LazyStageNewton, sparse_terms};
 use crate::method::variational::tables::{Tables, unit_nodes};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::model::mass_inverse::MassInverse;
 use crate::model::term_pattern::check_width;
-use crate::model::{Lagrangian, TermSum};
 use crate::nonlinear::{FixedPoint, Jacobian, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
@@ -175,36 +175,6 @@ impl Svi {
             self.max_iterations,
         )
     }
-}
-
-/// The stage equations of a step of an unforced sum of terms of run-time size by sparse Newton
-/// ([`crate::method::variational::stage_newton`]), from the offsets in `offsets` (the
-/// starting values, or a capped fixed point's last iterate): q_{k+1} − q_k = Z_s into `dq`
-/// and the discrete momentum balance into `dp`. Written for [`Dyn`] only (compiled once);
-/// returns the solve's work and the symbolic analyses it made.
-#[allow(clippy::too_many_arguments)]
-fn sparse_stage_step(
-    method: &Svi,
-    terms: &dyn TermSum<Dyn>,
-    stage: &mut LazyStageNewton,
-    tables: &Tables,
-    offsets: &mut DVector<f64>,
-    (t, q, p): (f64, &[f64], &[f64]),
-    (dq, dp): (&mut [f64], &mut [f64]),
-    jacobian: Jacobian,
-) -> Result<(Solved, usize), StepFailure> {
-    let (n, s, m) = (q.len(), tables.degree, tables.weights.len());
-    let (stage, analyses) = stage.get_or_make(
-        terms,
-        n,
-        (s, m),
-        method.linear_solver,
-        method.max_iterations,
-    )?;
-    let solved = stage.solve(terms, tables, t, (q, p), offsets, jacobian)?;
-    dq.copy_from_slice(&offsets.as_slice()[(s - 1) * n..s * n]);
-    stage.momentum_increment(terms, tables, t, q, offsets, dp);
-    Ok((solved, analyses))
 }
 
 /// Tables and buffers of the fixed-point iteration for [`Structure::ConstantMass`]
@@ -577,9 +547,7 @@ where
     /// Drop Newton's kept factors, dense and sparse.
     fn invalidate_newton(&mut self) {
         self.newton.invalidate();
-        if let Some(stage) = self.sparse.0.as_mut() {
-            stage.invalidate();
-        }
+        self.sparse.invalidate();
     }
 
     /// Starting values: the previous step's polynomial extrapolated to the new nodes, or at
@@ -835,16 +803,16 @@ where
                 workspace.set_step(h);
                 workspace.start(model, t, state);
             }
+            // Sparse Newton (`stage_newton`), written for `Dyn` only (compiled once).
             let ws = &mut *workspace;
-            let (solved, analyses) = sparse_stage_step(
-                self,
+            let (solved, analyses) = ws.sparse.step(
                 terms,
-                &mut ws.sparse,
                 &ws.tables,
-                &mut ws.offsets,
                 (t, state.q.as_slice(), state.y.as_slice()),
+                &mut ws.offsets,
                 (increment.q.as_mut_slice(), increment.y.as_mut_slice()),
                 jacobian,
+                (self.linear_solver, self.max_iterations),
             )?;
             ws.remember(h);
             let iterations = solved.iterations + spent;

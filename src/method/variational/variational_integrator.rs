@@ -45,7 +45,7 @@
 //! integrators*, Acta Numerica (2001), §1.2, §2.7 and §3.2; Porcù & Penati (OctConf 2013),
 //! "Discrete mechanics" and "Forced mechanics".
 
-use crate::dimension::{Dimension, Dyn, PhaseFunction, PhaseMap, Wrt, dimension_of};
+use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert_small;
@@ -55,10 +55,10 @@ use crate::method::variational::discrete_lagrangian::{DiscreteLagrangian, Discre
 use crate::method::variational::stage_newton::{LazyStageNewton, sparse_terms};
 use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::model::term_pattern::check_width;
-use crate::model::{Lagrangian, TermSum};
-use crate::nonlinear::{Jacobian, Newton, Solved};
+use crate::nonlinear::{Jacobian, Newton};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
@@ -338,19 +338,25 @@ where
         if let Some(terms) = sparse_terms(model)
             && workspace.sparse.is_some()
         {
+            // Sparse Newton on the segment rule's stage equations (see the module docs).
             workspace.predict(model, t, h, state);
             let VariationalWorkspace { offset, sparse, .. } = workspace;
-            let Some(sparse) = sparse.as_mut() else {
+            let Some(SparseSegment { tables, stage }) = sparse.as_mut() else {
                 return Err(StepFailure::SingularMatrix);
             };
-            let points = sparse.tables.weights.len();
-            let (solved, analyses) = sparse_segment_step(
+            if tables.h != h {
+                tables.rescale(h);
+                stage.invalidate();
+            }
+            let points = tables.weights.len();
+            let (solved, analyses) = stage.step(
                 terms,
-                sparse,
+                tables,
+                (t, state.q.as_slice(), state.y.as_slice()),
                 offset,
-                (t, h, self.max_iterations),
-                (state.q.as_slice(), state.y.as_slice()),
                 (increment.q.as_mut_slice(), increment.y.as_mut_slice()),
+                Jacobian::Kept,
+                (LinearSolverKind::Sparse, self.max_iterations),
             )?;
             workspace.remember(h, state, &increment.q);
             return Ok(StepReport {
@@ -394,34 +400,6 @@ where
         let tangent = discrete_tangent_map(&self.discrete_lagrangian, model, t, h, &state.q, &q1)?;
         Ok((increment, tangent))
     }
-}
-
-/// One step of an unforced sum of terms of run-time size by sparse Newton on a segment rule's
-/// stage equations from the predicted increment in `offset` (see the module docs): the
-/// increment q_{k+1} − q_k into `dq` (and `offset`), the momentum balance into `dp`. Written for
-/// [`Dyn`] only (compiled once); returns the solve's work and the symbolic analyses it made.
-fn sparse_segment_step(
-    terms: &dyn TermSum<Dyn>,
-    sparse: &mut SparseSegment,
-    offset: &mut DVector<f64>,
-    (t, h, max_iterations): (f64, f64, usize),
-    (q, p): (&[f64], &[f64]),
-    (dq, dp): (&mut [f64], &mut [f64]),
-) -> Result<(Solved, usize), StepFailure> {
-    let SparseSegment { tables, stage } = sparse;
-    if tables.h != h {
-        tables.rescale(h);
-        if let Some(stage) = stage.0.as_mut() {
-            stage.invalidate();
-        }
-    }
-    let (n, m) = (q.len(), tables.weights.len());
-    let (stage, analyses) =
-        stage.get_or_make(terms, n, (1, m), LinearSolverKind::Sparse, max_iterations)?;
-    let solved = stage.solve(terms, tables, t, (q, p), offset, Jacobian::Kept)?;
-    dq.copy_from_slice(offset.as_slice());
-    stage.momentum_increment(terms, tables, t, q, offset, dp);
-    Ok((solved, analyses))
 }
 
 /// L_d(t, q0, q1) of a step of size `h` as a [`PhaseFunction`] of (t, q, q̇) = (t, q0, q1),
