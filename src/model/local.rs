@@ -59,7 +59,7 @@ use crate::dimension::{Dyn, Wrt};
 use crate::error::Error;
 pub use crate::model::TermDerivatives;
 use crate::model::derived::LagrangianExt;
-use crate::model::{Lagrangian, Structure, TermSum};
+use crate::model::{Invariants, Lagrangian, Structure, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::{Const, DVector, SVector};
 use num_dual::HyperDual64;
@@ -467,6 +467,21 @@ impl<L: LocalLagrangian> Lagrangian<Dyn> for Terms<L> {
     #[inline]
     fn terms(&self) -> Option<&dyn TermSum<Dyn>> {
         Some(&self.0)
+    }
+}
+
+/// The invariants of a sum of local terms, for the observers of ℝᴺ.
+impl<L: LocalInvariants> Invariants<Dyn> for Terms<L> {
+    fn invariant_count(&self) -> usize {
+        self.0.invariant_count()
+    }
+
+    fn invariant_name(&self, index: usize) -> &'static str {
+        self.0.invariant_name(index)
+    }
+
+    fn invariant(&self, index: usize, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        self.0.invariant(index, t, q, v)
     }
 }
 

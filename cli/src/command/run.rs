@@ -27,11 +27,10 @@ use svi::Dimension;
 
 use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
-use svi::method::DynEuclidean;
-use svi::method::local::LocalMethod;
-use svi::method::registry::{LocalMethodVisitor, SpaceKind, VectorMethodVisitor};
+use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::method::space::Space;
 use svi::method::step::Step;
+use svi::model::local::Terms;
 use svi::model::reparametrized::MonitorSpec;
 use svi::observer::{Every, Observer};
 use svi::solve::{Solution, SolveOptions, Span};
@@ -42,7 +41,7 @@ use svi_models::{
     visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
-use crate::command::space::RunSpace;
+use crate::command::space::{Chain, RunSpace};
 use crate::report::csv::{CsvStream, Recorded};
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
@@ -349,9 +348,10 @@ where
     plan: Plan<'a, svi::Euclidean<N>>,
 }
 
-impl<M: ZooModel<N>, N: Dimension> VectorMethodVisitor<N> for VectorMethod<'_, M, N>
+impl<M: svi::Lagrangian<N>, N: Dimension> VectorMethodVisitor<N> for VectorMethod<'_, M, N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    svi::Euclidean<N>: RunSpace<M>,
 {
     type Output = Result<Summary, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
@@ -479,21 +479,12 @@ where
 impl LocalModelVisitor for SceneRun<'_> {
     type Output = Result<Summary, SceneError>;
 
+    /// A chain runs as a run-time-size Lagrangian of ℝⁿ ([`Chain`]) with the scene's method,
+    /// as every other model does; a method that would hold a dense n × n matrix refuses a
+    /// chain too large for it, naming itself and the size.
     fn visit<M: LocalZooModel>(self, mut model: M) -> Self::Output {
         let resolved = self.scene.resolve_local(&mut model)?;
         let spec = self.scene.method_spec()?;
-        // Explicit Störmer–Verlet on a chain needs the constant mass matrix it inverts once:
-        // bad input, before the run (the library would refuse it as the run starts).
-        if spec.name() == "verlet" && M::STRUCTURE != svi::Structure::ConstantMass {
-            return Err(SceneError::NotApplicable {
-                option: "--method verlet (method.name)",
-                reason: format!(
-                    "the model '{}' has a velocity-dependent mass matrix; verlet on a chain \
-                     needs a constant one (use svi or svi-newton)",
-                    model.name()
-                ),
-            });
-        }
         let method = MethodFields {
             name: spec.name().into(),
             form: None,
@@ -501,21 +492,11 @@ impl LocalModelVisitor for SceneRun<'_> {
             quadrature: spec.quadrature_in_use(),
         };
         let plan = self.plan(resolved, method);
-        LocalRun { model, plan }.visit(spec.local_method()?)
-    }
-}
-
-/// Runs a scene's runtime-dimension model with the visited large-system method.
-struct LocalRun<'a, M> {
-    model: M,
-    plan: Plan<'a, DynEuclidean>,
-}
-
-impl<M: LocalZooModel> LocalMethodVisitor for LocalRun<'_, M> {
-    type Output = Result<Summary, SceneError>;
-    fn visit<Me: LocalMethod + Clone>(self, method: Me) -> Self::Output {
-        let integrator = Integrator::new(self.model, method);
-        run_scene(&self.plan, &integrator)
+        VectorMethod {
+            model: Chain(Terms(model)),
+            plan,
+        }
+        .visit(spec.vector_method()?)
     }
 }
 

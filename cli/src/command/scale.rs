@@ -25,10 +25,8 @@ use crate::scene::limits;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
-use svi::method::DynInitial;
-use svi::method::local::LocalMethod;
-use svi::model::local::{LocalDefaults, LocalLagrangian};
-use svi::{Error, Integrator, StormerVerlet, Svi};
+use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
+use svi::{Dyn, Error, Integrator, Method, StormerVerlet, Svi};
 use svi_models::{Fput, RelativisticChain};
 
 /// The largest n `svi scale` takes (a relativistic chain of 10⁶ needs about 5 GB in Newton's
@@ -182,7 +180,7 @@ impl ScaleArgs {
 }
 
 /// The median of `batches` timings of a run of `steps` steps: (seconds, iterations).
-fn time_run<L: LocalLagrangian + LocalDefaults + Clone, M: LocalMethod + Clone>(
+fn time_run<L: LocalLagrangian + LocalDefaults + Clone, M: Method<Dyn> + Clone>(
     model: &L,
     method: &M,
     steps: usize,
@@ -190,16 +188,13 @@ fn time_run<L: LocalLagrangian + LocalDefaults + Clone, M: LocalMethod + Clone>(
 ) -> Result<(f64, usize), Error> {
     let (t0, q, v) = model.initial_state();
     let h = 0.1;
-    let integrator = Integrator::new(model.clone(), method.clone());
+    let integrator = Integrator::new(Terms(model.clone()), method.clone());
     let mut times = Vec::with_capacity(batches);
     let mut iterations = 0;
     for _ in 0..batches {
-        let initial = DynInitial::Velocity {
-            q: q.clone(),
-            v: v.clone(),
-        };
+        let (q, v) = (q.clone(), v.clone());
         let start = Instant::now();
-        let run = integrator.run(t0, initial, h, t0 + steps as f64 * h, &mut ())?;
+        let run = integrator.run_from_velocity(t0, q, v, h, t0 + steps as f64 * h, &mut ())?;
         times.push(start.elapsed().as_secs_f64());
         iterations = run.statistics.iterations;
     }
@@ -220,7 +215,7 @@ fn peak_memory_mb() -> f64 {
 }
 
 /// Measure one configuration at size n.
-fn measure<L: LocalLagrangian + LocalDefaults + Clone, M: LocalMethod + Clone>(
+fn measure<L: LocalLagrangian + LocalDefaults + Clone, M: Method<Dyn> + Clone>(
     method_name: &'static str,
     mut model: L,
     method: M,

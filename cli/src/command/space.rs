@@ -1,21 +1,20 @@
 //! What a scene's run does differently on each space, ℝᴺ (fixed N, and runtime-sized ℝⁿ for
-//! chains and lattices) and SO(3): the command line's side
+//! chains and lattices, [`Chain`]) and SO(3): the command line's side
 //! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, OVector, SVector};
-use svi::Dimension;
+use nalgebra::{DVector, DefaultAllocator, OVector, SVector};
 use svi::lie_group::so3::orthogonality_error;
 use svi::lie_group::{
     AngularMomentumError, OrthogonalityError, RigidBodyDefaults, RigidBodyExt, RigidInitial,
     RigidPoint, SO3,
 };
 use svi::method::space::Space;
-use svi::method::{DynEuclidean, DynInitial, DynPoint};
-use svi::model::local::{LocalDefaults, LocalLagrangian};
+use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
 use svi::{Defaults, Euclidean, Initial, LagrangianExt, PhasePoint};
+use svi::{Dimension, Dyn};
 use svi_models::{LocalZooModel, RigidZooModel, ZooModel};
 
 use crate::report::csv::{RIGID_CSV_HEADER, csv_header};
@@ -301,26 +300,74 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
     }
 }
 
-impl<L: LocalZooModel> RunSpace<L> for DynEuclidean {
+/// A chain or lattice of the zoo (or written as text) as the run-time-size Lagrangian the
+/// methods of ℝⁿ run ([`Terms`]: derivatives assembled term by term), with the run's parts of
+/// a chain: its few observables in the trajectory, not its n coordinates.
+#[derive(Debug, Clone)]
+pub struct Chain<M>(pub Terms<M>);
+
+impl<M: LocalZooModel> Chain<M> {
+    /// The chain's own model.
+    pub fn model(&self) -> &M {
+        &self.0.0
+    }
+}
+
+impl<M: LocalZooModel> svi::Lagrangian<Dyn> for Chain<M> {
+    const TIME_DEPENDENT: bool = <M as LocalLagrangian>::TIME_DEPENDENT;
+    const STRUCTURE: svi::Structure = <M as LocalLagrangian>::STRUCTURE;
+
+    #[inline]
+    fn dimension(&self) -> usize {
+        self.0.dimension()
+    }
+
+    #[inline]
+    fn lagrangian<D: svi::Scalar>(&self, t: D, q: &DVector<D>, v: &DVector<D>) -> D {
+        self.0.lagrangian(t, q, v)
+    }
+
+    #[inline]
+    fn terms(&self) -> Option<&dyn svi::model::TermSum<Dyn>> {
+        self.0.terms()
+    }
+}
+
+impl<M: LocalZooModel> svi::Invariants<Dyn> for Chain<M> {
+    fn invariant_count(&self) -> usize {
+        self.0.invariant_count()
+    }
+
+    fn invariant_name(&self, index: usize) -> &'static str {
+        self.0.invariant_name(index)
+    }
+
+    fn invariant(&self, index: usize, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
+        self.0.invariant(index, t, q, v)
+    }
+}
+
+impl<M: LocalZooModel> RunSpace<Chain<M>> for Euclidean<Dyn> {
     const LISTS_RUN_FIELDS: bool = true;
 
     /// Energy and the model's invariants (for models with some), each O(n) per step.
     type Diagnostics = (Option<EnergyError>, Option<InvariantError>);
 
     /// The invariants are measured unless the scene asks for no diagnostic (as on SO(3)).
-    fn diagnostics(model: &L, scene: &Scene) -> Self::Diagnostics {
+    fn diagnostics(model: &Chain<M>, scene: &Scene) -> Self::Diagnostics {
         (
             scene.wants(Diagnostic::Energy).then(EnergyError::default),
-            (scene.measures() && model.invariant_count() > 0).then(InvariantError::default),
+            (scene.measures() && model.model().invariant_count() > 0).then(InvariantError::default),
         )
     }
 
     fn measured(
-        model: &L,
+        model: &Chain<M>,
         (energy, invariants): Self::Diagnostics,
-        _: &DynPoint,
-        _: &DynPoint,
+        _: &PhasePoint<Dyn>,
+        _: &PhasePoint<Dyn>,
     ) -> (Option<f64>, Conservation) {
+        let model = model.model();
         (
             energy.map(|e| e.max),
             Conservation::Local {
@@ -335,38 +382,38 @@ impl<L: LocalZooModel> RunSpace<L> for DynEuclidean {
         )
     }
 
-    fn model_name(model: &L) -> &'static str {
-        LocalDefaults::name(model)
+    fn model_name(model: &Chain<M>) -> &'static str {
+        LocalDefaults::name(model.model())
     }
 
-    fn parameters(model: &L) -> Vec<(&'static str, f64)> {
-        LocalDefaults::parameters(model)
+    fn parameters(model: &Chain<M>) -> Vec<(&'static str, f64)> {
+        LocalDefaults::parameters(model.model())
     }
 
     /// None: the n coordinates of a chain are numbered, not named.
-    fn coordinates(_: &L) -> Option<Vec<String>> {
+    fn coordinates(_: &Chain<M>) -> Option<Vec<String>> {
         None
     }
 
-    fn energy(model: &L, point: &DynPoint) -> f64 {
-        point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v)
+    fn energy(model: &Chain<M>, point: &PhasePoint<Dyn>) -> f64 {
+        point.p.dot(&point.v) - model.model().value(point.t, &point.q, &point.v)
     }
 
-    /// Local models have no external force: autonomous ones conserve energy.
-    fn conserves_energy(_: &L) -> bool {
-        !<L as LocalLagrangian>::TIME_DEPENDENT
+    /// Chains have no external force: autonomous ones conserve energy.
+    fn conserves_energy(_: &Chain<M>) -> bool {
+        !<M as LocalLagrangian>::TIME_DEPENDENT
     }
 
-    fn energy_scale(model: &L, point: &DynPoint) -> f64 {
-        let energy = <Self as RunSpace<L>>::energy(model, point).abs();
+    fn energy_scale(model: &Chain<M>, point: &PhasePoint<Dyn>) -> f64 {
+        let energy = <Self as RunSpace<Chain<M>>>::energy(model, point).abs();
         energy.max(0.5 * point.p.dot(&point.v).abs())
     }
 
-    fn extent(point: &DynPoint) -> Option<f64> {
+    fn extent(point: &PhasePoint<Dyn>) -> Option<f64> {
         Some(point.q.amax())
     }
 
-    fn state(point: &DynPoint) -> StateSummary {
+    fn state(point: &PhasePoint<Dyn>) -> StateSummary {
         StateSummary::Vector {
             q: point.q.iter().copied().collect(),
             v: point.v.iter().copied().collect(),
@@ -374,21 +421,19 @@ impl<L: LocalZooModel> RunSpace<L> for DynEuclidean {
         }
     }
 
-    fn initial_guess_at_rest(initial: &DynInitial) -> nalgebra::DVector<f64> {
+    fn initial_guess_at_rest(initial: &Initial<Dyn>) -> DVector<f64> {
         <Self as Space>::initial_guess(initial)
     }
 
-    fn coordinate_count(initial: &DynInitial) -> usize {
-        match initial {
-            DynInitial::Velocity { q, .. } | DynInitial::Momentum { q, .. } => q.len(),
-        }
+    fn coordinate_count(initial: &Initial<Dyn>) -> usize {
+        initial.position().len()
     }
 
     /// `t,energy,<observables>`: the model's few observables (FPUT: the mode energies
     /// `mode_1`, …; Toda: the Lax traces), not the n coordinates.
-    fn csv_header(model: &L) -> String {
+    fn csv_header(model: &Chain<M>) -> String {
         let mut header = String::from("t,energy");
-        for name in model.observable_names() {
+        for name in model.model().observable_names() {
             header.push(',');
             header.push_str(&name);
         }
@@ -397,9 +442,11 @@ impl<L: LocalZooModel> RunSpace<L> for DynEuclidean {
     }
 
     /// t, the energy p·v − L and the observables.
-    fn csv_row(model: &L, point: &DynPoint, row: &mut Vec<f64>) {
+    fn csv_row(model: &Chain<M>, point: &PhasePoint<Dyn>, row: &mut Vec<f64>) {
         row.push(point.t);
-        row.push(<Self as RunSpace<L>>::energy(model, point));
-        model.observables_into(point.t, &point.q, &point.v, row);
+        row.push(<Self as RunSpace<Chain<M>>>::energy(model, point));
+        model
+            .model()
+            .observables_into(point.t, &point.q, &point.v, row);
     }
 }

@@ -120,7 +120,7 @@ pub use error::SceneError;
 use error::methods_with;
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use svi::Dimension;
+use svi::{Dimension, Dyn};
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -128,7 +128,6 @@ use std::path::Path;
 use serde::Deserialize;
 use svi::MethodSpec;
 use svi::lie_group::{LieSvi, RigidInitial};
-use svi::method::DynInitial;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
 use svi::model::text::{TextChainModel, TextModel, TextSpec, site_values};
@@ -357,13 +356,12 @@ impl Scene {
         }
     }
 
-    /// The options a runtime-dimension scene cannot use: a method other than svi, svi-newton
-    /// or verlet
-    /// (the library's [`MethodSpec::local_method`] decides, naming the method), degree
-    /// adaptivity (its methods have a fixed degree), and the diagnostics it has nothing for
-    /// (momentum, solution).
+    /// The options a runtime-dimension scene cannot use: degree adaptivity, and the
+    /// diagnostics it has nothing for (momentum, solution). Its method is any of ℝᴺ (one
+    /// that would hold a dense n × n matrix refuses a chain too large for it as the run
+    /// starts, naming itself and the size).
     fn check_local(&self, spec: MethodSpec) -> Result<(), SceneError> {
-        spec.local_method()?;
+        spec.vector_method()?;
         if self.run.adapt == Some(AdaptMode::Degree) {
             return Err(SceneError::NotApplicable {
                 option: "--adapt degree (run.adapt)",
@@ -858,7 +856,7 @@ impl Scene {
     pub fn resolve_local<M: LocalZooModel>(
         &self,
         model: &mut M,
-    ) -> Result<(f64, DynInitial, f64, f64), SceneError> {
+    ) -> Result<(f64, svi::Initial<Dyn>, f64, f64), SceneError> {
         for (name, value) in &self.parameters {
             model.set_parameter(name, *value)?;
         }

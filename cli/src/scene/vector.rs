@@ -4,9 +4,8 @@
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, U1};
-use svi::Dimension;
 use svi::Initial;
-use svi::method::DynInitial;
+use svi::{Dimension, Dyn};
 
 use crate::scene::error::SceneError;
 use crate::scene::schema::{Components, InitialSection};
@@ -89,7 +88,7 @@ pub fn local_initial(
     default_q: DVector<f64>,
     default_v: DVector<f64>,
     sites: SiteValues<'_>,
-) -> Result<DynInitial, SceneError> {
+) -> Result<svi::Initial<Dyn>, SceneError> {
     let n = default_q.len();
     let vector = |field: &'static str, components: &Option<Components>| {
         components
@@ -118,8 +117,8 @@ pub fn local_initial(
     let q = vector("q", &section.q)?.unwrap_or(default_q);
     Ok(match (vector("v", &section.v)?, vector("p", &section.p)?) {
         (Some(_), Some(_)) => return Err(SceneError::VelocityAndMomentum),
-        (Some(v), None) => DynInitial::Velocity { q, v },
-        (None, Some(p)) => DynInitial::Momentum { q, p },
-        (None, None) => DynInitial::Velocity { q, v: default_v },
+        (Some(v), None) => svi::Initial::Velocity { q, v },
+        (None, Some(p)) => svi::Initial::Momentum { q, p },
+        (None, None) => svi::Initial::Velocity { q, v: default_v },
     })
 }
