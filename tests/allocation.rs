@@ -102,16 +102,16 @@ fn multiscale_does_not_allocate_per_step() {
 fn local_allocations<L, M>(model: &L, method: &M, steps: usize) -> usize
 where
     L: svi::model::local::LocalDefaults + Clone,
-    M: svi::method::local::LocalMethod + Clone,
+    M: svi::Method<svi::Dyn> + Clone,
 {
     let (t0, q, v) = model.initial_state();
-    let integrator = Integrator::new(model.clone(), method.clone());
+    let integrator = Integrator::new(svi::model::local::Terms(model.clone()), method.clone());
     let mut energy = svi::observer::EnergyError::default();
     let before = allocations::count();
     integrator
         .run(
             t0,
-            svi::method::DynInitial::Velocity { q, v },
+            svi::Initial::Velocity { q, v },
             0.01,
             t0 + 0.01 * steps as f64,
             &mut energy,

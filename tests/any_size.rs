@@ -523,53 +523,62 @@ fn local_terms_assemble_the_hessian_blocks_of_the_whole_lagrangian() {
     }
 }
 
-/// The one implementation of SVI's fixed point, Störmer–Verlet and its compositions runs a
-/// constant-mass sum of terms in O(n): on the FPUT chain of 2000 particles it takes the
-/// steps of the large-system path of `svi::method::local` to round-off, and at n = 10⁵ it
-/// runs without any n × n matrix (the dense check lets it through; 80 GB would not fit).
+/// SVI's fixed point and Störmer–Verlet run a constant-mass sum of terms in O(n): on the FPUT
+/// chain of 2000 particles the fixed point ends where sparse Newton on the same stage
+/// equations does (`svi-newton`: another solver, with the exact Jacobian), and Verlet where a
+/// hand-written kick–drift–kick loop over the chain's force does, to round-off; at n = 10⁵
+/// both run without any n × n matrix (the dense check lets them through; 80 GB would not
+/// fit).
 #[test]
 fn one_implementation_runs_constant_mass_chains_of_any_size() {
-    use svi::method::DynInitial;
-    use svi::{Composition, Scheme, StormerVerlet, Svi};
+    use svi::method::any::AnyMethod;
+    use svi::{Solver, StormerVerlet, Svi};
     let chain = |n: usize| {
         let mut model = Fput::default();
         model.set_parameter("n", n as f64).unwrap();
         model.set_parameter("beta", 0.5).unwrap();
         model
     };
-    fn compare<M: Method<Dyn> + svi::method::local::LocalMethod + Clone>(
-        method: M,
-        model: Fput,
-        h: f64,
-        steps: usize,
-    ) {
-        let (t0, q0, v0) = model.initial_state();
-        let t_end = t0 + h * steps as f64;
-        let generic = Integrator::new(Terms(model.clone()), method.clone())
-            .run_from_velocity(t0, q0.clone(), v0.clone(), h, t_end, &mut ())
-            .unwrap();
-        let local = Integrator::new(model, method)
-            .run(t0, DynInitial::Velocity { q: q0, v: v0 }, h, t_end, &mut ())
-            .unwrap();
-        assert_eq!(generic.statistics.steps, steps);
-        let scale = local.last.p.amax();
-        let gap = (&generic.last.q - &local.last.q)
-            .amax()
-            .max((&generic.last.p - &local.last.p).amax());
-        assert!(gap <= 1e-13 * scale, "{gap:e} (scale {scale})");
-    }
     let model = chain(2000);
+    let (t0, q0, v0) = model.initial_state();
     let h = 0.5 * model.default_step();
-    compare(Svi::new(7).with_quadrature(6), model.clone(), h, 20);
-    compare(StormerVerlet::default(), model.clone(), h, 50);
-    compare(Composition::new(Scheme::Yoshida4), model, h, 20);
+    let run = |method: AnyMethod, steps: usize| {
+        Integrator::new(Terms(model.clone()), method)
+            .run_from_velocity(t0, q0.clone(), v0.clone(), h, t0 + h * steps as f64, &mut ())
+            .unwrap()
+    };
+    let fixed_point = run(AnyMethod::Svi(Svi::new(7).with_quadrature(6)), 20);
+    let newton = run(
+        AnyMethod::Svi(Svi::new(7).with_quadrature(6).with_solver(Solver::Newton)),
+        20,
+    );
+    assert_eq!(fixed_point.statistics.factorizations, 0);
+    assert!(newton.statistics.factorizations > 0);
+    let scale = fixed_point.last.p.amax();
+    let gap = (&fixed_point.last.q - &newton.last.q)
+        .amax()
+        .max((&fixed_point.last.p - &newton.last.p).amax());
+    assert!(gap <= 1e-12 * scale, "svi: {gap:e} (scale {scale})");
+    // Verlet against kick–drift–kick by hand (unit masses), 50 steps.
+    let verlet = run(AnyMethod::StormerVerlet(StormerVerlet::default()), 50);
+    let (mut q, mut p) = (q0.clone(), v0.clone());
+    let mut force = DVector::zeros(q.len());
+    for _ in 0..50 {
+        model.force_into(0.0, &q, &p, &mut force);
+        p.axpy(0.5 * h, &force, 1.0);
+        q.axpy(h, &p, 1.0);
+        model.force_into(0.0, &q, &p, &mut force);
+        p.axpy(0.5 * h, &force, 1.0);
+    }
+    let gap = (&verlet.last.q - &q).amax().max((&verlet.last.p - &p).amax());
+    assert!(gap <= 1e-12 * scale, "verlet: {gap:e}");
     // n = 10⁵: a few steps, each O(n).
     let model = chain(100_000);
     let (t0, q0, v0) = model.initial_state();
     let h = model.default_step();
     for method in [
-        svi::method::any::AnyMethod::Svi(Svi::new(5)),
-        svi::method::any::AnyMethod::StormerVerlet(StormerVerlet::default()),
+        AnyMethod::Svi(Svi::new(5)),
+        AnyMethod::StormerVerlet(StormerVerlet::default()),
     ] {
         let run = Integrator::new(Terms(model.clone()), method)
             .run_from_velocity(t0, q0.clone(), v0.clone(), h, t0 + 3.0 * h, &mut ())
@@ -581,15 +590,15 @@ fn one_implementation_runs_constant_mass_chains_of_any_size() {
 
 /// Sparse Newton serves every implicit method of ℝᴺ on a sum of terms whose mass matrix
 /// depends on q̇: on the relativistic chain of 10⁴ particles (where a dense Newton matrix,
-/// (2·10⁴)² entries and more, would be refused), SVI 7/6 takes the steps of the large-system
-/// path of `svi::method::local` to round-off, and midpoint, trapezoid, both symplectic Euler
+/// (2·10⁴)² entries and more, would be refused), SVI 7/6 keeps the energy to round-off, and
+/// midpoint, trapezoid, both symplectic Euler
 /// methods and Störmer–Verlet (its implicit path) end where SVI does to within their
 /// discretisation errors (the particles move 0.8 per unit time; a wrong residual or
 /// momentum update would be off by O(h)).
 #[test]
 fn sparse_newton_runs_every_implicit_method_on_a_relativistic_chain_of_any_size() {
-    use svi::method::DynInitial;
     use svi::method::any::AnyMethod;
+    use svi::model::local::LocalLagrangianExt;
     use svi::{Svi, VariationalIntegrator};
     let mut model = RelativisticChain::default();
     model.set_parameter("n", 10_000.0).unwrap();
@@ -603,22 +612,13 @@ fn sparse_newton_runs_every_implicit_method_on_a_relativistic_chain_of_any_size(
     };
     let reference = generic(AnyMethod::Svi(Svi::new(7).with_quadrature(6)));
     assert_eq!(reference.statistics.steps, steps);
-    let local = Integrator::new(model.clone(), Svi::new(7).with_quadrature(6))
-        .run(
-            t0,
-            DynInitial::Velocity {
-                q: q0.clone(),
-                v: v0.clone(),
-            },
-            h,
-            t_end,
-            &mut (),
-        )
-        .unwrap();
-    let gap = (&reference.last.q - &local.last.q)
-        .amax()
-        .max((&reference.last.p - &local.last.p).amax());
-    assert!(gap <= 1e-13, "svi: {gap:e}");
+    // SVI 7/6 (order 12) keeps the energy to round-off.
+    let energy = |q: &DVector<f64>, v: &DVector<f64>| LocalLagrangianExt::energy(&model, t0, q, v);
+    let (start, end) = (
+        energy(&q0, &v0),
+        energy(&reference.last.q, &reference.last.v),
+    );
+    assert!((end - start).abs() <= 1e-12 * start.abs(), "{start} → {end}");
     let moved = (&reference.last.q - &q0).amax();
     assert!(moved > 0.7, "moved {moved}");
     // Measured: 2.7e-11 (midpoint) and 5.3e-11 (the others).

@@ -5,14 +5,13 @@
 //! naming the column and the symbol.
 
 use nalgebra::DVector;
-use svi::method::DynInitial;
 use svi::model::local::{
-    LocalDefaults, LocalLagrangian, LocalLagrangianExt, force_by_terms, value_by_terms,
+    LocalDefaults, LocalLagrangian, LocalLagrangianExt, Terms, force_by_terms, value_by_terms,
 };
 use svi::model::text::{
     Boundary, TextChain, TextChainModel, TextError, TextModel, TextSpec, site_values,
 };
-use svi::{Integrator, StormerVerlet, Structure, Svi};
+use svi::{Initial, Integrator, StormerVerlet, Structure, Svi};
 use svi_models::{Fput, Toda};
 
 /// The FPUT chain of the zoo in one line of text (fixed ends).
@@ -84,27 +83,27 @@ fn fput_as_one_line_of_text_follows_the_zoo_chain_to_round_off() {
     let (h, steps) = (0.1, 100);
     let t_end = t0 + h * steps as f64;
     for initial in [
-        DynInitial::Velocity {
+        Initial::Velocity {
             q: q.clone(),
             v: v0,
         },
-        DynInitial::Velocity { q, v },
+        Initial::Velocity { q, v },
     ] {
         let verlet = StormerVerlet::default();
-        let a = Integrator::new(text.clone(), verlet.clone())
+        let a = Integrator::new(Terms(text.clone()), verlet.clone())
             .run(t0, initial.clone(), h, t_end, &mut ())
             .unwrap();
-        let b = Integrator::new(zoo.clone(), verlet)
+        let b = Integrator::new(Terms(zoo.clone()), verlet)
             .run(t0, initial.clone(), h, t_end, &mut ())
             .unwrap();
         assert_eq!(a.statistics.steps, steps);
         assert!(distance(&a.last.q, &b.last.q) <= 1e-13);
         assert!(distance(&a.last.p, &b.last.p) <= 1e-13);
         let svi = Svi::default();
-        let c = Integrator::new(text.clone(), svi.clone())
+        let c = Integrator::new(Terms(text.clone()), svi.clone())
             .run(t0, initial.clone(), h, t_end, &mut ())
             .unwrap();
-        let d = Integrator::new(zoo.clone(), svi)
+        let d = Integrator::new(Terms(zoo.clone()), svi)
             .run(t0, initial, h, t_end, &mut ())
             .unwrap();
         assert!(distance(&c.last.q, &d.last.q) <= 1e-13);
@@ -203,13 +202,13 @@ fn the_periodic_toda_lattice_as_text_follows_the_zoo_lattice() {
     assert_eq!(text.term_count(), 16);
     assert_eq!(text.indices(15), [15, 0]);
     let (t0, q0, v0) = zoo.initial_state();
-    let initial = DynInitial::Velocity { q: q0, v: v0 };
+    let initial = Initial::Velocity { q: q0, v: v0 };
     let run = |method: Svi| {
-        let a = Integrator::new(text.clone(), method.clone())
+        let a = Integrator::new(Terms(text.clone()), method.clone())
             .run(t0, initial.clone(), 0.1, 20.0, &mut ())
             .unwrap()
             .last;
-        let b = Integrator::new(zoo.clone(), method)
+        let b = Integrator::new(Terms(zoo.clone()), method)
             .run(t0, initial.clone(), 0.1, 20.0, &mut ())
             .unwrap()
             .last;

@@ -6,18 +6,16 @@
 //! (one `match` per call picks it); what differs is what is compiled: with the enum the
 //! stepping loop and every `solve` mode (adaptivity, reparametrised time, SEM, dense output)
 //! are instantiated once per model instead of once per model and method. Its SVI,
-//! Störmer–Verlet and compositions are also [`LocalMethod`]s, for sums of local terms
-//! ([`crate::MethodSpec::local_method`]). The command line
+//! The command line
 //! and the Python package run their methods this way; a program that knows its method at
 //! compile time uses the method's type directly.
 
 use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::method::collocation::SpectralCollocation;
-use crate::method::local::LocalMethod;
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
-use crate::method::space::{DynState, State, TangentMap};
+use crate::method::space::{State, TangentMap};
 use crate::method::variational::composition::Composition;
 use crate::method::variational::discrete_lagrangian::{
     AdjointSymplecticEuler, Midpoint, SymplecticEuler, Trapezoid,
@@ -254,123 +252,6 @@ macro_rules! any_method {
             }
         }
     };
-}
-
-impl AnyMethod {
-    /// Whether the method runs on runtime-dimension models written as sums of local terms
-    /// (its [`LocalMethod`] implementation serves): SVI, Störmer–Verlet and its compositions.
-    pub fn is_local(&self) -> bool {
-        matches!(
-            self,
-            AnyMethod::Svi(_) | AnyMethod::StormerVerlet(_) | AnyMethod::Composition(_)
-        )
-    }
-}
-
-/// The workspace of an [`AnyMethod`] on a sum of local terms: its method's own.
-pub enum AnyLocalWorkspace {
-    /// The workspace of [`Svi`].
-    Svi(<Svi as LocalMethod>::Workspace),
-    /// The workspace of [`StormerVerlet`].
-    StormerVerlet(<StormerVerlet as LocalMethod>::Workspace),
-    /// The workspace of [`Composition`].
-    Composition(<Composition as LocalMethod>::Workspace),
-}
-
-/// The local methods of an [`AnyMethod`] ([`AnyMethod::is_local`]); the others refuse
-/// runtime-dimension models in [`LocalMethod::local_workspace`], naming themselves.
-impl LocalMethod for AnyMethod {
-    type Workspace = AnyLocalWorkspace;
-
-    fn info(&self) -> MethodInfo {
-        Method::<nalgebra::U1>::info(self)
-    }
-
-    fn local_workspace<L: LocalLagrangian>(
-        &self,
-        model: &L,
-        h: f64,
-    ) -> Result<AnyLocalWorkspace, Error> {
-        Ok(match self {
-            AnyMethod::Svi(method) => AnyLocalWorkspace::Svi(method.local_workspace(model, h)?),
-            AnyMethod::StormerVerlet(method) => {
-                AnyLocalWorkspace::StormerVerlet(method.local_workspace(model, h)?)
-            }
-            AnyMethod::Composition(method) => {
-                AnyLocalWorkspace::Composition(method.local_workspace(model, h)?)
-            }
-            _ => {
-                return Err(Error::invalid(
-                    "method",
-                    format!(
-                        "{} runs on fixed-size models only, not on sums of local terms",
-                        LocalMethod::info(self).name
-                    ),
-                ));
-            }
-        })
-    }
-
-    fn local_step<L: LocalLagrangian>(
-        &self,
-        model: &L,
-        workspace: &mut AnyLocalWorkspace,
-        t: f64,
-        h: f64,
-        state: &DynState,
-        increment: &mut DynState,
-    ) -> Result<StepReport, StepFailure> {
-        match (self, workspace) {
-            (AnyMethod::Svi(method), AnyLocalWorkspace::Svi(workspace)) => {
-                method.local_step(model, workspace, t, h, state, increment)
-            }
-            (AnyMethod::StormerVerlet(method), AnyLocalWorkspace::StormerVerlet(workspace)) => {
-                method.local_step(model, workspace, t, h, state, increment)
-            }
-            (AnyMethod::Composition(method), AnyLocalWorkspace::Composition(workspace)) => {
-                method.local_step(model, workspace, t, h, state, increment)
-            }
-            _ => Err(FOREIGN_WORKSPACE),
-        }
-    }
-
-    fn local_restart(&self, workspace: &mut AnyLocalWorkspace) {
-        match (self, workspace) {
-            (AnyMethod::Svi(method), AnyLocalWorkspace::Svi(workspace)) => {
-                method.local_restart(workspace)
-            }
-            (AnyMethod::StormerVerlet(method), AnyLocalWorkspace::StormerVerlet(workspace)) => {
-                method.local_restart(workspace)
-            }
-            (AnyMethod::Composition(method), AnyLocalWorkspace::Composition(workspace)) => {
-                method.local_restart(workspace)
-            }
-            _ => {}
-        }
-    }
-
-    fn local_velocity<L: LocalLagrangian>(
-        &self,
-        model: &L,
-        workspace: &AnyLocalWorkspace,
-        t: f64,
-        q: &DVector<f64>,
-        p: &DVector<f64>,
-        v: &mut DVector<f64>,
-    ) -> Result<(), Error> {
-        match (self, workspace) {
-            (AnyMethod::Svi(method), AnyLocalWorkspace::Svi(workspace)) => {
-                method.local_velocity(model, workspace, t, q, p, v)
-            }
-            (AnyMethod::StormerVerlet(method), AnyLocalWorkspace::StormerVerlet(workspace)) => {
-                method.local_velocity(model, workspace, t, q, p, v)
-            }
-            (AnyMethod::Composition(method), AnyLocalWorkspace::Composition(workspace)) => {
-                method.local_velocity(model, workspace, t, q, p, v)
-            }
-            _ => Err(Error::invalid("workspace", "built by another method")),
-        }
-    }
 }
 
 any_method!(

@@ -34,7 +34,6 @@ use crate::method::any::AnyMethod;
 pub use crate::method::any::VectorMethodVisitor;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::lie_svi::{Form, LieSvi};
-use crate::method::local::LocalMethod;
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
 use crate::method::variational::composition::{Composition, Scheme};
@@ -334,15 +333,6 @@ impl Default for MethodSpec {
     }
 }
 
-/// Receives a method for runtime-dimension models ([`crate::model::local::LocalLagrangian`])
-/// ([`MethodSpec::local_method`]).
-pub trait LocalMethodVisitor {
-    /// What the visit returns.
-    type Output;
-    /// Use `method`.
-    fn visit<M: LocalMethod + Clone>(self, method: M) -> Self::Output;
-}
-
 /// Reads the [`MethodInfo`] of the visited method.
 struct InfoOf;
 
@@ -521,28 +511,6 @@ impl MethodSpec {
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
         Ok(self.vector_method()?.visit(visitor))
-    }
-
-    /// Build the method for a runtime-dimension model (a sum of local terms,
-    /// [`crate::model::local::LocalLagrangian`]), as an [`AnyMethod`] that is a
-    /// [`LocalMethod`]: `svi` (the fixed point for constant mass, else sparse Newton),
-    /// `svi-newton` (sparse Newton always), `verlet` and its compositions (constant mass). The
-    /// other methods of ℝᴺ run on fixed-size models only, and asking for one is an error that
-    /// names it.
-    pub fn local_method(&self) -> Result<AnyMethod, Error> {
-        let method = self.vector_method()?;
-        if method.is_local() {
-            return Ok(method);
-        }
-        Err(Error::invalid(
-            "method",
-            format!(
-                "'{self}' runs on fixed-size models only; runtime-dimension models \
-                 (chains, lattices) take svi, svi-newton, verlet, yoshida4, kahan-li6 or \
-                 kahan-li8 (not {})",
-                self.entry.name
-            ),
-        ))
     }
 
     /// Build the rigid-body method on SO(3). An error names the method if it integrates
