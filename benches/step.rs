@@ -32,7 +32,7 @@
 //! T = 200 (1000 steps), through [`Integrator::run_from_velocity`] with no observer (`()`),
 //! workspace construction and the initial Legendre map included: SVI with 6 CGL / 12 GL
 //! points, SVI with 7 CGL / 6 GL (the 6-stage Gauss method) and, for comparison, SC with
-//! 6 CGL points.
+//! 6 CGL points and Störmer–Verlet (the explicit kick–drift–kick path of a constant mass).
 //!
 //! Run with `cargo bench --bench step` (add a filter such as `-- step/kepler` to run a subset).
 //! Timings are short on purpose (2 s measurement, 0.5 s warm-up, 20 samples); the medians
@@ -44,7 +44,9 @@ use nalgebra::{Const, U2};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 use svi::method::StepReport;
-use svi::{Defaults, Initial, Integrator, Lagrangian, Method, SpectralCollocation, State, Svi};
+use svi::{
+    Defaults, Initial, Integrator, Lagrangian, Method, SpectralCollocation, State, StormerVerlet, Svi,
+};
 use svi_models::{DoublePendulum, Kepler, Pendulum};
 
 /// Untimed steps after each (re-)seed, to reach the warm-started steady state.
@@ -254,6 +256,7 @@ fn runs(c: &mut Criterion) {
     bench_run(&mut group, "svi_6cgl_12gl", Svi::new(6));
     bench_run(&mut group, "svi_7cgl_6gl", Svi::new(7).with_quadrature(6));
     bench_run(&mut group, "sc_6cgl", SpectralCollocation::new(6));
+    bench_run(&mut group, "verlet", StormerVerlet::default());
     group.finish();
 }
 

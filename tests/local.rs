@@ -751,10 +751,10 @@ fn stiff_soft_run(omega: f64) -> (f64, f64, f64, f64) {
         )
         .unwrap();
     let points = &points.inner.points;
-    let largest = |f: &dyn Fn(&svi::method::space::DynPoint) -> f64| {
+    let largest = |f: &dyn Fn(&svi::PhasePoint<nalgebra::Dyn>) -> f64| {
         points.iter().map(f).fold(f64::NEG_INFINITY, f64::max)
     };
-    let springs = |p: &svi::method::space::DynPoint| model.oscillatory_energies(&p.q, &p.v);
+    let springs = |p: &svi::PhasePoint<nalgebra::Dyn>| model.oscillatory_energies(&p.q, &p.v);
     (
         largest(&|p| (springs(p).iter().sum::<f64>() - 1.0).abs()),
         -largest(&|p| -springs(p)[0]),

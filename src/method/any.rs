@@ -25,9 +25,8 @@ use crate::method::variational::svi::Svi;
 use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::{Method, MethodInfo, StepReport};
 use crate::model::Lagrangian;
-use crate::model::local::LocalLagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator, OVector};
+use nalgebra::{DefaultAllocator, OVector};
 
 /// Receives a method on ℝᴺ as its concrete type ([`AnyMethod::visit`],
 /// [`crate::MethodSpec::visit_vector`]); N is fixed (`Const<N>`) or chosen at run time
