@@ -45,7 +45,8 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 use svi::method::StepReport;
 use svi::{
-    Defaults, Initial, Integrator, Lagrangian, Method, SpectralCollocation, State, StormerVerlet, Svi,
+    Defaults, Initial, Integrator, Lagrangian, Method, SpectralCollocation, State, StormerVerlet,
+    Svi,
 };
 use svi_models::{DoublePendulum, Kepler, Pendulum};
 

@@ -5,9 +5,7 @@
 use nalgebra::{DVector, SVector, U8};
 use svi::model::local::{LocalDefaults, LocalLagrangian, LocalLagrangianExt, Terms};
 use svi::observer::EnergyError;
-use svi::{
-    Composition, Initial, Integrator, Lagrangian, Scalar, Scheme, StormerVerlet, Structure,
-};
+use svi::{Composition, Initial, Integrator, Lagrangian, Scalar, Scheme, StormerVerlet, Structure};
 use svi_models::Fput;
 
 /// The FPUT chain of 8 particles written directly as one fixed-size Lagrangian (an
@@ -593,9 +591,9 @@ fn toda_lax_traces_do_not_drift_over_a_hundred_thousand_steps() {
     use std::ops::ControlFlow;
     use svi::Svi;
     use svi::drift::EnergyWindows;
-    use svi::{Dyn, PhasePoint};
     use svi::model::local::LocalInvariants;
     use svi::observer::Observer;
+    use svi::{Dyn, PhasePoint};
     use svi_models::Toda;
 
     /// Each trace's error, in windows.

@@ -166,17 +166,21 @@ macro_rules! any_method {
                 }
             }
 
-            fn velocity(
+            fn velocity_into<L: Lagrangian<N>>(
                 &self,
+                model: &L,
                 workspace: &AnyWorkspace<N>,
+                t: f64,
+                q: &OVector<f64, N>,
                 p: &OVector<f64, N>,
-            ) -> Option<OVector<f64, N>> {
+                v: &mut OVector<f64, N>,
+            ) -> Result<bool, Error> {
                 match (self, workspace) {
                     $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
-                        method.velocity(workspace, p)
+                        method.velocity_into(model, workspace, t, q, p, v)
                     })+
                     #[allow(unreachable_patterns)]
-                    _ => None,
+                    _ => Ok(false),
                 }
             }
 

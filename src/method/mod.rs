@@ -139,16 +139,25 @@ where
         None
     }
 
-    /// The velocity q̇ for the momentum `p` of a state this run's steps reached, from what the
-    /// workspace already holds (for a constant mass matrix its cached inverse, q̇ = M⁻¹p);
-    /// `None` where the inverse Legendre map must be solved for.
-    fn velocity(
+    /// The velocity q̇ for the momentum `p` of a state at (t, q) this run's steps reached,
+    /// into `v` (a guess on entry), from what the workspace already holds: a constant mass
+    /// matrix's cached inverse (q̇ = M⁻¹p), or the sparse inverse Legendre map a run on a sum
+    /// of terms keeps. `Ok(false)` where it holds neither and the caller solves the map.
+    ///
+    /// # Errors
+    /// [`Error::LegendreMap`] if the kept map does not converge.
+    #[allow(clippy::too_many_arguments)]
+    fn velocity_into<L: Lagrangian<N>>(
         &self,
+        model: &L,
         workspace: &Self::Workspace,
+        t: f64,
+        q: &OVector<f64, N>,
         p: &OVector<f64, N>,
-    ) -> Option<OVector<f64, N>> {
-        let _ = (workspace, p);
-        None
+        v: &mut OVector<f64, N>,
+    ) -> Result<bool, Error> {
+        let _ = (model, workspace, t, q, p, v);
+        Ok(false)
     }
 
     /// Whether the method runs `model` without any dense n × n matrix: `model` is a sum of

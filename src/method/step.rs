@@ -16,7 +16,7 @@ use crate::error::{Error, StepFailure, require_finite_entries};
 use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, TangentMap};
 use crate::method::{Coordinates, Method, MethodInfo, StepReport};
 use crate::model::derived::LagrangianExt;
-use crate::model::{Lagrangian, Structure};
+use crate::model::{Lagrangian, Structure, TermDerivatives};
 use crate::spectral::MAX_POINTS;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
@@ -216,20 +216,6 @@ pub trait Step<L: ?Sized, S: Space> {
     }
 }
 
-/// Triplets with the entries of one place added up, sorted by (row, column), zeros dropped.
-fn summed_triplets(mut triplets: Vec<(usize, usize, f64)>) -> Vec<(usize, usize, f64)> {
-    triplets.sort_by_key(|&(i, j, _)| (i, j));
-    let mut summed: Vec<(usize, usize, f64)> = Vec::with_capacity(triplets.len());
-    for (i, j, value) in triplets {
-        match summed.last_mut() {
-            Some(last) if (last.0, last.1) == (i, j) => last.2 += value,
-            _ => summed.push((i, j, value)),
-        }
-    }
-    summed.retain(|entry| entry.2 != 0.0);
-    summed
-}
-
 /// Most entries of one dense matrix a method on ℝᴺ may hold: 2²⁷ (1 GiB of `f64`). The methods
 /// on ℝᴺ keep dense N × N matrices (the mass matrix and its inverse, the tangent map) and the
 /// spectral ones a dense (N·P)² Newton matrix; a run-time-size model beyond this is refused
@@ -366,35 +352,41 @@ where
         }
         let shifted = state.y.map(|y| 2.0 * y + 1.0);
         let (scale, coupling, change) = match model.terms() {
-            // From the terms' blocks, in O(n log n): no n × n matrix.
+            // Term by term, in O(n): no n × n matrix. A term's blocks at q̇ and at the
+            // shifted q̇ (a sum whose terms' dependences on q̇ cancel would be refused; no
+            // model is written that way).
             Some(terms) => {
-                let blocks = |v: &OVector<f64, N>| {
-                    let mut blocks = [Vec::new(), Vec::new(), Vec::new()];
-                    terms.hessian_triplets(t, &state.q, v, &mut blocks);
-                    blocks.map(summed_triplets)
+                let layout = TermDerivatives {
+                    width: terms.width(),
                 };
-                let (first, second) = (blocks(&state.y), blocks(&shifted));
-                let largest = |entries: &[(usize, usize, f64)]| {
-                    entries.iter().fold(0.0, |m: f64, e| m.max(e.2.abs()))
-                };
-                let change = if first[2].len() == second[2].len()
-                    && first[2]
-                        .iter()
-                        .zip(&second[2])
-                        .all(|(a, b)| (a.0, a.1) == (b.0, b.1))
-                {
-                    first[2]
-                        .iter()
-                        .zip(&second[2])
-                        .fold(0.0, |m: f64, (a, b)| m.max((a.2 - b.2).abs()))
-                } else {
-                    f64::INFINITY
-                };
-                (
-                    1.0 + largest(&first[2]) + largest(&first[0]),
-                    largest(&first[1]).max(largest(&second[1])),
-                    change,
-                )
+                let k = layout.width;
+                let mut indices = vec![0; k];
+                let mut local = [vec![0.0; k], vec![0.0; k], vec![0.0; k]];
+                let mut blocks = [vec![0.0; layout.len()], vec![0.0; layout.len()]];
+                let (mut mass, mut stiffness) = (0.0_f64, 0.0_f64);
+                let (mut coupling, mut change) = (0.0_f64, 0.0_f64);
+                for e in 0..terms.term_count() {
+                    terms.term_indices(e, &mut indices);
+                    let [q, v, w] = &mut local;
+                    for (a, &i) in indices.iter().enumerate() {
+                        (q[a], v[a], w[a]) = (state.q[i], state.y[i], shifted[i]);
+                    }
+                    terms.term_derivatives(e, t, q, v, true, &mut blocks[0]);
+                    terms.term_derivatives(e, t, q, w, true, &mut blocks[1]);
+                    let [first, second] = &blocks;
+                    for a in 0..k {
+                        for b in 0..k {
+                            mass = mass.max(layout.vv(first, a, b).abs());
+                            stiffness = stiffness.max(layout.qq(first, a, b).abs());
+                            coupling = coupling
+                                .max(layout.qv(first, a, b).abs())
+                                .max(layout.qv(second, a, b).abs());
+                            change = change
+                                .max((layout.vv(first, a, b) - layout.vv(second, a, b)).abs());
+                        }
+                    }
+                }
+                (1.0 + mass + stiffness, coupling, change)
             }
             None => {
                 let first = model.second_derivatives(t, &state.q, &state.y);
@@ -428,23 +420,44 @@ where
         state: &State<N>,
         guess: &OVector<f64, N>,
     ) -> Result<PhasePoint<N>, Error> {
-        let (v, p) = match Method::info(self).coordinates {
+        let mut point = Step::<L, Euclidean<N>>::incomplete(self, t, state, guess);
+        self.complete_into(model, workspace, t, state, guess, &mut point)?;
+        Ok(point)
+    }
+
+    /// In `point`'s vectors (nothing allocated at run-time size, where the velocity comes
+    /// from the workspace: a cached M⁻¹ or the run's sparse inverse Legendre map).
+    fn complete_into(
+        &self,
+        model: &L,
+        workspace: Option<&M::Workspace>,
+        t: f64,
+        state: &State<N>,
+        guess: &OVector<f64, N>,
+        point: &mut PhasePoint<N>,
+    ) -> Result<(), Error> {
+        point.t = t;
+        point.q.copy_from(&state.q);
+        match Method::info(self).coordinates {
             Coordinates::Momentum => {
-                let known = workspace.and_then(|workspace| self.velocity(workspace, &state.y));
-                let v = match known {
-                    Some(v) => v,
-                    None => model.velocity(t, &state.q, &state.y, guess)?,
+                point.p.copy_from(&state.y);
+                point.v.copy_from(guess);
+                let known = match workspace {
+                    Some(workspace) => {
+                        self.velocity_into(model, workspace, t, &state.q, &state.y, &mut point.v)?
+                    }
+                    None => false,
                 };
-                (v, state.y.clone())
+                if !known {
+                    point.v = model.velocity(t, &state.q, &state.y, guess)?;
+                }
             }
-            Coordinates::Velocity => (state.y.clone(), model.momentum(t, &state.q, &state.y)),
-        };
-        Ok(PhasePoint {
-            t,
-            q: state.q.clone(),
-            v,
-            p,
-        })
+            Coordinates::Velocity => {
+                point.v.copy_from(&state.y);
+                model.momentum_into(t, &state.q, &state.y, &mut point.p);
+            }
+        }
+        Ok(())
     }
 
     fn incomplete(&self, t: f64, state: &State<N>, guess: &OVector<f64, N>) -> PhasePoint<N> {

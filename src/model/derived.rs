@@ -312,6 +312,22 @@ where
         N::gradient(&Action(self), t, q, v, Wrt::Velocity).1
     }
 
+    /// The momentum p = ∂L/∂q̇, written into `out` (in place, term by term, for a sum of
+    /// terms).
+    #[inline]
+    fn momentum_into(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        out: &mut OVector<f64, N>,
+    ) {
+        match self.terms() {
+            Some(terms) => terms.gradient_into(t, q, v, Wrt::Velocity, out),
+            None => *out = N::gradient(&Action(self), t, q, v, Wrt::Velocity).1,
+        }
+    }
+
     /// L, its gradients and the Hessian blocks L_qq, L_qv, L_vv.
     #[inline]
     fn second_derivatives(

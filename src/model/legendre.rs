@@ -15,6 +15,7 @@ use crate::model::term_pattern::{MAX_WIDTH, TermPattern};
 use crate::model::{TermDerivatives, TermSum};
 use crate::nonlinear::stalled;
 use nalgebra::DVector;
+use std::cell::RefCell;
 
 /// The pattern, solver and buffers of the inverse Legendre map of one sum of terms.
 #[derive(Debug)]
@@ -160,6 +161,41 @@ impl Legendre {
 fn shift(v: &mut [f64], a: f64, c: &DVector<f64>) {
     for (v, c) in v.iter_mut().zip(c.iter()) {
         *v += a * c;
+    }
+}
+
+/// A run's inverse Legendre map (pattern, symbolic analysis and buffers), made at its first
+/// use and kept for the run's later points; a clone starts without one (faer's factors are
+/// not cloned) and makes its own.
+#[derive(Debug, Default)]
+pub(crate) struct LazyLegendre(RefCell<Option<Legendre>>);
+
+impl Clone for LazyLegendre {
+    fn clone(&self) -> Self {
+        LazyLegendre::default()
+    }
+}
+
+impl LazyLegendre {
+    /// q̇ for the momentum `p` at (t, q), into `v` (the guess on entry), as [`velocity`]
+    /// but without making the map anew.
+    ///
+    /// # Errors
+    /// As [`velocity`].
+    pub(crate) fn solve(
+        &self,
+        terms: &dyn TermSum<Dyn>,
+        t: f64,
+        q: &[f64],
+        p: &[f64],
+        v: &mut [f64],
+    ) -> Result<(), Error> {
+        let mut slot = self.0.borrow_mut();
+        let legendre = match &mut *slot {
+            Some(legendre) => legendre,
+            empty => empty.insert(Legendre::new(terms, q.len(), LinearSolverKind::Sparse)?),
+        };
+        legendre.solve(terms, t, q, p, v)
     }
 }
 

@@ -262,12 +262,16 @@ where
         Method::<N>::restart(&self.base, &mut workspace.base);
     }
 
-    fn velocity(
+    fn velocity_into<L: Lagrangian<N>>(
         &self,
+        model: &L,
         workspace: &CompositionWorkspace<N>,
+        t: f64,
+        q: &OVector<f64, N>,
         p: &OVector<f64, N>,
-    ) -> Option<OVector<f64, N>> {
-        self.base.velocity(&workspace.base, p)
+        v: &mut OVector<f64, N>,
+    ) -> Result<bool, Error> {
+        self.base.velocity_into(model, &workspace.base, t, q, p, v)
     }
 
     /// The product of the stages' tangent maps.

@@ -41,7 +41,7 @@ use crate::method::Method;
 use crate::method::variational::discrete_lagrangian::Trapezoid;
 use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::variational::variational_integrator::{
-    VariationalWorkspace, continuation_tolerance, discrete_tangent_map,
+    VariationalWorkspace, discrete_tangent_map,
 };
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
@@ -199,14 +199,27 @@ where
     }
 
     /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked once
-    /// per run); `None` on the implicit path.
-    fn velocity(
+    /// per run); the implicit path's kept map otherwise.
+    fn velocity_into<L: Lagrangian<N>>(
         &self,
+        model: &L,
         workspace: &StormerVerletWorkspace<N>,
+        t: f64,
+        q: &OVector<f64, N>,
         p: &OVector<f64, N>,
-    ) -> Option<OVector<f64, N>> {
-        let inverse = workspace.explicit.as_ref()?.mass_inverse.as_ref()?;
-        Some(inverse.apply(p))
+        v: &mut OVector<f64, N>,
+    ) -> Result<bool, Error> {
+        match (&workspace.explicit, &workspace.implicit) {
+            (Some(explicit), _) => Ok(match &explicit.mass_inverse {
+                Some(inverse) => {
+                    inverse.apply_into(p, v);
+                    true
+                }
+                None => false,
+            }),
+            (None, Some(implicit)) => self.implicit().velocity_into(model, implicit, t, q, p, v),
+            (None, None) => Ok(false),
+        }
     }
 
     fn tangent_map<L: Lagrangian<N>>(
@@ -256,21 +269,33 @@ where
     let half = 0.5 * h;
     let mut evaluations = 1;
     // The force at q_k is the last step's end force when the step starts where that one
-    // ended (to within the rounding of the stepping loop's compensated summation).
-    let reuse = reusable.take().is_some_and(|(time, tolerance)| {
+    // ended (to within the rounding of the stepping loop's compensated summation); the
+    // position is checked inside the kick.
+    let check = reusable.take().and_then(|(time, tolerance)| {
         (!L::TIME_DEPENDENT || (time - t).abs() <= 4.0 * f64::EPSILON * t.abs().max(time.abs()))
-            && max_difference(&state.q, reusable_at) <= tolerance
+            .then_some(tolerance)
     });
-    if !reuse {
+    let mut reused = check.is_some()
+        && kick_at(
+            mass_inverse,
+            half,
+            state,
+            start_force,
+            check.map(|tolerance| (&*reusable_at, tolerance)),
+            kick,
+            velocity,
+        );
+    if !reused {
         evaluations += 1;
         mass_inverse.apply_into(&state.y, velocity);
         model.force_into(t, &state.q, velocity, start_force);
+        reused = kick_at(mass_inverse, half, state, start_force, None, kick, velocity);
     }
-    // Kick: p_{k+½} = p_k + (h/2)(∂L/∂q + f_L) at the start.
-    kick.copy_from(&state.y);
-    kick.axpy(half, start_force, 1.0);
+    debug_assert!(reused, "an unchecked kick always succeeds");
     let mut iterations = 0;
     if L::FORCED {
+        // Kick: p_{k+½} = p_k + (h/2)(∂L/∂q + f_L(t_k, q_k, M⁻¹p_{k+½})), implicit in the
+        // half-step momentum.
         let rest = kick.clone();
         let predicted =
             &rest + model.external_force(t, &state.q, &mass_inverse.apply(&rest)) * half;
@@ -290,24 +315,43 @@ where
             })?;
         kick.copy_from_slice(half_momentum.as_slice());
         *start_force += model.external_force(t, &state.q, &mass_inverse.apply(kick));
+        mass_inverse.apply_into(kick, velocity);
     }
-    // Drift.
-    mass_inverse.apply_into(kick, velocity);
-    increment.q.copy_from(velocity);
-    increment.q *= h;
-    end.copy_from(&state.q);
-    *end += &increment.q;
+    // Drift: q_{k+1} = q_k + h M⁻¹p_{k+½}, and the largest |q| at either end.
+    let mut extent: f64 = 0.0;
+    for (((d, e), q), v) in increment
+        .q
+        .as_mut_slice()
+        .iter_mut()
+        .zip(end.as_mut_slice())
+        .zip(state.q.as_slice())
+        .zip(velocity.as_slice())
+    {
+        *d = h * v;
+        *e = q + *d;
+        extent = extent.max(q.abs()).max(e.abs());
+    }
     let end_t = t + h;
-    // Kick: p_{k+1} = p_{k+½} + (h/2)(∂L/∂q + f_L) at the end.
+    // Kick: p_{k+1} = p_{k+½} + (h/2)(∂L/∂q + f_L) at the end; the momentum increment is
+    // (h/2)(F_k + F_{k+1}), F = ∂L/∂q + f_L.
+    // `end_force` keeps ∂L/∂q alone: it is the next step's start force.
     model.force_into(end_t, end, velocity, end_force);
-    // (start + end) (h/2), end = ∂L/∂q + f_L.
-    increment.y.copy_from(start_force);
-    increment.y += &*end_force;
-    if L::FORCED {
-        increment.y += model.external_force(end_t, end, velocity);
+    for ((d, a), b) in increment
+        .y
+        .as_mut_slice()
+        .iter_mut()
+        .zip(start_force.as_slice())
+        .zip(end_force.as_slice())
+    {
+        *d = half * (a + b);
     }
-    increment.y *= half;
-    *reusable = Some((end_t, continuation_tolerance(&state.q, end)));
+    if L::FORCED {
+        increment
+            .y
+            .axpy(half, &model.external_force(end_t, end, velocity), 1.0);
+    }
+    // A NaN position never matches (its extent is NaN, and so is the tolerance).
+    *reusable = Some((end_t, 4.0 * f64::EPSILON * extent));
     std::mem::swap(reusable_at, end);
     std::mem::swap(start_force, end_force);
     Ok(StepReport {
@@ -319,13 +363,67 @@ where
     })
 }
 
-/// max |aᵢ − bᵢ|, without a temporary vector.
+/// The kick p_{k+½} = p_k + (h/2) F_k into `kick` and the velocity M⁻¹p_{k+½} into
+/// `velocity`, in one pass for a diagonal M. With `check = Some((at, tolerance))`, `force`
+/// is the force at `at`, and the pass also checks that q_k is `at` to within `tolerance`
+/// entry by entry; it returns `false` if not (the kick is then not the one of q_k).
 #[inline]
-fn max_difference<N: Dimension>(a: &OVector<f64, N>, b: &OVector<f64, N>) -> f64
+fn kick_at<N: Dimension>(
+    mass_inverse: &MassInverse<N>,
+    half: f64,
+    state: &State<N>,
+    force: &OVector<f64, N>,
+    check: Option<(&OVector<f64, N>, f64)>,
+    kick: &mut OVector<f64, N>,
+    velocity: &mut OVector<f64, N>,
+) -> bool
 where
-    DefaultAllocator: Allocator<N>,
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    a.iter()
-        .zip(b.iter())
-        .fold(0.0, |m: f64, (x, y)| m.max((x - y).abs()))
+    let kicks = kick
+        .as_mut_slice()
+        .iter_mut()
+        .zip(state.y.as_slice())
+        .zip(force.as_slice());
+    let same = match (mass_inverse, check) {
+        (MassInverse::Diagonal(inverse), None) => {
+            for (((k, p), f), (v, m)) in
+                kicks.zip(velocity.as_mut_slice().iter_mut().zip(inverse.as_slice()))
+            {
+                *k = p + half * f;
+                *v = *k * m;
+            }
+            return true;
+        }
+        (MassInverse::Diagonal(inverse), Some((at, tolerance))) => {
+            let mut same = true;
+            for ((((k, p), f), (v, m)), (q, a)) in kicks
+                .zip(velocity.as_mut_slice().iter_mut().zip(inverse.as_slice()))
+                .zip(state.q.as_slice().iter().zip(at.as_slice()))
+            {
+                *k = p + half * f;
+                *v = *k * m;
+                same &= (q - a).abs() <= tolerance;
+            }
+            return same;
+        }
+        (_, None) => {
+            for ((k, p), f) in kicks {
+                *k = p + half * f;
+            }
+            true
+        }
+        (_, Some((at, tolerance))) => {
+            let mut same = true;
+            for (((k, p), f), (q, a)) in kicks.zip(state.q.as_slice().iter().zip(at.as_slice())) {
+                *k = p + half * f;
+                same &= (q - a).abs() <= tolerance;
+            }
+            same
+        }
+    };
+    if same {
+        mass_inverse.apply_into(kick, velocity);
+    }
+    same
 }

@@ -71,6 +71,7 @@ use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
+use crate::model::legendre::LazyLegendre;
 use crate::model::mass_inverse::MassInverse;
 use crate::model::term_pattern::check_width;
 use crate::nonlinear::{FixedPoint, Jacobian, Newton, Solved, after_fixed_point};
@@ -525,6 +526,8 @@ where
     newton: Newton,
     /// Sparse Newton for an unforced sum of terms of run-time size, made at its first use.
     sparse: LazyStageNewton,
+    /// The inverse Legendre map of such a sum of terms, made at its first use.
+    legendre: LazyLegendre,
     /// Fixed-point data, for constant-mass Lagrangians.
     constant_mass: Option<ConstantMass<N>>,
     /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
@@ -754,6 +757,7 @@ where
             },
             newton: Newton::new(size, self.max_iterations),
             sparse: LazyStageNewton::default(),
+            legendre: LazyLegendre::default(),
             constant_mass,
             newton_only: false,
         })
@@ -908,14 +912,32 @@ where
 
     /// q̇ = M⁻¹p once the fixed-point iteration has cached M⁻¹ (a constant-mass model,
     /// L = ½ q̇ᵀMq̇ − V, so p = Mq̇ exactly; [`Structure::ConstantMass`] is checked once per
-    /// run).
-    fn velocity(
+    /// run); for any other unforced sum of terms of run-time size the sparse inverse Legendre
+    /// map the run keeps.
+    fn velocity_into<L: Lagrangian<N>>(
         &self,
+        model: &L,
         workspace: &SviWorkspace<N>,
+        t: f64,
+        q: &OVector<f64, N>,
         p: &OVector<f64, N>,
-    ) -> Option<OVector<f64, N>> {
-        let inverse = workspace.constant_mass.as_ref()?.mass_inverse.as_ref()?;
-        Some(inverse.apply(p))
+        v: &mut OVector<f64, N>,
+    ) -> Result<bool, Error> {
+        let inverse = workspace
+            .constant_mass
+            .as_ref()
+            .and_then(|data| data.mass_inverse.as_ref());
+        if let Some(inverse) = inverse {
+            inverse.apply_into(p, v);
+            return Ok(true);
+        }
+        let Some(terms) = sparse_terms(model) else {
+            return Ok(false);
+        };
+        workspace
+            .legendre
+            .solve(terms, t, q.as_slice(), p.as_slice(), v.as_mut_slice())?;
+        Ok(true)
     }
 
     fn points(&self) -> Option<usize> {
@@ -1624,14 +1646,21 @@ mod tests {
         let method = Svi::new(6);
         let model = HenonHeiles::<true>;
         let (end, workspace) = advance(&method, &model, 0.1, 4, state([0.3, -0.2], [0.1, 0.4]));
-        let cached = Method::<U2>::velocity(&method, &workspace, &end.y).unwrap();
+        let from = |workspace: &SviWorkspace<U2>| {
+            let mut v = SVector::from([f64::NAN; 2]);
+            let known = method
+                .velocity_into(&model, workspace, 0.4, &end.q, &end.y, &mut v)
+                .unwrap();
+            known.then_some(v)
+        };
+        let known = from(&workspace).unwrap();
         let solved = model
             .velocity(0.4, &end.q, &end.y, &SVector::zeros())
             .unwrap();
-        assert!((cached - solved).amax() <= 1e-15, "{cached:?} {solved:?}");
-        // Not before a step has cached M⁻¹, and never for a general Lagrangian.
+        assert!((known - solved).amax() <= 1e-15, "{known:?} {solved:?}");
+        // Not before a step has cached M⁻¹, and never for a general Lagrangian of fixed size.
         let fresh = Method::<U2>::workspace(&method, &model, 0.1).unwrap();
-        assert!(Method::<U2>::velocity(&method, &fresh, &end.y).is_none());
+        assert!(from(&fresh).is_none());
         let (_, general) = advance(
             &method,
             &VariableMass,
@@ -1639,7 +1668,11 @@ mod tests {
             2,
             state([0.3, -0.2], [0.1, 0.4]),
         );
-        assert!(Method::<U2>::velocity(&method, &general, &end.y).is_none());
+        let mut v = SVector::zeros();
+        let known = method
+            .velocity_into(&VariableMass, &general, 0.4, &end.q, &end.y, &mut v)
+            .unwrap();
+        assert!(!known);
     }
 
     #[test]
@@ -1788,6 +1821,11 @@ mod tests {
         let (_, tangent) = method
             .tangent_map(&model, &mut workspace, 0.0, h, &start)
             .unwrap();
+        // The cached M⁻¹p of a constant-mass model.
+        let mut a = OVector::<f64, Const<K>>::zeros();
+        let known = method
+            .velocity_into(&model, &fixed_workspace, 1.0, &fixed.q, &fixed.y, &mut a)
+            .unwrap();
         let dynamic = AsDyn::<L, Const<K>>::new(model);
         let (other, other_workspace) = advance(method, &dynamic, h, 10, run_time(&start));
         assert_eq!(
@@ -1796,17 +1834,18 @@ mod tests {
         );
         let difference = apart(&fixed, &other);
         assert!(difference <= 1e-13, "{method:?}: {difference:e}");
-        // Dense output (of the last step, taken from either end state) and the cached M⁻¹p
-        // of a constant-mass model.
+        // Dense output (of the last step, taken from either end state) and the velocity.
         let (q, v) =
             Method::<Const<K>>::dense_output(method, &fixed_workspace, &fixed, h, 0.3).unwrap();
         let (p, w) = Method::<Dyn>::dense_output(method, &other_workspace, &other, h, 0.3).unwrap();
         assert!((DVector::from_column_slice(q.as_slice()) - p).amax() <= 1e-13);
         assert!((DVector::from_column_slice(v.as_slice()) - w).amax() <= 1e-12);
-        let velocity = Method::<Const<K>>::velocity(method, &fixed_workspace, &fixed.y);
-        let other_velocity = Method::<Dyn>::velocity(method, &other_workspace, &other.y);
-        assert_eq!(velocity.is_some(), other_velocity.is_some());
-        if let (Some(a), Some(b)) = (velocity, other_velocity) {
+        let mut b = DVector::zeros(K);
+        let other_known = method
+            .velocity_into(&dynamic, &other_workspace, 1.0, &other.q, &other.y, &mut b)
+            .unwrap();
+        assert_eq!(known, other_known);
+        if known {
             assert!((DVector::from_column_slice(a.as_slice()) - b).amax() <= 1e-13);
         }
         let mut other_workspace = method.workspace(&dynamic, h).unwrap();

@@ -57,6 +57,7 @@ use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
+use crate::model::legendre::LazyLegendre;
 use crate::model::term_pattern::check_width;
 use crate::nonlinear::{Jacobian, Newton};
 use crate::scalar::Scalar;
@@ -203,6 +204,8 @@ where
 struct SparseSegment {
     tables: Tables,
     stage: LazyStageNewton,
+    /// The inverse Legendre map of the sum of terms, made at its first use.
+    legendre: LazyLegendre,
 }
 
 impl<N: Dimension> VariationalWorkspace<N>
@@ -321,6 +324,7 @@ where
             workspace.sparse = Some(SparseSegment {
                 tables: Tables::segment(nodes, h)?,
                 stage: LazyStageNewton::default(),
+                legendre: LazyLegendre::default(),
             });
         }
         Ok(workspace)
@@ -341,7 +345,7 @@ where
             // Sparse Newton on the segment rule's stage equations (see the module docs).
             workspace.predict(model, t, h, state);
             let VariationalWorkspace { offset, sparse, .. } = workspace;
-            let Some(SparseSegment { tables, stage }) = sparse.as_mut() else {
+            let Some(SparseSegment { tables, stage, .. }) = sparse.as_mut() else {
                 return Err(StepFailure::SingularMatrix);
             };
             if tables.h != h {
@@ -379,6 +383,25 @@ where
             factorizations: iterations,
             analyses: 0,
         })
+    }
+
+    /// The sparse inverse Legendre map a run on a sum of terms keeps (sparse Newton's runs).
+    fn velocity_into<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &VariationalWorkspace<N>,
+        t: f64,
+        q: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+        v: &mut OVector<f64, N>,
+    ) -> Result<bool, Error> {
+        let (Some(segment), Some(terms)) = (&workspace.sparse, sparse_terms(model)) else {
+            return Ok(false);
+        };
+        segment
+            .legendre
+            .solve(terms, t, q.as_slice(), p.as_slice(), v.as_mut_slice())?;
+        Ok(true)
     }
 
     /// A segment rule on an unforced sum of terms: sparse Newton.
