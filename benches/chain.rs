@@ -3,25 +3,22 @@
 //!
 //! # `chain/verlet/<implementation>/<n>`, n ∈ {10³, 10⁴}
 //!
-//! - `svi`: [`Integrator::run`] of [`StormerVerlet`] on [`svi_models::Fput`] (α = 0.25,
-//!   β = 0.5), no observer: ∂L/∂q assembled from the spring terms by automatic
-//!   differentiation, the stepping loop's compensated summation included;
-//! - `terms`: the same run by the one implementation of ℝᴺ on `Terms(Fput)` (the chain as a
-//!   run-time-size [`svi::Lagrangian`] whose derivatives are assembled term by term);
+//! - `svi`: [`Integrator::run`] of [`StormerVerlet`] on `Terms(`[`svi_models::Fput`]`)`
+//!   (α = 0.25, β = 0.5; the chain as a run-time-size [`svi::Lagrangian`] whose derivatives
+//!   are assembled term by term), no observer: ∂L/∂q assembled from the spring terms by
+//!   automatic differentiation, the stepping loop's compensated summation included;
 //! - `hand_written`: kick–drift–kick with the force F_i = V'(q_{i+1} − q_i) − V'(q_i − q_{i−1})
 //!   written by hand, one force evaluation per step, plain summation (what a user writes
 //!   without a library).
 //!
-//! # `chain_svi/<implementation>/10⁴`
+//! # `chain_svi/svi/10⁴`
 //!
-//! Ten steps (h = 0.2) of SVI's fixed point with 6 CGL points: `local` (the large-system
-//! path of `svi::method::local`) against `terms` (the one implementation of ℝᴺ on
-//! `Terms(Fput)`).
+//! Ten steps (h = 0.2) of SVI's fixed point with 6 CGL points on `Terms(Fput)`.
 //!
-//! # `chain_svi_newton/<implementation>/10³`
+//! # `chain_svi_newton/svi/10³`
 //!
 //! Ten steps (h = 0.1) of SVI by sparse Newton with 6 CGL points on the relativistic
-//! chain (a mass matrix that depends on q̇): `local` against `terms`, as above.
+//! chain (a mass matrix that depends on q̇).
 //!
 //! # `chain_force/<implementation>/10⁴`
 //!
@@ -36,7 +33,6 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use nalgebra::DVector;
 use std::hint::black_box;
 use std::time::Duration;
-use svi::method::DynInitial;
 use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::{Integrator, StormerVerlet, Svi};
 use svi_models::{Fput, RelativisticChain};
@@ -96,14 +92,10 @@ fn bench(c: &mut Criterion) {
     for n in [1_000, 10_000] {
         let model = model(n);
         let (t0, q0, v0) = model.initial_state();
-        let initial = DynInitial::Velocity {
-            q: q0.clone(),
-            v: v0.clone(),
-        };
-        let integrator = Integrator::new(model.clone(), StormerVerlet::default());
+        let integrator = Integrator::new(Terms(model.clone()), StormerVerlet::default());
         let t_end = t0 + STEPS as f64 * H;
         let run = integrator
-            .run(t0, initial.clone(), H, t_end, &mut ())
+            .run_from_velocity(t0, q0.clone(), v0.clone(), H, t_end, &mut ())
             .unwrap();
         let (mut q, mut p, mut f) = (q0.as_slice().to_vec(), v0.as_slice().to_vec(), vec![0.0; n]);
         hand_written(&model, &mut q, &mut p, &mut f);
@@ -116,17 +108,6 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 black_box(
                     integrator
-                        .run(t0, initial.clone(), H, t_end, &mut ())
-                        .unwrap(),
-                )
-            })
-        });
-        // The one implementation of ℝᴺ on the chain as a sum of terms.
-        let terms = Integrator::new(Terms(model.clone()), StormerVerlet::default());
-        group.bench_function(BenchmarkId::new("terms", n), |b| {
-            b.iter(|| {
-                black_box(
-                    terms
                         .run_from_velocity(t0, q0.clone(), v0.clone(), H, t_end, &mut ())
                         .unwrap(),
                 )
@@ -145,10 +126,10 @@ fn bench(c: &mut Criterion) {
     // SVI's fixed point (6 CGL points, 12 Gauss points), 10 steps of h = 0.2 on FPUT at
     // n = 10⁴, and SVI by sparse Newton (6 CGL points), 10 steps of h = 0.1 on the
     // relativistic chain at n = 10³.
-    svi_local_against_terms(c, "chain_svi", model(10_000), 0.2);
+    svi_on_terms(c, "chain_svi", model(10_000), 0.2);
     let mut chain = RelativisticChain::default();
     chain.set_parameter("n", 1000.0).unwrap();
-    svi_local_against_terms(c, "chain_svi_newton", chain, 0.1);
+    svi_on_terms(c, "chain_svi_newton", chain, 0.1);
 
     // The force alone: ∂L/∂q assembled term by term by AD against the hand-written force.
     let mut group = c.benchmark_group("chain_force");
@@ -170,10 +151,8 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
-/// `<name>/local/<n>` and `<name>/terms/<n>`: 10 steps of size `h` of SVI with 6 CGL points
-/// on `chain`, by the large-system path of `method::local` and by the one implementation of
-/// ℝᴺ on `Terms(chain)`.
-fn svi_local_against_terms<L: LocalLagrangian + LocalDefaults + Clone>(
+/// `<name>/svi/<n>`: 10 steps of size `h` of SVI with 6 CGL points on `Terms(chain)`.
+fn svi_on_terms<L: LocalLagrangian + LocalDefaults + Clone>(
     c: &mut Criterion,
     name: &str,
     chain: L,
@@ -187,19 +166,11 @@ fn svi_local_against_terms<L: LocalLagrangian + LocalDefaults + Clone>(
     let n = chain.dimension();
     let (t0, q0, v0) = chain.initial_state();
     let t_end = t0 + 10.0 * h;
-    let local = Integrator::new(chain.clone(), Svi::new(6));
-    let initial = DynInitial::Velocity {
-        q: q0.clone(),
-        v: v0.clone(),
-    };
-    group.bench_function(BenchmarkId::new("local", n), |b| {
-        b.iter(|| black_box(local.run(t0, initial.clone(), h, t_end, &mut ()).unwrap()))
-    });
-    let terms = Integrator::new(Terms(chain), Svi::new(6));
-    group.bench_function(BenchmarkId::new("terms", n), |b| {
+    let integrator = Integrator::new(Terms(chain), Svi::new(6));
+    group.bench_function(BenchmarkId::new("svi", n), |b| {
         b.iter(|| {
             black_box(
-                terms
+                integrator
                     .run_from_velocity(t0, q0.clone(), v0.clone(), h, t_end, &mut ())
                     .unwrap(),
             )

@@ -27,11 +27,9 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use svi::method::DynInitial;
-use svi::method::local::LocalMethod;
-use svi::model::local::{LocalDefaults, LocalLagrangian};
+use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::model::text::{TextChain, TextChainModel, TextLagrangian, TextModel, TextSpec};
-use svi::{Integrator, Lagrangian, StormerVerlet, Svi};
+use svi::{Dyn, Initial, Integrator, Lagrangian, Method, StormerVerlet, Svi};
 use svi_models::{Fput, Kepler};
 
 /// One run of the scene with `model`; its final q.
@@ -84,14 +82,14 @@ fn fput_text(n: usize) -> TextChain<2, false, true> {
 }
 
 /// The time of a run of `steps` steps of h = 0.1 of `method` on `model` from `initial`.
-fn run_chain<L: LocalLagrangian + Clone, M: LocalMethod + Clone>(
+fn run_chain<L: LocalLagrangian + Clone, M: Method<Dyn> + Clone>(
     model: &L,
     method: &M,
-    initial: &DynInitial,
+    initial: &Initial<Dyn>,
     steps: usize,
 ) -> Duration {
     let start = Instant::now();
-    let run = Integrator::new(model.clone(), method.clone())
+    let run = Integrator::new(Terms(model.clone()), method.clone())
         .run(0.0, initial.clone(), 0.1, 0.1 * steps as f64, &mut ())
         .expect("the FPUT chain runs");
     black_box(run.last.q);
@@ -100,10 +98,10 @@ fn run_chain<L: LocalLagrangian + Clone, M: LocalMethod + Clone>(
 
 /// `iterations` times `STEPS` steps without the set-up: a run of 1 + `STEPS` steps less a
 /// run of one step (workspace, mass matrix, initial Legendre map and one step).
-fn steps_only<L: LocalLagrangian + Clone, M: LocalMethod + Clone>(
+fn steps_only<L: LocalLagrangian + Clone, M: Method<Dyn> + Clone>(
     model: &L,
     method: &M,
-    initial: &DynInitial,
+    initial: &Initial<Dyn>,
     iterations: u64,
 ) -> Duration {
     let mut seconds = 0.0;
@@ -122,7 +120,7 @@ fn chain(c: &mut Criterion) {
     zoo.set_parameter("n", n as f64).unwrap();
     zoo.set_parameter("beta", 0.5).unwrap();
     let (_, q, v) = zoo.initial_state();
-    let initial = DynInitial::Velocity { q, v };
+    let initial = Initial::Velocity { q, v };
     let mut group = c.benchmark_group("fput_chain");
     group
         .sample_size(10)
@@ -168,7 +166,7 @@ fn chain(c: &mut Criterion) {
         .sample_size(20)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(2));
-    let DynInitial::Velocity { q, v } = &initial else {
+    let Initial::Velocity { q, v } = &initial else {
         unreachable!("a state with velocities")
     };
     let mut out = DVector::zeros(n);

@@ -252,6 +252,36 @@ fn bad_sizes_and_states_are_errors_naming_them() {
         .run(t0, Initial::Velocity { q: nan, v }, 0.1, 1.0, &mut ())
         .unwrap_err();
     assert!(error.to_string().contains("initial position"), "{error}");
+    // A term that reads past the last coordinate: an error naming it, before any evaluation.
+    struct PastTheEnd;
+    impl LocalLagrangian for PastTheEnd {
+        type Width = nalgebra::Const<2>;
+        fn dimension(&self) -> usize {
+            3
+        }
+        fn term_count(&self) -> usize {
+            3
+        }
+        fn indices(&self, term: usize) -> [usize; 2] {
+            [term, term + 1]
+        }
+        fn term<D: Scalar>(&self, _: usize, _: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+            (v[0] * v[0] - (q[1] - q[0]).powi(2)) * 0.5
+        }
+    }
+    let zeros = DVector::zeros(3);
+    for method in [
+        svi::method::any::AnyMethod::StormerVerlet(StormerVerlet::default()),
+        svi::method::any::AnyMethod::Svi(svi::Svi::new(4)),
+    ] {
+        let error = Integrator::new(Terms(PastTheEnd), method)
+            .run_from_velocity(0.0, zeros.clone(), zeros.clone(), 0.1, 1.0, &mut ())
+            .unwrap_err();
+        assert!(
+            error.to_string().contains("term 2 reads coordinate 3"),
+            "{error}"
+        );
+    }
 }
 
 #[test]

@@ -16,8 +16,9 @@
 //! | `nbody` | [`NBody`] | 18 (d per body, at run time: [`svi::Dyn`]) | translations, rotations | — | — |
 //!
 //! Chains and lattices have their dimension n at run time (a parameter, `n`): each is a sum
-//! of local terms ([`svi::model::local::LocalLagrangian`]) on runtime-sized ℝⁿ, integrated by
-//! the large-system methods (`svi`, `verlet`; see [`svi::method::local`]):
+//! of local terms ([`svi::model::local::LocalLagrangian`]) on runtime-sized ℝⁿ, run as
+//! `svi::model::local::Terms(model)` by every method (in O(n) per step by those that keep
+//! the terms' sparsity: `svi`, `verlet` and its compositions, the segment-rule VIs):
 //!
 //! | name | model | n (default) | invariants | observables (trajectory CSV) |
 //! | --- | --- | --- | --- | --- |

@@ -14,15 +14,15 @@
 //! each: [`variational`] (SVI and the classic variational
 //! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
 //! (the multiscale variational integrator for stiff oscillations), [`reference`] (explicit
-//! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references),
-//! and [`local`] (SVI and
-//! Störmer–Verlet on runtime-dimension models: chains, lattices, up to 10⁵ degrees of freedom
-//! and beyond).
+//! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references).
+//! Each is written once for every dimension, fixed (`Const<N>`) or chosen at run time
+//! ([`crate::Dyn`]); on a sum of local terms of run-time size (chains, lattices, 10⁵ degrees
+//! of freedom and beyond) the methods that keep its sparsity ([`Method::keeps_sparsity`])
+//! run in O(n) per step.
 
 pub mod any;
 pub mod collocation;
 pub mod lie_svi;
-pub mod local;
 pub mod multiscale;
 pub mod reference;
 pub mod registry;
@@ -31,8 +31,8 @@ pub mod step;
 pub mod variational;
 
 pub use space::{
-    DynEuclidean, DynInitial, DynPoint, DynState, Euclidean, Initial, PhasePoint, RigidInitial,
-    RigidPoint, RigidState, SO3, Space, State, StepState, TangentMap,
+    Euclidean, Initial, PhasePoint, RigidInitial, RigidPoint, RigidState, SO3, Space, State,
+    StepState, TangentMap,
 };
 pub use step::Step;
 

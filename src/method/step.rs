@@ -305,6 +305,9 @@ where
         };
         let size = model.dimension();
         dimension_of::<N>(size).map_err(|reason| Error::invalid("model", reason))?;
+        if let Some(terms) = model.terms() {
+            terms.check_indices(size)?;
+        }
         for (what, x) in [("initial position", q), (name, second)] {
             if x.len() != size {
                 return Err(Error::invalid(

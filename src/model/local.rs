@@ -397,32 +397,14 @@ pub trait LocalLagrangianExt: LocalLagrangian {
         }
         triplets
     }
-
-    /// Check the model's shape: at least one coordinate, every index below n.
-    fn check_indices(&self) -> Result<(), Error> {
-        let n = self.dimension();
-        if n == 0 {
-            return Err(Error::invalid("n", "the model has no coordinates"));
-        }
-        for e in 0..self.term_count() {
-            if let Some(i) = self.indices(e).as_ref().iter().find(|&&i| i >= n) {
-                return Err(Error::invalid(
-                    "indices",
-                    format!("term {e} reads coordinate {i}, but the model has {n}"),
-                ));
-            }
-        }
-        Ok(())
-    }
 }
 
 impl<L: LocalLagrangian + ?Sized> LocalLagrangianExt for L {}
 
 /// A sum of local terms as a Lagrangian of run-time size, for the methods of ℝᴺ: L = Σₑ ℓₑ
 /// over any scalar, with its derivatives assembled term by term ([`Lagrangian::terms`]), so
-/// that every method of ℝᴺ runs on it — while the second implementations of
-/// [`crate::method::local`] (Störmer–Verlet, its compositions and SVI for 10⁵ coordinates and
-/// more) still take the bare model.
+/// that every method of ℝᴺ runs on it (those that keep the sparsity,
+/// [`crate::Method::keeps_sparsity`], at 10⁵ coordinates and more).
 ///
 /// ```
 /// use svi::model::local::Terms;

@@ -96,6 +96,25 @@ where
         out: &mut [f64],
     );
 
+    /// Check that every term reads coordinates below `n` (once per run, before anything
+    /// is evaluated).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] `indices`, naming the term and the coordinate.
+    fn check_indices(&self, n: usize) -> Result<(), crate::Error> {
+        let mut indices = vec![0; self.width()];
+        for e in 0..self.term_count() {
+            self.term_indices(e, &mut indices);
+            if let Some(i) = indices.iter().find(|&&i| i >= n) {
+                return Err(crate::Error::invalid(
+                    "indices",
+                    format!("term {e} reads coordinate {i}, but the model has {n}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// These terms as the terms of a run-time-size model (`Some` for every
     /// [`crate::model::local::LocalLagrangian`]; the default `None` for a fixed size, whose
     /// models the methods run densely): the sparse paths are compiled once, for

@@ -5,7 +5,6 @@
 
 pub mod adapt;
 pub mod grid;
-pub mod local_observer;
 pub mod logh;
 pub mod observer;
 pub mod reparam;

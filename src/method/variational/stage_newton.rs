@@ -234,11 +234,6 @@ impl StageNewton {
         self.factored = false;
     }
 
-    /// The number of terms (for the evaluation counts).
-    pub(crate) fn term_count(&self) -> usize {
-        self.points.terms.term_count()
-    }
-
     /// The residual r(z) into `self.residual`, and with `jacobian` the Jacobian's values.
     #[allow(clippy::too_many_arguments)]
     fn assemble(

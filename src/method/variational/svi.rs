@@ -207,8 +207,7 @@ impl Svi {
 /// bit for bit). The velocity dependence makes the iteration contract only by a factor
 /// O(h ‖M⁻¹ ∂f_L/∂q̇‖) instead of O(h²‖M⁻¹ L_qq‖): a forced model whose iteration does not
 /// converge (strong friction) falls back to Newton's method for the rest of the run.
-/// The dimension-free tables of the fixed-point iteration (see [`ConstantMass`]), shared
-/// with the runtime-dimension SVI ([`crate::method::local::svi`]).
+/// The dimension-free tables of the fixed-point iteration (see [`ConstantMass`]).
 #[derive(Debug, Clone)]
 pub(crate) struct NystromTables {
     /// c_j, j = 1..s.
