@@ -601,9 +601,10 @@ fn one_implementation_runs_constant_mass_chains_of_any_size() {
 /// depends on q̇: on the relativistic chain of 10⁴ particles (where a dense Newton matrix,
 /// (2·10⁴)² entries and more, would be refused), SVI 7/6 keeps the energy to round-off, and
 /// midpoint, trapezoid, both symplectic Euler
-/// methods and Störmer–Verlet (its implicit path) end where SVI does to within their
-/// discretisation errors (the particles move 0.8 per unit time; a wrong residual or
-/// momentum update would be off by O(h)).
+/// methods, Störmer–Verlet (its implicit path) and SC (its equations in implicit form, one
+/// symbolic analysis per run) end where SVI does to within their discretisation errors (the
+/// particles move 0.8 per unit time; a wrong residual or momentum update would be off by
+/// O(h)).
 #[test]
 fn sparse_newton_runs_every_implicit_method_on_a_relativistic_chain_of_any_size() {
     use svi::method::any::AnyMethod;
@@ -640,10 +641,12 @@ fn sparse_newton_runs_every_implicit_method_on_a_relativistic_chain_of_any_size(
         AnyMethod::SymplecticEuler(VariationalIntegrator::new(svi::SymplecticEuler)),
         AnyMethod::AdjointSymplecticEuler(VariationalIntegrator::new(svi::AdjointSymplecticEuler)),
         AnyMethod::StormerVerlet(svi::StormerVerlet::default()),
+        AnyMethod::SpectralCollocation(svi::SpectralCollocation::new(6)),
     ] {
         let name = Method::<Dyn>::info(&method).name;
         let run = generic(method);
         let gap = (&run.last.q - &reference.last.q).amax();
         assert!(gap <= 1e-9, "{name}: {gap:e}");
+        assert_eq!(run.statistics.analyses, 1, "{name}");
     }
 }

@@ -16,6 +16,9 @@
 //! Eliminating Y* gives eq. (24)–(25) for the s·N unknowns Q*, solved by Newton's method with
 //! the exact Jacobian (Λ*)² ⊗ I − diag(∂f/∂q) − diag(∂f/∂q̇)(Λ* ⊗ I), where ∂f/∂q and ∂f/∂q̇
 //! come from nested dual numbers. Then q_{k+1} = qˢ and q̇_{k+1} = yˢ.
+//! On an unforced sum of local terms of run-time size ([`crate::model::TermSum`]) the same
+//! equations are solved in implicit form, multiplied by the mass matrix, by sparse Newton
+//! ([`sparse_newton`]): O(n) per iteration, no n × n matrix.
 //! The differentiation matrix D̃⁽¹⁾ is built from barycentric formulas for ascending nodes
 //! ([`crate::spectral::basis::LagrangeBasis::differentiation_matrix`]); eq. (17) of the paper is
 //! quoted for descending nodes.
@@ -30,17 +33,20 @@
 //! # References
 //! Li, Wu, Leok (2018), §3, eqs. (12)–(25).
 
+pub(crate) mod sparse_newton;
+
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::method::Method;
+use crate::method::variational::stage_newton::sparse_terms;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
 use crate::model::mass_inverse::MassInverse;
-use crate::nonlinear::{FixedPoint, Newton, after_fixed_point};
+use crate::nonlinear::{FixedPoint, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use crate::spectral::starting_values::StartingValues;
@@ -49,6 +55,7 @@ use nalgebra::allocator::Allocator;
 use nalgebra::{
     DMatrix, DVector, DefaultAllocator, Dim, MatrixView, MatrixViewMut, OMatrix, OVector, U1,
 };
+use sparse_newton::LazySparseCollocation;
 use std::ops::ControlFlow;
 
 /// Options of the spectral collocation method.
@@ -295,6 +302,8 @@ where
     /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
     /// the run takes Newton's method.
     newton_only: bool,
+    /// Sparse Newton, for an unforced sum of terms of run-time size (made at its first use).
+    sparse: LazySparseCollocation,
 }
 
 /// Acceleration data at every collocation node; `false` if the mass matrix is singular
@@ -485,17 +494,19 @@ where
             Structure::ConstantMass => ConstantMass::new(&tables, self.points, n),
             Structure::General => None,
         };
-        // Newton's buffers exist for every model: a constant-mass model falls back to Newton
-        // where the fixed point fails.
-        let nodes = s;
+        // Newton's buffers exist for every model (a constant-mass model falls back to Newton
+        // where the fixed point fails): dense, or for a sum of terms sparse and made at the
+        // first use.
+        let dense = if sparse_terms(model).is_some() { 0 } else { s };
         Ok(CollocationWorkspace {
             tables,
             offsets: DVector::zeros(s * size),
             start: StartingValues::new(&basis, size),
-            nodes: vec![zero_node(n); nodes],
-            newton: Newton::new(s * size, self.max_iterations),
+            nodes: vec![zero_node(n); dense],
+            newton: Newton::new(dense * size, self.max_iterations),
             constant_mass,
             newton_only: false,
+            sparse: LazySparseCollocation::default(),
         })
     }
 
@@ -510,13 +521,19 @@ where
     ) -> Result<StepReport, StepFailure> {
         if workspace.tables.h != h {
             workspace.tables.rescale(h);
+            workspace.sparse.invalidate();
         }
+        let terms = sparse_terms(model);
         if workspace.start.prepare(h) {
             workspace.start.extrapolate::<N>(&mut workspace.offsets);
         } else {
-            let a = model
-                .acceleration(t, &state.q, &state.y)
-                .ok_or(StepFailure::SingularMatrix)?;
+            // A sum of terms starts from uniform motion: its acceleration is a dense solve.
+            let a = match terms {
+                Some(_) => OVector::zeros_generic(state.dimension(), U1),
+                None => model
+                    .acceleration(t, &state.q, &state.y)
+                    .ok_or(StepFailure::SingularMatrix)?,
+            };
             workspace
                 .start
                 .taylor(h, &state.y, &a, &mut workspace.offsets);
@@ -543,32 +560,59 @@ where
             nodes,
             newton,
             start,
+            sparse,
             ..
         } = workspace;
-        let mut singular = false;
-        let iterations = newton.solve(offsets, |z, jacobian, residual| {
-            if evaluate_nodes(model, tables, nodes, t, state, z) {
-                assemble(tables, nodes, state, z, jacobian, residual);
-            } else {
-                singular = true;
-                residual.fill(f64::NAN);
+        let (solved, analyses) = match terms {
+            Some(terms) => sparse.solve(
+                terms,
+                tables,
+                t,
+                (state.q.as_slice(), state.y.as_slice()),
+                offsets,
+                self.max_iterations,
+            )?,
+            None => {
+                let mut singular = false;
+                let iterations = newton.solve(offsets, |z, jacobian, residual| {
+                    if evaluate_nodes(model, tables, nodes, t, state, z) {
+                        assemble(tables, nodes, state, z, jacobian, residual);
+                    } else {
+                        singular = true;
+                        residual.fill(f64::NAN);
+                    }
+                });
+                if singular {
+                    return Err(StepFailure::SingularMatrix);
+                }
+                let iterations = iterations?;
+                // The dense Newton method factorises at every iteration.
+                let solved = Solved {
+                    iterations,
+                    factorizations: iterations,
+                };
+                (solved, 0)
             }
-        });
-        if singular {
-            return Err(StepFailure::SingularMatrix);
-        }
-        let factorizations = iterations?;
-        let iterations = factorizations + spent;
+        };
         let s = tables.degree;
-        let n = state.dimension();
-        increment.q.copy_from(&node(offsets, n, s - 1));
-        increment.y = tables.velocity(n, s, offsets) - &state.y;
+        let size = state.dimension().value();
+        // q_{k+1} − q_k = Z_s, q̇_{k+1} − q̇_k = yˢ − q̇_k (eq. 21), in place.
+        increment
+            .q
+            .copy_from_slice(&offsets.as_slice()[(s - 1) * size..]);
+        for (c, dy) in increment.y.iter_mut().enumerate() {
+            *dy = (0..s)
+                .map(|j| tables.lambda[(s - 1, j)] * offsets[j * size + c])
+                .sum::<f64>()
+                - state.y[c];
+        }
         start.remember(offsets, h);
+        let iterations = solved.iterations + spent;
         Ok(StepReport {
             iterations,
             evaluations: s * iterations,
-            factorizations,
-            analyses: 0,
+            factorizations: solved.factorizations,
+            analyses,
         })
     }
 
@@ -607,6 +651,13 @@ where
 
     fn points(&self) -> Option<usize> {
         Some(self.points)
+    }
+
+    /// An unforced sum of terms: the fixed point (M⁻¹ from the terms' blocks) for a constant
+    /// mass, and sparse Newton ([`sparse_newton`]) for every other one and wherever the fixed
+    /// point fails.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        model.terms().is_some() && !L::FORCED
     }
 
     fn with_points(&self, points: usize) -> Option<Self> {

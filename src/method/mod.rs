@@ -21,6 +21,7 @@
 //! run in O(n) per step.
 
 pub mod any;
+pub(crate) mod block_newton;
 pub mod collocation;
 pub mod lie_svi;
 pub mod multiscale;

@@ -34,7 +34,7 @@ use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
-use num_dual::HyperDual64;
+use num_dual::{Dual64, HyperDual64};
 
 /// Largest fixed dimension whose Hessian blocks are taken as one scalar hyper-dual sweep per
 /// entry in (q, q̇), (2N)(2N + 1)/2 sweeps, rather than three vector sweeps: 138 ns against
@@ -649,6 +649,33 @@ where
         rhs += model.external_force(t, q, v);
     }
     solve_small(vv, rhs)
+}
+
+/// The gradients and Hessian blocks of `model` at a point of dual numbers in ε, typically
+/// (t + ε, q + ε dq, q̇ + ε dv): ∂L/∂q, ∂L/∂q̇, ∂²L/∂q², ∂²L/∂q∂q̇, ∂²L/∂q̇² (column-major, in
+/// the layout of [`crate::model::TermDerivatives`]), their values into `value` and their
+/// ε-parts (third derivatives of L contracted with the direction) into `rate`.
+pub(crate) fn second_derivatives_along<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    t: Dual64,
+    (q, v): (&OVector<Dual64, N>, &OVector<Dual64, N>),
+    (value, rate): (&mut [f64], &mut [f64]),
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (_, gq, gv, qv) = N::mixed(&Action(model), t, q, v);
+    let (_, _, qq) = N::hessian(&Action(model), t, q, v, Wrt::Position);
+    let (_, _, vv) = N::hessian(&Action(model), t, q, v, Wrt::Velocity);
+    let blocks = [
+        gq.as_slice(),
+        gv.as_slice(),
+        qq.as_slice(),
+        qv.as_slice(),
+        vv.as_slice(),
+    ];
+    for ((x, re), eps) in blocks.into_iter().flatten().zip(value).zip(rate) {
+        (*re, *eps) = (x.re, x.eps);
+    }
 }
 
 /// M⁻¹ of a [`crate::model::Structure::ConstantMass`] Lagrangian, computed at the first step

@@ -58,11 +58,11 @@
 use crate::dimension::{Dyn, Wrt};
 use crate::error::Error;
 pub use crate::model::TermDerivatives;
-use crate::model::derived::LagrangianExt;
+use crate::model::derived::{LagrangianExt, second_derivatives_along};
 use crate::model::{Invariants, Lagrangian, Structure, TermSum};
 use crate::scalar::Scalar;
 use nalgebra::{Const, DVector, SVector};
-use num_dual::HyperDual64;
+use num_dual::{Dual64, HyperDual64};
 
 /// The width K of a [`LocalLagrangian`]'s terms: `nalgebra::Const<K>`.
 ///
@@ -117,6 +117,17 @@ pub trait TermWidth {
         t: f64,
         q: &[f64],
         v: &[f64],
+        out: &mut [f64],
+    );
+
+    /// The term's first and second derivatives at the dual point (t + ε, q + ε dq, q̇ + ε dv):
+    /// values, then ε-parts, each 2K + 3K² long ([`TermSum::term_derivatives_along`]).
+    fn second_derivatives_along<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        point: (&[f64], &[f64]),
+        direction: (&[f64], &[f64]),
         out: &mut [f64],
     );
 
@@ -248,6 +259,24 @@ impl<const K: usize> TermWidth for Const<K> {
         hessians[..square].copy_from_slice(d.qq.as_slice());
         hessians[square..2 * square].copy_from_slice(d.qv.as_slice());
         hessians[2 * square..].copy_from_slice(d.vv.as_slice());
+    }
+
+    fn second_derivatives_along<L: LocalLagrangian<Width = Self> + ?Sized>(
+        model: &L,
+        term: usize,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        (dq, dv): (&[f64], &[f64]),
+        out: &mut [f64],
+    ) {
+        let lift =
+            |x: &[f64], dx: &[f64]| SVector::<Dual64, K>::from_fn(|i, _| Dual64::new(x[i], dx[i]));
+        second_derivatives_along(
+            &Term { model, index: term },
+            Dual64::new(t, 1.0),
+            (&lift(q, dq), &lift(v, dv)),
+            out.split_at_mut(out.len() / 2),
+        );
     }
 
     fn mass_triplets<L: LocalLagrangian<Width = Self> + ?Sized>(
@@ -518,6 +547,18 @@ impl<L: LocalLagrangian> TermSum<Dyn> for L {
         } else {
             L::Width::first_derivatives(self, e, t, q, v, out);
         }
+    }
+
+    fn term_derivatives_along(
+        &self,
+        e: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        direction: (&[f64], &[f64]),
+        out: &mut [f64],
+    ) {
+        L::Width::second_derivatives_along(self, e, t, (q, v), direction, out);
     }
 }
 

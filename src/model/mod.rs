@@ -96,6 +96,22 @@ where
         out: &mut [f64],
     );
 
+    /// Term `e`'s first and second derivatives (as [`TermSum::term_derivatives`] with the
+    /// Hessian blocks) at the dual point (t + ε, q + ε dq, q̇ + ε dv): their values into the
+    /// first 2K + 3K² entries of `out` and their ε-parts — third derivatives of ℓ contracted
+    /// with (1, dq, dv) — into the next 2K + 3K² (the implicit collocation equations of
+    /// [`crate::SpectralCollocation`] on a sum of terms).
+    #[allow(clippy::too_many_arguments)]
+    fn term_derivatives_along(
+        &self,
+        e: usize,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        direction: (&[f64], &[f64]),
+        out: &mut [f64],
+    );
+
     /// Check that every term reads coordinates below `n` (once per run, before anything
     /// is evaluated).
     ///

@@ -20,26 +20,19 @@
 //! variational integrators ([`crate::method::variational::discrete_lagrangian`]): symplectic
 //! Euler, midpoint and trapezoid run on this solver too.
 //!
-//! Every block has the pattern P of L's Hessian (the union of the terms' index sets), so the
-//! (s n)² Jacobian has s² n·(nonzeros of P per row) entries; in node-major order the entry
-//! ((ν, r), (j, c)) sits at slot colptr((j − 1)n + c) + ν·|P column c| + rank of r in it, which
-//! each term's pair finds from its slot in P. Assembly is O(m s² K² · terms); the
-//! factorisation is faer's sparse LU (fill-reducing ordering found once, in the symbolic
-//! analysis).
+//! Every block has the pattern P of L's Hessian; the pattern, the slots and the simplified
+//! Newton iteration are [`BlockNewton`]'s. Assembly is O(m s² K² · terms).
 //!
-//! # Simplified Newton
-//! The factored Jacobian is kept across iterations and steps while the iteration contracts
-//! (‖Δ_k‖ ≤ ½‖Δ_{k−1}‖), and refactored otherwise or when the step size changes; only the
-//! residual defines the solution, so a stale Jacobian costs iterations, never accuracy.
 //! p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) is the discrete momentum balance.
 
 use crate::dimension::{Dimension, Dyn};
 use crate::error::{Error, StepFailure};
-use crate::linalg::sparse::{AnySolver, LinearSolverKind, Pattern};
+use crate::linalg::sparse::LinearSolverKind;
+use crate::method::block_newton::BlockNewton;
 use crate::method::variational::tables::Tables;
 use crate::model::term_pattern::{MAX_WIDTH, TermPattern};
 use crate::model::{Lagrangian, TermDerivatives, TermSum};
-use crate::nonlinear::{Jacobian, Solved, stalled};
+use crate::nonlinear::{Jacobian, Solved};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator};
 
@@ -116,7 +109,6 @@ impl Clone for LazyStageNewton {
 /// The quadrature points of a step, q_μ and q̇_μ, and each term's derivatives there.
 #[derive(Debug)]
 struct Points {
-    terms: TermPattern,
     positions: Vec<DVector<f64>>,
     velocities: Vec<DVector<f64>>,
     derivatives: Vec<f64>,
@@ -144,43 +136,34 @@ impl Points {
 
     /// Each term's derivatives at each point (with `second` the Hessian blocks too), handed
     /// to `visit(μ, terms, e, derivatives)` in the layout of [`TermDerivatives`].
+    #[allow(clippy::too_many_arguments)]
     fn visit_terms(
         &mut self,
         model: &dyn TermSum<Dyn>,
+        terms: &TermPattern,
         tables: &Tables,
         t: f64,
         second: bool,
-        mut visit: impl FnMut(usize, &TermPattern, usize, &[f64]),
+        mut visit: impl FnMut(usize, usize, &[f64]),
     ) {
-        let k = self.terms.width();
+        let k = terms.width();
         let (mut ql, mut vl) = ([0.0; MAX_WIDTH], [0.0; MAX_WIDTH]);
         for (mu, (q, v)) in self.positions.iter().zip(&self.velocities).enumerate() {
             let time = tables.time(t, mu);
-            for e in 0..self.terms.term_count() {
-                self.terms
-                    .gather(e, q.as_slice(), v.as_slice(), &mut ql, &mut vl);
+            for e in 0..terms.term_count() {
+                terms.gather(e, q.as_slice(), v.as_slice(), &mut ql, &mut vl);
                 model.term_derivatives(e, time, &ql[..k], &vl[..k], second, &mut self.derivatives);
-                visit(mu, &self.terms, e, &self.derivatives);
+                visit(mu, e, &self.derivatives);
             }
         }
     }
 }
 
-/// The stage equations' pattern, solver and buffers.
+/// The stage equations' solver and buffers.
 #[derive(Debug)]
 pub(crate) struct StageNewton {
-    n: usize,
-    s: usize,
     points: Points,
-    /// The (s n)² Jacobian's pattern and values.
-    pattern: Pattern,
-    values: Vec<f64>,
-    solver: AnySolver,
-    /// Whether `solver` holds a factorisation for the current step size.
-    factored: bool,
-    /// Residual, then Newton correction.
-    residual: DVector<f64>,
-    max_iterations: usize,
+    newton: BlockNewton,
 }
 
 impl StageNewton {
@@ -188,7 +171,7 @@ impl StageNewton {
     /// points, its pattern analysed by a solver of `kind`.
     ///
     /// # Errors
-    /// As [`TermPattern::new`], or when the symbolic analysis fails.
+    /// As [`BlockNewton::new`].
     pub(crate) fn new(
         terms: &dyn TermSum<Dyn>,
         n: usize,
@@ -196,103 +179,21 @@ impl StageNewton {
         kind: LinearSolverKind,
         max_iterations: usize,
     ) -> Result<Self, Error> {
-        let terms = TermPattern::new(terms, n)?;
-        let small = &terms.pattern;
-        let mut entries = Vec::with_capacity(s * s * small.len());
-        for j in 0..s {
-            for col in 0..n {
-                for nu in 0..s {
-                    for row in small.column(col) {
-                        entries.push((nu * n + row, j * n + col));
-                    }
-                }
-            }
-        }
-        let pattern = Pattern::new(s * n, &entries)?;
-        let solver = AnySolver::analysed(kind, &pattern)?;
-        let width = terms.width();
+        let newton = BlockNewton::new(terms, n, s, kind, max_iterations)?;
+        let width = newton.blocks.terms.width();
         Ok(StageNewton {
-            n,
-            s,
-            values: vec![0.0; pattern.len()],
-            pattern,
             points: Points {
-                terms,
                 positions: vec![DVector::zeros(n); m],
                 velocities: vec![DVector::zeros(n); m],
                 derivatives: vec![0.0; TermDerivatives { width }.len()],
             },
-            solver,
-            factored: false,
-            residual: DVector::zeros(s * n),
-            max_iterations,
+            newton,
         })
     }
 
     /// Forget the factorisation (the step size changed).
     pub(crate) fn invalidate(&mut self) {
-        self.factored = false;
-    }
-
-    /// The residual r(z) into `self.residual`, and with `jacobian` the Jacobian's values.
-    #[allow(clippy::too_many_arguments)]
-    fn assemble(
-        &mut self,
-        model: &dyn TermSum<Dyn>,
-        tables: &Tables,
-        t: f64,
-        (q0, p0): (&[f64], &[f64]),
-        z: &DVector<f64>,
-        jacobian: bool,
-    ) {
-        let (n, s) = (self.n, self.s);
-        self.points.set(tables, q0, z, s);
-        self.residual.as_mut_slice().fill(0.0);
-        self.residual.as_mut_slice()[..n].copy_from_slice(p0);
-        if jacobian {
-            self.values.fill(0.0);
-        }
-        let (residual, values, pattern) = (&mut self.residual, &mut self.values, &self.pattern);
-        let visit = |mu: usize, terms: &TermPattern, e: usize, derivatives: &[f64]| {
-            let k = terms.width();
-            let layout = TermDerivatives { width: k };
-            let w = tables.weights[mu];
-            let indices = terms.indices(e);
-            for nu in 0..s {
-                let (b, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
-                for (a, &i) in indices.iter().enumerate() {
-                    residual[nu * n + i] +=
-                        w * (b * layout.q(derivatives, a) + c * layout.v(derivatives, a));
-                }
-            }
-            if !jacobian {
-                return;
-            }
-            // The entry ((ν, row), (j, col)) of a pair whose slot in P is `small` (see the
-            // module docs).
-            let small_pattern = &terms.pattern;
-            for (bb, &col) in indices.iter().enumerate() {
-                let start = small_pattern.column_start(col);
-                let count = small_pattern.column_start(col + 1) - start;
-                for a in 0..k {
-                    let rank = terms.slot(e, a, bb) - start;
-                    let (qq, qv) = (layout.qq(derivatives, a, bb), layout.qv(derivatives, a, bb));
-                    let (vq, vv) = (layout.qv(derivatives, bb, a), layout.vv(derivatives, a, bb));
-                    for j in 1..=s {
-                        let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
-                        let from_q = w * (qq * bj + qv * cj);
-                        let from_v = w * (vq * bj + vv * cj);
-                        let column = pattern.column_start((j - 1) * n + col);
-                        for nu in 0..s {
-                            let value = from_q * tables.values[(mu, nu)]
-                                + from_v * tables.derivatives[(mu, nu)];
-                            values[column + nu * count + rank] += value;
-                        }
-                    }
-                }
-            }
-        };
-        self.points.visit_terms(model, tables, t, jacobian, visit);
+        self.newton.invalidate();
     }
 
     /// Solve the stage equations at the state (q_k, p_k) = `state` for the offsets `z` (on
@@ -303,56 +204,56 @@ impl StageNewton {
         model: &dyn TermSum<Dyn>,
         tables: &Tables,
         t: f64,
-        state: (&[f64], &[f64]),
+        (q0, p0): (&[f64], &[f64]),
         z: &mut DVector<f64>,
         jacobian: Jacobian,
     ) -> Result<Solved, StepFailure> {
-        let mut report = Solved {
-            iterations: 0,
-            factorizations: 0,
-        };
-        let mut previous = f64::INFINITY;
-        let q_size = state.0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        loop {
-            let refactor = !self.factored || jacobian == Jacobian::Exact;
-            self.assemble(model, tables, t, state, z, refactor);
-            let solver = self.solver.get();
-            if refactor {
-                solver
-                    .factor(&self.pattern, &self.values)
-                    .map_err(|_| StepFailure::SingularMatrix)?;
-                self.factored = true;
-                report.factorizations += 1;
-            }
-            if solver.solve_in_place(&mut self.residual).is_err() {
-                self.factored = false;
-                return Err(StepFailure::SingularMatrix);
-            }
-            *z -= &self.residual;
-            report.iterations += 1;
-            let size = self.residual.amax();
-            // The positions the offsets build, as they are now (from rest they start at 0).
-            let scale = q_size + z.amax();
-            if !size.is_finite() {
-                self.factored = false;
-                return Err(StepFailure::NonFinite);
-            }
-            if size <= 2.0 * f64::EPSILON * scale || stalled(size, previous, 1e-13, scale) {
-                return Ok(report);
-            }
-            if report.iterations >= self.max_iterations {
-                self.factored = false;
-                return Err(StepFailure::NonConvergence {
-                    iterations: report.iterations,
-                    residual: size,
-                });
-            }
-            // A stale Jacobian that contracts slowly is refreshed for the next iteration.
-            if report.iterations > 1 && size > 0.5 * previous {
-                self.factored = false;
-            }
-            previous = size;
-        }
+        let StageNewton { points, newton } = self;
+        let q_size = q0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        newton.solve(z, q_size, jacobian, |blocks, z, residual, mut values| {
+            let (n, s) = (blocks.n, blocks.s);
+            points.set(tables, q0, z, s);
+            residual.as_mut_slice().fill(0.0);
+            residual.as_mut_slice()[..n].copy_from_slice(p0);
+            let terms = &blocks.terms;
+            let k = terms.width();
+            let layout = TermDerivatives { width: k };
+            let second = values.is_some();
+            let visit = |mu: usize, e: usize, derivatives: &[f64]| {
+                let w = tables.weights[mu];
+                let indices = terms.indices(e);
+                for nu in 0..s {
+                    let (b, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+                    for (a, &i) in indices.iter().enumerate() {
+                        residual[nu * n + i] +=
+                            w * (b * layout.q(derivatives, a) + c * layout.v(derivatives, a));
+                    }
+                }
+                let Some(values) = values.as_deref_mut() else {
+                    return;
+                };
+                for bb in 0..k {
+                    for a in 0..k {
+                        let pair = blocks.pair(e, a, bb);
+                        let (qq, qv) =
+                            (layout.qq(derivatives, a, bb), layout.qv(derivatives, a, bb));
+                        let (vq, vv) =
+                            (layout.qv(derivatives, bb, a), layout.vv(derivatives, a, bb));
+                        for j in 1..=s {
+                            let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
+                            let from_q = w * (qq * bj + qv * cj);
+                            let from_v = w * (vq * bj + vv * cj);
+                            for nu in 0..s {
+                                values[blocks.slot(pair, nu, j - 1)] += from_q
+                                    * tables.values[(mu, nu)]
+                                    + from_v * tables.derivatives[(mu, nu)];
+                            }
+                        }
+                    }
+                }
+            };
+            points.visit_terms(model, terms, tables, t, second, visit);
+        })
     }
 
     /// p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) at the offsets `z`, into `dp`.
@@ -365,17 +266,19 @@ impl StageNewton {
         z: &DVector<f64>,
         dp: &mut [f64],
     ) {
-        self.points.set(tables, q0, z, self.s);
+        let terms = &self.newton.blocks.terms;
+        self.points.set(tables, q0, z, self.newton.blocks.s);
         dp.fill(0.0);
-        let visit = |mu: usize, terms: &TermPattern, e: usize, derivatives: &[f64]| {
-            let layout = TermDerivatives {
-                width: terms.width(),
-            };
+        let layout = TermDerivatives {
+            width: terms.width(),
+        };
+        let visit = |mu: usize, e: usize, derivatives: &[f64]| {
             let w = tables.weights[mu];
             for (a, &i) in terms.indices(e).iter().enumerate() {
                 dp[i] += w * layout.q(derivatives, a);
             }
         };
-        self.points.visit_terms(model, tables, t, false, visit);
+        self.points
+            .visit_terms(model, terms, tables, t, false, visit);
     }
 }
