@@ -280,10 +280,7 @@ where
         v: &OVector<f64, N>,
         out: &mut OVector<f64, N>,
     ) {
-        match self.terms() {
-            Some(terms) => terms.gradient_into(t, q, v, Wrt::Position, out),
-            None => *out = N::gradient(&Action(self), t, q, v, Wrt::Position).1,
-        }
+        gradient_into(self, t, q, v, Wrt::Position, out);
     }
 
     /// L and ∂L/∂q from one gradient.
@@ -322,10 +319,7 @@ where
         v: &OVector<f64, N>,
         out: &mut OVector<f64, N>,
     ) {
-        match self.terms() {
-            Some(terms) => terms.gradient_into(t, q, v, Wrt::Velocity, out),
-            None => *out = N::gradient(&Action(self), t, q, v, Wrt::Velocity).1,
-        }
+        gradient_into(self, t, q, v, Wrt::Velocity, out);
     }
 
     /// L, its gradients and the Hessian blocks L_qq, L_qv, L_vv.
@@ -649,6 +643,24 @@ where
         rhs += model.external_force(t, q, v);
     }
     solve_small(vv, rhs)
+}
+
+/// ∂L/∂q or ∂L/∂q̇ (`wrt`) into `out`: in place, term by term, for a sum of terms.
+#[inline]
+fn gradient_into<L: Lagrangian<N> + ?Sized, N: Dimension>(
+    model: &L,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+    wrt: Wrt,
+    out: &mut OVector<f64, N>,
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    match model.terms() {
+        Some(terms) => terms.gradient_into(t, q, v, wrt, out),
+        None => *out = N::gradient(&Action(model), t, q, v, wrt).1,
+    }
 }
 
 /// The gradients and Hessian blocks of `model` at a point of dual numbers in ε, typically
