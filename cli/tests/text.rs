@@ -331,7 +331,11 @@ fn misused_indices_and_chain_options_are_bad_input_naming_them() {
         &["--param", "n=2.5"],
         "not a whole number",
     );
-    bad_input(&["run", &scene.path], &["--method", "sc"], "'sc'");
+    bad_input(
+        &["run", &scene.path],
+        &["--adapt", "degree"],
+        "--adapt degree",
+    );
     let periodic = scene_file(
         "text-boundary",
         &kepler_scene(
