@@ -10,7 +10,7 @@
 //!
 //! In node-major order the entry ((i, r), (j, c)) sits at slot
 //! colptr((j − 1)n + c) + (i − 1)·|P column c| + rank of r in it, which each term's pair finds
-//! from its slot in P ([`Blocks::slot`]).
+//! from its slot in P ([`Blocks::pair`], [`Blocks::slots`]).
 //!
 //! # Simplified Newton
 //! The factored Jacobian is kept across iterations and steps while the iteration contracts
@@ -42,26 +42,53 @@ pub(crate) struct Blocks {
 impl Blocks {
     /// Where term `e`'s pair (local row `a`, local column `b`) goes in every block: its
     /// column c in ℝⁿ, the count of P's entries in that column, and the rank of its row
-    /// among them; [`Blocks::slot`] finds the entry of one block from these.
+    /// among them.
     #[inline]
-    pub(crate) fn pair(&self, e: usize, a: usize, b: usize) -> (usize, usize, usize) {
-        let col = self.terms.indices(e)[b];
+    pub(crate) fn pair(&self, e: usize, a: usize, b: usize) -> Pair {
+        let column = self.terms.indices(e)[b];
         let small = &self.terms.pattern;
-        let start = small.column_start(col);
-        let count = small.column_start(col + 1) - start;
-        (col, count, self.terms.slot(e, a, b) - start)
+        let start = small.column_start(column);
+        Pair {
+            column,
+            count: small.column_start(column + 1) - start,
+            rank: self.terms.slot(e, a, b) - start,
+        }
     }
 
-    /// The slot of the entry of block (`row_block`, `column_block`) (0-based) for a pair
-    /// found by [`Blocks::pair`].
+    /// The slots of `pair` in the blocks of column block `column_block` (0-based): the
+    /// entry of row block i is at `first + i·step`.
     #[inline]
-    pub(crate) fn slot(
-        &self,
-        (col, count, rank): (usize, usize, usize),
-        row_block: usize,
-        column_block: usize,
-    ) -> usize {
-        self.pattern.column_start(column_block * self.n + col) + row_block * count + rank
+    pub(crate) fn slots(&self, pair: Pair, column_block: usize) -> Slots {
+        Slots {
+            first: self
+                .pattern
+                .column_start(column_block * self.n + pair.column)
+                + pair.rank,
+            step: pair.count,
+        }
+    }
+}
+
+/// A term's pair of local coordinates located in P ([`Blocks::pair`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pair {
+    column: usize,
+    count: usize,
+    rank: usize,
+}
+
+/// The slots of one pair down one column block ([`Blocks::slots`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Slots {
+    first: usize,
+    step: usize,
+}
+
+impl Slots {
+    /// The slot in row block `row_block` (0-based).
+    #[inline]
+    pub(crate) fn row(self, row_block: usize) -> usize {
+        self.first + row_block * self.step
     }
 }
 

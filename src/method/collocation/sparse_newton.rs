@@ -152,7 +152,7 @@ impl SparseCollocation {
                                     if i == j {
                                         entry += from_q;
                                     }
-                                    values[blocks.slot(pair, i, j)] += entry;
+                                    values[blocks.slots(pair, j).row(i)] += entry;
                                 }
                             }
                         }

@@ -243,9 +243,9 @@ impl StageNewton {
                             let (bj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
                             let from_q = w * (qq * bj + qv * cj);
                             let from_v = w * (vq * bj + vv * cj);
+                            let slots = blocks.slots(pair, j - 1);
                             for nu in 0..s {
-                                values[blocks.slot(pair, nu, j - 1)] += from_q
-                                    * tables.values[(mu, nu)]
+                                values[slots.row(nu)] += from_q * tables.values[(mu, nu)]
                                     + from_v * tables.derivatives[(mu, nu)];
                             }
                         }
