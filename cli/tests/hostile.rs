@@ -195,6 +195,16 @@ fn short(scene: &Scene) -> bool {
     let (Some(h), Some(t_end)) = (scene.run.h, scene.run.t_end) else {
         return false;
     };
+    // A chain runs here by the methods that keep its sparsity: the dense ones (the reference
+    // methods' acceleration Jacobian by automatic differentiation of the whole L, multiscale)
+    // take a quarter of a second per step at the chains' default sizes.
+    if scene.is_local()
+        && !scene
+            .method_spec()
+            .is_ok_and(|spec| SPARSE_ON_CHAINS.contains(&spec.name()))
+    {
+        return false;
+    }
     let span = t_end - scene.initial.t0.unwrap_or(0.0);
     let adaptive = scene.run.adapt.is_some_and(|adapt| adapt.name() != "none");
     let rejected = !(h.is_finite() && h > 0.0 && span.is_finite() && span > 0.0);
@@ -219,6 +229,21 @@ fn short(scene: &Scene) -> bool {
         && scene.run.max_points.unwrap_or(0) <= 24
         && scene.run.max_halvings.unwrap_or(0) <= 6
 }
+
+/// The methods that run a chain without dense matrices.
+const SPARSE_ON_CHAINS: &[&str] = &[
+    "svi",
+    "svi-newton",
+    "sc",
+    "verlet",
+    "yoshida4",
+    "kahan-li6",
+    "kahan-li8",
+    "midpoint",
+    "trapezoid",
+    "symplectic-euler",
+    "symplectic-euler-adjoint",
+];
 
 /// Most steps of a hostile run in process. A run that [`short`] lets through can still need
 /// steps of any size (a huge parameter makes the model stiff: `double-pendulum --param

@@ -86,7 +86,11 @@ fn a_size_that_is_not_a_positive_whole_number_is_bad_input_naming_n() {
 #[test]
 fn options_a_chain_cannot_use_are_bad_input_naming_them() {
     bad_input(&["run", "fput"], &["--method", "lie-svi"], "lie-svi");
-    bad_input(&["run", "fput"], &["--adapt", "degree"], "--adapt degree");
+    bad_input(
+        &["run", "fput"],
+        &["--adapt", "degree", "--tol", "1e-9", "--method", "verlet"],
+        "--adapt degree",
+    );
     bad_input(
         &["run", "fput"],
         &["--diagnostics", "momentum"],
@@ -241,7 +245,7 @@ fn the_fput_trajectory_holds_the_energy_and_the_mode_energies() {
 }
 
 #[test]
-fn chains_take_output_times_step_adaptivity_recovery_and_strictness() {
+fn chains_take_output_times_step_and_degree_adaptivity_recovery_and_strictness() {
     // Output times inside steps: cubic Hermite between the step's ends; against a run whose
     // grid holds the time (h = 0.05), to O(h⁴).
     let inside = json(&[
@@ -282,6 +286,30 @@ fn chains_take_output_times_step_adaptivity_recovery_and_strictness() {
         number(&adaptive, "invariant_error_max") < 1e-8,
         "{adaptive}"
     );
+    // Degree adaptivity chooses the points of each step, by sparse Newton on a chain whose
+    // mass matrix depends on q̇.
+    let degree = json(&[
+        "run",
+        "relativistic-chain",
+        "--t-end",
+        "5",
+        "--h",
+        "0.5",
+        "--points",
+        "4",
+        "--quadrature",
+        "3",
+        "--adapt",
+        "degree",
+        "--tol",
+        "1e-10",
+        "--json",
+    ]);
+    assert_eq!(degree["adapt"], "degree");
+    let used = degree["adaptivity"]["points_used"].as_array().unwrap();
+    assert!(used.len() >= 2, "{degree}");
+    let error = number(&degree, "energy_error_max") / number(&degree, "energy_initial");
+    assert!(error < 1e-10, "{degree}");
     // Recovery and the divergence limit are run options like any other.
     let guarded = json(&[
         "run",

@@ -331,11 +331,7 @@ fn misused_indices_and_chain_options_are_bad_input_naming_them() {
         &["--param", "n=2.5"],
         "not a whole number",
     );
-    bad_input(
-        &["run", &scene.path],
-        &["--adapt", "degree"],
-        "--adapt degree",
-    );
+    bad_input(&["run", &scene.path], &["--method", "lie-svi"], "lie-svi");
     let periodic = scene_file(
         "text-boundary",
         &kepler_scene(

@@ -347,7 +347,8 @@ impl Scene {
 
     /// Whether the scene's model is a runtime-dimension one (a chain or lattice of
     /// [`svi_models::LOCAL_MODEL_NAMES`], or a chain written as text, on ℝⁿ with n a
-    /// parameter): it runs with the large-system methods, and its `[initial]` vectors have n
+    /// parameter): it runs with every method of ℝᴺ (in O(n) per step with those that keep
+    /// its sparsity), and its `[initial]` vectors have n
     /// components or are expressions per site.
     pub fn is_local(&self) -> bool {
         match self.lagrangian {
@@ -362,17 +363,6 @@ impl Scene {
     /// starts, naming itself and the size).
     fn check_local(&self, spec: MethodSpec) -> Result<(), SceneError> {
         spec.vector_method()?;
-        if self.run.adapt == Some(AdaptMode::Degree) {
-            return Err(SceneError::NotApplicable {
-                option: "--adapt degree (run.adapt)",
-                reason: format!(
-                    "'{}' is a runtime-dimension model, whose methods ({}) keep their degree; \
-                     use --adapt step or none",
-                    self.model_name(),
-                    spec.name()
-                ),
-            });
-        }
         for (diagnostic, option, what) in [
             (
                 Diagnostic::Momentum,
