@@ -85,7 +85,7 @@
 //! ```
 //!
 //! With indexed coordinates (`q[1..n]`, n a parameter) the text is a chain of local terms
-//! ([`svi::model::text::chain`]), run like the zoo's chains by the large-system methods;
+//! ([`svi::model::text::chain`]), run like the zoo's chains by every method of ℝᴺ;
 //! `boundary` (`"fixed"`, the default, or `"periodic"`) says what an index outside 1..n
 //! reads. The `[initial]` vectors of every chain, written as text or not, may be expressions
 //! in the site index `i` (from 1) and the parameters, evaluated at every site (a list of
