@@ -5,10 +5,12 @@
 //!
 //! - `kepler_T2000/zoo`: `svi_models::Kepler`;
 //! - `kepler_T2000/text`: `0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)` with μ = 1, the scene
-//!   `cli/scenes/kepler-text.toml`, as the `TextLagrangian` that `svi run` dispatches to
-//!   (autonomous, unforced, constant mass).
+//!   `cli/scenes/kepler-text.toml`, as a `TextLagrangian<U2>` (autonomous, unforced,
+//!   constant mass);
+//! - `kepler_T2000/text_run_time`: the same as the `TextLagrangian<Dyn>` that `svi run`
+//!   dispatches to.
 //!
-//! Issue #20 asks for the text run within 3× the zoo's. Run with `cargo bench --bench text`;
+//! Issue #20 asked for the text run within 3× the zoo's, issue #35 within 1.5×. Run with `cargo bench --bench text`;
 //! the medians are in `target/criterion/kepler_T2000/{zoo,text}/new/estimates.json`.
 //!
 //! # `fput_chain/<method>/<implementation>`, n = 10⁵
@@ -42,6 +44,17 @@ fn run<L: Lagrangian<U2>>(model: L) -> SVector<f64, 2> {
         .q
 }
 
+/// The same run at run-time size, as `svi run` takes a text model.
+fn run_run_time<L: Lagrangian<Dyn>>(model: L) -> DVector<f64> {
+    let q = DVector::from_column_slice(&[0.5, 0.0]);
+    let v = DVector::from_column_slice(&[0.0, 3f64.sqrt()]);
+    Integrator::new(model, Svi::new(6))
+        .run_from_velocity(0.0, q, v, 0.2, 2000.0, &mut ())
+        .expect("the Kepler scene runs")
+        .last
+        .q
+}
+
 fn kepler(c: &mut Criterion) {
     let spec = TextSpec {
         lagrangian: "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)".into(),
@@ -58,6 +71,11 @@ fn kepler(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(4));
     group.bench_function("zoo", |b| b.iter(|| black_box(run(Kepler::default()))));
     group.bench_function("text", |b| b.iter(|| black_box(run(text.clone()))));
+    let run_time = TextLagrangian::<Dyn, false, false, true>::new(text.model().clone())
+        .expect("the same declarations at run-time size");
+    group.bench_function("text_run_time", |b| {
+        b.iter(|| black_box(run_run_time(run_time.clone())))
+    });
     group.finish();
 }
 

@@ -2,9 +2,9 @@
 //! derivatives agree to round-off, and a whole run of the paper's Kepler scene agrees to
 //! 1e-10 in q. The references are the zoo models, whose closed forms have their own tests.
 
-use nalgebra::{Const, SVector, U1, U2};
+use nalgebra::{Const, DVector, SVector, U1, U2};
 use svi::model::text::{TextLagrangian, TextModel, TextSpec};
-use svi::{Defaults, Integrator, LagrangianExt, Structure, Svi, Symmetries};
+use svi::{Defaults, Dyn, Integrator, LagrangianExt, Structure, Svi, Symmetries};
 use svi_models::{DampedOscillator, Kepler, Pendulum};
 
 /// A text spec from its parts.
@@ -175,6 +175,19 @@ fn kepler_from_text_matches_the_zoo_model_at_t_2000() {
     assert_eq!(text.statistics.steps, 10_000);
     let difference = (text.last.q - zoo.last.q).amax();
     assert!(difference < 1e-10, "|Δq| = {difference:e}");
+    // Of run-time size, as `svi run` takes it: the force by the compiled program with the
+    // quadrature points as lanes (`Lagrangian::batch_force`).
+    let run_time =
+        TextLagrangian::<Dyn, false, false, true>::new(kepler_text().model().clone()).unwrap();
+    let (q, v) = (
+        DVector::from_column_slice(&[0.5, 0.0]),
+        DVector::from_column_slice(&[0.0, 3f64.sqrt()]),
+    );
+    let text = Integrator::new(run_time, Svi::new(6))
+        .run_from_velocity(0.0, q, v, 0.2, 2000.0, &mut ())
+        .unwrap();
+    let difference = (text.last.q - DVector::from_column_slice(zoo.last.q.as_slice())).amax();
+    assert!(difference < 1e-10, "run-time size: |Δq| = {difference:e}");
 }
 
 /// A Lagrangian in which a velocity does not appear has a singular mass matrix: refused at

@@ -243,6 +243,9 @@ const SPARSE_ON_CHAINS: &[&str] = &[
     "trapezoid",
     "symplectic-euler",
     "symplectic-euler-adjoint",
+    "explicit-euler",
+    "implicit-euler",
+    "rk4",
 ];
 
 /// Most steps of a hostile run in process. A run that [`short`] lets through can still need

@@ -17,6 +17,12 @@
 //! acceleration Jacobian, [`crate::LagrangianExt::acceleration_jacobian`]). None of the three
 //! is symplectic or symmetric; they are here to be compared with the methods that are.
 //!
+//! On an unforced sum of local terms of run-time size (a chain) the acceleration is taken term
+//! by term, a = −M⁻¹R(0) with the sparse mass matrix, its Jacobian −M⁻¹(J_q, J_y)
+//! ([`crate::model::euler_lagrange`]), and implicit Euler's equation multiplied by h M is solved
+//! by sparse Newton ([`sparse_newton`]): O(n) a step instead of differentiating the whole L
+//! (O(n³) for the acceleration, O(n⁴) for its Jacobian).
+//!
 //! Tangent maps: explicit Euler's is [[I, hI], [h f_q, I + h f_v]]; Runge–Kutta's follows its
 //! stages, dkᵢ/dy = J(yᵢ)(I + cᵢ h dkᵢ₋₁/dy) with J = [[0, I], [f_q, f_v]]; implicit Euler's
 //! is the implicit function theorem on its equation: dw/dq = K⁻¹ h f_q, dw/dq̇ = K⁻¹ with
@@ -27,8 +33,12 @@ use crate::error::{Error, StepFailure};
 use crate::method::space::StepState;
 use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
-use crate::model::derived::{AccelerationJacobian, LagrangianExt};
+use crate::model::derived::{AccelerationJacobian, LagrangianExt, sparse_terms};
+use crate::model::euler_lagrange::LazyAcceleration;
 use crate::nonlinear::Newton;
+use sparse_newton::LazySparseImplicitEuler;
+
+mod sparse_newton;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
 
@@ -55,11 +65,14 @@ impl Default for ImplicitEuler {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RungeKutta4;
 
-/// The dimension of a run, and for implicit Euler its Newton buffers.
+/// The dimension of a run, and for implicit Euler its Newton buffers; for a sum of local
+/// terms the sparse mass matrix of the acceleration, and implicit Euler's sparse Newton.
 #[derive(Debug, Clone)]
 pub struct ReferenceWorkspace<N> {
     n: N,
     newton: Option<(Newton, DVector<f64>)>,
+    acceleration: LazyAcceleration,
+    sparse_newton: LazySparseImplicitEuler,
 }
 
 /// The workspace of a reference method on `model`.
@@ -80,30 +93,68 @@ where
     let n =
         dimension_of::<N>(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
     let size = n.value();
+    // A sum of terms takes its equations term by term, without an n × n matrix.
+    let dense = sparse_terms(model).is_none();
     Ok(ReferenceWorkspace {
         n,
-        newton: implicit.map(|iterations| (Newton::new(size, iterations), DVector::zeros(size))),
+        newton: implicit
+            .filter(|_| dense)
+            .map(|iterations| (Newton::new(size, iterations), DVector::zeros(size))),
+        acceleration: LazyAcceleration::default(),
+        sparse_newton: LazySparseImplicitEuler::default(),
     })
 }
 
-/// The acceleration f(t, q, q̇), or the failure of a singular mass matrix.
-fn acceleration<L: Lagrangian<N>, N: Dimension>(
+/// The acceleration f(t, q, q̇) into `out` (term by term for a sum of terms, with the
+/// run's sparse mass matrix), or the failure of a singular mass matrix. Returns the symbolic
+/// analyses it made (the sparse mass matrix's, at a run's first call).
+fn acceleration_into<L: Lagrangian<N>, N: Dimension>(
     model: &L,
+    workspace: &mut ReferenceWorkspace<N>,
     t: f64,
-    q: &OVector<f64, N>,
-    v: &OVector<f64, N>,
-) -> Result<OVector<f64, N>, StepFailure>
+    (q, v): (&OVector<f64, N>, &OVector<f64, N>),
+    out: &mut OVector<f64, N>,
+) -> Result<usize, StepFailure>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    model
-        .acceleration(t, q, v)
-        .ok_or(StepFailure::SingularMatrix)
+    match sparse_terms(model) {
+        Some(terms) => {
+            let (acceleration, analyses) = workspace.acceleration.get(terms, q.len())?;
+            let point = (q.as_slice(), v.as_slice());
+            acceleration.acceleration(terms, t, point, out.as_mut_slice())?;
+            Ok(analyses)
+        }
+        None => {
+            *out = model
+                .acceleration(t, q, v)
+                .ok_or(StepFailure::SingularMatrix)?;
+            Ok(0)
+        }
+    }
 }
 
-/// The acceleration and its Jacobian, or the failure of a singular mass matrix.
+/// The acceleration f(t, q, q̇), as [`acceleration_into`], with the analyses it made.
+fn acceleration<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    workspace: &mut ReferenceWorkspace<N>,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+) -> Result<(OVector<f64, N>, usize), StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let mut out = OVector::zeros_generic(workspace.n, U1);
+    let analyses = acceleration_into(model, workspace, t, (q, v), &mut out)?;
+    Ok((out, analyses))
+}
+
+/// The acceleration and its Jacobian (term by term for a sum of terms), or the failure of a
+/// singular mass matrix.
 fn jacobian<L: Lagrangian<N>, N: Dimension>(
     model: &L,
+    workspace: &mut ReferenceWorkspace<N>,
     t: f64,
     q: &OVector<f64, N>,
     v: &OVector<f64, N>,
@@ -111,9 +162,17 @@ fn jacobian<L: Lagrangian<N>, N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    model
-        .acceleration_jacobian(t, q, v)
-        .ok_or(StepFailure::SingularMatrix)
+    let Some(terms) = sparse_terms(model) else {
+        return model
+            .acceleration_jacobian(t, q, v)
+            .ok_or(StepFailure::SingularMatrix);
+    };
+    let jacobian = workspace.acceleration.get(terms, q.len())?.0.jacobian(
+        terms,
+        t,
+        (q.as_slice(), v.as_slice()),
+    )?;
+    Ok(AccelerationJacobian::of_run_time(jacobian, workspace.n))
 }
 
 /// The facts every reference method shares: coordinates (q, q̇), neither symmetric nor
@@ -167,6 +226,11 @@ where
         info("explicit-euler", 1)
     }
 
+    /// A sum of terms: the acceleration and implicit Euler's equation term by term.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        sparse_terms(model).is_some()
+    }
+
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
         workspace(model, h, None)
     }
@@ -174,19 +238,20 @@ where
     fn step<L: Lagrangian<N>>(
         &self,
         model: &L,
-        _workspace: &mut Self::Workspace,
+        workspace: &mut Self::Workspace,
         t: f64,
         h: f64,
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
-        let a = acceleration(model, t, &state.q, &state.y)?;
+        let analyses =
+            acceleration_into(model, workspace, t, (&state.q, &state.y), &mut increment.y)?;
         increment.q.copy_from(&state.y);
         increment.q *= h;
-        increment.y.copy_from(&a);
         increment.y *= h;
         Ok(StepReport {
             evaluations: 1,
+            analyses,
             ..StepReport::default()
         })
     }
@@ -199,7 +264,7 @@ where
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let a = jacobian(model, t, &state.q, &state.y)?;
+        let a = jacobian(model, workspace, t, &state.q, &state.y)?;
         let mut increment = State::zeros(workspace.n);
         self.step(model, workspace, t, h, state, &mut increment)?;
         let n = workspace.n;
@@ -224,6 +289,11 @@ where
         info("rk4", 4)
     }
 
+    /// A sum of terms: the acceleration and implicit Euler's equation term by term.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        sparse_terms(model).is_some()
+    }
+
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
         workspace(model, h, None)
     }
@@ -231,7 +301,7 @@ where
     fn step<L: Lagrangian<N>>(
         &self,
         model: &L,
-        _workspace: &mut Self::Workspace,
+        workspace: &mut Self::Workspace,
         t: f64,
         h: f64,
         state: &State<N>,
@@ -239,13 +309,13 @@ where
     ) -> Result<StepReport, StepFailure> {
         // Stage i at y + cᵢ h kᵢ₋₁ with k = (dq, dv) = (q̇ of the stage, f of the stage).
         let (q, v) = (&state.q, &state.y);
-        let a1 = acceleration(model, t, q, v)?;
+        let (a1, analyses) = acceleration(model, workspace, t, q, v)?;
         let (q2, v2) = (q + v * (0.5 * h), v + &a1 * (0.5 * h));
-        let a2 = acceleration(model, t + 0.5 * h, &q2, &v2)?;
+        let (a2, _) = acceleration(model, workspace, t + 0.5 * h, &q2, &v2)?;
         let (q3, v3) = (q + &v2 * (0.5 * h), v + &a2 * (0.5 * h));
-        let a3 = acceleration(model, t + 0.5 * h, &q3, &v3)?;
+        let (a3, _) = acceleration(model, workspace, t + 0.5 * h, &q3, &v3)?;
         let (q4, v4) = (q + &v3 * h, v + &a3 * h);
-        let a4 = acceleration(model, t + h, &q4, &v4)?;
+        let (a4, _) = acceleration(model, workspace, t + h, &q4, &v4)?;
         increment
             .q
             .copy_from(&((v + (&v2 + &v3) * 2.0 + &v4) * (h / 6.0)));
@@ -254,6 +324,7 @@ where
             .copy_from(&((&a1 + (&a2 + &a3) * 2.0 + &a4) * (h / 6.0)));
         Ok(StepReport {
             evaluations: 4,
+            analyses,
             ..StepReport::default()
         })
     }
@@ -279,7 +350,7 @@ where
             (0.5, 2.0, 1.0),
             (1.0, 1.0, 0.0),
         ] {
-            let a = jacobian(model, t + c * h, &q, &v)?;
+            let a = jacobian(model, workspace, t + c * h, &q, &v)?;
             let j = first_order_jacobian(&a);
             let slope = match &previous {
                 None => j,
@@ -302,7 +373,9 @@ where
 
 impl ImplicitEuler {
     /// Solve for the new velocity w: w − q̇ − h f(t + h, q + h w, w) = 0, started from the
-    /// explicit Euler velocity. Returns w, the Jacobian at the solution and the iterations.
+    /// explicit Euler velocity (for a sum of terms by sparse Newton from q̇,
+    /// [`sparse_newton`]).
+    /// Returns w and the work.
     fn solve<L: Lagrangian<N>, N: Dimension>(
         &self,
         model: &L,
@@ -310,16 +383,35 @@ impl ImplicitEuler {
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(OVector<f64, N>, usize), StepFailure>
+    ) -> Result<(OVector<f64, N>, StepReport), StepFailure>
     where
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
         let n = workspace.n;
+        if let Some(terms) = sparse_terms(model) {
+            // From q̇_k: the simplified Newton iteration needs no acceleration to start.
+            let mut w = state.y.clone();
+            let (solved, analyses) = workspace.sparse_newton.solve(
+                terms,
+                self.max_iterations,
+                (t, h),
+                (state.q.as_slice(), state.y.as_slice()),
+                w.as_mut_slice(),
+            )?;
+            let report = StepReport {
+                iterations: solved.iterations,
+                evaluations: solved.iterations + 1,
+                factorizations: solved.factorizations,
+                analyses,
+            };
+            return Ok((w, report));
+        }
+        let (a, _) = acceleration(model, workspace, t, &state.q, &state.y)?;
+        let start = &state.y + a * h;
         let (newton, z) = workspace.newton.as_mut().ok_or(StepFailure::Unsupported {
             option: "workspace",
             reason: "not built for implicit Euler",
         })?;
-        let start = &state.y + acceleration(model, t, &state.q, &state.y)? * h;
         z.copy_from_slice(start.as_slice());
         let mut failed = None;
         let iterations = newton.solve(z, |z, jacobian, residual| {
@@ -347,9 +439,15 @@ impl ImplicitEuler {
             return Err(failure);
         }
         let iterations = iterations?;
+        let report = StepReport {
+            iterations,
+            evaluations: iterations + 1,
+            factorizations: iterations,
+            analyses: 0,
+        };
         Ok((
             OVector::<f64, N>::from_column_slice_generic(n, U1, z.as_slice()),
-            iterations,
+            report,
         ))
     }
 }
@@ -362,6 +460,11 @@ where
 
     fn info(&self) -> MethodInfo {
         info("implicit-euler", 1)
+    }
+
+    /// A sum of terms: the acceleration and implicit Euler's equation term by term.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        sparse_terms(model).is_some()
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
@@ -383,15 +486,10 @@ where
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
-        let (w, iterations) = self.solve(model, workspace, t, h, state)?;
+        let (w, report) = self.solve(model, workspace, t, h, state)?;
         increment.q.copy_from(&(&w * h));
         increment.y.copy_from(&(w - &state.y));
-        Ok(StepReport {
-            iterations,
-            evaluations: iterations + 1,
-            factorizations: iterations,
-            analyses: 0,
-        })
+        Ok(report)
     }
 
     fn tangent_map<L: Lagrangian<N>>(
@@ -404,7 +502,7 @@ where
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
         let (w, _) = self.solve(model, workspace, t, h, state)?;
         let q = &state.q + &w * h;
-        let a = jacobian(model, t + h, &q, &w)?;
+        let a = jacobian(model, workspace, t + h, &q, &w)?;
         let n = workspace.n;
         let identity = OMatrix::<f64, N, N>::identity_generic(n, n);
         // K dw = h f_q dq + dq̇, K = I − h(h f_q + f_v).

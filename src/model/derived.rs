@@ -28,9 +28,9 @@
 use crate::dimension::{Dimension, PhaseFunction, PhaseMap, Wrt};
 use crate::error::Error;
 use crate::linalg::solve_small;
-use crate::model::legendre;
 use crate::model::mass_inverse::MassInverse;
 use crate::model::{Lagrangian, Structure, Symmetries, TermSum};
+use crate::model::{euler_lagrange, legendre};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OMatrix, OVector, U1};
@@ -205,6 +205,21 @@ where
     pub v: OMatrix<f64, N, N>,
 }
 
+impl<N: Dimension> AccelerationJacobian<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// The same numbers in the types of the dimension `n` (a run-time-size Jacobian, as the
+    /// terms' path computes it, for a model whose `N` is [`crate::dimension::Dyn`] itself).
+    pub(crate) fn of_run_time(jacobian: AccelerationJacobian<crate::dimension::Dyn>, n: N) -> Self {
+        AccelerationJacobian {
+            value: OVector::from_column_slice_generic(n, U1, jacobian.value.as_slice()),
+            q: OMatrix::from_column_slice_generic(n, n, jacobian.q.as_slice()),
+            v: OMatrix::from_column_slice_generic(n, n, jacobian.v.as_slice()),
+        }
+    }
+}
+
 /// The external force f_L and its Jacobian at one point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ForceJacobian<N: Dimension>
@@ -281,6 +296,23 @@ where
         out: &mut OVector<f64, N>,
     ) {
         gradient_into(self, t, q, v, Wrt::Position, out);
+    }
+
+    /// ∂L/∂q at the points (`times[μ]`, `positions[μ]`, `v`) into `forces[μ]`: all at once
+    /// where the model offers it ([`Lagrangian::batch_force`]), else one by one.
+    #[inline]
+    fn forces_into(
+        &self,
+        times: &[f64],
+        positions: &[OVector<f64, N>],
+        v: &OVector<f64, N>,
+        forces: &mut [OVector<f64, N>],
+    ) {
+        if !self.batch_force(times, positions, v, forces) {
+            for ((&t, q), force) in times.iter().zip(positions).zip(forces) {
+                self.force_into(t, q, v, force);
+            }
+        }
     }
 
     /// L and ∂L/∂q from one gradient.
@@ -483,6 +515,15 @@ where
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
     ) -> Option<OVector<f64, N>> {
+        if let Some(terms) = sparse_terms(self) {
+            // Term by term with the sparse mass matrix ([`euler_lagrange`]), in O(n).
+            let mut out = q.clone();
+            euler_lagrange::Acceleration::new(terms, q.len())
+                .ok()?
+                .acceleration(terms, t, (q.as_slice(), v.as_slice()), out.as_mut_slice())
+                .ok()?;
+            return Some(out);
+        }
         acceleration_generic(self, t, q, v)
     }
 
@@ -515,6 +556,17 @@ where
         q: &OVector<f64, N>,
         v: &OVector<f64, N>,
     ) -> Option<AccelerationJacobian<N>> {
+        if let Some(terms) = sparse_terms(self) {
+            // −M⁻¹ J_q and −M⁻¹ J_y from the terms' blocks ([`euler_lagrange`]).
+            let jacobian = euler_lagrange::Acceleration::new(terms, q.len())
+                .ok()?
+                .jacobian(terms, t, (q.as_slice(), v.as_slice()))
+                .ok()?;
+            return Some(AccelerationJacobian::of_run_time(
+                jacobian,
+                q.shape_generic().0,
+            ));
+        }
         let (value, dq) = N::jacobian(&Acceleration(self), t, q, v, Wrt::Position);
         let (_, dv) = N::jacobian(&Acceleration(self), t, q, v, Wrt::Velocity);
         value
@@ -563,6 +615,22 @@ where
 impl<L: Lagrangian<N> + ?Sized, N: Dimension> LagrangianExt<N> for L where
     DefaultAllocator: Allocator<N> + Allocator<N, N>
 {
+}
+
+/// The terms of `model` where the methods take its equations term by term, with sparse
+/// matrices (SVI's and the segment rules' stage equations, SC's collocation equations, the
+/// Euler–Lagrange acceleration of [`euler_lagrange`]): an unforced sum of local terms of
+/// run-time size (a forced model, or a fixed size, takes the dense path).
+pub(crate) fn sparse_terms<L: Lagrangian<N> + ?Sized, N: Dimension>(
+    model: &L,
+) -> Option<&dyn TermSum<crate::dimension::Dyn>>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    if L::FORCED {
+        return None;
+    }
+    model.terms()?.as_run_time()
 }
 
 /// ∂L/∂q or ∂L/∂q̇ of a sum of local terms, assembled term by term.

@@ -38,6 +38,7 @@
 
 pub mod density;
 pub mod derived;
+pub(crate) mod euler_lagrange;
 pub(crate) mod legendre;
 pub mod local;
 pub mod mass_inverse;
@@ -323,6 +324,25 @@ where
     ) -> OVector<D, N> {
         let _ = (t, v);
         OVector::zeros_generic(q.shape_generic().0, U1)
+    }
+
+    /// ∂L/∂q at several points of one velocity at once, `forces[μ]` at
+    /// (`times[μ]`, `positions[μ]`, `v`), for a model that evaluates many points faster than
+    /// one at a time (a Lagrangian written as text runs its compiled force program with the
+    /// points as lanes). The integrators ask for it where the velocity does not matter
+    /// (SVI's fixed point on a constant-mass L, whose ∂L/∂q = −∂V/∂q is free of q̇). Returns
+    /// `false` (the default) to have them evaluate the points one by one; a model that
+    /// returns `true` has written every point.
+    #[inline]
+    fn batch_force(
+        &self,
+        times: &[f64],
+        positions: &[OVector<f64, N>],
+        v: &OVector<f64, N>,
+        forces: &mut [OVector<f64, N>],
+    ) -> bool {
+        let _ = (times, positions, v, forces);
+        false
     }
 }
 

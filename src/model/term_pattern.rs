@@ -6,12 +6,19 @@
 //! equations of the spectral and classic variational integrators).
 
 use crate::dimension::Dyn;
-use crate::error::Error;
+use crate::error::{Error, StepFailure};
 use crate::linalg::sparse::Pattern;
 use crate::model::TermSum;
 
 /// The widest term a sparse Newton iteration takes (its local buffers are this long).
 pub(crate) const MAX_WIDTH: usize = 16;
+
+/// The failure of a step whose model's terms read coordinates beyond its dimension (which
+/// [`TermSum::check_indices`] refuses before a run).
+pub(crate) const PATTERN_MISMATCH: StepFailure = StepFailure::Unsupported {
+    option: "model",
+    reason: "the pattern of its terms' indices does not fit its dimension",
+};
 
 /// Refuse terms wider than [`MAX_WIDTH`].
 ///

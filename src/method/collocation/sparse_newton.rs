@@ -10,23 +10,19 @@
 //!
 //! R_i = L_q̇q̇ a_i + L_q̇q y_i + L_q̇t − L_q = d/dε ∂L/∂q̇(t_i + ε, q_i + ε y_i, y_i + ε a_i)|₀ − ∂L/∂q
 //!
-//! (the same solution as the dense path, whose mass matrix is invertible). The Jacobian block
-//! (i, j) is δ_ij J_q + Λ*_ij J_y + (Λ*²)_ij J_a with
-//!
-//! J_q = ε[L_q̇q] − L_qq,   J_y = L_q̇q + ε[L_q̇q̇] − L_qq̇,   J_a = L_q̇q̇,
-//!
-//! where ε[·] is the ε-part of a Hessian block evaluated at the dual point
-//! (t_i + ε, q_i + ε y_i, y_i + ε a_i): third derivatives of L contracted with (1, y_i, a_i),
-//! from one evaluation of each term's Hessian blocks over dual numbers
-//! ([`TermSum::term_derivatives_along`]). Each block has the pattern of L's Hessian; the
-//! iteration is [`BlockNewton`]'s simplified Newton method.
+//! (the same solution as the dense path, whose mass matrix is invertible), the Euler–Lagrange
+//! residual of [`crate::model::euler_lagrange`] at node i. The Jacobian block (i, j) is
+//! δ_ij J_q + Λ*_ij J_y + (Λ*²)_ij J_a with that module's blocks J_q, J_y, J_a, term by term
+//! ([`TermShare`]); each block has the pattern of L's Hessian, and the iteration is
+//! [`BlockNewton`]'s simplified Newton method.
 
 use super::Tables;
 use crate::dimension::Dyn;
 use crate::error::{Error, StepFailure};
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::block_newton::{BlockNewton, Blocks};
-use crate::model::term_pattern::MAX_WIDTH;
+use crate::model::euler_lagrange::TermShare;
+use crate::model::term_pattern::{MAX_WIDTH, PATTERN_MISMATCH};
 use crate::model::{TermDerivatives, TermSum};
 use crate::nonlinear::{Jacobian, Solved};
 use nalgebra::DVector;
@@ -101,8 +97,6 @@ impl SparseCollocation {
                 } = blocks;
                 let (n, s) = (*n, *s);
                 let k = pattern.width();
-                let layout = TermDerivatives { width: k };
-                let len = layout.len();
                 let mut local = [[0.0; MAX_WIDTH]; 3];
                 residual.fill(0.0);
                 for i in 0..s {
@@ -129,11 +123,10 @@ impl SparseCollocation {
                         for (a, &c) in pattern.indices(e).iter().enumerate() {
                             al[a] = acceleration[c];
                         }
-                        let (ql, yl, al) = (&ql[..k], &yl[..k], &al[..k]);
-                        terms.term_derivatives_along(e, time, ql, yl, (yl, al), derivatives);
-                        let (value, rate) = derivatives.split_at(len);
+                        let node = (&ql[..k], &yl[..k], &al[..k]);
+                        let share = TermShare::along(terms, e, time, node, derivatives);
                         for (a, &r) in pattern.indices(e).iter().enumerate() {
-                            residual[i * n + r] += layout.v(rate, a) - layout.q(value, a);
+                            residual[i * n + r] += share.residual(a);
                         }
                         let Some(values) = values.as_deref_mut() else {
                             continue;
@@ -141,10 +134,7 @@ impl SparseCollocation {
                         for b in 0..k {
                             for a in 0..k {
                                 // Row a (the equation of coordinate a), column b.
-                                let from_q = layout.qv(rate, b, a) - layout.qq(value, a, b);
-                                let from_y = layout.qv(value, b, a) + layout.vv(rate, a, b)
-                                    - layout.qv(value, a, b);
-                                let from_a = layout.vv(value, a, b);
+                                let [from_q, from_y, from_a] = share.jacobian(a, b);
                                 let pair = blocks.pair(e, a, b);
                                 for j in 0..s {
                                     let mut entry = tables.lambda[(i, j)] * from_y
@@ -194,10 +184,7 @@ impl LazySparseCollocation {
             empty => {
                 let made =
                     SparseCollocation::new(terms, state.0.len(), tables.degree, max_iterations)
-                        .map_err(|_| StepFailure::Unsupported {
-                            option: "model",
-                            reason: "the pattern of its terms' indices does not fit its dimension",
-                        })?;
+                        .map_err(|_| PATTERN_MISMATCH)?;
                 empty.insert(Box::new(made))
             }
         };

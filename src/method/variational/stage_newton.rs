@@ -25,29 +25,15 @@
 //!
 //! p_{k+1} − p_k = Σ_μ W_μ ∂L/∂q(t_μ, q_μ, q̇_μ) is the discrete momentum balance.
 
-use crate::dimension::{Dimension, Dyn};
+use crate::dimension::Dyn;
 use crate::error::{Error, StepFailure};
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::block_newton::BlockNewton;
 use crate::method::variational::tables::Tables;
-use crate::model::term_pattern::{MAX_WIDTH, TermPattern};
-use crate::model::{Lagrangian, TermDerivatives, TermSum};
+use crate::model::term_pattern::{MAX_WIDTH, PATTERN_MISMATCH, TermPattern};
+use crate::model::{TermDerivatives, TermSum};
 use crate::nonlinear::{Jacobian, Solved};
-use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator};
-
-/// The terms of `model` when the stage equations are solved by sparse Newton: an unforced sum
-/// of local terms of run-time size (a forced model, or a fixed size, takes the dense Newton
-/// matrix).
-pub(crate) fn sparse_terms<L: Lagrangian<N>, N: Dimension>(model: &L) -> Option<&dyn TermSum<Dyn>>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    if L::FORCED {
-        return None;
-    }
-    model.terms()?.as_run_time()
-}
+use nalgebra::DVector;
 
 /// A run's [`StageNewton`], made at its first use. A clone starts without one (it holds a
 /// factorisation of its own run) and makes its own.
@@ -76,13 +62,8 @@ impl LazyStageNewton {
         let stage = match &mut self.0 {
             Some(stage) => stage,
             empty => {
-                let made =
-                    StageNewton::new(terms, n, (s, m), kind, max_iterations).map_err(|_| {
-                        StepFailure::Unsupported {
-                            option: "model",
-                            reason: "the pattern of its terms' indices does not fit its dimension",
-                        }
-                    })?;
+                let made = StageNewton::new(terms, n, (s, m), kind, max_iterations)
+                    .map_err(|_| PATTERN_MISMATCH)?;
                 empty.insert(Box::new(made))
             }
         };

@@ -65,11 +65,12 @@ use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
-use crate::method::variational::stage_newton::{LazyStageNewton, sparse_terms};
+use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::{Tables, unit_nodes};
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
+use crate::model::derived::sparse_terms;
 use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives, cached_mass_inverse};
 use crate::model::legendre::LazyLegendre;
 use crate::model::mass_inverse::MassInverse;
@@ -266,6 +267,8 @@ where
     velocity: OVector<f64, N>,
     /// A stage buffer (the next iterate at run-time size, where no local is free).
     scratch: OVector<f64, N>,
+    /// The times of the quadrature points in this step.
+    times: Vec<f64>,
     /// ∂L/∂q at the quadrature points.
     forces: Vec<OVector<f64, N>>,
     /// M⁻¹ ∂L/∂q at the quadrature points.
@@ -394,6 +397,7 @@ where
             last_accelerations: vec![zero.clone(); m],
             pending: false,
             mass_inverse: None,
+            times: vec![0.0; m],
             forces: vec![zero.clone(); m],
             accelerations: vec![zero.clone(); m],
             positions: vec![zero.clone(); m],
@@ -1209,6 +1213,9 @@ where
             }
         }
     }
+    for (mu, time) in data.times.iter_mut().enumerate() {
+        *time = tables.time(t, mu);
+    }
     let mut size: f64 = 0.0;
     for (base, c) in data.bases.iter_mut().zip(&data.nystrom.stage_velocity) {
         base.copy_from(&state.q);
@@ -1217,15 +1224,15 @@ where
     }
     let mut control = FixedPoint::new(max_iterations);
     loop {
+        model.forces_into(&data.times, &data.positions, &state.y, &mut data.forces);
         for (mu, (force, acceleration)) in data
             .forces
             .iter_mut()
             .zip(data.accelerations.iter_mut())
             .enumerate()
         {
-            let time = tables.time(t, mu);
-            model.force_into(time, &data.positions[mu], &state.y, force);
             if L::FORCED {
+                let time = data.times[mu];
                 *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
             }
             scaled_inverse.apply_into(force, acceleration);

@@ -554,7 +554,7 @@ impl Program {
         q: &[f64],
         v: &[f64],
     ) -> f64 {
-        self.execute(registers, lanes, t, q, v);
+        self.execute(registers, lanes.loader(t, q, v));
         match self.outputs.first() {
             Some(Output::Register(r)) => registers[*r][..lanes.count].iter().sum(),
             Some(Output::Constant(c)) => c * lanes.count as f64,
@@ -575,7 +575,7 @@ impl Program {
         v: &[f64],
         force: &mut [f64],
     ) {
-        self.execute(registers, lanes, t, q, v);
+        self.execute(registers, lanes.loader(t, q, v));
         for (&output, &base) in self.outputs.iter().zip(lanes.bases) {
             let entries = force[base..]
                 .iter_mut()
@@ -589,27 +589,41 @@ impl Program {
         }
     }
 
-    /// Run the steps on the sites of `lanes`.
+    /// Run a [`Program::force`] on `W` points at once, one a lane: `load` fills the lanes of
+    /// the time, a coordinate or a velocity; then `write(u, lane, ∂ℓ/∂q_u)` for every slot u
+    /// and each of the first `count` lanes, with [`MAX_REGISTERS`] `registers` as scratch.
     #[inline]
-    fn execute(&self, registers: &mut Registers, lanes: Lanes<'_>, t: f64, q: &[f64], v: &[f64]) {
-        let Lanes {
-            count,
-            bases,
-            stride,
-        } = lanes;
-        let gather = |target: &mut [f64; LANES], from: &[f64], base: usize| {
-            if stride == 1 {
-                target[..count].copy_from_slice(&from[base..base + count]);
-            } else {
-                for (lane, x) in target[..count].iter_mut().enumerate() {
-                    *x = from[base + lane * stride];
-                }
+    pub fn forces<const W: usize>(
+        &self,
+        registers: &mut [[f64; W]],
+        count: usize,
+        load: impl FnMut(Source, &mut [f64; W]),
+        mut write: impl FnMut(usize, usize, f64),
+    ) {
+        self.execute(registers, load);
+        for (u, &output) in self.outputs.iter().enumerate() {
+            match output {
+                Output::Zero => (0..count).for_each(|lane| write(u, lane, 0.0)),
+                Output::Constant(c) => (0..count).for_each(|lane| write(u, lane, c)),
+                Output::Register(r) => registers[r][..count]
+                    .iter()
+                    .enumerate()
+                    .for_each(|(lane, &g)| write(u, lane, g)),
             }
-        };
+        }
+    }
+
+    /// Run the steps on `W` lanes, `load` filling the loads.
+    #[inline]
+    fn execute<const W: usize>(
+        &self,
+        registers: &mut [[f64; W]],
+        mut load: impl FnMut(Source, &mut [f64; W]),
+    ) {
         for &(destination, instruction) in &self.steps {
             let (before, after) = registers.split_at_mut(destination);
             let (target, after) = after.split_first_mut().unwrap_or_else(|| unreachable!());
-            let read = |x: usize| -> &[f64; LANES] {
+            let read = |x: usize| -> &[f64; W] {
                 if x < destination {
                     &before[x]
                 } else {
@@ -618,9 +632,9 @@ impl Program {
             };
             match instruction {
                 Instruction::Number(c) => target.fill(c),
-                Instruction::Time => target.fill(t),
-                Instruction::Coordinate(u) => gather(target, q, bases[u]),
-                Instruction::Velocity(u) => gather(target, v, bases[u]),
+                Instruction::Time => load(Source::Time, target),
+                Instruction::Coordinate(u) => load(Source::Coordinate(u), target),
+                Instruction::Velocity(u) => load(Source::Velocity(u), target),
                 Instruction::Negate(x) => map(target, read(x), |x| -x),
                 Instruction::Scale(x, c) => map(target, read(x), |x| x * c),
                 Instruction::Shift(x, c) => map(target, read(x), |x| x + c),
@@ -648,9 +662,52 @@ impl Program {
     }
 }
 
+/// What a load instruction reads, lane by lane.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// The time.
+    Time,
+    /// Coordinate (slot) u.
+    Coordinate(usize),
+    /// Velocity (slot) u.
+    Velocity(usize),
+}
+
+impl Lanes<'_> {
+    /// The loads of these lanes: slot u of lane l at entry `bases[u] + l · stride` of q or
+    /// q̇, the same time on every lane.
+    #[inline]
+    fn loader<'a>(
+        &'a self,
+        t: f64,
+        q: &'a [f64],
+        v: &'a [f64],
+    ) -> impl FnMut(Source, &mut [f64; LANES]) + 'a {
+        let Lanes {
+            count,
+            bases,
+            stride,
+        } = *self;
+        move |source, target| {
+            let (from, base) = match source {
+                Source::Time => return target.fill(t),
+                Source::Coordinate(u) => (q, bases[u]),
+                Source::Velocity(u) => (v, bases[u]),
+            };
+            if stride == 1 {
+                target[..count].copy_from_slice(&from[base..base + count]);
+            } else {
+                for (lane, x) in target[..count].iter_mut().enumerate() {
+                    *x = from[base + lane * stride];
+                }
+            }
+        }
+    }
+}
+
 /// target = f(x), lane by lane.
 #[inline(always)]
-fn map(target: &mut [f64; LANES], x: &[f64; LANES], f: impl Fn(f64) -> f64) {
+fn map<const W: usize>(target: &mut [f64; W], x: &[f64; W], f: impl Fn(f64) -> f64) {
     for (t, x) in target.iter_mut().zip(x) {
         *t = f(*x);
     }
@@ -658,7 +715,12 @@ fn map(target: &mut [f64; LANES], x: &[f64; LANES], f: impl Fn(f64) -> f64) {
 
 /// target = f(x, y), lane by lane.
 #[inline(always)]
-fn zip(target: &mut [f64; LANES], x: &[f64; LANES], y: &[f64; LANES], f: impl Fn(f64, f64) -> f64) {
+fn zip<const W: usize>(
+    target: &mut [f64; W],
+    x: &[f64; W],
+    y: &[f64; W],
+    f: impl Fn(f64, f64) -> f64,
+) {
     for ((t, x), y) in target.iter_mut().zip(x).zip(y) {
         *t = f(*x, *y);
     }

@@ -149,6 +149,7 @@ use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 use crate::scalar::Scalar;
+use batch::{MAX_REGISTERS, Program, Source};
 use expression::{Expression, Split, Tape, Velocities};
 use tree::{CONSTANT_NAMES, FUNCTION_NAMES, Names};
 
@@ -362,6 +363,10 @@ struct Tapes {
     lagrangian: Tape,
     /// For a constant-mass L: its two parts.
     constant_mass: Option<Split>,
+    /// For a constant-mass L: ∂L/∂q = ∂U/∂q as a straight-line program, run with many
+    /// points as lanes ([`Lagrangian::batch_force`]); `None` where the program would need
+    /// more registers than there are.
+    force: Option<Program>,
     forces: Vec<Tape>,
     generators: Vec<Vec<Tape>>,
 }
@@ -376,9 +381,13 @@ impl Tapes {
         n: usize,
     ) -> Tapes {
         let compile = |expression: &Expression| expression.compile(parameters, Velocities::Read);
+        let constant_mass = Split::of(lagrangian, parameters, n);
         Tapes {
             lagrangian: compile(lagrangian),
-            constant_mass: Split::of(lagrangian, parameters, n),
+            force: constant_mass
+                .as_ref()
+                .and_then(|split| Program::force(split.potential(), n)),
+            constant_mass,
             forces: forces.iter().map(compile).collect(),
             generators: generators
                 .iter()
@@ -780,7 +789,49 @@ where
             forces[i].evaluate(t, q.as_slice(), v.as_slice())
         })
     }
+
+    /// A constant-mass L: the compiled program of ∂U/∂q on [`BATCH_LANES`] points at once.
+    #[inline]
+    fn batch_force(
+        &self,
+        times: &[f64],
+        positions: &[OVector<f64, N>],
+        _v: &OVector<f64, N>,
+        forces: &mut [OVector<f64, N>],
+    ) -> bool {
+        let program = match &self.model.tapes.force {
+            Some(program) if CONSTANT_MASS => program,
+            _ => return false,
+        };
+        let mut registers = [[0.0; BATCH_LANES]; MAX_REGISTERS];
+        for ((times, positions), forces) in times
+            .chunks(BATCH_LANES)
+            .zip(positions.chunks(BATCH_LANES))
+            .zip(forces.chunks_mut(BATCH_LANES))
+        {
+            program.forces(
+                &mut registers,
+                positions.len(),
+                |source, lanes| match source {
+                    Source::Time => lanes[..times.len()].copy_from_slice(times),
+                    Source::Coordinate(u) => {
+                        for (x, q) in lanes.iter_mut().zip(positions) {
+                            *x = q[u];
+                        }
+                    }
+                    // U(t, q) reads no velocity.
+                    Source::Velocity(_) => lanes.fill(0.0),
+                },
+                |u, lane, value| forces[lane][u] = value,
+            );
+        }
+        true
+    }
 }
+
+/// The points a text model's force program runs at once ([`Lagrangian::batch_force`]): as
+/// many as SVI's usual quadrature rules have.
+const BATCH_LANES: usize = 16;
 
 impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
     Symmetries<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
@@ -1031,5 +1082,39 @@ mod tests {
         assert!(model.set_parameter("m", 1.0).is_err());
         assert_eq!(model.coordinate_names(), ["x", "y"]);
         assert_eq!(model.name(), "text");
+    }
+
+    /// The compiled force program with the points as lanes is the force of the dual
+    /// numbers, point by point, for a time-dependent constant-mass L and more points than
+    /// one batch holds.
+    #[test]
+    fn the_batched_force_is_the_force_point_by_point() {
+        let text = spec(
+            "0.5*(vx^2 + 3*vy^2) - x^2*cos(t) - sin(x*y) + 1/sqrt(1 + x^2 + y^4)",
+            &["x", "y"],
+        );
+        let model = TextModel::new(&text).unwrap();
+        let model = TextLagrangian::<crate::dimension::Dyn, true, false, true>::new(model).unwrap();
+        let count = BATCH_LANES + 5;
+        let times: Vec<f64> = (0..count).map(|k| 0.1 * k as f64).collect();
+        let positions: Vec<DVector<f64>> = (0..count)
+            .map(|k| DVector::from_column_slice(&[(0.7 * k as f64).sin(), 0.2 * k as f64 - 1.0]))
+            .collect();
+        let v = DVector::from_column_slice(&[0.3, -0.4]);
+        let mut forces = vec![DVector::zeros(2); count];
+        assert!(model.batch_force(&times, &positions, &v, &mut forces));
+        for ((&t, q), force) in times.iter().zip(&positions).zip(&forces) {
+            let mut expected = DVector::zeros(2);
+            model.force_into(t, q, &v, &mut expected);
+            assert!(
+                (force - &expected).amax() <= 1e-14 * expected.amax().max(1.0),
+                "{force} {expected}"
+            );
+        }
+        // A general L offers no batch: the integrators take the points one by one.
+        let general = spec("0.5*(1 + x^2)*vx^2 + 0.5*vy^2 - x^2", &["x", "y"]);
+        let general = TextModel::new(&general).unwrap();
+        let general = TextLagrangian::<crate::dimension::Dyn>::new(general).unwrap();
+        assert!(!general.batch_force(&times, &positions, &v, &mut forces));
     }
 }
