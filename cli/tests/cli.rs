@@ -693,6 +693,80 @@ fn bench_measures_given_step_counts_and_tolerances() {
     }
 }
 
+/// The rows of the one CSV file `svi bench ARGS --out-dir DIR` wrote (columns as in
+/// `bench_measures_given_step_counts_and_tolerances`).
+fn bench_rows(name: &str, args: &[&str]) -> Vec<Vec<String>> {
+    let dir = Scratch::new(name);
+    let out = dir.0.to_str().unwrap();
+    let mut all = vec!["bench"];
+    all.extend_from_slice(args);
+    all.extend(["--batches", "1", "--min-batch", "0", "--out-dir", out]);
+    let output = svi(&all);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    let csv = std::fs::read_dir(&dir.0)
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .find(|path| path.extension().is_some_and(|e| e == "csv"))
+        .unwrap_or_else(|| panic!("no CSV: {stderr}"));
+    std::fs::read_to_string(csv)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect()
+}
+
+/// Chains and Lagrangians written as text are measured against the resolved reference run:
+/// their fixed-step methods reach their orders, and Kepler written as text has the zoo
+/// model's errors (the reference run against the exact solution); a peer is refused.
+#[test]
+fn bench_measures_chains_and_text_models_against_the_reference_run() {
+    let error = |row: &Vec<String>| row[4].parse::<f64>().unwrap();
+    let steps = [
+        "--methods",
+        "svi:3/2",
+        "--steps",
+        "100,200",
+        "--t-end",
+        "20",
+    ];
+    let text = bench_rows("bench-text", &[&["kepler-text"][..], &steps].concat());
+    let zoo = bench_rows("bench-zoo", &[&["kepler"][..], &steps].concat());
+    assert_eq!(text.len(), 2);
+    for (a, b) in text.iter().zip(&zoo) {
+        assert!(
+            (error(a) / error(b) - 1.0).abs() < 1e-3,
+            "{a:?} against {b:?}"
+        );
+    }
+    let ratio = error(&text[0]) / error(&text[1]);
+    assert!(ratio > 12.0 && ratio < 20.0, "order 4: {ratio}");
+    let chain = bench_rows(
+        "bench-chain",
+        &[
+            "fput",
+            "--param",
+            "n=16",
+            "--param",
+            "beta=0.5",
+            "--t-end",
+            "5",
+            "--methods",
+            "verlet",
+            "--steps",
+            "50,100",
+        ],
+    );
+    let ratio = error(&chain[0]) / error(&chain[1]);
+    assert!(ratio > 3.5 && ratio < 4.5, "order 2: {ratio}");
+    bad_input(
+        &["bench", "fput"],
+        &["--methods", "dop853"],
+        "needs a model of fixed size",
+    );
+}
+
 #[test]
 fn one_method_grammar_on_the_command_line_and_in_scenes() {
     // `--method svi:7/6` is `--method svi --points 7 --quadrature 6`, and the scene's

@@ -367,3 +367,81 @@ fn the_step_budget_bounds_every_member() {
     assert_eq!(rows[1]["status"], "too_many_steps", "{:?}", rows[1]);
     assert_eq!(cell(&rows[1], "steps"), 300.0);
 }
+
+/// Chains (zoo and text) and Lagrangians written as text run as ensembles: a chain's row has
+/// its scalars and no column per site, each row is the single run of that member; an initial
+/// component of a chain is refused naming the reason, and a text model's is set by name.
+#[test]
+fn chains_and_text_models_run_as_ensembles() {
+    let scratch = Scratch::new("ensemble-chains");
+    let chain = [
+        "fput",
+        "--param",
+        "n=16",
+        "--param",
+        "beta=0.5,1",
+        "--t-end",
+        "5",
+    ];
+    let (status, rows) = table(&chain, &scratch, "fput.csv");
+    assert_eq!(status, 0);
+    assert_eq!(rows.len(), 2);
+    for row in &rows {
+        assert_eq!(row["status"], "ok");
+        assert!(
+            !row.keys().any(|column| column.starts_with("q_")),
+            "{row:?}"
+        );
+        let run = run_text(&[
+            "run",
+            "fput",
+            "--param",
+            "n=16",
+            "--param",
+            &format!("beta={}", row["beta"]),
+            "--t-end",
+            "5",
+            "--diagnostics",
+            "energy",
+            "--json",
+        ]);
+        for field in ["energy_initial", "energy_error_max"] {
+            assert_eq!(cell(row, field), raw(&run, field)[0], "{field}");
+        }
+        // SVI 6/12 keeps the chain's energy to round-off.
+        assert!(cell(row, "energy_error_max") <= 1e-12 * cell(row, "energy_initial"));
+    }
+    // A stiffer spring stores more energy in the same displacement.
+    assert!(cell(&rows[1], "energy_initial") > cell(&rows[0], "energy_initial"));
+    let (status, rows) = table(
+        &[
+            "fput-text",
+            "--param",
+            "n=16",
+            "--param",
+            "beta=0.5,1",
+            "--t-end",
+            "5",
+        ],
+        &scratch,
+        "fput-text.csv",
+    );
+    assert_eq!(status, 0, "{rows:?}");
+    assert_eq!(rows.len(), 2);
+    bad_input(
+        &["ensemble", "fput", "--param", "n=16"],
+        &["--initial", "q.q1=0:1:2"],
+        "site by site",
+    );
+    let (status, rows) = table(
+        &["kepler-text", "--initial", "q.x=0.5,0.6", "--t-end", "10"],
+        &scratch,
+        "kepler-text.csv",
+    );
+    assert_eq!(status, 0, "{rows:?}");
+    // The first member starts from the scene's own state: it is the scene's run.
+    let run = run_text(&["run", "kepler-text", "--t-end", "10", "--json"]);
+    assert_eq!(cell(&rows[0], "q_x"), raw(&run, "q")[0]);
+    assert_eq!(cell(&rows[0], "q_y"), raw(&run, "q")[1]);
+    assert_ne!(cell(&rows[1], "q_x"), cell(&rows[0], "q_x"));
+}

@@ -783,6 +783,8 @@ fn bench_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
             "kepler",
             "pendulum",
             "rigid-body",
+            "fput",
+            "kepler-text",
             "nosuch",
         ]),
         vec![

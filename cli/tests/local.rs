@@ -104,11 +104,15 @@ fn options_a_chain_cannot_use_are_bad_input_naming_them() {
     bad_input(&["run", "fput"], &["--form", "full"], "--form");
     bad_input(&["run", "fput"], &["--every", "3"], "output.every");
     bad_input(&["run", "fput"], &["--param", "gamma=1"], "gamma");
-    bad_input(&["bench", "fput"], &[], "svi bench SCENE");
+    bad_input(
+        &["bench", "fput"],
+        &["--methods", "radau5"],
+        "needs a model of fixed size",
+    );
     bad_input(
         &["ensemble", "toda"],
-        &["--param", "n=4,8"],
-        "svi ensemble SCENE",
+        &["--initial", "q.q1=0,1"],
+        "site by site",
     );
 }
 

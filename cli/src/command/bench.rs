@@ -8,7 +8,9 @@
 //! largest energy and Noether-momentum errors (measured in a separate, untimed run with
 //! observers), the derivative evaluations, the nonlinear iterations and the wall time of a run
 //! that observes nothing (median over batches, each batch repeating the run for at least
-//! `min_batch` seconds, after a warm-up run).
+//! `min_batch` seconds, after a warm-up run). Chains (zoo or text) and Lagrangians written as
+//! text, which have no exact solution, are swept through the scene's own run against the
+//! resolved reference run, each point a whole run ([`sweep_runs`]; fixed-step methods).
 //!
 //! Fixed-step methods start from 8 steps, double until the error is below 3·10⁻², go back by
 //! bisection to the fewest steps (to within 1/16, or one step) with an error below 3·10⁻² — a method that
@@ -46,15 +48,17 @@ use crate::command::peers::{
 use crate::report::csv;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
+use crate::report::summary::{StateSummary, Summary};
 use crate::scene::builtin::DEFAULT_SCENE;
 use crate::scene::limits::{
     self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS, MIN_PEER_TOLERANCE,
 };
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
+use crate::scene::schema::Diagnostic;
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, OVector, SVector, U1};
+use nalgebra::{DVector, DefaultAllocator, OVector, SVector, U1};
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -515,24 +519,6 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, S
             ),
         });
     }
-    if scene.is_local() {
-        return Err(SceneError::NotApplicable {
-            option: "svi bench SCENE",
-            reason: format!(
-                "'{}' is a chain of runtime dimension with no exact solution to measure errors \
-                 against (svi run runs it)",
-                scene.model_name()
-            ),
-        });
-    }
-    if scene.lagrangian.is_some() {
-        return Err(SceneError::NotApplicable {
-            option: "svi bench SCENE",
-            reason: "a Lagrangian written as text has no exact solution to measure errors \
-                     against (svi run runs it)"
-                .into(),
-        });
-    }
     if options.methods.contains(&BenchMethod::Molly) {
         molly::check_model(&scene.model)?;
     }
@@ -545,16 +531,169 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, S
     } else {
         ProgressBar::hidden()
     };
-    let records = visit_model(
-        &scene.model,
-        Bench {
+    let records = if scene.is_local() || scene.lagrangian.is_some() {
+        sweep_runs(scene, options, &progress)
+    } else {
+        let bench = Bench {
             scene,
             options,
             progress: &progress,
-        },
-    );
+        };
+        visit_model(&scene.model, bench).unwrap_or_else(|error| Err(error.into()))
+    };
     progress.finish_and_clear();
-    records?
+    records
+}
+
+/// Sweep the methods of `options` on a chain (zoo or text) or a Lagrangian written as text
+/// through the scene's own run ([`Scene::run`], compiled once for every such model): each
+/// point is a whole run of the scene with the method and the step, its final position
+/// measured against the resolved reference run (SVI 7/6 at the scene's step h halved, up to
+/// h/16, until two runs agree to 10⁻¹¹ relative) in the Euclidean norm, its time the median
+/// of runs without diagnostics. The fixed-step methods of the library are swept this way; the
+/// peers and the adaptive modes need a model of fixed size.
+fn sweep_runs(
+    scene: &Scene,
+    options: &BenchOptions,
+    progress: &ProgressBar,
+) -> Result<Sweeps, SceneError> {
+    if options.coordinate.is_some() {
+        return Err(SceneError::NotApplicable {
+            option: "--coordinate",
+            reason: "measures one coordinate of a zoo model of fixed size; a chain or a text \
+                     model is measured in all its coordinates"
+                .into(),
+        });
+    }
+    let specs = options
+        .methods
+        .iter()
+        .map(|method| match method {
+            BenchMethod::Library(spec) => Ok(*spec),
+            other => Err(SceneError::NotApplicable {
+                option: "--methods",
+                reason: format!(
+                    "{other} needs a model of fixed size; on a chain or a text model svi bench \
+                     sweeps the fixed-step methods of the library"
+                ),
+            }),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    // The scene with `method` at step `h`, measuring the energy error or nothing.
+    let with = |method: MethodSpec, h: Option<f64>, energy: bool| -> Result<Scene, SceneError> {
+        let mut variant = scene.clone();
+        variant.apply(&Overrides {
+            method: Some(method),
+            h,
+            ..Overrides::default()
+        })?;
+        variant.output.diagnostics = Some(vec![if energy {
+            Diagnostic::Energy
+        } else {
+            Diagnostic::None
+        }]);
+        Ok(variant)
+    };
+    let final_q = |summary: &Summary| match &summary.state {
+        StateSummary::Vector { q, .. } => DVector::from_column_slice(q),
+        StateSummary::Rigid { .. } => unreachable!("a chain or a text model lives on ℝᴺ"),
+    };
+    // The reference: svi:7/6 at the scene's step halved until two runs agree.
+    let reference_spec: MethodSpec = "svi:7/6".parse()?;
+    let first = with(reference_spec, None, false)?.run(false)?;
+    let span = first.t_end - first.t0;
+    check_horizon(first.t0, first.t_end, first.h)?;
+    let (mut h, mut coarse) = (first.h, final_q(&first));
+    let reference = loop {
+        let fine = final_q(&with(reference_spec, Some(0.5 * h), false)?.run(false)?);
+        let discrepancy = (&coarse - &fine).amax();
+        if discrepancy <= 1e-11 * fine.amax().max(1.0) {
+            break fine;
+        }
+        if h <= first.h / 8.0 {
+            return Err(SceneError::NoReference {
+                model: scene.model_name().into(),
+                reason: format!(
+                    "its reference runs (svi:7/6 at h = {h:e} and h/2) differ by \
+                     {discrepancy:.1e}: the scene's step divided by 16 does not resolve it"
+                ),
+            });
+        }
+        (h, coarse) = (0.5 * h, fine);
+    };
+    let report = Report {
+        verbose: options.verbose,
+        progress,
+    };
+    let mut sweeps = Sweeps::default();
+    let mut first_error = None;
+    for spec in specs {
+        let label = spec.to_string();
+        progress.set_message(label.clone());
+        let run = |steps: f64, energy: bool| {
+            with(spec, Some(span / steps), energy)?
+                .run(false)
+                .map_err(|error| match error {
+                    SceneError::RunFailed { source, .. } => SceneError::from(source),
+                    other => other,
+                })
+        };
+        let final_error = |steps: usize| -> Result<f64, SceneError> {
+            Ok((final_q(&run(steps as f64, false)?) - &reference).norm())
+        };
+        let measure = |steps: f64| -> Result<Record, SceneError> {
+            let summary = run(steps, true)?;
+            let quiet = with(spec, Some(span / steps), false)?;
+            let seconds = median_seconds(
+                || {
+                    let _ = quiet.run(false);
+                },
+                options,
+            );
+            Ok(Record {
+                method: label.clone(),
+                parameter: steps,
+                h: Some(summary.h),
+                steps: summary.steps,
+                final_error: (final_q(&summary) - &reference).norm(),
+                energy_error_max: summary.energy_error_max.unwrap_or(f64::NAN),
+                momentum_error_max: None,
+                evaluations: summary.evaluations,
+                iterations: summary.iterations,
+                seconds,
+            })
+        };
+        let order = Method::<svi::Dyn>::info(&spec.vector_method()?)
+            .order
+            .max(1) as f64;
+        let mut records = Vec::new();
+        match sweep_steps(
+            &label,
+            order,
+            options,
+            report,
+            &mut records,
+            final_error,
+            measure,
+        ) {
+            Ok(()) => sweeps.records.extend(records),
+            Err(error) if error.is_bad_input() => return Err(error),
+            Err(error) => {
+                report.warn(&format!("{label} measured no point: {error}"));
+                sweeps.failures.push(MethodFailure {
+                    method: label.clone(),
+                    kind: crate::command::run::error_report(&error).kind,
+                    message: error.to_string(),
+                });
+                first_error.get_or_insert(error);
+            }
+        }
+        progress.inc(1);
+    }
+    match first_error {
+        Some(error) if sweeps.records.is_empty() => Err(error),
+        _ => Ok(sweeps),
+    }
 }
 
 /// Receives the scene's model and sweeps the methods on it.
@@ -1105,14 +1244,14 @@ where
 /// `final_error` is below 3·10⁻², bisected back to the fewest such steps, then grown by
 /// 10^(1/(2·order)) per point until the sweep ends ([`Stall::ends_after`]); `measure` makes
 /// the record of a step count (passed as `f64`).
-fn sweep_steps(
+fn sweep_steps<E: Into<SceneError> + fmt::Display>(
     label: &str,
     order: f64,
     options: &BenchOptions,
     report: Report<'_>,
     records: &mut Vec<Record>,
-    final_error: impl Fn(usize) -> Result<f64, svi::Error>,
-    measure: impl Fn(f64) -> Result<Record, svi::Error>,
+    final_error: impl Fn(usize) -> Result<f64, E>,
+    measure: impl Fn(f64) -> Result<Record, E>,
 ) -> Result<(), SceneError> {
     if !options.steps.is_empty() {
         let steps: Vec<f64> = options.steps.iter().map(|&steps| steps as f64).collect();
@@ -1168,11 +1307,11 @@ fn fewest_resolved_steps(resolved: impl Fn(usize) -> bool) -> usize {
 /// Measure the points of the method `label` that the user asked for (`--steps` or
 /// `--tolerances`, named `what`): a point that fails is a warning naming it and the others are
 /// kept; if every point fails, the first failure is the error.
-fn measure_requested(
+fn measure_requested<E: Into<SceneError> + fmt::Display>(
     label: &str,
     points: &[f64],
     what: &str,
-    measure: impl Fn(f64) -> Result<Record, svi::Error>,
+    measure: impl Fn(f64) -> Result<Record, E>,
     report: Report<'_>,
     records: &mut Vec<Record>,
 ) -> Result<(), SceneError> {

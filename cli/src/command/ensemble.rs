@@ -207,6 +207,7 @@ impl Ensemble {
         let names = check_axes(&scene, &axes)?;
         let schema = match &names.coordinates {
             Some(coordinates) => Schema::vector(coordinates),
+            None if names.chain => Schema::chain(),
             None => Schema::rigid(),
         };
         let members = members(&axes, random)?;

@@ -136,12 +136,17 @@ pub struct Schema {
 }
 
 impl Schema {
-    /// The columns of a model on ℝᴺ with these coordinate names.
-    pub fn vector(coordinates: &[String]) -> Schema {
-        let mut fields = vec![
+    /// The columns every table starts with: the run's end and its steps.
+    fn leading() -> Vec<(String, &'static str, Option<usize>)> {
+        vec![
             ("t_end".into(), "t_end", None),
             ("steps".into(), "steps", None),
-        ];
+        ]
+    }
+
+    /// The columns of a model on ℝᴺ with these coordinate names.
+    pub fn vector(coordinates: &[String]) -> Schema {
+        let mut fields = Schema::leading();
         for field in ["q", "v", "p"] {
             for (i, name) in coordinates.iter().enumerate() {
                 fields.push((format!("{field}_{name}"), field, Some(i)));
@@ -151,12 +156,18 @@ impl Schema {
         Schema { fields }
     }
 
+    /// The columns of a chain of run-time size: its scalars, no column per coordinate (a
+    /// chain of 10⁴ sites would have 3·10⁴).
+    pub fn chain() -> Schema {
+        let mut fields = Schema::leading();
+        fields.extend(VECTOR_SCALARS.map(|field| (field.to_string(), field, None)));
+        fields.push(("invariant_error_max".into(), "invariant_error_max", None));
+        Schema { fields }
+    }
+
     /// The columns of a rigid body on SO(3).
     pub fn rigid() -> Schema {
-        let mut fields = vec![
-            ("t_end".into(), "t_end", None),
-            ("steps".into(), "steps", None),
-        ];
+        let mut fields = Schema::leading();
         for (field, size) in [("quaternion", 4), ("omega", 3), ("momentum", 3)] {
             for i in 0..size {
                 fields.push((format!("{field}_{}", i + 1), field, Some(i)));

@@ -21,13 +21,15 @@ use svi::Dimension;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use svi::method::registry::SpaceKind;
-use svi_models::{ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel};
+use svi_models::{
+    LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
+};
 
 use crate::report::csv::Float;
-use crate::scene::Scene;
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
 use crate::scene::schema::Components;
+use crate::scene::{Scene, Text};
 
 /// The largest number of members of one ensemble (each keeps its summary until the table is
 /// written: about 2 kB).
@@ -470,7 +472,19 @@ impl Member {
         if initial.is_empty() {
             return Ok(scene);
         }
-        let resolved = svi_models::visit_model(&scene.model, ResolveInitial { scene: &scene })??;
+        let resolve = ResolveInitial { scene: &scene };
+        let resolved = match scene.text() {
+            Some(text) => match text? {
+                Text::Model(model) => svi_models::visit_text_model(model, resolve)??,
+                Text::Chain(_) => {
+                    return Err(SceneError::NotApplicable {
+                        option: "--initial",
+                        reason: "a chain's initial state is given site by site".into(),
+                    });
+                }
+            },
+            None => svi_models::visit_model(&scene.model, resolve)??,
+        };
         let (names, mut state) = resolved;
         for (field, coordinate, value) in initial {
             let index =
@@ -571,8 +585,12 @@ impl ModelVisitor for ResolveInitial<'_> {
 pub struct ModelNames {
     /// The model's parameter names.
     pub parameters: Vec<&'static str>,
-    /// The configuration coordinates (`None` for a rigid body on SO(3)).
+    /// The configuration coordinates (`None` for a rigid body on SO(3) and for a chain, whose
+    /// n coordinates are numbered, not named).
     pub coordinates: Option<Vec<String>>,
+    /// Whether the model is a chain of run-time size (zoo or text): its table has no column
+    /// per coordinate, and its initial state is given site by site in the scene.
+    pub chain: bool,
 }
 
 impl ModelVisitor for ModelNamesOf {
@@ -584,6 +602,25 @@ impl ModelVisitor for ModelNamesOf {
         ModelNames {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
             coordinates: Some(model.coordinate_names()),
+            chain: false,
+        }
+    }
+}
+
+impl LocalModelVisitor for ModelNamesOf {
+    type Output = ModelNames;
+    fn visit<M: LocalZooModel>(self, model: M) -> ModelNames {
+        ModelNames::chain(model.parameters())
+    }
+}
+
+impl ModelNames {
+    /// The names of a chain with these parameters.
+    fn chain(parameters: Vec<(&'static str, f64)>) -> ModelNames {
+        ModelNames {
+            parameters: parameters.iter().map(|(name, _)| *name).collect(),
+            coordinates: None,
+            chain: true,
         }
     }
 }
@@ -594,6 +631,7 @@ impl RigidModelVisitor for ModelNamesOf {
         ModelNames {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
             coordinates: None,
+            chain: false,
         }
     }
 }
@@ -605,18 +643,26 @@ struct ModelNamesOf;
 /// of the model's, every initial component one of its coordinates (ℝᴺ scenes only). Returns
 /// the model's names.
 pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError> {
-    if scene.is_local() {
-        return Err(SceneError::NotApplicable {
-            option: "svi ensemble SCENE",
-            reason: format!(
-                "'{}' is a chain of runtime dimension, whose members' tables are not built yet; \
-                 svi run runs it (models of fixed dimension and rigid bodies run as ensembles)",
-                scene.model
-            ),
-        });
-    }
     let names = match scene.space() {
-        SpaceKind::Vector => svi_models::visit_model(&scene.model, ModelNamesOf)?,
+        SpaceKind::Vector => match scene.text() {
+            Some(text) => match text? {
+                Text::Model(model) => ModelNames {
+                    parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
+                    coordinates: Some(
+                        model
+                            .coordinate_names()
+                            .iter()
+                            .map(|name| name.to_string())
+                            .collect(),
+                    ),
+                    chain: false,
+                },
+                Text::Chain(chain) => ModelNames::chain(chain.parameters()),
+            },
+            None if scene.is_local() => svi_models::visit_local_model(&scene.model, ModelNamesOf)
+                .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
+            None => svi_models::visit_model(&scene.model, ModelNamesOf)?,
+        },
         SpaceKind::Rotation => svi_models::visit_rigid_model(&scene.model, ModelNamesOf)
             .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
     };
@@ -636,12 +682,22 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
             }
             Target::Initial { field, coordinate } => {
                 let Some(coordinates) = &names.coordinates else {
-                    return Err(SceneError::NotApplicable {
-                        option: "--initial",
-                        reason: format!(
+                    let reason = if names.chain {
+                        format!(
+                            "varies q, v or p of models with named coordinates; '{}' is a \
+                             chain, whose initial state the scene gives site by site (vary \
+                             its parameters with --param)",
+                            scene.model_name()
+                        )
+                    } else {
+                        format!(
                             "varies q, v or p of scenes on ℝᴺ; '{}' is a rigid body",
                             scene.model
-                        ),
+                        )
+                    };
+                    return Err(SceneError::NotApplicable {
+                        option: "--initial",
+                        reason,
                     });
                 };
                 let Some(index) = coordinate_index(coordinates, coordinate) else {

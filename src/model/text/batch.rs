@@ -1,6 +1,8 @@
 //! A chain's terms on batches of sites: the value ℓ and the force ∂ℓ/∂q of one kind of term,
 //! compiled from its [`Tape`] into straight-line programs (the force by reverse-mode
-//! automatic differentiation), each run on [`LANES`] sites at once.
+//! automatic differentiation), each run on [`LANES`] sites at once. The same programs give
+//! a constant-mass text model's force on many points at once ([`Program::forces`]: SVI's
+//! quadrature points, one a lane).
 //!
 //! # Why
 //!
@@ -446,6 +448,8 @@ pub struct Program {
     steps: Vec<(usize, Instruction)>,
     /// ℓ (one output), or ∂ℓ/∂q of each slot.
     outputs: Vec<Output>,
+    /// The number of registers the steps use (at most [`MAX_REGISTERS`]).
+    registers: usize,
 }
 
 /// Where the lanes of a batch read their coordinates and write their forces: slot u of
@@ -540,7 +544,16 @@ impl Program {
                 Adjoint::Value(x) => Output::Register(register[x]),
             })
             .collect();
-        Some(Program { steps, outputs })
+        Some(Program {
+            steps,
+            outputs,
+            registers: count,
+        })
+    }
+
+    /// The number of registers the steps use (at most [`MAX_REGISTERS`]).
+    pub fn register_count(&self) -> usize {
+        self.registers
     }
 
     /// The sum of ℓ over the sites of `lanes` at time `t` (a [`Program::value`]), reading
@@ -591,7 +604,8 @@ impl Program {
 
     /// Run a [`Program::force`] on `W` points at once, one a lane: `load` fills the lanes of
     /// the time, a coordinate or a velocity; then `write(u, lane, ∂ℓ/∂q_u)` for every slot u
-    /// and each of the first `count` lanes, with [`MAX_REGISTERS`] `registers` as scratch.
+    /// and each of the first `count` lanes, with `registers` as scratch (at least
+    /// [`Program::register_count`] of them).
     #[inline]
     pub fn forces<const W: usize>(
         &self,

@@ -124,9 +124,13 @@
 //!
 //! For a constant-mass L the kinetic part ½q̇ᵀMq̇ is read off the tree once (M from the
 //! constant coefficients) and evaluated as a sum of products without a tape; only
-//! U(t, q) = L(t, q, 0) runs on one. On the Kepler scene of the paper (10 000 steps of SVI
-//! with 6/12 points) a text model takes 2.7 times as long as the same model in Rust
-//! (`cargo bench --bench text`).
+//! U(t, q) = L(t, q, 0) runs on one. Its force ∂U/∂q is also compiled into a straight-line
+//! program by reverse-mode differentiation (as a chain's terms are, [`batch`]), which SVI's
+//! fixed point runs on all its quadrature points at once, one a lane
+//! ([`Lagrangian::batch_force`]). On the Kepler scene of the paper (10 000 steps of SVI
+//! with 6/12 points) a text model takes about 1.7 times as long as the same model in Rust when
+//! its size is compiled in, and about 4 times at run-time size (`cargo bench --bench text --
+//! kepler_T2000`).
 
 mod batch;
 pub mod chain;
@@ -803,29 +807,54 @@ where
             Some(program) if CONSTANT_MASS => program,
             _ => return false,
         };
-        let mut registers = [[0.0; BATCH_LANES]; MAX_REGISTERS];
-        for ((times, positions), forces) in times
-            .chunks(BATCH_LANES)
-            .zip(positions.chunks(BATCH_LANES))
-            .zip(forces.chunks_mut(BATCH_LANES))
-        {
-            program.forces(
-                &mut registers,
-                positions.len(),
-                |source, lanes| match source {
-                    Source::Time => lanes[..times.len()].copy_from_slice(times),
-                    Source::Coordinate(u) => {
-                        for (x, q) in lanes.iter_mut().zip(positions) {
-                            *x = q[u];
-                        }
-                    }
-                    // U(t, q) reads no velocity.
-                    Source::Velocity(_) => lanes.fill(0.0),
-                },
-                |u, lane, value| forces[lane][u] = value,
+        // The smallest register file that holds the program: it is zeroed at every call.
+        if program.register_count() <= 8 {
+            batch_force_with(
+                program,
+                &mut [[0.0; BATCH_LANES]; 8],
+                times,
+                positions,
+                forces,
             );
+        } else {
+            let registers = &mut [[0.0; BATCH_LANES]; MAX_REGISTERS];
+            batch_force_with(program, registers, times, positions, forces);
         }
         true
+    }
+}
+
+/// ∂U/∂q at the points by `program`, [`BATCH_LANES`] points at once, with `registers`.
+#[inline]
+fn batch_force_with<N: Dimension>(
+    program: &Program,
+    registers: &mut [[f64; BATCH_LANES]],
+    times: &[f64],
+    positions: &[OVector<f64, N>],
+    forces: &mut [OVector<f64, N>],
+) where
+    DefaultAllocator: Allocator<N>,
+{
+    for ((times, positions), forces) in times
+        .chunks(BATCH_LANES)
+        .zip(positions.chunks(BATCH_LANES))
+        .zip(forces.chunks_mut(BATCH_LANES))
+    {
+        program.forces(
+            registers,
+            positions.len(),
+            |source, lanes| match source {
+                Source::Time => lanes[..times.len()].copy_from_slice(times),
+                Source::Coordinate(u) => {
+                    for (x, q) in lanes.iter_mut().zip(positions) {
+                        *x = q[u];
+                    }
+                }
+                // U(t, q) reads no velocity.
+                Source::Velocity(_) => lanes.fill(0.0),
+            },
+            |u, lane, value| forces[lane][u] = value,
+        );
     }
 }
 
