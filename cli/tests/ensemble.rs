@@ -374,60 +374,49 @@ fn the_step_budget_bounds_every_member() {
 #[test]
 fn chains_and_text_models_run_as_ensembles() {
     let scratch = Scratch::new("ensemble-chains");
-    let chain = [
-        "fput",
-        "--param",
-        "n=16",
-        "--param",
-        "beta=0.5,1",
-        "--t-end",
-        "5",
-    ];
-    let (status, rows) = table(&chain, &scratch, "fput.csv");
-    assert_eq!(status, 0);
-    assert_eq!(rows.len(), 2);
-    for row in &rows {
-        assert_eq!(row["status"], "ok");
-        assert!(
-            !row.keys().any(|column| column.starts_with("q_")),
-            "{row:?}"
-        );
-        let run = run_text(&[
-            "run",
-            "fput",
-            "--param",
-            "n=16",
-            "--param",
-            &format!("beta={}", row["beta"]),
-            "--t-end",
-            "5",
-            "--diagnostics",
-            "energy",
-            "--json",
-        ]);
-        for field in ["energy_initial", "energy_error_max"] {
-            assert_eq!(cell(row, field), raw(&run, field)[0], "{field}");
-        }
-        // SVI 6/12 keeps the chain's energy to round-off.
-        assert!(cell(row, "energy_error_max") <= 1e-12 * cell(row, "energy_initial"));
-    }
-    // A stiffer spring stores more energy in the same displacement.
-    assert!(cell(&rows[1], "energy_initial") > cell(&rows[0], "energy_initial"));
-    let (status, rows) = table(
-        &[
-            "fput-text",
+    // The zoo chain and the same chain written as text.
+    for scene in ["fput", "fput-text"] {
+        let args = [
+            scene,
             "--param",
             "n=16",
             "--param",
             "beta=0.5,1",
             "--t-end",
             "5",
-        ],
-        &scratch,
-        "fput-text.csv",
-    );
-    assert_eq!(status, 0, "{rows:?}");
-    assert_eq!(rows.len(), 2);
+        ];
+        let (status, rows) = table(&args, &scratch, &format!("{scene}.csv"));
+        assert_eq!(status, 0, "{rows:?}");
+        assert_eq!(rows.len(), 2);
+        for row in &rows {
+            assert_eq!(row["status"], "ok");
+            assert!(
+                !row.keys().any(|column| column.starts_with("q_")),
+                "{row:?}"
+            );
+            let beta = format!("beta={}", row["beta"]);
+            let run = run_text(&[
+                "run",
+                scene,
+                "--param",
+                "n=16",
+                "--param",
+                &beta,
+                "--t-end",
+                "5",
+                "--diagnostics",
+                "energy",
+                "--json",
+            ]);
+            for field in ["energy_initial", "energy_error_max"] {
+                assert_eq!(cell(row, field), raw(&run, field)[0], "{field}");
+            }
+            // SVI 6/12 keeps the chain's energy to round-off.
+            assert!(cell(row, "energy_error_max") <= 1e-12 * cell(row, "energy_initial"));
+        }
+        // A stiffer spring stores more energy in the same displacement.
+        assert!(cell(&rows[1], "energy_initial") > cell(&rows[0], "energy_initial"));
+    }
     bad_input(
         &["ensemble", "fput", "--param", "n=16"],
         &["--initial", "q.q1=0:1:2"],

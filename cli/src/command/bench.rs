@@ -625,8 +625,7 @@ fn sweep_runs(
         verbose: options.verbose,
         progress,
     };
-    let mut sweeps = Sweeps::default();
-    let mut first_error = None;
+    let mut outcomes = Outcomes::default();
     for spec in specs {
         let label = spec.to_string();
         progress.set_message(label.clone());
@@ -667,7 +666,7 @@ fn sweep_runs(
             .order
             .max(1) as f64;
         let mut records = Vec::new();
-        match sweep_steps(
+        let swept = sweep_steps(
             &label,
             order,
             options,
@@ -675,24 +674,52 @@ fn sweep_runs(
             &mut records,
             final_error,
             measure,
-        ) {
-            Ok(()) => sweeps.records.extend(records),
+        );
+        outcomes.add(&label, swept.map(|()| records), report)?;
+        progress.inc(1);
+    }
+    outcomes.finish()
+}
+
+/// The methods' outcomes of a bench as they come: the records, the failures, and the first
+/// failure's error.
+#[derive(Default)]
+struct Outcomes {
+    sweeps: Sweeps,
+    first_error: Option<SceneError>,
+}
+
+impl Outcomes {
+    /// Add the outcome of the method `label`: its records, or its failure (a warning naming
+    /// it, and a [`MethodFailure`]); bad input ends the bench.
+    fn add(
+        &mut self,
+        label: &str,
+        swept: Result<Vec<Record>, SceneError>,
+        report: Report<'_>,
+    ) -> Result<(), SceneError> {
+        match swept {
+            Ok(records) => self.sweeps.records.extend(records),
             Err(error) if error.is_bad_input() => return Err(error),
             Err(error) => {
                 report.warn(&format!("{label} measured no point: {error}"));
-                sweeps.failures.push(MethodFailure {
-                    method: label.clone(),
+                self.sweeps.failures.push(MethodFailure {
+                    method: label.to_string(),
                     kind: crate::command::run::error_report(&error).kind,
                     message: error.to_string(),
                 });
-                first_error.get_or_insert(error);
+                self.first_error.get_or_insert(error);
             }
         }
-        progress.inc(1);
+        Ok(())
     }
-    match first_error {
-        Some(error) if sweeps.records.is_empty() => Err(error),
-        _ => Ok(sweeps),
+
+    /// The sweeps, or the first failure when no method measured any point.
+    fn finish(self) -> Result<Sweeps, SceneError> {
+        match self.first_error {
+            Some(error) if self.sweeps.records.is_empty() => Err(error),
+            _ => Ok(self.sweeps),
+        }
     }
 }
 
@@ -845,8 +872,7 @@ impl ModelVisitor for Bench<'_> {
             exact,
             coordinate,
         };
-        let mut sweeps = Sweeps::default();
-        let mut first_error = None;
+        let mut outcomes = Outcomes::default();
         for spec in &self.options.methods {
             let label = spec.to_string();
             self.progress.set_message(label.clone());
@@ -876,25 +902,10 @@ impl ModelVisitor for Bench<'_> {
                     sweep_adaptive(&model, *spec, &problem, self.options, report, &mut records)
                 }
             };
-            match swept {
-                Ok(()) => sweeps.records.extend(records),
-                Err(error) if error.is_bad_input() => return Err(error),
-                Err(error) => {
-                    report.warn(&format!("{label} measured no point: {error}"));
-                    sweeps.failures.push(MethodFailure {
-                        method: label.clone(),
-                        kind: crate::command::run::error_report(&error).kind,
-                        message: error.to_string(),
-                    });
-                    first_error.get_or_insert(error);
-                }
-            }
+            outcomes.add(&label, swept.map(|()| records), report)?;
             self.progress.inc(1);
         }
-        match first_error {
-            Some(error) if sweeps.records.is_empty() => Err(error),
-            _ => Ok(sweeps),
-        }
+        outcomes.finish()
     }
 }
 
