@@ -128,8 +128,9 @@
 //! program by reverse-mode differentiation (as a chain's terms are, [`batch`]), which SVI's
 //! fixed point runs on all its quadrature points at once, one a lane
 //! ([`Lagrangian::batch_force`]). On the Kepler scene of the paper (10 000 steps of SVI
-//! with 6/12 points) a text model takes about 1.7 times as long as the same model in Rust when
-//! its size is compiled in, and about 4 times at run-time size (`cargo bench --bench text --
+//! with 6/12 points) a text model takes 1.7–1.9 times as long as the same model in Rust when
+//! its size is compiled in, and about 4 times at run-time size, where SVI's stage loops over
+//! vectors of run-time length cost more than the force (`cargo bench --bench text --
 //! kepler_T2000`).
 
 mod batch;
