@@ -36,11 +36,11 @@ use crate::model::Lagrangian;
 use crate::model::derived::{AccelerationJacobian, LagrangianExt, sparse_terms};
 use crate::model::euler_lagrange::LazyAcceleration;
 use crate::nonlinear::Newton;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
 use sparse_newton::LazySparseImplicitEuler;
 
 mod sparse_newton;
-use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
 
 /// Explicit Euler on the Euler–Lagrange equations (order 1, not symplectic).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

@@ -54,7 +54,7 @@ use crate::scene::limits::{
     self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS, MIN_PEER_TOLERANCE,
 };
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
-use crate::scene::schema::Diagnostic;
+use crate::scene::schema::{Diagnostic, OutputSection};
 use crate::scene::{Scene, SceneError};
 use anyhow::Context;
 use nalgebra::allocator::Allocator;
@@ -587,11 +587,16 @@ fn sweep_runs(
             h,
             ..Overrides::default()
         })?;
-        variant.output.diagnostics = Some(vec![if energy {
-            Diagnostic::Energy
-        } else {
-            Diagnostic::None
-        }]);
+        // Only the final state and the energy error are read: no trajectory, plot or output
+        // times of the scene's own.
+        variant.output = OutputSection {
+            diagnostics: Some(vec![if energy {
+                Diagnostic::Energy
+            } else {
+                Diagnostic::None
+            }]),
+            ..OutputSection::default()
+        };
         Ok(variant)
     };
     let final_q = |summary: &Summary| match &summary.state {
