@@ -211,7 +211,7 @@ where
 {
     /// The same numbers in the types of the dimension `n` (a run-time-size Jacobian, as the
     /// terms' path computes it, for a model whose `N` is [`crate::dimension::Dyn`] itself).
-    pub(crate) fn of_run_time(jacobian: AccelerationJacobian<crate::dimension::Dyn>, n: N) -> Self {
+    pub(crate) fn of_run_time(jacobian: euler_lagrange::RunTimeJacobian, n: N) -> Self {
         AccelerationJacobian {
             value: OVector::from_column_slice_generic(n, U1, jacobian.value.as_slice()),
             q: OMatrix::from_column_slice_generic(n, n, jacobian.q.as_slice()),

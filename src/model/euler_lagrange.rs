@@ -26,7 +26,6 @@
 use crate::dimension::Dyn;
 use crate::error::{Error, StepFailure};
 use crate::linalg::sparse::{AnySolver, LinearSolverKind};
-use crate::model::derived::AccelerationJacobian;
 use crate::model::term_pattern::{MAX_WIDTH, PATTERN_MISMATCH, TermPattern};
 use crate::model::{TermDerivatives, TermSum};
 use nalgebra::{DMatrix, DVector};
@@ -209,7 +208,7 @@ impl Acceleration {
         terms: &dyn TermSum<Dyn>,
         t: f64,
         (q, v): (&[f64], &[f64]),
-    ) -> Result<AccelerationJacobian<Dyn>, StepFailure> {
+    ) -> Result<RunTimeJacobian, StepFailure> {
         let n = q.len();
         let mut a = DVector::zeros(n);
         self.acceleration(terms, t, (q, v), a.as_mut_slice())?;
@@ -234,8 +233,20 @@ impl Acceleration {
             }
         }
         let [q, v] = columns;
-        Ok(AccelerationJacobian { value: a, q, v })
+        Ok(RunTimeJacobian { value: a, q, v })
     }
+}
+
+/// The acceleration and its Jacobian at one point, of run-time size
+/// ([`crate::model::derived::AccelerationJacobian`] converts it to a model's dimension).
+#[derive(Debug, Clone)]
+pub(crate) struct RunTimeJacobian {
+    /// q̈.
+    pub(crate) value: DVector<f64>,
+    /// ∂q̈/∂q.
+    pub(crate) q: DMatrix<f64>,
+    /// ∂q̈/∂q̇.
+    pub(crate) v: DMatrix<f64>,
 }
 
 /// A run's [`Acceleration`], made at its first use; a clone starts without one (faer's factors
