@@ -723,7 +723,9 @@ def bench(
 ) -> Any:
     """A work–precision sweep, as ``svi bench``: one row per (method, step count or tolerance)
     with the final error, energy and momentum errors, evaluations, iterations and median wall
-    time. The scene's model needs an exact solution. A method none of whose points could be
+    time. The error is measured against the model's exact solution or, for a model without one
+    (a chain, a text model), against a resolved reference run of SVI of order 12, as
+    ``svi bench`` measures it. A method none of whose points could be
     measured is left out of the table with an :class:`SviWarning` naming its error; the call
     raises :class:`SviError` only when no method measured any point."""
     args = [_text("scene", scene)]
