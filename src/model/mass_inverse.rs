@@ -100,12 +100,25 @@ impl<N: Dimension> MassInverse<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    /// The dense inverse of a dense mass matrix M (a model that is not a sum of terms; the
-    /// model's M⁻¹ is [`crate::LagrangianExt::mass_inverse`]).
+    /// The inverse of a dense mass matrix M (a model that is not a sum of terms; the model's
+    /// M⁻¹ is [`crate::LagrangianExt::mass_inverse`]): entry by entry when M is diagonal
+    /// (particles in Cartesian coordinates: the same numbers as the dense inverse, without
+    /// its n² products at every application), else the dense inverse.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] `structure` when M is singular.
     pub fn of_dense(mass: &OMatrix<f64, N, N>) -> Result<Self, Error> {
+        let (n, _) = mass.shape_generic();
+        let off_diagonal = (0..n.value())
+            .flat_map(|i| (0..n.value()).filter(move |&j| j != i).map(move |j| (i, j)));
+        if off_diagonal.into_iter().all(|(i, j)| mass[(i, j)] == 0.0) {
+            let inverse = OVector::from_fn_generic(n, U1, |i, _| 1.0 / mass[(i, i)]);
+            return if inverse.iter().all(|x| x.is_finite()) {
+                Ok(MassInverse::Diagonal(inverse))
+            } else {
+                Err(singular("singular"))
+            };
+        }
         invert_small(mass)
             .filter(|inverse| inverse.iter().all(|x| x.is_finite()))
             .map(MassInverse::Dense)
@@ -177,16 +190,7 @@ where
     pub fn apply_into(&self, p: &OVector<f64, N>, out: &mut OVector<f64, N>) {
         match self {
             MassInverse::Dense(inverse) => inverse.mul_to(p, out),
-            MassInverse::Diagonal(inverse) => {
-                for ((o, p), m) in out
-                    .as_mut_slice()
-                    .iter_mut()
-                    .zip(p.as_slice())
-                    .zip(inverse.as_slice())
-                {
-                    *o = p * m;
-                }
-            }
+            MassInverse::Diagonal(inverse) => multiply_entries(inverse, 1.0, p, out),
             MassInverse::Coupled(coupled) => {
                 out.copy_from(p);
                 coupled.solve_in_place(out.as_mut_slice());
@@ -208,6 +212,7 @@ where
     pub fn scaled(&self, factor: f64) -> Scaled<'_, N> {
         match self {
             MassInverse::Dense(inverse) => Scaled::Dense(inverse * factor),
+            MassInverse::Diagonal(inverse) => Scaled::Diagonal(inverse, factor),
             other => Scaled::Lazy(other, factor),
         }
     }
@@ -262,6 +267,8 @@ where
 {
     /// The dense inverse times the factor.
     Dense(OMatrix<f64, N, N>),
+    /// The diagonal inverse and the factor (no copy: a step's scaling allocates nothing).
+    Diagonal(&'a OVector<f64, N>, f64),
     /// The inverse and the factor, applied together.
     Lazy(&'a MassInverse<N>, f64),
 }
@@ -271,10 +278,11 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     /// `out` = factor · M⁻¹ `p`.
-    #[inline]
+    #[inline(always)]
     pub fn apply_into(&self, p: &OVector<f64, N>, out: &mut OVector<f64, N>) {
         match self {
             Scaled::Dense(inverse) => inverse.mul_to(p, out),
+            Scaled::Diagonal(inverse, factor) => multiply_entries(inverse, *factor, p, out),
             Scaled::Lazy(inverse, factor) => {
                 inverse.apply_into(p, out);
                 *out *= *factor;
@@ -283,12 +291,33 @@ where
     }
 }
 
+/// `out` = (`factor` `diagonal`) ∘ `p`, entry by entry (the digits of the dense inverse
+/// scaled once: mᵢ·factor is exact or rounds as factor·mᵢ does).
+#[inline(always)]
+fn multiply_entries<N: Dimension>(
+    diagonal: &OVector<f64, N>,
+    factor: f64,
+    p: &OVector<f64, N>,
+    out: &mut OVector<f64, N>,
+) where
+    DefaultAllocator: Allocator<N>,
+{
+    for ((o, p), m) in out
+        .as_mut_slice()
+        .iter_mut()
+        .zip(p.as_slice())
+        .zip(diagonal.as_slice())
+    {
+        *o = p * (m * factor);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::local::LocalLagrangian;
     use crate::scalar::Scalar;
-    use nalgebra::{Const, DMatrix, Dyn, SVector};
+    use nalgebra::{Const, DMatrix, Dyn, SMatrix, SVector};
 
     /// Particles of masses 1, 2, 3, … joined by springs, with an optional coupling c q̇ᵢq̇ᵢ₊₁
     /// of neighbouring velocities (a tridiagonal M).
@@ -350,6 +379,29 @@ mod tests {
             copy.scaled(2.0).apply_into(&p, &mut second);
             assert!((&second - &expected).amax() < 1e-14);
         }
+    }
+
+    /// A diagonal dense M is inverted entry by entry, to the digits of the dense inverse
+    /// (here exact: powers of two); a coupled one densely; a zero mass is singular.
+    #[test]
+    fn dense_mass_matrices_invert_entry_by_entry_when_diagonal() {
+        let p = SVector::<f64, 3>::new(1.0, -3.0, 0.5);
+        let diagonal = SMatrix::<f64, 3, 3>::from_diagonal(&SVector::<f64, 3>::new(2.0, 0.25, 8.0));
+        let inverse = MassInverse::of_dense(&diagonal).unwrap();
+        assert!(matches!(inverse, MassInverse::Diagonal(_)), "{inverse:?}");
+        let mut out = SVector::zeros();
+        inverse.scaled(3.0).apply_into(&p, &mut out);
+        assert_eq!(out, SVector::<f64, 3>::new(1.5, -36.0, 0.1875));
+        assert_eq!(inverse.to_dense(), invert_small(&diagonal).unwrap());
+        let mut coupled = diagonal;
+        coupled[(0, 2)] = 1.0;
+        coupled[(2, 0)] = 1.0;
+        let inverse = MassInverse::of_dense(&coupled).unwrap();
+        assert_eq!(inverse.dense(), invert_small(&coupled).as_ref());
+        let mut massless = diagonal;
+        massless[(1, 1)] = 0.0;
+        let error = MassInverse::of_dense(&massless).unwrap_err();
+        assert!(error.to_string().contains("singular"), "{error}");
     }
 
     /// A mass matrix with a zero on its diagonal is a typed error naming the coordinate.

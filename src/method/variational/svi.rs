@@ -265,8 +265,6 @@ where
     mass_inverse: Option<MassInverse<N>>,
     /// h M⁻¹p_k of this step.
     velocity: OVector<f64, N>,
-    /// A stage buffer (the next iterate at run-time size, where no local is free).
-    scratch: OVector<f64, N>,
     /// The times of the quadrature points in this step.
     times: Vec<f64>,
     /// ∂L/∂q at the quadrature points.
@@ -393,7 +391,6 @@ where
             nystrom: NystromTables::new(tables)?,
             last_velocity: zero.clone(),
             velocity: zero.clone(),
-            scratch: zero.clone(),
             last_accelerations: vec![zero.clone(); m],
             pending: false,
             mass_inverse: None,
@@ -445,12 +442,9 @@ where
             .zip(self.nystrom.start_matrix.chunks_exact(m))
             .zip(&self.nystrom.start_velocity)
         {
-            sum_into(position, q, |sum| {
-                add_scaled(sum, *gamma, &self.last_velocity);
-                for (e, acceleration) in row.iter().zip(&self.last_accelerations) {
-                    add_scaled(sum, *e, acceleration);
-                }
-            });
+            let velocity = std::iter::once((*gamma, &self.last_velocity));
+            let terms = velocity.chain(weighted(row, &self.last_accelerations));
+            combine_into(position, Some(q), terms, |_, _| {});
         }
     }
 
@@ -1104,6 +1098,85 @@ fn sum_into<N: Dimension>(
     }
 }
 
+/// `target` = `start` + Σ_ν c_ν x_ν over `terms` (c_ν, x_ν) (no `start`: zero), each
+/// coordinate's old and new value handed to `check` before it is overwritten. At a fixed size
+/// the sum is a vector in registers. At run-time size a few coordinates are summed one by one
+/// in a register (summed in place, vector by vector, every addition of a short vector waits
+/// on the store of the one before: most of the run time of Kepler written as text), many in
+/// blocks in a cached buffer. Every way adds in the same order, so all give the same digits.
+#[inline(always)]
+fn combine_into<'a, N: Dimension>(
+    target: &mut OVector<f64, N>,
+    start: Option<&OVector<f64, N>>,
+    terms: impl Iterator<Item = (f64, &'a OVector<f64, N>)> + Clone,
+    mut check: impl FnMut(f64, f64),
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    if N::try_to_usize().is_some() {
+        let mut sum = match start {
+            Some(start) => start.clone(),
+            None => OVector::zeros_generic(target.shape_generic().0, U1),
+        };
+        for (c, x) in terms {
+            add_scaled(&mut sum, c, x);
+        }
+        for (old, new) in target.iter().zip(&sum) {
+            check(*old, *new);
+        }
+        *target = sum;
+    } else if target.len() < REGISTER_SUMS {
+        for (k, old) in target.iter_mut().enumerate() {
+            let mut sum = start.map_or(0.0, |start| start[k]);
+            for (c, x) in terms.clone() {
+                sum += c * x[k];
+            }
+            check(*old, sum);
+            *old = sum;
+        }
+    } else {
+        let mut buffer = [0.0; SUM_BLOCK];
+        let n = target.len();
+        for begin in (0..n).step_by(SUM_BLOCK) {
+            let block = begin..(begin + SUM_BLOCK).min(n);
+            let sum = &mut buffer[..block.len()];
+            match start {
+                Some(start) => sum.copy_from_slice(&start.as_slice()[block.clone()]),
+                None => sum.fill(0.0),
+            }
+            for (c, x) in terms.clone() {
+                for (total, x) in sum.iter_mut().zip(&x.as_slice()[block.clone()]) {
+                    *total += c * x;
+                }
+            }
+            for (old, new) in target.as_mut_slice()[block].iter_mut().zip(sum.iter()) {
+                check(*old, *new);
+                *old = *new;
+            }
+        }
+    }
+}
+
+/// Below this many coordinates [`combine_into`] sums each coordinate in a register
+/// (`cargo bench --bench text`, `kepler_T2000/text_run_time`: n = 2).
+const REGISTER_SUMS: usize = 8;
+
+/// Above it, blocks of this many coordinates are summed vector by vector in a buffer that
+/// stays in the first-level cache (`fput_chain/svi`: n = 10⁵).
+const SUM_BLOCK: usize = 1024;
+
+/// The terms (c_ν, a_ν) of a combination of `vectors` with the coefficients `row`.
+#[inline(always)]
+fn weighted<'a, N: Dimension>(
+    row: &'a [f64],
+    vectors: &'a [OVector<f64, N>],
+) -> impl Iterator<Item = (f64, &'a OVector<f64, N>)> + Clone
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    row.iter().copied().zip(vectors)
+}
+
 /// `matrix[row..row + N, column..column + N] += block`, column by column (a fixed-size
 /// block cannot be added to a view of a run-time-size matrix in generic code).
 #[inline]
@@ -1243,33 +1316,14 @@ where
         let mut finite = true;
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.nystrom.stage_matrix[mu * m..(mu + 1) * m];
-            let update = |next: &mut OVector<f64, N>| {
-                for (a, acceleration) in row.iter().zip(&data.accelerations) {
-                    add_scaled(next, *a, acceleration);
+            let terms = weighted(row, &data.accelerations);
+            combine_into(position, Some(base), terms, |old, new| {
+                let difference = (new - old).abs();
+                if difference > change {
+                    change = difference;
                 }
-            };
-            let mut compare = |next: &OVector<f64, N>, position: &OVector<f64, N>| {
-                for (next, position) in next.as_slice().iter().zip(position.as_slice()) {
-                    let difference = (next - position).abs();
-                    if difference > change {
-                        change = difference;
-                    }
-                    finite &= next.is_finite();
-                }
-            };
-            if N::try_to_usize().is_some() {
-                // In a local, kept in registers.
-                let mut next = base.clone();
-                update(&mut next);
-                compare(&next, position);
-                *position = next;
-            } else {
-                // In the workspace's buffer: no allocation at run-time size.
-                data.scratch.copy_from(base);
-                update(&mut data.scratch);
-                compare(&data.scratch, position);
-                std::mem::swap(position, &mut data.scratch);
-            }
+                finite &= new.is_finite();
+            });
         }
         if !finite {
             return Err(StepFailure::NonFinite);
@@ -1277,11 +1331,10 @@ where
         if L::FORCED {
             for (mu, rate) in data.velocities.iter_mut().enumerate() {
                 let row = &data.nystrom.rate_matrix[mu * m..(mu + 1) * m];
-                let mut next = velocity * data.nystrom.stage_rate[mu];
-                for (b, acceleration) in row.iter().zip(&data.accelerations) {
-                    add_scaled(&mut next, *b, acceleration);
-                }
-                *rate = next / h;
+                let velocity = std::iter::once((data.nystrom.stage_rate[mu], velocity));
+                let terms = velocity.chain(weighted(row, &data.accelerations));
+                combine_into(rate, None, terms, |_, _| {});
+                *rate /= h;
             }
         }
         let converged = control.converged(change, size);
