@@ -101,17 +101,19 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     /// The inverse of a dense mass matrix M (a model that is not a sum of terms; the model's
-    /// M⁻¹ is [`crate::LagrangianExt::mass_inverse`]): entry by entry when M is diagonal
-    /// (particles in Cartesian coordinates: the same numbers as the dense inverse, without
-    /// its n² products at every application), else the dense inverse.
+    /// M⁻¹ is [`crate::LagrangianExt::mass_inverse`]). At run-time size a diagonal M is
+    /// inverted entry by entry (particles in Cartesian coordinates: no n² products of a
+    /// matrix of run-time size at every application); else, and always at a fixed size (whose
+    /// small matrix product is unrolled), the dense inverse.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] `structure` when M is singular.
     pub fn of_dense(mass: &OMatrix<f64, N, N>) -> Result<Self, Error> {
         let (n, _) = mass.shape_generic();
-        let off_diagonal = (0..n.value())
+        let mut off_diagonal = (0..n.value())
             .flat_map(|i| (0..n.value()).filter(move |&j| j != i).map(move |j| (i, j)));
-        if off_diagonal.into_iter().all(|(i, j)| mass[(i, j)] == 0.0) {
+        let diagonal = off_diagonal.all(|(i, j)| mass[(i, j)] == 0.0);
+        if N::try_to_usize().is_none() && diagonal {
             let inverse = OVector::from_fn_generic(n, U1, |i, _| 1.0 / mass[(i, i)]);
             return if inverse.iter().all(|x| x.is_finite()) {
                 Ok(MassInverse::Diagonal(inverse))
@@ -381,19 +383,23 @@ mod tests {
         }
     }
 
-    /// A diagonal dense M is inverted entry by entry, to the digits of the dense inverse
-    /// (here exact: powers of two); a coupled one densely; a zero mass is singular.
+    /// A diagonal dense M of run-time size is inverted entry by entry, to the digits of the
+    /// dense inverse (here exact: powers of two); a coupled one, or one of fixed size,
+    /// densely; a zero mass is singular.
     #[test]
     fn dense_mass_matrices_invert_entry_by_entry_when_diagonal() {
-        let p = SVector::<f64, 3>::new(1.0, -3.0, 0.5);
-        let diagonal = SMatrix::<f64, 3, 3>::from_diagonal(&SVector::<f64, 3>::new(2.0, 0.25, 8.0));
+        let p = DVector::from_vec(vec![1.0, -3.0, 0.5]);
+        let diagonal = DMatrix::from_diagonal(&DVector::from_vec(vec![2.0, 0.25, 8.0]));
         let inverse = MassInverse::of_dense(&diagonal).unwrap();
         assert!(matches!(inverse, MassInverse::Diagonal(_)), "{inverse:?}");
-        let mut out = SVector::zeros();
+        let mut out = DVector::zeros(3);
         inverse.scaled(3.0).apply_into(&p, &mut out);
-        assert_eq!(out, SVector::<f64, 3>::new(1.5, -36.0, 0.1875));
+        assert_eq!(out.as_slice(), [1.5, -36.0, 0.1875]);
         assert_eq!(inverse.to_dense(), invert_small(&diagonal).unwrap());
-        let mut coupled = diagonal;
+        let fixed = SMatrix::<f64, 3, 3>::from_column_slice(diagonal.as_slice());
+        let inverse = MassInverse::of_dense(&fixed).unwrap();
+        assert_eq!(inverse.dense(), invert_small(&fixed).as_ref());
+        let mut coupled = diagonal.clone();
         coupled[(0, 2)] = 1.0;
         coupled[(2, 0)] = 1.0;
         let inverse = MassInverse::of_dense(&coupled).unwrap();

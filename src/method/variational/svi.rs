@@ -442,9 +442,9 @@ where
             .zip(self.nystrom.start_matrix.chunks_exact(m))
             .zip(&self.nystrom.start_velocity)
         {
-            let velocity = std::iter::once((*gamma, &self.last_velocity));
-            let terms = velocity.chain(weighted(row, &self.last_accelerations));
-            combine_into(position, Some(q), terms, |_, _| {});
+            let velocity = Some((*gamma, &self.last_velocity));
+            let terms = weighted(row, &self.last_accelerations);
+            combine_into(position, Some(q), velocity, terms, |_, _| {});
         }
     }
 
@@ -1098,8 +1098,9 @@ fn sum_into<N: Dimension>(
     }
 }
 
-/// `target` = `start` + Σ_ν c_ν x_ν over `terms` (c_ν, x_ν) (no `start`: zero), each
-/// coordinate's old and new value handed to `check` before it is overwritten. At a fixed size
+/// `target` = `start` + c₀x₀ + Σ_ν c_ν x_ν over `terms` (c_ν, x_ν) (no `start`: zero; the
+/// `lead` term c₀x₀ optional), each coordinate's old and new value handed to `check` before
+/// it is overwritten. At a fixed size
 /// the sum is a vector in registers. At run-time size a few coordinates are summed one by one
 /// in a register (summed in place, vector by vector, every addition of a short vector waits
 /// on the store of the one before: most of the run time of Kepler written as text), many in
@@ -1108,6 +1109,7 @@ fn sum_into<N: Dimension>(
 fn combine_into<'a, N: Dimension>(
     target: &mut OVector<f64, N>,
     start: Option<&OVector<f64, N>>,
+    lead: Option<(f64, &OVector<f64, N>)>,
     terms: impl Iterator<Item = (f64, &'a OVector<f64, N>)> + Clone,
     mut check: impl FnMut(f64, f64),
 ) where
@@ -1118,16 +1120,22 @@ fn combine_into<'a, N: Dimension>(
             Some(start) => start.clone(),
             None => OVector::zeros_generic(target.shape_generic().0, U1),
         };
+        if let Some((c, x)) = lead {
+            add_scaled(&mut sum, c, x);
+        }
         for (c, x) in terms {
             add_scaled(&mut sum, c, x);
         }
-        for (old, new) in target.iter().zip(&sum) {
+        for (old, new) in target.as_slice().iter().zip(sum.as_slice()) {
             check(*old, *new);
         }
         *target = sum;
     } else if target.len() < REGISTER_SUMS {
         for (k, old) in target.iter_mut().enumerate() {
             let mut sum = start.map_or(0.0, |start| start[k]);
+            if let Some((c, x)) = lead {
+                sum += c * x[k];
+            }
             for (c, x) in terms.clone() {
                 sum += c * x[k];
             }
@@ -1143,6 +1151,11 @@ fn combine_into<'a, N: Dimension>(
             match start {
                 Some(start) => sum.copy_from_slice(&start.as_slice()[block.clone()]),
                 None => sum.fill(0.0),
+            }
+            if let Some((c, x)) = lead {
+                for (total, x) in sum.iter_mut().zip(&x.as_slice()[block.clone()]) {
+                    *total += c * x;
+                }
             }
             for (c, x) in terms.clone() {
                 for (total, x) in sum.iter_mut().zip(&x.as_slice()[block.clone()]) {
@@ -1317,7 +1330,7 @@ where
         for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
             let row = &data.nystrom.stage_matrix[mu * m..(mu + 1) * m];
             let terms = weighted(row, &data.accelerations);
-            combine_into(position, Some(base), terms, |old, new| {
+            combine_into(position, Some(base), None, terms, |old, new| {
                 let difference = (new - old).abs();
                 if difference > change {
                     change = difference;
@@ -1331,9 +1344,9 @@ where
         if L::FORCED {
             for (mu, rate) in data.velocities.iter_mut().enumerate() {
                 let row = &data.nystrom.rate_matrix[mu * m..(mu + 1) * m];
-                let velocity = std::iter::once((data.nystrom.stage_rate[mu], velocity));
-                let terms = velocity.chain(weighted(row, &data.accelerations));
-                combine_into(rate, None, terms, |_, _| {});
+                let velocity = Some((data.nystrom.stage_rate[mu], velocity));
+                let terms = weighted(row, &data.accelerations);
+                combine_into(rate, None, velocity, terms, |_, _| {});
                 *rate /= h;
             }
         }
@@ -1427,6 +1440,63 @@ mod tests {
         assert_tangent_matches_central_differences, distance, factorial, state,
     };
     use nalgebra::{Complex, Const, DVector, Dyn, SMatrix, SVector, U1, U2};
+
+    /// The stage sums add in one order whichever way they run (a fixed size in registers, a
+    /// few run-time coordinates one by one, many in blocks with a partial last one): the
+    /// digits of the plain loop start + c₁x₁ + c₂x₂ + …, and every old value is checked.
+    #[test]
+    fn stage_sums_have_the_plain_loops_digits_at_every_size() {
+        fn vector<N: Dimension>(n: N, seed: f64) -> OVector<f64, N>
+        where
+            DefaultAllocator: Allocator<N> + Allocator<N, N>,
+        {
+            OVector::from_fn_generic(n, U1, |i, _| (seed * (i as f64 + 1.0)).sin() / 3.0)
+        }
+        fn check<N: Dimension>(n: N)
+        where
+            DefaultAllocator: Allocator<N> + Allocator<N, N>,
+        {
+            let start = vector(n, 0.7);
+            let vectors: Vec<_> = (0..12).map(|j| vector(n, 1.3 + j as f64)).collect();
+            let row: Vec<f64> = (0..12).map(|j| 0.1 / (j as f64 + 1.0)).collect();
+            let plain = |mut sum: OVector<f64, N>| {
+                for (c, x) in row.iter().zip(&vectors) {
+                    for (total, x) in sum.iter_mut().zip(x) {
+                        *total += c * x;
+                    }
+                }
+                sum
+            };
+            let expected = plain(start.clone());
+            let mut target = vector(n, 2.9);
+            let old = target.clone();
+            let mut checked = Vec::new();
+            combine_into(
+                &mut target,
+                Some(&start),
+                None,
+                weighted(&row, &vectors),
+                |old, new| {
+                    checked.push((old, new));
+                },
+            );
+            assert_eq!(target, expected, "n = {}", n.value());
+            let pairs: Vec<_> = old.iter().copied().zip(expected.iter().copied()).collect();
+            assert_eq!(checked, pairs);
+            // The first term as the lead: the same sum.
+            let lead = Some((row[0], &vectors[0]));
+            let rest = weighted(&row[1..], &vectors[1..]);
+            combine_into(&mut target, Some(&start), lead, rest, |_, _| {});
+            assert_eq!(target, expected, "n = {}", n.value());
+            // Without a start the sum starts from zero.
+            combine_into(&mut target, None, None, weighted(&row, &vectors), |_, _| {});
+            assert_eq!(target, plain(&start * 0.0), "n = {}", n.value());
+        }
+        check(Const::<3>);
+        for n in [1, REGISTER_SUMS - 1, REGISTER_SUMS, 2 * SUM_BLOCK + 37] {
+            check(Dyn(n));
+        }
+    }
 
     /// The hand-derived Euler–Lagrange equations of [`VariableMass`]:
     /// q̈₀ = (−q₀ − q₀³ − 2 q₁ q̇₁ q̇₀) / (1 + q₁²), q̈₁ = q₁ q̇₀² − q₁.
