@@ -280,7 +280,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     /// `out` = factor · M⁻¹ `p`.
-    #[inline(always)]
+    #[inline]
     pub fn apply_into(&self, p: &OVector<f64, N>, out: &mut OVector<f64, N>) {
         match self {
             Scaled::Dense(inverse) => inverse.mul_to(p, out),
