@@ -112,8 +112,7 @@ where
         let (n, _) = mass.shape_generic();
         let mut off_diagonal = (0..n.value())
             .flat_map(|i| (0..n.value()).filter(move |&j| j != i).map(move |j| (i, j)));
-        let diagonal = off_diagonal.all(|(i, j)| mass[(i, j)] == 0.0);
-        if N::try_to_usize().is_none() && diagonal {
+        if N::try_to_usize().is_none() && off_diagonal.all(|(i, j)| mass[(i, j)] == 0.0) {
             let inverse = OVector::from_fn_generic(n, U1, |i, _| 1.0 / mass[(i, i)]);
             return if inverse.iter().all(|x| x.is_finite()) {
                 Ok(MassInverse::Diagonal(inverse))

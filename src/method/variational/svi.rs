@@ -1100,11 +1100,11 @@ fn sum_into<N: Dimension>(
 
 /// `target` = `start` + c₀x₀ + Σ_ν c_ν x_ν over `terms` (c_ν, x_ν) (no `start`: zero; the
 /// `lead` term c₀x₀ optional), each coordinate's old and new value handed to `check` before
-/// it is overwritten. At a fixed size
-/// the sum is a vector in registers. At run-time size a few coordinates are summed one by one
-/// in a register (summed in place, vector by vector, every addition of a short vector waits
-/// on the store of the one before: most of the run time of Kepler written as text), many in
-/// blocks in a cached buffer. Every way adds in the same order, so all give the same digits.
+/// it is overwritten. At a fixed size the sum is a vector in registers. At run-time size a
+/// few coordinates are summed one by one in a register (summed in place, vector by vector,
+/// every addition of a short vector waits on the store of the one before: most of the run
+/// time of Kepler written as text), many in blocks in a cached buffer. Every way adds in the
+/// same order, so all give the same digits.
 #[inline(always)]
 fn combine_into<'a, N: Dimension>(
     target: &mut OVector<f64, N>,
