@@ -14,6 +14,7 @@
 //! ([`PhaseFunction`], [`PhaseMap`]), at points whose coordinates may themselves be dual
 //! numbers (nested duals give the third derivatives of the Euler–Lagrange Jacobian).
 
+use crate::linalg::combination::Combination;
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
@@ -58,11 +59,12 @@ pub enum Wrt {
 pub const SCALAR_SWEEPS_UP_TO: usize = 3;
 
 /// The dimension of a configuration space: `Const<N>` or [`Dyn`]. Implemented for exactly
-/// these; it chooses the dual numbers of every derivative in `svi`.
+/// these; it chooses the dual numbers of every derivative in `svi` (and, through a
+/// crate-internal supertrait, how SVI's stage sums run at each size).
 ///
 /// Each function differentiates `f` at (t, q, q̇), whose coordinates are of any scalar type
 /// `D` (nested duals for higher derivatives), and returns the value with the derivatives.
-pub trait Dimension: Dim {
+pub trait Dimension: Dim + Combination {
     /// f and ∂f/∂q (or ∂f/∂q̇).
     fn gradient<D: Scalar, F: PhaseFunction<Self> + ?Sized>(
         f: &F,

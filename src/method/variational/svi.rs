@@ -62,6 +62,7 @@
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
 use crate::error::StepFailure;
+use crate::linalg::combination::{Rows, Start};
 use crate::linalg::invert;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
@@ -435,17 +436,13 @@ where
 
     /// Q_μ = q_k + γ_μ h M⁻¹p_{k−1} + Σ_ν E_μν a_ν from the last step's pending data.
     fn extrapolate_positions(&mut self, q: &OVector<f64, N>) {
-        let m = self.positions.len();
-        for ((position, row), gamma) in self
-            .positions
-            .iter_mut()
-            .zip(self.nystrom.start_matrix.chunks_exact(m))
-            .zip(&self.nystrom.start_velocity)
-        {
-            let velocity = Some((*gamma, &self.last_velocity));
-            let terms = weighted(row, &self.last_accelerations);
-            combine_into(position, Some(q), velocity, terms, |_, _| {});
-        }
+        let rows = Rows {
+            start: Start::Common(q),
+            lead: Some((&self.nystrom.start_velocity, &self.last_velocity)),
+            matrix: &self.nystrom.start_matrix,
+            inputs: &self.last_accelerations,
+        };
+        N::combine_rows(&mut self.positions, rows);
     }
 
     /// Node offset Z_j (j = 0..s − 1 for the nodes 1..s) of the last converged step, from
@@ -1098,98 +1095,6 @@ fn sum_into<N: Dimension>(
     }
 }
 
-/// `target` = `start` + c₀x₀ + Σ_ν c_ν x_ν over `terms` (c_ν, x_ν) (no `start`: zero; the
-/// `lead` term c₀x₀ optional), each coordinate's old and new value handed to `check` before
-/// it is overwritten. At a fixed size the sum is a vector in registers. At run-time size a
-/// few coordinates are summed one by one in a register (summed in place, vector by vector,
-/// every addition of a short vector waits on the store of the one before: most of the run
-/// time of Kepler written as text), many in blocks in a cached buffer. Every way adds in the
-/// same order, so all give the same digits.
-#[inline(always)]
-fn combine_into<'a, N: Dimension>(
-    target: &mut OVector<f64, N>,
-    start: Option<&OVector<f64, N>>,
-    lead: Option<(f64, &OVector<f64, N>)>,
-    terms: impl Iterator<Item = (f64, &'a OVector<f64, N>)> + Clone,
-    mut check: impl FnMut(f64, f64),
-) where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    if N::try_to_usize().is_some() {
-        let mut sum = match start {
-            Some(start) => start.clone(),
-            None => OVector::zeros_generic(target.shape_generic().0, U1),
-        };
-        if let Some((c, x)) = lead {
-            add_scaled(&mut sum, c, x);
-        }
-        for (c, x) in terms {
-            add_scaled(&mut sum, c, x);
-        }
-        for (old, new) in target.as_slice().iter().zip(sum.as_slice()) {
-            check(*old, *new);
-        }
-        *target = sum;
-    } else if target.len() < REGISTER_SUMS {
-        for (k, old) in target.iter_mut().enumerate() {
-            let mut sum = start.map_or(0.0, |start| start[k]);
-            if let Some((c, x)) = lead {
-                sum += c * x[k];
-            }
-            for (c, x) in terms.clone() {
-                sum += c * x[k];
-            }
-            check(*old, sum);
-            *old = sum;
-        }
-    } else {
-        let mut buffer = [0.0; SUM_BLOCK];
-        let n = target.len();
-        for begin in (0..n).step_by(SUM_BLOCK) {
-            let block = begin..(begin + SUM_BLOCK).min(n);
-            let sum = &mut buffer[..block.len()];
-            match start {
-                Some(start) => sum.copy_from_slice(&start.as_slice()[block.clone()]),
-                None => sum.fill(0.0),
-            }
-            if let Some((c, x)) = lead {
-                for (total, x) in sum.iter_mut().zip(&x.as_slice()[block.clone()]) {
-                    *total += c * x;
-                }
-            }
-            for (c, x) in terms.clone() {
-                for (total, x) in sum.iter_mut().zip(&x.as_slice()[block.clone()]) {
-                    *total += c * x;
-                }
-            }
-            for (old, new) in target.as_mut_slice()[block].iter_mut().zip(sum.iter()) {
-                check(*old, *new);
-                *old = *new;
-            }
-        }
-    }
-}
-
-/// Below this many coordinates [`combine_into`] sums each coordinate in a register
-/// (`cargo bench --bench text`, `kepler_T2000/text_run_time`: n = 2).
-const REGISTER_SUMS: usize = 8;
-
-/// Above it, blocks of this many coordinates are summed vector by vector in a buffer that
-/// stays in the first-level cache (`fput_chain/svi`: n = 10⁵).
-const SUM_BLOCK: usize = 1024;
-
-/// The terms (c_ν, a_ν) of a combination of `vectors` with the coefficients `row`.
-#[inline(always)]
-fn weighted<'a, N: Dimension>(
-    row: &'a [f64],
-    vectors: &'a [OVector<f64, N>],
-) -> impl Iterator<Item = (f64, &'a OVector<f64, N>)> + Clone
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    row.iter().copied().zip(vectors)
-}
-
 /// `matrix[row..row + N, column..column + N] += block`, column by column (a fixed-size
 /// block cannot be added to a view of a run-time-size matrix in generic code).
 #[inline]
@@ -1311,46 +1216,37 @@ where
     let mut control = FixedPoint::new(max_iterations);
     loop {
         model.forces_into(&data.times, &data.positions, &state.y, &mut data.forces);
-        for (mu, (force, acceleration)) in data
-            .forces
-            .iter_mut()
-            .zip(data.accelerations.iter_mut())
-            .enumerate()
-        {
-            if L::FORCED {
+        if L::FORCED {
+            for (mu, force) in data.forces.iter_mut().enumerate() {
                 let time = data.times[mu];
                 *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
             }
-            scaled_inverse.apply_into(force, acceleration);
         }
-        // The largest change by plain comparisons (no NaN-aware max in the hot loop): a NaN
-        // force is caught by the finiteness check below.
-        let mut change: f64 = 0.0;
-        let mut finite = true;
-        for (mu, (position, base)) in data.positions.iter_mut().zip(&data.bases).enumerate() {
-            let row = &data.nystrom.stage_matrix[mu * m..(mu + 1) * m];
-            let terms = weighted(row, &data.accelerations);
-            combine_into(position, Some(base), None, terms, |old, new| {
-                let difference = (new - old).abs();
-                if difference > change {
-                    change = difference;
-                }
-                finite &= new.is_finite();
-            });
-        }
-        if !finite {
+        scaled_inverse.apply_all(&data.forces, &mut data.accelerations);
+        // The largest change ignores a NaN, which the finiteness check catches.
+        let rows = Rows {
+            start: Start::Rows(&data.bases),
+            lead: None,
+            matrix: &data.nystrom.stage_matrix,
+            inputs: &data.accelerations,
+        };
+        let change = N::combine_rows(&mut data.positions, rows);
+        if !change.finite {
             return Err(StepFailure::NonFinite);
         }
         if L::FORCED {
-            for (mu, rate) in data.velocities.iter_mut().enumerate() {
-                let row = &data.nystrom.rate_matrix[mu * m..(mu + 1) * m];
-                let velocity = Some((data.nystrom.stage_rate[mu], velocity));
-                let terms = weighted(row, &data.accelerations);
-                combine_into(rate, None, velocity, terms, |_, _| {});
+            let rows = Rows {
+                start: Start::Zero,
+                lead: Some((&data.nystrom.stage_rate, velocity)),
+                matrix: &data.nystrom.rate_matrix,
+                inputs: &data.accelerations,
+            };
+            N::combine_rows(&mut data.velocities, rows);
+            for rate in &mut data.velocities {
                 *rate /= h;
             }
         }
-        let converged = control.converged(change, size);
+        let converged = control.converged(change.largest, size);
         if converged == Ok(true) {
             break;
         }
@@ -1441,65 +1337,6 @@ mod tests {
     };
     use nalgebra::{Complex, Const, DVector, Dyn, SMatrix, SVector, U1, U2};
 
-    /// The stage sums add in one order whichever way they run (a fixed size in registers, a
-    /// few run-time coordinates one by one, many in blocks with a partial last one): the
-    /// digits of the plain loop start + c₁x₁ + c₂x₂ + …, and every old value is checked.
-    #[test]
-    fn stage_sums_have_the_plain_loops_digits_at_every_size() {
-        fn vector<N: Dimension>(n: N, seed: f64) -> OVector<f64, N>
-        where
-            DefaultAllocator: Allocator<N> + Allocator<N, N>,
-        {
-            OVector::from_fn_generic(n, U1, |i, _| (seed * (i as f64 + 1.0)).sin() / 3.0)
-        }
-        fn check<N: Dimension>(n: N)
-        where
-            DefaultAllocator: Allocator<N> + Allocator<N, N>,
-        {
-            let start = vector(n, 0.7);
-            let vectors: Vec<_> = (0..12).map(|j| vector(n, 1.3 + j as f64)).collect();
-            let row: Vec<f64> = (0..12).map(|j| 0.1 / (j as f64 + 1.0)).collect();
-            let plain = |mut sum: OVector<f64, N>| {
-                for (c, x) in row.iter().zip(&vectors) {
-                    for (total, x) in sum.iter_mut().zip(x) {
-                        *total += c * x;
-                    }
-                }
-                sum
-            };
-            let expected = plain(start.clone());
-            let mut target = vector(n, 2.9);
-            let old = target.clone();
-            let mut checked = Vec::new();
-            combine_into(
-                &mut target,
-                Some(&start),
-                None,
-                weighted(&row, &vectors),
-                |old, new| {
-                    checked.push((old, new));
-                },
-            );
-            assert_eq!(target, expected, "n = {}", n.value());
-            let pairs: Vec<_> = old.iter().copied().zip(expected.iter().copied()).collect();
-            assert_eq!(checked, pairs);
-            // The first term as the lead: the same sum.
-            let lead = Some((row[0], &vectors[0]));
-            let rest = weighted(&row[1..], &vectors[1..]);
-            combine_into(&mut target, Some(&start), lead, rest, |_, _| {});
-            assert_eq!(target, expected, "n = {}", n.value());
-            // Without a start the sum starts from zero.
-            combine_into(&mut target, None, None, weighted(&row, &vectors), |_, _| {});
-            assert_eq!(target, plain(&start * 0.0), "n = {}", n.value());
-        }
-        check(Const::<3>);
-        for n in [1, REGISTER_SUMS - 1, REGISTER_SUMS, 2 * SUM_BLOCK + 37] {
-            check(Dyn(n));
-        }
-    }
-
-    /// The hand-derived Euler–Lagrange equations of [`VariableMass`]:
-    /// q̈₀ = (−q₀ − q₀³ − 2 q₁ q̇₁ q̇₀) / (1 + q₁²), q̈₁ = q₁ q̇₀² − q₁.
     fn variable_mass_acceleration(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
         SVector::from([
             (-q[0] - q[0].powi(3) - 2.0 * q[1] * v[1] * v[0]) / (1.0 + q[1] * q[1]),

@@ -21,10 +21,12 @@
 //!    instructions shared (`q[i+1] - q[i]`, written three times in FPUT, is computed once).
 //! 2. For the force, reverse mode from the end: each instruction adds its operands' share of
 //!    its adjoint, ∂ℓ/∂x = Σ (∂ℓ/∂y)(∂y/∂x), as new instructions. Adjoints that are
-//!    constants stay numbers (the adjoint of ℓ is 1, of `0.5*d^2` then 0.5), so the
-//!    derivative of a polynomial folds to the polynomial's derivative: FPUT's spring force
-//!    is ±(d + α d² + β d³), d = q_{i+1} − q_i, in eleven instructions with the two loads —
-//!    against two sweeps of fifteen on dual numbers.
+//!    constants stay numbers (the adjoint of ℓ is 1, of `0.5*d^2` then 0.5) and constant
+//!    factors of the others are carried along, not computed (−(1/s)² · ½(1/s) is one
+//!    product with the factor −½), so the derivative of a polynomial folds to the
+//!    polynomial's derivative: FPUT's spring force is ±(d + α d² + β d³),
+//!    d = q_{i+1} − q_i, in nine instructions with the two loads — against two sweeps of
+//!    fifteen on dual numbers; Kepler's in eleven.
 //! 3. What the outputs (the value, or the force on each slot) do not need is dropped — ℓ's
 //!    value from the force —, and the values are given registers, reused once dead: at most
 //!    [`MAX_REGISTERS`] of [`LANES`] numbers, a register file on the stack. A kind that
@@ -127,12 +129,14 @@ impl Instruction {
     }
 }
 
-/// An adjoint while the program is built: zero, a number, or a value's.
+/// An adjoint while the program is built: zero, a number, or a number times a value (the
+/// factor carried along, not computed: a chain of scalings folds into one number, applied
+/// where a sum needs it or when the force is written).
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Adjoint {
     Zero,
     Constant(f64),
-    Value(usize),
+    Value(f64, usize),
 }
 
 /// Instructions in static single assignment, equal ones shared.
@@ -166,10 +170,21 @@ impl Builder {
     fn times(&mut self, a: Adjoint, x: usize) -> Adjoint {
         match a {
             Adjoint::Zero => Adjoint::Zero,
-            Adjoint::Constant(1.0) => Adjoint::Value(x),
-            Adjoint::Constant(c) => Adjoint::Value(self.emit(Instruction::Scale(x, c))),
-            Adjoint::Value(a) => {
-                Adjoint::Value(self.emit(Instruction::Binary(Binary::Multiply, a, x)))
+            Adjoint::Constant(c) => Adjoint::Value(c, x),
+            Adjoint::Value(c, a) => {
+                Adjoint::Value(c, self.emit(Instruction::Binary(Binary::Multiply, a, x)))
+            }
+        }
+    }
+
+    /// a · b.
+    fn product(&mut self, a: Adjoint, b: Adjoint) -> Adjoint {
+        match b {
+            Adjoint::Zero => Adjoint::Zero,
+            Adjoint::Constant(c) => self.scaled(a, c),
+            Adjoint::Value(c, x) => {
+                let share = self.times(a, x);
+                self.scaled(share, c)
             }
         }
     }
@@ -179,22 +194,38 @@ impl Builder {
         match a {
             Adjoint::Zero => Adjoint::Zero,
             Adjoint::Constant(d) => Adjoint::Constant(c * d),
-            Adjoint::Value(x) if c == -1.0 => Adjoint::Value(self.emit(Instruction::Negate(x))),
-            Adjoint::Value(x) => Adjoint::Value(self.emit(Instruction::Scale(x, c))),
+            Adjoint::Value(d, x) => Adjoint::Value(c * d, x),
         }
     }
 
-    /// a + b.
+    /// The value c · x itself (an instruction unless c = 1).
+    fn computed(&mut self, c: f64, x: usize) -> usize {
+        match c {
+            1.0 => x,
+            -1.0 => self.emit(Instruction::Negate(x)),
+            c => self.emit(Instruction::Scale(x, c)),
+        }
+    }
+
+    /// a + b (c x + c y as c (x + y), c x − c y as c (x − y)).
     fn plus(&mut self, a: Adjoint, b: Adjoint) -> Adjoint {
         match (a, b) {
             (Adjoint::Zero, other) | (other, Adjoint::Zero) => other,
             (Adjoint::Constant(c), Adjoint::Constant(d)) => Adjoint::Constant(c + d),
-            (Adjoint::Constant(c), Adjoint::Value(x))
-            | (Adjoint::Value(x), Adjoint::Constant(c)) => {
-                Adjoint::Value(self.emit(Instruction::Shift(x, c)))
+            (Adjoint::Constant(c), Adjoint::Value(d, x))
+            | (Adjoint::Value(d, x), Adjoint::Constant(c)) => {
+                let x = self.computed(d, x);
+                Adjoint::Value(1.0, self.emit(Instruction::Shift(x, c)))
             }
-            (Adjoint::Value(x), Adjoint::Value(y)) => {
-                Adjoint::Value(self.emit(Instruction::Binary(Binary::Add, x, y)))
+            (Adjoint::Value(c, x), Adjoint::Value(d, y)) if c == d => {
+                Adjoint::Value(c, self.emit(Instruction::Binary(Binary::Add, x, y)))
+            }
+            (Adjoint::Value(c, x), Adjoint::Value(d, y)) if c == -d => {
+                Adjoint::Value(c, self.emit(Instruction::Binary(Binary::Subtract, x, y)))
+            }
+            (Adjoint::Value(c, x), Adjoint::Value(d, y)) => {
+                let (x, y) = (self.computed(c, x), self.computed(d, y));
+                Adjoint::Value(1.0, self.emit(Instruction::Binary(Binary::Add, x, y)))
             }
         }
     }
@@ -257,46 +288,41 @@ impl Builder {
     }
 
     /// The derivative of `function` at the value `x`, whose result is the value `y`.
-    fn derivative(&mut self, function: Function, x: usize, y: usize) -> usize {
+    fn derivative(&mut self, function: Function, x: usize, y: usize) -> Adjoint {
+        let value = |x: usize| Adjoint::Value(1.0, x);
         let one_minus_square = |builder: &mut Builder, z: usize| {
             let square = builder.emit(Instruction::Square(z));
             let negated = builder.emit(Instruction::Negate(square));
             builder.emit(Instruction::Shift(negated, 1.0))
         };
         match function {
-            Function::Sin => self.emit(Instruction::Call(Function::Cos, x)),
-            Function::Cos => {
-                let sine = self.emit(Instruction::Call(Function::Sin, x));
-                self.emit(Instruction::Negate(sine))
-            }
+            Function::Sin => value(self.emit(Instruction::Call(Function::Cos, x))),
+            Function::Cos => Adjoint::Value(-1.0, self.emit(Instruction::Call(Function::Sin, x))),
             Function::Tan => {
                 let square = self.emit(Instruction::Square(y));
-                self.emit(Instruction::Shift(square, 1.0))
+                value(self.emit(Instruction::Shift(square, 1.0)))
             }
             Function::Asin | Function::Acos => {
                 let root = one_minus_square(self, x);
                 let root = self.emit(Instruction::Call(Function::Sqrt, root));
                 let reciprocal = self.emit(Instruction::Reciprocal(root));
                 match function {
-                    Function::Asin => reciprocal,
-                    _ => self.emit(Instruction::Negate(reciprocal)),
+                    Function::Asin => value(reciprocal),
+                    _ => Adjoint::Value(-1.0, reciprocal),
                 }
             }
             Function::Atan => {
                 let square = self.emit(Instruction::Square(x));
                 let denominator = self.emit(Instruction::Shift(square, 1.0));
-                self.emit(Instruction::Reciprocal(denominator))
+                value(self.emit(Instruction::Reciprocal(denominator)))
             }
-            Function::Sinh => self.emit(Instruction::Call(Function::Cosh, x)),
-            Function::Cosh => self.emit(Instruction::Call(Function::Sinh, x)),
-            Function::Tanh => one_minus_square(self, y),
-            Function::Exp => y,
-            Function::Ln => self.emit(Instruction::Reciprocal(x)),
-            Function::Sqrt => {
-                let reciprocal = self.emit(Instruction::Reciprocal(y));
-                self.emit(Instruction::Scale(reciprocal, 0.5))
-            }
-            Function::Abs => self.emit(Instruction::Sign(x)),
+            Function::Sinh => value(self.emit(Instruction::Call(Function::Cosh, x))),
+            Function::Cosh => value(self.emit(Instruction::Call(Function::Sinh, x))),
+            Function::Tanh => value(one_minus_square(self, y)),
+            Function::Exp => value(y),
+            Function::Ln => value(self.emit(Instruction::Reciprocal(x))),
+            Function::Sqrt => Adjoint::Value(0.5, self.emit(Instruction::Reciprocal(y))),
+            Function::Abs => value(self.emit(Instruction::Sign(x))),
         }
     }
 
@@ -332,7 +358,7 @@ impl Builder {
                 Instruction::Shift(x, _) => add(self, x, a),
                 Instruction::DivideBy(x, c) => {
                     let share = match a {
-                        Adjoint::Value(r) => Adjoint::Value(self.emit(Instruction::DivideBy(r, c))),
+                        Adjoint::Value(d, r) => Adjoint::Value(d / c, r),
                         Adjoint::Constant(d) => Adjoint::Constant(d / c),
                         Adjoint::Zero => Adjoint::Zero,
                     };
@@ -363,7 +389,7 @@ impl Builder {
                 }
                 Instruction::Call(function, x) => {
                     let derivative = self.derivative(function, x, value);
-                    let share = self.times(a, derivative);
+                    let share = self.product(a, derivative);
                     add(self, x, share);
                 }
                 Instruction::Binary(binary, x, y) => {
@@ -432,12 +458,13 @@ impl Builder {
     }
 }
 
-/// Where a slot's gradient comes from in a program.
+/// Where a slot's gradient comes from in a program: nothing, a number, or a number times a
+/// register.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Output {
     Zero,
     Constant(f64),
-    Register(usize),
+    Register(f64, usize),
 }
 
 /// The value or the force ∂ℓ/∂q of one kind of term as a straight-line program on registers
@@ -470,7 +497,7 @@ impl Program {
     pub fn value(tape: &Tape) -> Option<Program> {
         let mut builder = Builder::default();
         let output = builder.forward(tape)?;
-        Program::compile(builder.instructions, &[Adjoint::Value(output)])
+        Program::compile(builder.instructions, &[Adjoint::Value(1.0, output)])
     }
 
     /// The program of `tape`'s force ∂ℓ/∂q in the coordinates of its `width` slots; `None`
@@ -487,7 +514,7 @@ impl Program {
         // The instructions the outputs need, each after its operands.
         let mut needed = vec![false; instructions.len()];
         for output in outputs {
-            if let Adjoint::Value(x) = output {
+            if let Adjoint::Value(_, x) = output {
                 needed[*x] = true;
             }
         }
@@ -507,7 +534,7 @@ impl Program {
             }
         }
         for output in outputs {
-            if let Adjoint::Value(x) = output {
+            if let Adjoint::Value(_, x) = output {
                 last_use[*x] = usize::MAX;
             }
         }
@@ -541,7 +568,7 @@ impl Program {
             .map(|output| match *output {
                 Adjoint::Zero => Output::Zero,
                 Adjoint::Constant(c) => Output::Constant(c),
-                Adjoint::Value(x) => Output::Register(register[x]),
+                Adjoint::Value(c, x) => Output::Register(c, register[x]),
             })
             .collect();
         Some(Program {
@@ -569,7 +596,7 @@ impl Program {
     ) -> f64 {
         self.execute(registers, lanes.loader(t, q, v));
         match self.outputs.first() {
-            Some(Output::Register(r)) => registers[*r][..lanes.count].iter().sum(),
+            Some(&Output::Register(c, r)) => c * registers[r][..lanes.count].iter().sum::<f64>(),
             Some(Output::Constant(c)) => c * lanes.count as f64,
             Some(Output::Zero) | None => 0.0,
         }
@@ -597,7 +624,7 @@ impl Program {
             match output {
                 Output::Zero => {}
                 Output::Constant(c) => entries.for_each(|f| *f += c),
-                Output::Register(r) => entries.zip(&registers[r]).for_each(|(f, g)| *f += g),
+                Output::Register(c, r) => entries.zip(&registers[r]).for_each(|(f, g)| *f += c * g),
             }
         }
     }
@@ -619,15 +646,18 @@ impl Program {
             match output {
                 Output::Zero => (0..count).for_each(|lane| write(u, lane, 0.0)),
                 Output::Constant(c) => (0..count).for_each(|lane| write(u, lane, c)),
-                Output::Register(r) => registers[r][..count]
+                Output::Register(c, r) => registers[r][..count]
                     .iter()
                     .enumerate()
-                    .for_each(|(lane, &g)| write(u, lane, g)),
+                    .for_each(|(lane, &g)| write(u, lane, c * g)),
             }
         }
     }
 
-    /// Run the steps on `W` lanes, `load` filling the loads.
+    /// Run the steps on `W` lanes, `load` filling the loads. Each step reads its operands
+    /// out of the register file by value and writes its result back whole: the lanes run as
+    /// vector instructions (a result written in place beside operands read in place would
+    /// not: the compiler cannot tell them apart).
     #[inline]
     fn execute<const W: usize>(
         &self,
@@ -635,43 +665,61 @@ impl Program {
         mut load: impl FnMut(Source, &mut [f64; W]),
     ) {
         for &(destination, instruction) in &self.steps {
-            let (before, after) = registers.split_at_mut(destination);
-            let (target, after) = after.split_first_mut().unwrap_or_else(|| unreachable!());
-            let read = |x: usize| -> &[f64; W] {
-                if x < destination {
-                    &before[x]
-                } else {
-                    &after[x - destination - 1]
+            let x = |x: usize| registers[x];
+            let value = match instruction {
+                Instruction::Number(c) => [c; W],
+                Instruction::Time => {
+                    load(Source::Time, &mut registers[destination]);
+                    continue;
                 }
-            };
-            match instruction {
-                Instruction::Number(c) => target.fill(c),
-                Instruction::Time => load(Source::Time, target),
-                Instruction::Coordinate(u) => load(Source::Coordinate(u), target),
-                Instruction::Velocity(u) => load(Source::Velocity(u), target),
-                Instruction::Negate(x) => map(target, read(x), |x| -x),
-                Instruction::Scale(x, c) => map(target, read(x), |x| x * c),
-                Instruction::Shift(x, c) => map(target, read(x), |x| x + c),
-                Instruction::DivideBy(x, c) => map(target, read(x), |x| x / c),
-                Instruction::Reciprocal(x) => map(target, read(x), f64::recip),
-                Instruction::Square(x) => map(target, read(x), |x| x * x),
-                // Small powers by products, as fast as written out.
-                Instruction::PowerInteger(x, 3) => map(target, read(x), |x| x * x * x),
-                Instruction::PowerInteger(x, 4) => map(target, read(x), |x| (x * x) * (x * x)),
-                Instruction::PowerInteger(x, n) => map(target, read(x), |x| x.powi(n)),
-                Instruction::Call(function, x) => map(target, read(x), |x| function.apply(x)),
-                Instruction::Sign(x) => map(target, read(x), |x| if x < 0.0 { -1.0 } else { 1.0 }),
-                Instruction::Binary(binary, x, y) => {
-                    let (x, y) = (read(x), read(y));
-                    match binary {
-                        Binary::Add => zip(target, x, y, |x, y| x + y),
-                        Binary::Subtract => zip(target, x, y, |x, y| x - y),
-                        Binary::Multiply => zip(target, x, y, |x, y| x * y),
-                        Binary::Divide => zip(target, x, y, |x, y| x / y),
-                        other => zip(target, x, y, |x, y| other.apply(x, y)),
+                Instruction::Coordinate(u) => {
+                    load(Source::Coordinate(u), &mut registers[destination]);
+                    continue;
+                }
+                Instruction::Velocity(u) => {
+                    load(Source::Velocity(u), &mut registers[destination]);
+                    continue;
+                }
+                Instruction::Negate(a) => x(a).map(|x| -x),
+                Instruction::Scale(a, c) => x(a).map(|x| x * c),
+                Instruction::Shift(a, c) => x(a).map(|x| x + c),
+                Instruction::DivideBy(a, c) => x(a).map(|x| x / c),
+                Instruction::Reciprocal(a) => x(a).map(f64::recip),
+                Instruction::Square(a) => x(a).map(|x| x * x),
+                Instruction::PowerInteger(a, n) => power(x(a), n),
+                // One lane loop per function, not a `match` in every lane: `sqrt` and
+                // `abs` then run as vector instructions.
+                Instruction::Call(function, a) => {
+                    let a = x(a);
+                    match function {
+                        Function::Sqrt => a.map(f64::sqrt),
+                        Function::Abs => a.map(|x| if x < 0.0 { -x } else { x }),
+                        Function::Sin => a.map(f64::sin),
+                        Function::Cos => a.map(f64::cos),
+                        Function::Tan => a.map(f64::tan),
+                        Function::Asin => a.map(f64::asin),
+                        Function::Acos => a.map(f64::acos),
+                        Function::Atan => a.map(f64::atan),
+                        Function::Sinh => a.map(f64::sinh),
+                        Function::Cosh => a.map(f64::cosh),
+                        Function::Tanh => a.map(f64::tanh),
+                        Function::Exp => a.map(f64::exp),
+                        Function::Ln => a.map(f64::ln),
                     }
                 }
-            }
+                Instruction::Sign(a) => x(a).map(|x| if x < 0.0 { -1.0 } else { 1.0 }),
+                Instruction::Binary(binary, a, b) => {
+                    let (a, b) = (x(a), x(b));
+                    match binary {
+                        Binary::Add => zip(a, b, |x, y| x + y),
+                        Binary::Subtract => zip(a, b, |x, y| x - y),
+                        Binary::Multiply => zip(a, b, |x, y| x * y),
+                        Binary::Divide => zip(a, b, |x, y| x / y),
+                        other => zip(a, b, |x, y| other.apply(x, y)),
+                    }
+                }
+            };
+            registers[destination] = value;
         }
     }
 }
@@ -719,25 +767,33 @@ impl Lanes<'_> {
     }
 }
 
-/// target = f(x), lane by lane.
+/// f(x, y), lane by lane.
 #[inline(always)]
-fn map<const W: usize>(target: &mut [f64; W], x: &[f64; W], f: impl Fn(f64) -> f64) {
-    for (t, x) in target.iter_mut().zip(x) {
-        *t = f(*x);
-    }
+fn zip<const W: usize>(x: [f64; W], y: [f64; W], f: impl Fn(f64, f64) -> f64) -> [f64; W] {
+    std::array::from_fn(|lane| f(x[lane], y[lane]))
 }
 
-/// target = f(x, y), lane by lane.
+/// xⁿ lane by lane, by repeated squaring in the order of `f64::powi` (compiler-rt's
+/// `__powidf2`: its digits), each squaring and product on all lanes at once rather than a
+/// call per lane.
 #[inline(always)]
-fn zip<const W: usize>(
-    target: &mut [f64; W],
-    x: &[f64; W],
-    y: &[f64; W],
-    f: impl Fn(f64, f64) -> f64,
-) {
-    for ((t, x), y) in target.iter_mut().zip(x).zip(y) {
-        *t = f(*x, *y);
+fn power<const W: usize>(mut x: [f64; W], n: i32) -> [f64; W] {
+    let mut result = [1.0; W];
+    let mut bits = n.unsigned_abs();
+    loop {
+        if bits & 1 == 1 {
+            result.iter_mut().zip(x).for_each(|(r, x)| *r *= x);
+        }
+        bits >>= 1;
+        if bits == 0 {
+            break;
+        }
+        x.iter_mut().for_each(|x| *x *= *x);
     }
+    if n < 0 {
+        result.iter_mut().for_each(|r| *r = 1.0 / *r);
+    }
+    result
 }
 
 #[cfg(test)]
@@ -766,9 +822,12 @@ mod tests {
         let (alpha, beta) = (0.25, 0.5);
         let spring = tape("-(0.5*(y-x)^2 + a/3*(y-x)^3 + b/4*(y-x)^4)", &[alpha, beta]);
         let gradient = Program::force(&spring, 2).unwrap();
-        // The loads, d = y − x, d², d³, −d − α d² − β d³ in five, and its negative: neither
-        // ℓ's value nor d⁴, and d computed once.
-        assert_eq!(gradient.steps.len(), 11, "{:?}", gradient.steps);
+        // The loads, d = y − x, d², d³, −d − α d² − β d³ in four (the scalings folded into
+        // the coefficients), and no negative: the force on x is the same register, negated
+        // as it is written. Neither ℓ's value nor d⁴, and d computed once.
+        assert_eq!(gradient.steps.len(), 9, "{:?}", gradient.steps);
+        assert_eq!(gradient.outputs[0], Output::Register(-1.0, 0));
+        assert_eq!(gradient.outputs[1], Output::Register(1.0, 0));
         // A chain of springs: lane l reads x = q[l], y = q[l + 1].
         let q: Vec<f64> = (0..6).map(|i| 0.3 * (1.7 * f64::from(i)).sin()).collect();
         let mut force = vec![0.0; 6];
@@ -793,6 +852,57 @@ mod tests {
             };
             // The same polynomial evaluated in another order: equal to a few ulps.
             assert!((f - (right - left)).abs() <= 1e-15, "{j}: {f}");
+        }
+    }
+
+    /// Kepler's force: the loads, x², y², r² = x² + y², r, 1/r, 1/r², 1/r³ and the two
+    /// products with x and y — the scalings of the chain rule (−1 from 1/r, ½ from √, 2 from
+    /// the squares) folded into one factor −1 applied as the force is written.
+    #[test]
+    fn the_kepler_force_is_eleven_instructions() {
+        let gradient = Program::force(&tape("a/sqrt(x^2 + y^2)", &[1.0, 0.0]), 2).unwrap();
+        assert_eq!(gradient.steps.len(), 11, "{:?}", gradient.steps);
+        let mut registers = [[0.0; LANES]; MAX_REGISTERS];
+        let lanes = Lanes {
+            count: 1,
+            bases: &[0, 1],
+            stride: 1,
+        };
+        let (q, mut force) = ([0.6, -0.8], [0.0; 2]);
+        gradient.add_force(&mut registers, lanes, 0.0, &q, &[0.0; 2], &mut force);
+        // ∂(1/r)/∂q = −q/r³ at r = 1.
+        assert!(
+            (force[0] + 0.6).abs() <= 1e-15 && (force[1] - 0.8).abs() <= 1e-15,
+            "{force:?}"
+        );
+    }
+
+    /// Integer powers on all lanes at once have `f64::powi`'s digits, for every sign and size
+    /// of the exponent.
+    #[test]
+    fn integer_powers_of_lanes_are_powi() {
+        let x: [f64; 4] = [0.3, -1.7, 2.9e3, -4.1e-5];
+        for n in [
+            0,
+            1,
+            2,
+            3,
+            4,
+            5,
+            7,
+            12,
+            31,
+            -1,
+            -2,
+            -3,
+            -8,
+            -13,
+            i32::MAX,
+            i32::MIN,
+        ] {
+            for (got, x) in power(x, n).iter().zip(x) {
+                assert_eq!(got.to_bits(), x.powi(n).to_bits(), "{x}^{n}: {got}");
+            }
         }
     }
 

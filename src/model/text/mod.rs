@@ -127,11 +127,11 @@
 //! U(t, q) = L(t, q, 0) runs on one. Its force ∂U/∂q is also compiled into a straight-line
 //! program by reverse-mode differentiation (as a chain's terms are, [`batch`]), which SVI's
 //! fixed point runs on all its quadrature points at once, one a lane
-//! ([`Lagrangian::batch_force`]). On the Kepler scene of the paper (10 000 steps of SVI
-//! with 6/12 points) a text model takes 1.7–1.9 times as long as the same model in Rust when
-//! its size is compiled in, and about 4 times at run-time size, where SVI's stage loops over
-//! vectors of run-time length cost more than the force (`cargo bench --bench text --
-//! kepler_T2000`).
+//! ([`Lagrangian::batch_force`]), in registers as wide as the points need. On the Kepler
+//! scene of the paper (10 000 steps of SVI 7/6) a text model takes about 1.6 times as long
+//! as the same model in Rust when its size is compiled in, and about 2.4 times at run-time
+//! size, where the force program and SVI's stage sums over vectors of run-time length cost
+//! about equally (`cargo bench --bench text -- kepler_T2000`).
 
 mod batch;
 pub mod chain;
@@ -808,28 +808,49 @@ where
             Some(program) if CONSTANT_MASS => program,
             _ => return false,
         };
-        // The smallest register file that holds the program: it is zeroed at every call.
-        if program.register_count() <= 8 {
-            batch_force_with(
-                program,
-                &mut [[0.0; BATCH_LANES]; 8],
-                times,
-                positions,
-                forces,
-            );
-        } else {
-            let registers = &mut [[0.0; BATCH_LANES]; MAX_REGISTERS];
-            batch_force_with(program, registers, times, positions, forces);
+        // Registers no wider than the points need: SVI 7/6's 6 Gauss points fill 6 lanes,
+        // the default 6/12's 12 (even widths: whole vector instructions).
+        let arguments = (program, times, positions, forces);
+        match positions.len() {
+            0..=4 => batch_force_in::<4, N>(arguments),
+            5..=6 => batch_force_in::<6, N>(arguments),
+            7..=8 => batch_force_in::<8, N>(arguments),
+            9..=12 => batch_force_in::<12, N>(arguments),
+            _ => batch_force_in::<BATCH_LANES, N>(arguments),
         }
         true
     }
 }
 
-/// ∂U/∂q at the points by `program`, [`BATCH_LANES`] points at once, with `registers`.
+/// The arguments of [`batch_force_in`]: the program, the times, positions and forces.
+type BatchForce<'a, N> = (
+    &'a Program,
+    &'a [f64],
+    &'a [OVector<f64, N>],
+    &'a mut [OVector<f64, N>],
+);
+
+/// ∂U/∂q at the points by `program`, `W` points at once, in the smallest register file
+/// that holds the program (it is zeroed at every call).
 #[inline]
-fn batch_force_with<N: Dimension>(
+fn batch_force_in<const W: usize, N: Dimension>(
+    (program, times, positions, forces): BatchForce<'_, N>,
+) where
+    DefaultAllocator: Allocator<N>,
+{
+    if program.register_count() <= 8 {
+        batch_force_with(program, &mut [[0.0; W]; 8], times, positions, forces);
+    } else {
+        let registers = &mut [[0.0; W]; MAX_REGISTERS];
+        batch_force_with(program, registers, times, positions, forces);
+    }
+}
+
+/// ∂U/∂q at the points by `program`, `W` points at once, with `registers`.
+#[inline]
+fn batch_force_with<const W: usize, N: Dimension>(
     program: &Program,
-    registers: &mut [[f64; BATCH_LANES]],
+    registers: &mut [[f64; W]],
     times: &[f64],
     positions: &[OVector<f64, N>],
     forces: &mut [OVector<f64, N>],
@@ -837,9 +858,9 @@ fn batch_force_with<N: Dimension>(
     DefaultAllocator: Allocator<N>,
 {
     for ((times, positions), forces) in times
-        .chunks(BATCH_LANES)
-        .zip(positions.chunks(BATCH_LANES))
-        .zip(forces.chunks_mut(BATCH_LANES))
+        .chunks(W)
+        .zip(positions.chunks(W))
+        .zip(forces.chunks_mut(W))
     {
         program.forces(
             registers,
@@ -854,13 +875,13 @@ fn batch_force_with<N: Dimension>(
                 // U(t, q) reads no velocity.
                 Source::Velocity(_) => lanes.fill(0.0),
             },
-            |u, lane, value| forces[lane][u] = value,
+            |u, lane, value| forces[lane].as_mut_slice()[u] = value,
         );
     }
 }
 
-/// The points a text model's force program runs at once ([`Lagrangian::batch_force`]): as
-/// many as SVI's usual quadrature rules have.
+/// The most points a text model's force program runs at once ([`Lagrangian::batch_force`]):
+/// as many as SVI's usual quadrature rules have.
 const BATCH_LANES: usize = 16;
 
 impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
@@ -1115,8 +1136,8 @@ mod tests {
     }
 
     /// The compiled force program with the points as lanes is the force of the dual
-    /// numbers, point by point, for a time-dependent constant-mass L and more points than
-    /// one batch holds.
+    /// numbers, point by point, for a time-dependent constant-mass L, at every register
+    /// width (3, 6, 7 and 12 points; more points than one batch holds).
     #[test]
     fn the_batched_force_is_the_force_point_by_point() {
         let text = spec(
@@ -1125,22 +1146,31 @@ mod tests {
         );
         let model = TextModel::new(&text).unwrap();
         let model = TextLagrangian::<crate::dimension::Dyn, true, false, true>::new(model).unwrap();
-        let count = BATCH_LANES + 5;
-        let times: Vec<f64> = (0..count).map(|k| 0.1 * k as f64).collect();
-        let positions: Vec<DVector<f64>> = (0..count)
-            .map(|k| DVector::from_column_slice(&[(0.7 * k as f64).sin(), 0.2 * k as f64 - 1.0]))
-            .collect();
         let v = DVector::from_column_slice(&[0.3, -0.4]);
-        let mut forces = vec![DVector::zeros(2); count];
-        assert!(model.batch_force(&times, &positions, &v, &mut forces));
-        for ((&t, q), force) in times.iter().zip(&positions).zip(&forces) {
-            let mut expected = DVector::zeros(2);
-            model.force_into(t, q, &v, &mut expected);
-            assert!(
-                (force - &expected).amax() <= 1e-14 * expected.amax().max(1.0),
-                "{force} {expected}"
-            );
+        let points = |count: usize| {
+            let times: Vec<f64> = (0..count).map(|k| 0.1 * k as f64).collect();
+            let positions: Vec<DVector<f64>> = (0..count)
+                .map(|k| {
+                    DVector::from_column_slice(&[(0.7 * k as f64).sin(), 0.2 * k as f64 - 1.0])
+                })
+                .collect();
+            (times, positions)
+        };
+        for count in [3, 6, 7, 12, BATCH_LANES + 5] {
+            let (times, positions) = points(count);
+            let mut forces = vec![DVector::zeros(2); count];
+            assert!(model.batch_force(&times, &positions, &v, &mut forces));
+            for ((&t, q), force) in times.iter().zip(&positions).zip(&forces) {
+                let mut expected = DVector::zeros(2);
+                model.force_into(t, q, &v, &mut expected);
+                assert!(
+                    (force - &expected).amax() <= 1e-14 * expected.amax().max(1.0),
+                    "{count} points: {force} {expected}"
+                );
+            }
         }
+        let (times, positions) = points(6);
+        let mut forces = vec![DVector::zeros(2); 6];
         // A general L offers no batch: the integrators take the points one by one.
         let general = spec("0.5*(1 + x^2)*vx^2 + 0.5*vy^2 - x^2", &["x", "y"]);
         let general = TextModel::new(&general).unwrap();
