@@ -18,7 +18,7 @@
 //! come from nested dual numbers. Then q_{k+1} = qˢ and q̇_{k+1} = yˢ.
 //! On an unforced sum of local terms of run-time size ([`crate::model::TermSum`]) the same
 //! equations are solved in implicit form, multiplied by the mass matrix, by sparse Newton
-//! ([`sparse_newton`]): O(n) per iteration, no n × n matrix.
+//! (`sparse_newton`): O(n) per iteration, no n × n matrix.
 //! The differentiation matrix D̃⁽¹⁾ is built from barycentric formulas for ascending nodes
 //! ([`crate::spectral::basis::LagrangeBasis::differentiation_matrix`]); eq. (17) of the paper is
 //! quoted for descending nodes.
@@ -654,7 +654,7 @@ where
     }
 
     /// An unforced sum of terms: the fixed point (M⁻¹ from the terms' blocks) for a constant
-    /// mass, and sparse Newton ([`sparse_newton`]) for every other one and wherever the fixed
+    /// mass, and sparse Newton (`sparse_newton`) for every other one and wherever the fixed
     /// point fails.
     fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
         model.terms().is_some() && !L::FORCED

@@ -13,7 +13,7 @@
 //! A method chosen at run time is one value, [`any::AnyMethod`]. Families, one folder or file
 //! each: [`variational`] (SVI and the classic variational
 //! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
-//! (the multiscale variational integrator for stiff oscillations), [`reference`] (explicit
+//! (the multiscale variational integrator for stiff oscillations), [`reference`](mod@reference) (explicit
 //! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references).
 //! Each is written once for every dimension, fixed (`Const<N>`) or chosen at run time
 //! ([`crate::Dyn`]); on a sum of local terms of run-time size (chains, lattices, 10⁵ degrees

@@ -10,7 +10,7 @@
 //! that observes nothing (median over batches, each batch repeating the run for at least
 //! `min_batch` seconds, after a warm-up run). Chains (zoo or text) and Lagrangians written as
 //! text, which have no exact solution, are swept through the scene's own run against the
-//! resolved reference run, each point a whole run ([`sweep_runs`]; fixed-step methods).
+//! resolved reference run, each point a whole run (`sweep_runs`; fixed-step methods).
 //!
 //! Fixed-step methods start from 8 steps, double until the error is below 3·10⁻², go back by
 //! bisection to the fewest steps (to within 1/16, or one step) with an error below 3·10⁻² — a method that

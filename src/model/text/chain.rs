@@ -48,7 +48,7 @@
 //!
 //! Which sums hold a site, and which slots of its window fall outside 1..n, change only at
 //! a few sites near the ends of the ranges and of the chain: the sites fall into segments,
-//! each one kind of term, and each kind is compiled once into a [`Tape`] over the K slots
+//! each one kind of term, and each kind is compiled once into a `Tape` over the K slots
 //! (with the constant-mass split of [`super`]). Under fixed boundaries a slot outside the
 //! chain is the number 0 in its kind's tape, folded away at compile time; its index
 //! repeats the nearest site's, which the term does not read (so its derivatives there are
@@ -1027,7 +1027,7 @@ impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> 
         kind.tape.evaluate(t, q.as_slice(), v.as_slice())
     }
 
-    /// Each segment of sites of one kind in batches of [`LANES`] by its program (see
+    /// Each segment of sites of one kind in batches of `LANES` by its program (see
     /// [the module docs](self)); a kind without one, and the rest's term, term by term.
     fn value(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
         let mut sum = 0.0;
@@ -1042,7 +1042,7 @@ impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> 
         sum
     }
 
-    /// Each segment of sites of one kind in batches of [`LANES`] by its program (see
+    /// Each segment of sites of one kind in batches of `LANES` by its program (see
     /// [the module docs](self)); a kind without one, and the rest's term, term by term.
     fn force_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut DVector<f64>) {
         out.as_mut_slice().fill(0.0);

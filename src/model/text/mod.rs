@@ -125,7 +125,7 @@
 //! For a constant-mass L the kinetic part ½q̇ᵀMq̇ is read off the tree once (M from the
 //! constant coefficients) and evaluated as a sum of products without a tape; only
 //! U(t, q) = L(t, q, 0) runs on one. Its force ∂U/∂q is also compiled into a straight-line
-//! program by reverse-mode differentiation (as a chain's terms are, [`batch`]), which SVI's
+//! program by reverse-mode differentiation (as a chain's terms are, `batch`), which SVI's
 //! fixed point runs on all its quadrature points at once, one a lane
 //! ([`Lagrangian::batch_force`]), in registers as wide as the points need. On the Kepler
 //! scene of the paper (10 000 steps of SVI 7/6) a text model takes about 1.6 times as long
@@ -795,7 +795,7 @@ where
         })
     }
 
-    /// A constant-mass L: the compiled program of ∂U/∂q on [`BATCH_LANES`] points at once.
+    /// A constant-mass L: the compiled program of ∂U/∂q on up to `BATCH_LANES` points at once.
     #[inline]
     fn batch_force(
         &self,
