@@ -168,10 +168,11 @@ where
 }
 
 /// The one implementation of ℝᴺ runs a sum of local terms of run-time size without
-/// allocating per step: Verlet, SVI's fixed point and SVI and midpoint by sparse Newton (the
-/// stepping loop's checked compensated sum included).
+/// allocating per step: Verlet, SVI's fixed point, SVI and midpoint by sparse Newton, and the
+/// reference methods (the stepping loop's checked compensated sum included).
 #[test]
 fn sums_of_terms_do_not_allocate_per_step() {
+    use svi::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
     use svi::model::local::LocalDefaults;
     use svi_models::{Fput, RelativisticChain};
     let mut fput = Fput::default();
@@ -201,5 +202,23 @@ fn sums_of_terms_do_not_allocate_per_step() {
         terms_allocations(&relativistic, &midpoint, 20),
         terms_allocations(&relativistic, &midpoint, 200),
         "midpoint, sparse Newton"
+    );
+    // The non-symplectic references: RK4's stages live in its workspace, implicit Euler
+    // solves in the increment.
+    assert_eq!(
+        terms_allocations(&fput, &RungeKutta4, 20),
+        terms_allocations(&fput, &RungeKutta4, 2000),
+        "rk4"
+    );
+    assert_eq!(
+        terms_allocations(&fput, &ExplicitEuler, 20),
+        terms_allocations(&fput, &ExplicitEuler, 2000),
+        "explicit euler"
+    );
+    let implicit = ImplicitEuler::default();
+    assert_eq!(
+        terms_allocations(&relativistic, &implicit, 20),
+        terms_allocations(&relativistic, &implicit, 200),
+        "implicit euler, sparse Newton"
     );
 }

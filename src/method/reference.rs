@@ -65,21 +65,51 @@ impl Default for ImplicitEuler {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RungeKutta4;
 
-/// The dimension of a run, and for implicit Euler its Newton buffers; for a sum of local
-/// terms the sparse mass matrix of the acceleration, and implicit Euler's sparse Newton.
+/// The dimension of a run, for RK4 its stage buffers and for implicit Euler its Newton
+/// buffers; for a sum of local terms the sparse mass matrix of the acceleration, and
+/// implicit Euler's sparse Newton.
 #[derive(Debug, Clone)]
-pub struct ReferenceWorkspace<N> {
+pub struct ReferenceWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
     n: N,
+    stages: Option<Stages<N>>,
     newton: Option<(Newton, DVector<f64>)>,
     acceleration: LazyAcceleration,
     sparse_newton: LazySparseImplicitEuler,
+}
+
+/// RK4's stages, kept across steps (a step allocates nothing).
+#[derive(Debug, Clone)]
+struct Stages<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// The accelerations a₁ … a₄ at the stages.
+    accelerations: [OVector<f64, N>; 4],
+    /// The velocities v₂, v₃, v₄ at the stages after the first.
+    velocities: [OVector<f64, N>; 3],
+    /// The position of the stage being evaluated.
+    position: OVector<f64, N>,
+}
+
+/// Which buffers a reference method's workspace holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Buffers {
+    /// None (explicit Euler).
+    None,
+    /// RK4's stages.
+    Stages,
+    /// Implicit Euler's Newton iteration, with at most this many iterations.
+    Newton(usize),
 }
 
 /// The workspace of a reference method on `model`.
 fn workspace<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     h: f64,
-    implicit: Option<usize>,
+    buffers: Buffers,
 ) -> Result<ReferenceWorkspace<N>, Error>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -95,11 +125,20 @@ where
     let size = n.value();
     // A sum of terms takes its equations term by term, without an n × n matrix.
     let dense = sparse_terms(model).is_none();
+    let zero = || OVector::zeros_generic(n, U1);
     Ok(ReferenceWorkspace {
         n,
-        newton: implicit
-            .filter(|_| dense)
-            .map(|iterations| (Newton::new(size, iterations), DVector::zeros(size))),
+        stages: (buffers == Buffers::Stages).then(|| Stages {
+            accelerations: std::array::from_fn(|_| zero()),
+            velocities: std::array::from_fn(|_| zero()),
+            position: zero(),
+        }),
+        newton: match buffers {
+            Buffers::Newton(iterations) if dense => {
+                Some((Newton::new(size, iterations), DVector::zeros(size)))
+            }
+            _ => None,
+        },
         acceleration: LazyAcceleration::default(),
         sparse_newton: LazySparseImplicitEuler::default(),
     })
@@ -232,7 +271,7 @@ where
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
-        workspace(model, h, None)
+        workspace(model, h, Buffers::None)
     }
 
     fn step<L: Lagrangian<N>>(
@@ -295,7 +334,7 @@ where
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
-        workspace(model, h, None)
+        workspace(model, h, Buffers::Stages)
     }
 
     fn step<L: Lagrangian<N>>(
@@ -307,21 +346,24 @@ where
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
-        // Stage i at y + cᵢ h kᵢ₋₁ with k = (dq, dv) = (q̇ of the stage, f of the stage).
-        let (q, v) = (&state.q, &state.y);
-        let (a1, analyses) = acceleration(model, workspace, t, q, v)?;
-        let (q2, v2) = (q + v * (0.5 * h), v + &a1 * (0.5 * h));
-        let (a2, _) = acceleration(model, workspace, t + 0.5 * h, &q2, &v2)?;
-        let (q3, v3) = (q + &v2 * (0.5 * h), v + &a2 * (0.5 * h));
-        let (a3, _) = acceleration(model, workspace, t + 0.5 * h, &q3, &v3)?;
-        let (q4, v4) = (q + &v3 * h, v + &a3 * h);
-        let (a4, _) = acceleration(model, workspace, t + h, &q4, &v4)?;
-        increment
-            .q
-            .copy_from(&((v + (&v2 + &v3) * 2.0 + &v4) * (h / 6.0)));
-        increment
-            .y
-            .copy_from(&((&a1 + (&a2 + &a3) * 2.0 + &a4) * (h / 6.0)));
+        // Stage i at y + cᵢ h kᵢ₋₁ with k = (dq, dv) = (q̇ of the stage, f of the stage), in
+        // the workspace's buffers.
+        let mut stages = workspace.stages.take().ok_or(StepFailure::Unsupported {
+            option: "workspace",
+            reason: "not built for RK4",
+        })?;
+        let result = rk4_stages(model, workspace, &mut stages, t, h, state).inspect(|_| {
+            let [a1, a2, a3, a4] = &stages.accelerations;
+            let [v2, v3, v4] = &stages.velocities;
+            let (v, sixth) = (&state.y, h / 6.0);
+            let rates = increment.q.iter_mut().zip(increment.y.iter_mut());
+            for (i, (dq, dv)) in rates.enumerate() {
+                *dq = (v[i] + (v2[i] + v3[i]) * 2.0 + v4[i]) * sixth;
+                *dv = (a1[i] + (a2[i] + a3[i]) * 2.0 + a4[i]) * sixth;
+            }
+        });
+        workspace.stages = Some(stages);
+        let analyses = result?;
         Ok(StepReport {
             evaluations: 4,
             analyses,
@@ -371,26 +413,68 @@ where
     }
 }
 
+/// RK4's four stages into `stages`; the analyses of the first acceleration.
+fn rk4_stages<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    workspace: &mut ReferenceWorkspace<N>,
+    stages: &mut Stages<N>,
+    t: f64,
+    h: f64,
+    state: &State<N>,
+) -> Result<usize, StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (q, v) = (&state.q, &state.y);
+    let Stages {
+        accelerations,
+        velocities,
+        position,
+    } = stages;
+    let analyses = acceleration_into(model, workspace, t, (q, v), &mut accelerations[0])?;
+    // Stage i + 1 at time t + c h and at q + c h v_i, v + c h a_i (v₁ = v).
+    for (i, c) in [0.5, 0.5, 1.0].into_iter().enumerate() {
+        let (before, after) = accelerations.split_at_mut(i + 1);
+        let (done, next) = velocities.split_at_mut(i);
+        let velocity = if i == 0 { v } else { &done[i - 1] };
+        for ((x, q), w) in position.iter_mut().zip(q.iter()).zip(velocity.iter()) {
+            *x = q + w * (c * h);
+        }
+        let stage = &mut next[0];
+        for ((w, v), a) in stage.iter_mut().zip(v.iter()).zip(before[i].iter()) {
+            *w = v + a * (c * h);
+        }
+        acceleration_into(
+            model,
+            workspace,
+            t + c * h,
+            (position, stage),
+            &mut after[0],
+        )?;
+    }
+    Ok(analyses)
+}
+
 impl ImplicitEuler {
     /// Solve for the new velocity w: w − q̇ − h f(t + h, q + h w, w) = 0, started from the
     /// explicit Euler velocity (for a sum of terms by sparse Newton from q̇,
     /// [`sparse_newton`]).
-    /// Returns w and the work.
+    /// Writes w to `w` (in place for a sum of terms: no allocation) and returns the work.
     fn solve<L: Lagrangian<N>, N: Dimension>(
         &self,
         model: &L,
         workspace: &mut ReferenceWorkspace<N>,
-        t: f64,
-        h: f64,
+        (t, h): (f64, f64),
         state: &State<N>,
-    ) -> Result<(OVector<f64, N>, StepReport), StepFailure>
+        w: &mut OVector<f64, N>,
+    ) -> Result<StepReport, StepFailure>
     where
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
         let n = workspace.n;
         if let Some(terms) = sparse_terms(model) {
             // From q̇_k: the simplified Newton iteration needs no acceleration to start.
-            let mut w = state.y.clone();
+            w.copy_from(&state.y);
             let (solved, analyses) = workspace.sparse_newton.solve(
                 terms,
                 self.max_iterations,
@@ -398,13 +482,12 @@ impl ImplicitEuler {
                 (state.q.as_slice(), state.y.as_slice()),
                 w.as_mut_slice(),
             )?;
-            let report = StepReport {
+            return Ok(StepReport {
                 iterations: solved.iterations,
                 evaluations: solved.iterations + 1,
                 factorizations: solved.factorizations,
                 analyses,
-            };
-            return Ok((w, report));
+            });
         }
         let (a, _) = acceleration(model, workspace, t, &state.q, &state.y)?;
         let start = &state.y + a * h;
@@ -439,16 +522,13 @@ impl ImplicitEuler {
             return Err(failure);
         }
         let iterations = iterations?;
-        let report = StepReport {
+        w.copy_from_slice(z.as_slice());
+        Ok(StepReport {
             iterations,
             evaluations: iterations + 1,
             factorizations: iterations,
             analyses: 0,
-        };
-        Ok((
-            OVector::<f64, N>::from_column_slice_generic(n, U1, z.as_slice()),
-            report,
-        ))
+        })
     }
 }
 
@@ -474,7 +554,7 @@ where
                 "at least one Newton iteration",
             ));
         }
-        workspace(model, h, Some(self.max_iterations))
+        workspace(model, h, Buffers::Newton(self.max_iterations))
     }
 
     fn step<L: Lagrangian<N>>(
@@ -486,9 +566,11 @@ where
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
-        let (w, report) = self.solve(model, workspace, t, h, state)?;
-        increment.q.copy_from(&(&w * h));
-        increment.y.copy_from(&(w - &state.y));
+        // w into the velocity's increment, then dq = h w and dq̇ = w − q̇ in place.
+        let report = self.solve(model, workspace, (t, h), state, &mut increment.y)?;
+        increment.q.copy_from(&increment.y);
+        increment.q *= h;
+        increment.y -= &state.y;
         Ok(report)
     }
 
@@ -500,7 +582,8 @@ where
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
-        let (w, _) = self.solve(model, workspace, t, h, state)?;
+        let mut w = OVector::zeros_generic(workspace.n, U1);
+        self.solve(model, workspace, (t, h), state, &mut w)?;
         let q = &state.q + &w * h;
         let a = jacobian(model, workspace, t + h, &q, &w)?;
         let n = workspace.n;
