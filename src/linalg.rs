@@ -5,7 +5,8 @@
 //!   `RealField` and `DimMin` bounds that nested duals and generic code do not have).
 //! - [`compensated_add`]: Kahan-compensated accumulation, for the stepping loop's sums of
 //!   increments over long runs.
-//! - `combination` (inside the crate): SVI's stage sums, many rows of linear combinations of vectors at once.
+//! - `combination` (inside the crate): SVI's stage sums, many rows of linear combinations of
+//!   vectors at once.
 //! - [`DenseLu`]: an LU factorisation with partial pivoting of a runtime-sized matrix held in
 //!   a buffer allocated once per run; factor and solve allocate nothing. The Newton systems of
 //!   the spectral methods are (N·s)-sized, with s chosen at run time.

@@ -352,16 +352,7 @@ where
             option: "workspace",
             reason: "not built for RK4",
         })?;
-        let result = rk4_stages(model, workspace, &mut stages, t, h, state).inspect(|_| {
-            let [a1, a2, a3, a4] = &stages.accelerations;
-            let [v2, v3, v4] = &stages.velocities;
-            let (v, sixth) = (&state.y, h / 6.0);
-            let rates = increment.q.iter_mut().zip(increment.y.iter_mut());
-            for (i, (dq, dv)) in rates.enumerate() {
-                *dq = (v[i] + (v2[i] + v3[i]) * 2.0 + v4[i]) * sixth;
-                *dv = (a1[i] + (a2[i] + a3[i]) * 2.0 + a4[i]) * sixth;
-            }
-        });
+        let result = rk4(model, workspace, &mut stages, (t, h), state, increment);
         workspace.stages = Some(stages);
         let analyses = result?;
         Ok(StepReport {
@@ -413,14 +404,15 @@ where
     }
 }
 
-/// RK4's four stages into `stages`; the analyses of the first acceleration.
-fn rk4_stages<L: Lagrangian<N>, N: Dimension>(
+/// RK4's step from `state` into `increment`, its four stages in `stages`; the analyses of
+/// the first acceleration.
+fn rk4<L: Lagrangian<N>, N: Dimension>(
     model: &L,
     workspace: &mut ReferenceWorkspace<N>,
     stages: &mut Stages<N>,
-    t: f64,
-    h: f64,
+    (t, h): (f64, f64),
     state: &State<N>,
+    increment: &mut State<N>,
 ) -> Result<usize, StepFailure>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -451,6 +443,14 @@ where
             (position, stage),
             &mut after[0],
         )?;
+    }
+    let [a1, a2, a3, a4] = &*accelerations;
+    let [v2, v3, v4] = &*velocities;
+    let sixth = h / 6.0;
+    let rates = increment.q.iter_mut().zip(increment.y.iter_mut());
+    for (i, (dq, dv)) in rates.enumerate() {
+        *dq = (v[i] + (v2[i] + v3[i]) * 2.0 + v4[i]) * sixth;
+        *dv = (a1[i] + (a2[i] + a3[i]) * 2.0 + a4[i]) * sixth;
     }
     Ok(analyses)
 }

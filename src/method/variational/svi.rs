@@ -1337,6 +1337,8 @@ mod tests {
     };
     use nalgebra::{Complex, Const, DVector, Dyn, SMatrix, SVector, U1, U2};
 
+    /// The hand-derived Euler–Lagrange equations of [`VariableMass`]:
+    /// q̈₀ = (−q₀ − q₀³ − 2 q₁ q̇₁ q̇₀) / (1 + q₁²), q̈₁ = q₁ q̇₀² − q₁.
     fn variable_mass_acceleration(q: &SVector<f64, 2>, v: &SVector<f64, 2>) -> SVector<f64, 2> {
         SVector::from([
             (-q[0] - q[0].powi(3) - 2.0 * q[1] * v[1] * v[0]) / (1.0 + q[1] * q[1]),
