@@ -7,7 +7,7 @@
 //!   section, the case issue #35 names) and `svi_6_12` (6 CGL / 12 GL points, the paper's);
 //! - `zoo`: `svi_models::Kepler`;
 //! - `text`: `0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)` with μ = 1, the scene
-//!   `cli/scenes/kepler-text.toml`, as a `TextLagrangian<U2>` (autonomous, unforced,
+//!   `experiments/scenes/kepler-text.toml`, as a `TextLagrangian<U2>` (autonomous, unforced,
 //!   constant mass);
 //! - `text_run_time`: the same as the `TextLagrangian<Dyn>` that `svi run` dispatches to.
 //!
@@ -19,7 +19,7 @@
 //!
 //! The FPUT chain (α = 0.25, β = 0.5, fixed ends) from its mode-1 state, `STEPS` = 20 steps
 //! of h = 0.1 per measured unit, without the set-up (a run of 21 steps less a run of one):
-//! `zoo` is `svi_models::Fput`, `text` the one-line sum of `cli/scenes/fput-text.toml` as the
+//! `zoo` is `svi_models::Fput`, `text` the one-line sum of `experiments/scenes/fput-text.toml` as the
 //! `TextChain<2, false, true>` that `svi run` dispatches to; methods `verlet` (explicit) and
 //! `svi` (6/12, the Hessian-free fixed point). Issue #35 asks for the text chain within 1.3×
 //! the zoo's time per step. `fput_chain_setup/<implementation>` times the set-up (a run of

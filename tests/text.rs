@@ -20,7 +20,7 @@ fn spec(lagrangian: &str, coordinates: &[&str], parameters: &[(&str, f64)]) -> T
     }
 }
 
-/// Kepler as in `cli/scenes/kepler-text.toml`.
+/// Kepler as in `experiments/scenes/kepler-text.toml`.
 fn kepler_text() -> TextLagrangian<U2, false, false, true> {
     let mut spec = spec(
         "0.5*(vx^2 + vy^2) + mu/sqrt(x^2 + y^2)",

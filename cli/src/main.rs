@@ -3,17 +3,16 @@
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
-use svi_cli::command;
-use svi_cli::command::bench::BenchArgs;
-use svi_cli::command::compare::CompareArgs;
-use svi_cli::command::ensemble::EnsembleArgs;
-use svi_cli::command::scale::ScaleArgs;
-use svi_cli::command::stability::StabilityArgs;
-use svi_cli::command::stress::StressArgs;
-use svi_cli::scene::error::is_bad_input;
-use svi_cli::scene::field::FieldScene;
-use svi_cli::scene::spectral::SpectralScene;
-use svi_cli::{DEFAULT_SCENE, Overrides, SceneError};
+use svi_experiments::bench::BenchArgs;
+use svi_experiments::compare::CompareArgs;
+use svi_experiments::ensemble::EnsembleArgs;
+use svi_experiments::scale::ScaleArgs;
+use svi_experiments::scene::error::is_bad_input;
+use svi_experiments::scene::field::FieldScene;
+use svi_experiments::scene::spectral::SpectralScene;
+use svi_experiments::stability::StabilityArgs;
+use svi_experiments::stress::StressArgs;
+use svi_experiments::{DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
 ///
@@ -89,7 +88,7 @@ fn clean_up_when_interrupted() {
     // A handler that cannot be installed (one is already) leaves the default: the process
     // ends, the outputs are still untouched and only a hidden `.svi-*.tmp` file may remain.
     let _ = ctrlc::set_handler(|| {
-        svi_cli::report::output::remove_pending();
+        svi_experiments::report::output::remove_pending();
         std::process::exit(130);
     });
 }
@@ -115,20 +114,20 @@ fn parse_arguments() -> Result<Cli, ExitCode> {
             .unwrap_or("invalid arguments")
             .trim_start_matches("error: ")
             .to_string();
-        let report = svi_cli::report::summary::ErrorReport {
+        let report = svi_experiments::report::summary::ErrorReport {
             kind: "invalid_input",
             message,
             step: None,
             t: None,
         };
-        let object = command::run::failure_object(&report);
+        let object = svi_experiments::run::failure_object(&report);
         // Nothing is left to report a failed write with: the exit status still says it.
-        let _ = svi_cli::report::output::print(format_args!("{object}\n"));
+        let _ = svi_experiments::report::output::print(format_args!("{object}\n"));
     }
     // Help, version and the parser's message, written as clap writes them; a failed write
     // (a full device) is an error, not a panic.
     if error.print().is_err() {
-        svi_cli::report::output::warn("error: cannot write to standard output");
+        svi_experiments::report::output::warn("error: cannot write to standard output");
         return Err(ExitCode::from(1));
     }
     Err(ExitCode::from(u8::try_from(code).unwrap_or(2)))
@@ -145,33 +144,47 @@ fn main() -> ExitCode {
         Command::Run(args) => {
             let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
             if let Some(scene) = FieldScene::load(name) {
-                command::field::execute(name, scene, &args.overrides, args.json, args.strict)
+                svi_experiments::run::field::execute(
+                    name,
+                    scene,
+                    &args.overrides,
+                    args.json,
+                    args.strict,
+                )
             } else if let Some(scene) = SpectralScene::load(name) {
-                command::spectral::execute(name, scene, &args.overrides, args.json, args.strict)
+                svi_experiments::run::spectral::execute(
+                    name,
+                    scene,
+                    &args.overrides,
+                    args.json,
+                    args.strict,
+                )
             } else {
-                command::run::execute(name, &args.overrides, args.json, args.strict)
+                svi_experiments::run::execute(name, &args.overrides, args.json, args.strict)
             }
         }
-        Command::List => svi_cli::report::output::print(command::list::listing())
+        Command::List => svi_experiments::report::output::print(svi_experiments::list::listing())
             .map_err(|error| SceneError::from(error).into()),
         Command::Bench(args) => match args
             .scene
             .as_deref()
             .map(|name| (name, SpectralScene::load(name)))
         {
-            Some((name, Some(scene))) => command::bench_spectral::execute(name, scene, &args),
-            _ => command::bench::execute_args(&args),
+            Some((name, Some(scene))) => {
+                svi_experiments::bench::spectral::execute(name, scene, &args)
+            }
+            _ => svi_experiments::bench::execute_args(&args),
         },
-        Command::Compare(args) => command::compare::execute_args(&args),
-        Command::Stability(args) => command::stability::execute_args(&args),
-        Command::Stress(args) => command::stress::execute_args(&args),
-        Command::Ensemble(args) => command::ensemble::execute_args(&args),
-        Command::Scale(args) => command::scale::execute_args(&args),
+        Command::Compare(args) => svi_experiments::compare::execute_args(&args),
+        Command::Stability(args) => svi_experiments::stability::execute_args(&args),
+        Command::Stress(args) => svi_experiments::stress::execute_args(&args),
+        Command::Ensemble(args) => svi_experiments::ensemble::execute_args(&args),
+        Command::Scale(args) => svi_experiments::scale::execute_args(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            svi_cli::report::output::warn(format_args!("error: {error:#}"));
+            svi_experiments::report::output::warn(format_args!("error: {error:#}"));
             ExitCode::from(exit_status(&error))
         }
     }

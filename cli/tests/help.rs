@@ -191,7 +191,7 @@ fn help_texts_state_the_defaults_and_caps_the_binary_has() {
         );
     }
     // svi scale: each stated cap is accepted by its check, and one more is not.
-    use svi_cli::command::scale::ScaleArgs;
+    use svi_experiments::scale::ScaleArgs;
     let cheap = ScaleArgs {
         sizes: vec![10],
         steps: 1,

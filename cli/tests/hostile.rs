@@ -22,14 +22,14 @@ use clap::Parser;
 use proptest::prelude::*;
 use proptest::sample::select;
 use serde_json::Value;
-use svi_cli::bench::{BenchArgs, BenchMethod, work_precision};
-use svi_cli::scene::limits::{
+use svi_experiments::bench::{BenchArgs, BenchMethod, work_precision};
+use svi_experiments::scene::limits::{
     MAX_BATCH_SECONDS, MAX_BATCHES, MAX_BISECTIONS, MAX_DRIFT_STEPS, MAX_RUN_SECONDS, MAX_SAMPLES,
     MAX_STEPS, MIN_PEER_TOLERANCE,
 };
-use svi_cli::stability::{Answer, Request, StabilityArgs};
-use svi_cli::stress::{StressArgs, stress};
-use svi_cli::{Overrides, Scene, SceneError, parse_parameter};
+use svi_experiments::stability::{Answer, Request, StabilityArgs};
+use svi_experiments::stress::{StressArgs, stress};
+use svi_experiments::{Overrides, Scene, SceneError, parse_parameter};
 
 use crate::hostile_cases;
 use crate::hostile_support;
@@ -415,7 +415,7 @@ fn node_levels(
     model: &str,
     parameters: &std::collections::BTreeMap<String, f64>,
     points: Option<usize>,
-    run: &svi_cli::scene::field::FieldRunSection,
+    run: &svi_experiments::scene::field::FieldRunSection,
 ) -> Option<f64> {
     struct Defaults<'a>(&'a std::collections::BTreeMap<String, f64>);
     fn defaults<const C: usize>(
@@ -465,8 +465,8 @@ fn load_and_maybe_run_space_time(
     args: &[String],
     file: &std::path::Path,
 ) -> Result<usize, TestCaseError> {
-    use svi_cli::scene::field::FieldScene;
-    use svi_cli::scene::spectral::SpectralScene;
+    use svi_experiments::scene::field::FieldScene;
+    use svi_experiments::scene::spectral::SpectralScene;
     let mut context = args.to_vec();
     context.push(text.to_string());
     let overrides = match RunCli::try_parse_from(
@@ -974,7 +974,7 @@ fn stability_in_process(args: &[String]) -> Result<usize, TestCaseError> {
     };
     let request = parsed.request();
     let methods: Vec<svi::MethodSpec> = if parsed.figures {
-        svi_cli::stability::figure_configurations()
+        svi_experiments::stability::figure_configurations()
             .into_iter()
             .map(|(_, spec)| spec)
             .collect()
@@ -998,7 +998,7 @@ fn stability_in_process(args: &[String]) -> Result<usize, TestCaseError> {
         }
     }
     for spec in methods {
-        match svi_cli::stability::run(spec, &request) {
+        match svi_experiments::stability::run(spec, &request) {
             Ok(Answer::Report(report)) => {
                 prop_assert!(report.points.iter().all(|p| p.z.is_finite()));
             }
@@ -1219,7 +1219,7 @@ fn command_line() -> impl Strategy<Value = Vec<String>> {
     )
         .prop_map(|(command, path, out)| {
             // A hostile scene path is never a built-in scene (which would run and write).
-            let path = if svi_cli::builtin_scene(&path).is_some() {
+            let path = if svi_experiments::builtin_scene(&path).is_some() {
                 "/dev/zero".to_string()
             } else {
                 path

@@ -20,9 +20,9 @@ use clap::Parser;
 use proptest::prelude::*;
 use proptest::sample::select;
 use serde_json::Value;
-use svi_cli::Scene;
-use svi_cli::command::ensemble::{Ensemble, EnsembleArgs};
-use svi_cli::command::scale::{MAX_ESTIMATED_SECONDS, ScaleArgs};
+use svi_experiments::Scene;
+use svi_experiments::ensemble::{Ensemble, EnsembleArgs};
+use svi_experiments::scale::{MAX_ESTIMATED_SECONDS, ScaleArgs};
 
 use crate::hostile_support;
 use hostile_support::*;
@@ -290,10 +290,12 @@ fn ensemble_case(args: &[String]) -> Result<usize, TestCaseError> {
             return Ok(0);
         }
     };
-    let random = parsed.random.map(|count| svi_cli::scene::ensemble::Random {
-        count,
-        seed: parsed.seed.unwrap_or(0),
-    });
+    let random = parsed
+        .random
+        .map(|count| svi_experiments::scene::ensemble::Random {
+            count,
+            seed: parsed.seed.unwrap_or(0),
+        });
     let built = Scene::load(parsed.scene.as_deref().unwrap_or("kepler"))
         .and_then(|scene| Ensemble::new(scene, &parsed.overrides(), parsed.axes(), random));
     let mut ensemble = match built {
@@ -304,7 +306,7 @@ fn ensemble_case(args: &[String]) -> Result<usize, TestCaseError> {
         }
     };
     let count = ensemble.members.len();
-    prop_assert!((1..=svi_cli::scene::ensemble::MAX_MEMBERS).contains(&count));
+    prop_assert!((1..=svi_experiments::scene::ensemble::MAX_MEMBERS).contains(&count));
     if count > 8 {
         return Ok(2);
     }

@@ -6,8 +6,8 @@
 //! monomorphisation (about six minutes of a two-core CI build).
 
 /// A built-in scene.
-fn scene(name: &str) -> svi_cli::Scene {
-    svi_cli::Scene::builtin(name)
+fn scene(name: &str) -> svi_experiments::Scene {
+    svi_experiments::Scene::builtin(name)
         .expect("built-in")
         .expect("parses")
 }
@@ -19,7 +19,7 @@ fn method(text: &str) -> svi::method::registry::MethodSpec {
 
 mod run {
     use super::{method, scene};
-    use svi_cli::{Diagnostic, Overrides, Parameters, Scene, SceneError};
+    use svi_experiments::{Diagnostic, Overrides, Parameters, Scene, SceneError};
 
     #[test]
     fn classic_methods_have_neither_points_nor_quadrature() {
@@ -172,9 +172,9 @@ mod run {
 }
 
 mod bench {
-    use svi_cli::bench::*;
-    use svi_cli::command::peers::RADAU5_TOLERANCE_FLOOR;
-    use svi_cli::{Scene, SceneError};
+    use svi_experiments::bench::peers::RADAU5_TOLERANCE_FLOOR;
+    use svi_experiments::bench::*;
+    use svi_experiments::{Scene, SceneError};
 
     /// (method, parameter) of every record, in order.
     fn labels(records: &[Record]) -> Vec<(&str, f64)> {
@@ -597,7 +597,7 @@ mod bench {
 }
 
 mod stability {
-    use svi_cli::stability::*;
+    use svi_experiments::stability::*;
 
     #[test]
     fn classic_methods_have_their_known_intervals() {
@@ -650,7 +650,7 @@ mod stability {
 }
 
 mod scale {
-    use svi_cli::command::scale::*;
+    use svi_experiments::scale::*;
 
     #[test]
     fn a_small_measurement_runs_every_configuration() {

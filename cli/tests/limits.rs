@@ -6,7 +6,7 @@
 use crate::common;
 use common::*;
 
-use svi_cli::scene::limits::{
+use svi_experiments::scene::limits::{
     MAX_BATCH_SECONDS, MAX_BATCHES, MAX_BISECTIONS, MAX_DRIFT_STEPS, MAX_RUN_SECONDS, MAX_SAMPLES,
     MAX_SCENE_BYTES, MAX_STEPS, MIN_PEER_TOLERANCE,
 };
@@ -111,7 +111,7 @@ fn time_budgets_and_counts_are_checked_before_anything_runs() {
     }
 }
 
-/// Issue #14, item 2: every cap is stated once (`svi_cli::scene::limits`), in the option's
+/// Issue #14, item 2: every cap is stated once (`svi_experiments::scene::limits`), in the option's
 /// help and in the README's "Limits".
 #[test]
 fn every_cap_is_in_the_help_and_the_readme() {

@@ -4,7 +4,7 @@
 use crate::common;
 use common::*;
 
-use svi_cli::Scene;
+use svi_experiments::Scene;
 
 #[test]
 fn every_stress_scene_parses_and_a_short_run_of_each_succeeds() {

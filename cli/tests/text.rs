@@ -5,7 +5,7 @@
 use crate::common;
 use common::*;
 
-/// A text scene: the Kepler problem as in `cli/scenes/kepler-text.toml`, with `extra` lines
+/// A text scene: the Kepler problem as in `experiments/scenes/kepler-text.toml`, with `extra` lines
 /// at the top level and a horizon of 20.
 fn kepler_scene(lagrangian: &str, extra: &str) -> String {
     format!(

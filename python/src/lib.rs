@@ -1,6 +1,6 @@
 //! `svi._svi`: the native module of the svi Python package.
 //!
-//! Every function goes through the command line's own code (`svi_cli`): a run is
+//! Every function calls `svi_experiments`, the library behind the command line: a run is
 //! [`Scene::load`], [`Scene::apply`] of the overrides, the `[initial]` fields, then
 //! [`Scene::run`] — the path of `svi run` — so `svi.run("kepler")` and `svi run kepler --json`
 //! print the same numbers. Results cross into Python as JSON text (a summary, a failure) and
@@ -18,13 +18,13 @@ use clap::ValueEnum;
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use svi_cli::command::ensemble::Ensemble;
-use svi_cli::command::run::error_report;
-use svi_cli::report::table::Cell;
-use svi_cli::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
-use svi_cli::scene::field::FieldScene;
-use svi_cli::scene::spectral::SpectralScene;
-use svi_cli::{
+use svi_experiments::ensemble::Ensemble;
+use svi_experiments::report::table::Cell;
+use svi_experiments::run::error_report;
+use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
+use svi_experiments::scene::field::FieldScene;
+use svi_experiments::scene::spectral::SpectralScene;
+use svi_experiments::{
     AdaptMode, Components, Diagnostic, FormName, Overrides, RecoveryKind, Scene, SceneError,
 };
 
@@ -398,14 +398,14 @@ fn ensemble(
 /// momenta, exact solution), as JSON.
 #[pyfunction]
 fn models() -> PyResult<String> {
-    serde_json::to_string(&svi_cli::describe_models())
+    serde_json::to_string(&svi_experiments::describe_models())
         .map_err(|error| invalid("models", error.to_string()))
 }
 
 /// The built-in scenes: (name, the first line of its file).
 #[pyfunction]
 fn scenes() -> Vec<(&'static str, String)> {
-    svi_cli::BUILTIN_SCENES
+    svi_experiments::BUILTIN_SCENES
         .iter()
         .map(|(name, text)| {
             let line = text.lines().next().unwrap_or("");
@@ -418,14 +418,14 @@ fn scenes() -> Vec<(&'static str, String)> {
 #[derive(clap::Parser)]
 struct StabilityCommand {
     #[command(flatten)]
-    args: svi_cli::command::stability::StabilityArgs,
+    args: svi_experiments::stability::StabilityArgs,
 }
 
 /// `svi bench`'s arguments, parsed as the binary parses them.
 #[derive(clap::Parser)]
 struct BenchCommand {
     #[command(flatten)]
-    args: svi_cli::command::bench::BenchArgs,
+    args: svi_experiments::bench::BenchArgs,
 }
 
 /// Parse command-line `args` of `command` (a clap error is bad input).
@@ -448,7 +448,7 @@ fn parse<T: clap::Parser>(command: &str, args: Vec<String>) -> PyResult<T> {
 /// `--z-max`, `--samples`): the CSV of the points and, for a range, the regions as JSON.
 #[pyfunction]
 fn stability(py: Python<'_>, args: Vec<String>) -> PyResult<(String, Option<String>)> {
-    use svi_cli::command::stability::{Answer, run, to_csv};
+    use svi_experiments::stability::{Answer, run, to_csv};
     let command: StabilityCommand = parse("stability", args)?;
     let spec: svi::MethodSpec = command
         .args
@@ -487,11 +487,11 @@ fn work_precision(py: Python<'_>, args: Vec<String>) -> PyResult<String> {
         .args
         .scene
         .as_deref()
-        .unwrap_or(svi_cli::DEFAULT_SCENE);
+        .unwrap_or(svi_experiments::DEFAULT_SCENE);
     let mut scene = load(name)?;
     scene.apply(&overrides).map_err(failure)?;
     let sweeps = py
-        .detach(|| svi_cli::command::bench::work_precision(&scene, &options))
+        .detach(|| svi_experiments::bench::work_precision(&scene, &options))
         .map_err(failure)?;
     let object = serde_json::json!({ "records": sweeps.records, "failures": sweeps.failures });
     Ok(object.to_string())

@@ -6,7 +6,7 @@ use proptest::prelude::*;
 use proptest::sample::select;
 use proptest::test_runner::TestRunner;
 use serde_json::Value;
-use svi_cli::{SceneError, Summary};
+use svi_experiments::{SceneError, Summary};
 
 use super::common::has_long_number;
 use super::hostile_cases::cases;

@@ -1,20 +1,29 @@
-//! # svi-cli — the `svi` command-line tool
+//! # svi-experiments — the experiments of svi as a library
+//!
+//! What the `svi` command line and the Python package run, with a typed Rust API; the two
+//! front doors parse their arguments, call this crate and print or convert what it returns.
 //!
 //! - [`scene`]: what to simulate — the scene format (TOML), the built-in scenes, the
-//!   command-line overrides, and every check of a scene's input;
-//! - [`command`]: what `svi` does with it — `run` (the one run path for every space), `list`,
-//!   `bench`, `compare`, `stability`, `stress`;
+//!   overrides of a scene's options, and every check of a scene's input;
+//! - [`run`]: one run of a scene on any space (ℝᴺ, ℝⁿ chains, SO(3)), and of the field and
+//!   pseudospectral scenes;
+//! - [`ensemble`], [`bench`], [`compare`], [`stability`], [`stress`], [`scale`], [`list`]:
+//!   the experiments built on runs;
 //! - [`report`]: what comes out — the one run summary, trajectory CSV and number format,
 //!   plots, the progress bar.
-//!
-//! The binary (`main.rs`) defines the arguments and dispatches to [`command`].
 
-pub mod command;
+pub mod bench;
+pub mod compare;
+pub mod ensemble;
+pub mod list;
 pub mod report;
+pub mod run;
+pub mod scale;
 pub mod scene;
+pub mod stability;
+pub mod stress;
 
-pub use command::list::{ModelDescription, describe_models};
-pub use command::{bench, stability, stress};
+pub use list::{ModelDescription, describe_models};
 pub use report::csv::{Float, csv_header};
 pub use report::progress::{PROGRESS_MIN_STEPS, PROGRESS_MIN_WORK, Progress};
 pub use report::summary::{

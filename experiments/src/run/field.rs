@@ -16,13 +16,13 @@ use svi::field::mesh::Mesh;
 use svi::field::multisymplectic::{CellQuadrature, Multisymplectic, MultisymplecticOptions};
 use svi_models::{FieldModelVisitor, FieldZooModel, UnknownModel, visit_field_model};
 
-use crate::command::run::{RunSummary, print_outcome};
 use crate::report::csv::{CsvStream, Float};
 use crate::report::field::FieldSummary;
 use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_space_time;
 use crate::report::progress::Progress;
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
+use crate::run::{RunSummary, print_outcome};
 use crate::scene::error::SceneError;
 use crate::scene::field::{FieldRunSection, FieldScene, QuadratureName};
 use crate::scene::limits;

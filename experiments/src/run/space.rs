@@ -1,6 +1,6 @@
 //! What a scene's run does differently on each space, ℝᴺ (fixed N, and runtime-sized ℝⁿ for
 //! chains and lattices, [`Chain`]) and SO(3): the command line's side
-//! of svi's [`Space`]. The one run path ([`crate::command::run`]) is written once over
+//! of svi's [`Space`]. The one run path ([`crate::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
 use nalgebra::allocator::Allocator;

@@ -15,13 +15,13 @@ use svi::field::fourier::Complex64;
 use svi::field::pseudospectral::{Pseudospectral, PseudospectralOptions, TimeScheme};
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
-use crate::command::field::{field_stream, finish_field_stream, time_levels};
-use crate::command::run::{RunSummary, print_outcome};
 use crate::report::health::{self, FieldMeasured, Warning};
 use crate::report::plot::plot_space_time;
 use crate::report::progress::Progress;
 use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Parameters, Status};
+use crate::run::field::{field_stream, finish_field_stream, time_levels};
+use crate::run::{RunSummary, print_outcome};
 use crate::scene::error::SceneError;
 use crate::scene::limits;
 use crate::scene::overrides::Overrides;

@@ -19,12 +19,12 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 use svi::MethodSpec;
 
-use crate::command::run::{error_report, failure_object};
 use crate::report::csv::{Float, Recorded};
 use crate::report::health::Warning;
 use crate::report::output::{self, OutputFile};
 use crate::report::plot::{Panel, Series, render_svg_grid};
 use crate::report::summary::{ErrorReport, Parameters, Status, Summary};
+use crate::run::{error_report, failure_object};
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 

@@ -18,12 +18,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::command::run::error_report;
 use crate::report::map::{self, Heatmap};
 use crate::report::output::{self, OutputFile};
 use crate::report::plot::{Panel, Series, render_svg};
 use crate::report::summary::ErrorReport;
 use crate::report::table::{MemberOutcome, Schema, Table};
+use crate::run::error_report;
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
@@ -359,7 +359,7 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         && args.json
         && !error.is::<MembersFailed>()
     {
-        let object = crate::command::run::failure_object(&report_of(error));
+        let object = crate::run::failure_object(&report_of(error));
         // Stdout that cannot be written leaves the exit status to tell.
         let _ = output::print(format_args!("{object}\n"));
     }

@@ -20,10 +20,10 @@ use anyhow::Context;
 use svi::field::pseudospectral::TimeScheme;
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
-use crate::command::bench::{BenchArgs, DEFAULT_MAX_RUN, DEFAULT_METHODS};
-use crate::command::spectral::{Prepared, error_against_exact, prepare};
+use crate::bench::{BenchArgs, DEFAULT_MAX_RUN, DEFAULT_METHODS};
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
+use crate::run::spectral::{Prepared, error_against_exact, prepare};
 use crate::scene::error::SceneError;
 use crate::scene::overrides::Overrides;
 use crate::scene::spectral::{SpectralScene, scheme_name, time_scheme};

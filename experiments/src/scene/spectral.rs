@@ -1,6 +1,6 @@
 //! Pseudospectral scenes: a complex (Schrödinger-type) field of the zoo
 //! ([`svi_models::SPECTRAL_MODEL_NAMES`]) run by the pseudospectral integrators
-//! ([`svi::field::pseudospectral`]). Their own format and run path (`command/spectral.rs`):
+//! ([`svi::field::pseudospectral`]). Their own format and run path (`run/spectral.rs`):
 //!
 //! ```toml
 //! # The NLS soliton (the first line, a comment, describes the scene)

@@ -1,6 +1,6 @@
 //! Field scenes: a 1 + 1 field theory of the zoo ([`svi_models::FIELD_MODEL_NAMES`]) run by
 //! the multisymplectic integrator ([`svi::field`]). They have their own, smaller format and
-//! their own run path (`command/field.rs`): a field has a mesh instead of an initial state
+//! their own run path (`run/field.rs`): a field has a mesh instead of an initial state
 //! and a method.
 //!
 //! ```toml

@@ -16,6 +16,10 @@
 //!    assembles the one [`Summary`]. A run that fails after it started still writes its
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
 
+pub mod field;
+pub mod space;
+pub mod spectral;
+
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
 use std::io::IsTerminal;
@@ -41,7 +45,6 @@ use svi_models::{
     visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
-use crate::command::space::{Chain, RunSpace};
 use crate::report::csv::{CsvStream, Recorded};
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
@@ -52,6 +55,7 @@ use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
     TrajectoryOutput,
 };
+use crate::run::space::{Chain, RunSpace};
 use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};
@@ -60,7 +64,7 @@ use crate::scene::{Scene, SceneError, Text};
 /// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
 /// run it and print its summary as text or as one JSON object, and the failed health checks
 /// on stderr (with `strict` they fail the run). A field scene takes its own path,
-/// `command/field.rs` (chosen in `main.rs`).
+/// `run/field.rs` (chosen by the command line's dispatch).
 ///
 /// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
 /// run that failed after it started, the summary up to its last good state with

@@ -19,7 +19,7 @@
 //! multiply the step count by 10^(1/(2·order)) per point (about a √10-fold error reduction,
 //! so that the crossing of an error target is located to within a factor 1.2 in time). The
 //! trigonometric peer `molly`, the mollified impulse method of García-Archilla, Sanz-Serna &
-//! Skeel (1999) written for the spring pendulum's splitting ([`crate::command::molly`]), takes
+//! Skeel (1999) written for the spring pendulum's splitting ([`crate::bench::molly`]), takes
 //! fixed steps over the fast spring and is swept in the same way (order 2).
 //! Adaptive peers (`ode_solvers`' DOP853 and Dopri5, and the stiff solver
 //! `differential-equations`' Radau5 with the exact Jacobian by automatic differentiation, on
@@ -41,10 +41,10 @@
 //! steps ([`svi::stepping::sem`]), swept over its first step (t_end − t0)/n like a fixed-step
 //! method (its `steps` count every trial step of the energy equation).
 
-use crate::command::molly;
-use crate::command::peers::{
-    FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5, split, wired_for,
-};
+pub mod molly;
+pub mod peers;
+pub mod spectral;
+
 use crate::report::csv;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
@@ -59,6 +59,9 @@ use crate::scene::{Scene, SceneError};
 use anyhow::Context;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, SVector, U1};
+use peers::{
+    FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5, split, wired_for,
+};
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -86,7 +89,7 @@ pub enum BenchMethod {
     Dopri5,
     /// `differential-equations`' Radau IIA (adaptive, implicit, order 5): the stiff solver.
     Radau5,
-    /// The mollified impulse method ([`crate::command::molly`]; fixed step, order 2, spring
+    /// The mollified impulse method ([`crate::bench::molly`]; fixed step, order 2, spring
     /// pendulum only): the trigonometric peer.
     Molly,
     /// A library method in computational time τ with a monitor (`METHOD@MONITOR`).
@@ -710,7 +713,7 @@ impl Outcomes {
                 report.warn(&format!("{label} measured no point: {error}"));
                 self.sweeps.failures.push(MethodFailure {
                     method: label.to_string(),
-                    kind: crate::command::run::error_report(&error).kind,
+                    kind: crate::run::error_report(&error).kind,
                     message: error.to_string(),
                 });
                 self.first_error.get_or_insert(error);

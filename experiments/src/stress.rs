@@ -33,8 +33,8 @@
 //! The ladder assumes the set of bounded steps is an interval starting at 0; a method with
 //! stability gaps (resonances) is reported at the first failure on the ladder.
 
-use crate::command::bench::{BenchMethod, Mode, parse_methods, run_mode};
-use crate::command::peers::{FirstOrder, dop853, split, wired_for};
+use crate::bench::peers::{FirstOrder, dop853, split, wired_for};
+use crate::bench::{BenchMethod, Mode, parse_methods, run_mode};
 use crate::report::csv::Float;
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, PlotError, Series, render_svg};
