@@ -3,7 +3,7 @@
 //! ([`Expression::compile`]: constants folded, instructions fused), and evaluated on a
 //! fixed-size array (no allocation per evaluation), generic over [`Scalar`].
 
-use super::TextError;
+use super::error::TextError;
 use super::parse::parse;
 use super::structure::{Polynomial, Properties, properties};
 use super::tree::{Binary, Function, Names, Node, Symbol};

@@ -132,194 +132,33 @@
 //! as the same model in Rust when its size is compiled in, and about 2.4 times at run-time
 //! size, where the force program and SVI's stage sums over vectors of run-time length cost
 //! about equally (`cargo bench --bench text -- kepler_T2000`).
+//!
+//! [`Lagrangian<N>`]: crate::model::Lagrangian
+//! [`Lagrangian::batch_force`]: crate::model::Lagrangian::batch_force
+//! [`Scalar`]: crate::scalar::Scalar
 
 mod batch;
 pub mod chain;
+mod error;
 mod expression;
+mod lagrangian;
+mod names;
 mod parse;
 mod structure;
 mod tree;
 
 pub use chain::{Boundary, MAX_SITES, MAX_WIDTH, TextChain, TextChainModel, site_values};
+pub use error::TextError;
 pub use expression::MAX_STACK;
+pub use lagrangian::TextLagrangian;
 pub use tree::MAX_NODES;
 
-use std::collections::BTreeSet;
-use std::sync::Mutex;
-
-use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, OVector, U1};
-
-use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
-use crate::model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
-use crate::scalar::Scalar;
-use batch::{MAX_REGISTERS, Program, Source};
+use crate::model::Structure;
+use batch::Program;
 use expression::{Expression, Split, Tape, Velocities};
-use tree::{CONSTANT_NAMES, FUNCTION_NAMES, Names};
-
-/// What goes wrong when reading a text model: every message names the field and, for the
-/// expressions, the column (counted in characters from 1) and the offending symbol.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum TextError {
-    /// An expression that does not follow the grammar.
-    #[error("syntax error at column {column} of {field}: {message}")]
-    Syntax {
-        /// The field: `lagrangian`, `forces[1]`, `symmetries[0][1]`.
-        field: String,
-        /// Column of the error, in characters from 1.
-        column: usize,
-        /// What is wrong there.
-        message: String,
-    },
-    /// A name that is neither a coordinate, a velocity, `t`, a parameter nor a constant.
-    #[error("unknown symbol '{symbol}' at column {column} of {field} (known: {known})")]
-    UnknownSymbol {
-        /// The field.
-        field: String,
-        /// Column of the symbol, in characters from 1.
-        column: usize,
-        /// The symbol.
-        symbol: String,
-        /// The symbols the field may use.
-        known: String,
-    },
-    /// A name followed by `(` that is not a function.
-    #[error("unknown function '{name}' at column {column} of {field} (known: {known})")]
-    UnknownFunction {
-        /// The field.
-        field: String,
-        /// Column of the name, in characters from 1.
-        column: usize,
-        /// The name.
-        name: String,
-        /// The functions of the grammar.
-        known: String,
-    },
-    /// An expression with nothing but spaces.
-    #[error("{field} is empty")]
-    Empty {
-        /// The field.
-        field: String,
-    },
-    /// An expression whose evaluation needs more than [`MAX_STACK`] values at once.
-    #[error("{field} nests too deeply: its evaluation needs more than {limit} values at once")]
-    TooDeep {
-        /// The field.
-        field: String,
-        /// [`MAX_STACK`].
-        limit: usize,
-    },
-    /// An expression of more than [`MAX_NODES`] numbers, names and operations.
-    #[error("{field} is too long: more than {limit} numbers, names and operations")]
-    TooLong {
-        /// The field.
-        field: String,
-        /// [`MAX_NODES`].
-        limit: usize,
-    },
-    /// A coordinate or parameter name that is not an identifier, is given twice, or is taken
-    /// by a function, a constant, `t` or a velocity.
-    #[error("invalid {role} name '{name}': {reason}")]
-    InvalidName {
-        /// `coordinate` or `parameter`.
-        role: &'static str,
-        /// The name.
-        name: String,
-        /// What is wrong with it.
-        reason: String,
-    },
-    /// A parameter value that is NaN or infinite.
-    #[error("parameter '{name}' = {value} is not a finite number")]
-    NonFiniteParameter {
-        /// The parameter.
-        name: String,
-        /// Its value.
-        value: f64,
-    },
-    /// A model without coordinates.
-    #[error("a text model needs at least one coordinate")]
-    NoCoordinates,
-    /// A Lagrangian in which a coordinate's velocity does not appear: its mass matrix
-    /// ∂²L/∂q̇² is singular, and the equations of motion do not determine that coordinate.
-    #[error(
-        "the lagrangian does not depend on {velocity}: its mass matrix ∂²L/∂q̇² is singular, so \
-         the motion of {coordinate} is not determined (every coordinate's velocity must appear \
-         in L, e.g. 0.5*{velocity}^2)"
-    )]
-    NoVelocity {
-        /// The coordinate.
-        coordinate: String,
-        /// Its velocity's name.
-        velocity: String,
-    },
-    /// A list of expressions (forces, a symmetry generator) whose length is not the number
-    /// of coordinates.
-    #[error("{field} has {found} expressions, but the model has {expected} coordinates")]
-    Dimension {
-        /// `forces` or `symmetries[i]`.
-        field: String,
-        /// The number of coordinates.
-        expected: usize,
-        /// The number of expressions given.
-        found: usize,
-    },
-    /// An index, a sum or an indexed coordinate against the rules of the grammar (see
-    /// [`chain`]): an index that is not `i + c` inside a sum or constant outside, bounds that
-    /// are not integers or `n ± c`, a sum inside a sum or inside a product, a power or a
-    /// function.
-    #[error("indexing error at column {column} of {field} ('{symbol}'): {message}")]
-    Indexing {
-        /// The field.
-        field: String,
-        /// Column of the symbol, in characters from 1.
-        column: usize,
-        /// The symbol or index.
-        symbol: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// The size parameter of indexed coordinates that is not a whole number from 1 to
-    /// [`MAX_SITES`].
-    #[error("the size '{name}' = {value} is not a whole number from 1 to {limit}")]
-    InvalidSize {
-        /// The size parameter.
-        name: String,
-        /// Its value.
-        value: f64,
-        /// [`MAX_SITES`].
-        limit: usize,
-    },
-    /// A chain whose terms read more coordinates than [`MAX_WIDTH`].
-    #[error(
-        "a term of the chain reads {width} coordinates ({what}), more than {limit}, the widest \
-         term compiled: use fewer families or nearer neighbours"
-    )]
-    TooWide {
-        /// The number of coordinates one term reads.
-        width: usize,
-        /// Where they come from.
-        what: String,
-        /// [`MAX_WIDTH`].
-        limit: usize,
-    },
-    /// A field that the kind of model does not take (forces of a chain, a boundary rule
-    /// without indexed coordinates).
-    #[error("{field} is not supported here: {reason}")]
-    Unsupported {
-        /// The field.
-        field: String,
-        /// Why.
-        reason: String,
-    },
-    /// A [`TextLagrangian`] whose dimension or declarations do not fit its model.
-    #[error("TextLagrangian cannot hold this model: {reason}")]
-    Declaration {
-        /// What does not fit.
-        reason: String,
-    },
-}
+use names::{Declared, intern, named_values, parameter_index};
+use tree::Names;
 
 /// A text model as written: the expressions and the names they use.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -348,7 +187,7 @@ impl TextSpec {
 }
 
 /// A parsed text model of any dimension (known at run time); [`TextLagrangian`] puts it
-/// behind [`Lagrangian<N>`].
+/// behind [`Lagrangian<N>`](crate::model::Lagrangian).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextModel {
     coordinates: Vec<&'static str>,
@@ -369,8 +208,8 @@ struct Tapes {
     /// For a constant-mass L: its two parts.
     constant_mass: Option<Split>,
     /// For a constant-mass L: ∂L/∂q = ∂U/∂q as a straight-line program, run with many
-    /// points as lanes ([`Lagrangian::batch_force`]); `None` where the program would need
-    /// more registers than there are.
+    /// points as lanes ([`Lagrangian::batch_force`](crate::model::Lagrangian::batch_force));
+    /// `None` where the program would need more registers than there are.
     force: Option<Program>,
     forces: Vec<Tape>,
     generators: Vec<Vec<Tape>>,
@@ -403,7 +242,7 @@ impl Tapes {
 }
 
 impl TextModel {
-    /// Name of every text model in reports ([`Defaults::name`]).
+    /// Name of every text model in reports ([`Defaults::name`](crate::model::Defaults::name)).
     pub const NAME: &'static str = "text";
 
     /// Check the names and parameter values of `spec` and parse its expressions.
@@ -549,447 +388,14 @@ impl TextModel {
     }
 }
 
-/// Each parameter's name with its value.
-fn named_values(names: &[&'static str], values: &[f64]) -> Vec<(&'static str, f64)> {
-    names.iter().copied().zip(values.iter().copied()).collect()
-}
-
-/// The index of the parameter `name` among `names`, for the new value `value`.
-///
-/// # Errors
-/// [`Error::InvalidParameter`] for a name that is not a parameter or a value that is not
-/// finite.
-fn parameter_index(names: &[&'static str], name: &str, value: f64) -> Result<usize, Error> {
-    let Some(index) = names.iter().position(|known| *known == name) else {
-        let known = if names.is_empty() {
-            "none".into()
-        } else {
-            names.join(", ")
-        };
-        return Err(Error::invalid(
-            name,
-            format!("not a parameter of the text model (parameters: {known})"),
-        ));
-    };
-    if !value.is_finite() {
-        return Err(Error::invalid(
-            name,
-            format!("{value} is not a finite number"),
-        ));
-    }
-    Ok(index)
-}
-
-/// The checked names of a model: its coordinates (or indexed families), their velocities and
-/// its parameters with their values.
-struct Declared {
-    coordinates: Vec<&'static str>,
-    velocities: Vec<&'static str>,
-    parameter_names: Vec<&'static str>,
-    parameter_values: Vec<f64>,
-}
-
-impl Declared {
-    /// Check `coordinates` and `parameters`: identifiers, none given twice, no velocity
-    /// (`v` + a coordinate) that is another name, finite values.
-    fn check(coordinates: &[&str], parameters: &[(String, f64)]) -> Result<Declared, TextError> {
-        let mut taken = BTreeSet::new();
-        let mut declared = Declared {
-            coordinates: Vec::new(),
-            velocities: Vec::new(),
-            parameter_names: Vec::new(),
-            parameter_values: Vec::new(),
-        };
-        for name in coordinates {
-            check_name("coordinate", name)?;
-            if !taken.insert(name.to_string()) {
-                return Err(TextError::InvalidName {
-                    role: "coordinate",
-                    name: name.to_string(),
-                    reason: "given twice".into(),
-                });
-            }
-            declared.coordinates.push(intern(name));
-        }
-        for name in coordinates {
-            let velocity = format!("v{name}");
-            if !taken.insert(velocity.clone()) {
-                return Err(TextError::InvalidName {
-                    role: "coordinate",
-                    name: name.to_string(),
-                    reason: format!("its velocity '{velocity}' is also a coordinate"),
-                });
-            }
-            declared.velocities.push(intern(&velocity));
-        }
-        for (name, value) in parameters {
-            check_name("parameter", name)?;
-            if !taken.insert(name.clone()) {
-                return Err(TextError::InvalidName {
-                    role: "parameter",
-                    name: name.clone(),
-                    reason: "given twice, or a coordinate or velocity".into(),
-                });
-            }
-            if !value.is_finite() {
-                return Err(TextError::NonFiniteParameter {
-                    name: name.clone(),
-                    value: *value,
-                });
-            }
-            declared.parameter_names.push(intern(name));
-            declared.parameter_values.push(*value);
-        }
-        Ok(declared)
-    }
-}
-
-/// Reject a name that is not an identifier, or is a function, a constant or `t`.
-fn check_name(role: &'static str, name: &str) -> Result<(), TextError> {
-    let invalid = |reason: &str| {
-        Err(TextError::InvalidName {
-            role,
-            name: name.into(),
-            reason: reason.into(),
-        })
-    };
-    let mut chars = name.chars();
-    let identifier = chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
-        && chars.all(|c| c.is_alphanumeric() || c == '_');
-    if !identifier {
-        return invalid("a name is a letter or '_' followed by letters, digits and '_'");
-    }
-    if FUNCTION_NAMES.contains(&name) {
-        return invalid("it is a function");
-    }
-    if CONSTANT_NAMES.contains(&name) {
-        return invalid("it is a constant");
-    }
-    if name == "t" {
-        return invalid("t is the time");
-    }
-    if name == "sum" {
-        return invalid("sum(i, lower, upper, body) is the indexed sum");
-    }
-    Ok(())
-}
-
-/// Intern `name`: the one `&'static str` with its text. The traits of a model name its
-/// coordinates, parameters and momenta with `&'static str`; a text model's names are leaked
-/// once per distinct name and process, not once per model.
-fn intern(name: &str) -> &'static str {
-    static NAMES: Mutex<BTreeSet<&'static str>> = Mutex::new(BTreeSet::new());
-    let mut names = NAMES
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
-    if let Some(known) = names.get(name) {
-        return known;
-    }
-    let leaked: &'static str = Box::leak(name.to_owned().into_boxed_str());
-    names.insert(leaked);
-    leaked
-}
-
-/// A [`TextModel`] as a [`Lagrangian<N>`] (with [`Symmetries`], [`Invariants`] — none —,
-/// [`ExactSolution`] — none — and [`Defaults`]), of any number of coordinates: `N` is
-/// [`crate::dimension::Dyn`] (the size is the model's, chosen at run time; what the command
-/// line uses) or a fixed `Const<N>` equal to the model's size.
-///
-/// The other parameters are the model's declarations ([`Lagrangian::TIME_DEPENDENT`],
-/// [`Lagrangian::FORCED`], and `CONSTANT_MASS` for [`Structure::ConstantMass`]): constants
-/// of the type, so a caller that learns the model's at run time dispatches on them. The
-/// defaults (time-dependent, forced, general) fit every model; [`TextLagrangian::new`]
-/// rejects declarations the model does not allow.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TextLagrangian<
-    N,
-    const TIME_DEPENDENT: bool = true,
-    const FORCED: bool = true,
-    const CONSTANT_MASS: bool = false,
-> {
-    model: TextModel,
-    dimension: std::marker::PhantomData<N>,
-}
-
-impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
-    TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    /// `model` as a Lagrangian on ℝᴺ with the type's declarations.
-    ///
-    /// # Errors
-    /// [`TextError::Declaration`] if `N` is fixed to another size than the model's, or a
-    /// declaration does
-    /// not hold: `TIME_DEPENDENT = false` with `t` in L, `FORCED = false` with forces,
-    /// `CONSTANT_MASS = true` for L not recognised as constant-mass.
-    pub fn new(model: TextModel) -> Result<Self, TextError> {
-        let declaration = |reason: String| Err(TextError::Declaration { reason });
-        if let Err(reason) = dimension_of::<N>(model.dimension()) {
-            return declaration(reason);
-        }
-        if model.time_dependent() && !TIME_DEPENDENT {
-            return declaration("L depends on t, but TIME_DEPENDENT = false".into());
-        }
-        if model.forced() && !FORCED {
-            return declaration("the model has forces, but FORCED = false".into());
-        }
-        if CONSTANT_MASS && model.structure() != Structure::ConstantMass {
-            return declaration(
-                "CONSTANT_MASS = true, but L is not recognised as ½q̇ᵀMq̇ − V(t, q)".into(),
-            );
-        }
-        Ok(TextLagrangian {
-            model,
-            dimension: std::marker::PhantomData,
-        })
-    }
-
-    /// The model.
-    pub fn model(&self) -> &TextModel {
-        &self.model
-    }
-}
-
-impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
-    Lagrangian<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    const TIME_DEPENDENT: bool = TIME_DEPENDENT;
-    const FORCED: bool = FORCED;
-    const STRUCTURE: Structure = if CONSTANT_MASS {
-        Structure::ConstantMass
-    } else {
-        Structure::General
-    };
-
-    fn dimension(&self) -> usize {
-        self.model.dimension()
-    }
-
-    #[inline]
-    fn lagrangian<D: Scalar>(&self, t: D, q: &OVector<D, N>, v: &OVector<D, N>) -> D {
-        let tapes = &self.model.tapes;
-        if CONSTANT_MASS && let Some(split) = &tapes.constant_mass {
-            // ½q̇ᵀMq̇ without a tape, plus U(t, q).
-            return split.evaluate(t, q.as_slice(), v.as_slice());
-        }
-        tapes.lagrangian.evaluate(t, q.as_slice(), v.as_slice())
-    }
-
-    #[inline]
-    fn external_force<D: Scalar>(
-        &self,
-        t: D,
-        q: &OVector<D, N>,
-        v: &OVector<D, N>,
-    ) -> OVector<D, N> {
-        let forces = &self.model.tapes.forces;
-        let (n, _) = q.shape_generic();
-        if forces.is_empty() {
-            return OVector::zeros_generic(n, U1);
-        }
-        OVector::from_fn_generic(n, U1, |i, _| {
-            forces[i].evaluate(t, q.as_slice(), v.as_slice())
-        })
-    }
-
-    /// A constant-mass L: the compiled program of ∂U/∂q on up to `BATCH_LANES` points at once.
-    #[inline]
-    fn batch_force(
-        &self,
-        times: &[f64],
-        positions: &[OVector<f64, N>],
-        _v: &OVector<f64, N>,
-        forces: &mut [OVector<f64, N>],
-    ) -> bool {
-        let program = match &self.model.tapes.force {
-            Some(program) if CONSTANT_MASS => program,
-            _ => return false,
-        };
-        // Registers no wider than the points need: SVI 7/6's 6 Gauss points fill 6 lanes,
-        // the default 6/12's 12 (even widths: whole vector instructions).
-        let arguments = (program, times, positions, forces);
-        match positions.len() {
-            0..=4 => batch_force_in::<4, N>(arguments),
-            5..=6 => batch_force_in::<6, N>(arguments),
-            7..=8 => batch_force_in::<8, N>(arguments),
-            9..=12 => batch_force_in::<12, N>(arguments),
-            _ => batch_force_in::<BATCH_LANES, N>(arguments),
-        }
-        true
-    }
-}
-
-/// The arguments of [`batch_force_in`]: the program, the times, positions and forces.
-type BatchForce<'a, N> = (
-    &'a Program,
-    &'a [f64],
-    &'a [OVector<f64, N>],
-    &'a mut [OVector<f64, N>],
-);
-
-/// ∂U/∂q at the points by `program`, `W` points at once, in the smallest register file
-/// that holds the program (it is zeroed at every call).
-#[inline]
-fn batch_force_in<const W: usize, N: Dimension>(
-    (program, times, positions, forces): BatchForce<'_, N>,
-) where
-    DefaultAllocator: Allocator<N>,
-{
-    if program.register_count() <= 8 {
-        batch_force_with(program, &mut [[0.0; W]; 8], times, positions, forces);
-    } else {
-        let registers = &mut [[0.0; W]; MAX_REGISTERS];
-        batch_force_with(program, registers, times, positions, forces);
-    }
-}
-
-/// ∂U/∂q at the points by `program`, `W` points at once, with `registers`.
-#[inline]
-fn batch_force_with<const W: usize, N: Dimension>(
-    program: &Program,
-    registers: &mut [[f64; W]],
-    times: &[f64],
-    positions: &[OVector<f64, N>],
-    forces: &mut [OVector<f64, N>],
-) where
-    DefaultAllocator: Allocator<N>,
-{
-    for ((times, positions), forces) in times
-        .chunks(W)
-        .zip(positions.chunks(W))
-        .zip(forces.chunks_mut(W))
-    {
-        program.forces(
-            registers,
-            positions.len(),
-            |source, lanes| match source {
-                Source::Time => lanes[..times.len()].copy_from_slice(times),
-                Source::Coordinate(u) => {
-                    for (x, q) in lanes.iter_mut().zip(positions) {
-                        *x = q[u];
-                    }
-                }
-                // U(t, q) reads no velocity.
-                Source::Velocity(_) => lanes.fill(0.0),
-            },
-            |u, lane, value| forces[lane].as_mut_slice()[u] = value,
-        );
-    }
-}
-
-/// The most points a text model's force program runs at once ([`Lagrangian::batch_force`]):
-/// as many as SVI's usual quadrature rules have.
-const BATCH_LANES: usize = 16;
-
-impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
-    Symmetries<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    fn generator_count(&self) -> usize {
-        self.model.generators.len()
-    }
-
-    /// `J1`, `J2`, ... in the order of [`TextSpec::symmetries`].
-    ///
-    /// # Panics
-    /// If `index >= generator_count()`.
-    fn momentum_name(&self, index: usize) -> &'static str {
-        self.model.momentum_names[index]
-    }
-
-    /// # Panics
-    /// If `index >= generator_count()`.
-    fn generator(&self, index: usize, q: &OVector<f64, N>) -> OVector<f64, N> {
-        let generator = &self.model.tapes.generators[index];
-        OVector::from_fn_generic(q.shape_generic().0, U1, |i, _| {
-            generator[i].evaluate(0.0, q.as_slice(), &[])
-        })
-    }
-}
-
-impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
-    Invariants<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
-where
-    DefaultAllocator: Allocator<N>,
-{
-}
-
-impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
-    ExactSolution<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    /// None: a text model has no closed-form solution.
-    fn exact_solution(
-        &self,
-        _t0: f64,
-        _q0: &OVector<f64, N>,
-        _v0: &OVector<f64, N>,
-        _t: f64,
-    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
-        None
-    }
-}
-
-impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const CONSTANT_MASS: bool>
-    Defaults<N> for TextLagrangian<N, TIME_DEPENDENT, FORCED, CONSTANT_MASS>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    /// [`TextModel::NAME`].
-    fn name(&self) -> &'static str {
-        TextModel::NAME
-    }
-
-    fn coordinate_names(&self) -> Vec<String> {
-        self.model
-            .coordinates
-            .iter()
-            .map(|name| name.to_string())
-            .collect()
-    }
-
-    fn parameters(&self) -> Vec<(&'static str, f64)> {
-        self.model.parameters()
-    }
-
-    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
-        self.model.set_parameter(name, value)
-    }
-
-    /// A text model has no literature defaults: at rest at the origin at t = 0 (give the
-    /// initial state).
-    fn initial_state(&self) -> (f64, OVector<f64, N>, OVector<f64, N>) {
-        let n = N::from_usize(self.model.dimension());
-        (
-            0.0,
-            OVector::zeros_generic(n, U1),
-            OVector::zeros_generic(n, U1),
-        )
-    }
-
-    /// A placeholder, 0.01 (give the step).
-    fn default_step(&self) -> f64 {
-        0.01
-    }
-
-    /// A placeholder, 10 (give the horizon).
-    fn default_horizon(&self) -> f64 {
-        10.0
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::model::derived::LagrangianExt;
+    use crate::model::{Defaults, Lagrangian};
     use nalgebra::{DVector, SVector, U1, U2};
 
-    fn spec(lagrangian: &str, coordinates: &[&str]) -> TextSpec {
+    pub(super) fn spec(lagrangian: &str, coordinates: &[&str]) -> TextSpec {
         TextSpec {
             lagrangian: lagrangian.into(),
             coordinates: coordinates.iter().map(|name| (*name).into()).collect(),
@@ -1133,48 +539,5 @@ mod tests {
         assert!(model.set_parameter("m", 1.0).is_err());
         assert_eq!(model.coordinate_names(), ["x", "y"]);
         assert_eq!(model.name(), "text");
-    }
-
-    /// The compiled force program with the points as lanes is the force of the dual
-    /// numbers, point by point, for a time-dependent constant-mass L, at every register
-    /// width (3, 6, 7 and 12 points; more points than one batch holds).
-    #[test]
-    fn the_batched_force_is_the_force_point_by_point() {
-        let text = spec(
-            "0.5*(vx^2 + 3*vy^2) - x^2*cos(t) - sin(x*y) + 1/sqrt(1 + x^2 + y^4)",
-            &["x", "y"],
-        );
-        let model = TextModel::new(&text).unwrap();
-        let model = TextLagrangian::<crate::dimension::Dyn, true, false, true>::new(model).unwrap();
-        let v = DVector::from_column_slice(&[0.3, -0.4]);
-        let points = |count: usize| {
-            let times: Vec<f64> = (0..count).map(|k| 0.1 * k as f64).collect();
-            let positions: Vec<DVector<f64>> = (0..count)
-                .map(|k| {
-                    DVector::from_column_slice(&[(0.7 * k as f64).sin(), 0.2 * k as f64 - 1.0])
-                })
-                .collect();
-            (times, positions)
-        };
-        for count in [3, 6, 7, 12, BATCH_LANES + 5] {
-            let (times, positions) = points(count);
-            let mut forces = vec![DVector::zeros(2); count];
-            assert!(model.batch_force(&times, &positions, &v, &mut forces));
-            for ((&t, q), force) in times.iter().zip(&positions).zip(&forces) {
-                let mut expected = DVector::zeros(2);
-                model.force_into(t, q, &v, &mut expected);
-                assert!(
-                    (force - &expected).amax() <= 1e-14 * expected.amax().max(1.0),
-                    "{count} points: {force} {expected}"
-                );
-            }
-        }
-        let (times, positions) = points(6);
-        let mut forces = vec![DVector::zeros(2); 6];
-        // A general L offers no batch: the integrators take the points one by one.
-        let general = spec("0.5*(1 + x^2)*vx^2 + 0.5*vy^2 - x^2", &["x", "y"]);
-        let general = TextModel::new(&general).unwrap();
-        let general = TextLagrangian::<crate::dimension::Dyn>::new(general).unwrap();
-        assert!(!general.batch_force(&times, &positions, &v, &mut forces));
     }
 }

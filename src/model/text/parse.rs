@@ -2,7 +2,7 @@
 //! [module docs](super), one function per precedence level (precedence climbing written
 //! out), into an arena of [`Node`]s.
 
-use super::TextError;
+use super::error::TextError;
 use super::tree::{
     Base, Binary, CONSTANT_NAMES, FUNCTION_NAMES, Function, Index, MAX_NESTING, MAX_NODES, Names,
     Node, Site, Symbol,

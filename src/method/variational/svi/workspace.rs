@@ -1,0 +1,120 @@
+//! The buffers of an SVI run ([`SviWorkspace`]) and the starting values of a step: the
+//! previous step's polynomial extrapolated to the new nodes, or at the first step the Taylor
+//! polynomial.
+
+use super::constant_mass::ConstantMass;
+use crate::dimension::Dimension;
+use crate::method::State;
+use crate::method::variational::stage_newton::LazyStageNewton;
+use crate::method::variational::tables::Tables;
+use crate::model::Lagrangian;
+use crate::model::derived::{ForceJacobian, LagrangianExt, SecondDerivatives};
+use crate::model::legendre::LazyLegendre;
+use crate::nonlinear::Newton;
+use crate::spectral::starting_values::StartingValues;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator, OVector, U1};
+
+/// Buffers of an SVI run.
+#[derive(Debug, Clone)]
+pub struct SviWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    pub(super) tables: Tables,
+    /// Node offsets qᵛ − q_k, ν = 1..s, stacked.
+    pub(super) offsets: DVector<f64>,
+    /// Warm start from the previous step.
+    pub(super) start: StartingValues,
+    /// Second derivatives of L at the quadrature points.
+    pub(super) points: Vec<SecondDerivatives<N>>,
+    /// External force and its Jacobian at the quadrature points (forced models).
+    pub(super) forces: Vec<ForceJacobian<N>>,
+    pub(super) newton: Newton,
+    /// Sparse Newton for an unforced sum of terms of run-time size, made at its first use.
+    pub(super) sparse: LazyStageNewton,
+    /// The inverse Legendre map of such a sum of terms, made at its first use.
+    pub(super) legendre: LazyLegendre,
+    /// Fixed-point data, for constant-mass Lagrangians.
+    pub(super) constant_mass: Option<ConstantMass<N>>,
+    /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
+    /// the run takes Newton's method.
+    pub(super) newton_only: bool,
+}
+
+impl<N: Dimension> SviWorkspace<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// Rescale the tables for a new step size (the kept Newton factors scale with it).
+    pub(super) fn set_step(&mut self, h: f64) {
+        if self.tables.h != h {
+            self.tables.rescale(h);
+            self.invalidate_newton();
+        }
+    }
+
+    /// Drop Newton's kept factors, dense and sparse.
+    pub(super) fn invalidate_newton(&mut self) {
+        self.newton.invalidate();
+        self.sparse.invalidate();
+    }
+
+    /// Starting values: the previous step's polynomial extrapolated to the new nodes, or at
+    /// the first step the Taylor polynomial with q̇ from the inverse Legendre map.
+    pub(super) fn start<L: Lagrangian<N>>(&mut self, model: &L, t: f64, state: &State<N>) {
+        self.settle();
+        starting_offsets(
+            &mut self.start,
+            self.tables.h,
+            &mut self.offsets,
+            model,
+            t,
+            state,
+        );
+    }
+
+    /// Write the last step's node offsets where the fixed-point iteration left them pending.
+    pub(super) fn settle(&mut self) {
+        if let Some(data) = self.constant_mass.as_mut() {
+            data.settle(&mut self.start);
+        }
+    }
+
+    /// Remember the node offsets in `offsets` as the last step's, of size `h`.
+    pub(super) fn remember(&mut self, h: f64) {
+        self.start.remember(&self.offsets, h);
+        if let Some(data) = self.constant_mass.as_mut() {
+            data.pending = false;
+        }
+    }
+}
+
+/// [`SviWorkspace::start`] on the workspace's parts.
+pub(super) fn starting_offsets<L: Lagrangian<N>, N: Dimension>(
+    start: &mut StartingValues,
+    h: f64,
+    offsets: &mut DVector<f64>,
+    model: &L,
+    t: f64,
+    state: &State<N>,
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    if start.prepare(h) {
+        start.extrapolate::<N>(offsets);
+    } else {
+        let n = state.dimension();
+        let v = model
+            .velocity(t, &state.q, &state.y, &state.y)
+            .unwrap_or_else(|_| OVector::zeros_generic(n, U1));
+        // A sum of terms starts from uniform motion: its acceleration is a dense solve.
+        let a = model
+            .terms()
+            .is_none()
+            .then(|| model.acceleration(t, &state.q, &v))
+            .flatten()
+            .unwrap_or_else(|| OVector::zeros_generic(n, U1));
+        start.taylor(h, &v, &a, offsets);
+    }
+}
