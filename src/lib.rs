@@ -98,3 +98,68 @@ pub type Solution<N> = stepping::solve::Solution<Euclidean<N>>;
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
+
+/// One item per chapter of the guide (`docs/guide/src`) with Rust code blocks, whose examples
+/// are compiled and run as doctests as the README's are; `GUIDE_DOCTESTS` names the chapters,
+/// and a test checks that every chapter with Rust code is among them.
+macro_rules! guide_doctests {
+    ($($item:ident: $chapter:literal),* $(,)?) => {
+        $(
+            #[doc = include_str!(concat!("../docs/guide/src/", $chapter))]
+            #[cfg(doctest)]
+            pub struct $item;
+        )*
+        /// The chapters of the guide whose Rust code blocks run as doctests.
+        #[cfg(test)]
+        const GUIDE_DOCTESTS: &[&str] = &[$($chapter),*];
+    };
+}
+
+guide_doctests! {
+    GuideRustDoctests: "rust.md",
+    GuideAdaptivityDoctests: "adaptivity.md",
+    GuideStressDoctests: "stress.md",
+}
+
+#[cfg(test)]
+mod guide_tests {
+    /// Whether a fenced code block's info string makes rustdoc compile it: no language, or
+    /// `rust` among its comma-separated attributes.
+    fn is_rust(info: &str) -> bool {
+        info.is_empty() || info.split(',').any(|attribute| attribute.trim() == "rust")
+    }
+
+    #[test]
+    fn every_guide_chapter_with_rust_code_runs_its_doctests() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/guide/src");
+        let mut with_rust = Vec::new();
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|extension| extension != "md") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            let mut in_block = false;
+            let mut rust = false;
+            for line in text.lines() {
+                if let Some(info) = line.trim_start().strip_prefix("```") {
+                    if !in_block && is_rust(info.trim()) {
+                        rust = true;
+                    }
+                    in_block = !in_block;
+                }
+            }
+            assert!(!in_block, "{}: a code block is not closed", path.display());
+            if rust {
+                with_rust.push(path.file_name().unwrap().to_str().unwrap().to_owned());
+            }
+        }
+        with_rust.sort();
+        let mut listed = super::GUIDE_DOCTESTS.to_vec();
+        listed.sort();
+        assert_eq!(
+            with_rust, listed,
+            "guide chapters with Rust code blocks (src/lib.rs)"
+        );
+    }
+}

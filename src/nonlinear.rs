@@ -50,9 +50,9 @@ pub(crate) fn stalled(size: f64, previous: f64, noise: f64, scale: f64) -> bool 
 
 /// Contraction rate θ above which the simplified Newton method refactorises its Jacobian at
 /// the current iterate. Chosen by instruction counts (callgrind) of SVI 4/3 and 7/6 on the
-/// double pendulum, h = 0.01 and 0.05, T = 20 (README, issue #15): summed over the four runs
-/// 0.1 cost 364 M instructions, 0.03 and 0.01 302 M each, 0.003 308 M; 0.03 factorises half
-/// as often as 0.01.
+/// double pendulum, h = 0.01 and 0.05, T = 20 (`docs/results/newton.md`, issue #15): summed
+/// over the four runs 0.1 cost 364 M instructions, 0.03 and 0.01 302 M each, 0.003 308 M; 0.03
+/// factorises half as often as 0.01.
 pub(crate) const REFACTOR_CONTRACTION: f64 = 0.03;
 
 /// How a [`Newton`] iteration treats its Jacobian.

@@ -112,9 +112,9 @@ fn time_budgets_and_counts_are_checked_before_anything_runs() {
 }
 
 /// Issue #14, item 2: every cap is stated once (`svi_experiments::scene::limits`), in the option's
-/// help and in the README's "Limits".
+/// help and in the guide's chapter "Limits" (`docs/guide/src/limits.md`).
 #[test]
-fn every_cap_is_in_the_help_and_the_readme() {
+fn every_cap_is_in_the_help_and_the_guide() {
     let help = |command: &str| String::from_utf8(svi(&[command, "--help"]).stdout).unwrap();
     for (command, text) in [
         ("stability", format!("2 to {MAX_SAMPLES}")),
@@ -132,12 +132,9 @@ fn every_cap_is_in_the_help_and_the_readme() {
             "svi {command} --help: {text}"
         );
     }
-    let readme = include_str!("../../README.md");
-    let limits = readme
-        .split("### Limits")
-        .nth(1)
-        .and_then(|rest| rest.split("\n#").next())
-        .expect("the README has a Limits section");
+    let limits = include_str!("../../docs/guide/src/limits.md")
+        .strip_prefix("# Limits\n")
+        .expect("the guide's chapter on limits");
     for cap in [
         "1 MiB",
         "10⁵ grid points",
@@ -149,7 +146,7 @@ fn every_cap_is_in_the_help_and_the_readme() {
         "50 bisections",
         "1e-20",
     ] {
-        assert!(limits.contains(cap), "README Limits: {cap}\n{limits}");
+        assert!(limits.contains(cap), "the guide's Limits: {cap}\n{limits}");
     }
 }
 

@@ -95,7 +95,7 @@ def test_overrides_method_params_initial_and_output_times():
 
 def test_a_reparametrised_run_takes_its_monitor_and_matches_the_binary():
     # Kepler e = 0.9 over T = 2000 (about 318 orbits), fixed steps 0.3 in τ with dt = |q| dτ:
-    # the final position within 1e-9 of the exact orbit (tests/reparam.rs, README).
+    # the final position within 1e-9 of the exact orbit (tests/reparam.rs, docs/guide/src/adaptivity.md).
     arguments = dict(method="svi:9/8", h=0.3, params={"e": 0.9}, adapt="reparam", diagnostics=["solution"])
     result = svi.run("kepler", monitor="sundman:1", trajectory=False, **arguments)
     reference = cli_json(

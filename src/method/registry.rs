@@ -1087,9 +1087,9 @@ mod tests {
         assert!(!help.contains("[`"), "{help}");
     }
 
-    /// The order column of the README's method table for `spec`: a number, or one of the
-    /// formulas in P and M the table uses.
-    fn readme_order(cell: &str, spec: &MethodSpec) -> Option<usize> {
+    /// The order column of the method table (in the guide's chapter on the command line) for
+    /// `spec`: a number, or one of the formulas in P and M the table uses.
+    fn table_order(cell: &str, spec: &MethodSpec) -> Option<usize> {
         let p = spec.points_in_use().unwrap_or_default();
         let m = spec.quadrature_in_use().unwrap_or_default();
         match cell {
@@ -1101,9 +1101,9 @@ mod tests {
     }
 
     #[test]
-    fn the_readme_table_lists_every_entry_with_its_grammar_order_and_summary() {
-        let readme = include_str!("../../README.md");
-        let rows: Vec<Vec<&str>> = readme
+    fn the_guides_method_table_lists_every_entry_with_its_grammar_order_and_summary() {
+        let chapter = include_str!("../../docs/guide/src/command-line.md");
+        let rows: Vec<Vec<&str>> = chapter
             .lines()
             .skip_while(|line| *line != "| method | grammar | order | summary |")
             .skip(2)
@@ -1115,7 +1115,7 @@ mod tests {
             let row = rows
                 .iter()
                 .find(|row| row[0] == format!("`{}`", entry.name))
-                .unwrap_or_else(|| panic!("{} is not in the README's method table", entry.name));
+                .unwrap_or_else(|| panic!("{} is not in the guide's method table", entry.name));
             assert_eq!(row.len(), 4, "{row:?}");
             assert_eq!(row[1], format!("`{}`", entry.grammar()), "{row:?}");
             assert_eq!(row[3], entry.summary, "{row:?}");
@@ -1135,9 +1135,9 @@ mod tests {
             }
             for spec in specs {
                 assert_eq!(
-                    readme_order(row[2], &spec),
+                    table_order(row[2], &spec),
                     Some(spec.info().unwrap().order),
-                    "{spec}: README order {}",
+                    "{spec}: the guide's order {}",
                     row[2]
                 );
             }

@@ -1,7 +1,8 @@
 //! The limits of what a user may ask `svi` for: every count and time budget set on the
-//! command line has a cap, stated once here (and in the option's `--help` and the README's
-//! "Limits"), so that no input makes a command read, run or allocate without bound. A value
-//! out of range is bad input (exit status 2) whose message names the option.
+//! command line has a cap, stated once here (and in the option's `--help` and the guide's
+//! chapter "Limits", `docs/guide/src/limits.md`), so that no input makes a command read, run
+//! or allocate without bound. A value out of range is bad input (exit status 2) whose message
+//! names the option.
 
 use std::path::Path;
 
