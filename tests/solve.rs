@@ -612,3 +612,144 @@ fn a_reparametrized_solve_out_of_steps_ends_in_a_typed_error() {
         );
     }
 }
+
+/// Solve Kepler e = 0.5 to `t_end` twice with `method` and `options`: once keeping the dense
+/// output, once serving `times` during the solve; the kept polynomials evaluated afterwards
+/// give the output points' q, q̇ (and p) to `tol`, and the two solves the same steps.
+fn kept_matches_served<M: Method<U2> + Clone>(method: M, mut options: SolveOptions, tol: f64) {
+    let (model, initial) = kepler(0.5);
+    let t_end = 20.0;
+    let times = sorted_times(1000, t_end);
+    let served = solve(
+        model,
+        method.clone(),
+        &Span::with_outputs(0.0, t_end, times.clone()),
+        initial,
+        &options,
+    )
+    .unwrap();
+    options.dense = true;
+    let kept = solve(model, method, &Span::new(0.0, t_end), initial, &options).unwrap();
+    assert_eq!(kept.statistics.steps, served.statistics.steps);
+    assert!(served.dense.is_none());
+    let dense = kept.dense.expect("asked for");
+    assert_eq!(dense.span(), Some((0.0, t_end)));
+    let mut worst: f64 = 0.0;
+    for (point, &t) in served.points.iter().zip(&times) {
+        let at = dense.at(t).unwrap();
+        for (kept, served) in [(&at.q, &point.q), (&at.v, &point.v)] {
+            for (a, b) in kept.iter().zip(served.iter()) {
+                worst = worst.max((a - b).abs());
+            }
+        }
+        // p is kept at the samples: a polynomial again, as Kepler's mass is constant.
+        assert!((at.p[0] - point.p[0]).abs() < tol && (at.p[1] - point.p[1]).abs() < tol);
+    }
+    eprintln!("kept against served dense output: {worst:e}");
+    assert!(worst < tol, "{worst:e}");
+    // At the end, the last step's polynomial meets the solve's last point.
+    let end = dense.at(t_end).unwrap();
+    assert!((end.q[0] - kept.last.q[0]).abs() < 1e-12);
+}
+
+/// `sol(t)`: the polynomials kept over a whole solve are the method's own dense output
+/// (SVI and SC: the step polynomial; midpoint: the cubic Hermite interpolant of its end
+/// points), in every mode — fixed steps, step doubling (whose half steps are kept, the
+/// rejected trials forgotten) and degree adaptivity (as many samples as the most points).
+#[test]
+fn kept_dense_output_is_the_methods_dense_output_at_any_time() {
+    kept_matches_served(
+        Svi::new(7).with_quadrature(6),
+        SolveOptions::fixed_step(0.1),
+        1e-14,
+    );
+    kept_matches_served(
+        SpectralCollocation::new(9),
+        SolveOptions::fixed_step(0.1),
+        1e-14,
+    );
+    kept_matches_served(
+        VariationalIntegrator::new(Midpoint),
+        SolveOptions::fixed_step(0.01),
+        1e-14,
+    );
+    kept_matches_served(Svi::new(6), SolveOptions::step_adaptive(1e-9), 1e-14);
+    kept_matches_served(
+        Svi::new(6),
+        SolveOptions::degree_adaptive(0.2, 1e-9, 3, 12),
+        1e-14,
+    );
+}
+
+/// Dense output between steps is as accurate as the method: SVI 7/6 on the oscillator
+/// q = cos t, evaluated at 1000 times, against the exact solution, with the error falling
+/// at the order of the step polynomial inside steps (s = 7 points: O(h^7) at least).
+#[test]
+fn kept_dense_output_converges_to_the_exact_solution_between_steps() {
+    let errors: Vec<f64> = [0.4, 0.2]
+        .iter()
+        .map(|&h| {
+            let mut options = SolveOptions::fixed_step(h);
+            options.dense = true;
+            let initial = Initial::Velocity {
+                q: nalgebra::SVector::from([1.0]),
+                v: nalgebra::SVector::from([0.0]),
+            };
+            let solution = solve(
+                svi_models::HarmonicOscillator::new(1.0).unwrap(),
+                Svi::new(7).with_quadrature(6),
+                &Span::new(0.0, 8.0),
+                initial,
+                &options,
+            )
+            .unwrap();
+            let dense = solution.dense.unwrap();
+            sorted_times(1000, 8.0)
+                .iter()
+                .map(|&t| {
+                    let at = dense.at(t).unwrap();
+                    (at.q[0] - t.cos()).abs().max((at.v[0] + t.sin()).abs())
+                })
+                .fold(0.0, f64::max)
+        })
+        .collect();
+    eprintln!("oscillator dense errors at h = 0.4, 0.2: {errors:e?}");
+    let order = (errors[0] / errors[1]).log2();
+    assert!(errors[1] < 1e-8, "{errors:e?}");
+    assert!(order > 6.0, "observed order {order}");
+}
+
+/// Dense output is refused where no polynomials are kept: the reparametrised solve, a time
+/// outside the span.
+#[test]
+fn dense_output_where_it_cannot_be_kept_is_a_typed_error() {
+    use svi::model::reparametrized::Sundman;
+    use svi::stepping::reparam::solve_reparametrized;
+    let (model, initial) = kepler(0.5);
+    let mut options = SolveOptions::fixed_step(0.1);
+    options.dense = true;
+    let span = Span::new(0.0, 1.0);
+    let error = solve_reparametrized(
+        model,
+        Svi::new(4),
+        Sundman { alpha: 1.5 },
+        &span,
+        initial,
+        &options,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "dense"),
+        "{error}"
+    );
+    let dense = solve(model, Svi::new(4), &span, initial, &options)
+        .unwrap()
+        .dense
+        .unwrap();
+    for t in [-0.1, 1.1, f64::INFINITY] {
+        assert!(
+            matches!(dense.at(t), Err(Error::InvalidParameter { .. })),
+            "{t}"
+        );
+    }
+}

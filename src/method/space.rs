@@ -107,6 +107,13 @@ pub trait Space: Copy + Debug + PartialEq + Default + 'static {
     /// The size of a point's configuration and of its velocity (largest components), from
     /// which a first trial step is guessed.
     fn size_and_speed(point: &Self::Point) -> (f64, f64);
+
+    /// The point's (q, q̇, p) as slices on a vector space; `None` on spaces whose points are
+    /// not vectors (SO(3)). Dense output of a whole solve ([`crate::stepping::dense`]) needs them.
+    fn coordinates(point: &Self::Point) -> Option<(&[f64], &[f64], &[f64])> {
+        let _ = point;
+        None
+    }
 }
 
 /// ℝᴺ: configurations q ∈ ℝᴺ, models [`crate::Lagrangian`]`<N>`, with N fixed (`Const<N>`)
@@ -157,6 +164,10 @@ where
 
     fn describe(point: &PhasePoint<N>) -> String {
         format!("q = {:?}, v = {:?}", point.q.as_slice(), point.v.as_slice())
+    }
+
+    fn coordinates(point: &PhasePoint<N>) -> Option<(&[f64], &[f64], &[f64])> {
+        Some((point.q.as_slice(), point.v.as_slice(), point.p.as_slice()))
     }
 
     fn size_and_speed(point: &PhasePoint<N>) -> (f64, f64) {

@@ -214,7 +214,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             let end = if last { span.t_end } else { t + 2.0 * h };
             let dt = if last { 0.5 * remaining } else { h };
             let mid = t + dt;
-            let mark = outputs.points.len();
+            let mark = outputs.mark();
             let guess = outputs.guess.clone();
             let start = progress.cursor.clone();
             let statistics = &mut progress.statistics;
@@ -323,10 +323,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                             {
                                 // Stopped after the first of the pair: drop the outputs
                                 // served from the second.
-                                let served = outputs
-                                    .points
-                                    .partition_point(|point| S::time(point) <= time);
-                                outputs.points.truncate(served);
+                                outputs.rollback_after(time);
                                 return Ok((adaptivity, time < span.t_end));
                             }
                         }
@@ -345,7 +342,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 }
                 Err(other) => return Err(self.failure(other, progress, false)),
             };
-            outputs.points.truncate(mark);
+            outputs.rollback(mark);
             outputs.guess = guess;
             method.restart(&mut half);
             method.restart(&mut full);

@@ -262,6 +262,7 @@ where
                 statistics,
                 adaptivity,
                 stopped: true,
+                dense: None,
             });
         }
         let limit = options.run.divergence_limit;
@@ -318,6 +319,7 @@ where
                     statistics,
                     adaptivity,
                     stopped: !finish,
+                    dense: None,
                 });
             }
             if finish {
@@ -330,6 +332,7 @@ where
                     statistics,
                     adaptivity,
                     stopped: false,
+                    dense: None,
                 });
             }
         }

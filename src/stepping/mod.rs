@@ -4,6 +4,7 @@
 //! ones in [`rigid_observer`]).
 
 pub mod adapt;
+pub mod dense;
 pub mod grid;
 pub mod logh;
 pub mod observer;

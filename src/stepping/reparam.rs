@@ -67,6 +67,7 @@ where
             },
             statistics,
             stopped: false,
+            dense: None,
         }),
     }
 }
@@ -316,6 +317,7 @@ where
                 statistics: progress.statistics,
                 adaptivity,
                 stopped: true,
+                dense: None,
             });
         }
         let mut k = 0usize;
@@ -442,6 +444,7 @@ where
                         statistics: progress.statistics,
                         adaptivity,
                         stopped: !finish,
+                        dense: None,
                     });
                 }
             }
@@ -455,6 +458,7 @@ where
                     statistics: progress.statistics,
                     adaptivity,
                     stopped: false,
+                    dense: None,
                 });
             }
         }

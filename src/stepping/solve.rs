@@ -32,6 +32,7 @@
 use crate::error::{Error, require_finite, require_positive};
 use crate::method::space::Space;
 use crate::method::step::Step;
+use crate::stepping::dense::DenseOutput;
 use crate::stepping::grid::{MAX_STEPS, check_span, grid_steps};
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics};
@@ -185,6 +186,10 @@ pub struct SolveOptions {
     /// Recovery of failed steps ([`Adapt::None`] only: the adaptive modes retry failed trial
     /// steps themselves) and the divergence limit on the state.
     pub run: RunOptions,
+    /// Keep every accepted step's polynomial ([`Solution::dense`]), so that the solution can
+    /// be evaluated at any time of the span after the solve; on ℝᴺ, not with the
+    /// reparametrised solve (default `false`).
+    pub dense: bool,
 }
 
 impl Default for SolveOptions {
@@ -204,6 +209,7 @@ impl Default for SolveOptions {
             max_rejections: 30,
             max_steps: MAX_STEPS,
             run: RunOptions::default(),
+            dense: false,
         }
     }
 }
@@ -300,6 +306,12 @@ impl SolveOptions {
             return Err(Error::invalid(
                 "recovery",
                 "reparam takes fixed steps in τ and has no recovery of failed steps",
+            ));
+        }
+        if self.dense {
+            return Err(Error::invalid(
+                "dense",
+                "the reparametrised solve keeps no step polynomials: ask for output times",
             ));
         }
         Ok(())
@@ -402,6 +414,9 @@ pub struct Solution<S: Space> {
     pub adaptivity: Adaptivity,
     /// Whether an observer stopped the solve before the end of the span.
     pub stopped: bool,
+    /// Every accepted step's polynomial, with [`SolveOptions::dense`]
+    /// ([`DenseOutput::at`] evaluates the solution at any time of the span).
+    pub dense: Option<DenseOutput>,
 }
 
 /// Solve from `initial` over `span` with `method`: the states at the span's output times.
@@ -438,17 +453,56 @@ pub fn solve<L, M: Step<L, S> + Clone, S: Space>(
     Integrator::new(model, method).solve(span, initial, options)
 }
 
-/// Output times not yet served, and the points produced so far.
+/// Output times not yet served, the points produced so far, and the steps' polynomials kept
+/// for dense output.
 pub(super) struct Outputs<'a, S: Space> {
     times: &'a [f64],
     pub(super) points: Vec<S::Point>,
     /// Last velocity, the Newton start of the next inverse Legendre map.
     pub(super) guess: S::Velocity,
+    dense: Option<DenseOutput>,
+}
+
+/// How far [`Outputs`] had got: output points and dense steps, to go back to after a
+/// rejected trial step.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Mark {
+    points: usize,
+    steps: usize,
 }
 
 impl<S: Space> Outputs<'_, S> {
     fn next(&self) -> Option<f64> {
         self.times.get(self.points.len()).copied()
+    }
+
+    /// Whether the start of each step is needed: an output time is left, or steps are kept.
+    fn wants_steps(&self) -> bool {
+        self.next().is_some() || self.dense.is_some()
+    }
+
+    pub(super) fn mark(&self) -> Mark {
+        Mark {
+            points: self.points.len(),
+            steps: self.dense.as_ref().map_or(0, DenseOutput::steps),
+        }
+    }
+
+    /// Forget what was produced after `mark`.
+    pub(super) fn rollback(&mut self, mark: Mark) {
+        self.points.truncate(mark.points);
+        if let Some(dense) = &mut self.dense {
+            dense.truncate(mark.steps);
+        }
+    }
+
+    /// Forget the output points after `time` and the steps that start at or after it.
+    pub(super) fn rollback_after(&mut self, time: f64) {
+        let served = self.points.partition_point(|point| S::time(point) <= time);
+        self.points.truncate(served);
+        if let Some(dense) = &mut self.dense {
+            dense.truncate_from(time);
+        }
     }
 }
 
@@ -498,7 +552,24 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             times: &span.output_times,
             points: Vec::with_capacity(span.output_times.len()),
             guess: progress.guess.clone(),
+            dense: None,
         };
+        if options.dense {
+            let samples = match options.adapt {
+                Adapt::Degree => options.max_points,
+                _ => self.method().points().unwrap_or(0),
+            };
+            let first = self
+                .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
+                .map_err(RunFailure::rejected)?;
+            let Some((q, ..)) = S::coordinates(&first) else {
+                return Err(RunFailure::rejected(Error::invalid(
+                    "dense",
+                    "dense output is kept on ℝᴺ only: ask for output times",
+                )));
+            };
+            outputs.dense = Some(DenseOutput::new(q.len(), samples));
+        }
         if outputs.next() == Some(span.t0) {
             let point = self
                 .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
@@ -524,6 +595,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             statistics: run.statistics,
             adaptivity,
             stopped,
+            dense: outputs.dense,
         })
     }
 
@@ -586,6 +658,37 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             outputs.guess = S::velocity(&point);
             outputs.points.push(point);
         }
+        let Some(dense) = outputs.dense.as_mut() else {
+            return Ok(());
+        };
+        for j in 0..dense.samples() {
+            let time = dense.sample_time(j, t, end_time);
+            let point = match method.dense_point(model, workspace, t, h, start, time) {
+                Some(point) => point,
+                None => {
+                    let (a, b) = match ends {
+                        Some(ref known) => known,
+                        None => ends.insert((
+                            self.phase_point(t, start, &outputs.guess)?,
+                            self.phase_point(end_time, end, &outputs.guess)?,
+                        )),
+                    };
+                    method.interpolate(model, a, b, time).ok_or_else(|| {
+                        Error::invalid("dense", "the method has no step polynomial on this space")
+                    })?
+                }
+            };
+            let (Some((q, v, p)), true) = (S::coordinates(&point), method.point_is_finite(&point))
+            else {
+                return Err(Error::NonFinite {
+                    what: format!("dense output point at t = {time:?}"),
+                    step: steps_taken.saturating_sub(1),
+                    t,
+                });
+            };
+            dense.push_sample(q, v, p);
+        }
+        dense.end_step(t, end_time);
         Ok(())
     }
 
@@ -622,8 +725,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             (span.t0, span.t_end, h, steps),
             &options.run,
             observer,
-            // The start of a step is read only to serve output times inside it.
-            outputs.next().is_some(),
+            // The start of a step is read only to serve output times inside it, or to keep
+            // its polynomial.
+            outputs.wants_steps(),
             |workspace, t, size, start, progress| {
                 if let Some(start) = start {
                     self.emit(
