@@ -615,7 +615,8 @@ fn a_reparametrized_solve_out_of_steps_ends_in_a_typed_error() {
 
 /// Solve Kepler e = 0.5 to `t_end` twice with `method` and `options`: once keeping the dense
 /// output, once serving `times` during the solve; the kept polynomials evaluated afterwards
-/// give the output points' q, q̇ (and p) to `tol`, and the two solves the same steps.
+/// give the output points' q, q̇ and p to `tol` relative to 1 + |x|, and the two solves the
+/// same steps.
 fn kept_matches_served<M: Method<U2> + Clone>(method: M, mut options: SolveOptions, tol: f64) {
     let (model, initial) = kepler(0.5);
     let t_end = 20.0;
@@ -637,13 +638,14 @@ fn kept_matches_served<M: Method<U2> + Clone>(method: M, mut options: SolveOptio
     let mut worst: f64 = 0.0;
     for (point, &t) in served.points.iter().zip(&times) {
         let at = dense.at(t).unwrap();
-        for (kept, served) in [(&at.q, &point.q), (&at.v, &point.v)] {
+        // p is kept at the samples: a polynomial again, as Kepler's mass is constant. The
+        // difference is relative to the size of the number (1 + |x|): rounding in the
+        // barycentric sums.
+        for (kept, served) in [(&at.q, &point.q), (&at.v, &point.v), (&at.p, &point.p)] {
             for (a, b) in kept.iter().zip(served.iter()) {
-                worst = worst.max((a - b).abs());
+                worst = worst.max((a - b).abs() / (1.0 + b.abs()));
             }
         }
-        // p is kept at the samples: a polynomial again, as Kepler's mass is constant.
-        assert!((at.p[0] - point.p[0]).abs() < tol && (at.p[1] - point.p[1]).abs() < tol);
     }
     eprintln!("kept against served dense output: {worst:e}");
     assert!(worst < tol, "{worst:e}");
@@ -668,10 +670,12 @@ fn kept_dense_output_is_the_methods_dense_output_at_any_time() {
         SolveOptions::fixed_step(0.1),
         1e-14,
     );
+    // The Hermite interpolant's q̇ divides differences of q by h: its own rounding, 1e-16/h,
+    // is what the kept samples reproduce.
     kept_matches_served(
         VariationalIntegrator::new(Midpoint),
         SolveOptions::fixed_step(0.01),
-        1e-14,
+        1e-13,
     );
     kept_matches_served(Svi::new(6), SolveOptions::step_adaptive(1e-9), 1e-14);
     kept_matches_served(
@@ -713,9 +717,9 @@ fn kept_dense_output_converges_to_the_exact_solution_between_steps() {
                 .fold(0.0, f64::max)
         })
         .collect();
-    eprintln!("oscillator dense errors at h = 0.4, 0.2: {errors:e?}");
+    eprintln!("oscillator dense errors at h = 0.4, 0.2: {errors:?}");
     let order = (errors[0] / errors[1]).log2();
-    assert!(errors[1] < 1e-8, "{errors:e?}");
+    assert!(errors[1] < 1e-8, "{errors:?}");
     assert!(order > 6.0, "observed order {order}");
 }
 

@@ -23,6 +23,7 @@ use crate::report::csv::{Float, Recorded};
 use crate::report::health::Warning;
 use crate::report::output::{self, OutputFile};
 use crate::report::plot::{Panel, Series, render_svg_grid};
+use crate::report::schema::{self, Kind, Versioned};
 use crate::report::summary::{ErrorReport, Parameters, Status, Summary};
 use crate::run::{error_report, failure_object};
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
@@ -153,6 +154,12 @@ impl MethodRow {
     }
 }
 
+impl Versioned for Comparison {
+    fn kind(&self) -> Kind {
+        Kind::Comparison
+    }
+}
+
 /// The comparison (`svi compare --json`): the scene, what its runs share, and a row per
 /// method in the order given.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -246,7 +253,7 @@ pub fn execute_args(args: &CompareArgs) -> anyhow::Result<()> {
         }
     }
     if args.json {
-        output::print(format_args!("{}\n", serde_json::to_string(&comparison)?))
+        output::print(format_args!("{}\n", schema::to_json(&comparison)?))
     } else {
         output::print(text_table(&comparison))
     }
@@ -489,14 +496,14 @@ impl Drawn {
     /// The curves of the trajectory `recorded` by the run of `summary` of the method
     /// `label`, thinned to at most [`PLOT_POINTS`] points each.
     fn new(label: String, summary: &Summary, recorded: Recorded) -> Self {
-        let Recorded { columns, rows } = recorded;
-        let column = |name: &str| columns.iter().position(|column| column == name);
-        let stride = rows.len().div_ceil(PLOT_POINTS).max(1);
+        let column = |name: &str| recorded.columns.iter().position(|column| column == name);
+        let count = recorded.rows().len();
+        let stride = count.div_ceil(PLOT_POINTS).max(1);
         // Every stride-th row and the last.
-        let thinned: Vec<&Vec<f64>> = rows
-            .iter()
+        let thinned: Vec<&[f64]> = recorded
+            .rows()
             .enumerate()
-            .filter(|(index, _)| index % stride == 0 || index + 1 == rows.len())
+            .filter(|(index, _)| index % stride == 0 || index + 1 == count)
             .map(|(_, row)| row)
             .collect();
         let curve = |x: usize, y: usize| -> Vec<(f64, f64)> {
@@ -540,7 +547,8 @@ impl Drawn {
                     x_log: false,
                     y_log: false,
                     equal_scale: false,
-                    series: columns
+                    series: recorded
+                        .columns
                         .iter()
                         .filter(configuration)
                         .filter_map(|name| {
@@ -554,15 +562,17 @@ impl Drawn {
             }
         };
         let energy_error = match column("energy") {
-            Some(energy) => rows
-                .chunks(stride)
-                .filter_map(|chunk| {
-                    chunk
-                        .iter()
-                        .map(|row| (row[0], (row[energy] - summary.energy_initial).abs()))
-                        .max_by(|a, b| a.1.total_cmp(&b.1))
-                })
-                .collect(),
+            Some(energy) => {
+                let rows: Vec<&[f64]> = recorded.rows().collect();
+                rows.chunks(stride)
+                    .filter_map(|chunk| {
+                        chunk
+                            .iter()
+                            .map(|row| (row[0], (row[energy] - summary.energy_initial).abs()))
+                            .max_by(|a, b| a.1.total_cmp(&b.1))
+                    })
+                    .collect()
+            }
             None => Vec::new(),
         };
         Drawn {

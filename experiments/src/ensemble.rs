@@ -21,7 +21,8 @@ use serde::Serialize;
 use crate::report::map::{self, Heatmap};
 use crate::report::output::{self, OutputFile};
 use crate::report::plot::{Panel, Series, render_svg};
-use crate::report::summary::ErrorReport;
+use crate::report::schema::{self, Kind, Versioned};
+use crate::report::summary::{ErrorReport, Status};
 use crate::report::table::{MemberOutcome, Schema, Table};
 use crate::run::error_report;
 use crate::scene::ensemble::{
@@ -308,6 +309,12 @@ fn thread_pool(threads: usize) -> Result<rayon::ThreadPool, SceneError> {
         })
 }
 
+impl Versioned for EnsembleSummary {
+    fn kind(&self) -> Kind {
+        Kind::Ensemble
+    }
+}
+
 /// The summary of an ensemble (`svi ensemble --json`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EnsembleSummary {
@@ -331,6 +338,8 @@ pub struct EnsembleSummary {
     pub out: Option<String>,
     /// The plot file, if drawn.
     pub plot: Option<String>,
+    /// `ok` if every member reached its horizon, else `failed` (exit status 1).
+    pub status: Status,
 }
 
 /// The error of an ensemble in which some members failed: exit status 1, after the table and
@@ -514,9 +523,14 @@ fn run_and_write(args: &EnsembleArgs) -> anyhow::Result<()> {
         seconds,
         out: args.out.as_ref().map(|path| path.display().to_string()),
         plot: args.plot.as_ref().map(|path| path.display().to_string()),
+        status: if failed == 0 {
+            Status::Ok
+        } else {
+            Status::Failed
+        },
     };
     if args.json {
-        output::print(format_args!("{}\n", serde_json::to_string(&summary)?))
+        output::print(format_args!("{}\n", schema::to_json(&summary)?))
             .map_err(SceneError::from)?;
     } else if args.out.is_some() {
         output::print(format_args!(

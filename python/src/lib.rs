@@ -18,7 +18,10 @@ use clap::ValueEnum;
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use svi::stepping::dense::DenseOutput;
 use svi_experiments::ensemble::Ensemble;
+use svi_experiments::report::schema;
 use svi_experiments::report::table::Cell;
 use svi_experiments::run::error_report;
 use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
@@ -40,7 +43,7 @@ fn failure(error: SceneError) -> PyErr {
     let bad_input = error.is_bad_input();
     let report = error_report(&error);
     let summary = match &error {
-        SceneError::RunFailed { partial, .. } => serde_json::to_value(partial.as_ref()).ok(),
+        SceneError::RunFailed { partial, .. } => schema::to_value(partial.as_ref()).ok(),
         _ => None,
     };
     let object = serde_json::json!({
@@ -142,7 +145,7 @@ fn overrides(
 
 /// Put the fields of `initial` (`t0`, `q`, `v`, `p`, `rotation`, `quaternion`, `omega`,
 /// `momentum`) into the scene's `[initial]` (a velocity replaces the scene's momentum and so
-/// on), then check the scene.
+/// on); the caller checks the scene.
 fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResult<()> {
     // A field given replaces the scene's exclusive partner (v for p, omega for momentum, ...)
     // unless both are given, which the scene's check rejects.
@@ -197,25 +200,102 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
         };
         *slot = Some(values);
     }
-    scene.check().map_err(failure)
+    Ok(())
 }
 
-/// A trajectory: its column names and rows.
-type Trajectory = (Vec<String>, Vec<Vec<f64>>);
+/// The numbers of `values` as bytes in the machine's order, for NumPy's `frombuffer`: arrays
+/// cross into Python as one buffer each, not as lists of Python floats.
+fn buffer<'py>(py: Python<'py>, values: &[f64]) -> Bound<'py, PyBytes> {
+    PyBytes::new_with(py, std::mem::size_of_val(values), |bytes| {
+        for (chunk, x) in bytes.chunks_exact_mut(8).zip(values) {
+            chunk.copy_from_slice(&x.to_ne_bytes());
+        }
+        Ok(())
+    })
+    .expect("filling a new bytes object cannot fail")
+}
 
-/// Run a scene as `svi run` does, with these overrides; returns the JSON summary and, with
-/// `trajectory`, the trajectory's column names and rows (every step, or the output times).
-/// `progress` allows `svi run`'s progress bar on stderr (long fixed-step runs, on a terminal).
+/// A trajectory: its column names and its numbers row by row (a buffer of f64).
+type Trajectory<'py> = (Vec<String>, Bound<'py, PyBytes>);
+
+/// A model written as text from Python (`svi.Lagrangian`): L, its coordinates, its forces,
+/// the generators of its symmetries and its parameters.
+type TextModel = (
+    String,
+    Vec<String>,
+    Option<Vec<String>>,
+    Option<Vec<Vec<String>>>,
+    BTreeMap<String, f64>,
+);
+
+/// Every step's polynomial of a run (`svi.Solution`'s dense output), evaluated from Python.
+#[pyclass(frozen, module = "svi._svi")]
+struct Dense(DenseOutput);
+
+#[pymethods]
+impl Dense {
+    /// (q, v, p) at the times of `times` (a buffer of f64), each a buffer of
+    /// len(times) × dimension numbers, row by row.
+    fn evaluate<'py>(
+        &self,
+        py: Python<'py>,
+        times: &[u8],
+    ) -> PyResult<(
+        Bound<'py, PyBytes>,
+        Bound<'py, PyBytes>,
+        Bound<'py, PyBytes>,
+    )> {
+        let n = self.0.dimension();
+        let count = times.len() / 8;
+        let mut values = [
+            vec![0.0; count * n],
+            vec![0.0; count * n],
+            vec![0.0; count * n],
+        ];
+        let [q, v, p] = &mut values;
+        for (i, time) in times.chunks_exact(8).enumerate() {
+            let time = f64::from_ne_bytes(time.try_into().expect("chunks of 8 bytes"));
+            let rows = i * n..(i + 1) * n;
+            self.0
+                .evaluate(
+                    time,
+                    &mut q[rows.clone()],
+                    &mut v[rows.clone()],
+                    &mut p[rows],
+                )
+                .map_err(|error| failure(SceneError::from(error)))?;
+        }
+        Ok((buffer(py, q), buffer(py, v), buffer(py, p)))
+    }
+
+    /// The span of the steps kept: (first step's start, last step's end).
+    fn span(&self) -> Option<(f64, f64)> {
+        self.0.span()
+    }
+
+    /// The number of coordinates.
+    fn dimension(&self) -> usize {
+        self.0.dimension()
+    }
+}
+
+/// Run a scene as `svi run` does, with these overrides; returns the JSON summary, with
+/// `trajectory` the trajectory's column names and numbers (every step, or the output times),
+/// and with `dense` every step's polynomial. `model` (a text model from `svi.Lagrangian`)
+/// replaces `scene`. `progress` allows `svi run`'s progress bar on stderr (long fixed-step
+/// runs, on a terminal).
 #[pyfunction]
 #[pyo3(signature = (
-    scene, *, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
+    scene, *, model=None, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
     initial=None, diagnostics=None, output_times=None, adapt=None, monitor=None, tol=None,
-    recovery=None, divergence_limit=None, max_steps=None, form=None, trajectory=true, every=None, progress=false
+    recovery=None, divergence_limit=None, max_steps=None, form=None, trajectory=true, every=None,
+    progress=false, dense=false
 ))]
 #[allow(clippy::too_many_arguments)]
-fn run(
-    py: Python<'_>,
+fn run<'py>(
+    py: Python<'py>,
     scene: &str,
+    model: Option<TextModel>,
     method: Option<&str>,
     points: Option<usize>,
     quadrature: Option<usize>,
@@ -235,7 +315,8 @@ fn run(
     trajectory: bool,
     every: Option<usize>,
     progress: bool,
-) -> PyResult<(String, Option<Trajectory>)> {
+    dense: bool,
+) -> PyResult<(String, Option<Trajectory<'py>>, Option<Dense>)> {
     let overrides = overrides(
         method,
         points,
@@ -253,27 +334,34 @@ fn run(
         max_steps,
         form,
     )?;
-    let mut loaded = load(scene)?;
-    loaded.apply(&overrides).map_err(failure)?;
+    let mut loaded = match model {
+        Some((lagrangian, coordinates, forces, symmetries, parameters)) => {
+            Scene::of_text_model(lagrangian, coordinates, forces, symmetries, parameters)
+        }
+        None => load(scene)?,
+    };
+    // The initial state first: a text model has no default one, and `apply` checks the scene.
     if let Some(initial) = initial {
         set_initial(&mut loaded, initial)?;
     }
+    loaded.apply(&overrides).map_err(failure)?;
     // The trajectory is the rows the run path writes, kept in memory: no file is written.
     loaded.output.trajectory = None;
     loaded.output.plot = None;
     loaded.output.record = trajectory;
     loaded.output.every = every;
+    loaded.output.dense = dense;
     loaded.check().map_err(failure)?;
     let result = py.detach(|| loaded.run(progress));
     let mut summary = result.map_err(failure)?;
     let rows = summary
         .recorded
         .take()
-        .map(|recorded| (recorded.columns, recorded.rows));
+        .map(|recorded| (recorded.columns, buffer(py, &recorded.values)));
+    let dense = summary.dense.take().map(Dense);
     summary.trajectory = None;
-    let json =
-        serde_json::to_string(&summary).map_err(|error| invalid("summary", error.to_string()))?;
-    Ok((json, rows))
+    let json = schema::to_json(&summary).map_err(|error| invalid("summary", error.to_string()))?;
+    Ok((json, rows, dense))
 }
 
 /// The scene `name`: a built-in scene or an existing scene file (as `svi run` loads it), else
@@ -508,6 +596,7 @@ fn version() -> &'static str {
 fn _svi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Failure", m.py().get_type::<Failure>())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_class::<Dense>()?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     m.add_function(wrap_pyfunction!(models, m)?)?;
     m.add_function(wrap_pyfunction!(scenes, m)?)?;

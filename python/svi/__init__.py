@@ -1,10 +1,14 @@
 """svi — structure-preserving simulation of mechanical systems, from Python.
 
-The numbers come from the Rust core through the command line's own run path: ``svi.run("kepler")``
-gives exactly the numbers of ``svi run kepler --json``, and ``svi.ensemble(...)`` exactly the table
-of ``svi ensemble ... --out``.
+The numbers come from the Rust core through the experiments library behind the command line, in
+memory: ``svi.run("kepler")`` gives exactly the numbers of ``svi run kepler --json``, and
+``svi.ensemble(...)`` exactly the table of ``svi ensemble ... --out``. A model of your own is a
+:class:`Lagrangian` written as an expression, solved by :func:`solve`:
 
 >>> import svi
+>>> pendulum = svi.Lagrangian("0.5*vth^2 + cos(th)", q=["th"])
+>>> sol = svi.solve(pendulum, (0.0, 10.0), q0=[1.0], v0=[0.0], method="svi:7/6", h=0.1)
+>>> sol(2.5)                # q(2.5), read off the step's own polynomial
 >>> result = svi.run("kepler", method="svi:7/6", t_end=20.0, params={"e": 0.6})
 >>> result.q[-1]            # the final configuration, a NumPy array
 >>> result.energy_error_max # any field of the JSON summary, as an attribute
@@ -36,6 +40,7 @@ __all__ = [
     "HealthError",
     "InvalidInputError",
     "InvalidParameterError",
+    "Lagrangian",
     "LegendreMapError",
     "NonConvergenceError",
     "NonFiniteError",
@@ -43,6 +48,7 @@ __all__ = [
     "Array",
     "Result",
     "SingularMatrixError",
+    "Solution",
     "StepSizeTooSmallError",
     "TooManyStepsError",
     "SviError",
@@ -52,6 +58,7 @@ __all__ = [
     "models",
     "run",
     "scenes",
+    "solve",
     "stability",
 ]
 
@@ -301,7 +308,7 @@ class Result:
             ``qw``, ..., ``omega_1``, ...).
     """
 
-    def __init__(self, summary: Dict[str, Any], trajectory: Optional[Tuple[List[str], List[List[float]]]]) -> None:
+    def __init__(self, summary: Dict[str, Any], trajectory: Optional[Tuple[List[str], bytes]]) -> None:
         self.summary: Dict[str, Any] = summary
         self.trajectory: Dict[str, np.ndarray] = {}
         self.t: Optional[np.ndarray] = None
@@ -314,8 +321,9 @@ class Result:
             self.v: Optional[np.ndarray] = None
             self.p: Optional[np.ndarray] = None
         if trajectory is not None:
-            columns, rows = trajectory
-            data = _exact(np.array(rows, dtype=float).reshape(len(rows), len(columns)))
+            columns, values = trajectory
+            # One buffer of f64 row by row, as the run recorded it (read-only: a view of it).
+            data = _exact(np.frombuffer(values, dtype=float).reshape(-1, len(columns)))
             self.trajectory = {name: data[:, i] for i, name in enumerate(columns)}
             self.t = self.trajectory.get("t")
             self.energy = self.trajectory.get("energy")
@@ -402,7 +410,7 @@ def run(
             _text("initial", name): _reals(f"initial[{name!r}]", [value] if _is_number(value) else value)
             for name, value in _mapping("initial", initial).items()
         }
-    summary, rows = _call(
+    summary, rows, _ = _call(
         _svi.run,
         _text("scene", scene),
         params=_parameters(params),
@@ -755,3 +763,7 @@ def bench(
     columns = list(records[0]) if records else []
     table = {name: _column([record[name] for record in records]) for name in columns}
     return _frame(table, columns, as_frame)
+
+
+# Models and solutions (after the helpers above, which they use).
+from ._solve import Lagrangian, Solution, solve  # noqa: E402

@@ -5,9 +5,22 @@ from typing import Dict, List, Optional, Sequence, Tuple
 class Failure(Exception):
     """A failed call; its one argument is the JSON text of the failure object."""
 
+class Dense:
+    """Every step's polynomial of a run (``svi.Solution``'s dense output)."""
+
+    def evaluate(self, times: bytes) -> Tuple[bytes, bytes, bytes]:
+        """(q, v, p) at ``times`` (f64 buffers), each len(times) × dimension f64 row by row."""
+    def span(self) -> Optional[Tuple[float, float]]:
+        """(first step's start, last step's end)."""
+    def dimension(self) -> int:
+        """The number of coordinates."""
+
 def run(
     scene: str,
     *,
+    model: Optional[
+        Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Dict[str, float]]
+    ] = None,
     method: Optional[str] = None,
     points: Optional[int] = None,
     quadrature: Optional[int] = None,
@@ -25,8 +38,11 @@ def run(
     trajectory: bool = True,
     every: Optional[int] = None,
     progress: bool = False,
-) -> Tuple[str, Optional[Tuple[List[str], List[List[float]]]]]:
-    """Run a scene as ``svi run`` does: the JSON summary and the trajectory's columns and rows."""
+    dense: bool = False,
+) -> Tuple[str, Optional[Tuple[List[str], bytes]], Optional[Dense]]:
+    """Run a scene (or ``model``, a text model) as ``svi run`` does: the JSON summary, the
+    trajectory's columns and numbers (f64, row by row), and with ``dense`` every step's
+    polynomial."""
 
 def ensemble(
     scene: str,

@@ -110,7 +110,7 @@ pub trait Space: Copy + Debug + PartialEq + Default + 'static {
 
     /// The point's (q, q̇, p) as slices on a vector space; `None` on spaces whose points are
     /// not vectors (SO(3)). Dense output of a whole solve ([`crate::stepping::dense`]) needs them.
-    fn coordinates(point: &Self::Point) -> Option<(&[f64], &[f64], &[f64])> {
+    fn point_vectors(point: &Self::Point) -> Option<(&[f64], &[f64], &[f64])> {
         let _ = point;
         None
     }
@@ -166,7 +166,7 @@ where
         format!("q = {:?}, v = {:?}", point.q.as_slice(), point.v.as_slice())
     }
 
-    fn coordinates(point: &PhasePoint<N>) -> Option<(&[f64], &[f64], &[f64])> {
+    fn point_vectors(point: &PhasePoint<N>) -> Option<(&[f64], &[f64], &[f64])> {
         Some((point.q.as_slice(), point.v.as_slice(), point.p.as_slice()))
     }
 

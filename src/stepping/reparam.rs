@@ -67,7 +67,6 @@ where
             },
             statistics,
             stopped: false,
-            dense: None,
         }),
     }
 }

@@ -562,7 +562,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             let first = self
                 .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
                 .map_err(RunFailure::rejected)?;
-            let Some((q, ..)) = S::coordinates(&first) else {
+            let Some((q, ..)) = S::point_vectors(&first) else {
                 return Err(RunFailure::rejected(Error::invalid(
                     "dense",
                     "dense output is kept on ℝᴺ only: ask for output times",
@@ -678,7 +678,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     })?
                 }
             };
-            let (Some((q, v, p)), true) = (S::coordinates(&point), method.point_is_finite(&point))
+            let (Some((q, v, p)), true) =
+                (S::point_vectors(&point), method.point_is_finite(&point))
             else {
                 return Err(Error::NonFinite {
                     what: format!("dense output point at t = {time:?}"),

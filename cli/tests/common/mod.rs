@@ -11,10 +11,39 @@ use serde_json::Value;
 
 /// Run `svi` with `args`.
 pub fn svi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_svi"))
+    let output = Command::new(env!("CARGO_BIN_EXE_svi"))
         .args(args)
         .output()
-        .expect("the svi binary runs")
+        .expect("the svi binary runs");
+    keep_json(args, &output);
+    output
+}
+
+/// With `SVI_JSON_OUTPUTS` set to a directory, keep the standard output of every command with
+/// `--json` there, one file per command (its arguments and its output), for
+/// `python/tests/test_schema.py` to validate against `docs/schema/result.schema.json`: every
+/// `--json` output of the tests, success and failure, every kind of scene.
+fn keep_json(args: &[&str], output: &Output) {
+    static KEPT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let Some(dir) = std::env::var_os("SVI_JSON_OUTPUTS") else {
+        return;
+    };
+    if !args.contains(&"--json") {
+        return;
+    }
+    let index = KEPT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let record = serde_json::json!({
+        "args": args,
+        "status": output.status.code(),
+        "stdout": String::from_utf8_lossy(&output.stdout),
+    });
+    let dir = PathBuf::from(dir);
+    let path = dir.join(format!("{}-{index}.json", std::process::id()));
+    std::fs::create_dir_all(&dir)
+        .and_then(|()| std::fs::write(&path, record.to_string()))
+        .unwrap_or_else(|error| {
+            panic!("cannot keep a --json output in {}: {error}", path.display())
+        });
 }
 
 /// Run `svi` with `args` and no input; kill it if it runs longer than `limit` (an error
@@ -78,11 +107,13 @@ pub fn svi_within_in(
         std::thread::sleep(pause);
         pause = (pause * 2).min(Duration::from_millis(20));
     };
-    Ok(Output {
+    let output = Output {
         status,
         stdout: stdout.join().unwrap_or_default(),
         stderr: stderr.join().unwrap_or_default(),
-    })
+    };
+    keep_json(args, &output);
+    Ok(output)
 }
 
 /// The time any single command of the tests may take before it counts as a hang: far

@@ -46,13 +46,21 @@ enum Sink {
     Memory(Recorded),
 }
 
-/// A trajectory kept in memory: its column names and rows.
+/// A trajectory kept in memory: its column names and its numbers, row by row in one buffer
+/// (the Python package hands them to NumPy as they are).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Recorded {
     /// The column names.
     pub columns: Vec<String>,
+    /// The numbers, row after row, one per column.
+    pub values: Vec<f64>,
+}
+
+impl Recorded {
     /// The rows, each with one number per column.
-    pub rows: Vec<Vec<f64>>,
+    pub fn rows(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.values.chunks_exact(self.columns.len().max(1))
+    }
 }
 
 impl CsvStream {
@@ -73,7 +81,7 @@ impl CsvStream {
         let columns = header.trim_end().split(',').map(String::from).collect();
         CsvStream::new(Sink::Memory(Recorded {
             columns,
-            rows: Vec::new(),
+            values: Vec::new(),
         }))
     }
 
@@ -102,7 +110,7 @@ impl CsvStream {
                 }
                 writeln!(out)?;
             }
-            Sink::Memory(recorded) => recorded.rows.push(self.values.clone()),
+            Sink::Memory(recorded) => recorded.values.extend_from_slice(&self.values),
         }
         self.rows += 1;
         self.last_time = Some(time);

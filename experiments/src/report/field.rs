@@ -1,11 +1,14 @@
 //! The summary of a field run (`svi run` on a field scene), as text or one JSON object.
 //!
-//! The JSON fields are an interface: `model`, `parameters`, `points`, `dx`, `h`, `levels`,
-//! `t_end`, `quadrature`, `explicit`, `energy_initial`, `energy_error_max` (largest
+//! The JSON fields are an interface (`docs/schema/result.schema.json`, kind `field`): `model`,
+//! `parameters`, `method` (`multisymplectic`), `mesh_points`, `dx`, `h`, `steps` (time
+//! levels), `t_end`, `cell_rule`, `explicit`, `energy_initial`, `energy_error_max` (largest
 //! |E^{j+½} − E^{½}| of the discrete energy), `momentum_initial`, `momentum_error_max`,
-//! `multisymplectic_residual_max` (null when not measured), `error_max` (largest
-//! |u − u_exact| over all nodes and levels), `newton_iterations`, `seconds`, `trajectory`,
-//! `status`, `warnings` and, for a failed run, `error`.
+//! `multisymplectic_residual_max` (null when not measured), `solution_error_max` (largest
+//! |u − u_exact| over all nodes and levels), `iterations` (Newton's), `seconds`,
+//! `trajectory`, `status`, `warnings` and, for a failed run, `error`. The names before schema
+//! version 1 (`points`, `levels`, `quadrature`, `error_max`, `newton_iterations`) are printed
+//! too, for one release.
 
 use std::fmt;
 
@@ -13,6 +16,7 @@ use serde::Serialize;
 
 use crate::report::csv::Float;
 use crate::report::health::Warning;
+use crate::report::schema::{Kind, Versioned};
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
 
 /// The result of a field run.
@@ -22,18 +26,20 @@ pub struct FieldSummary {
     pub model: String,
     /// Model parameters in effect.
     pub parameters: Parameters,
+    /// `multisymplectic`.
+    pub method: &'static str,
     /// Nodes in space.
-    pub points: usize,
+    pub mesh_points: usize,
     /// Δx.
     pub dx: f64,
     /// The time step Δt.
     pub h: f64,
-    /// Time levels computed.
-    pub levels: usize,
+    /// Time levels computed (steps).
+    pub steps: usize,
     /// Final time reached, levels · h (the first level at or after the scene's t_end).
     pub t_end: f64,
-    /// `trapezoid` or `midpoint`.
-    pub quadrature: &'static str,
+    /// The rule of the action on a cell: `trapezoid` or `midpoint`.
+    pub cell_rule: &'static str,
     /// Whether the levels were solved explicitly.
     pub explicit: bool,
     /// The discrete energy of the first slab.
@@ -47,9 +53,9 @@ pub struct FieldSummary {
     /// Largest |residual| of the discrete multisymplectic conservation law.
     pub multisymplectic_residual_max: Option<f64>,
     /// Largest |u − u_exact| over all nodes and levels.
-    pub error_max: f64,
+    pub solution_error_max: f64,
     /// Newton iterations over the run (0 when explicit).
-    pub newton_iterations: usize,
+    pub iterations: usize,
     /// Wall time of the integration, in seconds.
     pub seconds: f64,
     /// The field CSV, if one was written.
@@ -72,7 +78,7 @@ impl fmt::Display for FieldSummary {
                 "method",
                 format!(
                     "multisymplectic, {} cells ({})",
-                    self.quadrature,
+                    self.cell_rule,
                     if self.explicit { "explicit" } else { "Newton" }
                 ),
             ),
@@ -80,14 +86,14 @@ impl fmt::Display for FieldSummary {
                 "mesh",
                 format!(
                     "{} points, dx = {}, h = {}",
-                    self.points,
+                    self.mesh_points,
                     Float(self.dx),
                     Float(self.h)
                 ),
             ),
             (
                 "time",
-                format!("0 to {} in {} levels", Float(self.t_end), self.levels),
+                format!("0 to {} in {} levels", Float(self.t_end), self.steps),
             ),
             ("wall time", format!("{:.3} s", self.seconds)),
             (
@@ -110,8 +116,8 @@ impl fmt::Display for FieldSummary {
                 "multisymplectic residual",
                 optional(self.multisymplectic_residual_max),
             ),
-            ("error vs exact", format!("{:.3e}", self.error_max)),
-            ("Newton iterations", self.newton_iterations.to_string()),
+            ("error vs exact", format!("{:.3e}", self.solution_error_max)),
+            ("Newton iterations", self.iterations.to_string()),
         ];
         if let Some(trajectory) = &self.trajectory {
             rows.push((
@@ -127,5 +133,21 @@ impl fmt::Display for FieldSummary {
             writeln!(f, "{:width$}{value}", format!("{label}:"))?;
         }
         Ok(())
+    }
+}
+
+impl Versioned for FieldSummary {
+    fn kind(&self) -> Kind {
+        Kind::Field
+    }
+
+    fn deprecated(&self) -> Vec<(&'static str, serde_json::Value)> {
+        vec![
+            ("points", self.mesh_points.into()),
+            ("levels", self.steps.into()),
+            ("quadrature", self.cell_rule.into()),
+            ("error_max", self.solution_error_max.into()),
+            ("newton_iterations", self.iterations.into()),
+        ]
     }
 }

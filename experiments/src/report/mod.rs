@@ -8,6 +8,7 @@ pub mod map;
 pub mod output;
 pub mod plot;
 pub mod progress;
+pub mod schema;
 pub mod spectral;
 pub mod summary;
 pub mod table;

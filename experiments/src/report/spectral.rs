@@ -1,12 +1,14 @@
 //! The summary of a pseudospectral run (`svi run` on a pseudospectral scene), as text or one
 //! JSON object.
 //!
-//! The JSON fields are an interface: `model`, `parameters`, `method`, `order`, `points`, `dx`,
-//! `h`, `steps`, `t_end`, `norm_initial`, `norm_error_max` (largest |N_l − N_0|/N_0 of the
-//! mass N = Δx Σ|ψ_j|² over all levels), `energy_initial`, `energy_error` (|H_end − H_0|),
-//! `error_max` (largest |ψ − ψ_exact| over all nodes and levels), `error_final` (the same at
-//! the last level), `ffts`, `iterations`, `seconds`, `trajectory`, `status`, `warnings` and,
-//! for a failed run, `error`.
+//! The JSON fields are an interface (`docs/schema/result.schema.json`, kind `pseudospectral`):
+//! `model`, `parameters`, `method`, `order`, `mesh_points`, `dx`, `h`, `steps`, `t_end`,
+//! `norm_initial`, `norm_error_max` (largest |N_l − N_0|/N_0 of the mass N = Δx Σ|ψ_j|² over
+//! all levels), `energy_initial`, `energy_error_final` (|H_end − H_0|), `solution_error_max`
+//! (largest |ψ − ψ_exact| over all nodes and levels), `solution_error_final` (the same at the
+//! last level), `ffts`, `iterations`, `seconds`, `trajectory`, `status`, `warnings` and, for a
+//! failed run, `error`. The names before schema version 1 (`points`, `energy_error`,
+//! `error_max`, `error_final`) are printed too, for one release.
 
 use std::fmt;
 
@@ -14,6 +16,7 @@ use serde::Serialize;
 
 use crate::report::csv::Float;
 use crate::report::health::Warning;
+use crate::report::schema::{Kind, Versioned};
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
 
 /// The result of a pseudospectral run.
@@ -28,7 +31,7 @@ pub struct SpectralSummary {
     /// The order in time.
     pub order: usize,
     /// Fourier modes (= nodes in space).
-    pub points: usize,
+    pub mesh_points: usize,
     /// Δx.
     pub dx: f64,
     /// The time step.
@@ -44,11 +47,11 @@ pub struct SpectralSummary {
     /// The initial semi-discrete energy H.
     pub energy_initial: f64,
     /// |H_end − H_0|.
-    pub energy_error: f64,
+    pub energy_error_final: f64,
     /// Largest |ψ − ψ_exact| over all nodes and levels.
-    pub error_max: f64,
+    pub solution_error_max: f64,
     /// Largest |ψ − ψ_exact| at the last level.
-    pub error_final: f64,
+    pub solution_error_final: f64,
     /// FFTs over the run.
     pub ffts: usize,
     /// Iterations of the stage equations (0 for Strang).
@@ -81,7 +84,7 @@ impl fmt::Display for SpectralSummary {
                 "grid",
                 format!(
                     "{} Fourier modes, dx = {}, h = {}",
-                    self.points,
+                    self.mesh_points,
                     Float(self.dx),
                     Float(self.h)
                 ),
@@ -104,14 +107,14 @@ impl fmt::Display for SpectralSummary {
                 format!(
                     "{} (error at the end {:.3e})",
                     Float(self.energy_initial),
-                    self.energy_error
+                    self.energy_error_final
                 ),
             ),
             (
                 "error vs exact",
                 format!(
                     "{:.3e} (at the end {:.3e})",
-                    self.error_max, self.error_final
+                    self.solution_error_max, self.solution_error_final
                 ),
             ),
             ("FFTs", self.ffts.to_string()),
@@ -131,5 +134,20 @@ impl fmt::Display for SpectralSummary {
             writeln!(f, "{:width$}{value}", format!("{label}:"))?;
         }
         Ok(())
+    }
+}
+
+impl Versioned for SpectralSummary {
+    fn kind(&self) -> Kind {
+        Kind::Pseudospectral
+    }
+
+    fn deprecated(&self) -> Vec<(&'static str, serde_json::Value)> {
+        vec![
+            ("points", self.mesh_points.into()),
+            ("energy_error", self.energy_error_final.into()),
+            ("error_max", self.solution_error_max.into()),
+            ("error_final", self.solution_error_final.into()),
+        ]
     }
 }

@@ -14,6 +14,7 @@ use serde::Serialize;
 
 use crate::report::csv::{Float, Recorded, brief_vector as vector};
 use crate::report::health::Warning;
+use crate::report::schema::{Kind, Versioned};
 
 /// The result of running a scene (`svi run --json` prints it as one JSON object).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -58,6 +59,8 @@ pub struct Summary {
     pub energy_final: f64,
     /// Largest |E − E₀| over the step points (`None` if not asked for).
     pub energy_error_max: Option<f64>,
+    /// |energy_final − energy_initial|.
+    pub energy_error_final: f64,
     /// The energy's scale, max(|E₀|, ½|p₀·q̇₀|, ½|p·q̇|) at the two ends (Π·Ω on SO(3)):
     /// the health check warns when the energy error exceeds 1 % of it.
     pub energy_scale: f64,
@@ -94,6 +97,9 @@ pub struct Summary {
     /// Python package) instead of a file; never printed.
     #[serde(skip)]
     pub recorded: Option<Recorded>,
+    /// Every step's polynomial, with [`crate::OutputSection::dense`] (never serialised).
+    #[serde(skip)]
+    pub dense: Option<svi::stepping::dense::DenseOutput>,
 }
 
 /// Whether a run ended well.
@@ -636,6 +642,15 @@ impl fmt::Display for Summary {
             )?;
         }
         Ok(())
+    }
+}
+
+impl Versioned for Summary {
+    fn kind(&self) -> Kind {
+        match self.state {
+            StateSummary::Vector { .. } => Kind::Ode,
+            StateSummary::Rigid { .. } => Kind::LieGroup,
+        }
     }
 }
 

@@ -238,17 +238,18 @@ impl FieldModelVisitor for FieldRun<'_> {
                 "multisymplectic_residual_max",
                 run.multisymplectic_residual_max,
             ),
-            ("error_max", Some(error_max)),
+            ("solution_error_max", Some(error_max)),
         ]));
         Ok(FieldSummary {
             model: model.name().into(),
             parameters: Parameters(model.parameters()),
-            points,
+            method: "multisymplectic",
+            mesh_points: points,
             dx,
             h,
-            levels,
+            steps: levels,
             t_end: levels as f64 * h,
-            quadrature: match options.quadrature {
+            cell_rule: match options.quadrature {
                 CellQuadrature::Trapezoid => "trapezoid",
                 CellQuadrature::Midpoint => "midpoint",
             },
@@ -258,8 +259,8 @@ impl FieldModelVisitor for FieldRun<'_> {
             momentum_initial: run.momentum[0],
             momentum_error_max,
             multisymplectic_residual_max: run.multisymplectic_residual_max,
-            error_max,
-            newton_iterations: run.newton_iterations,
+            solution_error_max: error_max,
+            iterations: run.newton_iterations,
             seconds,
             trajectory,
             status: Status::Ok,

@@ -51,6 +51,7 @@ use crate::report::health::{self, Measured};
 use crate::report::output;
 use crate::report::plot::plot_csv;
 use crate::report::progress::Progress;
+use crate::report::schema::{self, Kind, SCHEMA_VERSION, Versioned};
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
     TrajectoryOutput,
@@ -82,7 +83,7 @@ pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> a
 }
 
 /// The summary of a run of any kind of scene, as [`print_outcome`] prints it.
-pub trait RunSummary: serde::Serialize + std::fmt::Display + Sized {
+pub trait RunSummary: Versioned + std::fmt::Display + Sized {
     /// The health checks the run failed.
     fn warnings(&self) -> &[Warning];
     /// Mark the run failed with `report` (a failed health check under `--strict`).
@@ -108,9 +109,15 @@ impl RunSummary for Summary {
 }
 
 /// The one JSON object of a command that failed before it ran anything (bad input, also
-/// arguments the parser rejects): `{"status": "failed", "error": {kind, message, step, t}}`.
+/// arguments the parser rejects): `{"schema_version": 1, "kind": "failure", "status": "failed",
+/// "error": {kind, message, step, t}}`.
 pub fn failure_object(report: &ErrorReport) -> serde_json::Value {
-    serde_json::json!({ "status": Status::Failed, "error": report })
+    serde_json::json!({
+        "schema_version": SCHEMA_VERSION,
+        "kind": Kind::Failure,
+        "status": Status::Failed,
+        "error": report,
+    })
 }
 
 /// Print the outcome of a run (`ran`: whether it started, after the scene was loaded and
@@ -148,9 +155,7 @@ pub fn print_outcome<S: RunSummary>(
         output::warn(format_args!("warning: {}", warning.message));
     }
     let printed = match (&summary, json) {
-        (Some(summary), true) => {
-            output::print(format_args!("{}\n", serde_json::to_string(summary)?))
-        }
+        (Some(summary), true) => output::print(format_args!("{}\n", schema::to_json(summary)?)),
         (Some(summary), false) if error.is_none() => output::print(summary),
         (None, true) => {
             let report = error.as_ref().map(error_report);
@@ -543,6 +548,7 @@ fn solve_options(scene: &Scene, h: f64) -> Result<SolveOptions, SceneError> {
         options.max_steps = steps;
     }
     options.run = run.options()?;
+    options.dense = scene.output.dense;
     Ok(options)
 }
 
@@ -552,6 +558,8 @@ struct Outcome<P> {
     statistics: Statistics,
     /// The adaptivity and the states at the output times (a run that reached the end).
     solved: Option<(svi::solve::Adaptivity, Vec<P>)>,
+    /// The steps' polynomials, when the scene keeps them (a run that reached the end).
+    dense: Option<svi::stepping::dense::DenseOutput>,
 }
 
 /// The one run path: run `integrator` on the scene of `plan` through
@@ -606,6 +614,7 @@ fn run_scene<L, S: RunSpace<L>>(
                 last: solution.last,
                 statistics: solution.statistics,
                 solved: Some((solution.adaptivity, solution.points)),
+                dense: solution.dense,
             },
             None,
         ),
@@ -617,6 +626,7 @@ fn run_scene<L, S: RunSpace<L>>(
                 last: run.last,
                 statistics: run.statistics,
                 solved: None,
+                dense: None,
             },
             Some(error),
         ),
@@ -702,6 +712,7 @@ fn run_scene<L, S: RunSpace<L>>(
         energy_initial,
         energy_final,
         energy_error_max,
+        energy_error_final: (energy_final - energy_initial).abs(),
         energy_scale,
         conservation,
         iterations: outcome.statistics.iterations,
@@ -715,6 +726,7 @@ fn run_scene<L, S: RunSpace<L>>(
         warnings,
         error: None,
         recorded,
+        dense: outcome.dense,
     };
     match failure {
         None => Ok(summary),

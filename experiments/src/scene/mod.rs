@@ -194,6 +194,28 @@ impl Scene {
         Ok(scene)
     }
 
+    /// The scene of a Lagrangian written as text with its `coordinates`, `forces`,
+    /// `symmetries` and `parameters`, every other field absent (the Python package's
+    /// `svi.Lagrangian`): not yet checked — a text model has no default initial state, step
+    /// or horizon, which the caller sets before [`Scene::check`].
+    pub fn of_text_model(
+        lagrangian: String,
+        coordinates: Vec<String>,
+        forces: Option<Vec<String>>,
+        symmetries: Option<Vec<Vec<String>>>,
+        parameters: BTreeMap<String, f64>,
+    ) -> Scene {
+        let empty: Scene = toml::from_str("").expect("every field of a scene has a default");
+        Scene {
+            lagrangian: Some(lagrangian),
+            coordinates: Some(coordinates),
+            forces,
+            symmetries,
+            parameters,
+            ..empty
+        }
+    }
+
     /// A built-in scene by name.
     pub fn builtin(name: &str) -> Option<Result<Scene, SceneError>> {
         builtin_scene(name).map(|text| Scene::from_toml(text, &format!("built-in scene '{name}'")))

@@ -310,4 +310,9 @@ pub struct OutputSection {
     /// `output_times` apply as to a file. Not a scene field.
     #[serde(skip)]
     pub record: bool,
+    /// Keep every step's polynomial (the summary's `dense`,
+    /// [`svi::solve::SolveOptions::dense`]) so that the solution can be evaluated at any
+    /// time afterwards: the Python package's `Solution(t)`. Not a scene field.
+    #[serde(skip)]
+    pub dense: bool,
 }
