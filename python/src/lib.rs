@@ -204,15 +204,14 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
 }
 
 /// The numbers of `values` as bytes in the machine's order, for NumPy's `frombuffer`: arrays
-/// cross into Python as one buffer each, not as lists of Python floats.
+/// cross into Python as one buffer each (one copy), not as lists of Python floats.
 fn buffer<'py>(py: Python<'py>, values: &[f64]) -> Bound<'py, PyBytes> {
-    PyBytes::new_with(py, std::mem::size_of_val(values), |bytes| {
-        for (chunk, x) in bytes.chunks_exact_mut(8).zip(values) {
-            chunk.copy_from_slice(&x.to_ne_bytes());
-        }
-        Ok(())
-    })
-    .expect("filling a new bytes object cannot fail")
+    // SAFETY: any initialised f64 is 8 initialised bytes, u8 has alignment 1, and the slice
+    // covers exactly the memory of `values`, which outlives this borrow.
+    let bytes = unsafe {
+        std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), std::mem::size_of_val(values))
+    };
+    PyBytes::new(py, bytes)
 }
 
 /// A trajectory: its column names and its numbers row by row (a buffer of f64).

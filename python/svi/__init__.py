@@ -7,7 +7,7 @@ memory: ``svi.run("kepler")`` gives exactly the numbers of ``svi run kepler --js
 
 >>> import svi
 >>> pendulum = svi.Lagrangian("0.5*vth^2 + cos(th)", q=["th"])
->>> sol = svi.solve(pendulum, (0.0, 10.0), q0=[1.0], v0=[0.0], method="svi:7/6", h=0.1)
+>>> sol = svi.solve(pendulum, (0.0, 10.0), q0=[1.0], v0=[0.0], method="svi:7/6", h=0.1, dense=True)
 >>> sol(2.5)                # q(2.5), read off the step's own polynomial
 >>> result = svi.run("kepler", method="svi:7/6", t_end=20.0, params={"e": 0.6})
 >>> result.q[-1]            # the final configuration, a NumPy array
@@ -332,7 +332,8 @@ class Result:
             for field in ("q", "v", "p"):
                 indices = [i for i, name in enumerate(columns) if name.startswith(field + "_")]
                 if indices and not chain:
-                    setattr(self, field, data[:, indices])
+                    # The columns of q (v, p) are adjacent: a view of the run's buffer.
+                    setattr(self, field, data[:, indices[0] : indices[-1] + 1])
 
     def __getattr__(self, name: str) -> Any:
         columns = self.__dict__.get("_chain_columns")

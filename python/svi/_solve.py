@@ -124,7 +124,10 @@ class Solution(Result):
 
     def __call__(self, t: Any, what: str = "q") -> np.ndarray:
         if self._dense is None:
-            raise AttributeError("this solution kept no step polynomials (solve(..., dense=False))")
+            raise AttributeError(
+                "this solution kept no step polynomials: solve(..., dense=True) keeps them "
+                "(or ask for saveat=[...] times before the run)"
+            )
         if what not in ("q", "v", "p"):
             raise ValueError(f"what is 'q', 'v' or 'p', not {what!r}")
         times = np.asarray(t, dtype=float)
@@ -153,7 +156,7 @@ def solve(
     tol: Optional[float] = None,
     diagnostics: Optional[Sequence[str]] = None,
     params: Optional[Mapping[str, float]] = None,
-    dense: bool = True,
+    dense: bool = False,
     **options: Any,
 ) -> Solution:
     """Solve a model from an initial state over a span of time.
@@ -174,8 +177,10 @@ def solve(
         diagnostics: any of ``"energy"``, ``"momentum"``, ``"solution"`` (default energy and
             momentum), or ``["none"]``.
         params: parameter values replacing the model's.
-        dense: keep every step's polynomial so that ``sol(t)`` works (default); ``False``
-            saves its memory (K points of (q, q̇, p) per step, K the method's points, at least 4).
+        dense: keep every step's polynomial so that ``sol(t)`` works at any time. It costs K
+            evaluations of the step polynomial and the Legendre map per step and their memory
+            (K the method's points, at least 4): SVI 7/6 on Kepler runs about 5 times longer.
+            Off by default; ``saveat`` gives states at times known before the run for free.
         options: the other options of :func:`run` (``points``, ``quadrature``, ``monitor``,
             ``recovery``, ``divergence_limit``, ``max_steps``, ``form``, ``every``).
 

@@ -19,7 +19,7 @@ DOUBLE_PENDULUM = svi.Lagrangian(
 
 def test_the_readme_double_pendulum_conserves_energy_and_evaluates_anywhere(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    sol = svi.solve(DOUBLE_PENDULUM, (0.0, 10.0), q0=[1.0, 0.5], v0=[0.0, 0.0], method="svi:7/6", h=0.01)
+    sol = svi.solve(DOUBLE_PENDULUM, (0.0, 10.0), q0=[1.0, 0.5], v0=[0.0, 0.0], method="svi:7/6", h=0.01, dense=True)
     assert sol.status == "ok" and sol.steps == 1000
     assert sol.t.shape == (1001,) and sol.q.shape == (1001, 2)
     # Symplectic: the energy error stays at the method's accuracy over the run.
@@ -48,7 +48,7 @@ def test_sol_t_is_the_methods_dense_output():
         ("midpoint", {"h": 0.01}, 1e-13),
         ("svi:6", {"adapt": "step", "tol": 1e-9}, 1e-14),
     ]:
-        kept = svi.solve(DOUBLE_PENDULUM, (0.0, 5.0), q0=[1.0, 0.5], v0=[0.0, 0.0], method=method, **options)
+        kept = svi.solve(DOUBLE_PENDULUM, (0.0, 5.0), q0=[1.0, 0.5], v0=[0.0, 0.0], method=method, dense=True, **options)
         served = svi.solve(
             DOUBLE_PENDULUM, (0.0, 5.0), q0=[1.0, 0.5], v0=[0.0, 0.0], method=method, saveat=times, **options
         )
@@ -66,21 +66,21 @@ def test_sol_t_converges_to_the_exact_oscillator_at_the_methods_order():
     times = np.linspace(0.0, 8.0, 2000)
     errors = []
     for h in (0.4, 0.2):
-        sol = svi.solve(oscillator, 8.0, q0=[1.0], v0=[0.0], method="svi:7/6", h=h)
+        sol = svi.solve(oscillator, 8.0, q0=[1.0], v0=[0.0], method="svi:7/6", h=h, dense=True)
         errors.append(np.abs(sol(times)[:, 0] - np.cos(times)).max())
     assert errors[1] < 1e-8
     assert math.log2(errors[0] / errors[1]) > 6.0, errors
 
 
 def test_a_zoo_model_solves_with_its_defaults_and_the_exact_kepler_orbit_is_met():
-    sol = svi.solve("kepler", 20.0, method="svi:9/8", h=0.05, diagnostics=["solution"])
+    sol = svi.solve("kepler", 20.0, method="svi:9/8", h=0.05, diagnostics=["solution"], dense=True)
     assert sol.solution_error_max < 1e-9
     # The step polynomials in between are as accurate as the steps.
     assert np.abs(sol(sol.t) - sol.q).max() < 1e-12
 
 
 def test_scalars_arrays_and_bad_times():
-    sol = svi.solve(DOUBLE_PENDULUM, 1.0, q0=[1.0, 0.5], v0=[0.0, 0.0], h=0.1)
+    sol = svi.solve(DOUBLE_PENDULUM, 1.0, q0=[1.0, 0.5], v0=[0.0, 0.0], h=0.1, dense=True)
     assert sol(0.5).shape == (2,)
     assert sol(np.zeros((3, 4))).shape == (3, 4, 2)
     assert sol.span == (0.0, 1.0)
@@ -89,8 +89,8 @@ def test_scalars_arrays_and_bad_times():
             sol(bad)
     with pytest.raises(ValueError):
         sol(0.5, "x")
-    without = svi.solve(DOUBLE_PENDULUM, 1.0, q0=[1.0, 0.5], v0=[0.0, 0.0], h=0.1, dense=False)
-    with pytest.raises(AttributeError, match="dense=False"):
+    without = svi.solve(DOUBLE_PENDULUM, 1.0, q0=[1.0, 0.5], v0=[0.0, 0.0], h=0.1)
+    with pytest.raises(AttributeError, match="dense=True"):
         without(0.5)
 
 

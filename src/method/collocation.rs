@@ -50,7 +50,7 @@ use crate::nonlinear::{FixedPoint, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use crate::spectral::starting_values::StartingValues;
-use crate::spectral::{MAX_POINTS, check_options};
+use crate::spectral::{Scratch, check_options};
 use nalgebra::allocator::Allocator;
 use nalgebra::{
     DMatrix, DVector, DefaultAllocator, Dim, MatrixView, MatrixViewMut, OMatrix, OVector, U1,
@@ -629,7 +629,7 @@ where
         _h: f64,
         theta: f64,
     ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
-        let mut values = [0.0; MAX_POINTS];
+        let mut values = Scratch::zeros(workspace.start.points());
         let n = state.dimension();
         let (offset, _) = workspace
             .start
@@ -738,6 +738,7 @@ where
 mod tests {
     use super::*;
     use crate::analysis::verify::observed_order;
+    use crate::spectral::MAX_POINTS;
     use crate::test_models::{
         Damped, HenonHeiles, Oscillator, VariableMass, advance,
         assert_tangent_matches_central_differences, distance, factorial, state,

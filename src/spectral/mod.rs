@@ -22,6 +22,55 @@ use crate::error::Error;
 /// spectral method, degree adaptivity and the stability analysis.
 pub const MAX_POINTS: usize = 256;
 
+/// Scratch numbers of one evaluation of a basis (at most [`MAX_POINTS`]): on the stack for the
+/// point counts used in practice (up to [`Scratch::STACK`]), on the heap beyond — so that the
+/// dense output, called K times per step, clears 256 bytes instead of a [`MAX_POINTS`] array.
+pub(crate) struct Scratch {
+    stack: [f64; Scratch::STACK],
+    /// Empty (no allocation) unless more than [`Scratch::STACK`] numbers are asked for.
+    heap: Vec<f64>,
+    len: usize,
+}
+
+impl Scratch {
+    /// The most numbers kept on the stack.
+    pub(crate) const STACK: usize = 32;
+
+    /// `len` zeros.
+    pub(crate) fn zeros(len: usize) -> Self {
+        Scratch {
+            stack: [0.0; Self::STACK],
+            heap: if len > Self::STACK {
+                vec![0.0; len]
+            } else {
+                Vec::new()
+            },
+            len,
+        }
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        if self.len > Self::STACK {
+            &self.heap
+        } else {
+            &self.stack[..self.len]
+        }
+    }
+}
+
+impl std::ops::DerefMut for Scratch {
+    fn deref_mut(&mut self) -> &mut [f64] {
+        if self.len > Self::STACK {
+            &mut self.heap
+        } else {
+            &mut self.stack[..self.len]
+        }
+    }
+}
+
 /// Check a number of CGL points: 2 to [`MAX_POINTS`]. An error names `points`.
 pub fn check_points(points: usize) -> Result<(), Error> {
     if (2..=MAX_POINTS).contains(&points) {
@@ -78,4 +127,29 @@ pub(crate) fn check_options(
         return Err(Error::invalid("max_iterations", "must be at least 1"));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Scratch of every size: zeros, writable, of the length asked for, on the stack up to
+    /// `STACK` and on the heap beyond.
+    #[test]
+    fn scratch_has_the_length_asked_for_on_either_side_of_the_stack_size() {
+        for len in [0, 1, Scratch::STACK, Scratch::STACK + 1, MAX_POINTS] {
+            let mut scratch = Scratch::zeros(len);
+            assert_eq!(scratch.len(), len);
+            assert!(scratch.iter().all(|&x| x == 0.0));
+            scratch
+                .iter_mut()
+                .enumerate()
+                .for_each(|(i, x)| *x = i as f64);
+            assert_eq!(
+                scratch.last().copied(),
+                len.checked_sub(1).map(|i| i as f64)
+            );
+            assert_eq!(scratch.heap.is_empty(), len <= Scratch::STACK);
+        }
+    }
 }

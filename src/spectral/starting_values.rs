@@ -11,6 +11,7 @@
 //! Node values are stored as offsets qᵛ − q_k (ν = 1, …, s; q⁰ − q_k = 0 is implicit).
 
 use crate::dimension::Dimension;
+use crate::spectral::Scratch;
 use crate::spectral::basis::LagrangeBasis;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, U1};
@@ -132,6 +133,11 @@ impl StartingValues {
     }
 
     /// Node offsets of the remembered step, if any.
+    /// The number of points of the basis (the polynomial's degree + 1).
+    pub(crate) fn points(&self) -> usize {
+        self.basis.len()
+    }
+
     pub(crate) fn last_offsets(&self) -> Option<&[f64]> {
         self.previous_step.map(|_| self.previous.as_slice())
     }
@@ -170,8 +176,8 @@ impl StartingValues {
     where
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
-        let mut derivatives = [0.0; crate::spectral::MAX_POINTS];
         let points = self.basis.len();
+        let mut derivatives = Scratch::zeros(points);
         self.basis.values_into(tau, &mut values[..points]);
         self.basis.derivatives_into(tau, &mut derivatives[..points]);
         let dimension = N::from_usize(self.width::<N>());

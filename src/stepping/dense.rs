@@ -72,6 +72,16 @@ impl DenseOutput {
         }
     }
 
+    /// Room for `steps` more steps (their count known ahead: fixed steps).
+    pub(crate) fn reserve(&mut self, steps: usize) {
+        let values = steps.saturating_mul(self.nodes.len() * self.dimension);
+        self.starts.reserve(steps);
+        self.ends.reserve(steps);
+        for buffer in [&mut self.q, &mut self.v, &mut self.p] {
+            buffer.reserve(values);
+        }
+    }
+
     /// The number K of samples per step.
     pub(crate) fn samples(&self) -> usize {
         self.nodes.len()

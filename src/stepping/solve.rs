@@ -568,7 +568,12 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     "dense output is kept on ℝᴺ only: ask for output times",
                 )));
             };
-            outputs.dense = Some(DenseOutput::new(q.len(), samples));
+            let mut dense = DenseOutput::new(q.len(), samples);
+            // Fixed steps: their count is known, the buffers are sized once.
+            if let (Adapt::None, Some(h)) = (options.adapt, options.h) {
+                dense.reserve(grid_steps(span.t0, span.t_end, h).unwrap_or(0));
+            }
+            outputs.dense = Some(dense);
         }
         if outputs.next() == Some(span.t0) {
             let point = self

@@ -83,7 +83,7 @@ use crate::model::term_pattern::check_width;
 use crate::nonlinear::{Jacobian, Newton, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::starting_values::StartingValues;
-use crate::spectral::{MAX_POINTS, check_options};
+use crate::spectral::{MAX_POINTS, Scratch, check_options};
 use constant_mass::ConstantMass;
 use fixed_point::fixed_point_step;
 use nalgebra::allocator::Allocator;
@@ -379,7 +379,7 @@ where
         h: f64,
         theta: f64,
     ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
-        let mut values = [0.0; MAX_POINTS];
+        let mut values = Scratch::zeros(workspace.start.points());
         let tau = 2.0 * theta - 1.0;
         let (offset, rate) = match workspace.constant_mass.as_ref() {
             Some(data) if data.pending => workspace
