@@ -25,7 +25,7 @@ use crate::report::output::{self, OutputFile};
 use crate::report::plot::{Panel, Series, render_svg_grid};
 use crate::report::schema::{self, Kind, Versioned};
 use crate::report::summary::{ErrorReport, Parameters, Status, Summary};
-use crate::run::{error_report, failure_object};
+use crate::run::outcome::{error_report, failure_object};
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 

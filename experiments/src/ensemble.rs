@@ -24,7 +24,7 @@ use crate::report::plot::{Panel, Series, render_svg};
 use crate::report::schema::{self, Kind, Versioned};
 use crate::report::summary::{ErrorReport, Status};
 use crate::report::table::{MemberOutcome, Schema, Table};
-use crate::run::error_report;
+use crate::run::outcome::error_report;
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
@@ -368,7 +368,7 @@ pub fn execute_args(args: &EnsembleArgs) -> anyhow::Result<()> {
         && args.json
         && !error.is::<MembersFailed>()
     {
-        let object = crate::run::failure_object(&report_of(error));
+        let object = crate::run::outcome::failure_object(&report_of(error));
         // Stdout that cannot be written leaves the exit status to tell.
         let _ = output::print(format_args!("{object}\n"));
     }

@@ -7,8 +7,8 @@
 //!   overrides of a scene's options, and every check of a scene's input;
 //! - [`run`]: one run of a scene on any space (ℝᴺ, ℝⁿ chains, SO(3)), and of the field and
 //!   pseudospectral scenes;
-//! - [`ensemble`], [`bench`], [`compare`], [`stability`], [`stress`], [`scale`], [`list`]:
-//!   the experiments built on runs;
+//! - [`ensemble`], [`bench`](mod@bench), [`compare`], [`stability`], [`stress`], [`scale`],
+//!   [`list`]: the experiments built on runs;
 //! - [`report`]: what comes out — the one run summary, trajectory CSV and number format,
 //!   plots, the progress bar.
 

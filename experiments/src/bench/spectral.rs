@@ -20,7 +20,7 @@ use anyhow::Context;
 use svi::field::pseudospectral::TimeScheme;
 use svi_models::{SpectralModelVisitor, SpectralZooModel, UnknownModel, visit_spectral_model};
 
-use crate::bench::{BenchArgs, DEFAULT_MAX_RUN, DEFAULT_METHODS};
+use crate::bench::options::{BenchArgs, DEFAULT_MAX_RUN, DEFAULT_METHODS};
 use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
 use crate::run::spectral::{Prepared, error_against_exact, prepare};

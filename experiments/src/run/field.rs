@@ -22,7 +22,7 @@ use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_space_time;
 use crate::report::progress::Progress;
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
-use crate::run::{RunSummary, print_outcome};
+use crate::run::outcome::{RunSummary, print_outcome};
 use crate::scene::error::SceneError;
 use crate::scene::field::{FieldRunSection, FieldScene, QuadratureName};
 use crate::scene::limits;

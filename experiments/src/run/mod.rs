@@ -17,27 +17,26 @@
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
 
 pub mod field;
+pub(crate) mod outcome;
+mod solver;
 pub mod space;
 pub mod spectral;
+mod trajectory;
+
+pub use outcome::{RunSummary, error_report, failure_object, print_outcome};
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
 use std::io::IsTerminal;
-use std::marker::PhantomData;
-use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
 use svi::Dimension;
 
-use anyhow::Context;
 use svi::lie_group::RigidBodyIntegrator;
 use svi::method::registry::{SpaceKind, VectorMethodVisitor};
-use svi::method::space::Space;
-use svi::method::step::Step;
 use svi::model::local::Terms;
-use svi::model::reparametrized::MonitorSpec;
-use svi::observer::{Every, Observer};
-use svi::solve::{Solution, SolveOptions, Span};
+use svi::observer::Every;
+use svi::solve::{SolveOptions, Span};
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, LagrangianExt, Method, Statistics};
 use svi_models::{
@@ -45,18 +44,16 @@ use svi_models::{
     visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
-use crate::report::csv::{CsvStream, Recorded};
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
-use crate::report::output;
 use crate::report::plot::plot_csv;
 use crate::report::progress::Progress;
-use crate::report::schema::{self, Kind, SCHEMA_VERSION, Versioned};
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
-    TrajectoryOutput,
 };
+use crate::run::solver::{InTau, Solver};
 use crate::run::space::{Chain, RunSpace};
+use crate::run::trajectory::TrajectoryStream;
 use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};
@@ -80,118 +77,6 @@ pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> a
         scene.run(std::io::stderr().is_terminal())
     });
     print_outcome(name, result, ran, json, strict)
-}
-
-/// The summary of a run of any kind of scene, as [`print_outcome`] prints it.
-pub trait RunSummary: Versioned + std::fmt::Display + Sized {
-    /// The health checks the run failed.
-    fn warnings(&self) -> &[Warning];
-    /// Mark the run failed with `report` (a failed health check under `--strict`).
-    fn fail(&mut self, report: ErrorReport);
-    /// The summary of the run up to its last good state that `error` carries, if any.
-    fn partial(error: &SceneError) -> Option<Self>;
-}
-
-impl RunSummary for Summary {
-    fn warnings(&self) -> &[Warning] {
-        &self.warnings
-    }
-    fn fail(&mut self, report: ErrorReport) {
-        self.status = Status::Failed;
-        self.error = Some(report);
-    }
-    fn partial(error: &SceneError) -> Option<Self> {
-        match error {
-            SceneError::RunFailed { partial, .. } => Some((**partial).clone()),
-            _ => None,
-        }
-    }
-}
-
-/// The one JSON object of a command that failed before it ran anything (bad input, also
-/// arguments the parser rejects): `{"schema_version": 1, "kind": "failure", "status": "failed",
-/// "error": {kind, message, step, t}}`.
-pub fn failure_object(report: &ErrorReport) -> serde_json::Value {
-    serde_json::json!({
-        "schema_version": SCHEMA_VERSION,
-        "kind": Kind::Failure,
-        "status": Status::Failed,
-        "error": report,
-    })
-}
-
-/// Print the outcome of a run (`ran`: whether it started, after the scene was loaded and
-/// the flags applied) as text or as one JSON object, the warnings on stderr, and return the
-/// error, if any, for the exit status.
-///
-/// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
-/// run that failed after it started, the summary up to its last good state with
-/// `"status": "failed"` and the `error` (kind, message, step, t); bad input, only `status`
-/// and `error` ([`failure_object`]). With `strict` a failed health check is an error.
-pub fn print_outcome<S: RunSummary>(
-    name: &str,
-    result: Result<S, SceneError>,
-    ran: bool,
-    json: bool,
-    strict: bool,
-) -> anyhow::Result<()> {
-    let (summary, error) = match result {
-        Ok(mut summary) => {
-            let error = (strict && !summary.warnings().is_empty()).then(|| SceneError::Unhealthy {
-                warnings: summary
-                    .warnings()
-                    .iter()
-                    .map(|w| w.message.clone())
-                    .collect(),
-            });
-            if let Some(error) = &error {
-                summary.fail(error_report(error));
-            }
-            (Some(summary), error)
-        }
-        Err(error) => (S::partial(&error), Some(error)),
-    };
-    for warning in summary.iter().flat_map(|summary| summary.warnings()) {
-        output::warn(format_args!("warning: {}", warning.message));
-    }
-    let printed = match (&summary, json) {
-        (Some(summary), true) => output::print(format_args!("{}\n", schema::to_json(summary)?)),
-        (Some(summary), false) if error.is_none() => output::print(summary),
-        (None, true) => {
-            let report = error.as_ref().map(error_report);
-            let object = report.as_ref().map(failure_object);
-            output::print(format_args!("{}\n", object.unwrap_or_default()))
-        }
-        _ => Ok(()),
-    };
-    let error = match (error, printed) {
-        (None, Err(stdout)) => Some(SceneError::from(stdout)),
-        (error, _) => error,
-    };
-    match error {
-        None => Ok(()),
-        Some(error) if ran => Err(error).with_context(|| format!("scene '{name}' failed")),
-        Some(error) => Err(error.into()),
-    }
-}
-
-/// The JSON `error` object of a scene error: the library's kind for its errors, `health`,
-/// `output`, or `invalid_input` for other bad input.
-pub fn error_report(error: &SceneError) -> ErrorReport {
-    let kind = match error {
-        SceneError::Svi(error) | SceneError::RunFailed { source: error, .. } => {
-            return ErrorReport::of(error);
-        }
-        SceneError::Unhealthy { .. } => "health",
-        SceneError::Write { .. } | SceneError::Stdout(_) | SceneError::Plot(_) => "output",
-        _ => "invalid_input",
-    };
-    ErrorReport {
-        kind,
-        message: error.to_string(),
-        step: None,
-        t: None,
-    }
 }
 
 impl Scene {
@@ -375,113 +260,6 @@ where
         } else {
             run_scene(&self.plan, &integrator)
         }
-    }
-}
-
-/// How [`run_scene`] solves: the one loop ([`Integrator::try_solve`]), or fixed steps in
-/// computational time ([`InTau`]). A trait object, so that [`run_scene`] is compiled once
-/// per model and space, not once per method as well.
-trait Solver<L, S: Space> {
-    /// Solve over `span` from `initial`, reporting the accepted steps to `observer`.
-    fn solve(
-        &self,
-        span: &Span,
-        initial: S::Initial,
-        options: &SolveOptions,
-        observer: &mut dyn Observer<L, S::Point>,
-    ) -> Result<Solution<S>, RunFailure<S>>;
-
-    /// The model.
-    fn model(&self) -> &L;
-
-    /// The phase point of `initial` at `t0` (`guess`: the start of an inverse Legendre map).
-    fn first_point(
-        &self,
-        t0: f64,
-        initial: &S::Initial,
-        guess: &S::Velocity,
-    ) -> Result<S::Point, svi::Error>;
-
-    /// The method's name, order and properties.
-    fn info(&self) -> svi::MethodInfo;
-}
-
-impl<L, M: Step<L, S> + Clone, S: Space> Solver<L, S> for Integrator<L, M, S> {
-    fn solve(
-        &self,
-        span: &Span,
-        initial: S::Initial,
-        options: &SolveOptions,
-        mut observer: &mut dyn Observer<L, S::Point>,
-    ) -> Result<Solution<S>, RunFailure<S>> {
-        self.try_solve(span, initial, options, &mut observer)
-    }
-
-    fn model(&self) -> &L {
-        Integrator::model(self)
-    }
-
-    fn first_point(
-        &self,
-        t0: f64,
-        initial: &S::Initial,
-        guess: &S::Velocity,
-    ) -> Result<S::Point, svi::Error> {
-        let first = self.initial_state(t0, initial)?;
-        self.phase_point(t0, &first, guess)
-    }
-
-    fn info(&self) -> svi::MethodInfo {
-        self.method().info()
-    }
-}
-
-/// `adapt = "reparam"`: the integrator on ℝᴺ in computational time τ with its monitor
-/// ([`Integrator::try_solve_reparametrized`]).
-struct InTau<'a, L, M, N: Dimension>
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    integrator: &'a Integrator<L, M, svi::Euclidean<N>>,
-    monitor: MonitorSpec,
-}
-
-impl<L: svi::Lagrangian<N>, M: Method<N> + Clone, N: Dimension> Solver<L, svi::Euclidean<N>>
-    for InTau<'_, L, M, N>
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    fn solve(
-        &self,
-        span: &Span,
-        initial: svi::Initial<N>,
-        options: &SolveOptions,
-        mut observer: &mut dyn Observer<L, svi::PhasePoint<N>>,
-    ) -> Result<Solution<svi::Euclidean<N>>, RunFailure<svi::Euclidean<N>>> {
-        self.integrator.try_solve_reparametrized(
-            &self.monitor,
-            span,
-            initial,
-            options,
-            &mut observer,
-        )
-    }
-
-    fn model(&self) -> &L {
-        self.integrator.model()
-    }
-
-    fn first_point(
-        &self,
-        t0: f64,
-        initial: &svi::Initial<N>,
-        guess: &nalgebra::OVector<f64, N>,
-    ) -> Result<svi::PhasePoint<N>, svi::Error> {
-        Solver::first_point(self.integrator, t0, initial, guess)
-    }
-
-    fn info(&self) -> svi::MethodInfo {
-        Solver::info(self.integrator)
     }
 }
 
@@ -738,91 +516,6 @@ fn run_scene<L, S: RunSpace<L>>(
             }),
             source,
         }),
-    }
-}
-
-/// The trajectory of a run on the space `S`, written as the run goes (to its file, or kept in
-/// memory): an observer of the thinned step points (a write error stops the run and is
-/// reported after it).
-struct TrajectoryStream<S> {
-    path: std::path::PathBuf,
-    stream: CsvStream,
-    error: Option<std::io::Error>,
-    space: PhantomData<S>,
-}
-
-impl<S: Space> TrajectoryStream<S> {
-    /// Create the file at `path` with the header of the space (or, with `path` empty, keep
-    /// the rows in memory).
-    fn create<L>(model: &L, path: &Path, record: bool) -> Result<Self, SceneError>
-    where
-        S: RunSpace<L>,
-    {
-        let header = S::csv_header(model);
-        let stream = if record {
-            CsvStream::in_memory(&header)
-        } else {
-            CsvStream::create("--out (output.trajectory)", path, &header)?
-        };
-        Ok(TrajectoryStream {
-            path: path.into(),
-            stream,
-            error: None,
-            space: PhantomData,
-        })
-    }
-
-    /// Append the row of `point`.
-    fn write<L>(&mut self, model: &L, point: &S::Point) -> Result<(), SceneError>
-    where
-        S: RunSpace<L>,
-    {
-        let result = self
-            .stream
-            .write_row(S::time(point), |row| S::csv_row(model, point, row));
-        result.map_err(|source| self.failed(source))
-    }
-
-    /// The time of the last row written.
-    fn last_time(&self) -> Option<f64> {
-        self.stream.last_time()
-    }
-
-    /// Put the file in place (or report the write error that stopped the run); the rows kept
-    /// in memory.
-    fn finish(self, every: usize) -> Result<(TrajectoryOutput, Option<Recorded>), SceneError> {
-        if let Some(source) = self.error {
-            return Err(SceneError::Write {
-                path: self.path,
-                source,
-            });
-        }
-        let (rows, recorded) = self.stream.finish()?;
-        let path = self.path.display().to_string();
-        Ok((TrajectoryOutput { path, every, rows }, recorded))
-    }
-
-    /// The error of a failed write, as a scene error.
-    fn failed(&self, source: std::io::Error) -> SceneError {
-        SceneError::Write {
-            path: self.path.clone(),
-            source,
-        }
-    }
-}
-
-impl<L, S: RunSpace<L>> Observer<L, S::Point> for TrajectoryStream<S> {
-    fn observe(&mut self, model: &L, _: usize, point: &S::Point) -> ControlFlow<()> {
-        let result = self
-            .stream
-            .write_row(S::time(point), |row| S::csv_row(model, point, row));
-        match result {
-            Ok(()) => ControlFlow::Continue(()),
-            Err(error) => {
-                self.error = Some(error);
-                ControlFlow::Break(())
-            }
-        }
     }
 }
 

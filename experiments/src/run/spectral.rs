@@ -21,7 +21,7 @@ use crate::report::progress::Progress;
 use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Parameters, Status};
 use crate::run::field::{field_stream, finish_field_stream, time_levels};
-use crate::run::{RunSummary, print_outcome};
+use crate::run::outcome::{RunSummary, print_outcome};
 use crate::scene::error::SceneError;
 use crate::scene::limits;
 use crate::scene::overrides::Overrides;

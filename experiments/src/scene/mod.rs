@@ -105,11 +105,13 @@
 //! ```
 
 pub mod builtin;
+mod check;
 pub mod ensemble;
 pub mod error;
 pub mod field;
 pub mod limits;
 pub mod overrides;
+mod resolve;
 pub mod rigid;
 pub mod schema;
 pub mod spectral;
@@ -117,22 +119,16 @@ pub mod vector;
 
 pub use error::SceneError;
 
-use error::methods_with;
-use nalgebra::DefaultAllocator;
-use nalgebra::allocator::Allocator;
-use svi::{Dimension, Dyn};
-
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde::Deserialize;
 use svi::MethodSpec;
-use svi::lie_group::{LieSvi, RigidInitial};
+use svi::lie_group::LieSvi;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
-use svi::model::text::{TextChainModel, TextModel, TextSpec, site_values};
-use svi::{Initial, LagrangianExt};
-use svi_models::{LOCAL_MODEL_NAMES, LocalZooModel, RIGID_MODEL_NAMES, RigidZooModel, ZooModel};
+use svi::model::text::{TextChainModel, TextModel, TextSpec};
+use svi_models::{LOCAL_MODEL_NAMES, RIGID_MODEL_NAMES};
 
 use builtin::builtin_scene;
 use overrides::Overrides;
@@ -294,60 +290,6 @@ impl Scene {
         self.text_spec().is_some_and(|spec| spec.is_indexed())
     }
 
-    /// The model fields: a zoo `model` or a `lagrangian` (parsed, with the initial state,
-    /// step and horizon it has no defaults for), and the fields of a text model only with
-    /// one.
-    fn check_model(&self) -> Result<(), SceneError> {
-        let Some(model) = self.text() else {
-            let text_fields = [
-                (self.coordinates.is_some(), "coordinates"),
-                (self.forces.is_some(), "forces"),
-                (self.symmetries.is_some(), "symmetries"),
-                (self.boundary.is_some(), "boundary"),
-            ];
-            if let Some((_, option)) = text_fields.into_iter().find(|(given, _)| *given) {
-                return Err(SceneError::NotApplicable {
-                    option,
-                    reason: "belongs to a Lagrangian written as text (lagrangian = \"...\")".into(),
-                });
-            }
-            if self.model.is_empty() {
-                return Err(SceneError::NoModel);
-            }
-            return Ok(());
-        };
-        if !self.model.is_empty() {
-            return Err(SceneError::ModelAndLagrangian {
-                model: self.model.clone(),
-            });
-        }
-        model?;
-        if self.boundary.is_some() && !self.is_text_chain() {
-            return Err(SceneError::NotApplicable {
-                option: "boundary",
-                reason: "belongs to a chain of indexed coordinates (coordinates = [\"q[1..n]\"])"
-                    .into(),
-            });
-        }
-        let initial = &self.initial;
-        let needed = [
-            (initial.q.is_none(), "initial.q"),
-            (
-                initial.v.is_none() && initial.p.is_none(),
-                "initial.v (or initial.p)",
-            ),
-            (
-                self.run.h.is_none() && self.run.adapt != Some(AdaptMode::Step),
-                "run.h",
-            ),
-            (self.run.t_end.is_none(), "run.t_end"),
-        ];
-        if let Some((_, field)) = needed.into_iter().find(|(missing, _)| *missing) {
-            return Err(SceneError::TextModelNeeds { field });
-        }
-        Ok(())
-    }
-
     /// The space the scene's model lives on: SO(3) for a rigid-body model, else ℝᴺ (an
     /// unknown model name is reported when the scene runs).
     pub fn space(&self) -> SpaceKind {
@@ -376,248 +318,6 @@ impl Scene {
         match self.lagrangian {
             None => LOCAL_MODEL_NAMES.contains(&self.model.as_str()),
             Some(_) => self.is_text_chain(),
-        }
-    }
-
-    /// The options a runtime-dimension scene cannot use: degree adaptivity, and the
-    /// diagnostics it has nothing for (momentum, solution). Its method is any of ℝᴺ (one
-    /// that would hold a dense n × n matrix refuses a chain too large for it as the run
-    /// starts, naming itself and the size).
-    fn check_local(&self, spec: MethodSpec) -> Result<(), SceneError> {
-        spec.vector_method()?;
-        for (diagnostic, option, what) in [
-            (
-                Diagnostic::Momentum,
-                "--diagnostics momentum (output.diagnostics)",
-                "declares no symmetry, hence no Noether momentum to measure",
-            ),
-            (
-                Diagnostic::Solution,
-                "--diagnostics solution (output.diagnostics)",
-                "has no exact solution to measure against",
-            ),
-        ] {
-            if self.wants_explicitly(diagnostic) {
-                return Err(self.not_measurable(option, what));
-            }
-        }
-        Ok(())
-    }
-
-    /// Consistency checks that need no model: a method for the scene's space with valid
-    /// options, initial-state fields of that space (one of each exclusive pair), valid run
-    /// options, and no option the scene cannot use (see [`SceneError::NotApplicable`]).
-    pub fn check(&self) -> Result<(), SceneError> {
-        self.check_model()?;
-        let spec = self.method_spec()?;
-        let initial = &self.initial;
-        match self.space() {
-            SpaceKind::Vector => {
-                let rigid = [
-                    (initial.rotation.is_some(), "initial.rotation"),
-                    (initial.quaternion.is_some(), "initial.quaternion"),
-                    (initial.omega.is_some(), "initial.omega"),
-                    (initial.momentum.is_some(), "initial.momentum"),
-                    (self.method.form.is_some(), "--form (method.form)"),
-                ];
-                if let Some((_, option)) = rigid.into_iter().find(|(given, _)| *given) {
-                    return Err(SceneError::NotApplicable {
-                        option,
-                        reason: format!(
-                            "applies to rigid-body scenes only (see svi list); '{}' is a model \
-                             on ℝᴺ",
-                            self.model_name()
-                        ),
-                    });
-                }
-                if initial.v.is_some() && initial.p.is_some() {
-                    return Err(SceneError::VelocityAndMomentum);
-                }
-                if self.is_local() {
-                    self.check_local(spec)?;
-                }
-            }
-            SpaceKind::Rotation => {
-                let vector = [
-                    (initial.q.is_some(), "initial.q"),
-                    (initial.v.is_some(), "initial.v"),
-                    (initial.p.is_some(), "initial.p"),
-                ];
-                if let Some((_, option)) = vector.into_iter().find(|(given, _)| *given) {
-                    return Err(SceneError::NotApplicable {
-                        option,
-                        reason: format!(
-                            "applies to scenes on ℝᴺ; the rigid body '{}' takes rotation or \
-                             quaternion, and omega or momentum",
-                            self.model
-                        ),
-                    });
-                }
-                rigid::check_initial(initial)?;
-                rigid::method(spec, self.method.form)?;
-                if self.wants_explicitly(Diagnostic::Solution) {
-                    return Err(SceneError::NotApplicable {
-                        option: "--diagnostics solution (output.diagnostics)",
-                        reason: format!(
-                            "the rigid body '{}' has no exact solution to measure against",
-                            self.model
-                        ),
-                    });
-                }
-            }
-        }
-        self.check_run(spec)?;
-        self.check_output()
-    }
-
-    /// `[run]`: valid run options; `tol`, `min_points` and `max_points` only with the modes
-    /// that use them; degree adaptivity only for a method with points; recovery only at fixed
-    /// steps.
-    fn check_run(&self, spec: MethodSpec) -> Result<(), SceneError> {
-        let run = &self.run;
-        run.options()?;
-        if let Some(steps) = run.max_steps {
-            limits::count(
-                "--max-steps (run.max_steps)",
-                steps,
-                1,
-                svi::stepping::grid::MAX_STEPS,
-                "steps",
-            )?;
-        }
-        let adapt = run.adapt.unwrap_or_default();
-        let not_applicable =
-            |option, reason: String| Err(SceneError::NotApplicable { option, reason });
-        if matches!(adapt, AdaptMode::None | AdaptMode::Reparam | AdaptMode::Sem)
-            && run.tol.is_some()
-        {
-            return not_applicable(
-                "--tol (run.tol)",
-                format!(
-                    "sets the tolerance of --adapt step and --adapt degree; this run has {} \
-                     (adapt {}{})",
-                    if adapt == AdaptMode::Sem {
-                        "steps fixed by energy conservation"
-                    } else {
-                        "fixed steps"
-                    },
-                    adapt.name(),
-                    match adapt {
-                        AdaptMode::Reparam => ": choose --h, the step in τ",
-                        AdaptMode::Sem => ": --h is the first step",
-                        _ => "",
-                    }
-                ),
-            );
-        }
-        if adapt == AdaptMode::Sem
-            && (self.space() != SpaceKind::Vector || self.is_local() || spec.name() != "svi")
-        {
-            return not_applicable(
-                "--adapt sem (run.adapt)",
-                format!(
-                    "fits the steps of svi on models on ℝᴺ of fixed dimension to discrete \
-                     energy conservation, not of {} on this model",
-                    spec.name()
-                ),
-            );
-        }
-        if adapt != AdaptMode::Reparam && run.monitor.is_some() {
-            return not_applicable(
-                "--monitor (run.monitor)",
-                format!(
-                    "sets the monitor of --adapt reparam, not of adapt {}",
-                    adapt.name()
-                ),
-            );
-        }
-        if adapt == AdaptMode::Reparam {
-            self.monitor()?;
-            if self.space() != SpaceKind::Vector || self.is_local() {
-                return not_applicable(
-                    "--adapt reparam (run.adapt)",
-                    "reparametrises models on ℝᴺ of fixed dimension (not rigid bodies or \
-                     chains)"
-                        .into(),
-                );
-            }
-        }
-        for (bound, option) in [
-            (run.min_points, "run.min_points"),
-            (run.max_points, "run.max_points"),
-        ] {
-            if bound.is_some() && adapt != AdaptMode::Degree {
-                return not_applicable(
-                    option,
-                    format!(
-                        "bounds the points of adapt = \"degree\", not of adapt = \"{}\"",
-                        adapt.name()
-                    ),
-                );
-            }
-        }
-        if adapt == AdaptMode::Degree && !spec.entry().takes_points() {
-            return not_applicable(
-                "--adapt degree (run.adapt)",
-                format!(
-                    "method {} has no polynomial degree to adapt (methods with points: {})",
-                    spec.name(),
-                    methods_with(spec.space(), registry::Entry::takes_points)
-                ),
-            );
-        }
-        if adapt != AdaptMode::None && run.recovery == Some(RecoveryKind::HalveStep) {
-            return not_applicable(
-                "--recovery (run.recovery)",
-                format!(
-                    "adapt {} retries failed steps itself; recovery applies to fixed steps \
-                     (adapt none)",
-                    adapt.name()
-                ),
-            );
-        }
-        Ok(())
-    }
-
-    /// `[output]`: `every` only with a trajectory file and without output times, `none` alone
-    /// among the diagnostics.
-    fn check_output(&self) -> Result<(), SceneError> {
-        let output = &self.output;
-        if self.wants_explicitly(Diagnostic::None)
-            && output
-                .diagnostics
-                .as_ref()
-                .is_some_and(|wanted| wanted.len() > 1)
-        {
-            return Err(SceneError::NotApplicable {
-                option: "--diagnostics (output.diagnostics)",
-                reason: "none means no diagnostic: give it alone, or list the diagnostics \
-                         wanted"
-                    .into(),
-            });
-        }
-        if output.plot.is_some() && output.trajectory.is_none() {
-            return Err(SceneError::NotApplicable {
-                option: "--plot (output.plot)",
-                reason: "draws the trajectory file: give --out FILE (output.trajectory) too".into(),
-            });
-        }
-        crate::report::output::check_run_outputs(
-            output.trajectory.as_deref(),
-            output.plot.as_deref(),
-            self.source.as_deref(),
-        )?;
-        let kept = output.trajectory.is_some() || output.record;
-        match (output.every, kept) {
-            (Some(_), false) => Err(SceneError::EveryWithoutOutput),
-            (Some(0), true) => Err(svi::Error::invalid("every", "0 steps; need at least 1").into()),
-            (Some(_), true) if output.output_times.is_some() => Err(SceneError::NotApplicable {
-                option: "--every (output.every)",
-                reason: "thins the steps written to the trajectory; with --output-times \
-                             the trajectory holds the states at those times"
-                    .into(),
-            }),
-            _ => Ok(()),
         }
     }
 
@@ -815,139 +515,6 @@ impl Scene {
                 .iter()
                 .any(|diagnostic| *diagnostic != Diagnostic::None)
         })
-    }
-
-    /// Apply the scene's parameters to a model on ℝᴺ and resolve the initial time and state,
-    /// the step and the horizon (scene values, else the model's defaults).
-    pub fn resolve<M: ZooModel<N>, N: Dimension>(
-        &self,
-        model: &mut M,
-    ) -> Result<(f64, Initial<N>, f64, f64), SceneError>
-    where
-        DefaultAllocator: Allocator<N> + Allocator<N, N>,
-    {
-        for (name, value) in &self.parameters {
-            model.set_parameter(name, *value)?;
-        }
-        let (default_t0, default_q, default_v) = model.initial_state();
-        let initial = vector::initial(&self.initial, model.name(), default_q, default_v)?;
-        let t0 = self.initial.t0.unwrap_or(default_t0);
-        if self.wants_explicitly(Diagnostic::Momentum) && model.generator_count() == 0 {
-            return Err(self.not_measurable(
-                "--diagnostics momentum (output.diagnostics)",
-                "has no symmetry, hence no Noether momentum to measure",
-            ));
-        }
-        if self.wants_explicitly(Diagnostic::Solution) {
-            let velocity = match &initial {
-                Initial::Velocity { v, .. } => Some(v.clone()),
-                Initial::Momentum { q, p } => model.velocity(t0, q, p, p).ok(),
-            };
-            let q = match &initial {
-                Initial::Velocity { q, .. } | Initial::Momentum { q, .. } => q,
-            };
-            // A velocity that cannot be computed is the run's to report.
-            if velocity.is_some_and(|v| model.exact_solution(t0, q, &v, t0).is_none()) {
-                return Err(self.not_measurable(
-                    "--diagnostics solution (output.diagnostics)",
-                    "has no exact solution for this initial state to measure against",
-                ));
-            }
-        }
-        Ok((
-            t0,
-            initial,
-            self.run.h.unwrap_or_else(|| model.default_step()),
-            self.run.t_end.unwrap_or_else(|| model.default_horizon()),
-        ))
-    }
-
-    /// [`Scene::resolve`] for a runtime-dimension model: its parameters (the size `n` among
-    /// them) first, then the initial state of `[initial]` (vectors of n components) or the
-    /// model's default for that n.
-    pub fn resolve_local<M: LocalZooModel>(
-        &self,
-        model: &mut M,
-    ) -> Result<(f64, svi::Initial<Dyn>, f64, f64), SceneError> {
-        for (name, value) in &self.parameters {
-            model.set_parameter(name, *value)?;
-        }
-        // The memory is checked before any vector of n components is made.
-        let spec = self.method_spec()?;
-        let outputs = self.output.output_times.as_ref().map_or(0, Vec::len);
-        let n = model.dimension();
-        let estimate = limits::chain_memory(
-            n,
-            spec.name(),
-            spec.points_in_use(),
-            M::STRUCTURE == svi::Structure::ConstantMass,
-            outputs,
-        );
-        let what = format!(
-            "{} with n = {n}, {}{}",
-            model.name(),
-            spec.name(),
-            if outputs > 0 {
-                format!(" and {outputs} output times of 3n numbers each")
-            } else {
-                String::new()
-            }
-        );
-        limits::check_memory("n (--param n, or --output-times)", estimate, &what)?;
-        let (default_t0, default_q, default_v) = model.initial_state();
-        // A chain written as text stores its families site by site; a zoo chain is one.
-        let families = if self.is_text_chain() {
-            self.coordinates.as_ref().map_or(1, Vec::len)
-        } else {
-            1
-        };
-        let parameters = model.parameters();
-        let sites = |field: &'static str, expressions: &[String]| {
-            site_values(
-                expressions,
-                families,
-                &format!("initial.{field}"),
-                &parameters,
-                n / families,
-            )
-            .map_err(SceneError::from)
-        };
-        let initial =
-            vector::local_initial(&self.initial, model.name(), default_q, default_v, &sites)?;
-        Ok((
-            self.initial.t0.unwrap_or(default_t0),
-            initial,
-            self.run.h.unwrap_or_else(|| model.default_step()),
-            self.run.t_end.unwrap_or_else(|| model.default_horizon()),
-        ))
-    }
-
-    /// [`Scene::resolve`] for a rigid body on SO(3) (t0 defaults to 0, the horizon to t0
-    /// plus the model's default duration).
-    pub fn resolve_rigid<M: RigidZooModel>(
-        &self,
-        model: &mut M,
-    ) -> Result<(f64, RigidInitial, f64, f64), SceneError> {
-        for (name, value) in &self.parameters {
-            model.set_parameter(name, *value)?;
-        }
-        let (default_r, default_omega) = model.initial_state();
-        let initial = rigid::initial(&self.initial, default_r, default_omega)?;
-        if self.wants_explicitly(Diagnostic::Momentum) && model.axis_count() == 0 {
-            return Err(self.not_measurable(
-                "--diagnostics momentum (output.diagnostics)",
-                "has no symmetry axis, hence no conserved angular momentum to measure",
-            ));
-        }
-        let t0 = self.initial.t0.unwrap_or(0.0);
-        Ok((
-            t0,
-            initial,
-            self.run.h.unwrap_or_else(|| model.default_step()),
-            self.run
-                .t_end
-                .unwrap_or_else(|| t0 + model.default_horizon()),
-        ))
     }
 }
 
@@ -1273,29 +840,6 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn both_velocity_and_momentum_are_rejected() {
-        let text = "model = \"kepler\"\n[initial]\nq = [1, 0]\nv = [0, 1]\np = [0, 1]\n";
-        assert!(matches!(
-            Scene::from_toml(text, "t"),
-            Err(SceneError::VelocityAndMomentum)
-        ));
-    }
-
-    #[test]
-    fn every_needs_a_file_and_a_positive_count() {
-        let text = "model = \"kepler\"\n[output]\nevery = 10\n";
-        assert!(matches!(
-            Scene::from_toml(text, "t"),
-            Err(SceneError::EveryWithoutOutput)
-        ));
-        let text = "model = \"kepler\"\n[output]\nevery = 0\ntrajectory = \"x.csv\"\n";
-        assert!(matches!(
-            Scene::from_toml(text, "t"),
-            Err(SceneError::Svi(svi::Error::InvalidParameter { name, .. })) if name == "every"
-        ));
-    }
-
-    #[test]
     fn a_missing_bare_name_is_an_unknown_scene_and_a_missing_path_a_read_error() {
         let error = Scene::load("keppler").unwrap_err();
         assert!(matches!(error, SceneError::UnknownScene { .. }));
@@ -1303,61 +847,6 @@ pub(crate) mod tests {
         let path = std::env::temp_dir().join("svi-cli-no-such-dir/scene.toml");
         let error = Scene::load(path.to_str().unwrap()).unwrap_err();
         assert!(matches!(error, SceneError::Read { .. }), "{error}");
-    }
-
-    #[test]
-    fn options_the_scene_cannot_use_are_named() {
-        for (text, option) in [
-            ("[run]\ntol = 1e-9\n", "--tol (run.tol)"),
-            (
-                "[run]\nadapt = \"step\"\nmin_points = 4\n",
-                "run.min_points",
-            ),
-            (
-                "[method]\nname = \"verlet\"\n[run]\nadapt = \"degree\"\ntol = 1e-9\n",
-                "--adapt degree (run.adapt)",
-            ),
-            (
-                "[run]\nadapt = \"step\"\ntol = 1e-9\nrecovery = \"halve-step\"\n",
-                "--recovery (run.recovery)",
-            ),
-            ("[method]\nform = \"full\"\n", "--form (method.form)"),
-            ("[initial]\nomega = [1, 0, 0]\n", "initial.omega"),
-            (
-                "[output]\ndiagnostics = [\"none\", \"energy\"]\n",
-                "--diagnostics (output.diagnostics)",
-            ),
-            (
-                "[output]\ntrajectory = \"x.csv\"\nevery = 2\noutput_times = [1.0]\n",
-                "--every (output.every)",
-            ),
-        ] {
-            let text = format!("model = \"kepler\"\n{text}");
-            match Scene::from_toml(&text, "t") {
-                Err(error @ SceneError::NotApplicable { option: named, .. }) => {
-                    assert_eq!(named, option, "{text}: {error}");
-                    assert!(error.is_bad_input());
-                }
-                other => panic!("{text}: {other:?}"),
-            }
-        }
-        // The rigid bodies take their own initial fields, and not those on ℝᴺ.
-        let top = "model = \"heavy-top\"\n[initial]\nrotation = [0.1, 0, 0]\nomega = [0, 0, 5]\n";
-        assert_eq!(
-            Scene::from_toml(top, "t").unwrap().space(),
-            SpaceKind::Rotation
-        );
-        let error = Scene::from_toml("model = \"heavy-top\"\n[initial]\nv = [1, 0, 0]\n", "t");
-        assert!(
-            matches!(
-                error,
-                Err(SceneError::NotApplicable {
-                    option: "initial.v",
-                    ..
-                })
-            ),
-            "{error:?}"
-        );
     }
 
     #[test]
