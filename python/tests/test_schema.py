@@ -7,6 +7,7 @@ import json
 import os
 import re
 import subprocess
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -55,7 +56,10 @@ def test_a_renamed_or_mistyped_field_fails_validation():
 
 
 def run(*args):
-    done = subprocess.run([svi_binary(), *args], capture_output=True, text=True, timeout=600, cwd=os.environ.get("TMPDIR", "/tmp"))
+    """`svi ARGS` (in the system's temporary directory, where a run could write) as (exit
+    status, stdout, stderr)."""
+    binary = os.path.abspath(svi_binary())
+    done = subprocess.run([binary, *args], capture_output=True, text=True, timeout=600, cwd=tempfile.gettempdir())
     return done.returncode, done.stdout, done.stderr
 
 
