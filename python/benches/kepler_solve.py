@@ -1,7 +1,8 @@
 """What the Python front door costs: svi.solve of Kepler (e = 0.5, SVI 7/6, h = 0.02, T = 2000:
 10^5 steps, the trajectory of every step returned as NumPy arrays) against the Rust run it
 makes — the run's own `seconds` (svi-experiments' Scene::run, in process, the same steps and
-the same trajectory kept) — and against `svi run` of the same scene, which keeps no trajectory.
+the same trajectory kept) — and against `svi run` of the same scene, which keeps no trajectory
+(as svi.solve with saveat=[T] does not).
 
     python python/benches/kepler_solve.py [SVI_BIN]
 
@@ -22,13 +23,23 @@ CLI = ["run", "kepler", "--method", "svi:7/6", "--h", "0.02", "--diagnostics", "
 
 def main() -> None:
     binary = sys.argv[1] if len(sys.argv) > 1 else None
-    rows = {"python wall": [], "its Rust run": [], "dense=True wall": [], "svi run (no trajectory)": [], "svi run process": []}
+    rows = {
+        "python wall": [],
+        "its Rust run": [],
+        "saveat=[T] wall": [],
+        "dense=True wall": [],
+        "svi run (no trajectory)": [],
+        "svi run process": [],
+    }
     for _ in range(15):
         start = time.perf_counter()
         sol = svi.solve("kepler", 2000.0, **ARGS)
         rows["python wall"].append(time.perf_counter() - start)
         rows["its Rust run"].append(sol.seconds)
         assert sol.steps == 100_000 and sol.q.shape == (100_001, 2)
+        start = time.perf_counter()
+        svi.solve("kepler", 2000.0, saveat=[2000.0], **ARGS)
+        rows["saveat=[T] wall"].append(time.perf_counter() - start)
         start = time.perf_counter()
         svi.solve("kepler", 2000.0, dense=True, **ARGS)
         rows["dense=True wall"].append(time.perf_counter() - start)
@@ -43,6 +54,8 @@ def main() -> None:
     print(f"python / its Rust run: {median['python wall'] / median['its Rust run']:.3f}")
     if binary:
         print(f"python / svi run process: {median['python wall'] / median['svi run process']:.3f}")
+        print(f"python saveat=[T] / svi run process: {median['saveat=[T] wall'] / median['svi run process']:.3f}")
+        print(f"python saveat=[T] / svi run's solve: {median['saveat=[T] wall'] / median['svi run (no trajectory)']:.3f}")
 
 
 if __name__ == "__main__":

@@ -15,10 +15,10 @@
 use std::collections::BTreeMap;
 
 use clap::ValueEnum;
+use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
 use svi::stepping::dense::DenseOutput;
 use svi_experiments::ensemble::Ensemble;
 use svi_experiments::report::schema;
@@ -203,19 +203,14 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
     Ok(())
 }
 
-/// The numbers of `values` as bytes in the machine's order, for NumPy's `frombuffer`: arrays
-/// cross into Python as one buffer each (one copy), not as lists of Python floats.
-fn buffer<'py>(py: Python<'py>, values: &[f64]) -> Bound<'py, PyBytes> {
-    // SAFETY: any initialised f64 is 8 initialised bytes, u8 has alignment 1, and the slice
-    // covers exactly the memory of `values`, which outlives this borrow.
-    let bytes = unsafe {
-        std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), std::mem::size_of_val(values))
-    };
-    PyBytes::new(py, bytes)
+/// `values` as a NumPy array that owns them: arrays cross into Python without a copy, not as
+/// lists of Python floats.
+fn array(py: Python<'_>, values: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
+    PyArray1::from_vec(py, values)
 }
 
-/// A trajectory: its column names and its numbers row by row (a buffer of f64).
-type Trajectory<'py> = (Vec<String>, Bound<'py, PyBytes>);
+/// A trajectory: its column names and its numbers row by row.
+type Trajectory<'py> = (Vec<String>, Bound<'py, PyArray1<f64>>);
 
 /// A model written as text from Python (`svi.Lagrangian`): L, its coordinates, its forces,
 /// the generators of its symmetries and its parameters.
@@ -233,27 +228,21 @@ struct Dense(DenseOutput);
 
 #[pymethods]
 impl Dense {
-    /// (q, v, p) at the times of `times` (a buffer of f64), each a buffer of
-    /// len(times) × dimension numbers, row by row.
+    /// (q, v, p) at `times`, each an array of len(times) × dimension numbers, row by row.
     fn evaluate<'py>(
         &self,
         py: Python<'py>,
-        times: &[u8],
-    ) -> PyResult<(
-        Bound<'py, PyBytes>,
-        Bound<'py, PyBytes>,
-        Bound<'py, PyBytes>,
-    )> {
+        times: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<[Bound<'py, PyArray1<f64>>; 3]> {
         let n = self.0.dimension();
-        let count = times.len() / 8;
-        let mut values = [
+        let times = times.as_slice()?;
+        let count = times.len();
+        let [mut q, mut v, mut p] = [
             vec![0.0; count * n],
             vec![0.0; count * n],
             vec![0.0; count * n],
         ];
-        let [q, v, p] = &mut values;
-        for (i, time) in times.chunks_exact(8).enumerate() {
-            let time = f64::from_ne_bytes(time.try_into().expect("chunks of 8 bytes"));
+        for (i, &time) in times.iter().enumerate() {
             let rows = i * n..(i + 1) * n;
             self.0
                 .evaluate(
@@ -264,7 +253,7 @@ impl Dense {
                 )
                 .map_err(|error| failure(SceneError::from(error)))?;
         }
-        Ok((buffer(py, q), buffer(py, v), buffer(py, p)))
+        Ok([array(py, q), array(py, v), array(py, p)])
     }
 
     /// The span of the steps kept: (first step's start, last step's end).
@@ -356,7 +345,7 @@ fn run<'py>(
     let rows = summary
         .recorded
         .take()
-        .map(|recorded| (recorded.columns, buffer(py, &recorded.values)));
+        .map(|recorded| (recorded.columns, array(py, recorded.values)));
     let dense = summary.dense.take().map(Dense);
     summary.trajectory = None;
     let json = schema::to_json(&summary).map_err(|error| invalid("summary", error.to_string()))?;

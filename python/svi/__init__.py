@@ -308,7 +308,7 @@ class Result:
             ``qw``, ..., ``omega_1``, ...).
     """
 
-    def __init__(self, summary: Dict[str, Any], trajectory: Optional[Tuple[List[str], bytes]]) -> None:
+    def __init__(self, summary: Dict[str, Any], trajectory: Optional[Tuple[List[str], np.ndarray]]) -> None:
         self.summary: Dict[str, Any] = summary
         self.trajectory: Dict[str, np.ndarray] = {}
         self.t: Optional[np.ndarray] = None
@@ -322,8 +322,8 @@ class Result:
             self.p: Optional[np.ndarray] = None
         if trajectory is not None:
             columns, values = trajectory
-            # One buffer of f64 row by row, as the run recorded it (read-only: a view of it).
-            data = _exact(np.frombuffer(values, dtype=float).reshape(-1, len(columns)))
+            # The run's numbers row by row, an array that owns them (no copy).
+            data = _exact(values.reshape(-1, len(columns)))
             self.trajectory = {name: data[:, i] for i, name in enumerate(columns)}
             self.t = self.trajectory.get("t")
             self.energy = self.trajectory.get("energy")

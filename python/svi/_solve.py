@@ -131,8 +131,8 @@ class Solution(Result):
         if what not in ("q", "v", "p"):
             raise ValueError(f"what is 'q', 'v' or 'p', not {what!r}")
         times = np.asarray(t, dtype=float)
-        q, v, p = _call(self._dense.evaluate, np.ascontiguousarray(times.ravel()).tobytes())
-        values = np.frombuffer({"q": q, "v": v, "p": p}[what], dtype=float)
+        q, v, p = _call(self._dense.evaluate, np.ascontiguousarray(times.ravel()))
+        values = {"q": q, "v": v, "p": p}[what]
         n = self._dense.dimension()
         return _exact(values.reshape(n) if times.ndim == 0 else values.reshape(times.shape + (n,)))
 

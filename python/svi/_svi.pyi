@@ -2,14 +2,16 @@
 
 from typing import Dict, List, Optional, Sequence, Tuple
 
+import numpy as np
+
 class Failure(Exception):
     """A failed call; its one argument is the JSON text of the failure object."""
 
 class Dense:
     """Every step's polynomial of a run (``svi.Solution``'s dense output)."""
 
-    def evaluate(self, times: bytes) -> Tuple[bytes, bytes, bytes]:
-        """(q, v, p) at ``times`` (f64 buffers), each len(times) × dimension f64 row by row."""
+    def evaluate(self, times: np.ndarray) -> List[np.ndarray]:
+        """(q, v, p) at ``times``, each len(times) × dimension numbers row by row."""
     def span(self) -> Optional[Tuple[float, float]]:
         """(first step's start, last step's end)."""
     def dimension(self) -> int:
@@ -39,9 +41,9 @@ def run(
     every: Optional[int] = None,
     progress: bool = False,
     dense: bool = False,
-) -> Tuple[str, Optional[Tuple[List[str], bytes]], Optional[Dense]]:
+) -> Tuple[str, Optional[Tuple[List[str], np.ndarray]], Optional[Dense]]:
     """Run a scene (or ``model``, a text model) as ``svi run`` does: the JSON summary, the
-    trajectory's columns and numbers (f64, row by row), and with ``dense`` every step's
+    trajectory's columns and numbers (row by row), and with ``dense`` every step's
     polynomial."""
 
 def ensemble(
