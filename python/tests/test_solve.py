@@ -135,3 +135,30 @@ def test_the_readme_python_example_is_the_example_file_ci_runs():
     with open(os.path.join(root, "examples", "double_pendulum.py"), encoding="utf-8") as example:
         script = example.read()
     assert "```python\n" + script + "```" in text
+
+
+def test_a_chain_written_in_python_is_the_scene_written_as_text():
+    """An indexed chain (q[1..n], sums) from svi.Lagrangian gives the numbers of the same chain
+    as a scene's text, digit for digit: one model, two front doors."""
+    expr = "sum(i, 1, n, 0.5*vq[i]^2) - sum(i, 1, n - 1, 0.5*(q[i+1] - q[i])^2 + 0.25*(q[i+1] - q[i])^4)"
+    q0 = [math.sin(k) for k in range(8)]
+    chain = svi.Lagrangian(expr, q=["q[1..n]"], params={"n": 8})
+    sol = svi.solve(chain, 10.0, q0=q0, v0=[0.0] * 8, h=0.05, method="verlet", dense=True)
+    scene = f"""
+lagrangian = "{expr}"
+coordinates = ["q[1..n]"]
+[parameters]
+n = 8
+[initial]
+q = {q0!r}
+v = {[0.0] * 8!r}
+[method]
+name = "verlet"
+[run]
+h = 0.05
+t_end = 10.0
+"""
+    run = svi.run(scene)
+    assert sol.summary["q"] == run.summary["q"] and sol.steps == run.steps == 200
+    assert sol.energy_error_max == run.energy_error_max < 1e-2
+    assert np.abs(sol(10.0) - np.array(run.summary["q"])).max() < 1e-13
