@@ -387,10 +387,13 @@ type Chunk = (usize, Vec<String>, Vec<Vec<Py<PyAny>>>);
 
 /// Run the members `start..stop` of an ensemble (all without `stop`; none with `stop =
 /// start`) as `svi ensemble` does, on `threads` threads (0: every core); returns the number
-/// of members, the table's columns and the rows of those members.
+/// of members, the table's columns and the rows of those members. `model` (a text model from
+/// `svi.Lagrangian`) replaces `scene`; `base` holds initial-state fields every member starts
+/// from before its varied components.
 #[pyfunction]
 #[pyo3(signature = (
-    scene, *, params=vec![], initial=vec![], random=None, seed=0, start=0, stop=None, threads=0,
+    scene, *, model=None, base=None, params=vec![], initial=vec![], random=None, seed=0, start=0,
+    stop=None, threads=0,
     method=None, points=None, quadrature=None, h=None, t_end=None, diagnostics=None,
     adapt=None, monitor=None, tol=None, recovery=None, divergence_limit=None, max_steps=None, form=None
 ))]
@@ -398,6 +401,8 @@ type Chunk = (usize, Vec<String>, Vec<Vec<Py<PyAny>>>);
 fn ensemble(
     py: Python<'_>,
     scene: &str,
+    model: Option<TextModel>,
+    base: Option<BTreeMap<String, Vec<f64>>>,
     params: Vec<String>,
     initial: Vec<String>,
     random: Option<usize>,
@@ -444,7 +449,16 @@ fn ensemble(
         axes.push(parse_initial_axis(text).map_err(failure)?);
     }
     let random = random.map(|count| Random { count, seed });
-    let ensemble = Ensemble::new(load(scene)?, &overrides, axes, random).map_err(failure)?;
+    let mut loaded = match model {
+        Some((lagrangian, coordinates, forces, symmetries, parameters)) => {
+            Scene::of_text_model(lagrangian, coordinates, forces, symmetries, parameters)
+        }
+        None => load(scene)?,
+    };
+    if let Some(base) = base {
+        set_initial(&mut loaded, base)?;
+    }
+    let ensemble = Ensemble::new(loaded, &overrides, axes, random).map_err(failure)?;
     let count = ensemble.members.len();
     let stop = stop.unwrap_or(count).min(count);
     let start = start.min(stop);

@@ -567,7 +567,7 @@ def _run_chunk(arguments: Dict[str, Any], start: int, stop: int) -> Tuple[List[s
 
 
 def ensemble(
-    scene: str = DEFAULT_SCENE,
+    scene: Any = DEFAULT_SCENE,
     params: Optional[Mapping[str, ValuesSpec]] = None,
     initial: Optional[Mapping[str, ValuesSpec]] = None,
     *,
@@ -591,11 +591,16 @@ def ensemble(
     divergence_limit: Optional[float] = None,
     max_steps: Optional[int] = None,
     form: Optional[str] = None,
+    q0: Any = None,
+    v0: Any = None,
+    p0: Any = None,
 ) -> Any:
     """Run a scene over grids or random draws of parameters and initial states, as ``svi ensemble``.
 
     Args:
-        scene: a built-in scene, a zoo model's name, a scene file or a scene's TOML text.
+        scene: a built-in scene, a zoo model's name, a scene file or a scene's TOML text, or a
+            :class:`Lagrangian` (then ``q0`` and ``v0`` or ``p0``, the state every member starts
+            from before its varied components, are needed).
         params: varied model parameters, name → values: a list or array (these values), a
             tuple ``(lo, hi, count)`` (a grid, both ends included, as ``numpy.linspace``), a
             tuple ``(lo, hi)`` (a range, with ``random``), or the command line's SPEC string.
@@ -625,8 +630,14 @@ def ensemble(
         SviError: bad input of the ensemble itself (unknown scene, parameter or coordinate,
         malformed values).
     """
+    base = {
+        name: _reals(f"{name}0", np.atleast_1d(value)) for name, value in (("q", q0), ("v", v0), ("p", p0)) if value is not None
+    }
+    model = scene._native() if isinstance(scene, Lagrangian) else None
     arguments: Dict[str, Any] = dict(
-        scene=_text("scene", scene),
+        scene="" if model is not None else _text("scene", scene),
+        model=model,
+        base=base or None,
         params=[_spec(name, values) for name, values in _mapping("params", {} if params is None else params).items()],
         initial=[_spec(name, values) for name, values in _mapping("initial", {} if initial is None else initial).items()],
         random=_count("random", random),

@@ -49,6 +49,10 @@ def run(
 def ensemble(
     scene: str,
     *,
+    model: Optional[
+        Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Dict[str, float]]
+    ] = None,
+    base: Optional[Dict[str, List[float]]] = None,
     params: Sequence[str] = ...,
     initial: Sequence[str] = ...,
     random: Optional[int] = None,

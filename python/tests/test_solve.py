@@ -162,3 +162,18 @@ t_end = 10.0
     assert sol.summary["q"] == run.summary["q"] and sol.steps == run.steps == 200
     assert sol.energy_error_max == run.energy_error_max < 1e-2
     assert np.abs(sol(10.0) - np.array(run.summary["q"])).max() < 1e-13
+
+
+def test_an_ensemble_over_a_model_object_is_its_members_solves():
+    """svi.ensemble over a Lagrangian (its parameter varied, from one base state): each
+    member's row has the numbers of svi.solve of that member."""
+    oscillator = svi.Lagrangian("0.5*vx^2 - 0.5*w^2*x^2", q=["x"], params={"w": 1.0})
+    table = svi.ensemble(
+        oscillator, params={"w": [0.5, 1.0, 2.0]}, q0=[1.0], v0=[0.0], h=0.1, t_end=5.0, method="svi:6", as_frame=False
+    )
+    assert list(table["status"]) == ["ok"] * 3
+    for w, energy_error in zip(table["w"], table["energy_error_max"]):
+        sol = svi.solve(oscillator, 5.0, q0=[1.0], v0=[0.0], h=0.1, method="svi:6", params={"w": w})
+        assert energy_error == sol.energy_error_max
+    with pytest.raises(svi.InvalidInputError, match="initial"):
+        svi.ensemble(oscillator, params={"w": [0.5, 1.0]}, h=0.1, t_end=5.0)
