@@ -177,3 +177,25 @@ def test_an_ensemble_over_a_model_object_is_its_members_solves():
         assert energy_error == sol.energy_error_max
     with pytest.raises(svi.InvalidInputError, match="initial"):
         svi.ensemble(oscillator, params={"w": [0.5, 1.0]}, h=0.1, t_end=5.0)
+
+
+@pytest.mark.parametrize(
+    "model, kwargs",
+    [
+        (DOUBLE_PENDULUM, dict(q0=[1.0], v0=[0.0, 0.0], h=0.1)),  # too few components
+        (DOUBLE_PENDULUM, dict(q0=[float("nan"), 0.0], v0=[0.0, 0.0], h=0.1)),
+        (DOUBLE_PENDULUM, dict(q0=[1.0, 0.0], v0=[0.0, 0.0], h=0.0)),
+        (DOUBLE_PENDULUM, dict(q0=[1.0, 0.0], v0=[0.0, 0.0], h=float("inf"))),
+        (DOUBLE_PENDULUM, dict(q0=[1.0, 0.0], v0=[0.0, 0.0], p0=[0.0, 0.0], h=0.1)),  # v and p
+        (DOUBLE_PENDULUM, dict(q0=[1.0, 0.0], v0=[0.0, 0.0], h=0.1, saveat=[2.0, 1.0])),
+        (DOUBLE_PENDULUM, dict(q0=[1.0, 0.0], v0=[0.0, 0.0], h=0.1, adapt="reparam", dense=True)),
+        (svi.Lagrangian("", q=["x"]), dict(q0=[1.0], v0=[0.0], h=0.1)),
+        (svi.Lagrangian("0.5*vx^2", q=[]), dict(q0=[], v0=[], h=0.1)),
+        (svi.Lagrangian("0.5*vx^2 +", q=["x"]), dict(q0=[1.0], v0=[0.0], h=0.1)),
+    ],
+)
+def test_hostile_solves_are_typed_bad_input(model, kwargs):
+    """Bad models and arguments of svi.solve: an SviError marked bad input, never a crash."""
+    with pytest.raises(svi.SviError) as error:
+        svi.solve(model, 1.0, **kwargs)
+    assert error.value.bad_input, error.value

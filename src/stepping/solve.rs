@@ -625,24 +625,30 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         end_time: f64,
     ) -> Result<(), Error> {
         let model = self.model();
+        // The point at `time` inside the step: the method's dense output or, without one, the
+        // space's interpolant of the end points (completed once); `None` if it has neither.
         let mut ends: Option<(S::Point, S::Point)> = None;
+        let mut inside = |time: f64, guess: &S::Velocity| -> Result<Option<S::Point>, Error> {
+            if let Some(point) = method.dense_point(model, workspace, t, h, start, time) {
+                return Ok(Some(point));
+            }
+            let (a, b) = match ends {
+                Some(ref known) => known,
+                None => ends.insert((
+                    self.phase_point(t, start, guess)?,
+                    self.phase_point(end_time, end, guess)?,
+                )),
+            };
+            Ok(method.interpolate(model, a, b, time))
+        };
         while let Some(time) = outputs.next() {
             if time > end_time {
                 break;
             }
             let point = if time == end_time {
                 self.phase_point(end_time, end, &outputs.guess)?
-            } else if let Some(point) = method.dense_point(model, workspace, t, h, start, time) {
-                point
             } else {
-                let (a, b) = match ends {
-                    Some(ref known) => known,
-                    None => ends.insert((
-                        self.phase_point(t, start, &outputs.guess)?,
-                        self.phase_point(end_time, end, &outputs.guess)?,
-                    )),
-                };
-                method.interpolate(model, a, b, time).ok_or_else(|| {
+                inside(time, &outputs.guess)?.ok_or_else(|| {
                     Error::invalid(
                         "output_times",
                         format!(
@@ -668,21 +674,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         };
         for j in 0..dense.samples() {
             let time = dense.sample_time(j, t, end_time);
-            let point = match method.dense_point(model, workspace, t, h, start, time) {
-                Some(point) => point,
-                None => {
-                    let (a, b) = match ends {
-                        Some(ref known) => known,
-                        None => ends.insert((
-                            self.phase_point(t, start, &outputs.guess)?,
-                            self.phase_point(end_time, end, &outputs.guess)?,
-                        )),
-                    };
-                    method.interpolate(model, a, b, time).ok_or_else(|| {
-                        Error::invalid("dense", "the method has no step polynomial on this space")
-                    })?
-                }
-            };
+            let point = inside(time, &outputs.guess)?.ok_or_else(|| {
+                Error::invalid("dense", "the method has no step polynomial on this space")
+            })?;
             let (Some((q, v, p)), true) =
                 (S::point_vectors(&point), method.point_is_finite(&point))
             else {
