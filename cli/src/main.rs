@@ -2,17 +2,20 @@
 
 use std::process::ExitCode;
 
+mod outcome;
+
+use std::io::IsTerminal;
+
 use clap::{Args, Parser, Subcommand};
 use svi_experiments::bench::BenchArgs;
 use svi_experiments::compare::CompareArgs;
 use svi_experiments::ensemble::EnsembleArgs;
 use svi_experiments::scale::ScaleArgs;
 use svi_experiments::scene::error::is_bad_input;
-use svi_experiments::scene::field::FieldScene;
 use svi_experiments::scene::spectral::SpectralScene;
 use svi_experiments::stability::StabilityArgs;
 use svi_experiments::stress::StressArgs;
-use svi_experiments::{DEFAULT_SCENE, Overrides, SceneError};
+use svi_experiments::{AnyScene, Control, DEFAULT_SCENE, Overrides, SceneError};
 
 /// Spectral variational integrators and spectral collocation, from one Lagrangian.
 ///
@@ -141,28 +144,7 @@ fn main() -> ExitCode {
         Err(code) => return code,
     };
     let result = match cli.command {
-        Command::Run(args) => {
-            let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
-            if let Some(scene) = FieldScene::load(name) {
-                svi_experiments::run::field::execute(
-                    name,
-                    scene,
-                    &args.overrides,
-                    args.json,
-                    args.strict,
-                )
-            } else if let Some(scene) = SpectralScene::load(name) {
-                svi_experiments::run::spectral::execute(
-                    name,
-                    scene,
-                    &args.overrides,
-                    args.json,
-                    args.strict,
-                )
-            } else {
-                svi_experiments::run::execute(name, &args.overrides, args.json, args.strict)
-            }
-        }
+        Command::Run(args) => run(&args),
         Command::List => svi_experiments::report::output::print(svi_experiments::list::listing())
             .map_err(|error| SceneError::from(error).into()),
         Command::Bench(args) => match args
@@ -188,6 +170,20 @@ fn main() -> ExitCode {
             ExitCode::from(exit_status(&error))
         }
     }
+}
+
+/// `svi run`: open the scene (built-in or file), put the command-line overrides on top, run
+/// it (checked once) and print its outcome.
+fn run(args: &RunArgs) -> anyhow::Result<()> {
+    let name = args.scene.as_deref().unwrap_or(DEFAULT_SCENE);
+    let result = AnyScene::open(name).and_then(|mut scene| {
+        scene.overlay(&args.overrides)?;
+        scene.run(Control {
+            progress: std::io::stderr().is_terminal(),
+            stop: None,
+        })
+    });
+    outcome::print_outcome(name, result, args.json, args.strict)
 }
 
 /// The exit status of a failed command (see the long help): 2 when the outermost typed error

@@ -29,7 +29,7 @@ use svi_experiments::scene::limits::{
 };
 use svi_experiments::stability::{Answer, Request, StabilityArgs};
 use svi_experiments::stress::{StressArgs, stress};
-use svi_experiments::{Overrides, Scene, SceneError, parse_parameter};
+use svi_experiments::{Control, Overrides, Scene, SceneError, parse_parameter};
 
 use crate::hostile_cases;
 use crate::hostile_support;
@@ -275,7 +275,7 @@ fn parse_and_maybe_run(text: &str) -> Result<usize, TestCaseError> {
         return Ok(1);
     }
     with_test_budget(&mut scene);
-    match scene.run(false) {
+    match scene.run(Control::QUIET) {
         Ok(summary) => {
             prop_assert!(summary.steps as f64 <= 1e5);
             check_summary(&summary, text)?;
@@ -713,7 +713,7 @@ fn run_in_process(args: &[String]) -> Result<usize, TestCaseError> {
         outcome = 4;
     }
     with_test_budget(&mut scene);
-    match scene.run(false) {
+    match scene.run(Control::QUIET) {
         Ok(summary) => check_summary(&summary, &format!("{args:?}"))?,
         Err(error) => check_error(&error, args)?,
     }

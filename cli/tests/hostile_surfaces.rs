@@ -20,9 +20,9 @@ use clap::Parser;
 use proptest::prelude::*;
 use proptest::sample::select;
 use serde_json::Value;
-use svi_experiments::Scene;
 use svi_experiments::ensemble::{Ensemble, EnsembleArgs};
 use svi_experiments::scale::{MAX_ESTIMATED_SECONDS, ScaleArgs};
+use svi_experiments::{Control, Scene};
 
 use crate::hostile_support;
 use hostile_support::*;
@@ -155,7 +155,7 @@ fn text_case(text: &str) -> Result<usize, TestCaseError> {
         return Ok(3);
     }
     scene.run.max_steps = Some(20_000);
-    match scene.run(false) {
+    match scene.run(Control::QUIET) {
         Ok(summary) => {
             check_summary(&summary, text)?;
             Ok(2)
@@ -317,7 +317,7 @@ fn ensemble_case(args: &[String]) -> Result<usize, TestCaseError> {
         run.t_end = Some(t0 + 2.0);
     }
     run.max_steps = Some(run.max_steps.map_or(20_000, |steps| steps.min(20_000)));
-    let outcomes = match ensemble.run(0..count, 1, &|| {}) {
+    let outcomes = match ensemble.run(0..count, 1, &|| {}, None) {
         Ok(outcomes) => outcomes,
         Err(error) => {
             check_error(&error, args)?;

@@ -19,7 +19,7 @@ fn method(text: &str) -> svi::method::registry::MethodSpec {
 
 mod run {
     use super::{method, scene};
-    use svi_experiments::{Diagnostic, Overrides, Parameters, Scene, SceneError};
+    use svi_experiments::{Control, Diagnostic, Overrides, Parameters, Scene, SceneError};
 
     #[test]
     fn classic_methods_have_neither_points_nor_quadrature() {
@@ -55,7 +55,7 @@ mod run {
                     kind.name()
                 )
             );
-            let summary = scene.run(false).unwrap();
+            let summary = scene.run(Control::QUIET).unwrap();
             assert_eq!(summary.method, kind.name());
             assert_eq!((summary.points, summary.quadrature), (None, None));
             assert!(summary.symplectic && summary.order <= 2);
@@ -75,12 +75,12 @@ mod run {
         assert_eq!(scene.parameters["zeta"], 0.1);
         assert_eq!((scene.run.h, scene.run.t_end), (Some(0.1), Some(50.0)));
         // By default only the error at the end; the largest over the run when asked for.
-        let summary = scene.run(false).unwrap();
+        let summary = scene.run(Control::QUIET).unwrap();
         assert_eq!(summary.conservation.solution_error_max(), None);
         let last = summary.conservation.solution_error_final().unwrap();
         assert!(last < 1e-12, "{last:e}");
         scene.output.diagnostics = Some(vec![Diagnostic::Solution]);
-        let summary = scene.run(false).unwrap();
+        let summary = scene.run(Control::QUIET).unwrap();
         assert_eq!(summary.steps, 500);
         let max = summary.conservation.solution_error_max().unwrap();
         assert!(max < 1e-12 && max >= last, "{max:e} {last:e}");
@@ -89,7 +89,7 @@ mod run {
         assert!(summary.energy_final < 0.01 * summary.energy_initial);
         let mut verlet = scene.clone();
         verlet.method.name = Some(method("verlet"));
-        let summary = verlet.run(false).unwrap();
+        let summary = verlet.run(Control::QUIET).unwrap();
         // Second order: 1.6e-3 at h = 0.1.
         let error = summary.conservation.solution_error_max().unwrap();
         assert!(error > 1e-3 && error < 2e-3, "{error:e}");
@@ -99,7 +99,10 @@ mod run {
     #[test]
     fn wrong_dimension_names_field_and_sizes() {
         let text = "model = \"kepler\"\n[initial]\nq = [1, 0, 0]\n";
-        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
+        let error = Scene::from_toml(text, "t")
+            .unwrap()
+            .run(Control::QUIET)
+            .unwrap_err();
         assert!(matches!(
             &error,
             SceneError::Dimension {
@@ -114,7 +117,10 @@ mod run {
             "initial.q has 3 components, but model 'kepler' has dimension 2"
         );
         let text = "model = \"oscillator\"\n[initial]\np = []\n";
-        let error = Scene::from_toml(text, "t").unwrap().run(false).unwrap_err();
+        let error = Scene::from_toml(text, "t")
+            .unwrap()
+            .run(Control::QUIET)
+            .unwrap_err();
         assert!(matches!(
             error,
             SceneError::Dimension {
@@ -130,7 +136,7 @@ mod run {
     fn an_unknown_model_lists_the_known_ones() {
         let error = Scene::from_toml("model = \"kepler3\"\n", "t")
             .unwrap()
-            .run(false)
+            .run(Control::QUIET)
             .unwrap_err();
         assert!(matches!(error, SceneError::UnknownModel(_)));
         assert!(error.to_string().contains("known: oscillator, pendulum"));
@@ -140,7 +146,7 @@ mod run {
     fn a_run_that_asks_for_nothing_reports_no_errors() {
         let mut scene = scene("oscillator");
         scene.output.diagnostics = Some(vec![]);
-        let summary = scene.run(false).unwrap();
+        let summary = scene.run(Control::QUIET).unwrap();
         assert_eq!(summary.steps, 100);
         assert_eq!(summary.energy_error_max, None);
         assert_eq!(summary.conservation.momentum_error_max(), None);
@@ -157,7 +163,7 @@ mod run {
     fn the_summary_reports_the_initial_and_final_energy() {
         let mut scene = scene("kepler");
         scene.run.t_end = Some(2.0);
-        let summary = scene.run(false).unwrap();
+        let summary = scene.run(Control::QUIET).unwrap();
         assert_eq!(summary.steps, 10);
         assert!((summary.energy_initial + 0.5).abs() < 1e-15);
         assert!(

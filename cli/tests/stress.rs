@@ -4,7 +4,7 @@
 use crate::common;
 use common::*;
 
-use svi_experiments::Scene;
+use svi_experiments::{Control, Scene};
 
 #[test]
 fn every_stress_scene_parses_and_a_short_run_of_each_succeeds() {
@@ -21,7 +21,9 @@ fn every_stress_scene_parses_and_a_short_run_of_each_succeeds() {
         let mut scene = Scene::builtin(name).unwrap().unwrap();
         let h = scene.run.h.unwrap();
         scene.run.t_end = Some(50.0 * h);
-        let summary = scene.run(false).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let summary = scene
+            .run(Control::QUIET)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(summary.steps, 50, "{name}");
         // kepler-recovery is coarse on purpose (h = 0.11 at e = 0.95: 0.33 after 50 steps).
         let bound = if name == "kepler-recovery" { 0.5 } else { 1e-2 };

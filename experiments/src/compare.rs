@@ -25,6 +25,7 @@ use crate::report::output::{self, OutputFile};
 use crate::report::plot::{Panel, Series, render_svg_grid};
 use crate::report::schema::{self, Kind, Versioned};
 use crate::report::summary::{ErrorReport, Parameters, Status, Summary};
+use crate::run::Control;
 use crate::run::outcome::{error_report, failure_object};
 use crate::scene::overrides::{Overrides, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
@@ -313,7 +314,10 @@ fn prepare(args: &CompareArgs) -> Result<(Prepared, Option<OutputFile>), SceneEr
 /// Run `scene` (the scene with `method`) through the one run path; with `draw`, keep the
 /// curves of its picture.
 fn run_method(method: MethodSpec, scene: &Scene, draw: bool, progress: bool) -> Outcome {
-    let (mut summary, failure) = match scene.run(progress) {
+    let (mut summary, failure) = match scene.run(Control {
+        progress,
+        stop: None,
+    }) {
         Ok(summary) => (Some(summary), None),
         Err(SceneError::RunFailed { partial, .. }) => (Some(*partial), Some(Failure::Run)),
         Err(error) => (None, Some(Failure::Refused(error))),

@@ -12,6 +12,7 @@
 use std::io::{IsTerminal, Write};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -24,6 +25,7 @@ use crate::report::plot::{Panel, Series, render_svg};
 use crate::report::schema::{self, Kind, Versioned};
 use crate::report::summary::{ErrorReport, Status};
 use crate::report::table::{MemberOutcome, Schema, Table};
+use crate::run::Control;
 use crate::run::outcome::error_report;
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
@@ -227,33 +229,48 @@ impl Ensemble {
 
     /// Run the members `range` of the ensemble on `threads` threads (0: every core), calling
     /// `done` after each member. The outcomes are in member order whatever the thread count.
+    /// When `stop` is set, the members running stop between steps, the others do not start,
+    /// and the ensemble ends with [`SceneError::Interrupted`].
     pub fn run(
         &self,
         range: std::ops::Range<usize>,
         threads: usize,
         done: &(dyn Fn() + Sync),
+        stop: Option<&AtomicBool>,
     ) -> Result<Vec<MemberOutcome>, SceneError> {
         let pool = thread_pool(threads)?;
-        let members = self.members.get(range).unwrap_or(&[]);
-        Ok(pool.install(|| {
-            members
-                .par_iter()
-                .with_max_len(1)
-                .map(|member| {
-                    let outcome = self.run_member(member);
-                    done();
-                    outcome
-                })
-                .collect()
-        }))
+        let members = self.members.get(range.clone()).unwrap_or(&[]);
+        let control = Control {
+            progress: false,
+            stop,
+        };
+        let outcomes: Vec<MemberOutcome> = pool
+            .install(|| {
+                members
+                    .par_iter()
+                    .with_max_len(1)
+                    .map(|member| {
+                        let outcome =
+                            (!control.stopped()).then(|| self.run_member(member, control));
+                        done();
+                        outcome
+                    })
+                    .collect::<Option<_>>()
+            })
+            .filter(|_| !control.stopped())
+            .ok_or_else(|| SceneError::Interrupted {
+                at: format!("the ensemble of members {range:?}"),
+            })?;
+        Ok(outcomes)
     }
 
-    /// Run one member through the one run path; a panic is recorded, not propagated.
-    pub fn run_member(&self, member: &Member) -> MemberOutcome {
+    /// Run one member through the one run path, watched by `control`; a panic is recorded,
+    /// not propagated.
+    pub fn run_member(&self, member: &Member, control: Control<'_>) -> MemberOutcome {
         let run = || {
             member
                 .apply(&self.axes, &self.scene)
-                .and_then(|scene| scene.run(false))
+                .and_then(|scene| scene.run(control))
         };
         match catch_unwind(AssertUnwindSafe(run)) {
             Ok(Ok(summary)) => MemberOutcome {
@@ -449,11 +466,16 @@ fn run_and_write(args: &EnsembleArgs) -> anyhow::Result<()> {
         None
     };
     let start = Instant::now();
-    let outcomes = ensemble.run(0..count, threads, &|| {
-        if let Some(bar) = &bar {
-            bar.inc(1);
-        }
-    })?;
+    let outcomes = ensemble.run(
+        0..count,
+        threads,
+        &|| {
+            if let Some(bar) = &bar {
+                bar.inc(1);
+            }
+        },
+        None,
+    )?;
     let seconds = start.elapsed().as_secs_f64();
     if let Some(bar) = &bar {
         bar.finish_and_clear();

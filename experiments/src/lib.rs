@@ -30,6 +30,8 @@ pub use report::summary::{
     AdaptivitySummary, Conservation, OutputPoint, Parameters, SolveSummary, StateSummary, Summary,
     TrajectoryOutput,
 };
+pub use run::Control;
+pub use scene::any::AnyScene;
 pub use scene::builtin::{BUILTIN_SCENES, DEFAULT_SCENE, builtin_scene, builtin_scene_names};
 pub use scene::overrides::{Overrides, method_help, parse_parameter};
 pub use scene::schema::{

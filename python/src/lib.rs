@@ -1,18 +1,22 @@
 //! `svi._svi`: the native module of the svi Python package.
 //!
 //! Every function calls `svi_experiments`, the library behind the command line: a run is
-//! [`Scene::load`], [`Scene::apply`] of the overrides, the `[initial]` fields, then
-//! [`Scene::run`] — the path of `svi run` — so `svi.run("kepler")` and `svi run kepler --json`
-//! print the same numbers. Results cross into Python as JSON text (a summary, a failure) and
+//! [`Scene::open`], the `[initial]` fields, [`Scene::overlay`] of the overrides, then
+//! [`Scene::run`] (which checks the scene, once) — the path of `svi run` — so
+//! `svi.run("kepler")` and `svi run kepler --json` print the same numbers. Results cross into Python as JSON text (a summary, a failure) and
 //! lists of numbers (trajectories, tables); `svi/__init__.py` turns them into NumPy arrays,
 //! result objects, exceptions and DataFrames. The Global Interpreter Lock is released while
-//! Rust runs.
+//! Rust runs, on a worker thread, while the calling thread looks for signals: Ctrl-C stops a
+//! run or an ensemble between steps and raises `KeyboardInterrupt` ([`interruptible`]).
 //!
 //! A failure raises `svi._svi.Failure` with one argument, the JSON text of the failure object
 //! of `svi run --json` (`kind`, `message`, `step`, `t`) plus `bad_input` and `summary` (the
 //! run up to its last good state, for a run that failed after it started).
 
 use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
 
 use clap::ValueEnum;
 use numpy::{PyArray1, PyReadonlyArray1};
@@ -28,7 +32,8 @@ use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_paramet
 use svi_experiments::scene::field::FieldScene;
 use svi_experiments::scene::spectral::SpectralScene;
 use svi_experiments::{
-    AdaptMode, Components, Diagnostic, FormName, Overrides, RecoveryKind, Scene, SceneError,
+    AdaptMode, Components, Control, Diagnostic, FormName, Overrides, RecoveryKind, Scene,
+    SceneError,
 };
 
 create_exception!(
@@ -145,7 +150,7 @@ fn overrides(
 
 /// Put the fields of `initial` (`t0`, `q`, `v`, `p`, `rotation`, `quaternion`, `omega`,
 /// `momentum`) into the scene's `[initial]` (a velocity replaces the scene's momentum and so
-/// on); the caller checks the scene.
+/// on); the run checks the scene.
 fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResult<()> {
     // A field given replaces the scene's exclusive partner (v for p, omega for momentum, ...)
     // unless both are given, which the scene's check rejects.
@@ -201,6 +206,52 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
         *slot = Some(values);
     }
     Ok(())
+}
+
+/// How often the calling thread looks for signals while a run goes on.
+const SIGNAL_PERIOD: Duration = Duration::from_millis(50);
+
+/// Run `work` on a worker thread with the GIL released while this thread looks for signals
+/// every [`SIGNAL_PERIOD`]: the exception of a signal's handler (`KeyboardInterrupt` for
+/// Ctrl-C) sets the stop flag `work` is given, waits for `work` to stop (between steps) and
+/// is raised. A signal handler runs on the main thread only, hence the worker.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&AtomicBool) -> T + Send,
+) -> PyResult<T> {
+    let stop = AtomicBool::new(false);
+    let (result, signal) = py.detach(|| {
+        std::thread::scope(|scope| {
+            let (sender, receiver) = mpsc::channel();
+            let flag = &stop;
+            let worker = scope.spawn(move || {
+                // The receiver lives until the result arrives.
+                let _ = sender.send(work(flag));
+            });
+            let mut signal = None;
+            loop {
+                match receiver.recv_timeout(SIGNAL_PERIOD) {
+                    Ok(result) => return (result, signal),
+                    Err(RecvTimeoutError::Timeout) if signal.is_none() => {
+                        if let Err(error) = Python::attach(|py| py.check_signals()) {
+                            stop.store(true, Ordering::Relaxed);
+                            signal = Some(error);
+                        }
+                    }
+                    Err(RecvTimeoutError::Timeout) => {}
+                    // The worker panicked: its panic goes on here.
+                    Err(RecvTimeoutError::Disconnected) => match worker.join() {
+                        Err(panic) => std::panic::resume_unwind(panic),
+                        Ok(()) => unreachable!("a worker that returned sent its result"),
+                    },
+                }
+            }
+        })
+    });
+    match signal {
+        Some(error) => Err(error),
+        None => Ok(result),
+    }
 }
 
 /// `values` as a NumPy array that owns them: arrays cross into Python without a copy, not as
@@ -328,19 +379,22 @@ fn run<'py>(
         }
         None => load(scene)?,
     };
-    // The initial state first: a text model has no default one, and `apply` checks the scene.
     if let Some(initial) = initial {
         set_initial(&mut loaded, initial)?;
     }
-    loaded.apply(&overrides).map_err(failure)?;
+    loaded.overlay(&overrides).map_err(failure)?;
     // The trajectory is the rows the run path writes, kept in memory: no file is written.
     loaded.output.trajectory = None;
     loaded.output.plot = None;
     loaded.output.record = trajectory;
     loaded.output.every = every;
     loaded.output.dense = dense;
-    loaded.check().map_err(failure)?;
-    let result = py.detach(|| loaded.run(progress));
+    let result = interruptible(py, |stop| {
+        loaded.run(Control {
+            progress,
+            stop: Some(stop),
+        })
+    })?;
     let mut summary = result.map_err(failure)?;
     let rows = summary
         .recorded
@@ -359,7 +413,7 @@ fn run<'py>(
 fn load(name: &str) -> PyResult<Scene> {
     let is_file = std::path::Path::new(name).is_file();
     if !is_file && name.contains(['\n', '=']) {
-        return Scene::from_toml(name, "a scene text").map_err(failure);
+        return Scene::parse(name, "a scene text").map_err(failure);
     }
     if FieldScene::load(name).is_some() || SpectralScene::load(name).is_some() {
         return Err(failure(SceneError::NotApplicable {
@@ -370,13 +424,13 @@ fn load(name: &str) -> PyResult<Scene> {
             ),
         }));
     }
-    match Scene::load(name) {
+    match Scene::open(name) {
         Err(SceneError::UnknownScene { .. })
             if svi_models::MODEL_NAMES.contains(&name)
                 || svi_models::LOCAL_MODEL_NAMES.contains(&name)
                 || svi_models::RIGID_MODEL_NAMES.contains(&name) =>
         {
-            Scene::from_toml(&format!("model = \"{name}\"\n"), "a model name").map_err(failure)
+            Scene::parse(&format!("model = \"{name}\"\n"), "a model name").map_err(failure)
         }
         result => result.map_err(failure),
     }
@@ -462,9 +516,10 @@ fn ensemble(
     let count = ensemble.members.len();
     let stop = stop.unwrap_or(count).min(count);
     let start = start.min(stop);
-    let outcomes = py
-        .detach(|| ensemble.run(start..stop, threads, &|| {}))
-        .map_err(failure)?;
+    let outcomes = interruptible(py, |flag| {
+        ensemble.run(start..stop, threads, &|| {}, Some(flag))
+    })?
+    .map_err(failure)?;
     let table = ensemble.table(start, &outcomes);
     let rows = table
         .rows

@@ -11,6 +11,7 @@ use crate::bench::options::BenchOptions;
 use crate::bench::record::{Record, Sweeps};
 use crate::bench::sweep::{Outcomes, Report, check_horizon, median_seconds, sweep_steps};
 use crate::report::summary::{StateSummary, Summary};
+use crate::run::Control;
 use crate::scene::overrides::Overrides;
 use crate::scene::schema::{Diagnostic, OutputSection};
 use crate::scene::{Scene, SceneError};
@@ -52,7 +53,7 @@ pub(super) fn sweep_runs(
     // The scene with `method` at step `h`, measuring the energy error or nothing.
     let with = |method: MethodSpec, h: Option<f64>, energy: bool| -> Result<Scene, SceneError> {
         let mut variant = scene.clone();
-        variant.apply(&Overrides {
+        variant.overlay(&Overrides {
             method: Some(method),
             h,
             ..Overrides::default()
@@ -75,12 +76,12 @@ pub(super) fn sweep_runs(
     };
     // The reference: svi:7/6 at the scene's step halved until two runs agree.
     let reference_spec: MethodSpec = "svi:7/6".parse()?;
-    let first = with(reference_spec, None, false)?.run(false)?;
+    let first = with(reference_spec, None, false)?.run(Control::QUIET)?;
     let span = first.t_end - first.t0;
     check_horizon(first.t0, first.t_end, first.h)?;
     let (mut h, mut coarse) = (first.h, final_q(&first));
     let reference = loop {
-        let fine = final_q(&with(reference_spec, Some(0.5 * h), false)?.run(false)?);
+        let fine = final_q(&with(reference_spec, Some(0.5 * h), false)?.run(Control::QUIET)?);
         let discrepancy = (&coarse - &fine).amax();
         if discrepancy <= 1e-11 * fine.amax().max(1.0) {
             break fine;
@@ -106,7 +107,7 @@ pub(super) fn sweep_runs(
         progress.set_message(label.clone());
         let run = |steps: f64, energy: bool| {
             with(spec, Some(span / steps), energy)?
-                .run(false)
+                .run(Control::QUIET)
                 .map_err(|error| match error {
                     SceneError::RunFailed { source, .. } => SceneError::from(source),
                     other => other,
@@ -117,10 +118,12 @@ pub(super) fn sweep_runs(
         };
         let measure = |steps: f64| -> Result<Record, SceneError> {
             let summary = run(steps, true)?;
+            // Checked once: the timed runs do only the run.
             let quiet = with(spec, Some(span / steps), false)?;
+            let quiet = quiet.checked()?;
             let seconds = median_seconds(
                 || {
-                    let _ = quiet.run(false);
+                    let _ = quiet.run(Control::QUIET);
                 },
                 options,
             );

@@ -8,7 +8,6 @@
 //! left to right (a periodic mesh does not repeat its first node at the right end). The run
 //! takes the whole number of steps h that reaches t_end (the last level at or after it).
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -22,11 +21,10 @@ use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_space_time;
 use crate::report::progress::Progress;
 use crate::report::summary::{ErrorReport, Parameters, Status, TrajectoryOutput};
-use crate::run::outcome::{RunSummary, print_outcome};
+use crate::run::outcome::RunSummary;
 use crate::scene::error::SceneError;
 use crate::scene::field::{FieldRunSection, FieldScene, QuadratureName};
 use crate::scene::limits;
-use crate::scene::overrides::Overrides;
 
 /// The most time levels a field run may take.
 pub const MAX_LEVELS: usize = 100_000_000;
@@ -93,25 +91,6 @@ pub fn finish_field_stream(
         every,
         rows,
     }))
-}
-
-/// `svi run` on the field scene `scene` (loaded as `name`): apply the overrides, run, print
-/// the summary as text or JSON (also for failures, as `svi run` does for every scene) and
-/// return the error, if any, for the exit status.
-pub fn execute(
-    name: &str,
-    scene: Result<FieldScene, SceneError>,
-    overrides: &Overrides,
-    json: bool,
-    strict: bool,
-) -> anyhow::Result<()> {
-    let mut ran = false;
-    let result = scene.and_then(|mut scene| {
-        scene.apply(overrides)?;
-        ran = true;
-        scene.run(std::io::stderr().is_terminal())
-    });
-    print_outcome(name, result, ran, json, strict)
 }
 
 impl RunSummary for FieldSummary {

@@ -1,7 +1,8 @@
 //! `svi run`: the one run path, for scenes on every space.
 //!
-//! 1. [`execute`] loads the scene (built-in or file), applies the command-line overrides and
-//!    checks them ([`Scene::apply`]).
+//! 1. The front door (the command line's `svi run`, the Python package) opens the scene
+//!    ([`crate::scene::AnyScene::open`]), puts its overrides on top and checks it once
+//!    ([`Scene::checked`]).
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
 //!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
 //!    runtime-sized ℝⁿ (chains, lattices; [`svi_models::visit_text_chain`] for a chain
@@ -16,6 +17,7 @@
 //!    assembles the one [`Summary`]. A run that fails after it started still writes its
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
 
+mod control;
 pub mod field;
 pub(crate) mod outcome;
 mod solver;
@@ -23,11 +25,11 @@ pub mod space;
 pub mod spectral;
 mod trajectory;
 
-pub use outcome::{RunSummary, error_report, failure_object, print_outcome};
+pub use control::{Control, STOP_STRIDE};
+pub use outcome::{AnySummary, RunSummary, error_report, failure_object};
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use std::io::IsTerminal;
 use std::path::Path;
 use std::time::Instant;
 use svi::Dimension;
@@ -44,6 +46,7 @@ use svi_models::{
     visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
+use crate::report::csv::Float;
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
 use crate::report::plot::plot_csv;
@@ -51,43 +54,29 @@ use crate::report::progress::Progress;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
 };
+use crate::run::control::Stop;
 use crate::run::solver::{InTau, Solver};
 use crate::run::space::{Chain, RunSpace};
 use crate::run::trajectory::TrajectoryStream;
-use crate::scene::overrides::Overrides;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};
-use crate::scene::{Scene, SceneError, Text};
-
-/// `svi run`: load the scene `name` (built-in or file), apply the command-line overrides,
-/// run it and print its summary as text or as one JSON object, and the failed health checks
-/// on stderr (with `strict` they fail the run). A field scene takes its own path,
-/// `run/field.rs` (chosen by the command line's dispatch).
-///
-/// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
-/// run that failed after it started, the summary up to its last good state with
-/// `"status": "failed"` and the `error` (kind, message, step, t); bad input, only `status`
-/// and `error`. The exit status stays that of the error (see `main.rs`).
-pub fn execute(name: &str, overrides: &Overrides, json: bool, strict: bool) -> anyhow::Result<()> {
-    // Errors of the run carry the scene's name; errors of loading it name what is wrong.
-    let mut ran = false;
-    let result = Scene::load(name).and_then(|mut scene| {
-        scene.apply(overrides)?;
-        ran = true;
-        scene.run(std::io::stderr().is_terminal())
-    });
-    print_outcome(name, result, ran, json, strict)
-}
+use crate::scene::{CheckedScene, Scene, SceneError, Text};
 
 impl Scene {
-    /// Integrate the scene, write its trajectory if asked, and summarise. `progress` allows a
-    /// progress bar on stderr for fixed-grid runs of at least
-    /// [`crate::report::progress::PROGRESS_MIN_STEPS`] steps.
-    pub fn run(&self, progress: bool) -> Result<Summary, SceneError> {
-        self.check()?;
+    /// Check the scene ([`Scene::checked`]), integrate it, write its trajectory if asked, and
+    /// summarise.
+    pub fn run(&self, control: Control<'_>) -> Result<Summary, SceneError> {
+        self.checked()?.run(control)
+    }
+}
+
+impl CheckedScene<'_> {
+    /// Integrate the scene, write its trajectory if asked, and summarise, watched by
+    /// `control` (a progress bar, a stop flag).
+    pub fn run(self, control: Control<'_>) -> Result<Summary, SceneError> {
         let run = SceneRun {
-            scene: self,
-            progress,
+            scene: &self,
+            control,
         };
         match self.space() {
             SpaceKind::Vector => match self.text() {
@@ -109,7 +98,7 @@ impl Scene {
 /// integrator.
 struct Plan<'a, S: svi::method::space::Space> {
     scene: &'a Scene,
-    progress: bool,
+    control: Control<'a>,
     t0: f64,
     initial: S::Initial,
     h: f64,
@@ -132,7 +121,7 @@ struct MethodFields {
 #[derive(Clone, Copy)]
 struct SceneRun<'a> {
     scene: &'a Scene,
-    progress: bool,
+    control: Control<'a>,
 }
 
 impl<'a> SceneRun<'a> {
@@ -144,7 +133,7 @@ impl<'a> SceneRun<'a> {
     ) -> Plan<'a, S> {
         Plan {
             scene: self.scene,
-            progress: self.progress,
+            control: self.control,
             t0,
             initial,
             h,
@@ -369,11 +358,12 @@ fn run_scene<L, S: RunSpace<L>>(
         .filter(|_| output_times.is_none())
         .map(|stream| Every::new(every, stream));
     // The step count of step doubling and of steps in τ is not known ahead.
-    let progress = (plan.progress
+    let progress = (plan.control.progress
         && !matches!(adapt, AdaptMode::Step | AdaptMode::Reparam | AdaptMode::Sem))
     .then(|| Progress::for_run(t0, plan.h, t_end, S::coordinate_count(&plan.initial)))
     .flatten();
-    let mut observers = (S::diagnostics(model, scene), trajectory, progress);
+    let stop = plan.control.stop.map(Stop);
+    let mut observers = (S::diagnostics(model, scene), trajectory, progress, stop);
     let span = match output_times {
         Some(times) => Span::with_outputs(t0, t_end, times.clone()),
         None => Span::new(t0, t_end),
@@ -381,9 +371,23 @@ fn run_scene<L, S: RunSpace<L>>(
     let start = Instant::now();
     let result = solver.solve(&span, plan.initial.clone(), &options, &mut observers);
     let seconds = start.elapsed().as_secs_f64();
-    let (diagnostics, _, progress) = observers;
+    let (diagnostics, _, progress, _) = observers;
     if let Some(progress) = &progress {
         progress.finish();
+    }
+    // A stopped run is no result (an observer of the run may have stopped it too: the flag
+    // says which); its outputs are not written.
+    if plan.control.stopped() {
+        let (steps, t) = match &result {
+            Ok(solution) => (solution.statistics.steps, S::time(&solution.last)),
+            Err(failure) => failure
+                .partial
+                .as_ref()
+                .map_or((0, t0), |run| (run.statistics.steps, S::time(&run.last))),
+        };
+        return Err(SceneError::Interrupted {
+            at: format!("the run at t = {} after {steps} steps", Float(t)),
+        });
     }
     // A failed run still reports (and writes) everything up to its last good state.
     let (outcome, failure) = match result {

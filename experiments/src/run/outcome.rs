@@ -1,16 +1,19 @@
-//! What `svi run` prints of a run of any kind of scene: its summary or its error (with the
-//! summary up to its last good state) as text or as one JSON object, the failed health checks
-//! on stderr, and the JSON `error` object of a scene error.
+//! The outcome of a run of any kind of scene ([`AnyScene::run`]): its summary ([`AnySummary`])
+//! or its error, with the summary up to its last good state where the run started; the JSON
+//! `error` object of a scene error and the failure object of bad input.
 
-use anyhow::Context;
+use serde::Serialize;
 
+use crate::report::field::FieldSummary;
 use crate::report::health::Warning;
-use crate::report::output;
-use crate::report::schema::{self, Kind, SCHEMA_VERSION, Versioned};
+use crate::report::schema::{Kind, SCHEMA_VERSION, Versioned};
+use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Status, Summary};
+use crate::run::Control;
 use crate::scene::SceneError;
+use crate::scene::any::AnyScene;
 
-/// The summary of a run of any kind of scene, as [`print_outcome`] prints it.
+/// The summary of a run of some kind of scene: what a front door prints.
 pub trait RunSummary: Versioned + std::fmt::Display + Sized {
     /// The health checks the run failed.
     fn warnings(&self) -> &[Warning];
@@ -48,61 +51,6 @@ pub fn failure_object(report: &ErrorReport) -> serde_json::Value {
     })
 }
 
-/// Print the outcome of a run (`ran`: whether it started, after the scene was loaded and
-/// the flags applied) as text or as one JSON object, the warnings on stderr, and return the
-/// error, if any, for the exit status.
-///
-/// With `json` every outcome prints one JSON object: the summary with `"status": "ok"`; a
-/// run that failed after it started, the summary up to its last good state with
-/// `"status": "failed"` and the `error` (kind, message, step, t); bad input, only `status`
-/// and `error` ([`failure_object`]). With `strict` a failed health check is an error.
-pub fn print_outcome<S: RunSummary>(
-    name: &str,
-    result: Result<S, SceneError>,
-    ran: bool,
-    json: bool,
-    strict: bool,
-) -> anyhow::Result<()> {
-    let (summary, error) = match result {
-        Ok(mut summary) => {
-            let error = (strict && !summary.warnings().is_empty()).then(|| SceneError::Unhealthy {
-                warnings: summary
-                    .warnings()
-                    .iter()
-                    .map(|w| w.message.clone())
-                    .collect(),
-            });
-            if let Some(error) = &error {
-                summary.fail(error_report(error));
-            }
-            (Some(summary), error)
-        }
-        Err(error) => (S::partial(&error), Some(error)),
-    };
-    for warning in summary.iter().flat_map(|summary| summary.warnings()) {
-        output::warn(format_args!("warning: {}", warning.message));
-    }
-    let printed = match (&summary, json) {
-        (Some(summary), true) => output::print(format_args!("{}\n", schema::to_json(summary)?)),
-        (Some(summary), false) if error.is_none() => output::print(summary),
-        (None, true) => {
-            let report = error.as_ref().map(error_report);
-            let object = report.as_ref().map(failure_object);
-            output::print(format_args!("{}\n", object.unwrap_or_default()))
-        }
-        _ => Ok(()),
-    };
-    let error = match (error, printed) {
-        (None, Err(stdout)) => Some(SceneError::from(stdout)),
-        (error, _) => error,
-    };
-    match error {
-        None => Ok(()),
-        Some(error) if ran => Err(error).with_context(|| format!("scene '{name}' failed")),
-        Some(error) => Err(error.into()),
-    }
-}
-
 /// The JSON `error` object of a scene error: the library's kind for its errors, `health`,
 /// `output`, or `invalid_input` for other bad input.
 pub fn error_report(error: &SceneError) -> ErrorReport {
@@ -119,5 +67,84 @@ pub fn error_report(error: &SceneError) -> ErrorReport {
         message: error.to_string(),
         step: None,
         t: None,
+    }
+}
+
+/// The summary of a run of a scene of any kind.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum AnySummary {
+    /// A run on ℝⁿ or SO(3).
+    Ode(Box<Summary>),
+    /// A multisymplectic field run.
+    Field(Box<FieldSummary>),
+    /// A pseudospectral run.
+    Pseudospectral(Box<SpectralSummary>),
+}
+
+impl AnyScene {
+    /// Check the scene once and run it, watched by `control` (a field or pseudospectral run
+    /// draws its progress bar but has no stop flag: a `control.stop` is refused for it).
+    pub fn run(&self, control: Control<'_>) -> Result<AnySummary, SceneError> {
+        if control.stop.is_some() && !matches!(self, AnyScene::Ode(_)) {
+            return Err(SceneError::NotApplicable {
+                option: "stop",
+                reason: "a field or pseudospectral run cannot be stopped between steps".into(),
+            });
+        }
+        Ok(match self {
+            AnyScene::Ode(scene) => AnySummary::Ode(Box::new(scene.run(control)?)),
+            AnyScene::Field(scene) => AnySummary::Field(Box::new(scene.run(control.progress)?)),
+            AnyScene::Pseudospectral(scene) => {
+                AnySummary::Pseudospectral(Box::new(scene.run(control.progress)?))
+            }
+        })
+    }
+}
+
+impl Versioned for AnySummary {
+    fn kind(&self) -> Kind {
+        match self {
+            AnySummary::Ode(summary) => summary.kind(),
+            AnySummary::Field(summary) => summary.kind(),
+            AnySummary::Pseudospectral(summary) => summary.kind(),
+        }
+    }
+    fn deprecated(&self) -> Vec<(&'static str, serde_json::Value)> {
+        match self {
+            AnySummary::Ode(summary) => summary.deprecated(),
+            AnySummary::Field(summary) => summary.deprecated(),
+            AnySummary::Pseudospectral(summary) => summary.deprecated(),
+        }
+    }
+}
+
+impl std::fmt::Display for AnySummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AnySummary::Ode(summary) => summary.fmt(f),
+            AnySummary::Field(summary) => summary.fmt(f),
+            AnySummary::Pseudospectral(summary) => summary.fmt(f),
+        }
+    }
+}
+
+impl RunSummary for AnySummary {
+    fn warnings(&self) -> &[Warning] {
+        match self {
+            AnySummary::Ode(summary) => summary.warnings(),
+            AnySummary::Field(summary) => summary.warnings(),
+            AnySummary::Pseudospectral(summary) => summary.warnings(),
+        }
+    }
+    fn fail(&mut self, report: ErrorReport) {
+        match self {
+            AnySummary::Ode(summary) => summary.fail(report),
+            AnySummary::Field(summary) => summary.fail(report),
+            AnySummary::Pseudospectral(summary) => summary.fail(report),
+        }
+    }
+    fn partial(error: &SceneError) -> Option<Self> {
+        Summary::partial(error).map(|summary| AnySummary::Ode(Box::new(summary)))
     }
 }

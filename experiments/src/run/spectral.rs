@@ -8,7 +8,6 @@
 //! left to right (the periodic grid does not repeat its first node). `--plot` draws |ψ| over
 //! space and time. The run takes the whole number of steps h that reaches t_end.
 
-use std::io::IsTerminal;
 use std::time::Instant;
 
 use svi::field::fourier::Complex64;
@@ -21,10 +20,9 @@ use crate::report::progress::Progress;
 use crate::report::spectral::SpectralSummary;
 use crate::report::summary::{ErrorReport, Parameters, Status};
 use crate::run::field::{field_stream, finish_field_stream, time_levels};
-use crate::run::outcome::{RunSummary, print_outcome};
+use crate::run::outcome::RunSummary;
 use crate::scene::error::SceneError;
 use crate::scene::limits;
-use crate::scene::overrides::Overrides;
 use crate::scene::spectral::{SpectralScene, scheme_name};
 
 impl RunSummary for SpectralSummary {
@@ -38,24 +36,6 @@ impl RunSummary for SpectralSummary {
     fn partial(_: &SceneError) -> Option<Self> {
         None
     }
-}
-
-/// `svi run` on the pseudospectral scene `scene` (loaded as `name`): apply the overrides,
-/// run, print the summary as text or JSON and return the error, if any, for the exit status.
-pub fn execute(
-    name: &str,
-    scene: Result<SpectralScene, SceneError>,
-    overrides: &Overrides,
-    json: bool,
-    strict: bool,
-) -> anyhow::Result<()> {
-    let mut ran = false;
-    let result = scene.and_then(|mut scene| {
-        scene.apply(overrides)?;
-        ran = true;
-        scene.run(std::io::stderr().is_terminal())
-    });
-    print_outcome(name, result, ran, json, strict)
 }
 
 impl SpectralScene {

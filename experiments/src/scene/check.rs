@@ -1,6 +1,8 @@
 //! Every check of a scene's input that needs no model ([`Scene::check`]): the model fields,
 //! a method for the scene's space, initial-state fields of that space, the run and output
-//! options, and no option the scene cannot use.
+//! options, and no option the scene cannot use. A [`CheckedScene`] is a scene that passed
+//! them, borrowed so that it cannot change: a run path checks a scene once and runs it as
+//! often as it likes (the bench's timed repetitions, an ensemble's member).
 
 use svi::MethodSpec;
 use svi::method::registry::{self, SpaceKind};
@@ -9,7 +11,25 @@ use crate::scene::error::methods_with;
 use crate::scene::schema::{AdaptMode, Diagnostic, RecoveryKind};
 use crate::scene::{Scene, SceneError, limits, rigid};
 
+/// A scene that passed [`Scene::check`], borrowed so that it stays as checked: its runs
+/// ([`CheckedScene::run`]) do not check it again.
+#[derive(Debug, Clone, Copy)]
+pub struct CheckedScene<'a>(&'a Scene);
+
+impl std::ops::Deref for CheckedScene<'_> {
+    type Target = Scene;
+    fn deref(&self) -> &Scene {
+        self.0
+    }
+}
+
 impl Scene {
+    /// The scene, checked ([`Scene::check`]) once for any number of runs.
+    pub fn checked(&self) -> Result<CheckedScene<'_>, SceneError> {
+        self.check()?;
+        Ok(CheckedScene(self))
+    }
+
     /// The model fields: a zoo `model` or a `lagrangian` (parsed, with the initial state,
     /// step and horizon it has no defaults for), and the fields of a text model only with
     /// one.

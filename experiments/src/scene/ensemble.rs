@@ -442,7 +442,7 @@ impl Member {
     /// The scene of this member: `scene` with the member's parameters applied as `svi run
     /// --param` applies them, and its initial components written into `[initial]` (the other
     /// components as the scene or the model's defaults give them, for the member's
-    /// parameters).
+    /// parameters). Not checked: its run checks it, once.
     pub fn apply(&self, axes: &[Axis], scene: &Scene) -> Result<Scene, SceneError> {
         let mut scene = scene.clone();
         let parameters: Vec<(String, f64)> = axes
@@ -454,7 +454,7 @@ impl Member {
             })
             .collect();
         if !parameters.is_empty() {
-            scene.apply(&Overrides {
+            scene.overlay(&Overrides {
                 parameters,
                 ..Overrides::default()
             })?;
@@ -527,7 +527,6 @@ impl Member {
                 scene.initial.p = Some(Components::Values(p));
             }
         }
-        scene.check()?;
         Ok(scene)
     }
 }

@@ -218,6 +218,13 @@ pub enum SceneError {
         #[source]
         source: svi::Error,
     },
+    /// A run stopped by its caller's stop flag ([`crate::run::Control::stop`]; Ctrl-C in
+    /// Python) before its horizon: nothing of it is reported as a result.
+    #[error("interrupted: {at}")]
+    Interrupted {
+        /// Where: the time and step a run reached, the members of an ensemble.
+        at: String,
+    },
     /// A method name of `svi bench` or `svi stress` that is neither a library method nor
     /// one of the peers `dop853`, `dopri5`, `radau5` and `molly`.
     #[error(
@@ -307,6 +314,7 @@ impl SceneError {
         match self {
             SceneError::Svi(error) => is_bad_input(error),
             SceneError::RunFailed { .. }
+            | SceneError::Interrupted { .. }
             | SceneError::Write { .. }
             | SceneError::Stdout(_)
             | SceneError::Plot(_)

@@ -104,6 +104,7 @@
 //! v = "0"
 //! ```
 
+pub mod any;
 pub mod builtin;
 mod check;
 pub mod ensemble;
@@ -117,6 +118,7 @@ pub mod schema;
 pub mod spectral;
 pub mod vector;
 
+pub use check::CheckedScene;
 pub use error::SceneError;
 
 use std::collections::BTreeMap;
@@ -182,12 +184,18 @@ pub struct Scene {
 impl Scene {
     /// Parse a scene from TOML and check it; `origin` names the source in error messages.
     pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
-        let scene: Scene = toml::from_str(text).map_err(|parser| SceneError::Parse {
-            origin: origin.into(),
-            parser,
-        })?;
+        let scene = Scene::parse(text, origin)?;
         scene.check()?;
         Ok(scene)
+    }
+
+    /// Parse a scene from TOML without checking it (a run checks it, once: see
+    /// [`Scene::checked`]); `origin` names the source in error messages.
+    pub fn parse(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        toml::from_str(text).map_err(|parser| SceneError::Parse {
+            origin: origin.into(),
+            parser,
+        })
     }
 
     /// The scene of a Lagrangian written as text with its `coordinates`, `forces`,
@@ -218,19 +226,25 @@ impl Scene {
     }
 
     /// A built-in scene if `name_or_path` names one, else the scene file at that path (read
-    /// only if it is a regular file of at most [`limits::MAX_SCENE_BYTES`]).
+    /// only if it is a regular file of at most [`limits::MAX_SCENE_BYTES`]), checked.
     pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
-        if let Some(scene) = Scene::builtin(name_or_path) {
-            return scene;
+        let scene = Scene::open(name_or_path)?;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// [`Scene::load`] without the check: the scene a run path puts its overrides on
+    /// ([`Scene::overlay`]) and then checks once ([`Scene::checked`]).
+    pub fn open(name_or_path: &str) -> Result<Scene, SceneError> {
+        if let Some(text) = builtin_scene(name_or_path) {
+            return Scene::parse(text, &format!("built-in scene '{name_or_path}'"));
         }
         let path = Path::new(name_or_path);
         match limits::read_scene_file(path) {
-            Ok(text) => {
-                Scene::from_toml(&text, &format!("'{}'", path.display())).map(|scene| Scene {
-                    source: Some(path.into()),
-                    ..scene
-                })
-            }
+            Ok(text) => Scene::parse(&text, &format!("'{}'", path.display())).map(|scene| Scene {
+                source: Some(path.into()),
+                ..scene
+            }),
             Err(SceneError::Read { source, .. })
                 if source.kind() == std::io::ErrorKind::NotFound
                     && path.extension().is_none()
@@ -321,11 +335,17 @@ impl Scene {
         }
     }
 
-    /// Apply command-line overrides, then [`Scene::check`]. A flag for a method that does not
-    /// take it (`--points`, `--quadrature`) or for the other space (`--form`), and `--h` with
-    /// `--adapt step`, are errors; a scene's own `points` and `quadrature` are ignored by a
-    /// method without them.
+    /// Apply command-line overrides ([`Scene::overlay`]), then [`Scene::check`].
     pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
+        self.overlay(overrides)?;
+        self.check()
+    }
+
+    /// Put command-line overrides on top, without checking the scene they make (a run checks
+    /// it). A flag for a method that does not take it (`--points`, `--quadrature`) or for the
+    /// other space (`--form`), and `--h` with `--adapt step`, are errors; a scene's own
+    /// `points` and `quadrature` are ignored by a method without them.
+    pub fn overlay(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
         let Overrides {
             method,
             points,
@@ -433,7 +453,7 @@ impl Scene {
                     .into(),
             });
         }
-        self.check()
+        Ok(())
     }
 
     /// `[method] name`, or the default method of the scene's space (`svi` on ℝᴺ, `lie-svi`
