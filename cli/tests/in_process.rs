@@ -19,6 +19,7 @@ fn method(text: &str) -> svi::method::registry::MethodSpec {
 
 mod run {
     use super::{method, scene};
+    use svi_experiments::scene::overrides::RunFlags;
     use svi_experiments::{Control, Diagnostic, Overrides, Parameters, Scene, SceneError};
 
     #[test]
@@ -37,14 +38,20 @@ mod run {
             let mut scene = scene("oscillator");
             scene
                 .apply(&Overrides {
-                    method: Some(kind),
+                    run: RunFlags {
+                        method: Some(kind),
+                        ..RunFlags::default()
+                    },
                     ..Overrides::default()
                 })
                 .unwrap();
             assert_eq!((scene.points(), scene.quadrature()), (None, None));
             let error = scene
                 .apply(&Overrides {
-                    points: Some(4),
+                    run: RunFlags {
+                        points: Some(4),
+                        ..RunFlags::default()
+                    },
                     ..Overrides::default()
                 })
                 .unwrap_err();

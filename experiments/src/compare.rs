@@ -27,7 +27,7 @@ use crate::report::schema::{self, Kind, Versioned};
 use crate::report::summary::{ErrorReport, Parameters, Status, Summary};
 use crate::run::Control;
 use crate::run::outcome::{error_report, failure_object};
-use crate::scene::overrides::{Overrides, method_help, parse_parameter};
+use crate::scene::overrides::{Overrides, RunFlags, method_help, parse_parameter};
 use crate::scene::{Scene, SceneError};
 
 /// `svi compare`'s arguments.
@@ -73,8 +73,11 @@ impl CompareArgs {
     /// The flags every method's run shares.
     fn overrides(&self) -> Overrides {
         Overrides {
-            h: self.h,
-            t_end: self.t_end,
+            run: RunFlags {
+                h: self.h,
+                t_end: self.t_end,
+                ..RunFlags::default()
+            },
             parameters: self.parameters.clone(),
             ..Overrides::default()
         }
@@ -292,7 +295,10 @@ fn prepare(args: &CompareArgs) -> Result<(Prepared, Option<OutputFile>), SceneEr
         .map(|method| {
             let mut scene = scene.clone();
             scene.apply(&Overrides {
-                method: Some(*method),
+                run: RunFlags {
+                    method: Some(*method),
+                    ..RunFlags::default()
+                },
                 ..Overrides::default()
             })?;
             Ok((*method, scene))

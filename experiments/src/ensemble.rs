@@ -30,12 +30,9 @@ use crate::run::outcome::error_report;
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
-use crate::scene::overrides::{
-    Overrides, diagnostics_help, max_steps_help, method_help, monitor_help, tol_help,
-};
-use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
+use crate::scene::overrides::{Overrides, RunFlags, diagnostics_help, diagnostics_long_help};
+use crate::scene::schema::Diagnostic;
 use crate::scene::{Scene, SceneError};
-use svi::model::reparametrized::MonitorSpec;
 
 /// The most threads `--threads` accepts.
 pub const MAX_THREADS: usize = 1024;
@@ -45,8 +42,12 @@ pub const MAX_THREADS: usize = 1024;
 /// are asked for with `--diagnostics`).
 pub const DEFAULT_DIAGNOSTICS: [Diagnostic; 1] = [Diagnostic::Energy];
 
-/// `svi ensemble`'s arguments.
+/// `svi ensemble`'s arguments: its own, and the flags of `svi run` every member shares
+/// ([`RunFlags`], with the ensemble's default diagnostics).
 #[derive(Debug, Clone, Default, clap::Args)]
+#[command(mut_arg("diagnostics", |arg| arg
+    .help(diagnostics_help(&DEFAULT_DIAGNOSTICS))
+    .long_help(diagnostics_long_help(&DEFAULT_DIAGNOSTICS))))]
 pub struct EnsembleArgs {
     /// Built-in scene (see `svi list`) or path to a scene TOML file [default: kepler].
     pub scene: Option<String>,
@@ -92,70 +93,16 @@ pub struct EnsembleArgs {
     /// colour).
     #[arg(long, requires = "plot")]
     pub plot_cyclic: bool,
-    /// Integration method of every member: NAME, NAME:P or NAME:P/M.
-    #[arg(long, value_name = "METHOD", long_help = method_help("Integration method of every member (default: the scene's)."))]
-    pub method: Option<svi::MethodSpec>,
-    /// Number of Chebyshev–Gauss–Lobatto points (svi, sc, lie-svi), on top of --method.
-    #[arg(long, value_name = "N", allow_hyphen_values = true)]
-    pub points: Option<usize>,
-    /// Number of Gauss–Legendre quadrature points (svi, lie-svi), on top of --method.
-    #[arg(long, value_name = "M", allow_hyphen_values = true)]
-    pub quadrature: Option<usize>,
-    /// Step size.
-    #[arg(long = "h", value_name = "H", allow_hyphen_values = true)]
-    pub h: Option<f64>,
-    /// Final time.
-    #[arg(long, value_name = "T", allow_hyphen_values = true)]
-    pub t_end: Option<f64>,
-    /// Diagnostics of every member, comma-separated, or none.
-    #[arg(
-        long,
-        value_enum,
-        value_name = "LIST",
-        value_delimiter = ',',
-        help = diagnostics_help(&DEFAULT_DIAGNOSTICS)
-    )]
-    pub diagnostics: Option<Vec<Diagnostic>>,
-    /// Adaptivity of every member (the modes below, as for svi run; the default: none).
-    #[arg(long, value_enum)]
-    pub adapt: Option<AdaptMode>,
-    /// Target final error of --adapt step and --adapt degree.
-    #[arg(long, value_name = "TOL", allow_hyphen_values = true, help = tol_help())]
-    pub tol: Option<f64>,
-    /// The monitor g(q) > 0 of --adapt reparam.
-    #[arg(long, value_name = "MONITOR", help = monitor_help())]
-    pub monitor: Option<MonitorSpec>,
-    /// Recovery policy for failed steps.
-    #[arg(long, value_enum)]
-    pub recovery: Option<RecoveryKind>,
-    /// Stop a member once a state component exceeds this in absolute value.
-    #[arg(long, value_name = "LIMIT", allow_hyphen_values = true)]
-    pub divergence_limit: Option<f64>,
-    /// Most steps of each member.
-    #[arg(long, value_name = "STEPS", allow_hyphen_values = true, help = max_steps_help())]
-    pub max_steps: Option<usize>,
-    /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
-    #[arg(long, value_enum, value_name = "FORM")]
-    pub form: Option<FormName>,
+    /// The flags of `svi run` every member shares.
+    #[command(flatten)]
+    pub run: RunFlags,
 }
 
 impl EnsembleArgs {
     /// The overrides every member shares (those of `svi run` that an ensemble takes).
     pub fn overrides(&self) -> Overrides {
         Overrides {
-            method: self.method,
-            points: self.points,
-            quadrature: self.quadrature,
-            h: self.h,
-            t_end: self.t_end,
-            diagnostics: self.diagnostics.clone(),
-            adapt: self.adapt,
-            monitor: self.monitor,
-            tol: self.tol,
-            recovery: self.recovery,
-            divergence_limit: self.divergence_limit,
-            max_steps: self.max_steps,
-            form: self.form,
+            run: self.run.clone(),
             ..Overrides::default()
         }
     }
@@ -195,7 +142,7 @@ impl Ensemble {
         axes: Vec<Axis>,
         random: Option<Random>,
     ) -> Result<Ensemble, SceneError> {
-        if overrides.diagnostics.is_none() && scene.output.diagnostics.is_none() {
+        if overrides.run.diagnostics.is_none() && scene.output.diagnostics.is_none() {
             scene.output.diagnostics = Some(DEFAULT_DIAGNOSTICS.to_vec());
         }
         scene.apply(overrides)?;

@@ -18,7 +18,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
-use clap::ValueEnum;
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::PyException;
@@ -30,11 +29,9 @@ use svi_experiments::report::table::Cell;
 use svi_experiments::run::error_report;
 use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
 use svi_experiments::scene::field::FieldScene;
+use svi_experiments::scene::overrides::OptionValue;
 use svi_experiments::scene::spectral::SpectralScene;
-use svi_experiments::{
-    AdaptMode, Components, Control, Diagnostic, FormName, Overrides, RecoveryKind, Scene,
-    SceneError,
-};
+use svi_experiments::{Components, Control, Overrides, Scene, SceneError};
 
 create_exception!(
     _svi,
@@ -82,70 +79,64 @@ fn invalid(option: &'static str, reason: String) -> PyErr {
     failure(SceneError::InvalidOption { option, reason })
 }
 
-/// Parse an argument written as on the command line (`method`, `monitor`).
-fn parsed<T: std::str::FromStr>(option: &'static str, text: Option<&str>) -> PyResult<Option<T>>
-where
-    T::Err: std::fmt::Display,
-{
-    text.map(|text| {
-        text.parse()
-            .map_err(|error| invalid(option, format!("{error}")))
-    })
-    .transpose()
+/// The options of `svi run` that are not keywords of the package's calls: the model's
+/// parameters are the `params` dict, files are not written (results come back as arrays), and
+/// the trajectory's thinning is `every` of the trajectory.
+const NOT_KEYWORDS: [&str; 4] = ["parameters", "out", "plot", "every"];
+
+/// A keyword argument's value, of the kinds of [`OptionKind`] (the package checked it).
+#[derive(FromPyObject)]
+enum Value {
+    Count(u64),
+    Real(f64),
+    Text(String),
+    Reals(Vec<f64>),
+    Names(Vec<String>),
 }
 
-/// Parse a clap value enum (`adapt`, `recovery`, `form`) by its command-line name.
-fn choice<T: ValueEnum>(option: &'static str, text: Option<&str>) -> PyResult<Option<T>> {
-    text.map(|text| T::from_str(text, false).map_err(|reason| invalid(option, reason)))
-        .transpose()
+/// The options of `svi run` the package's calls take as keywords, each with the kind of its
+/// value (`real`, `count`, `text`, `reals`, `names`): `Overrides` is their one definition, so
+/// a flag added to `svi run` is a keyword of `svi.run`, `svi.solve` and `svi.ensemble`.
+#[pyfunction]
+fn options() -> Vec<(String, &'static str)> {
+    Overrides::options()
+        .into_iter()
+        .filter(|(name, _)| !NOT_KEYWORDS.contains(&name.as_str()))
+        .map(|(name, kind)| (name, kind.name()))
+        .collect()
 }
 
-/// The overrides of `svi run` from keyword arguments.
-#[allow(clippy::too_many_arguments)]
+/// The overrides of keyword `options` (see [`options`]) and the model's `params`.
 fn overrides(
-    method: Option<&str>,
-    points: Option<usize>,
-    quadrature: Option<usize>,
-    h: Option<f64>,
-    t_end: Option<f64>,
+    options: Option<BTreeMap<String, Value>>,
     params: Option<BTreeMap<String, f64>>,
-    diagnostics: Option<Vec<String>>,
-    output_times: Option<Vec<f64>>,
-    adapt: Option<&str>,
-    monitor: Option<&str>,
-    tol: Option<f64>,
-    recovery: Option<&str>,
-    divergence_limit: Option<f64>,
-    max_steps: Option<usize>,
-    form: Option<&str>,
 ) -> PyResult<Overrides> {
-    let diagnostics = diagnostics
-        .map(|names| {
-            names
-                .iter()
-                .map(|name| name.parse::<Diagnostic>())
-                .collect::<Result<Vec<_>, _>>()
-                .map_err(|error| failure(error.into()))
+    let named: Vec<(String, OptionValue)> = options
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(name, value)| {
+            let value = match value {
+                Value::Count(n) => OptionValue::Count(n),
+                Value::Real(x) => OptionValue::Real(x),
+                Value::Text(text) => OptionValue::Text(text),
+                Value::Reals(xs) => OptionValue::Reals(xs),
+                Value::Names(names) => OptionValue::Names(names),
+            };
+            (name, value)
         })
-        .transpose()?;
-    Ok(Overrides {
-        method: parsed("method", method)?,
-        points,
-        quadrature,
-        h,
-        t_end,
-        parameters: params.unwrap_or_default().into_iter().collect(),
-        diagnostics,
-        adapt: choice::<AdaptMode>("adapt", adapt)?,
-        monitor: parsed("monitor", monitor)?,
-        tol,
-        output_times,
-        recovery: choice::<RecoveryKind>("recovery", recovery)?,
-        divergence_limit,
-        max_steps,
-        form: choice::<FormName>("form", form)?,
-        ..Overrides::default()
-    })
+        .collect();
+    if let Some((name, _)) = named
+        .iter()
+        .find(|(name, _)| NOT_KEYWORDS.contains(&name.as_str()))
+    {
+        return Err(invalid(
+            "option",
+            format!("'{name}' is not an option of this call"),
+        ));
+    }
+    let mut overrides = Overrides::from_named(&named).map_err(failure)?;
+    overrides.parameters = params.unwrap_or_default().into_iter().collect();
+    Ok(overrides)
 }
 
 /// Put the fields of `initial` (`t0`, `q`, `v`, `p`, `rotation`, `quaternion`, `omega`,
@@ -325,9 +316,7 @@ impl Dense {
 /// runs, on a terminal).
 #[pyfunction]
 #[pyo3(signature = (
-    scene, *, model=None, method=None, points=None, quadrature=None, h=None, t_end=None, params=None,
-    initial=None, diagnostics=None, output_times=None, adapt=None, monitor=None, tol=None,
-    recovery=None, divergence_limit=None, max_steps=None, form=None, trajectory=true, every=None,
+    scene, *, model=None, params=None, initial=None, options=None, trajectory=true, every=None,
     progress=false, dense=false
 ))]
 #[allow(clippy::too_many_arguments)]
@@ -335,44 +324,15 @@ fn run<'py>(
     py: Python<'py>,
     scene: &str,
     model: Option<TextModel>,
-    method: Option<&str>,
-    points: Option<usize>,
-    quadrature: Option<usize>,
-    h: Option<f64>,
-    t_end: Option<f64>,
     params: Option<BTreeMap<String, f64>>,
     initial: Option<BTreeMap<String, Vec<f64>>>,
-    diagnostics: Option<Vec<String>>,
-    output_times: Option<Vec<f64>>,
-    adapt: Option<&str>,
-    monitor: Option<&str>,
-    tol: Option<f64>,
-    recovery: Option<&str>,
-    divergence_limit: Option<f64>,
-    max_steps: Option<usize>,
-    form: Option<&str>,
+    options: Option<BTreeMap<String, Value>>,
     trajectory: bool,
     every: Option<usize>,
     progress: bool,
     dense: bool,
 ) -> PyResult<(String, Option<Trajectory<'py>>, Option<Dense>)> {
-    let overrides = overrides(
-        method,
-        points,
-        quadrature,
-        h,
-        t_end,
-        params,
-        diagnostics,
-        output_times,
-        adapt,
-        monitor,
-        tol,
-        recovery,
-        divergence_limit,
-        max_steps,
-        form,
-    )?;
+    let overrides = overrides(options, params)?;
     let mut loaded = match model {
         Some((lagrangian, coordinates, forces, symmetries, parameters)) => {
             Scene::of_text_model(lagrangian, coordinates, forces, symmetries, parameters)
@@ -447,9 +407,7 @@ type Chunk = (usize, Vec<String>, Vec<Vec<Py<PyAny>>>);
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, model=None, base=None, params=vec![], initial=vec![], random=None, seed=0, start=0,
-    stop=None, threads=0,
-    method=None, points=None, quadrature=None, h=None, t_end=None, diagnostics=None,
-    adapt=None, monitor=None, tol=None, recovery=None, divergence_limit=None, max_steps=None, form=None
+    stop=None, threads=0, options=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble(
@@ -464,37 +422,9 @@ fn ensemble(
     start: usize,
     stop: Option<usize>,
     threads: usize,
-    method: Option<&str>,
-    points: Option<usize>,
-    quadrature: Option<usize>,
-    h: Option<f64>,
-    t_end: Option<f64>,
-    diagnostics: Option<Vec<String>>,
-    adapt: Option<&str>,
-    monitor: Option<&str>,
-    tol: Option<f64>,
-    recovery: Option<&str>,
-    divergence_limit: Option<f64>,
-    max_steps: Option<usize>,
-    form: Option<&str>,
+    options: Option<BTreeMap<String, Value>>,
 ) -> PyResult<Chunk> {
-    let overrides = overrides(
-        method,
-        points,
-        quadrature,
-        h,
-        t_end,
-        None,
-        diagnostics,
-        None,
-        adapt,
-        monitor,
-        tol,
-        recovery,
-        divergence_limit,
-        max_steps,
-        form,
-    )?;
+    let overrides = overrides(options, None)?;
     let mut axes = Vec::new();
     for text in &params {
         axes.push(parse_parameter_axis(text).map_err(failure)?);
@@ -653,6 +583,7 @@ fn version() -> &'static str {
 fn _svi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Failure", m.py().get_type::<Failure>())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(options, m)?)?;
     m.add_class::<Dense>()?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;
     m.add_function(wrap_pyfunction!(models, m)?)?;

@@ -56,6 +56,7 @@ __all__ = [
     "bench",
     "ensemble",
     "models",
+    "options",
     "run",
     "scenes",
     "solve",
@@ -381,6 +382,7 @@ def run(
     trajectory: bool = True,
     every: Optional[int] = None,
     progress: Optional[bool] = None,
+    **options: Any,
 ) -> Result:
     """Run a scene, as ``svi run SCENE --json`` does, and return its summary and trajectory.
 
@@ -416,8 +418,7 @@ def run(
         _text("scene", scene),
         params=_parameters(params),
         initial=initial_lists,
-        output_times=_reals("output_times", output_times),
-        **_shared_options(locals()),
+        options=_shared_options(locals(), options, "run"),
         trajectory=_flag("trajectory", trajectory),
         every=_count("every", every),
         progress=_stderr_is_terminal() if progress is None else _flag("progress", progress),
@@ -425,28 +426,39 @@ def run(
     return Result(json.loads(summary), rows)
 
 
-#: The options :func:`run` and :func:`ensemble` share (the flags of ``svi run``), each with
-#: the check of its type.
-_SHARED_OPTIONS: Dict[str, Callable[[str, Any], Any]] = {
-    "method": _text,
-    "points": _count,
-    "quadrature": _count,
-    "h": _real,
-    "t_end": _real,
-    "diagnostics": _names,
-    "adapt": _text,
-    "monitor": _text,
-    "tol": _real,
-    "recovery": _text,
-    "divergence_limit": _real,
-    "max_steps": _count,
-    "form": _text,
+#: The checks of the kinds of option values (``_svi.options()`` names each option's kind).
+_CHECKS: Dict[str, Callable[[str, Any], Any]] = {
+    "real": _real,
+    "count": _count,
+    "text": _text,
+    "reals": _reals,
+    "names": _names,
 }
 
+#: The options of ``svi run`` that :func:`run`, :func:`ensemble` and :func:`solve` take as
+#: keywords (the flags' names with ``_``: ``t_end`` for ``--t-end``), each with the check of
+#: its kind. They come from the native module, whose one definition of them is the command
+#: line's: a flag added to ``svi run`` is a keyword of every call.
+_SHARED_OPTIONS: Dict[str, Callable[[str, Any], Any]] = {name: _CHECKS[kind] for name, kind in _svi.options()}
 
-def _shared_options(arguments: Mapping[str, Any]) -> Dict[str, Any]:
-    """The shared options among a call's ``arguments`` (its ``locals()``), their types checked."""
-    return {name: check(name, arguments[name]) for name, check in _SHARED_OPTIONS.items()}
+
+def options() -> List[str]:
+    """The options of ``svi run`` that :func:`run`, :func:`solve` and :func:`ensemble` take as
+    keyword arguments (the flags' names with ``_`` for ``-``)."""
+    return list(_SHARED_OPTIONS)
+
+
+def _shared_options(arguments: Mapping[str, Any], extra: Mapping[str, Any], call: str) -> Dict[str, Any]:
+    """The options among a call's named ``arguments`` (its ``locals()``) and its other keyword
+    arguments ``extra``, their types checked, those not given left out; a keyword that is no
+    option is a ``TypeError``, as Python's for an unexpected keyword."""
+    unknown = set(extra) - set(_SHARED_OPTIONS)
+    if unknown:
+        raise TypeError(f"{call}() got unexpected keyword arguments: {', '.join(sorted(unknown))}")
+    given = {name: arguments[name] for name in _SHARED_OPTIONS if name in arguments}
+    given.update(extra)
+    checked = {name: _SHARED_OPTIONS[name](name, value) for name, value in given.items()}
+    return {name: value for name, value in checked.items() if value is not None}
 
 
 def _mapping(name: str, values: Any) -> Mapping[str, Any]:
@@ -594,6 +606,7 @@ def ensemble(
     q0: Any = None,
     v0: Any = None,
     p0: Any = None,
+    **options: Any,
 ) -> Any:
     """Run a scene over grids or random draws of parameters and initial states, as ``svi ensemble``.
 
@@ -643,7 +656,7 @@ def ensemble(
         random=_count("random", random),
         seed=_whole("seed", seed),
         threads=_whole("threads", threads),
-        **_shared_options(locals()),
+        options=_shared_options(locals(), options, "ensemble"),
     )
     count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)
     rows: List[List[Any]] = []

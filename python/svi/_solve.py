@@ -14,7 +14,6 @@ from . import _svi
 # The helpers of the package (argument checks, errors, the result object): this module is
 # imported at the end of ``svi/__init__.py``, once they exist.
 from . import (  # noqa: E402
-    _SHARED_OPTIONS,
     Result,
     _call,
     _count,
@@ -201,13 +200,10 @@ def solve(
     for name, value in (("q", q0), ("v", v0), ("p", p0)):
         if value is not None:
             initial[name] = _reals(f"{name}0", np.atleast_1d(value))
-    arguments = dict.fromkeys(_SHARED_OPTIONS)
     every = _count("every", options.pop("every", None))
-    arguments.update(options)
-    arguments.update(method=method, h=h, t_end=t_end, adapt=adapt, tol=tol, diagnostics=diagnostics)
-    unknown = set(arguments) - set(_SHARED_OPTIONS)
-    if unknown:
-        raise TypeError(f"solve() got unexpected keyword arguments: {', '.join(sorted(unknown))}")
+    named = dict(method=method, h=h, t_end=t_end, adapt=adapt, tol=tol, diagnostics=diagnostics)
+    named["output_times"] = _reals("saveat", saveat)
+    checked = _shared_options(named, options, "solve")
     if isinstance(model, Lagrangian):
         scene, native = "", model._native()
     else:
@@ -218,8 +214,7 @@ def solve(
         model=native,
         params=None if params is None else {_text("params", k): _real(f"params[{k!r}]", x) for k, x in _mapping("params", params).items()},
         initial=initial or None,
-        output_times=_reals("saveat", saveat),
-        **_shared_options(arguments),
+        options=checked,
         trajectory=True,
         every=every,
         progress=False,

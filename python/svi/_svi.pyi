@@ -1,8 +1,11 @@
 """Type stubs of the native module svi._svi (the Rust core; use the functions of ``svi``)."""
 
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
+
+#: A value of an option of ``svi run`` given by name (checked by ``svi`` for its kind).
+OptionValue = Union[int, float, str, List[float], List[str]]
 
 class Failure(Exception):
     """A failed call; its one argument is the JSON text of the failure object."""
@@ -23,20 +26,9 @@ def run(
     model: Optional[
         Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Dict[str, float]]
     ] = None,
-    method: Optional[str] = None,
-    points: Optional[int] = None,
-    quadrature: Optional[int] = None,
-    h: Optional[float] = None,
-    t_end: Optional[float] = None,
     params: Optional[Dict[str, float]] = None,
     initial: Optional[Dict[str, List[float]]] = None,
-    diagnostics: Optional[Sequence[str]] = None,
-    output_times: Optional[Sequence[float]] = None,
-    adapt: Optional[str] = None,
-    tol: Optional[float] = None,
-    recovery: Optional[str] = None,
-    divergence_limit: Optional[float] = None,
-    form: Optional[str] = None,
+    options: Optional[Dict[str, OptionValue]] = None,
     trajectory: bool = True,
     every: Optional[int] = None,
     progress: bool = False,
@@ -60,19 +52,13 @@ def ensemble(
     start: int = 0,
     stop: Optional[int] = None,
     threads: int = 0,
-    method: Optional[str] = None,
-    points: Optional[int] = None,
-    quadrature: Optional[int] = None,
-    h: Optional[float] = None,
-    t_end: Optional[float] = None,
-    diagnostics: Optional[Sequence[str]] = None,
-    adapt: Optional[str] = None,
-    tol: Optional[float] = None,
-    recovery: Optional[str] = None,
-    divergence_limit: Optional[float] = None,
-    form: Optional[str] = None,
+    options: Optional[Dict[str, OptionValue]] = None,
 ) -> Tuple[int, List[str], List[List[object]]]:
     """Run members ``start..stop`` of an ensemble: (member count, columns, rows)."""
+
+def options() -> List[Tuple[str, str]]:
+    """The options of ``svi run`` the calls take (in ``options``), each with the kind of its
+    value: ``real``, ``count``, ``text``, ``reals`` or ``names``."""
 
 def models() -> str:
     """The zoo models on ℝᴺ, as JSON."""

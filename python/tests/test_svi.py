@@ -304,3 +304,33 @@ def test_text_models_and_chains_of_any_size_run_from_python(tmp_path):
     chain.write_text(harmonic_chain(n, indexed=True))
     records = svi.bench(str(chain), methods="verlet", steps=[10, 20], t_end=1.0, batches=1, min_batch=0, as_frame=False)
     assert records["final_error"][0] / records["final_error"][1] == pytest.approx(4.0, rel=0.02)
+
+
+def test_every_flag_of_svi_run_is_a_keyword_of_the_calls():
+    """Adding a run option is one field of the command line's overrides: its flag is a keyword
+    of svi.run, svi.solve and svi.ensemble, parsed by the same parser (same errors)."""
+    import re
+
+    _, help_text, _ = cli("run", "--help")
+    flags = {flag.replace("-", "_") for flag in re.findall(r"^\s+--([a-z][a-z-]*)", help_text, re.M)}
+    not_keywords = {"json", "strict", "help", "param", "out", "plot", "every"}
+    assert set(svi.options()) == flags - not_keywords, (svi.options(), flags)
+    # Each reaches the command line's parser: a value it rejects is bad input naming the flag.
+    for name in ["adapt", "recovery", "form", "monitor", "method"]:
+        status, _, stderr = cli("run", "kepler", f"--{name.replace('_', '-')}", "bogus")
+        assert status == 2
+        for call in (
+            lambda: svi.run("kepler", **{name: "bogus"}),
+            lambda: svi.solve("kepler", 1.0, **{name: "bogus"}),
+            lambda: svi.ensemble("kepler", params={"e": [0.5]}, as_frame=False, **{name: "bogus"}),
+        ):
+            with pytest.raises(svi.InvalidInputError) as caught:
+                call()
+            assert name.replace("_", "-") in caught.value.message or name in caught.value.message
+    # Options outside a call's signature go through its keywords, as the flags do.
+    by_keyword = svi.run("kepler", t_end=1.0, trajectory=False, divergence_limit=1e6, max_steps=1000)
+    assert by_keyword.summary == svi.run("kepler", t_end=1.0, trajectory=False).summary | {
+        "seconds": by_keyword.summary["seconds"]
+    }
+    with pytest.raises(TypeError, match="frobnicate"):
+        svi.run("kepler", frobnicate=1)

@@ -8,7 +8,7 @@ use crate::scene::SceneError;
 use crate::scene::limits::{
     self, MAX_BATCH_SECONDS, MAX_BATCHES, MAX_RUN_SECONDS, MAX_STEPS, MIN_PEER_TOLERANCE,
 };
-use crate::scene::overrides::{Overrides, method_help, parse_parameter};
+use crate::scene::overrides::{Overrides, RunFlags, method_help, parse_parameter};
 
 /// `svi bench`'s arguments (parsed by the binary, and by tests as the binary does).
 #[derive(Debug, Clone, PartialEq, clap::Args)]
@@ -131,8 +131,11 @@ impl BenchArgs {
     /// for; an error names a method that is not known.
     pub fn options(&self) -> Result<(Overrides, BenchOptions), SceneError> {
         let overrides = Overrides {
+            run: RunFlags {
+                t_end: self.t_end,
+                ..RunFlags::default()
+            },
             parameters: self.parameters.clone(),
-            t_end: self.t_end,
             ..Overrides::default()
         };
         let options = BenchOptions {

@@ -12,7 +12,7 @@ use crate::bench::record::{Record, Sweeps};
 use crate::bench::sweep::{Outcomes, Report, check_horizon, median_seconds, sweep_steps};
 use crate::report::summary::{StateSummary, Summary};
 use crate::run::Control;
-use crate::scene::overrides::Overrides;
+use crate::scene::overrides::{Overrides, RunFlags};
 use crate::scene::schema::{Diagnostic, OutputSection};
 use crate::scene::{Scene, SceneError};
 
@@ -54,8 +54,11 @@ pub(super) fn sweep_runs(
     let with = |method: MethodSpec, h: Option<f64>, energy: bool| -> Result<Scene, SceneError> {
         let mut variant = scene.clone();
         variant.overlay(&Overrides {
-            method: Some(method),
-            h,
+            run: RunFlags {
+                method: Some(method),
+                h,
+                ..RunFlags::default()
+            },
             ..Overrides::default()
         })?;
         // Only the final state and the energy error are read: no trajectory, plot or output

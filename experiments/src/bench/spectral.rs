@@ -25,7 +25,7 @@ use crate::report::output::{self, OutputDirectory};
 use crate::report::plot::{Panel, Series, render_svg};
 use crate::run::spectral::{Prepared, error_against_exact, prepare};
 use crate::scene::error::SceneError;
-use crate::scene::overrides::Overrides;
+use crate::scene::overrides::{Overrides, RunFlags};
 use crate::scene::spectral::{SpectralScene, scheme_name, time_scheme};
 
 /// The methods of a pseudospectral bench unless `--methods` names others.
@@ -71,8 +71,11 @@ pub fn execute(
 ) -> anyhow::Result<()> {
     let mut scene = scene?;
     scene.apply(&Overrides {
+        run: RunFlags {
+            t_end: args.t_end,
+            ..RunFlags::default()
+        },
         parameters: args.parameters.clone(),
-        t_end: args.t_end,
         ..Overrides::default()
     })?;
     let methods = if args.methods == DEFAULT_METHODS {

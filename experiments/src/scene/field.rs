@@ -206,18 +206,21 @@ pub fn reject_other_flags(
     reason: impl FnOnce() -> String,
 ) -> Result<(), SceneError> {
     let unused = [
-        (overrides.method.is_some() && !takes_method, "--method"),
-        (overrides.points.is_some(), "--points"),
-        (overrides.quadrature.is_some(), "--quadrature"),
-        (overrides.diagnostics.is_some(), "--diagnostics"),
-        (overrides.adapt.is_some(), "--adapt"),
-        (overrides.tol.is_some(), "--tol"),
-        (overrides.monitor.is_some(), "--monitor"),
+        (overrides.run.method.is_some() && !takes_method, "--method"),
+        (overrides.run.points.is_some(), "--points"),
+        (overrides.run.quadrature.is_some(), "--quadrature"),
+        (overrides.run.diagnostics.is_some(), "--diagnostics"),
+        (overrides.run.adapt.is_some(), "--adapt"),
+        (overrides.run.tol.is_some(), "--tol"),
+        (overrides.run.monitor.is_some(), "--monitor"),
         (overrides.output_times.is_some(), "--output-times"),
-        (overrides.recovery.is_some(), "--recovery"),
-        (overrides.divergence_limit.is_some(), "--divergence-limit"),
-        (overrides.max_steps.is_some(), "--max-steps"),
-        (overrides.form.is_some(), "--form"),
+        (overrides.run.recovery.is_some(), "--recovery"),
+        (
+            overrides.run.divergence_limit.is_some(),
+            "--divergence-limit",
+        ),
+        (overrides.run.max_steps.is_some(), "--max-steps"),
+        (overrides.run.form.is_some(), "--form"),
     ];
     match unused.into_iter().find(|(given, _)| *given) {
         Some((_, option)) => Err(SceneError::NotApplicable {
@@ -264,8 +267,8 @@ impl SpaceTimeFields<'_> {
                 self.parameters.insert(name.clone(), *value);
             }
         }
-        set(&mut self.run.h, &overrides.h);
-        set(&mut self.run.t_end, &overrides.t_end);
+        set(&mut self.run.h, &overrides.run.h);
+        set(&mut self.run.t_end, &overrides.run.t_end);
         set(self.every, &overrides.every);
         set(self.trajectory, &overrides.out);
         set(self.plot, &overrides.plot);
@@ -297,6 +300,7 @@ impl SpaceTimeFields<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::overrides::RunFlags;
 
     #[test]
     fn the_built_in_field_scenes_parse_and_name_field_models() {
@@ -311,7 +315,10 @@ mod tests {
     fn flags_for_other_scenes_are_not_applicable() {
         let mut scene = FieldScene::load("wave").unwrap().unwrap();
         let overrides = Overrides {
-            adapt: Some(crate::scene::schema::AdaptMode::Step),
+            run: RunFlags {
+                adapt: Some(crate::scene::schema::AdaptMode::Step),
+                ..RunFlags::default()
+            },
             ..Overrides::default()
         };
         assert!(matches!(
@@ -322,8 +329,11 @@ mod tests {
             })
         ));
         let overrides = Overrides {
+            run: RunFlags {
+                h: Some(0.01),
+                ..RunFlags::default()
+            },
             parameters: vec![("points".into(), 64.0), ("c".into(), 2.0)],
-            h: Some(0.01),
             ..Overrides::default()
         };
         scene.apply(&overrides).unwrap();

@@ -133,7 +133,7 @@ use svi::model::text::{TextChainModel, TextModel, TextSpec};
 use svi_models::{LOCAL_MODEL_NAMES, RIGID_MODEL_NAMES};
 
 use builtin::builtin_scene;
-use overrides::Overrides;
+use overrides::{Overrides, RunFlags};
 use schema::{
     AdaptMode, BoundaryName, Diagnostic, InitialSection, MethodSection, OutputSection,
     RecoveryKind, RunSection,
@@ -347,24 +347,27 @@ impl Scene {
     /// `points` and `quadrature` are ignored by a method without them.
     pub fn overlay(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
         let Overrides {
-            method,
-            points,
-            quadrature,
-            h,
-            t_end,
+            run:
+                RunFlags {
+                    method,
+                    points,
+                    quadrature,
+                    h,
+                    t_end,
+                    diagnostics,
+                    adapt,
+                    tol,
+                    monitor,
+                    recovery,
+                    divergence_limit,
+                    max_steps,
+                    form,
+                },
             parameters,
             every,
             out,
             plot,
-            diagnostics,
-            adapt,
-            tol,
-            monitor,
             output_times,
-            recovery,
-            divergence_limit,
-            max_steps,
-            form,
         } = overrides;
         let space = self.space();
         if let Some(method) = method {
@@ -700,24 +703,26 @@ pub(crate) mod tests {
         let mut scene = scene("kepler");
         scene
             .apply(&Overrides {
-                method: Some(method("svi")),
-                points: Some(5),
-                quadrature: Some(7),
-                h: Some(0.05),
-                t_end: Some(10.0),
+                run: RunFlags {
+                    method: Some(method("svi")),
+                    points: Some(5),
+                    quadrature: Some(7),
+                    h: Some(0.05),
+                    t_end: Some(10.0),
+                    diagnostics: Some(vec![Diagnostic::Energy]),
+                    adapt: Some(AdaptMode::Degree),
+                    tol: Some(1e-9),
+                    monitor: None,
+                    recovery: None,
+                    divergence_limit: None,
+                    max_steps: Some(500),
+                    form: None,
+                },
                 parameters: vec![("e".into(), 0.9)],
                 every: Some(10),
                 out: Some("x.csv".into()),
                 plot: Some("x.svg".into()),
-                diagnostics: Some(vec![Diagnostic::Energy]),
-                adapt: Some(AdaptMode::Degree),
-                tol: Some(1e-9),
-                monitor: None,
                 output_times: None,
-                recovery: None,
-                divergence_limit: None,
-                max_steps: Some(500),
-                form: None,
             })
             .unwrap();
         assert_eq!(scene.run.max_steps, Some(500));
@@ -738,8 +743,11 @@ pub(crate) mod tests {
         assert_eq!(dense.output.output_times, Some(vec![1.0, 2.0]));
         // Recovery is for fixed-step runs only.
         let recovery = Overrides {
-            recovery: Some(RecoveryKind::HalveStep),
-            divergence_limit: Some(1e9),
+            run: RunFlags {
+                recovery: Some(RecoveryKind::HalveStep),
+                divergence_limit: Some(1e9),
+                ..RunFlags::default()
+            },
             ..Overrides::default()
         };
         assert!(scene.clone().apply(&recovery).is_err());
@@ -772,7 +780,10 @@ pub(crate) mod tests {
         let mut scene = scene("oscillator");
         scene
             .apply(&Overrides {
-                points: Some(4),
+                run: RunFlags {
+                    points: Some(4),
+                    ..RunFlags::default()
+                },
                 ..Overrides::default()
             })
             .unwrap();
@@ -784,14 +795,20 @@ pub(crate) mod tests {
         let mut scene = scene("kepler");
         scene
             .apply(&Overrides {
-                method: Some(method("sc")),
+                run: RunFlags {
+                    method: Some(method("sc")),
+                    ..RunFlags::default()
+                },
                 ..Overrides::default()
             })
             .unwrap();
         assert_eq!(scene.quadrature(), None);
         let error = scene
             .apply(&Overrides {
-                quadrature: Some(12),
+                run: RunFlags {
+                    quadrature: Some(12),
+                    ..RunFlags::default()
+                },
                 ..Overrides::default()
             })
             .unwrap_err();

@@ -35,6 +35,15 @@ pub fn diagnostics_help(default: &[Diagnostic]) -> String {
     )
 }
 
+/// The long help of `--diagnostics`: [`diagnostics_help`] and what `none` means.
+pub fn diagnostics_long_help(default: &[Diagnostic]) -> String {
+    format!(
+        "{}\n\nnone computes no per-step diagnostic at all (on rigid bodies also no invariant \
+         and orthogonality errors); their summary fields are null.",
+        diagnostics_help(default)
+    )
+}
+
 /// The help of `--tol`, with the library's default tolerance.
 pub fn tol_help() -> String {
     format!(
@@ -67,9 +76,11 @@ pub fn max_steps_help() -> String {
     )
 }
 
-/// Scene fields set from the command line.
+/// The flags of every command that runs a scene (`svi run`, `svi ensemble`): the method, the
+/// step and horizon, the diagnostics and the run's options. A field here is a flag of both
+/// commands and a keyword of the Python package's `svi.run`, `svi.solve` and `svi.ensemble`.
 #[derive(Debug, Clone, Default, PartialEq, clap::Args)]
-pub struct Overrides {
+pub struct RunFlags {
     /// Integration method: NAME, NAME:P or NAME:P/M, e.g. svi:7/6, sc:9, verlet.
     #[arg(
         long,
@@ -92,19 +103,6 @@ pub struct Overrides {
     /// Final time.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub t_end: Option<f64>,
-    /// Model parameter (repeatable), e.g. `--param e=0.9`.
-    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
-    pub parameters: Vec<(String, f64)>,
-    /// Keep every K-th step of the trajectory (with --out, without --output-times; default 1).
-    #[arg(long, value_name = "K", allow_hyphen_values = true)]
-    pub every: Option<usize>,
-    /// Write the trajectory as CSV to FILE.
-    #[arg(long, value_name = "FILE")]
-    pub out: Option<PathBuf>,
-    /// Draw the trajectory written by --out as an SVG line chart to FILE: every column
-    /// against t (on chains the energy and the observables, e.g. FPUT's mode energies).
-    #[arg(long, value_name = "FILE")]
-    pub plot: Option<PathBuf>,
     /// Diagnostics to compute, comma-separated, or none.
     #[arg(
         long,
@@ -112,11 +110,7 @@ pub struct Overrides {
         value_name = "LIST",
         value_delimiter = ',',
         help = diagnostics_help(&crate::Scene::DEFAULT_DIAGNOSTICS),
-        long_help = format!(
-            "{}\n\nnone computes no per-step diagnostic at all (on rigid bodies also no \
-             invariant and orthogonality errors); their summary fields are null.",
-            diagnostics_help(&crate::Scene::DEFAULT_DIAGNOSTICS)
-        )
+        long_help = diagnostics_long_help(&crate::Scene::DEFAULT_DIAGNOSTICS)
     )]
     pub diagnostics: Option<Vec<Diagnostic>>,
     /// Adaptivity (the modes below; the default: none).
@@ -128,15 +122,6 @@ pub struct Overrides {
     /// The monitor g(q) > 0 of --adapt reparam.
     #[arg(long, value_name = "MONITOR", help = monitor_help())]
     pub monitor: Option<MonitorSpec>,
-    /// Report the states at these times, comma-separated (dense output); with --out the
-    /// trajectory holds them instead of the steps.
-    #[arg(
-        long,
-        value_name = "LIST",
-        value_delimiter = ',',
-        allow_hyphen_values = true
-    )]
-    pub output_times: Option<Vec<f64>>,
     /// Recovery policy for failed steps (fixed steps only: the adaptive modes retry failed
     /// steps themselves).
     #[arg(long, value_enum)]
@@ -150,6 +135,180 @@ pub struct Overrides {
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]
     pub form: Option<FormName>,
+}
+
+/// Scene fields set from the command line: the [`RunFlags`], and the model's parameters and
+/// outputs of one run.
+#[derive(Debug, Clone, Default, PartialEq, clap::Args)]
+pub struct Overrides {
+    /// The flags of every command that runs a scene.
+    #[command(flatten)]
+    pub run: RunFlags,
+    /// Model parameter (repeatable), e.g. `--param e=0.9`.
+    #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_parameter)]
+    pub parameters: Vec<(String, f64)>,
+    /// Keep every K-th step of the trajectory (with --out, without --output-times; default 1).
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub every: Option<usize>,
+    /// Write the trajectory as CSV to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Draw the trajectory written by --out as an SVG line chart to FILE: every column
+    /// against t (on chains the energy and the observables, e.g. FPUT's mode energies).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Report the states at these times, comma-separated (dense output); with --out the
+    /// trajectory holds them instead of the steps.
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        allow_hyphen_values = true
+    )]
+    pub output_times: Option<Vec<f64>>,
+}
+
+/// The kind of value a run option takes, read from its flag's parser: what a front door that
+/// names options (the Python package's keyword arguments) checks a value against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OptionKind {
+    /// A number (`--h`, `--tol`).
+    Real,
+    /// A whole number, 0 or more (`--points`, `--max-steps`).
+    Count,
+    /// A word parsed by the flag (`--method`, `--adapt`).
+    Text,
+    /// A list of numbers (`--output-times`).
+    Reals,
+    /// A list of words (`--diagnostics`).
+    Names,
+}
+
+impl OptionKind {
+    /// The kind's name: `real`, `count`, `text`, `reals`, `names`.
+    pub fn name(self) -> &'static str {
+        match self {
+            OptionKind::Real => "real",
+            OptionKind::Count => "count",
+            OptionKind::Text => "text",
+            OptionKind::Reals => "reals",
+            OptionKind::Names => "names",
+        }
+    }
+}
+
+/// A value of a run option given by name, of the option's [`OptionKind`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum OptionValue {
+    /// A whole number.
+    Count(u64),
+    /// A number.
+    Real(f64),
+    /// A word.
+    Text(String),
+    /// Numbers.
+    Reals(Vec<f64>),
+    /// Words.
+    Names(Vec<String>),
+}
+
+impl OptionValue {
+    /// The value as the flag's argument: numbers in exponent form (exact), lists
+    /// comma-separated.
+    fn argument(&self) -> String {
+        let join = |items: Vec<String>| items.join(",");
+        match self {
+            OptionValue::Count(n) => n.to_string(),
+            OptionValue::Real(x) => format!("{x:e}"),
+            OptionValue::Text(text) => text.clone(),
+            OptionValue::Reals(xs) => join(xs.iter().map(|x| format!("{x:e}")).collect()),
+            OptionValue::Names(names) => join(names.clone()),
+        }
+    }
+}
+
+/// `svi run`'s flags as a command of their own, parsed for options given by name.
+#[derive(Debug, clap::Parser)]
+#[command(name = "svi run")]
+struct Named {
+    #[command(flatten)]
+    overrides: Overrides,
+}
+
+impl Overrides {
+    /// Every option of `svi run` by its name (the flag's id: `t_end` for `--t-end`,
+    /// `parameters` for `--param`) and the kind of value it takes. One field of [`Overrides`]
+    /// is one flag of the command line and one keyword of the Python package.
+    pub fn options() -> Vec<(String, OptionKind)> {
+        use clap::CommandFactory;
+        use clap::builder::ValueParser;
+        let real = ValueParser::from(clap::value_parser!(f64)).type_id();
+        let count = ValueParser::from(clap::value_parser!(usize)).type_id();
+        let command = Named::command();
+        command
+            .get_arguments()
+            .filter(|arg| arg.get_long().is_some())
+            .map(|arg| {
+                let list = arg.get_value_delimiter().is_some();
+                let parsed = arg.get_value_parser().type_id();
+                let kind = if parsed == real {
+                    if list {
+                        OptionKind::Reals
+                    } else {
+                        OptionKind::Real
+                    }
+                } else if parsed == count {
+                    OptionKind::Count
+                } else if list {
+                    OptionKind::Names
+                } else {
+                    OptionKind::Text
+                };
+                (arg.get_id().to_string(), kind)
+            })
+            .collect()
+    }
+
+    /// The overrides of options given by name ([`Overrides::options`]), parsed by the
+    /// parser of `svi run`'s flags: the same values, defaults and errors as on the command
+    /// line.
+    pub fn from_named(options: &[(String, OptionValue)]) -> Result<Overrides, SceneError> {
+        use clap::{CommandFactory, FromArgMatches};
+        let command = Named::command();
+        let mut tokens = vec!["svi run".to_string()];
+        for (name, value) in options {
+            let long = command
+                .get_arguments()
+                .find(|arg| arg.get_id() == name.as_str())
+                .and_then(|arg| arg.get_long())
+                .ok_or_else(|| SceneError::InvalidOption {
+                    option: "option",
+                    reason: format!(
+                        "unknown option '{name}' (known: {})",
+                        Overrides::options()
+                            .into_iter()
+                            .map(|(name, _)| name)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                })?;
+            tokens.push(format!("--{long}={}", value.argument()));
+        }
+        let invalid = |error: clap::Error| SceneError::InvalidOption {
+            option: "option",
+            reason: error
+                .to_string()
+                .lines()
+                .next()
+                .unwrap_or("rejected")
+                .trim_start_matches("error: ")
+                .to_string(),
+        };
+        let matches = command.try_get_matches_from(tokens).map_err(invalid)?;
+        Named::from_arg_matches(&matches)
+            .map(|named| named.overrides)
+            .map_err(invalid)
+    }
 }
 
 /// Parse `NAME=VALUE` (the argument of `--param`).
@@ -175,6 +334,68 @@ pub fn parse_parameter(text: &str) -> Result<(String, f64), SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn options_given_by_name_are_the_flags_parsed_by_the_command_line_parser() {
+        use clap::Parser;
+        let kinds: std::collections::BTreeMap<String, OptionKind> =
+            Overrides::options().into_iter().collect();
+        assert_eq!(kinds["h"], OptionKind::Real);
+        assert_eq!(kinds["max_steps"], OptionKind::Count);
+        assert_eq!(kinds["method"], OptionKind::Text);
+        assert_eq!(kinds["output_times"], OptionKind::Reals);
+        assert_eq!(kinds["diagnostics"], OptionKind::Names);
+        let named = Overrides::from_named(&[
+            ("method".into(), OptionValue::Text("svi:7/6".into())),
+            ("h".into(), OptionValue::Real(0.1)),
+            ("t_end".into(), OptionValue::Real(-1e-300)),
+            ("max_steps".into(), OptionValue::Count(7)),
+            (
+                "output_times".into(),
+                OptionValue::Reals(vec![0.5, 1.0 / 3.0]),
+            ),
+            (
+                "diagnostics".into(),
+                OptionValue::Names(vec!["energy".into(), "momentum".into()]),
+            ),
+            ("adapt".into(), OptionValue::Text("degree".into())),
+        ])
+        .unwrap();
+        let third = format!("{:e}", 1.0 / 3.0);
+        let flags = Named::try_parse_from([
+            "svi run",
+            "--method",
+            "svi:7/6",
+            "--h",
+            "0.1",
+            "--t-end",
+            "-1e-300",
+            "--max-steps",
+            "7",
+            "--output-times",
+            &format!("0.5,{third}"),
+            "--diagnostics",
+            "energy,momentum",
+            "--adapt",
+            "degree",
+        ])
+        .unwrap();
+        assert_eq!(named, flags.overrides);
+        assert_eq!(named.output_times.as_ref().unwrap()[1], 1.0 / 3.0);
+        for (name, value, says) in [
+            ("adapt", OptionValue::Text("bogus".into()), "--adapt"),
+            ("tol", OptionValue::Text("abc".into()), "--tol"),
+            (
+                "frobnicate",
+                OptionValue::Count(1),
+                "unknown option 'frobnicate'",
+            ),
+        ] {
+            let error = Overrides::from_named(&[(name.into(), value)]).unwrap_err();
+            assert!(error.to_string().contains(says), "{error}");
+            assert!(error.is_bad_input());
+        }
+    }
 
     #[test]
     fn parameters_parse_as_name_equals_number() {

@@ -171,7 +171,7 @@ impl SpectralScene {
                 self.model
             )
         })?;
-        if let Some(method) = &overrides.method {
+        if let Some(method) = &overrides.run.method {
             self.method = Some(method.to_string());
         }
         self.scheme()?;
