@@ -22,54 +22,6 @@ fn table(args: &[&str], scratch: &Scratch, file: &str) -> (i32, Vec<HashMap<Stri
     (output.status.code().unwrap(), parse_csv(&text))
 }
 
-/// Parse the table (quoted fields only at the end of a row: the error message).
-fn parse_csv(text: &str) -> Vec<HashMap<String, String>> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    lines
-        .map(|line| {
-            let (plain, quoted) = match line.find('"') {
-                Some(at) => (
-                    &line[..at],
-                    Some(line[at..].trim_matches('"').replace("\"\"", "\"")),
-                ),
-                None => (line, None),
-            };
-            let mut fields: Vec<String> = plain.split(',').map(String::from).collect();
-            if let Some(quoted) = quoted {
-                fields.pop();
-                fields.push(quoted);
-            }
-            assert_eq!(fields.len(), header.len(), "{line}");
-            header.iter().map(|h| h.to_string()).zip(fields).collect()
-        })
-        .collect()
-}
-
-/// The number in a cell.
-fn cell(row: &HashMap<String, String>, column: &str) -> f64 {
-    row[column]
-        .parse()
-        .unwrap_or_else(|_| panic!("{column} = '{}' is not a number", row[column]))
-}
-
-/// The numbers of the field `key` of a JSON object, read from its text with Rust's exact
-/// parser (serde_json's own float parsing may be off in the last digit).
-fn raw(text: &str, key: &str) -> Vec<f64> {
-    let pattern = format!("\"{key}\":");
-    let start = text
-        .find(&pattern)
-        .unwrap_or_else(|| panic!("no {key} in {text}"))
-        + pattern.len();
-    let rest = &text[start..];
-    let token = if let Some(array) = rest.strip_prefix('[') {
-        &array[..array.find(']').unwrap()]
-    } else {
-        &rest[..rest.find([',', '}']).unwrap()]
-    };
-    token.split(',').map(|x| x.parse().unwrap()).collect()
-}
-
 /// `svi run ARGS --json`: its stdout as text.
 fn run_text(args: &[&str]) -> String {
     let output = svi(args);

@@ -14,6 +14,7 @@ mod cli;
 mod compare;
 mod ensemble;
 mod field;
+mod front_doors;
 mod help;
 mod honesty;
 mod hostile;

@@ -2,6 +2,7 @@
 //! its failures, and scratch directories.
 #![allow(dead_code)] // each test file uses its own subset
 
+use std::collections::HashMap;
 use std::io::Read;
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
@@ -234,4 +235,54 @@ pub fn has_long_number(text: &str) -> bool {
         }
     }
     false
+}
+
+/// Parse a CSV table (`svi ensemble`'s, `svi bench`'s) into rows by column name (quoted
+/// fields only at the end of a row: the error message).
+pub fn parse_csv(text: &str) -> Vec<HashMap<String, String>> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    lines
+        .map(|line| {
+            let (plain, quoted) = match line.find('"') {
+                Some(at) => (
+                    &line[..at],
+                    Some(line[at..].trim_matches('"').replace("\"\"", "\"")),
+                ),
+                None => (line, None),
+            };
+            let mut fields: Vec<String> = plain.split(',').map(String::from).collect();
+            if let Some(quoted) = quoted {
+                fields.pop();
+                fields.push(quoted);
+            }
+            assert_eq!(fields.len(), header.len(), "{line}");
+            header.iter().map(|h| h.to_string()).zip(fields).collect()
+        })
+        .collect()
+}
+
+/// The number in a cell.
+pub fn cell(row: &HashMap<String, String>, column: &str) -> f64 {
+    row[column]
+        .parse()
+        .unwrap_or_else(|_| panic!("{column} = '{}' is not a number", row[column]))
+}
+
+/// The numbers of the field `key` of a JSON object, read from its text with Rust's exact
+/// parser (serde_json's own float parsing may be off in the last digit): the first occurrence
+/// of `"key":`, a number or an array of numbers.
+pub fn raw(text: &str, key: &str) -> Vec<f64> {
+    let pattern = format!("\"{key}\":");
+    let start = text
+        .find(&pattern)
+        .unwrap_or_else(|| panic!("no {key} in {text}"))
+        + pattern.len();
+    let rest = &text[start..];
+    let token = if let Some(array) = rest.strip_prefix('[') {
+        &array[..array.find(']').unwrap()]
+    } else {
+        &rest[..rest.find([',', '}']).unwrap()]
+    };
+    token.split(',').map(|x| x.parse().unwrap()).collect()
 }

@@ -1,16 +1,16 @@
-//! The problem of a sweep on a model of fixed size: the initial state, the horizon, and the
-//! final position the error is measured against (the exact solution's, or the resolved
-//! reference run's).
+//! The problem of a sweep on a model of fixed size: the initial state, the horizon, the
+//! scene's run options, and the final position the error is measured against (the exact
+//! solution's, or the resolved reference run's).
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
-use svi::{Dimension, Initial, Integrator};
+use svi::{Dimension, Initial, Integrator, RunOptions};
 use svi_models::ZooModel;
 
 use crate::scene::SceneError;
 
-/// The problem of a sweep: initial state, horizon, the reference final position and the
-/// coordinate the error is measured in.
+/// The problem of a sweep: initial state, horizon, the scene's run options, the reference
+/// final position and the coordinate the error is measured in.
 pub(super) struct Problem<N: Dimension>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -22,6 +22,9 @@ where
     pub(super) exact: OVector<f64, N>,
     /// The one coordinate of `--coordinate` (`None`: the Euclidean norm of all).
     pub(super) coordinate: Option<usize>,
+    /// The scene's recovery policy and divergence limit (`[run]`), under which the library's
+    /// methods run, as in `svi run` of the scene.
+    pub(super) run: RunOptions,
 }
 
 impl<N: Dimension> Problem<N>

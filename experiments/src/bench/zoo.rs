@@ -7,7 +7,7 @@ use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector, SVector, U1};
 use svi::method::registry::VectorMethodVisitor;
 use svi::observer::{EnergyError, MomentumError};
-use svi::{Dimension, Initial, Integrator, LagrangianExt, Method, RunOptions};
+use svi::{Dimension, Initial, Integrator, LagrangianExt, Method};
 use svi_models::{ModelVisitor, ZooModel};
 
 use crate::bench::adaptive::sweep_adaptive;
@@ -37,6 +37,7 @@ impl ModelVisitor for Bench<'_> {
     {
         let (t0, initial, _, t_end) = self.scene.resolve(&mut model)?;
         check_horizon(t0, t_end, model.default_step())?;
+        let run = self.scene.run.options()?;
         let (q0, v0) = match initial {
             Initial::Velocity { q, v } => (q, v),
             Initial::Momentum { q, p } => {
@@ -85,6 +86,7 @@ impl ModelVisitor for Bench<'_> {
             t_end,
             exact,
             coordinate,
+            run,
         };
         let mut outcomes = Outcomes::default();
         for spec in &self.options.methods {
@@ -170,17 +172,12 @@ where
     let integrator = Integrator::new(model.clone(), method);
     let span = problem.t_end - problem.t0;
     let from = (problem.start(), problem.t_end);
-    let free = RunOptions::default();
+    // The scene's recovery and divergence limit, as `svi run` of the scene runs under them
+    // (a chain's sweep runs the scene itself): the same scene, the same steps and numbers.
+    let run = &problem.run;
     let final_error = |steps: usize| {
-        run_mode(
-            &integrator,
-            mode,
-            &from,
-            span / steps as f64,
-            &free,
-            &mut (),
-        )
-        .map(|(q, _)| problem.error(&q))
+        run_mode(&integrator, mode, &from, span / steps as f64, run, &mut ())
+            .map(|(q, _)| problem.error(&q))
     };
     // `parameter`: a step count, or a tolerance of step doubling.
     let measure = |parameter: f64| -> Result<Record, svi::Error> {
@@ -196,15 +193,15 @@ where
                 mode,
                 &from,
                 h,
-                &free,
+                run,
                 &mut (&mut energy, &mut momentum),
             )
         } else {
-            run_mode(&integrator, mode, &from, h, &free, &mut energy)
+            run_mode(&integrator, mode, &from, h, run, &mut energy)
         }?;
         let seconds = median_seconds(
             || {
-                let _ = run_mode(&integrator, mode, &from, h, &free, &mut ());
+                let _ = run_mode(&integrator, mode, &from, h, run, &mut ());
             },
             options,
         );
