@@ -11,16 +11,13 @@ command line's doors are held to the same numbers by cli/tests/front_doors.rs.""
 
 import json
 import math
-import os
-import shutil
 import subprocess
-from pathlib import Path
 
 import pytest
 
 import svi
 
-ROOT = Path(__file__).resolve().parents[2]
+from svi_binary import svi_binary
 
 #: The fields of a summary that are the same computation whatever the door (not ``seconds``).
 FIELDS = [
@@ -42,18 +39,6 @@ FIELDS = [
     "factorizations",
     "retries",
 ]
-
-
-def svi_binary():
-    """The svi binary: $SVI_BIN, else the workspace's release build, else svi on PATH."""
-    candidates = [os.environ.get("SVI_BIN")]
-    target = os.environ.get("CARGO_TARGET_DIR", str(ROOT / "target"))
-    candidates.append(str(Path(target) / "release" / "svi"))
-    candidates.append(shutil.which("svi"))
-    for candidate in candidates:
-        if candidate and Path(candidate).is_file():
-            return candidate
-    pytest.skip("no svi binary (build it with cargo build --release -p svi-cli)")
 
 
 def cli_run(scene, *args):

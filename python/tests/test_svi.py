@@ -4,29 +4,14 @@ fields, ensembles as tables, and a Dask cluster that returns the local table."""
 
 import json
 import math
-import os
-import shutil
 import subprocess
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import svi
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def svi_binary():
-    """The svi binary: $SVI_BIN, else the workspace's release build, else svi on PATH."""
-    candidates = [os.environ.get("SVI_BIN")]
-    target = os.environ.get("CARGO_TARGET_DIR", str(ROOT / "target"))
-    candidates.append(str(Path(target) / "release" / "svi"))
-    candidates.append(shutil.which("svi"))
-    for candidate in candidates:
-        if candidate and Path(candidate).is_file():
-            return candidate
-    pytest.skip("no svi binary (build it with cargo build --release -p svi-cli)")
+from svi_binary import svi_binary
 
 
 def cli(*args):
