@@ -119,6 +119,7 @@ guide_doctests! {
     GuideRustDoctests: "rust.md",
     GuideAdaptivityDoctests: "adaptivity.md",
     GuideStressDoctests: "stress.md",
+    GuideConstraintsDoctests: "constraints.md",
 }
 
 #[cfg(test)]

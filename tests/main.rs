@@ -12,6 +12,7 @@ mod hostile_cases;
 mod allocation;
 mod any_size;
 mod classic_methods;
+mod constraints;
 mod convergence;
 mod derivatives;
 mod errors;

@@ -36,6 +36,7 @@
 //! }
 //! ```
 
+pub mod constraint;
 pub mod density;
 pub mod derived;
 pub(crate) mod euler_lagrange;
