@@ -1,4 +1,4 @@
-//! Constrained variational integrators: RATTLE and its symmetric compositions.
+//! RATTLE and its symmetric compositions.
 //!
 //! # Discrete equations
 //! For L = ½ q̇ᵀMq̇ − V(q) ([`Structure::ConstantMass`]) and holonomic constraints g(q) = 0
@@ -25,18 +25,19 @@
 //! kahan-li8) give orders 4, 6 and 8 on the manifold (Reich 1996; Hairer, Lubich & Wanner,
 //! §V.3 and §VII.1.4).
 
-use crate::dimension::{Dimension, dimension_of};
+use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, record};
+use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::DenseLu;
 use crate::method::variational::composition::Scheme;
+use crate::model::Lagrangian;
 use crate::model::constraint::{
-    ConstraintScratch, Constraints, ConstraintsExt, Projected, check_rank, project,
+    ConstraintScratch, Constraints, ConstraintsExt, Projected, check_rank,
 };
 use crate::model::derived::LagrangianExt;
 use crate::model::mass_inverse::MassInverse;
-use crate::model::{Lagrangian, Structure};
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut, DefaultAllocator, OVector, U1};
+use nalgebra::{DMatrix, DVector, DVectorView, DVectorViewMut, DefaultAllocator, OVector};
 
 /// RATTLE, alone or composed.
 #[derive(Debug, Clone, PartialEq)]
@@ -85,54 +86,6 @@ impl Rattle {
     }
 }
 
-/// A point of a constrained run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ConstrainedPoint<N: Dimension>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    /// Time.
-    pub t: f64,
-    /// Configuration, on g = 0.
-    pub q: OVector<f64, N>,
-    /// Momentum, in the cotangent space G M⁻¹ p = 0.
-    pub p: OVector<f64, N>,
-    /// The position multipliers λ of the step's last (sub-)step: the constraint force at its
-    /// start is −Gᵀλ.
-    pub multipliers: DVector<f64>,
-}
-
-/// The end of a constrained run, with its constraint diagnostics.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ConstrainedRun<N: Dimension>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    /// The last point.
-    pub last: ConstrainedPoint<N>,
-    /// The initial data as projected onto the constraints (and how far it moved).
-    pub initial: Projected<N>,
-    /// Steps taken.
-    pub steps: usize,
-    /// Newton iterations for the multipliers, summed over the run.
-    pub iterations: usize,
-    /// max over the run of |g(q)|∞ (position level).
-    pub constraint_error_max: f64,
-    /// max over the run of |G(q) q̇|∞ (velocity level, q̇ = M⁻¹p).
-    pub velocity_constraint_error_max: f64,
-}
-
-/// A Lagrangian with holonomic constraints and a constrained method.
-#[derive(Debug, Clone)]
-pub struct ConstrainedIntegrator<L, C> {
-    /// The Lagrangian, of constant mass.
-    pub model: L,
-    /// The constraints g(q) = 0.
-    pub constraints: C,
-    /// The method.
-    pub method: Rattle,
-}
-
 /// Buffers of a constrained run, sized once (no allocation per step).
 struct Workspace<N: Dimension>
 where
@@ -169,142 +122,101 @@ where
     zero: OVector<f64, N>,
 }
 
-impl<L, C> ConstrainedIntegrator<L, C> {
-    /// Pair `model` and `constraints` with `method`.
-    ///
-    /// # Errors
-    /// [`Error::InvalidParameter`] for a Lagrangian without a constant mass matrix or with a
-    /// non-conservative force (RATTLE needs L = ½ q̇ᵀMq̇ − V(q)), or with no constraint.
-    pub fn new<N: Dimension>(model: L, constraints: C, method: Rattle) -> Result<Self, Error>
-    where
-        L: Lagrangian<N>,
-        C: Constraints<N>,
-        DefaultAllocator: Allocator<N> + Allocator<N, N>,
-    {
-        if L::STRUCTURE != Structure::ConstantMass || L::FORCED {
-            return Err(Error::invalid(
-                "model",
-                "RATTLE needs L = ½ q̇ᵀMq̇ − V(q): a constant mass matrix and no external force",
-            ));
+/// The run of [`ConstrainedIntegrator::run`] with RATTLE, from the projected `initial` data.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>>(
+    integrator: &ConstrainedIntegrator<L, C>,
+    rattle: &Rattle,
+    t0: f64,
+    h: f64,
+    steps: usize,
+    mass_inverse: MassInverse<N>,
+    initial: Projected<N>,
+    mut observe: impl FnMut(&ConstrainedPoint<N>),
+) -> Result<ConstrainedRun<N>, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let stepper = Stepper {
+        model: &integrator.model,
+        constraints: &integrator.constraints,
+        max_iterations: rattle.max_iterations,
+    };
+    let zero = initial.q.map(|_| 0.0);
+    let n = zero.len();
+    let q0 = &initial.q;
+    let m = stepper.constraints.count();
+    let mut workspace = Workspace {
+        scratch: ConstraintScratch::new(q0, m),
+        force: zero.clone(),
+        jacobian: DMatrix::zeros(m, n),
+        directions: DMatrix::zeros(n, m),
+        end_force: zero.clone(),
+        end_jacobian: DMatrix::zeros(m, n),
+        end_directions: DMatrix::zeros(n, m),
+        lambda: DVector::zeros(m),
+        residual: DVector::zeros(m),
+        correction: DVector::zeros(m),
+        newton: DenseLu::new(m),
+        drift: zero.clone(),
+        increment: zero.clone(),
+        kick: zero.clone(),
+        end: zero.clone(),
+        shift: DVector::zeros(n),
+        carry_q: zero.clone(),
+        carry_p: zero.clone(),
+        row: zero.clone(),
+        buffer: zero.clone(),
+        zero,
+        mass_inverse,
+    };
+    let mut point = ConstrainedPoint {
+        t: t0,
+        q: initial.q.clone(),
+        p: initial.p.clone(),
+        multipliers: DVector::zeros(m),
+    };
+    stepper.evaluate_start(&mut workspace, &point.q)?;
+    observe(&point);
+    let fractions = rattle.fractions();
+    let mut run = ConstrainedRun {
+        last: point.clone(),
+        initial,
+        steps: 0,
+        iterations: 0,
+        constraint_error_max: 0.0,
+        velocity_constraint_error_max: 0.0,
+    };
+    let mut g = DVector::zeros(m);
+    let mut rate = DVector::zeros(m);
+    for k in 0..steps {
+        for &fraction in &fractions {
+            run.iterations += stepper.substep(&mut workspace, fraction * h, k, &mut point)?;
         }
-        if constraints.count() == 0 {
-            return Err(Error::invalid(
-                "constraints",
-                "none given: run the unconstrained model with verlet",
-            ));
-        }
-        Ok(ConstrainedIntegrator {
-            model,
-            constraints,
-            method,
-        })
-    }
-
-    /// Run `steps` steps of size `h` from (t0, q0, p0), projected first onto the constraints
-    /// ([`project`]); `observe` sees the initial point and the end of every step.
-    ///
-    /// # Errors
-    /// Invalid input (h, the initial data, constraints of deficient rank), a mass matrix that
-    /// is singular, or a Newton iteration for the multipliers that does not converge
-    /// ([`Error::NonConvergence`]).
-    pub fn run<N: Dimension>(
-        &self,
-        t0: f64,
-        q0: &OVector<f64, N>,
-        p0: &OVector<f64, N>,
-        h: f64,
-        steps: usize,
-        mut observe: impl FnMut(&ConstrainedPoint<N>),
-    ) -> Result<ConstrainedRun<N>, Error>
-    where
-        L: Lagrangian<N>,
-        C: Constraints<N>,
-        DefaultAllocator: Allocator<N> + Allocator<N, N>,
-    {
-        if !(h.is_finite() && h > 0.0) {
-            return Err(Error::invalid(
-                "h",
-                format!("must be finite and > 0, got {h}"),
-            ));
-        }
-        if !t0.is_finite() || q0.iter().chain(p0.iter()).any(|x| !x.is_finite()) {
-            return Err(Error::invalid("initial", "t0, q0 and p0 must be finite"));
-        }
-        let n = dimension_of::<N>(self.model.dimension())
-            .map_err(|reason| Error::invalid("model", reason))?;
-        if q0.len() != n.value() || p0.len() != n.value() {
-            return Err(Error::invalid(
-                "initial",
-                format!("q0 and p0 need {} components", n.value()),
-            ));
-        }
-        let zero = OVector::<f64, N>::zeros_generic(n, U1);
-        let mass_inverse = self.model.mass_inverse(t0, q0, &zero)?;
-        let initial = project(&self.constraints, &mass_inverse, q0, p0)?;
-        let m = self.constraints.count();
-        let mut workspace = Workspace {
-            scratch: ConstraintScratch::new(q0, m),
-            force: zero.clone(),
-            jacobian: DMatrix::zeros(m, n.value()),
-            directions: DMatrix::zeros(n.value(), m),
-            end_force: zero.clone(),
-            end_jacobian: DMatrix::zeros(m, n.value()),
-            end_directions: DMatrix::zeros(n.value(), m),
-            lambda: DVector::zeros(m),
-            residual: DVector::zeros(m),
-            correction: DVector::zeros(m),
-            newton: DenseLu::new(m),
-            drift: zero.clone(),
-            increment: zero.clone(),
-            kick: zero.clone(),
-            end: zero.clone(),
-            shift: DVector::zeros(n.value()),
-            carry_q: zero.clone(),
-            carry_p: zero.clone(),
-            row: zero.clone(),
-            buffer: zero.clone(),
-            zero,
-            mass_inverse,
-        };
-        let mut point = ConstrainedPoint {
-            t: t0,
-            q: initial.q.clone(),
-            p: initial.p.clone(),
-            multipliers: DVector::zeros(m),
-        };
-        self.evaluate_start(&mut workspace, &point.q)?;
+        point.t = t0 + (k + 1) as f64 * h;
+        point.multipliers.copy_from(&workspace.lambda);
+        record(
+            &mut run,
+            stepper.constraints,
+            &point,
+            &workspace.jacobian,
+            &workspace.mass_inverse,
+            (&mut g, &mut rate, &mut workspace.buffer),
+        );
         observe(&point);
-        let fractions = self.method.fractions();
-        let mut run = ConstrainedRun {
-            last: point.clone(),
-            initial,
-            steps: 0,
-            iterations: 0,
-            constraint_error_max: 0.0,
-            velocity_constraint_error_max: 0.0,
-        };
-        let mut g = DVector::zeros(m);
-        let mut rate = DVector::zeros(m);
-        for k in 0..steps {
-            for &fraction in &fractions {
-                run.iterations += self.substep(&mut workspace, fraction * h, k, &mut point)?;
-            }
-            point.t = t0 + (k + 1) as f64 * h;
-            point.multipliers.copy_from(&workspace.lambda);
-            self.constraints.values_into(&point.q, &mut g);
-            workspace
-                .mass_inverse
-                .apply_into(&point.p, &mut workspace.buffer);
-            rate.gemv(1.0, &workspace.jacobian, &view(&workspace.buffer), 0.0);
-            run.constraint_error_max = run.constraint_error_max.max(g.amax());
-            run.velocity_constraint_error_max = run.velocity_constraint_error_max.max(rate.amax());
-            run.steps += 1;
-            observe(&point);
-        }
-        run.last = point;
-        Ok(run)
     }
+    run.last = point;
+    Ok(run)
+}
 
+/// What one RATTLE step reads: the model, the constraints and the Newton cap.
+struct Stepper<'a, L, C> {
+    model: &'a L,
+    constraints: &'a C,
+    max_iterations: usize,
+}
+
+impl<L, C> Stepper<'_, L, C> {
     /// F, G and M⁻¹Gᵀ at `q`, the start of the next step.
     fn evaluate_start<N: Dimension>(
         &self,
@@ -329,7 +241,7 @@ impl<L, C> ConstrainedIntegrator<L, C> {
         } = workspace;
         self.model.force_into(0.0, q, zero, force);
         self.constraints.jacobian_into(q, scratch, jacobian);
-        check_rank(&self.constraints, jacobian)?;
+        check_rank(self.constraints, jacobian)?;
         directions_into(mass_inverse, jacobian, row, buffer, directions);
         Ok(())
     }
@@ -381,8 +293,7 @@ impl<L, C> ConstrainedIntegrator<L, C> {
             if floor {
                 break;
             }
-            if iterations == self.method.max_iterations || !w.residual.iter().all(|x| x.is_finite())
-            {
+            if iterations == self.max_iterations || !w.residual.iter().all(|x| x.is_finite()) {
                 return Err(Error::NonConvergence {
                     step,
                     t: point.t,

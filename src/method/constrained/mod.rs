@@ -1,0 +1,234 @@
+//! Constrained variational integrators: a Lagrangian L(t, q, q̇) on ℝⁿ with holonomic
+//! constraints g(q) = 0 ([`Constraints`]).
+//!
+//! The discrete variational principle with multipliers (Marsden & West 2001, §3.5) makes
+//! stationary the discrete action Σ L_d(q_k, q_{k+1}) − Σ λ_kᵀ g(q_k): each step solves the
+//! discrete Euler–Lagrange equations with the constraint forces −G(q)ᵀλ (G = ∂g/∂q) together
+//! with g(q_{k+1}) = 0, and the momentum is projected onto the cotangent space
+//! G(q) M⁻¹ p = 0 of the hidden velocity constraint. The methods keep the constraint manifold
+//! to round-off, are symplectic on its cotangent bundle and keep the momenta of the symmetries
+//! that respect the constraints.
+//!
+//! [`ConstrainedMethod`] names them: RATTLE and its symmetric compositions
+//! ([`rattle`]). A run projects the initial data onto the constraints first
+//! ([`crate::model::constraint::project`]) and reports how far it moved them, and the largest
+//! constraint violations over the run at position and velocity level.
+
+pub mod rattle;
+
+use crate::dimension::{Dimension, dimension_of};
+use crate::error::Error;
+use crate::method::variational::composition::Scheme;
+use crate::model::constraint::{Constraints, ConstraintsExt, Projected, project};
+use crate::model::derived::LagrangianExt;
+use crate::model::mass_inverse::MassInverse;
+use crate::model::{Lagrangian, Structure};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DVector, DefaultAllocator, OVector, U1};
+pub use rattle::Rattle;
+
+/// A constrained method, by name.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ConstrainedMethod {
+    /// RATTLE, alone or composed ([`rattle`]).
+    Rattle(Rattle),
+}
+
+impl ConstrainedMethod {
+    /// The names [`ConstrainedMethod::named`] accepts: `rattle`, `rattle-yoshida4`,
+    /// `rattle-kahan-li6`, `rattle-kahan-li8`.
+    pub fn names() -> Vec<String> {
+        std::iter::once(Rattle::default())
+            .chain(Scheme::ALL.into_iter().map(Rattle::composed))
+            .map(|method| method.name())
+            .collect()
+    }
+
+    /// The method called `name` (one of [`ConstrainedMethod::names`]), with default options.
+    pub fn named(name: &str) -> Option<Self> {
+        if name == "rattle" {
+            return Some(Rattle::default().into());
+        }
+        let scheme = Scheme::named(name.strip_prefix("rattle-")?)?;
+        Some(Rattle::composed(scheme).into())
+    }
+
+    /// The method's name.
+    pub fn name(&self) -> String {
+        match self {
+            ConstrainedMethod::Rattle(rattle) => rattle.name(),
+        }
+    }
+
+    /// The order of the method.
+    pub fn order(&self) -> usize {
+        match self {
+            ConstrainedMethod::Rattle(rattle) => rattle.order(),
+        }
+    }
+}
+
+impl From<Rattle> for ConstrainedMethod {
+    fn from(rattle: Rattle) -> Self {
+        ConstrainedMethod::Rattle(rattle)
+    }
+}
+
+/// A point of a constrained run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstrainedPoint<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// Time.
+    pub t: f64,
+    /// Configuration, on g = 0.
+    pub q: OVector<f64, N>,
+    /// Momentum, in the cotangent space G M⁻¹ p = 0.
+    pub p: OVector<f64, N>,
+    /// The position multipliers λ of the step's last (sub-)step: the constraint force at its
+    /// start is −Gᵀλ.
+    pub multipliers: DVector<f64>,
+}
+
+/// The end of a constrained run, with its constraint diagnostics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstrainedRun<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// The last point.
+    pub last: ConstrainedPoint<N>,
+    /// The initial data as projected onto the constraints (and how far it moved).
+    pub initial: Projected<N>,
+    /// Steps taken.
+    pub steps: usize,
+    /// Newton iterations for the multipliers, summed over the run.
+    pub iterations: usize,
+    /// max over the run of |g(q)|∞ (position level).
+    pub constraint_error_max: f64,
+    /// max over the run of |G(q) q̇|∞ (velocity level, q̇ = M⁻¹p).
+    pub velocity_constraint_error_max: f64,
+}
+
+/// A Lagrangian with holonomic constraints and a constrained method.
+#[derive(Debug, Clone)]
+pub struct ConstrainedIntegrator<L, C> {
+    /// The Lagrangian, of constant mass.
+    pub model: L,
+    /// The constraints g(q) = 0.
+    pub constraints: C,
+    /// The method.
+    pub method: ConstrainedMethod,
+}
+
+impl<L, C> ConstrainedIntegrator<L, C> {
+    /// Pair `model` and `constraints` with `method`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a Lagrangian without a constant mass matrix or with a
+    /// non-conservative force (RATTLE needs L = ½ q̇ᵀMq̇ − V(q)), or with no constraint.
+    pub fn new<N: Dimension>(
+        model: L,
+        constraints: C,
+        method: impl Into<ConstrainedMethod>,
+    ) -> Result<Self, Error>
+    where
+        L: Lagrangian<N>,
+        C: Constraints<N>,
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        if L::STRUCTURE != Structure::ConstantMass || L::FORCED {
+            return Err(Error::invalid(
+                "model",
+                "RATTLE needs L = ½ q̇ᵀMq̇ − V(q): a constant mass matrix and no external force",
+            ));
+        }
+        if constraints.count() == 0 {
+            return Err(Error::invalid(
+                "constraints",
+                "none given: run the unconstrained model with verlet",
+            ));
+        }
+        Ok(ConstrainedIntegrator {
+            model,
+            constraints,
+            method: method.into(),
+        })
+    }
+
+    /// Run `steps` steps of size `h` from (t0, q0, p0), projected first onto the constraints
+    /// ([`project`]); `observe` sees the initial point and the end of every step.
+    ///
+    /// # Errors
+    /// Invalid input (h, the initial data, constraints of deficient rank), a mass matrix that
+    /// is singular, or a Newton iteration for the multipliers that does not converge
+    /// ([`Error::NonConvergence`]).
+    pub fn run<N: Dimension>(
+        &self,
+        t0: f64,
+        q0: &OVector<f64, N>,
+        p0: &OVector<f64, N>,
+        h: f64,
+        steps: usize,
+        observe: impl FnMut(&ConstrainedPoint<N>),
+    ) -> Result<ConstrainedRun<N>, Error>
+    where
+        L: Lagrangian<N>,
+        C: Constraints<N>,
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        if !(h.is_finite() && h > 0.0) {
+            return Err(Error::invalid(
+                "h",
+                format!("must be finite and > 0, got {h}"),
+            ));
+        }
+        if !t0.is_finite() || q0.iter().chain(p0.iter()).any(|x| !x.is_finite()) {
+            return Err(Error::invalid("initial", "t0, q0 and p0 must be finite"));
+        }
+        let n = dimension_of::<N>(self.model.dimension())
+            .map_err(|reason| Error::invalid("model", reason))?;
+        if q0.len() != n.value() || p0.len() != n.value() {
+            return Err(Error::invalid(
+                "initial",
+                format!("q0 and p0 need {} components", n.value()),
+            ));
+        }
+        let zero = OVector::<f64, N>::zeros_generic(n, U1);
+        let mass_inverse = self.model.mass_inverse(t0, q0, &zero)?;
+        let initial = project(&self.constraints, &mass_inverse, q0, p0)?;
+        match &self.method {
+            ConstrainedMethod::Rattle(rattle) => {
+                rattle::run(self, rattle, t0, h, steps, mass_inverse, initial, observe)
+            }
+        }
+    }
+}
+
+/// The constraint violations at `point` into `run`'s maxima, and one more step counted
+/// (`g`, `rate` and `buffer` are scratch of length m, m and n).
+fn record<N: Dimension, C: Constraints<N>>(
+    run: &mut ConstrainedRun<N>,
+    constraints: &C,
+    point: &ConstrainedPoint<N>,
+    jacobian: &nalgebra::DMatrix<f64>,
+    mass_inverse: &MassInverse<N>,
+    scratch: (&mut DVector<f64>, &mut DVector<f64>, &mut OVector<f64, N>),
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (g, rate, buffer) = scratch;
+    constraints.values_into(&point.q, g);
+    mass_inverse.apply_into(&point.p, buffer);
+    rate.gemv(
+        1.0,
+        jacobian,
+        &nalgebra::DVectorView::from_slice(buffer.as_slice(), buffer.len()),
+        0.0,
+    );
+    run.constraint_error_max = run.constraint_error_max.max(g.amax());
+    run.velocity_constraint_error_max = run.velocity_constraint_error_max.max(rate.amax());
+    run.steps += 1;
+}
