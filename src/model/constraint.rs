@@ -25,7 +25,7 @@ use crate::model::mass_inverse::MassInverse;
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OVector};
-use num_dual::Dual64;
+use num_dual::{Dual64, HyperDual64};
 
 /// m holonomic constraints g(q) = 0 on ℝⁿ, written once, generic over the scalar.
 ///
@@ -76,6 +76,8 @@ where
 {
     q: OVector<Dual64, N>,
     g: Vec<Dual64>,
+    hyper_q: OVector<HyperDual64, N>,
+    hyper_g: Vec<HyperDual64>,
 }
 
 impl<N: Dimension> ConstraintScratch<N>
@@ -87,6 +89,8 @@ where
         ConstraintScratch {
             q: q.map(Dual64::from_re),
             g: vec![Dual64::from_re(0.0); count],
+            hyper_q: q.map(HyperDual64::from_re),
+            hyper_g: vec![HyperDual64::from_re(0.0); count],
         }
     }
 }
@@ -118,6 +122,39 @@ where
             scratch.q[j].eps = 0.0;
             for (i, g) in scratch.g.iter().enumerate() {
                 jacobian[(i, j)] = g.eps;
+            }
+        }
+    }
+
+    /// The Hessian of the weighted sum Σₐ wₐ gₐ(q) (n × n) into `hessian`: the derivative of
+    /// the constraint force Gᵀw with respect to q, which the implicit constrained methods'
+    /// Newton matrices need. One sweep of the hyper-dual number [`HyperDual64`] per pair of
+    /// coordinates (n(n + 1)/2 sweeps: meant for the small systems of the dense path).
+    fn weighted_hessian_into(
+        &self,
+        q: &OVector<f64, N>,
+        weights: &[f64],
+        scratch: &mut ConstraintScratch<N>,
+        hessian: &mut DMatrix<f64>,
+    ) {
+        for (dual, &x) in scratch.hyper_q.iter_mut().zip(q.iter()) {
+            *dual = HyperDual64::from_re(x);
+        }
+        for i in 0..q.len() {
+            for j in 0..=i {
+                scratch.hyper_q[i].eps1 = 1.0;
+                scratch.hyper_q[j].eps2 = 1.0;
+                self.constraints(&scratch.hyper_q, &mut scratch.hyper_g);
+                scratch.hyper_q[i].eps1 = 0.0;
+                scratch.hyper_q[j].eps2 = 0.0;
+                let value: f64 = scratch
+                    .hyper_g
+                    .iter()
+                    .zip(weights)
+                    .map(|(g, w)| g.eps1eps2 * w)
+                    .sum();
+                hessian[(i, j)] = value;
+                hessian[(j, i)] = value;
             }
         }
     }

@@ -14,6 +14,7 @@
 //! ([`crate::model::constraint::project`]) and reports how far it moved them, and the largest
 //! constraint violations over the run at position and velocity level.
 
+pub mod galerkin;
 pub mod rattle;
 
 use crate::dimension::{Dimension, dimension_of};
@@ -21,8 +22,8 @@ use crate::error::Error;
 use crate::method::variational::composition::Scheme;
 use crate::model::constraint::{Constraints, ConstraintsExt, Projected, project};
 use crate::model::derived::LagrangianExt;
-use crate::model::mass_inverse::MassInverse;
 use crate::model::{Lagrangian, Structure};
+pub use galerkin::{ConstrainedSvi, ConstraintPoints};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, U1};
 pub use rattle::Rattle;
@@ -33,14 +34,25 @@ pub use rattle::Rattle;
 pub enum ConstrainedMethod {
     /// RATTLE, alone or composed ([`rattle`]).
     Rattle(Rattle),
+    /// The constrained SVI and the constrained midpoint rule ([`galerkin`]).
+    Galerkin(ConstrainedSvi),
 }
 
 impl ConstrainedMethod {
     /// The names [`ConstrainedMethod::named`] accepts: `rattle`, `rattle-yoshida4`,
-    /// `rattle-kahan-li6`, `rattle-kahan-li8`.
+    /// `rattle-kahan-li6`, `rattle-kahan-li8`, `midpoint`, and the constrained SVI `svi:P/Q`
+    /// (P nodes, Q Gauss points, constrained at the Gauss points; listed as `svi:5/4`) and
+    /// `svi:P/Q@nodes` (constrained at the interior nodes; listed as `svi:5/4@nodes`).
     pub fn names() -> Vec<String> {
+        let galerkin = [
+            ConstrainedSvi::midpoint(),
+            ConstrainedSvi::new(5, 4),
+            ConstrainedSvi::new(5, 4).constrained_at(ConstraintPoints::Nodes),
+        ];
         std::iter::once(Rattle::default())
             .chain(Scheme::ALL.into_iter().map(Rattle::composed))
+            .map(ConstrainedMethod::from)
+            .chain(galerkin.into_iter().map(ConstrainedMethod::from))
             .map(|method| method.name())
             .collect()
     }
@@ -50,6 +62,9 @@ impl ConstrainedMethod {
         if name == "rattle" {
             return Some(Rattle::default().into());
         }
+        if let Some(method) = ConstrainedSvi::named(name) {
+            return Some(method.into());
+        }
         let scheme = Scheme::named(name.strip_prefix("rattle-")?)?;
         Some(Rattle::composed(scheme).into())
     }
@@ -58,6 +73,7 @@ impl ConstrainedMethod {
     pub fn name(&self) -> String {
         match self {
             ConstrainedMethod::Rattle(rattle) => rattle.name(),
+            ConstrainedMethod::Galerkin(method) => method.name(),
         }
     }
 
@@ -65,7 +81,14 @@ impl ConstrainedMethod {
     pub fn order(&self) -> usize {
         match self {
             ConstrainedMethod::Rattle(rattle) => rattle.order(),
+            ConstrainedMethod::Galerkin(method) => method.order(),
         }
+    }
+}
+
+impl From<ConstrainedSvi> for ConstrainedMethod {
+    fn from(method: ConstrainedSvi) -> Self {
+        ConstrainedMethod::Galerkin(method)
     }
 }
 
@@ -139,10 +162,19 @@ impl<L, C> ConstrainedIntegrator<L, C> {
         C: Constraints<N>,
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
-        if L::STRUCTURE != Structure::ConstantMass || L::FORCED {
+        let method = method.into();
+        if L::FORCED {
             return Err(Error::invalid(
                 "model",
-                "RATTLE needs L = ½ q̇ᵀMq̇ − V(q): a constant mass matrix and no external force",
+                "the constrained methods take no external force yet (write it as a potential)",
+            ));
+        }
+        let explicit = L::STRUCTURE == Structure::ConstantMass && !L::TIME_DEPENDENT;
+        if matches!(method, ConstrainedMethod::Rattle(_)) && !explicit {
+            return Err(Error::invalid(
+                "model",
+                "RATTLE needs L = ½ q̇ᵀMq̇ − V(q): a constant mass matrix and no explicit time \
+                 dependence (run midpoint or the constrained SVI)",
             ));
         }
         if constraints.count() == 0 {
@@ -154,7 +186,7 @@ impl<L, C> ConstrainedIntegrator<L, C> {
         Ok(ConstrainedIntegrator {
             model,
             constraints,
-            method: method.into(),
+            method,
         })
     }
 
@@ -203,29 +235,30 @@ impl<L, C> ConstrainedIntegrator<L, C> {
             ConstrainedMethod::Rattle(rattle) => {
                 rattle::run(self, rattle, t0, h, steps, mass_inverse, initial, observe)
             }
+            ConstrainedMethod::Galerkin(method) => {
+                galerkin::run(self, method, t0, h, steps, initial, observe)
+            }
         }
     }
 }
 
-/// The constraint violations at `point` into `run`'s maxima, and one more step counted
-/// (`g`, `rate` and `buffer` are scratch of length m, m and n).
+/// The constraint violations at `point` (with velocity `velocity` and G(q) `jacobian`) into
+/// `run`'s maxima, and one more step counted (`g` and `rate` are scratch of length m).
 fn record<N: Dimension, C: Constraints<N>>(
     run: &mut ConstrainedRun<N>,
     constraints: &C,
     point: &ConstrainedPoint<N>,
     jacobian: &nalgebra::DMatrix<f64>,
-    mass_inverse: &MassInverse<N>,
-    scratch: (&mut DVector<f64>, &mut DVector<f64>, &mut OVector<f64, N>),
+    velocity: &OVector<f64, N>,
+    (g, rate): (&mut DVector<f64>, &mut DVector<f64>),
 ) where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    DefaultAllocator: Allocator<N>,
 {
-    let (g, rate, buffer) = scratch;
     constraints.values_into(&point.q, g);
-    mass_inverse.apply_into(&point.p, buffer);
     rate.gemv(
         1.0,
         jacobian,
-        &nalgebra::DVectorView::from_slice(buffer.as_slice(), buffer.len()),
+        &nalgebra::DVectorView::from_slice(velocity.as_slice(), velocity.len()),
         0.0,
     );
     run.constraint_error_max = run.constraint_error_max.max(g.amax());

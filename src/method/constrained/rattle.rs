@@ -195,13 +195,16 @@ where
         }
         point.t = t0 + (k + 1) as f64 * h;
         point.multipliers.copy_from(&workspace.lambda);
+        workspace
+            .mass_inverse
+            .apply_into(&point.p, &mut workspace.buffer);
         record(
             &mut run,
             stepper.constraints,
             &point,
             &workspace.jacobian,
-            &workspace.mass_inverse,
-            (&mut g, &mut rate, &mut workspace.buffer),
+            &workspace.buffer,
+            (&mut g, &mut rate),
         );
         observe(&point);
     }
@@ -372,7 +375,7 @@ fn compensated_add<N: Dimension>(
 }
 
 /// M⁻¹Gᵀ (n × m) into `directions`, column by column (`row` and `buffer` are scratch).
-fn directions_into<N: Dimension>(
+pub(super) fn directions_into<N: Dimension>(
     mass_inverse: &MassInverse<N>,
     jacobian: &DMatrix<f64>,
     row: &mut OVector<f64, N>,
@@ -391,7 +394,7 @@ fn directions_into<N: Dimension>(
 }
 
 /// `v` as a vector of run-time size (no copy), for products with the m × n Jacobian.
-fn view<N: Dimension>(v: &OVector<f64, N>) -> DVectorView<'_, f64>
+pub(super) fn view<N: Dimension>(v: &OVector<f64, N>) -> DVectorView<'_, f64>
 where
     DefaultAllocator: Allocator<N>,
 {
@@ -399,7 +402,7 @@ where
 }
 
 /// `v` as a mutable vector of run-time size (no copy).
-fn view_mut<N: Dimension>(v: &mut OVector<f64, N>) -> DVectorViewMut<'_, f64>
+pub(super) fn view_mut<N: Dimension>(v: &mut OVector<f64, N>) -> DVectorViewMut<'_, f64>
 where
     DefaultAllocator: Allocator<N>,
 {
