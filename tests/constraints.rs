@@ -4,8 +4,8 @@
 
 use nalgebra::{Const, OVector, SVector, U2, U3, U4};
 use svi::method::constrained::{
-    ConstrainedIntegrator, ConstrainedMethod, ConstrainedPoint, ConstrainedSvi, ConstraintPoints,
-    Rattle,
+    ConstrainedDel, ConstrainedIntegrator, ConstrainedMethod, ConstrainedPoint, ConstrainedSvi,
+    ConstraintPoints, Rattle, SegmentRule,
 };
 use svi::model::constraint::{ConstraintScratch, Constraints, ConstraintsExt};
 use svi::{Integrator, Lagrangian, Scalar, Scheme, Structure, Svi};
@@ -378,7 +378,7 @@ fn the_constrained_midpoint_and_svi_have_their_measured_orders_on_the_sphere() {
     // (method, steps, expected order): at the Gauss points 2s, then 2s − 2; at the nodes
     // irregular.
     let cases = [
-        (ConstrainedSvi::midpoint(), 20, 2.0),
+        (ConstrainedSvi::new(2, 1), 20, 2.0),
         (ConstrainedSvi::new(3, 2), 10, 4.0),
         (ConstrainedSvi::new(4, 3), 10, 4.0),
         (ConstrainedSvi::new(5, 4), 10, 6.0),
@@ -556,4 +556,56 @@ fn the_weighted_constraint_hessian_is_exact() {
         ],
     );
     assert!((hessian - expected).amax() < 1e-14);
+}
+
+#[test]
+fn the_constrained_segment_rules_have_orders_1_1_2_2_on_the_sphere() {
+    let t_end = 1.0;
+    let reference = spherical_final(Rattle::composed(Scheme::KahanLi8), t_end, 400);
+    for rule in SegmentRule::ALL {
+        let method = ConstrainedMethod::from(ConstrainedDel::new(rule));
+        let (steps, order) = (200, rule.order() as f64);
+        let coarse = (spherical_final_of(method.clone(), t_end, steps) - reference).norm();
+        let fine = (spherical_final_of(method.clone(), t_end, 2 * steps) - reference).norm();
+        let observed = (coarse / fine).log2();
+        println!(
+            "{}: {coarse:.2e} → {fine:.2e}, order {observed:.2}",
+            rule.name()
+        );
+        assert!(
+            (observed - order).abs() < 0.15,
+            "{}: observed order {observed:.2}, expected {order}",
+            rule.name()
+        );
+    }
+}
+
+/// The end of `steps` steps of `method` on the spherical pendulum at h = 0.05.
+fn spherical_end(method: impl Into<ConstrainedMethod>, steps: usize) -> ConstrainedPoint<U3> {
+    let (q0, p0) = spherical_initial();
+    ConstrainedIntegrator::new(FallingPoint { m: M, g: G }, Sphere { l: L }, method)
+        .unwrap()
+        .run(0.0, &q0, &p0, 0.05, steps, |_| {})
+        .unwrap()
+        .last
+}
+
+#[test]
+fn the_constrained_trapezoid_is_rattle_and_the_midpoint_rule_is_the_two_node_svi() {
+    // Independent implementations of one method each: the bordered Newton system of the
+    // segment rule against RATTLE's explicit kicks and drifts, and against the Galerkin step.
+    let steps = 200;
+    let trapezoid = spherical_end(ConstrainedDel::new(SegmentRule::Trapezoid), steps);
+    let rattle = spherical_end(Rattle::default(), steps);
+    let midpoint = spherical_end(ConstrainedDel::new(SegmentRule::Midpoint), steps);
+    let galerkin = spherical_end(ConstrainedSvi::new(2, 1), steps);
+    let pairs = [
+        ("trapezoid − rattle", trapezoid, rattle),
+        ("midpoint − svi:2/1", midpoint, galerkin),
+    ];
+    for (name, a, b) in pairs {
+        let gap = (a.q - b.q).amax().max((a.p - b.p).amax());
+        println!("{name}: {gap:.1e} after {steps} steps");
+        assert!(gap < 1e-12, "{name}: {gap:e}");
+    }
 }

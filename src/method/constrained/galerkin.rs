@@ -32,7 +32,8 @@
 //! Either way the discrete Lagrangian is the constrained extremum of A over polynomials
 //! pinned at q_k and q_{k+1} on the constraint manifold, so the method is symplectic on its
 //! cotangent bundle and keeps the momenta of symmetries that respect the constraints. With
-//! two nodes (s = 1, no interior constraint) it is the constrained midpoint rule.
+//! two nodes (s = 1, no interior constraint) it is the constrained midpoint rule
+//! ([`super::discrete`], which the tests check it against).
 //!
 //! Between its constraint points the polynomial leaves the manifold, which costs order. On
 //! the spherical pendulum (`cargo test --release --test integration constraints -- --nocapture`)
@@ -41,16 +42,15 @@
 //! system, are a derivative order behind) — and the nodes give 2, 4, 4, 6, 4, 6: hence the
 //! default.
 
-use super::rattle::{directions_into, view, view_mut};
-use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, record};
+use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, record};
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::DenseLu;
+use crate::model::Lagrangian;
 use crate::model::constraint::{
     ConstraintScratch, Constraints, ConstraintsExt, Projected, check_rank,
 };
 use crate::model::derived::LagrangianExt;
-use crate::model::{Lagrangian, Structure};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use nalgebra::allocator::Allocator;
@@ -91,12 +91,6 @@ impl ConstrainedSvi {
         }
     }
 
-    /// The constrained midpoint rule: two nodes, one Gauss point, the constraint at the
-    /// step's ends only.
-    pub fn midpoint() -> Self {
-        ConstrainedSvi::new(2, 1)
-    }
-
     /// The same method constrained at `at`.
     pub fn constrained_at(self, at: ConstraintPoints) -> Self {
         ConstrainedSvi { at, ..self }
@@ -117,10 +111,9 @@ impl ConstrainedSvi {
         }
     }
 
-    /// The name: `midpoint`, `svi:P/Q` (constrained at the Gauss points) or `svi:P/Q@nodes`.
+    /// The name: `svi:P/Q` (constrained at the Gauss points) or `svi:P/Q@nodes`.
     pub fn name(&self) -> String {
         match (self.points, self.quadrature, self.at) {
-            (2, 1, _) => "midpoint".into(),
             (points, quadrature, ConstraintPoints::Quadrature) => {
                 format!("svi:{points}/{quadrature}")
             }
@@ -130,12 +123,9 @@ impl ConstrainedSvi {
         }
     }
 
-    /// The method called `name` (`midpoint`, `svi:P/Q`, `svi:P/Q@nodes`); its numbers are
-    /// checked when it runs.
+    /// The method called `name` (`svi:P/Q`, `svi:P/Q@nodes`); its numbers are checked when
+    /// it runs.
     pub fn named(name: &str) -> Option<Self> {
-        if name == "midpoint" {
-            return Some(ConstrainedSvi::midpoint());
-        }
         let rest = name.strip_prefix("svi:")?;
         let (rest, at) = match rest.strip_suffix("@nodes") {
             Some(rest) => (rest, ConstraintPoints::Nodes),
@@ -169,7 +159,7 @@ impl Tables {
             return Err(Error::invalid(
                 "points",
                 format!(
-                    "{} needs at least {least} nodes (two: midpoint), got {}",
+                    "{} needs at least {least} nodes (two: the midpoint rule), got {}",
                     method.name(),
                     method.points
                 ),
@@ -212,12 +202,9 @@ where
     start_jacobian: DMatrix<f64>,
     values: DVector<f64>,
     hessian: DMatrix<f64>,
-    /// The multipliers of one constraint point; for the projection G q̇, M⁻¹Gᵀ and
-    /// S = G M⁻¹ Gᵀ.
+    /// The multipliers of one constraint point, and the projection's buffers.
     lambda: DVector<f64>,
-    rate: DVector<f64>,
-    directions: DMatrix<f64>,
-    projection: DenseLu,
+    projection: Projection<N>,
     /// A point on the curve, its velocity, and p̃.
     q: OVector<f64, N>,
     v: OVector<f64, N>,
@@ -256,9 +243,7 @@ where
         values: DVector::zeros(m),
         hessian: DMatrix::zeros(n, n),
         lambda: DVector::zeros(m),
-        rate: DVector::zeros(m),
-        directions: DMatrix::zeros(n, m),
-        projection: DenseLu::new(m),
+        projection: Projection::new(&zero, m),
         q: zero.clone(),
         v: zero.clone(),
         momentum: zero,
@@ -394,7 +379,15 @@ where
             .copy_from(&w.unknowns.rows(s * n + r * m, m));
         self.constraints
             .jacobian_into(&point.q, &mut w.scratch, &mut w.start_jacobian);
-        *velocity = self.project_momentum(w, end, &point.q, velocity, step)?;
+        *velocity = w.projection.project(
+            self.model,
+            end,
+            &point.q,
+            &w.start_jacobian,
+            &mut w.momentum,
+            velocity,
+            (step, self.method.max_iterations),
+        )?;
         point.p.copy_from(&w.momentum);
         Ok(iterations)
     }
@@ -553,51 +546,6 @@ where
                 w.momentum[a] -= psi * force;
             }
         }
-    }
-
-    /// `w.momentum` projected onto the cotangent space at `q` (whose G is
-    /// `w.start_jacobian`): p − Gᵀμ with G q̇(q, p − Gᵀμ) = 0, by Newton's method on μ with
-    /// S = G M⁻¹ Gᵀ (one iteration for a constant mass). Returns the velocity there.
-    fn project_momentum(
-        &self,
-        w: &mut Workspace<N>,
-        t: f64,
-        q: &OVector<f64, N>,
-        guess: &OVector<f64, N>,
-        step: usize,
-    ) -> Result<OVector<f64, N>, Error> {
-        let mut velocity = self.model.velocity(t, q, &w.momentum, guess)?;
-        for iteration in 0..self.method.max_iterations {
-            w.rate.gemv(1.0, &w.start_jacobian, &view(&velocity), 0.0);
-            if iteration > 0 && w.rate.amax() <= 4.0 * f64::EPSILON * velocity.amax().max(1.0) {
-                return Ok(velocity);
-            }
-            let inverse = self.model.mass_inverse(t, q, &velocity)?;
-            directions_into(
-                &inverse,
-                &w.start_jacobian,
-                &mut w.q,
-                &mut w.v,
-                &mut w.directions,
-            );
-            w.start_jacobian
-                .mul_to(&w.directions, w.projection.matrix_mut());
-            w.projection
-                .factor()
-                .map_err(|_| Error::SingularMatrix { step, t })?;
-            w.projection.solve_in_place(&mut w.rate);
-            view_mut(&mut w.momentum).gemv_tr(-1.0, &w.start_jacobian, &w.rate, 1.0);
-            velocity = self.model.velocity(t, q, &w.momentum, &velocity)?;
-            if L::STRUCTURE == Structure::ConstantMass {
-                return Ok(velocity);
-            }
-        }
-        Err(Error::NonConvergence {
-            step,
-            t,
-            iterations: self.method.max_iterations,
-            residual: f64::NAN,
-        })
     }
 }
 

@@ -9,20 +9,24 @@
 //! to round-off, are symplectic on its cotangent bundle and keep the momenta of the symmetries
 //! that respect the constraints.
 //!
-//! [`ConstrainedMethod`] names them: RATTLE and its symmetric compositions
-//! ([`rattle`]). A run projects the initial data onto the constraints first
+//! [`ConstrainedMethod`] names them: RATTLE and its symmetric compositions ([`rattle`]), the
+//! segment rules symplectic Euler, midpoint and trapezoid ([`discrete`]), and the
+//! constrained SVI ([`galerkin`]). A run projects the initial data onto the constraints first
 //! ([`crate::model::constraint::project`]) and reports how far it moved them, and the largest
 //! constraint violations over the run at position and velocity level.
 
+pub mod discrete;
 pub mod galerkin;
 pub mod rattle;
 
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
+use crate::linalg::DenseLu;
 use crate::method::variational::composition::Scheme;
 use crate::model::constraint::{Constraints, ConstraintsExt, Projected, project};
 use crate::model::derived::LagrangianExt;
 use crate::model::{Lagrangian, Structure};
+pub use discrete::{ConstrainedDel, SegmentRule};
 pub use galerkin::{ConstrainedSvi, ConstraintPoints};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, U1};
@@ -34,24 +38,31 @@ pub use rattle::Rattle;
 pub enum ConstrainedMethod {
     /// RATTLE, alone or composed ([`rattle`]).
     Rattle(Rattle),
-    /// The constrained SVI and the constrained midpoint rule ([`galerkin`]).
+    /// The constrained SVI ([`galerkin`]).
     Galerkin(ConstrainedSvi),
+    /// The constrained discrete Euler–Lagrange equations of a segment rule ([`discrete`]).
+    Discrete(ConstrainedDel),
 }
 
 impl ConstrainedMethod {
     /// The names [`ConstrainedMethod::named`] accepts: `rattle`, `rattle-yoshida4`,
-    /// `rattle-kahan-li6`, `rattle-kahan-li8`, `midpoint`, and the constrained SVI `svi:P/Q`
-    /// (P nodes, Q Gauss points, constrained at the Gauss points; listed as `svi:5/4`) and
+    /// `rattle-kahan-li6`, `rattle-kahan-li8`, the segment rules `symplectic-euler`,
+    /// `symplectic-euler-adjoint`, `midpoint`, `trapezoid`, and the constrained SVI `svi:P/Q`
+    /// (P nodes, Q Gauss points, constrained at Gauss points; listed as `svi:5/4`) and
     /// `svi:P/Q@nodes` (constrained at the interior nodes; listed as `svi:5/4@nodes`).
     pub fn names() -> Vec<String> {
         let galerkin = [
-            ConstrainedSvi::midpoint(),
             ConstrainedSvi::new(5, 4),
             ConstrainedSvi::new(5, 4).constrained_at(ConstraintPoints::Nodes),
         ];
         std::iter::once(Rattle::default())
             .chain(Scheme::ALL.into_iter().map(Rattle::composed))
             .map(ConstrainedMethod::from)
+            .chain(
+                SegmentRule::ALL
+                    .into_iter()
+                    .map(|rule| ConstrainedDel::new(rule).into()),
+            )
             .chain(galerkin.into_iter().map(ConstrainedMethod::from))
             .map(|method| method.name())
             .collect()
@@ -61,6 +72,9 @@ impl ConstrainedMethod {
     pub fn named(name: &str) -> Option<Self> {
         if name == "rattle" {
             return Some(Rattle::default().into());
+        }
+        if let Some(rule) = SegmentRule::named(name) {
+            return Some(ConstrainedDel::new(rule).into());
         }
         if let Some(method) = ConstrainedSvi::named(name) {
             return Some(method.into());
@@ -74,6 +88,7 @@ impl ConstrainedMethod {
         match self {
             ConstrainedMethod::Rattle(rattle) => rattle.name(),
             ConstrainedMethod::Galerkin(method) => method.name(),
+            ConstrainedMethod::Discrete(method) => method.rule.name().into(),
         }
     }
 
@@ -82,7 +97,14 @@ impl ConstrainedMethod {
         match self {
             ConstrainedMethod::Rattle(rattle) => rattle.order(),
             ConstrainedMethod::Galerkin(method) => method.order(),
+            ConstrainedMethod::Discrete(method) => method.rule.order(),
         }
+    }
+}
+
+impl From<ConstrainedDel> for ConstrainedMethod {
+    fn from(method: ConstrainedDel) -> Self {
+        ConstrainedMethod::Discrete(method)
     }
 }
 
@@ -238,6 +260,9 @@ impl<L, C> ConstrainedIntegrator<L, C> {
             ConstrainedMethod::Galerkin(method) => {
                 galerkin::run(self, method, t0, h, steps, initial, observe)
             }
+            ConstrainedMethod::Discrete(method) => {
+                discrete::run(self, method, t0, h, steps, initial, observe)
+            }
         }
     }
 }
@@ -264,4 +289,81 @@ fn record<N: Dimension, C: Constraints<N>>(
     run.constraint_error_max = run.constraint_error_max.max(g.amax());
     run.velocity_constraint_error_max = run.velocity_constraint_error_max.max(rate.amax());
     run.steps += 1;
+}
+
+/// Buffers of the projection of a momentum onto the cotangent space, sized once.
+struct Projection<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    rate: DVector<f64>,
+    directions: nalgebra::DMatrix<f64>,
+    schur: DenseLu,
+    row: OVector<f64, N>,
+    buffer: OVector<f64, N>,
+}
+
+impl<N: Dimension> Projection<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// Buffers for `m` constraints on vectors shaped like `zero`.
+    fn new(zero: &OVector<f64, N>, m: usize) -> Self {
+        Projection {
+            rate: DVector::zeros(m),
+            directions: nalgebra::DMatrix::zeros(zero.len(), m),
+            schur: DenseLu::new(m),
+            row: zero.clone(),
+            buffer: zero.clone(),
+        }
+    }
+
+    /// `momentum` projected in place onto the cotangent space at `q` (with G(q) =
+    /// `jacobian`): p − Gᵀμ with G q̇(q, p − Gᵀμ) = 0, q̇ the inverse Legendre map, by Newton's
+    /// method on μ with S = G M⁻¹ Gᵀ (one iteration for a constant mass). Returns the velocity
+    /// there; `guess` starts the Legendre map. `(step, cap)`: the step for errors and the cap
+    /// on iterations.
+    #[allow(clippy::too_many_arguments)]
+    fn project<L: Lagrangian<N>>(
+        &mut self,
+        model: &L,
+        t: f64,
+        q: &OVector<f64, N>,
+        jacobian: &nalgebra::DMatrix<f64>,
+        momentum: &mut OVector<f64, N>,
+        guess: &OVector<f64, N>,
+        (step, cap): (usize, usize),
+    ) -> Result<OVector<f64, N>, Error> {
+        let mut velocity = model.velocity(t, q, momentum, guess)?;
+        for iteration in 0..cap {
+            self.rate.gemv(1.0, jacobian, &rattle::view(&velocity), 0.0);
+            if iteration > 0 && self.rate.amax() <= 4.0 * f64::EPSILON * velocity.amax().max(1.0) {
+                return Ok(velocity);
+            }
+            let inverse = model.mass_inverse(t, q, &velocity)?;
+            rattle::directions_into(
+                &inverse,
+                jacobian,
+                &mut self.row,
+                &mut self.buffer,
+                &mut self.directions,
+            );
+            jacobian.mul_to(&self.directions, self.schur.matrix_mut());
+            self.schur
+                .factor()
+                .map_err(|_| Error::SingularMatrix { step, t })?;
+            self.schur.solve_in_place(&mut self.rate);
+            rattle::view_mut(momentum).gemv_tr(-1.0, jacobian, &self.rate, 1.0);
+            velocity = model.velocity(t, q, momentum, &velocity)?;
+            if L::STRUCTURE == Structure::ConstantMass {
+                return Ok(velocity);
+            }
+        }
+        Err(Error::NonConvergence {
+            step,
+            t,
+            iterations: cap,
+            residual: self.rate.amax(),
+        })
+    }
 }
