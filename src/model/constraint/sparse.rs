@@ -126,14 +126,14 @@ impl SparseJacobian {
     }
 }
 
-/// One product of S_ij = Σ_c A_ic w_c B_jc: the slot of S_ij, the entries of A and B, the
-/// column c.
+/// One product of S_ij = Σ_c A_ic w_c B_jc: the entries of A and B and the column c (32-bit
+/// indices: the list is streamed at every assembly, and its size decides the step's memory
+/// traffic).
 #[derive(Debug, Clone, Copy)]
 struct Product {
-    slot: usize,
-    left: usize,
-    right: usize,
-    column: usize,
+    left: u32,
+    right: u32,
+    column: u32,
 }
 
 /// Matrices S = A M⁻¹ Bᵀ (m × m) of Jacobians of one layout: the pattern and products fixed
@@ -141,6 +141,8 @@ struct Product {
 #[derive(Debug)]
 pub(crate) struct Schur {
     pattern: Pattern,
+    /// The products of each slot: those of slot s are `products[starts[s]..starts[s + 1]]`.
+    starts: Vec<usize>,
     products: Vec<Product>,
     /// The values of the last assembled S, in the pattern's slot order.
     values: Vec<f64>,
@@ -150,25 +152,36 @@ pub(crate) struct Schur {
 impl Schur {
     /// The pattern and products of S for Jacobians laid out as `jacobian`, analysed for the
     /// sparse LU.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] `constraints` when G has 2³² entries or more (the
+    /// products' indices are 32-bit), or from the symbolic analysis.
     pub(crate) fn new(jacobian: &SparseJacobian, n: usize) -> Result<Self, Error> {
         let width = jacobian.width;
+        let index = |i: usize| {
+            u32::try_from(i).map_err(|_| {
+                Error::invalid("constraints", "too many: G has 2³² entries or more")
+            })
+        };
+        index(jacobian.columns.len().max(n))?;
         // The entries of each column (compressed: start offsets, then the entries).
-        let mut starts = vec![0usize; n + 1];
+        let mut column_starts = vec![0usize; n + 1];
         for &c in &jacobian.columns {
-            starts[c + 1] += 1;
+            column_starts[c + 1] += 1;
         }
         for c in 0..n {
-            starts[c + 1] += starts[c];
+            column_starts[c + 1] += column_starts[c];
         }
-        let mut fill = starts.clone();
+        let mut fill = column_starts.clone();
         let mut by_column = vec![0usize; jacobian.columns.len()];
         for (entry, &c) in jacobian.columns.iter().enumerate() {
             by_column[fill[c]] = entry;
             fill[c] += 1;
         }
+        // Every pair of entries in one column: (left, right, column).
         let mut pairs = Vec::new();
         for c in 0..n {
-            let entries = &by_column[starts[c]..starts[c + 1]];
+            let entries = &by_column[column_starts[c]..column_starts[c + 1]];
             for &left in entries {
                 for &right in entries {
                     pairs.push((left, right, c));
@@ -180,24 +193,33 @@ impl Schur {
             .map(|&(left, right, _)| (left / width, right / width))
             .collect();
         let pattern = Pattern::new(jacobian.rows(), &places)?;
-        let products = pairs
-            .iter()
-            .zip(&places)
-            .filter_map(|(&(left, right, column), &(i, j))| {
-                Some(Product {
-                    slot: pattern.slot(i, j)?,
-                    left,
-                    right,
-                    column,
-                })
-            })
-            .collect();
+        // Sorted by slot, so that an assembly writes each value once, in order.
+        let mut slotted: Vec<(usize, Product)> = Vec::with_capacity(pairs.len());
+        for (&(left, right, column), &(i, j)) in pairs.iter().zip(&places) {
+            if let Some(slot) = pattern.slot(i, j) {
+                let product = Product {
+                    left: index(left)?,
+                    right: index(right)?,
+                    column: index(column)?,
+                };
+                slotted.push((slot, product));
+            }
+        }
+        slotted.sort_by_key(|&(slot, product)| (slot, product.column));
+        let mut starts = vec![0usize; pattern.len() + 1];
+        for &(slot, _) in &slotted {
+            starts[slot + 1] += 1;
+        }
+        for s in 0..pattern.len() {
+            starts[s + 1] += starts[s];
+        }
         let mut lu = SparseLu::default();
         lu.analyse(&pattern)?;
         Ok(Schur {
             values: vec![0.0; pattern.len()],
+            products: slotted.into_iter().map(|(_, product)| product).collect(),
+            starts,
             pattern,
-            products,
             lu,
         })
     }
@@ -210,13 +232,13 @@ impl Schur {
         weights: &[f64],
         right: &SparseJacobian,
     ) {
-        self.values.fill(0.0);
         let (a, b) = (&left.entries, &right.entries);
-        for p in &self.products {
-            self.values[p.slot] += a[p.left] * weights[p.column] * b[p.right];
-        }
-        if scale != 1.0 {
-            self.values.iter_mut().for_each(|v| *v *= scale);
+        for (value, range) in self.values.iter_mut().zip(self.starts.windows(2)) {
+            let sum: f64 = self.products[range[0]..range[1]]
+                .iter()
+                .map(|p| a[p.left as usize] * weights[p.column as usize] * b[p.right as usize])
+                .sum();
+            *value = scale * sum;
         }
     }
 
