@@ -33,14 +33,11 @@ use svi_models::polymer::Bonds;
 const STEPS: usize = 20;
 const H: f64 = 0.01;
 
+/// RATTLE on the polymer chain.
+type Chain = ConstrainedIntegrator<Terms<Polymer>, SparseConstraints<Bonds>>;
+
 /// The integrator and default state (q₀, p₀) of a chain of `n` beads.
-fn setup(
-    n: usize,
-) -> (
-    ConstrainedIntegrator<Terms<Polymer>, SparseConstraints<Bonds>>,
-    DVector<f64>,
-    DVector<f64>,
-) {
+fn setup(n: usize) -> (Chain, DVector<f64>, DVector<f64>) {
     let mut polymer = Polymer::default();
     polymer.set_parameter("n", n as f64).unwrap();
     let (_, q, v) = polymer.initial_state();
@@ -51,12 +48,7 @@ fn setup(
 }
 
 /// The time of a run of `steps` steps.
-fn time_run(
-    integrator: &ConstrainedIntegrator<Terms<Polymer>, SparseConstraints<Bonds>>,
-    q: &DVector<f64>,
-    p: &DVector<f64>,
-    steps: usize,
-) -> Duration {
+fn time_run(integrator: &Chain, q: &DVector<f64>, p: &DVector<f64>, steps: usize) -> Duration {
     let start = Instant::now();
     let run = integrator.run(0.0, q, p, H, steps, |_| {}).unwrap();
     let elapsed = start.elapsed();

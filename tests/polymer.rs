@@ -56,12 +56,15 @@ fn run<C: Constraints<Dyn>>(
         .unwrap()
 }
 
-/// The trajectory of a run, every point's (q, p).
+/// Every point's (q, p) of a run.
+type Trajectory = Vec<(DVector<f64>, DVector<f64>)>;
+
+/// The trajectory of a run of 300 steps, and the run.
 fn trajectory<C: Constraints<Dyn>>(
     polymer: &Polymer,
     constraints: C,
     method: Rattle,
-) -> (Vec<(DVector<f64>, DVector<f64>)>, ConstrainedRun<Dyn>) {
+) -> (Trajectory, ConstrainedRun<Dyn>) {
     let mut points = Vec::new();
     let run = run(polymer, constraints, method, 0.01, 300, |point| {
         points.push((point.q.clone(), point.p.clone()));

@@ -28,9 +28,9 @@
 //! # Dense and sparse
 //! This file holds G as a dense m × n matrix: right for a few constraints. Local constraints
 //! ([`Constraints::local`], [`crate::model::constraint::local::SparseConstraints`]) with a
-//! diagonal mass matrix take [`sparse`] instead — the same equations, iteration and stopping
-//! rule with G stored sparsely and sparse LU, O(n) per step — chosen once at the start of the
-//! run.
+//! diagonal mass matrix take the sparse path instead (`rattle/sparse.rs`) — the same
+//! equations, iteration and stopping rule with G stored sparsely and sparse LU, O(n) per step
+//! — chosen once at the start of the run.
 
 mod sparse;
 

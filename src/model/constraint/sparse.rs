@@ -159,9 +159,8 @@ impl Schur {
     pub(crate) fn new(jacobian: &SparseJacobian, n: usize) -> Result<Self, Error> {
         let width = jacobian.width;
         let index = |i: usize| {
-            u32::try_from(i).map_err(|_| {
-                Error::invalid("constraints", "too many: G has 2³² entries or more")
-            })
+            u32::try_from(i)
+                .map_err(|_| Error::invalid("constraints", "too many: G has 2³² entries or more"))
         };
         index(jacobian.columns.len().max(n))?;
         // The entries of each column (compressed: start offsets, then the entries).
@@ -257,10 +256,10 @@ impl Schur {
     /// `out` = S `x` for the assembled S.
     fn mul_into(&self, x: &[f64], out: &mut [f64]) {
         out.fill(0.0);
-        for col in 0..self.pattern.size() {
+        for (col, &x) in x.iter().enumerate().take(self.pattern.size()) {
             let start = self.pattern.column_start(col);
             for (offset, row) in self.pattern.column(col).enumerate() {
-                out[row] += self.values[start + offset] * x[col];
+                out[row] += self.values[start + offset] * x;
             }
         }
     }
@@ -453,4 +452,115 @@ where
         q,
         p,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::constraint::{Constraints, ConstraintsExt};
+    use crate::model::constraint::local::{LocalConstraints, SparseConstraints};
+    use crate::scalar::Scalar;
+    use nalgebra::{Const, DMatrix, SVector};
+
+    /// Overlapping triples of 7 coordinates, one with a repeated index, nonlinear in each.
+    struct Triples;
+
+    impl LocalConstraints for Triples {
+        type Width = Const<3>;
+        fn count(&self) -> usize {
+            4
+        }
+        fn indices(&self, i: usize) -> [usize; 3] {
+            [[0, 1, 2], [2, 3, 4], [4, 4, 6], [1, 5, 6]][i]
+        }
+        fn constraint<D: Scalar>(&self, i: usize, q: &SVector<D, 3>) -> D {
+            q[0] * q[1] + q[2].sin() * (i as f64 + 1.0) + q[0] * q[0] * q[2]
+        }
+    }
+
+    /// S = s A W Bᵀ assembled from the products equals the dense product, for Jacobians A, B
+    /// at two points and a repeated slot.
+    #[test]
+    fn assembly_equals_the_dense_product() {
+        let constraints = SparseConstraints(Triples);
+        let rows = constraints.local().unwrap();
+        let (qa, qb) = (
+            DVector::from_fn(7, |i, _| 0.3 + 0.1 * i as f64),
+            DVector::from_fn(7, |i, _| (0.7 * i as f64).cos()),
+        );
+        let weights: Vec<f64> = (0..7).map(|i| 1.0 / (1.0 + i as f64)).collect();
+        let mut a = SparseJacobian::new(rows, 7).unwrap();
+        let mut b = a.clone();
+        a.evaluate(rows, qa.as_slice());
+        b.evaluate(rows, qb.as_slice());
+        let mut schur = Schur::new(&a, 7).unwrap();
+        schur.assemble(-0.5, &a, &weights, &b);
+        let w = DMatrix::from_diagonal(&DVector::from_vec(weights.clone()));
+        let expected = constraints.jacobian(&qa) * w * constraints.jacobian(&qb).transpose() * -0.5;
+        let mut dense = DMatrix::zeros(4, 4);
+        for col in 0..4 {
+            let start = schur.pattern.column_start(col);
+            for (offset, row) in schur.pattern.column(col).enumerate() {
+                dense[(row, col)] = schur.values[start + offset];
+            }
+        }
+        assert!((&dense - &expected).amax() < 1e-14, "{dense} vs {expected}");
+        // Rows 0 and 2 share no coordinate: no entry.
+        assert_eq!(schur.pattern.slot(0, 2), None);
+        // G x and Gᵀ y against the dense Jacobian.
+        let x = DVector::from_fn(7, |i, _| i as f64 - 2.0);
+        let mut gx = vec![0.0; 4];
+        a.mul_into(x.as_slice(), &mut gx);
+        let dense_a = constraints.jacobian(&qa);
+        assert!((DVector::from_vec(gx) - &dense_a * &x).amax() < 1e-14);
+        let y = DVector::from_vec(vec![1.0, -2.0, 0.5, 3.0]);
+        let mut gty = vec![1.0; 7];
+        a.tr_mul_add(2.0, y.as_slice(), &mut gty);
+        let expected = dense_a.tr_mul(&y) * 2.0 + DVector::from_element(7, 1.0);
+        assert!((DVector::from_vec(gty) - expected).amax() < 1e-14);
+    }
+
+    /// The O(n) rank check passes independent rows and names a parallel one.
+    #[test]
+    fn the_rank_check_names_a_parallel_row() {
+        let rows = SparseConstraints(Triples);
+        let rows = rows.local().unwrap();
+        let q = DVector::from_fn(7, |i, _| 0.3 + 0.1 * i as f64);
+        let weights = vec![1.0; 7];
+        let mut jacobian = SparseJacobian::new(rows, 7).unwrap();
+        let mut schur = Schur::new(&jacobian, 7).unwrap();
+        check_rank(rows, q.as_slice(), &weights, &mut jacobian, &mut schur).unwrap();
+
+        /// The first triple twice.
+        struct Twice;
+        impl LocalConstraints for Twice {
+            type Width = Const<3>;
+            fn count(&self) -> usize {
+                2
+            }
+            fn indices(&self, _: usize) -> [usize; 3] {
+                [0, 1, 2]
+            }
+            fn constraint<D: Scalar>(&self, _: usize, q: &SVector<D, 3>) -> D {
+                Triples.constraint(0, q)
+            }
+        }
+        let twice = SparseConstraints(Twice);
+        let rows = twice.local().unwrap();
+        let mut jacobian = SparseJacobian::new(rows, 7).unwrap();
+        let mut schur = Schur::new(&jacobian, 7).unwrap();
+        let error = check_rank(rows, q.as_slice(), &weights, &mut jacobian, &mut schur)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("g[1] is redundant") && error.contains("g[0]"),
+            "{error}"
+        );
+        let error = SparseJacobian::new(rows, 2).unwrap_err().to_string();
+        assert!(error.contains("2 constraints on 2 coordinates"), "{error}");
+        let error = SparseJacobian::new(SparseConstraints(Triples).local().unwrap(), 6)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("g[2] reads coordinate 6"), "{error}");
+    }
 }
