@@ -457,8 +457,8 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::constraint::{Constraints, ConstraintsExt};
     use crate::model::constraint::local::{LocalConstraints, SparseConstraints};
+    use crate::model::constraint::{Constraints, ConstraintsExt};
     use crate::scalar::Scalar;
     use nalgebra::{Const, DMatrix, SVector};
 
