@@ -26,6 +26,7 @@ mod logh;
 mod multiscale;
 mod newton;
 mod pendulum_chain;
+mod polymer;
 mod pseudospectral;
 mod reparam;
 mod sem;

@@ -30,6 +30,15 @@
 //! They implement [`LocalZooModel`] and are handed to a [`LocalModelVisitor`] by
 //! [`visit_local_model`] (names: [`LOCAL_MODEL_NAMES`]).
 //!
+//! A chain with holonomic constraints is a sum of local terms plus local constraints
+//! ([`svi::model::constraint::local`]), run by the constrained integrators
+//! ([`svi::method::constrained`]) rather than by every method, so it is not among
+//! [`LOCAL_MODEL_NAMES`] (run without its constraints it would be another system):
+//!
+//! | name | model | n (default) | constraints | invariants | observables |
+//! | --- | --- | --- | --- | --- | --- |
+//! | `polymer` | [`Polymer`] | 64 beads in ℝ³ | n − 1 rigid bonds ([`polymer::Bonds`]) | momenta (x, y; z without gravity), angular momentum about z | `end_to_end`, `gyration_radius` |
+//!
 //! The last three are forced (`Lagrangian::FORCED`): their non-conservative force (friction,
 //! a time-dependent drive) is part of the model, [`svi::Lagrangian::external_force`], and
 //! every integrator of `svi` solves their Lagrange–d'Alembert equations.
@@ -113,6 +122,7 @@ pub mod kepler;
 pub mod nbody;
 pub mod oscillator;
 pub mod pendulum;
+pub mod polymer;
 pub mod relativistic_chain;
 pub mod schrodinger;
 pub mod sine_gordon_chain;
@@ -134,6 +144,7 @@ pub use kepler::{Kepler, KeplerOrbit};
 pub use nbody::{Body, NBody};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
+pub use polymer::Polymer;
 pub use relativistic_chain::RelativisticChain;
 pub use schrodinger::{NlsSoliton, SchrodingerPacket};
 pub use sine_gordon_chain::SineGordonChain;
@@ -456,6 +467,19 @@ impl LocalZooModel for SineGordonChain {
     /// crossing.
     fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
         out.push(self.kink_position(q));
+    }
+}
+
+impl LocalZooModel for Polymer {
+    /// `end_to_end` and `gyration_radius`.
+    fn observable_names(&self) -> Vec<String> {
+        vec!["end_to_end".into(), "gyration_radius".into()]
+    }
+
+    /// The distance between the ends ([`Polymer::end_to_end`]) and the radius of gyration
+    /// ([`Polymer::gyration_radius`]).
+    fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
+        out.extend([self.end_to_end(q), self.gyration_radius(q)]);
     }
 }
 

@@ -18,6 +18,13 @@
 //! [`project`] makes initial data consistent: q₀ onto g = 0 (Newton steps along M⁻¹Gᵀ, the
 //! M-orthogonal projection to first order) and p₀ onto the cotangent space (the M⁻¹-orthogonal
 //! projection), reporting how far each moved.
+//!
+//! Many constraints that each read a few coordinates (the bonds of a long chain) are written
+//! as [`local::LocalConstraints`] and run as [`local::SparseConstraints`]: G is then stored
+//! sparsely and every step, the rank check and the projection cost O(n) ([`sparse`]).
+
+pub mod local;
+pub mod sparse;
 
 use crate::dimension::Dimension;
 use crate::error::Error;
@@ -65,6 +72,14 @@ where
     /// (a text model's expression).
     fn constraint_name(&self, index: usize) -> String {
         format!("g[{index}]")
+    }
+
+    /// The constraints as rows of a sparse Jacobian, when each reads a few coordinates
+    /// ([`local::SparseConstraints`]): the integrators then store G sparsely and take O(n)
+    /// per step (with a diagonal mass matrix). `None` (the default): G is a dense m × n
+    /// matrix, right for a few constraints on a small system.
+    fn local(&self) -> Option<&dyn local::ConstraintRows> {
+        None
     }
 }
 
@@ -266,7 +281,7 @@ where
 }
 
 /// Most Newton steps of the projection onto g = 0.
-const PROJECTION_STEPS: usize = 50;
+pub(crate) const PROJECTION_STEPS: usize = 50;
 
 /// Project (q₀, p₀) onto the constraint manifold and its cotangent space, for a constant mass
 /// matrix with inverse `mass_inverse`: q ← q − M⁻¹Gᵀ(G M⁻¹ Gᵀ)⁻¹ g(q) until g(q) = 0 to
@@ -276,6 +291,9 @@ const PROJECTION_STEPS: usize = 50;
 /// # Errors
 /// [`Error::InvalidParameter`] for constraints of deficient rank, or when the projection of
 /// q₀ does not converge (q₀ too far from the manifold, or no point of it near).
+///
+/// Local constraints ([`Constraints::local`]) with a diagonal M⁻¹ are projected in O(n) by
+/// sparse LU, their rank checked in O(n) ([`sparse`]).
 pub fn project<N: Dimension, C: Constraints<N> + ?Sized>(
     constraints: &C,
     mass_inverse: &MassInverse<N>,
@@ -285,6 +303,11 @@ pub fn project<N: Dimension, C: Constraints<N> + ?Sized>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
+    if let Some(rows) = constraints.local()
+        && let Some(weights) = sparse::diagonal(mass_inverse)
+    {
+        return sparse::project(rows, &weights, q0, p0);
+    }
     let m = constraints.count();
     let mut scratch = ConstraintScratch::new(q0, m);
     let mut jacobian = DMatrix::zeros(m, q0.len());

@@ -64,7 +64,8 @@ use crate::scalar::Scalar;
 use nalgebra::{Const, DVector, SVector};
 use num_dual::{Dual64, HyperDual64};
 
-/// The width K of a [`LocalLagrangian`]'s terms: `nalgebra::Const<K>`.
+/// The width K of a [`LocalLagrangian`]'s terms (and of the local constraints of
+/// [`crate::model::constraint::local`]): `nalgebra::Const<K>`.
 ///
 /// It carries K to the fixed-size code a term is differentiated by (stable Rust cannot use
 /// an associated constant as an array length). Implemented for every `Const<K>`; not meant
@@ -76,6 +77,9 @@ pub trait TermWidth {
     type Vector<D: Scalar>;
     /// The index set of one term: `[usize; K]`.
     type Indices: AsRef<[usize]> + Copy;
+
+    /// The vector of the K slots `entry(0)`, …, `entry(K − 1)`.
+    fn vector<D: Scalar>(entry: impl FnMut(usize) -> D) -> Self::Vector<D>;
 
     /// Add the term's ∂ℓₑ/∂q (`velocity == false`) or ∂ℓₑ/∂q̇ (`velocity == true`) at
     /// (t, q, q̇) into `out` at the term's indices.
@@ -183,6 +187,11 @@ impl<const K: usize> TermWidth for Const<K> {
     const WIDTH: usize = K;
     type Vector<D: Scalar> = SVector<D, K>;
     type Indices = [usize; K];
+
+    #[inline]
+    fn vector<D: Scalar>(mut entry: impl FnMut(usize) -> D) -> SVector<D, K> {
+        SVector::from_fn(|i, _| entry(i))
+    }
 
     #[inline]
     fn scatter_gradient<L: LocalLagrangian<Width = Self> + ?Sized>(

@@ -24,6 +24,15 @@
 //! composes like Störmer–Verlet: the compositions of [`Scheme`] (yoshida4, kahan-li6,
 //! kahan-li8) give orders 4, 6 and 8 on the manifold (Reich 1996; Hairer, Lubich & Wanner,
 //! §V.3 and §VII.1.4).
+//!
+//! # Dense and sparse
+//! This file holds G as a dense m × n matrix: right for a few constraints. Local constraints
+//! ([`Constraints::local`], [`crate::model::constraint::local::SparseConstraints`]) with a
+//! diagonal mass matrix take the sparse path instead (`rattle/sparse.rs`) — the same
+//! equations, iteration and stopping rule with G stored sparsely and sparse LU, O(n) per step
+//! — chosen once at the start of the run.
+
+mod sparse;
 
 use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, record};
 use crate::dimension::Dimension;
@@ -31,6 +40,7 @@ use crate::error::Error;
 use crate::linalg::DenseLu;
 use crate::method::variational::composition::Scheme;
 use crate::model::Lagrangian;
+use crate::model::constraint::sparse::diagonal;
 use crate::model::constraint::{
     ConstraintScratch, Constraints, ConstraintsExt, Projected, check_rank,
 };
@@ -137,6 +147,13 @@ pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
+    if let Some(rows) = integrator.constraints.local()
+        && let Some(weights) = diagonal(&mass_inverse)
+    {
+        return sparse::run(
+            integrator, rattle, rows, weights, t0, h, steps, initial, observe,
+        );
+    }
     let stepper = Stepper {
         model: &integrator.model,
         constraints: &integrator.constraints,
