@@ -16,7 +16,11 @@
 //!    output times, recovery, divergence limit: one call for all), writes the trajectory and
 //!    assembles the one [`Summary`]. A run that fails after it started still writes its
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
+//!
+//! A scene with holonomic constraints takes its own path (`constrained.rs`): the library's
+//! constrained integrator with the scene's constrained method, observed for the same summary.
 
+mod constrained;
 mod control;
 pub mod field;
 pub(crate) mod outcome;
@@ -81,6 +85,9 @@ impl CheckedScene<'_> {
         match self.space() {
             SpaceKind::Vector => match self.text() {
                 Some(text) => match text? {
+                    Text::Model(model) if self.is_constrained() => {
+                        constrained::run(&self, control, model)
+                    }
                     Text::Model(model) => visit_text_model(model, run)?,
                     Text::Chain(chain) => visit_text_chain(chain, run)?,
                 },

@@ -161,8 +161,14 @@ mod tests {
         assert_eq!(Constraints::<Dyn>::count(&constraints), 2);
         assert_eq!(constraints.values(&q).as_slice(), &[14.0 - 4.0, -1.0]);
         let jacobian = ConstraintsExt::<Dyn>::jacobian(&constraints, &q);
-        assert_eq!(jacobian.row(0).iter().copied().collect::<Vec<_>>(), [2.0, 4.0, 6.0]);
-        assert_eq!(jacobian.row(1).iter().copied().collect::<Vec<_>>(), [1.0, -1.0, 0.0]);
+        assert_eq!(
+            jacobian.row(0).iter().copied().collect::<Vec<_>>(),
+            [2.0, 4.0, 6.0]
+        );
+        assert_eq!(
+            jacobian.row(1).iter().copied().collect::<Vec<_>>(),
+            [1.0, -1.0, 0.0]
+        );
         assert_eq!(
             Constraints::<U3>::constraint_name(&constraints, 0),
             "x^2 + y^2 + z^2 - l^2"
@@ -185,7 +191,10 @@ mod tests {
             "{velocity}"
         );
         let time = refused("x - t");
-        assert!(time.contains("'x - t'") && time.contains("time t"), "{time}");
+        assert!(
+            time.contains("'x - t'") && time.contains("time t"),
+            "{time}"
+        );
         let constant = refused("l - 1");
         assert!(
             constant.contains("'l - 1'") && constant.contains("does not depend on the coordinates"),

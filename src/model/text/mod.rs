@@ -381,6 +381,18 @@ impl TextModel {
         named_values(&self.parameter_names, &self.parameter_values)
     }
 
+    /// The symmetry generator `index` (of [`TextSpec::symmetries`]) at `q` into `out`, without
+    /// allocating: what a run's observer of the Noether momenta evaluates at every step.
+    ///
+    /// # Panics
+    /// If `index` is not below the number of generators, or `q` and `out` are shorter than
+    /// the coordinates.
+    pub fn generator_into(&self, index: usize, q: &[f64], out: &mut [f64]) {
+        for (value, tape) in out.iter_mut().zip(&self.tapes.generators[index]) {
+            *value = tape.evaluate(0.0, q, &[]);
+        }
+    }
+
     /// The number of holonomic constraints ([`TextSpec::constraints`]).
     pub fn constraint_count(&self) -> usize {
         self.constraints.len()

@@ -1,0 +1,305 @@
+//! Scenes with holonomic constraints: a Lagrangian written as text with
+//! `constraints = ["x^2 + y^2 + z^2 - l^2", ...]`, run by a constrained method
+//! ([`svi::method::constrained::ConstrainedMethod`]: `rattle`, `rattle-yoshida4`, ...).
+//!
+//! A scene's method ([`SceneMethod`], `[method] name` and `--method`) is either a method of
+//! the registry ([`svi::method::registry::METHODS`]) or a constrained one; a scene with
+//! constraints takes a constrained method (by default `rattle`), every other scene a method of
+//! the registry, and each mismatch is an error that lists the methods the scene takes. What a
+//! constrained run cannot use (adaptivity, output times, recovery, a divergence limit, points
+//! and quadrature, the `solution` diagnostic) is refused by name ([`Scene::check`]).
+//!
+//! ```toml
+//! lagrangian = "0.5*m*(vx^2 + vy^2 + vz^2) - m*g*z"
+//! coordinates = ["x", "y", "z"]
+//! constraints = ["x^2 + y^2 + z^2 - l^2"]   # g(q) = 0, in q and the parameters
+//! symmetries = [["-y", "x", "0"]]           # optional: rotations about the vertical
+//!
+//! [method]
+//! name = "rattle-kahan-li8"                 # default "rattle"
+//! ```
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::Deserialize;
+use svi::MethodSpec;
+use svi::method::constrained::ConstrainedMethod;
+use svi::method::registry;
+use svi::model::text::TextModel;
+
+use crate::scene::schema::{AdaptMode, Diagnostic, RecoveryKind};
+use crate::scene::{Scene, SceneError, Text};
+
+/// The method of a scene: a method of the registry, or a constrained method for a scene with
+/// constraints.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SceneMethod {
+    /// A method of [`svi::method::registry::METHODS`] (`svi:7/6`, `verlet`, ...).
+    Registry(MethodSpec),
+    /// A constrained method (`rattle`, `rattle-kahan-li8`, ...; see [`constrained_names`]).
+    Constrained(ConstrainedMethod),
+}
+
+impl From<MethodSpec> for SceneMethod {
+    fn from(spec: MethodSpec) -> Self {
+        SceneMethod::Registry(spec)
+    }
+}
+
+impl fmt::Display for SceneMethod {
+    /// As written: `name`, `name:P`, `name:P/M`, or the constrained method's name.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SceneMethod::Registry(spec) => spec.fmt(f),
+            SceneMethod::Constrained(method) => f.write_str(&method.name()),
+        }
+    }
+}
+
+impl FromStr for SceneMethod {
+    type Err = svi::Error;
+
+    /// A method of the registry (`name`, `name:P` or `name:P/M`), else a constrained method's
+    /// name; an unknown name is an error listing both.
+    fn from_str(text: &str) -> Result<Self, svi::Error> {
+        match text.parse::<MethodSpec>() {
+            Ok(spec) => Ok(SceneMethod::Registry(spec)),
+            Err(error) => match ConstrainedMethod::named(text.trim()) {
+                Some(method) => Ok(SceneMethod::Constrained(method)),
+                None if registry::find(text.trim().split(':').next().unwrap_or("")).is_none() => {
+                    Err(svi::Error::invalid(
+                        "method",
+                        format!(
+                            "unknown method '{}' (known: {}; for scenes with constraints: {})",
+                            text.trim(),
+                            registry::known_names(),
+                            constrained_names()
+                        ),
+                    ))
+                }
+                None => Err(error),
+            },
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for SceneMethod {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(deserializer)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// The constrained methods, as named in scenes and on the command line:
+/// `rattle, rattle-yoshida4, ...` ([`ConstrainedMethod::names`]).
+pub fn constrained_names() -> String {
+    ConstrainedMethod::names().join(", ")
+}
+
+/// The help of the constrained methods, for options that take a method: one line each, with
+/// its order.
+pub fn constrained_help() -> String {
+    let mut text = String::from(
+        "Scenes with holonomic constraints (constraints = [...]) take a constrained method:",
+    );
+    let names = ConstrainedMethod::names();
+    let width = names.iter().map(String::len).max().unwrap_or(0) + 2;
+    for name in names {
+        let order = ConstrainedMethod::named(&name).map_or(0, |method| method.order());
+        text.push_str(&format!(
+            "\n  {name:<width$}constrained variational integrator of order {order}"
+        ));
+    }
+    text
+}
+
+/// The method a scene with constraints runs when it names none.
+pub const DEFAULT_CONSTRAINED_METHOD: &str = "rattle";
+
+/// A reason listing the constrained methods, for errors about a scene's method.
+fn with_constraints_take() -> String {
+    format!(
+        "a scene with constraints takes a constrained method ({})",
+        constrained_names()
+    )
+}
+
+impl Scene {
+    /// Whether the scene has holonomic constraints or names a constrained method: it runs on
+    /// the constrained path ([`Scene::constrained_method`]).
+    pub fn is_constrained(&self) -> bool {
+        self.constraints.is_some() || matches!(self.method.name, Some(SceneMethod::Constrained(_)))
+    }
+
+    /// The constrained method of a scene with constraints: `[method] name`, by default
+    /// [`DEFAULT_CONSTRAINED_METHOD`]. An error says which methods the scene takes when its
+    /// method does not fit it (a method of the registry with constraints, a constrained
+    /// method without).
+    pub fn constrained_method(&self) -> Result<ConstrainedMethod, SceneError> {
+        let option = "--method (method.name)";
+        match (&self.method.name, &self.constraints) {
+            (Some(SceneMethod::Constrained(method)), Some(_)) => Ok(method.clone()),
+            (None, Some(_)) => Ok(ConstrainedMethod::named(DEFAULT_CONSTRAINED_METHOD)
+                .unwrap_or_else(|| unreachable!("rattle is a constrained method"))),
+            (Some(SceneMethod::Registry(spec)), Some(_)) => Err(SceneError::NotApplicable {
+                option,
+                reason: format!(
+                    "{spec} integrates without constraints; {}",
+                    with_constraints_take()
+                ),
+            }),
+            (method, None) => Err(SceneError::NotApplicable {
+                option,
+                reason: format!(
+                    "{} is a constrained method, and the scene has no constraints (constraints \
+                     = [\"...\"] beside a lagrangian written as text); its methods are those \
+                     of svi run --help ({})",
+                    method
+                        .as_ref()
+                        .map_or_else(String::new, ToString::to_string),
+                    registry::known_names()
+                ),
+            }),
+        }
+    }
+
+    /// The checks of a scene with constraints ([`Scene::check`] calls it instead of those of
+    /// the other scenes): a constrained method, a Lagrangian written as text that RATTLE can
+    /// integrate (½q̇ᵀMq̇ − V(q): constant mass, autonomous, unforced), at least one
+    /// constraint, an initial state on ℝᴺ, and none of the options a constrained run does not
+    /// use.
+    pub(crate) fn check_constrained(&self) -> Result<(), SceneError> {
+        self.constrained_method()?;
+        let Some(Ok(Text::Model(model))) = self.text() else {
+            // check_model has reported the model's errors: this is a chain, or no text.
+            return Err(SceneError::NotApplicable {
+                option: "constraints",
+                reason: "belong to a Lagrangian written as text with named coordinates".into(),
+            });
+        };
+        if model.constraint_count() == 0 {
+            return Err(svi::Error::invalid(
+                "constraints",
+                "the list is empty: give at least one constraint g(q) = 0, or drop constraints \
+                 and run the model with a method of the registry (svi, verlet, ...)",
+            )
+            .into());
+        }
+        check_declarations(&model)?;
+        self.check_vector_initial()?;
+        let run = &self.run;
+        let refused = [
+            (
+                run.adapt.is_some_and(|adapt| adapt != AdaptMode::None),
+                "--adapt (run.adapt)",
+            ),
+            (run.tol.is_some(), "--tol (run.tol)"),
+            (run.monitor.is_some(), "--monitor (run.monitor)"),
+            (run.min_points.is_some(), "run.min_points"),
+            (run.max_points.is_some(), "run.max_points"),
+            (
+                run.recovery == Some(RecoveryKind::HalveStep),
+                "--recovery (run.recovery)",
+            ),
+            (run.max_halvings.is_some(), "run.max_halvings"),
+            (
+                run.divergence_limit.is_some(),
+                "--divergence-limit (run.divergence_limit)",
+            ),
+            (self.method.points.is_some(), "--points (method.points)"),
+            (
+                self.method.quadrature.is_some(),
+                "--quadrature (method.quadrature)",
+            ),
+            (
+                self.output.output_times.is_some(),
+                "--output-times (output.output_times)",
+            ),
+            (self.output.dense, "dense"),
+            (
+                self.wants_explicitly(Diagnostic::Solution),
+                "--diagnostics solution (output.diagnostics)",
+            ),
+            (
+                self.wants_explicitly(Diagnostic::Momentum)
+                    && self.symmetries.as_ref().is_none_or(Vec::is_empty),
+                "--diagnostics momentum (output.diagnostics)",
+            ),
+        ];
+        if let Some((_, option)) = refused.into_iter().find(|(given, _)| *given) {
+            return Err(SceneError::NotApplicable {
+                option,
+                reason: "not for a constrained run: it takes fixed steps --h to --t-end, the \
+                         energy and momentum diagnostics (momentum with symmetries = [...]) and \
+                         writes --out with --every and --multipliers"
+                    .into(),
+            });
+        }
+        if let Some(steps) = run.max_steps {
+            crate::scene::limits::count(
+                "--max-steps (run.max_steps)",
+                steps,
+                1,
+                svi::stepping::grid::MAX_STEPS,
+                "steps",
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// A Lagrangian that RATTLE integrates: ½q̇ᵀMq̇ − V(q), autonomous and unforced.
+fn check_declarations(model: &TextModel) -> Result<(), SceneError> {
+    let reason = if model.forced() {
+        "has forces"
+    } else if model.time_dependent() {
+        "depends on t"
+    } else if model.structure() != svi::Structure::ConstantMass {
+        "is not recognised as ½q̇ᵀMq̇ − V(q) with a constant mass matrix M"
+    } else {
+        return Ok(());
+    };
+    Err(SceneError::NotApplicable {
+        option: "lagrangian",
+        reason: format!(
+            "the constrained methods integrate L = ½q̇ᵀMq̇ − V(q) (constant mass, autonomous, \
+             unforced); this L {reason}"
+        ),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_method_is_one_of_the_registry_or_a_constrained_one_and_an_unknown_name_lists_both() {
+        assert_eq!(
+            "svi:7/6".parse::<SceneMethod>().unwrap(),
+            SceneMethod::Registry("svi:7/6".parse().unwrap())
+        );
+        for name in ConstrainedMethod::names() {
+            let method: SceneMethod = name.parse().unwrap();
+            assert!(matches!(&method, SceneMethod::Constrained(_)), "{name}");
+            assert_eq!(method.to_string(), name);
+        }
+        let unknown = "rk45".parse::<SceneMethod>().unwrap_err().to_string();
+        assert!(
+            unknown.contains("known: svi, ") && unknown.contains(&constrained_names()),
+            "{unknown}"
+        );
+        // A known name with bad options keeps the registry's message.
+        let bad = "svi:0".parse::<SceneMethod>().unwrap_err().to_string();
+        assert!(!bad.contains("rattle"), "{bad}");
+    }
+
+    #[test]
+    fn the_help_lists_every_constrained_method_of_the_registry() {
+        let help = constrained_help();
+        for name in ConstrainedMethod::names() {
+            assert!(help.contains(&format!("\n  {name} ")), "{name}: {help}");
+        }
+        assert_eq!(help.lines().count(), ConstrainedMethod::names().len() + 1);
+    }
+}
