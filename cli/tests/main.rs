@@ -12,6 +12,7 @@ mod hostile_support;
 
 mod cli;
 mod compare;
+mod constraints;
 mod ensemble;
 mod field;
 mod front_doors;

@@ -10,12 +10,17 @@ use crate::scene::constrained::SceneMethod;
 use crate::scene::error::SceneError;
 use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
 
-/// The help of an option taking a method: `intro`, then the grammar and every method, and the
-/// constrained methods.
+/// The help of an option taking a method: `intro`, then the grammar and every method.
 pub fn method_help(intro: &str) -> String {
+    format!("{intro}\n\n{}", registry::grammar_help())
+}
+
+/// The help of `--method` of the commands that run scenes: [`method_help`] and the
+/// constrained methods of scenes with constraints.
+pub fn run_method_help(intro: &str) -> String {
     format!(
-        "{intro}\n\n{}\n{}",
-        registry::grammar_help(),
+        "{}\n{}",
+        method_help(intro),
         crate::scene::constrained::constrained_help()
     )
 }
@@ -90,7 +95,7 @@ pub struct RunFlags {
     #[arg(
         long,
         value_name = "METHOD",
-        long_help = method_help(
+        long_help = run_method_help(
             "Integration method (default: the scene's). Rigid-body scenes take lie-svi or \
              lie-svi-reduced; scenes with constraints a constrained method (default rattle)."
         )
