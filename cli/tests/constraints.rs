@@ -66,8 +66,8 @@ fn the_four_bar_linkages_crank_turns_full_circles() {
     };
     for pair in rows.windows(2) {
         let step = angle(&pair[1]) - angle(&pair[0]);
-        turned += (step + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-            - std::f64::consts::PI;
+        turned +=
+            (step + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
     }
     let turns = turned / std::f64::consts::TAU;
     println!("four-bar linkage: the crank turned {turns:.2} times in 20 s");
@@ -112,7 +112,10 @@ fn the_trajectory_has_the_multipliers_on_request() {
     let plain = plain.to_str().unwrap();
     let with = with.to_str().unwrap();
     let args = ["--t-end", "1", "--every", "25"];
-    let summary = constrained("double-pendulum-cartesian", &[&args[..], &["--out", plain]].concat());
+    let summary = constrained(
+        "double-pendulum-cartesian",
+        &[&args[..], &["--out", plain]].concat(),
+    );
     assert_eq!(summary["trajectory"]["rows"], 17);
     constrained(
         "double-pendulum-cartesian",
@@ -162,11 +165,8 @@ fn initial_data_off_the_constraints_is_projected_with_a_warning() {
     // radial part that the projection removes.
     let file = scene_file(
         "projected",
-        &sphere(
-            "[\"x^2 + y^2 + z^2 - 1.002001\"]",
-            "h = 0.01\nt_end = 1.0",
-        )
-        .replace("v = [0.0, 2.0, 0.0]", "v = [0.1, 2.0, 0.0]"),
+        &sphere("[\"x^2 + y^2 + z^2 - 1.002001\"]", "h = 0.01\nt_end = 1.0")
+            .replace("v = [0.0, 2.0, 0.0]", "v = [0.1, 2.0, 0.0]"),
     );
     let output = svi(&["run", &file.path, "--json"]);
     assert_eq!(output.status.code(), Some(0));
@@ -188,7 +188,15 @@ fn initial_data_off_the_constraints_is_projected_with_a_warning() {
 
 #[test]
 fn a_step_newton_cannot_take_is_a_failed_run_with_its_last_good_state() {
-    let output = svi(&["run", "spherical-pendulum", "--h", "100", "--t-end", "1000", "--json"]);
+    let output = svi(&[
+        "run",
+        "spherical-pendulum",
+        "--h",
+        "100",
+        "--t-end",
+        "1000",
+        "--json",
+    ]);
     assert_eq!(output.status.code(), Some(1));
     let summary: Value = serde_json::from_slice(&output.stdout).unwrap();
     assert_eq!(summary["status"], "failed");
@@ -202,10 +210,24 @@ fn a_step_newton_cannot_take_is_a_failed_run_with_its_last_good_state() {
 #[test]
 fn a_scene_and_its_method_must_agree_about_constraints() {
     let names = ConstrainedMethod::names().join(", ");
-    let stderr = bad_input(&["run", "spherical-pendulum"], &["--method", "verlet"], &names);
-    assert!(stderr.contains("verlet integrates without constraints"), "{stderr}");
-    let stderr = bad_input(&["run", "kepler"], &["--method", "rattle"], "svi, svi-newton");
-    assert!(stderr.contains("rattle is a constrained method"), "{stderr}");
+    let stderr = bad_input(
+        &["run", "spherical-pendulum"],
+        &["--method", "verlet"],
+        &names,
+    );
+    assert!(
+        stderr.contains("verlet integrates without constraints"),
+        "{stderr}"
+    );
+    let stderr = bad_input(
+        &["run", "kepler"],
+        &["--method", "rattle"],
+        "svi, svi-newton",
+    );
+    assert!(
+        stderr.contains("rattle is a constrained method"),
+        "{stderr}"
+    );
     // An unknown name lists both kinds.
     bad_input(&["run", "kepler"], &["--method", "shake"], &names);
     // Every constrained method runs a constrained scene, with its order.
@@ -227,7 +249,13 @@ fn the_help_and_the_guide_list_every_constrained_method() {
     ))
     .unwrap();
     for name in ConstrainedMethod::names() {
-        assert!(help.contains(&format!("  {name} ")), "svi run --help: {name}");
-        assert!(guide.contains(&format!("| `{name}` |")), "the guide's table: {name}");
+        assert!(
+            help.contains(&format!("  {name} ")),
+            "svi run --help: {name}"
+        );
+        assert!(
+            guide.contains(&format!("| `{name}` |")),
+            "the guide's table: {name}"
+        );
     }
 }

@@ -1540,9 +1540,23 @@ fn hostile_constraints_are_typed_errors_naming_them_and_never_a_silent_zero() {
         (sphere, "nan", on, "0.01", "", "parameter 'l' = NaN"),
         (sphere, "inf", on, "0.01", "", "parameter 'l' = inf"),
         ("[\"x*vx\"]", "1.0", on, "0.01", "", "constraint 'x*vx'"),
-        (sphere, "1.0", on, "0.01", "[method]\nname = \"verlet\"", "rattle-kahan-li8"),
+        (
+            sphere,
+            "1.0",
+            on,
+            "0.01",
+            "[method]\nname = \"verlet\"",
+            "rattle-kahan-li8",
+        ),
         // The origin: the sphere's gradient vanishes there.
-        (sphere, "1.0", "[0.0, 0.0, 0.0]", "0.01", "", "does not depend on q"),
+        (
+            sphere,
+            "1.0",
+            "[0.0, 0.0, 0.0]",
+            "0.01",
+            "",
+            "does not depend on q",
+        ),
     ];
     for (constraints, l, q, h, extra, says) in cases {
         let (top, method) = match extra.strip_prefix("[method]\n") {
@@ -1577,6 +1591,9 @@ fn hostile_constraints_are_typed_errors_naming_them_and_never_a_silent_zero() {
         panic!("{error}")
     };
     assert!(matches!(source, svi::Error::NonConvergence { step: 0, .. }));
-    assert_eq!(partial.status, svi_experiments::report::summary::Status::Failed);
+    assert_eq!(
+        partial.status,
+        svi_experiments::report::summary::Status::Failed
+    );
     assert!(!error.is_bad_input());
 }

@@ -724,19 +724,40 @@ fn constrained_case(dir: &std::path::Path, args: &[String]) -> Result<usize, Tes
     let stderr = String::from_utf8_lossy(&output.stderr);
     let code = output.status.code();
     prop_assert!(!stderr.contains("panicked"), "{:?}: {}", args, stderr);
-    prop_assert!(matches!(code, Some(0..=2)), "{:?}: {:?} {}", args, code, stderr);
+    prop_assert!(
+        matches!(code, Some(0..=2)),
+        "{:?}: {:?} {}",
+        args,
+        code,
+        stderr
+    );
     let text = String::from_utf8_lossy(&output.stdout);
     prop_assert_eq!(text.lines().count(), 1, "{:?}: {}", args, text);
     let object: Value = serde_json::from_str(&text)
         .map_err(|error| TestCaseError::fail(format!("{args:?}: {error}: {text}")))?;
-    prop_assert_eq!(object["status"] == "ok", code == Some(0), "{:?}: {}", args, object);
+    prop_assert_eq!(
+        object["status"] == "ok",
+        code == Some(0),
+        "{:?}: {}",
+        args,
+        object
+    );
     if code == Some(0) {
         check_summary_json(&object, &format!("{args:?}"))?;
-        prop_assert!(object["constraint_error_max"].as_f64().is_some_and(|g| g <= 1e-9));
+        prop_assert!(
+            object["constraint_error_max"]
+                .as_f64()
+                .is_some_and(|g| g <= 1e-9)
+        );
     }
     if code == Some(1) && object["kind"] == "ode" {
         // A run that failed after it started says why, never a silent status.
-        prop_assert!(object["error"]["kind"].is_string(), "{:?}: {}", args, object);
+        prop_assert!(
+            object["error"]["kind"].is_string(),
+            "{:?}: {}",
+            args,
+            object
+        );
     }
     Ok(code.unwrap_or(1) as usize)
 }

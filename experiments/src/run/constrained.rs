@@ -395,7 +395,7 @@ struct Watch<'a> {
 
 /// `max` ← the larger of `max` and `value`, NaN winning (a NaN deviation is no bound).
 fn raise(max: &mut f64, value: f64) {
-    if !(value <= *max) {
+    if value.is_nan() || value > *max {
         *max = value;
     }
 }

@@ -112,6 +112,7 @@ pub mod ensemble;
 pub mod error;
 pub mod field;
 pub mod limits;
+pub mod method;
 pub mod overrides;
 mod resolve;
 pub mod rigid;
@@ -134,7 +135,7 @@ use svi::model::text::{TextChainModel, TextModel, TextSpec};
 use svi_models::{LOCAL_MODEL_NAMES, RIGID_MODEL_NAMES};
 
 use builtin::builtin_scene;
-use constrained::SceneMethod;
+use method::SceneMethod;
 use overrides::{Overrides, RunFlags};
 use schema::{
     AdaptMode, BoundaryName, Diagnostic, InitialSection, MethodSection, OutputSection,
@@ -759,6 +760,7 @@ pub(crate) mod tests {
                 out: Some("x.csv".into()),
                 plot: Some("x.svg".into()),
                 output_times: None,
+                multipliers: None,
             })
             .unwrap();
         assert_eq!(scene.run.max_steps, Some(500));

@@ -6,8 +6,8 @@ use svi::method::registry;
 use svi::model::reparametrized::MonitorSpec;
 
 use crate::report::csv::Float;
-use crate::scene::constrained::SceneMethod;
 use crate::scene::error::SceneError;
+use crate::scene::method::SceneMethod;
 use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
 
 /// The help of an option taking a method: `intro`, then the grammar and every method.
@@ -21,7 +21,7 @@ pub fn run_method_help(intro: &str) -> String {
     format!(
         "{}\n{}",
         method_help(intro),
-        crate::scene::constrained::constrained_help()
+        crate::scene::method::constrained_help()
     )
 }
 

@@ -12,7 +12,7 @@ use serde::Deserialize;
 use svi::solve::Adapt;
 use svi::{Recovery, RunOptions};
 
-use crate::scene::constrained::SceneMethod;
+use crate::scene::method::SceneMethod;
 
 /// A diagnostic evaluated at every step point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
