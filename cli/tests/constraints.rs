@@ -259,3 +259,53 @@ fn the_help_and_the_guide_list_every_constrained_method() {
         );
     }
 }
+
+#[test]
+fn a_constrained_scene_run_allocates_nothing_per_step_beyond_the_integrators_own() {
+    use nalgebra::DVector;
+    use svi::method::constrained::{ConstrainedIntegrator, Rattle};
+    use svi::model::text::{TextLagrangian, TextModel, TextSpec};
+    use svi_experiments::{Control, Scene};
+    let scratch = Scratch::new("constrained-allocations");
+    // The allocations per step of the library's RATTLE on the scene's model, with an observer
+    // that does nothing: the difference between 1000 and 100 steps, over 900.
+    let spec = TextSpec {
+        lagrangian: "0.5*m*(vx^2 + vy^2 + vz^2) - m*g*z".into(),
+        coordinates: vec!["x".into(), "y".into(), "z".into()],
+        parameters: vec![("m".into(), 1.0), ("g".into(), 9.81), ("l".into(), 1.0)],
+        constraints: vec!["x^2 + y^2 + z^2 - l^2".into()],
+        ..TextSpec::default()
+    };
+    let model = TextModel::new(&spec).unwrap();
+    let constraints = model.constraints();
+    let model = TextLagrangian::<svi::Dyn, false, false, true>::new(model).unwrap();
+    let integrator = ConstrainedIntegrator::new(model, constraints, Rattle::default()).unwrap();
+    let q0 = DVector::from_vec(vec![0.7173560908995228, 0.0, -0.6967067093471654]);
+    let p0 = DVector::from_vec(vec![0.0, 2.0, 0.0]);
+    let library = |steps: usize| {
+        let before = crate::allocations::count();
+        integrator.run(0.0, &q0, &p0, 0.01, steps, |_| {}).unwrap();
+        crate::allocations::count() - before
+    };
+    let per_step = (library(1000) - library(100)) as f64 / 900.0;
+    // The same from a scene run: its observer's energy, momentum and trajectory rows (to a
+    // file, with the multipliers) add nothing per step.
+    let scene_run = |t_end: f64, out: Option<&str>| {
+        let mut scene = Scene::load("spherical-pendulum").unwrap();
+        scene.run.t_end = Some(t_end);
+        scene.output.trajectory = out.map(|name| scratch.join(name));
+        scene.output.multipliers = out.map(|_| true);
+        let before = crate::allocations::count();
+        let summary = scene.run(Control::QUIET).unwrap();
+        let count = crate::allocations::count() - before;
+        assert_eq!(summary.steps, (t_end * 100.0).round() as usize);
+        count
+    };
+    println!("RATTLE on the text model: {per_step} allocations per step (the library's)");
+    for out in [None, Some("trajectory.csv")] {
+        let extra = scene_run(100.0, out) as f64 - scene_run(1.0, out) as f64 - 9900.0 * per_step;
+        println!("a scene run, trajectory {out:?}: {extra} allocations more over 9900 steps");
+        // A file's writes may allocate now and then (its buffer), never per step.
+        assert!(extra <= 4.0, "{out:?}: {extra}");
+    }
+}

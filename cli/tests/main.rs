@@ -4,6 +4,8 @@
 //! --release --test integration [FILTER]`): one link, and each generic function the tests
 //! share is compiled once instead of once per file.
 
+#[path = "../../tests/common/allocations.rs"]
+mod allocations;
 mod common;
 #[path = "../../tests/common/hostile_cases.rs"]
 mod hostile_cases;
