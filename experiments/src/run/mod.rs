@@ -1,7 +1,7 @@
 //! `svi run`: the one run path, for scenes on every space.
 //!
 //! 1. The front door (the command line's `svi run`, the Python package) opens the scene
-//!    ([`crate::scene::AnyScene::open`]), puts its overrides on top and checks it once
+//!    ([`crate::scene::any::AnyScene::open`]), puts its overrides on top and checks it once
 //!    ([`Scene::checked`]).
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
 //!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
