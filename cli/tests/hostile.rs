@@ -1345,3 +1345,255 @@ fn the_binary_ends_in_time_with_status_0_1_or_2() {
     );
     assert!(counts[0] > 0 && counts[2] > 0, "{counts:?}");
 }
+
+// ---- scenes with holonomic constraints ----------------------------------------------------
+
+/// A scene with constraints: the spherical pendulum's Lagrangian (or one a constrained
+/// method refuses), constraints mostly valid and some hostile (none, redundant, constant,
+/// contradictory, too many, reading a velocity or t, malformed, singular), hostile
+/// parameters, an initial state on, near or far from the sphere, a method (constrained, of
+/// the registry, unknown), a step (some too large for Newton's method) and the options a
+/// constrained run refuses.
+fn constrained_scene_text() -> impl Strategy<Value = String> {
+    let sphere = "x^2 + y^2 + z^2 - l^2";
+    let constraints = prop_oneof![
+        4 => Just(format!("[\"{sphere}\"]")),
+        3 => select(vec![
+            "[]",
+            "[\"x^2 + y^2 + z^2 - l^2\", \"x^2 + y^2 + z^2 - l^2\"]",
+            "[\"x^2 + y^2 + z^2 - l^2\", \"x^2 + y^2 + z^2 - 4*l^2\"]",
+            "[\"l - 1\"]",
+            "[\"0\"]",
+            "[\"x^2 + y^2 + z^2 - l^2\", \"x\", \"y\", \"z\"]",
+            "[\"x^2 + y^2 + z^2 - l^2\", \"x - y\", \"y + z\"]",
+            "[\"x^2 + y^2 + z^2 - l^2\", \"z + 0.5*l\"]",
+            "[\"x*vx\"]",
+            "[\"x^2 - t\"]",
+            "[\"x^2 +\"]",
+            "[\"w^2 - 1\"]",
+            "[\"x^99999 - 1\"]",
+            "[\"1/(x^2 + y^2 + z^2) - 1\"]",
+            "[\"sqrt(x) - 1\"]",
+            "[\"x^2 + y^2 + z^2 - 1e300\"]",
+            "[\"abs(x) + abs(y) + abs(z) - l\"]",
+            "[\"\"]",
+        ])
+        .prop_map(String::from),
+    ];
+    let lagrangian = prop_oneof![
+        6 => Just("0.5*m*(vx^2 + vy^2 + vz^2) - m*g*z"),
+        1 => select(vec![
+            "0.5*(vx^2 + vy^2 + vz^2)*x - g*z",
+            "0.5*(vx^2 + vy^2 + vz^2) - g*z*t",
+            "vx*vy + 0.5*vz^2",
+            "0.5*(vx^2 + vy^2 + vz^2) - g/z",
+            "1e300*(vx^2 + vy^2 + vz^2) - g*z",
+        ]),
+    ];
+    let value = || {
+        prop_oneof![
+            6 => (0.5f64..2.0).prop_map(|x| format!("{x:?}")),
+            1 => select(vec!["0.0", "-1.0", "nan", "inf", "-inf", "1e300", "1e-300", "5e-324"])
+                .prop_map(String::from),
+        ]
+    };
+    let position = prop_oneof![
+        6 => Just("[0.7173560908995228, 0.0, -0.6967067093471654]"),
+        2 => Just("[0.7180734469904223, 0.0, -0.6974034160565126]"), // 1e-3 outside
+        1 => select(vec![
+            "[0.0, 0.0, 0.0]",
+            "[1e300, 0.0, 0.0]",
+            "[0.7, 0.0]",
+            "[0.0, 0.0, -1.0, 0.0]",
+            "[100.0, 100.0, 100.0]",
+        ]),
+    ];
+    let velocity = prop_oneof![
+        4 => Just("v = [0.0, 2.0, 0.0]"),
+        1 => select(vec![
+            "v = [0.5, 2.0, -0.3]",
+            "p = [0.0, 2.0, 0.0]",
+            "v = [1e300, 0.0, 0.0]",
+            "v = [0.0, 2.0]",
+            "v = [0.0, 2.0, 0.0]\np = [0.0, 2.0, 0.0]",
+        ]),
+    ];
+    let method = prop_oneof![
+        4 => select(svi::method::constrained::ConstrainedMethod::names())
+            .prop_map(|name| format!("\"{name}\"")),
+        1 => select(vec!["\"verlet\"", "\"svi:4\"", "\"shake\"", "\"rattle:4\"", "3"])
+            .prop_map(String::from),
+        1 => Just(String::new()),
+    ];
+    let step = prop_oneof![
+        6 => (0.001f64..0.1).prop_map(|h| format!("{h:?}")),
+        1 => select(vec!["100.0", "10.0", "1e-300", "-0.1", "0.0", "nan", "inf"])
+            .prop_map(String::from),
+    ];
+    let option = proptest::option::of(select(vec![
+        "[run]\nadapt = \"step\"",
+        "[run]\ntol = 1e-9",
+        "[run]\nrecovery = \"halve-step\"",
+        "[run]\ndivergence_limit = 10.0",
+        "[run]\nmax_steps = 3",
+        "[method]\npoints = 5",
+        "[output]\noutput_times = [0.5]",
+        "[output]\nmultipliers = true",
+        "[output]\ndiagnostics = [\"solution\"]",
+        "[output]\ndiagnostics = [\"momentum\"]",
+        "[output]\ndiagnostics = [\"none\"]",
+        "forces = [\"-vx\", \"-vy\", \"-vz\"]",
+        "symmetries = [[\"-y\", \"x\", \"0\"]]",
+    ]));
+    (
+        (lagrangian, constraints),
+        (value(), value(), value()),
+        (position, velocity),
+        (method, step, (0.05f64..2.0).prop_map(|t| format!("{t:?}"))),
+        option,
+    )
+        .prop_map(
+            |((lagrangian, constraints), (m, g, l), (q, v), (method, h, t_end), option)| {
+                let mut text = format!(
+                    "lagrangian = \"{lagrangian}\"\ncoordinates = [\"x\", \"y\", \"z\"]\n\
+                     constraints = {constraints}\n"
+                );
+                let (top, section) = match option {
+                    Some(line) if !line.starts_with('[') => (line, ""),
+                    Some(line) => ("", line),
+                    None => ("", ""),
+                };
+                if !top.is_empty() {
+                    text.push_str(top);
+                    text.push('\n');
+                }
+                text.push_str(&format!(
+                    "[parameters]\nm = {m}\ng = {g}\nl = {l}\n[initial]\nq = {q}\n{v}\n"
+                ));
+                if !method.is_empty() {
+                    text.push_str(&format!("[method]\nname = {method}\n"));
+                }
+                text.push_str(&format!("[run]\nh = {h}\nt_end = {t_end}\n"));
+                // A second [run] or [method] table is a TOML error: fold the option in.
+                match section.split_once('\n') {
+                    Some(("[run]", line)) => text.push_str(&format!("{line}\n")),
+                    Some(("[method]", line)) if !method.is_empty() => {
+                        text = text.replace("[run]\n", &format!("{line}\n[run]\n"));
+                    }
+                    Some(_) => {
+                        text.push_str(section);
+                        text.push('\n');
+                    }
+                    None => {}
+                }
+                text
+            },
+        )
+}
+
+#[test]
+fn hostile_constrained_scenes_never_panic() {
+    let counts = run_counting(
+        "constrained scenes",
+        1500,
+        &OUTCOMES,
+        constrained_scene_text(),
+        |text| parse_and_maybe_run(&text),
+    );
+    assert!(counts[0] > 0 && counts[2] > 0, "{counts:?}");
+}
+
+/// The spherical pendulum with `constraints`, the initial `q`, the step `h` and `extra`
+/// lines (`[parameters] l` = `l`).
+fn sphere_scene(constraints: &str, l: &str, q: &str, h: &str, extra: &str) -> String {
+    format!(
+        "lagrangian = \"0.5*(vx^2 + vy^2 + vz^2) - 9.81*z\"\ncoordinates = [\"x\", \"y\", \
+         \"z\"]\nconstraints = {constraints}\n{extra}\n[parameters]\nl = {l}\n[initial]\nq = \
+         {q}\nv = [0.0, 2.0, 0.0]\n[run]\nh = {h}\nt_end = 1.0\n"
+    )
+}
+
+#[test]
+fn hostile_constraints_are_typed_errors_naming_them_and_never_a_silent_zero() {
+    let on = "[0.7173560908995228, 0.0, -0.6967067093471654]";
+    let sphere = "[\"x^2 + y^2 + z^2 - l^2\"]";
+    // (constraints, l, q, h, extra lines, what the error says: bad input naming it).
+    let cases = [
+        ("[]", "1.0", on, "0.01", "", "the list is empty"),
+        (
+            "[\"x^2 + y^2 + z^2 - l^2\", \"x^2 + y^2 + z^2 - l^2\"]",
+            "1.0",
+            on,
+            "0.01",
+            "",
+            "x^2 + y^2 + z^2 - l^2 is redundant",
+        ),
+        ("[\"l - 1\"]", "1.0", on, "0.01", "", "constraint 'l - 1'"),
+        (
+            "[\"x^2 + y^2 + z^2 - l^2\", \"x\", \"y\", \"z\"]",
+            "1.0",
+            on,
+            "0.01",
+            "",
+            "4 constraints on 3 coordinates",
+        ),
+        (sphere, "nan", on, "0.01", "", "parameter 'l' = NaN"),
+        (sphere, "inf", on, "0.01", "", "parameter 'l' = inf"),
+        ("[\"x*vx\"]", "1.0", on, "0.01", "", "constraint 'x*vx'"),
+        (
+            sphere,
+            "1.0",
+            on,
+            "0.01",
+            "[method]\nname = \"verlet\"",
+            "rattle-kahan-li8",
+        ),
+        // The origin: the sphere's gradient vanishes there.
+        (
+            sphere,
+            "1.0",
+            "[0.0, 0.0, 0.0]",
+            "0.01",
+            "",
+            "does not depend on q",
+        ),
+    ];
+    for (constraints, l, q, h, extra, says) in cases {
+        let (top, method) = match extra.strip_prefix("[method]\n") {
+            Some(line) => ("", line),
+            None => (extra, ""),
+        };
+        let mut text = sphere_scene(constraints, l, q, h, top);
+        if !method.is_empty() {
+            text = text.replace("[run]", &format!("[method]\n{method}\n[run]"));
+        }
+        let error = Scene::from_toml(&text, "t")
+            .and_then(|scene| scene.run(Control::QUIET))
+            .expect_err(&text);
+        assert!(error.is_bad_input(), "{text}: {error}");
+        assert!(error.to_string().contains(says), "{says}: {error}");
+    }
+    // 1e-3 off the sphere: projected, with a warning that says how far.
+    let off = "[0.7180734469904223, 0.0, -0.6974034160565126]";
+    let summary = Scene::from_toml(&sphere_scene(sphere, "1.0", off, "0.01", ""), "t")
+        .and_then(|scene| scene.run(Control::QUIET))
+        .unwrap();
+    assert_eq!(summary.warnings.len(), 1, "{:?}", summary.warnings);
+    assert_eq!(summary.warnings[0].kind, "projection");
+    assert!(summary.warnings[0].message.contains("q0 moved by 1.000e-3"));
+    // Newton cannot take the step: a failed run with its last good state, never a status 0.
+    let long = sphere_scene(sphere, "1.0", on, "100.0", "").replace("t_end = 1.0", "t_end = 1e3");
+    let error = Scene::from_toml(&long, "t")
+        .unwrap()
+        .run(Control::QUIET)
+        .unwrap_err();
+    let SceneError::RunFailed { partial, source } = &error else {
+        panic!("{error}")
+    };
+    assert!(matches!(source, svi::Error::NonConvergence { step: 0, .. }));
+    assert_eq!(
+        partial.status,
+        svi_experiments::report::summary::Status::Failed
+    );
+    assert!(!error.is_bad_input());
+}

@@ -659,3 +659,118 @@ fn outputs_never_follow_links_clobber_or_block_and_json_is_one_object() {
     );
     assert!(counts[0] > 0 && counts[2] > 0, "{counts:?}");
 }
+
+// ---- scenes with holonomic constraints through the binary ---------------------------------
+
+/// `svi run` of a built-in constrained scene with hostile flags (steps Newton cannot take,
+/// non-finite and degenerate parameters, mismatched methods, the options a constrained run
+/// refuses, --multipliers with and without a file), always with `--json`.
+fn constrained_arguments() -> impl Strategy<Value = Vec<String>> {
+    let scene = select(vec![
+        "spherical-pendulum",
+        "double-pendulum-cartesian",
+        "four-bar-linkage",
+    ]);
+    let flags = proptest::collection::vec(
+        select(vec![
+            vec!["--h", "100"],
+            vec!["--h", "1"],
+            vec!["--h", "nan"],
+            vec!["--h", "1e-300"],
+            vec!["--t-end", "0.5"],
+            vec!["--t-end", "1e300"],
+            vec!["--param", "l=0"],
+            vec!["--param", "l=nan"],
+            vec!["--param", "d1=1e300"],
+            vec!["--param", "r1=2"],
+            vec!["--param", "r2=0.1"],
+            vec!["--param", "g=-inf"],
+            vec!["--param", "nosuch=1"],
+            vec!["--method", "rattle-kahan-li8"],
+            vec!["--method", "verlet"],
+            vec!["--method", "rattle:3"],
+            vec!["--adapt", "step"],
+            vec!["--output-times", "0.5"],
+            vec!["--diagnostics", "solution"],
+            vec!["--diagnostics", "none"],
+            vec!["--multipliers"],
+            vec!["--multipliers=false"],
+            vec!["--multipliers=maybe"],
+            vec!["--out", "out.csv"],
+            vec!["--every", "7"],
+            vec!["--max-steps", "5"],
+            vec!["--strict"],
+        ]),
+        0..4,
+    );
+    (scene, flags).prop_map(|(scene, flags)| {
+        let mut args: Vec<String> = vec!["run".into(), scene.into()];
+        args.extend(flags.into_iter().flatten().map(String::from));
+        // Short runs: at most a second of simulated time unless the flags say otherwise.
+        if !args.iter().any(|arg| arg == "--t-end") {
+            args.extend(["--t-end".into(), "1".into()]);
+        }
+        args.push("--json".into());
+        args
+    })
+}
+
+/// Run the binary on a constrained scene's hostile command line in `dir`: status 0, 1 or 2,
+/// no panic, one JSON object whose status agrees with the exit status, finite numbers when
+/// it succeeds.
+fn constrained_case(dir: &std::path::Path, args: &[String]) -> Result<usize, TestCaseError> {
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let output = svi_within_in(Some(dir), &args, HANG).map_err(TestCaseError::fail)?;
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let code = output.status.code();
+    prop_assert!(!stderr.contains("panicked"), "{:?}: {}", args, stderr);
+    prop_assert!(
+        matches!(code, Some(0..=2)),
+        "{:?}: {:?} {}",
+        args,
+        code,
+        stderr
+    );
+    let text = String::from_utf8_lossy(&output.stdout);
+    prop_assert_eq!(text.lines().count(), 1, "{:?}: {}", args, text);
+    let object: Value = serde_json::from_str(&text)
+        .map_err(|error| TestCaseError::fail(format!("{args:?}: {error}: {text}")))?;
+    prop_assert_eq!(
+        object["status"] == "ok",
+        code == Some(0),
+        "{:?}: {}",
+        args,
+        object
+    );
+    if code == Some(0) {
+        check_summary_json(&object, &format!("{args:?}"))?;
+        prop_assert!(
+            object["constraint_error_max"]
+                .as_f64()
+                .is_some_and(|g| g <= 1e-9)
+        );
+    }
+    if code == Some(1) && object["kind"] == "ode" {
+        // A run that failed after it started says why, never a silent status.
+        prop_assert!(
+            object["error"]["kind"].is_string(),
+            "{:?}: {}",
+            args,
+            object
+        );
+    }
+    Ok(code.unwrap_or(1) as usize)
+}
+
+#[test]
+fn hostile_flags_on_constrained_scenes_end_in_one_json_object_and_a_status() {
+    let dir = Scratch::new("hostile-constrained");
+    let counts = run_counting(
+        "constrained scenes through the binary",
+        60,
+        &["exit 0", "exit 1", "exit 2"],
+        constrained_arguments(),
+        |args| constrained_case(&dir.0, &args),
+    );
+    assert!(counts[0] > 0 && counts[2] > 0, "{counts:?}");
+}

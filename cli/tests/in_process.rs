@@ -39,7 +39,7 @@ mod run {
             scene
                 .apply(&Overrides {
                     run: RunFlags {
-                        method: Some(kind),
+                        method: Some(kind.into()),
                         ..RunFlags::default()
                     },
                     ..Overrides::default()
@@ -95,7 +95,7 @@ mod run {
         // E(50) = E(0) e^{−5}-ish: the friction removed almost all the energy.
         assert!(summary.energy_final < 0.01 * summary.energy_initial);
         let mut verlet = scene.clone();
-        verlet.method.name = Some(method("verlet"));
+        verlet.method.name = Some(method("verlet").into());
         let summary = verlet.run(Control::QUIET).unwrap();
         // Second order: 1.6e-3 at h = 0.1.
         let error = summary.conservation.solution_error_max().unwrap();

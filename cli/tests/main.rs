@@ -4,6 +4,8 @@
 //! --release --test integration [FILTER]`): one link, and each generic function the tests
 //! share is compiled once instead of once per file.
 
+#[path = "../../tests/common/allocations.rs"]
+mod allocations;
 mod common;
 #[path = "../../tests/common/hostile_cases.rs"]
 mod hostile_cases;
@@ -12,6 +14,7 @@ mod hostile_support;
 
 mod cli;
 mod compare;
+mod constraints;
 mod ensemble;
 mod field;
 mod front_doors;

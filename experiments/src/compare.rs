@@ -296,7 +296,7 @@ fn prepare(args: &CompareArgs) -> Result<(Prepared, Option<OutputFile>), SceneEr
             let mut scene = scene.clone();
             scene.apply(&Overrides {
                 run: RunFlags {
-                    method: Some(*method),
+                    method: Some((*method).into()),
                     ..RunFlags::default()
                 },
                 ..Overrides::default()

@@ -87,6 +87,8 @@ const NOT_KEYWORDS: [&str; 4] = ["parameters", "out", "plot", "every"];
 /// A keyword argument's value, of the kinds of [`OptionKind`] (the package checked it).
 #[derive(FromPyObject)]
 enum Value {
+    /// First: a Python bool is an int too, and only a bool is a flag.
+    Flag(bool),
     Count(u64),
     Real(f64),
     Text(String),
@@ -95,7 +97,7 @@ enum Value {
 }
 
 /// The options of `svi run` the package's calls take as keywords, each with the kind of its
-/// value (`real`, `count`, `text`, `reals`, `names`): `Overrides` is their one definition, so
+/// value (`real`, `count`, `text`, `reals`, `names`, `flag`): `Overrides` is their one definition, so
 /// a flag added to `svi run` is a keyword of `svi.run`, `svi.solve` and `svi.ensemble`.
 #[pyfunction]
 fn options() -> Vec<(String, &'static str)> {
@@ -121,6 +123,7 @@ fn overrides(
                 Value::Text(text) => OptionValue::Text(text),
                 Value::Reals(xs) => OptionValue::Reals(xs),
                 Value::Names(names) => OptionValue::Names(names),
+                Value::Flag(flag) => OptionValue::Flag(flag),
             };
             (name, value)
         })
@@ -255,12 +258,13 @@ fn array(py: Python<'_>, values: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
 type Trajectory<'py> = (Vec<String>, Bound<'py, PyArray1<f64>>);
 
 /// A model written as text from Python (`svi.Lagrangian`): L, its coordinates, its forces,
-/// the generators of its symmetries and its parameters.
+/// the generators of its symmetries, its holonomic constraints and its parameters.
 type TextModel = (
     String,
     Vec<String>,
     Option<Vec<String>>,
     Option<Vec<Vec<String>>>,
+    Option<Vec<String>>,
     BTreeMap<String, f64>,
 );
 
@@ -334,8 +338,15 @@ fn run<'py>(
 ) -> PyResult<(String, Option<Trajectory<'py>>, Option<Dense>)> {
     let overrides = overrides(options, params)?;
     let mut loaded = match model {
-        Some((lagrangian, coordinates, forces, symmetries, parameters)) => {
-            Scene::of_text_model(lagrangian, coordinates, forces, symmetries, parameters)
+        Some((lagrangian, coordinates, forces, symmetries, constraints, parameters)) => {
+            Scene::of_text_model(
+                lagrangian,
+                coordinates,
+                forces,
+                symmetries,
+                constraints,
+                parameters,
+            )
         }
         None => load(scene)?,
     };
@@ -434,8 +445,15 @@ fn ensemble(
     }
     let random = random.map(|count| Random { count, seed });
     let mut loaded = match model {
-        Some((lagrangian, coordinates, forces, symmetries, parameters)) => {
-            Scene::of_text_model(lagrangian, coordinates, forces, symmetries, parameters)
+        Some((lagrangian, coordinates, forces, symmetries, constraints, parameters)) => {
+            Scene::of_text_model(
+                lagrangian,
+                coordinates,
+                forces,
+                symmetries,
+                constraints,
+                parameters,
+            )
         }
         None => load(scene)?,
     };

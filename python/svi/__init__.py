@@ -305,6 +305,8 @@ class Result:
             its observables instead (``trajectory``), and asking for ``q`` says so; its final
             state is ``summary["q"]``.
         energy: energy at those times.
+        multipliers: a constrained run's Lagrange multipliers at those times, an array of shape
+            (points, m) for m constraints, with ``multipliers=True``; else ``None``.
         trajectory: every column of the trajectory by name (``t``, ``q_q1``, ..., on SO(3)
             ``qw``, ..., ``omega_1``, ...).
     """
@@ -314,6 +316,7 @@ class Result:
         self.trajectory: Dict[str, np.ndarray] = {}
         self.t: Optional[np.ndarray] = None
         self.energy: Optional[np.ndarray] = None
+        self.multipliers: Optional[np.ndarray] = None
         # A chain's trajectory holds t, energy and its observables, not its n coordinates.
         chain = "coordinates" not in summary and "form" not in summary
         self._chain_columns: Optional[List[str]] = None
@@ -335,6 +338,9 @@ class Result:
                 if indices and not chain:
                     # The columns of q (v, p) are adjacent: a view of the run's buffer.
                     setattr(self, field, data[:, indices[0] : indices[-1] + 1])
+            indices = [i for i, name in enumerate(columns) if name.startswith("lambda_")]
+            if indices:
+                self.multipliers = data[:, indices[0] : indices[-1] + 1]
 
     def __getattr__(self, name: str) -> Any:
         columns = self.__dict__.get("_chain_columns")
@@ -433,6 +439,7 @@ _CHECKS: Dict[str, Callable[[str, Any], Any]] = {
     "text": _text,
     "reals": _reals,
     "names": _names,
+    "flag": lambda name, value: None if value is None else _flag(name, value),
 }
 
 #: The options of ``svi run`` that :func:`run`, :func:`ensemble` and :func:`solve` take as

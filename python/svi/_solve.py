@@ -70,6 +70,11 @@ class Lagrangian:
             (Lagrange–d'Alembert).
         symmetries: optional generators ξ(q) of symmetries, each one expression per
             coordinate; their Noether momenta are diagnosed (``momentum_error_max``).
+        constraints: optional holonomic constraints g(q) = 0, each an expression in the
+            coordinates and the parameters (``"x^2 + y^2 - l^2"``): the model then runs with a
+            constrained method (``method="rattle"``, the default, or ``"rattle-kahan-li8"``,
+            ...), and the solution reports ``constraint_error_max`` and
+            ``velocity_constraint_error_max`` (and with ``multipliers=True`` the multipliers).
 
     >>> pendulum = Lagrangian("0.5*l^2*vth^2 + g*l*cos(th)", q=["th"], params={"g": 9.81, "l": 1.0})
     """
@@ -81,6 +86,7 @@ class Lagrangian:
         params: Optional[Mapping[str, float]] = None,
         forces: Optional[Sequence[Any]] = None,
         symmetries: Optional[Sequence[Sequence[Any]]] = None,
+        constraints: Optional[Sequence[Any]] = None,
     ) -> None:
         self.expr: str = _expression("expr", expr)
         self.q: List[str] = [_symbol("q", name) for name in _sequence("q", q)]
@@ -96,12 +102,18 @@ class Lagrangian:
             if symmetries is None
             else [[_expression("symmetries", x) for x in _sequence("symmetries", xi)] for xi in _sequence("symmetries", symmetries)]
         )
+        self.constraints: Optional[List[str]] = (
+            None if constraints is None else [_expression("constraints", g) for g in _sequence("constraints", constraints)]
+        )
 
-    def _native(self) -> Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Dict[str, float]]:
-        return (self.expr, self.q, self.forces, self.symmetries, self.params)
+    def _native(
+        self,
+    ) -> Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Optional[List[str]], Dict[str, float]]:
+        return (self.expr, self.q, self.forces, self.symmetries, self.constraints, self.params)
 
     def __repr__(self) -> str:
-        return f"Lagrangian({self.expr!r}, q={self.q!r}, params={self.params!r})"
+        constraints = "" if self.constraints is None else f", constraints={self.constraints!r}"
+        return f"Lagrangian({self.expr!r}, q={self.q!r}, params={self.params!r}{constraints})"
 
 
 class Solution(Result):
@@ -167,7 +179,9 @@ def solve(
         q0, v0 | p0: the initial configuration and velocity (or momentum); a
             :class:`Lagrangian` needs both, a zoo model has defaults.
         method: ``NAME``, ``NAME:P`` or ``NAME:P/M`` (``"svi:7/6"``, ``"sc:9"``, ``"verlet"``;
-            default SVI with 6 points).
+            default SVI with 6 points); for a model with constraints a constrained method
+            (``"rattle"``, the default, ``"rattle-yoshida4"``, ``"rattle-kahan-li6"``,
+            ``"rattle-kahan-li8"``).
         h: the step (the first trial step of ``adapt="step"``; the τ-step of ``"reparam"``).
         saveat: times at which ``t, q, v, p`` are reported, read off the step polynomials
             (default: every step).
@@ -181,7 +195,9 @@ def solve(
             (K the method's points, at least 4): SVI 7/6 on Kepler runs about 5 times longer.
             Off by default; ``saveat`` gives states at times known before the run for free.
         options: the other options of :func:`run` (``points``, ``quadrature``, ``monitor``,
-            ``recovery``, ``divergence_limit``, ``max_steps``, ``form``, ``every``).
+            ``recovery``, ``divergence_limit``, ``max_steps``, ``form``, ``every``, and
+            ``multipliers=True``: a constrained run's Lagrange multipliers at every point,
+            ``sol.multipliers``).
 
     Returns:
         a :class:`Solution`.

@@ -33,12 +33,16 @@ HOSTILE = [
 RUN_KEYWORDS = [
     "method", "h", "t_end", "params", "initial", "diagnostics", "output_times", "points", "quadrature",
     "adapt", "monitor", "tol", "recovery", "divergence_limit", "max_steps", "form", "every", "trajectory",
+    "multipliers",
 ]
 ENSEMBLE_KEYWORDS = [
     "params", "initial", "random", "seed", "threads", "method", "h", "t_end", "diagnostics", "points",
     "adapt", "tol", "max_steps",
 ]
-SCENES = ["kepler", "oscillator", "pendulum", "fput", "rigid-body", "wave", "kepler-text", "nosuch", "", "/", "a=b"]
+SCENES = [
+    "kepler", "oscillator", "pendulum", "fput", "rigid-body", "wave", "kepler-text", "spherical-pendulum",
+    "four-bar-linkage", "nosuch", "", "/", "a=b",
+]
 
 
 def finite(value):
@@ -169,3 +173,56 @@ def test_bench_keeps_the_methods_that_measure():
         table = svi.bench("kepler", methods="svi:6,verlet", steps=[100, 200], batches=1, min_batch=0.0, as_frame=False)
     assert list(table["method"]) == ["verlet", "verlet"]
     assert all(np.isfinite(table["final_error"]))
+
+
+#: Constraints for the spherical pendulum's Lagrangian: valid, and every kind of hostile one.
+CONSTRAINTS = [
+    ["x^2 + y^2 + z^2 - l^2"], ["x^2 + y^2 + z^2 - l^2"], ["x^2 + y^2 + z^2 - l^2"], [],
+    ["x^2 + y^2 + z^2 - l^2", "x^2 + y^2 + z^2 - l^2"], ["l - 1"], ["0"], ["x", "y", "z", "x + y"],
+    ["x^2 + y^2 + z^2 - l^2", "z + 0.5"], ["x*vx"], ["x - t"], ["x^2 +"], ["w"], [""], ["x^99999 - 1"],
+    ["1/(x^2 + y^2 + z^2) - 1"], "x^2 + y^2 - 1", [1.5], [None], None,
+]
+
+
+def test_hostile_constrained_models_raise_svi_errors_only():
+    """svi.Lagrangian with hostile constraints, parameters and initial states, solved with
+    hostile methods, steps and options: a result on its constraints, or an SviError."""
+    rng = random.Random(SEED + 37)
+    outcomes = {"result": 0, "error": 0}
+    on = [math.sin(0.8), 0.0, -math.cos(0.8)]
+    for _ in range(150 * FACTOR):
+        constraints = rng.choice(CONSTRAINTS)
+        params = {"g": 9.81, "l": rng.choice([1.0, 1.0, 1.0, 0.0, -1.0, math.nan, math.inf, 1e300, 1.001])}
+        q0 = rng.choice([on, on, [1.001 * x for x in on], [0.0, 0.0, 0.0], [1e300, 0.0, 0.0], [0.7, 0.0]])
+        keywords = {
+            "method": rng.choice(["rattle", "rattle-yoshida4", "rattle-kahan-li6", "rattle-kahan-li8", None, "svi", "shake", 3]),
+            "h": rng.choice([0.01, 0.05, 0.2, 100.0, 1e-300, -0.1, math.nan, True]),
+        }
+        for name, values in (
+            ("multipliers", [True, False, 1, "yes"]),
+            ("dense", [True]),
+            ("adapt", ["step"]),
+            ("saveat", [[0.5]]),
+            ("diagnostics", [["energy"], ["momentum"], ["solution"], ["none"]]),
+            ("every", [3, 0]),
+        ):
+            if rng.random() < 0.15:
+                keywords[name] = rng.choice(values)
+        try:
+            model = svi.Lagrangian("0.5*(vx^2 + vy^2 + vz^2) - g*z", q=["x", "y", "z"], params=params, constraints=constraints)
+        except svi.SviError as error:
+            assert isinstance(error, svi.ArgumentTypeError), repr(error)
+            outcomes["error"] += 1
+            continue
+        t_end = 1e3 if keywords["h"] == 100.0 else 1.0
+        outcome = call(svi.solve, model, t_end, q0=q0, v0=[0.0, 2.0, 0.0], max_steps=20_000, **keywords)
+        if isinstance(outcome, svi.Solution):
+            assert outcome.status == "ok"
+            assert finite(outcome.summary) or outcome.summary["warnings"], outcome.summary
+            assert outcome.constraint_error_max <= 1e-9, outcome.summary
+        else:
+            assert outcome.kind in ("invalid_input", "invalid_parameter", "non_convergence", "singular_matrix", "non_finite"), outcome
+            if outcome.kind == "non_convergence":
+                assert outcome.summary["status"] == "failed"
+        outcomes["error" if isinstance(outcome, svi.SviError) else "result"] += 1
+    assert outcomes["result"] > 0 and outcomes["error"] > 0, outcomes

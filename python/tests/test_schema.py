@@ -68,6 +68,8 @@ COMMANDS = [
     ("run", "kepler", "--t-end", "5", "--json"),
     ("run", "kepler", "--t-end", "5", "--adapt", "step", "--tol", "1e-8", "--output-times", "1,2", "--diagnostics", "energy,momentum,solution", "--json"),
     ("run", "kepler-text", "--t-end", "5", "--json"),
+    ("run", "spherical-pendulum", "--t-end", "1", "--json"),
+    ("run", "spherical-pendulum", "--h", "100", "--t-end", "1000", "--json"),
     ("run", "fput", "--t-end", "5", "--json"),
     ("run", "heavy-top", "--t-end", "1", "--json"),
     ("run", "wave", "--t-end", "0.5", "--json"),

@@ -55,7 +55,7 @@ pub(super) fn sweep_runs(
         let mut variant = scene.clone();
         variant.overlay(&Overrides {
             run: RunFlags {
-                method: Some(method),
+                method: Some(method.into()),
                 h,
                 ..RunFlags::default()
             },

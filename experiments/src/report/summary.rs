@@ -275,6 +275,28 @@ pub enum Conservation {
         /// the model has none or no diagnostic is asked for).
         invariant_error_max: Option<f64>,
     },
+    /// On ℝᴺ with holonomic constraints g(q) = 0 (a constrained run): the fields of ℝᴺ
+    /// (`solution_error_*` always `None`: no exact solution is known) and how well the run
+    /// kept the constraints.
+    Constrained {
+        /// Largest deviation of the Noether momenta (`None` if the model has no symmetry).
+        momentum_error_max: Option<f64>,
+        /// Always `None` (no exact solution).
+        solution_error_max: Option<f64>,
+        /// Always `None` (no exact solution).
+        solution_error_final: Option<f64>,
+        /// The constraints, as written.
+        constraints: Vec<String>,
+        /// Largest |g(q)|∞ over the step points (`None` for a run that failed before its end).
+        constraint_error_max: Option<f64>,
+        /// Largest |G(q) q̇|∞ over the step points, G = ∂g/∂q (the hidden velocity
+        /// constraint; `None` for a run that failed before its end).
+        velocity_constraint_error_max: Option<f64>,
+        /// |q − q₀|: how far the projection of the initial state onto g = 0 moved q₀.
+        initial_q_moved: f64,
+        /// |p − p₀|: how far the projection onto the cotangent space G M⁻¹ p = 0 moved p₀.
+        initial_p_moved: f64,
+    },
     /// On SO(3).
     Rigid {
         /// Names of the conserved angular momenta (about the model's symmetry axes).
@@ -305,6 +327,9 @@ impl Conservation {
             | Conservation::Local {
                 momentum_error_max, ..
             }
+            | Conservation::Constrained {
+                momentum_error_max, ..
+            }
             | Conservation::Rigid {
                 momentum_error_max, ..
             } => *momentum_error_max,
@@ -324,6 +349,21 @@ impl Conservation {
                 invariant_error_max,
                 ..
             } => numbers.push(("invariant_error_max", *invariant_error_max)),
+            Conservation::Constrained {
+                constraint_error_max,
+                velocity_constraint_error_max,
+                initial_q_moved,
+                initial_p_moved,
+                ..
+            } => numbers.extend([
+                ("constraint_error_max", *constraint_error_max),
+                (
+                    "velocity_constraint_error_max",
+                    *velocity_constraint_error_max,
+                ),
+                ("initial_q_moved", Some(*initial_q_moved)),
+                ("initial_p_moved", Some(*initial_p_moved)),
+            ]),
             Conservation::Rigid {
                 momentum_error_relative,
                 invariant_error_max,
@@ -351,6 +391,9 @@ impl Conservation {
             }
             | Conservation::Local {
                 solution_error_max, ..
+            }
+            | Conservation::Constrained {
+                solution_error_max, ..
             } => *solution_error_max,
             Conservation::Rigid { .. } => None,
         }
@@ -364,6 +407,10 @@ impl Conservation {
                 ..
             }
             | Conservation::Local {
+                solution_error_final,
+                ..
+            }
+            | Conservation::Constrained {
                 solution_error_final,
                 ..
             } => *solution_error_final,
@@ -404,6 +451,30 @@ impl Conservation {
                 "invariant error",
                 named(*invariant_error_max, invariant_names),
             )],
+            Conservation::Constrained {
+                momentum_error_max,
+                constraints,
+                constraint_error_max,
+                velocity_constraint_error_max,
+                initial_q_moved,
+                initial_p_moved,
+                ..
+            } => vec![
+                ("momentum error", error(*momentum_error_max)),
+                ("constraints", constraints.join("; ")),
+                (
+                    "constraint error",
+                    format!(
+                        "|g| {} max, |G q'| {} max",
+                        error(*constraint_error_max),
+                        error(*velocity_constraint_error_max)
+                    ),
+                ),
+                (
+                    "initial projection",
+                    format!("q moved {initial_q_moved:.3e}, p moved {initial_p_moved:.3e}"),
+                ),
+            ],
             Conservation::Rigid {
                 momentum_names,
                 momentum_error_max,

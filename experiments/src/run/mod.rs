@@ -1,7 +1,7 @@
 //! `svi run`: the one run path, for scenes on every space.
 //!
 //! 1. The front door (the command line's `svi run`, the Python package) opens the scene
-//!    ([`crate::scene::AnyScene::open`]), puts its overrides on top and checks it once
+//!    ([`crate::scene::any::AnyScene::open`]), puts its overrides on top and checks it once
 //!    ([`Scene::checked`]).
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
 //!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
@@ -16,7 +16,11 @@
 //!    output times, recovery, divergence limit: one call for all), writes the trajectory and
 //!    assembles the one [`Summary`]. A run that fails after it started still writes its
 //!    trajectory and reports its last good state ([`SceneError::RunFailed`]).
+//!
+//! A scene with holonomic constraints takes its own path (`constrained.rs`): the library's
+//! constrained integrator with the scene's constrained method, observed for the same summary.
 
+mod constrained;
 mod control;
 pub mod field;
 pub(crate) mod outcome;
@@ -81,6 +85,9 @@ impl CheckedScene<'_> {
         match self.space() {
             SpaceKind::Vector => match self.text() {
                 Some(text) => match text? {
+                    Text::Model(model) if self.is_constrained() => {
+                        constrained::run(&self, control, model)
+                    }
                     Text::Model(model) => visit_text_model(model, run)?,
                     Text::Chain(chain) => visit_text_chain(chain, run)?,
                 },

@@ -65,6 +65,18 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "outer-solar-system",
         include_str!("../../scenes/outer-solar-system.toml"),
     ),
+    (
+        "spherical-pendulum",
+        include_str!("../../scenes/spherical-pendulum.toml"),
+    ),
+    (
+        "double-pendulum-cartesian",
+        include_str!("../../scenes/double-pendulum-cartesian.toml"),
+    ),
+    (
+        "four-bar-linkage",
+        include_str!("../../scenes/four-bar-linkage.toml"),
+    ),
     ("fput", include_str!("../../scenes/fput.toml")),
     ("fput-text", include_str!("../../scenes/fput-text.toml")),
     ("fput-stiff", include_str!("../../scenes/fput-stiff.toml")),

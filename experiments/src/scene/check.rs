@@ -40,6 +40,7 @@ impl Scene {
                 (self.forces.is_some(), "forces"),
                 (self.symmetries.is_some(), "symmetries"),
                 (self.boundary.is_some(), "boundary"),
+                (self.constraints.is_some(), "constraints"),
             ];
             if let Some((_, option)) = text_fields.into_iter().find(|(given, _)| *given) {
                 return Err(SceneError::NotApplicable {
@@ -114,30 +115,15 @@ impl Scene {
     /// options, and no option the scene cannot use (see [`SceneError::NotApplicable`]).
     pub fn check(&self) -> Result<(), SceneError> {
         self.check_model()?;
+        if self.is_constrained() {
+            self.check_constrained()?;
+            return self.check_output();
+        }
         let spec = self.method_spec()?;
         let initial = &self.initial;
         match self.space() {
             SpaceKind::Vector => {
-                let rigid = [
-                    (initial.rotation.is_some(), "initial.rotation"),
-                    (initial.quaternion.is_some(), "initial.quaternion"),
-                    (initial.omega.is_some(), "initial.omega"),
-                    (initial.momentum.is_some(), "initial.momentum"),
-                    (self.method.form.is_some(), "--form (method.form)"),
-                ];
-                if let Some((_, option)) = rigid.into_iter().find(|(given, _)| *given) {
-                    return Err(SceneError::NotApplicable {
-                        option,
-                        reason: format!(
-                            "applies to rigid-body scenes only (see svi list); '{}' is a model \
-                             on ℝᴺ",
-                            self.model_name()
-                        ),
-                    });
-                }
-                if initial.v.is_some() && initial.p.is_some() {
-                    return Err(SceneError::VelocityAndMomentum);
-                }
+                self.check_vector_initial()?;
                 if self.is_local() {
                     self.check_local(spec)?;
                 }
@@ -173,6 +159,32 @@ impl Scene {
         }
         self.check_run(spec)?;
         self.check_output()
+    }
+
+    /// The initial state of a scene on ℝᴺ: none of the rigid bodies' fields, and not both v
+    /// and p.
+    pub(crate) fn check_vector_initial(&self) -> Result<(), SceneError> {
+        let initial = &self.initial;
+        let rigid = [
+            (initial.rotation.is_some(), "initial.rotation"),
+            (initial.quaternion.is_some(), "initial.quaternion"),
+            (initial.omega.is_some(), "initial.omega"),
+            (initial.momentum.is_some(), "initial.momentum"),
+            (self.method.form.is_some(), "--form (method.form)"),
+        ];
+        if let Some((_, option)) = rigid.into_iter().find(|(given, _)| *given) {
+            return Err(SceneError::NotApplicable {
+                option,
+                reason: format!(
+                    "applies to rigid-body scenes only (see svi list); '{}' is a model on ℝᴺ",
+                    self.model_name()
+                ),
+            });
+        }
+        if initial.v.is_some() && initial.p.is_some() {
+            return Err(SceneError::VelocityAndMomentum);
+        }
+        Ok(())
     }
 
     /// `[run]`: valid run options; `tol`, `min_points` and `max_points` only with the modes
@@ -300,6 +312,24 @@ impl Scene {
                          wanted"
                     .into(),
             });
+        }
+        if output.multipliers == Some(true) {
+            if !self.is_constrained() {
+                return Err(SceneError::NotApplicable {
+                    option: "--multipliers (output.multipliers)",
+                    reason: "writes the Lagrange multipliers of a scene with constraints \
+                             (constraints = [...]); this scene has none"
+                        .into(),
+                });
+            }
+            if output.trajectory.is_none() && !output.record {
+                return Err(SceneError::NotApplicable {
+                    option: "--multipliers (output.multipliers)",
+                    reason: "adds the multipliers to the trajectory: give --out FILE \
+                             (output.trajectory) too"
+                        .into(),
+                });
+            }
         }
         if output.plot.is_some() && output.trajectory.is_none() {
             return Err(SceneError::NotApplicable {

@@ -107,10 +107,12 @@
 pub mod any;
 pub mod builtin;
 mod check;
+pub mod constrained;
 pub mod ensemble;
 pub mod error;
 pub mod field;
 pub mod limits;
+pub mod method;
 pub mod overrides;
 mod resolve;
 pub mod rigid;
@@ -133,6 +135,7 @@ use svi::model::text::{TextChainModel, TextModel, TextSpec};
 use svi_models::{LOCAL_MODEL_NAMES, RIGID_MODEL_NAMES};
 
 use builtin::builtin_scene;
+use method::SceneMethod;
 use overrides::{Overrides, RunFlags};
 use schema::{
     AdaptMode, BoundaryName, Diagnostic, InitialSection, MethodSection, OutputSection,
@@ -159,6 +162,9 @@ pub struct Scene {
     pub symmetries: Option<Vec<Vec<String>>>,
     /// What the indexed coordinates of `lagrangian` read outside 1..n (default fixed).
     pub boundary: Option<BoundaryName>,
+    /// Holonomic constraints g(q) = 0 of `lagrangian`, one expression each in the coordinates
+    /// and the parameters: the scene runs a constrained method ([`constrained`]).
+    pub constraints: Option<Vec<String>>,
     /// Model parameters, name → value, applied on top of the model's defaults; for a
     /// Lagrangian written as text, its parameters.
     #[serde(default)]
@@ -199,14 +205,15 @@ impl Scene {
     }
 
     /// The scene of a Lagrangian written as text with its `coordinates`, `forces`,
-    /// `symmetries` and `parameters`, every other field absent (the Python package's
-    /// `svi.Lagrangian`): not yet checked — a text model has no default initial state, step
-    /// or horizon, which the caller sets before [`Scene::check`].
+    /// `symmetries`, `constraints` and `parameters`, every other field absent (the Python
+    /// package's `svi.Lagrangian`): not yet checked — a text model has no default initial
+    /// state, step or horizon, which the caller sets before [`Scene::check`].
     pub fn of_text_model(
         lagrangian: String,
         coordinates: Vec<String>,
         forces: Option<Vec<String>>,
         symmetries: Option<Vec<Vec<String>>>,
+        constraints: Option<Vec<String>>,
         parameters: BTreeMap<String, f64>,
     ) -> Scene {
         let empty: Scene = toml::from_str("").expect("every field of a scene has a default");
@@ -215,6 +222,7 @@ impl Scene {
             coordinates: Some(coordinates),
             forces,
             symmetries,
+            constraints,
             parameters,
             ..empty
         }
@@ -282,6 +290,7 @@ impl Scene {
             forces: self.forces.clone().unwrap_or_default(),
             symmetries: self.symmetries.clone().unwrap_or_default(),
             boundary: self.boundary.map(Into::into).unwrap_or_default(),
+            constraints: self.constraints.clone().unwrap_or_default(),
         })
     }
 
@@ -368,38 +377,46 @@ impl Scene {
             out,
             plot,
             output_times,
+            multipliers,
         } = overrides;
         let space = self.space();
-        if let Some(method) = method {
-            method.check_space(space)?;
-            // The options written in `--method` replace the scene's; the others carry over.
-            self.method.name = Some(*method);
-            if method.points().is_some() {
-                self.method.points = None;
+        match method {
+            Some(SceneMethod::Registry(method)) => {
+                method.check_space(space)?;
+                // The options written in `--method` replace the scene's; the others carry over.
+                self.method.name = Some(SceneMethod::Registry(*method));
+                if method.points().is_some() {
+                    self.method.points = None;
+                }
+                if method.quadrature().is_some() {
+                    self.method.quadrature = None;
+                }
+                if space == SpaceKind::Rotation
+                    && method.lie_svi()?.form == svi::lie_group::Form::Reduced
+                {
+                    self.method.form = None;
+                }
             }
-            if method.quadrature().is_some() {
-                self.method.quadrature = None;
-            }
-            if space == SpaceKind::Rotation
-                && method.lie_svi()?.form == svi::lie_group::Form::Reduced
-            {
-                self.method.form = None;
-            }
+            Some(constrained) => self.method.name = Some(constrained.clone()),
+            None => {}
         }
-        let name = self.method_name();
-        for (given, option, takes) in [
-            (
-                quadrature.is_some(),
-                "quadrature",
-                name.entry().takes_quadrature(),
-            ),
-            (points.is_some(), "points", name.entry().takes_points()),
-        ] {
-            if given && !takes {
-                return Err(SceneError::OptionNotForMethod {
-                    option,
-                    method: name,
-                });
+        // A constrained scene refuses the registry's method options when it is checked.
+        if !self.is_constrained() {
+            let name = self.method_name()?;
+            for (given, option, takes) in [
+                (
+                    quadrature.is_some(),
+                    "quadrature",
+                    name.entry().takes_quadrature(),
+                ),
+                (points.is_some(), "points", name.entry().takes_points()),
+            ] {
+                if given && !takes {
+                    return Err(SceneError::OptionNotForMethod {
+                        option,
+                        method: name,
+                    });
+                }
             }
         }
         if form.is_some() && space == SpaceKind::Vector {
@@ -442,6 +459,7 @@ impl Scene {
             self.run.monitor = Some(monitor.to_string());
         }
         set(&mut self.output.output_times, output_times);
+        set(&mut self.output.multipliers, multipliers);
         if *recovery == Some(RecoveryKind::None) {
             self.run.max_halvings = None;
         }
@@ -460,22 +478,35 @@ impl Scene {
     }
 
     /// `[method] name`, or the default method of the scene's space (`svi` on ℝᴺ, `lie-svi`
-    /// on SO(3)).
-    fn method_name(&self) -> MethodSpec {
-        self.method.name.unwrap_or_else(|| {
-            let space = self.space();
-            registry::METHODS
-                .iter()
-                .find(|entry| entry.space == space)
-                .map_or_else(MethodSpec::default, registry::Entry::spec)
-        })
+    /// on SO(3)); a constrained method is an error naming the methods the scene takes.
+    fn method_name(&self) -> Result<MethodSpec, SceneError> {
+        match &self.method.name {
+            Some(SceneMethod::Registry(spec)) => Ok(*spec),
+            Some(SceneMethod::Constrained(_)) => {
+                self.constrained_method()
+                    .and(Err(SceneError::NotApplicable {
+                        option: "--method (method.name)",
+                        reason: "a constrained method runs with svi run or svi.run/svi.solve, not \
+                             with this command"
+                            .into(),
+                    }))
+            }
+            None => {
+                let space = self.space();
+                Ok(registry::METHODS
+                    .iter()
+                    .find(|entry| entry.space == space)
+                    .map_or_else(MethodSpec::default, registry::Entry::spec))
+            }
+        }
     }
 
     /// The method in use: the method name with `points` and `quadrature` applied on top
     /// (each only for a method that takes it). An error names the method if it is not for
-    /// the scene's space, or the option out of range.
+    /// the scene's space, or the option out of range, or if it is a constrained method (see
+    /// [`Scene::constrained_method`]).
     pub fn method_spec(&self) -> Result<MethodSpec, SceneError> {
-        let mut spec = self.method_name();
+        let mut spec = self.method_name()?;
         spec.check_space(self.space())?;
         if let Some(points) = self.method.points
             && spec.entry().takes_points()
@@ -609,6 +640,9 @@ pub(crate) mod tests {
                 "double-pendulum-chaotic",
                 "oscillator-beyond-stability",
                 "outer-solar-system",
+                "spherical-pendulum",
+                "double-pendulum-cartesian",
+                "four-bar-linkage",
                 "fput",
                 "fput-text",
                 "fput-stiff",
@@ -637,7 +671,10 @@ pub(crate) mod tests {
             );
             if MODEL_NAMES.contains(&name) || LOCAL_MODEL_NAMES.contains(&name) {
                 assert_eq!(scene.model, name);
-                assert_eq!(scene.method.name, Some(method("svi")));
+                assert_eq!(scene.method.name, Some(method("svi").into()));
+            } else if scene.constraints.is_some() {
+                // Named after the mechanism its Lagrangian and constraints describe.
+                assert_eq!(scene.model_name(), "text", "{name}");
             } else if name == "outer-solar-system" {
                 // Named after the bodies HLW integrate.
                 assert_eq!(scene.model, "nbody");
@@ -704,7 +741,7 @@ pub(crate) mod tests {
         scene
             .apply(&Overrides {
                 run: RunFlags {
-                    method: Some(method("svi")),
+                    method: Some(method("svi").into()),
                     points: Some(5),
                     quadrature: Some(7),
                     h: Some(0.05),
@@ -723,6 +760,7 @@ pub(crate) mod tests {
                 out: Some("x.csv".into()),
                 plot: Some("x.svg".into()),
                 output_times: None,
+                multipliers: None,
             })
             .unwrap();
         assert_eq!(scene.run.max_steps, Some(500));
@@ -796,7 +834,7 @@ pub(crate) mod tests {
         scene
             .apply(&Overrides {
                 run: RunFlags {
-                    method: Some(method("sc")),
+                    method: Some(method("sc").into()),
                     ..RunFlags::default()
                 },
                 ..Overrides::default()

@@ -2,17 +2,27 @@
 
 use std::path::PathBuf;
 
-use svi::MethodSpec;
 use svi::method::registry;
 use svi::model::reparametrized::MonitorSpec;
 
 use crate::report::csv::Float;
 use crate::scene::error::SceneError;
+use crate::scene::method::SceneMethod;
 use crate::scene::schema::{AdaptMode, Diagnostic, FormName, RecoveryKind};
 
 /// The help of an option taking a method: `intro`, then the grammar and every method.
 pub fn method_help(intro: &str) -> String {
     format!("{intro}\n\n{}", registry::grammar_help())
+}
+
+/// The help of `--method` of the commands that run scenes: [`method_help`] and the
+/// constrained methods of scenes with constraints.
+pub fn run_method_help(intro: &str) -> String {
+    format!(
+        "{}\n{}",
+        method_help(intro),
+        crate::scene::method::constrained_help()
+    )
 }
 
 /// `a,b,c` of diagnostics' names.
@@ -85,12 +95,12 @@ pub struct RunFlags {
     #[arg(
         long,
         value_name = "METHOD",
-        long_help = method_help(
+        long_help = run_method_help(
             "Integration method (default: the scene's). Rigid-body scenes take lie-svi or \
-             lie-svi-reduced."
+             lie-svi-reduced; scenes with constraints a constrained method (default rattle)."
         )
     )]
-    pub method: Option<MethodSpec>,
+    pub method: Option<SceneMethod>,
     /// Number of Chebyshev–Gauss–Lobatto points (svi, sc, lie-svi), on top of --method.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub points: Option<usize>,
@@ -166,6 +176,16 @@ pub struct Overrides {
         allow_hyphen_values = true
     )]
     pub output_times: Option<Vec<f64>>,
+    /// Add the Lagrange multipliers of a constrained run to the trajectory (--out), one column
+    /// lambda_1, … per constraint (--multipliers alone is --multipliers=true).
+    #[arg(
+        long,
+        value_name = "BOOL",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "true"
+    )]
+    pub multipliers: Option<bool>,
 }
 
 /// The kind of value a run option takes, read from its flag's parser: what a front door that
@@ -182,6 +202,8 @@ pub enum OptionKind {
     Reals,
     /// A list of words (`--diagnostics`).
     Names,
+    /// True or false (`--multipliers`).
+    Flag,
 }
 
 impl OptionKind {
@@ -193,6 +215,7 @@ impl OptionKind {
             OptionKind::Text => "text",
             OptionKind::Reals => "reals",
             OptionKind::Names => "names",
+            OptionKind::Flag => "flag",
         }
     }
 }
@@ -210,6 +233,8 @@ pub enum OptionValue {
     Reals(Vec<f64>),
     /// Words.
     Names(Vec<String>),
+    /// True or false.
+    Flag(bool),
 }
 
 impl OptionValue {
@@ -223,6 +248,7 @@ impl OptionValue {
             OptionValue::Text(text) => text.clone(),
             OptionValue::Reals(xs) => join(xs.iter().map(|x| format!("{x:e}")).collect()),
             OptionValue::Names(names) => join(names.clone()),
+            OptionValue::Flag(flag) => flag.to_string(),
         }
     }
 }
@@ -244,6 +270,7 @@ impl Overrides {
         use clap::builder::ValueParser;
         let real = ValueParser::from(clap::value_parser!(f64)).type_id();
         let count = ValueParser::from(clap::value_parser!(usize)).type_id();
+        let flag = ValueParser::bool().type_id();
         let command = Named::command();
         command
             .get_arguments()
@@ -259,6 +286,8 @@ impl Overrides {
                     }
                 } else if parsed == count {
                     OptionKind::Count
+                } else if parsed == flag {
+                    OptionKind::Flag
                 } else if list {
                     OptionKind::Names
                 } else {

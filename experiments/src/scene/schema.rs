@@ -10,15 +10,9 @@ use std::str::FromStr;
 
 use serde::Deserialize;
 use svi::solve::Adapt;
-use svi::{MethodSpec, Recovery, RunOptions};
+use svi::{Recovery, RunOptions};
 
-/// Deserialise an optional method written `name`, `name:P` or `name:P/M`.
-fn optional_method_spec<'de, D: serde::Deserializer<'de>>(
-    deserializer: D,
-) -> Result<Option<MethodSpec>, D::Error> {
-    let text = String::deserialize(deserializer)?;
-    text.parse().map(Some).map_err(serde::de::Error::custom)
-}
+use crate::scene::method::SceneMethod;
 
 /// A diagnostic evaluated at every step point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
@@ -140,9 +134,10 @@ pub struct InitialSection {
 #[serde(deny_unknown_fields)]
 pub struct MethodSection {
     /// The method, `name`, `name:P` or `name:P/M` of `svi::method::registry::METHODS`
-    /// (default: `svi` on ℝᴺ, `lie-svi` on SO(3)).
-    #[serde(default, deserialize_with = "optional_method_spec")]
-    pub name: Option<MethodSpec>,
+    /// (default: `svi` on ℝᴺ, `lie-svi` on SO(3)), or for a scene with constraints a
+    /// constrained method (default `rattle`; see [`crate::scene::constrained`]).
+    #[serde(default)]
+    pub name: Option<SceneMethod>,
     /// Chebyshev–Gauss–Lobatto points of svi, sc and lie-svi, applied on top of `name`
     /// (default: the method's); ignored by the methods without.
     pub points: Option<usize>,
@@ -305,6 +300,9 @@ pub struct OutputSection {
     pub diagnostics: Option<Vec<Diagnostic>>,
     /// Report the states at these times, read off each step's polynomial (dense output).
     pub output_times: Option<Vec<f64>>,
+    /// Add the Lagrange multipliers λ of a constrained run to the trajectory, one column
+    /// `lambda_1`, … per constraint (default false; needs `trajectory`).
+    pub multipliers: Option<bool>,
     /// Keep the trajectory in memory (the summary's `recorded`) instead of writing a file:
     /// the Python package's runs, which never touch the file system. `every` and
     /// `output_times` apply as to a file. Not a scene field.

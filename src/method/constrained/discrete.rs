@@ -68,6 +68,11 @@ impl SegmentRule {
         self.info().order
     }
 
+    /// Whether the rule is symmetric (midpoint and trapezoid).
+    pub fn symmetric(self) -> bool {
+        self.info().symmetric
+    }
+
     fn info(self) -> crate::method::variational::discrete_lagrangian::DiscreteLagrangianInfo {
         match self {
             SegmentRule::SymplecticEuler => SymplecticEuler.info(),
@@ -213,6 +218,8 @@ impl<L, C> Stepper<'_, L, C> {
             initial,
             steps: 0,
             iterations: 0,
+            evaluations: 0,
+            factorizations: 0,
             constraint_error_max: 0.0,
             velocity_constraint_error_max: 0.0,
         };
@@ -231,6 +238,10 @@ impl<L, C> Stepper<'_, L, C> {
             );
             observe(&point);
         }
+        // One L_d per pair of coordinates per Newton iteration, one per coordinate for p̃.
+        let points = rule.info().points;
+        run.evaluations = (run.iterations * n * n + steps * n) * points;
+        run.factorizations = run.iterations + w.projection.factorizations;
         run.last = point;
         Ok(run)
     }

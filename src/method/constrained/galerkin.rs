@@ -262,6 +262,8 @@ where
         initial,
         steps: 0,
         iterations: 0,
+        evaluations: 0,
+        factorizations: 0,
         constraint_error_max: 0.0,
         velocity_constraint_error_max: 0.0,
     };
@@ -288,6 +290,9 @@ where
         );
         observe(&point);
     }
+    // Second derivatives at every Gauss point per Newton iteration, first derivatives for p̃.
+    run.evaluations = (run.iterations + steps) * method.quadrature;
+    run.factorizations = run.iterations + w.projection.factorizations;
     run.last = point;
     Ok(run)
 }

@@ -92,6 +92,15 @@ impl ConstrainedMethod {
         }
     }
 
+    /// Whether the method is symmetric (all are symplectic on the constraint manifold):
+    /// every one but symplectic Euler and its adjoint.
+    pub fn symmetric(&self) -> bool {
+        match self {
+            ConstrainedMethod::Rattle(_) | ConstrainedMethod::Galerkin(_) => true,
+            ConstrainedMethod::Discrete(method) => method.rule.symmetric(),
+        }
+    }
+
     /// The order of the method.
     pub fn order(&self) -> usize {
         match self {
@@ -151,6 +160,11 @@ where
     pub steps: usize,
     /// Newton iterations for the multipliers, summed over the run.
     pub iterations: usize,
+    /// Evaluations of L's derivatives at a point (of L_d's for the segment rules), summed
+    /// over the run.
+    pub evaluations: usize,
+    /// Matrices factorised (Newton's and the cotangent projection's), summed over the run.
+    pub factorizations: usize,
     /// max over the run of |g(q)|∞ (position level).
     pub constraint_error_max: f64,
     /// max over the run of |G(q) q̇|∞ (velocity level, q̇ = M⁻¹p).
@@ -299,6 +313,8 @@ where
     rate: DVector<f64>,
     directions: nalgebra::DMatrix<f64>,
     schur: DenseLu,
+    /// The matrices S factorised so far.
+    factorizations: usize,
     row: OVector<f64, N>,
     buffer: OVector<f64, N>,
 }
@@ -313,6 +329,7 @@ where
             rate: DVector::zeros(m),
             directions: nalgebra::DMatrix::zeros(zero.len(), m),
             schur: DenseLu::new(m),
+            factorizations: 0,
             row: zero.clone(),
             buffer: zero.clone(),
         }
@@ -349,6 +366,7 @@ where
                 &mut self.directions,
             );
             jacobian.mul_to(&self.directions, self.schur.matrix_mut());
+            self.factorizations += 1;
             self.schur
                 .factor()
                 .map_err(|_| Error::SingularMatrix { step, t })?;

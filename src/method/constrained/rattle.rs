@@ -201,6 +201,8 @@ where
         initial,
         steps: 0,
         iterations: 0,
+        evaluations: 0,
+        factorizations: 0,
         constraint_error_max: 0.0,
         velocity_constraint_error_max: 0.0,
     };
@@ -225,6 +227,11 @@ where
         );
         observe(&point);
     }
+    // The force once at the start and once per sub-step; a matrix per Newton iteration and
+    // per sub-step's velocity projection.
+    let substeps = steps * fractions.len();
+    run.evaluations = 1 + substeps;
+    run.factorizations = run.iterations + substeps;
     run.last = point;
     Ok(run)
 }

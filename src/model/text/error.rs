@@ -158,6 +158,15 @@ pub enum TextError {
         /// Why.
         reason: String,
     },
+    /// A holonomic constraint that is not g(q): it reads a velocity or the time, or no
+    /// coordinate at all.
+    #[error("constraint '{constraint}' is not a holonomic constraint g(q) = 0: {reason}")]
+    Constraint {
+        /// The constraint, as written.
+        constraint: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// A [`TextLagrangian`](super::TextLagrangian) whose dimension or declarations do not fit
     /// its model.
     #[error("TextLagrangian cannot hold this model: {reason}")]

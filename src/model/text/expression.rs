@@ -110,6 +110,13 @@ impl Expression {
         self.properties
     }
 
+    /// Whether any coordinate appears in the expression.
+    pub fn uses_coordinates(&self) -> bool {
+        self.nodes
+            .iter()
+            .any(|node| matches!(node, Node::Symbol(Symbol::Coordinate(_))))
+    }
+
     /// Whether the velocity of coordinate `i` appears in the expression.
     pub fn uses_velocity(&self, i: usize) -> bool {
         self.nodes

@@ -139,6 +139,7 @@
 
 mod batch;
 pub mod chain;
+mod constraints;
 mod error;
 mod expression;
 mod lagrangian;
@@ -148,6 +149,7 @@ mod structure;
 mod tree;
 
 pub use chain::{Boundary, MAX_SITES, MAX_WIDTH, TextChain, TextChainModel, site_values};
+pub use constraints::TextConstraints;
 pub use error::TextError;
 pub use expression::MAX_STACK;
 pub use lagrangian::TextLagrangian;
@@ -156,6 +158,7 @@ pub use tree::MAX_NODES;
 use crate::error::Error;
 use crate::model::Structure;
 use batch::Program;
+use constraints::parse_constraints;
 use expression::{Expression, Split, Tape, Velocities};
 use names::{Declared, intern, named_values, parameter_index};
 use tree::Names;
@@ -176,6 +179,9 @@ pub struct TextSpec {
     pub symmetries: Vec<Vec<String>>,
     /// What indexed coordinates read outside their range (chains only, see [`chain`]).
     pub boundary: Boundary,
+    /// Holonomic constraints g(q) = 0, one expression each in the coordinates and the
+    /// parameters ([`TextModel::constraints`]; not for chains).
+    pub constraints: Vec<String>,
 }
 
 impl TextSpec {
@@ -197,6 +203,9 @@ pub struct TextModel {
     forces: Vec<Expression>,
     generators: Vec<Vec<Expression>>,
     momentum_names: Vec<&'static str>,
+    /// The holonomic constraints, as written and parsed.
+    constraint_texts: Vec<String>,
+    constraints: Vec<Expression>,
     /// The expressions compiled for the current parameter values.
     tapes: Tapes,
 }
@@ -322,6 +331,7 @@ impl TextModel {
         let momentum_names = (1..=generators.len())
             .map(|i| intern(&format!("J{i}")))
             .collect();
+        let constraints = parse_constraints(&spec.constraints, &configuration)?;
         let tapes = Tapes::compile(&lagrangian, &forces, &generators, &parameter_values, n);
         Ok(TextModel {
             coordinates,
@@ -331,6 +341,8 @@ impl TextModel {
             forces,
             generators,
             momentum_names,
+            constraint_texts: spec.constraints.clone(),
+            constraints,
             tapes,
         })
     }
@@ -367,6 +379,33 @@ impl TextModel {
     /// The parameters, name and current value.
     pub fn parameters(&self) -> Vec<(&'static str, f64)> {
         named_values(&self.parameter_names, &self.parameter_values)
+    }
+
+    /// The symmetry generator `index` (of [`TextSpec::symmetries`]) at `q` into `out`, without
+    /// allocating: what a run's observer of the Noether momenta evaluates at every step.
+    ///
+    /// # Panics
+    /// If `index` is not below the number of generators, or `q` and `out` are shorter than
+    /// the coordinates.
+    pub fn generator_into(&self, index: usize, q: &[f64], out: &mut [f64]) {
+        for (value, tape) in out.iter_mut().zip(&self.tapes.generators[index]) {
+            *value = tape.evaluate(0.0, q, &[]);
+        }
+    }
+
+    /// The number of holonomic constraints ([`TextSpec::constraints`]).
+    pub fn constraint_count(&self) -> usize {
+        self.constraints.len()
+    }
+
+    /// The holonomic constraints g(q) = 0 as [`Constraints`](crate::model::constraint::Constraints),
+    /// compiled for the current parameter values (none if the model has none).
+    pub fn constraints(&self) -> TextConstraints {
+        TextConstraints::compile(
+            &self.constraint_texts,
+            &self.constraints,
+            &self.parameter_values,
+        )
     }
 
     /// Set the parameter `name`.

@@ -134,6 +134,8 @@ where
         initial,
         steps: 0,
         iterations: 0,
+        evaluations: 0,
+        factorizations: 0,
         constraint_error_max: 0.0,
         velocity_constraint_error_max: 0.0,
     };
@@ -156,6 +158,11 @@ where
         run.steps += 1;
         observe(&point);
     }
+    // The force once at the start and once per sub-step; a matrix per Newton iteration and
+    // per sub-step's velocity projection.
+    let substeps = steps * fractions.len();
+    run.evaluations = 1 + substeps;
+    run.factorizations = run.iterations + substeps;
     run.last = point;
     Ok(run)
 }

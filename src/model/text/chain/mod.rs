@@ -170,12 +170,13 @@ impl TextChainModel {
         for (given, field) in [
             (!spec.forces.is_empty(), "forces"),
             (!spec.symmetries.is_empty(), "symmetries"),
+            (!spec.constraints.is_empty(), "constraints"),
         ] {
             if given {
                 return Err(TextError::Unsupported {
                     field: field.into(),
-                    reason: "a chain of indexed coordinates takes neither forces nor symmetry \
-                             generators yet"
+                    reason: "a chain of indexed coordinates takes neither forces, symmetry \
+                             generators nor constraints yet"
                         .into(),
                 });
             }
