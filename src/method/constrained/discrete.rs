@@ -20,7 +20,9 @@
 //! one Gauss point. All four are symplectic on the constraint manifold's cotangent bundle;
 //! symplectic Euler and its adjoint are of order 1, midpoint and trapezoid of order 2.
 
-use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, record};
+use super::{
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, at_round_off, record,
+};
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::DenseLu;
@@ -202,27 +204,12 @@ impl<L, C> Stepper<'_, L, C> {
             momentum: zero.clone(),
             projection: Projection::new(&zero, m),
         };
-        let mut point = ConstrainedPoint {
-            t: t0,
-            q: initial.q.clone(),
-            p: initial.p.clone(),
-            multipliers: DVector::zeros(m),
-        };
+        let (mut point, mut run) = ConstrainedRun::start(t0, initial, m);
         self.constraints
             .jacobian_into(&point.q, &mut w.scratch, &mut w.start_jacobian);
         check_rank(self.constraints, &w.start_jacobian)?;
         let mut velocity = self.model.velocity(t0, &point.q, &point.p, &zero)?;
         observe(&point);
-        let mut run = ConstrainedRun {
-            last: point.clone(),
-            initial,
-            steps: 0,
-            iterations: 0,
-            evaluations: 0,
-            factorizations: 0,
-            constraint_error_max: 0.0,
-            velocity_constraint_error_max: 0.0,
-        };
         let (mut g, mut rate) = (DVector::zeros(m), DVector::zeros(m));
         for k in 0..steps {
             let t = t0 + k as f64 * h;
@@ -331,9 +318,7 @@ impl<L, C> Stepper<'_, L, C> {
             }
             iterations += 1;
             let moved = w.residual.rows(0, n).amax();
-            if moved <= 4.0 * f64::EPSILON * scale
-                || (moved <= 1e3 * f64::EPSILON * scale && moved > 0.5 * before)
-            {
+            if at_round_off(moved, before, scale) {
                 break;
             }
             if iterations == self.max_iterations {

@@ -42,7 +42,9 @@
 //! system, are a derivative order behind) — and the nodes give 2, 4, 4, 6, 4, 6: hence the
 //! default.
 
-use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, record};
+use super::{
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, at_round_off, record,
+};
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::DenseLu;
@@ -248,25 +250,10 @@ where
         v: zero.clone(),
         momentum: zero,
     };
-    let mut point = ConstrainedPoint {
-        t: t0,
-        q: initial.q.clone(),
-        p: initial.p.clone(),
-        multipliers: DVector::zeros(m),
-    };
+    let (mut point, mut run) = ConstrainedRun::start(t0, initial, m);
     constraints.jacobian_into(&point.q, &mut w.scratch, &mut w.start_jacobian);
     check_rank(constraints, &w.start_jacobian)?;
     observe(&point);
-    let mut run = ConstrainedRun {
-        last: point.clone(),
-        initial,
-        steps: 0,
-        iterations: 0,
-        evaluations: 0,
-        factorizations: 0,
-        constraint_error_max: 0.0,
-        velocity_constraint_error_max: 0.0,
-    };
     let stepper = Stepper {
         model,
         constraints,
@@ -358,9 +345,7 @@ where
             w.unknowns += &w.residual;
             iterations += 1;
             let moved = w.residual.rows(0, s * n).amax();
-            if moved <= 4.0 * f64::EPSILON * scale
-                || (moved <= 1e3 * f64::EPSILON * scale && moved > 0.5 * before)
-            {
+            if at_round_off(moved, before, scale) {
                 break;
             }
             if iterations == self.method.max_iterations {

@@ -385,3 +385,38 @@ where
         })
     }
 }
+
+impl<N: Dimension> ConstrainedRun<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// The first point of a run from the projected `initial` data at `t0` with `m`
+    /// multipliers, and the run with nothing done yet.
+    fn start(t0: f64, initial: Projected<N>, m: usize) -> (ConstrainedPoint<N>, Self) {
+        let point = ConstrainedPoint {
+            t: t0,
+            q: initial.q.clone(),
+            p: initial.p.clone(),
+            multipliers: DVector::zeros(m),
+        };
+        let run = ConstrainedRun {
+            last: point.clone(),
+            initial,
+            steps: 0,
+            iterations: 0,
+            evaluations: 0,
+            factorizations: 0,
+            constraint_error_max: 0.0,
+            velocity_constraint_error_max: 0.0,
+        };
+        (point, run)
+    }
+}
+
+/// The stopping rule of the constrained methods' Newton iterations: the correction `moved`
+/// to the positions is at round-off of their size `scale`, or has stopped shrinking (by half
+/// from `before`) near it.
+fn at_round_off(moved: f64, before: f64, scale: f64) -> bool {
+    moved <= 4.0 * f64::EPSILON * scale
+        || (moved <= 1e3 * f64::EPSILON * scale && moved > 0.5 * before)
+}

@@ -1,7 +1,7 @@
 //! RATTLE and its symmetric compositions.
 //!
 //! # Discrete equations
-//! For L = ½ q̇ᵀMq̇ − V(q) ([`Structure::ConstantMass`]) and holonomic constraints g(q) = 0
+//! For L = ½ q̇ᵀMq̇ − V(q) ([`crate::model::Structure::ConstantMass`]) and holonomic constraints g(q) = 0
 //! with Jacobian G = ∂g/∂q ([`Constraints`]), the discrete variational principle with
 //! multipliers over the trapezoidal discrete Lagrangian (Marsden & West 2001, §3.5; Hairer,
 //! Lubich & Wanner 2006, §VII.1.4, eq. (1.26)) gives RATTLE, with F = ∂L/∂q = −∇V:
@@ -34,7 +34,7 @@
 
 mod sparse;
 
-use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, record};
+use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, at_round_off, record};
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::DenseLu;
@@ -187,25 +187,10 @@ where
         zero,
         mass_inverse,
     };
-    let mut point = ConstrainedPoint {
-        t: t0,
-        q: initial.q.clone(),
-        p: initial.p.clone(),
-        multipliers: DVector::zeros(m),
-    };
+    let (mut point, mut run) = ConstrainedRun::start(t0, initial, m);
     stepper.evaluate_start(&mut workspace, &point.q)?;
     observe(&point);
     let fractions = rattle.fractions();
-    let mut run = ConstrainedRun {
-        last: point.clone(),
-        initial,
-        steps: 0,
-        iterations: 0,
-        evaluations: 0,
-        factorizations: 0,
-        constraint_error_max: 0.0,
-        velocity_constraint_error_max: 0.0,
-    };
     let mut g = DVector::zeros(m);
     let mut rate = DVector::zeros(m);
     for k in 0..steps {
@@ -315,8 +300,7 @@ impl<L, C> Stepper<'_, L, C> {
                 *x = q + *i;
             }
             self.constraints.values_into(&w.end, &mut w.residual);
-            let floor = moved <= 4.0 * f64::EPSILON * scale
-                || (moved <= 1e3 * f64::EPSILON * scale && moved > 0.5 * before);
+            let floor = at_round_off(moved, before, scale);
             if floor {
                 break;
             }

@@ -16,7 +16,9 @@
 use super::{Rattle, compensated_add};
 use crate::dimension::Dimension;
 use crate::error::Error;
-use crate::method::constrained::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun};
+use crate::method::constrained::{
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, at_round_off,
+};
 use crate::model::Lagrangian;
 use crate::model::constraint::Projected;
 use crate::model::constraint::local::ConstraintRows;
@@ -108,12 +110,7 @@ where
         shift: vec![0.0; n],
         zero,
     };
-    let mut point = ConstrainedPoint {
-        t: t0,
-        q: initial.q.clone(),
-        p: initial.p.clone(),
-        multipliers: DVector::zeros(m),
-    };
+    let (mut point, mut run) = ConstrainedRun::start(t0, initial, m);
     {
         let w = &mut workspace;
         check_rank(
@@ -129,16 +126,6 @@ where
     }
     observe(&point);
     let fractions = rattle.fractions();
-    let mut run = ConstrainedRun {
-        last: point.clone(),
-        initial,
-        steps: 0,
-        iterations: 0,
-        evaluations: 0,
-        factorizations: 0,
-        constraint_error_max: 0.0,
-        velocity_constraint_error_max: 0.0,
-    };
     let (mut g, mut rate) = (vec![0.0; m], vec![0.0; m]);
     for k in 0..steps {
         for &fraction in &fractions {
@@ -223,8 +210,7 @@ impl<L> Stepper<'_, L> {
             }
             self.rows
                 .values_into(w.end.as_slice(), w.residual.as_mut_slice());
-            let floor = moved <= 4.0 * f64::EPSILON * scale
-                || (moved <= 1e3 * f64::EPSILON * scale && moved > 0.5 * before);
+            let floor = at_round_off(moved, before, scale);
             if floor {
                 break;
             }
