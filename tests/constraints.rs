@@ -609,3 +609,32 @@ fn the_constrained_trapezoid_is_rattle_and_the_midpoint_rule_is_the_two_node_svi
         assert!(gap < 1e-12, "{name}: {gap:e}");
     }
 }
+
+#[test]
+fn an_observer_stops_every_constrained_method_at_the_point_it_saw() {
+    use std::ops::ControlFlow;
+    let (q0, p0) = spherical_initial();
+    let methods: [ConstrainedMethod; 4] = [
+        Rattle::default().into(),
+        Rattle::composed(Scheme::Yoshida4).into(),
+        ConstrainedDel::new(SegmentRule::Midpoint).into(),
+        ConstrainedSvi::new(5, 4).into(),
+    ];
+    for method in methods {
+        let name = method.name();
+        let run = ConstrainedIntegrator::new(FallingPoint { m: M, g: G }, Sphere { l: L }, method)
+            .unwrap()
+            .run(0.0, &q0, &p0, 0.01, 1000, |point| {
+                if point.t >= 0.1 - 1e-12 {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            })
+            .unwrap();
+        assert!(run.stopped, "{name}");
+        assert_eq!(run.steps, 10, "{name}");
+        assert!((run.last.t - 0.1).abs() < 1e-12, "{name}");
+        assert!(run.evaluations > 0 && run.factorizations > 0, "{name}");
+    }
+}

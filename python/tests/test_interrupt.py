@@ -56,3 +56,14 @@ def test_ctrl_c_stops_a_scene_run_and_an_ensemble():
             call()
         timer.join()
         assert time.perf_counter() - start < SENT_AFTER + STOPPED_WITHIN
+
+
+def test_ctrl_c_stops_a_constrained_run():
+    # RATTLE on the spherical pendulum: about 10⁸ steps unless it is stopped.
+    start = time.perf_counter()
+    timer = interrupt_after(SENT_AFTER)
+    with pytest.raises(KeyboardInterrupt):
+        svi.run("spherical-pendulum", **LONG, diagnostics=["none"], trajectory=False)
+    timer.join()
+    assert time.perf_counter() - start < SENT_AFTER + STOPPED_WITHIN
+    assert svi.run("spherical-pendulum", t_end=1.0, h=0.01).summary["status"] == "ok"

@@ -33,6 +33,8 @@ use crate::report::summary::{
 use crate::run::Control;
 use crate::scene::schema::Diagnostic;
 use crate::scene::{Scene, SceneError, vector};
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The Lagrangians the constrained methods take: ½q̇ᵀMq̇ − V(q), autonomous and unforced
 /// (the scene's check has made sure the text is one).
@@ -87,6 +89,7 @@ pub(super) fn run(
     };
     let mut watch = Watch {
         model,
+        stop: control.stop,
         mass_inverse: &mass_inverse,
         velocity: zero.clone(),
         generator: zero,
@@ -314,8 +317,11 @@ impl Grid {
         watch: &mut Watch<'_>,
     ) -> Result<ConstrainedRun<Dyn>, svi::Error> {
         let mut run = integrator.run(self.t0, q0, p0, self.h, self.full, |point| {
-            watch.observe(point);
+            watch.observe(point)
         })?;
+        if run.stopped {
+            return Ok(run);
+        }
         if let Some(h) = self.last {
             // The shorter last step, from the last point (on the constraints already: its
             // projection moves it by round-off, and its first point is not observed again).
@@ -364,6 +370,8 @@ fn rebase(error: svi::Error, offset: usize) -> svi::Error {
 /// What the run observes at every point, in buffers sized once.
 struct Watch<'a> {
     model: &'a Model,
+    /// The caller's stop flag, asked after every point.
+    stop: Option<&'a AtomicBool>,
     mass_inverse: &'a MassInverse<Dyn>,
     /// q̇ = M⁻¹p of the last point.
     velocity: DVector<f64>,
@@ -403,7 +411,18 @@ fn raise(max: &mut f64, value: f64) {
 
 impl Watch<'_> {
     /// See `point`: its energy and momenta, its trajectory row, the progress bar.
-    fn observe(&mut self, point: &ConstrainedPoint<Dyn>) {
+    /// Take `point`, and stop the run there if the stop flag is set.
+    fn observe(&mut self, point: &ConstrainedPoint<Dyn>) -> ControlFlow<()> {
+        self.take(point);
+        if self.stop.is_some_and(|stop| stop.load(Ordering::Relaxed)) {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+
+    /// Take `point`: its energy, momenta and constraint numbers, and the trajectory's row.
+    fn take(&mut self, point: &ConstrainedPoint<Dyn>) {
         if std::mem::take(&mut self.skip) {
             return;
         }

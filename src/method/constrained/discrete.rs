@@ -21,7 +21,7 @@
 //! symplectic Euler and its adjoint are of order 1, midpoint and trapezoid of order 2.
 
 use super::{
-    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, at_round_off, record,
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, Projection, at_round_off, record,
 };
 use crate::dimension::Dimension;
 use crate::error::Error;
@@ -113,14 +113,14 @@ impl ConstrainedDel {
 }
 
 /// The run of [`ConstrainedIntegrator::run`] with a constrained segment rule.
-pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>>(
+pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>, R: Flow>(
     integrator: &ConstrainedIntegrator<L, C>,
     method: &ConstrainedDel,
     t0: f64,
     h: f64,
     steps: usize,
     initial: Projected<N>,
-    observe: impl FnMut(&ConstrainedPoint<N>),
+    observe: impl FnMut(&ConstrainedPoint<N>) -> R,
 ) -> Result<ConstrainedRun<N>, Error>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -172,14 +172,14 @@ where
 }
 
 impl<L, C> Stepper<'_, L, C> {
-    fn run<N: Dimension, Ld: DiscreteLagrangian>(
+    fn run<N: Dimension, Ld: DiscreteLagrangian, R: Flow>(
         &self,
         rule: &Ld,
         t0: f64,
         h: f64,
         steps: usize,
         initial: Projected<N>,
-        mut observe: impl FnMut(&ConstrainedPoint<N>),
+        mut observe: impl FnMut(&ConstrainedPoint<N>) -> R,
     ) -> Result<ConstrainedRun<N>, Error>
     where
         L: Lagrangian<N>,
@@ -209,9 +209,12 @@ impl<L, C> Stepper<'_, L, C> {
             .jacobian_into(&point.q, &mut w.scratch, &mut w.start_jacobian);
         check_rank(self.constraints, &w.start_jacobian)?;
         let mut velocity = self.model.velocity(t0, &point.q, &point.p, &zero)?;
-        observe(&point);
+        run.stopped = observe(&point).stops();
         let (mut g, mut rate) = (DVector::zeros(m), DVector::zeros(m));
         for k in 0..steps {
+            if run.stopped {
+                break;
+            }
             let t = t0 + k as f64 * h;
             run.iterations += self.step(rule, &mut w, t, h, k, &mut point, &mut velocity)?;
             point.t = t0 + (k + 1) as f64 * h;
@@ -223,11 +226,11 @@ impl<L, C> Stepper<'_, L, C> {
                 &velocity,
                 (&mut g, &mut rate),
             );
-            observe(&point);
+            run.stopped = observe(&point).stops();
         }
         // One L_d per pair of coordinates per Newton iteration, one per coordinate for p̃.
         let points = rule.info().points;
-        run.evaluations = (run.iterations * n * n + steps * n) * points;
+        run.evaluations = (run.iterations * n * n + run.steps * n) * points;
         run.factorizations = run.iterations + w.projection.factorizations;
         run.last = point;
         Ok(run)

@@ -43,7 +43,7 @@
 //! default.
 
 use super::{
-    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Projection, at_round_off, record,
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, Projection, at_round_off, record,
 };
 use crate::dimension::Dimension;
 use crate::error::Error;
@@ -215,14 +215,14 @@ where
 
 /// The run of [`ConstrainedIntegrator::run`] with a constrained Galerkin method.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>>(
+pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>, R: Flow>(
     integrator: &ConstrainedIntegrator<L, C>,
     method: &ConstrainedSvi,
     t0: f64,
     h: f64,
     steps: usize,
     initial: Projected<N>,
-    mut observe: impl FnMut(&ConstrainedPoint<N>),
+    mut observe: impl FnMut(&ConstrainedPoint<N>) -> R,
 ) -> Result<ConstrainedRun<N>, Error>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -253,7 +253,7 @@ where
     let (mut point, mut run) = ConstrainedRun::start(t0, initial, m);
     constraints.jacobian_into(&point.q, &mut w.scratch, &mut w.start_jacobian);
     check_rank(constraints, &w.start_jacobian)?;
-    observe(&point);
+    run.stopped = observe(&point).stops();
     let stepper = Stepper {
         model,
         constraints,
@@ -264,6 +264,9 @@ where
     let (mut g, mut rate) = (DVector::zeros(m), DVector::zeros(m));
     let mut velocity = model.velocity(t0, &point.q, &point.p, &point.q.map(|_| 0.0))?;
     for k in 0..steps {
+        if run.stopped {
+            break;
+        }
         let t = t0 + k as f64 * h;
         run.iterations += stepper.step(&mut w, t, h, k, &mut point, &mut velocity)?;
         point.t = t0 + (k + 1) as f64 * h;
@@ -275,10 +278,10 @@ where
             &velocity,
             (&mut g, &mut rate),
         );
-        observe(&point);
+        run.stopped = observe(&point).stops();
     }
     // Second derivatives at every Gauss point per Newton iteration, first derivatives for p̃.
-    run.evaluations = (run.iterations + steps) * method.quadrature;
+    run.evaluations = (run.iterations + run.steps) * method.quadrature;
     run.factorizations = run.iterations + w.projection.factorizations;
     run.last = point;
     Ok(run)

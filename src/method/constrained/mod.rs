@@ -31,6 +31,7 @@ pub use galerkin::{ConstrainedSvi, ConstraintPoints};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, U1};
 pub use rattle::Rattle;
+use std::ops::ControlFlow;
 
 /// A constrained method, by name.
 #[derive(Debug, Clone, PartialEq)]
@@ -165,6 +166,8 @@ where
     pub evaluations: usize,
     /// Matrices factorised (Newton's and the cotangent projection's), summed over the run.
     pub factorizations: usize,
+    /// Whether the observer stopped the run (at `last`, before its `steps` were all taken).
+    pub stopped: bool,
     /// max over the run of |g(q)|∞ (position level).
     pub constraint_error_max: f64,
     /// max over the run of |G(q) q̇|∞ (velocity level, q̇ = M⁻¹p).
@@ -227,20 +230,22 @@ impl<L, C> ConstrainedIntegrator<L, C> {
     }
 
     /// Run `steps` steps of size `h` from (t0, q0, p0), projected first onto the constraints
-    /// ([`project`]); `observe` sees the initial point and the end of every step.
+    /// ([`project`]); `observe` sees the initial point and the end of every step, and stops
+    /// the run there by returning `ControlFlow::Break(())` ([`Flow`]; a closure returning
+    /// `()` never stops it).
     ///
     /// # Errors
     /// Invalid input (h, the initial data, constraints of deficient rank), a mass matrix that
     /// is singular, or a Newton iteration for the multipliers that does not converge
     /// ([`Error::NonConvergence`]).
-    pub fn run<N: Dimension>(
+    pub fn run<N: Dimension, R: Flow>(
         &self,
         t0: f64,
         q0: &OVector<f64, N>,
         p0: &OVector<f64, N>,
         h: f64,
         steps: usize,
-        observe: impl FnMut(&ConstrainedPoint<N>),
+        observe: impl FnMut(&ConstrainedPoint<N>) -> R,
     ) -> Result<ConstrainedRun<N>, Error>
     where
         L: Lagrangian<N>,
@@ -406,6 +411,7 @@ where
             iterations: 0,
             evaluations: 0,
             factorizations: 0,
+            stopped: false,
             constraint_error_max: 0.0,
             velocity_constraint_error_max: 0.0,
         };
@@ -419,4 +425,23 @@ where
 fn at_round_off(moved: f64, before: f64, scale: f64) -> bool {
     moved <= 4.0 * f64::EPSILON * scale
         || (moved <= 1e3 * f64::EPSILON * scale && moved > 0.5 * before)
+}
+
+/// What an observer of a constrained run returns: `()` to go on, or a [`ControlFlow`] whose
+/// `Break` stops the run at the point just observed ([`ConstrainedRun::stopped`]).
+pub trait Flow {
+    /// Whether the run stops here.
+    fn stops(&self) -> bool;
+}
+
+impl Flow for () {
+    fn stops(&self) -> bool {
+        false
+    }
+}
+
+impl Flow for ControlFlow<()> {
+    fn stops(&self) -> bool {
+        self.is_break()
+    }
 }

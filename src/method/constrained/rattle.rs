@@ -34,7 +34,7 @@
 
 mod sparse;
 
-use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, at_round_off, record};
+use super::{ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, at_round_off, record};
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::linalg::DenseLu;
@@ -134,7 +134,7 @@ where
 
 /// The run of [`ConstrainedIntegrator::run`] with RATTLE, from the projected `initial` data.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>>(
+pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>, R: Flow>(
     integrator: &ConstrainedIntegrator<L, C>,
     rattle: &Rattle,
     t0: f64,
@@ -142,7 +142,7 @@ pub(super) fn run<N: Dimension, L: Lagrangian<N>, C: Constraints<N>>(
     steps: usize,
     mass_inverse: MassInverse<N>,
     initial: Projected<N>,
-    mut observe: impl FnMut(&ConstrainedPoint<N>),
+    mut observe: impl FnMut(&ConstrainedPoint<N>) -> R,
 ) -> Result<ConstrainedRun<N>, Error>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -189,11 +189,14 @@ where
     };
     let (mut point, mut run) = ConstrainedRun::start(t0, initial, m);
     stepper.evaluate_start(&mut workspace, &point.q)?;
-    observe(&point);
+    run.stopped = observe(&point).stops();
     let fractions = rattle.fractions();
     let mut g = DVector::zeros(m);
     let mut rate = DVector::zeros(m);
     for k in 0..steps {
+        if run.stopped {
+            break;
+        }
         for &fraction in &fractions {
             run.iterations += stepper.substep(&mut workspace, fraction * h, k, &mut point)?;
         }
@@ -210,11 +213,11 @@ where
             &workspace.buffer,
             (&mut g, &mut rate),
         );
-        observe(&point);
+        run.stopped = observe(&point).stops();
     }
     // The force once at the start and once per sub-step; a matrix per Newton iteration and
     // per sub-step's velocity projection.
-    let substeps = steps * fractions.len();
+    let substeps = run.steps * fractions.len();
     run.evaluations = 1 + substeps;
     run.factorizations = run.iterations + substeps;
     run.last = point;

@@ -17,7 +17,7 @@ use super::{Rattle, compensated_add};
 use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::method::constrained::{
-    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, at_round_off,
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, at_round_off,
 };
 use crate::model::Lagrangian;
 use crate::model::constraint::Projected;
@@ -67,7 +67,7 @@ struct Stepper<'a, L> {
 /// The run of [`ConstrainedIntegrator::run`] with RATTLE on the sparse path, from the
 /// projected `initial` data, with M⁻¹ = diag(`weights`).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn run<N: Dimension, L: Lagrangian<N>, C>(
+pub(super) fn run<N: Dimension, L: Lagrangian<N>, C, R: Flow>(
     integrator: &ConstrainedIntegrator<L, C>,
     rattle: &Rattle,
     rows: &dyn ConstraintRows,
@@ -76,7 +76,7 @@ pub(super) fn run<N: Dimension, L: Lagrangian<N>, C>(
     h: f64,
     steps: usize,
     initial: Projected<N>,
-    mut observe: impl FnMut(&ConstrainedPoint<N>),
+    mut observe: impl FnMut(&ConstrainedPoint<N>) -> R,
 ) -> Result<ConstrainedRun<N>, Error>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -124,10 +124,13 @@ where
             .model
             .force_into(0.0, &point.q, &w.zero, &mut w.force);
     }
-    observe(&point);
+    run.stopped = observe(&point).stops();
     let fractions = rattle.fractions();
     let (mut g, mut rate) = (vec![0.0; m], vec![0.0; m]);
     for k in 0..steps {
+        if run.stopped {
+            break;
+        }
         for &fraction in &fractions {
             run.iterations += stepper.substep(&mut workspace, fraction * h, k, &mut point)?;
         }
@@ -143,11 +146,11 @@ where
         run.constraint_error_max = run.constraint_error_max.max(amax(&g));
         run.velocity_constraint_error_max = run.velocity_constraint_error_max.max(amax(&rate));
         run.steps += 1;
-        observe(&point);
+        run.stopped = observe(&point).stops();
     }
     // The force once at the start and once per sub-step; a matrix per Newton iteration and
     // per sub-step's velocity projection.
-    let substeps = steps * fractions.len();
+    let substeps = run.steps * fractions.len();
     run.evaluations = 1 + substeps;
     run.factorizations = run.iterations + substeps;
     run.last = point;
