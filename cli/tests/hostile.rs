@@ -1421,7 +1421,17 @@ fn constrained_scene_text() -> impl Strategy<Value = String> {
     let method = prop_oneof![
         4 => select(svi::method::constrained::ConstrainedMethod::names())
             .prop_map(|name| format!("\"{name}\"")),
-        1 => select(vec!["\"verlet\"", "\"svi:4\"", "\"shake\"", "\"rattle:4\"", "3"])
+        1 => select(vec![
+            "\"verlet\"",
+            "\"svi:4\"",
+            "\"shake\"",
+            "\"rattle:4\"",
+            "3",
+            "\"svi:1/1\"",
+            "\"svi:500/4\"",
+            "\"svi:5/0@nodes\"",
+            "\"svi:0/0@nodes\"",
+        ])
             .prop_map(String::from),
         1 => Just(String::new()),
     ];

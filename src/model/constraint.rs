@@ -335,14 +335,7 @@ where
         }
     }
     if !converged {
-        return Err(Error::invalid(
-            "initial.q",
-            format!(
-                "cannot be projected onto the constraints: after {PROJECTION_STEPS} Newton \
-                 steps |g| = {:.1e}",
-                g.amax()
-            ),
-        ));
+        return Err(not_projected(g.amax()));
     }
     constraints.jacobian_into(&q, &mut scratch, &mut jacobian);
     let (directions, schur) = schur_complement(mass_inverse, &jacobian)?;
@@ -390,4 +383,16 @@ where
         )
     })?;
     Ok((directions, factors))
+}
+
+/// The error of initial data that Newton's method did not bring onto the constraints, with
+/// |g| after [`PROJECTION_STEPS`] steps.
+fn not_projected(residual: f64) -> Error {
+    Error::invalid(
+        "initial.q",
+        format!(
+            "cannot be projected onto the constraints: after {PROJECTION_STEPS} Newton steps \
+             |g| = {residual:.1e}"
+        ),
+    )
 }

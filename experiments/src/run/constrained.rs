@@ -27,8 +27,7 @@ use crate::report::health::{self, Measured, Warning};
 use crate::report::plot::plot_csv;
 use crate::report::progress::Progress;
 use crate::report::summary::{
-    Conservation, ErrorReport, Parameters, SolveSummary, StateSummary, Status, Summary,
-    TrajectoryOutput,
+    Conservation, Parameters, SolveSummary, StateSummary, Status, Summary, TrajectoryOutput,
 };
 use crate::run::Control;
 use crate::scene::schema::Diagnostic;
@@ -248,17 +247,7 @@ pub(super) fn run(
         recorded,
         dense: None,
     };
-    match failure {
-        None => Ok(summary),
-        Some(source) => Err(SceneError::RunFailed {
-            partial: Box::new(Summary {
-                status: Status::Failed,
-                error: Some(ErrorReport::of(&source)),
-                ..summary
-            }),
-            source,
-        }),
-    }
+    super::ended(summary, failure)
 }
 
 /// The fixed grid of a constrained run: `full` steps of `h` from `t0`, then, when the span is

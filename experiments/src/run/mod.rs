@@ -517,17 +517,7 @@ fn run_scene<L, S: RunSpace<L>>(
         recorded,
         dense: outcome.dense,
     };
-    match failure {
-        None => Ok(summary),
-        Some(source) => Err(SceneError::RunFailed {
-            partial: Box::new(Summary {
-                status: Status::Failed,
-                error: Some(ErrorReport::of(&source)),
-                ..summary
-            }),
-            source,
-        }),
-    }
+    ended(summary, failure)
 }
 
 /// The tolerance of an adaptive run: the scene's, or without one the library's default;
@@ -573,6 +563,22 @@ fn solve_summary<L, S: RunSpace<L>>(scene: &Scene, outcome: &Outcome<S::Point>) 
                     state: S::state(point),
                 })
                 .collect()
+        }),
+    }
+}
+
+/// The summary of a run that ended, or, with a `failure`, the error carrying it as the partial
+/// summary up to the last good state.
+fn ended(summary: Summary, failure: Option<svi::Error>) -> Result<Summary, SceneError> {
+    match failure {
+        None => Ok(summary),
+        Some(source) => Err(SceneError::RunFailed {
+            partial: Box::new(Summary {
+                status: Status::Failed,
+                error: Some(ErrorReport::of(&source)),
+                ..summary
+            }),
+            source,
         }),
     }
 }

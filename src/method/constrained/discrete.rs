@@ -21,7 +21,8 @@
 //! symplectic Euler and its adjoint are of order 1, midpoint and trapezoid of order 2.
 
 use super::{
-    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, Projection, at_round_off, record,
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, Projection, at_round_off,
+    newton_correction, record,
 };
 use crate::dimension::Dimension;
 use crate::error::Error;
@@ -300,19 +301,7 @@ impl<L, C> Stepper<'_, L, C> {
                     matrix[(n + e, n + f)] = 0.0;
                 }
             }
-            if !w.residual.iter().all(|x| x.is_finite()) {
-                return Err(Error::NonConvergence {
-                    step,
-                    t,
-                    iterations,
-                    residual: f64::INFINITY,
-                });
-            }
-            w.newton
-                .factor()
-                .map_err(|_| Error::SingularMatrix { step, t })?;
-            w.residual.neg_mut();
-            w.newton.solve_in_place(&mut w.residual);
+            newton_correction(&mut w.newton, &mut w.residual, (step, t, iterations))?;
             for a in 0..n {
                 w.end[a] += w.residual[a];
             }

@@ -43,7 +43,8 @@
 //! default.
 
 use super::{
-    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, Projection, at_round_off, record,
+    ConstrainedIntegrator, ConstrainedPoint, ConstrainedRun, Flow, Projection, at_round_off,
+    newton_correction, record,
 };
 use crate::dimension::Dimension;
 use crate::error::Error;
@@ -332,19 +333,7 @@ where
         let (mut iterations, mut before) = (0, f64::INFINITY);
         loop {
             self.assemble(w, t, h, &point.p)?;
-            if !w.residual.iter().all(|x| x.is_finite()) {
-                return Err(Error::NonConvergence {
-                    step,
-                    t,
-                    iterations,
-                    residual: f64::INFINITY,
-                });
-            }
-            w.newton
-                .factor()
-                .map_err(|_| Error::SingularMatrix { step, t })?;
-            w.residual.neg_mut();
-            w.newton.solve_in_place(&mut w.residual);
+            newton_correction(&mut w.newton, &mut w.residual, (step, t, iterations))?;
             w.unknowns += &w.residual;
             iterations += 1;
             let moved = w.residual.rows(0, s * n).amax();

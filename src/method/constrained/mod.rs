@@ -445,3 +445,26 @@ impl Flow for ControlFlow<()> {
         self.is_break()
     }
 }
+
+/// One Newton correction of the implicit constrained methods: `residual` (finite, else
+/// [`Error::NonConvergence`]) becomes −J⁻¹ residual with J the matrix written into `newton`.
+fn newton_correction(
+    newton: &mut DenseLu,
+    residual: &mut DVector<f64>,
+    (step, t, iterations): (usize, f64, usize),
+) -> Result<(), Error> {
+    if !residual.iter().all(|x| x.is_finite()) {
+        return Err(Error::NonConvergence {
+            step,
+            t,
+            iterations,
+            residual: f64::INFINITY,
+        });
+    }
+    newton
+        .factor()
+        .map_err(|_| Error::SingularMatrix { step, t })?;
+    residual.neg_mut();
+    newton.solve_in_place(residual);
+    Ok(())
+}

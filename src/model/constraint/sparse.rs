@@ -427,14 +427,7 @@ where
         }
     }
     if !converged {
-        return Err(Error::invalid(
-            "initial.q",
-            format!(
-                "cannot be projected onto the constraints: after {PROJECTION_STEPS} Newton \
-                 steps |g| = {:.1e}",
-                g.amax()
-            ),
-        ));
+        return Err(super::not_projected(g.amax()));
     }
     jacobian.evaluate(rows, q.as_slice());
     schur.assemble(1.0, &jacobian, weights, &jacobian);
