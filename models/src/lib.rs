@@ -13,6 +13,7 @@
 //! | `damped-oscillator` | [`DampedOscillator`] | 1 | — | — | yes |
 //! | `damped-pendulum` | [`DampedPendulum`] | 1 | — | — | only undamped (c = 0) |
 //! | `driven-oscillator` | [`DrivenOscillator`] | 1 | — | — | yes |
+//! | `henon-heiles` | [`HenonHeiles`] | 2 | — | — | — |
 //! | `nbody` | [`NBody`] | 18 (d per body, at run time: [`svi::Dyn`]) | translations, rotations | — | — |
 //!
 //! Chains and lattices have their dimension n at run time (a parameter, `n`): each is a sum
@@ -118,6 +119,7 @@ pub mod driven_oscillator;
 pub mod fields;
 pub mod fput;
 pub mod fput_stiff;
+pub mod henon_heiles;
 pub mod kepler;
 pub mod nbody;
 pub mod oscillator;
@@ -140,6 +142,7 @@ pub use driven_oscillator::DrivenOscillator;
 pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
 pub use fput::Fput;
 pub use fput_stiff::FputStiff;
+pub use henon_heiles::HenonHeiles;
 pub use kepler::{Kepler, KeplerOrbit};
 pub use nbody::{Body, NBody};
 pub use oscillator::HarmonicOscillator;
@@ -245,6 +248,7 @@ vector_zoo!(
     DampedPendulum,
     DrivenOscillator,
     NBody,
+    HenonHeiles,
 );
 
 /// Hand a text model to the visitor as a [`TextLagrangian`] of run-time dimension ([`Dyn`]:
