@@ -16,6 +16,7 @@ mod constraints;
 mod convergence;
 mod derivatives;
 mod errors;
+mod events;
 mod field;
 mod forces;
 mod geometry;

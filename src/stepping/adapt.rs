@@ -50,7 +50,8 @@ use crate::spectral::MAX_POINTS;
 use crate::stepping::grid::{grid_step, grid_steps, resolution};
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Cursor, Integrator, Progress, RunFailure, Statistics};
-use crate::stepping::solve::{Adaptivity, Outputs, SolveOptions, Span};
+use crate::stepping::outputs::Outputs;
+use crate::stepping::solve::{Adaptivity, SolveOptions, Span};
 
 /// Chebyshev coefficient magnitudes a_k = max over components |c_k| (k = 0..s) of the
 /// polynomial through the CGL node values (offsets, `width` numbers per node: node 0 is zero).
@@ -318,6 +319,10 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                         ] {
                             progress.cursor = cursor;
                             progress.t = time;
+                            if outputs.terminal_time().is_some_and(|event| event <= time) {
+                                // A terminal event inside this step ended the solve.
+                                return Ok((adaptivity, false));
+                            }
                             if observer.wants(step)
                                 && self.observe(step, Some(&half), progress, observer)?
                             {
@@ -504,6 +509,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 adaptivity.record(size, Some(points));
                 progress.cursor = next;
                 progress.t = end_time;
+                if outputs.terminal.is_some() {
+                    return Ok((adaptivity, false));
+                }
                 if observer.wants(k + 1)
                     && self.observe(k + 1, Some(&steppers[points - low].1), progress, observer)?
                 {

@@ -263,6 +263,8 @@ where
                 adaptivity,
                 stopped: true,
                 dense: None,
+                events: Vec::new(),
+                terminal: None,
             });
         }
         let limit = options.run.divergence_limit;
@@ -320,6 +322,8 @@ where
                     adaptivity,
                     stopped: !finish,
                     dense: None,
+                    events: Vec::new(),
+                    terminal: None,
                 });
             }
             if finish {
@@ -333,6 +337,8 @@ where
                     adaptivity,
                     stopped: false,
                     dense: None,
+                    events: Vec::new(),
+                    terminal: None,
                 });
             }
         }

@@ -5,9 +5,11 @@
 
 pub mod adapt;
 pub mod dense;
+pub mod event;
 pub mod grid;
 pub mod logh;
 pub mod observer;
+mod outputs;
 pub mod reparam;
 pub mod rigid_observer;
 pub mod run;

@@ -317,6 +317,8 @@ where
                 adaptivity,
                 stopped: true,
                 dense: None,
+                events: Vec::new(),
+                terminal: None,
             });
         }
         let mut k = 0usize;
@@ -444,6 +446,8 @@ where
                         adaptivity,
                         stopped: !finish,
                         dense: None,
+                        events: Vec::new(),
+                        terminal: None,
                     });
                 }
             }
@@ -458,6 +462,8 @@ where
                     adaptivity,
                     stopped: false,
                     dense: None,
+                    events: Vec::new(),
+                    terminal: None,
                 });
             }
         }

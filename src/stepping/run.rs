@@ -24,6 +24,7 @@ use crate::stepping::observer::Observer;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
 use std::marker::PhantomData;
+use std::ops::ControlFlow;
 
 /// Totals of a run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -303,7 +304,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             options,
             observer,
             false,
-            |_, _, _, _, _| Ok(()),
+            |_, _, _, _, _| Ok(ControlFlow::Continue(())),
         )?;
         self.finish(Some(&workspace), progress, stopped)
     }
@@ -385,7 +386,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             f64,
             Option<&S::State>,
             &Progress<S>,
-        ) -> Result<(), Error>,
+        ) -> Result<ControlFlow<()>, Error>,
     ) -> Result<bool, RunFailure<S>> {
         let depth = match options.recovery {
             Recovery::None => 0,
@@ -415,8 +416,11 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
             }
             progress.statistics.steps += 1;
             progress.t = end;
-            after_step(workspace, t, step_size, start.as_ref(), progress)
+            let flow = after_step(workspace, t, step_size, start.as_ref(), progress)
                 .map_err(|error| self.failure(error, progress, false))?;
+            if flow.is_break() {
+                return Ok(true);
+            }
             if observer.wants(k + 1) && self.observe(k + 1, Some(workspace), progress, observer)? {
                 return Ok(k + 1 < steps);
             }

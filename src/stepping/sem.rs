@@ -56,7 +56,8 @@ use crate::method::space::{Space, StepState};
 use crate::method::step::Step;
 use crate::stepping::observer::Observer;
 use crate::stepping::run::{Cursor, Integrator, Progress, RunFailure};
-use crate::stepping::solve::{Adaptivity, Outputs, SolveOptions, Span};
+use crate::stepping::outputs::Outputs;
+use crate::stepping::solve::{Adaptivity, SolveOptions, Span};
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::brent::BrentOpt;
 use std::cell::RefCell;
@@ -311,6 +312,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 previous = Some(h);
             }
             h = fitted;
+            if outputs.terminal.is_some() {
+                return Ok((adaptivity, false));
+            }
             if observer.wants(k) && self.observe(k, Some(&workspace), progress, observer)? {
                 return Ok((adaptivity, progress.t < span.t_end));
             }

@@ -33,9 +33,12 @@ use crate::error::{Error, require_finite, require_positive};
 use crate::method::space::Space;
 use crate::method::step::Step;
 use crate::stepping::dense::DenseOutput;
+use crate::stepping::event::{DEFAULT_EVENT_SAMPLES, Event, EventPoint, EventTracker};
 use crate::stepping::grid::{MAX_STEPS, check_span, grid_steps};
 use crate::stepping::observer::Observer;
+use crate::stepping::outputs::Outputs;
 use crate::stepping::run::{Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics};
+use std::ops::ControlFlow;
 use std::fmt;
 use std::str::FromStr;
 
@@ -190,6 +193,10 @@ pub struct SolveOptions {
     /// be evaluated at any time of the span after the solve; on ℝᴺ, not with the
     /// reparametrised solve (default `false`).
     pub dense: bool,
+    /// Interior samples of every event function per step, besides the step's end
+    /// ([`crate::stepping::event`]): crossings closer together than a step over
+    /// `event_samples + 1` may be missed (default 4, at most 1000).
+    pub event_samples: usize,
 }
 
 impl Default for SolveOptions {
@@ -210,6 +217,7 @@ impl Default for SolveOptions {
             max_steps: MAX_STEPS,
             run: RunOptions::default(),
             dense: false,
+            event_samples: DEFAULT_EVENT_SAMPLES,
         }
     }
 }
@@ -339,6 +347,15 @@ impl SolveOptions {
         if self.max_rejections == 0 {
             return Err(Error::invalid("max_rejections", "must be at least 1"));
         }
+        if self.event_samples > MAX_EVENT_SAMPLES {
+            return Err(Error::invalid(
+                "event_samples",
+                format!(
+                    "{} is more than {MAX_EVENT_SAMPLES} samples per step",
+                    self.event_samples
+                ),
+            ));
+        }
         self.validate_budget()?;
         if let Some(h) = self.min_step {
             require_positive("min_step", h)?;
@@ -360,6 +377,9 @@ impl SolveOptions {
         Ok(())
     }
 }
+
+/// Most interior samples of an event function per step ([`SolveOptions::event_samples`]).
+pub const MAX_EVENT_SAMPLES: usize = 1000;
 
 /// What the adaptive modes did.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -417,6 +437,11 @@ pub struct Solution<S: Space> {
     /// Every accepted step's polynomial, with [`SolveOptions::dense`]
     /// ([`DenseOutput::at`] evaluates the solution at any time of the span).
     pub dense: Option<DenseOutput>,
+    /// The located events ([`Integrator::try_solve_events`]), in time order.
+    pub events: Vec<EventPoint<S::Point>>,
+    /// The index in `events` of the terminal event that ended the solve (`last` is its
+    /// point), if one did.
+    pub terminal: Option<usize>,
 }
 
 /// Solve from `initial` over `span` with `method`: the states at the span's output times.
@@ -453,59 +478,6 @@ pub fn solve<L, M: Step<L, S> + Clone, S: Space>(
     Integrator::new(model, method).solve(span, initial, options)
 }
 
-/// Output times not yet served, the points produced so far, and the steps' polynomials kept
-/// for dense output.
-pub(super) struct Outputs<'a, S: Space> {
-    times: &'a [f64],
-    pub(super) points: Vec<S::Point>,
-    /// Last velocity, the Newton start of the next inverse Legendre map.
-    pub(super) guess: S::Velocity,
-    dense: Option<DenseOutput>,
-}
-
-/// How far [`Outputs`] had got: output points and dense steps, to go back to after a
-/// rejected trial step.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Mark {
-    points: usize,
-    steps: usize,
-}
-
-impl<S: Space> Outputs<'_, S> {
-    fn next(&self) -> Option<f64> {
-        self.times.get(self.points.len()).copied()
-    }
-
-    /// Whether the start of each step is needed: an output time is left, or steps are kept.
-    fn wants_steps(&self) -> bool {
-        self.next().is_some() || self.dense.is_some()
-    }
-
-    pub(super) fn mark(&self) -> Mark {
-        Mark {
-            points: self.points.len(),
-            steps: self.dense.as_ref().map_or(0, DenseOutput::steps),
-        }
-    }
-
-    /// Forget what was produced after `mark`.
-    pub(super) fn rollback(&mut self, mark: Mark) {
-        self.points.truncate(mark.points);
-        if let Some(dense) = &mut self.dense {
-            dense.truncate(mark.steps);
-        }
-    }
-
-    /// Forget the output points after `time` and the steps that start at or after it.
-    pub(super) fn rollback_after(&mut self, time: f64) {
-        let served = self.points.partition_point(|point| S::time(point) <= time);
-        self.points.truncate(served);
-        if let Some(dense) = &mut self.dense {
-            dense.truncate_from(time);
-        }
-    }
-}
-
 impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// [`solve`] with this integrator's model and method.
     pub fn solve(
@@ -528,8 +500,27 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         options: &SolveOptions,
         observer: &mut O,
     ) -> Result<Solution<S>, RunFailure<S>> {
+        self.try_solve_events(span, initial, options, &[], observer)
+    }
+
+    /// [`Integrator::try_solve`] locating `events` on every accepted step
+    /// ([`crate::stepping::event`]): they come back in [`Solution::events`], and the first
+    /// crossing of a terminal one ends the solve at its time ([`Solution::terminal`]).
+    ///
+    /// # Errors
+    /// Those of [`Integrator::try_solve`]; [`Error::NonFinite`] naming an event whose value
+    /// is not finite; [`Error::InvalidParameter`] (`events`) for a method with neither a
+    /// step polynomial nor an interpolant on its space.
+    pub fn try_solve_events<O: Observer<L, S::Point>>(
+        &self,
+        span: &Span,
+        initial: S::Initial,
+        options: &SolveOptions,
+        events: &[Event<'_>],
+        observer: &mut O,
+    ) -> Result<Solution<S>, RunFailure<S>> {
         let mut observer: &mut dyn Observer<L, S::Point> = observer;
-        self.solve_observed(span, initial, options, &mut observer)
+        self.solve_observed(span, initial, options, events, &mut observer)
     }
 
     /// [`Integrator::try_solve`] with the observer behind a trait object, so that the
@@ -541,6 +532,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         span: &Span,
         initial: S::Initial,
         options: &SolveOptions,
+        events: &[Event<'_>],
         observer: &mut &mut dyn Observer<L, S::Point>,
     ) -> Result<Solution<S>, RunFailure<S>> {
         span.validate().map_err(RunFailure::rejected)?;
@@ -548,12 +540,21 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         let mut progress = self
             .start(span.t0, &initial)
             .map_err(RunFailure::rejected)?;
-        let mut outputs = Outputs {
-            times: &span.output_times,
-            points: Vec::with_capacity(span.output_times.len()),
-            guess: progress.guess.clone(),
-            dense: None,
-        };
+        let mut outputs = Outputs::new(&span.output_times, progress.guess.clone());
+        if !events.is_empty() {
+            let first = self
+                .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
+                .map_err(RunFailure::rejected)?;
+            let (q, v, _) = S::point_vectors(&first).ok_or_else(|| {
+                RunFailure::rejected(Error::invalid(
+                    "events",
+                    "events are located on ℝᴺ only",
+                ))
+            })?;
+            let tracker = EventTracker::new(events, options.event_samples, (span.t0, q, v))
+                .map_err(RunFailure::rejected)?;
+            outputs.events = Some(tracker);
+        }
         if options.dense {
             let samples = match options.adapt {
                 Adapt::Degree => options.max_points,
@@ -594,102 +595,20 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         }?;
         // The end point as `try_run` completes it (from the velocity last observed).
         let run = self.finish(None, progress, stopped)?;
+        let last = match outputs.terminal {
+            Some(k) => outputs.located[k].point.clone(),
+            None => run.last,
+        };
         Ok(Solution {
             points: outputs.points,
-            last: run.last,
+            last,
             statistics: run.statistics,
             adaptivity,
-            stopped,
+            stopped: stopped && outputs.terminal.is_none(),
             dense: outputs.dense,
+            events: outputs.located,
+            terminal: outputs.terminal,
         })
-    }
-
-    /// Serve every output time in (t, t + h] from the step of `method` just taken from
-    /// `start` at `t` to `end` at `end_time`: at `end_time` itself the completed end point,
-    /// inside the step the method's dense output or, without one, the space's interpolant of
-    /// the completed end points. `steps_taken` counts the steps so far, this one included. A
-    /// non-finite output point (a step too short for its polynomial's scaling, say) is
-    /// [`Error::NonFinite`] in this step (index `steps_taken − 1`, starting at `t`), never a
-    /// silent NaN.
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn emit(
-        &self,
-        method: &M,
-        workspace: &M::Workspace,
-        outputs: &mut Outputs<'_, S>,
-        steps_taken: usize,
-        t: f64,
-        h: f64,
-        start: &S::State,
-        end: &S::State,
-        end_time: f64,
-    ) -> Result<(), Error> {
-        let model = self.model();
-        // The point at `time` inside the step: the method's dense output or, without one, the
-        // space's interpolant of the end points (completed once); `None` if it has neither.
-        let mut ends: Option<(S::Point, S::Point)> = None;
-        let mut inside = |time: f64, guess: &S::Velocity| -> Result<Option<S::Point>, Error> {
-            if let Some(point) = method.dense_point(model, workspace, t, h, start, time) {
-                return Ok(Some(point));
-            }
-            let (a, b) = match ends {
-                Some(ref known) => known,
-                None => ends.insert((
-                    self.phase_point(t, start, guess)?,
-                    self.phase_point(end_time, end, guess)?,
-                )),
-            };
-            Ok(method.interpolate(model, a, b, time))
-        };
-        while let Some(time) = outputs.next() {
-            if time > end_time {
-                break;
-            }
-            let point = if time == end_time {
-                self.phase_point(end_time, end, &outputs.guess)?
-            } else {
-                inside(time, &outputs.guess)?.ok_or_else(|| {
-                    Error::invalid(
-                        "output_times",
-                        format!(
-                            "{time:?} lies inside a step, and {} has neither dense output nor an \
-                             interpolant on its space: ask for output at the ends of the span",
-                            method.info().name
-                        ),
-                    )
-                })?
-            };
-            if !method.point_is_finite(&point) {
-                return Err(Error::NonFinite {
-                    what: format!("output point at t = {time:?}"),
-                    step: steps_taken.saturating_sub(1),
-                    t,
-                });
-            }
-            outputs.guess = S::velocity(&point);
-            outputs.points.push(point);
-        }
-        let Some(dense) = outputs.dense.as_mut() else {
-            return Ok(());
-        };
-        for j in 0..dense.samples() {
-            let time = dense.sample_time(j, t, end_time);
-            let point = inside(time, &outputs.guess)?.ok_or_else(|| {
-                Error::invalid("dense", "the method has no step polynomial on this space")
-            })?;
-            let (Some((q, v, p)), true) =
-                (S::point_vectors(&point), method.point_is_finite(&point))
-            else {
-                return Err(Error::NonFinite {
-                    what: format!("dense output point at t = {time:?}"),
-                    step: steps_taken.saturating_sub(1),
-                    t,
-                });
-            };
-            dense.push_sample(q, v, p);
-        }
-        dense.end_step(t, end_time);
-        Ok(())
     }
 
     /// Fixed steps: the grid loop of [`Integrator::try_run`] (recovery, divergence limit,
@@ -743,7 +662,11 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     )?;
                 }
                 adaptivity.record(size, points);
-                Ok(())
+                Ok(if outputs.terminal.is_some() {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                })
             },
         )?;
         Ok((adaptivity, stopped))
