@@ -92,7 +92,10 @@ fn kepler_pericentre_passages_carry_only_the_runs_phase_error() {
     assert!(last < 2.0 * error, "{last:e} against {error:e}");
     for (k, delta) in times.iter().enumerate() {
         let share = (k + 1) as f64 / 318.0;
-        assert!(delta.abs() <= 1.2 * share * last + 1e-12, "passage {k}: {delta:e}");
+        assert!(
+            delta.abs() <= 1.2 * share * last + 1e-12,
+            "passage {k}: {delta:e}"
+        );
     }
 }
 
@@ -125,22 +128,42 @@ fn crossing_error<M: svi::Method<U1> + Clone>(method: M, h: f64) -> f64 {
 /// the refinement by exact steps carries it inside the steps.
 #[test]
 fn oscillator_crossings_converge_at_the_methods_order() {
-    let observed = |errors: [f64; 3]| [(errors[0] / errors[1]).log2(), (errors[1] / errors[2]).log2()];
+    let observed = |errors: [f64; 3]| {
+        [
+            (errors[0] / errors[1]).log2(),
+            (errors[1] / errors[2]).log2(),
+        ]
+    };
     let steps = [0.4, 0.2, 0.1];
     println!("| method | error h = 0.4 | 0.2 | 0.1 | orders |");
     for s in 2..=5 {
         let errors = steps.map(|h| crossing_error(Svi::new(s).with_quadrature(s), h));
         let orders = observed(errors);
-        println!("| svi:{s}/{s} | {:.1e} | {:.1e} | {:.1e} | {:.2}, {:.2} |", errors[0], errors[1], errors[2], orders[0], orders[1]);
+        println!(
+            "| svi:{s}/{s} | {:.1e} | {:.1e} | {:.1e} | {:.2}, {:.2} |",
+            errors[0], errors[1], errors[2], orders[0], orders[1]
+        );
         let expected = (2 * s - 2) as f64;
         // The last ratio of s = 5 reaches round-off (7e-15).
-        assert!((orders[0] - expected).abs() < 0.1, "svi:{s}/{s}: {orders:?}");
-        assert!(errors[2] < 1e-13 || (orders[1] - expected).abs() < 0.1, "svi:{s}/{s}: {orders:?}");
+        assert!(
+            (orders[0] - expected).abs() < 0.1,
+            "svi:{s}/{s}: {orders:?}"
+        );
+        assert!(
+            errors[2] < 1e-13 || (orders[1] - expected).abs() < 0.1,
+            "svi:{s}/{s}: {orders:?}"
+        );
     }
     let errors = steps.map(|h| crossing_error(StormerVerlet::default(), h));
     let orders = observed(errors);
-    println!("| verlet | {:.1e} | {:.1e} | {:.1e} | {:.2}, {:.2} |", errors[0], errors[1], errors[2], orders[0], orders[1]);
-    assert!(orders.iter().all(|order| (order - 2.0).abs() < 0.1), "{orders:?}");
+    println!(
+        "| verlet | {:.1e} | {:.1e} | {:.1e} | {:.2}, {:.2} |",
+        errors[0], errors[1], errors[2], orders[0], orders[1]
+    );
+    assert!(
+        orders.iter().all(|order| (order - 2.0).abs() < 0.1),
+        "{orders:?}"
+    );
 }
 
 /// A terminal event ends the solve at its time: the last point is the event's, output times
@@ -157,7 +180,13 @@ fn a_terminal_event_ends_the_solve_at_its_time() {
     ];
     let span = Span::with_outputs(0.0, 100.0, vec![0.0, 3.0, 6.0, 7.0, 100.0]);
     let solution = Integrator::new(model, Svi::new(8).with_quadrature(7))
-        .try_solve_events(&span, initial, &SolveOptions::fixed_step(h), &events, &mut ())
+        .try_solve_events(
+            &span,
+            initial,
+            &SolveOptions::fixed_step(h),
+            &events,
+            &mut (),
+        )
         .unwrap();
     // Apocentre at π (not terminal), then the first pericentre at 2π ends the run.
     assert_eq!(solution.events.len(), 2);
@@ -188,10 +217,18 @@ fn adaptive_solves_locate_the_same_events() {
             &mut (),
         )
         .unwrap();
-    assert!(solution.adaptivity.rejected > 0, "{:?}", solution.adaptivity);
+    assert!(
+        solution.adaptivity.rejected > 0,
+        "{:?}",
+        solution.adaptivity
+    );
     assert_eq!(solution.events.len(), 20);
     for (k, event) in solution.events.iter().enumerate() {
-        assert!((event.point.t - TAU * (k + 1) as f64).abs() < 1e-8, "{k}: {}", event.point.t);
+        assert!(
+            (event.point.t - TAU * (k + 1) as f64).abs() < 1e-8,
+            "{k}: {}",
+            event.point.t
+        );
     }
 }
 
@@ -206,15 +243,29 @@ fn interior_samples_see_two_crossings_inside_one_step() {
         let mut options = SolveOptions::fixed_step(2.5);
         options.event_samples = samples;
         Integrator::new(model, Svi::new(12).with_quadrature(12))
-            .try_solve_events(&Span::new(0.0, 2.5), Initial::Velocity { q, v }, &options, &events, &mut ())
+            .try_solve_events(
+                &Span::new(0.0, 2.5),
+                Initial::Velocity { q, v },
+                &options,
+                &events,
+                &mut (),
+            )
             .unwrap()
     };
     assert!(run(0).events.is_empty());
     let found = run(4).events;
     assert_eq!(found.len(), 2);
     let first = 0.9f64.asin();
-    assert!((found[0].point.t - first).abs() < 1e-9, "{}", found[0].point.t);
-    assert!((found[1].point.t - (PI - first)).abs() < 1e-9, "{}", found[1].point.t);
+    assert!(
+        (found[0].point.t - first).abs() < 1e-9,
+        "{}",
+        found[0].point.t
+    );
+    assert!(
+        (found[1].point.t - (PI - first)).abs() < 1e-9,
+        "{}",
+        found[1].point.t
+    );
 }
 
 #[test]
@@ -226,13 +277,24 @@ fn bad_events_are_typed_errors_naming_them() {
     // Non-finite from the start, and from some time on.
     for event in [
         Event::new("broken", |_, _, _| f64::NAN),
-        Event::new("broken", |t, _, _| if t > 5.0 { f64::INFINITY } else { 1.0 }),
+        Event::new(
+            "broken",
+            |t, _, _| if t > 5.0 { f64::INFINITY } else { 1.0 },
+        ),
     ] {
         let failure = integrator
             .try_solve_events(&span, initial, &options, &[event], &mut ())
             .unwrap_err();
-        assert!(matches!(failure.error, Error::NonFinite { .. }), "{}", failure.error);
-        assert!(failure.error.to_string().contains("event 'broken'"), "{}", failure.error);
+        assert!(
+            matches!(failure.error, Error::NonFinite { .. }),
+            "{}",
+            failure.error
+        );
+        assert!(
+            failure.error.to_string().contains("event 'broken'"),
+            "{}",
+            failure.error
+        );
     }
     let mut options = options;
     options.event_samples = 1_000_000;
@@ -240,5 +302,9 @@ fn bad_events_are_typed_errors_naming_them() {
     let failure = integrator
         .try_solve_events(&span, initial, &options, &events, &mut ())
         .unwrap_err();
-    assert!(failure.error.to_string().contains("event_samples"), "{}", failure.error);
+    assert!(
+        failure.error.to_string().contains("event_samples"),
+        "{}",
+        failure.error
+    );
 }

@@ -532,6 +532,7 @@ impl Drawn {
                 x_log: false,
                 y_log: false,
                 equal_scale: true,
+                scatter: false,
                 series: bodies
                     .into_iter()
                     .filter_map(|body| {
@@ -557,6 +558,7 @@ impl Drawn {
                     x_log: false,
                     y_log: false,
                     equal_scale: false,
+                    scatter: false,
                     series: recorded
                         .columns
                         .iter()
@@ -627,6 +629,7 @@ fn draw(mut file: OutputFile, outcomes: &[Outcome]) -> Result<PathBuf, SceneErro
         x_log: false,
         y_log: true,
         equal_scale: false,
+        scatter: false,
         series: drawn
             .iter()
             .map(|(outcome, d)| Series {

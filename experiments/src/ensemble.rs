@@ -612,6 +612,7 @@ fn draw(
             x_log: false,
             y_log: positive && high > 100.0 * low,
             equal_scale: false,
+            scatter: false,
             series: vec![Series {
                 label: column.into(),
                 points,

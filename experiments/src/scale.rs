@@ -349,6 +349,7 @@ pub fn execute_args(args: &ScaleArgs) -> anyhow::Result<()> {
         x_log: true,
         y_log: true,
         equal_scale: false,
+        scatter: false,
         series,
     };
     dir.write("scale.csv", csv.as_bytes())

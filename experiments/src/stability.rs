@@ -120,6 +120,7 @@ pub fn plot(
             x_log: false,
             y_log: false,
             equal_scale: false,
+            scatter: false,
             series: reports
                 .iter()
                 .map(|(label, report)| Series {

@@ -49,8 +49,8 @@ use crate::method::step::Step;
 use crate::spectral::MAX_POINTS;
 use crate::stepping::grid::{grid_step, grid_steps, resolution};
 use crate::stepping::observer::Observer;
-use crate::stepping::run::{Cursor, Integrator, Progress, RunFailure, Statistics};
 use crate::stepping::outputs::Outputs;
+use crate::stepping::run::{Cursor, Integrator, Progress, RunFailure, Statistics};
 use crate::stepping::solve::{Adaptivity, SolveOptions, Span};
 
 /// Chebyshev coefficient magnitudes a_k = max over components |c_k| (k = 0..s) of the

@@ -30,6 +30,7 @@ use argmin::core::{CostFunction, Executor, State, TerminationReason, Termination
 use argmin::solver::brent::BrentRoot;
 
 use crate::error::Error;
+use crate::model::text::TextFunction;
 use crate::scalar::Scalar;
 
 /// Which zero crossings of g are events.
@@ -93,6 +94,13 @@ pub trait EventFunction {
     fn value<D: Scalar>(&self, t: D, q: &[D], v: &[D]) -> D;
 }
 
+/// A function written as text is an event function.
+impl EventFunction for TextFunction {
+    fn value<D: Scalar>(&self, t: D, q: &[D], v: &[D]) -> D {
+        self.evaluate(t, q, v)
+    }
+}
+
 /// The function of an event on `f64`s.
 type EventFn<'a> = dyn Fn(f64, &[f64], &[f64]) -> f64 + Send + Sync + 'a;
 
@@ -131,7 +139,10 @@ impl<'a> Event<'a> {
     }
 
     /// The event `name` of an [`EventFunction`], evaluated on `f64`s.
-    pub fn from_function(name: impl Into<String>, g: impl EventFunction + Send + Sync + 'a) -> Self {
+    pub fn from_function(
+        name: impl Into<String>,
+        g: impl EventFunction + Send + Sync + 'a,
+    ) -> Self {
         Event::new(name, move |t, q, v| g.value(t, q, v))
     }
 
@@ -188,6 +199,10 @@ pub struct EventPoint<P> {
     /// The solution's point at the event time.
     pub point: P,
 }
+
+/// The solution inside a step: hands q and q̇ at a time of the step to a callback.
+pub(super) type PointAt<'p> =
+    dyn FnMut(f64, &mut dyn FnMut(&[f64], &[f64])) -> Result<(), Error> + 'p;
 
 /// Interior samples of g per step by default: four, so that crossings at least a fifth of
 /// a step apart are told apart.
@@ -246,7 +261,7 @@ impl<'e, 'a> EventTracker<'e, 'a> {
         t: f64,
         end: f64,
         step: usize,
-        point_at: &mut dyn FnMut(f64, &mut dyn FnMut(&[f64], &[f64])) -> Result<(), Error>,
+        point_at: &mut PointAt<'_>,
     ) -> Result<(), Error> {
         let count = self.events.len();
         let intervals = self.samples + 1;
@@ -287,7 +302,11 @@ impl<'e, 'a> EventTracker<'e, 'a> {
         self.last
             .copy_from_slice(&self.values[intervals * count..(intervals + 1) * count]);
         self.found.sort_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some(first) = self.found.iter().position(|&(_, i)| self.events[i].terminal) {
+        if let Some(first) = self
+            .found
+            .iter()
+            .position(|&(_, i)| self.events[i].terminal)
+        {
             self.found.truncate(first + 1);
         }
         Ok(())
@@ -308,9 +327,7 @@ impl<'e, 'a> EventTracker<'e, 'a> {
 struct Along<'p, 'e, 'a> {
     event: &'e Event<'a>,
     step: usize,
-    point_at: RefCell<
-        &'p mut dyn FnMut(f64, &mut dyn FnMut(&[f64], &[f64])) -> Result<(), Error>,
-    >,
+    point_at: RefCell<&'p mut PointAt<'p>>,
 }
 
 impl Along<'_, '_, '_> {
@@ -340,7 +357,7 @@ fn root(
     event: &Event<'_>,
     step: usize,
     (lower, upper): (f64, f64),
-    point_at: &mut dyn FnMut(f64, &mut dyn FnMut(&[f64], &[f64])) -> Result<(), Error>,
+    point_at: &mut PointAt<'_>,
 ) -> Result<f64, Error> {
     let along = Along {
         event,
@@ -364,10 +381,9 @@ fn root(
         .run()
         .map_err(|error| match error.downcast::<Error>() {
             Ok(error) => error,
-            Err(other) => Error::invalid(
-                "event",
-                format!("locating event '{}': {other}", event.name),
-            ),
+            Err(other) => {
+                Error::invalid("event", format!("locating event '{}': {other}", event.name))
+            }
         })?;
     let state = result.state();
     match (state.get_termination_status(), state.get_param()) {

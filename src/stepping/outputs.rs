@@ -147,24 +147,20 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             && let Some(tracker) = outputs.events.as_mut()
         {
             let guess = &outputs.guess;
-            let mut point_at = |time: f64,
-                                f: &mut dyn FnMut(&[f64], &[f64])|
-             -> Result<(), Error> {
-                let point = inside(time, guess)?.ok_or_else(|| no_events(method))?;
-                let (q, v, _) = S::point_vectors(&point).ok_or_else(|| no_events(method))?;
-                f(q, v);
-                Ok(())
-            };
+            let mut point_at =
+                |time: f64, f: &mut dyn FnMut(&[f64], &[f64])| -> Result<(), Error> {
+                    let point = inside(time, guess)?.ok_or_else(|| no_events(method))?;
+                    let (q, v, _) = S::point_vectors(&point).ok_or_else(|| no_events(method))?;
+                    f(q, v);
+                    Ok(())
+                };
             tracker.locate(t, end_time, step, &mut point_at)?;
             let mut refinement = None;
             for &(estimate, index) in tracker.found() {
                 let event = tracker.event(index);
                 // g's slope along the polynomial, for Newton's method on the exact steps.
                 let delta = 1e-6 * h;
-                let (before, after) = (
-                    (estimate - delta).max(t),
-                    (estimate + delta).min(end_time),
-                );
+                let (before, after) = ((estimate - delta).max(t), (estimate + delta).min(end_time));
                 let mut g = |time: f64| -> Result<f64, Error> {
                     let point = inside(time, guess)?.ok_or_else(|| no_events(method))?;
                     let (q, v, _) = S::point_vectors(&point).ok_or_else(|| no_events(method))?;

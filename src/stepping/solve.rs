@@ -38,8 +38,8 @@ use crate::stepping::grid::{MAX_STEPS, check_span, grid_steps};
 use crate::stepping::observer::Observer;
 use crate::stepping::outputs::Outputs;
 use crate::stepping::run::{Integrator, Progress, Recovery, RunFailure, RunOptions, Statistics};
-use std::ops::ControlFlow;
 use std::fmt;
+use std::ops::ControlFlow;
 use std::str::FromStr;
 
 /// Which adaptivity [`solve`] uses.
@@ -546,10 +546,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 .phase_point(span.t0, &progress.cursor.state, &outputs.guess)
                 .map_err(RunFailure::rejected)?;
             let (q, v, _) = S::point_vectors(&first).ok_or_else(|| {
-                RunFailure::rejected(Error::invalid(
-                    "events",
-                    "events are located on ℝᴺ only",
-                ))
+                RunFailure::rejected(Error::invalid("events", "events are located on ℝᴺ only"))
             })?;
             let tracker = EventTracker::new(events, options.event_samples, (span.t0, q, v))
                 .map_err(RunFailure::rejected)?;

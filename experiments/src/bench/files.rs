@@ -79,6 +79,7 @@ pub fn plot(
         x_log: true,
         y_log: true,
         equal_scale: false,
+        scatter: false,
         series: series(x),
     };
     render_svg(

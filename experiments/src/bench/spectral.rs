@@ -381,6 +381,7 @@ fn plot(records: &[SpectralRecord], title: &str) -> Result<String, crate::report
             x_log: true,
             y_log: true,
             equal_scale: false,
+            scatter: false,
             series,
         }
     };

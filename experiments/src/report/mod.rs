@@ -2,6 +2,7 @@
 //! number format, SVG plots, the progress bar.
 
 pub mod csv;
+pub mod events;
 pub mod field;
 pub mod health;
 pub mod map;

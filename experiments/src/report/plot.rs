@@ -31,6 +31,8 @@ pub struct Panel {
     /// One unit is as long on both axes (orbits in a plane keep their shape); linear axes
     /// only.
     pub equal_scale: bool,
+    /// Points only, no lines joining them (a surface of section).
+    pub scatter: bool,
     /// The curves.
     pub series: Vec<Series>,
 }
@@ -202,6 +204,7 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
         x_log: false,
         y_log: false,
         equal_scale: false,
+        scatter: false,
         series,
     };
     write_svg(svg, &[panel], 900, 560)
@@ -210,6 +213,51 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
 /// Largest number of cells of a space-time picture along x and along t (the field is
 /// sampled down to them, so the SVG stays small).
 const SPACE_TIME_CELLS: (usize, usize) = (160, 120);
+
+/// Draw the Poincaré section points of the trajectory files `csvs` (one series per file: an
+/// orbit each) as a scatter of their two columns `axes` to `svg`.
+///
+/// # Errors
+/// [`PlotError`] if a file cannot be read or lacks a column, or the picture cannot be written.
+pub fn plot_section(
+    csvs: &[&Path],
+    svg: &Path,
+    title: &str,
+    axes: &[String; 2],
+) -> Result<(), PlotError> {
+    let error = |reason: String| PlotError {
+        path: svg.display().to_string(),
+        reason,
+    };
+    let mut series = Vec::with_capacity(csvs.len());
+    for csv in csvs {
+        let (header, rows) = read_csv(csv, error)?;
+        let column = |name: &String| {
+            header
+                .iter()
+                .position(|h| h == name)
+                .ok_or_else(|| error(format!("{} has no column {name}", csv.display())))
+        };
+        let (x, y) = (column(&axes[0])?, column(&axes[1])?);
+        series.push(Series {
+            label: csv
+                .file_stem()
+                .map_or(String::new(), |stem| stem.to_string_lossy().into_owned()),
+            points: rows.iter().map(|row| (row[x], row[y])).collect(),
+        });
+    }
+    let panel = Panel {
+        title: title.to_string(),
+        x_label: axes[0].clone(),
+        y_label: axes[1].clone(),
+        x_log: false,
+        y_log: false,
+        equal_scale: false,
+        scatter: true,
+        series,
+    };
+    write_svg(svg, &[panel], 800, 800)
+}
 
 /// Draw a field's space-time CSV `csv` (rows `t,x,u` or `t,x,u,…`, the nodes of one time level
 /// after another, as `svi run --out` writes a field scene; further columns are ignored, e.g.
@@ -386,6 +434,14 @@ fn draw_panel(
                             && (!panel.y_log || *y > 0.0)
                     })
                     .collect();
+                if panel.scatter {
+                    chart
+                        .draw_series(data.into_iter().map(|p| Circle::new(p, 1, color.filled())))
+                        .map_err(|e| e.to_string())?
+                        .label(series.label.as_str())
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 3, color.filled()));
+                    continue;
+                }
                 chart
                     .draw_series(LineSeries::new(data.clone(), color.stroke_width(2)))
                     .map_err(|e| e.to_string())?
@@ -454,6 +510,7 @@ mod tests {
                     x_log,
                     y_log,
                     equal_scale: false,
+                    scatter: false,
                     series: vec![Series {
                         label: "s".into(),
                         points: points.clone(),
@@ -476,6 +533,7 @@ mod tests {
             x_log: log,
             y_log: log,
             equal_scale: false,
+            scatter: false,
             series: vec![
                 Series {
                     label: "first".into(),

@@ -13,6 +13,7 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::report::csv::{Float, Recorded, brief_vector as vector};
+use crate::report::events::EventsSummary;
 use crate::report::health::Warning;
 use crate::report::schema::{Kind, Versioned};
 
@@ -100,6 +101,10 @@ pub struct Summary {
     /// Every step's polynomial, with [`crate::OutputSection::dense`] (never serialised).
     #[serde(skip)]
     pub dense: Option<svi::stepping::dense::DenseOutput>,
+    /// The events located and the Poincaré section (scenes with events or a section):
+    /// `events`, `terminal_event`, `section`.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub events: Option<EventsSummary>,
 }
 
 /// Whether a run ended well.
@@ -691,6 +696,8 @@ impl fmt::Display for Summary {
         ));
         rows.push(("energy error", error(self.energy_error_max)));
         rows.extend(self.conservation.rows());
+        let events = self.events.as_ref().map(EventsSummary::rows);
+        rows.extend(events.into_iter().flatten());
         let width = rows.iter().map(|(label, _)| label.len()).max().unwrap_or(0) + 2;
         for (label, value) in rows {
             writeln!(f, "{label:<width$}{value}")?;

@@ -246,6 +246,7 @@ pub(super) fn run(
         error: None,
         recorded,
         dense: None,
+        events: None,
     };
     super::ended(summary, failure)
 }

@@ -22,6 +22,7 @@
 
 mod constrained;
 mod control;
+mod events;
 pub mod field;
 pub(crate) mod outcome;
 mod solver;
@@ -43,6 +44,7 @@ use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::model::local::Terms;
 use svi::observer::Every;
 use svi::solve::{SolveOptions, Span};
+use svi::stepping::event::EventPoint;
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, LagrangianExt, Method, Statistics};
 use svi_models::{
@@ -53,12 +55,13 @@ use svi_models::{
 use crate::report::csv::Float;
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
-use crate::report::plot::plot_csv;
+use crate::report::plot::{plot_csv, plot_section};
 use crate::report::progress::Progress;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
 };
 use crate::run::control::Stop;
+use crate::run::events::SceneEvents;
 use crate::run::solver::{InTau, Solver};
 use crate::run::space::{Chain, RunSpace};
 use crate::run::trajectory::TrajectoryStream;
@@ -334,6 +337,8 @@ struct Outcome<P> {
     solved: Option<(svi::solve::Adaptivity, Vec<P>)>,
     /// The steps' polynomials, when the scene keeps them (a run that reached the end).
     dense: Option<svi::stepping::dense::DenseOutput>,
+    /// The located events and the index of the terminal one (a run that reached the end).
+    located: (Vec<EventPoint<P>>, Option<usize>),
 }
 
 /// The one run path: run `integrator` on the scene of `plan` through
@@ -360,9 +365,12 @@ fn run_scene<L, S: RunSpace<L>>(
         (None, true) => Some(TrajectoryStream::<S>::create(model, Path::new(""), true)?),
         (None, false) => None,
     };
+    let scene_events = SceneEvents::of::<L, S>(scene, model)?;
+    let section = scene.output.section.is_some();
+    // With output times or a section the file holds those points, written after the run.
     let trajectory = stream
         .as_mut()
-        .filter(|_| output_times.is_none())
+        .filter(|_| output_times.is_none() && !section)
         .map(|stream| Every::new(every, stream));
     // The step count of step doubling and of steps in τ is not known ahead.
     let progress = (plan.control.progress
@@ -376,7 +384,14 @@ fn run_scene<L, S: RunSpace<L>>(
         None => Span::new(t0, t_end),
     };
     let start = Instant::now();
-    let result = solver.solve(&span, plan.initial.clone(), &options, &mut observers);
+    let events = scene_events.as_ref().map_or(&[][..], |e| &e.events[..]);
+    let result = solver.solve(
+        &span,
+        plan.initial.clone(),
+        &options,
+        events,
+        &mut observers,
+    );
     let seconds = start.elapsed().as_secs_f64();
     let (diagnostics, _, progress, _) = observers;
     if let Some(progress) = &progress {
@@ -404,6 +419,7 @@ fn run_scene<L, S: RunSpace<L>>(
                 statistics: solution.statistics,
                 solved: Some((solution.adaptivity, solution.points)),
                 dense: solution.dense,
+                located: (solution.events, solution.terminal),
             },
             None,
         ),
@@ -416,6 +432,7 @@ fn run_scene<L, S: RunSpace<L>>(
                 statistics: run.statistics,
                 solved: None,
                 dense: None,
+                located: (Vec::new(), None),
             },
             Some(error),
         ),
@@ -427,9 +444,21 @@ fn run_scene<L, S: RunSpace<L>>(
     let last = outcome.last.clone();
     let first = solver.first_point(t0, &plan.initial, &S::initial_guess_at_rest(&plan.initial))?;
 
+    let (events_summary, section_points) = match &scene_events {
+        Some(scene_events) => {
+            let (summary, points) =
+                scene_events.sort::<L, S>(&outcome.located.0, outcome.located.1);
+            (Some(summary), points)
+        }
+        None => (None, Vec::new()),
+    };
     let trajectory = match stream {
         Some(mut stream) => {
-            if output_times.is_some() {
+            if section {
+                for point in &section_points {
+                    stream.write(model, point)?;
+                }
+            } else if output_times.is_some() {
                 // The initial point and the states at the output times.
                 let outputs = outcome.solved.iter().flat_map(|(_, points)| points);
                 let later = outputs.filter(|point| S::time(point) > t0);
@@ -449,7 +478,14 @@ fn run_scene<L, S: RunSpace<L>>(
         None => (None, None),
     };
     if let (Some(svg), Some(csv)) = (&scene.output.plot, &scene.output.trajectory) {
-        plot_csv(csv, svg, &format!("{} ({})", scene.model, plan.method.name))?;
+        let title = format!("{} ({})", scene.model, plan.method.name);
+        match events_summary.as_ref().and_then(|e| e.section.as_ref()) {
+            Some(section) => {
+                let title = format!("{title}: section {}", section.surface);
+                plot_section(&[csv.as_path()], svg, &title, &section.axes)?;
+            }
+            None => plot_csv(csv, svg, &title)?,
+        }
     }
 
     let solves = adapt != AdaptMode::None || output_times.is_some();
@@ -516,6 +552,7 @@ fn run_scene<L, S: RunSpace<L>>(
         error: None,
         recorded,
         dense: outcome.dense,
+        events: events_summary,
     };
     ended(summary, failure)
 }

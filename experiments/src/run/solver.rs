@@ -9,6 +9,7 @@ use svi::method::step::Step;
 use svi::model::reparametrized::MonitorSpec;
 use svi::observer::Observer;
 use svi::solve::{Solution, SolveOptions, Span};
+use svi::stepping::event::Event;
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method};
 
@@ -17,12 +18,14 @@ use svi::{Integrator, Method};
 /// [`run_scene`](super::run_scene) is compiled once per model and space, not once per method as
 /// well.
 pub(super) trait Solver<L, S: Space> {
-    /// Solve over `span` from `initial`, reporting the accepted steps to `observer`.
+    /// Solve over `span` from `initial`, locating `events`, reporting the accepted steps to
+    /// `observer`.
     fn solve(
         &self,
         span: &Span,
         initial: S::Initial,
         options: &SolveOptions,
+        events: &[Event<'_>],
         observer: &mut dyn Observer<L, S::Point>,
     ) -> Result<Solution<S>, RunFailure<S>>;
 
@@ -47,9 +50,10 @@ impl<L, M: Step<L, S> + Clone, S: Space> Solver<L, S> for Integrator<L, M, S> {
         span: &Span,
         initial: S::Initial,
         options: &SolveOptions,
+        events: &[Event<'_>],
         mut observer: &mut dyn Observer<L, S::Point>,
     ) -> Result<Solution<S>, RunFailure<S>> {
-        self.try_solve(span, initial, options, &mut observer)
+        self.try_solve_events(span, initial, options, events, &mut observer)
     }
 
     fn model(&self) -> &L {
@@ -91,8 +95,19 @@ where
         span: &Span,
         initial: svi::Initial<N>,
         options: &SolveOptions,
+        events: &[Event<'_>],
         mut observer: &mut dyn Observer<L, svi::PhasePoint<N>>,
     ) -> Result<Solution<svi::Euclidean<N>>, RunFailure<svi::Euclidean<N>>> {
+        // The scene's checks refuse events with steps in τ.
+        if !events.is_empty() {
+            return Err(RunFailure {
+                error: svi::Error::invalid(
+                    "events",
+                    "events are not located in fixed steps of τ (adapt = reparam)",
+                ),
+                partial: None,
+            });
+        }
         self.integrator.try_solve_reparametrized(
             &self.monitor,
             span,

@@ -58,6 +58,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/double-pendulum-chaotic.toml"),
     ),
     (
+        "henon-heiles",
+        include_str!("../../scenes/henon-heiles.toml"),
+    ),
+    (
         "oscillator-beyond-stability",
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
     ),

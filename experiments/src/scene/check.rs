@@ -299,6 +299,50 @@ impl Scene {
     /// `[output]`: `every` only with a trajectory file and without output times, `none` alone
     /// among the diagnostics.
     fn check_output(&self) -> Result<(), SceneError> {
+        self.check_output_files()
+    }
+
+    /// Events and a section: on ℝᴺ, unconstrained, not in steps of τ; a section's points
+    /// fill the trajectory file, so not with output times or thinning. (The names in them
+    /// are checked against the model's when the run builds them.)
+    fn check_events(&self) -> Result<(), SceneError> {
+        let section = self.output.section.is_some();
+        if self.events.is_empty() && !section {
+            return Ok(());
+        }
+        let option = if section {
+            "--section (output.section)"
+        } else {
+            "--event (events)"
+        };
+        let refuse = |reason: &str| {
+            Err(SceneError::NotApplicable {
+                option,
+                reason: reason.into(),
+            })
+        };
+        if self.is_constrained() {
+            return refuse("events are not located in constrained runs yet");
+        }
+        if self.space() == SpaceKind::Rotation {
+            return refuse("events are located on ℝᴺ: rigid-body scenes have none");
+        }
+        if self.run.adapt == Some(AdaptMode::Reparam) {
+            return refuse("events are not located in fixed steps of τ (adapt = reparam)");
+        }
+        if section && self.output.output_times.is_some() {
+            return refuse(
+                "the section's points fill the trajectory file: leave out --output-times",
+            );
+        }
+        if section && self.output.every.is_some() {
+            return refuse("the section's points fill the trajectory file: leave out --every");
+        }
+        Ok(())
+    }
+
+    /// The output files and what they need.
+    fn check_output_files(&self) -> Result<(), SceneError> {
         let output = &self.output;
         if self.wants_explicitly(Diagnostic::None)
             && output
@@ -331,6 +375,7 @@ impl Scene {
                 });
             }
         }
+        self.check_events()?;
         if output.plot.is_some() && output.trajectory.is_none() {
             return Err(SceneError::NotApplicable {
                 option: "--plot (output.plot)",

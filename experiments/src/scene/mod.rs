@@ -110,6 +110,7 @@ mod check;
 pub mod constrained;
 pub mod ensemble;
 pub mod error;
+pub mod events;
 pub mod field;
 pub mod limits;
 pub mod method;
@@ -178,6 +179,9 @@ pub struct Scene {
     /// Step, horizon, adaptivity and failure handling.
     #[serde(default)]
     pub run: RunSection,
+    /// Events located during the run (`[[events]]`), see [`events`].
+    #[serde(default)]
+    pub events: Vec<events::EventSpec>,
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
@@ -378,6 +382,8 @@ impl Scene {
             plot,
             output_times,
             multipliers,
+            events,
+            section,
         } = overrides;
         let space = self.space();
         match method {
@@ -460,6 +466,8 @@ impl Scene {
         }
         set(&mut self.output.output_times, output_times);
         set(&mut self.output.multipliers, multipliers);
+        self.events.extend(events.iter().cloned());
+        set(&mut self.output.section, section);
         if *recovery == Some(RecoveryKind::None) {
             self.run.max_halvings = None;
         }
@@ -761,8 +769,11 @@ pub(crate) mod tests {
                 plot: Some("x.svg".into()),
                 output_times: None,
                 multipliers: None,
+                events: vec!["peri: q1*vq1 + q2*vq2 @up".parse().unwrap()],
+                section: None,
             })
             .unwrap();
+        assert_eq!(scene.events.len(), 1);
         assert_eq!(scene.run.max_steps, Some(500));
         assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
         assert_eq!(scene.run.tol, Some(1e-9));

@@ -186,6 +186,14 @@ pub struct Overrides {
         default_missing_value = "true"
     )]
     pub multipliers: Option<bool>,
+    /// Locate the zeros of a function g(t, q, q̇) of the model's names (repeatable):
+    /// `[NAME:] G [@up|@down|@both] [@terminal]`, e.g. "pericentre: x*vx + y*vy @up".
+    #[arg(long = "event", value_name = "EVENT")]
+    pub events: Vec<crate::scene::events::EventSpec>,
+    /// Poincaré section COORDINATE=VALUE[,VARIABLE>VALUE], e.g. "y=0,vy>0" (or "q2=0,v2>0"):
+    /// --out writes its points instead of the trajectory, --plot draws them.
+    #[arg(long, value_name = "SECTION")]
+    pub section: Option<crate::scene::events::SectionSpec>,
 }
 
 /// The kind of value a run option takes, read from its flag's parser: what a front door that

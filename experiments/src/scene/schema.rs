@@ -303,6 +303,9 @@ pub struct OutputSection {
     /// Add the Lagrange multipliers λ of a constrained run to the trajectory, one column
     /// `lambda_1`, … per constraint (default false; needs `trajectory`).
     pub multipliers: Option<bool>,
+    /// A Poincaré section, `"y=0,vy>0"` ([`crate::scene::events`]): the trajectory file
+    /// holds the section's points instead of the steps, and `plot` draws them.
+    pub section: Option<crate::scene::events::SectionSpec>,
     /// Keep the trajectory in memory (the summary's `recorded`) instead of writing a file:
     /// the Python package's runs, which never touch the file system. `every` and
     /// `output_times` apply as to a file. Not a scene field.

@@ -147,6 +147,7 @@ pub fn plot(records: &[StressRecord]) -> Result<String, PlotError> {
                 x_log: false,
                 y_log: true,
                 equal_scale: false,
+                scatter: false,
                 series: vec![series],
             }),
         }

@@ -142,6 +142,7 @@ pub mod chain;
 mod constraints;
 mod error;
 mod expression;
+mod function;
 mod lagrangian;
 mod names;
 mod parse;
@@ -152,6 +153,7 @@ pub use chain::{Boundary, MAX_SITES, MAX_WIDTH, TextChain, TextChainModel, site_
 pub use constraints::TextConstraints;
 pub use error::TextError;
 pub use expression::MAX_STACK;
+pub use function::TextFunction;
 pub use lagrangian::TextLagrangian;
 pub use tree::MAX_NODES;
 
