@@ -115,10 +115,11 @@ impl ode_solvers::System<f64, ode_solvers::SVector<f64, 8>> for TwoOrbits {
     }
 }
 
-/// The maximal Lyapunov exponent over [0, t_end] by two trajectories 10⁻⁸ apart, integrated
-/// together by DOP853 (rtol = atol = 10⁻¹²) and renormalised to 10⁻⁸ every time unit
-/// (Benettin et al. 1976): (1/T) Σ ln(d_k/d₀).
-fn two_trajectory_exponent(start: [f64; 4], t_end: f64) -> f64 {
+/// The maximal Lyapunov exponent over [0, t_end] by two trajectories 10⁻⁸ apart (the shadow
+/// displaced along (1, 1, 1, 1)/2), integrated together by DOP853 (rtol = atol = `tolerance`)
+/// and renormalised to 10⁻⁸ every time unit (Benettin et al. 1976): (1/T) Σ ln(d_k/d₀), and
+/// the reference orbit's (x, y, ẋ, ẏ) at t_end.
+fn two_trajectory_exponent(start: [f64; 4], t_end: f64, tolerance: f64) -> (f64, [f64; 4]) {
     let (d0, interval) = (1e-8, 1.0);
     let mut y = ode_solvers::SVector::<f64, 8>::zeros();
     for i in 0..4 {
@@ -137,8 +138,8 @@ fn two_trajectory_exponent(start: [f64; 4], t_end: f64) -> f64 {
             b,
             interval,
             y,
-            1e-12,
-            1e-12,
+            tolerance,
+            tolerance,
             0.9,
             0.0,
             0.333,
@@ -160,7 +161,10 @@ fn two_trajectory_exponent(start: [f64; 4], t_end: f64) -> f64 {
             y[4 + i] = y[i] + (y[4 + i] - y[i]) * (d0 / d);
         }
     }
-    log / (intervals as f64 * interval)
+    (
+        log / (intervals as f64 * interval),
+        [y[0], y[1], y[2], y[3]],
+    )
 }
 
 /// Least-squares slope of the samples with t ≥ `from`.
@@ -297,35 +301,87 @@ fn svi_gives_the_spectrum_of_stormer_verlet() {
 }
 
 #[test]
-fn the_maximal_exponent_agrees_with_two_trajectories_by_dop853() {
+fn on_one_trajectory_the_tangent_maps_give_the_two_trajectory_exponent() {
+    // SVI of high order at h = 0.05 and DOP853 at 10⁻¹³ follow the same trajectory to
+    // t = 150 (checked: the end points agree to 10⁻⁷, though the chaos amplifies their
+    // errors by e^{λt} ≈ e^{0.09·150} ≈ 10⁶; at t = 300 they are 3·10⁻³ apart), and the deviation starts along the same direction (1, 1, 1, 1)/2 (y = p = q̇
+    // on this model): both compute ln(‖δ(t)‖/‖δ(0)‖)/t of one linearised flow, the one from
+    // the exact tangent maps of the steps, the other from differences of two orbits 10⁻⁸
+    // apart. What is left is the trajectories' gap and the O(d₀) nonlinearity.
+    let t_end = 150.0;
     let (model, initial) = chaotic();
-    let mut maximal = MaximalLyapunov::new(MaximalOptions::default()).unwrap();
+    let mut maximal =
+        MaximalLyapunov::new(MaximalOptions::default().with_deviation(vec![0.5; 4])).unwrap();
+    let run = Integrator::new(model, Svi::new(10))
+        .try_run_tangent(0.0, initial.clone(), H, t_end, &mut maximal)
+        .unwrap();
+    let (reference, end) = two_trajectory_exponent(phase(&initial), t_end, 1e-13);
+    let gap = (0..2)
+        .map(|i| {
+            (run.last.q[i] - end[i])
+                .abs()
+                .max((run.last.v[i] - end[2 + i]).abs())
+        })
+        .fold(0.0, f64::max);
+    let lambda = maximal.exponent();
+    eprintln!(
+        "one trajectory to t = {t_end}: tangent maps (SVI, 10 points) {lambda}, DOP853 two \
+         trajectories {reference}: {:.1e} relative, end points {gap:.1e} apart",
+        lambda / reference - 1.0
+    );
+    // Measured: 2·10⁻⁹ apart, −5·10⁻⁸ relative (the O(d₀) = 10⁻⁸ nonlinearity of two orbits).
+    assert!(gap < 1e-7, "{gap:e}");
+    assert!(
+        (lambda / reference - 1.0).abs() < 1e-6,
+        "{lambda} vs {reference}"
+    );
+}
+
+#[test]
+fn the_maximal_exponent_agrees_with_two_trajectories_by_dop853() {
+    // The same initial point to T = 10⁴ (2·10⁵ steps of Störmer–Verlet at h = 0.05): after
+    // t ≈ 300 the two runs follow different trajectories of the chaotic sea (their errors
+    // grow like e^{λt}), so this compares two finite-time samples of one ergodic average, not
+    // the tangent maps (the test above does that on one trajectory). At T they agree within
+    // 5 % (measured +3.7 %); the run goes on to 5T and prints the other horizons, where the
+    // two samples differ by 5–13 % (the sea is sticky near its islands: finite-time
+    // exponents converge slowly) — printed, not asserted.
+    let (model, initial) = chaotic();
+    let mut maximal = Sampled::new(
+        MaximalLyapunov::new(MaximalOptions::default()).unwrap(),
+        (T / H).round() as usize,
+        |m: &MaximalLyapunov| m.exponent(),
+    );
     let mut every_ten = MaximalLyapunov::new(MaximalOptions::default().with_every(10)).unwrap();
     let mut full = LyapunovSpectrum::new(SpectrumOptions::default()).unwrap();
+    let clock = Instant::now();
     Integrator::new(model, StormerVerlet::default())
         .try_run_tangent(
             0.0,
             initial.clone(),
             H,
-            T,
+            5.0 * T,
             &mut (&mut maximal, &mut every_ten, &mut full),
         )
         .unwrap();
-    let clock = Instant::now();
-    let reference = two_trajectory_exponent(phase(&initial), T);
-    let elapsed = clock.elapsed();
-    let lambda = maximal.exponent();
-    eprintln!(
-        "maximal exponent, T = {T}: tangent maps {lambda} (every 10 steps {}), spectrum {}, \
-         DOP853 two trajectories {reference} ({elapsed:?}): {:.2} %",
-        every_ten.exponent(),
-        full.exponents()[0],
-        100.0 * (lambda / reference - 1.0)
-    );
-    assert!(
-        (lambda / reference - 1.0).abs() < 0.05,
-        "{lambda} vs {reference}"
-    );
+    let tangent_time = clock.elapsed();
+    for &(t, lambda) in &maximal.samples {
+        let clock = Instant::now();
+        let (reference, _) = two_trajectory_exponent(phase(&initial), t, 1e-12);
+        eprintln!(
+            "maximal exponent, T = {t}: tangent maps {lambda}, DOP853 two trajectories \
+             {reference} ({:?}; the tangent run to 5T {tangent_time:?}): {:+.2} %",
+            clock.elapsed(),
+            100.0 * (lambda / reference - 1.0)
+        );
+        if t == T {
+            assert!(
+                (lambda / reference - 1.0).abs() < 0.05,
+                "T = {t}: {lambda} vs {reference}"
+            );
+        }
+    }
+    let lambda = maximal.inner.exponent();
     // Renormalising every 10 steps changes nothing but round-off (the norm of a product of
     // renormalised propagations is the product of the norms).
     assert!((every_ten.exponent() - lambda).abs() < 1e-9);
