@@ -87,7 +87,7 @@ impl<O: TangentObserver<U2>, F: FnMut(&O) -> f64> TangentObserver<U2> for Sample
     }
     fn observe(&mut self, step: &TangentStep<'_, U2>) -> Result<ControlFlow<()>, Error> {
         let flow = self.inner.observe(step)?;
-        if step.step % self.every == 0 || step.last {
+        if step.step.is_multiple_of(self.every) || step.last {
             self.samples.push((step.t, (self.read)(&self.inner)));
         }
         Ok(flow)
@@ -210,17 +210,10 @@ fn a_tangent_run_takes_the_steps_of_a_plain_run_for_every_method() {
     for entry in METHODS.iter().filter(|e| e.space == SpaceKind::Vector) {
         let integrator = Integrator::new(model, entry.spec().vector_method().unwrap());
         let plain = integrator
-            .try_run(
-                0.0,
-                initial.clone(),
-                0.05,
-                5.0,
-                &Default::default(),
-                &mut (),
-            )
+            .try_run(0.0, initial, 0.05, 5.0, &Default::default(), &mut ())
             .unwrap();
         let tangent = integrator
-            .try_run_tangent(0.0, initial.clone(), 0.05, 5.0, &mut ())
+            .try_run_tangent(0.0, initial, 0.05, 5.0, &mut ())
             .unwrap();
         let gap = (plain.state.q - tangent.state.q)
             .amax()
@@ -283,7 +276,7 @@ fn svi_gives_the_spectrum_of_stormer_verlet() {
     let clock = Instant::now();
     let mut svi = LyapunovSpectrum::new(SpectrumOptions::default()).unwrap();
     Integrator::new(model, Svi::default())
-        .try_run_tangent(0.0, initial.clone(), 0.1, t_end, &mut svi)
+        .try_run_tangent(0.0, initial, 0.1, t_end, &mut svi)
         .unwrap();
     let elapsed = clock.elapsed();
     let verlet = spectrum(chaotic(), SpectrumOptions::default(), t_end);
@@ -313,7 +306,7 @@ fn on_one_trajectory_the_tangent_maps_give_the_two_trajectory_exponent() {
     let mut maximal =
         MaximalLyapunov::new(MaximalOptions::default().with_deviation(vec![0.5; 4])).unwrap();
     let run = Integrator::new(model, Svi::new(10))
-        .try_run_tangent(0.0, initial.clone(), H, t_end, &mut maximal)
+        .try_run_tangent(0.0, initial, H, t_end, &mut maximal)
         .unwrap();
     let (reference, end) = two_trajectory_exponent(phase(&initial), t_end, 1e-13);
     let gap = (0..2)
@@ -358,7 +351,7 @@ fn the_maximal_exponent_agrees_with_two_trajectories_by_dop853() {
     Integrator::new(model, StormerVerlet::default())
         .try_run_tangent(
             0.0,
-            initial.clone(),
+            initial,
             H,
             5.0 * T,
             &mut (&mut maximal, &mut every_ten, &mut full),
@@ -593,7 +586,7 @@ fn bad_options_and_a_method_without_tangent_map_are_typed_errors() {
     let integrator = Integrator::new(model, StormerVerlet::default());
     let rejected = |observer: &mut dyn TangentObserver<U2>| {
         let failure = integrator
-            .try_run_tangent(0.0, initial.clone(), H, 1.0, observer)
+            .try_run_tangent(0.0, initial, H, 1.0, observer)
             .unwrap_err();
         assert!(failure.partial.is_none());
         name(failure.error)
@@ -624,7 +617,7 @@ fn bad_options_and_a_method_without_tangent_map_are_typed_errors() {
     let mut careless =
         LyapunovSpectrum::new(SpectrumOptions::default().with_every(400_000)).unwrap();
     let failure = integrator
-        .try_run_tangent(0.0, initial.clone(), H, 3e4, &mut careless)
+        .try_run_tangent(0.0, initial, H, 3e4, &mut careless)
         .unwrap_err();
     eprintln!("{}", failure.error);
     assert!(
@@ -635,7 +628,7 @@ fn bad_options_and_a_method_without_tangent_map_are_typed_errors() {
     assert_eq!(failure.partial.unwrap().statistics.steps, 400_000);
     // A method whose tangent map is not available is named.
     let failure = Integrator::new(model, WithoutTangent::default())
-        .try_run_tangent(0.0, initial.clone(), H, 1.0, &mut ())
+        .try_run_tangent(0.0, initial, H, 1.0, &mut ())
         .unwrap_err();
     match &failure.error {
         Error::InvalidParameter { name, reason } => {
@@ -674,10 +667,10 @@ fn an_observer_stops_the_run_and_points_are_completed_on_request() {
     }
     impl TangentObserver<U2> for StopAt {
         fn wants_point(&self, step: usize) -> bool {
-            step % 2 == 0
+            step.is_multiple_of(2)
         }
         fn observe(&mut self, step: &TangentStep<'_, U2>) -> Result<ControlFlow<()>, Error> {
-            assert_eq!(step.point.is_some(), step.step % 2 == 0);
+            assert_eq!(step.point.is_some(), step.step.is_multiple_of(2));
             if let Some(point) = step.point {
                 assert_eq!(point.t, step.t);
                 assert_eq!(point.q, step.state.q);
@@ -807,20 +800,20 @@ fn cost_per_step() {
             let integrator = Integrator::new(model, $method);
             let steps = $steps;
             let t_end = H * steps as f64;
-            let plain = time(steps, || { integrator.try_run(0.0, initial.clone(), H, t_end, &Default::default(), &mut ()).unwrap(); });
-            let bare = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut ()).unwrap(); });
+            let plain = time(steps, || { integrator.try_run(0.0, initial, H, t_end, &Default::default(), &mut ()).unwrap(); });
+            let bare = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut ()).unwrap(); });
             let mut spectrum = LyapunovSpectrum::new(SpectrumOptions::default()).unwrap();
-            let full = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut spectrum).unwrap(); });
+            let full = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut spectrum).unwrap(); });
             let mut spectrum10 = LyapunovSpectrum::new(SpectrumOptions::default().with_every(10)).unwrap();
-            let full10 = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut spectrum10).unwrap(); });
+            let full10 = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut spectrum10).unwrap(); });
             let mut maximal = MaximalLyapunov::new(MaximalOptions::default()).unwrap();
-            let one = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut maximal).unwrap(); });
+            let one = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut maximal).unwrap(); });
             let mut megno = Megno::new(MegnoOptions::default()).unwrap();
-            let meg = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut megno).unwrap(); });
+            let meg = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut megno).unwrap(); });
             let mut sali = Sali::new(SaliOptions::default()).unwrap();
-            let sal = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut sali).unwrap(); });
+            let sal = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut sali).unwrap(); });
             let mut gali = Gali::new(GaliOptions::default().with_k(4)).unwrap();
-            let gal = time(steps, || { integrator.try_run_tangent(0.0, initial.clone(), H, t_end, &mut gali).unwrap(); });
+            let gal = time(steps, || { integrator.try_run_tangent(0.0, initial, H, t_end, &mut gali).unwrap(); });
             eprintln!(
                 "{:<16} ns/step: plain {plain:.0} | tangent run {bare:.0} | spectrum {full:.0} (every 10: {full10:.0}) | maximal {one:.0} | MEGNO {meg:.0} | SALI {sal:.0} | GALI_4 {gal:.0}",
                 $label
