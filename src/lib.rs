@@ -59,6 +59,7 @@ pub mod stepping;
 mod test_models;
 
 // Module paths of earlier releases, kept for users' code.
+pub use analysis::chaos;
 pub use analysis::{drift, stability, verify};
 pub use model::derived;
 pub use spectral::{basis, quadrature};

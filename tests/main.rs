@@ -11,6 +11,7 @@ mod hostile_cases;
 
 mod allocation;
 mod any_size;
+mod chaos;
 mod classic_methods;
 mod constraints;
 mod convergence;

@@ -30,7 +30,6 @@
 
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
-use crate::method::space::StepState;
 use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::derived::{AccelerationJacobian, LagrangianExt, sparse_terms};
@@ -314,7 +313,7 @@ where
             yq: &a.q * h,
             yy: identity + &a.v * h,
         };
-        Ok((state.plus(&increment), map))
+        Ok((increment, map))
     }
 }
 
@@ -400,7 +399,7 @@ where
         let map = blocks(&(identity + sum * (h / 6.0)), n);
         let mut increment = State::zeros(n);
         self.step(model, workspace, t, h, state, &mut increment)?;
-        Ok((state.plus(&increment), map))
+        Ok((increment, map))
     }
 }
 
@@ -598,8 +597,11 @@ where
             yq: dw_dq,
             yy: inverse,
         };
-        let end = State { q, y: w };
-        Ok((end, map))
+        let increment = State {
+            q: q - &state.q,
+            y: w - &state.y,
+        };
+        Ok((increment, map))
     }
 }
 

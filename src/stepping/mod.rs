@@ -1,6 +1,7 @@
 //! The one stepping loop, for every method on every space: the time grid ([`grid`]), runs
 //! with recovery, divergence limit and observers ([`run`]), output times and step or degree
-//! adaptivity on the same loop ([`solve`]), and the observers ([`observer`], with the rigid-body
+//! adaptivity on the same loop ([`solve`]), runs by the exact tangent map for chaos indicators
+//! ([`tangent`]), and the observers ([`observer`], with the rigid-body
 //! ones in [`rigid_observer`]).
 
 pub mod adapt;
@@ -15,3 +16,4 @@ pub mod rigid_observer;
 pub mod run;
 pub mod sem;
 pub mod solve;
+pub mod tangent;
