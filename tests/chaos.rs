@@ -35,7 +35,7 @@ fn chaotic() -> (HenonHeiles, Initial<U2>) {
     let model = HenonHeiles::default();
     let speed = model.initial_speed().unwrap();
     let initial = Initial::Velocity {
-        q: SVector::from([0.0, HenonHeiles::Y0]),
+        q: SVector::from([0.0, model.y0]),
         v: SVector::from([speed, 0.0]),
     };
     (model, initial)

@@ -31,7 +31,8 @@ use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
 use crate::scene::overrides::{Overrides, RunFlags, diagnostics_help, diagnostics_long_help};
-use crate::scene::schema::Diagnostic;
+use crate::scene::schema::{Diagnostic, Indicator};
+use crate::scene::events::SectionSpec;
 use crate::scene::{Scene, SceneError};
 
 /// The most threads `--threads` accepts.
@@ -83,8 +84,8 @@ pub struct EnsembleArgs {
     pub json: bool,
     /// Draw the members: FILE.svg, a line of --plot-value against the one varied field;
     /// FILE.png, a heat map of --plot-value over a grid of two varied fields (the first
-    /// across, the second up).
-    #[arg(long, value_name = "FILE", requires = "plot_value")]
+    /// across, the second up); with --section, FILE.svg of every member's section points.
+    #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
     /// The table column to draw with --plot, e.g. energy_error_max or q_alpha2.
     #[arg(long, value_name = "COLUMN", requires = "plot")]
@@ -93,6 +94,11 @@ pub struct EnsembleArgs {
     /// colour).
     #[arg(long, requires = "plot")]
     pub plot_cyclic: bool,
+    /// Poincaré section of every member, COORDINATE=VALUE[,VARIABLE>VALUE] as for `svi run`
+    /// (e.g. "x=0,vx>0"): --plot FILE.svg draws all members' points in one picture, the
+    /// table counts them (column section_points).
+    #[arg(long, value_name = "SECTION")]
+    pub section: Option<SectionSpec>,
     /// The flags of `svi run` every member shares.
     #[command(flatten)]
     pub run: RunFlags,
@@ -103,6 +109,7 @@ impl EnsembleArgs {
     pub fn overrides(&self) -> Overrides {
         Overrides {
             run: self.run.clone(),
+            section: self.section.clone(),
             ..Overrides::default()
         }
     }
@@ -154,12 +161,24 @@ impl Ensemble {
                     .into(),
             });
         }
+        // Each member keeps its section's points in memory, for the one picture of them all.
+        scene.output.record = scene.output.section.is_some();
         let names = check_axes(&scene, &axes)?;
-        let schema = match &names.coordinates {
+        let mut schema = match &names.coordinates {
             Some(coordinates) => Schema::vector(coordinates),
             None if names.chain => Schema::chain(),
             None => Schema::rigid(),
         };
+        if scene.output.section.is_some() {
+            schema.add("section_points".into(), "section.points", None);
+        }
+        if let (Some(asked), Some(coordinates)) = (&scene.run.indicators, &names.coordinates) {
+            for indicator in Indicator::ALL.into_iter().filter(|i| asked.contains(i)) {
+                for (column, field, component) in indicator.columns(2 * coordinates.len()) {
+                    schema.add(column, field, component);
+                }
+            }
+        }
         let members = members(&axes, random)?;
         Ok(Ensemble {
             scene,
@@ -372,8 +391,27 @@ fn run_and_write(args: &EnsembleArgs) -> anyhow::Result<()> {
         seed: args.seed.unwrap_or(0),
     });
     let ensemble = Ensemble::new(Scene::load(name)?, &args.overrides(), args.axes(), random)?;
-    if let (Some(plot), Some(column)) = (&args.plot, &args.plot_value) {
-        check_plot(&ensemble, plot, column, random.is_some())?;
+    let section = ensemble.scene.output.section.is_some();
+    match (&args.plot, &args.plot_value) {
+        (Some(plot), None) if section => check_section_plot(plot)?,
+        (Some(_), Some(_)) if section => {
+            return Err(SceneError::NotApplicable {
+                option: "--plot-value",
+                reason: "with --section, --plot draws the members' section points".into(),
+            }
+            .into());
+        }
+        (Some(plot), Some(column)) => check_plot(&ensemble, plot, column, random.is_some())?,
+        (Some(_), None) => {
+            return Err(SceneError::NotApplicable {
+                option: "--plot",
+                reason: "draws a column of the table: give --plot-value COLUMN (or --section \
+                         for the members' section points)"
+                    .into(),
+            }
+            .into());
+        }
+        (None, _) => {}
     }
     // The output files exist (as temporaries) before any member runs: an unwritable path is
     // reported first, and an existing file is replaced only once the table is complete.
@@ -470,8 +508,11 @@ fn run_and_write(args: &EnsembleArgs) -> anyhow::Result<()> {
     if let Some(file) = out_file {
         file.commit().map_err(SceneError::from)?;
     }
-    if let (Some(mut file), Some(column)) = (plot_file, &args.plot_value) {
-        draw(&ensemble, &table, &mut file, column, args.plot_cyclic)?;
+    if let Some(mut file) = plot_file {
+        match &args.plot_value {
+            Some(column) => draw(&ensemble, &table, &mut file, column, args.plot_cyclic)?,
+            None => draw_section(&ensemble, &outcomes, &mut file)?,
+        }
         file.commit().map_err(SceneError::from)?;
     }
     let mut failures = std::collections::BTreeMap::new();
@@ -636,4 +677,72 @@ fn draw(
         };
         map::write_png(&heatmap, file).map_err(write_error)
     }
+}
+
+/// A section picture is an SVG file.
+fn check_section_plot(path: &Path) -> Result<(), SceneError> {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("svg") => Ok(()),
+        _ => Err(SceneError::NotApplicable {
+            option: "--plot",
+            reason: "with --section draws FILE.svg, the members' section points".into(),
+        }),
+    }
+}
+
+/// The section points of every member (kept in memory by the members' runs), one series
+/// each, as one scatter picture.
+fn draw_section(
+    ensemble: &Ensemble,
+    outcomes: &[MemberOutcome],
+    file: &mut OutputFile,
+) -> Result<(), SceneError> {
+    let path = file.path().to_path_buf();
+    let mut axes = None;
+    let mut series = Vec::new();
+    for (member, outcome) in ensemble.members.iter().zip(outcomes) {
+        let Some(summary) = &outcome.summary else {
+            continue;
+        };
+        let (Some(recorded), Some(section)) = (
+            &summary.recorded,
+            summary.events.as_ref().and_then(|e| e.section.as_ref()),
+        ) else {
+            continue;
+        };
+        let column = |name: &String| recorded.columns.iter().position(|c| c == name);
+        let (Some(x), Some(y)) = (column(&section.axes[0]), column(&section.axes[1])) else {
+            continue;
+        };
+        axes.get_or_insert_with(|| (section.axes.clone(), section.surface.clone()));
+        let label: Vec<String> = ensemble
+            .axis_names()
+            .iter()
+            .zip(&member.values)
+            .map(|(name, value)| format!("{name} = {value}"))
+            .collect();
+        series.push(Series {
+            label: label.join(", "),
+            points: recorded.rows().map(|row| (row[x], row[y])).collect(),
+        });
+    }
+    let Some(([x_label, y_label], surface)) = axes else {
+        return Err(SceneError::NotApplicable {
+            option: "--plot",
+            reason: "no member crossed the section: nothing to draw".into(),
+        });
+    };
+    let panel = Panel {
+        title: format!("{}: section {surface}, {} orbits", ensemble.scene.model, series.len()),
+        x_label,
+        y_label,
+        x_log: false,
+        y_log: false,
+        equal_scale: false,
+        scatter: true,
+        series,
+    };
+    let svg = render_svg(&[panel], 800, 800)?;
+    file.write_all(svg.as_bytes())
+        .map_err(|source| SceneError::Write { path, source })
 }

@@ -22,8 +22,10 @@
 //!
 //! # Defaults
 //!
-//! λ = 1, E = 1/8 (the parameter `energy` fixes ẋ₀ of the default initial point), step
-//! h = 0.1, horizon T = 1000.
+//! λ = 1; the default initial point (0, y₀, ẋ₀, ẏ₀) on the surface of section x = 0 is given
+//! by the parameters `energy` = 1/8, `y0` = −0.2 and `vy0` = 0, with ẋ₀ > 0 from the energy
+//! (so an ensemble over y0 and vy0 covers one energy surface); step h = 0.1, horizon
+//! T = 1000.
 //!
 //! # References
 //!
@@ -40,18 +42,20 @@ use crate::params;
 pub struct HenonHeiles {
     /// Strength λ of the cubic term (> 0).
     pub lambda: f64,
-    /// Energy E of the default initial point, at least V(0, y₀) (see
+    /// Energy E of the default initial point, at least V(0, y₀) + ½ẏ₀² (see
     /// [`HenonHeiles::initial_speed`]); orbits stay bounded for E < 1/(6λ²).
     pub energy: f64,
+    /// y₀ of the default initial point (x₀ = 0) on the surface of section x = 0.
+    pub y0: f64,
+    /// ẏ₀ of the default initial point.
+    pub vy0: f64,
 }
 
 impl HenonHeiles {
     /// Registry name of the model.
     pub const NAME: &'static str = "henon-heiles";
     /// Parameter names, in the order of [`Defaults::parameters`].
-    pub const PARAMETERS: [&'static str; 2] = ["lambda", "energy"];
-    /// y₀ of the default initial point (x₀ = 0, ẏ₀ = 0).
-    pub const Y0: f64 = -0.2;
+    pub const PARAMETERS: [&'static str; 4] = ["lambda", "energy", "y0", "vy0"];
 
     /// The potential V(x, y) = ½(x² + y²) + λ(x² y − y³/3).
     pub fn potential(&self, x: f64, y: f64) -> f64 {
@@ -63,20 +67,23 @@ impl HenonHeiles {
         0.5 * v.norm_squared() + self.potential(q[0], q[1])
     }
 
-    /// ẋ₀ of the default initial point (0, y₀, ẋ₀, 0) on the energy surface E:
-    /// √(2(E − V(0, y₀))), or an error naming `energy` if E lies below V(0, y₀).
+    /// ẋ₀ > 0 of the default initial point (0, y₀, ẋ₀, ẏ₀) on the energy surface E:
+    /// √(2(E − V(0, y₀)) − ẏ₀²), or an error naming the energy if the point (0, y₀, ·, ẏ₀)
+    /// does not reach the surface (E < V(0, y₀) + ½ẏ₀²).
     pub fn initial_speed(&self) -> Result<f64, Error> {
-        let kinetic = self.energy - self.potential(0.0, Self::Y0);
-        if kinetic.is_finite() && kinetic >= 0.0 {
-            Ok((2.0 * kinetic).sqrt())
+        let squared = 2.0 * (self.energy - self.potential(0.0, self.y0)) - self.vy0 * self.vy0;
+        if squared.is_finite() && squared >= 0.0 {
+            Ok(squared.sqrt())
         } else {
             Err(Error::invalid(
                 "energy",
                 format!(
-                    "{} lies below the potential V(0, {}) = {} of the default initial point",
+                    "E = {} lies below V(0, y0) + vy0²/2 = {} at y0 = {}, vy0 = {}: the point \
+                     is not on that energy surface",
                     self.energy,
-                    Self::Y0,
-                    self.potential(0.0, Self::Y0)
+                    self.potential(0.0, self.y0) + 0.5 * self.vy0 * self.vy0,
+                    self.y0,
+                    self.vy0
                 ),
             ))
         }
@@ -84,11 +91,13 @@ impl HenonHeiles {
 }
 
 impl Default for HenonHeiles {
-    /// λ = 1, E = 1/8.
+    /// λ = 1, E = 1/8, y₀ = −0.2, ẏ₀ = 0.
     fn default() -> Self {
         Self {
             lambda: 1.0,
             energy: 0.125,
+            y0: -0.2,
+            vy0: 0.0,
         }
     }
 }
@@ -135,35 +144,40 @@ impl Defaults<U2> for HenonHeiles {
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {
-        vec![("lambda", self.lambda), ("energy", self.energy)]
+        vec![
+            ("lambda", self.lambda),
+            ("energy", self.energy),
+            ("y0", self.y0),
+            ("vy0", self.vy0),
+        ]
     }
 
-    /// `lambda` must be finite and positive; `energy` finite, and at least V(0, y₀) so the
-    /// default initial point exists.
+    /// `lambda` must be finite and positive; `energy`, `y0` and `vy0` finite, with the
+    /// default initial point on the energy surface (E ≥ V(0, y₀) + ½ẏ₀²; an ensemble over
+    /// y0 and vy0 reports the points off the surface as rejected members).
     fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        let mut trial = *self;
         match name {
-            "lambda" => self.lambda = params::positive(name, value)?,
-            "energy" => {
-                let trial = Self {
-                    energy: params::finite(name, value)?,
-                    ..*self
-                };
-                trial.initial_speed()?;
-                *self = trial;
-            }
+            "lambda" => trial.lambda = params::positive(name, value)?,
+            "energy" => trial.energy = params::finite(name, value)?,
+            "y0" => trial.y0 = params::finite(name, value)?,
+            "vy0" => trial.vy0 = params::finite(name, value)?,
             _ => return Err(params::unknown(Self::NAME, name, &Self::PARAMETERS)),
         }
+        trial.initial_speed()?;
+        *self = trial;
         Ok(())
     }
 
-    /// t₀ = 0, (x, y) = (0, −0.2), (ẋ, ẏ) = (√(2(E − V(0, −0.2))), 0).
+    /// t₀ = 0, (x, y) = (0, y₀), (ẋ, ẏ) = (√(2(E − V(0, y₀)) − ẏ₀²), ẏ₀).
     fn initial_state(&self) -> (f64, SVector<f64, 2>, SVector<f64, 2>) {
-        // `set_parameter` keeps E ≥ V(0, y₀); a struct built by hand below it starts at rest.
+        // `set_parameter` keeps the point on its surface; a struct built by hand off it
+        // starts with ẋ₀ = 0.
         let speed = self.initial_speed().unwrap_or(0.0);
         (
             0.0,
-            SVector::from([0.0, Self::Y0]),
-            SVector::from([speed, 0.0]),
+            SVector::from([0.0, self.y0]),
+            SVector::from([speed, self.vy0]),
         )
     }
 
@@ -197,7 +211,7 @@ mod tests {
     fn forces_are_the_textbook_accelerations() {
         let model = HenonHeiles {
             lambda: 0.7,
-            energy: 0.1,
+            ..HenonHeiles::default()
         };
         let (x, y) = (0.3, -0.4);
         let q = SVector::from([x, y]);
@@ -213,6 +227,12 @@ mod tests {
         let error = model.set_parameter("energy", 0.01).unwrap_err();
         assert!(error.to_string().contains("energy"), "{error}");
         assert_eq!(model, HenonHeiles::default());
+        // (0, 0.2, ·, 0.5) lies above E = 1/8: ½·0.25 + V > 1/8.
+        model.set_parameter("y0", 0.2).unwrap();
+        assert!(model.set_parameter("vy0", 0.5).is_err());
+        model.set_parameter("vy0", 0.3).unwrap();
+        let (_, q, v) = model.initial_state();
+        assert_relative_eq!(model.energy_of(&q, &v), 0.125, epsilon = 1e-16);
         assert!(model.set_parameter("energy", f64::NAN).is_err());
         assert!(model.set_parameter("lambda", 0.0).is_err());
     }

@@ -1,6 +1,7 @@
 //! What the commands write: the run summary and its health check, trajectory CSV and the
 //! number format, SVG plots, the progress bar.
 
+pub mod chaos;
 pub mod csv;
 pub mod events;
 pub mod field;

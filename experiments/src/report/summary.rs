@@ -13,6 +13,7 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::report::csv::{Float, Recorded, brief_vector as vector};
+use crate::report::chaos::IndicatorSummary;
 use crate::report::events::EventsSummary;
 use crate::report::health::Warning;
 use crate::report::schema::{Kind, Versioned};
@@ -105,6 +106,10 @@ pub struct Summary {
     /// `events`, `terminal_event`, `section`.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub events: Option<EventsSummary>,
+    /// The chaos indicators at the end of the run (`--indicators`): `megno`, `lyapunov_max`,
+    /// `lyapunov`, `sali`.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub indicators: Option<IndicatorSummary>,
 }
 
 /// Whether a run ended well.
@@ -698,6 +703,8 @@ impl fmt::Display for Summary {
         rows.extend(self.conservation.rows());
         let events = self.events.as_ref().map(EventsSummary::rows);
         rows.extend(events.into_iter().flatten());
+        let indicators = self.indicators.as_ref().map(IndicatorSummary::rows);
+        rows.extend(indicators.into_iter().flatten());
         let width = rows.iter().map(|(label, _)| label.len()).max().unwrap_or(0) + 2;
         for (label, value) in rows {
             writeln!(f, "{label:<width$}{value}")?;

@@ -156,6 +156,12 @@ impl Schema {
         Schema { fields }
     }
 
+    /// One more column `column`: the summary's JSON field `field` (its component
+    /// `component` for an array; `outer.inner` for a field of an object field).
+    pub fn add(&mut self, column: String, field: &'static str, component: Option<usize>) {
+        self.fields.push((column, field, component));
+    }
+
     /// The columns of a chain of run-time size: its scalars, no column per coordinate (a
     /// chain of 10⁴ sites would have 3·10⁴).
     pub fn chain() -> Schema {
@@ -211,7 +217,11 @@ impl Table {
                 row.extend(values.iter().map(|x| Cell::Number(*x)));
                 row.push(Cell::Text(outcome.status().into()));
                 for (_, field, component) in fields {
-                    let value = summary.as_ref().and_then(|map| map.get(*field));
+                    // `outer.inner` names a field of an object field.
+                    let value = summary.as_ref().and_then(|map| match field.split_once('.') {
+                        Some((outer, inner)) => map.get(outer).and_then(|o| o.get(inner)),
+                        None => map.get(*field),
+                    });
                     let value = match (value, component) {
                         (Some(Value::Array(items)), Some(i)) => items.get(*i),
                         (value, None) => value,

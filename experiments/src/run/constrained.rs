@@ -247,6 +247,7 @@ pub(super) fn run(
         recorded,
         dense: None,
         events: None,
+        indicators: None,
     };
     super::ended(summary, failure)
 }

@@ -26,6 +26,7 @@ mod events;
 pub mod field;
 pub(crate) mod outcome;
 mod solver;
+mod tangent;
 pub mod space;
 pub mod spectral;
 mod trajectory;
@@ -35,6 +36,7 @@ pub use outcome::{AnySummary, RunSummary, error_report, failure_object};
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
+use std::cell::RefCell;
 use std::path::Path;
 use std::time::Instant;
 use svi::Dimension;
@@ -63,6 +65,7 @@ use crate::report::summary::{
 use crate::run::control::Stop;
 use crate::run::events::SceneEvents;
 use crate::run::solver::{InTau, Solver};
+use crate::run::tangent::TangentRun;
 use crate::run::space::{Chain, RunSpace};
 use crate::run::trajectory::TrajectoryStream;
 use crate::scene::rigid::{METHOD_NAME, form_name};
@@ -249,7 +252,16 @@ where
     type Output = Result<Summary, SceneError>;
     fn visit<Me: Method<N> + Clone>(self, method: Me) -> Self::Output {
         let integrator = Integrator::new(self.model, method);
-        if self.plan.scene.run.adapt == Some(AdaptMode::Reparam) {
+        let indicators = self.plan.scene.run.indicators.clone().unwrap_or_default();
+        if !indicators.is_empty() {
+            let solver = TangentRun {
+                integrator: &integrator,
+                asked: indicators,
+                h: self.plan.h,
+                found: RefCell::new(None),
+            };
+            run_scene(&self.plan, &solver)
+        } else if self.plan.scene.run.adapt == Some(AdaptMode::Reparam) {
             let monitor = self.plan.scene.monitor()?;
             let solver = InTau {
                 integrator: &integrator,
@@ -553,6 +565,7 @@ fn run_scene<L, S: RunSpace<L>>(
         recorded,
         dense: outcome.dense,
         events: events_summary,
+        indicators: solver.indicators(),
     };
     ended(summary, failure)
 }

@@ -13,6 +13,8 @@ use svi::stepping::event::Event;
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, Method};
 
+use crate::report::chaos::IndicatorSummary;
+
 /// How [`run_scene`](super::run_scene) solves: the one loop ([`Integrator::try_solve`]), or
 /// fixed steps in computational time ([`InTau`]). A trait object, so that
 /// [`run_scene`](super::run_scene) is compiled once per model and space, not once per method as
@@ -42,6 +44,11 @@ pub(super) trait Solver<L, S: Space> {
 
     /// The method's name, order and properties.
     fn info(&self) -> svi::MethodInfo;
+
+    /// The chaos indicators of the last solve, for a solver that computes them.
+    fn indicators(&self) -> Option<IndicatorSummary> {
+        None
+    }
 }
 
 impl<L, M: Step<L, S> + Clone, S: Space> Solver<L, S> for Integrator<L, M, S> {

@@ -307,6 +307,7 @@ impl Scene {
     /// are checked against the model's when the run builds them.)
     fn check_events(&self) -> Result<(), SceneError> {
         let section = self.output.section.is_some();
+        self.check_indicators()?;
         if self.events.is_empty() && !section {
             return Ok(());
         }
@@ -337,6 +338,42 @@ impl Scene {
         }
         if section && self.output.every.is_some() {
             return refuse("the section's points fill the trajectory file: leave out --every");
+        }
+        Ok(())
+    }
+
+    /// Chaos indicators: the tangent maps of fixed steps on ℝᴺ, without what a tangent run
+    /// does not serve (output times, events, a section, recovery of failed steps).
+    fn check_indicators(&self) -> Result<(), SceneError> {
+        if self.run.indicators.as_ref().is_none_or(Vec::is_empty) {
+            return Ok(());
+        }
+        let refuse = |reason: &str| {
+            Err(SceneError::NotApplicable {
+                option: "--indicators (run.indicators)",
+                reason: reason.into(),
+            })
+        };
+        if self.is_constrained() {
+            return refuse("constrained runs have no tangent map yet");
+        }
+        if self.space() == SpaceKind::Rotation {
+            return refuse("computed on ℝᴺ from the tangent maps: not for rigid-body scenes");
+        }
+        if !matches!(self.run.adapt, None | Some(AdaptMode::None)) {
+            return refuse("takes the tangent maps of fixed steps: leave out --adapt");
+        }
+        if self.run.recovery == Some(RecoveryKind::HalveStep) {
+            return refuse(
+                "a halved step would change the map whose tangent is observed: leave out \
+                 --recovery",
+            );
+        }
+        if self.output.output_times.is_some() {
+            return refuse("a tangent run serves no output times: leave out --output-times");
+        }
+        if !self.events.is_empty() || self.output.section.is_some() {
+            return refuse("a tangent run locates no events: leave out --event and --section");
         }
         Ok(())
     }

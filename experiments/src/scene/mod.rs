@@ -375,6 +375,7 @@ impl Scene {
                     divergence_limit,
                     max_steps,
                     form,
+                    indicators,
                 },
             parameters,
             every,
@@ -474,6 +475,7 @@ impl Scene {
         set(&mut self.run.recovery, recovery);
         set(&mut self.run.divergence_limit, divergence_limit);
         set(&mut self.run.max_steps, max_steps);
+        set(&mut self.run.indicators, indicators);
         if h.is_some() && self.run.adapt == Some(AdaptMode::Step) {
             return Err(SceneError::NotApplicable {
                 option: "--h",
@@ -762,6 +764,7 @@ pub(crate) mod tests {
                     divergence_limit: None,
                     max_steps: Some(500),
                     form: None,
+                    indicators: None,
                 },
                 parameters: vec![("e".into(), 0.9)],
                 every: Some(10),

@@ -145,6 +145,10 @@ pub struct RunFlags {
     /// Form of the Lie-group integrator for rigid-body scenes: full or reduced.
     #[arg(long, value_enum, value_name = "FORM")]
     pub form: Option<FormName>,
+    /// Chaos indicators from the method's exact tangent maps, comma-separated (fixed steps on
+    /// ℝᴺ): megno, lyapunov (maximal exponent), spectrum (all 2N exponents), sali.
+    #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
+    pub indicators: Option<Vec<crate::scene::schema::Indicator>>,
 }
 
 /// Scene fields set from the command line: the [`RunFlags`], and the model's parameters and

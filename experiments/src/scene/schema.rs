@@ -192,6 +192,50 @@ pub struct RunSection {
     /// adaptive run that needs more stops with `too_many_steps` (the run so far reported);
     /// a fixed-step run that needs more is rejected before it starts.
     pub max_steps: Option<usize>,
+    /// Chaos indicators computed from the method's exact tangent maps along the run
+    /// ([`svi::analysis::chaos`]; fixed steps on ℝᴺ): the summary's `megno`, `lyapunov_max`,
+    /// `lyapunov` and `sali`.
+    pub indicators: Option<Vec<Indicator>>,
+}
+
+/// A chaos indicator of a run, as named in scenes and on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Indicator {
+    /// MEGNO ⟨Y⟩ at the end (→ 2 on regular orbits, grows as λt/2 on chaotic ones): `megno`.
+    Megno,
+    /// The maximal Lyapunov exponent, one deviation vector renormalised: `lyapunov_max`.
+    Lyapunov,
+    /// The full Lyapunov spectrum, 2N exponents by QR re-orthonormalisation: `lyapunov`.
+    Spectrum,
+    /// The smaller alignment index of two deviation vectors (→ 0 on chaotic orbits): `sali`.
+    Sali,
+}
+
+impl Indicator {
+    /// The names, as written in scenes and on the command line.
+    pub const NAMES: [&'static str; 4] = ["megno", "lyapunov", "spectrum", "sali"];
+
+    /// Every indicator, in the order of their summary fields and table columns.
+    pub const ALL: [Indicator; 4] = [
+        Indicator::Megno,
+        Indicator::Lyapunov,
+        Indicator::Spectrum,
+        Indicator::Sali,
+    ];
+
+    /// The ensemble table's columns of the indicator on a phase space of `dimension` (2N):
+    /// (column, summary field, component of an array field).
+    pub fn columns(self, dimension: usize) -> Vec<(String, &'static str, Option<usize>)> {
+        match self {
+            Indicator::Megno => vec![("megno".into(), "megno", None)],
+            Indicator::Lyapunov => vec![("lyapunov_max".into(), "lyapunov_max", None)],
+            Indicator::Spectrum => (0..dimension)
+                .map(|i| (format!("lyapunov_{}", i + 1), "lyapunov", Some(i)))
+                .collect(),
+            Indicator::Sali => vec![("sali".into(), "sali", None)],
+        }
+    }
 }
 
 /// The adaptivity modes of [`svi::solve()`], as named in scenes and on the command line.
