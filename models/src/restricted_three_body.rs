@@ -59,10 +59,10 @@
 //!
 //! μ = 1/(1 + 1047.348644) = 9.5388 · 10⁻⁴, the ratio m_J/(m_S + m_J) from the IAU's
 //! mass ratio M_Sun/M_Jupiter = 1047.348644 (IAU 2009 System of Astronomical Constants,
-//! Luzum et al. 2011, Table 1; Murray & Dermott use 9.53875 · 10⁻⁴). a = 0.6, e = 0.1: an
+//! Luzum et al. 2011, Table 1). a = 0.6, e = 0.1: an
 //! asteroid at 3.1 AU, between the 3:1 (a = 0.48) and 2:1 (a = 0.63) resonances with Jupiter,
-//! on a regular orbit (REBOUND's MEGNO ≈ 2, `benches/megno_map_rebound.py`). Step h = 0.02
-//! (about 130 steps per orbit of the particle), horizon T = 2π · 100 (100 periods of the
+//! on a regular orbit (REBOUND's MEGNO ≈ 2, `benches/megno_map_rebound.py`). Step h = 0.05
+//! (about 60 steps per orbit of the particle), horizon T = 2π · 100 (100 periods of the
 //! primaries).
 //!
 //! # References
@@ -333,9 +333,9 @@ impl Defaults<U2> for RestrictedThreeBody {
         )
     }
 
-    /// h = 0.02.
+    /// h = 0.05.
     fn default_step(&self) -> f64 {
-        0.02
+        0.05
     }
 
     /// T = 2π · 100 (100 periods of the primaries).

@@ -4,9 +4,9 @@
 
 use std::f64::consts::TAU;
 
-use nalgebra::SVector;
+use nalgebra::{SVector, U2};
 use svi::observer::{EnergyError, InvariantError, Trajectory};
-use svi::{Defaults, Initial, Integrator, Svi};
+use svi::{Defaults, Initial, Integrator, Lagrangian, Scalar, Structure, Svi};
 use svi_models::{KeplerOrbit, RestrictedThreeBody};
 
 /// The inertial Kepler orbit (G M = 1) through the model's initial state, rotated by −t into
@@ -90,4 +90,29 @@ fn svi_conserves_the_jacobi_constant() {
     assert!(invariant.max < 1e-12, "{:e}", invariant.max);
     assert!(energy.max < 1e-12, "{:e}", energy.max);
     assert!((run.last.t - 100.0).abs() < 1e-12);
+}
+
+/// The model with a false [`Structure::ConstantMass`] declaration.
+#[derive(Clone, Copy, Debug)]
+struct DeclaredConstantMass(RestrictedThreeBody);
+
+impl Lagrangian<U2> for DeclaredConstantMass {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
+
+    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
+        self.0.lagrangian(t, q, v)
+    }
+}
+
+#[test]
+fn a_constant_mass_declaration_is_refused() {
+    let model = RestrictedThreeBody::default();
+    let (t0, q0, v0) = model.initial_state();
+    let integrator = Integrator::new(DeclaredConstantMass(model), Svi::new(6));
+    let error = integrator
+        .run(t0, Initial::Velocity { q: q0, v: v0 }, 0.02, 1.0, &mut ())
+        .unwrap_err();
+    println!("{error}");
+    assert!(error.to_string().to_lowercase().contains("constant"), "{error}");
 }
