@@ -462,9 +462,14 @@ mod tests {
         };
         let (t0, q0, v0) = model.initial_state();
         let (q, v) = model.exact_solution(t0, &q0, &v0, t0).unwrap();
-        assert!((q - q0).amax() < 1e-15 && (v - v0).amax() < 1e-14, "{q} {v}");
-        assert!(RestrictedThreeBody::default()
-            .exact_solution(t0, &q0, &v0, 1.0)
-            .is_none());
+        assert!(
+            (q - q0).amax() < 1e-15 && (v - v0).amax() < 1e-14,
+            "{q} {v}"
+        );
+        assert!(
+            RestrictedThreeBody::default()
+                .exact_solution(t0, &q0, &v0, 1.0)
+                .is_none()
+        );
     }
 }

@@ -22,7 +22,8 @@ fn kepler_in_rotating_frame(
     let orbit = KeplerOrbit::from_state(q0, &inertial_v0).expect("a bound orbit");
     let (q, v) = orbit.state_after(t);
     let (sin, cos) = t.sin_cos();
-    let back = |w: SVector<f64, 2>| SVector::from([cos * w[0] + sin * w[1], -sin * w[0] + cos * w[1]]);
+    let back =
+        |w: SVector<f64, 2>| SVector::from([cos * w[0] + sin * w[1], -sin * w[0] + cos * w[1]]);
     (back(q), back(SVector::from([v[0] + q[1], v[1] - q[0]])))
 }
 
@@ -114,5 +115,8 @@ fn a_constant_mass_declaration_is_refused() {
         .run(t0, Initial::Velocity { q: q0, v: v0 }, 0.02, 1.0, &mut ())
         .unwrap_err();
     println!("{error}");
-    assert!(error.to_string().to_lowercase().contains("constant"), "{error}");
+    assert!(
+        error.to_string().to_lowercase().contains("constant"),
+        "{error}"
+    );
 }
