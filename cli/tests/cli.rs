@@ -292,7 +292,10 @@ fn list_names_scenes_and_models() {
     }
     assert!(text.contains("e = 0.5"), "{text}");
     // Every name stands apart from its description, the longest included.
-    for name in svi_models::LOCAL_MODEL_NAMES {
+    for name in svi_models::LOCAL_MODEL_NAMES
+        .iter()
+        .chain(svi_models::MODEL_NAMES)
+    {
         assert!(text.contains(&format!("  {name} ")), "{name}: {text}");
     }
 }

@@ -93,7 +93,7 @@ fn description(text: &str) -> &str {
 }
 
 /// The width of the name column of the listing: the longest model name and two spaces.
-const NAME_COLUMN: usize = 20;
+const NAME_COLUMN: usize = 23;
 
 /// The listing of `svi list`: the built-in scenes and the models (on ℝᴺ, chains of runtime
 /// dimension and rigid bodies) with their parameters.

@@ -14,6 +14,7 @@
 //! | `damped-pendulum` | [`DampedPendulum`] | 1 | — | — | only undamped (c = 0) |
 //! | `driven-oscillator` | [`DrivenOscillator`] | 1 | — | — | yes |
 //! | `henon-heiles` | [`HenonHeiles`] | 2 | — | — | — |
+//! | `restricted-three-body` | [`RestrictedThreeBody`] | 2 | — | Jacobi constant | only μ = 0 (Kepler, rotating frame) |
 //! | `nbody` | [`NBody`] | 18 (d per body, at run time: [`svi::Dyn`]) | translations, rotations | — | — |
 //!
 //! Chains and lattices have their dimension n at run time (a parameter, `n`): each is a sum
@@ -126,6 +127,7 @@ pub mod oscillator;
 pub mod pendulum;
 pub mod polymer;
 pub mod relativistic_chain;
+pub mod restricted_three_body;
 pub mod schrodinger;
 pub mod sine_gordon_chain;
 pub mod spring_pendulum;
@@ -149,6 +151,7 @@ pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use polymer::Polymer;
 pub use relativistic_chain::RelativisticChain;
+pub use restricted_three_body::RestrictedThreeBody;
 pub use schrodinger::{NlsSoliton, SchrodingerPacket};
 pub use sine_gordon_chain::SineGordonChain;
 pub use spring_pendulum::SpringPendulum;
@@ -249,6 +252,7 @@ vector_zoo!(
     DrivenOscillator,
     NBody,
     HenonHeiles,
+    RestrictedThreeBody,
 );
 
 /// Hand a text model to the visitor as a [`TextLagrangian`] of run-time dimension ([`Dyn`]:

@@ -7,4 +7,5 @@
 mod exact_solutions;
 mod forced_models;
 mod registry;
+mod restricted_three_body;
 mod rigid_models;

@@ -43,7 +43,9 @@ fn every_registered_name_visits_the_model_of_that_name() {
             "damped-oscillator",
             "damped-pendulum",
             "driven-oscillator",
-            "nbody"
+            "nbody",
+            "henon-heiles",
+            "restricted-three-body"
         ]
     );
     for &name in MODEL_NAMES {
@@ -63,7 +65,8 @@ fn an_unknown_name_is_an_error_listing_the_known_ones() {
     assert_eq!(
         error.to_string(),
         "unknown model 'pendulm' (known: oscillator, pendulum, spring-pendulum, kepler, \
-         double-pendulum, damped-oscillator, damped-pendulum, driven-oscillator, nbody)"
+         double-pendulum, damped-oscillator, damped-pendulum, driven-oscillator, nbody, \
+         henon-heiles, restricted-three-body)"
     );
     assert!(visit_model("", Name).is_err());
     assert!(visit_model("Kepler", Name).is_err());
@@ -145,10 +148,11 @@ impl ModelVisitor for CheckContract {
                 assert_eq!(changed.set_parameter(parameter, 0.0), Ok(()));
             }
             let mut changed = model.clone();
-            let other = if parameter == "e" {
-                0.25
-            } else {
-                2.0 * value + 1.0
+            let other = match parameter {
+                "e" => 0.25,
+                // A mass ratio is at most 1/2.
+                "mu" => 0.25,
+                _ => 2.0 * value + 1.0,
             };
             changed.set_parameter(parameter, other).unwrap();
             let updated = changed.parameters();
@@ -173,7 +177,7 @@ fn every_model_honours_the_defaults_contract() {
         .iter()
         .map(|name| visit_model(name, CheckContract).unwrap())
         .collect();
-    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4, 1]);
+    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4, 1, 2, 3]);
 }
 
 #[test]

@@ -62,6 +62,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/henon-heiles.toml"),
     ),
     (
+        "restricted-three-body",
+        include_str!("../../scenes/restricted-three-body.toml"),
+    ),
+    (
         "oscillator-beyond-stability",
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
     ),

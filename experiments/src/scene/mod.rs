@@ -648,6 +648,8 @@ pub(crate) mod tests {
                 "kepler-e0.99",
                 "kepler-recovery",
                 "double-pendulum-chaotic",
+                "henon-heiles",
+                "restricted-three-body",
                 "oscillator-beyond-stability",
                 "outer-solar-system",
                 "spherical-pendulum",
