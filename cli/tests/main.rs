@@ -16,6 +16,7 @@ mod cli;
 mod compare;
 mod constraints;
 mod ensemble;
+mod events;
 mod field;
 mod front_doors;
 mod help;

@@ -30,9 +30,9 @@ use crate::run::outcome::error_report;
 use crate::scene::ensemble::{
     Axis, Member, Random, Values, check_axes, members, parse_initial_axis, parse_parameter_axis,
 };
+use crate::scene::events::SectionSpec;
 use crate::scene::overrides::{Overrides, RunFlags, diagnostics_help, diagnostics_long_help};
 use crate::scene::schema::{Diagnostic, Indicator};
-use crate::scene::events::SectionSpec;
 use crate::scene::{Scene, SceneError};
 
 /// The most threads `--threads` accepts.
@@ -733,7 +733,11 @@ fn draw_section(
         });
     };
     let panel = Panel {
-        title: format!("{}: section {surface}, {} orbits", ensemble.scene.model, series.len()),
+        title: format!(
+            "{}: section {surface}, {} orbits",
+            ensemble.scene.model,
+            series.len()
+        ),
         x_label,
         y_label,
         x_log: false,

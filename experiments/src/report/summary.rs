@@ -12,8 +12,8 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::report::csv::{Float, Recorded, brief_vector as vector};
 use crate::report::chaos::IndicatorSummary;
+use crate::report::csv::{Float, Recorded, brief_vector as vector};
 use crate::report::events::EventsSummary;
 use crate::report::health::Warning;
 use crate::report::schema::{Kind, Versioned};

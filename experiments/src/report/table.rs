@@ -218,10 +218,12 @@ impl Table {
                 row.push(Cell::Text(outcome.status().into()));
                 for (_, field, component) in fields {
                     // `outer.inner` names a field of an object field.
-                    let value = summary.as_ref().and_then(|map| match field.split_once('.') {
-                        Some((outer, inner)) => map.get(outer).and_then(|o| o.get(inner)),
-                        None => map.get(*field),
-                    });
+                    let value = summary
+                        .as_ref()
+                        .and_then(|map| match field.split_once('.') {
+                            Some((outer, inner)) => map.get(outer).and_then(|o| o.get(inner)),
+                            None => map.get(*field),
+                        });
                     let value = match (value, component) {
                         (Some(Value::Array(items)), Some(i)) => items.get(*i),
                         (value, None) => value,

@@ -26,9 +26,9 @@ mod events;
 pub mod field;
 pub(crate) mod outcome;
 mod solver;
-mod tangent;
 pub mod space;
 pub mod spectral;
+mod tangent;
 mod trajectory;
 
 pub use control::{Control, STOP_STRIDE};
@@ -65,8 +65,8 @@ use crate::report::summary::{
 use crate::run::control::Stop;
 use crate::run::events::SceneEvents;
 use crate::run::solver::{InTau, Solver};
-use crate::run::tangent::TangentRun;
 use crate::run::space::{Chain, RunSpace};
+use crate::run::tangent::TangentRun;
 use crate::run::trajectory::TrajectoryStream;
 use crate::scene::rigid::{METHOD_NAME, form_name};
 use crate::scene::schema::{AdaptMode, RecoveryKind};

@@ -19,7 +19,7 @@ use svi::solve::{Adaptivity, Solution, SolveOptions, Span};
 use svi::stepping::event::Event;
 use svi::stepping::run::RunFailure;
 use svi::stepping::tangent::{TangentObserver, TangentStep};
-use svi::{Dimension, Euclidean, Error, Integrator, Method, PhasePoint};
+use svi::{Dimension, Error, Euclidean, Integrator, Method, PhasePoint};
 
 use crate::report::chaos::IndicatorSummary;
 use crate::run::solver::Solver;
@@ -102,8 +102,12 @@ where
         let mut flow = ControlFlow::Continue(());
         for o in [
             i.megno.as_mut().map(|o| o as &mut dyn TangentObserver<N>),
-            i.lyapunov.as_mut().map(|o| o as &mut dyn TangentObserver<N>),
-            i.spectrum.as_mut().map(|o| o as &mut dyn TangentObserver<N>),
+            i.lyapunov
+                .as_mut()
+                .map(|o| o as &mut dyn TangentObserver<N>),
+            i.spectrum
+                .as_mut()
+                .map(|o| o as &mut dyn TangentObserver<N>),
             i.sali.as_mut().map(|o| o as &mut dyn TangentObserver<N>),
         ]
         .into_iter()
@@ -152,15 +156,26 @@ where
         };
         // The scene's checks refuse events and output times with indicators.
         if !events.is_empty() {
-            return Err(rejected(Error::invalid("events", "a tangent run locates none")));
+            return Err(rejected(Error::invalid(
+                "events",
+                "a tangent run locates none",
+            )));
         }
         let model = self.integrator.model();
         let mut indicators = Indicators::new(&self.asked).map_err(rejected)?;
         if observer.wants(0) {
-            let first = Solver::first_point(self, span.t0, &initial, &Euclidean::<N>::initial_guess(&initial))
-                .map_err(rejected)?;
+            let first = Solver::first_point(
+                self,
+                span.t0,
+                &initial,
+                &Euclidean::<N>::initial_guess(&initial),
+            )
+            .map_err(rejected)?;
             if observer.observe(model, 0, &first).is_break() {
-                return Err(rejected(Error::invalid("stop", "stopped before the first step")));
+                return Err(rejected(Error::invalid(
+                    "stop",
+                    "stopped before the first step",
+                )));
             }
         }
         let mut observed = Observed {
@@ -168,13 +183,9 @@ where
             model,
             points: observer,
         };
-        let run = self.integrator.try_run_tangent(
-            span.t0,
-            initial,
-            self.h,
-            span.t_end,
-            &mut observed,
-        )?;
+        let run =
+            self.integrator
+                .try_run_tangent(span.t0, initial, self.h, span.t_end, &mut observed)?;
         *self.found.borrow_mut() = Some(indicators.summary());
         Ok(Solution {
             points: Vec::new(),
