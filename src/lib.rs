@@ -121,6 +121,7 @@ guide_doctests! {
     GuideAdaptivityDoctests: "adaptivity.md",
     GuideStressDoctests: "stress.md",
     GuideConstraintsDoctests: "constraints.md",
+    GuideChaosDoctests: "chaos.md",
 }
 
 #[cfg(test)]

@@ -7,7 +7,6 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::report::csv::Float;
-use crate::report::summary::StateSummary;
 
 /// One located event of the summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -16,9 +15,12 @@ pub struct EventRecord {
     pub name: String,
     /// Its time.
     pub t: f64,
-    /// The state there.
-    #[serde(flatten)]
-    pub state: StateSummary,
+    /// The configuration there.
+    pub q: Vec<f64>,
+    /// The velocity.
+    pub v: Vec<f64>,
+    /// The momentum.
+    pub p: Vec<f64>,
 }
 
 /// What a run's events and section found, for the summary.

@@ -128,11 +128,16 @@ impl SceneEvents {
         let mut points = Vec::new();
         for event in located {
             match self.names.get(event.event) {
-                Some(name) => records.push(EventRecord {
-                    name: name.clone(),
-                    t: S::time(&event.point),
-                    state: S::state(&event.point),
-                }),
+                Some(name) => {
+                    let (q, v, p) = S::point_vectors(&event.point).unwrap_or_default();
+                    records.push(EventRecord {
+                        name: name.clone(),
+                        t: S::time(&event.point),
+                        q: q.to_vec(),
+                        v: v.to_vec(),
+                        p: p.to_vec(),
+                    });
+                }
                 None if self.meets_condition::<L, S>(&event.point) => points.push(&event.point),
                 None => {}
             }

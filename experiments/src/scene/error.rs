@@ -352,3 +352,12 @@ fn shorten_long_numbers(text: &str) -> String {
     out.push_str(rest);
     out
 }
+
+impl From<crate::scene::events::SpecError> for SceneError {
+    fn from(error: crate::scene::events::SpecError) -> Self {
+        SceneError::InvalidOption {
+            option: error.option,
+            reason: error.reason,
+        }
+    }
+}

@@ -18,7 +18,16 @@ use std::str::FromStr;
 use serde::Deserialize;
 use svi::stepping::event::Direction;
 
-use crate::scene::error::SceneError;
+/// An event or section that does not parse, or names what the model lacks: bad input
+/// ([`crate::scene::SceneError::InvalidOption`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("invalid {option}: {reason}")]
+pub struct SpecError {
+    /// The option, with its scene field: `--section (output.section)`.
+    pub option: &'static str,
+    /// What is wrong, and what would do.
+    pub reason: String,
+}
 
 /// One event of a scene.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -51,11 +60,11 @@ impl EventSpec {
 }
 
 impl FromStr for EventSpec {
-    type Err = SceneError;
+    type Err = SpecError;
 
     /// `[NAME:] G [@up|@down|@both] [@terminal]`.
-    fn from_str(text: &str) -> Result<Self, SceneError> {
-        let invalid = |reason: String| SceneError::InvalidOption {
+    fn from_str(text: &str) -> Result<Self, SpecError> {
+        let invalid = |reason: String| SpecError {
             option: "--event (events)",
             reason,
         };
@@ -125,15 +134,15 @@ impl fmt::Display for SectionSpec {
 }
 
 impl FromStr for SectionSpec {
-    type Err = SceneError;
+    type Err = SpecError;
 
     /// `COORDINATE=VALUE[,VARIABLE>VALUE|VARIABLE<VALUE]`.
-    fn from_str(text: &str) -> Result<Self, SceneError> {
-        let invalid = |reason: String| SceneError::InvalidOption {
+    fn from_str(text: &str) -> Result<Self, SpecError> {
+        let invalid = |reason: String| SpecError {
             option: "--section (output.section)",
             reason,
         };
-        let number = |word: &str| -> Result<f64, SceneError> {
+        let number = |word: &str| -> Result<f64, SpecError> {
             match word.trim().parse::<f64>() {
                 Ok(value) if value.is_finite() => Ok(value),
                 _ => Err(invalid(format!(
@@ -197,13 +206,13 @@ impl<'de> Deserialize<'de> for SectionSpec {
 /// Where a name of a section points among the model's `coordinates`: (index, velocity).
 ///
 /// # Errors
-/// [`SceneError::InvalidOption`] naming the section and the model's names when it is none of
+/// [`SpecError`] naming the section and the model's names when it is none of
 /// them (`x`, `vx`, `q1`, `v1`).
 pub fn resolve(
     name: &str,
     coordinates: &[String],
     section: &SectionSpec,
-) -> Result<(usize, bool), SceneError> {
+) -> Result<(usize, bool), SpecError> {
     if let Some(i) = coordinates.iter().position(|c| c == name) {
         return Ok((i, false));
     }
@@ -219,7 +228,7 @@ pub fn resolve(
     };
     positional('q', false)
         .or_else(|| positional('v', true))
-        .ok_or_else(|| SceneError::InvalidOption {
+        .ok_or_else(|| SpecError {
             option: "--section (output.section)",
             reason: format!(
                 "'{name}' in '{section}' is not a coordinate or velocity of the model (its \
