@@ -164,7 +164,11 @@ impl Defaults<U2> for HenonHeiles {
             "vy0" => trial.vy0 = params::finite(name, value)?,
             _ => return Err(params::unknown(Self::NAME, name, &Self::PARAMETERS)),
         }
-        trial.initial_speed()?;
+        // Off the energy surface, the error names the parameter that moved the point off it.
+        trial.initial_speed().map_err(|error| match error {
+            Error::InvalidParameter { reason, .. } => Error::invalid(name, reason),
+            other => other,
+        })?;
         *self = trial;
         Ok(())
     }

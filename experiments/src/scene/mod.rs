@@ -383,7 +383,7 @@ impl Scene {
             plot,
             output_times,
             multipliers,
-            events,
+            event,
             section,
         } = overrides;
         let space = self.space();
@@ -467,7 +467,7 @@ impl Scene {
         }
         set(&mut self.output.output_times, output_times);
         set(&mut self.output.multipliers, multipliers);
-        self.events.extend(events.iter().cloned());
+        self.events.extend(event.iter().cloned());
         set(&mut self.output.section, section);
         if *recovery == Some(RecoveryKind::None) {
             self.run.max_halvings = None;
@@ -774,7 +774,7 @@ pub(crate) mod tests {
                 plot: Some("x.svg".into()),
                 output_times: None,
                 multipliers: None,
-                events: vec!["peri: q1*vq1 + q2*vq2 @up".parse().unwrap()],
+                event: vec!["peri: q1*vq1 + q2*vq2 @up".parse().unwrap()],
                 section: None,
             })
             .unwrap();

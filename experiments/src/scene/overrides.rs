@@ -192,8 +192,8 @@ pub struct Overrides {
     pub multipliers: Option<bool>,
     /// Locate the zeros of a function g(t, q, q̇) of the model's names (repeatable):
     /// `[NAME:] G [@up|@down|@both] [@terminal]`, e.g. "pericentre: x*vx + y*vy @up".
-    #[arg(long = "event", value_name = "EVENT")]
-    pub events: Vec<crate::scene::events::EventSpec>,
+    #[arg(long, value_name = "EVENT")]
+    pub event: Vec<crate::scene::events::EventSpec>,
     /// Poincaré section COORDINATE=VALUE[,VARIABLE>VALUE], e.g. "y=0,vy>0" (or "q2=0,v2>0"):
     /// --out writes its points instead of the trajectory, --plot draws them.
     #[arg(long, value_name = "SECTION")]
