@@ -167,6 +167,7 @@ fn an_ensemble_draws_its_members_sections_and_tabulates_indicators() {
     let rows = parse_csv(&std::fs::read_to_string(&table).unwrap());
     let points: f64 = rows.iter().map(|row| cell(row, "section_points")).sum();
     let picture = std::fs::read_to_string(&svg).unwrap();
+    // Every point, and the legend's five markers.
     assert_eq!(picture.matches("<circle").count() as f64, points + 5.0);
     let output = svi(&[
         "ensemble",

@@ -47,6 +47,9 @@ pub struct PlotError {
     pub reason: String,
 }
 
+/// Scatter pictures of at most this many series get a legend.
+const SCATTER_LEGEND: usize = 8;
+
 /// Series with at most this many points get a marker at each point.
 const MARKED_POINTS: usize = 60;
 
@@ -435,11 +438,15 @@ fn draw_panel(
                     })
                     .collect();
                 if panel.scatter {
-                    chart
+                    let drawn = chart
                         .draw_series(data.into_iter().map(|p| Circle::new(p, 1, color.filled())))
-                        .map_err(|e| e.to_string())?
-                        .label(series.label.as_str())
-                        .legend(move |(x, y)| Circle::new((x + 10, y), 3, color.filled()));
+                        .map_err(|e| e.to_string())?;
+                    // A legend of many orbits would cover the picture: colours tell them apart.
+                    if panel.series.len() <= SCATTER_LEGEND {
+                        drawn
+                            .label(series.label.as_str())
+                            .legend(move |(x, y)| Circle::new((x + 10, y), 3, color.filled()));
+                    }
                     continue;
                 }
                 chart
@@ -455,12 +462,14 @@ fn draw_panel(
                         .map_err(|e| e.to_string())?;
                 }
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(|e| e.to_string())?;
+            if !(panel.scatter && panel.series.len() > SCATTER_LEGEND) {
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.8))
+                    .border_style(BLACK)
+                    .draw()
+                    .map_err(|e| e.to_string())?;
+            }
         }};
     }
     match (panel.x_log, panel.y_log) {

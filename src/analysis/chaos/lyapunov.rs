@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DefaultAllocator};
 use std::ops::ControlFlow;
 
 use super::{
-    Deviations, initial_deviations, lost, orthonormalize, phase_dimension, require_interval,
+    Deviations, lost, one_deviation, orthonormalize, phase_dimension, rate, require_interval,
 };
 
 /// Options of [`LyapunovSpectrum`].
@@ -300,11 +300,7 @@ impl MaximalLyapunov {
 
     /// The running exponent λ(t) at the last renormalisation (0 before the first).
     pub fn exponent(&self) -> f64 {
-        if self.time > 0.0 {
-            (self.log[0] - self.compensation[0]) / self.time
-        } else {
-            0.0
-        }
+        rate(self.log[0], self.compensation[0], self.time)
     }
 
     /// The time t − t₀ of the last renormalisation.
@@ -321,9 +317,7 @@ where
     /// [`Error::InvalidParameter`] `deviation` for a vector of the wrong length, zero or
     /// not finite.
     fn begin(&mut self, t0: f64, state: &State<N>) -> Result<(), Error> {
-        let given = self.options.deviation.as_ref().map(std::slice::from_ref);
-        let vectors = initial_deviations("deviation", given, phase_dimension(state), 1)?;
-        self.deviations = Deviations::new(vectors);
+        self.deviations = one_deviation(self.options.deviation.as_ref(), state)?;
         (self.log, self.compensation) = ([0.0], [0.0]);
         (self.t0, self.time, self.since) = (t0, 0.0, 0);
         Ok(())

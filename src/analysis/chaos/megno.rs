@@ -9,7 +9,7 @@ use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
 use std::ops::ControlFlow;
 
-use super::{Deviations, initial_deviations, lost, phase_dimension};
+use super::{Deviations, lost, one_deviation, rate};
 
 /// Options of [`Megno`].
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -102,11 +102,7 @@ impl Megno {
 
     /// The maximal Lyapunov exponent estimate ln(δ(t)/δ(0)) / t of the same deviation vector.
     pub fn lyapunov(&self) -> f64 {
-        if self.time > 0.0 {
-            (self.sums[2] - self.compensation[2]) / self.time
-        } else {
-            0.0
-        }
+        rate(self.sums[2], self.compensation[2], self.time)
     }
 
     /// The time t − t₀ after the last step.
@@ -123,9 +119,7 @@ where
     /// [`Error::InvalidParameter`] `deviation` for a vector of the wrong length, zero or
     /// not finite.
     fn begin(&mut self, t0: f64, state: &State<N>) -> Result<(), Error> {
-        let given = self.options.deviation.as_ref().map(std::slice::from_ref);
-        let vectors = initial_deviations("deviation", given, phase_dimension(state), 1)?;
-        self.deviations = Deviations::new(vectors);
+        self.deviations = one_deviation(self.options.deviation.as_ref(), state)?;
         (self.sums, self.compensation) = ([0.0; 3], [0.0; 3]);
         (self.value, self.mean, self.t0, self.time) = (0.0, 0.0, t0, 0.0);
         Ok(())

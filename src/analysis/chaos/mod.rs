@@ -273,6 +273,30 @@ where
     }
 }
 
+/// A compensated sum of logarithms (`sum` − `compensation`) per unit time `time`: an
+/// exponent's running estimate, 0 before any time has passed.
+pub(super) fn rate(sum: f64, compensation: f64, time: f64) -> f64 {
+    if time > 0.0 {
+        (sum - compensation) / time
+    } else {
+        0.0
+    }
+}
+
+/// The one deviation vector of an indicator on the run of `state`: the user's `deviation`
+/// (checked and normalised) or the default one.
+pub(super) fn one_deviation<N: Dimension>(
+    deviation: Option<&Vec<f64>>,
+    state: &State<N>,
+) -> Result<Deviations, Error>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    let given = deviation.map(std::slice::from_ref);
+    let vectors = initial_deviations("deviation", given, phase_dimension(state), 1)?;
+    Ok(Deviations::new(vectors))
+}
+
 /// The phase-space dimension 2N of a run from its initial state.
 pub(super) fn phase_dimension<N: Dimension>(state: &State<N>) -> usize
 where
