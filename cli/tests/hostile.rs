@@ -586,6 +586,7 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         "oscillator-beyond-stability",
         "fput",
         "toda",
+        "henon-heiles",
         "keppler",
     ]);
     let numeric = vec![
@@ -640,6 +641,40 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         flag(
             "--diagnostics",
             select(vec!["energy", "none", "momentum,solution", "energy,none"])
+                .prop_map(String::from)
+                .boxed(),
+        ),
+        flag(
+            "--event",
+            select(vec![
+                "peri: q1*vq1 + q2*vq2 @up",
+                "t - 1 @terminal",
+                "bad: 1/(t - t)",
+                "e: t @sideways",
+                "nosuch + 1",
+                "",
+                ": q1",
+            ])
+            .prop_map(String::from)
+            .boxed(),
+        ),
+        flag(
+            "--section",
+            select(vec![
+                "q1=0,v1>0",
+                "q2=0",
+                "q9=0",
+                "v1=0",
+                "q1=nan",
+                "q1=0,v1",
+                "=0",
+            ])
+            .prop_map(String::from)
+            .boxed(),
+        ),
+        flag(
+            "--indicators",
+            select(vec!["megno", "spectrum,sali", "lyapunov", "chaos"])
                 .prop_map(String::from)
                 .boxed(),
         ),

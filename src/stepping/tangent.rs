@@ -56,7 +56,7 @@ where
 /// Receives the tangent map of every step of [`Integrator::try_run_tangent`].
 ///
 /// Observers compose as tuples (each sees every step; the run stops when one asks to or
-/// fails) and as `&mut O`.
+/// fails), switch on and off as `Option`, and pass as `&mut O`.
 pub trait TangentObserver<N: Dimension>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -102,6 +102,23 @@ where
     }
     fn observe(&mut self, step: &TangentStep<'_, N>) -> Result<ControlFlow<()>, Error> {
         (**self).observe(step)
+    }
+}
+
+/// An observer that may be absent: `None` sees nothing and never stops the run.
+impl<N: Dimension, O: TangentObserver<N>> TangentObserver<N> for Option<O>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    fn begin(&mut self, t0: f64, state: &State<N>) -> Result<(), Error> {
+        self.as_mut().map_or(Ok(()), |o| o.begin(t0, state))
+    }
+    fn wants_point(&self, step: usize) -> bool {
+        self.as_ref().is_some_and(|o| o.wants_point(step))
+    }
+    fn observe(&mut self, step: &TangentStep<'_, N>) -> Result<ControlFlow<()>, Error> {
+        self.as_mut()
+            .map_or(Ok(ControlFlow::Continue(())), |o| o.observe(step))
     }
 }
 

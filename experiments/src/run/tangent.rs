@@ -25,40 +25,40 @@ use crate::report::chaos::IndicatorSummary;
 use crate::run::solver::Solver;
 use crate::scene::schema::Indicator;
 
-/// The indicators of one run, each present when asked for.
-#[derive(Default)]
-struct Indicators {
-    megno: Option<Megno>,
-    lyapunov: Option<MaximalLyapunov>,
-    spectrum: Option<LyapunovSpectrum>,
-    sali: Option<Sali>,
+/// The indicators of one run, each present when asked for: one tangent observer.
+type Indicators = (
+    Option<Megno>,
+    Option<MaximalLyapunov>,
+    Option<LyapunovSpectrum>,
+    Option<Sali>,
+);
+
+/// The indicators `asked` for, with their default options.
+fn indicators(asked: &[Indicator]) -> Result<Indicators, Error> {
+    let wants = |indicator| asked.contains(&indicator);
+    Ok((
+        wants(Indicator::Megno)
+            .then(|| Megno::new(MegnoOptions::default()))
+            .transpose()?,
+        wants(Indicator::Lyapunov)
+            .then(|| MaximalLyapunov::new(MaximalOptions::default()))
+            .transpose()?,
+        wants(Indicator::Spectrum)
+            .then(|| LyapunovSpectrum::new(SpectrumOptions::default()))
+            .transpose()?,
+        wants(Indicator::Sali)
+            .then(|| Sali::new(SaliOptions::default()))
+            .transpose()?,
+    ))
 }
 
-impl Indicators {
-    fn new(asked: &[Indicator]) -> Result<Indicators, Error> {
-        let mut indicators = Indicators::default();
-        for indicator in asked {
-            match indicator {
-                Indicator::Megno => indicators.megno = Some(Megno::new(MegnoOptions::default())?),
-                Indicator::Lyapunov => {
-                    indicators.lyapunov = Some(MaximalLyapunov::new(MaximalOptions::default())?);
-                }
-                Indicator::Spectrum => {
-                    indicators.spectrum = Some(LyapunovSpectrum::new(SpectrumOptions::default())?);
-                }
-                Indicator::Sali => indicators.sali = Some(Sali::new(SaliOptions::default())?),
-            }
-        }
-        Ok(indicators)
-    }
-
-    fn summary(&self) -> IndicatorSummary {
-        IndicatorSummary {
-            megno: self.megno.as_ref().map(Megno::mean),
-            lyapunov_max: self.lyapunov.as_ref().map(MaximalLyapunov::exponent),
-            lyapunov: self.spectrum.as_ref().map(|s| s.exponents().to_vec()),
-            sali: self.sali.as_ref().map(Sali::value),
-        }
+/// What the indicators found, for the summary.
+fn summary((megno, lyapunov, spectrum, sali): &Indicators) -> IndicatorSummary {
+    IndicatorSummary {
+        megno: megno.as_ref().map(Megno::mean),
+        lyapunov_max: lyapunov.as_ref().map(MaximalLyapunov::exponent),
+        lyapunov: spectrum.as_ref().map(|s| s.exponents().to_vec()),
+        sali: sali.as_ref().map(Sali::value),
     }
 }
 
@@ -77,20 +77,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn begin(&mut self, t0: f64, state: &State<N>) -> Result<(), Error> {
-        let i = &mut *self.indicators;
-        if let Some(o) = &mut i.megno {
-            o.begin(t0, state)?;
-        }
-        if let Some(o) = &mut i.lyapunov {
-            o.begin(t0, state)?;
-        }
-        if let Some(o) = &mut i.spectrum {
-            o.begin(t0, state)?;
-        }
-        if let Some(o) = &mut i.sali {
-            TangentObserver::<N>::begin(o, t0, state)?;
-        }
-        Ok(())
+        self.indicators.begin(t0, state)
     }
 
     fn wants_point(&self, step: usize) -> bool {
@@ -98,25 +85,7 @@ where
     }
 
     fn observe(&mut self, step: &TangentStep<'_, N>) -> Result<ControlFlow<()>, Error> {
-        let i = &mut *self.indicators;
-        let mut flow = ControlFlow::Continue(());
-        for o in [
-            i.megno.as_mut().map(|o| o as &mut dyn TangentObserver<N>),
-            i.lyapunov
-                .as_mut()
-                .map(|o| o as &mut dyn TangentObserver<N>),
-            i.spectrum
-                .as_mut()
-                .map(|o| o as &mut dyn TangentObserver<N>),
-            i.sali.as_mut().map(|o| o as &mut dyn TangentObserver<N>),
-        ]
-        .into_iter()
-        .flatten()
-        {
-            if o.observe(step)?.is_break() {
-                flow = ControlFlow::Break(());
-            }
-        }
+        let mut flow = self.indicators.observe(step)?;
         if let Some(point) = step.point
             && self.points.observe(self.model, step.step, point).is_break()
         {
@@ -162,7 +131,7 @@ where
             )));
         }
         let model = self.integrator.model();
-        let mut indicators = Indicators::new(&self.asked).map_err(rejected)?;
+        let mut indicators = indicators(&self.asked).map_err(rejected)?;
         if observer.wants(0) {
             let first = Solver::first_point(
                 self,
@@ -186,7 +155,7 @@ where
         let run =
             self.integrator
                 .try_run_tangent(span.t0, initial, self.h, span.t_end, &mut observed)?;
-        *self.found.borrow_mut() = Some(indicators.summary());
+        *self.found.borrow_mut() = Some(summary(&indicators));
         Ok(Solution {
             points: Vec::new(),
             last: run.last,
