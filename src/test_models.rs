@@ -142,7 +142,7 @@ pub(crate) fn assert_tangent_matches_central_differences<
         DVector::from_iterator(2 * n, after.q.iter().chain(after.y.iter()).copied())
     };
     let mut workspace = method.workspace(model, h).unwrap();
-    let (_, tangent) = method
+    let (_, tangent, _) = method
         .tangent_map(model, &mut workspace, 0.0, h, &start)
         .unwrap();
     let phi = tangent.matrix();

@@ -857,7 +857,7 @@ impl Method<U2> for WithoutTangent {
         _: f64,
         _: f64,
         _: &State<U2>,
-    ) -> Result<(State<U2>, TangentMap<U2>), StepFailure> {
+    ) -> Result<(State<U2>, TangentMap<U2>, StepReport), StepFailure> {
         Err(StepFailure::Unsupported {
             option: "tangent map",
             reason: "not implemented",

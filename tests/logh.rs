@@ -179,7 +179,7 @@ fn a_composition_step_is_symplectic() {
     let state = svi::State { q: q0, y: v0 };
     let method = integrator.method();
     let mut workspace = Method::<U2>::workspace(method, &model, 0.01).unwrap();
-    let (_, tangent) = method
+    let (_, tangent, _) = method
         .tangent_map(&model, &mut workspace, 0.0, 0.01, &state)
         .unwrap();
     let error = tangent.symplecticity_error();

@@ -234,3 +234,80 @@ fn bad_events_sections_and_indicators_are_typed_errors() {
         "{summary}"
     );
 }
+
+#[test]
+fn the_events_file_holds_every_event_and_a_failed_run_keeps_its_events() {
+    let scratch = Scratch::new("events-out");
+    let path = scratch.join("events.csv");
+    let file = path.to_str().unwrap();
+    // Kepler e = 0.5 from its pericentre (period 2π): apocentres (y falling through 0) at
+    // π, 3π, 5π and pericentres at 2π, 4π, 6π, in time order in the file.
+    let summary = json(&[
+        "run",
+        "kepler",
+        "--method",
+        "svi:9/8",
+        "--t-end",
+        "20",
+        "--event",
+        "peri: q1*vq1 + q2*vq2 @up",
+        "--event",
+        "q2 @down",
+        "--events-out",
+        file,
+        "--json",
+    ]);
+    let rows = parse_csv(&std::fs::read_to_string(&path).unwrap());
+    assert_eq!(rows.len(), 6);
+    let events = summary["events"].as_array().unwrap();
+    for (k, (row, event)) in rows.iter().zip(events).enumerate() {
+        let name = if k % 2 == 0 { "event2" } else { "peri" };
+        assert_eq!(row["event"], name);
+        assert_eq!(event["name"], name);
+        // The file's numbers are the summary's (serde_json's parser may be off in the last
+        // digit).
+        let same = |a: f64, b: f64| (a - b).abs() <= 2.0 * f64::EPSILON * a.abs();
+        assert!(same(cell(row, "t"), number(event, "t")));
+        assert!(same(cell(row, "q_q1"), vector(event, "q")[0]));
+        assert!(same(cell(row, "p_q2"), vector(event, "p")[1]));
+        assert!((cell(row, "t") - TAU / 2.0 * (k + 1) as f64).abs() < 1e-9, "{row:?}");
+    }
+    // An event that turns NaN after t = 5 fails the run (status 1); the apocentre at π and the
+    // zero of the failing function at t = 5 were located first, and are kept in the summary
+    // and the file.
+    let output = svi(&[
+        "run",
+        "kepler",
+        "--t-end",
+        "20",
+        "--event",
+        "q2 @down",
+        "--event",
+        "late: sqrt(5 - t)",
+        "--events-out",
+        file,
+        "--json",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    let summary: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let events = summary["events"].as_array().unwrap();
+    let names: Vec<&str> = events.iter().map(|e| e["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["event1", "late"]);
+    assert!((number(&events[0], "t") - TAU / 2.0).abs() < 1e-8);
+    let rows = parse_csv(&std::fs::read_to_string(&path).unwrap());
+    assert_eq!(rows.len(), 2);
+    assert!((cell(&rows[1], "t") - number(&events[1], "t")).abs() < 1e-15);
+    // The file needs events, is CSV and is no other output's file.
+    let run = ["run", "kepler"];
+    bad_input(&run, &["--events-out", file], "give --event");
+    bad_input(
+        &run,
+        &["--event", "q2", "--events-out", "events.svg"],
+        "not a picture",
+    );
+    bad_input(
+        &run,
+        &["--event", "q2", "--events-out", file, "--out", file],
+        "writes the same file",
+    );
+}

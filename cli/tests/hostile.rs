@@ -681,6 +681,7 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
     ];
     if mode == Mode::Binary {
         other.push(flag("--out", output_path()));
+        other.push(flag("--events-out", output_path()));
     }
     (
         scene,

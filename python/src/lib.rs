@@ -20,7 +20,7 @@ use std::time::Duration;
 
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyTypeError};
 use pyo3::prelude::*;
 use svi::stepping::dense::DenseOutput;
 use svi_experiments::ensemble::Ensemble;
@@ -29,7 +29,8 @@ use svi_experiments::report::table::Cell;
 use svi_experiments::run::error_report;
 use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
 use svi_experiments::scene::field::FieldScene;
-use svi_experiments::scene::overrides::OptionValue;
+use svi_experiments::scene::events::NativeEvent;
+use svi_experiments::scene::overrides::{OptionKind, OptionValue};
 use svi_experiments::scene::spectral::SpectralScene;
 use svi_experiments::{Components, Control, Overrides, Scene, SceneError};
 
@@ -81,8 +82,8 @@ fn invalid(option: &'static str, reason: String) -> PyErr {
 
 /// The options of `svi run` that are not keywords of the package's calls: the model's
 /// parameters are the `params` dict, files are not written (results come back as arrays), and
-/// the trajectory's thinning is `every` of the trajectory.
-const NOT_KEYWORDS: [&str; 4] = ["parameters", "out", "plot", "every"];
+/// the trajectory's thinning is `every` of the trajectory; the events come in the summary.
+const NOT_KEYWORDS: [&str; 5] = ["parameters", "out", "plot", "every", "events_out"];
 
 /// A keyword argument's value, of the kinds of [`OptionKind`] (the package checked it).
 #[derive(FromPyObject)]
@@ -113,6 +114,7 @@ fn overrides(
     options: Option<BTreeMap<String, Value>>,
     params: Option<BTreeMap<String, f64>>,
 ) -> PyResult<Overrides> {
+    let kinds: BTreeMap<String, OptionKind> = Overrides::options().into_iter().collect();
     let named: Vec<(String, OptionValue)> = options
         .unwrap_or_default()
         .into_iter()
@@ -122,6 +124,9 @@ fn overrides(
                 Value::Real(x) => OptionValue::Real(x),
                 Value::Text(text) => OptionValue::Text(text),
                 Value::Reals(xs) => OptionValue::Reals(xs),
+                Value::Names(texts) if kinds.get(&name) == Some(&OptionKind::Texts) => {
+                    OptionValue::Texts(texts)
+                }
                 Value::Names(names) => OptionValue::Names(names),
                 Value::Flag(flag) => OptionValue::Flag(flag),
             };
@@ -257,6 +262,57 @@ fn array(py: Python<'_>, values: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
 /// A trajectory: its column names and its numbers row by row.
 type Trajectory<'py> = (Vec<String>, Bound<'py, PyArray1<f64>>);
 
+/// An event given as a Python callable: (name, direction, terminal, g) with g(t, q, v) of a
+/// float and two NumPy arrays.
+type CallableEvent = (String, String, bool, Py<PyAny>);
+
+/// The Python exception raised by an event's callable during a run, kept until the run ends.
+type Raised = std::sync::Arc<std::sync::Mutex<Option<PyErr>>>;
+
+/// The scene events of `callables`, each calling its Python function with the GIL held; an
+/// exception the function raises (or a result that is not a float) is kept in `raised` and
+/// the event's value is NaN, which fails the run naming the event.
+fn native_events(callables: Vec<CallableEvent>, raised: &Raised) -> PyResult<Vec<NativeEvent>> {
+    callables
+        .into_iter()
+        .map(|(name, direction, terminal, function)| {
+            let direction = direction
+                .parse()
+                .map_err(|error: svi::Error| invalid("event", error.to_string()))?;
+            let raised = std::sync::Arc::clone(raised);
+            let event = name.clone();
+            let call = move |t: f64, q: &[f64], v: &[f64]| -> f64 {
+                Python::attach(|py| {
+                    let value = function
+                        .call1(py, (t, PyArray1::from_slice(py, q), PyArray1::from_slice(py, v)))
+                        .and_then(|value| {
+                            value.extract::<f64>(py).map_err(|_| {
+                                let kind = value.bind(py).get_type().name().map_or_else(
+                                    |_| "another type".to_string(),
+                                    |name| name.to_string(),
+                                );
+                                PyTypeError::new_err(format!(
+                                    "event '{event}': g(t, q, v) returned {kind}, not a float"
+                                ))
+                            })
+                        });
+                    value.unwrap_or_else(|error| {
+                        let mut kept = raised.lock().unwrap_or_else(|e| e.into_inner());
+                        kept.get_or_insert(error);
+                        f64::NAN
+                    })
+                })
+            };
+            Ok(NativeEvent {
+                name,
+                direction,
+                terminal,
+                function: std::sync::Arc::new(call),
+            })
+        })
+        .collect()
+}
+
 /// A model written as text from Python (`svi.Lagrangian`): L, its coordinates, its forces,
 /// the generators of its symmetries, its holonomic constraints and its parameters.
 type TextModel = (
@@ -317,11 +373,12 @@ impl Dense {
 /// `trajectory` the trajectory's column names and numbers (every step, or the output times),
 /// and with `dense` every step's polynomial. `model` (a text model from `svi.Lagrangian`)
 /// replaces `scene`. `progress` allows `svi run`'s progress bar on stderr (long fixed-step
-/// runs, on a terminal).
+/// runs, on a terminal). `events` are events given as Python callables ([`CallableEvent`]):
+/// an exception one raises is raised again when the run ends.
 #[pyfunction]
 #[pyo3(signature = (
     scene, *, model=None, params=None, initial=None, options=None, trajectory=true, every=None,
-    progress=false, dense=false
+    progress=false, dense=false, events=vec![]
 ))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
@@ -335,6 +392,7 @@ fn run<'py>(
     every: Option<usize>,
     progress: bool,
     dense: bool,
+    events: Vec<CallableEvent>,
 ) -> PyResult<(String, Option<Trajectory<'py>>, Option<Dense>)> {
     let overrides = overrides(options, params)?;
     let mut loaded = match model {
@@ -354,6 +412,8 @@ fn run<'py>(
         set_initial(&mut loaded, initial)?;
     }
     loaded.overlay(&overrides).map_err(failure)?;
+    let raised = Raised::default();
+    loaded.native_events = native_events(events, &raised)?;
     // The trajectory is the rows the run path writes, kept in memory: no file is written.
     loaded.output.trajectory = None;
     loaded.output.plot = None;
@@ -366,6 +426,9 @@ fn run<'py>(
             stop: Some(stop),
         })
     })?;
+    if let Some(error) = raised.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        return Err(error);
+    }
     let mut summary = result.map_err(failure)?;
     let rows = summary
         .recorded

@@ -29,7 +29,8 @@ from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Seque
 
 import numpy as np
 
-from . import _svi
+from . import _events, _svi
+from ._events import Event
 
 __version__: str = _svi.version()
 
@@ -37,6 +38,7 @@ __all__ = [
     "DEFAULT_SCENE",
     "ArgumentTypeError",
     "DivergedError",
+    "Event",
     "HealthError",
     "InvalidInputError",
     "InvalidParameterError",
@@ -419,12 +421,15 @@ def run(
             _text("initial", name): _reals(f"initial[{name!r}]", [value] if _is_number(value) else value)
             for name, value in _mapping("initial", initial).items()
         }
+    checked = _shared_options(locals(), options, "run")
+    callables = _events.split(checked)
     summary, rows, _ = _call(
         _svi.run,
         _text("scene", scene),
         params=_parameters(params),
         initial=initial_lists,
-        options=_shared_options(locals(), options, "run"),
+        options=checked,
+        events=callables,
         trajectory=_flag("trajectory", trajectory),
         every=_count("every", every),
         progress=_stderr_is_terminal() if progress is None else _flag("progress", progress),
@@ -439,6 +444,7 @@ _CHECKS: Dict[str, Callable[[str, Any], Any]] = {
     "text": _text,
     "reals": _reals,
     "names": _names,
+    "texts": _events.events,
     "flag": lambda name, value: None if value is None else _flag(name, value),
 }
 
@@ -654,6 +660,12 @@ def ensemble(
         name: _reals(f"{name}0", np.atleast_1d(value)) for name, value in (("q", q0), ("v", v0), ("p", p0)) if value is not None
     }
     model = scene._native() if isinstance(scene, Lagrangian) else None
+    checked = _shared_options(locals(), options, "ensemble")
+    if _events.split(checked):
+        raise TypeError(
+            "ensemble(): events are text here (the members run in parallel in Rust); "
+            "callables are events of svi.run and svi.solve"
+        )
     arguments: Dict[str, Any] = dict(
         scene="" if model is not None else _text("scene", scene),
         model=model,
@@ -663,7 +675,7 @@ def ensemble(
         random=_count("random", random),
         seed=_whole("seed", seed),
         threads=_whole("threads", threads),
-        options=_shared_options(locals(), options, "ensemble"),
+        options=checked,
     )
     count, columns, _ = _call(_svi.ensemble, start=0, stop=0, **arguments)
     rows: List[List[Any]] = []

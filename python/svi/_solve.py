@@ -9,7 +9,7 @@ from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from . import _svi
+from . import _events, _svi
 
 # The helpers of the package (argument checks, errors, the result object): this module is
 # imported at the end of ``svi/__init__.py``, once they exist.
@@ -220,6 +220,7 @@ def solve(
     named = dict(method=method, h=h, t_end=t_end, adapt=adapt, tol=tol, diagnostics=diagnostics)
     named["output_times"] = _reals("saveat", saveat)
     checked = _shared_options(named, options, "solve")
+    callables = _events.split(checked)
     if isinstance(model, Lagrangian):
         scene, native = "", model._native()
     else:
@@ -235,6 +236,7 @@ def solve(
         every=every,
         progress=False,
         dense=bool(dense),
+        events=callables,
     )
     return Solution(json.loads(summary), rows, kept)
 

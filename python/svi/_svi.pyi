@@ -1,6 +1,6 @@
 """Type stubs of the native module svi._svi (the Rust core; use the functions of ``svi``)."""
 
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -33,10 +33,11 @@ def run(
     every: Optional[int] = None,
     progress: bool = False,
     dense: bool = False,
+    events: List[Tuple[str, str, bool, Callable[..., float]]] = [],
 ) -> Tuple[str, Optional[Tuple[List[str], np.ndarray]], Optional[Dense]]:
     """Run a scene (or ``model``, a text model) as ``svi run`` does: the JSON summary, the
-    trajectory's columns and numbers (row by row), and with ``dense`` every step's
-    polynomial."""
+    trajectory's columns and numbers (row by row), with ``dense`` every step's polynomial;
+    ``events`` are events given as callables (name, direction, terminal, g(t, q, v))."""
 
 def ensemble(
     scene: str,

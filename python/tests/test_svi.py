@@ -298,7 +298,7 @@ def test_every_flag_of_svi_run_is_a_keyword_of_the_calls():
 
     _, help_text, _ = cli("run", "--help")
     flags = {flag.replace("-", "_") for flag in re.findall(r"^\s+--([a-z][a-z-]*)", help_text, re.M)}
-    not_keywords = {"json", "strict", "help", "param", "out", "plot", "every"}
+    not_keywords = {"json", "strict", "help", "param", "out", "plot", "every", "events_out"}
     assert set(svi.options()) == flags - not_keywords, (svi.options(), flags)
     # Each reaches the command line's parser: a value it rejects is bad input naming the flag.
     for name in ["adapt", "recovery", "form", "monitor", "method"]:

@@ -202,7 +202,7 @@ pub fn stability_matrix<M: Method<U1>>(method: &M, z: f64) -> Result<Matrix2<f64
     require_positive("z", z)?;
     let h = z.sqrt();
     let mut workspace = method.workspace(&Oscillator, h)?;
-    let (_, tangent) = method
+    let (_, tangent, _) = method
         .tangent_map(&Oscillator, &mut workspace, 0.0, h, &State::zeros(U1))
         .map_err(|failure| failure.at(0, 0.0))?;
     let matrix = Matrix2::new(

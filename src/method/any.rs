@@ -244,7 +244,7 @@ macro_rules! any_method {
                 t: f64,
                 h: f64,
                 state: &State<N>,
-            ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+            ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
                 match (self, workspace) {
                     $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
                         method.tangent_map(model, workspace, t, h, state)

@@ -678,11 +678,11 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let n = state.dimension();
         let dimension = n.value();
         let mut increment = State::zeros(n);
-        self.step(model, workspace, t, h, state, &mut increment)?;
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
         let ws = &mut *workspace;
         let s = ws.tables.degree;
         // The fixed-point path keeps no Jacobians: evaluate them at the converged nodes.
@@ -730,7 +730,7 @@ where
             yq: velocity.generic_view((0, 0), (n, n)).into_owned(),
             yy: velocity.generic_view((0, dimension), (n, n)).into_owned(),
         };
-        Ok((increment, tangent))
+        Ok((increment, tangent, report))
     }
 }
 
@@ -838,7 +838,7 @@ mod tests {
         for points in [3, 4, 6] {
             let method = SpectralCollocation::new(points);
             let mut workspace = method.workspace(&Oscillator::<false>, h).unwrap();
-            let (_, tangent) = method
+            let (_, tangent, _) = method
                 .tangent_map(
                     &Oscillator::<false>,
                     &mut workspace,

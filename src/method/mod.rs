@@ -228,9 +228,10 @@ where
         None
     }
 
-    /// Perform the step like [`Method::step`] and return its exact Jacobian with respect to
-    /// `state` (implicit function theorem on the converged nonlinear system; derivatives of L
-    /// by automatic differentiation).
+    /// Perform the step like [`Method::step`] and return the increment, its exact Jacobian
+    /// with respect to `state` (implicit function theorem on the converged nonlinear system;
+    /// derivatives of L by automatic differentiation) and the work of the step's solve (the
+    /// Jacobian's own derivative evaluations are not counted).
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
@@ -238,5 +239,5 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure>;
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure>;
 }

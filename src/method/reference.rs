@@ -301,10 +301,10 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let a = jacobian(model, workspace, t, &state.q, &state.y)?;
         let mut increment = State::zeros(workspace.n);
-        self.step(model, workspace, t, h, state, &mut increment)?;
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
         let n = workspace.n;
         let identity = OMatrix::<f64, N, N>::identity_generic(n, n);
         let map = TangentMap {
@@ -313,7 +313,7 @@ where
             yq: &a.q * h,
             yy: identity + &a.v * h,
         };
-        Ok((increment, map))
+        Ok((increment, map, report))
     }
 }
 
@@ -368,7 +368,7 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let n = workspace.n;
         let size = n.value();
         let identity = DMatrix::<f64>::identity(2 * size, 2 * size);
@@ -398,8 +398,8 @@ where
         }
         let map = blocks(&(identity + sum * (h / 6.0)), n);
         let mut increment = State::zeros(n);
-        self.step(model, workspace, t, h, state, &mut increment)?;
-        Ok((increment, map))
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
+        Ok((increment, map, report))
     }
 }
 
@@ -580,9 +580,9 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let mut w = OVector::zeros_generic(workspace.n, U1);
-        self.solve(model, workspace, (t, h), state, &mut w)?;
+        let report = self.solve(model, workspace, (t, h), state, &mut w)?;
         let q = &state.q + &w * h;
         let a = jacobian(model, workspace, t + h, &q, &w)?;
         let n = workspace.n;
@@ -601,7 +601,7 @@ where
             q: q - &state.q,
             y: w - &state.y,
         };
-        Ok((increment, map))
+        Ok((increment, map, report))
     }
 }
 

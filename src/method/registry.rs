@@ -1003,7 +1003,7 @@ mod tests {
                 state.q += &increment.q;
                 state.y += &increment.y;
             }
-            let (fifth, tangent) = method
+            let (fifth, tangent, _) = method
                 .tangent_map(&self.model, &mut workspace, 4.0 * h, h, &state)
                 .map_err(|failure| format!("{failure:?}"))?;
             Ok([&state.q, &state.y, &fifth.q, &fifth.y]

@@ -93,8 +93,9 @@ pub trait Step<L: ?Sized, S: Space> {
         let _ = workspace;
     }
 
-    /// Perform the step like [`Step::step`] and return the increment and the step's exact
-    /// Jacobian with respect to `state`.
+    /// Perform the step like [`Step::step`] and return the increment, the step's exact
+    /// Jacobian with respect to `state` and the work of the step's solve (as
+    /// [`Method::tangent_map`]).
     fn tangent_map(
         &self,
         model: &L,
@@ -102,7 +103,7 @@ pub trait Step<L: ?Sized, S: Space> {
         t: f64,
         h: f64,
         state: &S::State,
-    ) -> Result<(S::State, S::Tangent), StepFailure>;
+    ) -> Result<(S::State, S::Tangent, StepReport), StepFailure>;
 
     /// The method's state for an initial condition at `t0`, after checking the condition
     /// (finite values; on SO(3) an orthogonal attitude).
@@ -294,7 +295,7 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         Method::tangent_map(self, model, workspace, t, h, state)
     }
 

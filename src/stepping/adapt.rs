@@ -219,6 +219,9 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             let guess = outputs.guess.clone();
             let start = progress.cursor.clone();
             let statistics = &mut progress.statistics;
+            // An output or event that fails on the trial's converged steps (a non-finite event
+            // function) is the solve's failure, not a reason to retry a smaller step.
+            let mut served = Ok(());
             let mut trial = || -> Result<(Cursor<S>, Cursor<S>, f64, f64), Error> {
                 let x1 = self.trial(
                     method,
@@ -230,7 +233,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     options,
                     statistics,
                 )?;
-                self.emit(
+                served = self.emit(
                     method,
                     &half,
                     outputs,
@@ -240,7 +243,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     &start.state,
                     &x1.state,
                     mid,
-                )?;
+                );
+                served.clone()?;
                 let x2 = self.trial(
                     method,
                     &mut half,
@@ -251,7 +255,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     options,
                     statistics,
                 )?;
-                self.emit(
+                served = self.emit(
                     method,
                     &half,
                     outputs,
@@ -261,7 +265,8 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                     &x1.state,
                     &x2.state,
                     end,
-                )?;
+                );
+                served.clone()?;
                 let w = self.trial(
                     method,
                     &mut full,
@@ -276,7 +281,11 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 let size = x2.state.distance(&x2.state.zeros_like());
                 Ok((x1, x2, error, size))
             };
-            let optimal = match trial() {
+            let result = trial();
+            if let Err(error) = served {
+                return Err(self.failure(error, progress, false));
+            }
+            let optimal = match result {
                 Ok((x1, x2, error, size)) => {
                     // The slides' h_opt is the step whose single-step error is tol_step, with
                     // the trusted ratio between the 2h and the h steps' errors capped and the

@@ -68,6 +68,7 @@ where
             statistics,
             stopped: false,
         }),
+        events: Vec::new(),
     }
 }
 

@@ -20,6 +20,7 @@ use crate::method::space::{Initial, PhasePoint, Space, StepState};
 use crate::method::step::Step;
 use crate::method::{Euclidean, StepReport};
 use crate::stepping::grid::{grid_step, grid_steps};
+use crate::stepping::event::EventPoint;
 use crate::stepping::observer::Observer;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
@@ -41,6 +42,16 @@ pub struct Statistics {
     pub factorizations: usize,
     /// Symbolic analyses of a sparse linear solver's pattern (one per pattern and run).
     pub analyses: usize,
+}
+
+impl Statistics {
+    /// Add the work of one step.
+    pub(crate) fn record(&mut self, report: StepReport) {
+        self.iterations += report.iterations;
+        self.evaluations += report.evaluations;
+        self.factorizations += report.factorizations;
+        self.analyses += report.analyses;
+    }
 }
 
 /// The result of a run on the space `S` (on ℝᴺ: [`crate::Run`]).
@@ -132,14 +143,18 @@ pub struct RunFailure<S: Space> {
     /// The run up to the last good state (`last` is that state, at the start of the failing
     /// step); `None` when the inputs were rejected before the first step.
     pub partial: Option<Run<S>>,
+    /// The events a solve located before it failed ([`Integrator::try_solve_events`]), in
+    /// the order of their times.
+    pub events: Vec<EventPoint<S::Point>>,
 }
 
 impl<S: Space> RunFailure<S> {
-    /// A failure before the first step: no partial run.
-    pub(crate) fn rejected(error: Error) -> Self {
+    /// A failure before the first step: no partial run, no events.
+    pub fn rejected(error: Error) -> Self {
         RunFailure {
             error,
             partial: None,
+            events: Vec::new(),
         }
     }
 }
@@ -330,7 +345,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         h: f64,
     ) -> Result<(S::State, S::Tangent), Error> {
         let mut workspace = self.cold_workspace(t, state, h)?;
-        let (increment, tangent) = self
+        let (increment, tangent, _) = self
             .method
             .tangent_map(&self.model, &mut workspace, t, h, state)
             .map_err(|failure| failure.at(0, t))?;
@@ -544,10 +559,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         statistics: &mut Statistics,
     ) -> Result<(), StepFailure> {
         let report = method.step(&self.model, workspace, t, h, &cursor.state, increment)?;
-        statistics.iterations += report.iterations;
-        statistics.evaluations += report.evaluations;
-        statistics.factorizations += report.factorizations;
-        statistics.analyses += report.analyses;
+        statistics.record(report);
         cursor
             .state
             .add_checked(&mut cursor.compensation, increment, divergence_limit)
@@ -628,6 +640,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
                 statistics: progress.statistics,
                 stopped,
             }),
+            events: Vec::new(),
         }
     }
 }

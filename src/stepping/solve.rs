@@ -580,7 +580,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
             outputs.guess = S::velocity(&point);
             outputs.points.push(point);
         }
-        let (adaptivity, stopped) = match options.adapt {
+        let driven = match options.adapt {
             Adapt::None => self.solve_fixed(span, options, &mut progress, &mut outputs, observer),
             Adapt::Step => {
                 self.solve_step_adaptive(span, options, &mut progress, &mut outputs, observer)
@@ -589,7 +589,12 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
                 self.solve_degree_adaptive(span, options, &mut progress, &mut outputs, observer)
             }
             Adapt::Sem => self.solve_sem(span, options, &mut progress, &mut outputs, observer),
-        }?;
+        };
+        // A failed solve keeps the events it located.
+        let (adaptivity, stopped) = driven.map_err(|failure| RunFailure {
+            events: std::mem::take(&mut outputs.located),
+            ..failure
+        })?;
         // The end point as `try_run` completes it (from the velocity last observed).
         let run = self.finish(None, progress, stopped)?;
         let last = match outputs.terminal {

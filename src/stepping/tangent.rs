@@ -14,9 +14,9 @@
 //! symplectic, and the Lyapunov spectrum of the discrete flow pairs as ±λ.
 //!
 //! A run here takes no recovery (a failed step is an error: halving it would change the map
-//! whose Jacobian is observed) and no divergence limit (NaN and ∞ are caught); the work
-//! counts of [`Statistics`](crate::stepping::run::Statistics) other than `steps` stay zero,
-//! since [`Step::tangent_map`] reports none.
+//! whose Jacobian is observed) and no divergence limit (NaN and ∞ are caught); its
+//! [`Statistics`](crate::stepping::run::Statistics) count the work of the steps' solves as a
+//! plain run does (the Jacobians' own derivative evaluations are not counted).
 
 use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
@@ -222,7 +222,7 @@ where
         for k in 0..steps {
             let (t, size, end) = grid_step(t0, t_end, h, steps, k);
             let state = &progress.cursor.state;
-            let (increment, tangent) = method
+            let (increment, tangent, report) = method
                 .tangent_map(model, &mut workspace, t, size, state)
                 .map_err(|failure| {
                     self.failure(tangent_failure(name, failure, k, t), &progress, false)
@@ -233,6 +233,7 @@ where
                 .add_checked(&mut cursor.compensation, &increment, None)
                 .map_err(|failure| self.failure(failure.at(k, t), &progress, false))?;
             progress.statistics.steps += 1;
+            progress.statistics.record(report);
             progress.t = end;
             let point = if observer.wants_point(k + 1) {
                 self.complete_progress(&workspace, k + 1, &mut progress)

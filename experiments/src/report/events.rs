@@ -47,6 +47,33 @@ pub struct SectionSummary {
 }
 
 impl EventsSummary {
+    /// The events as CSV (the file of `--events-out`): a header `event,t,q_<name>…,v_<name>…,
+    /// p_<name>…` for the model's coordinate `names`, then one row per event in time order,
+    /// every number by [`Float`] (it reads back exactly); a name with a comma or a quote is
+    /// quoted.
+    pub fn to_csv(&self, names: &[String]) -> String {
+        let header = crate::report::csv::csv_header(names);
+        let columns = header.trim_end().trim_end_matches(",energy");
+        let mut text = format!("event,{columns}\n");
+        for record in &self.events {
+            let name = if record.name.contains([',', '"', '\n', '\r']) {
+                format!("\"{}\"", record.name.replace('"', "\"\""))
+            } else {
+                record.name.clone()
+            };
+            text.push_str(&name);
+            let numbers = std::iter::once(&record.t)
+                .chain(&record.q)
+                .chain(&record.v)
+                .chain(&record.p);
+            for x in numbers {
+                text.push_str(&format!(",{}", Float(*x)));
+            }
+            text.push('\n');
+        }
+        text
+    }
+
     /// The summary's lines: per event name its count and first and last times, the event
     /// that ended the run, the section.
     pub fn rows(&self) -> Vec<(&'static str, String)> {

@@ -256,30 +256,36 @@ pub fn check_distinct(
     Ok(())
 }
 
-/// The option names of a run's two outputs.
+/// The option names of a run's three outputs.
 const TRAJECTORY: &str = "--out (output.trajectory)";
 const PLOT: &str = "--plot (output.plot)";
+/// The option name of the events' CSV file.
+pub const EVENTS: &str = "--events-out (output.events)";
 
-/// Check the outputs of a run before it starts: the trajectory (CSV text, not a picture's
-/// name) and its plot (an `.svg` name) are files that can be written, not the same file, and
-/// neither is the scene file `source`.
+/// Check the outputs of a run before it starts: the trajectory and the events (CSV text, not
+/// a picture's name) and the trajectory's plot (an `.svg` name) are files that can be
+/// written, no two the same file, and none the scene file `source`.
 pub fn check_run_outputs(
     trajectory: Option<&Path>,
     plot: Option<&Path>,
+    events: Option<&Path>,
     source: Option<&Path>,
 ) -> Result<(), OutputError> {
-    if let Some(path) = trajectory {
-        check_file(TRAJECTORY, path)?;
-        check_not_a_picture(TRAJECTORY, path)?;
+    for (option, path) in [(TRAJECTORY, trajectory), (EVENTS, events)] {
+        if let Some(path) = path {
+            check_file(option, path)?;
+            check_not_a_picture(option, path)?;
+        }
     }
     if let Some(path) = plot {
         check_file(PLOT, path)?;
         check_extension(PLOT, path, &["svg"], "SVG")?;
     }
-    let outputs: Vec<(&'static str, &Path)> = [(TRAJECTORY, trajectory), (PLOT, plot)]
-        .into_iter()
-        .filter_map(|(option, path)| Some((option, path?)))
-        .collect();
+    let outputs: Vec<(&'static str, &Path)> =
+        [(TRAJECTORY, trajectory), (PLOT, plot), (EVENTS, events)]
+            .into_iter()
+            .filter_map(|(option, path)| Some((option, path?)))
+            .collect();
     check_distinct(&outputs, source.as_slice())
 }
 

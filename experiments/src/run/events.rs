@@ -41,7 +41,7 @@ impl SceneEvents {
         model: &L,
     ) -> Result<Option<SceneEvents>, SceneError> {
         let section = scene.output.section.as_ref();
-        if scene.events.is_empty() && section.is_none() {
+        if !scene.has_events() && section.is_none() {
             return Ok(None);
         }
         let Some(coordinates) = S::coordinates(model) else {
@@ -66,6 +66,15 @@ impl SceneEvents {
                     .terminal(spec.terminal),
             );
             names.push(name);
+        }
+        for native in &scene.native_events {
+            let g = std::sync::Arc::clone(&native.function);
+            events.push(
+                Event::new(native.name.clone(), move |t, q, v| g(t, q, v))
+                    .direction(native.direction)
+                    .terminal(native.terminal),
+            );
+            names.push(native.name.clone());
         }
         let section = match section {
             None => None,

@@ -58,6 +58,7 @@ use crate::report::csv::Float;
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
 use crate::report::plot::{plot_csv, plot_section};
+use crate::report::output::{EVENTS, write_file};
 use crate::report::progress::Progress;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
@@ -438,19 +439,21 @@ fn run_scene<L, S: RunSpace<L>>(
         Err(RunFailure {
             error,
             partial: Some(run),
+            events,
         }) => (
             Outcome {
                 last: run.last,
                 statistics: run.statistics,
                 solved: None,
                 dense: None,
-                located: (Vec::new(), None),
+                located: (events, None),
             },
             Some(error),
         ),
         Err(RunFailure {
             error,
             partial: None,
+            ..
         }) => return Err(error.into()),
     };
     let last = outcome.last.clone();
@@ -464,6 +467,10 @@ fn run_scene<L, S: RunSpace<L>>(
         }
         None => (None, Vec::new()),
     };
+    if let (Some(path), Some(events)) = (&scene.output.events, &events_summary) {
+        let names = S::coordinates(model).unwrap_or_default();
+        write_file(EVENTS, path, events.to_csv(&names).as_bytes())?;
+    }
     let trajectory = match stream {
         Some(mut stream) => {
             if section {

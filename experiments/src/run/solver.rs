@@ -107,13 +107,10 @@ where
     ) -> Result<Solution<svi::Euclidean<N>>, RunFailure<svi::Euclidean<N>>> {
         // The scene's checks refuse events with steps in τ.
         if !events.is_empty() {
-            return Err(RunFailure {
-                error: svi::Error::invalid(
-                    "events",
-                    "events are not located in fixed steps of τ (adapt = reparam)",
-                ),
-                partial: None,
-            });
+            return Err(RunFailure::rejected(svi::Error::invalid(
+                "events",
+                "events are not located in fixed steps of τ (adapt = reparam)",
+            )));
         }
         self.integrator.try_solve_reparametrized(
             &self.monitor,

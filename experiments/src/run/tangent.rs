@@ -119,10 +119,7 @@ where
         events: &[Event<'_>],
         observer: &mut dyn Observer<L, PhasePoint<N>>,
     ) -> Result<Solution<Euclidean<N>>, RunFailure<Euclidean<N>>> {
-        let rejected = |error| RunFailure {
-            error,
-            partial: None,
-        };
+        let rejected = RunFailure::rejected;
         // The scene's checks refuse events and output times with indicators.
         if !events.is_empty() {
             return Err(rejected(Error::invalid(

@@ -308,7 +308,7 @@ impl Scene {
     fn check_events(&self) -> Result<(), SceneError> {
         let section = self.output.section.is_some();
         self.check_indicators()?;
-        if self.events.is_empty() && !section {
+        if !self.has_events() && !section {
             return Ok(());
         }
         let option = if section {
@@ -372,7 +372,7 @@ impl Scene {
         if self.output.output_times.is_some() {
             return refuse("a tangent run serves no output times: leave out --output-times");
         }
-        if !self.events.is_empty() || self.output.section.is_some() {
+        if self.has_events() || self.output.section.is_some() {
             return refuse("a tangent run locates no events: leave out --event and --section");
         }
         Ok(())
@@ -419,9 +419,16 @@ impl Scene {
                 reason: "draws the trajectory file: give --out FILE (output.trajectory) too".into(),
             });
         }
+        if output.events.is_some() && !self.has_events() {
+            return Err(SceneError::NotApplicable {
+                option: crate::report::output::EVENTS,
+                reason: "writes the located events: give --event (events) too".into(),
+            });
+        }
         crate::report::output::check_run_outputs(
             output.trajectory.as_deref(),
             output.plot.as_deref(),
+            output.events.as_deref(),
             self.source.as_deref(),
         )?;
         let kept = output.trajectory.is_some() || output.record;

@@ -7,6 +7,10 @@
 //! its crossings and whether the first ends the run. On the command line:
 //! `--event "pericentre: x*vx + y*vy @up @terminal"` (the name and the qualifiers optional).
 //!
+//! An event may also be a function of the caller's program ([`NativeEvent`]: a Python
+//! callable of the package), carried by the scene beside its text events but never part of a
+//! scene file.
+//!
 //! A section `"y=0,vy>0"` is the crossings of the surface "coordinate = value", kept where
 //! the condition holds; a condition on the same coordinate's velocity counts only the
 //! crossings in that direction. Coordinates may be named as the model names them (`x`, `vx`)
@@ -14,6 +18,7 @@
 
 use std::fmt;
 use std::str::FromStr;
+use std::sync::Arc;
 
 use serde::Deserialize;
 use svi::stepping::event::Direction;
@@ -27,6 +32,42 @@ pub struct SpecError {
     pub option: &'static str,
     /// What is wrong, and what would do.
     pub reason: String,
+}
+
+/// g(t, q, q̇) on `f64`s, given as code.
+pub type NativeFunction = dyn Fn(f64, &[f64], &[f64]) -> f64 + Send + Sync;
+
+/// An event whose function is code of the caller (the Python package's callables), not text.
+#[derive(Clone)]
+pub struct NativeEvent {
+    /// Its name in the results.
+    pub name: String,
+    /// Which crossings count.
+    pub direction: Direction,
+    /// Whether the first crossing ends the run, with status ok.
+    pub terminal: bool,
+    /// g(t, q, q̇); a non-finite value fails the run naming the event.
+    pub function: Arc<NativeFunction>,
+}
+
+impl fmt::Debug for NativeEvent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("NativeEvent")
+            .field("name", &self.name)
+            .field("direction", &self.direction)
+            .field("terminal", &self.terminal)
+            .finish_non_exhaustive()
+    }
+}
+
+impl PartialEq for NativeEvent {
+    /// The same name, direction and terminal flag, and the same function object.
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+            && self.direction == other.direction
+            && self.terminal == other.terminal
+            && Arc::ptr_eq(&self.function, &other.function)
+    }
 }
 
 /// One event of a scene.
@@ -237,6 +278,13 @@ pub fn resolve(
                 n = coordinates.len()
             ),
         })
+}
+
+impl crate::scene::Scene {
+    /// Whether the scene asks for events (text or native; a section is not counted).
+    pub fn has_events(&self) -> bool {
+        !self.events.is_empty() || !self.native_events.is_empty()
+    }
 }
 
 #[cfg(test)]

@@ -292,6 +292,7 @@ impl SpaceTimeFields<'_> {
         Ok(crate::report::output::check_run_outputs(
             self.trajectory.as_deref(),
             self.plot.as_deref(),
+            None,
             self.source,
         )?)
     }

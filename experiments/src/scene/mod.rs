@@ -185,6 +185,10 @@ pub struct Scene {
     /// Outputs.
     #[serde(default)]
     pub output: OutputSection,
+    /// Events given as code by the caller (the Python package's callables), located after
+    /// the text `events`. Not a scene field.
+    #[serde(skip)]
+    pub native_events: Vec<events::NativeEvent>,
     /// The scene file it was read from (none for a built-in scene or a text): no output may
     /// be written over it. Not a scene field.
     #[serde(skip)]
@@ -385,6 +389,7 @@ impl Scene {
             multipliers,
             event,
             section,
+            events_out,
         } = overrides;
         let space = self.space();
         match method {
@@ -469,6 +474,7 @@ impl Scene {
         set(&mut self.output.multipliers, multipliers);
         self.events.extend(event.iter().cloned());
         set(&mut self.output.section, section);
+        set(&mut self.output.events, events_out);
         if *recovery == Some(RecoveryKind::None) {
             self.run.max_halvings = None;
         }

@@ -198,6 +198,10 @@ pub struct Overrides {
     /// --out writes its points instead of the trajectory, --plot draws them.
     #[arg(long, value_name = "SECTION")]
     pub section: Option<crate::scene::events::SectionSpec>,
+    /// Write the events located by --event as CSV to FILE, one row per event:
+    /// event,t,q_…,v_…,p_… (also after a run that failed).
+    #[arg(long, value_name = "FILE")]
+    pub events_out: Option<PathBuf>,
 }
 
 /// The kind of value a run option takes, read from its flag's parser: what a front door that
@@ -214,12 +218,14 @@ pub enum OptionKind {
     Reals,
     /// A list of words (`--diagnostics`).
     Names,
+    /// A list of texts, each the argument of one repetition of the flag (`--event`).
+    Texts,
     /// True or false (`--multipliers`).
     Flag,
 }
 
 impl OptionKind {
-    /// The kind's name: `real`, `count`, `text`, `reals`, `names`.
+    /// The kind's name: `real`, `count`, `text`, `reals`, `names`, `texts`, `flag`.
     pub fn name(self) -> &'static str {
         match self {
             OptionKind::Real => "real",
@@ -227,6 +233,7 @@ impl OptionKind {
             OptionKind::Text => "text",
             OptionKind::Reals => "reals",
             OptionKind::Names => "names",
+            OptionKind::Texts => "texts",
             OptionKind::Flag => "flag",
         }
     }
@@ -245,23 +252,27 @@ pub enum OptionValue {
     Reals(Vec<f64>),
     /// Words.
     Names(Vec<String>),
+    /// Texts, one per repetition of the flag.
+    Texts(Vec<String>),
     /// True or false.
     Flag(bool),
 }
 
 impl OptionValue {
-    /// The value as the flag's argument: numbers in exponent form (exact), lists
-    /// comma-separated.
-    fn argument(&self) -> String {
+    /// The value as the flag's arguments: numbers in exponent form (exact), lists
+    /// comma-separated, texts one argument each (the flag repeated).
+    fn arguments(&self) -> Vec<String> {
         let join = |items: Vec<String>| items.join(",");
-        match self {
+        let one = match self {
             OptionValue::Count(n) => n.to_string(),
             OptionValue::Real(x) => format!("{x:e}"),
             OptionValue::Text(text) => text.clone(),
             OptionValue::Reals(xs) => join(xs.iter().map(|x| format!("{x:e}")).collect()),
             OptionValue::Names(names) => join(names.clone()),
+            OptionValue::Texts(texts) => return texts.clone(),
             OptionValue::Flag(flag) => flag.to_string(),
-        }
+        };
+        vec![one]
     }
 }
 
@@ -289,6 +300,7 @@ impl Overrides {
             .filter(|arg| arg.get_long().is_some())
             .map(|arg| {
                 let list = arg.get_value_delimiter().is_some();
+                let repeated = matches!(arg.get_action(), clap::ArgAction::Append);
                 let parsed = arg.get_value_parser().type_id();
                 let kind = if parsed == real {
                     if list {
@@ -302,6 +314,8 @@ impl Overrides {
                     OptionKind::Flag
                 } else if list {
                     OptionKind::Names
+                } else if repeated {
+                    OptionKind::Texts
                 } else {
                     OptionKind::Text
                 };
@@ -333,7 +347,9 @@ impl Overrides {
                             .join(", ")
                     ),
                 })?;
-            tokens.push(format!("--{long}={}", value.argument()));
+            for argument in value.arguments() {
+                tokens.push(format!("--{long}={argument}"));
+            }
         }
         let invalid = |error: clap::Error| SceneError::InvalidOption {
             option: "option",
@@ -386,6 +402,7 @@ mod tests {
         assert_eq!(kinds["method"], OptionKind::Text);
         assert_eq!(kinds["output_times"], OptionKind::Reals);
         assert_eq!(kinds["diagnostics"], OptionKind::Names);
+        assert_eq!(kinds["event"], OptionKind::Texts);
         let named = Overrides::from_named(&[
             ("method".into(), OptionValue::Text("svi:7/6".into())),
             ("h".into(), OptionValue::Real(0.1)),
@@ -400,6 +417,10 @@ mod tests {
                 OptionValue::Names(vec!["energy".into(), "momentum".into()]),
             ),
             ("adapt".into(), OptionValue::Text("degree".into())),
+            (
+                "event".into(),
+                OptionValue::Texts(vec!["up: x @up".into(), "y, z".into()]),
+            ),
         ])
         .unwrap();
         let third = format!("{:e}", 1.0 / 3.0);
@@ -419,9 +440,14 @@ mod tests {
             "energy,momentum",
             "--adapt",
             "degree",
+            "--event",
+            "up: x @up",
+            "--event",
+            "y, z",
         ])
         .unwrap();
         assert_eq!(named, flags.overrides);
+        assert_eq!(named.event.len(), 2);
         assert_eq!(named.output_times.as_ref().unwrap()[1], 1.0 / 3.0);
         for (name, value, says) in [
             ("adapt", OptionValue::Text("bogus".into()), "--adapt"),

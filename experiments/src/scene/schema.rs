@@ -350,6 +350,9 @@ pub struct OutputSection {
     /// A Poincaré section, `"y=0,vy>0"` ([`crate::scene::events`]): the trajectory file
     /// holds the section's points instead of the steps, and `plot` draws them.
     pub section: Option<crate::scene::events::SectionSpec>,
+    /// CSV file for the located events (needs events): one row per event, `event,t,q_…,v_…,p_…`,
+    /// written after the run, a failed one included.
+    pub events: Option<PathBuf>,
     /// Keep the trajectory in memory (the summary's `recorded`) instead of writing a file:
     /// the Python package's runs, which never touch the file system. `every` and
     /// `output_times` apply as to a file. Not a scene field.

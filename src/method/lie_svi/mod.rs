@@ -345,9 +345,9 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         t: f64,
         h: f64,
         state: &RigidState,
-    ) -> Result<(RigidState, SMatrix<f64, 6, 6>), StepFailure> {
+    ) -> Result<(RigidState, SMatrix<f64, 6, 6>, StepReport), StepFailure> {
         let mut increment = RigidState::zeros();
-        Step::<L, SO3>::step(self, model, workspace, t, h, state, &mut increment)?;
+        let report = Step::<L, SO3>::step(self, model, workspace, t, h, state, &mut increment)?;
         let d = workspace.degree;
         let n = 3 * d;
         let tables = Tables {
@@ -434,7 +434,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             .copy_from(&(mu_from_eta - output * eta_from_eta));
         phi.fixed_view_mut::<3, 3>(3, 3)
             .copy_from(&(mu_from_p - output * eta_from_p));
-        Ok((increment, phi))
+        Ok((increment, phi, report))
     }
 
     /// Checks the initial condition: finite values and an orthogonal attitude (‖R₀ᵀR₀ − I‖ at

@@ -507,11 +507,11 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let n = state.dimension();
         let dimension = n.value();
         let mut increment = State::zeros(n);
-        self.step(model, workspace, t, h, state, &mut increment)?;
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
         let tables = &workspace.tables;
         let count = tables.basis;
         let s = tables.degree;
@@ -572,7 +572,7 @@ where
             yq: momentum.generic_view((0, 0), (n, n)).into_owned(),
             yy: momentum.generic_view((0, dimension), (n, n)).into_owned(),
         };
-        Ok((increment, tangent))
+        Ok((increment, tangent, report))
     }
 }
 
@@ -641,7 +641,7 @@ mod tests {
         let h = 2.0;
         let start = state([0.3, -0.2], [0.1, 0.4]);
         let mut workspace = method.workspace(&model, h).unwrap();
-        let (_, tangent) = method
+        let (_, tangent, _) = method
             .tangent_map(&model, &mut workspace, 0.0, h, &start)
             .unwrap();
         let symplectic = tangent.symplecticity_error();

@@ -282,9 +282,10 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let base = &mut workspace.base;
         let mut product: Option<TangentMap<N>> = None;
+        let mut report = StepReport::default();
         let n = state.dimension();
         let (mut from, mut stage, mut total) = (State::zeros(n), State::zeros(n), State::zeros(n));
         self.stages(
@@ -292,8 +293,9 @@ where
             state,
             (&mut from, &mut stage, &mut total),
             |t, size, from, stage| {
-                let (increment, tangent) = self.base.tangent_map(model, base, t, size, from)?;
+                let (increment, tangent, work) = self.base.tangent_map(model, base, t, size, from)?;
                 *stage = increment;
+                report += work;
                 product = Some(match &product {
                     None => tangent,
                     Some(before) => before.then(&tangent),
@@ -302,7 +304,7 @@ where
             },
         )?;
         product
-            .map(|tangent| (total, tangent))
+            .map(|tangent| (total, tangent, report))
             .ok_or(StepFailure::SingularMatrix)
     }
 }

@@ -229,12 +229,12 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let mut increment = State::zeros(state.dimension());
-        self.step(model, workspace, t, h, state, &mut increment)?;
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
         let q1 = &state.q + &increment.q;
         let tangent = discrete_tangent_map(&Trapezoid, model, t, h, &state.q, &q1)?;
-        Ok((increment, tangent))
+        Ok((increment, tangent, report))
     }
 }
 

@@ -417,12 +417,12 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let mut increment = State::zeros(state.dimension());
-        self.step(model, workspace, t, h, state, &mut increment)?;
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
         let q1 = &state.q + &increment.q;
         let tangent = discrete_tangent_map(&self.discrete_lagrangian, model, t, h, &state.q, &q1)?;
-        Ok((increment, tangent))
+        Ok((increment, tangent, report))
     }
 }
 
@@ -662,7 +662,7 @@ mod tests {
         let h = 0.1;
         let (fixed, _) = advance(method, &model, h, 10, start);
         let mut workspace = method.workspace(&model, h).unwrap();
-        let (_, tangent) = method
+        let (_, tangent, _) = method
             .tangent_map(&model, &mut workspace, 0.0, h, &start)
             .unwrap();
         let dynamic = AsDyn::<L, Const<K>>::new(model);
@@ -673,7 +673,7 @@ mod tests {
             .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
         assert!(difference <= 1e-13, "{method:?}: {difference:e}");
         let mut workspace = method.workspace(&dynamic, h).unwrap();
-        let (_, other_tangent) = method
+        let (_, other_tangent, _) = method
             .tangent_map(&dynamic, &mut workspace, 0.0, h, &run_time(&start))
             .unwrap();
         let difference = (tangent.matrix() - other_tangent.matrix()).amax();

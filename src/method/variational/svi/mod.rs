@@ -65,6 +65,7 @@ mod newton;
 mod workspace;
 
 pub use workspace::SviWorkspace;
+use workspace::TangentBuffers;
 
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::Error;
@@ -240,6 +241,7 @@ where
             legendre: LazyLegendre::default(),
             constant_mass,
             newton_only: false,
+            tangent: None,
         })
     }
 
@@ -488,25 +490,34 @@ where
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<(State<N>, TangentMap<N>), StepFailure> {
+    ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure> {
         let mut increment = State::zeros(state.dimension());
-        self.step(model, workspace, t, h, state, &mut increment)?;
+        let report = self.step(model, workspace, t, h, state, &mut increment)?;
         // The converged node offsets (a fixed-point step leaves them pending).
         workspace.settle();
         if let Some(offsets) = workspace.start.last_offsets() {
             workspace.offsets.copy_from_slice(offsets);
         }
-        let ws = &*workspace;
-        let tables = &ws.tables;
+        let SviWorkspace {
+            tables,
+            offsets,
+            tangent: buffers,
+            ..
+        } = workspace;
         let s = tables.degree;
         let n = state.dimension();
         let w = n.value();
+        let TangentBuffers {
+            hessian,
+            lu,
+            sensitivity,
+            momentum,
+        } = buffers.get_or_insert_with(|| TangentBuffers::new(s, w));
         // Full block Hessian H_{νj} = ∂(g_ν + f_ν)/∂qʲ, ν, j = 0..s, at the converged nodes
         // (the force terms vanish for unforced models).
-        let size = (s + 1) * w;
-        let mut hessian = DMatrix::zeros(size, size);
+        hessian.fill(0.0);
         for mu in 0..tables.nodes.len() {
-            let (q, v) = tables.point(mu, &state.q, &ws.offsets);
+            let (q, v) = tables.point(mu, &state.q, offsets);
             let d = model.second_derivatives(tables.time(t, mu), &q, &v);
             let f = model.external_force_jacobian(tables.time(t, mu), &q, &v);
             let weight = tables.weights[mu];
@@ -517,35 +528,37 @@ where
                 for nu in 0..=s {
                     let block =
                         &from_q * tables.values[(mu, nu)] + &from_v * tables.derivatives[(mu, nu)];
-                    add_block(&mut hessian, nu * w, j * w, &block);
+                    add_block(hessian, nu * w, j * w, &block);
                 }
             }
         }
         let inner = s * w;
-        let mut lu = crate::linalg::DenseLu::new(inner);
         lu.matrix_mut()
             .copy_from(&hessian.view((0, w), (inner, inner)));
         lu.factor().map_err(|_| StepFailure::SingularMatrix)?;
         // Columns: d/dq_k (N), then d/dp_k (N).
-        let mut sensitivity = DMatrix::zeros(inner, 2 * w);
-        sensitivity
-            .view_mut((0, 0), (inner, w))
-            .copy_from(&(-hessian.view((0, 0), (inner, w))));
-        for i in 0..w {
-            sensitivity[(i, w + i)] = -1.0;
+        sensitivity.fill(0.0);
+        for j in 0..w {
+            for i in 0..inner {
+                sensitivity[(i, j)] = -hessian[(i, j)];
+            }
+            sensitivity[(j, w + j)] = -1.0;
         }
-        lu.solve_columns_in_place(&mut sensitivity);
+        lu.solve_columns_in_place(sensitivity);
         let last = sensitivity.view(((s - 1) * w, 0), (w, 2 * w));
-        let mut momentum = hessian.view((s * w, w), (w, inner)) * &sensitivity;
-        let mut from_q0 = momentum.view_mut((0, 0), (w, w));
-        from_q0 += hessian.view((s * w, 0), (w, w));
+        momentum.gemm(
+            1.0,
+            &hessian.view((s * w, w), (w, inner)),
+            &*sensitivity,
+            0.0,
+        );
         let tangent = TangentMap {
             qq: OMatrix::from_fn_generic(n, n, |i, j| last[(i, j)]),
             qy: OMatrix::from_fn_generic(n, n, |i, j| last[(i, w + j)]),
-            yq: OMatrix::from_fn_generic(n, n, |i, j| momentum[(i, j)]),
+            yq: OMatrix::from_fn_generic(n, n, |i, j| momentum[(i, j)] + hessian[(s * w + i, j)]),
             yy: OMatrix::from_fn_generic(n, n, |i, j| momentum[(i, w + j)]),
         };
-        Ok((increment, tangent))
+        Ok((increment, tangent, report))
     }
 }
 
@@ -951,7 +964,7 @@ mod tests {
     fn assert_symplectic<L: Lagrangian<U2>>(method: &Svi, model: &L, start: State<U2>) {
         let h = 0.3;
         let mut workspace = method.workspace(model, h).unwrap();
-        let (_, tangent) = method
+        let (_, tangent, _) = method
             .tangent_map(model, &mut workspace, 0.0, h, &start)
             .unwrap();
         let error = tangent.symplecticity_error();
@@ -1042,7 +1055,7 @@ mod tests {
         let h = 0.1;
         let (fixed, fixed_workspace) = advance(method, &model, h, 10, start);
         let mut workspace = method.workspace(&model, h).unwrap();
-        let (_, tangent) = method
+        let (_, tangent, _) = method
             .tangent_map(&model, &mut workspace, 0.0, h, &start)
             .unwrap();
         // The cached M⁻¹p of a constant-mass model.
@@ -1073,7 +1086,7 @@ mod tests {
             assert!((DVector::from_column_slice(a.as_slice()) - b).amax() <= 1e-13);
         }
         let mut other_workspace = method.workspace(&dynamic, h).unwrap();
-        let (_, other_tangent) = method
+        let (_, other_tangent, _) = method
             .tangent_map(&dynamic, &mut other_workspace, 0.0, h, &run_time(&start))
             .unwrap();
         let difference = (tangent.matrix() - other_tangent.matrix()).amax();

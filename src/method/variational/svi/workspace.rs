@@ -13,7 +13,8 @@ use crate::model::legendre::LazyLegendre;
 use crate::nonlinear::Newton;
 use crate::spectral::starting_values::StartingValues;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator, OVector, U1};
+use crate::linalg::DenseLu;
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OVector, U1};
 
 /// Buffers of an SVI run.
 #[derive(Debug, Clone)]
@@ -40,6 +41,35 @@ where
     /// Set once the fixed-point iteration of a forced model failed to converge: the rest of
     /// the run takes Newton's method.
     pub(super) newton_only: bool,
+    /// Buffers of the tangent map, made at its first use.
+    pub(super) tangent: Option<TangentBuffers>,
+}
+
+/// Buffers of [`crate::method::Method::tangent_map`] for SVI: the block Hessian of the
+/// discrete action in the nodes, the LU factors of its interior block and the sensitivities.
+#[derive(Debug, Clone)]
+pub(super) struct TangentBuffers {
+    /// H_{νj} = ∂(g_ν + f_ν)/∂qʲ, ν, j = 0..s.
+    pub(super) hessian: DMatrix<f64>,
+    /// The block ν = 0..s−1, j = 1..s, factorised.
+    pub(super) lu: DenseLu,
+    /// The interior nodes' derivatives in (q_k, p_k).
+    pub(super) sensitivity: DMatrix<f64>,
+    /// p_{k+1}'s derivatives in (q_k, p_k).
+    pub(super) momentum: DMatrix<f64>,
+}
+
+impl TangentBuffers {
+    /// Buffers for `degree` s and `width` N coordinates.
+    pub(super) fn new(degree: usize, width: usize) -> Self {
+        let (size, inner) = ((degree + 1) * width, degree * width);
+        TangentBuffers {
+            hessian: DMatrix::zeros(size, size),
+            lu: DenseLu::new(inner),
+            sensitivity: DMatrix::zeros(inner, 2 * width),
+            momentum: DMatrix::zeros(width, 2 * width),
+        }
+    }
 }
 
 impl<N: Dimension> SviWorkspace<N>
