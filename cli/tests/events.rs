@@ -111,7 +111,7 @@ fn indicators_tell_the_chaotic_orbit_from_a_regular_one() {
         "run",
         "henon-heiles",
         "--indicators",
-        "megno,spectrum,lyapunov,sali",
+        "megno,spectrum,lyapunov,sali,gali",
         "--json",
     ]);
     let spectrum = vector(&chaotic, "lyapunov");
@@ -123,9 +123,15 @@ fn indicators_tell_the_chaotic_orbit_from_a_regular_one() {
     // ⟨Y⟩ ≈ λt/2 on a chaotic orbit (T = 2000).
     assert!(number(&chaotic, "megno") > 20.0);
     assert!(number(&chaotic, "sali") < 1e-8);
-    // The tangent run is the plain run: the same final state.
+    assert!(number(&chaotic, "gali") < 1e-8);
+    // The tangent run is the plain run: the same final state and the same work of the
+    // steps' solves.
     let plain = json(&["run", "henon-heiles", "--json"]);
     assert_eq!(chaotic["q"], plain["q"]);
+    for work in ["iterations", "evaluations"] {
+        assert!(number(&plain, work) > 0.0);
+        assert_eq!(chaotic[work], plain[work], "{work}");
+    }
     let regular = json(&[
         "run",
         "henon-heiles",
@@ -134,11 +140,12 @@ fn indicators_tell_the_chaotic_orbit_from_a_regular_one() {
         "--param",
         "y0=0",
         "--indicators",
-        "megno,sali",
+        "megno,sali,gali",
         "--json",
     ]);
     assert!((number(&regular, "megno") - 2.0).abs() < 0.1, "{regular}");
     assert!(number(&regular, "sali") > 1e-3);
+    assert!(number(&regular, "gali") > 1e-3);
 }
 
 #[test]

@@ -167,6 +167,7 @@ tuple_tangent_observer!(A);
 tuple_tangent_observer!(A, B);
 tuple_tangent_observer!(A, B, C);
 tuple_tangent_observer!(A, B, C, D);
+tuple_tangent_observer!(A, B, C, D, E);
 
 /// The error of a failed tangent step `k` at `t`: a method that cannot give its tangent map
 /// on this model ([`StepFailure::Unsupported`]) is named; other failures carry the step and

@@ -1,5 +1,5 @@
 //! The chaos indicators of a run in its summary (`--indicators`): MEGNO, the maximal
-//! Lyapunov exponent, the Lyapunov spectrum and SALI at the end of the run, from the method's
+//! Lyapunov exponent, the Lyapunov spectrum, SALI and GALI_N at the end of the run, from the method's
 //! exact tangent maps ([`svi::analysis::chaos`]).
 
 use serde::Serialize;
@@ -21,6 +21,10 @@ pub struct IndicatorSummary {
     /// The smaller alignment index SALI (→ 0 exponentially on chaotic orbits).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sali: Option<f64>,
+    /// GALI_N, the volume spanned by N unit deviation vectors (N the coordinates): about
+    /// constant on regular orbits (of an N-torus), → 0 exponentially on chaotic ones.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gali: Option<f64>,
 }
 
 impl IndicatorSummary {
@@ -42,6 +46,9 @@ impl IndicatorSummary {
         }
         if let Some(sali) = self.sali {
             rows.push(("SALI", format!("{sali:.3e}")));
+        }
+        if let Some(gali) = self.gali {
+            rows.push(("GALI_N", format!("{gali:.3e}")));
         }
         rows
     }

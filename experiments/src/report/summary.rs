@@ -107,7 +107,7 @@ pub struct Summary {
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub events: Option<EventsSummary>,
     /// The chaos indicators at the end of the run (`--indicators`): `megno`, `lyapunov_max`,
-    /// `lyapunov`, `sali`.
+    /// `lyapunov`, `sali`, `gali`.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub indicators: Option<IndicatorSummary>,
 }

@@ -10,8 +10,8 @@ use std::ops::ControlFlow;
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
 use svi::analysis::chaos::{
-    LyapunovSpectrum, MaximalLyapunov, MaximalOptions, Megno, MegnoOptions, Sali, SaliOptions,
-    SpectrumOptions,
+    Gali, GaliOptions, LyapunovSpectrum, MaximalLyapunov, MaximalOptions, Megno, MegnoOptions,
+    Sali, SaliOptions, SpectrumOptions,
 };
 use svi::method::space::{Initial, Space, State};
 use svi::observer::Observer;
@@ -31,10 +31,12 @@ type Indicators = (
     Option<MaximalLyapunov>,
     Option<LyapunovSpectrum>,
     Option<Sali>,
+    Option<Gali>,
 );
 
-/// The indicators `asked` for, with their default options.
-fn indicators(asked: &[Indicator]) -> Result<Indicators, Error> {
+/// The indicators `asked` for, with their default options, for a model of `n` coordinates
+/// (GALI of order n).
+fn indicators(asked: &[Indicator], n: usize) -> Result<Indicators, Error> {
     let wants = |indicator| asked.contains(&indicator);
     Ok((
         wants(Indicator::Megno)
@@ -49,16 +51,20 @@ fn indicators(asked: &[Indicator]) -> Result<Indicators, Error> {
         wants(Indicator::Sali)
             .then(|| Sali::new(SaliOptions::default()))
             .transpose()?,
+        wants(Indicator::Gali)
+            .then(|| Gali::new(GaliOptions::default().with_k(n)))
+            .transpose()?,
     ))
 }
 
 /// What the indicators found, for the summary.
-fn summary((megno, lyapunov, spectrum, sali): &Indicators) -> IndicatorSummary {
+fn summary((megno, lyapunov, spectrum, sali, gali): &Indicators) -> IndicatorSummary {
     IndicatorSummary {
         megno: megno.as_ref().map(Megno::mean),
         lyapunov_max: lyapunov.as_ref().map(MaximalLyapunov::exponent),
         lyapunov: spectrum.as_ref().map(|s| s.exponents().to_vec()),
         sali: sali.as_ref().map(Sali::value),
+        gali: gali.as_ref().map(Gali::value),
     }
 }
 
@@ -128,7 +134,8 @@ where
             )));
         }
         let model = self.integrator.model();
-        let mut indicators = indicators(&self.asked).map_err(rejected)?;
+        let n = initial.position().len();
+        let mut indicators = indicators(&self.asked, n).map_err(rejected)?;
         if observer.wants(0) {
             let first = Solver::first_point(
                 self,

@@ -782,9 +782,11 @@ pub(crate) mod tests {
                 multipliers: None,
                 event: vec!["peri: q1*vq1 + q2*vq2 @up".parse().unwrap()],
                 section: None,
+                events_out: Some("events.csv".into()),
             })
             .unwrap();
         assert_eq!(scene.events.len(), 1);
+        assert_eq!(scene.output.events, Some("events.csv".into()));
         assert_eq!(scene.run.max_steps, Some(500));
         assert_eq!(scene.run.adapt, Some(AdaptMode::Degree));
         assert_eq!(scene.run.tol, Some(1e-9));

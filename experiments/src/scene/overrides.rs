@@ -146,7 +146,7 @@ pub struct RunFlags {
     #[arg(long, value_enum, value_name = "FORM")]
     pub form: Option<FormName>,
     /// Chaos indicators from the method's exact tangent maps, comma-separated (fixed steps on
-    /// ℝᴺ): megno, lyapunov (maximal exponent), spectrum (all 2N exponents), sali.
+    /// ℝᴺ): megno, lyapunov (maximal exponent), spectrum (all 2N exponents), sali, gali (GALI_N).
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub indicators: Option<Vec<crate::scene::schema::Indicator>>,
 }

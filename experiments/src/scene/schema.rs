@@ -194,7 +194,7 @@ pub struct RunSection {
     pub max_steps: Option<usize>,
     /// Chaos indicators computed from the method's exact tangent maps along the run
     /// ([`svi::analysis::chaos`]; fixed steps on ℝᴺ): the summary's `megno`, `lyapunov_max`,
-    /// `lyapunov` and `sali`.
+    /// `lyapunov`, `sali` and `gali`.
     pub indicators: Option<Vec<Indicator>>,
 }
 
@@ -210,18 +210,22 @@ pub enum Indicator {
     Spectrum,
     /// The smaller alignment index of two deviation vectors (→ 0 on chaotic orbits): `sali`.
     Sali,
+    /// GALI of order N, the volume of N unit deviation vectors (about constant on regular
+    /// orbits, → 0 exponentially on chaotic ones; 1 for N = 1): `gali`.
+    Gali,
 }
 
 impl Indicator {
     /// The names, as written in scenes and on the command line.
-    pub const NAMES: [&'static str; 4] = ["megno", "lyapunov", "spectrum", "sali"];
+    pub const NAMES: [&'static str; 5] = ["megno", "lyapunov", "spectrum", "sali", "gali"];
 
     /// Every indicator, in the order of their summary fields and table columns.
-    pub const ALL: [Indicator; 4] = [
+    pub const ALL: [Indicator; 5] = [
         Indicator::Megno,
         Indicator::Lyapunov,
         Indicator::Spectrum,
         Indicator::Sali,
+        Indicator::Gali,
     ];
 
     /// The ensemble table's columns of the indicator on a phase space of `dimension` (2N):
@@ -234,6 +238,7 @@ impl Indicator {
                 .map(|i| (format!("lyapunov_{}", i + 1), "lyapunov", Some(i)))
                 .collect(),
             Indicator::Sali => vec![("sali".into(), "sali", None)],
+            Indicator::Gali => vec![("gali".into(), "gali", None)],
         }
     }
 }
