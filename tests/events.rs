@@ -298,7 +298,10 @@ fn bad_events_are_typed_errors_naming_them() {
     }
     // A solve that fails keeps the events located before: the apocentres (y falling
     // through 0) at π and 3π, on every driver.
-    for adapt in [SolveOptions::fixed_step(0.1), SolveOptions::step_adaptive(1e-10)] {
+    for adapt in [
+        SolveOptions::fixed_step(0.1),
+        SolveOptions::step_adaptive(1e-10),
+    ] {
         let events = [
             Event::new("apocentre", |_, q, _| q[1]).direction(Direction::Down),
             Event::new("late", |t, _, _| if t > 11.0 { f64::NAN } else { 1.0 }),
@@ -306,7 +309,11 @@ fn bad_events_are_typed_errors_naming_them() {
         let failure = integrator
             .try_solve_events(&Span::new(0.0, 20.0), initial, &adapt, &events, &mut ())
             .unwrap_err();
-        assert!(failure.error.to_string().contains("event 'late'"), "{}", failure.error);
+        assert!(
+            failure.error.to_string().contains("event 'late'"),
+            "{}",
+            failure.error
+        );
         let times: Vec<f64> = failure.events.iter().map(|e| e.point.t).collect();
         assert_eq!(times.len(), 2, "{times:?}");
         for (k, t) in times.iter().enumerate() {

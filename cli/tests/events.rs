@@ -277,7 +277,10 @@ fn the_events_file_holds_every_event_and_a_failed_run_keeps_its_events() {
         assert!(same(cell(row, "t"), number(event, "t")));
         assert!(same(cell(row, "q_q1"), vector(event, "q")[0]));
         assert!(same(cell(row, "p_q2"), vector(event, "p")[1]));
-        assert!((cell(row, "t") - TAU / 2.0 * (k + 1) as f64).abs() < 1e-9, "{row:?}");
+        assert!(
+            (cell(row, "t") - TAU / 2.0 * (k + 1) as f64).abs() < 1e-9,
+            "{row:?}"
+        );
     }
     // An event that turns NaN after t = 5 fails the run (status 1); the apocentre at π and the
     // zero of the failing function at t = 5 were located first, and are kept in the summary

@@ -28,8 +28,8 @@ use svi_experiments::report::schema;
 use svi_experiments::report::table::Cell;
 use svi_experiments::run::error_report;
 use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
-use svi_experiments::scene::field::FieldScene;
 use svi_experiments::scene::events::NativeEvent;
+use svi_experiments::scene::field::FieldScene;
 use svi_experiments::scene::overrides::{OptionKind, OptionValue};
 use svi_experiments::scene::spectral::SpectralScene;
 use svi_experiments::{Components, Control, Overrides, Scene, SceneError};
@@ -284,7 +284,10 @@ fn native_events(callables: Vec<CallableEvent>, raised: &Raised) -> PyResult<Vec
             let call = move |t: f64, q: &[f64], v: &[f64]| -> f64 {
                 Python::attach(|py| {
                     let value = function
-                        .call1(py, (t, PyArray1::from_slice(py, q), PyArray1::from_slice(py, v)))
+                        .call1(
+                            py,
+                            (t, PyArray1::from_slice(py, q), PyArray1::from_slice(py, v)),
+                        )
                         .and_then(|value| {
                             value.extract::<f64>(py).map_err(|_| {
                                 let kind = value.bind(py).get_type().name().map_or_else(

@@ -68,7 +68,7 @@ where
             statistics,
             stopped: false,
         }),
-        events: Vec::new(),
+        events: Box::default(),
     }
 }
 

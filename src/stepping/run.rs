@@ -19,8 +19,8 @@ use crate::error::{Error, StepFailure, require_finite, require_positive};
 use crate::method::space::{Initial, PhasePoint, Space, StepState};
 use crate::method::step::Step;
 use crate::method::{Euclidean, StepReport};
-use crate::stepping::grid::{grid_step, grid_steps};
 use crate::stepping::event::EventPoint;
+use crate::stepping::grid::{grid_step, grid_steps};
 use crate::stepping::observer::Observer;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
@@ -144,8 +144,8 @@ pub struct RunFailure<S: Space> {
     /// step); `None` when the inputs were rejected before the first step.
     pub partial: Option<Run<S>>,
     /// The events a solve located before it failed ([`Integrator::try_solve_events`]), in
-    /// the order of their times.
-    pub events: Vec<EventPoint<S::Point>>,
+    /// the order of their times (a boxed slice: a failure stays small to return).
+    pub events: Box<[EventPoint<S::Point>]>,
 }
 
 impl<S: Space> RunFailure<S> {
@@ -154,7 +154,7 @@ impl<S: Space> RunFailure<S> {
         RunFailure {
             error,
             partial: None,
-            events: Vec::new(),
+            events: Box::default(),
         }
     }
 }
@@ -640,7 +640,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
                 statistics: progress.statistics,
                 stopped,
             }),
-            events: Vec::new(),
+            events: Box::default(),
         }
     }
 }

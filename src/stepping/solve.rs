@@ -592,7 +592,7 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
         };
         // A failed solve keeps the events it located.
         let (adaptivity, stopped) = driven.map_err(|failure| RunFailure {
-            events: std::mem::take(&mut outputs.located),
+            events: std::mem::take(&mut outputs.located).into_boxed_slice(),
             ..failure
         })?;
         // The end point as `try_run` completes it (from the velocity last observed).

@@ -57,8 +57,8 @@ use svi_models::{
 use crate::report::csv::Float;
 use crate::report::health::Warning;
 use crate::report::health::{self, Measured};
-use crate::report::plot::{plot_csv, plot_section};
 use crate::report::output::{EVENTS, write_file};
+use crate::report::plot::{plot_csv, plot_section};
 use crate::report::progress::Progress;
 use crate::report::summary::{
     AdaptivitySummary, ErrorReport, OutputPoint, Parameters, SolveSummary, Status, Summary,
@@ -446,7 +446,7 @@ fn run_scene<L, S: RunSpace<L>>(
                 statistics: run.statistics,
                 solved: None,
                 dense: None,
-                located: (events, None),
+                located: (events.into_vec(), None),
             },
             Some(error),
         ),

@@ -293,7 +293,8 @@ where
             state,
             (&mut from, &mut stage, &mut total),
             |t, size, from, stage| {
-                let (increment, tangent, work) = self.base.tangent_map(model, base, t, size, from)?;
+                let (increment, tangent, work) =
+                    self.base.tangent_map(model, base, t, size, from)?;
                 *stage = increment;
                 report += work;
                 product = Some(match &product {

@@ -4,6 +4,7 @@
 
 use super::constant_mass::ConstantMass;
 use crate::dimension::Dimension;
+use crate::linalg::DenseLu;
 use crate::method::State;
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
@@ -13,7 +14,6 @@ use crate::model::legendre::LazyLegendre;
 use crate::nonlinear::Newton;
 use crate::spectral::starting_values::StartingValues;
 use nalgebra::allocator::Allocator;
-use crate::linalg::DenseLu;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OVector, U1};
 
 /// Buffers of an SVI run.
