@@ -674,7 +674,7 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         ),
         flag(
             "--indicators",
-            select(vec!["megno", "spectrum,sali", "lyapunov", "chaos"])
+            select(vec!["megno", "spectrum,sali", "lyapunov", "gali,megno", "chaos"])
                 .prop_map(String::from)
                 .boxed(),
         ),
