@@ -25,7 +25,8 @@ REBOUND's particle equals svi's `jacobi` invariant (`--check-jacobi` prints both
 
 For every (a, e) of the grid the script integrates to t_end with REBOUND's MEGNO
 (sim.init_megno()) and writes one CSV row `a,e,megno,seconds` (seconds: the wall time of that
-point); a particle that goes further than 5 from the centre of mass gets megno = inf. The total wall time goes to standard error.
+point), in grid order as the orbits finish; a particle that goes further than 5 from the
+centre of mass gets megno = inf. The total wall time goes to standard error.
 MEGNO tends to 2 on a regular (quasi-periodic) orbit and grows like lambda t / 2 on a chaotic
 one (lambda the maximal Lyapunov exponent): > 4 is chaotic, as read in MEGNO maps.
 
@@ -182,22 +183,20 @@ def main():
 
     jobs = [(float(a), float(e), args.mu, args.t_end, args.integrator, args.steps_per_orbit)
             for a in args.a for e in args.e]
-    start = time.perf_counter()
-    if args.threads == 1:
-        rows = [megno(job) for job in jobs]
-    else:
-        with multiprocessing.Pool(args.threads) as pool:
-            rows = pool.map(megno, jobs, chunksize=max(1, len(jobs) // (8 * args.threads)))
-    total = time.perf_counter() - start
-
     out = open(args.out, "w") if args.out else sys.stdout
     out.write("a,e,megno,seconds\n")
-    for a, e, value, seconds in rows:
-        out.write(f"{a!r},{e!r},{value!r},{seconds:.6f}\n")
+    rows = []
+    start = time.perf_counter()
+    # Rows are written as the orbits finish (in grid order), so a long map shows its progress
+    # and an interrupted one keeps what it computed.
+    with multiprocessing.Pool(args.threads) as pool:
+        for a, e, value, seconds in pool.imap(megno, jobs, chunksize=4):
+            rows.append((a, e, value, seconds))
+            out.write(f"{a!r},{e!r},{value!r},{seconds:.6f}\n")
+            out.flush()
+    total = time.perf_counter() - start
     if args.out:
         out.close()
-    else:
-        out.flush()
     finite = [row[2] for row in rows if math.isfinite(row[2])]
     print(f"{len(rows)} orbits ({len(args.a)} a x {len(args.e)} e), t_end = {args.t_end:g}, "
           f"{args.integrator}, {args.threads} processes: {total:.2f} s wall "
