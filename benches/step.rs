@@ -10,7 +10,11 @@
 //! - `svi_<p>cgl_<2p>gl`: [`Svi::new`]`(p)` with its default 2p Gauss points, p ∈ {3, 6, 9};
 //! - `svi_<p>cgl_<p-1>gl`: the Gauss-equivalent configuration (degree s = p − 1 with s Gauss
 //!   points is the s-stage Gauss–Legendre method), p ∈ {3, 6, 7, 9};
-//! - `sc_<p>cgl`: [`SpectralCollocation::new`]`(p)`, p ∈ {3, 6, 9}.
+//! - `sc_<p>cgl`: [`SpectralCollocation::new`]`(p)`, p ∈ {3, 6, 9};
+//! - `verlet`, `symplectic_euler`, `symplectic_euler_adjoint`: [`StormerVerlet`] and the
+//!   [`VariationalIntegrator`] of [`SymplecticEuler`] and [`AdjointSymplecticEuler`], all
+//!   three explicit kick–drift–kick steps on the constant-mass models (one gradient per step),
+//!   Newton's method on the double pendulum.
 //!
 //! How a step is measured (`Bencher::iter_custom`): the workspace is built once and 200
 //! steps are taken untimed, so the warm start (the previous step's polynomial extrapolated
@@ -45,8 +49,8 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 use svi::method::StepReport;
 use svi::{
-    Defaults, Initial, Integrator, Lagrangian, Method, SpectralCollocation, State, StormerVerlet,
-    Svi,
+    AdjointSymplecticEuler, Defaults, Initial, Integrator, Lagrangian, Method, SpectralCollocation,
+    State, StormerVerlet, Svi, SymplecticEuler, VariationalIntegrator,
 };
 use svi_models::{DoublePendulum, Kepler, Pendulum};
 
@@ -213,6 +217,23 @@ where
             h,
         );
     }
+    bench_step(
+        &mut group,
+        "verlet",
+        model.clone(),
+        StormerVerlet::default(),
+        h,
+    );
+    let euler = VariationalIntegrator::new(SymplecticEuler);
+    bench_step(&mut group, "symplectic_euler", model.clone(), euler, h);
+    let adjoint = VariationalIntegrator::new(AdjointSymplecticEuler);
+    bench_step(
+        &mut group,
+        "symplectic_euler_adjoint",
+        model.clone(),
+        adjoint,
+        h,
+    );
     group.finish();
 }
 

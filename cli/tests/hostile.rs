@@ -674,9 +674,15 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         ),
         flag(
             "--indicators",
-            select(vec!["megno", "spectrum,sali", "lyapunov", "gali,megno", "chaos"])
-                .prop_map(String::from)
-                .boxed(),
+            select(vec![
+                "megno",
+                "spectrum,sali",
+                "lyapunov",
+                "gali,megno",
+                "chaos",
+            ])
+            .prop_map(String::from)
+            .boxed(),
         ),
     ];
     if mode == Mode::Binary {

@@ -125,13 +125,13 @@ pub const METHODS: &[Entry] = &[
         name: "symplectic-euler",
         options: Options::None,
         space: SpaceKind::Vector,
-        summary: "symplectic Euler, L_d = h L(q_k, v)",
+        summary: "symplectic Euler, L_d = h L(q_k, v), explicit for constant-mass models",
     },
     Entry {
         name: "symplectic-euler-adjoint",
         options: Options::None,
         space: SpaceKind::Vector,
-        summary: "adjoint symplectic Euler, L_d = h L(q_k+1, v)",
+        summary: "adjoint symplectic Euler, L_d = h L(q_k+1, v), explicit for constant-mass models",
     },
     Entry {
         name: "midpoint",

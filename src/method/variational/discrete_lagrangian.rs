@@ -76,6 +76,31 @@ where
 {
 }
 
+/// Where the two kicks of an explicit step fall: the weights (a, b), a + b = 1, of
+/// L_d = h [a L(t_k, q_k, v) + b L(t_k + h, q_{k+1}, v)], whose discrete Euler–Lagrange
+/// equations a constant-mass Lagrangian solves explicitly as a kick of weight a, a drift and a
+/// kick of weight b ([`crate::method::variational::kick_drift_kick`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kicks {
+    /// a = 1, b = 0: symplectic Euler (kick, then drift).
+    Start,
+    /// a = b = ½: Störmer–Verlet (kick, drift, kick).
+    Split,
+    /// a = 0, b = 1: the adjoint symplectic Euler (drift, then kick).
+    End,
+}
+
+impl Kicks {
+    /// The weights (a, b).
+    pub fn weights(self) -> (f64, f64) {
+        match self {
+            Kicks::Start => (1.0, 0.0),
+            Kicks::Split => (0.5, 0.5),
+            Kicks::End => (0.0, 1.0),
+        }
+    }
+}
+
 /// A discrete Lagrangian L_d(q_k, q_{k+1}, h) ≈ ∫_{t_k}^{t_k+h} L dt and its discrete forces.
 ///
 /// Both functions are generic over the scalar so that [`crate::VariationalIntegrator`] can
@@ -91,6 +116,13 @@ pub trait DiscreteLagrangian {
     /// equations as the stage equations of a degree-1 Galerkin integrator (sparse Newton for
     /// a sum of local terms). `None` (the default) for any other discrete Lagrangian.
     fn segment(&self) -> Option<&'static [SegmentNode]> {
+        None
+    }
+
+    /// The kicks of the explicit step a [`crate::VariationalIntegrator`] of this discrete
+    /// Lagrangian takes on a constant-mass Lagrangian ([`crate::Structure::ConstantMass`]);
+    /// `None` (the default) for a discrete Lagrangian it always solves by Newton's method.
+    fn kicks(&self) -> Option<Kicks> {
         None
     }
 
@@ -233,7 +265,7 @@ where
 
 /// Implements [`DiscreteLagrangian`] for a unit struct by a segment quadrature rule.
 macro_rules! segment_rule {
-    ($type:ty, $name:literal, $order:literal, $symmetric:literal, $nodes:expr) => {
+    ($type:ty, $name:literal, $order:literal, $symmetric:literal, $kicks:expr, $nodes:expr) => {
         impl $type {
             /// The quadrature rule on the segment [q_k, q_{k+1}].
             pub const NODES: &'static [SegmentNode] = $nodes;
@@ -251,6 +283,10 @@ macro_rules! segment_rule {
 
             fn segment(&self) -> Option<&'static [SegmentNode]> {
                 Some(Self::NODES)
+            }
+
+            fn kicks(&self) -> Option<Kicks> {
+                $kicks
             }
 
             #[inline(always)]
@@ -294,7 +330,8 @@ macro_rules! segment_rule {
 /// p_k = ∂L/∂q̇(q_k, v) − h ∂L/∂q(q_k, v) − h f_L(t_k, q_k, v),   p_{k+1} = ∂L/∂q̇(q_k, v).
 ///
 /// For L = ½ q̇ᵀMq̇ − V(q) this is p_{k+1} = p_k − h ∇V(q_k), q_{k+1} = q_k + h M⁻¹p_{k+1}
-/// (Hairer, Lubich, Wanner, *Geometric Numerical Integration*, eq. VI.3.1).
+/// (Hairer, Lubich, Wanner, *Geometric Numerical Integration*, eq. VI.3.1), which
+/// [`crate::VariationalIntegrator`] runs explicitly ([`Kicks::Start`]).
 ///
 /// # Properties
 /// Order 1; not symmetric (its adjoint is [`AdjointSymplecticEuler`]); symplectic.
@@ -310,6 +347,7 @@ segment_rule!(
     "symplectic-euler",
     1,
     false,
+    Some(Kicks::Start),
     &[SegmentNode {
         position: 0.0,
         weight: 1.0
@@ -325,7 +363,8 @@ segment_rule!(
 /// p_k = ∂L/∂q̇(q_{k+1}, v),   p_{k+1} = ∂L/∂q̇(q_{k+1}, v) + h ∂L/∂q(q_{k+1}, v) + h f_L.
 ///
 /// For L = ½ q̇ᵀMq̇ − V(q) this is q_{k+1} = q_k + h M⁻¹p_k, p_{k+1} = p_k − h ∇V(q_{k+1})
-/// (Hairer, Lubich, Wanner, eq. VI.3.2).
+/// (Hairer, Lubich, Wanner, eq. VI.3.2), which [`crate::VariationalIntegrator`] runs
+/// explicitly ([`Kicks::End`]).
 ///
 /// # Properties
 /// Order 1; not symmetric (the adjoint of [`SymplecticEuler`]); symplectic.
@@ -340,6 +379,7 @@ segment_rule!(
     "symplectic-euler-adjoint",
     1,
     false,
+    Some(Kicks::End),
     &[SegmentNode {
         position: 1.0,
         weight: 1.0
@@ -370,6 +410,7 @@ segment_rule!(
     "midpoint",
     2,
     true,
+    None,
     &[SegmentNode {
         position: 0.5,
         weight: 1.0
@@ -406,6 +447,7 @@ segment_rule!(
     "trapezoid",
     2,
     true,
+    None,
     &[
         SegmentNode {
             position: 0.0,

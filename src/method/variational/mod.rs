@@ -8,7 +8,10 @@
 //!   sparse Newton of the classic discrete Lagrangians.
 //! - [`discrete_lagrangian`]: the classic discrete Lagrangians (symplectic Euler and its
 //!   adjoint, midpoint, trapezoid) as plain data.
-//! - [`variational_integrator`]: one implicit discrete Euler–Lagrange solver for any of them.
+//! - [`variational_integrator`]: one discrete Euler–Lagrange solver for any of them, implicit
+//!   (Newton) or, for a constant mass and a rule on the end points, explicit:
+//! - [`kick_drift_kick`]: the explicit step of symplectic Euler, its adjoint and
+//!   Störmer–Verlet on a constant-mass Lagrangian.
 //! - `stage_newton`: sparse Newton on the stage equations of a sum of local terms, for SVI
 //!   and the classic variational integrators.
 //! - [`stormer_verlet`]: the trapezoidal rule, explicit (kick–drift–kick) for a constant mass.
@@ -16,6 +19,7 @@
 
 pub mod composition;
 pub mod discrete_lagrangian;
+pub mod kick_drift_kick;
 pub(crate) mod stage_newton;
 pub mod stormer_verlet;
 pub mod svi;

@@ -51,15 +51,18 @@ use crate::error::StepFailure;
 use crate::linalg::invert_small;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
-use crate::method::variational::discrete_lagrangian::{DiscreteLagrangian, DiscreteLagrangianInfo};
+use crate::method::variational::discrete_lagrangian::{
+    DiscreteLagrangian, DiscreteLagrangianInfo, Kicks,
+};
+use crate::method::variational::kick_drift_kick::Explicit;
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::model::derived::sparse_terms;
 use crate::model::legendre::LazyLegendre;
 use crate::model::term_pattern::check_width;
+use crate::model::{Lagrangian, Structure};
 use crate::nonlinear::{Jacobian, Newton};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
@@ -186,9 +189,31 @@ where
     4.0 * f64::EPSILON * start.amax().max(end.amax())
 }
 
-/// Buffers of a run of a [`VariationalIntegrator`].
+/// Buffers of a run of a [`VariationalIntegrator`] (and of [`crate::StormerVerlet`]): the
+/// explicit kick–drift–kick path of a constant-mass Lagrangian under a discrete Lagrangian
+/// with [`Kicks`], or Newton's method on the discrete Euler–Lagrange equations.
 #[derive(Debug, Clone)]
 pub struct VariationalWorkspace<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    path: Path<N>,
+}
+
+/// The path of a run, chosen once by the model's structure.
+#[derive(Debug, Clone)]
+enum Path<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// Both boxed: a workspace is made once per run, and the two differ in size.
+    Explicit(Box<Explicit<N>>),
+    Implicit(Box<Implicit<N>>),
+}
+
+/// Buffers of the implicit path.
+#[derive(Debug, Clone)]
+struct Implicit<N: Dimension>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
@@ -209,13 +234,13 @@ struct SparseSegment {
     legendre: LazyLegendre,
 }
 
-impl<N: Dimension> VariationalWorkspace<N>
+impl<N: Dimension> Implicit<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     /// Buffers for a configuration space of dimension `n`.
-    pub(crate) fn new(n: N, max_iterations: usize) -> Self {
-        VariationalWorkspace {
+    fn new(n: N, max_iterations: usize) -> Self {
+        Implicit {
             offset: DVector::zeros(n.value()),
             newton: Newton::new(n.value(), max_iterations),
             history: History::empty(n),
@@ -260,7 +285,7 @@ where
     }
 
     /// Record a completed step.
-    pub(crate) fn remember(&mut self, h: f64, state: &State<N>, increment: &OVector<f64, N>) {
+    fn remember(&mut self, h: f64, state: &State<N>, increment: &OVector<f64, N>) {
         let history = &mut self.history;
         let continued = history.continued_by(h, &state.q);
         if continued {
@@ -279,6 +304,47 @@ where
         }
         history.tolerance = continuation_tolerance(&state.q, &history.end);
         history.last.copy_from(increment);
+    }
+}
+
+impl<Ld: DiscreteLagrangian> VariationalIntegrator<Ld> {
+    /// The workspace of a run: the explicit path with `kicks` for a constant-mass Lagrangian,
+    /// else Newton's method (sparse for an unforced sum of terms and a segment rule).
+    pub(crate) fn workspace_with<L: Lagrangian<N>, N: Dimension>(
+        &self,
+        model: &L,
+        h: f64,
+        kicks: Option<Kicks>,
+    ) -> Result<VariationalWorkspace<N>, Error>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        crate::error::require_positive("h", h)?;
+        if self.max_iterations == 0 {
+            return Err(Error::invalid("max_iterations", "must be at least 1"));
+        }
+        let n = dimension_of::<N>(model.dimension())
+            .map_err(|reason| Error::invalid("model", reason))?;
+        if let (Some(kicks), Structure::ConstantMass) = (kicks, L::STRUCTURE) {
+            let explicit = Explicit::new(kicks, n, L::FORCED, self.max_iterations);
+            return Ok(VariationalWorkspace {
+                path: Path::Explicit(Box::new(explicit)),
+            });
+        }
+        let mut implicit = Implicit::new(n, self.max_iterations);
+        if let (Some(terms), Some(nodes)) =
+            (sparse_terms(model), self.discrete_lagrangian.segment())
+        {
+            check_width(terms.width())?;
+            implicit.sparse = Some(SparseSegment {
+                tables: Tables::segment(nodes, h)?,
+                stage: LazyStageNewton::default(),
+                legendre: LazyLegendre::default(),
+            });
+        }
+        Ok(VariationalWorkspace {
+            path: Path::Implicit(Box::new(implicit)),
+        })
     }
 }
 
@@ -311,24 +377,7 @@ where
         model: &L,
         h: f64,
     ) -> Result<VariationalWorkspace<N>, Error> {
-        crate::error::require_positive("h", h)?;
-        if self.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", "must be at least 1"));
-        }
-        let n = dimension_of::<N>(model.dimension())
-            .map_err(|reason| Error::invalid("model", reason))?;
-        let mut workspace = VariationalWorkspace::new(n, self.max_iterations);
-        if let (Some(terms), Some(nodes)) =
-            (sparse_terms(model), self.discrete_lagrangian.segment())
-        {
-            check_width(terms.width())?;
-            workspace.sparse = Some(SparseSegment {
-                tables: Tables::segment(nodes, h)?,
-                stage: LazyStageNewton::default(),
-                legendre: LazyLegendre::default(),
-            });
-        }
-        Ok(workspace)
+        self.workspace_with(model, h, self.discrete_lagrangian.kicks())
     }
 
     fn step<L: Lagrangian<N>>(
@@ -340,12 +389,16 @@ where
         state: &State<N>,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
+        let workspace = match &mut workspace.path {
+            Path::Explicit(explicit) => return explicit.step(model, t, h, state, increment),
+            Path::Implicit(implicit) => &mut **implicit,
+        };
         if let Some(terms) = sparse_terms(model)
             && workspace.sparse.is_some()
         {
             // Sparse Newton on the segment rule's stage equations (see the module docs).
             workspace.predict(model, t, h, state);
-            let VariationalWorkspace { offset, sparse, .. } = workspace;
+            let Implicit { offset, sparse, .. } = workspace;
             let Some(SparseSegment { tables, stage, .. }) = sparse.as_mut() else {
                 return Err(StepFailure::SingularMatrix);
             };
@@ -386,7 +439,9 @@ where
         })
     }
 
-    /// The sparse inverse Legendre map a run on a sum of terms keeps (sparse Newton's runs).
+    /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked
+    /// once per run), or the sparse inverse Legendre map a run on a sum of terms keeps (sparse
+    /// Newton's runs).
     fn velocity_into<L: Lagrangian<N>>(
         &self,
         model: &L,
@@ -396,7 +451,19 @@ where
         p: &OVector<f64, N>,
         v: &mut OVector<f64, N>,
     ) -> Result<bool, Error> {
-        let (Some(segment), Some(terms)) = (&workspace.sparse, sparse_terms(model)) else {
+        let sparse = match &workspace.path {
+            Path::Explicit(explicit) => {
+                return Ok(match explicit.mass_inverse() {
+                    Some(inverse) => {
+                        inverse.apply_into(p, v);
+                        true
+                    }
+                    None => false,
+                });
+            }
+            Path::Implicit(implicit) => &implicit.sparse,
+        };
+        let (Some(segment), Some(terms)) = (sparse, sparse_terms(model)) else {
             return Ok(false);
         };
         segment
@@ -500,7 +567,7 @@ where
 fn solve_position<Ld: DiscreteLagrangian, L: Lagrangian<N>, N: Dimension>(
     discrete: &Ld,
     model: &L,
-    workspace: &mut VariationalWorkspace<N>,
+    workspace: &mut Implicit<N>,
     t: f64,
     h: f64,
     state: &State<N>,
@@ -719,6 +786,9 @@ mod tests {
         let model = VariableMass;
         let h = 0.1;
         let (end, mut workspace) = advance(&method, &model, h, 2, state([0.5, -0.3], [0.4, 0.6]));
+        let Path::Implicit(workspace) = &mut workspace.path else {
+            panic!("a variable mass takes the implicit path");
+        };
         assert!(workspace.history.has_before);
         let expected = workspace.history.last * 2.0 - workspace.history.before;
         workspace.predict(&model, 0.2, h, &end);
@@ -730,6 +800,9 @@ mod tests {
         assert_ne!(workspace.offset.as_slice(), expected.as_slice());
         // A fresh workspace has no history.
         let fresh = Method::<nalgebra::U2>::workspace(&method, &model, h).unwrap();
+        let Path::Implicit(fresh) = fresh.path else {
+            panic!("a variable mass takes the implicit path");
+        };
         assert!(fresh.history.h.is_nan() && !fresh.history.has_before);
     }
 }
