@@ -47,7 +47,8 @@ Usage:
     python3 benches/megno_map_rebound.py --check-jacobi 0.6,0.1 --svi target/release/svi
 
 Options: --a LO:HI:N and --e LO:HI:N (inclusive grids, N points each), --t-end T, --threads K
-(worker processes), --mu MU, --integrator whfast|ias15, --steps-per-orbit S, --out FILE
+(worker processes), --mu MU, --integrator whfast|ias15, --steps-per-orbit S, --encounter R
+(end an orbit closer than R to the Sun or Jupiter, counted as lost: MEGNO inf), --out FILE
 (default: standard output), --check-jacobi A,E [--svi PATH].
 """
 
@@ -78,7 +79,7 @@ def grid(text):
     return np.linspace(lo, hi, n) if n > 1 else np.array([lo])
 
 
-def simulation(mu, a, e, integrator, steps_per_orbit):
+def simulation(mu, a, e, integrator, steps_per_orbit, encounter=0.0):
     """The Sun, Jupiter and the test particle at t = 0, centre of mass at rest."""
     sim = rebound.Simulation()
     sim.G = 1.0
@@ -94,6 +95,8 @@ def simulation(mu, a, e, integrator, steps_per_orbit):
         period = 2.0 * math.pi * min(1.0, a ** 1.5 / math.sqrt(1.0 - mu))
         sim.dt = period / steps_per_orbit
     sim.exit_max_distance = ESCAPE_RADIUS
+    if encounter > 0.0:
+        sim.exit_min_distance = encounter
     return sim
 
 
@@ -107,9 +110,10 @@ def jacobi(mu, particle):
     return 2.0 * omega - (vx * vx + vy * vy)
 
 
-def run_megno(mu, a, e, t_end, integrator, steps_per_orbit):
-    """MEGNO at t_end, or None if the particle escapes or the run stops early."""
-    sim = simulation(mu, a, e, integrator, steps_per_orbit)
+def run_megno(mu, a, e, t_end, integrator, steps_per_orbit, encounter):
+    """MEGNO at t_end, or None if the particle escapes, comes closer than `encounter` to a
+    primary (when positive) or the run stops early."""
+    sim = simulation(mu, a, e, integrator, steps_per_orbit, encounter)
     sim.init_megno(seed=0)
     try:
         sim.integrate(t_end, exact_finish_time=0)
@@ -121,13 +125,13 @@ def run_megno(mu, a, e, t_end, integrator, steps_per_orbit):
 
 def megno(job):
     """MEGNO of one grid point; returns (a, e, megno, seconds)."""
-    a, e, mu, t_end, integrator, steps_per_orbit = job
+    a, e, mu, t_end, integrator, steps_per_orbit, encounter = job
     start = time.perf_counter()
-    value = run_megno(mu, a, e, t_end, integrator, steps_per_orbit)
+    value = run_megno(mu, a, e, t_end, integrator, steps_per_orbit, encounter)
     if value is None and integrator == "whfast":
         # WHFast's fixed step does not resolve close encounters with Jupiter: an orbit it
         # loses is redone with IAS15.
-        value = run_megno(mu, a, e, t_end, "ias15", steps_per_orbit)
+        value = run_megno(mu, a, e, t_end, "ias15", steps_per_orbit, encounter)
     return a, e, math.inf if value is None else value, time.perf_counter() - start
 
 
@@ -165,6 +169,10 @@ def main():
     parser.add_argument("--steps-per-orbit", type=float, default=60.0,
                         help="WHFast steps per period of the particle or Jupiter, whichever "
                              "is shorter (default 60)")
+    parser.add_argument("--encounter", type=float, default=0.0, metavar="R",
+                        help="end an orbit that comes closer than R to a primary, MEGNO inf "
+                             "(default 0: never; IAS15 may then grind through a near-collision "
+                             "with Jupiter for a very long time)")
     parser.add_argument("--out", help="CSV file (default: standard output)")
     parser.add_argument("--check-jacobi", metavar="A,E",
                         help="print the Jacobi constant of one (a, e) and exit")
@@ -181,8 +189,8 @@ def main():
     if np.any(args.a <= 0.0) or np.any(args.e < 0.0) or np.any(args.e >= 1.0):
         parser.error("a must be positive and 0 <= e < 1")
 
-    jobs = [(float(a), float(e), args.mu, args.t_end, args.integrator, args.steps_per_orbit)
-            for a in args.a for e in args.e]
+    jobs = [(float(a), float(e), args.mu, args.t_end, args.integrator, args.steps_per_orbit,
+             args.encounter) for a in args.a for e in args.e]
     out = open(args.out, "w") if args.out else sys.stdout
     out.write("a,e,megno,seconds\n")
     rows = []
