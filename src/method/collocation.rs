@@ -50,13 +50,14 @@ use crate::nonlinear::{FixedPoint, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
 use crate::spectral::starting_values::StartingValues;
-use crate::spectral::{Scratch, check_options};
+use crate::spectral::{MAX_POINTS, Scratch, check_options};
 use nalgebra::allocator::Allocator;
 use nalgebra::{
     DMatrix, DVector, DefaultAllocator, Dim, MatrixView, MatrixViewMut, OMatrix, OVector, U1,
 };
 use sparse_newton::LazySparseCollocation;
 use std::ops::ControlFlow;
+use std::sync::OnceLock;
 
 /// Options of the spectral collocation method.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,23 +98,35 @@ impl SpectralCollocation {
     }
 
     /// Order of the collocation method: the order of the interpolatory quadrature on the
-    /// collocation nodes c_1, …, c_s (Hairer, Nørsett, Wanner I, Thm. II.7.9).
+    /// collocation nodes c_1, …, c_s (Hairer, Nørsett, Wanner I, Thm. II.7.9), computed once
+    /// per number of points ([`Method::info`] is asked at every observed step).
     fn order(&self) -> usize {
-        let Some((nodes, weights)) = collocation_quadrature(self.points) else {
-            return 0;
-        };
-        let limit = self.points.saturating_mul(2);
-        (0..limit)
-            .find(|&k| {
-                let sum: f64 = weights
-                    .iter()
-                    .zip(&nodes)
-                    .map(|(b, c)| b * c.powi(k as i32))
-                    .sum();
-                (sum - 1.0 / (k as f64 + 1.0)).abs() > 1e-10
-            })
-            .unwrap_or(limit)
+        static ORDERS: [OnceLock<usize>; MAX_POINTS + 1] =
+            [const { OnceLock::new() }; MAX_POINTS + 1];
+        match ORDERS.get(self.points) {
+            Some(order) => *order.get_or_init(|| collocation_order(self.points)),
+            None => collocation_order(self.points),
+        }
     }
+}
+
+/// The order of the interpolatory quadrature on the collocation nodes of `points` CGL points
+/// (0 for an invalid number of points).
+fn collocation_order(points: usize) -> usize {
+    let Some((nodes, weights)) = collocation_quadrature(points) else {
+        return 0;
+    };
+    let limit = points.saturating_mul(2);
+    (0..limit)
+        .find(|&k| {
+            let sum: f64 = weights
+                .iter()
+                .zip(&nodes)
+                .map(|(b, c)| b * c.powi(k as i32))
+                .sum();
+            (sum - 1.0 / (k as f64 + 1.0)).abs() > 1e-10
+        })
+        .unwrap_or(limit)
 }
 
 /// The collocation nodes c_1, …, c_s on [0, 1] and the weights b_i = ∫₀¹ ℓ_i of the

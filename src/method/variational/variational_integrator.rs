@@ -58,11 +58,12 @@ use crate::method::variational::kick_drift_kick::Explicit;
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
-use crate::model::derived::LagrangianExt;
 use crate::model::derived::sparse_terms;
+use crate::model::derived::{LagrangianExt, cached_mass_inverse};
 use crate::model::legendre::LazyLegendre;
+use crate::model::mass_inverse::MassInverse;
 use crate::model::term_pattern::check_width;
-use crate::model::{Lagrangian, Structure};
+use crate::model::{ConstantMass, Lagrangian, Structure};
 use crate::nonlinear::{Jacobian, Newton};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
@@ -223,6 +224,8 @@ where
     history: History<N>,
     /// Sparse Newton, for an unforced sum of terms of run-time size and a segment rule.
     sparse: Option<SparseSegment>,
+    /// M⁻¹ of a constant-mass Lagrangian, from the first step: the observers' q̇ = M⁻¹p.
+    mass_inverse: Option<MassInverse<N>>,
 }
 
 /// The stage tables of a segment rule and the sparse Newton solver of its equations.
@@ -245,6 +248,7 @@ where
             newton: Newton::new(n.value(), max_iterations),
             history: History::empty(n),
             sparse: None,
+            mass_inverse: None,
         }
     }
 
@@ -393,6 +397,9 @@ where
             Path::Explicit(explicit) => return explicit.step(model, t, h, state, increment),
             Path::Implicit(implicit) => &mut **implicit,
         };
+        if ConstantMass::<L, N>::DECLARED {
+            cached_mass_inverse(&mut workspace.mass_inverse, model, t, &state.q, &state.y)?;
+        }
         if let Some(terms) = sparse_terms(model)
             && workspace.sparse.is_some()
         {
@@ -439,8 +446,8 @@ where
         })
     }
 
-    /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked
-    /// once per run), or the sparse inverse Legendre map a run on a sum of terms keeps (sparse
+    /// q̇ = M⁻¹p from the cached inverse of a constant mass matrix (checked once per run),
+    /// or the sparse inverse Legendre map a run on a sum of terms keeps (sparse
     /// Newton's runs).
     fn velocity_into<L: Lagrangian<N>>(
         &self,
@@ -461,7 +468,13 @@ where
                     None => false,
                 });
             }
-            Path::Implicit(implicit) => &implicit.sparse,
+            Path::Implicit(implicit) => {
+                if let Some(inverse) = &implicit.mass_inverse {
+                    inverse.apply_into(p, v);
+                    return Ok(true);
+                }
+                &implicit.sparse
+            }
         };
         let (Some(segment), Some(terms)) = (sparse, sparse_terms(model)) else {
             return Ok(false);
@@ -774,6 +787,30 @@ mod tests {
             &VariationalIntegrator::new(Trapezoid),
             Damped::<false> { c: 0.3 },
             forced,
+        );
+    }
+
+    /// On a constant mass the implicit path keeps M⁻¹ from its first step: the observers'
+    /// q̇ = M⁻¹p needs no Newton solve of the Legendre map; a variable mass keeps none.
+    #[test]
+    fn a_constant_mass_gives_the_observers_velocity_without_a_solve() {
+        let start = state([0.3, -0.2], [0.1, 0.25]);
+        let model = HenonHeiles::<true>;
+        let method = VariationalIntegrator::new(Midpoint);
+        let (end, workspace) = advance(&method, &model, 0.1, 3, start);
+        let mut v = end.q;
+        assert!(
+            method
+                .velocity_into(&model, &workspace, 0.3, &end.q, &end.y, &mut v)
+                .unwrap()
+        );
+        let mass = nalgebra::Matrix2::new(2.0, 1.0, 1.0, 3.0);
+        assert!((mass * v - end.y).amax() < 1e-15);
+        let (end, workspace) = advance(&method, &VariableMass, 0.1, 3, start);
+        assert!(
+            !method
+                .velocity_into(&VariableMass, &workspace, 0.3, &end.q, &end.y, &mut v)
+                .unwrap()
         );
     }
 
