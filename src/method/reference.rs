@@ -17,7 +17,9 @@
 //! acceleration Jacobian, [`crate::LagrangianExt::acceleration_jacobian`]). None of the three
 //! is symplectic or symmetric; they are here to be compared with the methods that are.
 //!
-//! On an unforced sum of local terms of run-time size (a chain) the acceleration is taken term
+//! For a constant mass matrix ([`crate::Structure::ConstantMass`]) the acceleration is
+//! f = M⁻¹(L_q + f_L): one gradient and M⁻¹ kept from the first step, no Hessian.
+//! Otherwise, on an unforced sum of local terms of run-time size (a chain) the acceleration is taken term
 //! by term, a = −M⁻¹R(0) with the sparse mass matrix, its Jacobian −M⁻¹(J_q, J_y)
 //! (`crate::model::euler_lagrange`), and implicit Euler's equation multiplied by h M is solved
 //! by sparse Newton (`sparse_newton`): O(n) a step instead of differentiating the whole L
@@ -31,9 +33,12 @@
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
-use crate::model::Lagrangian;
-use crate::model::derived::{AccelerationJacobian, LagrangianExt, sparse_terms};
+use crate::model::derived::{
+    AccelerationJacobian, LagrangianExt, cached_mass_inverse, sparse_terms,
+};
 use crate::model::euler_lagrange::LazyAcceleration;
+use crate::model::mass_inverse::MassInverse;
+use crate::model::{ConstantMass, Lagrangian};
 use crate::nonlinear::Newton;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
@@ -70,13 +75,17 @@ pub struct RungeKutta4;
 #[derive(Debug, Clone)]
 pub struct ReferenceWorkspace<N: Dimension>
 where
-    DefaultAllocator: Allocator<N>,
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     n: N,
     stages: Option<Stages<N>>,
     newton: Option<(Newton, DVector<f64>)>,
     acceleration: LazyAcceleration,
     sparse_newton: LazySparseImplicitEuler,
+    /// M⁻¹ of a constant-mass Lagrangian, from the first acceleration, and the force
+    /// ∂L/∂q + f_L it is applied to.
+    mass_inverse: Option<MassInverse<N>>,
+    force: OVector<f64, N>,
 }
 
 /// RK4's stages, kept across steps (a step allocates nothing).
@@ -140,6 +149,8 @@ where
         },
         acceleration: LazyAcceleration::default(),
         sparse_newton: LazySparseImplicitEuler::default(),
+        mass_inverse: None,
+        force: zero(),
     })
 }
 
@@ -156,6 +167,16 @@ fn acceleration_into<L: Lagrangian<N>, N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
+    if ConstantMass::<L, N>::DECLARED {
+        // f = M⁻¹(∂L/∂q + f_L): one gradient, no Hessian.
+        let inverse = cached_mass_inverse(&mut workspace.mass_inverse, model, t, q, v)?;
+        model.force_into(t, q, v, &mut workspace.force);
+        if L::FORCED {
+            workspace.force += model.external_force(t, q, v);
+        }
+        inverse.apply_into(&workspace.force, out);
+        return Ok(0);
+    }
     match sparse_terms(model) {
         Some(terms) => {
             let (acceleration, analyses) = workspace.acceleration.get(terms, q.len())?;
@@ -611,6 +632,29 @@ mod tests {
     use crate::test_models::{
         HenonHeiles, VariableMass, assert_tangent_matches_central_differences, state,
     };
+
+    /// A constant mass takes f = M⁻¹(L_q + f_L) without a Hessian; the general path on the
+    /// same L (declared [`crate::Structure::General`]) gives the same steps to round-off.
+    #[test]
+    fn a_constant_mass_gives_the_general_acceleration() {
+        use crate::test_models::{Damped, advance, distance};
+        let start = state([0.3, -0.2], [0.1, 0.4]);
+        let (constant, _) = advance(&RungeKutta4, &HenonHeiles::<true>, 0.05, 100, start);
+        let (general, _) = advance(&RungeKutta4, &HenonHeiles::<false>, 0.05, 100, start);
+        assert!(distance(&constant, &general) < 1e-13);
+        let (constant, _) = advance(&ExplicitEuler, &HenonHeiles::<true>, 0.05, 100, start);
+        let (general, _) = advance(&ExplicitEuler, &HenonHeiles::<false>, 0.05, 100, start);
+        assert!(distance(&constant, &general) < 1e-13);
+        // With friction f_L = −c q̇.
+        let start = state([0.8], [-0.4]);
+        let (constant, _) = advance(&RungeKutta4, &Damped::<true> { c: 0.3 }, 0.05, 100, start);
+        let (general, _) = advance(&RungeKutta4, &Damped::<false> { c: 0.3 }, 0.05, 100, start);
+        assert!(distance(&constant, &general) < 1e-13);
+        let implicit = ImplicitEuler::default();
+        let (constant, _) = advance(&implicit, &Damped::<true> { c: 0.3 }, 0.05, 100, start);
+        let (general, _) = advance(&implicit, &Damped::<false> { c: 0.3 }, 0.05, 100, start);
+        assert!(distance(&constant, &general) < 1e-13);
+    }
 
     #[test]
     fn the_tangent_maps_match_central_differences() {
