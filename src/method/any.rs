@@ -184,6 +184,21 @@ macro_rules! any_method {
                 }
             }
 
+            fn momentum_into(
+                &self,
+                workspace: &AnyWorkspace<N>,
+                v: &OVector<f64, N>,
+                p: &mut OVector<f64, N>,
+            ) -> bool {
+                match (self, workspace) {
+                    $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
+                        method.momentum_into(workspace, v, p)
+                    })+
+                    #[allow(unreachable_patterns)]
+                    _ => false,
+                }
+            }
+
             fn verlet_fractions(&self) -> Option<&[f64]> {
                 match self {
                     $(AnyMethod::$variant(method) => Method::<N>::verlet_fractions(method),)+

@@ -175,6 +175,8 @@ where
     weights: Vec<f64>,
     /// M⁻¹, from the first step.
     mass_inverse: Option<MassInverse<N>>,
+    /// M, from the first step, for the observers' p = M q̇ (not for a sum of terms).
+    mass: Option<OMatrix<f64, N, N>>,
     /// f at the collocation nodes.
     accelerations: Vec<OVector<f64, N>>,
     /// Offsets Z_i during the iteration.
@@ -198,6 +200,7 @@ where
             velocity_coefficients: velocity_coefficients.collect(),
             weights,
             mass_inverse: None,
+            mass: None,
             accelerations: vec![OVector::zeros_generic(n, U1); s],
             stages: vec![OVector::zeros_generic(n, U1); s],
         })
@@ -405,6 +408,9 @@ where
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
+    if data.mass_inverse.is_none() && sparse_terms(model).is_none() {
+        data.mass = Some(model.second_derivatives(t, &state.q, &state.y).vv);
+    }
     let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
     let n = state.dimension();
     let s = tables.degree;
@@ -673,6 +679,26 @@ where
         model.terms().is_some() && !L::FORCED
     }
 
+    /// p = M q̇ from the fixed point's constant mass matrix.
+    fn momentum_into(
+        &self,
+        workspace: &CollocationWorkspace<N>,
+        v: &OVector<f64, N>,
+        p: &mut OVector<f64, N>,
+    ) -> bool {
+        match workspace
+            .constant_mass
+            .as_ref()
+            .and_then(|data| data.mass.as_ref())
+        {
+            Some(mass) => {
+                mass.mul_to(v, p);
+                true
+            }
+            None => false,
+        }
+    }
+
     fn with_points(&self, points: usize) -> Option<Self> {
         Some(SpectralCollocation {
             points,
@@ -834,6 +860,21 @@ mod tests {
             (slope - (order + 1.0)).abs() < 0.1,
             "points {points}: local error slope {slope:.3}, declared order {order}"
         );
+    }
+
+    /// On a constant mass the observers' momentum p = M q̇ comes from the kept M; on a
+    /// variable mass the workspace keeps none.
+    #[test]
+    fn a_constant_mass_gives_the_observers_momentum() {
+        let method = SpectralCollocation::new(5);
+        let start = state([0.3, -0.2], [0.1, 0.4]);
+        let (end, workspace) = advance(&method, &HenonHeiles::<true>, 0.1, 5, start);
+        let mut p = end.q;
+        assert!(method.momentum_into(&workspace, &end.y, &mut p));
+        let exact = HenonHeiles::<true>.momentum(0.0, &end.q, &end.y);
+        assert!((p - exact).amax() < 1e-15);
+        let (end, workspace) = advance(&method, &VariableMass, 0.1, 5, start);
+        assert!(!method.momentum_into(&workspace, &end.y, &mut p));
     }
 
     #[test]

@@ -162,6 +162,19 @@ where
         Ok(false)
     }
 
+    /// The momentum p = M q̇ of a velocity `v` from the constant mass matrix M the workspace
+    /// keeps (methods in the coordinates (q, q̇) on a constant-mass model, once a step has
+    /// run), into `p`. `false` where it keeps none and the caller differentiates L.
+    fn momentum_into(
+        &self,
+        workspace: &Self::Workspace,
+        v: &OVector<f64, N>,
+        p: &mut OVector<f64, N>,
+    ) -> bool {
+        let _ = (workspace, v, p);
+        false
+    }
+
     /// Whether the method runs `model` without any dense n × n matrix: `model` is a sum of
     /// local terms ([`Lagrangian::terms`]) and the method's path for it keeps their sparsity
     /// (O(n) memory and work per step). Such a run takes a model of any size; every other

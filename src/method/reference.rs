@@ -86,6 +86,9 @@ where
     /// ∂L/∂q + f_L it is applied to.
     mass_inverse: Option<MassInverse<N>>,
     force: OVector<f64, N>,
+    /// M itself for the observers' p = M q̇ (a model of fixed or moderate size, not a sum of
+    /// terms), kept with M⁻¹.
+    mass: Option<OMatrix<f64, N, N>>,
 }
 
 /// RK4's stages, kept across steps (a step allocates nothing).
@@ -151,6 +154,7 @@ where
         sparse_newton: LazySparseImplicitEuler::default(),
         mass_inverse: None,
         force: zero(),
+        mass: None,
     })
 }
 
@@ -169,6 +173,9 @@ where
 {
     if ConstantMass::<L, N>::DECLARED {
         // f = M⁻¹(∂L/∂q + f_L): one gradient, no Hessian.
+        if workspace.mass_inverse.is_none() && sparse_terms(model).is_none() {
+            workspace.mass = Some(model.second_derivatives(t, q, v).vv);
+        }
         let inverse = cached_mass_inverse(&mut workspace.mass_inverse, model, t, q, v)?;
         model.force_into(t, q, v, &mut workspace.force);
         if L::FORCED {
@@ -234,6 +241,24 @@ where
     Ok(AccelerationJacobian::of_run_time(jacobian, workspace.n))
 }
 
+/// p = M q̇ from the constant mass matrix the workspace keeps, if it keeps one.
+fn momentum_from_mass<N: Dimension>(
+    workspace: &ReferenceWorkspace<N>,
+    v: &OVector<f64, N>,
+    p: &mut OVector<f64, N>,
+) -> bool
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    match &workspace.mass {
+        Some(mass) => {
+            mass.mul_to(v, p);
+            true
+        }
+        None => false,
+    }
+}
+
 /// The facts every reference method shares: coordinates (q, q̇), neither symmetric nor
 /// symplectic.
 fn info(name: &'static str, order: usize) -> MethodInfo {
@@ -288,6 +313,15 @@ where
     /// A sum of terms: the acceleration and implicit Euler's equation term by term.
     fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
         sparse_terms(model).is_some()
+    }
+
+    fn momentum_into(
+        &self,
+        workspace: &Self::Workspace,
+        v: &OVector<f64, N>,
+        p: &mut OVector<f64, N>,
+    ) -> bool {
+        momentum_from_mass(workspace, v, p)
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
@@ -351,6 +385,15 @@ where
     /// A sum of terms: the acceleration and implicit Euler's equation term by term.
     fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
         sparse_terms(model).is_some()
+    }
+
+    fn momentum_into(
+        &self,
+        workspace: &Self::Workspace,
+        v: &OVector<f64, N>,
+        p: &mut OVector<f64, N>,
+    ) -> bool {
+        momentum_from_mass(workspace, v, p)
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
@@ -567,6 +610,15 @@ where
         sparse_terms(model).is_some()
     }
 
+    fn momentum_into(
+        &self,
+        workspace: &Self::Workspace,
+        v: &OVector<f64, N>,
+        p: &mut OVector<f64, N>,
+    ) -> bool {
+        momentum_from_mass(workspace, v, p)
+    }
+
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
         if self.max_iterations == 0 {
             return Err(Error::invalid(
@@ -642,9 +694,19 @@ mod tests {
         let (constant, _) = advance(&RungeKutta4, &HenonHeiles::<true>, 0.05, 100, start);
         let (general, _) = advance(&RungeKutta4, &HenonHeiles::<false>, 0.05, 100, start);
         assert!(distance(&constant, &general) < 1e-13);
-        let (constant, _) = advance(&ExplicitEuler, &HenonHeiles::<true>, 0.05, 100, start);
+        let (constant, workspace) = advance(&ExplicitEuler, &HenonHeiles::<true>, 0.05, 100, start);
         let (general, _) = advance(&ExplicitEuler, &HenonHeiles::<false>, 0.05, 100, start);
         assert!(distance(&constant, &general) < 1e-13);
+        // The observers' momentum p = M q̇ from the kept M, without differentiating L.
+        let mut p = constant.q;
+        assert!(Method::<nalgebra::U2>::momentum_into(
+            &ExplicitEuler,
+            &workspace,
+            &constant.y,
+            &mut p
+        ));
+        let exact = HenonHeiles::<true>.momentum(0.0, &constant.q, &constant.y);
+        assert!((p - exact).amax() < 1e-15);
         // With friction f_L = −c q̇.
         let start = state([0.8], [-0.4]);
         let (constant, _) = advance(&RungeKutta4, &Damped::<true> { c: 0.3 }, 0.05, 100, start);

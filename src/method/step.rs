@@ -430,7 +430,8 @@ where
     }
 
     /// In `point`'s vectors (nothing allocated at run-time size, where the velocity comes
-    /// from the workspace: a cached M⁻¹ or the run's sparse inverse Legendre map).
+    /// from the workspace: a cached M⁻¹ or the run's sparse inverse Legendre map; the
+    /// momentum of a method in velocity coordinates from a cached M).
     fn complete_into(
         &self,
         model: &L,
@@ -458,7 +459,11 @@ where
             }
             Coordinates::Velocity => {
                 point.v.copy_from(&state.y);
-                model.momentum_into(t, &state.q, &state.y, &mut point.p);
+                let known = workspace
+                    .is_some_and(|workspace| self.momentum_into(workspace, &state.y, &mut point.p));
+                if !known {
+                    model.momentum_into(t, &state.q, &state.y, &mut point.p);
+                }
             }
         }
         Ok(())
