@@ -44,8 +44,7 @@ use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::sparse_terms;
-use crate::model::derived::{AccelerationJacobian, LagrangianExt, cached_mass_inverse};
-use crate::model::mass_inverse::MassInverse;
+use crate::model::derived::{AccelerationJacobian, KeptMass, LagrangianExt};
 use crate::nonlinear::{FixedPoint, Newton, Solved, after_fixed_point};
 use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::quadrature::GaussLegendre;
@@ -173,10 +172,8 @@ where
     velocity_coefficients: Vec<f64>,
     /// Quadrature weights b_i on the collocation nodes.
     weights: Vec<f64>,
-    /// M⁻¹, from the first step.
-    mass_inverse: Option<MassInverse<N>>,
-    /// M, from the first step, for the observers' p = M q̇ (not for a sum of terms).
-    mass: Option<OMatrix<f64, N, N>>,
+    /// M⁻¹ and M, from the first step.
+    mass: KeptMass<N>,
     /// f at the collocation nodes.
     accelerations: Vec<OVector<f64, N>>,
     /// Offsets Z_i during the iteration.
@@ -199,8 +196,7 @@ where
             inverse: (0..s * s).map(|k| inverse[(k / s, k % s)]).collect(),
             velocity_coefficients: velocity_coefficients.collect(),
             weights,
-            mass_inverse: None,
-            mass: None,
+            mass: KeptMass::default(),
             accelerations: vec![OVector::zeros_generic(n, U1); s],
             stages: vec![OVector::zeros_generic(n, U1); s],
         })
@@ -408,10 +404,7 @@ where
     let Some(data) = constant_mass.as_mut() else {
         return Err(StepFailure::SingularMatrix);
     };
-    if data.mass_inverse.is_none() && sparse_terms(model).is_none() {
-        data.mass = Some(model.second_derivatives(t, &state.q, &state.y).vv);
-    }
-    let mass_inverse = cached_mass_inverse(&mut data.mass_inverse, model, t, &state.q, &state.y)?;
+    let mass_inverse = data.mass.inverse(model, t, &state.q, &state.y)?;
     let n = state.dimension();
     let s = tables.degree;
     let quarter = 0.25 * h * h;
@@ -686,17 +679,10 @@ where
         v: &OVector<f64, N>,
         p: &mut OVector<f64, N>,
     ) -> bool {
-        match workspace
+        workspace
             .constant_mass
             .as_ref()
-            .and_then(|data| data.mass.as_ref())
-        {
-            Some(mass) => {
-                mass.mul_to(v, p);
-                true
-            }
-            None => false,
-        }
+            .is_some_and(|data| data.mass.momentum_into(v, p))
     }
 
     fn with_points(&self, points: usize) -> Option<Self> {

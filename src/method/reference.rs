@@ -33,11 +33,8 @@
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
-use crate::model::derived::{
-    AccelerationJacobian, LagrangianExt, cached_mass_inverse, sparse_terms,
-};
+use crate::model::derived::{AccelerationJacobian, KeptMass, LagrangianExt, sparse_terms};
 use crate::model::euler_lagrange::LazyAcceleration;
-use crate::model::mass_inverse::MassInverse;
 use crate::model::{ConstantMass, Lagrangian};
 use crate::nonlinear::Newton;
 use nalgebra::allocator::Allocator;
@@ -82,13 +79,10 @@ where
     newton: Option<(Newton, DVector<f64>)>,
     acceleration: LazyAcceleration,
     sparse_newton: LazySparseImplicitEuler,
-    /// M⁻¹ of a constant-mass Lagrangian, from the first acceleration, and the force
-    /// ∂L/∂q + f_L it is applied to.
-    mass_inverse: Option<MassInverse<N>>,
+    /// M⁻¹ and M of a constant-mass Lagrangian, from the first acceleration, and the force
+    /// ∂L/∂q + f_L M⁻¹ is applied to.
+    mass: KeptMass<N>,
     force: OVector<f64, N>,
-    /// M itself for the observers' p = M q̇ (a model of fixed or moderate size, not a sum of
-    /// terms), kept with M⁻¹.
-    mass: Option<OMatrix<f64, N, N>>,
 }
 
 /// RK4's stages, kept across steps (a step allocates nothing).
@@ -152,9 +146,8 @@ where
         },
         acceleration: LazyAcceleration::default(),
         sparse_newton: LazySparseImplicitEuler::default(),
-        mass_inverse: None,
+        mass: KeptMass::default(),
         force: zero(),
-        mass: None,
     })
 }
 
@@ -173,10 +166,7 @@ where
 {
     if ConstantMass::<L, N>::DECLARED {
         // f = M⁻¹(∂L/∂q + f_L): one gradient, no Hessian.
-        if workspace.mass_inverse.is_none() && sparse_terms(model).is_none() {
-            workspace.mass = Some(model.second_derivatives(t, q, v).vv);
-        }
-        let inverse = cached_mass_inverse(&mut workspace.mass_inverse, model, t, q, v)?;
+        let inverse = workspace.mass.inverse(model, t, q, v)?;
         model.force_into(t, q, v, &mut workspace.force);
         if L::FORCED {
             workspace.force += model.external_force(t, q, v);
@@ -241,24 +231,6 @@ where
     Ok(AccelerationJacobian::of_run_time(jacobian, workspace.n))
 }
 
-/// p = M q̇ from the constant mass matrix the workspace keeps, if it keeps one.
-fn momentum_from_mass<N: Dimension>(
-    workspace: &ReferenceWorkspace<N>,
-    v: &OVector<f64, N>,
-    p: &mut OVector<f64, N>,
-) -> bool
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    match &workspace.mass {
-        Some(mass) => {
-            mass.mul_to(v, p);
-            true
-        }
-        None => false,
-    }
-}
-
 /// The facts every reference method shares: coordinates (q, q̇), neither symmetric nor
 /// symplectic.
 fn info(name: &'static str, order: usize) -> MethodInfo {
@@ -321,7 +293,7 @@ where
         v: &OVector<f64, N>,
         p: &mut OVector<f64, N>,
     ) -> bool {
-        momentum_from_mass(workspace, v, p)
+        workspace.mass.momentum_into(v, p)
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
@@ -393,7 +365,7 @@ where
         v: &OVector<f64, N>,
         p: &mut OVector<f64, N>,
     ) -> bool {
-        momentum_from_mass(workspace, v, p)
+        workspace.mass.momentum_into(v, p)
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {
@@ -616,7 +588,7 @@ where
         v: &OVector<f64, N>,
         p: &mut OVector<f64, N>,
     ) -> bool {
-        momentum_from_mass(workspace, v, p)
+        workspace.mass.momentum_into(v, p)
     }
 
     fn workspace<L: Lagrangian<N>>(&self, model: &L, h: f64) -> Result<Self::Workspace, Error> {

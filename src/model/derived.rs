@@ -782,6 +782,65 @@ where
     }
 }
 
+/// M and M⁻¹ of a [`crate::model::Structure::ConstantMass`] Lagrangian, kept by a run of a
+/// method in the coordinates (q, q̇): M⁻¹ for the accelerations, M for the observers'
+/// momentum p = M q̇ (dense models; a sum of terms keeps only its inverse). Both from one
+/// mass matrix at the first step.
+#[derive(Debug, Clone)]
+pub(crate) struct KeptMass<N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    inverse: Option<MassInverse<N>>,
+    mass: Option<OMatrix<f64, N, N>>,
+}
+
+impl<N: Dimension> Default for KeptMass<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    fn default() -> Self {
+        KeptMass {
+            inverse: None,
+            mass: None,
+        }
+    }
+}
+
+impl<N: Dimension> KeptMass<N>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// M⁻¹, made at the first call (as [`cached_mass_inverse`]) with M kept beside it.
+    pub(crate) fn inverse<L: Lagrangian<N>>(
+        &mut self,
+        model: &L,
+        t: f64,
+        q: &OVector<f64, N>,
+        y: &OVector<f64, N>,
+    ) -> Result<&MassInverse<N>, crate::error::StepFailure> {
+        if self.inverse.is_none() && model.terms().is_none() {
+            let mass = model.mass_matrix(t, q, y);
+            let inverse = MassInverse::of_dense(&mass)
+                .map_err(|_| crate::error::StepFailure::SingularMatrix)?;
+            self.mass = Some(mass);
+            self.inverse = Some(inverse);
+        }
+        cached_mass_inverse(&mut self.inverse, model, t, q, y)
+    }
+
+    /// p = M `v` into `p`; `false` before M is kept (or for a sum of terms).
+    pub(crate) fn momentum_into(&self, v: &OVector<f64, N>, p: &mut OVector<f64, N>) -> bool {
+        match &self.mass {
+            Some(mass) => {
+                mass.mul_to(v, p);
+                true
+            }
+            None => false,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
