@@ -109,9 +109,9 @@ pub trait Step<L: ?Sized, S: Space> {
     /// (finite values; on SO(3) an orthogonal attitude).
     fn initial_state(&self, model: &L, t0: f64, initial: &S::Initial) -> Result<S::State, Error>;
 
-    /// Check, once per run at the initial state, what the model declares about itself (a
-    /// constant mass matrix, G-invariance), so a wrong declaration is an error and not a wrong
-    /// result.
+    /// Check, at the initial state of an integrator's first run, what the model declares
+    /// about itself (a constant mass matrix, G-invariance), so a wrong declaration is an
+    /// error and not a wrong result.
     fn check_model(&self, model: &L, t0: f64, state: &S::State) -> Result<(), Error> {
         let _ = (model, t0, state);
         Ok(())
@@ -349,7 +349,7 @@ where
     /// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
     /// L_vv must not change with q̇, and ∂L/∂q̇ must vanish at q̇ = 0 (no term linear in q̇:
     /// p = Mq̇ exactly, which the fixed-point iteration and the cached q̇ = M⁻¹p rely on).
-    /// Necessary conditions, checked once per run at the initial state.
+    /// Necessary conditions, checked at the initial state of the integrator's first run.
     fn check_model(&self, model: &L, t: f64, state: &State<N>) -> Result<(), Error> {
         if L::STRUCTURE != Structure::ConstantMass {
             return Ok(());

@@ -193,7 +193,10 @@ impl<const K: usize> TermWidth for Const<K> {
         SVector::from_fn(|i, _| entry(i))
     }
 
-    #[inline]
+    /// K sweeps of the scalar dual number, written out here so that the term is inlined into
+    /// the caller's loop over the terms: through [`LagrangianExt`] the compiler may keep the
+    /// sweeps a call per term, at twice the cost (`cargo bench --bench chain`).
+    #[inline(always)]
     fn scatter_gradient<L: LocalLagrangian<Width = Self> + ?Sized>(
         model: &L,
         term: usize,
@@ -205,15 +208,16 @@ impl<const K: usize> TermWidth for Const<K> {
     ) {
         let indices = model.indices(term);
         let (ql, vl) = gather(&indices, q, v);
-        let local = Term { model, index: term };
-        let gradient = if velocity {
-            local.momentum(t, &ql, &vl)
-        } else {
-            local.force(t, &ql, &vl)
-        };
+        let (mut x, mut y) = (ql.map(Dual64::from_re), vl.map(Dual64::from_re));
+        let t = Dual64::from_re(t);
         let out = out.as_mut_slice();
-        for (i, g) in indices.iter().zip(gradient.as_slice()) {
-            out[*i] += g;
+        for (a, &i) in indices.iter().enumerate() {
+            let seeded = if velocity { &mut y[a] } else { &mut x[a] };
+            seeded.eps = 1.0;
+            let gradient = model.term(term, t, &x, &y).eps;
+            let seeded = if velocity { &mut y[a] } else { &mut x[a] };
+            seeded.eps = 0.0;
+            out[i] += gradient;
         }
     }
 
@@ -334,7 +338,7 @@ pub trait LocalLagrangian {
     /// Structure the integrators may exploit, as [`crate::Lagrangian::STRUCTURE`]: with
     /// [`Structure::ConstantMass`] (every term ½ q̇ᵀMₑq̇ − Vₑ(t, q) with constant Mₑ) SVI
     /// iterates without a Hessian and Störmer–Verlet runs explicitly. Checked at the initial
-    /// state of every run.
+    /// state of an integrator's first run.
     const STRUCTURE: Structure = Structure::General;
 
     /// n, the number of coordinates.
@@ -387,8 +391,8 @@ pub fn value_by_terms<L: LocalLagrangian + ?Sized>(
 }
 
 /// ∂L/∂q of `model` at (t, q, q̇), written into `out`: each term's gradient by the
-/// fixed-size automatic differentiation of [`crate::model::derived`], scattered at its
-/// indices ([`LocalLagrangian::force_into`]'s default).
+/// fixed-size automatic differentiation of [`crate::model::derived`], added at its indices
+/// ([`LocalLagrangian::force_into`]'s default).
 #[inline]
 pub fn force_by_terms<L: LocalLagrangian + ?Sized>(
     model: &L,
@@ -400,6 +404,19 @@ pub fn force_by_terms<L: LocalLagrangian + ?Sized>(
     out.as_mut_slice().fill(0.0);
     for e in 0..model.term_count() {
         L::Width::scatter_gradient(model, e, t, q, v, false, out);
+    }
+}
+
+/// ∂²L/∂q̇² of `model` at (t, q, q̇) as triplets appended to `out`, term by term.
+fn mass_triplets_by_terms<L: LocalLagrangian + ?Sized>(
+    model: &L,
+    t: f64,
+    q: &DVector<f64>,
+    v: &DVector<f64>,
+    out: &mut Vec<(usize, usize, f64)>,
+) {
+    for e in 0..model.term_count() {
+        L::Width::mass_triplets(model, e, t, q, v, out);
     }
 }
 
@@ -430,9 +447,7 @@ pub trait LocalLagrangianExt: LocalLagrangian {
         v: &DVector<f64>,
     ) -> Vec<(usize, usize, f64)> {
         let mut triplets = Vec::new();
-        for e in 0..self.term_count() {
-            Self::Width::mass_triplets(self, e, t, q, v, &mut triplets);
-        }
+        mass_triplets_by_terms(self, t, q, v, &mut triplets);
         triplets
     }
 }
@@ -528,6 +543,17 @@ impl<L: LocalLagrangian> TermSum<Dyn> for L {
 
     fn as_run_time(&self) -> Option<&dyn TermSum<Dyn>> {
         Some(self)
+    }
+
+    /// Each term's ∂²ℓ/∂q̇² alone, one hyper-dual sweep per entry (no other block).
+    fn mass_triplets(
+        &self,
+        t: f64,
+        q: &DVector<f64>,
+        v: &DVector<f64>,
+        out: &mut Vec<(usize, usize, f64)>,
+    ) {
+        mass_triplets_by_terms(self, t, q, v, out);
     }
 
     fn width(&self) -> usize {

@@ -140,9 +140,8 @@ where
         v: &OVector<f64, N>,
     ) -> Result<Self, Error> {
         let (n, _) = q.shape_generic();
-        let mut blocks = [Vec::new(), Vec::new(), Vec::new()];
-        terms.hessian_triplets(t, q, v, &mut blocks);
-        let [_, _, mass] = blocks;
+        let mut mass = Vec::new();
+        terms.mass_triplets(t, q, v, &mut mass);
         let mut diagonal = OVector::<f64, N>::zeros_generic(n, U1);
         let mut coupled = Vec::new();
         for (i, j, value) in mass {

@@ -141,6 +141,22 @@ where
         None
     }
 
+    /// The mass matrix ∂²L/∂q̇² at (t, q, q̇) as (row, column, value) triplets appended to
+    /// `out` (entries of one place add up), term by term: by default the third block of
+    /// [`TermSum::hessian_triplets`]; a sum of local terms takes the mass block alone.
+    fn mass_triplets(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        out: &mut Vec<(usize, usize, f64)>,
+    ) {
+        let mut blocks = [Vec::new(), Vec::new(), std::mem::take(out)];
+        self.hessian_triplets(t, q, v, &mut blocks);
+        let [_, _, mass] = blocks;
+        *out = mass;
+    }
+
     /// The Hessian blocks ∂²L/∂q², ∂²L/∂q∂q̇ (row q, column q̇) and ∂²L/∂q̇² at (t, q, q̇) as
     /// (row, column, value) triplets, appended to `blocks[0]`, `blocks[1]` and `blocks[2]`
     /// (entries of one place add up), term by term.
@@ -242,7 +258,8 @@ where
     /// by a fixed-point iteration that needs only ∂L/∂q (no Hessian at all), and
     /// [`crate::StormerVerlet`] run explicitly (kick–drift–kick). The declaration is about L
     /// only: a constant-mass model may have any external force. The stepping loop checks the
-    /// declaration at the initial state and rejects a model that breaks it.
+    /// declaration at the initial state of an integrator's first run and rejects a model
+    /// that breaks it.
     const STRUCTURE: Structure = Structure::General;
 
     /// Whether the model has a non-conservative force ([`Lagrangian::external_force`]).

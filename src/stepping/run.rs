@@ -26,6 +26,7 @@ use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
 use std::marker::PhantomData;
 use std::ops::ControlFlow;
+use std::sync::OnceLock;
 
 /// Totals of a run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -225,6 +226,9 @@ pub(crate) struct Progress<S: Space> {
 pub struct Integrator<L, M, S> {
     model: L,
     method: M,
+    /// Set once the model's declarations have passed [`Step::check_model`] (at the first
+    /// run's initial state): the model and method cannot change, so later runs skip it.
+    checked: OnceLock<()>,
     space: PhantomData<fn() -> S>,
 }
 
@@ -234,6 +238,7 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         Integrator {
             model,
             method,
+            checked: OnceLock::new(),
             space: PhantomData,
         }
     }
@@ -368,10 +373,15 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
     }
 
     /// The progress of a run at its start: the initial state in the method's coordinates,
-    /// after the model's declarations are checked.
+    /// after the model's declarations are checked (by the integrator's first run that gets
+    /// this far; a failed check is repeated by the next run).
     pub(crate) fn start(&self, t0: f64, initial: &S::Initial) -> Result<Progress<S>, Error> {
         let state = self.initial_state(t0, initial)?;
-        self.method.check_model(&self.model, t0, &state)?;
+        if self.checked.get().is_none() {
+            self.method.check_model(&self.model, t0, &state)?;
+            // Another thread's run may have set it first: the same fact.
+            let _ = self.checked.set(());
+        }
         Ok(Progress {
             t: t0,
             cursor: Cursor::new(state),

@@ -31,6 +31,7 @@
 
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
+use crate::linalg::lane_extent;
 use crate::method::variational::discrete_lagrangian::Kicks;
 use crate::method::{State, StepReport};
 use crate::model::Lagrangian;
@@ -94,7 +95,7 @@ where
         }
     }
 
-    /// M⁻¹ once a step has computed it (a constant mass matrix, checked once per run).
+    /// M⁻¹ once a step has computed it (a constant mass matrix, checked by the integrator's first run).
     pub(crate) fn mass_inverse(&self) -> Option<&MassInverse<N>> {
         self.mass_inverse.as_ref()
     }
@@ -191,8 +192,7 @@ where
                 mass_inverse.apply_into(kick, velocity);
             }
         }
-        // Drift: q_{k+1} = q_k + h v, and the largest |q| at either end.
-        let mut extent: f64 = 0.0;
+        // Drift: q_{k+1} = q_k + h v.
         for (((d, e), q), v) in increment
             .q
             .as_mut_slice()
@@ -203,7 +203,6 @@ where
         {
             *d = h * v;
             *e = q + *d;
-            extent = extent.max(q.abs()).max(e.abs());
         }
         let end_t = t + h;
         if second == 0.0 {
@@ -237,7 +236,11 @@ where
                     .y
                     .axpy(second, &model.external_force(end_t, end, velocity), 1.0);
             }
-            // A NaN position never matches (its extent is NaN, and so is the tolerance).
+            // The largest |q| at either end sets the tolerance; a NaN position never matches
+            // (its difference is NaN).
+            let (extent, _) = lane_extent([state.q.as_slice(), end.as_slice()], |[q, e]| {
+                (q.abs().max(e.abs()), true)
+            });
             *reusable = Some((end_t, 4.0 * f64::EPSILON * extent));
             std::mem::swap(reusable_at, end);
             std::mem::swap(start_force, end_force);

@@ -125,8 +125,8 @@ where
         model.terms().is_some() && !L::FORCED
     }
 
-    /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked once
-    /// per run); the implicit path's kept map otherwise.
+    /// q̇ = M⁻¹p from the explicit path's cached inverse (a constant mass matrix, checked by
+    /// the integrator's first run); the implicit path's kept map otherwise.
     fn velocity_into<L: Lagrangian<N>>(
         &self,
         model: &L,

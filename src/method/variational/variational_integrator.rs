@@ -446,7 +446,7 @@ where
         })
     }
 
-    /// q̇ = M⁻¹p from the cached inverse of a constant mass matrix (checked once per run),
+    /// q̇ = M⁻¹p from the cached inverse of a constant mass matrix (checked by the integrator's first run),
     /// or the sparse inverse Legendre map a run on a sum of terms keeps (sparse
     /// Newton's runs).
     fn velocity_into<L: Lagrangian<N>>(

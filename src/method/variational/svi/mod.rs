@@ -393,9 +393,9 @@ where
     }
 
     /// q̇ = M⁻¹p once the fixed-point iteration has cached M⁻¹ (a constant-mass model,
-    /// L = ½ q̇ᵀMq̇ − V, so p = Mq̇ exactly; [`Structure::ConstantMass`] is checked once per
-    /// run); for any other unforced sum of terms of run-time size the sparse inverse Legendre
-    /// map the run keeps.
+    /// L = ½ q̇ᵀMq̇ − V, so p = Mq̇ exactly; [`Structure::ConstantMass`] is checked by the
+    /// integrator's first run); for any other unforced sum of terms of run-time size the
+    /// sparse inverse Legendre map the run keeps.
     fn velocity_into<L: Lagrangian<N>>(
         &self,
         model: &L,
