@@ -239,14 +239,33 @@ pub(crate) struct FixedPoint {
     previous: f64,
     iterations: usize,
     max_iterations: usize,
+    /// Whether an increment within 2ε of the unknowns' size is not yet enough: the
+    /// iteration goes on until the increments stop decreasing (`FixedPoint::to_noise`).
+    to_noise: bool,
 }
 
 impl FixedPoint {
+    /// Converged at an increment within 2ε of the unknowns' size, or once the increments
+    /// stall at round-off.
     pub(crate) fn new(max_iterations: usize) -> Self {
         FixedPoint {
             previous: f64::INFINITY,
             iterations: 0,
             max_iterations,
+            to_noise: false,
+        }
+    }
+
+    /// Converged only once the increments stop decreasing at round-off (or vanish): the
+    /// iterate is then a fixed point to within the noise of its own evaluation, whose error
+    /// is uncorrelated from step to step. Stopping at an increment of 2ε instead leaves an
+    /// error that follows the smooth error of the starting values, the same sign step after
+    /// step: on Kepler (SVI 13/12, 1.4·10⁶ steps) the energy error then drifted linearly to
+    /// 2e-12, and random-walked to 6e-14 when run to noise (about one iteration a step more).
+    pub(crate) fn to_noise(max_iterations: usize) -> Self {
+        FixedPoint {
+            to_noise: true,
+            ..FixedPoint::new(max_iterations)
         }
     }
 
@@ -263,7 +282,8 @@ impl FixedPoint {
         if !size.is_finite() {
             return Err(StepFailure::NonFinite);
         }
-        if size <= 2.0 * f64::EPSILON * scale
+        if size == 0.0
+            || (!self.to_noise && size <= 2.0 * f64::EPSILON * scale)
             || stalled(size, self.previous, FIXED_POINT_NOISE, scale)
         {
             return Ok(true);

@@ -15,7 +15,7 @@ use crate::model::derived::{LagrangianExt, cached_mass_inverse};
 use crate::nonlinear::FixedPoint;
 use crate::spectral::starting_values::StartingValues;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator};
+use nalgebra::{DVector, DefaultAllocator, OVector};
 
 /// Positions at the quadrature points at the start of a step: the previous step's polynomial
 /// extrapolated, straight from its velocity term and accelerations where its node offsets
@@ -87,7 +87,7 @@ where
     mass_inverse.apply_into(&state.y, &mut data.velocity);
     data.velocity *= h;
     let velocity = &data.velocity;
-    let scaled_inverse = mass_inverse.scaled(h * h);
+    let kick_inverse = mass_inverse.scaled(h);
     if L::FORCED {
         // The velocities of the starting polynomial, from its offsets (the previous step's
         // polynomial extrapolated, as the positions).
@@ -113,7 +113,9 @@ where
         add_scaled(base, *c, velocity);
         size = size.max(base.amax());
     }
-    let mut control = FixedPoint::new(max_iterations);
+    // Run to noise: an error correlated from step to step would make the symplectic step's
+    // energy drift (see `FixedPoint::to_noise`).
+    let mut control = FixedPoint::to_noise(max_iterations);
     loop {
         model.forces_into(&data.times, &data.positions, &state.y, &mut data.forces);
         if L::FORCED {
@@ -122,19 +124,35 @@ where
                 *force += model.external_force(time, &data.positions[mu], &data.velocities[mu]);
             }
         }
-        scaled_inverse.apply_all(&data.forces, &mut data.accelerations);
-        // The largest change ignores a NaN, which the finiteness check catches.
+        // The kicks L_ν = h b_ν ∂L/∂q and h M⁻¹L_ν (see `NystromTables`).
+        for (((load, kick), force), w) in data
+            .loads
+            .iter_mut()
+            .zip(&mut data.kicks)
+            .zip(&data.forces)
+            .zip(&tables.weights)
+        {
+            load.copy_from(force);
+            *load *= *w;
+            kick_inverse.apply_into(load, kick);
+        }
         let rows = Rows {
             start: Start::Rows(&data.bases),
             lead: None,
-            matrix: &data.nystrom.stage_matrix,
-            inputs: &data.accelerations,
+            matrix: &data.nystrom.kick_matrix,
+            inputs: &data.kicks,
         };
+        // The largest change ignores a NaN, which the finiteness check catches.
         let change = N::combine_rows(&mut data.positions, rows);
         if !change.finite {
             return Err(StepFailure::NonFinite);
         }
         if L::FORCED {
+            accelerations_of_kicks(
+                &mut data.accelerations,
+                &data.kicks,
+                &tables.reference_weights,
+            );
             let rows = Rows {
                 start: Start::Zero,
                 lead: Some((&data.nystrom.stage_rate, velocity)),
@@ -151,6 +169,11 @@ where
             break;
         }
         if let Err(failure) = converged {
+            accelerations_of_kicks(
+                &mut data.accelerations,
+                &data.kicks,
+                &tables.reference_weights,
+            );
             // The node offsets of the last iterate, where Newton takes over from a capped
             // iteration (see `after_fixed_point`).
             for ((target, row), c) in offsets
@@ -168,16 +191,26 @@ where
             return Err(failure);
         }
     }
+    accelerations_of_kicks(
+        &mut data.accelerations,
+        &data.kicks,
+        &tables.reference_weights,
+    );
+    // p_{k+1} − p_k = Σ_μ L_μ, and q_{k+1} − q_k = h M⁻¹p_k + Σ_μ d_μ h M⁻¹L_μ with the
+    // small terms summed first.
     let dp = &mut increment.y;
-    dp.fill(0.0);
-    for (force, w) in data.forces.iter().zip(&tables.weights) {
-        add_scaled(dp, *w, force);
+    dp.copy_from(&data.loads[0]);
+    for load in &data.loads[1..] {
+        *dp += load;
+    }
+    let sum = &mut data.end_kick;
+    sum.fill(0.0);
+    for (d, kick) in data.nystrom.end_fractions.iter().zip(&data.kicks) {
+        add_scaled(sum, *d, kick);
     }
     let dq = &mut increment.q;
     dq.copy_from(velocity);
-    for (w, acceleration) in data.nystrom.end_weights.iter().zip(&data.accelerations) {
-        add_scaled(dq, *w, acceleration);
-    }
+    *dq += &*sum;
     // The step's polynomial is remembered by its velocity term and accelerations; its node
     // offsets are written only if something reads them (see `ConstantMass::pending`).
     std::mem::swap(&mut data.velocity, &mut data.last_velocity);
@@ -191,4 +224,19 @@ where
         factorizations: 0,
         analyses: 0,
     })
+}
+
+/// The scaled accelerations h² M⁻¹ ∂L/∂q(τ_μ) = h M⁻¹L_μ / b_μ from the kicks, for the next
+/// step's start and the node offsets (`w` the Gauss weights, b = w/2).
+fn accelerations_of_kicks<N: Dimension>(
+    accelerations: &mut [OVector<f64, N>],
+    kicks: &[OVector<f64, N>],
+    w: &[f64],
+) where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    for ((acceleration, kick), w) in accelerations.iter_mut().zip(kicks).zip(w) {
+        acceleration.copy_from(kick);
+        *acceleration *= 2.0 / w;
+    }
 }
