@@ -47,7 +47,7 @@ use nalgebra::{DMatrix, DefaultAllocator, OVector, U1};
 /// every time. Together with an iteration run to its noise ([`crate::nonlinear`]'s
 /// `FixedPoint::to_noise`) the energy error of a long run random-walks (Brouwer's law)
 /// instead of drifting: Kepler e = 0.5, SVI 13/12 with h = 0.143, largest energy error
-/// 2.7e-14 after 1.4·10⁶ steps (6.7e-12 before), final position error at T = 2·10⁵ 6e-9
+/// 5.0e-14 after 1.4·10⁶ steps (6.7e-12 before), final position error at T = 2·10⁵ 3e-8
 /// (3.5e-6 before); see Antoñana, Makazaga & Murua, *Reducing and monitoring round-off error
 /// propagation for symplectic implicit Runge–Kutta schemes*, Numer. Algorithms 76 (2017).
 ///
