@@ -19,8 +19,8 @@
 //!
 //! For a constant mass matrix ([`crate::Structure::ConstantMass`]) the acceleration is
 //! f = M⁻¹(L_q + f_L): one gradient and M⁻¹ kept from the first step, no Hessian.
-//! Otherwise, on an unforced sum of local terms of run-time size (a chain) the acceleration is taken term
-//! by term, a = −M⁻¹R(0) with the sparse mass matrix, its Jacobian −M⁻¹(J_q, J_y)
+//! Otherwise, on an unforced sum of local terms of run-time size (a chain) the acceleration
+//! is taken term by term, a = −M⁻¹R(0) with the sparse mass matrix, its Jacobian −M⁻¹(J_q, J_y)
 //! (`crate::model::euler_lagrange`), and implicit Euler's equation multiplied by h M is solved
 //! by sparse Newton (`sparse_newton`): O(n) a step instead of differentiating the whole L
 //! (O(n³) for the acceleration, O(n⁴) for its Jacobian).

@@ -95,7 +95,8 @@ where
         }
     }
 
-    /// M⁻¹ once a step has computed it (a constant mass matrix, checked by the integrator's first run).
+    /// M⁻¹ once a step has computed it (a constant mass matrix, checked by the integrator's
+    /// first run).
     pub(crate) fn mass_inverse(&self) -> Option<&MassInverse<N>> {
         self.mass_inverse.as_ref()
     }

@@ -446,9 +446,9 @@ where
         })
     }
 
-    /// q̇ = M⁻¹p from the cached inverse of a constant mass matrix (checked by the integrator's first run),
-    /// or the sparse inverse Legendre map a run on a sum of terms keeps (sparse
-    /// Newton's runs).
+    /// q̇ = M⁻¹p from the cached inverse of a constant mass matrix (checked by the
+    /// integrator's first run), or the sparse inverse Legendre map a run on a sum of terms
+    /// keeps (sparse Newton's runs).
     fn velocity_into<L: Lagrangian<N>>(
         &self,
         model: &L,

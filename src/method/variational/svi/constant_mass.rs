@@ -199,7 +199,7 @@ impl NystromTables {
                 })
                 .collect()
         };
-        // G_μν = d_ν − Ā_μν / b_ν (b = w/2), symmetric for a symplectic method: made so
+        // G_μν = d_ν − A_μν / b_ν (b = w/2), symmetric for a symplectic method: made so
         // exactly, then K = d − G.
         let mut symmetric = vec![0.0; m * m];
         for mu in 0..m {

@@ -191,11 +191,14 @@ where
             return Err(failure);
         }
     }
-    accelerations_of_kicks(
-        &mut data.accelerations,
-        &data.kicks,
-        &tables.reference_weights,
-    );
+    if !L::FORCED {
+        // (A forced iteration made them from these kicks already.)
+        accelerations_of_kicks(
+            &mut data.accelerations,
+            &data.kicks,
+            &tables.reference_weights,
+        );
+    }
     // p_{k+1} − p_k = Σ_μ L_μ, and q_{k+1} − q_k = h M⁻¹p_k + Σ_μ d_μ h M⁻¹L_μ with the
     // small terms summed first.
     let dp = &mut increment.y;
