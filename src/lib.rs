@@ -81,6 +81,7 @@ pub use method::{
     Coordinates, Euclidean, Initial, Method, MethodInfo, PhasePoint, SO3, Space, State, Step,
     TangentMap,
 };
+pub use model::hamiltonian::{Canonical, Hamiltonian, HamiltonianStructure};
 pub use model::text::{TextError, TextLagrangian, TextModel, TextSpec};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;

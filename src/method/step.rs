@@ -349,8 +349,19 @@ where
     /// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
     /// L_vv must not change with q̇, and ∂L/∂q̇ must vanish at q̇ = 0 (no term linear in q̇:
     /// p = Mq̇ exactly, which the fixed-point iteration and the cached q̇ = M⁻¹p rely on).
-    /// Necessary conditions, checked at the initial state of the integrator's first run.
+    /// Necessary conditions, checked at the initial state of the integrator's first run. A
+    /// model written as a Hamiltonian is checked by
+    /// [`crate::model::hamiltonian::HamiltonianForm::check`] instead.
     fn check_model(&self, model: &L, t: f64, state: &State<N>) -> Result<(), Error> {
+        // A model written as H: H finite, ∂²H/∂p² regular and its declared structure, at
+        // (q, p) (its Lagrangian's constant mass is ½ q̇ᵀMq̇ by construction).
+        if let Some(form) = model.hamiltonian_form() {
+            let p = match Method::info(self).coordinates {
+                Coordinates::Momentum => state.y.clone(),
+                Coordinates::Velocity => model.momentum(t, &state.q, &state.y),
+            };
+            return form.check(t, &state.q, &p);
+        }
         if L::STRUCTURE != Structure::ConstantMass {
             return Ok(());
         }

@@ -435,6 +435,10 @@ where
         p: &OVector<f64, N>,
         guess: &OVector<f64, N>,
     ) -> Result<OVector<f64, N>, Error> {
+        // A model written as H: q̇ = ∂H/∂p, no Newton's method.
+        if let Some(form) = self.hamiltonian_form() {
+            return Ok(form.gradient(t, q, p).1);
+        }
         if let Some(terms) = self.terms() {
             // A constant mass matrix of a sum of terms: M⁻¹p from the terms' blocks, in O(n).
             if Self::STRUCTURE == Structure::ConstantMass {

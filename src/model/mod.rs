@@ -36,10 +36,12 @@
 //! }
 //! ```
 
+pub mod canonical;
 pub mod constraint;
 pub mod density;
 pub mod derived;
 pub(crate) mod euler_lagrange;
+pub mod hamiltonian;
 pub(crate) mod legendre;
 pub mod local;
 pub mod mass_inverse;
@@ -283,6 +285,19 @@ where
     /// `Lagrangian<Dyn>`).
     #[inline]
     fn terms(&self) -> Option<&dyn TermSum<N>> {
+        None
+    }
+
+    /// H itself, when the model was written as a Hamiltonian
+    /// ([`crate::model::hamiltonian::Canonical`] answers `Some`): the Hamiltonian methods then
+    /// take H's derivatives by automatic differentiation of H, where for a model written as L
+    /// they derive them from L's through the Legendre map ([`crate::model::canonical`]).
+    /// `None` (the default) for every Lagrangian.
+    #[inline]
+    fn hamiltonian_form(&self) -> Option<&dyn hamiltonian::HamiltonianForm<N>>
+    where
+        DefaultAllocator: Allocator<N, N>,
+    {
         None
     }
 
