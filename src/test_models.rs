@@ -3,6 +3,7 @@
 
 use crate::dimension::Dimension;
 use crate::method::{Method, State};
+use crate::model::hamiltonian::Hamiltonian;
 use crate::model::{Lagrangian, Structure};
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
@@ -48,6 +49,19 @@ impl Lagrangian<U2> for VariableMass {
     fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, v: &SVector<D, 2>) -> D {
         let kinetic = (q[1] * q[1] + 1.0) * v[0] * v[0] * 0.5 + v[1] * v[1] * 0.5;
         kinetic - q.dot(q) * 0.5 - q[0].powi(4) * 0.25
+    }
+}
+
+/// [`VariableMass`] written as a Hamiltonian (a general H, not separable):
+/// H = p₀²/(2(1 + q₁²)) + p₁²/2 + ½ |q|² + ¼ q₀⁴.
+pub(crate) struct VariableMassH;
+impl Hamiltonian<U2> for VariableMassH {
+    const TIME_DEPENDENT: bool = false;
+    fn hamiltonian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, p: &SVector<D, 2>) -> D {
+        p[0] * p[0] / ((q[1] * q[1] + 1.0) * 2.0)
+            + p[1] * p[1] * 0.5
+            + q.dot(q) * 0.5
+            + q[0].powi(4) * 0.25
     }
 }
 

@@ -24,6 +24,7 @@ pub mod any;
 pub(crate) mod block_newton;
 pub mod collocation;
 pub mod constrained;
+pub mod hamiltonian;
 pub mod lie_svi;
 pub mod multiscale;
 pub mod reference;

@@ -697,21 +697,8 @@ mod tests {
     use super::*;
     use crate::model::canonical;
     use crate::model::derived::LagrangianExt;
-    use crate::test_models::VariableMass;
-    use nalgebra::{SVector, U1, U2};
-
-    /// [`VariableMass`] written as H: p₀²/(2(1 + q₁²)) + p₁²/2 + (q₀² + q₁²)/2 + q₀⁴/4.
-    struct VariableMassH;
-
-    impl Hamiltonian<U2> for VariableMassH {
-        const TIME_DEPENDENT: bool = false;
-        fn hamiltonian<D: Scalar>(&self, _t: D, q: &SVector<D, 2>, p: &SVector<D, 2>) -> D {
-            p[0] * p[0] / ((q[1] * q[1] + 1.0) * 2.0)
-                + p[1] * p[1] * 0.5
-                + (q[0] * q[0] + q[1] * q[1]) * 0.5
-                + q[0].powi(4) * 0.25
-        }
-    }
+    use crate::test_models::{VariableMass, VariableMassH};
+    use nalgebra::{SVector, U1};
 
     /// A relativistic oscillator, H = √(1 + p²) + q²/2, whose L = −√(1 − q̇²) − q²/2.
     struct Relativistic;
