@@ -748,9 +748,19 @@ mod tests {
                 model.acceleration_jacobian(0.0, &q, &v).unwrap(),
                 VariableMass.acceleration_jacobian(0.0, &q, &v).unwrap(),
             );
-            assert!((&a.value - &b.value).amax() < 1e-12);
-            assert!((&a.q - &b.q).amax() < 1e-12, "{} {}", a.q, b.q);
-            assert!((&a.v - &b.v).amax() < 1e-12, "{} {}", a.v, b.v);
+            assert!((a.value - b.value).amax() < 1e-12);
+            assert!(
+                (a.q.clone() - b.q.clone()).amax() < 1e-12,
+                "{} {}",
+                a.q,
+                b.q
+            );
+            assert!(
+                (a.v.clone() - b.v.clone()).amax() < 1e-12,
+                "{} {}",
+                a.v,
+                b.v
+            );
         }
     }
 

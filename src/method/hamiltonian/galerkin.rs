@@ -796,7 +796,7 @@ mod tests {
         // The relativistic oscillator to T = 4 at h = 0.2 and 0.1 against 9 points at h/8.
         let start = state([1.0], [0.5]);
         let model = Canonical::new(Relativistic);
-        let end = 4.0;
+        let end = 4.0f64;
         let reference = {
             let method = HamiltonianGalerkin::new(9).with_quadrature(8);
             advance(&method, &model, 0.0125, 320, start).0
@@ -808,7 +808,7 @@ mod tests {
             let errors: Vec<f64> = steps
                 .iter()
                 .map(|&h| {
-                    let count = (end / h as f64).round() as usize;
+                    let count = (end / h).round() as usize;
                     distance(&advance(&method, &model, h, count, start).0, &reference)
                 })
                 .collect();
