@@ -749,18 +749,8 @@ mod tests {
                 VariableMass.acceleration_jacobian(0.0, &q, &v).unwrap(),
             );
             assert!((a.value - b.value).amax() < 1e-12);
-            assert!(
-                (a.q.clone() - b.q.clone()).amax() < 1e-12,
-                "{} {}",
-                a.q,
-                b.q
-            );
-            assert!(
-                (a.v.clone() - b.v.clone()).amax() < 1e-12,
-                "{} {}",
-                a.v,
-                b.v
-            );
+            assert!((a.q - b.q).amax() < 1e-12, "{} {}", a.q, b.q);
+            assert!((a.v - b.v).amax() < 1e-12, "{} {}", a.v, b.v);
         }
     }
 
