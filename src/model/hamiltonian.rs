@@ -788,7 +788,7 @@ mod tests {
             ] {
                 assert!((x - y).amax() < 1e-13, "{x} {y}");
             }
-            assert!((&from_h.hp - v).amax() < 1e-14);
+            assert!((from_h.hp - v).amax() < 1e-14);
         }
     }
 
