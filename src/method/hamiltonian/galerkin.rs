@@ -54,7 +54,7 @@ use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentM
 use crate::model::Lagrangian;
 use crate::model::canonical;
 use crate::model::hamiltonian::HamiltonianStructure;
-use crate::nonlinear::{Jacobian, Newton};
+use crate::nonlinear::{Jacobian, Newton, Solved};
 use crate::spectral::basis::LagrangeBasis;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
@@ -204,8 +204,8 @@ where
                 Method::<N>::step(&self.svi(), model, svi, t, h, state, increment)
             }
             HamiltonianGalerkinWorkspace::General(general) => {
-                let iterations = general.solve(model, t, h, state)?;
-                general.increment(model, t, state, iterations, increment)
+                let solved = general.solve(model, t, h, state)?;
+                general.increment(model, t, state, solved, increment)
             }
         }
     }
@@ -213,7 +213,10 @@ where
     fn restart(&self, workspace: &mut HamiltonianGalerkinWorkspace<N>) {
         match workspace {
             HamiltonianGalerkinWorkspace::Quadratic(svi) => Method::<N>::restart(&self.svi(), svi),
-            HamiltonianGalerkinWorkspace::General(general) => general.last = None,
+            HamiltonianGalerkinWorkspace::General(general) => {
+                general.last = None;
+                general.newton.invalidate();
+            }
         }
     }
 
@@ -264,9 +267,9 @@ where
                 Method::<N>::tangent_map(&self.svi(), model, svi, t, h, state)
             }
             HamiltonianGalerkinWorkspace::General(general) => {
-                let iterations = general.solve(model, t, h, state)?;
+                let solved = general.solve(model, t, h, state)?;
                 let mut increment = State::zeros(state.q.shape_generic().0);
-                let report = general.increment(model, t, state, iterations, &mut increment)?;
+                let report = general.increment(model, t, state, solved, &mut increment)?;
                 let tangent = general.tangent(model, t, state)?;
                 Ok((increment, tangent, report))
             }
@@ -360,20 +363,25 @@ where
         })
     }
 
-    /// Solve the stage equations for the unknowns by Newton's method.
+    /// Solve the stage equations for the unknowns by the simplified Newton method (the
+    /// factorised Jacobian kept across iterations and steps while it contracts well).
     fn solve<L: Lagrangian<N>>(
         &mut self,
         model: &L,
         t: f64,
         h: f64,
         state: &State<N>,
-    ) -> Result<usize, StepFailure> {
-        self.tables.rescale(h);
+    ) -> Result<Solved, StepFailure> {
+        if h != self.tables.h {
+            // The kept factors belong to another step size.
+            self.tables.rescale(h);
+            self.newton.invalidate();
+        }
         self.start(model, t, state)?;
         let mut unknowns = std::mem::take(&mut self.unknowns);
         let mut newton = std::mem::replace(&mut self.newton, Newton::new(0, 1));
         let mut failure = None;
-        let result = newton.iterate(&mut unknowns, Jacobian::Exact, |z, jacobian, residual| {
+        let result = newton.iterate(&mut unknowns, Jacobian::Kept, |z, jacobian, residual| {
             if let Err(error) = self.residual(model, t, state, z, jacobian, residual) {
                 failure = Some(error);
                 residual.fill(f64::NAN);
@@ -386,7 +394,7 @@ where
         }
         let solved = result?;
         self.last = Some((self.unknowns.clone(), h));
-        Ok(solved.iterations)
+        Ok(solved)
     }
 
     /// Starting values: the last step's unknowns rescaled to this step (Δ ∝ h, Π ∝ h), or
@@ -517,14 +525,14 @@ where
         Ok(())
     }
 
-    /// The increment of the converged step (after `iterations` Newton iterations): Δˢ and
+    /// The increment of the converged step (after the work `solved`): Δˢ and
     /// −(h/2) Σ_μ w_μ (∂H/∂q − f_H)(μ).
     fn increment<L: Lagrangian<N>>(
         &mut self,
         model: &L,
         t: f64,
         state: &State<N>,
-        iterations: usize,
+        solved: Solved,
         increment: &mut State<N>,
     ) -> Result<StepReport, StepFailure> {
         let unknowns = std::mem::take(&mut self.unknowns);
@@ -542,9 +550,9 @@ where
             increment.y.axpy(-self.tables.weights[mu], &d.hq, 1.0);
         }
         Ok(StepReport {
-            iterations,
-            evaluations: (iterations + 1) * m,
-            factorizations: iterations,
+            iterations: solved.iterations,
+            evaluations: (solved.iterations + 1) * m,
+            factorizations: solved.factorizations,
             analyses: 0,
         })
     }
