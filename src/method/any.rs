@@ -13,6 +13,7 @@
 use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::method::collocation::SpectralCollocation;
+use crate::method::hamiltonian::galerkin::HamiltonianGalerkin;
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
 use crate::method::space::{State, TangentMap};
@@ -274,6 +275,7 @@ macro_rules! any_method {
 
 any_method!(
     Svi(Svi),
+    HamiltonianGalerkin(HamiltonianGalerkin),
     SpectralCollocation(SpectralCollocation),
     SymplecticEuler(VariationalIntegrator<SymplecticEuler>),
     AdjointSymplecticEuler(VariationalIntegrator<AdjointSymplecticEuler>),

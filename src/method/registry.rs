@@ -33,6 +33,7 @@ use crate::error::Error;
 use crate::method::any::AnyMethod;
 pub use crate::method::any::VectorMethodVisitor;
 use crate::method::collocation::SpectralCollocation;
+use crate::method::hamiltonian::galerkin::HamiltonianGalerkin;
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
@@ -112,6 +113,17 @@ pub const METHODS: &[Entry] = &[
         space: SpaceKind::Vector,
         summary: "svi with Newton's method and the exact Jacobian at every iteration, also for \
                   constant-mass models: CGL points P, Gauss points M (default 2P)",
+    },
+    Entry {
+        name: "svi-h",
+        options: Options::PointsAndQuadrature {
+            default_points: || HamiltonianGalerkin::default().points,
+            default_quadrature: |points| Svi::new(points).quadrature_points(),
+        },
+        space: SpaceKind::Vector,
+        summary: "Galerkin Hamiltonian variational integrator on Hamilton's equations (svi's map \
+                  for a hyperregular L; svi's fixed point for H = ½pᵀM⁻¹p + V, Newton on the \
+                  Gauss-point momenta otherwise): CGL points P, Gauss points M (default 2P)",
     },
     Entry {
         name: "sc",
@@ -481,6 +493,14 @@ impl MethodSpec {
                 }
                 svi.into()
             }
+            "svi-h" => {
+                let galerkin = HamiltonianGalerkin::new(points);
+                match self.quadrature {
+                    Some(quadrature) => galerkin.with_quadrature(quadrature),
+                    None => galerkin,
+                }
+                .into()
+            }
             "sc" => SpectralCollocation::new(points).into(),
             "symplectic-euler" => VariationalIntegrator::new(SymplecticEuler).into(),
             "symplectic-euler-adjoint" => VariationalIntegrator::new(AdjointSymplecticEuler).into(),
@@ -779,7 +799,7 @@ mod tests {
         }
         let unknown = "rk45".parse::<MethodSpec>().unwrap_err().to_string();
         assert!(
-            unknown.contains("known: svi, svi-newton, sc, symplectic-euler,"),
+            unknown.contains("known: svi, svi-newton, svi-h, sc, symplectic-euler,"),
             "{unknown}"
         );
         let message = "midpoint:3".parse::<MethodSpec>().unwrap_err().to_string();
