@@ -185,7 +185,31 @@ const MOMENTUM_MAX_ITERATIONS: usize = 100;
 /// take at most third derivatives of L).
 const CHORD_STEPS: usize = 4;
 
-/// A Hamiltonian model run as a [`Lagrangian`] (see the module docs): `Canonical(h)`.
+/// A Hamiltonian model run as a [`Lagrangian`] (see the module docs): `Canonical::new(h)`.
+///
+/// ```
+/// use nalgebra::{SVector, U1};
+/// use svi::method::hamiltonian::galerkin::HamiltonianGalerkin;
+/// use svi::{Canonical, Hamiltonian, HamiltonianStructure, Initial, Integrator, Scalar};
+///
+/// /// The pendulum, H = p²/2 − cos q.
+/// struct Pendulum;
+///
+/// impl Hamiltonian<U1> for Pendulum {
+///     const TIME_DEPENDENT: bool = false;
+///     const STRUCTURE: HamiltonianStructure = HamiltonianStructure::QuadraticKinetic;
+///     fn hamiltonian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, p: &SVector<D, 1>) -> D {
+///         p[0] * p[0] * 0.5 - q[0].cos()
+///     }
+/// }
+///
+/// let integrator = Integrator::new(Canonical::new(Pendulum), HamiltonianGalerkin::new(7));
+/// let initial = Initial::Momentum { q: SVector::from([1.0]), p: SVector::from([0.0]) };
+/// let run = integrator.run(0.0, initial, 0.1, 10.0, &mut ())?;
+/// let energy = run.last.p[0].powi(2) * 0.5 - run.last.q[0].cos();
+/// assert!((energy + 1f64.cos()).abs() < 1e-13);
+/// # Ok::<(), svi::Error>(())
+/// ```
 ///
 /// The companions of a Hamiltonian ([`HamiltonianDefaults`], [`HamiltonianSymmetries`],
 /// [`HamiltonianInvariants`], [`HamiltonianExactSolution`]) become the Lagrangian ones, so a
