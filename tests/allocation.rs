@@ -10,9 +10,9 @@ use svi::method::any::AnyMethod;
 use svi::method::hamiltonian::{ImplicitMidpoint, Partitioned};
 use svi::method::multiscale::Multiscale;
 use svi::{
-    AdjointSymplecticEuler, Canonical, Composition, Hamiltonian, HamiltonianStructure,
-    Integrator, Lagrangian, Method, Midpoint, Scalar, Scheme, SpectralCollocation,
-    StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
+    AdjointSymplecticEuler, Canonical, Composition, Hamiltonian, HamiltonianStructure, Integrator,
+    Lagrangian, Method, Midpoint, Scalar, Scheme, SpectralCollocation, StormerVerlet, Svi,
+    SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
 use svi_models::{DampedPendulum, DoublePendulum, Kepler, SpringPendulum};
 

@@ -313,8 +313,8 @@ where
         let (mut drift_q, mut drift_p) = (identity.clone(), OMatrix::zeros_generic(n, n));
         if a != 0.0 {
             let start = derivatives.linearised(model, t, &state.q, &kick)?;
-            let inverse = invert_small(&(&identity + &start.gp * a))
-                .ok_or(StepFailure::SingularMatrix)?;
+            let inverse =
+                invert_small(&(&identity + &start.gp * a)).ok_or(StepFailure::SingularMatrix)?;
             pq = -(&inverse * &start.gq) * a;
             pp = inverse;
             drift_q += start.qp.transpose() * a;
