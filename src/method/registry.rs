@@ -165,6 +165,12 @@ pub const METHODS: &[Entry] = &[
         summary: "Kahan & Li's composition of Störmer–Verlet: order 8, 17 stages",
     },
     Entry {
+        name: "trapezoid",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "trapezoidal discrete Lagrangian, always implicit",
+    },
+    Entry {
         name: "symplectic-euler-h",
         options: Options::None,
         space: SpaceKind::Vector,
@@ -208,12 +214,6 @@ pub const METHODS: &[Entry] = &[
         options: Options::None,
         space: SpaceKind::Vector,
         summary: "Kahan & Li's composition of verlet-h: order 8, 17 stages",
-    },
-    Entry {
-        name: "trapezoid",
-        options: Options::None,
-        space: SpaceKind::Vector,
-        summary: "trapezoidal discrete Lagrangian, always implicit",
     },
     Entry {
         name: "explicit-euler",

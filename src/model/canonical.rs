@@ -65,6 +65,7 @@ where
 ///
 /// # Errors
 /// [`Error::LegendreMap`] where the inverse Legendre map of L does not converge.
+#[allow(clippy::type_complexity)]
 pub fn gradient<L: Lagrangian<N> + ?Sized, N: Dimension>(
     model: &L,
     t: f64,

@@ -761,9 +761,9 @@ mod tests {
                 model.acceleration_jacobian(0.0, &q, &v).unwrap(),
                 VariableMass.acceleration_jacobian(0.0, &q, &v).unwrap(),
             );
-            assert!((&a.value - &b.value).amax() < 1e-12);
-            assert!((&a.q - &b.q).amax() < 1e-12, "{} {}", a.q, b.q);
-            assert!((&a.v - &b.v).amax() < 1e-12, "{} {}", a.v, b.v);
+            assert!((a.value - b.value).amax() < 1e-12);
+            assert!((a.q - b.q).amax() < 1e-12, "{} {}", a.q, b.q);
+            assert!((a.v - b.v).amax() < 1e-12, "{} {}", a.v, b.v);
         }
     }
 
@@ -801,7 +801,7 @@ mod tests {
             ] {
                 assert!((x - y).amax() < 1e-13, "{x} {y}");
             }
-            assert!((&from_h.hp - v).amax() < 1e-14);
+            assert!((from_h.hp - v).amax() < 1e-14);
         }
     }
 

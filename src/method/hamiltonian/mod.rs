@@ -92,6 +92,9 @@ use crate::nonlinear::Newton;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector, U1};
 
+/// Two vectors of ℝᴺ: (∂H/∂q, ∂H/∂p), or (g, ∂H/∂p).
+type Pair<N> = (OVector<f64, N>, OVector<f64, N>);
+
 /// A derivative of H that could not be taken — the inverse Legendre map of a model written as
 /// L did not converge, or its mass matrix is singular — as the failure of the step.
 fn failure(error: Error) -> StepFailure {
@@ -164,7 +167,7 @@ where
         t: f64,
         q: &OVector<f64, N>,
         p: &OVector<f64, N>,
-    ) -> Result<(OVector<f64, N>, OVector<f64, N>), StepFailure> {
+    ) -> Result<Pair<N>, StepFailure> {
         let (hq, hp) = canonical::gradient(model, t, q, p, &self.velocity).map_err(failure)?;
         self.velocity.copy_from(&hp);
         self.evaluations += 1;
@@ -178,7 +181,7 @@ where
         t: f64,
         q: &OVector<f64, N>,
         p: &OVector<f64, N>,
-    ) -> Result<(OVector<f64, N>, OVector<f64, N>), StepFailure> {
+    ) -> Result<Pair<N>, StepFailure> {
         let (mut g, hp) = self.gradient(model, t, q, p)?;
         if self.forced {
             g -= canonical::force(model, t, q, p, &hp).map_err(failure)?;
