@@ -6,10 +6,13 @@
 use crate::allocations;
 
 use nalgebra::{Const, SVector};
+use svi::method::any::AnyMethod;
+use svi::method::hamiltonian::{ImplicitMidpoint, Partitioned};
 use svi::method::multiscale::Multiscale;
 use svi::{
-    AdjointSymplecticEuler, Integrator, Lagrangian, Method, Midpoint, SpectralCollocation,
-    StormerVerlet, Svi, SymplecticEuler, Trapezoid, VariationalIntegrator,
+    AdjointSymplecticEuler, Canonical, Composition, Hamiltonian, HamiltonianStructure, Integrator,
+    Lagrangian, Method, Midpoint, Scalar, Scheme, SpectralCollocation, StormerVerlet, Svi,
+    SymplecticEuler, Trapezoid, VariationalIntegrator,
 };
 use svi_models::{DampedPendulum, DoublePendulum, Kepler, SpringPendulum};
 
@@ -93,6 +96,43 @@ fn forced_paths_do_not_allocate_per_step() {
     assert_loop_allocates_nothing(model, VariationalIntegrator::new(SymplecticEuler), q, v);
     let adjoint = VariationalIntegrator::new(AdjointSymplecticEuler);
     assert_loop_allocates_nothing(model, adjoint, q, v);
+}
+
+/// A relativistic oscillator written as H = √(1 + p²) + q²/2 (separable, explicit
+/// Störmer–Verlet with a drift not linear in p).
+#[derive(Clone)]
+struct Relativistic;
+
+impl Hamiltonian<nalgebra::U1> for Relativistic {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: HamiltonianStructure = HamiltonianStructure::Separable;
+    fn hamiltonian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, p: &SVector<D, 1>) -> D {
+        (p[0] * p[0] + 1.0).sqrt() + q[0] * q[0] * 0.5
+    }
+}
+
+/// The methods on Hamilton's equations: on a model written as H (explicit), on constant-mass
+/// and general models written as L (the Legendre map, Newton), forced or not.
+#[test]
+fn hamiltonian_methods_do_not_allocate_per_step() {
+    let methods = || {
+        [
+            AnyMethod::from(Partitioned::symplectic_euler()),
+            Partitioned::adjoint_symplectic_euler().into(),
+            Partitioned::stormer_verlet().into(),
+            ImplicitMidpoint::default().into(),
+            Composition::hamiltonian(Scheme::Yoshida4).into(),
+        ]
+    };
+    for method in methods() {
+        let (q, v) = (SVector::from([1.0]), SVector::from([0.2]));
+        assert_loop_allocates_nothing(Canonical::new(Relativistic), method.clone(), q, v);
+        assert_loop_allocates_nothing(DampedPendulum::default(), method.clone(), q, v);
+        let (q, v) = (SVector::from([0.5, 0.0]), SVector::from([0.0, 3f64.sqrt()]));
+        assert_loop_allocates_nothing(Kepler::default(), method.clone(), q, v);
+        let (q, v) = (SVector::from([1.0, 0.5]), SVector::from([0.0, 0.0]));
+        assert_loop_allocates_nothing(DoublePendulum::default(), method, q, v);
+    }
 }
 
 #[test]

@@ -14,6 +14,7 @@ use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::method::collocation::SpectralCollocation;
 use crate::method::hamiltonian::galerkin::HamiltonianGalerkin;
+use crate::method::hamiltonian::{ImplicitMidpoint, Partitioned};
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
 use crate::method::space::{State, TangentMap};
@@ -283,6 +284,9 @@ any_method!(
     Trapezoid(VariationalIntegrator<Trapezoid>),
     StormerVerlet(StormerVerlet),
     Composition(Composition),
+    Partitioned(Partitioned),
+    ImplicitMidpoint(ImplicitMidpoint),
+    HamiltonianComposition(Composition<Partitioned>),
     Multiscale(Multiscale),
     ExplicitEuler(ExplicitEuler),
     ImplicitEuler(ImplicitEuler),

@@ -12,7 +12,8 @@
 //!
 //! A method chosen at run time is one value, [`any::AnyMethod`]. Families, one folder or file
 //! each: [`variational`] (SVI and the classic variational
-//! integrators), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
+//! integrators), [`hamiltonian`] (symplectic Euler, midpoint, Störmer–Verlet and its
+//! compositions on Hamilton's equations), [`collocation`] (spectral collocation), [`lie_svi`] (SO(3)), [`multiscale`]
 //! (the multiscale variational integrator for stiff oscillations), [`reference`](mod@reference) (explicit
 //! and implicit Euler and RK4 on the Euler–Lagrange equations: non-symplectic references).
 //! Each is written once for every dimension, fixed (`Const<N>`) or chosen at run time

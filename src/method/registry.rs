@@ -34,6 +34,7 @@ use crate::method::any::AnyMethod;
 pub use crate::method::any::VectorMethodVisitor;
 use crate::method::collocation::SpectralCollocation;
 use crate::method::hamiltonian::galerkin::HamiltonianGalerkin;
+use crate::method::hamiltonian::{ImplicitMidpoint, Partitioned};
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
@@ -180,6 +181,51 @@ pub const METHODS: &[Entry] = &[
         options: Options::None,
         space: SpaceKind::Vector,
         summary: "trapezoidal discrete Lagrangian, always implicit",
+    },
+    Entry {
+        name: "symplectic-euler-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "symplectic Euler on Hamilton's equations, p_k+1 = p_k − h H_q(q_k, p_k+1): \
+                  order 1, explicit for separable H",
+    },
+    Entry {
+        name: "symplectic-euler-adjoint-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "adjoint symplectic Euler on Hamilton's equations, q_k+1 = q_k + h H_p(q_k+1, \
+                  p_k): order 1, explicit for separable H",
+    },
+    Entry {
+        name: "midpoint-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "implicit midpoint rule on Hamilton's equations: order 2",
+    },
+    Entry {
+        name: "verlet-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Störmer–Verlet on Hamilton's equations: order 2, explicit for separable H with \
+                  any kinetic energy T(p)",
+    },
+    Entry {
+        name: "yoshida4-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Yoshida's triple jump of verlet-h: order 4, 3 stages",
+    },
+    Entry {
+        name: "kahan-li6-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Kahan & Li's composition of verlet-h: order 6, 9 stages",
+    },
+    Entry {
+        name: "kahan-li8-h",
+        options: Options::None,
+        space: SpaceKind::Vector,
+        summary: "Kahan & Li's composition of verlet-h: order 8, 17 stages",
     },
     Entry {
         name: "explicit-euler",
@@ -481,6 +527,9 @@ impl MethodSpec {
         if let Some(scheme) = Scheme::named(self.entry.name) {
             return Ok(Composition::new(scheme).into());
         }
+        if let Some(scheme) = self.entry.name.strip_suffix("-h").and_then(Scheme::named) {
+            return Ok(Composition::hamiltonian(scheme).into());
+        }
         let points = self.points_in_use().unwrap_or_default();
         Ok(match self.entry.name {
             "svi" | "svi-newton" => {
@@ -507,6 +556,10 @@ impl MethodSpec {
             "midpoint" => VariationalIntegrator::new(Midpoint).into(),
             "verlet" => StormerVerlet::default().into(),
             "trapezoid" => VariationalIntegrator::new(Trapezoid).into(),
+            "symplectic-euler-h" => Partitioned::symplectic_euler().into(),
+            "symplectic-euler-adjoint-h" => Partitioned::adjoint_symplectic_euler().into(),
+            "midpoint-h" => ImplicitMidpoint::default().into(),
+            "verlet-h" => Partitioned::stormer_verlet().into(),
             "multiscale" => Multiscale::new(points).into(),
             "explicit-euler" => ExplicitEuler.into(),
             "implicit-euler" => ImplicitEuler::default().into(),

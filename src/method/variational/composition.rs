@@ -1,7 +1,9 @@
 //! Symmetric compositions of Störmer–Verlet: higher order from the second-order method.
 //!
 //! # The composition
-//! With Φ_h one step of [`StormerVerlet`] (order 2, symmetric), the composition
+//! With Φ_h one step of [`StormerVerlet`] (order 2, symmetric; or of Störmer–Verlet on
+//! Hamilton's equations, [`crate::method::hamiltonian::Partitioned::stormer_verlet`], any base
+//! that is [`Composable`]), the composition
 //!
 //! Ψ_h = Φ_{γ_s h} ∘ … ∘ Φ_{γ_1 h},  Σ γ_i = 1, γ_i = γ_{s+1−i},
 //!
@@ -120,22 +122,43 @@ impl Scheme {
     }
 }
 
-/// Options of a composition of Störmer–Verlet (see the module docs). The scheme is fixed at
-/// construction: the step fractions are derived from it once.
+/// A symmetric method of order 2 that the schemes compose: Störmer–Verlet on L or on H.
+pub trait Composable {
+    /// The registry name of the composition `scheme` of this method.
+    fn composed_name(&self, scheme: Scheme) -> &'static str;
+}
+
+impl Composable for StormerVerlet {
+    /// `yoshida4`, `kahan-li6`, `kahan-li8`.
+    fn composed_name(&self, scheme: Scheme) -> &'static str {
+        scheme.name()
+    }
+}
+
+/// Options of a composition of Störmer–Verlet (see the module docs): of the Lagrangian
+/// [`StormerVerlet`] by default. The scheme is fixed at construction: the step fractions are
+/// derived from it once.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Composition {
+pub struct Composition<B = StormerVerlet> {
     scheme: Scheme,
-    /// The base method.
-    pub base: StormerVerlet,
+    /// The base method (its options).
+    pub base: B,
     fractions: Vec<f64>,
 }
 
 impl Composition {
     /// The composition `scheme` of Störmer–Verlet with its default options.
     pub fn new(scheme: Scheme) -> Self {
+        Composition::with_base(scheme, StormerVerlet::default())
+    }
+}
+
+impl<B> Composition<B> {
+    /// The composition `scheme` of `base`, a symmetric method of order 2.
+    pub fn with_base(scheme: Scheme, base: B) -> Self {
         Composition {
             scheme,
-            base: StormerVerlet::default(),
+            base,
             fractions: scheme.fractions(),
         }
     }
@@ -181,31 +204,31 @@ impl Composition {
     }
 }
 
-/// Buffers of a composition run: Störmer–Verlet's, and the start and increment of one
-/// stage.
+/// Buffers of a composition run: the base method's (Störmer–Verlet's by default), and the
+/// start and increment of one stage.
 #[derive(Debug, Clone)]
-pub struct CompositionWorkspace<N: Dimension>
+pub struct CompositionWorkspace<N: Dimension, W = StormerVerletWorkspace<N>>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    base: StormerVerletWorkspace<N>,
+    base: W,
     from: State<N>,
     stage: State<N>,
 }
 
-impl<N: Dimension> Method<N> for Composition
+impl<N: Dimension, B: Method<N> + Composable> Method<N> for Composition<B>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     const WITHOUT_POINTS: bool = true;
-    const COMPOSES_VERLET: bool = true;
+    const COMPOSES_VERLET: bool = B::COMPOSES_VERLET;
 
-    type Workspace = CompositionWorkspace<N>;
+    type Workspace = CompositionWorkspace<N, B::Workspace>;
 
-    /// Störmer–Verlet's properties with the scheme's name and order.
+    /// The base method's properties with the scheme's name and order.
     fn info(&self) -> MethodInfo {
         MethodInfo {
-            name: self.scheme.name(),
+            name: self.base.composed_name(self.scheme),
             order: self.scheme.order(),
             ..Method::<N>::info(&self.base)
         }
@@ -215,7 +238,7 @@ where
         &self,
         model: &L,
         h: f64,
-    ) -> Result<CompositionWorkspace<N>, Error> {
+    ) -> Result<CompositionWorkspace<N, B::Workspace>, Error> {
         let base = self.base.workspace(model, h)?;
         let n: N =
             dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
@@ -230,7 +253,7 @@ where
     fn step<L: Lagrangian<N>>(
         &self,
         model: &L,
-        workspace: &mut CompositionWorkspace<N>,
+        workspace: &mut CompositionWorkspace<N, B::Workspace>,
         t: f64,
         h: f64,
         state: &State<N>,
@@ -250,22 +273,24 @@ where
         Ok(report)
     }
 
+    /// The fractions, if the base is the Störmer–Verlet step the logarithmic-Hamiltonian
+    /// splitting reproduces.
     fn verlet_fractions(&self) -> Option<&[f64]> {
-        Some(&self.fractions)
+        Method::<N>::verlet_fractions(&self.base).map(|_| self.fractions.as_slice())
     }
 
     fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
         Method::<N>::keeps_sparsity(&self.base, model)
     }
 
-    fn restart(&self, workspace: &mut CompositionWorkspace<N>) {
+    fn restart(&self, workspace: &mut CompositionWorkspace<N, B::Workspace>) {
         Method::<N>::restart(&self.base, &mut workspace.base);
     }
 
     fn velocity_into<L: Lagrangian<N>>(
         &self,
         model: &L,
-        workspace: &CompositionWorkspace<N>,
+        workspace: &CompositionWorkspace<N, B::Workspace>,
         t: f64,
         q: &OVector<f64, N>,
         p: &OVector<f64, N>,
@@ -278,7 +303,7 @@ where
     fn tangent_map<L: Lagrangian<N>>(
         &self,
         model: &L,
-        workspace: &mut CompositionWorkspace<N>,
+        workspace: &mut CompositionWorkspace<N, B::Workspace>,
         t: f64,
         h: f64,
         state: &State<N>,

@@ -426,9 +426,12 @@ segment_rule!(
 /// p_k = ½[∂L/∂q̇(q_k, v) + ∂L/∂q̇(q_{k+1}, v)] − (h/2)(∂L/∂q(q_k, v) + f_L(t_k, q_k, v)),
 /// p_{k+1} = ½[∂L/∂q̇(q_k, v) + ∂L/∂q̇(q_{k+1}, v)] + (h/2)(∂L/∂q(q_{k+1}, v) + f_L(t_k + h, q_{k+1}, v)).
 ///
-/// This is the slides' "Störmer–Verlet" discrete Lagrangian. For a general L its variational
-/// integrator is the Lobatto IIIA–IIIB pair (the generalized Störmer–Verlet method), implicit
-/// in q_{k+1}; for L = ½ q̇ᵀMq̇ − V(t, q) with constant M it is the explicit kick–drift–kick
+/// This is the slides' "Störmer–Verlet" discrete Lagrangian, implicit in q_{k+1} for a general
+/// L. It holds one velocity v over the step, so for a mass matrix that depends on q it is not
+/// the Lobatto IIIA–IIIB pair (the generalized Störmer–Verlet method of HLW eq. VI.3.4, whose
+/// two end velocities share one momentum: [`crate::method::hamiltonian::Partitioned`]), an
+/// O(h³) difference per step (tested there); for L = ½ q̇ᵀMq̇ − V(t, q) with constant M both
+/// are the explicit kick–drift–kick
 /// Störmer–Verlet method, which [`crate::StormerVerlet`] runs without any Newton iteration.
 /// [`crate::VariationalIntegrator`]`<Trapezoid>` always takes the implicit path.
 ///

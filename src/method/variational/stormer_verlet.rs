@@ -17,7 +17,8 @@
 //! per step: the force at q_{k+1} is reused as the force at q_k of the next step. With a
 //! force f_L that depends on q̇ the first kick is implicit in v only (Newton's method on N
 //! unknowns, no Hessian of L). Every other Lagrangian takes the implicit path of
-//! [`VariationalIntegrator`]`<`[`Trapezoid`]`>` (the Lobatto IIIA–IIIB pair): the same
+//! [`VariationalIntegrator`]`<`[`Trapezoid`]`>` (for a mass matrix that depends on q not the
+//! Lobatto IIIA–IIIB pair, see [`Trapezoid`]): the same
 //! discrete equations, solved by Newton's method on q_{k+1}.
 //!
 //! # Properties
