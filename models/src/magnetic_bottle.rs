@@ -13,8 +13,9 @@
 //! B = ∇ × A = B₀ (−x z/L², −y z/L², 1 + z²/L²),
 //!
 //! divergence-free identically (∇·B = −2B₀z/L² + 2B₀z/L² = 0) and axisymmetric
-//! (B_r = −B₀ r z/L² = −∂A_φ/∂z, B_z = (1/r)∂(r A_φ)/∂r). It is not curl-free
-//! (∇ × B = −(B₀ r/L²) φ̂, a volume current, as in a bottle wound with distributed coils).
+//! (B_r = −B₀ r z/L² = −∂A_φ/∂z, B_z = (1/r)∂(r A_φ)/∂r). It is not a vacuum field:
+//! ∇ × B = −(B₀ r/L²) φ̂ ≠ 0, the field of a volume current density (which does not enter
+//! the particle's motion).
 //!
 //! # Hamiltonian
 //!
