@@ -17,6 +17,20 @@
 //! | `restricted-three-body` | [`RestrictedThreeBody`] | 2 | — | Jacobi constant | only μ = 0 (Kepler, rotating frame) |
 //! | `nbody` | [`NBody`] | 18 (d per body, at run time: [`svi::Dyn`]) | translations, rotations | — | — |
 //!
+//! Models written as a Hamiltonian H(t, q, p) ([`svi::Hamiltonian`], with the H-side
+//! companions of [`svi::model::hamiltonian`]) are registered as [`Canonical`]`<H>`, which is a
+//! [`Lagrangian`] with the same companions, so they run by every method and front door:
+//!
+//! | name | model | N | H | symmetry | invariants | exact solution |
+//! | --- | --- | --- | --- | --- | --- | --- |
+//! | `kepler-h` | [`KeplerH`] | 2 | ∣p∣²/2 − 1/∣q∣ | rotation | Runge–Lenz | yes (Kepler's equation) |
+//! | `pendulum-h` | [`PendulumH`] | 1 | p²/(2ml²) − mgl cos θ | — | — | yes (Jacobi elliptic) |
+//! | `henon-heiles-h` | [`HenonHeilesH`] | 2 | ∣p∣²/2 + ∣q∣²/2 + λ(x²y − y³/3) | — | — | — |
+//! | `magnetic-bottle` | [`MagneticBottle`] | 3 | ∣p − eA(x)∣²/(2m) (non-separable) | rotation about the axis (p_φ) | magnetic moment (adiabatic) | — |
+//!
+//! The first three are the Lagrangian models `kepler`, `pendulum` and `henon-heiles` in
+//! canonical variables, with their parameters, defaults and exact solutions.
+//!
 //! Chains and lattices have their dimension n at run time (a parameter, `n`): each is a sum
 //! of local terms ([`svi::model::local::LocalLagrangian`]) on runtime-sized ℝⁿ, run as
 //! `svi::model::local::Terms(model)` by every method (in O(n) per step by those that keep
@@ -121,10 +135,14 @@ pub mod fields;
 pub mod fput;
 pub mod fput_stiff;
 pub mod henon_heiles;
+pub mod henon_heiles_h;
 pub mod kepler;
+pub mod kepler_h;
+pub mod magnetic_bottle;
 pub mod nbody;
 pub mod oscillator;
 pub mod pendulum;
+pub mod pendulum_h;
 pub mod polymer;
 pub mod relativistic_chain;
 pub mod restricted_three_body;
@@ -145,10 +163,14 @@ pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
 pub use fput::Fput;
 pub use fput_stiff::FputStiff;
 pub use henon_heiles::HenonHeiles;
+pub use henon_heiles_h::HenonHeilesH;
 pub use kepler::{Kepler, KeplerOrbit};
+pub use kepler_h::KeplerH;
+pub use magnetic_bottle::MagneticBottle;
 pub use nbody::{Body, NBody};
 pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
+pub use pendulum_h::PendulumH;
 pub use polymer::Polymer;
 pub use relativistic_chain::RelativisticChain;
 pub use restricted_three_body::RestrictedThreeBody;
@@ -167,7 +189,10 @@ use svi::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian};
 use svi::model::text::{
     MAX_WIDTH, TextChain, TextChainModel, TextError, TextLagrangian, TextModel,
 };
-use svi::{Defaults, Dimension, Dyn, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
+use svi::{
+    Canonical, Defaults, Dimension, Dyn, ExactSolution, Invariants, Lagrangian, Structure,
+    Symmetries,
+};
 
 /// Everything a zoo model implements (blanket impl for any type with all the bounds).
 pub trait ZooModel<N: Dimension>:
@@ -213,15 +238,17 @@ pub trait ModelVisitor {
         DefaultAllocator: Allocator<N> + Allocator<N, N>;
 }
 
-/// The zoo on ℝᴺ: [`MODEL_NAMES`] and [`visit_model`] from one list of model types (adding
-/// a model is its file and one entry here).
+/// The zoo on ℝᴺ: [`MODEL_NAMES`] and [`visit_model`] from two lists of model types, the
+/// Lagrangians and then the Hamiltonians, which are visited as [`Canonical`]`<H>` (adding a
+/// model is its file and one entry here).
 macro_rules! vector_zoo {
-    ($($model:ident),+ $(,)?) => {
+    ($($model:ident),+ ; hamiltonians: $($hamiltonian:ident),+ $(,)?) => {
         /// Names of all models, in a stable order (each equals the model's
         /// [`Defaults::name`]).
-        pub const MODEL_NAMES: &[&str] = &[$($model::NAME),+];
+        pub const MODEL_NAMES: &[&str] = &[$($model::NAME,)+ $($hamiltonian::NAME),+];
 
-        /// Build the named model with its defaults and hand it to the visitor.
+        /// Build the named model with its defaults and hand it to the visitor (a model
+        /// written as a Hamiltonian H as [`Canonical`]`<H>`).
         ///
         /// # Errors
         /// [`UnknownModel`] if `name` is not one of [`MODEL_NAMES`].
@@ -232,6 +259,11 @@ macro_rules! vector_zoo {
             $(
                 if name == $model::NAME {
                     return Ok(visitor.visit($model::default()));
+                }
+            )+
+            $(
+                if name == $hamiltonian::NAME {
+                    return Ok(visitor.visit(Canonical::new($hamiltonian::default())));
                 }
             )+
             Err(UnknownModel {
@@ -252,7 +284,12 @@ vector_zoo!(
     DrivenOscillator,
     NBody,
     HenonHeiles,
-    RestrictedThreeBody,
+    RestrictedThreeBody;
+    hamiltonians:
+    KeplerH,
+    PendulumH,
+    HenonHeilesH,
+    MagneticBottle,
 );
 
 /// Hand a text model to the visitor as a [`TextLagrangian`] of run-time dimension ([`Dyn`]:

@@ -45,7 +45,11 @@ fn every_registered_name_visits_the_model_of_that_name() {
             "driven-oscillator",
             "nbody",
             "henon-heiles",
-            "restricted-three-body"
+            "restricted-three-body",
+            "kepler-h",
+            "pendulum-h",
+            "henon-heiles-h",
+            "magnetic-bottle"
         ]
     );
     for &name in MODEL_NAMES {
@@ -66,7 +70,8 @@ fn an_unknown_name_is_an_error_listing_the_known_ones() {
         error.to_string(),
         "unknown model 'pendulm' (known: oscillator, pendulum, spring-pendulum, kepler, \
          double-pendulum, damped-oscillator, damped-pendulum, driven-oscillator, nbody, \
-         henon-heiles, restricted-three-body)"
+         henon-heiles, restricted-three-body, kepler-h, pendulum-h, henon-heiles-h, \
+         magnetic-bottle)"
     );
     assert!(visit_model("", Name).is_err());
     assert!(visit_model("Kepler", Name).is_err());
@@ -183,7 +188,7 @@ fn every_model_honours_the_defaults_contract() {
         .iter()
         .map(|name| visit_model(name, CheckContract).unwrap())
         .collect();
-    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4, 1, 4, 3]);
+    assert_eq!(counts, [1, 3, 4, 1, 5, 2, 4, 4, 1, 4, 3, 1, 3, 4, 5]);
 }
 
 #[test]

@@ -65,6 +65,16 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
         "restricted-three-body",
         include_str!("../../scenes/restricted-three-body.toml"),
     ),
+    ("kepler-h", include_str!("../../scenes/kepler-h.toml")),
+    ("pendulum-h", include_str!("../../scenes/pendulum-h.toml")),
+    (
+        "henon-heiles-h",
+        include_str!("../../scenes/henon-heiles-h.toml"),
+    ),
+    (
+        "magnetic-bottle",
+        include_str!("../../scenes/magnetic-bottle.toml"),
+    ),
     (
         "oscillator-beyond-stability",
         include_str!("../../scenes/oscillator-beyond-stability.toml"),
