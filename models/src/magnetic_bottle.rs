@@ -59,6 +59,13 @@
 //! doubled), horizon T = 10 bounce periods 10 · 2π/(εΩ₀) ≈ 2513 (12 800 steps). The
 //! parameters keep these ratios: step and horizon follow Ω₀ and ε.
 //!
+//! # Measured
+//!
+//! `svi run magnetic-bottle --t-end 196349.54084936207 --every 25 --out bottle.csv` (SVI with
+//! 6 CGL points, 10⁶ default steps, 784 bounces): energy error 1.9e-13 (3e-12 of E), p_φ
+//! error 1.3e-13, μ within 2.8 % of μ₀ throughout (ε = 2.5 %), its means over single bounces
+//! within 8e-4 of each other, with a least-squares drift of 9e-7 of μ₀ over the run.
+//!
 //! # References
 //!
 //! F. F. Chen, *Introduction to Plasma Physics and Controlled Fusion* (3rd ed., 2016), §2.3.3
