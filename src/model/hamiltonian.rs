@@ -218,7 +218,72 @@ pub struct Canonical<H> {
     model: H,
     /// M = (∂²H/∂p²)⁻¹ of a [`HamiltonianStructure::QuadraticKinetic`] H, column-major,
     /// computed at the first point the model is evaluated at.
-    mass: OnceLock<Vec<f64>>,
+    mass: OnceLock<Mass>,
+}
+
+/// The constant mass matrix M of a [`HamiltonianStructure::QuadraticKinetic`] H, in the
+/// cheapest form it takes (most models have M = m I): the force of a constant-mass method
+/// differentiates ½ q̇ᵀMq̇ at every point even though it does not depend on q.
+#[derive(Debug, Clone)]
+enum Mass {
+    /// M = m I.
+    Scaled(f64),
+    /// M = diag(mᵢ).
+    Diagonal(Vec<f64>),
+    /// Any M, column-major.
+    Dense(Vec<f64>),
+}
+
+impl Mass {
+    /// M from its entries (column-major n × n).
+    fn new(entries: &[f64], n: usize) -> Self {
+        let diagonal: Vec<f64> = (0..n).map(|i| entries[i * (n + 1)]).collect();
+        let off_diagonal = (0..n)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .any(|(i, j)| i != j && entries[i + n * j] != 0.0);
+        if off_diagonal {
+            Mass::Dense(entries.to_vec())
+        } else if diagonal.iter().all(|&m| m == diagonal[0]) {
+            Mass::Scaled(diagonal[0])
+        } else {
+            Mass::Diagonal(diagonal)
+        }
+    }
+
+    /// M q̇.
+    #[inline]
+    fn apply<D: Scalar, N: Dimension>(&self, v: &OVector<D, N>) -> OVector<D, N>
+    where
+        DefaultAllocator: Allocator<N>,
+    {
+        match self {
+            Mass::Scaled(m) => v * D::from(*m),
+            Mass::Diagonal(m) => {
+                OVector::from_fn_generic(v.shape_generic().0, U1, |i, _| v[i] * m[i])
+            }
+            Mass::Dense(m) => {
+                let n = v.len();
+                OVector::from_fn_generic(v.shape_generic().0, U1, |i, _| {
+                    (0..n).fold(D::zero(), |sum, j| sum + v[j] * m[i + n * j])
+                })
+            }
+        }
+    }
+
+    /// ½ q̇ᵀMq̇.
+    #[inline]
+    fn kinetic<D: Scalar, N: Dimension>(&self, v: &OVector<D, N>) -> D
+    where
+        DefaultAllocator: Allocator<N>,
+    {
+        match self {
+            Mass::Scaled(m) => v.dot(v) * (0.5 * m),
+            Mass::Diagonal(m) => {
+                (0..v.len()).fold(D::zero(), |sum, i| sum + v[i] * v[i] * m[i]) * 0.5
+            }
+            Mass::Dense(_) => self.apply(v).dot(v) * 0.5,
+        }
+    }
 }
 
 impl<H: Clone> Clone for Canonical<H> {
@@ -289,10 +354,25 @@ where
 }
 
 impl<H> Canonical<H> {
-    /// M = (∂²H/∂p²)⁻¹, from its first evaluation (at (t, q), p = 0); NaN if ∂²H/∂p² is
-    /// singular there (a run then stops with a non-finite error, and
+    /// M = (∂²H/∂p²)⁻¹, from its first evaluation (at the real parts of (t, q), p = 0); NaN
+    /// if ∂²H/∂p² is singular there (a run then stops with a non-finite error, and
     /// [`HamiltonianForm::check`] names the cause).
-    fn mass<N: Dimension>(&self, t: f64, q: &OVector<f64, N>) -> &[f64]
+    #[inline]
+    fn mass<D: Scalar, N: Dimension>(&self, t: D, q: &OVector<D, N>) -> &Mass
+    where
+        H: Hamiltonian<N>,
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
+        match self.mass.get() {
+            Some(mass) => mass,
+            None => self.first_mass(t.re(), &q.map(|x| x.re())),
+        }
+    }
+
+    /// [`Canonical::mass`] at its first evaluation.
+    #[cold]
+    #[inline(never)]
+    fn first_mass<N: Dimension>(&self, t: f64, q: &OVector<f64, N>) -> &Mass
     where
         H: Hamiltonian<N>,
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -300,9 +380,10 @@ impl<H> Canonical<H> {
         self.mass.get_or_init(|| {
             let zero = OVector::zeros_generic(q.shape_generic().0, U1);
             let (_, _, pp) = N::hessian(&Energy(&self.model), t, q, &zero, Wrt::Velocity);
+            let n = q.len();
             match invert_small(&pp) {
-                Some(mass) => mass.as_slice().to_vec(),
-                None => vec![f64::NAN; pp.len()],
+                Some(mass) => Mass::new(mass.as_slice(), n),
+                None => Mass::Dense(vec![f64::NAN; n * n]),
             }
         })
     }
@@ -352,6 +433,7 @@ impl<H> Canonical<H> {
     }
 
     /// p(t, q, q̇) in the scalar of the call (see the module docs).
+    #[inline]
     fn momentum<D: Scalar, N: Dimension>(
         &self,
         t: D,
@@ -362,14 +444,10 @@ impl<H> Canonical<H> {
         H: Hamiltonian<N>,
         DefaultAllocator: Allocator<N> + Allocator<N, N>,
     {
-        let (t_re, q_re) = (t.re(), q.map(|x| x.re()));
         if H::STRUCTURE == HamiltonianStructure::QuadraticKinetic {
-            let mass = self.mass(t_re, &q_re);
-            let n = v.len();
-            return OVector::from_fn_generic(q.shape_generic().0, U1, |i, _| {
-                (0..n).fold(D::zero(), |sum, j| sum + v[j] * mass[i + n * j])
-            });
+            return self.mass(t, q).apply(v);
         }
+        let (t_re, q_re) = (t.re(), q.map(|x| x.re()));
         let v_re = v.map(|x| x.re());
         let real = self.real_momentum(t_re, &q_re, &v_re);
         let energy = Energy(&self.model);
@@ -410,8 +488,7 @@ where
         if H::STRUCTURE == HamiltonianStructure::QuadraticKinetic {
             // ½ q̇ᵀMq̇ − V, V = H(t, q, 0): no Legendre map at all.
             let zero = OVector::zeros_generic(q.shape_generic().0, U1);
-            let p = self.momentum(t, q, v);
-            return p.dot(v) * 0.5 - self.model.hamiltonian(t, q, &zero);
+            return self.mass(t, q).kinetic(v) - self.model.hamiltonian(t, q, &zero);
         }
         let p = self.momentum(t, q, v);
         p.dot(v) - self.model.hamiltonian(t, q, &p)
@@ -426,6 +503,28 @@ where
     ) -> OVector<D, N> {
         let p = self.momentum(t, q, v);
         self.model.external_force(t, q, &p)
+    }
+
+    /// ∂L/∂q = −∂H/∂q(t, q, 0) of a quadratic kinetic energy, from H alone: the fixed point
+    /// of a constant mass then differentiates neither ½ q̇ᵀMq̇ nor the Legendre map.
+    #[inline]
+    fn batch_force(
+        &self,
+        times: &[f64],
+        positions: &[OVector<f64, N>],
+        v: &OVector<f64, N>,
+        forces: &mut [OVector<f64, N>],
+    ) -> bool {
+        if H::STRUCTURE != HamiltonianStructure::QuadraticKinetic {
+            return false;
+        }
+        let zero = OVector::zeros_generic(v.shape_generic().0, U1);
+        let energy = Energy(&self.model);
+        for ((&t, q), force) in times.iter().zip(positions).zip(forces) {
+            let (_, gradient) = N::gradient(&energy, t, q, &zero, Wrt::Position);
+            *force = -gradient;
+        }
+        true
     }
 
     fn hamiltonian_form(&self) -> Option<&dyn HamiltonianForm<N>> {
