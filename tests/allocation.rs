@@ -7,7 +7,9 @@ use crate::allocations;
 
 use nalgebra::{Const, SVector};
 use svi::method::any::AnyMethod;
-use svi::method::hamiltonian::{ImplicitMidpoint, Partitioned};
+use svi::method::hamiltonian::{
+    HamiltonianCollocation, HamiltonianGalerkin, ImplicitMidpoint, Partitioned,
+};
 use svi::method::multiscale::Multiscale;
 use svi::{
     AdjointSymplecticEuler, Canonical, Composition, Hamiltonian, HamiltonianStructure, Integrator,
@@ -122,6 +124,8 @@ fn hamiltonian_methods_do_not_allocate_per_step() {
             Partitioned::stormer_verlet().into(),
             ImplicitMidpoint::default().into(),
             Composition::hamiltonian(Scheme::Yoshida4).into(),
+            HamiltonianGalerkin::new(4).with_quadrature(3).into(),
+            HamiltonianCollocation::new(4).into(),
         ]
     };
     for method in methods() {

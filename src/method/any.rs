@@ -13,8 +13,9 @@
 use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::method::collocation::SpectralCollocation;
-use crate::method::hamiltonian::galerkin::HamiltonianGalerkin;
-use crate::method::hamiltonian::{ImplicitMidpoint, Partitioned};
+use crate::method::hamiltonian::{
+    HamiltonianCollocation, HamiltonianGalerkin, ImplicitMidpoint, Partitioned,
+};
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
 use crate::method::space::{State, TangentMap};
@@ -277,6 +278,7 @@ macro_rules! any_method {
 any_method!(
     Svi(Svi),
     HamiltonianGalerkin(HamiltonianGalerkin),
+    HamiltonianCollocation(HamiltonianCollocation),
     SpectralCollocation(SpectralCollocation),
     SymplecticEuler(VariationalIntegrator<SymplecticEuler>),
     AdjointSymplecticEuler(VariationalIntegrator<AdjointSymplecticEuler>),

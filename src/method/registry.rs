@@ -33,8 +33,9 @@ use crate::error::Error;
 use crate::method::any::AnyMethod;
 pub use crate::method::any::VectorMethodVisitor;
 use crate::method::collocation::SpectralCollocation;
-use crate::method::hamiltonian::galerkin::HamiltonianGalerkin;
-use crate::method::hamiltonian::{ImplicitMidpoint, Partitioned};
+use crate::method::hamiltonian::{
+    HamiltonianCollocation, HamiltonianGalerkin, ImplicitMidpoint, Partitioned,
+};
 use crate::method::lie_svi::{Form, LieSvi};
 use crate::method::multiscale::Multiscale;
 use crate::method::reference::{ExplicitEuler, ImplicitEuler, RungeKutta4};
@@ -133,6 +134,14 @@ pub const METHODS: &[Entry] = &[
         },
         space: SpaceKind::Vector,
         summary: "spectral collocation of the Euler–Lagrange equations: CGL points P",
+    },
+    Entry {
+        name: "sc-h",
+        options: Options::Points {
+            default: || HamiltonianCollocation::default().points,
+        },
+        space: SpaceKind::Vector,
+        summary: "spectral collocation of Hamilton's equations in (q, p): CGL points P",
     },
     Entry {
         name: "symplectic-euler",
@@ -551,6 +560,7 @@ impl MethodSpec {
                 .into()
             }
             "sc" => SpectralCollocation::new(points).into(),
+            "sc-h" => HamiltonianCollocation::new(points).into(),
             "symplectic-euler" => VariationalIntegrator::new(SymplecticEuler).into(),
             "symplectic-euler-adjoint" => VariationalIntegrator::new(AdjointSymplecticEuler).into(),
             "midpoint" => VariationalIntegrator::new(Midpoint).into(),
@@ -852,7 +862,7 @@ mod tests {
         }
         let unknown = "rk45".parse::<MethodSpec>().unwrap_err().to_string();
         assert!(
-            unknown.contains("known: svi, svi-newton, svi-h, sc, symplectic-euler,"),
+            unknown.contains("known: svi, svi-newton, svi-h, sc, sc-h, symplectic-euler,"),
             "{unknown}"
         );
         let message = "midpoint:3".parse::<MethodSpec>().unwrap_err().to_string();

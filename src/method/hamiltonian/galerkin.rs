@@ -46,6 +46,7 @@
 //! (2011); Porcù & Penati's `spectralvarint` (`002`), the Hamiltonian form of the spectral
 //! variational integrator.
 
+use super::Derivatives;
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::variational::svi::{Svi, SviWorkspace};
@@ -130,12 +131,14 @@ where
     newton: Newton,
     /// (Δ¹, …, Δˢ, Π_1, …, Π_m), N numbers each.
     unknowns: DVector<f64>,
-    /// The last converged unknowns and step size, for the next step's starting values.
-    last: Option<(DVector<f64>, f64)>,
-    /// The point of each Gauss node: (t_μ, q(τ_μ), P_μ, q̇ guess).
+    /// The step of the last converged solve, whose unknowns (still in `unknowns`) start
+    /// the next one.
+    last_h: Option<f64>,
+    /// H's derivatives at the Gauss points.
+    derivatives: Derivatives<N>,
+    /// (q(τ_μ), P_μ) at each Gauss point.
     q: Vec<OVector<f64, N>>,
     p: Vec<OVector<f64, N>>,
-    velocity: Vec<OVector<f64, N>>,
 }
 
 impl<N: Dimension> Method<N> for HamiltonianGalerkin
@@ -182,10 +185,10 @@ where
                 tables,
                 newton: Newton::new(size, self.max_iterations),
                 unknowns: DVector::zeros(size),
-                last: None,
+                last_h: None,
+                derivatives: Derivatives::new(model, n),
                 q: vec![zero.clone(); m],
-                p: vec![zero.clone(); m],
-                velocity: vec![zero; m],
+                p: vec![zero; m],
             },
         )))
     }
@@ -214,7 +217,7 @@ where
         match workspace {
             HamiltonianGalerkinWorkspace::Quadratic(svi) => Method::<N>::restart(&self.svi(), svi),
             HamiltonianGalerkinWorkspace::General(general) => {
-                general.last = None;
+                general.last_h = None;
                 general.newton.invalidate();
             }
         }
@@ -233,13 +236,9 @@ where
             HamiltonianGalerkinWorkspace::Quadratic(svi) => {
                 Method::<N>::velocity_into(&self.svi(), model, svi, t, q, p, v)
             }
-            HamiltonianGalerkinWorkspace::General(_) => match model.hamiltonian_form() {
-                Some(form) => {
-                    *v = form.gradient(t, q, p).1;
-                    Ok(true)
-                }
-                None => Ok(false),
-            },
+            HamiltonianGalerkinWorkspace::General(general) => {
+                Ok(general.derivatives.velocity_into(model, t, q, p, v))
+            }
         }
     }
 
@@ -295,25 +294,17 @@ impl<N: Dimension> GeneralWorkspace<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    /// Fill the Gauss points' (q(τ_μ), P_μ) and q̇ guesses from the unknowns.
+    /// Fill the Gauss points' (q(τ_μ), P_μ) from the unknowns.
     fn points(&mut self, state: &State<N>, unknowns: &DVector<f64>) {
         let (tables, w) = (&self.tables, state.q.len());
         let s = tables.degree;
-        for (mu, ((q, p), v)) in self
-            .q
-            .iter_mut()
-            .zip(self.p.iter_mut())
-            .zip(self.velocity.iter_mut())
-            .enumerate()
-        {
+        for (mu, (q, p)) in self.q.iter_mut().zip(self.p.iter_mut()).enumerate() {
             q.copy_from(&state.q);
-            v.fill(0.0);
             for nu in 1..=s {
                 let offset = &unknowns.as_slice()[(nu - 1) * w..nu * w];
-                let (value, rate) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+                let value = tables.values[(mu, nu)];
                 for i in 0..w {
                     q[i] += value * offset[i];
-                    v[i] += rate * offset[i];
                 }
             }
             let pi = &unknowns.as_slice()[(s + mu) * w..(s + mu + 1) * w];
@@ -324,42 +315,29 @@ where
     }
 
     /// The derivatives at Gauss point `mu` (second ones on request).
-    fn derivatives<L: Lagrangian<N>>(
-        &self,
+    fn at_point<L: Lagrangian<N>>(
+        &mut self,
         model: &L,
         t: f64,
         mu: usize,
         second: bool,
     ) -> Result<PointDerivatives<N>, StepFailure> {
         let time = t + self.tables.h * self.tables.unit_nodes[mu];
-        let (q, p, guess) = (&self.q[mu], &self.p[mu], &self.velocity[mu]);
-        let failure = |_| StepFailure::NonFinite;
-        let forced = canonical::forced(model);
+        let (q, p) = (&self.q[mu], &self.p[mu]);
         if !second {
-            let (mut hq, hp) = canonical::gradient(model, time, q, p, guess).map_err(failure)?;
-            if forced {
-                hq -= canonical::force(model, time, q, p, guess).map_err(failure)?;
-            }
+            let (hq, hp) = self.derivatives.field(model, time, q, p)?;
             return Ok(PointDerivatives {
                 hq,
                 hp,
                 second: None,
             });
         }
-        let c = canonical::second(model, time, q, p, guess).map_err(failure)?;
-        let pq = c.qp.transpose();
-        let (mut hq, mut qq, mut qp) = (c.hq, c.qq, c.qp);
-        if forced {
-            let (f, fq, fp) =
-                canonical::force_jacobian(model, time, q, p, guess).map_err(failure)?;
-            hq -= f;
-            qq -= fq;
-            qp -= &fp;
-        }
+        let field = self.derivatives.linearised(model, time, q, p)?;
+        let pq = field.qp.transpose();
         Ok(PointDerivatives {
-            hq,
-            hp: c.hp,
-            second: Some([qq, qp, pq, c.pp]),
+            hq: field.g,
+            hp: field.hp,
+            second: Some([field.gq, field.gp, pq, field.pp]),
         })
     }
 
@@ -377,6 +355,7 @@ where
             self.tables.rescale(h);
             self.newton.invalidate();
         }
+        self.derivatives.start(model, t, &state.q, &state.y)?;
         self.start(model, t, state)?;
         let mut unknowns = std::mem::take(&mut self.unknowns);
         let mut newton = std::mem::replace(&mut self.newton, Newton::new(0, 1));
@@ -393,7 +372,7 @@ where
             return Err(error);
         }
         let solved = result?;
-        self.last = Some((self.unknowns.clone(), h));
+        self.last_h = Some(h);
         Ok(solved)
     }
 
@@ -406,13 +385,12 @@ where
         state: &State<N>,
     ) -> Result<(), StepFailure> {
         let h = self.tables.h;
-        if let Some((last, last_h)) = &self.last {
-            self.unknowns.copy_from(last);
+        // A failed solve leaves `last_h` at `None`: its unknowns are not a solution.
+        if let Some(last_h) = self.last_h.take() {
             self.unknowns *= h / last_h;
             return Ok(());
         }
-        let (hq, hp) = canonical::gradient(model, t, &state.q, &state.y, &state.y)
-            .map_err(|_| StepFailure::NonFinite)?;
+        let (hq, hp) = self.derivatives.field(model, t, &state.q, &state.y)?;
         let w = state.q.len();
         let s = self.tables.degree;
         for nu in 1..=s {
@@ -449,7 +427,7 @@ where
             matrix.fill(0.0);
         }
         for mu in 0..m {
-            let d = self.derivatives(model, t, mu, jacobian.is_some())?;
+            let d = self.at_point(model, t, mu, jacobian.is_some())?;
             let tables = &self.tables;
             let (weight, reference_weight) = (tables.weights[mu], tables.reference_weights[mu]);
             // Rows ν < s: −Σ_μ w_μ l̇_ν Π_μ + Σ_μ (h/2) w_μ l_ν (∂H/∂q − f_H).
@@ -546,12 +524,12 @@ where
         self.unknowns = unknowns;
         increment.y.fill(0.0);
         for mu in 0..m {
-            let d = self.derivatives(model, t, mu, false)?;
+            let d = self.at_point(model, t, mu, false)?;
             increment.y.axpy(-self.tables.weights[mu], &d.hq, 1.0);
         }
         Ok(StepReport {
             iterations: solved.iterations,
-            evaluations: (solved.iterations + 1) * m,
+            evaluations: self.derivatives.evaluations,
             factorizations: solved.factorizations,
             analyses: 0,
         })
@@ -583,7 +561,7 @@ where
         let mut sources = DMatrix::zeros(size, 2 * w);
         let mut derivatives = Vec::with_capacity(m);
         for mu in 0..m {
-            let d = self.derivatives(model, t, mu, true)?;
+            let d = self.at_point(model, t, mu, true)?;
             let Some([qq, qp, pq, pp]) = &d.second else {
                 unreachable!("second derivatives were asked for")
             };

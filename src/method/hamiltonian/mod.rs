@@ -9,6 +9,7 @@
 //!
 //! | method | name | equations | order | symmetric | explicit |
 //! | --- | --- | --- | --- | --- | --- |
+//! | [`HamiltonianCollocation`] | `sc-h[:P]` | SC's CGL collocation of z' = (∂H/∂p, −g) ([`collocation`]) | P − 1 | no | never |
 //! | [`HamiltonianGalerkin`] | `svi-h[:P[/M]]` | the Galerkin discrete right Hamiltonian on SVI's curve and Gauss rule ([`galerkin`]) | 2·min(P − 1, M) | yes | never (SVI's fixed point for H = ½pᵀM⁻¹p + V) |
 //! | [`Partitioned::symplectic_euler`] | `symplectic-euler-h` | p_{k+1} = p_k − h g(t_k, q_k, p_{k+1}), q_{k+1} = q_k + h ∂H/∂p(t_k, q_k, p_{k+1}) | 1 | no | separable H, unforced |
 //! | [`Partitioned::adjoint_symplectic_euler`] | `symplectic-euler-adjoint-h` | q_{k+1} = q_k + h ∂H/∂p(t_{k+1}, q_{k+1}, p_k), p_{k+1} = p_k − h g(t_{k+1}, q_{k+1}, p_k) | 1 | no | separable H |
@@ -73,10 +74,12 @@
 //! [`Scheme`]: crate::method::variational::composition::Scheme
 //! [`Kicks`]: crate::method::variational::discrete_lagrangian::Kicks
 
+pub mod collocation;
 pub mod galerkin;
 pub mod midpoint;
 pub mod partitioned;
 
+pub use collocation::HamiltonianCollocation;
 pub use galerkin::HamiltonianGalerkin;
 pub use midpoint::ImplicitMidpoint;
 pub use partitioned::Partitioned;
