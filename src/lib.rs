@@ -123,6 +123,7 @@ guide_doctests! {
     GuideStressDoctests: "stress.md",
     GuideConstraintsDoctests: "constraints.md",
     GuideChaosDoctests: "chaos.md",
+    GuideHamiltonianDoctests: "hamiltonian.md",
 }
 
 #[cfg(test)]
