@@ -799,6 +799,12 @@ mod tests {
                 })
                 .collect();
             let observed = observed_order(&steps, &errors, 1e-13).unwrap();
+            let listed: Vec<String> = errors.iter().map(|e| format!("{e:.2e}")).collect();
+            eprintln!(
+                "svi-h {points}/{}: errors at h = 0.2, 0.1: {}; observed order {observed:.2}",
+                points - 1,
+                listed.join(", ")
+            );
             assert!(
                 (observed - order as f64).abs() < 0.3,
                 "{points} points: observed {observed:.2}, errors {errors:?}"
