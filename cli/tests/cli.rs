@@ -530,7 +530,9 @@ fn the_damped_oscillator_scene_reports_the_solution_error() {
 fn classic_methods_reject_spectral_options() {
     let stderr = failure(&["run", "oscillator", "--method", "verlet", "--points", "4"]);
     assert!(
-        stderr.contains("points is an option of svi, svi-newton, sc and multiscale, not of verlet"),
+        stderr.contains(
+            "points is an option of svi, svi-newton, svi-h, sc, sc-h and multiscale, not of verlet"
+        ),
         "{stderr}"
     );
     let stderr = failure(&["run", "kepler", "--method", "midpoint", "--quadrature", "4"]);
@@ -840,7 +842,7 @@ fn one_method_grammar_on_the_command_line_and_in_scenes() {
         (&["--method", "lie-svi", "--points", "3"], "'lie-svi'"),
         (
             &["--method", "verlet", "--points", "3"],
-            "--points is an option of svi, svi-newton, sc and multiscale, not of verlet",
+            "--points is an option of svi, svi-newton, svi-h, sc, sc-h and multiscale, not of verlet",
         ),
     ] {
         let mut all = vec!["run", "kepler"];

@@ -58,7 +58,7 @@ mod run {
             assert_eq!(
                 error.to_string(),
                 format!(
-                    "--points is an option of svi, svi-newton, sc and multiscale, not of {}",
+                    "--points is an option of svi, svi-newton, svi-h, sc, sc-h and multiscale, not of {}",
                     kind.name()
                 )
             );

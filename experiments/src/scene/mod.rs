@@ -925,11 +925,9 @@ pub(crate) mod tests {
         let SceneError::Parse { parser, .. } = &error else {
             panic!("{error}")
         };
-        assert!(
-            parser
-                .to_string()
-                .contains("unknown method 'rk45' (known: svi, svi-newton, sc, symplectic-euler,")
-        );
+        assert!(parser.to_string().contains(
+            "unknown method 'rk45' (known: svi, svi-newton, svi-h, sc, sc-h, symplectic-euler,"
+        ));
         let text = "model = \"kepler\"\n[output]\ndiagnostics = [\"energy\", \"angular\"]\n";
         let SceneError::Parse { parser, .. } = Scene::from_toml(text, "t").unwrap_err() else {
             panic!()
