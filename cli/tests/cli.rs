@@ -537,7 +537,7 @@ fn classic_methods_reject_spectral_options() {
     );
     let stderr = failure(&["run", "kepler", "--method", "midpoint", "--quadrature", "4"]);
     assert!(
-        stderr.contains("quadrature is an option of svi and svi-newton, not of midpoint"),
+        stderr.contains("quadrature is an option of svi, svi-newton and svi-h, not of midpoint"),
         "{stderr}"
     );
     let stderr = failure(&["run", "kepler", "--method", "leapfrog"]);
