@@ -55,7 +55,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     match model.hamiltonian_form() {
-        Some(form) => Ok(form.gradient(t, q, p).1),
+        Some(form) => Ok(form.velocity(t, q, p)),
         None => model.velocity(t, q, p, guess),
     }
 }

@@ -136,6 +136,10 @@ where
         p: &OVector<f64, N>,
     ) -> (OVector<f64, N>, OVector<f64, N>);
 
+    /// The velocity q̇ = ∂H/∂p alone (one sweep in p: what observers and the inverse
+    /// Legendre map ask for).
+    fn velocity(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> OVector<f64, N>;
+
     /// H with its gradient and Hessian blocks.
     fn second(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> CanonicalSecond<N>;
 
@@ -554,8 +558,15 @@ where
         q: &OVector<f64, N>,
         p: &OVector<f64, N>,
     ) -> (OVector<f64, N>, OVector<f64, N>) {
-        let (_, hq, hp, _) = N::mixed(&Energy(&self.model), t, q, p);
+        // Two first-order sweeps: the mixed block of `N::mixed` is not needed here.
+        let energy = Energy(&self.model);
+        let (_, hq) = N::gradient(&energy, t, q, p, Wrt::Position);
+        let (_, hp) = N::gradient(&energy, t, q, p, Wrt::Velocity);
         (hq, hp)
+    }
+
+    fn velocity(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> OVector<f64, N> {
+        N::gradient(&Energy(&self.model), t, q, p, Wrt::Velocity).1
     }
 
     fn second(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> CanonicalSecond<N> {
@@ -630,7 +641,7 @@ where
             let other = self.second(t, q, &shifted);
             let change = (&other.pp - &second.pp).amax();
             let zero = OVector::zeros_generic(q.shape_generic().0, U1);
-            let (_, at_rest) = self.gradient(t, q, &zero);
+            let at_rest = self.velocity(t, q, &zero);
             if change > 1e-12 * scale || at_rest.amax() > 1e-12 * scale {
                 return Err(Error::invalid(
                     "model",
@@ -755,7 +766,7 @@ where
     /// (t0, q0, q̇0) with q̇0 = ∂H/∂p(t0, q0, p0).
     fn initial_state(&self) -> (f64, OVector<f64, N>, OVector<f64, N>) {
         let (t0, q0, p0) = self.model.initial_state();
-        let (_, v0) = self.gradient(t0, &q0, &p0);
+        let v0 = self.velocity(t0, &q0, &p0);
         (t0, q0, v0)
     }
     fn default_step(&self) -> f64 {
@@ -810,7 +821,7 @@ where
     ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
         let p0 = self.momentum(t0, q0, v0);
         let (q, p) = self.model.exact_solution(t0, q0, &p0, t)?;
-        let (_, v) = self.gradient(t, &q, &p);
+        let v = self.velocity(t, &q, &p);
         Some((q, v))
     }
 }

@@ -249,7 +249,7 @@ where
         v: &mut OVector<f64, N>,
     ) -> bool {
         if let Some(form) = model.hamiltonian_form() {
-            v.copy_from(&form.gradient(t, q, p).1);
+            v.copy_from(&form.velocity(t, q, p));
             return true;
         }
         match &self.mass_inverse {
