@@ -1,0 +1,260 @@
+//! [`TextHamiltonian`]: a [`TextModel`] written as H(t, q, p) behind [`Hamiltonian<N>`] and
+//! the H-side companions, its declarations constants of the type. It runs as
+//! [`Canonical`](crate::model::hamiltonian::Canonical)`<TextHamiltonian<N, …>>`, so every
+//! method of svi integrates it; the expressions, names and tapes are a text Lagrangian's, with
+//! the momenta read where L reads the velocities.
+
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
+
+use super::TextModel;
+use super::error::TextError;
+use crate::dimension::{Dimension, dimension_of};
+use crate::error::Error;
+use crate::model::hamiltonian::{
+    Hamiltonian, HamiltonianDefaults, HamiltonianExactSolution, HamiltonianInvariants,
+    HamiltonianStructure, HamiltonianSymmetries,
+};
+use crate::scalar::Scalar;
+
+/// A [`TextModel`] written as a Hamiltonian ([`TextSpec::hamiltonian`](super::TextSpec)) as a
+/// [`Hamiltonian<N>`] (with [`HamiltonianSymmetries`], [`HamiltonianInvariants`] — none —,
+/// [`HamiltonianExactSolution`] — none — and [`HamiltonianDefaults`]), of any number of
+/// coordinates: `N` is [`crate::dimension::Dyn`] (what the command line uses) or a fixed
+/// `Const<N>` equal to the model's size.
+///
+/// The other parameters are the model's declarations ([`Hamiltonian::TIME_DEPENDENT`],
+/// [`Hamiltonian::FORCED`], and `QUADRATIC_KINETIC` for
+/// [`HamiltonianStructure::QuadraticKinetic`]): constants of the type, as for
+/// [`TextLagrangian`](super::TextLagrangian). The defaults (time-dependent, forced, general)
+/// fit every model; [`TextHamiltonian::new`] rejects declarations the model does not allow.
+///
+/// ```
+/// use nalgebra::DVector;
+/// use svi::model::text::{TextHamiltonian, TextModel, TextSpec};
+/// use svi::{Canonical, Dyn, Initial, Integrator, Svi};
+///
+/// let spec = TextSpec {
+///     hamiltonian: "0.5*(px^2 + py^2) - mu/sqrt(x^2 + y^2)".into(),
+///     coordinates: vec!["x".into(), "y".into()],
+///     parameters: vec![("mu".into(), 1.0)],
+///     ..TextSpec::default()
+/// };
+/// // Autonomous, unforced, ½pᵀAp + V(q) with A constant: all three may be declared.
+/// let kepler = TextHamiltonian::<Dyn, false, false, true>::new(TextModel::new(&spec)?)?;
+/// let integrator = Integrator::new(Canonical::new(kepler), Svi::new(6));
+/// let initial = Initial::Momentum {
+///     q: DVector::from_vec(vec![1.0, 0.0]),
+///     p: DVector::from_vec(vec![0.0, 1.0]),
+/// };
+/// let run = integrator.run(0.0, initial, 0.1, 6.0, &mut ()).unwrap();
+/// let exact = DVector::from_vec(vec![6f64.cos(), 6f64.sin()]);
+/// assert!((run.last.q - exact).amax() < 1e-10);
+/// # Ok::<(), svi::model::text::TextError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextHamiltonian<
+    N,
+    const TIME_DEPENDENT: bool = true,
+    const FORCED: bool = true,
+    const QUADRATIC_KINETIC: bool = false,
+> {
+    model: TextModel,
+    dimension: std::marker::PhantomData<N>,
+}
+
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const QUADRATIC_KINETIC: bool>
+    TextHamiltonian<N, TIME_DEPENDENT, FORCED, QUADRATIC_KINETIC>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// `model` as a Hamiltonian on T*ℝᴺ with the type's declarations.
+    ///
+    /// # Errors
+    /// [`TextError::Declaration`] for a model written as a Lagrangian, if `N` is fixed to
+    /// another size than the model's, or a declaration does not hold: `TIME_DEPENDENT =
+    /// false` with `t` in H, `FORCED = false` with forces, `QUADRATIC_KINETIC = true` for H
+    /// not recognised as ½pᵀAp + V(t, q).
+    pub fn new(model: TextModel) -> Result<Self, TextError> {
+        let declaration = |reason: String| {
+            Err(TextError::Declaration {
+                holder: "TextHamiltonian",
+                reason,
+            })
+        };
+        if !model.is_hamiltonian() {
+            return declaration(
+                "the model is written as a Lagrangian: TextLagrangian holds it".into(),
+            );
+        }
+        if let Err(reason) = dimension_of::<N>(model.dimension()) {
+            return declaration(reason);
+        }
+        if model.time_dependent() && !TIME_DEPENDENT {
+            return declaration("H depends on t, but TIME_DEPENDENT = false".into());
+        }
+        if model.forced() && !FORCED {
+            return declaration("the model has forces, but FORCED = false".into());
+        }
+        if QUADRATIC_KINETIC
+            && model.hamiltonian_structure() != HamiltonianStructure::QuadraticKinetic
+        {
+            return declaration(
+                "QUADRATIC_KINETIC = true, but H is not recognised as ½pᵀAp + V(t, q)".into(),
+            );
+        }
+        Ok(TextHamiltonian {
+            model,
+            dimension: std::marker::PhantomData,
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &TextModel {
+        &self.model
+    }
+}
+
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const QUADRATIC_KINETIC: bool>
+    Hamiltonian<N> for TextHamiltonian<N, TIME_DEPENDENT, FORCED, QUADRATIC_KINETIC>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    const TIME_DEPENDENT: bool = TIME_DEPENDENT;
+    const FORCED: bool = FORCED;
+    const STRUCTURE: HamiltonianStructure = if QUADRATIC_KINETIC {
+        HamiltonianStructure::QuadraticKinetic
+    } else {
+        HamiltonianStructure::General
+    };
+
+    fn dimension(&self) -> usize {
+        self.model.dimension()
+    }
+
+    #[inline]
+    fn hamiltonian<D: Scalar>(&self, t: D, q: &OVector<D, N>, p: &OVector<D, N>) -> D {
+        let tapes = &self.model.tapes;
+        if QUADRATIC_KINETIC && let Some(split) = &tapes.constant_mass {
+            // ½pᵀAp without a tape, plus V(t, q).
+            return split.evaluate(t, q.as_slice(), p.as_slice());
+        }
+        tapes.lagrangian.evaluate(t, q.as_slice(), p.as_slice())
+    }
+
+    #[inline]
+    fn external_force<D: Scalar>(
+        &self,
+        t: D,
+        q: &OVector<D, N>,
+        p: &OVector<D, N>,
+    ) -> OVector<D, N> {
+        let forces = &self.model.tapes.forces;
+        let (n, _) = q.shape_generic();
+        if forces.is_empty() {
+            return OVector::zeros_generic(n, U1);
+        }
+        OVector::from_fn_generic(n, U1, |i, _| {
+            forces[i].evaluate(t, q.as_slice(), p.as_slice())
+        })
+    }
+}
+
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const QUADRATIC_KINETIC: bool>
+    HamiltonianSymmetries<N> for TextHamiltonian<N, TIME_DEPENDENT, FORCED, QUADRATIC_KINETIC>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    fn generator_count(&self) -> usize {
+        self.model.generators.len()
+    }
+
+    /// `J1`, `J2`, ... in the order of [`TextSpec::symmetries`](super::TextSpec::symmetries).
+    ///
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn momentum_name(&self, index: usize) -> &'static str {
+        self.model.momentum_names[index]
+    }
+
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn generator(&self, index: usize, q: &OVector<f64, N>) -> OVector<f64, N> {
+        let generator = &self.model.tapes.generators[index];
+        OVector::from_fn_generic(q.shape_generic().0, U1, |i, _| {
+            generator[i].evaluate(0.0, q.as_slice(), &[])
+        })
+    }
+}
+
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const QUADRATIC_KINETIC: bool>
+    HamiltonianInvariants<N> for TextHamiltonian<N, TIME_DEPENDENT, FORCED, QUADRATIC_KINETIC>
+where
+    DefaultAllocator: Allocator<N>,
+{
+}
+
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const QUADRATIC_KINETIC: bool>
+    HamiltonianExactSolution<N> for TextHamiltonian<N, TIME_DEPENDENT, FORCED, QUADRATIC_KINETIC>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// None: a text model has no closed-form solution.
+    fn exact_solution(
+        &self,
+        _t0: f64,
+        _q0: &OVector<f64, N>,
+        _p0: &OVector<f64, N>,
+        _t: f64,
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
+        None
+    }
+}
+
+impl<N: Dimension, const TIME_DEPENDENT: bool, const FORCED: bool, const QUADRATIC_KINETIC: bool>
+    HamiltonianDefaults<N> for TextHamiltonian<N, TIME_DEPENDENT, FORCED, QUADRATIC_KINETIC>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// [`TextModel::NAME`].
+    fn name(&self) -> &'static str {
+        TextModel::NAME
+    }
+
+    fn coordinate_names(&self) -> Vec<String> {
+        self.model
+            .coordinates
+            .iter()
+            .map(|name| name.to_string())
+            .collect()
+    }
+
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        self.model.parameters()
+    }
+
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        self.model.set_parameter(name, value)
+    }
+
+    /// A text model has no literature defaults: at rest at the origin at t = 0 (give the
+    /// initial state).
+    fn initial_state(&self) -> (f64, OVector<f64, N>, OVector<f64, N>) {
+        let n = N::from_usize(self.model.dimension());
+        (
+            0.0,
+            OVector::zeros_generic(n, U1),
+            OVector::zeros_generic(n, U1),
+        )
+    }
+
+    /// A placeholder, 0.01 (give the step).
+    fn default_step(&self) -> f64 {
+        0.01
+    }
+
+    /// A placeholder, 10 (give the horizon).
+    fn default_horizon(&self) -> f64 {
+        10.0
+    }
+}
