@@ -313,12 +313,16 @@ pub fn visit_text_model<V: ModelVisitor>(
     if model.is_hamiltonian() {
         let quadratic = model.hamiltonian_structure() == HamiltonianStructure::QuadraticKinetic;
         return Ok(match (conservative, quadratic) {
-            (true, true) => visitor.visit(Canonical::new(
-                TextHamiltonian::<Dyn, false, false, true>::new(model)?,
-            )),
-            (true, false) => visitor.visit(Canonical::new(
-                TextHamiltonian::<Dyn, false, false, false>::new(model)?,
-            )),
+            (true, true) => {
+                visitor.visit(Canonical::new(
+                    TextHamiltonian::<Dyn, false, false, true>::new(model)?,
+                ))
+            }
+            (true, false) => {
+                visitor.visit(Canonical::new(
+                    TextHamiltonian::<Dyn, false, false, false>::new(model)?,
+                ))
+            }
             (false, _) => visitor.visit(Canonical::new(TextHamiltonian::<Dyn>::new(model)?)),
         });
     }

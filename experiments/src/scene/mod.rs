@@ -654,6 +654,7 @@ pub(crate) mod tests {
                 "oscillator",
                 "kepler",
                 "kepler-text",
+                "kepler-h-text",
                 "pendulum",
                 "spring-pendulum",
                 "double-pendulum",
@@ -697,7 +698,7 @@ pub(crate) mod tests {
                 MODEL_NAMES.contains(&model)
                     || RIGID_MODEL_NAMES.contains(&model)
                     || LOCAL_MODEL_NAMES.contains(&model)
-                    || scene.lagrangian.is_some(),
+                    || scene.is_text(),
                 "{name}"
             );
             assert_eq!(

@@ -258,3 +258,116 @@ where
         10.0
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dimension::Dyn;
+    use crate::model::hamiltonian::Canonical;
+    use crate::model::text::{TextLagrangian, TextSpec};
+    use crate::model::{Lagrangian, Structure};
+    use nalgebra::{DVector, SVector, U2};
+
+    fn spec(hamiltonian: &str) -> TextSpec {
+        TextSpec {
+            hamiltonian: hamiltonian.into(),
+            coordinates: vec!["x".into(), "y".into()],
+            parameters: vec![("B".into(), 2.0)],
+            ..TextSpec::default()
+        }
+    }
+
+    /// The structure read off H: ½pᵀAp + V with constant A is quadratic kinetic (A from
+    /// parameters and numbers), a coupling of p and q or a varying coefficient is general;
+    /// the declarations are checked against it.
+    #[test]
+    fn declarations_follow_the_text_of_h() {
+        let quadratic = TextModel::new(&spec("(px^2 + 3*py^2)/(2*B) - 1/sqrt(x^2 + y^2)")).unwrap();
+        assert!(quadratic.is_hamiltonian());
+        assert_eq!(
+            quadratic.hamiltonian_structure(),
+            HamiltonianStructure::QuadraticKinetic
+        );
+        // The Lagrangian side's declaration is not H's.
+        assert_eq!(quadratic.structure(), Structure::General);
+        assert!(TextHamiltonian::<U2, false, false, true>::new(quadratic.clone()).is_ok());
+        assert!(TextLagrangian::<Dyn>::new(quadratic).is_err());
+        for general in [
+            "((px + B*y/2)^2 + (py - B*x/2)^2)/2",
+            "(1 + x^2)*px^2/2 + py^2/2",
+            "sqrt(1 + px^2 + py^2)",
+        ] {
+            let model = TextModel::new(&spec(general)).unwrap();
+            assert_eq!(
+                model.hamiltonian_structure(),
+                HamiltonianStructure::General,
+                "{general}"
+            );
+            assert!(TextHamiltonian::<Dyn, false, false, true>::new(model.clone()).is_err());
+            assert!(TextHamiltonian::<Dyn, false, false, false>::new(model).is_ok());
+        }
+        let mut driven = spec("(px^2 + py^2)/2 - x*cos(t)");
+        driven.forces = vec!["-0.1*px".into(), "-0.1*py".into()];
+        let model = TextModel::new(&driven).unwrap();
+        assert!(model.time_dependent() && model.forced());
+        assert!(TextHamiltonian::<Dyn, false, true>::new(model.clone()).is_err());
+        assert!(TextHamiltonian::<Dyn, true, false>::new(model.clone()).is_err());
+        let driven = TextHamiltonian::<U2>::new(model).unwrap();
+        let (q, p) = (SVector::from([0.5, 0.0]), SVector::from([2.0, -1.0]));
+        assert_eq!(driven.hamiltonian(0.0, &q, &p), 2.5 - 0.5);
+        assert_eq!(driven.external_force(0.0, &q, &p).as_slice(), &[-0.2, 0.1]);
+    }
+
+    /// H and the Lagrangian of `Canonical` at a point, by hand: for the uniform magnetic field,
+    /// L = |q̇|²/2 + q̇·A(q) with A = B(−y, x)/2, and p = q̇ + A.
+    #[test]
+    fn a_text_hamiltonian_is_a_model_through_canonical() {
+        let model = TextModel::new(&spec("((px + B*y/2)^2 + (py - B*x/2)^2)/2")).unwrap();
+        let model =
+            Canonical::new(TextHamiltonian::<Dyn, false, false, false>::new(model).unwrap());
+        let q = DVector::from_vec(vec![0.3, -0.7]);
+        let v = DVector::from_vec(vec![1.1, 0.4]);
+        let (b, x, y) = (2.0, 0.3, -0.7);
+        let expected =
+            0.5 * (1.1f64.powi(2) + 0.4f64.powi(2)) + 1.1 * (-b * y / 2.0) + 0.4 * (b * x / 2.0);
+        assert!((model.lagrangian(0.0, &q, &v) - expected).abs() < 1e-14);
+        assert_eq!(Lagrangian::dimension(&model), 2);
+    }
+
+    #[test]
+    fn misuses_of_a_text_hamiltonian_are_named() {
+        let error = |spec: &TextSpec| TextModel::new(spec).unwrap_err().to_string();
+        assert_eq!(
+            error(&spec("(vx^2 + py^2)/2")),
+            "'vx' at column 2 of hamiltonian is a velocity, but a Hamiltonian is a function of \
+             the momenta: write px"
+        );
+        assert!(error(&spec("(px^2 + pz^2)/2")).starts_with(
+            "unknown symbol 'pz' at column 9 of hamiltonian (known: x, y, px, py, t, B)"
+        ));
+        let both = TextSpec {
+            lagrangian: "vx^2/2".into(),
+            ..spec("px^2/2")
+        };
+        assert_eq!(
+            TextModel::new(&both),
+            Err(TextError::LagrangianAndHamiltonian)
+        );
+        let constrained = TextSpec {
+            constraints: vec!["x^2 + y^2 - 1".into()],
+            ..spec("(px^2 + py^2)/2")
+        };
+        assert!(error(&constrained).starts_with("constraints is not supported here"));
+        // A coordinate whose momentum would be another name.
+        let clash = TextSpec {
+            coordinates: vec!["x".into(), "px".into()],
+            ..spec("x")
+        };
+        assert!(error(&clash).contains("its momentum 'px' is also a coordinate"));
+        let chain = TextSpec {
+            coordinates: vec!["q[1..n]".into()],
+            ..spec("x")
+        };
+        assert!(crate::model::text::TextChainModel::new(&chain).is_err());
+    }
+}

@@ -47,12 +47,16 @@ where
     /// not hold: `TIME_DEPENDENT = false` with `t` in L, `FORCED = false` with forces,
     /// `CONSTANT_MASS = true` for L not recognised as constant-mass.
     pub fn new(model: TextModel) -> Result<Self, TextError> {
-        let declaration = |reason: String| Err(TextError::Declaration {
-            holder: "TextLagrangian",
-            reason,
-        });
+        let declaration = |reason: String| {
+            Err(TextError::Declaration {
+                holder: "TextLagrangian",
+                reason,
+            })
+        };
         if model.is_hamiltonian() {
-            return declaration("the model is written as a Hamiltonian: TextHamiltonian holds it".into());
+            return declaration(
+                "the model is written as a Hamiltonian: TextHamiltonian holds it".into(),
+            );
         }
         if let Err(reason) = dimension_of::<N>(model.dimension()) {
             return declaration(reason);

@@ -316,7 +316,7 @@ impl TextModel {
                 field,
                 column,
                 symbol,
-            ..
+                ..
             } if slot == Slot::Momentum
                 && let Some(momentum) = symbol
                     .strip_prefix('v')
