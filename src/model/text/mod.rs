@@ -54,6 +54,9 @@
 //! - the parameters, as given, read at every evaluation (so `set_parameter` takes effect);
 //! - the velocities: `v` followed by the coordinate's name (`vx` for `x`, `vtheta` for
 //!   `theta`); not in symmetry generators, which are functions of q only;
+//! - in a Hamiltonian H(t, q, p) ([`TextSpec::hamiltonian`], held by [`TextHamiltonian`]), the
+//!   momenta in their place: `p` followed by the coordinate's name (`px` for `x`); a velocity
+//!   name there is [`TextError::VelocityInHamiltonian`];
 //! - `t`, the time (not in symmetry generators);
 //! - the constants `pi` and `e`;
 //! - the functions `sin cos tan asin acos atan sinh cosh tanh exp ln sqrt abs`, `log` (the
