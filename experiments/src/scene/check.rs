@@ -45,8 +45,8 @@ impl Scene {
             if let Some((_, option)) = text_fields.into_iter().find(|(given, _)| *given) {
                 return Err(SceneError::NotApplicable {
                     option,
-                    reason: "belongs to a model written as text (lagrangian = \"...\" or \
-                             hamiltonian = \"...\")"
+                    reason: "belongs to a Lagrangian written as text (lagrangian = \"...\") or a \
+                             Hamiltonian (hamiltonian = \"...\")"
                         .into(),
                 });
             }
