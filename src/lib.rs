@@ -82,7 +82,7 @@ pub use method::{
     TangentMap,
 };
 pub use model::hamiltonian::{Canonical, Hamiltonian, HamiltonianStructure};
-pub use model::text::{TextError, TextLagrangian, TextModel, TextSpec};
+pub use model::text::{TextError, TextHamiltonian, TextLagrangian, TextModel, TextSpec};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;
 pub use stepping::grid::step_count;

@@ -187,11 +187,11 @@ use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator};
 use svi::model::local::{LocalDefaults, LocalInvariants, LocalLagrangian};
 use svi::model::text::{
-    MAX_WIDTH, TextChain, TextChainModel, TextError, TextLagrangian, TextModel,
+    MAX_WIDTH, TextChain, TextChainModel, TextError, TextHamiltonian, TextLagrangian, TextModel,
 };
 use svi::{
-    Canonical, Defaults, Dimension, Dyn, ExactSolution, Invariants, Lagrangian, Structure,
-    Symmetries,
+    Canonical, Defaults, Dimension, Dyn, ExactSolution, HamiltonianStructure, Invariants,
+    Lagrangian, Structure, Symmetries,
 };
 
 /// Everything a zoo model implements (blanket impl for any type with all the bounds).
@@ -298,6 +298,9 @@ vector_zoo!(
 /// Hessian-free iterations and explicit Störmer–Verlet); autonomous and unforced
 /// (`TextLagrangian<Dyn, false, false, false>`: energy is conserved, and checked); anything
 /// else (`TextLagrangian<Dyn>`: time-dependent and forced, correct for every model).
+/// A model written as a Hamiltonian goes the same way as
+/// [`Canonical`]`<`[`TextHamiltonian`]`<Dyn, …>>`, with the same three choices
+/// (quadratic kinetic energy ½pᵀAp with constant A in place of the constant mass).
 ///
 /// # Errors
 /// [`TextError::Declaration`] if the model breaks a declaration (which cannot happen for the
@@ -307,6 +310,22 @@ pub fn visit_text_model<V: ModelVisitor>(
     visitor: V,
 ) -> Result<V::Output, TextError> {
     let conservative = !model.time_dependent() && !model.forced();
+    if model.is_hamiltonian() {
+        let quadratic = model.hamiltonian_structure() == HamiltonianStructure::QuadraticKinetic;
+        return Ok(match (conservative, quadratic) {
+            (true, true) => {
+                visitor.visit(Canonical::new(
+                    TextHamiltonian::<Dyn, false, false, true>::new(model)?,
+                ))
+            }
+            (true, false) => {
+                visitor.visit(Canonical::new(
+                    TextHamiltonian::<Dyn, false, false, false>::new(model)?,
+                ))
+            }
+            (false, _) => visitor.visit(Canonical::new(TextHamiltonian::<Dyn>::new(model)?)),
+        });
+    }
     Ok(match (conservative, model.structure()) {
         (true, Structure::ConstantMass) => {
             visitor.visit(TextLagrangian::<Dyn, false, false, true>::new(model)?)

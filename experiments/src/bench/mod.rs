@@ -101,7 +101,7 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, S
     } else {
         ProgressBar::hidden()
     };
-    let records = if scene.is_local() || scene.lagrangian.is_some() {
+    let records = if scene.is_local() || scene.is_text() {
         sweep_runs(scene, options, &progress)
     } else {
         let bench = Bench {

@@ -10,6 +10,10 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ("oscillator", include_str!("../../scenes/oscillator.toml")),
     ("kepler", include_str!("../../scenes/kepler.toml")),
     ("kepler-text", include_str!("../../scenes/kepler-text.toml")),
+    (
+        "kepler-h-text",
+        include_str!("../../scenes/kepler-h-text.toml"),
+    ),
     ("pendulum", include_str!("../../scenes/pendulum.toml")),
     (
         "spring-pendulum",

@@ -45,7 +45,9 @@ impl Scene {
             if let Some((_, option)) = text_fields.into_iter().find(|(given, _)| *given) {
                 return Err(SceneError::NotApplicable {
                     option,
-                    reason: "belongs to a Lagrangian written as text (lagrangian = \"...\")".into(),
+                    reason: "belongs to a Lagrangian written as text (lagrangian = \"...\") or a \
+                             Hamiltonian (hamiltonian = \"...\")"
+                        .into(),
                 });
             }
             if self.model.is_empty() {
@@ -57,6 +59,9 @@ impl Scene {
             return Err(SceneError::ModelAndLagrangian {
                 model: self.model.clone(),
             });
+        }
+        if self.lagrangian.is_some() && self.hamiltonian.is_some() {
+            return Err(SceneError::LagrangianAndHamiltonian);
         }
         model?;
         if self.boundary.is_some() && !self.is_text_chain() {

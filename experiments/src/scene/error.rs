@@ -85,12 +85,18 @@ pub enum SceneError {
          Lagrangian, lagrangian = \"...\" with coordinates = [...]"
     )]
     NoModel,
-    /// A scene with both a zoo model and a Lagrangian written as text.
-    #[error("the scene gives both model = \"{model}\" and lagrangian: give one of them")]
+    /// A scene with both a zoo model and a Lagrangian or Hamiltonian written as text.
+    #[error(
+        "the scene gives both model = \"{model}\" and lagrangian or hamiltonian: give one of \
+         them"
+    )]
     ModelAndLagrangian {
         /// The zoo model named.
         model: String,
     },
+    /// A scene with both a Lagrangian and a Hamiltonian written as text.
+    #[error("the scene gives both lagrangian and hamiltonian: give one of them")]
+    LagrangianAndHamiltonian,
     /// A Lagrangian written as text that cannot be read (the message names the field, the
     /// column and the symbol).
     #[error(transparent)]

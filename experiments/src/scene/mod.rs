@@ -155,6 +155,10 @@ pub struct Scene {
     /// A Lagrangian written as text, instead of `model` (see [`svi::model::text`] for the
     /// grammar; velocities are `v` + the coordinate's name).
     pub lagrangian: Option<String>,
+    /// A Hamiltonian written as text, instead of `model` or `lagrangian` (the same grammar;
+    /// momenta are `p` + the coordinate's name). The other text fields are then its own:
+    /// `forces` are f_H(t, q, p).
+    pub hamiltonian: Option<String>,
     /// The coordinate names of `lagrangian`.
     pub coordinates: Option<Vec<String>>,
     /// The non-conservative force of `lagrangian`, one expression per coordinate.
@@ -277,18 +281,27 @@ impl Scene {
     /// The name of the scene's model: its zoo name, or [`TextModel::NAME`] for a Lagrangian
     /// written as text.
     pub fn model_name(&self) -> &str {
-        match self.lagrangian {
-            Some(_) => TextModel::NAME,
-            None => &self.model,
+        if self.is_text() {
+            TextModel::NAME
+        } else {
+            &self.model
         }
     }
 
-    /// The scene's Lagrangian written as text, as the library reads it (`None` for a zoo
-    /// model).
+    /// Whether the scene writes its model as text (`lagrangian` or `hamiltonian`).
+    pub fn is_text(&self) -> bool {
+        self.lagrangian.is_some() || self.hamiltonian.is_some()
+    }
+
+    /// The scene's Lagrangian or Hamiltonian written as text, as the library reads it (`None`
+    /// for a zoo model).
     pub fn text_spec(&self) -> Option<TextSpec> {
-        let lagrangian = self.lagrangian.as_ref()?;
+        if !self.is_text() {
+            return None;
+        }
         Some(TextSpec {
-            lagrangian: lagrangian.clone(),
+            lagrangian: self.lagrangian.clone().unwrap_or_default(),
+            hamiltonian: self.hamiltonian.clone().unwrap_or_default(),
             coordinates: self.coordinates.clone().unwrap_or_default(),
             parameters: self
                 .parameters
@@ -346,9 +359,10 @@ impl Scene {
     /// its sparsity), and its `[initial]` vectors have n
     /// components or are expressions per site.
     pub fn is_local(&self) -> bool {
-        match self.lagrangian {
-            None => LOCAL_MODEL_NAMES.contains(&self.model.as_str()),
-            Some(_) => self.is_text_chain(),
+        if self.is_text() {
+            self.is_text_chain()
+        } else {
+            LOCAL_MODEL_NAMES.contains(&self.model.as_str())
         }
     }
 
@@ -444,7 +458,7 @@ impl Scene {
         set(&mut self.run.t_end, t_end);
         for (name, value) in parameters {
             // A text model's parameters are those its scene declares.
-            if self.lagrangian.is_some() && !self.parameters.contains_key(name) {
+            if self.is_text() && !self.parameters.contains_key(name) {
                 let declared: Vec<&str> = self.parameters.keys().map(String::as_str).collect();
                 return Err(svi::Error::invalid(
                     name.as_str(),
@@ -640,6 +654,7 @@ pub(crate) mod tests {
                 "oscillator",
                 "kepler",
                 "kepler-text",
+                "kepler-h-text",
                 "pendulum",
                 "spring-pendulum",
                 "double-pendulum",
@@ -683,7 +698,7 @@ pub(crate) mod tests {
                 MODEL_NAMES.contains(&model)
                     || RIGID_MODEL_NAMES.contains(&model)
                     || LOCAL_MODEL_NAMES.contains(&model)
-                    || scene.lagrangian.is_some(),
+                    || scene.is_text(),
                 "{name}"
             );
             assert_eq!(

@@ -167,10 +167,32 @@ pub enum TextError {
         /// What is wrong with it.
         reason: String,
     },
-    /// A [`TextLagrangian`](super::TextLagrangian) whose dimension or declarations do not fit
+    /// A text model that gives both a Lagrangian and a Hamiltonian.
+    #[error("the model gives both a lagrangian and a hamiltonian: give one of them")]
+    LagrangianAndHamiltonian,
+    /// A velocity name (`vx`) in a Hamiltonian or its force, which are functions of the
+    /// momenta (`px`).
+    #[error(
+        "'{symbol}' at column {column} of {field} is a velocity, but a Hamiltonian is a \
+         function of the momenta: write {momentum}"
+    )]
+    VelocityInHamiltonian {
+        /// The field: `hamiltonian`, `forces[1]`.
+        field: String,
+        /// Column of the symbol, in characters from 1.
+        column: usize,
+        /// The velocity name.
+        symbol: String,
+        /// The momentum name meant.
+        momentum: String,
+    },
+    /// A [`TextLagrangian`](super::TextLagrangian) or
+    /// [`TextHamiltonian`](super::TextHamiltonian) whose dimension or declarations do not fit
     /// its model.
-    #[error("TextLagrangian cannot hold this model: {reason}")]
+    #[error("{holder} cannot hold this model: {reason}")]
     Declaration {
+        /// The type: `TextLagrangian`, `TextHamiltonian` or `TextChain`.
+        holder: &'static str,
         /// What does not fit.
         reason: String,
     },

@@ -42,12 +42,22 @@ where
     /// `model` as a Lagrangian on ℝᴺ with the type's declarations.
     ///
     /// # Errors
-    /// [`TextError::Declaration`] if `N` is fixed to another size than the model's, or a
-    /// declaration does
+    /// [`TextError::Declaration`] for a model written as a Hamiltonian, if `N` is fixed to
+    /// another size than the model's, or a declaration does
     /// not hold: `TIME_DEPENDENT = false` with `t` in L, `FORCED = false` with forces,
     /// `CONSTANT_MASS = true` for L not recognised as constant-mass.
     pub fn new(model: TextModel) -> Result<Self, TextError> {
-        let declaration = |reason: String| Err(TextError::Declaration { reason });
+        let declaration = |reason: String| {
+            Err(TextError::Declaration {
+                holder: "TextLagrangian",
+                reason,
+            })
+        };
+        if model.is_hamiltonian() {
+            return declaration(
+                "the model is written as a Hamiltonian: TextHamiltonian holds it".into(),
+            );
+        }
         if let Err(reason) = dimension_of::<N>(model.dimension()) {
             return declaration(reason);
         }

@@ -54,6 +54,9 @@
 //! - the parameters, as given, read at every evaluation (so `set_parameter` takes effect);
 //! - the velocities: `v` followed by the coordinate's name (`vx` for `x`, `vtheta` for
 //!   `theta`); not in symmetry generators, which are functions of q only;
+//! - in a Hamiltonian H(t, q, p) ([`TextSpec::hamiltonian`], held by [`TextHamiltonian`]), the
+//!   momenta in their place: `p` followed by the coordinate's name (`px` for `x`); a velocity
+//!   name there is [`TextError::VelocityInHamiltonian`];
 //! - `t`, the time (not in symmetry generators);
 //! - the constants `pi` and `e`;
 //! - the functions `sin cos tan asin acos atan sinh cosh tanh exp ln sqrt abs`, `log` (the
@@ -143,6 +146,7 @@ mod constraints;
 mod error;
 mod expression;
 mod function;
+mod hamiltonian;
 mod lagrangian;
 mod names;
 mod parse;
@@ -154,27 +158,34 @@ pub use constraints::TextConstraints;
 pub use error::TextError;
 pub use expression::MAX_STACK;
 pub use function::TextFunction;
+pub use hamiltonian::TextHamiltonian;
 pub use lagrangian::TextLagrangian;
 pub use tree::MAX_NODES;
 
 use crate::error::Error;
 use crate::model::Structure;
+use crate::model::hamiltonian::HamiltonianStructure;
 use batch::Program;
 use constraints::parse_constraints;
 use expression::{Expression, Split, Tape, Velocities};
-use names::{Declared, intern, named_values, parameter_index};
+use names::{Declared, Slot, intern, named_values, parameter_index};
 use tree::Names;
 
 /// A text model as written: the expressions and the names they use.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TextSpec {
-    /// L(t, q, q̇) as an expression.
+    /// L(t, q, q̇) as an expression (empty for a model written as a Hamiltonian).
     pub lagrangian: String,
-    /// The coordinate names; their velocities are `v` + name.
+    /// H(t, q, p) as an expression, instead of [`TextSpec::lagrangian`] (empty for a model
+    /// written as a Lagrangian): the model is then a [`TextHamiltonian`], whose momenta are
+    /// `p` + the coordinate's name.
+    pub hamiltonian: String,
+    /// The coordinate names; their velocities are `v` + name (momenta `p` + name).
     pub coordinates: Vec<String>,
     /// The parameters, name and value.
     pub parameters: Vec<(String, f64)>,
-    /// The non-conservative force f_L(t, q, q̇), one expression per coordinate (empty: none).
+    /// The non-conservative force, one expression per coordinate (empty: none): f_L(t, q, q̇)
+    /// of a Lagrangian, f_H(t, q, p) of a Hamiltonian.
     pub forces: Vec<String>,
     /// Symmetry generators ξ(q), each one expression per coordinate in q and the parameters;
     /// their Noether momenta are named `J1`, `J2`, ...
@@ -194,13 +205,17 @@ impl TextSpec {
     }
 }
 
-/// A parsed text model of any dimension (known at run time); [`TextLagrangian`] puts it
-/// behind [`Lagrangian<N>`](crate::model::Lagrangian).
+/// A parsed text model of any dimension (known at run time); [`TextLagrangian`] puts a
+/// model written as L behind [`Lagrangian<N>`](crate::model::Lagrangian), [`TextHamiltonian`]
+/// one written as H behind [`Hamiltonian<N>`](crate::model::hamiltonian::Hamiltonian).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextModel {
     coordinates: Vec<&'static str>,
     parameter_names: Vec<&'static str>,
     parameter_values: Vec<f64>,
+    /// What the second slot of the phase space holds: q̇ for L, p for H.
+    slot: Slot,
+    /// L(t, q, q̇) or H(t, q, p): the expressions read p where L's read q̇.
     lagrangian: Expression,
     forces: Vec<Expression>,
     generators: Vec<Vec<Expression>>,
@@ -278,13 +293,48 @@ impl TextModel {
                 reason: "a boundary rule applies to indexed coordinates (q[1..n])".into(),
             });
         }
+        let (text, field, slot) = match (spec.lagrangian.is_empty(), spec.hamiltonian.is_empty()) {
+            (_, true) => (&spec.lagrangian, "lagrangian", Slot::Velocity),
+            (true, false) => (&spec.hamiltonian, "hamiltonian", Slot::Momentum),
+            (false, false) => return Err(TextError::LagrangianAndHamiltonian),
+        };
+        if slot == Slot::Momentum && !spec.constraints.is_empty() {
+            return Err(TextError::Unsupported {
+                field: "constraints".into(),
+                reason: "holonomic constraints are run with a lagrangian written as text, not a \
+                         hamiltonian"
+                    .into(),
+            });
+        }
         let names: Vec<&str> = spec.coordinates.iter().map(String::as_str).collect();
         let Declared {
             coordinates,
             velocities,
             parameter_names,
             parameter_values,
-        } = Declared::check(&names, &spec.parameters)?;
+        } = Declared::check_phase_space(&names, &spec.parameters, slot)?;
+        // A velocity in H (or f_H) is a slip for a momentum: say so.
+        let velocity_in_hamiltonian = |error: TextError| match error {
+            TextError::UnknownSymbol {
+                field,
+                column,
+                symbol,
+                ..
+            } if slot == Slot::Momentum
+                && let Some(momentum) = symbol
+                    .strip_prefix('v')
+                    .filter(|name| coordinates.contains(name))
+                    .map(|name| format!("p{name}")) =>
+            {
+                TextError::VelocityInHamiltonian {
+                    field,
+                    column,
+                    symbol,
+                    momentum,
+                }
+            }
+            error => error,
+        };
         let phase_space = Names {
             coordinates: &coordinates,
             velocities: &velocities,
@@ -309,11 +359,19 @@ impl TextModel {
             texts
                 .iter()
                 .enumerate()
-                .map(|(i, text)| Expression::parse(text, &format!("{field}[{i}]"), names))
+                .map(|(i, text)| {
+                    Expression::parse(text, &format!("{field}[{i}]"), names)
+                        .map_err(velocity_in_hamiltonian)
+                })
                 .collect::<Result<Vec<_>, _>>()
         };
-        let lagrangian = Expression::parse(&spec.lagrangian, "lagrangian", &phase_space)?;
-        if let Some(i) = (0..n).find(|&i| !lagrangian.uses_velocity(i)) {
+        let lagrangian =
+            Expression::parse(text, field, &phase_space).map_err(velocity_in_hamiltonian)?;
+        // A Hamiltonian free of a momentum is checked where it matters, at the initial state
+        // of a run (∂²H/∂p² singular: `HamiltonianForm::check`).
+        if slot == Slot::Velocity
+            && let Some(i) = (0..n).find(|&i| !lagrangian.uses_velocity(i))
+        {
             return Err(TextError::NoVelocity {
                 coordinate: spec.coordinates[i].clone(),
                 velocity: velocities[i].into(),
@@ -339,6 +397,7 @@ impl TextModel {
             coordinates,
             parameter_names,
             parameter_values,
+            slot,
             lagrangian,
             forces,
             generators,
@@ -359,7 +418,13 @@ impl TextModel {
         &self.coordinates
     }
 
-    /// Whether `t` appears in L.
+    /// Whether the model is written as a Hamiltonian H(t, q, p) ([`TextSpec::hamiltonian`]):
+    /// then [`TextHamiltonian`] holds it, else [`TextLagrangian`].
+    pub fn is_hamiltonian(&self) -> bool {
+        self.slot == Slot::Momentum
+    }
+
+    /// Whether `t` appears in L (or H).
     pub fn time_dependent(&self) -> bool {
         self.lagrangian.properties().time
     }
@@ -370,11 +435,23 @@ impl TextModel {
     }
 
     /// [`Structure::ConstantMass`] if L is, by its structure, ½q̇ᵀMq̇ − V(t, q) with M
-    /// constant (see the [module docs](self)), else [`Structure::General`].
+    /// constant (see the [module docs](self)), else [`Structure::General`] (also for a model
+    /// written as H: see [`TextModel::hamiltonian_structure`]).
     pub fn structure(&self) -> Structure {
         match self.tapes.constant_mass {
-            Some(_) => Structure::ConstantMass,
-            None => Structure::General,
+            Some(_) if !self.is_hamiltonian() => Structure::ConstantMass,
+            _ => Structure::General,
+        }
+    }
+
+    /// [`HamiltonianStructure::QuadraticKinetic`] if H is, by its structure, ½pᵀAp + V(t, q)
+    /// with A constant (read off the text as a constant mass is off L's), else
+    /// [`HamiltonianStructure::General`] (also for a model written as L). That A is
+    /// invertible is checked at the initial state of a run.
+    pub fn hamiltonian_structure(&self) -> HamiltonianStructure {
+        match self.tapes.constant_mass {
+            Some(_) if self.is_hamiltonian() => HamiltonianStructure::QuadraticKinetic,
+            _ => HamiltonianStructure::General,
         }
     }
 

@@ -61,6 +61,17 @@ impl Declared {
         coordinates: &[&str],
         parameters: &[(String, f64)],
     ) -> Result<Declared, TextError> {
+        Declared::check_phase_space(coordinates, parameters, Slot::Velocity)
+    }
+
+    /// [`Declared::check`] with the second slot of the phase space named by `slot`: the
+    /// velocities (`v` + a coordinate) of a Lagrangian or the momenta (`p` + a coordinate) of
+    /// a Hamiltonian, kept in [`Declared::velocities`] either way.
+    pub(super) fn check_phase_space(
+        coordinates: &[&str],
+        parameters: &[(String, f64)],
+        slot: Slot,
+    ) -> Result<Declared, TextError> {
         let mut taken = BTreeSet::new();
         let mut declared = Declared {
             coordinates: Vec::new(),
@@ -80,12 +91,12 @@ impl Declared {
             declared.coordinates.push(intern(name));
         }
         for name in coordinates {
-            let velocity = format!("v{name}");
+            let velocity = format!("{}{name}", slot.prefix());
             if !taken.insert(velocity.clone()) {
                 return Err(TextError::InvalidName {
                     role: "coordinate",
                     name: name.to_string(),
-                    reason: format!("its velocity '{velocity}' is also a coordinate"),
+                    reason: format!("its {} '{velocity}' is also a coordinate", slot.noun()),
                 });
             }
             declared.velocities.push(intern(&velocity));
@@ -109,6 +120,33 @@ impl Declared {
             declared.parameter_values.push(*value);
         }
         Ok(declared)
+    }
+}
+
+/// What the second slot of a text model's phase space holds, and how its names are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Slot {
+    /// The velocities q̇ of a Lagrangian: `v` + the coordinate's name.
+    Velocity,
+    /// The momenta p of a Hamiltonian: `p` + the coordinate's name.
+    Momentum,
+}
+
+impl Slot {
+    /// The prefix of the names: `v` or `p`.
+    pub(super) fn prefix(self) -> &'static str {
+        match self {
+            Slot::Velocity => "v",
+            Slot::Momentum => "p",
+        }
+    }
+
+    /// What the slot holds, in messages: `velocity` or `momentum`.
+    pub(super) fn noun(self) -> &'static str {
+        match self {
+            Slot::Velocity => "velocity",
+            Slot::Momentum => "momentum",
+        }
     }
 }
 

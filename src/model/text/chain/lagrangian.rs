@@ -40,7 +40,12 @@ impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool>
     /// not hold: `TIME_DEPENDENT = false` with `t` in L, `CONSTANT_MASS = true` for a model
     /// not recognised as constant-mass.
     pub fn new(model: TextChainModel) -> Result<Self, TextError> {
-        let declaration = |reason: String| Err(TextError::Declaration { reason });
+        let declaration = |reason: String| {
+            Err(TextError::Declaration {
+                holder: "TextChain",
+                reason,
+            })
+        };
         if model.width() != WIDTH {
             return declaration(format!(
                 "the chain's terms read {} coordinates, but WIDTH = {WIDTH}",

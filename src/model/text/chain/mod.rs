@@ -167,6 +167,12 @@ impl TextChainModel {
     /// # Errors
     /// A [`TextError`] naming the field, and for an expression the column and the symbol.
     pub fn new(spec: &TextSpec) -> Result<TextChainModel, TextError> {
+        if !spec.hamiltonian.is_empty() {
+            return Err(TextError::Unsupported {
+                field: "hamiltonian".into(),
+                reason: "a chain of indexed coordinates is written as a lagrangian".into(),
+            });
+        }
         for (given, field) in [
             (!spec.forces.is_empty(), "forces"),
             (!spec.symmetries.is_empty(), "symmetries"),
