@@ -78,8 +78,8 @@ pub use method::variational::stormer_verlet::StormerVerlet;
 pub use method::variational::svi::{Solver, Svi};
 pub use method::variational::variational_integrator::VariationalIntegrator;
 pub use method::{
-    Coordinates, Euclidean, Initial, Method, MethodInfo, PhasePoint, SO3, Space, State, Step,
-    TangentMap,
+    Coordinates, Equations, Euclidean, Initial, Method, MethodInfo, PhasePoint, SO3, Space, State,
+    Step, TangentMap,
 };
 pub use model::hamiltonian::{Canonical, Hamiltonian, HamiltonianStructure};
 pub use model::text::{TextError, TextHamiltonian, TextLagrangian, TextModel, TextSpec};

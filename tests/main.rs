@@ -27,6 +27,7 @@ mod local;
 mod logh;
 mod multiscale;
 mod newton;
+mod octave_call;
 mod pendulum_chain;
 mod polymer;
 mod pseudospectral;

@@ -22,6 +22,7 @@ use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyTypeError};
 use pyo3::prelude::*;
+use svi::model::rhs::HamiltonianRhs;
 use svi::stepping::dense::DenseOutput;
 use svi_experiments::ensemble::Ensemble;
 use svi_experiments::report::schema;
@@ -316,9 +317,11 @@ fn native_events(callables: Vec<CallableEvent>, raised: &Raised) -> PyResult<Vec
         .collect()
 }
 
-/// A model written as text from Python (`svi.Lagrangian`): L, its coordinates, its forces,
-/// the generators of its symmetries, its holonomic constraints and its parameters.
+/// A model written as text from Python (`svi.Lagrangian`, `svi.Hamiltonian`): what it is
+/// written as (`"lagrangian"` or `"hamiltonian"`), L or H, its coordinates, its forces, the
+/// generators of its symmetries, its holonomic constraints and its parameters.
 type TextModel = (
+    String,
     String,
     Vec<String>,
     Option<Vec<String>>,
@@ -399,9 +402,11 @@ fn run<'py>(
 ) -> PyResult<(String, Option<Trajectory<'py>>, Option<Dense>)> {
     let overrides = overrides(options, params)?;
     let mut loaded = match model {
-        Some((lagrangian, coordinates, forces, symmetries, constraints, parameters)) => {
+        Some((kind, expression, coordinates, forces, symmetries, constraints, parameters)) => {
+            let hamiltonian = kind == "hamiltonian";
             Scene::of_text_model(
-                lagrangian,
+                (!hamiltonian).then(|| expression.clone()),
+                hamiltonian.then_some(expression),
                 coordinates,
                 forces,
                 symmetries,
@@ -511,9 +516,11 @@ fn ensemble(
     }
     let random = random.map(|count| Random { count, seed });
     let mut loaded = match model {
-        Some((lagrangian, coordinates, forces, symmetries, constraints, parameters)) => {
+        Some((kind, expression, coordinates, forces, symmetries, constraints, parameters)) => {
+            let hamiltonian = kind == "hamiltonian";
             Scene::of_text_model(
-                lagrangian,
+                (!hamiltonian).then(|| expression.clone()),
+                hamiltonian.then_some(expression),
                 coordinates,
                 forces,
                 symmetries,
@@ -551,6 +558,188 @@ fn ensemble(
         .collect::<Result<Vec<_>, std::convert::Infallible>>()
         .unwrap_or_else(|never| match never {});
     Ok((count, table.columns, rows))
+}
+
+/// The states of a solve of a right-hand side: every accepted step's (t, q, p), row by row.
+struct Steps(Vec<f64>);
+
+impl<L> svi::observer::Observer<L, svi::PhasePoint<svi::Dyn>> for Steps {
+    /// The steps after the initial point.
+    fn wants(&self, step: usize) -> bool {
+        step > 0
+    }
+
+    fn observe(
+        &mut self,
+        _: &L,
+        _: usize,
+        point: &svi::PhasePoint<svi::Dyn>,
+    ) -> std::ops::ControlFlow<()> {
+        self.0.push(point.t);
+        self.0.extend(point.q.iter().chain(point.p.iter()));
+        std::ops::ControlFlow::Continue(())
+    }
+}
+
+/// A Python function of (t, y) returning an array of `size` floats, as the code a
+/// [`HamiltonianRhs`] calls: it writes the result into `out`, or keeps the exception it raised
+/// (or a result of another shape) in `raised` and writes NaN, which fails the step.
+fn python_function(
+    function: Py<PyAny>,
+    what: &'static str,
+    size: usize,
+    raised: &Raised,
+) -> impl Fn(f64, &[f64], &mut [f64]) + Send + Sync + 'static {
+    let raised = std::sync::Arc::clone(raised);
+    move |t: f64, y: &[f64], out: &mut [f64]| {
+        let result = Python::attach(|py| -> PyResult<()> {
+            let value = function.call1(py, (t, PyArray1::from_slice(py, y)))?;
+            let values: Vec<f64> = numpy::PyArrayMethods::to_vec(
+                &value
+                    .bind(py)
+                    .call_method1("__array__", ())
+                    .and_then(|array| array.call_method1("astype", ("float64",)))
+                    .and_then(|array| array.call_method0("ravel"))
+                    .and_then(|array| {
+                        array
+                            .cast_into::<PyArray1<f64>>()
+                            .map_err(|error| PyErr::from(error))
+                    })
+                    .map_err(|_| {
+                        PyTypeError::new_err(format!(
+                            "{what}(t, y) returned something that is not an array of numbers"
+                        ))
+                    })?
+                    .readonly(),
+            )
+            .map_err(|_| PyTypeError::new_err(format!("{what}(t, y): not contiguous")))?;
+            if values.len() != size {
+                return Err(PyTypeError::new_err(format!(
+                    "{what}(t, y) returned {} numbers, not {size}",
+                    values.len()
+                )));
+            }
+            out.copy_from_slice(&values);
+            Ok(())
+        });
+        if let Err(error) = result {
+            raised
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .get_or_insert(error);
+            out.fill(f64::NAN);
+        }
+    }
+}
+
+/// The Octave package's call `[T, Y] = spectralvarint(odefun, tspan, y0)` (`svi.solve` with a
+/// callable): y' = `odefun`(t, y) with y = (q, p) of 2N entries, from `y0` at `times[0]`, run
+/// by `method` (default `svi-h`) through [`svi::solve`] on a [`HamiltonianRhs`] — step
+/// doubling to `tol` (default 1e-8) unless `adapt = "none"` with the step `h`. Returns the
+/// summary (JSON) and the rows (t, q, p): at every accepted step for two `times`, else at the
+/// listed times. An exception `odefun` or `jacobian` raises is raised again.
+#[pyfunction]
+#[pyo3(signature = (odefun, times, y0, *, jacobian=None, method=None, h=None, tol=None, adapt=None, max_steps=None))]
+#[allow(clippy::too_many_arguments)]
+fn solve_rhs<'py>(
+    py: Python<'py>,
+    odefun: Py<PyAny>,
+    times: Vec<f64>,
+    y0: Vec<f64>,
+    jacobian: Option<Py<PyAny>>,
+    method: Option<String>,
+    h: Option<f64>,
+    tol: Option<f64>,
+    adapt: Option<String>,
+    max_steps: Option<usize>,
+) -> PyResult<(String, Trajectory<'py>)> {
+    let size = y0.len();
+    if size == 0 || size % 2 == 1 {
+        return Err(invalid(
+            "y0",
+            format!("y0 = (q, p) has an even number of entries, at least 2, not {size}"),
+        ));
+    }
+    let n = size / 2;
+    if times.len() < 2 {
+        return Err(invalid(
+            "t_span",
+            format!("needs at least two times (t0, t_end), not {}", times.len()),
+        ));
+    }
+    let raised = Raised::default();
+    let mut model = HamiltonianRhs::new(n, python_function(odefun, "odefun", size, &raised))
+        .map_err(|error| failure(error.into()))?;
+    if let Some(jacobian) = jacobian {
+        model = model.with_jacobian(python_function(jacobian, "jac", size * size, &raised));
+    }
+    let spec: svi::MethodSpec = method
+        .as_deref()
+        .unwrap_or("svi-h")
+        .parse()
+        .map_err(|error: svi::Error| failure(error.into()))?;
+    let mut options = svi::SolveOptions::default();
+    options.h = h;
+    if let Some(max_steps) = max_steps {
+        options.max_steps = max_steps;
+    }
+    if let Some(adapt) = adapt {
+        options.adapt = adapt
+            .parse()
+            .map_err(|error: svi::Error| failure(error.into()))?;
+    }
+    if tol.is_some() {
+        options.tol = tol;
+    }
+    let every_step = times.len() == 2;
+    let span = if every_step {
+        svi::Span::new(times[0], times[1])
+    } else {
+        svi::Span::times(&times)
+    };
+    let initial = svi::Initial::Momentum {
+        q: nalgebra::DVector::from_column_slice(&y0[..n]),
+        p: nalgebra::DVector::from_column_slice(&y0[n..]),
+    };
+    let mut steps = Steps(Vec::new());
+    let result = spec.vector_method().and_then(|method| {
+        svi::Integrator::new(model, method)
+            .try_solve(&span, initial, &options, &mut steps)
+            .map_err(|failure| failure.error)
+    });
+    if let Some(error) = raised.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        return Err(error);
+    }
+    let solution = result.map_err(|error| failure(error.into()))?;
+    let mut rows = Vec::new();
+    for point in &solution.points {
+        if every_step && point.t != times[0] {
+            // The accepted steps, which end with the last point.
+            rows.extend(&steps.0);
+            break;
+        }
+        rows.push(point.t);
+        rows.extend(point.q.iter().chain(point.p.iter()));
+    }
+    let names: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
+    let columns = std::iter::once("t".to_string())
+        .chain(names.iter().map(|name| format!("q_{name}")))
+        .chain(names.iter().map(|name| format!("p_{name}")))
+        .collect();
+    let summary = serde_json::json!({
+        "model": "rhs",
+        "method": spec.canonical().to_string(),
+        "coordinates": names,
+        "status": "ok",
+        "t0": times[0],
+        "t_end": solution.last.t,
+        "steps": solution.statistics.steps,
+        "rejected_steps": solution.adaptivity.rejected,
+        "evaluations": solution.statistics.evaluations,
+        "q": solution.last.q.as_slice(),
+        "p": solution.last.p.as_slice(),
+    });
+    Ok((summary.to_string(), (columns, array(py, rows))))
 }
 
 /// The zoo models on ℝᴺ (name, coordinates, parameters, default step and horizon, Noether
@@ -667,6 +856,7 @@ fn version() -> &'static str {
 fn _svi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Failure", m.py().get_type::<Failure>())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_rhs, m)?)?;
     m.add_function(wrap_pyfunction!(options, m)?)?;
     m.add_class::<Dense>()?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;

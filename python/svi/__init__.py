@@ -39,6 +39,7 @@ __all__ = [
     "ArgumentTypeError",
     "DivergedError",
     "Event",
+    "Hamiltonian",
     "HealthError",
     "InvalidInputError",
     "InvalidParameterError",
@@ -659,7 +660,7 @@ def ensemble(
     base = {
         name: _reals(f"{name}0", np.atleast_1d(value)) for name, value in (("q", q0), ("v", v0), ("p", p0)) if value is not None
     }
-    model = scene._native() if isinstance(scene, Lagrangian) else None
+    model = scene._native() if isinstance(scene, _TextModel) else None
     checked = _shared_options(locals(), options, "ensemble")
     if _events.split(checked):
         raise TypeError(
@@ -810,4 +811,4 @@ def bench(
 
 
 # Models and solutions (after the helpers above, which they use).
-from ._solve import Lagrangian, Solution, solve  # noqa: E402
+from ._solve import Hamiltonian, Lagrangian, Solution, _TextModel, solve  # noqa: E402

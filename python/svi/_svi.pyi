@@ -7,6 +7,12 @@ import numpy as np
 #: A value of an option of ``svi run`` given by name (checked by ``svi`` for its kind).
 OptionValue = Union[int, float, str, List[float], List[str]]
 
+#: A model written as text: ("lagrangian" or "hamiltonian", the expression, coordinates, forces,
+#: symmetries, constraints, parameters).
+TextModel = Tuple[
+    str, str, List[str], Optional[List[str]], Optional[List[List[str]]], Optional[List[str]], Dict[str, float]
+]
+
 class Failure(Exception):
     """A failed call; its one argument is the JSON text of the failure object."""
 
@@ -23,9 +29,7 @@ class Dense:
 def run(
     scene: str,
     *,
-    model: Optional[
-        Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Dict[str, float]]
-    ] = None,
+    model: Optional[TextModel] = None,
     params: Optional[Dict[str, float]] = None,
     initial: Optional[Dict[str, List[float]]] = None,
     options: Optional[Dict[str, OptionValue]] = None,
@@ -39,12 +43,25 @@ def run(
     trajectory's columns and numbers (row by row), with ``dense`` every step's polynomial;
     ``events`` are events given as callables (name, direction, terminal, g(t, q, v))."""
 
+def solve_rhs(
+    odefun: Callable[[float, np.ndarray], object],
+    times: List[float],
+    y0: List[float],
+    *,
+    jacobian: Optional[Callable[[float, np.ndarray], object]] = None,
+    method: Optional[str] = None,
+    h: Optional[float] = None,
+    tol: Optional[float] = None,
+    adapt: Optional[str] = None,
+    max_steps: Optional[int] = None,
+) -> Tuple[str, Tuple[List[str], np.ndarray]]:
+    """The Octave package's call: y' = odefun(t, y), y = (q, p), from y0 over ``times`` by a
+    method on Hamilton's equations; the JSON summary and the rows (t, q, p)."""
+
 def ensemble(
     scene: str,
     *,
-    model: Optional[
-        Tuple[str, List[str], Optional[List[str]], Optional[List[List[str]]], Dict[str, float]]
-    ] = None,
+    model: Optional[TextModel] = None,
     base: Optional[Dict[str, List[float]]] = None,
     params: Sequence[str] = ...,
     initial: Sequence[str] = ...,

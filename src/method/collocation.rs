@@ -40,7 +40,7 @@ use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::invert;
 use crate::method::Method;
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::sparse_terms;
@@ -486,6 +486,7 @@ where
             symmetric: false,
             symplectic: false,
             coordinates: Coordinates::Velocity,
+            equations: Equations::Lagrange,
         }
     }
 

@@ -55,6 +55,18 @@ pub enum Coordinates {
     Velocity,
 }
 
+/// Which equations of motion a method discretises, and so which description of the model it
+/// reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Equations {
+    /// The Euler–Lagrange equations or the discrete action: L and its derivatives.
+    Lagrange,
+    /// Hamilton's equations ([`crate::method::hamiltonian`]): H's derivatives only, so they
+    /// also run a model given as the right-hand side of Hamilton's equations alone
+    /// ([`crate::model::rhs::HamiltonianRhs`]).
+    Hamilton,
+}
+
 /// Static facts about a configured method.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MethodInfo {
@@ -68,6 +80,8 @@ pub struct MethodInfo {
     pub symplectic: bool,
     /// The state coordinates the method works in.
     pub coordinates: Coordinates,
+    /// The equations it discretises.
+    pub equations: Equations,
 }
 
 /// Work reported by one step.

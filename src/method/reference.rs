@@ -32,7 +32,7 @@
 
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::derived::{AccelerationJacobian, KeptMass, LagrangianExt, sparse_terms};
 use crate::model::euler_lagrange::LazyAcceleration;
 use crate::model::{ConstantMass, Lagrangian};
@@ -240,6 +240,7 @@ fn info(name: &'static str, order: usize) -> MethodInfo {
         symmetric: false,
         symplectic: false,
         coordinates: Coordinates::Velocity,
+        equations: Equations::Lagrange,
     }
 }
 

@@ -46,7 +46,7 @@ use crate::method::variational::discrete_lagrangian::{
 use crate::method::variational::stormer_verlet::StormerVerlet;
 use crate::method::variational::svi::{Solver, Svi};
 use crate::method::variational::variational_integrator::VariationalIntegrator;
-use crate::method::{Method, MethodInfo};
+use crate::method::{Equations, Method, MethodInfo};
 use crate::spectral::{check_points, check_quadrature};
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, U1};
@@ -297,6 +297,23 @@ pub fn find(name: &str) -> Option<&'static Entry> {
 pub fn known_names() -> String {
     METHODS
         .iter()
+        .map(|entry| entry.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The names of the methods of [`METHODS`] on Hamilton's equations ([`Equations::Hamilton`]),
+/// comma-separated: those that run a model given as the right-hand side of Hamilton's
+/// equations ([`crate::model::rhs::HamiltonianRhs`]).
+pub fn hamiltonian_names() -> String {
+    METHODS
+        .iter()
+        .filter(|entry| {
+            entry
+                .spec()
+                .info()
+                .is_ok_and(|info| info.equations == Equations::Hamilton)
+        })
         .map(|entry| entry.name)
         .collect::<Vec<_>>()
         .join(", ")
@@ -726,6 +743,24 @@ impl FromStr for MethodSpec {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_methods_on_hamiltons_equations_are_the_names_ending_in_h() {
+        // The refusal of a right-hand side by the other methods (method/step.rs) names them so.
+        let names = super::hamiltonian_names();
+        for entry in METHODS
+            .iter()
+            .filter(|entry| entry.space == SpaceKind::Vector)
+        {
+            assert_eq!(
+                names.split(", ").any(|name| name == entry.name),
+                entry.name.ends_with("-h"),
+                "{}",
+                entry.name
+            );
+        }
+        assert!(names.starts_with("svi-h, "), "{names}");
+    }
+
     use super::*;
     use crate::dimension::{Dyn, dimension_of};
     use crate::lie_group::RigidBodyLagrangian;

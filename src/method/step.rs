@@ -13,9 +13,11 @@
 
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure, require_finite_entries};
+use crate::linalg::solve_small;
 use crate::method::space::{Euclidean, Initial, PhasePoint, Space, State, TangentMap};
-use crate::method::{Coordinates, Method, MethodInfo, StepReport};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, StepReport};
 use crate::model::derived::LagrangianExt;
+use crate::model::hamiltonian::HamiltonianForm;
 use crate::model::{Lagrangian, Structure, TermDerivatives};
 use crate::spectral::MAX_POINTS;
 use nalgebra::allocator::Allocator;
@@ -356,7 +358,20 @@ where
         // A model written as H: H finite, ∂²H/∂p² regular and its declared structure, at
         // (q, p) (its Lagrangian's constant mass is ½ q̇ᵀMq̇ by construction).
         if let Some(form) = model.hamiltonian_form() {
-            let p = match Method::info(self).coordinates {
+            let info = Method::info(self);
+            if form.field_only() && info.equations != Equations::Hamilton {
+                return Err(Error::invalid(
+                    "method",
+                    format!(
+                        "{} discretises the Euler–Lagrange equations, and a model given as the \
+                         right-hand side of Hamilton's equations has no Lagrangian: run it with \
+                         a method on Hamilton's equations (the methods whose names end in -h, \
+                         svi-h the first)",
+                        info.name,
+                    ),
+                ));
+            }
+            let p = match info.coordinates {
                 Coordinates::Momentum => state.y.clone(),
                 Coordinates::Velocity => model.momentum(t, &state.q, &state.y),
             };
@@ -508,11 +523,18 @@ where
     ) -> Option<PhasePoint<N>> {
         let theta = ((time - t) / h).clamp(0.0, 1.0);
         let (q, v) = Method::dense_output(self, workspace, start, h, theta)?;
-        let p = model.momentum(time, &q, &v);
+        let p = match model.hamiltonian_form() {
+            // No L: p solves ∂H/∂p(t, q, p) = q̇ by the field itself, else the Hermite
+            // interpolant of (q, p) serves the time.
+            Some(form) if form.field_only() => field_momentum(form, time, &q, &v, &start.y)?,
+            _ => model.momentum(time, &q, &v),
+        };
         Some(PhasePoint { t: time, q, v, p })
     }
 
-    /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map.
+    /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map; for a model given
+    /// as the right-hand side of Hamilton's equations (no Legendre map) p is interpolated the
+    /// same way, with ṗ = −∂H/∂q + f_H at the ends.
     fn interpolate(
         &self,
         model: &L,
@@ -527,7 +549,17 @@ where
         } = Hermite::new(a.t, b.t, time);
         let q = &a.q * w[0] + &a.v * (h * w[1]) + &b.q * w[2] + &b.v * (h * w[3]);
         let v = (&a.q * d[0] + &b.q * d[2]) / h + &a.v * d[1] + &b.v * d[3];
-        let p = model.momentum(time, &q, &v);
+        let p = match model.hamiltonian_form() {
+            Some(form) if form.field_only() => {
+                let rate = |point: &PhasePoint<N>| {
+                    let (hq, _) = form.gradient(point.t, &point.q, &point.p);
+                    form.force(point.t, &point.q, &point.p) - hq
+                };
+                let (ra, rb) = (rate(a), rate(b));
+                &a.p * w[0] + ra * (h * w[1]) + &b.p * w[2] + rb * (h * w[3])
+            }
+            _ => model.momentum(time, &q, &v),
+        };
         Some(PhasePoint { t: time, q, v, p })
     }
 
@@ -553,3 +585,32 @@ where
         Method::discrete_energy(self, model, workspace, t, h, start)
     }
 }
+
+/// p with ∂H/∂p(t, q, p) = `v` for a model known by its Hamiltonian field alone (the inverse
+/// Legendre map through the field: Newton's method with ∂²H/∂p² from the field's Jacobian,
+/// from `guess`); `None` if it does not converge to round-off in a few iterations.
+fn field_momentum<N: Dimension>(
+    form: &dyn HamiltonianForm<N>,
+    t: f64,
+    q: &OVector<f64, N>,
+    v: &OVector<f64, N>,
+    guess: &OVector<f64, N>,
+) -> Option<OVector<f64, N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let scale = 1.0 + v.amax();
+    let mut p = guess.clone();
+    for _ in 0..FIELD_MOMENTUM_ITERATIONS {
+        let residual = form.velocity(t, q, &p) - v;
+        if residual.amax() <= 1e-14 * scale {
+            return Some(p);
+        }
+        let step = solve_small(form.second(t, q, &p).pp, residual)?;
+        p -= step;
+    }
+    None
+}
+
+/// Most Newton iterations of [`field_momentum`].
+const FIELD_MOMENTUM_ITERATIONS: usize = 20;

@@ -125,6 +125,13 @@ where
     /// Whether f_H is present.
     fn forced(&self) -> bool;
 
+    /// Whether the model is the right-hand side of Hamilton's equations alone
+    /// ([`crate::model::rhs::HamiltonianRhs`]): no H ([`HamiltonianForm::value`] is NaN) and
+    /// no Lagrangian, so only the methods on Hamilton's equations run it.
+    fn field_only(&self) -> bool {
+        false
+    }
+
     /// H(t, q, p).
     fn value(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> f64;
 

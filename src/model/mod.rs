@@ -46,6 +46,7 @@ pub(crate) mod legendre;
 pub mod local;
 pub mod mass_inverse;
 pub mod reparametrized;
+pub mod rhs;
 pub mod rigid_body;
 pub mod so3;
 pub(crate) mod term_pattern;

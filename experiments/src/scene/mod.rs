@@ -216,12 +216,14 @@ impl Scene {
         })
     }
 
-    /// The scene of a Lagrangian written as text with its `coordinates`, `forces`,
-    /// `symmetries`, `constraints` and `parameters`, every other field absent (the Python
-    /// package's `svi.Lagrangian`): not yet checked — a text model has no default initial
-    /// state, step or horizon, which the caller sets before [`Scene::check`].
+    /// The scene of a Lagrangian or a Hamiltonian written as text (one of the two given) with
+    /// its `coordinates`, `forces`, `symmetries`, `constraints` and `parameters`, every other
+    /// field absent (the Python package's `svi.Lagrangian` and `svi.Hamiltonian`): not yet
+    /// checked — a text model has no default initial state, step or horizon, which the
+    /// caller sets before [`Scene::check`].
     pub fn of_text_model(
-        lagrangian: String,
+        lagrangian: Option<String>,
+        hamiltonian: Option<String>,
         coordinates: Vec<String>,
         forces: Option<Vec<String>>,
         symmetries: Option<Vec<Vec<String>>>,
@@ -230,7 +232,8 @@ impl Scene {
     ) -> Scene {
         let empty: Scene = toml::from_str("").expect("every field of a scene has a default");
         Scene {
-            lagrangian: Some(lagrangian),
+            lagrangian,
+            hamiltonian,
             coordinates: Some(coordinates),
             forces,
             symmetries,

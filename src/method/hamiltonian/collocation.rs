@@ -27,7 +27,7 @@ use super::{Derivatives, Linearised, offset, solve};
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::collocation::SpectralCollocation;
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::nonlinear::Newton;
 use crate::spectral::basis::LagrangeBasis;
@@ -97,6 +97,7 @@ where
             symmetric: false,
             symplectic: false,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Hamilton,
         }
     }
 

@@ -51,7 +51,7 @@ use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::variational::svi::{Svi, SviWorkspace};
 use crate::method::variational::tables::Tables;
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::canonical;
 use crate::model::hamiltonian::HamiltonianStructure;
@@ -134,6 +134,11 @@ where
     /// The step of the last converged solve, whose unknowns (still in `unknowns`) start
     /// the next one.
     last_h: Option<f64>,
+    /// The configuration that solve started from: with `last_h`, which step the unknowns
+    /// describe (the dense output reads them only for that step).
+    last_start: OVector<f64, N>,
+    /// The CGL basis l_ν of the curve q(τ) = q_k + Σ_ν l_ν(τ) Δᵛ (dense output).
+    basis: LagrangeBasis,
     /// H's derivatives at the Gauss points.
     derivatives: Derivatives<N>,
     /// (q(τ_μ), P_μ) at each Gauss point.
@@ -155,6 +160,7 @@ where
             symmetric: true,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Hamilton,
         }
     }
 
@@ -186,6 +192,8 @@ where
                 newton: Newton::new(size, self.max_iterations),
                 unknowns: DVector::zeros(size),
                 last_h: None,
+                last_start: zero.clone(),
+                basis,
                 derivatives: Derivatives::new(model, n),
                 q: vec![zero.clone(); m],
                 p: vec![zero; m],
@@ -238,6 +246,45 @@ where
             }
             HamiltonianGalerkinWorkspace::General(general) => {
                 Ok(general.derivatives.velocity_into(model, t, q, p, v))
+            }
+        }
+    }
+
+    /// The step's curve: SVI's polynomial for H = ½pᵀM⁻¹p + V, else the CGL polynomial of the
+    /// last solve's node offsets, q(τ) = q_k + Σ_ν l_ν(τ) Δᵛ, if that solve was this step.
+    fn dense_output(
+        &self,
+        workspace: &HamiltonianGalerkinWorkspace<N>,
+        state: &State<N>,
+        h: f64,
+        theta: f64,
+    ) -> Option<(OVector<f64, N>, OVector<f64, N>)> {
+        match workspace {
+            HamiltonianGalerkinWorkspace::Quadratic(svi) => {
+                Method::<N>::dense_output(&self.svi(), svi, state, h, theta)
+            }
+            HamiltonianGalerkinWorkspace::General(general) => {
+                if general.last_h != Some(h) || general.last_start != state.q {
+                    return None;
+                }
+                let points = general.basis.len();
+                let (mut values, mut rates) = (vec![0.0; points], vec![0.0; points]);
+                let tau = 2.0 * theta - 1.0;
+                general.basis.values_into(tau, &mut values);
+                general.basis.derivatives_into(tau, &mut rates);
+                let (mut q, mut v) = (
+                    state.q.clone(),
+                    OVector::zeros_generic(state.q.shape_generic().0, U1),
+                );
+                let w = state.q.len();
+                for nu in 1..points {
+                    let offset = &general.unknowns.as_slice()[(nu - 1) * w..nu * w];
+                    for i in 0..w {
+                        q[i] += values[nu] * offset[i];
+                        v[i] += rates[nu] * (2.0 / h) * offset[i];
+                    }
+                }
+                Some((q, v))
             }
         }
     }
@@ -373,6 +420,7 @@ where
         }
         let solved = result?;
         self.last_h = Some(h);
+        self.last_start.copy_from(&state.q);
         Ok(solved)
     }
 

@@ -25,7 +25,7 @@
 use super::{Derivatives, Linearised, offset, solve};
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure, require_positive};
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::nonlinear::Newton;
 use nalgebra::allocator::Allocator;
@@ -98,6 +98,7 @@ where
             symmetric: true,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Hamilton,
         }
     }
 

@@ -31,7 +31,7 @@ use crate::error::{Error, StepFailure, require_positive};
 use crate::linalg::invert_small;
 use crate::method::variational::composition::{Composable, Composition, Scheme};
 use crate::method::variational::discrete_lagrangian::Kicks;
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::canonical;
 use crate::nonlinear::Newton;
@@ -171,6 +171,7 @@ where
             symmetric,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Hamilton,
         }
     }
 

@@ -95,7 +95,7 @@ mod equations;
 use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
 use crate::method::space::{RigidInitial, RigidPoint, RigidState, SO3};
 use crate::method::step::Step;
-use crate::method::{Coordinates, MethodInfo, StepReport};
+use crate::method::{Coordinates, Equations, MethodInfo, StepReport};
 use crate::model::rigid_body::{RigidBodyExt, RigidBodyLagrangian};
 use crate::model::so3::{
     Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log, orthogonality_error,
@@ -193,6 +193,7 @@ impl LieSvi {
             symmetric: self.points == 2,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Lagrange,
         }
     }
 

@@ -95,7 +95,7 @@ mod tables;
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::linalg::invert_small;
-use crate::method::{Coordinates, Method, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, Method, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::derived::{LagrangianExt, SecondDerivatives};
 use crate::nonlinear::{Jacobian, Newton};
@@ -372,6 +372,7 @@ where
             symmetric: false,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Lagrange,
         }
     }
 

@@ -39,7 +39,7 @@ use crate::method::variational::discrete_lagrangian::{Kicks, Trapezoid};
 use crate::method::variational::variational_integrator::{
     VariationalIntegrator, VariationalWorkspace,
 };
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, OVector};
@@ -91,6 +91,7 @@ where
             symmetric: true,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Lagrange,
         }
     }
 

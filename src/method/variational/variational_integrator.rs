@@ -57,7 +57,7 @@ use crate::method::variational::discrete_lagrangian::{
 use crate::method::variational::kick_drift_kick::Explicit;
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, MethodInfo, State, StepReport, TangentMap};
 use crate::model::derived::sparse_terms;
 use crate::model::derived::{LagrangianExt, cached_mass_inverse};
 use crate::model::legendre::LazyLegendre;
@@ -373,6 +373,7 @@ where
             symmetric,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Lagrange,
         }
     }
 

@@ -74,7 +74,7 @@ use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
-use crate::method::{Coordinates, MethodInfo, State, StepReport, TangentMap};
+use crate::method::{Coordinates, Equations, MethodInfo, State, StepReport, TangentMap};
 use crate::model::Lagrangian;
 use crate::model::Structure;
 use crate::model::derived::sparse_terms;
@@ -204,6 +204,7 @@ where
             symmetric: true,
             symplectic: true,
             coordinates: Coordinates::Momentum,
+            equations: Equations::Lagrange,
         }
     }
 
