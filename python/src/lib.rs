@@ -581,8 +581,8 @@ impl<L> svi::observer::Observer<L, svi::PhasePoint<svi::Dyn>> for Steps {
     }
 }
 
-/// A Python function of (t, y) returning an array of `size` floats, as the code a
-/// [`HamiltonianRhs`] calls: it writes the result into `out`, or keeps the exception it raised
+/// A Python function of (t, y) returning a contiguous array of `size` float64 numbers (the
+/// package's wrapper makes it one), as the code a [`HamiltonianRhs`] calls: it writes the result into `out`, or keeps the exception it raised
 /// (or a result of another shape) in `raised` and writes NaN, which fails the step.
 fn python_function(
     function: Py<PyAny>,
@@ -594,32 +594,19 @@ fn python_function(
     move |t: f64, y: &[f64], out: &mut [f64]| {
         let result = Python::attach(|py| -> PyResult<()> {
             let value = function.call1(py, (t, PyArray1::from_slice(py, y)))?;
-            let values: Vec<f64> = numpy::PyArrayMethods::to_vec(
-                &value
-                    .bind(py)
-                    .call_method1("__array__", ())
-                    .and_then(|array| array.call_method1("astype", ("float64",)))
-                    .and_then(|array| array.call_method0("ravel"))
-                    .and_then(|array| {
-                        array
-                            .cast_into::<PyArray1<f64>>()
-                            .map_err(|error| PyErr::from(error))
-                    })
-                    .map_err(|_| {
-                        PyTypeError::new_err(format!(
-                            "{what}(t, y) returned something that is not an array of numbers"
-                        ))
-                    })?
-                    .readonly(),
-            )
-            .map_err(|_| PyTypeError::new_err(format!("{what}(t, y): not contiguous")))?;
+            let array: PyReadonlyArray1<'_, f64> = value.extract(py).map_err(|_| {
+                PyTypeError::new_err(format!(
+                    "{what}(t, y) returned something that is not an array of numbers"
+                ))
+            })?;
+            let values = array.as_slice()?;
             if values.len() != size {
                 return Err(PyTypeError::new_err(format!(
                     "{what}(t, y) returned {} numbers, not {size}",
                     values.len()
                 )));
             }
-            out.copy_from_slice(&values);
+            out.copy_from_slice(values);
             Ok(())
         });
         if let Err(error) = result {
@@ -636,7 +623,9 @@ fn python_function(
 /// callable): y' = `odefun`(t, y) with y = (q, p) of 2N entries, from `y0` at `times[0]`, run
 /// by `method` (default `svi-h`) through [`svi::solve`] on a [`HamiltonianRhs`] — step
 /// doubling to `tol` (default 1e-8) unless `adapt = "none"` with the step `h`. Returns the
-/// summary (JSON) and the rows (t, q, p): at every accepted step for two `times`, else at the
+/// summary (JSON: `steps` counts every step the method took, trial steps of step doubling
+/// included, as `svi run`'s summary; `accepted_steps` those the solution is made of) and the
+/// rows (t, q, p): at every accepted step for two `times`, else at the
 /// listed times. An exception `odefun` or `jacobian` raises is raised again.
 #[pyfunction]
 #[pyo3(signature = (odefun, times, y0, *, jacobian=None, method=None, h=None, tol=None, adapt=None, max_steps=None))]
@@ -734,6 +723,7 @@ fn solve_rhs<'py>(
         "t0": times[0],
         "t_end": solution.last.t,
         "steps": solution.statistics.steps,
+        "accepted_steps": solution.adaptivity.accepted,
         "rejected_steps": solution.adaptivity.rejected,
         "evaluations": solution.statistics.evaluations,
         "q": solution.last.q.as_slice(),

@@ -291,10 +291,10 @@ def solve(
             raise _wrong_type(given[0], "not an option of odefun (model, t_span, y0, jac, method, h, tol, adapt, max_steps)", unused.get(given[0], dense))
         summary, rows = _call(
             _svi.solve_rhs,
-            model,
+            _flat(model, "odefun", None),
             times,
             _reals("y0", np.concatenate([np.atleast_1d(q0), np.atleast_1d(p0)])),
-            jacobian=jac,
+            jacobian=None if jac is None else _flat(jac, "jac", 2 * len(np.atleast_1d(q0))),
             method=_text("method", method),
             h=_real("h", h),
             tol=_real("tol", tol),
@@ -337,6 +337,21 @@ def solve(
         events=callables,
     )
     return Solution(json.loads(summary), rows, kept)
+
+
+def _flat(function: Callable[[float, np.ndarray], Any], name: str, square: Optional[int]) -> Callable[[float, np.ndarray], np.ndarray]:
+    """``function`` returning a contiguous float64 array for the Rust core: y' as it is; with
+    ``square`` = 2N, the 2N × 2N Jacobian (rows ∂F_i/∂y) column by column."""
+
+    def flat(t: float, y: np.ndarray) -> np.ndarray:
+        value = np.asarray(function(t, y), dtype=float)
+        if square is None:
+            return np.ascontiguousarray(value.ravel())
+        if value.shape != (square, square):
+            raise TypeError(f"{name}(t, y) returned shape {value.shape}, not ({square}, {square})")
+        return np.ascontiguousarray(value.ravel(order="F"))
+
+    return flat
 
 
 def _span_times(value: Any) -> Optional[List[float]]:
