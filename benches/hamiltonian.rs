@@ -17,14 +17,26 @@
 //! numbers), and `midpoint_h` the implicit midpoint rule on Hamilton's equations. Each is timed
 //! per step (mean over whole runs of 2000 steps from the default state).
 //!
+//! # `hamiltonian/relativistic_chain_n10000/<method>`: one step of a chain of 10⁴ particles
+//!
+//! [`RelativisticChain`] with n = 10⁴ (peak speed 0.8 c) from its default state, step 0.1:
+//! `svi` is SVI with its default points on the Lagrangian (a kinetic energy that is not
+//! quadratic: Newton's method with the sparse Hessian assembled term by term), `verlet_h` and
+//! `kahan_li8_h` the explicit splitting of the same chain written as the separable
+//! H = Σ c√(m²c² + pᵢ²) + V(q) ([`RelativisticChainH`] through [`LocalCanonical`]). Each is
+//! timed per step (mean over runs of 10 steps); the gap between each final state and SVI's is
+//! printed first.
+//!
 //! Run with `cargo bench --bench hamiltonian`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 use std::time::Duration;
 use svi::method::hamiltonian::{HamiltonianGalerkin, ImplicitMidpoint};
-use svi::{Canonical, Defaults, ExactSolution, Initial, Integrator, Method, Svi};
-use svi_models::{Kepler, KeplerH, MagneticBottle};
+use svi::model::local::{LocalDefaults, Terms};
+use svi::model::local_hamiltonian::LocalCanonical;
+use svi::{Canonical, Defaults, ExactSolution, Initial, Integrator, Method, MethodSpec, Svi};
+use svi_models::{Kepler, KeplerH, MagneticBottle, RelativisticChain, RelativisticChainH};
 
 const T_END: f64 = 2000.0;
 const STEPS: usize = 13953;
@@ -122,11 +134,68 @@ fn magnetic_bottle(c: &mut Criterion) {
     group.finish();
 }
 
+/// Steps per timed run of the chain.
+const CHAIN_STEPS: usize = 10;
+
+fn relativistic_chain(c: &mut Criterion) {
+    let mut group = c.benchmark_group("hamiltonian/relativistic_chain_n10000");
+    group.sample_size(10);
+    let chain = RelativisticChain {
+        n: 10_000,
+        ..RelativisticChain::default()
+    };
+    let h = chain.default_step();
+    let t_end = CHAIN_STEPS as f64 * h;
+    let (t0, q0, v0) = chain.initial_state();
+    let lagrangian = Integrator::new(Terms(chain.clone()), Svi::default());
+    let reference = lagrangian
+        .run_from_velocity(t0, q0.clone(), v0.clone(), h, t_end, &mut ())
+        .expect("svi on the chain");
+    eprintln!(
+        "svi: {} steps, {} iterations, {} factorisations",
+        reference.statistics.steps,
+        reference.statistics.iterations,
+        reference.statistics.factorizations
+    );
+    group.bench_function("svi", |b| {
+        b.iter(|| {
+            lagrangian.run_from_velocity(t0, black_box(q0.clone()), v0.clone(), h, t_end, &mut ())
+        })
+    });
+    let hamiltonian = RelativisticChainH(chain);
+    let (_, q0, p0) = hamiltonian.initial_state();
+    for (id, name) in [("verlet_h", "verlet-h"), ("kahan_li8_h", "kahan-li8-h")] {
+        let method = name
+            .parse::<MethodSpec>()
+            .and_then(|spec| spec.vector_method())
+            .expect("a registry method");
+        let integrator = Integrator::new(LocalCanonical::new(hamiltonian.clone()), method);
+        let initial = Initial::Momentum {
+            q: q0.clone(),
+            p: p0.clone(),
+        };
+        let run = integrator
+            .run(t0, initial.clone(), h, t_end, &mut ())
+            .unwrap_or_else(|error| panic!("{id}: {error}"));
+        eprintln!(
+            "{id}: {} steps, {} iterations; gap to svi {:.2e} in q, {:.2e} in p",
+            run.statistics.steps,
+            run.statistics.iterations,
+            (&run.last.q - &reference.last.q).amax(),
+            (&run.last.p - &reference.last.p).amax()
+        );
+        group.bench_function(id, |b| {
+            b.iter(|| integrator.run(t0, black_box(initial.clone()), h, t_end, &mut ()))
+        });
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .measurement_time(Duration::from_secs(3))
         .warm_up_time(Duration::from_millis(500));
-    targets = kepler, magnetic_bottle
+    targets = kepler, magnetic_bottle, relativistic_chain
 }
 criterion_main!(benches);

@@ -172,7 +172,7 @@ pub use oscillator::HarmonicOscillator;
 pub use pendulum::Pendulum;
 pub use pendulum_h::PendulumH;
 pub use polymer::Polymer;
-pub use relativistic_chain::RelativisticChain;
+pub use relativistic_chain::{RelativisticChain, RelativisticChainH};
 pub use restricted_three_body::RestrictedThreeBody;
 pub use schrodinger::{NlsSoliton, SchrodingerPacket};
 pub use sine_gordon_chain::SineGordonChain;

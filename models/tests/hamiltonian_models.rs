@@ -359,3 +359,89 @@ fn the_bottle_traps_the_particle_and_conserves_energy_p_phi_and_mu() {
         "half bounce {half_bounce}, adiabatic theory {theory}"
     );
 }
+
+#[test]
+fn the_relativistic_chain_as_h_by_the_explicit_splitting_matches_the_lagrangian_svi() {
+    // n = 64 from the Lagrangian's default state (peak speed 0.8 c, γ up to 1.67), T = 10:
+    // kahan-li8-h on H, explicit (no Newton iteration, no Hessian), against SVI 7/6 with
+    // sparse Newton on L. Both are accurate to about 1e-10 at these steps.
+    use svi::model::local::Terms;
+    use svi::model::local_hamiltonian::LocalCanonical;
+    use svi::{Initial, MethodSpec};
+    use svi_models::{RelativisticChain, RelativisticChainH};
+
+    let chain = RelativisticChain {
+        n: 64,
+        ..RelativisticChain::default()
+    };
+    let hamiltonian = RelativisticChainH(chain.clone());
+    let (t0, q0, p0) = hamiltonian.initial_state();
+    let (_, _, v0) = svi::model::local::LocalDefaults::initial_state(&chain);
+    let t_end = 10.0;
+    let lagrangian = Integrator::new(Terms(chain.clone()), Svi::new(7).with_quadrature(6))
+        .run_from_velocity(t0, q0.clone(), v0, 0.05, t_end, &mut ())
+        .unwrap();
+    let splitting = "kahan-li8-h"
+        .parse::<MethodSpec>()
+        .unwrap()
+        .vector_method()
+        .unwrap();
+    let mut energy = EnergyError::default();
+    let explicit = Integrator::new(LocalCanonical::new(hamiltonian.clone()), splitting)
+        .run(
+            t0,
+            Initial::Momentum {
+                q: q0.clone(),
+                p: p0.clone(),
+            },
+            0.02,
+            t_end,
+            &mut energy,
+        )
+        .unwrap();
+    assert_eq!(
+        explicit.statistics.iterations, 0,
+        "the splitting is explicit"
+    );
+    let gap = (&explicit.last.q - &lagrangian.last.q)
+        .amax()
+        .max((&explicit.last.p - &lagrangian.last.p).amax());
+    eprintln!(
+        "relativistic chain n = 64: explicit kahan-li8-h against svi:7/6, {gap:.2e}; energy error {:.2e}",
+        energy.max
+    );
+    assert!(gap < 1e-8, "{gap:e}");
+    assert!(energy.max < 1e-9, "{:e}", energy.max);
+    // verlet-h: second order, explicit.
+    let verlet = "verlet-h"
+        .parse::<MethodSpec>()
+        .unwrap()
+        .vector_method()
+        .unwrap();
+    let gaps: Vec<f64> = [0.02, 0.01]
+        .iter()
+        .map(|&h| {
+            let run = Integrator::new(LocalCanonical::new(hamiltonian.clone()), verlet.clone())
+                .run(
+                    t0,
+                    Initial::Momentum {
+                        q: q0.clone(),
+                        p: p0.clone(),
+                    },
+                    h,
+                    t_end,
+                    &mut (),
+                )
+                .unwrap();
+            (&run.last.q - &lagrangian.last.q).amax()
+        })
+        .collect();
+    let order = (gaps[0] / gaps[1]).log2();
+    eprintln!("verlet-h against svi:7/6: {gaps:?}, order {order:.2}");
+    assert!((order - 2.0).abs() < 0.1, "{order}");
+    // A Lagrangian method refuses the model, naming why.
+    let error = Integrator::new(LocalCanonical::new(hamiltonian), Svi::default())
+        .run(t0, Initial::Momentum { q: q0, p: p0 }, 0.05, 1.0, &mut ())
+        .unwrap_err();
+    assert!(error.to_string().contains("no Lagrangian"), "{error}");
+}

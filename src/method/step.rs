@@ -327,7 +327,17 @@ where
         let y = match (Method::info(self).coordinates, initial) {
             (Coordinates::Momentum, Initial::Momentum { p, .. }) => p.clone(),
             (Coordinates::Velocity, Initial::Velocity { v, .. }) => v.clone(),
-            (Coordinates::Momentum, Initial::Velocity { q, v }) => model.momentum(t0, q, v),
+            (Coordinates::Momentum, Initial::Velocity { q, v }) => match model.hamiltonian_form() {
+                Some(form) if form.without_lagrangian() => field_momentum(form, t0, q, v, v)
+                    .ok_or_else(|| {
+                        Error::invalid(
+                            "initial state",
+                            "no momentum p with ∂H/∂p = the initial velocity was found: give \
+                             the initial momentum",
+                        )
+                    })?,
+                _ => model.momentum(t0, q, v),
+            },
             (Coordinates::Velocity, Initial::Momentum { q, p }) => model.velocity(t0, q, p, p)?,
         };
         let state = State { q: q.clone(), y };
@@ -359,12 +369,13 @@ where
         // (q, p) (its Lagrangian's constant mass is ½ q̇ᵀMq̇ by construction).
         if let Some(form) = model.hamiltonian_form() {
             let info = Method::info(self);
-            if form.field_only() && info.equations != Equations::Hamilton {
+            if form.without_lagrangian() && info.equations != Equations::Hamilton {
                 return Err(Error::invalid(
                     "method",
                     format!(
-                        "{} discretises the Euler–Lagrange equations, and a model given as the \
-                         right-hand side of Hamilton's equations has no Lagrangian: run it with \
+                        "{} discretises the Euler–Lagrange equations, and the model (a \
+                         right-hand side of Hamilton's equations, or an H of local terms) has no \
+                         Lagrangian: run it with \
                          a method on Hamilton's equations (the methods whose names end in -h, \
                          svi-h the first)",
                         info.name,
@@ -524,17 +535,18 @@ where
         let theta = ((time - t) / h).clamp(0.0, 1.0);
         let (q, v) = Method::dense_output(self, workspace, start, h, theta)?;
         let p = match model.hamiltonian_form() {
-            // No L: p solves ∂H/∂p(t, q, p) = q̇ by the field itself, else the Hermite
+            // No L: p solves ∂H/∂p(t, q, p) = q̇ by H's derivatives, else the Hermite
             // interpolant of (q, p) serves the time.
-            Some(form) if form.field_only() => field_momentum(form, time, &q, &v, &start.y)?,
+            Some(form) if form.without_lagrangian() => {
+                field_momentum(form, time, &q, &v, &start.y)?
+            }
             _ => model.momentum(time, &q, &v),
         };
         Some(PhasePoint { t: time, q, v, p })
     }
 
-    /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map; for a model given
-    /// as the right-hand side of Hamilton's equations (no Legendre map) p is interpolated the
-    /// same way, with ṗ = −∂H/∂q + f_H at the ends.
+    /// Cubic Hermite interpolation of (q, q̇), with p from the Legendre map; for a model without
+    /// a Lagrangian p is interpolated the same way, with ṗ = −∂H/∂q + f_H at the ends.
     fn interpolate(
         &self,
         model: &L,
@@ -550,7 +562,7 @@ where
         let q = &a.q * w[0] + &a.v * (h * w[1]) + &b.q * w[2] + &b.v * (h * w[3]);
         let v = (&a.q * d[0] + &b.q * d[2]) / h + &a.v * d[1] + &b.v * d[3];
         let p = match model.hamiltonian_form() {
-            Some(form) if form.field_only() => {
+            Some(form) if form.without_lagrangian() => {
                 let rate = |point: &PhasePoint<N>| {
                     let (hq, _) = form.gradient(point.t, &point.q, &point.p);
                     form.force(point.t, &point.q, &point.p) - hq
@@ -586,8 +598,8 @@ where
     }
 }
 
-/// p with ∂H/∂p(t, q, p) = `v` for a model known by its Hamiltonian field alone (the inverse
-/// Legendre map through the field: Newton's method with ∂²H/∂p² from the field's Jacobian,
+/// p with ∂H/∂p(t, q, p) = `v` for a model without a Lagrangian (the inverse Legendre map
+/// through H's derivatives: Newton's method with ∂²H/∂p² from the field's Jacobian,
 /// from `guess`); `None` if it does not converge to round-off in a few iterations.
 fn field_momentum<N: Dimension>(
     form: &dyn HamiltonianForm<N>,

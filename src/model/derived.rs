@@ -409,6 +409,26 @@ where
         }
     }
 
+    /// The energy at a phase point (t, q, q̇, p) whose p and q̇ belong together: p·q̇ − L, or
+    /// H(t, q, p) for a model without a Lagrangian
+    /// ([`crate::model::hamiltonian::HamiltonianForm::without_lagrangian`]).
+    #[inline]
+    fn phase_energy(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+    ) -> f64
+    where
+        DefaultAllocator: Allocator<N, N>,
+    {
+        match self.hamiltonian_form() {
+            Some(form) if form.without_lagrangian() => form.value(t, q, p),
+            _ => p.dot(v) - self.value(t, q, v),
+        }
+    }
+
     /// The energy E = p·q̇ − L.
     #[inline]
     fn energy(&self, t: f64, q: &OVector<f64, N>, v: &OVector<f64, N>) -> f64 {

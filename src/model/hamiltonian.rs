@@ -125,10 +125,12 @@ where
     /// Whether f_H is present.
     fn forced(&self) -> bool;
 
-    /// Whether the model is the right-hand side of Hamilton's equations alone
-    /// ([`crate::model::rhs::HamiltonianRhs`]): no H ([`HamiltonianForm::value`] is NaN) and
-    /// no Lagrangian, so only the methods on Hamilton's equations run it.
-    fn field_only(&self) -> bool {
+    /// Whether the model has no Lagrangian: the right-hand side of Hamilton's equations alone
+    /// ([`crate::model::rhs::HamiltonianRhs`]) or an H of local terms
+    /// ([`crate::model::local_hamiltonian::LocalCanonical`]). Only the methods on Hamilton's
+    /// equations run it, and a momentum from a velocity solves ∂H/∂p = q̇ with H's own
+    /// derivatives.
+    fn without_lagrangian(&self) -> bool {
         false
     }
 

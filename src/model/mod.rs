@@ -44,6 +44,7 @@ pub(crate) mod euler_lagrange;
 pub mod hamiltonian;
 pub(crate) mod legendre;
 pub mod local;
+pub mod local_hamiltonian;
 pub mod mass_inverse;
 pub mod reparametrized;
 pub mod rhs;

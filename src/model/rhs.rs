@@ -177,7 +177,7 @@ impl HamiltonianForm<Dyn> for HamiltonianRhs {
         true
     }
 
-    fn field_only(&self) -> bool {
+    fn without_lagrangian(&self) -> bool {
         true
     }
 

@@ -172,7 +172,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn observe(&mut self, model: &L, _: usize, point: &PhasePoint<N>) -> ControlFlow<()> {
-        let energy = point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v);
+        let energy = model.phase_energy(point.t, &point.q, &point.v, &point.p);
         let initial = *self.initial.get_or_insert(energy);
         self.max = worst(self.max, (energy - initial).abs());
         ControlFlow::Continue(())

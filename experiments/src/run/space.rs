@@ -180,11 +180,11 @@ where
         csv_header(&model.coordinate_names())
     }
 
-    /// t, q, v, p and the energy p·v − L.
+    /// t, q, v, p and the energy p·v − L (H for a model without L).
     fn csv_row(model: &L, point: &PhasePoint<N>, row: &mut Vec<f64>) {
         row.push(point.t);
         row.extend(point.q.iter().chain(&point.v).chain(&point.p));
-        row.push(point.p.dot(&point.v) - model.value(point.t, &point.q, &point.v));
+        row.push(model.phase_energy(point.t, &point.q, &point.v, &point.p));
     }
 }
 

@@ -186,13 +186,31 @@ where
         }
         let n: N =
             dimension_of(model.dimension()).map_err(|reason| Error::invalid("model", reason))?;
+        let separable = canonical::structure(model).is_separable();
+        // The explicit steps of a separable unforced H solve nothing: no n × n matrix.
+        let unknowns = if separable && !canonical::forced(model) {
+            0
+        } else {
+            n.value()
+        };
         Ok(PartitionedWorkspace {
             derivatives: Derivatives::new(model, n),
-            separable: canonical::structure(model).is_separable(),
-            newton: Newton::new(n.value(), self.max_iterations),
+            separable,
+            newton: Newton::new(unknowns, self.max_iterations),
             unknown: DVector::zeros(n.value()),
             kick: OVector::zeros_generic(n, nalgebra::U1),
         })
+    }
+
+    /// On a separable unforced H without a Lagrangian (a sum of local terms,
+    /// [`crate::model::local_hamiltonian`]) the steps are explicit and every derivative is
+    /// assembled term by term: O(n) memory, no n × n matrix.
+    fn keeps_sparsity<L: Lagrangian<N>>(&self, model: &L) -> bool {
+        canonical::structure(model).is_separable()
+            && !canonical::forced(model)
+            && model
+                .hamiltonian_form()
+                .is_some_and(|form| form.without_lagrangian())
     }
 
     fn step<L: Lagrangian<N>>(
