@@ -75,6 +75,15 @@ where
         N::try_to_usize().unwrap_or(0)
     }
 
+    /// The structure of this H, at run time: [`Hamiltonian::STRUCTURE`] (the default), or a
+    /// more specific one that only the value knows — a Hamiltonian written as text is
+    /// [`HamiltonianStructure::Separable`] when its expression is T(p) + V(t, q). The methods
+    /// on Hamilton's equations read it (a separable H steps explicitly); it is checked at the
+    /// initial state like the declaration.
+    fn structure(&self) -> HamiltonianStructure {
+        Self::STRUCTURE
+    }
+
     /// The value H(t, q, p). Mark it `#[inline]`, as a Lagrangian.
     fn hamiltonian<D: Scalar>(&self, t: D, q: &OVector<D, N>, p: &OVector<D, N>) -> D;
 
@@ -550,7 +559,7 @@ where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
     fn structure(&self) -> HamiltonianStructure {
-        H::STRUCTURE
+        self.model.structure()
     }
 
     fn forced(&self) -> bool {
@@ -636,7 +645,7 @@ where
         }
         let scale = 1.0 + second.pp.amax() + second.qq.amax();
         let coupling = second.qp.amax();
-        if H::STRUCTURE.is_separable() && coupling > 1e-12 * scale {
+        if self.model.structure().is_separable() && coupling > 1e-12 * scale {
             return Err(Error::invalid(
                 "model",
                 format!(

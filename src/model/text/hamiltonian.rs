@@ -132,6 +132,16 @@ where
         self.model.dimension()
     }
 
+    /// The declared structure, or [`HamiltonianStructure::Separable`] when the text is
+    /// T(p) + V(t, q) ([`TextModel::hamiltonian_structure`]).
+    fn structure(&self) -> HamiltonianStructure {
+        match (QUADRATIC_KINETIC, self.model.hamiltonian_structure()) {
+            (true, _) => HamiltonianStructure::QuadraticKinetic,
+            (false, HamiltonianStructure::Separable) => HamiltonianStructure::Separable,
+            (false, _) => HamiltonianStructure::General,
+        }
+    }
+
     #[inline]
     fn hamiltonian<D: Scalar>(&self, t: D, q: &OVector<D, N>, p: &OVector<D, N>) -> D {
         let tapes = &self.model.tapes;
@@ -292,10 +302,30 @@ mod tests {
         assert_eq!(quadratic.structure(), Structure::General);
         assert!(TextHamiltonian::<U2, false, false, true>::new(quadratic.clone()).is_ok());
         assert!(TextLagrangian::<Dyn>::new(quadratic).is_err());
+        // T(p) + V(t, q) with any T: separable (constant factors and sums of such parts).
+        for separable in [
+            "sqrt(1 + px^2 + py^2)",
+            "B*(sqrt(1 + px^2) + sqrt(1 + py^2)) + (x^2 + y^2)/2 - x*cos(t)",
+            "2*cosh(px)/B - x*y + py^4",
+        ] {
+            let model = TextModel::new(&spec(separable)).unwrap();
+            assert_eq!(
+                model.hamiltonian_structure(),
+                HamiltonianStructure::Separable,
+                "{separable}"
+            );
+            assert!(TextHamiltonian::<Dyn, false, false, true>::new(model.clone()).is_err());
+            let h = TextHamiltonian::<Dyn>::new(model).unwrap();
+            assert_eq!(
+                Hamiltonian::<Dyn>::structure(&h),
+                HamiltonianStructure::Separable
+            );
+        }
         for general in [
             "((px + B*y/2)^2 + (py - B*x/2)^2)/2",
             "(1 + x^2)*px^2/2 + py^2/2",
-            "sqrt(1 + px^2 + py^2)",
+            "x*px + py^2",
+            "sqrt(1 + px^2)*(1 + y^2)",
         ] {
             let model = TextModel::new(&spec(general)).unwrap();
             assert_eq!(
@@ -306,6 +336,11 @@ mod tests {
             assert!(TextHamiltonian::<Dyn, false, false, true>::new(model.clone()).is_err());
             assert!(TextHamiltonian::<Dyn, false, false, false>::new(model).is_ok());
         }
+        let general = TextHamiltonian::<Dyn>::new(TextModel::new(&spec("x*px + py^2")).unwrap());
+        assert_eq!(
+            Hamiltonian::<Dyn>::structure(&general.unwrap()),
+            HamiltonianStructure::General
+        );
         let mut driven = spec("(px^2 + py^2)/2 - x*cos(t)");
         driven.forces = vec!["-0.1*px".into(), "-0.1*py".into()];
         let model = TextModel::new(&driven).unwrap();
@@ -369,5 +404,36 @@ mod tests {
             ..spec("x")
         };
         assert!(crate::model::text::TextChainModel::new(&chain).is_err());
+    }
+
+    /// A relativistic H written as text is read as separable: `verlet-h` and its compositions
+    /// step it explicitly (no Newton iteration), and kahan-li8-h meets svi-h on it.
+    #[test]
+    fn a_separable_text_hamiltonian_steps_explicitly() {
+        use crate::method::Initial;
+        use crate::method::registry::MethodSpec;
+        use crate::stepping::run::Integrator;
+        let relativistic = TextModel::new(&spec(
+            "sqrt(1 + px^2) + sqrt(1 + py^2) + B*(x^2 + y^2)/2 - x*y",
+        ))
+        .unwrap();
+        let model =
+            Canonical::new(TextHamiltonian::<Dyn, false, false, false>::new(relativistic).unwrap());
+        let initial = Initial::Momentum {
+            q: DVector::from_vec(vec![1.0, 0.0]),
+            p: DVector::from_vec(vec![0.0, 2.0]),
+        };
+        let run = |name: &str, h: f64| {
+            let method = name.parse::<MethodSpec>().unwrap().vector_method().unwrap();
+            Integrator::new(model.clone(), method)
+                .run(0.0, initial.clone(), h, 5.0, &mut ())
+                .unwrap()
+        };
+        let explicit = run("kahan-li8-h", 0.05);
+        assert_eq!(explicit.statistics.iterations, 0);
+        assert_eq!(run("verlet-h", 0.05).statistics.iterations, 0);
+        let reference = run("svi-h:8", 0.05);
+        let gap = (&explicit.last.q - &reference.last.q).amax();
+        assert!(gap < 1e-9, "{gap:e}");
     }
 }

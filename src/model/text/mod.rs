@@ -445,13 +445,21 @@ impl TextModel {
     }
 
     /// [`HamiltonianStructure::QuadraticKinetic`] if H is, by its structure, ½pᵀAp + V(t, q)
-    /// with A constant (read off the text as a constant mass is off L's), else
+    /// with A constant (read off the text as a constant mass is off L's);
+    /// [`HamiltonianStructure::Separable`] if it is T(p) + V(t, q) with any T (a sum of parts
+    /// each free of the momenta or free of t and q, `sqrt(1 + px^2) + x^2/2`); else
     /// [`HamiltonianStructure::General`] (also for a model written as L). That A is
     /// invertible is checked at the initial state of a run.
     pub fn hamiltonian_structure(&self) -> HamiltonianStructure {
-        match self.tapes.constant_mass {
-            Some(_) if self.is_hamiltonian() => HamiltonianStructure::QuadraticKinetic,
-            _ => HamiltonianStructure::General,
+        if !self.is_hamiltonian() {
+            return HamiltonianStructure::General;
+        }
+        if self.tapes.constant_mass.is_some() {
+            HamiltonianStructure::QuadraticKinetic
+        } else if self.lagrangian.properties().separable {
+            HamiltonianStructure::Separable
+        } else {
+            HamiltonianStructure::General
         }
     }
 

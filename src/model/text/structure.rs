@@ -101,6 +101,10 @@ impl VelocityForm {
 pub struct Properties {
     /// Whether t appears.
     pub time: bool,
+    /// Whether the expression is, by its structure, a sum of parts each free of q̇ or free of
+    /// (t, q) (constant factors allowed): for a Hamiltonian, whose momenta sit in q̇'s slot,
+    /// H = T(p) + V(t, q).
+    pub separable: bool,
     /// How q̇ appears (`None`: in a way the analysis does not follow).
     pub velocity: Option<VelocityForm>,
 }
@@ -234,7 +238,37 @@ impl Polynomial {
 pub fn properties(nodes: &[Node], root: usize) -> Properties {
     Properties {
         time: nodes.contains(&Node::Symbol(Symbol::Time)),
+        separable: separable(nodes, root),
         velocity: velocity_form(nodes, root),
+    }
+}
+
+/// Which variables the subtree at `node` reads: (q̇, t or q).
+fn reads(nodes: &[Node], node: usize) -> (bool, bool) {
+    match nodes[node] {
+        Node::Number(_) | Node::Symbol(Symbol::Parameter(_)) => (false, false),
+        Node::Symbol(Symbol::Velocity(_)) => (true, false),
+        Node::Symbol(Symbol::Site(site)) => (site.velocity, !site.velocity),
+        Node::Symbol(_) => (false, true),
+        Node::Negate(a) | Node::PowerInteger(a, _) | Node::Call(_, a) => reads(nodes, a),
+        Node::Binary(_, a, b) => {
+            let (x, y) = (reads(nodes, a), reads(nodes, b));
+            (x.0 || y.0, x.1 || y.1)
+        }
+    }
+}
+
+/// [`Properties::separable`] of the subtree at `node`.
+fn separable(nodes: &[Node], node: usize) -> bool {
+    let constant = |node| reads(nodes, node) == (false, false);
+    match nodes[node] {
+        Node::Binary(Binary::Add | Binary::Subtract, a, b) => {
+            separable(nodes, a) && separable(nodes, b)
+        }
+        Node::Negate(a) => separable(nodes, a),
+        Node::Binary(Binary::Multiply, a, b) if constant(a) => separable(nodes, b),
+        Node::Binary(Binary::Multiply | Binary::Divide, a, b) if constant(b) => separable(nodes, a),
+        _ => reads(nodes, node) != (true, true),
     }
 }
 
