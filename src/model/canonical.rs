@@ -60,6 +60,27 @@ where
     }
 }
 
+/// ∂H/∂q alone at (t, q, p): one sweep for a model written as H, else the first half of
+/// [`gradient`].
+///
+/// # Errors
+/// [`Error::LegendreMap`] where the inverse Legendre map of L does not converge.
+pub fn position_gradient<L: Lagrangian<N> + ?Sized, N: Dimension>(
+    model: &L,
+    t: f64,
+    q: &OVector<f64, N>,
+    p: &OVector<f64, N>,
+    guess: &OVector<f64, N>,
+) -> Result<OVector<f64, N>, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    match model.hamiltonian_form() {
+        Some(form) => Ok(form.position_gradient(t, q, p)),
+        None => gradient(model, t, q, p, guess).map(|(hq, _)| hq),
+    }
+}
+
 /// (∂H/∂q, ∂H/∂p) at (t, q, p); `guess` starts the inverse Legendre map of a model written
 /// as L.
 ///

@@ -158,6 +158,17 @@ where
     /// Legendre map ask for).
     fn velocity(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> OVector<f64, N>;
 
+    /// ∂H/∂q alone (the kicks of a separable H). By default the first half of
+    /// [`HamiltonianForm::gradient`]; a model that can take it in one sweep does.
+    fn position_gradient(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+    ) -> OVector<f64, N> {
+        self.gradient(t, q, p).0
+    }
+
     /// H with its gradient and Hessian blocks.
     fn second(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> CanonicalSecond<N>;
 
@@ -585,6 +596,15 @@ where
 
     fn velocity(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> OVector<f64, N> {
         N::gradient(&Energy(&self.model), t, q, p, Wrt::Velocity).1
+    }
+
+    fn position_gradient(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+    ) -> OVector<f64, N> {
+        N::gradient(&Energy(&self.model), t, q, p, Wrt::Position).1
     }
 
     fn second(&self, t: f64, q: &OVector<f64, N>, p: &OVector<f64, N>) -> CanonicalSecond<N> {

@@ -203,6 +203,13 @@ impl<H: LocalHamiltonian> HamiltonianForm<Dyn> for LocalCanonical<H> {
         hp
     }
 
+    /// ∂H/∂q term by term, O(n).
+    fn position_gradient(&self, t: f64, q: &DVector<f64>, p: &DVector<f64>) -> DVector<f64> {
+        let mut hq = DVector::zeros(q.len());
+        (&self.0 as &dyn TermSum<Dyn>).gradient_into(t, q, p, Wrt::Position, &mut hq);
+        hq
+    }
+
     /// The Hessian blocks assembled from the terms' into dense n × n matrices (the implicit
     /// methods; the explicit splitting of a separable H never asks for them).
     fn second(&self, t: f64, q: &DVector<f64>, p: &DVector<f64>) -> CanonicalSecond<Dyn> {

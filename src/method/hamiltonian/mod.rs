@@ -177,6 +177,33 @@ where
         Ok((hq, hp))
     }
 
+    /// ∂H/∂q alone at (t, q, p) (the kick of an unforced separable H).
+    fn position_gradient<L: Lagrangian<N>>(
+        &mut self,
+        model: &L,
+        t: f64,
+        q: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+    ) -> Result<OVector<f64, N>, StepFailure> {
+        let hq = canonical::position_gradient(model, t, q, p, &self.velocity).map_err(failure)?;
+        self.evaluations += 1;
+        Ok(hq)
+    }
+
+    /// ∂H/∂p alone at (t, q, p) (the drift of a separable H).
+    fn velocity<L: Lagrangian<N>>(
+        &mut self,
+        model: &L,
+        t: f64,
+        q: &OVector<f64, N>,
+        p: &OVector<f64, N>,
+    ) -> Result<OVector<f64, N>, StepFailure> {
+        let hp = canonical::velocity(model, t, q, p, &self.velocity).map_err(failure)?;
+        self.velocity.copy_from(&hp);
+        self.evaluations += 1;
+        Ok(hp)
+    }
+
     /// g = ∂H/∂q − f_H and ∂H/∂p at (t, q, p).
     fn field<L: Lagrangian<N>>(
         &mut self,
