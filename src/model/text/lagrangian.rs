@@ -237,10 +237,7 @@ where
     /// # Panics
     /// If `index >= generator_count()`.
     fn generator(&self, index: usize, q: &OVector<f64, N>) -> OVector<f64, N> {
-        let generator = &self.model.tapes.generators[index];
-        OVector::from_fn_generic(q.shape_generic().0, U1, |i, _| {
-            generator[i].evaluate(0.0, q.as_slice(), &[])
-        })
+        self.model.generator(index, q)
     }
 }
 
@@ -280,7 +277,7 @@ where
 
     fn coordinate_names(&self) -> Vec<String> {
         self.model
-            .coordinates
+            .coordinate_names()
             .iter()
             .map(|name| name.to_string())
             .collect()
@@ -294,25 +291,19 @@ where
         self.model.set_parameter(name, value)
     }
 
-    /// A text model has no literature defaults: at rest at the origin at t = 0 (give the
-    /// initial state).
+    /// [`TextModel::rest_state`].
     fn initial_state(&self) -> (f64, OVector<f64, N>, OVector<f64, N>) {
-        let n = N::from_usize(self.model.dimension());
-        (
-            0.0,
-            OVector::zeros_generic(n, U1),
-            OVector::zeros_generic(n, U1),
-        )
+        self.model.rest_state()
     }
 
-    /// A placeholder, 0.01 (give the step).
+    /// [`TextModel::DEFAULT_STEP`].
     fn default_step(&self) -> f64 {
-        0.01
+        TextModel::DEFAULT_STEP
     }
 
-    /// A placeholder, 10 (give the horizon).
+    /// [`TextModel::DEFAULT_HORIZON`].
     fn default_horizon(&self) -> f64 {
-        10.0
+        TextModel::DEFAULT_HORIZON
     }
 }
 

@@ -162,12 +162,15 @@ pub use hamiltonian::TextHamiltonian;
 pub use lagrangian::TextLagrangian;
 pub use tree::MAX_NODES;
 
+use crate::dimension::Dimension;
 use crate::error::Error;
 use crate::model::Structure;
 use crate::model::hamiltonian::HamiltonianStructure;
 use batch::Program;
 use constraints::parse_constraints;
 use expression::{Expression, Split, Tape, Velocities};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, OVector, U1};
 use names::{Declared, Slot, intern, named_values, parameter_index};
 use tree::Names;
 
@@ -270,6 +273,12 @@ impl Tapes {
 impl TextModel {
     /// Name of every text model in reports ([`Defaults::name`](crate::model::Defaults::name)).
     pub const NAME: &'static str = "text";
+
+    /// A placeholder step of a text model, 0.01 (the caller gives the step).
+    pub const DEFAULT_STEP: f64 = 0.01;
+
+    /// A placeholder horizon of a text model, 10 (the caller gives the horizon).
+    pub const DEFAULT_HORIZON: f64 = 10.0;
 
     /// Check the names and parameter values of `spec` and parse its expressions.
     ///
@@ -478,6 +487,34 @@ impl TextModel {
         for (value, tape) in out.iter_mut().zip(&self.tapes.generators[index]) {
             *value = tape.evaluate(0.0, q, &[]);
         }
+    }
+
+    /// The symmetry generator `index` at `q`, as the `Symmetries` of [`TextLagrangian`] and
+    /// [`TextHamiltonian`] give it.
+    ///
+    /// # Panics
+    /// If `index` is not below the number of generators.
+    pub fn generator<N: Dimension>(&self, index: usize, q: &OVector<f64, N>) -> OVector<f64, N>
+    where
+        DefaultAllocator: Allocator<N>,
+    {
+        let mut out = OVector::zeros_generic(q.shape_generic().0, U1);
+        self.generator_into(index, q.as_slice(), out.as_mut_slice());
+        out
+    }
+
+    /// A text model has no literature defaults: at rest at the origin at t = 0, the second
+    /// vector q̇ or p (the caller gives the initial state).
+    pub fn rest_state<N: Dimension>(&self) -> (f64, OVector<f64, N>, OVector<f64, N>)
+    where
+        DefaultAllocator: Allocator<N>,
+    {
+        let n = N::from_usize(self.dimension());
+        (
+            0.0,
+            OVector::zeros_generic(n, U1),
+            OVector::zeros_generic(n, U1),
+        )
     }
 
     /// The number of holonomic constraints ([`TextSpec::constraints`]).
