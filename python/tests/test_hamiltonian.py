@@ -103,3 +103,15 @@ def test_a_hamiltonian_written_as_text_runs_on_every_kind_of_method():
 def test_a_text_hamiltonian_with_an_unknown_symbol_is_a_typed_error():
     with pytest.raises(svi.InvalidInputError, match="vx"):
         svi.solve(svi.Hamiltonian("0.5*vx^2 + x^2", q=["x"]), (0.0, 1.0), q0=[1.0], p0=[0.0])
+
+
+def test_the_energy_of_a_general_text_hamiltonian_is_h():
+    """A relativistic (separable, not quadratic) text H on an explicit composition: the energy
+    diagnostic is H itself, finite and conserved to the method's accuracy (it solved a Legendre
+    map for L and came out NaN before)."""
+    pair = svi.Hamiltonian("sqrt(1 + px^2) + sqrt(1 + py^2) + 0.5*(x^2 + y^2) - 0.1*x*y", q=["x", "y"])
+    sol = svi.solve(pair, (0.0, 100.0), q0=[1.0, 0.0], p0=[0.0, 2.0], method="kahan-li8-h", h=0.05)
+    assert sol.status == "ok" and sol.iterations == 0
+    assert sol.energy_error_max is not None and sol.energy_error_max < 1e-9, sol.energy_error_max
+    energy = np.sqrt(1 + sol.p[:, 0] ** 2) + np.sqrt(1 + sol.p[:, 1] ** 2) + 0.5 * (sol.q**2).sum(axis=1) - 0.1 * sol.q[:, 0] * sol.q[:, 1]
+    assert np.abs(sol.energy - energy).max() < 1e-12

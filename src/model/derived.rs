@@ -409,9 +409,10 @@ where
         }
     }
 
-    /// The energy at a phase point (t, q, q̇, p) whose p and q̇ belong together: p·q̇ − L, or
-    /// H(t, q, p) for a model without a Lagrangian
-    /// ([`crate::model::hamiltonian::HamiltonianForm::without_lagrangian`]).
+    /// The energy at a phase point (t, q, q̇, p) whose p and q̇ belong together: H(t, q, p)
+    /// for a model written as H (no Legendre map is solved: a model without a Lagrangian has
+    /// none, and a general H's adapter would solve one for L), else
+    /// [`LagrangianExt::energy`], p·q̇ − L.
     #[inline]
     fn phase_energy(
         &self,
@@ -424,8 +425,8 @@ where
         DefaultAllocator: Allocator<N, N>,
     {
         match self.hamiltonian_form() {
-            Some(form) if form.without_lagrangian() => form.value(t, q, p),
-            _ => p.dot(v) - self.value(t, q, v),
+            Some(form) => form.value(t, q, p),
+            None => self.energy(t, q, v),
         }
     }
 

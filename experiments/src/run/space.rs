@@ -143,7 +143,7 @@ where
     }
 
     fn energy(model: &L, point: &PhasePoint<N>) -> f64 {
-        LagrangianExt::energy(model, point.t, &point.q, &point.v)
+        model.phase_energy(point.t, &point.q, &point.v, &point.p)
     }
 
     fn conserves_energy(_: &L) -> bool {
