@@ -411,8 +411,8 @@ where
 
     /// The energy at a phase point (t, q, q̇, p) whose p and q̇ belong together: H(t, q, p)
     /// for a model written as H (no Legendre map is solved: a model without a Lagrangian has
-    /// none, and a general H's adapter would solve one for L), else
-    /// [`LagrangianExt::energy`], p·q̇ − L.
+    /// none, and a general H's adapter would solve one for L), else p·q̇ − L with the point's
+    /// p (no allocation, also for a sum of terms of run-time size).
     #[inline]
     fn phase_energy(
         &self,
@@ -426,7 +426,7 @@ where
     {
         match self.hamiltonian_form() {
             Some(form) => form.value(t, q, p),
-            None => self.energy(t, q, v),
+            None => p.dot(v) - self.value(t, q, v),
         }
     }
 
