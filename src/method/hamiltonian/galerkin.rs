@@ -46,7 +46,7 @@
 //! (2011); Porcù & Penati's `spectralvarint` (`002`), the Hamiltonian form of the spectral
 //! variational integrator.
 
-use super::Derivatives;
+use super::{Derivatives, Linearised, Pair};
 use crate::dimension::{Dimension, dimension_of};
 use crate::error::{Error, StepFailure};
 use crate::method::variational::svi::{Svi, SviWorkspace};
@@ -323,20 +323,6 @@ where
     }
 }
 
-/// H's derivatives and f_H's at one Gauss point.
-struct PointDerivatives<N: Dimension>
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    /// ∂H/∂q − f_H.
-    hq: OVector<f64, N>,
-    /// ∂H/∂p.
-    hp: OVector<f64, N>,
-    /// ∂(∂H/∂q − f_H)/∂q, ∂(∂H/∂q − f_H)/∂p, ∂²H/∂p∂q (entry (a, b) = ∂²H/∂p_a∂q_b) and
-    /// ∂²H/∂p².
-    second: Option<[OMatrix<f64, N, N>; 4]>,
-}
-
 impl<N: Dimension> GeneralWorkspace<N>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
@@ -361,31 +347,28 @@ where
         }
     }
 
-    /// The derivatives at Gauss point `mu` (second ones on request).
-    fn at_point<L: Lagrangian<N>>(
+    /// (∂H/∂q − f_H, ∂H/∂p) at Gauss point `mu`.
+    fn field_at<L: Lagrangian<N>>(
         &mut self,
         model: &L,
         t: f64,
         mu: usize,
-        second: bool,
-    ) -> Result<PointDerivatives<N>, StepFailure> {
+    ) -> Result<Pair<N>, StepFailure> {
         let time = t + self.tables.h * self.tables.unit_nodes[mu];
-        let (q, p) = (&self.q[mu], &self.p[mu]);
-        if !second {
-            let (hq, hp) = self.derivatives.field(model, time, q, p)?;
-            return Ok(PointDerivatives {
-                hq,
-                hp,
-                second: None,
-            });
-        }
-        let field = self.derivatives.linearised(model, time, q, p)?;
-        let pq = field.qp.transpose();
-        Ok(PointDerivatives {
-            hq: field.g,
-            hp: field.hp,
-            second: Some([field.gq, field.gp, pq, field.pp]),
-        })
+        self.derivatives
+            .field(model, time, &self.q[mu], &self.p[mu])
+    }
+
+    /// The field and its derivatives at Gauss point `mu`.
+    fn linearised_at<L: Lagrangian<N>>(
+        &mut self,
+        model: &L,
+        t: f64,
+        mu: usize,
+    ) -> Result<Linearised<N>, StepFailure> {
+        let time = t + self.tables.h * self.tables.unit_nodes[mu];
+        self.derivatives
+            .linearised(model, time, &self.q[mu], &self.p[mu])
     }
 
     /// Solve the stage equations for the unknowns by the simplified Newton method (the
@@ -475,7 +458,13 @@ where
             matrix.fill(0.0);
         }
         for mu in 0..m {
-            let d = self.at_point(model, t, mu, jacobian.is_some())?;
+            let (linear, (g, hp)) = if jacobian.is_some() {
+                let linear = self.linearised_at(model, t, mu)?;
+                let field = (linear.g.clone(), linear.hp.clone());
+                (Some(linear), field)
+            } else {
+                (None, self.field_at(model, t, mu)?)
+            };
             let tables = &self.tables;
             let (weight, reference_weight) = (tables.weights[mu], tables.reference_weights[mu]);
             // Rows ν < s: −Σ_μ w_μ l̇_ν Π_μ + Σ_μ (h/2) w_μ l_ν (∂H/∂q − f_H).
@@ -487,7 +476,7 @@ where
                 );
                 for i in 0..w {
                     residual[nu * w + i] +=
-                        -reference_weight * rate * pi[i] + weight * value * d.hq[i];
+                        -reference_weight * rate * pi[i] + weight * value * g[i];
                 }
             }
             // Rows of Gauss point μ: Σ_ν Δᵛ l̇_ν(τ_μ) − (h/2) ∂H/∂p.
@@ -499,12 +488,13 @@ where
                 }
             }
             for i in 0..w {
-                residual[row + i] -= half_h * d.hp[i];
+                residual[row + i] -= half_h * hp[i];
             }
-            let (Some(matrix), Some([qq, qp, pq, pp])) = (jacobian.as_deref_mut(), &d.second)
-            else {
+            let (Some(matrix), Some(linear)) = (jacobian.as_deref_mut(), &linear) else {
                 continue;
             };
+            // ∂g/∂q, ∂g/∂p, ∂²H/∂q∂p (its transpose is ∂(∂H/∂p)/∂q) and ∂²H/∂p².
+            let (qq, qp, pq, pp) = (&linear.gq, &linear.gp, &linear.qp, &linear.pp);
             let column_pi = (s + mu) * w;
             for nu in 0..s {
                 let (value, rate) = (
@@ -536,7 +526,7 @@ where
                 // ∂/∂Δʲ: l̇_j I − (h/2) l_j H_pq.
                 for b in 0..w {
                     for a in 0..w {
-                        matrix[(row + a, (j - 1) * w + b)] -= half_h * value * pq[(a, b)];
+                        matrix[(row + a, (j - 1) * w + b)] -= half_h * value * pq[(b, a)];
                     }
                     matrix[(row + b, (j - 1) * w + b)] += rate;
                 }
@@ -572,8 +562,8 @@ where
         self.unknowns = unknowns;
         increment.y.fill(0.0);
         for mu in 0..m {
-            let d = self.at_point(model, t, mu, false)?;
-            increment.y.axpy(-self.tables.weights[mu], &d.hq, 1.0);
+            let (g, _) = self.field_at(model, t, mu)?;
+            increment.y.axpy(-self.tables.weights[mu], &g, 1.0);
         }
         Ok(StepReport {
             iterations: solved.iterations,
@@ -609,10 +599,8 @@ where
         let mut sources = DMatrix::zeros(size, 2 * w);
         let mut derivatives = Vec::with_capacity(m);
         for mu in 0..m {
-            let d = self.at_point(model, t, mu, true)?;
-            let Some([qq, qp, pq, pp]) = &d.second else {
-                unreachable!("second derivatives were asked for")
-            };
+            let d = self.linearised_at(model, t, mu)?;
+            let (qq, qp, pq, pp) = (&d.gq, &d.gp, &d.qp, &d.pp);
             let weight = self.tables.weights[mu];
             for nu in 0..s {
                 let value = self.tables.values[(mu, nu)];
@@ -627,7 +615,7 @@ where
             let half_h = 0.5 * self.tables.h;
             for b in 0..w {
                 for a in 0..w {
-                    sources[(row + a, b)] -= half_h * pq[(a, b)];
+                    sources[(row + a, b)] -= half_h * pq[(b, a)];
                     sources[(row + a, w + b)] -= half_h * pp[(a, b)];
                 }
             }
@@ -650,9 +638,7 @@ where
         }
         // p_{k+1} = p_k − Σ_μ (h/2) w_μ g_μ with g = ∂H/∂q − f_H at (q(τ_μ), P_μ).
         for (mu, d) in derivatives.iter().enumerate() {
-            let Some([qq, qp, _, _]) = &d.second else {
-                unreachable!("second derivatives were asked for")
-            };
+            let (qq, qp) = (&d.gq, &d.gp);
             let weight = self.tables.weights[mu];
             // d q(τ_μ)/d(q_k, p_k) and d P_μ/d(q_k, p_k), N × 2N.
             let mut dq = DMatrix::zeros(w, 2 * w);
