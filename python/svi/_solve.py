@@ -272,7 +272,7 @@ def solve(
             raise _wrong_type("t_span", "(t0, t_end) when saveat is given", t_span)
         saveat = times
     if y0 is not None:
-        y = np.atleast_1d(np.asarray(y0, dtype=float))
+        y = np.asarray(_reals("y0", np.atleast_1d(y0)), dtype=float)
         if q0 is not None or p0 is not None or v0 is not None:
             raise _wrong_type("y0", "the whole initial state: no q0, v0 or p0 besides it", y0)
         if y.ndim != 1 or y.size % 2 == 1:
@@ -283,6 +283,8 @@ def solve(
             raise _wrong_type("t_span", "(t0, t_end) or [t0, ..., t_end] for odefun", t_span)
         if q0 is None or p0 is None:
             raise _wrong_type("y0", "the initial state (q0, p0) of odefun", y0)
+        if jac is not None and not callable(jac):
+            raise _wrong_type("jac", "a function of (t, y) returning the 2N × 2N Jacobian", jac)
         max_steps = _count("max_steps", options.pop("max_steps", None))
         unused = {"v0": v0, "saveat": saveat if len(times) == 2 else None, "diagnostics": diagnostics, "params": params}
         unused.update(options)
@@ -291,10 +293,10 @@ def solve(
             raise _wrong_type(given[0], "not an option of odefun (model, t_span, y0, jac, method, h, tol, adapt, max_steps)", unused.get(given[0], dense))
         summary, rows = _call(
             _svi.solve_rhs,
-            _flat(model, "odefun", None),
+            _flat(model, "odefun", 2 * len(np.atleast_1d(q0)), square=False),
             times,
             _reals("y0", np.concatenate([np.atleast_1d(q0), np.atleast_1d(p0)])),
-            jacobian=None if jac is None else _flat(jac, "jac", 2 * len(np.atleast_1d(q0))),
+            jacobian=None if jac is None else _flat(jac, "jac", 2 * len(np.atleast_1d(q0)), square=True),
             method=_text("method", method),
             h=_real("h", h),
             tol=_real("tol", tol),
@@ -339,17 +341,22 @@ def solve(
     return Solution(json.loads(summary), rows, kept)
 
 
-def _flat(function: Callable[[float, np.ndarray], Any], name: str, square: Optional[int]) -> Callable[[float, np.ndarray], np.ndarray]:
-    """``function`` returning a contiguous float64 array for the Rust core: y' as it is; with
-    ``square`` = 2N, the 2N × 2N Jacobian (rows ∂F_i/∂y) column by column."""
+def _flat(function: Callable[[float, np.ndarray], Any], name: str, size: int, square: bool) -> Callable[[float, np.ndarray], np.ndarray]:
+    """``function`` returning a contiguous float64 array for the Rust core: y' (``size``
+    = 2N numbers) as it is; with ``square``, the 2N × 2N Jacobian (rows ∂F_i/∂y) column by
+    column. A result of another shape or not of numbers is an :class:`ArgumentTypeError`
+    naming ``name`` (raised again when the run ends, as ``function``'s own exceptions are)."""
+    shape = (size, size) if square else (size,)
 
     def flat(t: float, y: np.ndarray) -> np.ndarray:
-        value = np.asarray(function(t, y), dtype=float)
-        if square is None:
-            return np.ascontiguousarray(value.ravel())
-        if value.shape != (square, square):
-            raise TypeError(f"{name}(t, y) returned shape {value.shape}, not ({square}, {square})")
-        return np.ascontiguousarray(value.ravel(order="F"))
+        value = function(t, y)
+        try:
+            array = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            array = None
+        if array is None or array.shape != shape and not (not square and array.size == size and array.ndim <= 2):
+            raise _wrong_type(f"{name}(t, y)", f"an array of shape {shape}", value)
+        return np.ascontiguousarray(array.ravel(order="F" if square else "C"))
 
     return flat
 

@@ -70,8 +70,10 @@ def test_odefun_bad_input_is_a_typed_error():
 
     with pytest.raises(ZeroDivisionError, match="inside odefun"):
         svi.solve(broken, (0.0, 1.0), [1.0, 0.0])
-    with pytest.raises(TypeError, match="returned 3 numbers, not 2"):
+    with pytest.raises(svi.ArgumentTypeError, match=r"odefun\(t, y\).*shape \(2,\)"):
         svi.solve(lambda t, y: [0.0, 0.0, 0.0], (0.0, 1.0), [1.0, 0.0])
+    with pytest.raises(svi.ArgumentTypeError, match="jac"):
+        svi.solve(damped, (0.0, 1.0), [1.0, 0.0], jac=lambda t, y: [1.0, 2.0])
     # Non-finite at the initial state.
     with pytest.raises(svi.NonFiniteError):
         svi.solve(lambda t, y: [math.nan, 0.0], (0.0, 1.0), [1.0, 0.0])
@@ -115,3 +117,38 @@ def test_the_energy_of_a_general_text_hamiltonian_is_h():
     assert sol.energy_error_max is not None and sol.energy_error_max < 1e-9, sol.energy_error_max
     energy = np.sqrt(1 + sol.p[:, 0] ** 2) + np.sqrt(1 + sol.p[:, 1] ** 2) + 0.5 * (sol.q**2).sum(axis=1) - 0.1 * sol.q[:, 0] * sol.q[:, 1]
     assert np.abs(sol.energy - energy).max() < 1e-12
+
+
+def test_hostile_odefun_calls_raise_svi_errors_or_odefuns_own():
+    """The Octave call with hostile right-hand sides, spans, states and options: a solution
+    whose numbers are finite (or warned about), an SviError, or the exception odefun raised."""
+    import random
+
+    rng = random.Random(20261205)
+    hostile = [None, True, 0, -1, 2, 0.5, -0.3, 1e-300, 1e300, math.inf, math.nan, "1", "", [], [1.0], (0.0, 1.0), {}, object()]
+
+    def raising(t, y):
+        raise ZeroDivisionError("odefun's own")
+
+    odefuns = [damped, lambda t, y: [math.nan, 0.0], lambda t, y: "ab", lambda t, y: [[y[1]], [-y[0]]], lambda t, y: None, raising, lambda t, y: [y[1] * 1e300, 1e300]]
+    outcomes = {"result": 0, "error": 0}
+    for _ in range(120):
+        keywords = {name: rng.choice(hostile) for name in rng.sample(["method", "h", "tol", "adapt", "max_steps", "jac"], rng.randint(0, 2))}
+        keywords.setdefault("max_steps", 20_000)
+        # The well-formed choice half of the time each, so that some calls run.
+        span = (0.0, 1.0) if rng.random() < 0.5 else rng.choice([[0.0, 0.5, 1.0], (1.0, 0.0), 1.0, (0.0, math.inf), "x", [0.0]])
+        y0 = [1.0, 0.0] if rng.random() < 0.5 else rng.choice([[1.0], [math.nan, 0.0], "ab", [1.0, 0.0, 0.0, 0.0], None])
+        odefun = damped if rng.random() < 0.5 else rng.choice(odefuns)
+        try:
+            sol = svi.solve(odefun, span, y0, **keywords)
+        except svi.SviError as error:
+            assert error.message and "panicked" not in error.message
+            outcomes["error"] += 1
+            continue
+        except ZeroDivisionError as error:
+            assert str(error) == "odefun's own"
+            outcomes["error"] += 1
+            continue
+        assert sol.status == "ok" and (np.isfinite(sol.y).all() or sol.summary.get("warnings")), sol.summary
+        outcomes["result"] += 1
+    assert outcomes["result"] > 0 and outcomes["error"] > 0, outcomes
