@@ -109,6 +109,19 @@ pub enum Error {
         /// The budget.
         max_steps: usize,
     },
+    /// A Lie-group step's algebra increment left the natural chart (on a rotation factor a
+    /// rotation by π or more in one step), where the chart no longer describes the step.
+    #[error(
+        "the step at step {step} (t = {t:?}) reaches {reach:.3} of the natural chart's domain (a rotation by {reach:.3}π or more in one step); take a smaller step"
+    )]
+    OutsideChart {
+        /// Index of the step.
+        step: usize,
+        /// Start time of the step.
+        t: f64,
+        /// The step's [`crate::model::group::LieGroup::chart_reach`] (≥ 1).
+        reach: f64,
+    },
 }
 
 impl Error {
@@ -122,7 +135,7 @@ impl Error {
 
     /// The kind of error as a stable snake-case name (for machine-readable reports):
     /// `invalid_parameter`, `non_convergence`, `singular_matrix`, `legendre_map`,
-    /// `step_size_too_small`, `non_finite`, `diverged` or `too_many_steps`.
+    /// `step_size_too_small`, `non_finite`, `diverged`, `too_many_steps` or `outside_chart`.
     pub fn kind(&self) -> &'static str {
         match self {
             Error::InvalidParameter { .. } => "invalid_parameter",
@@ -133,6 +146,7 @@ impl Error {
             Error::NonFinite { .. } => "non_finite",
             Error::Diverged { .. } => "diverged",
             Error::TooManySteps { .. } => "too_many_steps",
+            Error::OutsideChart { .. } => "outside_chart",
         }
     }
 
@@ -143,7 +157,8 @@ impl Error {
             | Error::SingularMatrix { step, .. }
             | Error::NonFinite { step, .. }
             | Error::Diverged { step, .. }
-            | Error::TooManySteps { step, .. } => Some(step),
+            | Error::TooManySteps { step, .. }
+            | Error::OutsideChart { step, .. } => Some(step),
             _ => None,
         }
     }
@@ -158,7 +173,8 @@ impl Error {
             | Error::Diverged { t, .. }
             | Error::LegendreMap { t, .. }
             | Error::StepSizeTooSmall { t, .. }
-            | Error::TooManySteps { t, .. } => Some(t),
+            | Error::TooManySteps { t, .. }
+            | Error::OutsideChart { t, .. } => Some(t),
             Error::InvalidParameter { .. } => None,
         }
     }
@@ -203,6 +219,11 @@ pub enum StepFailure {
         /// The bound that was exceeded.
         limit: f64,
     },
+    /// A Lie-group step left the natural chart ([`Error::OutsideChart`]).
+    OutsideChart {
+        /// The step's [`crate::model::group::LieGroup::chart_reach`] (≥ 1).
+        reach: f64,
+    },
     /// The method cannot do what was asked of it on this model (an
     /// [`Error::InvalidParameter`] named `option`).
     Unsupported {
@@ -238,6 +259,7 @@ impl StepFailure {
                 norm,
                 limit,
             },
+            StepFailure::OutsideChart { reach } => Error::OutsideChart { step, t, reach },
             StepFailure::Unsupported { option, reason } => Error::invalid(option, reason),
         }
     }

@@ -45,17 +45,33 @@
 //! assert!(observers.1.max < 1e-14);
 //! ```
 
-pub use crate::method::lie_svi::{Form, LieSvi, LieWorkspace, ORTHOGONALITY_TOLERANCE};
+pub use crate::method::group_space::{GroupInitial, GroupPoint, GroupSpace, GroupState};
+pub use crate::method::lie_svi::{
+    Form, GroupWorkspace, LieSvi, LieWorkspace, ORTHOGONALITY_TOLERANCE,
+};
 pub use crate::method::space::{RigidInitial, RigidPoint, RigidState, SO3};
+pub use crate::model::group::product::{Product, RotationsAndTranslations};
+pub use crate::model::group::rigid_motions::RigidMotions;
+pub use crate::model::group::rotations::Rotations;
+pub use crate::model::group::translations::Translations;
+pub use crate::model::group::{GroupLagrangian, GroupLagrangianExt, LieGroup};
 pub use crate::model::rigid_body::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
 pub use crate::model::so3::{self, quaternion, rotation};
+pub use crate::stepping::group_observer::{DefectError, SpatialMomentumError};
 pub use crate::stepping::rigid_observer::{AngularMomentumError, OrthogonalityError};
 
 /// A rigid-body model and a [`LieSvi`] method, ready to run: the one
 /// [`crate::Integrator`] on [`SO3`].
 pub type RigidBodyIntegrator<L> = crate::Integrator<L, LieSvi, SO3>;
+/// A model on a Lie group G (dimension `N`, `E` stored numbers) and a [`LieSvi`] method:
+/// the [`crate::Integrator`] on [`GroupSpace`].
+pub type GroupIntegrator<L, G, const N: usize, const E: usize> =
+    crate::Integrator<L, LieSvi, GroupSpace<G, N, E>>;
+/// The result of a run on a Lie group.
+pub type GroupRun<G, const N: usize, const E: usize> =
+    crate::stepping::run::Run<GroupSpace<G, N, E>>;
 /// The result of a rigid-body run.
 pub type RigidRun = crate::stepping::run::Run<SO3>;
 /// Stores the observed points of a rigid-body run.

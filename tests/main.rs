@@ -23,6 +23,7 @@ mod forces;
 mod geometry;
 mod hostile;
 mod lie_group;
+mod lie_groups;
 mod local;
 mod logh;
 mod multiscale;

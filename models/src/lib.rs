@@ -151,6 +151,7 @@ pub mod sine_gordon_chain;
 pub mod spring_pendulum;
 pub mod toda;
 
+pub mod falling_body;
 pub mod heavy_top;
 pub mod pendulum_3d;
 pub mod rigid_body;
@@ -179,6 +180,7 @@ pub use sine_gordon_chain::SineGordonChain;
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
 
+pub use falling_body::FallingBody;
 pub use heavy_top::HeavyTop;
 pub use pendulum_3d::Pendulum3d;
 pub use rigid_body::FreeRigidBody;

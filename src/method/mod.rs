@@ -25,6 +25,7 @@ pub mod any;
 pub(crate) mod block_newton;
 pub mod collocation;
 pub mod constrained;
+pub mod group_space;
 pub mod hamiltonian;
 pub mod lie_svi;
 pub mod multiscale;

@@ -41,6 +41,7 @@ pub mod constraint;
 pub mod density;
 pub mod derived;
 pub(crate) mod euler_lagrange;
+pub mod group;
 pub mod hamiltonian;
 pub(crate) mod legendre;
 pub mod local;

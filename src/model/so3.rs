@@ -44,7 +44,7 @@ pub type Vector3<D> = SVector<D, 3>;
 const SERIES_THRESHOLD: f64 = 1e-2;
 
 /// Evaluate Σ_k c_k tᵏ by Horner's rule.
-fn horner<D: Scalar>(t: D, coefficients: &[f64]) -> D {
+pub(crate) fn horner<D: Scalar>(t: D, coefficients: &[f64]) -> D {
     let mut sum = D::from(0.0);
     for c in coefficients.iter().rev() {
         sum = sum * t + *c;

@@ -8,6 +8,7 @@ pub mod adapt;
 pub mod dense;
 pub mod event;
 pub mod grid;
+pub mod group_observer;
 pub mod logh;
 pub mod observer;
 mod outputs;

@@ -3,61 +3,40 @@
 //! residual and Jacobian in ξ¹…ξᵈ assembled from the Gauss points, and the torque sum g_R.
 
 use super::derivatives::{PointDerivatives, point_derivatives};
+use super::tables::StepTables;
 use crate::method::space::RigidState;
 use crate::model::rigid_body::RigidBodyLagrangian;
 use crate::model::so3::{Matrix3, Vector3, body_velocity, exp};
 use nalgebra::{DMatrix, DVector};
 use num_dual::{DualSVec64, DualVec, gradient, jacobian};
 
-/// Borrowed tables of one step.
-pub(super) struct Tables<'a> {
-    pub(super) degree: usize,
-    pub(super) reduced: bool,
-    pub(super) weights: &'a [f64],
-    pub(super) values: &'a DMatrix<f64>,
-    pub(super) derivatives: &'a DMatrix<f64>,
-}
-
-impl Tables<'_> {
-    /// a = ξ(τ_μ) and b = ξ̇(τ_μ) for unknowns z.
-    fn point(&self, mu: usize, z: &DVector<f64>) -> (Vector3<f64>, Vector3<f64>) {
-        let mut a = Vector3::zeros();
-        let mut b = Vector3::zeros();
-        for nu in 1..=self.degree {
-            let node = z.fixed_rows::<3>(3 * (nu - 1));
-            a += node * self.values[(mu, nu)];
-            b += node * self.derivatives[(mu, nu)];
-        }
-        (a, b)
+/// g_R = Σ_μ W_μ ∂ℓ/∂η at η = 0 (zero in the reduced form).
+pub(super) fn torque_sum<L: RigidBodyLagrangian>(
+    model: &L,
+    tables: &StepTables,
+    reduced: bool,
+    r: &Matrix3<f64>,
+    z: &DVector<f64>,
+) -> Vector3<f64> {
+    let mut sum = Vector3::zeros();
+    if reduced {
+        return sum;
     }
-
-    /// g_R = Σ_μ W_μ ∂ℓ/∂η at η = 0 (zero in the reduced form).
-    pub(super) fn torque_sum<L: RigidBodyLagrangian>(
-        &self,
-        model: &L,
-        r: &Matrix3<f64>,
-        z: &DVector<f64>,
-    ) -> Vector3<f64> {
-        let mut sum = Vector3::zeros();
-        if self.reduced {
-            return sum;
-        }
-        for (mu, w) in self.weights.iter().enumerate() {
-            let (a, b) = self.point(mu, z);
-            let rotation = r * exp(&a);
-            let omega = body_velocity(&a, &b);
-            let (_, g) = gradient(
-                |eta: Vector3<DualSVec64<3>>| {
-                    let moved = rotation.map(DualVec::from_re) * exp(&eta);
-                    model.lagrangian(&moved, &omega.map(DualVec::from_re))
-                },
-                &Vector3::zeros(),
-            );
-            // d/dη L(R_k exp(η) E, Ω) = E · (d/dζ L(R_k E exp(ζ), Ω)), ζ = Eᵀη.
-            sum += exp(&a) * g * *w;
-        }
-        sum
+    for (mu, w) in tables.weights.iter().enumerate() {
+        let (a, b) = tables.point::<3>(mu, z);
+        let rotation = r * exp(&a);
+        let omega = body_velocity(&a, &b);
+        let (_, g) = gradient(
+            |eta: Vector3<DualSVec64<3>>| {
+                let moved = rotation.map(DualVec::from_re) * exp(&eta);
+                model.lagrangian(&moved, &omega.map(DualVec::from_re))
+            },
+            &Vector3::zeros(),
+        );
+        // d/dη L(R_k exp(η) E, Ω) = E · (d/dζ L(R_k E exp(ζ), Ω)), ζ = Eᵀη.
+        sum += exp(&a) * g * *w;
     }
+    sum
 }
 
 /// Residual of the internal-stage conditions and of the discrete Euler–Lagrange equation in
@@ -65,7 +44,8 @@ impl Tables<'_> {
 #[allow(clippy::too_many_arguments)]
 pub(super) fn assemble<L: RigidBodyLagrangian>(
     model: &L,
-    tables: &Tables<'_>,
+    tables: &StepTables,
+    reduced: bool,
     points: &mut [PointDerivatives],
     torque_rates: &mut [Matrix3<f64>],
     state: &RigidState,
@@ -75,8 +55,8 @@ pub(super) fn assemble<L: RigidBodyLagrangian>(
 ) {
     let d = tables.degree;
     for (mu, point) in points.iter_mut().enumerate() {
-        let (a, b) = tables.point(mu, z);
-        *point = point_derivatives(model, tables.reduced, &state.r, &a, &b);
+        let (a, b) = tables.point::<3>(mu, z);
+        *point = point_derivatives(model, reduced, &state.r, &a, &b);
     }
     residual.fill(0.0);
     jacobian_out.fill(0.0);
@@ -111,7 +91,7 @@ pub(super) fn assemble<L: RigidBodyLagrangian>(
                 let mut target = jacobian_out.fixed_view_mut::<3, 3>(3 * (nu - 1), 3 * (j - 1));
                 target += from_a * l + from_b * c;
             }
-            if !tables.reduced {
+            if !reduced {
                 torque_rates[j - 1] += (hea * lj + heb * cj) * w;
             }
         }
@@ -128,7 +108,7 @@ pub(super) fn assemble<L: RigidBodyLagrangian>(
     let map = crate::model::so3::dexp(&(-end));
     for (j, rate) in torque_rates.iter().enumerate() {
         let mut target = jacobian_out.fixed_view_mut::<3, 3>(3 * (d - 1), 3 * j);
-        if !tables.reduced {
+        if !reduced {
             target -= map * rate;
         }
         if j + 1 == d {

@@ -91,6 +91,9 @@
 
 mod derivatives;
 mod equations;
+mod group;
+mod group_equations;
+mod tables;
 
 use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
 use crate::method::space::{RigidInitial, RigidPoint, RigidState, SO3};
@@ -101,12 +104,12 @@ use crate::model::so3::{
     Matrix3, Vector3, body_velocity, exp, exp_minus_identity, log, orthogonality_error,
 };
 use crate::nonlinear::Newton;
-use crate::spectral::basis::LagrangeBasis;
 use crate::spectral::check_options;
-use crate::spectral::quadrature::GaussLegendre;
 use derivatives::PointDerivatives;
-use equations::{Tables, assemble};
+use equations::{assemble, torque_sum};
+pub use group::GroupWorkspace;
 use nalgebra::{DMatrix, DVector, SMatrix};
+use tables::StepTables;
 
 /// Largest ‖R₀ᵀR₀ − I‖ accepted for an initial attitude.
 pub const ORTHOGONALITY_TOLERANCE: f64 = 1e-10;
@@ -176,6 +179,19 @@ impl LieSvi {
         self
     }
 
+    /// The same method with `points` CGL points; an explicit quadrature keeps its offset
+    /// from the points (degree adaptivity).
+    fn with_point_count(&self, points: usize) -> Self {
+        let quadrature = self
+            .quadrature
+            .map(|m| (m + points).saturating_sub(self.points).max(1));
+        LieSvi {
+            points,
+            quadrature,
+            ..self.clone()
+        }
+    }
+
     /// The number of Gauss–Legendre points in use.
     pub fn quadrature_points(&self) -> usize {
         self.quadrature.unwrap_or(self.points)
@@ -197,18 +213,19 @@ impl LieSvi {
         }
     }
 
-    /// Check the options against the model.
-    fn validate<L: RigidBodyLagrangian>(&self) -> Result<(), Error> {
+    /// Check the options against a model whose Lagrangian is (`g_invariant`) or is not
+    /// declared G-invariant.
+    fn validate(&self, g_invariant: bool) -> Result<(), Error> {
         check_options(
             self.points,
             Some(self.quadrature_points()),
             self.max_iterations,
         )?;
-        if self.form == Form::Reduced && !L::G_INVARIANT {
+        if self.form == Form::Reduced && !g_invariant {
             return Err(Error::invalid(
                 "form",
                 "the reduced Euler–Poincaré form needs a G-invariant Lagrangian \
-                 (RigidBodyLagrangian::G_INVARIANT = true)",
+                 (G_INVARIANT = true)",
             ));
         }
         Ok(())
@@ -224,25 +241,14 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
 
     /// Validate the options and build every table and buffer for steps of size `h`.
     fn workspace(&self, _model: &L, h: f64) -> Result<LieWorkspace, Error> {
-        self.validate::<L>()?;
+        self.validate(L::G_INVARIANT)?;
         require_positive("h", h)?;
-        let basis = LagrangeBasis::chebyshev_gauss_lobatto(self.points)?;
-        let gauss = GaussLegendre::new(self.quadrature_points())?;
-        let degree = self.points - 1;
-        let m = gauss.len();
-        let shifted: Vec<f64> = basis.nodes().iter().map(|x| x + 2.0).collect();
-        let mut workspace = LieWorkspace {
-            degree,
-            h: f64::NAN,
+        let tables = StepTables::new(self.points, self.quadrature_points(), h)?;
+        let degree = tables.degree;
+        let m = tables.len();
+        Ok(LieWorkspace {
+            tables,
             reduced: self.form == Form::Reduced,
-            reference_weights: gauss.weights().to_vec(),
-            weights: vec![0.0; m],
-            values: basis.value_matrix(gauss.nodes()),
-            reference_derivatives: basis.derivative_matrix(gauss.nodes()),
-            derivatives: DMatrix::zeros(m, degree + 1),
-            extrapolation: basis.value_matrix(&shifted),
-            nodes: basis.nodes().to_vec(),
-            basis: basis.clone(),
             unknowns: DVector::zeros(3 * degree),
             previous: DVector::zeros(3 * degree),
             has_previous: false,
@@ -250,9 +256,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             torque_rates: vec![Matrix3::zeros(); degree],
             newton: Newton::new(3 * degree, self.max_iterations),
             velocity_guess: Vector3::zeros(),
-        };
-        workspace.rescale(h);
-        Ok(workspace)
+        })
     }
 
     /// Advance `state` by one step of size `h`, writing the increments
@@ -266,8 +270,9 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         state: &RigidState,
         increment: &mut RigidState,
     ) -> Result<StepReport, StepFailure> {
-        if workspace.h != h {
-            workspace.rescale(h);
+        if workspace.tables.h != h {
+            workspace.tables.rescale(h);
+            workspace.has_previous = false;
         }
         workspace.start(model, h, state);
         let LieWorkspace {
@@ -275,24 +280,15 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             newton,
             points,
             torque_rates,
-            degree,
             reduced,
-            weights,
-            values,
-            derivatives,
+            tables,
             ..
         } = workspace;
-        let tables = Tables {
-            degree: *degree,
-            reduced: *reduced,
-            weights,
-            values,
-            derivatives,
-        };
         let iterations = newton.solve(unknowns, |z, jacobian, residual| {
             assemble(
                 model,
-                &tables,
+                tables,
+                *reduced,
                 points,
                 torque_rates,
                 state,
@@ -301,7 +297,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
                 residual,
             )
         })?;
-        let torque = tables.torque_sum(model, &state.r, unknowns);
+        let torque = torque_sum(model, tables, *reduced, &state.r, unknowns);
         let end = unknowns
             .fixed_rows::<3>(3 * (tables.degree - 1))
             .into_owned();
@@ -315,7 +311,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         }
         workspace.previous.copy_from(&workspace.unknowns);
         workspace.has_previous = true;
-        let m = workspace.points.len();
+        let m = workspace.tables.len();
         Ok(StepReport {
             iterations,
             evaluations: m * (iterations + 1),
@@ -349,20 +345,15 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
     ) -> Result<(RigidState, SMatrix<f64, 6, 6>, StepReport), StepFailure> {
         let mut increment = RigidState::zeros();
         let report = Step::<L, SO3>::step(self, model, workspace, t, h, state, &mut increment)?;
-        let d = workspace.degree;
+        let d = workspace.tables.degree;
         let n = 3 * d;
-        let tables = Tables {
-            degree: d,
-            reduced: workspace.reduced,
-            weights: &workspace.weights,
-            values: &workspace.values,
-            derivatives: &workspace.derivatives,
-        };
+        let tables = &workspace.tables;
         let mut lu = crate::linalg::DenseLu::new(n);
         let mut residual = DVector::zeros(n);
         assemble(
             model,
-            &tables,
+            tables,
+            workspace.reduced,
             &mut workspace.points,
             &mut workspace.torque_rates,
             state,
@@ -558,15 +549,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             return None;
         }
         let tau = 2.0 * ((time - t) / h).clamp(0.0, 1.0) - 1.0;
-        let values = workspace.basis.value_matrix(&[tau]);
-        let rates = workspace.basis.derivative_matrix(&[tau]);
-        let mut xi = Vector3::zeros();
-        let mut rate = Vector3::zeros();
-        for nu in 1..=workspace.degree {
-            let node = workspace.previous.fixed_rows::<3>(3 * (nu - 1));
-            xi += node * values[(0, nu)];
-            rate += node * (2.0 / h * rates[(0, nu)]);
-        }
+        let (xi, rate) = workspace.tables.curve::<3>(tau, h, &workspace.previous);
         let r = start.r * exp(&xi);
         let omega = body_velocity(&xi, &rate);
         Some(RigidPoint {
@@ -584,14 +567,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
     /// The same method with `points` CGL points; an explicit quadrature keeps its offset
     /// from the points.
     fn with_points(&self, points: usize) -> Option<Self> {
-        let quadrature = self
-            .quadrature
-            .map(|m| (m + points).saturating_sub(self.points).max(1));
-        Some(LieSvi {
-            points,
-            quadrature,
-            ..self.clone()
-        })
+        Some(self.with_point_count(points))
     }
 
     /// ξ¹, …, ξᵈ of the last step (ξ⁰ = 0): the Lie-algebra polynomial of the step.
@@ -613,25 +589,8 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
 /// Tables, buffers and warm-start data of a [`LieSvi`] run.
 #[derive(Debug, Clone)]
 pub struct LieWorkspace {
-    degree: usize,
-    h: f64,
+    tables: StepTables,
     reduced: bool,
-    /// Gauss weights w_μ.
-    reference_weights: Vec<f64>,
-    /// W_μ = (h/2) w_μ.
-    weights: Vec<f64>,
-    /// l_ν(τ_μ), m × (d + 1).
-    values: DMatrix<f64>,
-    /// l̇_ν(τ_μ), m × (d + 1).
-    reference_derivatives: DMatrix<f64>,
-    /// (2/h) l̇_ν(τ_μ), m × (d + 1).
-    derivatives: DMatrix<f64>,
-    /// l_j(x_ν + 2), (d + 1) × (d + 1): the previous step's polynomial at the new nodes.
-    extrapolation: DMatrix<f64>,
-    /// CGL nodes x_ν.
-    nodes: Vec<f64>,
-    /// The Lagrange basis on the CGL nodes (dense output).
-    basis: LagrangeBasis,
     /// ξ¹…ξᵈ, stacked.
     unknowns: DVector<f64>,
     /// The previous step's ξ¹…ξᵈ.
@@ -646,30 +605,16 @@ pub struct LieWorkspace {
 }
 
 impl LieWorkspace {
-    fn rescale(&mut self, h: f64) {
-        self.h = h;
-        for (w, r) in self.weights.iter_mut().zip(&self.reference_weights) {
-            *w = 0.5 * h * r;
-        }
-        self.derivatives
-            .zip_apply(&self.reference_derivatives, |d, r| *d = 2.0 / h * r);
-        self.has_previous = false;
-    }
-
     /// Starting values: the previous step's ξ-polynomial extrapolated to the new nodes and
     /// moved to the chart at R_k (ξᵛ = log(exp(ξᵈ_prev)ᵀ exp(ζ_ν))), or at the first step the
     /// uniform rotation ξ(τ) = (τ + 1)(h/2) Ω₀.
     fn start<L: RigidBodyLagrangian>(&mut self, model: &L, h: f64, state: &RigidState) {
-        let d = self.degree;
+        let d = self.tables.degree;
         if self.has_previous {
             let end = self.previous.fixed_rows::<3>(3 * (d - 1)).into_owned();
             let back = exp(&end).transpose();
             for nu in 1..=d {
-                let mut zeta = Vector3::zeros();
-                for j in 1..=d {
-                    zeta +=
-                        self.previous.fixed_rows::<3>(3 * (j - 1)) * self.extrapolation[(nu, j)];
-                }
+                let zeta = self.tables.extrapolated::<3>(nu, &self.previous);
                 let guess = log(&(back * exp(&zeta)));
                 self.unknowns
                     .fixed_rows_mut::<3>(3 * (nu - 1))
@@ -681,7 +626,7 @@ impl LieWorkspace {
                 .unwrap_or_else(|_| Vector3::zeros());
             self.velocity_guess = omega;
             for nu in 1..=d {
-                let guess = omega * (0.5 * h * (self.nodes[nu] + 1.0));
+                let guess = omega * (0.5 * h * (self.tables.nodes[nu] + 1.0));
                 self.unknowns
                     .fixed_rows_mut::<3>(3 * (nu - 1))
                     .copy_from(&guess);

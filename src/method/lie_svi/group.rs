@@ -1,0 +1,377 @@
+//! [`LieSvi`] on any Lie group ([`GroupSpace`]): the full form (§5.3) and the reduced
+//! Euler–Poincaré form (§5.4) of the parent module, with the group's exp, dexp and Ad in
+//! place of SO(3)'s closed forms.
+//!
+//! The derivation of the parent module holds on every group until its last line, where
+//! SO(3)'s dexp_xᵀ = dexp_{−x} was used. In general the step solves
+//!
+//! 0 = ∂S/∂ξᵛ (ν = 1, …, d − 1),  0 = P − dexp_{ξᵈ}ᵀ (μ_k + g_R),
+//!
+//! and then, from dexp_x = Ad_{exp x} dexp_{−x},
+//!
+//! g_{k+1} = g_k F,  μ_{k+1} = Ad_Fᵀ (μ_k + g_R),  F = exp(ξᵈ),
+//!
+//! the discrete Euler–Poincaré equation μ_{k+1} = Ad*_F(μ_k + g_R) with the left-trivialised
+//! discrete momenta. The increments are g_k (F − e) ([`LieGroup::translate_difference`] of
+//! [`LieGroup::exp_minus_identity`]) and (Ad_F − I)ᵀμ_k + Ad_Fᵀ g_R with
+//! Ad_F − I = ad_{ξᵈ} dexp_{ξᵈ} (both power series in ad), so neither cancels for small steps.
+//! The discrete Noether theorem holds as on SO(3): for a left-invariant L the spatial momentum
+//! Ad_{g⁻¹}ᵀμ is conserved, since Ad_{g_{k+1}⁻¹}ᵀ Ad_Fᵀ = Ad_{g_k⁻¹}ᵀ.
+
+use super::group_equations::{GroupDerivatives, assemble_group, configuration_sum};
+use super::tables::StepTables;
+use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE};
+use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
+use crate::method::group_space::{GroupInitial, GroupPoint, GroupSpace, GroupState};
+use crate::method::space::Space;
+use crate::method::step::Step;
+use crate::method::{MethodInfo, StepReport};
+use crate::model::group::{GroupLagrangian, GroupLagrangianExt, LieGroup};
+use crate::nonlinear::Newton;
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+/// Tables, buffers and warm-start data of a [`LieSvi`] run on a group of dimension `N`.
+#[derive(Debug, Clone)]
+pub struct GroupWorkspace<const N: usize> {
+    tables: StepTables,
+    reduced: bool,
+    /// ξ¹…ξᵈ, stacked.
+    unknowns: DVector<f64>,
+    /// The previous step's ξ¹…ξᵈ.
+    previous: DVector<f64>,
+    has_previous: bool,
+    points: Vec<GroupDerivatives<N>>,
+    /// ∂g_R/∂ξʲ, j = 1..d.
+    rates: Vec<SMatrix<f64, N, N>>,
+    newton: Newton,
+    /// Last body velocity from the inverse Legendre map (its Newton start).
+    velocity_guess: SVector<f64, N>,
+}
+
+impl<const N: usize> GroupWorkspace<N> {
+    /// Starting values: the previous step's curve extrapolated to the new nodes and moved to
+    /// the chart at g_k (ξᵛ = log(exp(ξᵈ_prev)⁻¹ exp(ζ_ν))), or at the first step the
+    /// uniform motion ξ(τ) = (τ + 1)(h/2) ξ₀.
+    fn start<L: GroupLagrangian<N, E>, const E: usize>(
+        &mut self,
+        model: &L,
+        h: f64,
+        state: &GroupState<N, E>,
+    ) {
+        let d = self.tables.degree;
+        if self.has_previous {
+            let end = self.previous.fixed_rows::<N>(N * (d - 1)).into_owned();
+            let back = L::Group::exp(&(-end));
+            for nu in 1..=d {
+                let zeta = self.tables.extrapolated::<N>(nu, &self.previous);
+                let guess = L::Group::log(&L::Group::compose(&back, &L::Group::exp(&zeta)));
+                self.unknowns
+                    .fixed_rows_mut::<N>(N * (nu - 1))
+                    .copy_from(&guess);
+            }
+        } else {
+            let xi = model
+                .velocity(&state.g, &state.momentum, &self.velocity_guess)
+                .unwrap_or_else(|_| SVector::zeros());
+            self.velocity_guess = xi;
+            for nu in 1..=d {
+                let guess = xi * (0.5 * h * (self.tables.nodes[nu] + 1.0));
+                self.unknowns
+                    .fixed_rows_mut::<N>(N * (nu - 1))
+                    .copy_from(&guess);
+            }
+        }
+    }
+}
+
+/// The space of a model on a group.
+type S<L, const N: usize, const E: usize> = GroupSpace<<L as GroupLagrangian<N, E>>::Group, N, E>;
+
+impl<L, const N: usize, const E: usize> Step<L, S<L, N, E>> for LieSvi
+where
+    L: GroupLagrangian<N, E>,
+{
+    type Workspace = GroupWorkspace<N>;
+
+    fn info(&self) -> MethodInfo {
+        LieSvi::info(self)
+    }
+
+    fn workspace(&self, _model: &L, h: f64) -> Result<GroupWorkspace<N>, Error> {
+        self.validate(L::G_INVARIANT)?;
+        require_positive("h", h)?;
+        let tables = StepTables::new(self.points, self.quadrature_points(), h)?;
+        let degree = tables.degree;
+        let m = tables.len();
+        Ok(GroupWorkspace {
+            tables,
+            reduced: self.form == Form::Reduced,
+            unknowns: DVector::zeros(N * degree),
+            previous: DVector::zeros(N * degree),
+            has_previous: false,
+            points: vec![GroupDerivatives::zeros(); m],
+            rates: vec![SMatrix::zeros(); degree],
+            newton: Newton::new(N * degree, self.max_iterations),
+            velocity_guess: SVector::zeros(),
+        })
+    }
+
+    /// Advance (g_k, μ_k) by one step, writing (g_{k+1} − g_k, μ_{k+1} − μ_k) into
+    /// `increment`. A step whose ξᵈ leaves the natural chart is
+    /// [`StepFailure::OutsideChart`]. Allocates nothing.
+    fn step(
+        &self,
+        model: &L,
+        workspace: &mut GroupWorkspace<N>,
+        _t: f64,
+        h: f64,
+        state: &GroupState<N, E>,
+        increment: &mut GroupState<N, E>,
+    ) -> Result<StepReport, StepFailure> {
+        if workspace.tables.h != h {
+            workspace.tables.rescale(h);
+            workspace.has_previous = false;
+        }
+        workspace.start(model, h, state);
+        let GroupWorkspace {
+            tables,
+            reduced,
+            unknowns,
+            points,
+            rates,
+            newton,
+            ..
+        } = workspace;
+        let last = N * (tables.degree - 1);
+        // A start (ξᵈ ≈ h ξ) or an end outside the chart: the step is too large for it, and
+        // that, not the Newton iteration, is what to report.
+        let outside = |z: &DVector<f64>| {
+            let reach = L::Group::chart_reach(&z.fixed_rows::<N>(last).into_owned());
+            (reach >= 1.0).then_some(StepFailure::OutsideChart { reach })
+        };
+        if let Some(failure) = outside(unknowns) {
+            return Err(failure);
+        }
+        let iterations = newton
+            .solve(unknowns, |z, jacobian, residual| {
+                assemble_group(
+                    model, tables, *reduced, points, rates, state, z, jacobian, residual,
+                )
+            })
+            .map_err(|failure| outside(unknowns).unwrap_or(failure))?;
+        if let Some(failure) = outside(unknowns) {
+            return Err(failure);
+        }
+        let end = unknowns.fixed_rows::<N>(last).into_owned();
+        // The derivatives are those of the last Newton iterate, which the increment below
+        // moves by less than the iteration's tolerance: g_R from them is as exact.
+        let torque = configuration_sum(tables, points);
+        let adjoint_minus_identity = L::Group::ad(&end) * L::Group::dexp(&end);
+        increment.g = L::Group::translate_difference(&state.g, &L::Group::exp_minus_identity(&end));
+        increment.momentum = adjoint_minus_identity.transpose() * state.momentum
+            + (adjoint_minus_identity.transpose() * torque + torque);
+        if !increment
+            .g
+            .iter()
+            .chain(increment.momentum.iter())
+            .all(|x| x.is_finite())
+        {
+            return Err(StepFailure::NonFinite);
+        }
+        workspace.previous.copy_from(&workspace.unknowns);
+        workspace.has_previous = true;
+        let m = workspace.tables.len();
+        Ok(StepReport {
+            iterations,
+            evaluations: m * (iterations + 1),
+            factorizations: iterations,
+            analyses: 0,
+        })
+    }
+
+    fn restart(&self, workspace: &mut GroupWorkspace<N>) {
+        workspace.has_previous = false;
+    }
+
+    /// Not yet built on general groups: an [`StepFailure::Unsupported`] error (the exact
+    /// tangent map exists on SO(3), [`crate::method::space::SO3`]).
+    fn tangent_map(
+        &self,
+        _model: &L,
+        _workspace: &mut GroupWorkspace<N>,
+        _t: f64,
+        _h: f64,
+        _state: &GroupState<N, E>,
+    ) -> Result<(GroupState<N, E>, DMatrix<f64>, StepReport), StepFailure> {
+        Err(StepFailure::Unsupported {
+            option: "tangent map",
+            reason: "the exact tangent map of lie-svi is built on SO(3) only",
+        })
+    }
+
+    /// Checks the initial condition: finite values and a configuration in the group
+    /// ([`LieGroup::defect`] at most [`ORTHOGONALITY_TOLERANCE`]).
+    fn initial_state(
+        &self,
+        model: &L,
+        t0: f64,
+        initial: &GroupInitial<N, E>,
+    ) -> Result<GroupState<N, E>, Error> {
+        let (g, second, name) = match initial {
+            GroupInitial::Velocity { g, xi } => (g, xi, "initial body velocity"),
+            GroupInitial::Momentum { g, momentum } => (g, momentum, "initial body momentum"),
+        };
+        require_finite_entries("initial configuration", g)?;
+        require_finite_entries(name, second)?;
+        let defect = L::Group::defect(g);
+        if defect > ORTHOGONALITY_TOLERANCE {
+            return Err(Error::invalid(
+                "initial configuration",
+                format!(
+                    "not in {}: its distance from the group (‖RᵀR − I‖ of a rotation, or a \
+                     reflection) is {defect:e}",
+                    L::Group::NAME
+                ),
+            ));
+        }
+        let momentum = match initial {
+            GroupInitial::Momentum { momentum, .. } => *momentum,
+            GroupInitial::Velocity { g, xi } => model.momentum(g, xi),
+        };
+        let state = GroupState { g: *g, momentum };
+        if !state.momentum.iter().all(|x| x.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "initial state".into(),
+                step: 0,
+                t: t0,
+            });
+        }
+        // The Legendre map must be invertible at the start (a singular inertia is not).
+        self.complete(
+            model,
+            None,
+            t0,
+            &state,
+            &S::<L, N, E>::initial_guess(initial),
+        )?;
+        Ok(state)
+    }
+
+    /// A G-invariance declaration: L(g, ξ) = L(e, ξ) and a zero configuration gradient at
+    /// the initial state.
+    fn check_model(&self, model: &L, t0: f64, state: &GroupState<N, E>) -> Result<(), Error> {
+        if !L::G_INVARIANT {
+            return Ok(());
+        }
+        let xi = self.complete(model, None, t0, state, &SVector::zeros())?.xi;
+        let here = model.value(&state.g, &xi);
+        let identity = model.value(&L::Group::identity(), &xi);
+        let gradient = model.configuration_gradient(&state.g, &xi).amax();
+        let scale = 1.0 + here.abs() + state.momentum.amax() * (1.0 + xi.amax());
+        if (here - identity).abs() > 1e-12 * scale || gradient > 1e-12 * scale {
+            return Err(Error::invalid(
+                "G_INVARIANT",
+                format!(
+                    "the model declares L(g, ξ) = L(e, ξ), but the values differ by {:e} and \
+                     the configuration gradient is {gradient:e}",
+                    (here - identity).abs()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// ξ from μ by the inverse Legendre map started at `guess`.
+    fn complete(
+        &self,
+        model: &L,
+        _workspace: Option<&GroupWorkspace<N>>,
+        t: f64,
+        state: &GroupState<N, E>,
+        guess: &SVector<f64, N>,
+    ) -> Result<GroupPoint<N, E>, Error> {
+        let xi = model
+            .velocity(&state.g, &state.momentum, guess)
+            .map_err(|error| match error {
+                Error::LegendreMap {
+                    iterations,
+                    residual,
+                    ..
+                } => Error::LegendreMap {
+                    t,
+                    iterations,
+                    residual,
+                },
+                other => other,
+            })?;
+        Ok(GroupPoint {
+            t,
+            g: state.g,
+            xi,
+            momentum: state.momentum,
+        })
+    }
+
+    fn incomplete(
+        &self,
+        t: f64,
+        state: &GroupState<N, E>,
+        guess: &SVector<f64, N>,
+    ) -> GroupPoint<N, E> {
+        GroupPoint {
+            t,
+            g: state.g,
+            xi: *guess,
+            momentum: state.momentum,
+        }
+    }
+
+    fn point_is_finite(&self, point: &GroupPoint<N, E>) -> bool {
+        point
+            .xi
+            .iter()
+            .chain(point.momentum.iter())
+            .all(|x| x.is_finite())
+    }
+
+    /// The step curve g_k exp(ξ(τ)) at τ = 2(time − t)/h − 1, with the body velocity
+    /// dexp_{−ξ} ξ̇ and μ = ∂L/∂ξ there.
+    fn dense_point(
+        &self,
+        model: &L,
+        workspace: &GroupWorkspace<N>,
+        t: f64,
+        h: f64,
+        start: &GroupState<N, E>,
+        time: f64,
+    ) -> Option<GroupPoint<N, E>> {
+        if !workspace.has_previous {
+            return None;
+        }
+        let tau = 2.0 * ((time - t) / h).clamp(0.0, 1.0) - 1.0;
+        let (xi, rate) = workspace.tables.curve::<N>(tau, h, &workspace.previous);
+        let g = L::Group::compose(&start.g, &L::Group::exp(&xi));
+        let velocity = L::Group::body_velocity(&xi, &rate);
+        Some(GroupPoint {
+            t: time,
+            g,
+            xi: velocity,
+            momentum: model.momentum(&g, &velocity),
+        })
+    }
+
+    fn points(&self) -> Option<usize> {
+        Some(self.points)
+    }
+
+    fn with_points(&self, points: usize) -> Option<Self> {
+        Some(self.with_point_count(points))
+    }
+
+    /// ξ¹, …, ξᵈ of the last step (ξ⁰ = 0).
+    fn node_offsets<'a>(&self, workspace: &'a mut GroupWorkspace<N>) -> Option<&'a [f64]> {
+        workspace
+            .has_previous
+            .then_some(workspace.previous.as_slice())
+    }
+}

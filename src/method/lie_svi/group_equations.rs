@@ -1,0 +1,355 @@
+//! The equations of one Lie-SVI step on any group G (the generalisation of
+//! [`super::equations`]): the Lagrangian at a quadrature point
+//! ℓ(η, a, b) = L(g_k exp(η) exp(a), dexp_{−a} b), its gradient and Hessian blocks in
+//! (η, a, b) by num-dual, and the residual and Jacobian of
+//!
+//! 0 = ∂S/∂ξᵛ (ν = 1, …, d − 1),  0 = P − dexp_{ξᵈ}ᵀ (μ_k + g_R).
+//!
+//! On SO(3), dexp_xᵀ = dexp_{−x} and this is the SO(3) equation; on a general group the
+//! transpose stays (parent module docs for the derivation).
+//!
+//! The Hessian of ℓ in 3N variables is assembled from N × N blocks, each one num-dual
+//! hyper-dual evaluation (∂²/∂x∂y with x and y seeded separately): stable Rust cannot size a
+//! 3N-variable dual number from the group's N, and the blocks cost about as much. The reduced
+//! form needs the (a, b) blocks only.
+
+use super::tables::StepTables;
+use crate::method::group_space::GroupState;
+use crate::model::group::{GroupLagrangian, LieGroup};
+use nalgebra::{Const, DMatrix, DVector, SMatrix, SVector};
+use num_dual::{DualSVec64, DualVec, HyperDualVec, jacobian, partial_hessian};
+
+/// A hyper-dual number with N first-derivative directions on each side.
+type Mixed<const N: usize> = HyperDualVec<f64, Const<N>, Const<N>>;
+
+/// Gradient and Hessian blocks of ℓ(η, a, b) at one quadrature point (η = 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct GroupDerivatives<const N: usize> {
+    /// ∂ℓ/∂η (the integrand of g_R; zero in the reduced form).
+    pub(super) eta: SVector<f64, N>,
+    /// ∂ℓ/∂a.
+    pub(super) a: SVector<f64, N>,
+    /// ∂ℓ/∂b.
+    pub(super) b: SVector<f64, N>,
+    /// ∂²ℓ/∂a∂a.
+    pub(super) aa: SMatrix<f64, N, N>,
+    /// ∂²ℓ/∂a∂b (rows a).
+    pub(super) ab: SMatrix<f64, N, N>,
+    /// ∂²ℓ/∂b∂b.
+    pub(super) bb: SMatrix<f64, N, N>,
+    /// ∂²ℓ/∂η∂a (rows η).
+    pub(super) eta_a: SMatrix<f64, N, N>,
+    /// ∂²ℓ/∂η∂b (rows η).
+    pub(super) eta_b: SMatrix<f64, N, N>,
+}
+
+impl<const N: usize> GroupDerivatives<N> {
+    pub(super) fn zeros() -> Self {
+        GroupDerivatives {
+            eta: SVector::zeros(),
+            a: SVector::zeros(),
+            b: SVector::zeros(),
+            aa: SMatrix::zeros(),
+            ab: SMatrix::zeros(),
+            bb: SMatrix::zeros(),
+            eta_a: SMatrix::zeros(),
+            eta_b: SMatrix::zeros(),
+        }
+    }
+}
+
+/// The same variable seeded on both sides: x + y − x₀ has x's first directions, y's second
+/// ones and the real part x₀.
+#[inline]
+fn both<const N: usize>(
+    x: &SVector<Mixed<N>, N>,
+    y: &SVector<Mixed<N>, N>,
+    value: &SVector<f64, N>,
+) -> SVector<Mixed<N>, N> {
+    x + y - value.map(Mixed::from_re)
+}
+
+/// The gradient and Hessian blocks of ℓ at (0, a, b) (the η blocks only in the full form),
+/// by the chain rule through the local Lagrangian L̂(ζ, w) = L(ĝ exp(ζ), w), ĝ = g_k exp(a)
+/// (module docs): three hyper-dual evaluations of the user's L and two of the group's body
+/// velocity W(a, b) = dexp_{−a} b.
+pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    model: &L,
+    reduced: bool,
+    base: &SVector<f64, E>,
+    a: &SVector<f64, N>,
+    b: &SVector<f64, N>,
+) -> GroupDerivatives<N> {
+    let zero = SVector::<f64, N>::zeros();
+    let lift = |v: &SVector<f64, N>| v.map(Mixed::from_re);
+    let w0 = L::Group::body_velocity(a, b);
+    let pull = L::Group::dexp(&(-a));
+    let (_, rate) = jacobian(
+        |x: SVector<DualSVec64<N>, N>| L::Group::body_velocity(&x, &b.map(DualVec::from_re)),
+        a,
+    );
+    // L̂'s derivatives: λ = ∂L̂/∂ζ, ν = ∂L̂/∂w and the blocks ζζ, ζw, ww.
+    let (lambda, zz, zw, nu, ww) = if reduced {
+        let identity = L::Group::identity::<Mixed<N>>();
+        let (_, nu, _, ww) = partial_hessian(
+            |(x, y)| model.lagrangian(&identity, &both(&x, &y, &w0)),
+            (&w0, &w0),
+        );
+        let z = SMatrix::zeros();
+        (zero, z, z, nu, ww)
+    } else {
+        let base = L::Group::compose(base, &L::Group::exp(a)).map(Mixed::from_re);
+        let local = |z: &SVector<Mixed<N>, N>, w: &SVector<Mixed<N>, N>| {
+            model.lagrangian(&L::Group::compose(&base, &L::Group::exp(z)), w)
+        };
+        let (_, lambda, _, zz) = partial_hessian(
+            |(x, y)| local(&both(&x, &y, &zero), &lift(&w0)),
+            (&zero, &zero),
+        );
+        let (_, _, _, zw) = partial_hessian(|(x, y)| local(&x, &y), (&zero, &w0));
+        let (_, nu, _, ww) =
+            partial_hessian(|(x, y)| local(&lift(&zero), &both(&x, &y, &w0)), (&w0, &w0));
+        (lambda, zz, zw, nu, ww)
+    };
+    // The second-order terms of the maps: ⟨ν, W(a + α, b + β)⟩ in (α, α) and (α, β), and
+    // ½⟨λ, W(a + α, α)⟩ in (α, α) (the α² term of ζ).
+    let (a_lift, b_lift) = (lift(a), lift(b));
+    let (lambda_lift, nu_lift) = (lift(&lambda), lift(&nu));
+    let (_, _, _, curvature) = partial_hessian(
+        |(x, y)| {
+            let alpha = x + y;
+            let moved = a_lift + alpha;
+            nu_lift.dot(&L::Group::body_velocity(&moved, &b_lift))
+                + lambda_lift.dot(&L::Group::body_velocity(&moved, &alpha)) * 0.5
+        },
+        (&zero, &zero),
+    );
+    let (_, _, _, twist) = partial_hessian(
+        |(x, y)| nu_lift.dot(&L::Group::body_velocity(&(a_lift + x), &(b_lift + y))),
+        (&zero, &zero),
+    );
+    let from_b = zw * pull;
+    let mut out = GroupDerivatives {
+        a: pull.transpose() * lambda + rate.transpose() * nu,
+        b: pull.transpose() * nu,
+        aa: pull.transpose() * zz * pull
+            + pull.transpose() * zw * rate
+            + rate.transpose() * zw.transpose() * pull
+            + rate.transpose() * ww * rate
+            + curvature,
+        ab: pull.transpose() * from_b + rate.transpose() * ww * pull + twist,
+        bb: pull.transpose() * ww * pull,
+        ..GroupDerivatives::zeros()
+    };
+    if !reduced {
+        // ζ = Aη + Bα + ½[Aη, Bα] + … with A = Ad_{exp(−a)}: the bracket's bilinear form
+        // C_ij = ⟨λ, [e_i, e_j]⟩.
+        let adjoint = L::Group::adjoint(&L::Group::exp(&(-a)));
+        let bracket = SMatrix::<f64, N, N>::from_fn(|i, j| {
+            let unit = SVector::<f64, N>::from_fn(|k, _| if k == i { 1.0 } else { 0.0 });
+            lambda.dot(&L::Group::ad(&unit).column(j))
+        });
+        out.eta = adjoint.transpose() * lambda;
+        out.eta_a = adjoint.transpose() * (zz * pull + zw * rate + bracket * pull * 0.5);
+        out.eta_b = adjoint.transpose() * from_b;
+    }
+    out
+}
+
+/// g_R = Σ_μ W_μ ∂ℓ/∂η from the derivatives of the last assembly.
+pub(super) fn configuration_sum<const N: usize>(
+    tables: &StepTables,
+    points: &[GroupDerivatives<N>],
+) -> SVector<f64, N> {
+    points
+        .iter()
+        .zip(&tables.weights)
+        .fold(SVector::zeros(), |sum, (p, w)| sum + p.eta * *w)
+}
+
+/// Residual and Jacobian in ξ¹…ξᵈ of the internal-stage conditions and of
+/// P − dexp_{ξᵈ}ᵀ(μ_k + g_R), with ∂g_R/∂ξʲ in `rates`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    model: &L,
+    tables: &StepTables,
+    reduced: bool,
+    points: &mut [GroupDerivatives<N>],
+    rates: &mut [SMatrix<f64, N, N>],
+    state: &GroupState<N, E>,
+    z: &DVector<f64>,
+    jacobian_out: &mut DMatrix<f64>,
+    residual: &mut DVector<f64>,
+) {
+    let d = tables.degree;
+    for (mu, point) in points.iter_mut().enumerate() {
+        let (a, b) = tables.point::<N>(mu, z);
+        *point = group_derivatives(model, reduced, &state.g, &a, &b);
+    }
+    residual.fill(0.0);
+    jacobian_out.fill(0.0);
+    for rate in rates.iter_mut() {
+        *rate = SMatrix::zeros();
+    }
+    for (mu, p) in points.iter().enumerate() {
+        let w = tables.weights[mu];
+        for nu in 1..=d {
+            let (l, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+            let mut row = residual.fixed_rows_mut::<N>(N * (nu - 1));
+            row += (p.a * l + p.b * c) * w;
+        }
+        for j in 1..=d {
+            let (lj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
+            let from_a = (p.aa * lj + p.ab * cj) * w;
+            let from_b = (p.ab.transpose() * lj + p.bb * cj) * w;
+            for nu in 1..=d {
+                let (l, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
+                let mut target = jacobian_out.fixed_view_mut::<N, N>(N * (nu - 1), N * (j - 1));
+                target += from_a * l + from_b * c;
+            }
+            if !reduced {
+                rates[j - 1] += (p.eta_a * lj + p.eta_b * cj) * w;
+            }
+        }
+    }
+    // Last block: P − dexp_ξᵀ (μ_k + g_R), ξ = ξᵈ.
+    let end = z.fixed_rows::<N>(N * (d - 1)).into_owned();
+    let load = state.momentum + configuration_sum(tables, points);
+    let (pulled, pulled_rate) = jacobian(
+        |x: SVector<DualSVec64<N>, N>| L::Group::dexp(&x).transpose() * load.map(DualVec::from_re),
+        &end,
+    );
+    let mut row = residual.fixed_rows_mut::<N>(N * (d - 1));
+    row -= pulled;
+    let map = L::Group::dexp(&end).transpose();
+    for (j, rate) in rates.iter().enumerate() {
+        let mut target = jacobian_out.fixed_view_mut::<N, N>(N * (d - 1), N * j);
+        if !reduced {
+            target -= map * rate;
+        }
+        if j + 1 == d {
+            target -= pulled_rate;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::group::product::RotationsAndTranslations;
+    use crate::model::group::rigid_motions::RigidMotions;
+    use crate::model::group::rotations::Rotations;
+    use crate::scalar::Scalar;
+
+    /// ℓ(η, a, b) in hyper-dual numbers; in the reduced form the base point is the identity and
+    /// η is not used.
+    #[inline]
+    fn lagrangian_at<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+        model: &L,
+        base: &SVector<f64, E>,
+        reduced: bool,
+        eta: &SVector<Mixed<N>, N>,
+        a: &SVector<Mixed<N>, N>,
+        b: &SVector<Mixed<N>, N>,
+    ) -> Mixed<N> {
+        let xi = L::Group::body_velocity(a, b);
+        let g = if reduced {
+            L::Group::exp(a)
+        } else {
+            let moved = L::Group::compose(&L::Group::exp(eta), &L::Group::exp(a));
+            L::Group::compose(&base.map(Mixed::from_re), &moved)
+        };
+        model.lagrangian(&g, &xi)
+    }
+
+    /// [`group_derivatives`] by brute force: each block one hyper-dual evaluation of ℓ through
+    /// both exponentials (the reference of the tests).
+    fn group_derivatives_reference<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+        model: &L,
+        reduced: bool,
+        base: &SVector<f64, E>,
+        a: &SVector<f64, N>,
+        b: &SVector<f64, N>,
+    ) -> GroupDerivatives<N> {
+        let zero = SVector::<f64, N>::zeros();
+        let lift = |v: &SVector<f64, N>| v.map(Mixed::from_re);
+        let f = |eta: &_, a: &_, b: &_| lagrangian_at(model, base, reduced, eta, a, b);
+        let (_, ga, gb, ab) = partial_hessian(|(x, y)| f(&lift(&zero), &x, &y), (a, b));
+        let (_, _, _, aa) =
+            partial_hessian(|(x, y)| f(&lift(&zero), &both(&x, &y, a), &lift(b)), (a, a));
+        let (_, _, _, bb) =
+            partial_hessian(|(x, y)| f(&lift(&zero), &lift(a), &both(&x, &y, b)), (b, b));
+        let mut out = GroupDerivatives {
+            a: ga,
+            b: gb,
+            aa,
+            ab,
+            bb,
+            ..GroupDerivatives::zeros()
+        };
+        if !reduced {
+            let (_, ge, _, eta_a) = partial_hessian(|(x, y)| f(&x, &y, &lift(b)), (&zero, a));
+            let (_, _, _, eta_b) = partial_hessian(|(x, y)| f(&x, &lift(a), &y), (&zero, b));
+            out.eta = ge;
+            out.eta_a = eta_a;
+            out.eta_b = eta_b;
+        }
+        out
+    }
+
+    /// A Lagrangian that couples the configuration and the velocity nonlinearly.
+    struct Coupled;
+    impl<G: LieGroup<N, E>, const N: usize, const E: usize> GroupLagrangian<N, E> for (Coupled, G) {
+        type Group = G;
+        fn lagrangian<D: Scalar>(&self, g: &SVector<D, E>, xi: &SVector<D, N>) -> D {
+            let mut sum = D::from(0.0);
+            for i in 0..N {
+                sum += xi[i] * xi[i] * (1.0 + 0.3 * i as f64) * 0.5;
+            }
+            for k in 0..E {
+                sum += (g[k] * (0.2 + 0.1 * k as f64)).sin() * (xi[k % N] * 0.7 + 1.0);
+            }
+            sum + (g[0] * xi[N - 1]).powi(2) * 0.3
+        }
+    }
+
+    fn agree<G: LieGroup<N, E>, const N: usize, const E: usize>(reduced: bool) {
+        let model = (Coupled, G::default());
+        let base = G::exp(&SVector::<f64, N>::from_fn(|i, _| 0.3 - 0.17 * i as f64));
+        for scale in [0.0, 1e-4, 0.5] {
+            let a = SVector::<f64, N>::from_fn(|i, _| scale * (0.4 - 0.23 * i as f64));
+            let b = SVector::<f64, N>::from_fn(|i, _| 1.0 - 0.31 * i as f64);
+            let fast = group_derivatives(&model, reduced, &base, &a, &b);
+            let reference = group_derivatives_reference(&model, reduced, &base, &a, &b);
+            let pairs = [
+                (fast.eta, reference.eta),
+                (fast.a, reference.a),
+                (fast.b, reference.b),
+            ];
+            for (x, y) in pairs {
+                assert!((x - y).amax() < 1e-12, "{}: gradient {x} vs {y}", G::NAME);
+            }
+            let blocks = [
+                (fast.aa, reference.aa, "aa"),
+                (fast.ab, reference.ab, "ab"),
+                (fast.bb, reference.bb, "bb"),
+                (fast.eta_a, reference.eta_a, "ηa"),
+                (fast.eta_b, reference.eta_b, "ηb"),
+            ];
+            for (x, y, name) in blocks {
+                assert!(
+                    (x - y).amax() < 1e-12,
+                    "{} {name} at scale {scale}: {x} vs {y}",
+                    G::NAME
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn chain_rule_derivatives_match_the_brute_force_ones() {
+        agree::<Rotations, 3, 9>(false);
+        agree::<RigidMotions, 6, 12>(false);
+        agree::<RotationsAndTranslations, 6, 12>(false);
+    }
+}

@@ -1,0 +1,334 @@
+//! Lie groups, and Lagrangians written on them (Leok, *Generalized Variational Integrators*,
+//! §5.3–5.4, for any group G).
+//!
+//! # The interface a group implements once
+//! A matrix Lie group G of dimension N is stored as E real numbers (the free entries of its
+//! matrices: 9 for a rotation, 12 for a rigid motion (R, x), K for a translation of ℝᴷ), and
+//! its Lie algebra 𝔤 ≅ ℝᴺ in a fixed basis. [`LieGroup`] asks for
+//! - the group operation [`LieGroup::compose`] and the identity, the inverse;
+//! - the exponential [`LieGroup::exp`] (and exp − e without cancellation,
+//!   [`LieGroup::exp_minus_identity`]) and its chart inverse [`LieGroup::log`];
+//! - the right-trivialised derivative of exp, [`LieGroup::dexp`]: with the series
+//!   dexp_x = Σ ad_xⁿ/(n + 1)!, d/dt exp(x(t)) = (dexp_x ẋ)^ exp(x) (the paper's
+//!   "T_ξ exp = T_e L_exp(ξ) · dexp_ad_ξ" up to the side of the trivialisation, see
+//!   [`crate::model::so3`] for the sign), and its inverse [`LieGroup::dexp_inverse`];
+//! - the adjoint actions: ad_x y = \[x, y\] ([`LieGroup::ad`]) and Ad_g x = g x̂ g⁻¹
+//!   ([`LieGroup::adjoint`]); ad* and Ad* are their transposes;
+//! - the hat map x ↦ x̂ into the stored entries ([`LieGroup::hat`]);
+//! - [`LieGroup::defect`], how far stored entries are from the group (‖RᵀR − I‖), and
+//!   [`LieGroup::chart_reach`], how far an algebra element is towards the edge of the natural
+//!   chart (|ω|/π on a rotation factor: beyond 1, log no longer inverts exp).
+//!
+//! From these, the body velocity of a curve g₀ exp(ξ(t)) is ξ_body = dexp_{−ξ} ξ̇ (the
+//! left-trivialised derivative, [`LieGroup::body_velocity`]), and the identities used by the
+//! integrator hold on every group: dexp_x = Ad_{exp x} dexp_{−x}, and
+//! Ad_{exp x} − I = ad_x dexp_x (both are power series in ad_x).
+//!
+//! The groups: [`rotations::Rotations`] (SO(3)), [`rigid_motions::RigidMotions`] (SE(3),
+//! closed-form exp and dexp), [`translations::Translations`] (ℝᴷ under addition) and
+//! [`product::Product`] (G₁ × G₂ of any two groups, so SO(3) × ℝ³ and, nested, SO(3)ᴺ).
+//!
+//! # Lagrangians on a group
+//! A [`GroupLagrangian`] is one function L(g, ξ) of the configuration g ∈ G and the body
+//! velocity ξ = (g⁻¹ġ)^∨ ∈ 𝔤, generic over [`Scalar`]; [`GroupLagrangianExt`] derives the
+//! momentum μ = ∂L/∂ξ (left-trivialised), its inverse (the Legendre map), the energy
+//! μ·ξ − L and the configuration gradient d/dε L(g exp(εζ), ξ).
+
+pub mod product;
+pub mod rigid_motions;
+pub mod rotations;
+pub mod translations;
+
+use crate::error::Error;
+use crate::linalg::solve_small;
+use crate::scalar::Scalar;
+use nalgebra::{Const, SMatrix, SVector};
+use num_dual::{Dual2Vec, DualSVec64, DualVec, gradient, hessian};
+use std::fmt::Debug;
+
+/// A matrix Lie group of dimension `N` whose elements are stored as `E` numbers (see the
+/// module docs for the conventions). Implemented by marker types; every function is an
+/// associated function, generic over the scalar where the integrator differentiates through
+/// it.
+pub trait LieGroup<const N: usize, const E: usize>:
+    Copy + Debug + Default + PartialEq + Send + Sync + 'static
+{
+    /// The group's name in reports (`"SO(3)"`).
+    const NAME: &'static str;
+
+    /// The identity element e.
+    fn identity<D: Scalar>() -> SVector<D, E>;
+
+    /// The product g h.
+    fn compose<D: Scalar>(g: &SVector<D, E>, h: &SVector<D, E>) -> SVector<D, E>;
+
+    /// The inverse g⁻¹.
+    fn inverse(g: &SVector<f64, E>) -> SVector<f64, E>;
+
+    /// exp(x) − e, without cancellation for small x.
+    fn exp_minus_identity<D: Scalar>(x: &SVector<D, N>) -> SVector<D, E>;
+
+    /// The exponential map 𝔤 → G.
+    #[inline]
+    fn exp<D: Scalar>(x: &SVector<D, N>) -> SVector<D, E> {
+        Self::exp_minus_identity(x) + Self::identity()
+    }
+
+    /// The chart inverse of exp at the identity: x with exp(x) = g and
+    /// [`LieGroup::chart_reach`]`(x) ≤ 1`.
+    fn log(g: &SVector<f64, E>) -> SVector<f64, N>;
+
+    /// g (e + δ) − g for a difference δ of two elements: the increment of g under a step
+    /// g ↦ g exp(x) with δ = exp(x) − e, formed without the cancellation of
+    /// `compose(g, e + δ) − g` (linear in δ for a matrix group).
+    fn translate_difference(g: &SVector<f64, E>, delta: &SVector<f64, E>) -> SVector<f64, E>;
+
+    /// The hat map x ↦ x̂ into the stored entries (the derivative of exp at 0 in the
+    /// direction x).
+    fn hat(x: &SVector<f64, N>) -> SVector<f64, E>;
+
+    /// ad_x, the matrix of y ↦ \[x, y\].
+    fn ad<D: Scalar>(x: &SVector<D, N>) -> SMatrix<D, N, N>;
+
+    /// Ad_g, the matrix of x ↦ (g x̂ g⁻¹)^∨.
+    fn adjoint(g: &SVector<f64, E>) -> SMatrix<f64, N, N>;
+
+    /// dexp_x = Σ ad_xⁿ/(n + 1)!, the right-trivialised derivative of exp.
+    fn dexp<D: Scalar>(x: &SVector<D, N>) -> SMatrix<D, N, N>;
+
+    /// The inverse of [`LieGroup::dexp`] (inside the natural chart).
+    fn dexp_inverse(x: &SVector<f64, N>) -> SMatrix<f64, N, N>;
+
+    /// The body velocity dexp_{−x} ẋ of the curve exp(x(t)) (override where a product is
+    /// cheaper than the matrix).
+    #[inline]
+    fn body_velocity<D: Scalar>(x: &SVector<D, N>, rate: &SVector<D, N>) -> SVector<D, N> {
+        Self::dexp(&(-x)) * rate
+    }
+
+    /// How far the stored entries are from the group (‖RᵀR − I‖ in the Frobenius norm for
+    /// each rotation factor, the largest of them; 0 for a translation); `f64::INFINITY`
+    /// for entries that are not in the group's component of the identity (det R < 0).
+    fn defect(g: &SVector<f64, E>) -> f64;
+
+    /// How far x is towards the edge of the natural chart, as a fraction: below 1, exp is
+    /// invertible by [`LieGroup::log`] near x (|ω|/π for each rotation part ω, the largest;
+    /// 0 for a translation).
+    fn chart_reach(x: &SVector<f64, N>) -> f64;
+}
+
+/// A Lagrangian L(g, ξ) on the tangent bundle of a Lie group `G`, left-trivialised: g ∈ G
+/// is the configuration and ξ = (g⁻¹ġ)^∨ the body velocity.
+///
+/// ```
+/// use nalgebra::SVector;
+/// use svi::Scalar;
+/// use svi::model::group::GroupLagrangian;
+/// use svi::model::group::rigid_motions::RigidMotions;
+///
+/// /// A rigid body of mass 2 and inertia diag(1, 2, 3), falling freely (g = 9.81 along −z).
+/// struct Falling;
+/// impl GroupLagrangian<6, 12> for Falling {
+///     type Group = RigidMotions;
+///     fn lagrangian<D: Scalar>(&self, g: &SVector<D, 12>, xi: &SVector<D, 6>) -> D {
+///         let kinetic = (xi[0] * xi[0] + xi[1] * xi[1] * 2.0 + xi[2] * xi[2] * 3.0) * 0.5
+///             + (xi[3] * xi[3] + xi[4] * xi[4] + xi[5] * xi[5]);
+///         kinetic - RigidMotions::position(g)[2] * (2.0 * 9.81)
+///     }
+/// }
+/// ```
+pub trait GroupLagrangian<const N: usize, const E: usize> {
+    /// The group G.
+    type Group: LieGroup<N, E>;
+
+    /// Whether L(g, ξ) = L(e, ξ) for every g (invariance under the left action of the whole
+    /// group); `true` allows the reduced Euler–Poincaré form (§5.4). The default (`false`) is
+    /// always correct; the stepping loop checks a `true` at the initial state.
+    const G_INVARIANT: bool = false;
+
+    /// The value L(g, ξ). Mark it `#[inline]`: the integrator evaluates it with dual numbers
+    /// in its inner loop.
+    fn lagrangian<D: Scalar>(&self, g: &SVector<D, E>, xi: &SVector<D, N>) -> D;
+}
+
+/// Iteration cap of the inverse Legendre map.
+const LEGENDRE_MAX_ITERATIONS: usize = 50;
+
+/// Quantities derived from a [`GroupLagrangian`] by automatic differentiation. Implemented
+/// for every Lagrangian on a group.
+pub trait GroupLagrangianExt<const N: usize, const E: usize>: GroupLagrangian<N, E> {
+    /// L(g, ξ).
+    #[inline]
+    fn value(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> f64 {
+        self.lagrangian(g, xi)
+    }
+
+    /// The left-trivialised momentum μ = ∂L/∂ξ.
+    #[inline]
+    fn momentum(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> SVector<f64, N> {
+        gradient(
+            |x: SVector<DualSVec64<N>, N>| self.lagrangian(&g.map(DualVec::from_re), &x),
+            xi,
+        )
+        .1
+    }
+
+    /// The energy μ·ξ − L.
+    #[inline]
+    fn energy(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> f64 {
+        let (value, momentum) = gradient(
+            |x: SVector<DualSVec64<N>, N>| self.lagrangian(&g.map(DualVec::from_re), &x),
+            xi,
+        );
+        momentum.dot(xi) - value
+    }
+
+    /// The left-trivialised configuration gradient τ with τ·ζ = d/dε L(g exp(εζ), ξ) at
+    /// ε = 0 (the generalised force of a potential, in the body frame).
+    #[inline]
+    fn configuration_gradient(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> SVector<f64, N> {
+        gradient(
+            |z: SVector<DualSVec64<N>, N>| {
+                let moved = <Self::Group as LieGroup<N, E>>::compose(
+                    &g.map(DualVec::from_re),
+                    &<Self::Group as LieGroup<N, E>>::exp(&z),
+                );
+                self.lagrangian(&moved, &xi.map(DualVec::from_re))
+            },
+            &SVector::zeros(),
+        )
+        .1
+    }
+
+    /// The inverse Legendre map: ξ with ∂L/∂ξ(g, ξ) = μ, by Newton's method from `guess`
+    /// (one iteration is exact for a Lagrangian quadratic in ξ).
+    fn velocity(
+        &self,
+        g: &SVector<f64, E>,
+        momentum: &SVector<f64, N>,
+        guess: &SVector<f64, N>,
+    ) -> Result<SVector<f64, N>, Error> {
+        let mut xi = *guess;
+        let mut last = f64::INFINITY;
+        let failure = |iterations, residual| Error::LegendreMap {
+            t: f64::NAN,
+            iterations,
+            residual,
+        };
+        for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
+            let (_, current, inertia) = hessian(
+                |x: SVector<Dual2Vec<f64, Const<N>>, N>| {
+                    self.lagrangian(&g.map(Dual2Vec::from_re), &x)
+                },
+                &xi,
+            );
+            let delta = solve_small(inertia, momentum - current)
+                .ok_or_else(|| failure(iteration, f64::INFINITY))?;
+            xi += delta;
+            let size = delta.amax();
+            if !size.is_finite() {
+                break;
+            }
+            let scale = 1.0 + xi.amax();
+            if size <= f64::EPSILON * scale || (size >= last && size <= 1e-10 * scale) {
+                return Ok(xi);
+            }
+            last = size;
+        }
+        Err(failure(LEGENDRE_MAX_ITERATIONS, last))
+    }
+}
+
+impl<const N: usize, const E: usize, T: GroupLagrangian<N, E> + ?Sized> GroupLagrangianExt<N, E>
+    for T
+{
+}
+
+/// Checks every identity of the interface numerically on one group, at the algebra elements
+/// `xs` (the tests of each group call it).
+#[cfg(test)]
+pub(crate) fn check_group<G: LieGroup<N, E>, const N: usize, const E: usize>(
+    xs: &[SVector<f64, N>],
+) {
+    let close = |a: f64, b: f64, what: &str| assert!(a <= b, "{}: {what}: {a:e}", G::NAME);
+    let e = G::identity::<f64>();
+    for x in xs {
+        let g = G::exp(x);
+        let y = -x * 0.7 + SVector::from_fn(|i, _| 0.1 * (i as f64 + 1.0).sin());
+        let h = G::exp(&y);
+        // Group axioms and the exponential.
+        close(
+            (G::compose(&g, &G::inverse(&g)) - e).amax(),
+            1e-14,
+            "g g⁻¹ = e",
+        );
+        close(
+            (G::exp(&(-x)) - G::inverse(&g)).amax(),
+            1e-14,
+            "exp(−x) = exp(x)⁻¹",
+        );
+        close((G::log(&g) - x).amax(), 1e-12, "log exp x = x");
+        close(G::defect(&g), 1e-14, "exp(x) in G");
+        close(
+            (G::translate_difference(&g, &(h - e)) - (G::compose(&g, &h) - g)).amax(),
+            1e-14,
+            "translate_difference",
+        );
+        let third = G::exp(&(x * 0.3 + y));
+        close(
+            (G::compose(&G::compose(&g, &h), &third) - G::compose(&g, &G::compose(&h, &third)))
+                .amax(),
+            1e-13,
+            "associativity",
+        );
+        // dexp against the series Σ adⁿ/(n + 1)!, its inverse, and central differences of exp.
+        let ad = G::ad(x);
+        let mut term = SMatrix::<f64, N, N>::identity();
+        let mut series = term;
+        let mut adjoint_series = term;
+        for n in 1..40 {
+            term = term * ad / n as f64;
+            adjoint_series += term;
+            series += term / (n + 1) as f64;
+        }
+        close(
+            (G::dexp(x) - series).amax(),
+            1e-13,
+            &format!("dexp = Σ adⁿ/(n + 1)! at {x:?}"),
+        );
+        close(
+            (G::dexp_inverse(x) * G::dexp(x) - SMatrix::identity()).amax(),
+            1e-12,
+            "dexp⁻¹ dexp = I",
+        );
+        close(
+            (G::adjoint(&g) - adjoint_series).amax(),
+            1e-12,
+            "Ad_exp x = exp(ad_x)",
+        );
+        let step = 1e-5;
+        for j in 0..N {
+            let unit = SVector::<f64, N>::from_fn(|i, _| if i == j { step } else { 0.0 });
+            let derivative = (G::exp(&(x + unit)) - G::exp(&(x - unit))) / (2.0 * step);
+            // d/ds exp(x + s e_j) = (dexp_x e_j)^ exp(x) = g (dexp_{−x} e_j)^.
+            let body = G::dexp(&(-x)).column(j).into_owned();
+            let expected = G::translate_difference(&g, &G::hat(&body));
+            close(
+                (derivative - expected).amax(),
+                1e-8,
+                "d exp = g (dexp_{−x} ẋ)^",
+            );
+            close(
+                (G::body_velocity(x, &(unit / step)) - body).amax(),
+                1e-14,
+                "body_velocity = dexp_{−x} ẋ",
+            );
+        }
+        // Ad is a homomorphism, ad is the derivative of Ad.
+        close(
+            (G::adjoint(&G::compose(&g, &h)) - G::adjoint(&g) * G::adjoint(&h)).amax(),
+            1e-12,
+            "Ad_gh = Ad_g Ad_h",
+        );
+    }
+}

@@ -1,0 +1,187 @@
+//! The direct product G₁ × G₂ of two groups on the [`LieGroup`] interface: elements (g₁, g₂)
+//! stored one after the other, algebra elements (x₁, x₂), and every map acting factor by
+//! factor (exp, log, dexp, ad and Ad are block diagonal). Products nest, so SO(3) × ℝ³
+//! ([`RotationsAndTranslations`]) and SO(3)ᴺ or (G × ℝᴷ) × H are all products.
+//!
+//! The dimensions are spelled out as parameters (stable Rust cannot add them in a type):
+//! `Product<A, B, NA, EA, NB, EB>` implements `LieGroup<NA + NB, EA + EB>`, and asking it for
+//! any other shape is a compile-time error.
+
+use super::LieGroup;
+use super::rotations::Rotations;
+use super::translations::Translations;
+use crate::scalar::Scalar;
+use nalgebra::{SMatrix, SVector};
+use std::marker::PhantomData;
+
+/// G₁ × G₂ for G₁ = `A` (dimension `NA`, `EA` stored numbers) and G₂ = `B` (`NB`, `EB`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Product<A, B, const NA: usize, const EA: usize, const NB: usize, const EB: usize>(
+    PhantomData<(A, B)>,
+);
+
+/// SO(3) × ℝ³: a rigid body whose attitude and position are separate factors (compare SE(3),
+/// [`super::rigid_motions::RigidMotions`], where the position is translated with the body).
+pub type RotationsAndTranslations = Product<Rotations, Translations<3>, 3, 9, 3, 3>;
+
+/// Splits a vector of the product into its two factors.
+#[inline]
+fn split<D: Scalar, const M: usize, const MA: usize, const MB: usize>(
+    x: &SVector<D, M>,
+) -> (SVector<D, MA>, SVector<D, MB>) {
+    (
+        x.fixed_rows::<MA>(0).into_owned(),
+        x.fixed_rows::<MB>(MA).into_owned(),
+    )
+}
+
+/// Joins two factors' vectors.
+#[inline]
+fn join<D: Scalar, const M: usize, const MA: usize, const MB: usize>(
+    a: &SVector<D, MA>,
+    b: &SVector<D, MB>,
+) -> SVector<D, M> {
+    SVector::from_iterator(a.iter().chain(b.iter()).copied())
+}
+
+/// The block-diagonal matrix diag(a, b).
+#[inline]
+fn diagonal<D: Scalar, const M: usize, const MA: usize, const MB: usize>(
+    a: &SMatrix<D, MA, MA>,
+    b: &SMatrix<D, MB, MB>,
+) -> SMatrix<D, M, M> {
+    let mut m = SMatrix::<D, M, M>::zeros();
+    m.fixed_view_mut::<MA, MA>(0, 0).copy_from(a);
+    m.fixed_view_mut::<MB, MB>(MA, MA).copy_from(b);
+    m
+}
+
+impl<
+    A,
+    B,
+    const NA: usize,
+    const EA: usize,
+    const NB: usize,
+    const EB: usize,
+    const N: usize,
+    const E: usize,
+> LieGroup<N, E> for Product<A, B, NA, EA, NB, EB>
+where
+    A: LieGroup<NA, EA>,
+    B: LieGroup<NB, EB>,
+{
+    const NAME: &'static str = "product of groups";
+
+    #[inline]
+    fn identity<D: Scalar>() -> SVector<D, E> {
+        const {
+            assert!(
+                N == NA + NB && E == EA + EB,
+                "a product's shape is the sum of its factors'"
+            )
+        };
+        join(&A::identity::<D>(), &B::identity::<D>())
+    }
+
+    #[inline]
+    fn compose<D: Scalar>(g: &SVector<D, E>, h: &SVector<D, E>) -> SVector<D, E> {
+        let (g1, g2) = split::<D, E, EA, EB>(g);
+        let (h1, h2) = split::<D, E, EA, EB>(h);
+        join(&A::compose(&g1, &h1), &B::compose(&g2, &h2))
+    }
+
+    fn inverse(g: &SVector<f64, E>) -> SVector<f64, E> {
+        let (g1, g2) = split::<f64, E, EA, EB>(g);
+        join(&A::inverse(&g1), &B::inverse(&g2))
+    }
+
+    #[inline]
+    fn exp_minus_identity<D: Scalar>(x: &SVector<D, N>) -> SVector<D, E> {
+        const {
+            assert!(
+                N == NA + NB && E == EA + EB,
+                "a product's shape is the sum of its factors'"
+            )
+        };
+        let (x1, x2) = split::<D, N, NA, NB>(x);
+        join(&A::exp_minus_identity(&x1), &B::exp_minus_identity(&x2))
+    }
+
+    fn log(g: &SVector<f64, E>) -> SVector<f64, N> {
+        let (g1, g2) = split::<f64, E, EA, EB>(g);
+        join(&A::log(&g1), &B::log(&g2))
+    }
+
+    fn translate_difference(g: &SVector<f64, E>, delta: &SVector<f64, E>) -> SVector<f64, E> {
+        let (g1, g2) = split::<f64, E, EA, EB>(g);
+        let (d1, d2) = split::<f64, E, EA, EB>(delta);
+        join(
+            &A::translate_difference(&g1, &d1),
+            &B::translate_difference(&g2, &d2),
+        )
+    }
+
+    fn hat(x: &SVector<f64, N>) -> SVector<f64, E> {
+        let (x1, x2) = split::<f64, N, NA, NB>(x);
+        join(&A::hat(&x1), &B::hat(&x2))
+    }
+
+    #[inline]
+    fn ad<D: Scalar>(x: &SVector<D, N>) -> SMatrix<D, N, N> {
+        let (x1, x2) = split::<D, N, NA, NB>(x);
+        diagonal(&A::ad(&x1), &B::ad(&x2))
+    }
+
+    fn adjoint(g: &SVector<f64, E>) -> SMatrix<f64, N, N> {
+        let (g1, g2) = split::<f64, E, EA, EB>(g);
+        diagonal(&A::adjoint(&g1), &B::adjoint(&g2))
+    }
+
+    #[inline]
+    fn dexp<D: Scalar>(x: &SVector<D, N>) -> SMatrix<D, N, N> {
+        let (x1, x2) = split::<D, N, NA, NB>(x);
+        diagonal(&A::dexp(&x1), &B::dexp(&x2))
+    }
+
+    fn dexp_inverse(x: &SVector<f64, N>) -> SMatrix<f64, N, N> {
+        let (x1, x2) = split::<f64, N, NA, NB>(x);
+        diagonal(&A::dexp_inverse(&x1), &B::dexp_inverse(&x2))
+    }
+
+    #[inline]
+    fn body_velocity<D: Scalar>(x: &SVector<D, N>, rate: &SVector<D, N>) -> SVector<D, N> {
+        let (x1, x2) = split::<D, N, NA, NB>(x);
+        let (r1, r2) = split::<D, N, NA, NB>(rate);
+        join(&A::body_velocity(&x1, &r1), &B::body_velocity(&x2, &r2))
+    }
+
+    fn defect(g: &SVector<f64, E>) -> f64 {
+        let (g1, g2) = split::<f64, E, EA, EB>(g);
+        A::defect(&g1).max(B::defect(&g2))
+    }
+
+    fn chart_reach(x: &SVector<f64, N>) -> f64 {
+        let (x1, x2) = split::<f64, N, NA, NB>(x);
+        A::chart_reach(&x1).max(B::chart_reach(&x2))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::rigid_motions::RigidMotions;
+    use super::*;
+
+    #[test]
+    fn products_satisfy_the_group_identities() {
+        super::super::check_group::<RotationsAndTranslations, 6, 12>(&[
+            SVector::zeros(),
+            SVector::from([0.3, -0.7, 1.1, -0.4, 0.2, 0.9]),
+        ]);
+        // Nested: SE(3) × SO(3) × ℝ².
+        type Nested =
+            Product<RigidMotions, Product<Rotations, Translations<2>, 3, 9, 2, 2>, 6, 12, 5, 11>;
+        super::super::check_group::<Nested, 11, 23>(&[SVector::from([
+            0.3, -0.7, 1.1, -0.4, 0.2, 0.9, 0.1, 0.2, -0.3, 1.0, -2.0,
+        ])]);
+    }
+}

@@ -1,0 +1,413 @@
+//! Lie-SVI on any Lie group (issue #38): the group interface reproduces the SO(3) integrator,
+//! the free fall of a rigid body on SE(3) and on SO(3) × ℝ³ against its exact solution
+//! (Jacobi elliptic functions for the rotation, a parabola for the centre of mass), observed
+//! orders, the group and its momenta kept to round-off, and typed errors for bad input.
+
+use nalgebra::SVector;
+use svi::lie_group::{
+    DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, LieSvi, RigidBodyDefaults,
+    RigidBodyIntegrator, RigidBodyLagrangian, RigidInitial, RigidMotions, Rotations,
+    RotationsAndTranslations, SpatialMomentumError, so3,
+};
+use svi::observer::EnergyError;
+use svi::{Error, Integrator, Scalar};
+use svi_models::{FallingBody, FreeRigidBody, HeavyTop};
+
+type Vector3 = SVector<f64, 3>;
+
+/// A rigid-body model seen through the group interface.
+#[derive(Clone)]
+struct OnRotations<T>(T);
+
+impl<T: RigidBodyLagrangian> GroupLagrangian<3, 9> for OnRotations<T> {
+    type Group = Rotations;
+    const G_INVARIANT: bool = T::G_INVARIANT;
+    fn lagrangian<D: Scalar>(&self, g: &SVector<D, 9>, xi: &SVector<D, 3>) -> D {
+        self.0.lagrangian(&Rotations::matrix(g), xi)
+    }
+}
+
+/// Largest difference of attitude and body momentum between the SO(3) integrator and the
+/// same method through the group interface, after `steps` steps of size `h`.
+fn so3_against_group<T: RigidBodyLagrangian + RigidBodyDefaults + Clone>(
+    model: T,
+    method: LieSvi,
+    h: f64,
+    steps: usize,
+) -> f64 {
+    let (r0, omega0) = model.initial_state();
+    let t_end = h * steps as f64;
+    let so3 = RigidBodyIntegrator::new(model.clone(), method.clone())
+        .run(
+            0.0,
+            RigidInitial::Velocity {
+                r: r0,
+                omega: omega0,
+            },
+            h,
+            t_end,
+            &mut (),
+        )
+        .unwrap();
+    let group: GroupIntegrator<_, Rotations, 3, 9> = Integrator::new(OnRotations(model), method);
+    let initial = GroupInitial::Velocity {
+        g: Rotations::element(&r0),
+        xi: omega0,
+    };
+    let run = group.run(0.0, initial, h, t_end, &mut ()).unwrap();
+    assert_eq!(run.statistics.steps, steps);
+    let attitude = (Rotations::matrix(&run.state.g) - so3.state.r).amax();
+    let momentum = (run.state.momentum - so3.state.momentum).amax() / so3.state.momentum.amax();
+    attitude.max(momentum)
+}
+
+#[test]
+fn the_group_interface_reproduces_the_so3_integrator() {
+    for (points, form) in [(2, Form::Full), (3, Form::Full), (5, Form::Full)] {
+        let difference = so3_against_group(
+            HeavyTop::default(),
+            LieSvi::new(points).with_form(form),
+            0.02,
+            500,
+        );
+        println!("heavy top, {points} points: {difference:e}");
+        assert!(
+            difference < 5e-13,
+            "heavy top, {points} points: {difference:e}"
+        );
+    }
+    for form in [Form::Full, Form::Reduced] {
+        let difference = so3_against_group(
+            FreeRigidBody::default(),
+            LieSvi::new(4).with_form(form),
+            0.05,
+            500,
+        );
+        println!("free body, {form:?}: {difference:e}");
+        assert!(difference < 5e-13, "free body, {form:?}: {difference:e}");
+    }
+}
+
+/// The falling body's initial state: attitude, position, body angular velocity and body
+/// velocity of the centre of mass.
+fn falling_start() -> (SVector<f64, 12>, SVector<f64, 6>) {
+    let r0 = so3::exp(&Vector3::new(0.1, -0.2, 0.3));
+    let g0 = RigidMotions::element(&r0, &Vector3::new(1.0, -2.0, 3.0));
+    (g0, SVector::from([1.0, 0.2, 0.8, 0.5, 0.0, 2.0]))
+}
+
+/// Error of a falling-body run against the exact solution at its end: the attitude angle
+/// |log(R_exactᵀR)|, and position and body velocity relative to their sizes.
+fn falling_error(body: &FallingBody, g: &SVector<f64, 12>, xi: &SVector<f64, 6>, t: f64) -> f64 {
+    let (g0, xi0) = falling_start();
+    let (exact_g, exact_xi) = body.exact(&g0, &xi0, t).unwrap();
+    let attitude =
+        so3::log(&(RigidMotions::rotation(&exact_g).transpose() * RigidMotions::rotation(g)))
+            .norm();
+    let position = (RigidMotions::position(g) - RigidMotions::position(&exact_g)).norm()
+        / RigidMotions::position(&exact_g).norm();
+    let velocity = (xi - exact_xi).norm() / exact_xi.norm();
+    attitude.max(position).max(velocity)
+}
+
+/// A falling-body run on SE(3) with `points` CGL points to `t_end` in steps of `h`: its error,
+/// the largest defect ‖RᵀR − I‖ and the largest energy error relative to the energy's parts.
+fn falling_run(body: FallingBody, points: usize, h: f64, t_end: f64) -> (f64, f64, f64) {
+    let (g0, xi0) = falling_start();
+    let integrator: GroupIntegrator<_, RigidMotions, 6, 12> =
+        Integrator::new(body, LieSvi::new(points));
+    let mut observers = (DefectError::default(), EnergyError::default());
+    let run = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            h,
+            t_end,
+            &mut observers,
+        )
+        .unwrap();
+    let error = falling_error(&body, &run.last.g, &run.last.xi, run.last.t);
+    let energy_scale = body.energy(&run.last.g, &run.last.xi).abs().max(1.0)
+        + body.gravity * RigidMotions::position(&run.last.g)[2].abs();
+    (error, observers.0.max, observers.1.max / energy_scale)
+}
+
+#[test]
+fn falling_body_on_se3_matches_the_exact_solution_with_its_orders() {
+    println!("points  h        error at T = 10   observed order");
+    for (points, order, steps) in [
+        (2, 2.0, [800, 1600]),
+        (3, 4.0, [500, 1000]),
+        (4, 6.0, [400, 800]),
+    ] {
+        let errors: Vec<f64> = steps
+            .iter()
+            .map(|&n| falling_run(FallingBody::default(), points, 10.0 / n as f64, 10.0).0)
+            .collect();
+        let observed = (errors[0] / errors[1]).log2();
+        println!(
+            "{points}       {:<8} {:e}  {observed:.2}",
+            10.0 / steps[1] as f64,
+            errors[1]
+        );
+        assert!(
+            (observed - order).abs() < 0.2,
+            "{points} points: order {observed}"
+        );
+    }
+}
+
+/// The torque-free motion in space (no gravity: the centre of mass moves uniformly).
+#[test]
+fn free_body_on_se3_to_t_100_within_1e_10() {
+    let free = FallingBody {
+        gravity: 0.0,
+        ..FallingBody::default()
+    };
+    let (error, defect, energy) = falling_run(free, 3, 0.0035, 100.0);
+    println!(
+        "SE(3), 3 points, h = 0.0035, T = 100: error {error:e}, ‖RᵀR − I‖ ≤ {defect:e}, relative energy error {energy:e}"
+    );
+    assert!(error < 1e-10, "{error:e}");
+    assert!(defect < 1e-13, "{defect:e}");
+    assert!(energy < 1e-13, "{energy:e}");
+}
+
+/// The falling body on SO(3) × ℝ³: the position is a separate factor and its body velocity
+/// the spatial velocity u = ẋ.
+#[derive(Clone, Copy)]
+struct FallingOnProduct(FallingBody);
+
+impl GroupLagrangian<6, 12> for FallingOnProduct {
+    type Group = RotationsAndTranslations;
+    fn lagrangian<D: Scalar>(&self, g: &SVector<D, 12>, xi: &SVector<D, 6>) -> D {
+        let body = &self.0;
+        let [i1, i2, i3] = body.inertia;
+        let rotation = (xi[0] * xi[0] * i1 + xi[1] * xi[1] * i2 + xi[2] * xi[2] * i3) * 0.5;
+        let translation = (xi[3] * xi[3] + xi[4] * xi[4] + xi[5] * xi[5]) * (0.5 * body.mass);
+        rotation + translation - g[11] * (body.mass * body.gravity)
+    }
+}
+
+#[test]
+fn falling_body_on_so3_times_r3_matches_the_exact_solution() {
+    let body = FallingBody::default();
+    let (g0, xi0) = falling_start();
+    let r0 = RigidMotions::rotation(&g0);
+    // The same state in the product's coordinates: ξ = (ω, ẋ) with ẋ = Rv.
+    let mut xi = xi0;
+    let u0 = r0 * xi0.fixed_rows::<3>(3);
+    xi.fixed_rows_mut::<3>(3).copy_from(&u0);
+    let integrator: GroupIntegrator<_, RotationsAndTranslations, 6, 12> =
+        Integrator::new(FallingOnProduct(body), LieSvi::new(3));
+    let mut momentum = SpatialMomentumError::<6>::default();
+    let run = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi },
+            0.004,
+            100.0,
+            &mut momentum,
+        )
+        .unwrap();
+    // Back to SE(3)'s body velocity for the comparison.
+    let r = RigidMotions::rotation(&run.last.g);
+    let mut body_xi = run.last.xi;
+    let v = r.transpose() * run.last.xi.fixed_rows::<3>(3);
+    body_xi.fixed_rows_mut::<3>(3).copy_from(&v);
+    let error = falling_error(&body, &run.last.g, &body_xi, run.last.t);
+    println!(
+        "SO(3) × R³, 3 points, h = 0.004, T = 100: error {error:e}; spatial momentum drift {:?}",
+        momentum.max.as_slice()
+    );
+    assert!(error < 1e-10, "{error:e}");
+    // Angular momentum RΠ of the rotation factor (all three components: the rotation is
+    // torque-free) and horizontal linear momentum are Noether momenta.
+    let scale = 2.5;
+    for k in [0, 1, 2, 3, 4] {
+        assert!(
+            momentum.max[k] < 1e-13 * scale,
+            "component {k}: {:e}",
+            momentum.max[k]
+        );
+    }
+}
+
+#[test]
+fn falling_body_on_se3_conserves_its_noether_momenta() {
+    // Symmetries of L on SE(3): translations along x and y and rotations about the vertical
+    // through the origin; the spatial momentum is (RΠ + x × mẋ, mẋ).
+    let body = FallingBody::default();
+    let (g0, xi0) = falling_start();
+    let integrator: GroupIntegrator<_, RigidMotions, 6, 12> = Integrator::new(body, LieSvi::new(3));
+    let mut momentum = SpatialMomentumError::<6>::default();
+    integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            0.01,
+            50.0,
+            &mut momentum,
+        )
+        .unwrap();
+    let initial = momentum.initial.unwrap();
+    println!(
+        "SE(3) spatial momentum drift {:?} from {:?}",
+        momentum.max.as_slice(),
+        initial.as_slice()
+    );
+    // Round-off relative to the size the components reach (x × mẋ grows with the fall).
+    let scale = momentum.max.amax();
+    for k in [2, 3, 4] {
+        assert!(
+            momentum.max[k] < 1e-12 * scale,
+            "component {k}: {:e}",
+            momentum.max[k]
+        );
+    }
+    // The other components change under gravity.
+    assert!(momentum.max[5] > 1.0);
+}
+
+#[test]
+fn bad_input_on_a_group_gives_typed_errors() {
+    let body = FallingBody::default();
+    let (g0, xi0) = falling_start();
+    let integrator: GroupIntegrator<_, RigidMotions, 6, 12> = Integrator::new(body, LieSvi::new(3));
+    // A configuration that is not a rigid motion: R scaled by 1.01.
+    let mut bent = g0;
+    for k in 0..9 {
+        bent[k] *= 1.01;
+    }
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: bent, xi: xi0 },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "initial configuration"),
+        "{error}"
+    );
+    assert!(error.to_string().contains("SE(3)"), "{error}");
+    // A reflection.
+    let mut mirrored = g0;
+    for k in 0..3 {
+        mirrored[k] = -mirrored[k];
+    }
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity {
+                g: mirrored,
+                xi: xi0,
+            },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "initial configuration"),
+        "{error}"
+    );
+    // A non-finite velocity.
+    let mut broken = xi0;
+    broken[4] = f64::NAN;
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: broken },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        error.to_string().contains("initial body velocity[4]"),
+        "{error}"
+    );
+    // A step the natural chart cannot reach: |ω| h ≥ π.
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            3.0,
+            6.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(error, Error::OutsideChart { step: 0, reach, .. } if reach >= 1.0),
+        "{error}"
+    );
+    assert_eq!(error.kind(), "outside_chart");
+    // A singular inertia: the Legendre map cannot be inverted.
+    let flat = FallingBody {
+        inertia: [0.0, 2.0, 3.0],
+        ..body
+    };
+    let integrator: GroupIntegrator<_, RigidMotions, 6, 12> = Integrator::new(flat, LieSvi::new(3));
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Momentum {
+                g: g0,
+                momentum: xi0,
+            },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(matches!(error, Error::LegendreMap { .. }), "{error}");
+    assert!(error.to_string().contains("singular"), "{error}");
+    // The reduced form on a Lagrangian that is not G-invariant.
+    let integrator: GroupIntegrator<_, RigidMotions, 6, 12> =
+        Integrator::new(body, LieSvi::new(3).with_form(Form::Reduced));
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "form"),
+        "{error}"
+    );
+}
+
+#[test]
+fn a_wrong_g_invariance_declaration_is_caught() {
+    #[derive(Clone, Copy)]
+    struct Claims(FallingBody);
+    impl GroupLagrangian<6, 12> for Claims {
+        type Group = RigidMotions;
+        const G_INVARIANT: bool = true;
+        fn lagrangian<D: Scalar>(&self, g: &SVector<D, 12>, xi: &SVector<D, 6>) -> D {
+            self.0.lagrangian(g, xi)
+        }
+    }
+    let (g0, xi0) = falling_start();
+    let integrator: GroupIntegrator<_, RigidMotions, 6, 12> =
+        Integrator::new(Claims(FallingBody::default()), LieSvi::new(3));
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "G_INVARIANT"),
+        "{error}"
+    );
+}
