@@ -5,13 +5,13 @@
 
 use nalgebra::SVector;
 use svi::lie_group::{
-    DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, LieSvi, RigidBodyDefaults,
-    RigidBodyIntegrator, RigidBodyLagrangian, RigidInitial, RigidMotions, Rotations,
-    RotationsAndTranslations, SpatialMomentumError, so3,
+    DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, LieSvi, Power,
+    RigidBodyDefaults, RigidBodyIntegrator, RigidBodyLagrangian, RigidInitial, RigidMotions,
+    Rotations, RotationsAndTranslations, SpatialMomentumError, so3,
 };
 use svi::observer::EnergyError;
 use svi::{Error, Integrator, Scalar};
-use svi_models::{FallingBody, FreeRigidBody, HeavyTop};
+use svi_models::{DoubleSphericalPendulum, FallingBody, FreeRigidBody, HeavyTop};
 
 type Vector3 = SVector<f64, 3>;
 
@@ -410,4 +410,134 @@ fn a_wrong_g_invariance_declaration_is_caught() {
         matches!(&error, Error::InvalidParameter { name, .. } if name == "G_INVARIANT"),
         "{error}"
     );
+}
+
+/// The double spherical pendulum in angles: qᵢ = (sin θᵢ cos φᵢ, sin θᵢ sin φᵢ, −cos θᵢ),
+/// coordinates (θ₁, φ₁, θ₂, φ₂), unit lengths and masses.
+struct DoublePendulumInAngles {
+    gravity: f64,
+}
+
+impl svi::Lagrangian<nalgebra::U4> for DoublePendulumInAngles {
+    const TIME_DEPENDENT: bool = false;
+    fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 4>, v: &SVector<D, 4>) -> D {
+        let mut position = SVector::<D, 3>::zeros();
+        let mut velocity = SVector::<D, 3>::zeros();
+        let mut sum = D::from(0.0);
+        for i in 0..2 {
+            let (theta, phi, theta_rate, phi_rate) =
+                (q[2 * i], q[2 * i + 1], v[2 * i], v[2 * i + 1]);
+            let (st, ct) = theta.sin_cos();
+            let (sp, cp) = phi.sin_cos();
+            position += SVector::<D, 3>::new(st * cp, st * sp, -ct);
+            velocity += SVector::<D, 3>::new(
+                ct * cp * theta_rate - st * sp * phi_rate,
+                ct * sp * theta_rate + st * cp * phi_rate,
+                st * theta_rate,
+            );
+            sum += velocity.dot(&velocity) * 0.5 - position[2] * self.gravity;
+        }
+        sum
+    }
+}
+
+/// Direction and rate of a link in angles.
+fn link(theta: f64, phi: f64, theta_rate: f64, phi_rate: f64) -> (Vector3, Vector3) {
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = phi.sin_cos();
+    (
+        Vector3::new(st * cp, st * sp, -ct),
+        Vector3::new(
+            ct * cp * theta_rate - st * sp * phi_rate,
+            ct * sp * theta_rate + st * cp * phi_rate,
+            st * theta_rate,
+        ),
+    )
+}
+
+#[test]
+fn double_spherical_pendulum_on_so3_squared_matches_the_angles() {
+    let angles = [1.0, 0.3, 1.4, -0.5];
+    let rates = [0.2, 1.0, -0.3, 0.8];
+    // Reference: SVI with 9 points in the angles (order 18), h = 0.01.
+    let reference = Integrator::new(DoublePendulumInAngles { gravity: 9.81 }, svi::Svi::new(9))
+        .run_from_velocity(
+            0.0,
+            SVector::from(angles),
+            SVector::from(rates),
+            0.01,
+            5.0,
+            &mut (),
+        )
+        .unwrap();
+    let q = reference.last.q;
+    let (first, _) = link(q[0], q[1], 0.0, 0.0);
+    let (second, _) = link(q[2], q[3], 0.0, 0.0);
+    let exact = [first, first + second];
+    // Lie-SVI on SO(3)².
+    let chain = DoubleSphericalPendulum::default();
+    let links = [
+        link(angles[0], angles[1], rates[0], rates[1]),
+        link(angles[2], angles[3], rates[2], rates[3]),
+    ];
+    let (g0, xi0) = chain.state(&[links[0].0, links[1].0], &[links[0].1, links[1].1]);
+    let integrator: GroupIntegrator<_, Power<Rotations, 2, 3, 9>, 6, 18> =
+        Integrator::new(chain, LieSvi::new(5));
+    let mut observers = (
+        SpatialMomentumError::<6>::default(),
+        EnergyError::default(),
+        DefectError::default(),
+    );
+    let run = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            0.01,
+            5.0,
+            &mut observers,
+        )
+        .unwrap();
+    let positions = chain.positions(&run.last.g);
+    let error = (0..2)
+        .map(|i| (positions[i] - exact[i]).amax())
+        .fold(0.0, f64::max);
+    // Vertical angular momentum Σ (Rⱼμⱼ)·e₃ and the spins μⱼ,₃.
+    let (initial, last) = (
+        observers.0.initial.unwrap(),
+        run.last.spatial_momentum::<Power<Rotations, 2, 3, 9>>(),
+    );
+    let vertical = (last[2] + last[5] - initial[2] - initial[5]).abs();
+    let spins = run.last.momentum[2].abs().max(run.last.momentum[5].abs());
+    println!(
+        "double spherical pendulum, lie-svi 5 points, h = 0.01, T = 5: position error {error:e}, \
+         vertical momentum {vertical:e}, spins {spins:e}, energy {:e}, ‖RᵀR − I‖ {:e}",
+        observers.1.max, observers.2.max
+    );
+    assert!(error < 1e-9, "{error:e}");
+    assert!(vertical < 1e-13, "{vertical:e}");
+    assert!(spins < 1e-13, "{spins:e}");
+    assert!(observers.2.max < 1e-13);
+}
+
+#[test]
+fn a_group_too_large_for_the_dense_derivatives_is_a_typed_error() {
+    let chain = svi_models::SphericalChain::<8, 24, 72>::default();
+    let directions = [-Vector3::z(); 8];
+    let (g0, xi0) = chain.state(&directions, &[Vector3::zeros(); 8]);
+    let integrator: GroupIntegrator<_, Power<Rotations, 8, 3, 9>, 24, 72> =
+        Integrator::new(chain, LieSvi::new(3));
+    let error = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            0.01,
+            1.0,
+            &mut (),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "group dimension"),
+        "{error}"
+    );
+    assert!(error.to_string().contains("24"), "{error}");
 }

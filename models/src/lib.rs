@@ -148,6 +148,7 @@ pub mod relativistic_chain;
 pub mod restricted_three_body;
 pub mod schrodinger;
 pub mod sine_gordon_chain;
+pub mod spherical_chain;
 pub mod spring_pendulum;
 pub mod toda;
 
@@ -177,6 +178,7 @@ pub use relativistic_chain::{RelativisticChain, RelativisticChainH};
 pub use restricted_three_body::RestrictedThreeBody;
 pub use schrodinger::{NlsSoliton, SchrodingerPacket};
 pub use sine_gordon_chain::SineGordonChain;
+pub use spherical_chain::{DoubleSphericalPendulum, SphericalChain};
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
 

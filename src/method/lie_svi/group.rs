@@ -18,7 +18,7 @@
 //! The discrete Noether theorem holds as on SO(3): for a left-invariant L the spatial momentum
 //! Ad_{g⁻¹}ᵀμ is conserved, since Ad_{g_{k+1}⁻¹}ᵀ Ad_Fᵀ = Ad_{g_k⁻¹}ᵀ.
 
-use super::group_equations::{GroupDerivatives, assemble_group, configuration_sum};
+use super::group_equations::{GroupDerivatives, assemble_group, configuration_sum_at};
 use super::tables::StepTables;
 use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE};
 use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
@@ -29,6 +29,26 @@ use crate::method::{MethodInfo, StepReport};
 use crate::model::group::{GroupLagrangian, GroupLagrangianExt, LieGroup};
 use crate::nonlinear::Newton;
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+
+/// The largest group dimension N the dense derivatives support: each Gauss point differentiates
+/// L in hyper-dual numbers with N + N directions (N² + 2N + 1 numbers each, on the stack), so
+/// beyond this a group needs derivatives that exploit its structure (chains of links).
+pub const MAX_GROUP_DIMENSION: usize = 12;
+
+/// [`MAX_GROUP_DIMENSION`] as a typed error.
+fn check_dimension<const N: usize>() -> Result<(), Error> {
+    if N > MAX_GROUP_DIMENSION {
+        return Err(Error::invalid(
+            "group dimension",
+            format!(
+                "{N} exceeds {MAX_GROUP_DIMENSION}, the largest group lie-svi differentiates \
+                 densely (larger groups, such as chains of more than four links on SO(3), are \
+                 not supported yet)"
+            ),
+        ));
+    }
+    Ok(())
+}
 
 /// Tables, buffers and warm-start data of a [`LieSvi`] run on a group of dimension `N`.
 #[derive(Debug, Clone)]
@@ -97,7 +117,10 @@ where
         LieSvi::info(self)
     }
 
+    /// Validate the options (and the group's dimension, at most [`MAX_GROUP_DIMENSION`]) and
+    /// build every table and buffer for steps of size `h`.
     fn workspace(&self, _model: &L, h: f64) -> Result<GroupWorkspace<N>, Error> {
+        check_dimension::<N>()?;
         self.validate(L::G_INVARIANT)?;
         require_positive("h", h)?;
         let tables = StepTables::new(self.points, self.quadrature_points(), h)?;
@@ -163,9 +186,8 @@ where
             return Err(failure);
         }
         let end = unknowns.fixed_rows::<N>(last).into_owned();
-        // The derivatives are those of the last Newton iterate, which the increment below
-        // moves by less than the iteration's tolerance: g_R from them is as exact.
-        let torque = configuration_sum(tables, points);
+        // g_R at the converged nodes (the assembly's is one Newton iterate behind).
+        let torque = configuration_sum_at(model, tables, *reduced, &state.g, unknowns);
         let adjoint_minus_identity = L::Group::ad(&end) * L::Group::dexp(&end);
         increment.g = L::Group::translate_difference(&state.g, &L::Group::exp_minus_identity(&end));
         increment.momentum = adjoint_minus_identity.transpose() * state.momentum
@@ -209,14 +231,16 @@ where
         })
     }
 
-    /// Checks the initial condition: finite values and a configuration in the group
-    /// ([`LieGroup::defect`] at most [`ORTHOGONALITY_TOLERANCE`]).
+    /// Checks the group's dimension (at most [`MAX_GROUP_DIMENSION`]) and the initial
+    /// condition: finite values, a configuration in the group ([`LieGroup::defect`] at most
+    /// [`ORTHOGONALITY_TOLERANCE`]) and an invertible Legendre map.
     fn initial_state(
         &self,
         model: &L,
         t0: f64,
         initial: &GroupInitial<N, E>,
     ) -> Result<GroupState<N, E>, Error> {
+        check_dimension::<N>()?;
         let (g, second, name) = match initial {
             GroupInitial::Velocity { g, xi } => (g, xi, "initial body velocity"),
             GroupInitial::Momentum { g, momentum } => (g, momentum, "initial body momentum"),

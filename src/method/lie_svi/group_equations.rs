@@ -8,16 +8,34 @@
 //! On SO(3), dexp_xᵀ = dexp_{−x} and this is the SO(3) equation; on a general group the
 //! transpose stays (parent module docs for the derivation).
 //!
-//! The Hessian of ℓ in 3N variables is assembled from N × N blocks, each one num-dual
-//! hyper-dual evaluation (∂²/∂x∂y with x and y seeded separately): stable Rust cannot size a
-//! 3N-variable dual number from the group's N, and the blocks cost about as much. The reduced
-//! form needs the (a, b) blocks only.
+//! # Derivatives by the chain rule
+//! ℓ's Hessian in 3N variables is assembled from N × N blocks (stable Rust cannot size a
+//! 3N-variable dual number from the group's N). Differentiating the whole of ℓ block by block
+//! would push the group's exp and dexp through every hyper-dual evaluation; instead, with
+//! ĝ = g_k exp(a), perturbations (η, α, β) of (0, a, b) and A = Ad_{exp(−a)}, B = dexp_{−a},
+//! W(a, b) = dexp_{−a} b (the body velocity):
+//!
+//! - g_k exp(η) exp(a + α) = ĝ exp(ζ) with ζ = Aη + Bα + ½ S(α, α) + ½[Aη, Bα] + O(3),
+//!   because exp(−a) exp(η) exp(a) = exp(Aη) exactly, log(exp(−a) exp(a + α)) = Bα +
+//!   ½ S(α, α) + … with S(α, α) = ∂_a(W(a, α))·α (differentiate dexp_{−γ}γ' = W(a + sα, α)
+//!   at s = 0, where the bracket [γ', γ'] vanishes), and the Baker–Campbell–Hausdorff series
+//!   log(e^X e^Y) = X + Y + ½[X, Y] + …;
+//! - the velocity is w = W(a + α, b + β).
+//!
+//! So ℓ = L̂(ζ, w) with the local Lagrangian L̂(ζ, w) = L(ĝ exp(ζ), w), and the second-order
+//! chain rule needs only: λ = ∂L̂/∂ζ, ν = ∂L̂/∂w and the blocks ζζ, ζw, ww of L̂ at (0, W)
+//! (three hyper-dual evaluations of the user's L, at ĝ times a curve that agrees with exp to
+//! second order); the Jacobians ∂W/∂a and B; and the Hessians of the scalars
+//! ⟨ν, W(a + α, b + β)⟩ and ½⟨λ, W(a + α, α)⟩ (two hyper-dual evaluations of W, which has
+//! no Lagrangian in it). The bracket term gives ∂²ℓ/∂η∂α its ½ Aᵀ C B with
+//! C_ij = ⟨λ, [e_i, e_j]⟩. The reduced form has λ = 0 and L̂ evaluated at e. The tests check
+//! every block against brute-force hyper-dual differentiation of ℓ.
 
 use super::tables::StepTables;
 use crate::method::group_space::GroupState;
 use crate::model::group::{GroupLagrangian, LieGroup};
 use nalgebra::{Const, DMatrix, DVector, SMatrix, SVector};
-use num_dual::{DualSVec64, DualVec, HyperDualVec, jacobian, partial_hessian};
+use num_dual::{DualSVec64, DualVec, HyperDualVec, gradient, jacobian, partial_hessian};
 
 /// A hyper-dual number with N first-derivative directions on each side.
 type Mixed<const N: usize> = HyperDualVec<f64, Const<N>, Const<N>>;
@@ -71,8 +89,9 @@ fn both<const N: usize>(
 
 /// The gradient and Hessian blocks of ℓ at (0, a, b) (the η blocks only in the full form),
 /// by the chain rule through the local Lagrangian L̂(ζ, w) = L(ĝ exp(ζ), w), ĝ = g_k exp(a)
-/// (module docs): three hyper-dual evaluations of the user's L and two of the group's body
-/// velocity W(a, b) = dexp_{−a} b.
+/// (module docs): three hyper-dual evaluations of the user's L (at ĝ exp(ζ) to second order,
+/// [`LieGroup::exp_second_order`]) and two of the group's body velocity
+/// W(a, b) = dexp_{−a} b.
 pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
     reduced: bool,
@@ -100,7 +119,7 @@ pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const 
     } else {
         let base = L::Group::compose(base, &L::Group::exp(a)).map(Mixed::from_re);
         let local = |z: &SVector<Mixed<N>, N>, w: &SVector<Mixed<N>, N>| {
-            model.lagrangian(&L::Group::compose(&base, &L::Group::exp(z)), w)
+            model.lagrangian(&L::Group::compose(&base, &L::Group::exp_second_order(z)), w)
         };
         let (_, lambda, _, zz) = partial_hessian(
             |(x, y)| local(&both(&x, &y, &zero), &lift(&w0)),
@@ -157,7 +176,7 @@ pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const 
 }
 
 /// g_R = Σ_μ W_μ ∂ℓ/∂η from the derivatives of the last assembly.
-pub(super) fn configuration_sum<const N: usize>(
+fn configuration_sum<const N: usize>(
     tables: &StepTables,
     points: &[GroupDerivatives<N>],
 ) -> SVector<f64, N> {
@@ -165,6 +184,37 @@ pub(super) fn configuration_sum<const N: usize>(
         .iter()
         .zip(&tables.weights)
         .fold(SVector::zeros(), |sum, (p, w)| sum + p.eta * *w)
+}
+
+/// g_R = Σ_μ W_μ ∂ℓ/∂η at the nodes `z` (zero in the reduced form): ∂ℓ/∂η = Aᵀ ∂L̂/∂ζ with
+/// A = Ad_{exp(−a)} (module docs), one first-order dual evaluation of L per Gauss point.
+pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    model: &L,
+    tables: &StepTables,
+    reduced: bool,
+    base: &SVector<f64, E>,
+    z: &DVector<f64>,
+) -> SVector<f64, N> {
+    let mut sum = SVector::zeros();
+    if reduced {
+        return sum;
+    }
+    for (mu, w) in tables.weights.iter().enumerate() {
+        let (a, b) = tables.point::<N>(mu, z);
+        let moved = L::Group::compose(base, &L::Group::exp(&a)).map(DualVec::from_re);
+        let velocity = L::Group::body_velocity(&a, &b).map(DualVec::from_re);
+        let (_, lambda) = gradient(
+            |zeta: SVector<DualSVec64<N>, N>| {
+                model.lagrangian(
+                    &L::Group::compose(&moved, &L::Group::exp_second_order(&zeta)),
+                    &velocity,
+                )
+            },
+            &SVector::zeros(),
+        );
+        sum += L::Group::adjoint(&L::Group::exp(&(-a))).transpose() * lambda * *w;
+    }
+    sum
 }
 
 /// Residual and Jacobian in ξ¹…ξᵈ of the internal-stage conditions and of

@@ -107,7 +107,7 @@ use crate::nonlinear::Newton;
 use crate::spectral::check_options;
 use derivatives::PointDerivatives;
 use equations::{assemble, torque_sum};
-pub use group::GroupWorkspace;
+pub use group::{GroupWorkspace, MAX_GROUP_DIMENSION};
 use nalgebra::{DMatrix, DVector, SMatrix};
 use tables::StepTables;
 

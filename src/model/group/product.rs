@@ -1,4 +1,5 @@
-//! The direct product G₁ × G₂ of two groups on the [`LieGroup`] interface: elements (g₁, g₂)
+//! The direct product G₁ × G₂ of two groups ([`Product`]) and the power Gᴷ of one
+//! ([`Power`]) on the [`LieGroup`] interface: elements (g₁, g₂)
 //! stored one after the other, algebra elements (x₁, x₂), and every map acting factor by
 //! factor (exp, log, dexp, ad and Ad are block diagonal). Products nest, so SO(3) × ℝ³
 //! ([`RotationsAndTranslations`]) and SO(3)ᴺ or (G × ℝᴷ) × H are all products.
@@ -107,6 +108,12 @@ where
         join(&A::exp_minus_identity(&x1), &B::exp_minus_identity(&x2))
     }
 
+    #[inline]
+    fn exp_second_order<D: Scalar>(x: &SVector<D, N>) -> SVector<D, E> {
+        let (x1, x2) = split::<D, N, NA, NB>(x);
+        join(&A::exp_second_order(&x1), &B::exp_second_order(&x2))
+    }
+
     fn log(g: &SVector<f64, E>) -> SVector<f64, N> {
         let (g1, g2) = split::<f64, E, EA, EB>(g);
         join(&A::log(&g1), &B::log(&g2))
@@ -166,6 +173,182 @@ where
     }
 }
 
+/// Gᴷ, the product of `K` copies of one group G = `G` (dimension `NG`, `EG` stored numbers):
+/// chains of identical links, such as SO(3)ᴷ for K rigid links or spherical pendulums.
+/// Implements `LieGroup<K·NG, K·EG>` (checked at compile time).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Power<G, const K: usize, const NG: usize, const EG: usize>(PhantomData<G>);
+
+/// Factor `k` of a vector of Gᴷ, `M` numbers per factor.
+#[inline]
+fn factor<D: Scalar, const L: usize, const M: usize>(x: &SVector<D, L>, k: usize) -> SVector<D, M> {
+    x.fixed_rows::<M>(M * k).into_owned()
+}
+
+impl<G, const K: usize, const NG: usize, const EG: usize, const N: usize, const E: usize>
+    LieGroup<N, E> for Power<G, K, NG, EG>
+where
+    G: LieGroup<NG, EG>,
+{
+    const NAME: &'static str = "power of a group";
+
+    #[inline]
+    fn identity<D: Scalar>() -> SVector<D, E> {
+        const {
+            assert!(
+                N == K * NG && E == K * EG,
+                "a power's shape is K times its group's"
+            )
+        };
+        let mut g = SVector::<D, E>::zeros();
+        for k in 0..K {
+            g.fixed_rows_mut::<EG>(EG * k)
+                .copy_from(&G::identity::<D>());
+        }
+        g
+    }
+
+    #[inline]
+    fn compose<D: Scalar>(g: &SVector<D, E>, h: &SVector<D, E>) -> SVector<D, E> {
+        let mut out = SVector::<D, E>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<EG>(EG * k).copy_from(&G::compose(
+                &factor::<D, E, EG>(g, k),
+                &factor::<D, E, EG>(h, k),
+            ));
+        }
+        out
+    }
+
+    fn inverse(g: &SVector<f64, E>) -> SVector<f64, E> {
+        let mut out = SVector::<f64, E>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<EG>(EG * k)
+                .copy_from(&G::inverse(&factor::<f64, E, EG>(g, k)));
+        }
+        out
+    }
+
+    #[inline]
+    fn exp_minus_identity<D: Scalar>(x: &SVector<D, N>) -> SVector<D, E> {
+        const {
+            assert!(
+                N == K * NG && E == K * EG,
+                "a power's shape is K times its group's"
+            )
+        };
+        let mut out = SVector::<D, E>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<EG>(EG * k)
+                .copy_from(&G::exp_minus_identity(&factor::<D, N, NG>(x, k)));
+        }
+        out
+    }
+
+    #[inline]
+    fn exp_second_order<D: Scalar>(x: &SVector<D, N>) -> SVector<D, E> {
+        let mut out = SVector::<D, E>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<EG>(EG * k)
+                .copy_from(&G::exp_second_order(&factor::<D, N, NG>(x, k)));
+        }
+        out
+    }
+
+    fn log(g: &SVector<f64, E>) -> SVector<f64, N> {
+        let mut out = SVector::<f64, N>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<NG>(NG * k)
+                .copy_from(&G::log(&factor::<f64, E, EG>(g, k)));
+        }
+        out
+    }
+
+    fn translate_difference(g: &SVector<f64, E>, delta: &SVector<f64, E>) -> SVector<f64, E> {
+        let mut out = SVector::<f64, E>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<EG>(EG * k)
+                .copy_from(&G::translate_difference(
+                    &factor::<f64, E, EG>(g, k),
+                    &factor::<f64, E, EG>(delta, k),
+                ));
+        }
+        out
+    }
+
+    fn hat(x: &SVector<f64, N>) -> SVector<f64, E> {
+        let mut out = SVector::<f64, E>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<EG>(EG * k)
+                .copy_from(&G::hat(&factor::<f64, N, NG>(x, k)));
+        }
+        out
+    }
+
+    #[inline]
+    fn ad<D: Scalar>(x: &SVector<D, N>) -> SMatrix<D, N, N> {
+        let mut m = SMatrix::<D, N, N>::zeros();
+        for k in 0..K {
+            m.fixed_view_mut::<NG, NG>(NG * k, NG * k)
+                .copy_from(&G::ad(&factor::<D, N, NG>(x, k)));
+        }
+        m
+    }
+
+    fn adjoint(g: &SVector<f64, E>) -> SMatrix<f64, N, N> {
+        let mut m = SMatrix::<f64, N, N>::zeros();
+        for k in 0..K {
+            m.fixed_view_mut::<NG, NG>(NG * k, NG * k)
+                .copy_from(&G::adjoint(&factor::<f64, E, EG>(g, k)));
+        }
+        m
+    }
+
+    #[inline]
+    fn dexp<D: Scalar>(x: &SVector<D, N>) -> SMatrix<D, N, N> {
+        let mut m = SMatrix::<D, N, N>::zeros();
+        for k in 0..K {
+            m.fixed_view_mut::<NG, NG>(NG * k, NG * k)
+                .copy_from(&G::dexp(&factor::<D, N, NG>(x, k)));
+        }
+        m
+    }
+
+    fn dexp_inverse(x: &SVector<f64, N>) -> SMatrix<f64, N, N> {
+        let mut m = SMatrix::<f64, N, N>::zeros();
+        for k in 0..K {
+            m.fixed_view_mut::<NG, NG>(NG * k, NG * k)
+                .copy_from(&G::dexp_inverse(&factor::<f64, N, NG>(x, k)));
+        }
+        m
+    }
+
+    #[inline]
+    fn body_velocity<D: Scalar>(x: &SVector<D, N>, rate: &SVector<D, N>) -> SVector<D, N> {
+        let mut out = SVector::<D, N>::zeros();
+        for k in 0..K {
+            out.fixed_rows_mut::<NG>(NG * k)
+                .copy_from(&G::body_velocity(
+                    &factor::<D, N, NG>(x, k),
+                    &factor::<D, N, NG>(rate, k),
+                ));
+        }
+        out
+    }
+
+    fn defect(g: &SVector<f64, E>) -> f64 {
+        (0..K).fold(0.0, |worst: f64, k| {
+            worst.max(G::defect(&factor::<f64, E, EG>(g, k)))
+        })
+    }
+
+    fn chart_reach(x: &SVector<f64, N>) -> f64 {
+        (0..K).fold(0.0, |worst: f64, k| {
+            worst.max(G::chart_reach(&factor::<f64, N, NG>(x, k)))
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::rigid_motions::RigidMotions;
@@ -182,6 +365,10 @@ mod tests {
             Product<RigidMotions, Product<Rotations, Translations<2>, 3, 9, 2, 2>, 6, 12, 5, 11>;
         super::super::check_group::<Nested, 11, 23>(&[SVector::from([
             0.3, -0.7, 1.1, -0.4, 0.2, 0.9, 0.1, 0.2, -0.3, 1.0, -2.0,
+        ])]);
+        // SO(3)³.
+        super::super::check_group::<Power<Rotations, 3, 3, 9>, 9, 27>(&[SVector::from([
+            0.3, -0.7, 1.1, -0.4, 0.2, 0.9, 0.1, 0.2, -0.3,
         ])]);
     }
 }

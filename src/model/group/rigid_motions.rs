@@ -185,6 +185,17 @@ impl LieGroup<6, 12> for RigidMotions {
         Self::element(&so3::exp_minus_identity(&omega), &(so3::dexp(&omega) * v))
     }
 
+    /// (I + ω̂ + ½ω̂², v + ½ ω × v): the entries of I + ξ̂ + ½ξ̂².
+    #[inline]
+    fn exp_second_order<D: Scalar>(x: &SVector<D, 6>) -> SVector<D, 12> {
+        let (omega, v) = Self::parts(x);
+        let h = so3::hat(&omega);
+        Self::element(
+            &(Matrix3::identity() + h + h * h * D::from(0.5)),
+            &(v + so3::cross(&omega, &v) * D::from(0.5)),
+        )
+    }
+
     fn log(g: &SVector<f64, 12>) -> SVector<f64, 6> {
         let omega = so3::log(&Self::rotation(g));
         let v = so3::dexp_inverse(&omega) * Self::position(g);

@@ -47,6 +47,13 @@ impl LieGroup<3, 9> for Rotations {
         Self::element(&so3::exp_minus_identity(x))
     }
 
+    /// I + x̂ + ½x̂².
+    #[inline]
+    fn exp_second_order<D: Scalar>(x: &Vector3<D>) -> SVector<D, 9> {
+        let h = so3::hat(x);
+        Self::element(&(Matrix3::identity() + h + h * h * D::from(0.5)))
+    }
+
     fn log(g: &SVector<f64, 9>) -> Vector3<f64> {
         so3::log(&Self::matrix(g))
     }
