@@ -124,6 +124,7 @@ guide_doctests! {
     GuideConstraintsDoctests: "constraints.md",
     GuideChaosDoctests: "chaos.md",
     GuideHamiltonianDoctests: "hamiltonian.md",
+    GuideRigidBodiesDoctests: "rigid-bodies.md",
 }
 
 #[cfg(test)]
