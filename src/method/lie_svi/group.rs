@@ -122,6 +122,12 @@ where
     fn workspace(&self, _model: &L, h: f64) -> Result<GroupWorkspace<N>, Error> {
         check_dimension::<N>()?;
         self.validate(L::G_INVARIANT)?;
+        if self.form == Form::Reduced && L::FORCED {
+            return Err(Error::invalid(
+                "form",
+                "the reduced Euler–Poincaré form needs an unforced model (FORCED = false)",
+            ));
+        }
         require_positive("h", h)?;
         let tables = StepTables::new(self.points, self.quadrature_points(), h)?;
         let degree = tables.degree;
@@ -146,7 +152,7 @@ where
         &self,
         model: &L,
         workspace: &mut GroupWorkspace<N>,
-        _t: f64,
+        t: f64,
         h: f64,
         state: &GroupState<N, E>,
         increment: &mut GroupState<N, E>,
@@ -178,7 +184,7 @@ where
         let iterations = newton
             .solve(unknowns, |z, jacobian, residual| {
                 assemble_group(
-                    model, tables, *reduced, points, rates, state, z, jacobian, residual,
+                    model, tables, *reduced, points, rates, t, state, z, jacobian, residual,
                 )
             })
             .map_err(|failure| outside(unknowns).unwrap_or(failure))?;
@@ -187,7 +193,7 @@ where
         }
         let end = unknowns.fixed_rows::<N>(last).into_owned();
         // g_R at the converged nodes (the assembly's is one Newton iterate behind).
-        let torque = configuration_sum_at(model, tables, *reduced, &state.g, unknowns);
+        let torque = configuration_sum_at(model, tables, *reduced, t, &state.g, unknowns);
         let adjoint_minus_identity = L::Group::ad(&end) * L::Group::dexp(&end);
         increment.g = L::Group::translate_difference(&state.g, &L::Group::exp_minus_identity(&end));
         increment.momentum = adjoint_minus_identity.transpose() * state.momentum

@@ -51,8 +51,10 @@ pub(super) struct GroupDerivatives<const N: usize> {
     pub(super) b: SVector<f64, N>,
     /// ∂²ℓ/∂a∂a.
     pub(super) aa: SMatrix<f64, N, N>,
-    /// ∂²ℓ/∂a∂b (rows a).
+    /// The derivative in b of the a-row ∂ℓ/∂a (+ Bᵀf with a force).
     pub(super) ab: SMatrix<f64, N, N>,
+    /// The derivative in a of the b-row ∂ℓ/∂b (abᵀ without a force).
+    pub(super) ba: SMatrix<f64, N, N>,
     /// ∂²ℓ/∂b∂b.
     pub(super) bb: SMatrix<f64, N, N>,
     /// ∂²ℓ/∂η∂a (rows η).
@@ -69,6 +71,7 @@ impl<const N: usize> GroupDerivatives<N> {
             b: SVector::zeros(),
             aa: SMatrix::zeros(),
             ab: SMatrix::zeros(),
+            ba: SMatrix::zeros(),
             bb: SMatrix::zeros(),
             eta_a: SMatrix::zeros(),
             eta_b: SMatrix::zeros(),
@@ -157,6 +160,7 @@ pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const 
             + rate.transpose() * ww * rate
             + curvature,
         ab: pull.transpose() * from_b + rate.transpose() * ww * pull + twist,
+        ba: SMatrix::zeros(),
         bb: pull.transpose() * ww * pull,
         ..GroupDerivatives::zeros()
     };
@@ -172,7 +176,51 @@ pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const 
         out.eta_a = adjoint.transpose() * (zz * pull + zw * rate + bracket * pull * 0.5);
         out.eta_b = adjoint.transpose() * from_b;
     }
+    out.ba = out.ab.transpose();
     out
+}
+
+/// Adds the force's terms at one Gauss point (time `t`): the body variation of
+/// g_k exp(η) exp(a + α) is ζ = Aη + Bα + … (A = Ad_{exp(−a)} = I − ad_a B, B = dexp_{−a}),
+/// so the virtual work ⟨f, ζ⟩ adds Bᵀf to the a-row and Aᵀf to the η-row, and their
+/// derivatives in a and b (by num-dual) to the Jacobian. The b-row has no force.
+pub(super) fn add_force<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    model: &L,
+    reduced: bool,
+    t: f64,
+    base: &SVector<f64, E>,
+    a: &SVector<f64, N>,
+    b: &SVector<f64, N>,
+    out: &mut GroupDerivatives<N>,
+) {
+    type D<const N: usize> = DualSVec64<N>;
+    let lifted = base.map(D::<N>::from_re);
+    let time = D::<N>::from_re(t);
+    // (Bᵀf, Aᵀf) at (a', b'); `row` picks one.
+    let rows = |a: &SVector<D<N>, N>, b: &SVector<D<N>, N>, row: bool| {
+        let g = L::Group::compose(&lifted, &L::Group::exp(a));
+        let force = model.external_force(time, &g, &L::Group::body_velocity(a, b));
+        let pull = L::Group::dexp(&(-a));
+        if row {
+            pull.transpose() * force
+        } else {
+            let adjoint = SMatrix::identity() - L::Group::ad(a) * pull;
+            adjoint.transpose() * force
+        }
+    };
+    let (a_lift, b_lift) = (a.map(D::<N>::from_re), b.map(D::<N>::from_re));
+    let (pulled, pulled_a) = jacobian(|x| rows(&x, &b_lift, true), a);
+    let (_, pulled_b) = jacobian(|y| rows(&a_lift, &y, true), b);
+    out.a += pulled;
+    out.aa += pulled_a;
+    out.ab += pulled_b;
+    if !reduced {
+        let (moved, moved_a) = jacobian(|x| rows(&x, &b_lift, false), a);
+        let (_, moved_b) = jacobian(|y| rows(&a_lift, &y, false), b);
+        out.eta += moved;
+        out.eta_a += moved_a;
+        out.eta_b += moved_b;
+    }
 }
 
 /// g_R = Σ_μ W_μ ∂ℓ/∂η from the derivatives of the last assembly.
@@ -187,11 +235,13 @@ fn configuration_sum<const N: usize>(
 }
 
 /// g_R = Σ_μ W_μ ∂ℓ/∂η at the nodes `z` (zero in the reduced form): ∂ℓ/∂η = Aᵀ ∂L̂/∂ζ with
-/// A = Ad_{exp(−a)} (module docs), one first-order dual evaluation of L per Gauss point.
+/// A = Ad_{exp(−a)} (module docs), one first-order dual evaluation of L per Gauss point; with a
+/// force, Aᵀ(∂L̂/∂ζ + f).
 pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
     tables: &StepTables,
     reduced: bool,
+    t: f64,
     base: &SVector<f64, E>,
     z: &DVector<f64>,
 ) -> SVector<f64, N> {
@@ -201,9 +251,10 @@ pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, con
     }
     for (mu, w) in tables.weights.iter().enumerate() {
         let (a, b) = tables.point::<N>(mu, z);
-        let moved = L::Group::compose(base, &L::Group::exp(&a)).map(DualVec::from_re);
-        let velocity = L::Group::body_velocity(&a, &b).map(DualVec::from_re);
-        let (_, lambda) = gradient(
+        let g = L::Group::compose(base, &L::Group::exp(&a));
+        let xi = L::Group::body_velocity(&a, &b);
+        let (moved, velocity) = (g.map(DualVec::from_re), xi.map(DualVec::from_re));
+        let (_, mut lambda) = gradient(
             |zeta: SVector<DualSVec64<N>, N>| {
                 model.lagrangian(
                     &L::Group::compose(&moved, &L::Group::exp_second_order(&zeta)),
@@ -212,6 +263,9 @@ pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, con
             },
             &SVector::zeros(),
         );
+        if L::FORCED {
+            lambda += model.external_force(tables.time(t, mu), &g, &xi);
+        }
         sum += L::Group::adjoint(&L::Group::exp(&(-a))).transpose() * lambda * *w;
     }
     sum
@@ -226,6 +280,7 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
     reduced: bool,
     points: &mut [GroupDerivatives<N>],
     rates: &mut [SMatrix<f64, N, N>],
+    t: f64,
     state: &GroupState<N, E>,
     z: &DVector<f64>,
     jacobian_out: &mut DMatrix<f64>,
@@ -235,6 +290,9 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
     for (mu, point) in points.iter_mut().enumerate() {
         let (a, b) = tables.point::<N>(mu, z);
         *point = group_derivatives(model, reduced, &state.g, &a, &b);
+        if L::FORCED {
+            add_force(model, reduced, tables.time(t, mu), &state.g, &a, &b, point);
+        }
     }
     residual.fill(0.0);
     jacobian_out.fill(0.0);
@@ -251,7 +309,7 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
         for j in 1..=d {
             let (lj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
             let from_a = (p.aa * lj + p.ab * cj) * w;
-            let from_b = (p.ab.transpose() * lj + p.bb * cj) * w;
+            let from_b = (p.ba * lj + p.bb * cj) * w;
             for nu in 1..=d {
                 let (l, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
                 let mut target = jacobian_out.fixed_view_mut::<N, N>(N * (nu - 1), N * (j - 1));

@@ -19,6 +19,8 @@ pub(super) struct StepTables {
     reference_weights: Vec<f64>,
     /// W_μ = (h/2) w_μ.
     pub(super) weights: Vec<f64>,
+    /// Gauss nodes τ_μ ∈ (−1, 1).
+    gauss_nodes: Vec<f64>,
     /// l_ν(τ_μ), m × (d + 1).
     pub(super) values: DMatrix<f64>,
     /// l̇_ν(τ_μ), m × (d + 1).
@@ -45,6 +47,7 @@ impl StepTables {
             h: f64::NAN,
             reference_weights: gauss.weights().to_vec(),
             weights: vec![0.0; gauss.len()],
+            gauss_nodes: gauss.nodes().to_vec(),
             values: basis.value_matrix(gauss.nodes()),
             reference_derivatives: basis.derivative_matrix(gauss.nodes()),
             derivatives: DMatrix::zeros(gauss.len(), degree + 1),
@@ -54,6 +57,11 @@ impl StepTables {
         };
         tables.rescale(h);
         Ok(tables)
+    }
+
+    /// The time t + (h/2)(τ_μ + 1) of Gauss point `mu` on the step from `t`.
+    pub(super) fn time(&self, t: f64, mu: usize) -> f64 {
+        t + 0.5 * self.h * (self.gauss_nodes[mu] + 1.0)
     }
 
     /// Number of Gauss points m.

@@ -154,9 +154,29 @@ pub trait GroupLagrangian<const N: usize, const E: usize> {
     /// always correct; the stepping loop checks a `true` at the initial state.
     const G_INVARIANT: bool = false;
 
+    /// Whether the model has a non-conservative force
+    /// ([`GroupLagrangian::external_force`]); `false` (the default) skips it entirely.
+    const FORCED: bool = false;
+
     /// The value L(g, ξ). Mark it `#[inline]`: the integrator evaluates it with dual numbers
     /// in its inner loop.
     fn lagrangian<D: Scalar>(&self, g: &SVector<D, E>, xi: &SVector<D, N>) -> D;
+
+    /// The non-conservative generalised force f(t, g, ξ) ∈ 𝔤* in the body frame (Lagrange–
+    /// d'Alembert on the group): its virtual work on a variation g exp(εζ) is ⟨f, ζ⟩. On SO(3)
+    /// it is the body torque; on SE(3) (ω, v) a torque and a force, both in the body frame (a
+    /// spatial force F at the body origin is Rᵀ F in the force slots; a spatial torque T is
+    /// Rᵀ T). Generic over the scalar: the integrator differentiates it. Read only when
+    /// [`GroupLagrangian::FORCED`] is `true`; the default is zero.
+    fn external_force<D: Scalar>(
+        &self,
+        t: D,
+        g: &SVector<D, E>,
+        xi: &SVector<D, N>,
+    ) -> SVector<D, N> {
+        let _ = (t, g, xi);
+        SVector::zeros()
+    }
 }
 
 /// Iteration cap of the inverse Legendre map.
