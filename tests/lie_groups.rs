@@ -585,17 +585,12 @@ impl GroupLagrangian<6, 12> for DraggedSe3 {
     }
     fn external_force<D: Scalar>(
         &self,
-        _t: D,
-        _g: &SVector<D, 12>,
+        t: D,
+        g: &SVector<D, 12>,
         xi: &SVector<D, 6>,
     ) -> SVector<D, 6> {
-        SVector::from_fn(|i, _| {
-            if i < 3 {
-                D::from(0.0)
-            } else {
-                -xi[i] * self.0.drag
-            }
-        })
+        // The same slots: −k times the velocity of the centre of mass, here in the body frame.
+        self.0.external_force(t, g, xi)
     }
 }
 

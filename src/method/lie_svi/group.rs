@@ -20,7 +20,7 @@
 
 use super::group_equations::{GroupDerivatives, assemble_group, configuration_sum_at};
 use super::tables::StepTables;
-use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE};
+use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE, check_invariance};
 use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
 use crate::method::group_space::{GroupInitial, GroupPoint, GroupSpace, GroupState};
 use crate::method::space::Space;
@@ -298,17 +298,7 @@ where
         let identity = model.value(&L::Group::identity(), &xi);
         let gradient = model.configuration_gradient(&state.g, &xi).amax();
         let scale = 1.0 + here.abs() + state.momentum.amax() * (1.0 + xi.amax());
-        if (here - identity).abs() > 1e-12 * scale || gradient > 1e-12 * scale {
-            return Err(Error::invalid(
-                "G_INVARIANT",
-                format!(
-                    "the model declares L(g, ξ) = L(e, ξ), but the values differ by {:e} and \
-                     the configuration gradient is {gradient:e}",
-                    (here - identity).abs()
-                ),
-            ));
-        }
-        Ok(())
+        check_invariance("L(g, ξ) = L(e, ξ)", here - identity, gradient, scale)
     }
 
     /// ξ from μ by the inverse Legendre map started at `guess`.

@@ -480,17 +480,7 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         let identity = model.value(&Matrix3::identity(), &omega);
         let torque = model.torque(&state.r, &omega).amax();
         let scale = 1.0 + here.abs() + state.momentum.amax() * (1.0 + omega.amax());
-        if (here - identity).abs() > 1e-12 * scale || torque > 1e-12 * scale {
-            return Err(Error::invalid(
-                "G_INVARIANT",
-                format!(
-                    "the model declares L(R, Ω) = L(I, Ω), but the values differ by {:e} and \
-                     the configuration gradient is {torque:e}",
-                    (here - identity).abs()
-                ),
-            ));
-        }
-        Ok(())
+        check_invariance("L(R, Ω) = L(I, Ω)", here - identity, torque, scale)
     }
 
     /// Ω from Π by the inverse Legendre map started at `guess`.
@@ -584,6 +574,22 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             .chain(point.momentum.iter())
             .all(|x| x.is_finite())
     }
+}
+
+/// A G-invariance declaration (`claim`) against the measured difference L(g, ξ) − L(e, ξ) and
+/// configuration gradient at the initial state, relative to `scale`.
+fn check_invariance(claim: &str, difference: f64, gradient: f64, scale: f64) -> Result<(), Error> {
+    if difference.abs() > 1e-12 * scale || gradient > 1e-12 * scale {
+        return Err(Error::invalid(
+            "G_INVARIANT",
+            format!(
+                "the model declares {claim}, but the values differ by {:e} and the \
+                 configuration gradient is {gradient:e}",
+                difference.abs()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Tables, buffers and warm-start data of a [`LieSvi`] run.
