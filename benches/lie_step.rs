@@ -10,7 +10,9 @@
 //!
 //! `lie_step/falling-body-se3/<p>cgl_<p>gl` is the same measurement through the group
 //! interface ([`svi::lie_group::LieGroup`]) on SE(3): the falling rigid body (h = 0.01),
-//! from the state of the tests (the generic Lie-SVI with chain-rule derivatives).
+//! from the state of the tests (the generic Lie-SVI with chain-rule derivatives), and
+//! `lie_step/heavy-top-on-rotations/<p>cgl_<p>gl` the heavy top through the interface on
+//! [`svi::lie_group::Rotations`], to set against `lie_step/heavy-top` (the SO(3) path).
 //!
 //! Run with `cargo bench --bench lie_step`.
 
@@ -18,10 +20,11 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{SVector, Vector3};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
+use svi::Scalar;
 use svi::Step;
 use svi::lie_group::{
-    Form, GroupLagrangianExt, GroupSpace, GroupState, LieSvi, LieWorkspace, RigidBodyDefaults,
-    RigidBodyExt, RigidBodyLagrangian, RigidMotions, RigidState, so3,
+    Form, GroupLagrangian, GroupLagrangianExt, GroupSpace, GroupState, LieSvi, LieWorkspace,
+    RigidBodyDefaults, RigidBodyExt, RigidBodyLagrangian, RigidMotions, RigidState, Rotations, so3,
 };
 use svi::method::lie_svi::GroupWorkspace;
 use svi_models::{FallingBody, FreeRigidBody, HeavyTop, Pendulum3d};
@@ -101,27 +104,35 @@ fn bench_model<L: RigidBodyLagrangian + RigidBodyDefaults>(
     group.finish();
 }
 
-/// The falling body's workspace and state after [`PRE_STEPS`] steps.
-fn seed_falling(
-    body: &FallingBody,
+/// The heavy top through the group interface.
+struct OnRotations(HeavyTop);
+
+impl GroupLagrangian<3, 9> for OnRotations {
+    type Group = Rotations;
+    #[inline]
+    fn lagrangian<D: Scalar>(&self, g: &SVector<D, 9>, xi: &SVector<D, 3>) -> D {
+        self.0.lagrangian(&Rotations::matrix(g), xi)
+    }
+}
+
+/// A model's workspace and state after [`PRE_STEPS`] steps from (g, ξ).
+fn seed_group<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    model: &L,
     method: &LieSvi,
     h: f64,
-) -> (GroupWorkspace<6>, GroupState<6, 12>) {
-    let r = so3::exp(&Vector3::new(0.1, -0.2, 0.3));
-    let g = RigidMotions::element(&r, &Vector3::new(1.0, -2.0, 3.0));
-    let xi = SVector::<f64, 6>::from([1.0, 0.2, 0.8, 0.5, 0.0, 2.0]);
+    (g, xi): (SVector<f64, E>, SVector<f64, N>),
+) -> (GroupWorkspace<N>, GroupState<N, E>) {
     let mut state = GroupState {
         g,
-        momentum: body.momentum(&g, &xi),
+        momentum: model.momentum(&g, &xi),
     };
     let mut workspace =
-        Step::<FallingBody, GroupSpace<RigidMotions, 6, 12>>::workspace(method, body, h)
-            .expect("valid options");
+        Step::<L, GroupSpace<L::Group, N, E>>::workspace(method, model, h).expect("valid options");
     let mut increment = GroupState::zeros();
     for _ in 0..PRE_STEPS {
-        Step::<FallingBody, GroupSpace<RigidMotions, 6, 12>>::step(
+        Step::<L, GroupSpace<L::Group, N, E>>::step(
             method,
-            body,
+            model,
             &mut workspace,
             0.0,
             h,
@@ -135,10 +146,15 @@ fn seed_falling(
     (workspace, state)
 }
 
-fn falling_steps(c: &mut Criterion) {
-    let body = FallingBody::default();
-    let h = 0.01;
-    let mut group = c.benchmark_group("lie_step/falling-body-se3");
+/// `lie_step/<name>/<p>cgl_<p>gl` through the group interface from (g, ξ) with steps `h`.
+fn bench_group<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    c: &mut Criterion,
+    name: &str,
+    model: &L,
+    start: (SVector<f64, E>, SVector<f64, N>),
+    h: f64,
+) {
+    let mut group = c.benchmark_group(format!("lie_step/{name}"));
     group
         .sample_size(20)
         .measurement_time(Duration::from_secs(2))
@@ -150,14 +166,14 @@ fn falling_steps(c: &mut Criterion) {
                 let mut total = Duration::ZERO;
                 let mut done = 0;
                 while done < iterations {
-                    let (mut workspace, mut state) = seed_falling(&body, &method, h);
+                    let (mut workspace, mut state) = seed_group(model, &method, h, start);
                     let mut increment = GroupState::zeros();
                     let count = SEGMENT.min(iterations - done);
-                    let start = Instant::now();
+                    let clock = Instant::now();
                     for _ in 0..count {
-                        Step::<FallingBody, GroupSpace<RigidMotions, 6, 12>>::step(
+                        Step::<L, GroupSpace<L::Group, N, E>>::step(
                             &method,
-                            &body,
+                            model,
                             &mut workspace,
                             0.0,
                             h,
@@ -168,7 +184,7 @@ fn falling_steps(c: &mut Criterion) {
                         state.g += increment.g;
                         state.momentum += increment.momentum;
                     }
-                    total += start.elapsed();
+                    total += clock.elapsed();
                     black_box(&state);
                     done += count;
                 }
@@ -177,6 +193,24 @@ fn falling_steps(c: &mut Criterion) {
         });
     }
     group.finish();
+}
+
+fn group_steps(c: &mut Criterion) {
+    let r = so3::exp(&Vector3::new(0.1, -0.2, 0.3));
+    let g = RigidMotions::element(&r, &Vector3::new(1.0, -2.0, 3.0));
+    let xi = SVector::<f64, 6>::from([1.0, 0.2, 0.8, 0.5, 0.0, 2.0]);
+    bench_group(
+        c,
+        "falling-body-se3",
+        &FallingBody::default(),
+        (g, xi),
+        0.01,
+    );
+    let top = HeavyTop::default();
+    let (r, omega) = top.initial_state();
+    let h = top.default_step();
+    let start = (Rotations::element(&r), omega);
+    bench_group(c, "heavy-top-on-rotations", &OnRotations(top), start, h);
 }
 
 fn lie_steps(c: &mut Criterion) {
@@ -196,5 +230,5 @@ fn lie_steps(c: &mut Criterion) {
     bench_model(c, Pendulum3d::default(), &full);
 }
 
-criterion_group!(benches, lie_steps, falling_steps);
+criterion_group!(benches, lie_steps, group_steps);
 criterion_main!(benches);
