@@ -50,6 +50,7 @@ pub use crate::method::lie_svi::{
     Form, GroupWorkspace, LieSvi, LieWorkspace, ORTHOGONALITY_TOLERANCE,
 };
 pub use crate::method::space::{RigidInitial, RigidPoint, RigidState, SO3};
+pub use crate::model::group::circle::Circle;
 pub use crate::model::group::product::{Power, Product, RotationsAndTranslations};
 pub use crate::model::group::rigid_motions::RigidMotions;
 pub use crate::model::group::rotations::Rotations;

@@ -152,6 +152,7 @@ pub mod spherical_chain;
 pub mod spring_pendulum;
 pub mod toda;
 
+pub mod dual_spin;
 pub mod falling_body;
 pub mod heavy_top;
 pub mod pendulum_3d;
@@ -182,6 +183,7 @@ pub use spherical_chain::{DoubleSphericalPendulum, SphericalChain};
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
 
+pub use dual_spin::DualSpin;
 pub use falling_body::FallingBody;
 pub use heavy_top::HeavyTop;
 pub use pendulum_3d::Pendulum3d;

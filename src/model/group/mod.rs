@@ -25,8 +25,9 @@
 //! Ad_{exp x} − I = ad_x dexp_x (both are power series in ad_x).
 //!
 //! The groups: [`rotations::Rotations`] (SO(3)), [`rigid_motions::RigidMotions`] (SE(3),
-//! closed-form exp and dexp), [`translations::Translations`] (ℝᴷ under addition) and
-//! [`product::Product`] (G₁ × G₂ of any two groups, so SO(3) × ℝ³ and, nested, SO(3)ᴺ).
+//! closed-form exp and dexp), [`translations::Translations`] (ℝᴷ under addition),
+//! [`circle::Circle`] (SO(2) ≅ S¹), [`product::Product`] (G₁ × G₂ of any two groups, so
+//! SO(3) × ℝ³ and SO(3) × S¹) and [`product::Power`] (Gᴷ, so SO(3)ᴷ).
 //!
 //! # Lagrangians on a group
 //! A [`GroupLagrangian`] is one function L(g, ξ) of the configuration g ∈ G and the body
@@ -34,6 +35,7 @@
 //! momentum μ = ∂L/∂ξ (left-trivialised), its inverse (the Legendre map), the energy
 //! μ·ξ − L and the configuration gradient d/dε L(g exp(εζ), ξ).
 
+pub mod circle;
 pub mod product;
 pub mod rigid_motions;
 pub mod rotations;
