@@ -36,7 +36,7 @@
 //! ```
 
 use crate::error::Error;
-use crate::linalg::solve_small;
+use crate::model::group::invert_momentum;
 use crate::model::so3::{Matrix3, Vector3, exp};
 use crate::scalar::Scalar;
 use nalgebra::Const;
@@ -132,9 +132,6 @@ pub trait RigidBodyDefaults: RigidBodyLagrangian {
     fn default_horizon(&self) -> f64;
 }
 
-/// Iteration cap of the inverse Legendre map.
-const LEGENDRE_MAX_ITERATIONS: usize = 50;
-
 /// Quantities derived from a [`RigidBodyLagrangian`] by automatic differentiation.
 /// Implemented for every rigid-body Lagrangian.
 pub trait RigidBodyExt: RigidBodyLagrangian {
@@ -187,35 +184,14 @@ pub trait RigidBodyExt: RigidBodyLagrangian {
         momentum: &Vector3<f64>,
         guess: &Vector3<f64>,
     ) -> Result<Vector3<f64>, Error> {
-        let mut omega = *guess;
-        let mut last = f64::INFINITY;
-        for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
+        invert_momentum(momentum, guess, |omega| {
             let (_, current, inertia) = hessian(
                 |w: Vector3<Dual2Vec<f64, Const<3>>>| {
                     self.lagrangian(&r.map(Dual2Vec::from_re), &w)
                 },
-                &omega,
+                omega,
             );
-            let delta = solve_small(inertia, momentum - current).ok_or(Error::LegendreMap {
-                t: f64::NAN,
-                iterations: iteration,
-                residual: f64::INFINITY,
-            })?;
-            omega += delta;
-            let size = delta.amax();
-            if !size.is_finite() {
-                break;
-            }
-            let scale = 1.0 + omega.amax();
-            if size <= f64::EPSILON * scale || (size >= last && size <= 1e-10 * scale) {
-                return Ok(omega);
-            }
-            last = size;
-        }
-        Err(Error::LegendreMap {
-            t: f64::NAN,
-            iterations: LEGENDRE_MAX_ITERATIONS,
-            residual: last,
+            (current, inertia)
         })
     }
 

@@ -20,7 +20,7 @@
 
 use super::group_equations::{GroupDerivatives, assemble_group, configuration_sum_at};
 use super::tables::StepTables;
-use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE, check_invariance};
+use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE, at_time, check_invariance};
 use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
 use crate::method::group_space::{GroupInitial, GroupPoint, GroupSpace, GroupState};
 use crate::method::space::Space;
@@ -312,18 +312,7 @@ where
     ) -> Result<GroupPoint<N, E>, Error> {
         let xi = model
             .velocity(&state.g, &state.momentum, guess)
-            .map_err(|error| match error {
-                Error::LegendreMap {
-                    iterations,
-                    residual,
-                    ..
-                } => Error::LegendreMap {
-                    t,
-                    iterations,
-                    residual,
-                },
-                other => other,
-            })?;
+            .map_err(at_time(t))?;
         Ok(GroupPoint {
             t,
             g: state.g,

@@ -492,21 +492,9 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
         state: &RigidState,
         guess: &Vector3<f64>,
     ) -> Result<RigidPoint, Error> {
-        let omega =
-            model
-                .velocity(&state.r, &state.momentum, guess)
-                .map_err(|error| match error {
-                    Error::LegendreMap {
-                        iterations,
-                        residual,
-                        ..
-                    } => Error::LegendreMap {
-                        t,
-                        iterations,
-                        residual,
-                    },
-                    other => other,
-                })?;
+        let omega = model
+            .velocity(&state.r, &state.momentum, guess)
+            .map_err(at_time(t))?;
         Ok(RigidPoint {
             t,
             r: state.r,
@@ -573,6 +561,22 @@ impl<L: RigidBodyLagrangian> Step<L, SO3> for LieSvi {
             .iter()
             .chain(point.momentum.iter())
             .all(|x| x.is_finite())
+    }
+}
+
+/// Stamps the inverse Legendre map's failure (whose t is NaN) with the time `t` of the state.
+fn at_time(t: f64) -> impl FnOnce(Error) -> Error {
+    move |error| match error {
+        Error::LegendreMap {
+            iterations,
+            residual,
+            ..
+        } => Error::LegendreMap {
+            t,
+            iterations,
+            residual,
+        },
+        other => other,
     }
 }
 

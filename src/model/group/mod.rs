@@ -238,35 +238,52 @@ pub trait GroupLagrangianExt<const N: usize, const E: usize>: GroupLagrangian<N,
         momentum: &SVector<f64, N>,
         guess: &SVector<f64, N>,
     ) -> Result<SVector<f64, N>, Error> {
-        let mut xi = *guess;
-        let mut last = f64::INFINITY;
-        let failure = |iterations, residual| Error::LegendreMap {
-            t: f64::NAN,
-            iterations,
-            residual,
-        };
-        for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
+        invert_momentum(momentum, guess, |xi| {
             let (_, current, inertia) = hessian(
                 |x: SVector<Dual2Vec<f64, Const<N>>, N>| {
                     self.lagrangian(&g.map(Dual2Vec::from_re), &x)
                 },
-                &xi,
+                xi,
             );
-            let delta = solve_small(inertia, momentum - current)
-                .ok_or_else(|| failure(iteration, f64::INFINITY))?;
-            xi += delta;
-            let size = delta.amax();
-            if !size.is_finite() {
-                break;
-            }
-            let scale = 1.0 + xi.amax();
-            if size <= f64::EPSILON * scale || (size >= last && size <= 1e-10 * scale) {
-                return Ok(xi);
-            }
-            last = size;
-        }
-        Err(failure(LEGENDRE_MAX_ITERATIONS, last))
+            (current, inertia)
+        })
     }
+}
+
+/// Solves ∂L/∂ξ = `momentum` for ξ by Newton's method from `guess`, where `derivatives(ξ)`
+/// gives ∂L/∂ξ and ∂²L/∂ξ² (the inverse Legendre map of a Lagrangian on a group; SO(3)'s
+/// rigid bodies use it too). It stops at an increment of ε relative, or when the increments
+/// stop decreasing below 1e-10 relative; a singular ∂²L/∂ξ² or no convergence in
+/// [`LEGENDRE_MAX_ITERATIONS`] is an [`Error::LegendreMap`] (with t = NaN: the caller knows
+/// the time).
+pub(crate) fn invert_momentum<const N: usize>(
+    momentum: &SVector<f64, N>,
+    guess: &SVector<f64, N>,
+    mut derivatives: impl FnMut(&SVector<f64, N>) -> (SVector<f64, N>, SMatrix<f64, N, N>),
+) -> Result<SVector<f64, N>, Error> {
+    let mut xi = *guess;
+    let mut last = f64::INFINITY;
+    let failure = |iterations, residual| Error::LegendreMap {
+        t: f64::NAN,
+        iterations,
+        residual,
+    };
+    for iteration in 1..=LEGENDRE_MAX_ITERATIONS {
+        let (current, inertia) = derivatives(&xi);
+        let delta = solve_small(inertia, momentum - current)
+            .ok_or_else(|| failure(iteration, f64::INFINITY))?;
+        xi += delta;
+        let size = delta.amax();
+        if !size.is_finite() {
+            break;
+        }
+        let scale = 1.0 + xi.amax();
+        if size <= f64::EPSILON * scale || (size >= last && size <= 1e-10 * scale) {
+            return Ok(xi);
+        }
+        last = size;
+    }
+    Err(failure(LEGENDRE_MAX_ITERATIONS, last))
 }
 
 impl<const N: usize, const E: usize, T: GroupLagrangian<N, E> + ?Sized> GroupLagrangianExt<N, E>
