@@ -12,7 +12,8 @@
 //! interface ([`svi::lie_group::LieGroup`]) on SE(3): the falling rigid body (h = 0.01),
 //! from the state of the tests (the generic Lie-SVI with chain-rule derivatives), and
 //! `lie_step/heavy-top-on-rotations/<p>cgl_<p>gl` the heavy top through the interface on
-//! [`svi::lie_group::Rotations`], to set against `lie_step/heavy-top` (the SO(3) path).
+//! [`svi::lie_group::Rotations`], to set against `lie_step/heavy-top` (the same step, which
+//! SO(3) rigid bodies run too, with the model written for SO(3)).
 //!
 //! Run with `cargo bench --bench lie_step`.
 

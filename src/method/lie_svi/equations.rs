@@ -1,43 +1,16 @@
 //! The equations of one step (§5.3.2, §5.4): the internal-stage conditions ∂S/∂ξᵛ = 0 and
 //! the trivialised discrete Euler–Lagrange equation P − dexp_{−ξᵈ}(μ_k + g_R) = 0, their
-//! residual and Jacobian in ξ¹…ξᵈ assembled from the Gauss points, and the torque sum g_R.
+//! residual and Jacobian in ξ¹…ξᵈ assembled from the Gauss points, with every block of ℓ's
+//! Hessian (η included): what the exact tangent map of a step needs. The step itself is the
+//! one on any group ([`super::group`] with [`crate::model::group::rotations::Rotations`]).
 
 use super::derivatives::{PointDerivatives, point_derivatives};
 use super::tables::StepTables;
 use crate::method::space::RigidState;
 use crate::model::rigid_body::RigidBodyLagrangian;
-use crate::model::so3::{Matrix3, Vector3, body_velocity, exp};
+use crate::model::so3::{Matrix3, Vector3, body_velocity};
 use nalgebra::{DMatrix, DVector};
-use num_dual::{DualSVec64, DualVec, gradient, jacobian};
-
-/// g_R = Σ_μ W_μ ∂ℓ/∂η at η = 0 (zero in the reduced form).
-pub(super) fn torque_sum<L: RigidBodyLagrangian>(
-    model: &L,
-    tables: &StepTables,
-    reduced: bool,
-    r: &Matrix3<f64>,
-    z: &DVector<f64>,
-) -> Vector3<f64> {
-    let mut sum = Vector3::zeros();
-    if reduced {
-        return sum;
-    }
-    for (mu, w) in tables.weights.iter().enumerate() {
-        let (a, b) = tables.point::<3>(mu, z);
-        let rotation = r * exp(&a);
-        let omega = body_velocity(&a, &b);
-        let (_, g) = gradient(
-            |eta: Vector3<DualSVec64<3>>| {
-                let moved = rotation.map(DualVec::from_re) * exp(&eta);
-                model.lagrangian(&moved, &omega.map(DualVec::from_re))
-            },
-            &Vector3::zeros(),
-        );
-        // d/dη L(R_k exp(η) E, Ω) = E · (d/dζ L(R_k E exp(ζ), Ω)), ζ = Eᵀη.
-        sum += exp(&a) * g * *w;
-    }
-    sum
-}
+use num_dual::{DualSVec64, DualVec, jacobian};
 
 /// Residual of the internal-stage conditions and of the discrete Euler–Lagrange equation in
 /// trivialised form, and its Jacobian in ξ¹…ξᵈ.
@@ -114,5 +87,101 @@ pub(super) fn assemble<L: RigidBodyLagrangian>(
         if j + 1 == d {
             target -= pulled_rate;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::method::lie_svi::{Form, LieSvi};
+    use crate::method::space::SO3;
+    use crate::method::step::Step;
+    use crate::model::rigid_body::RigidBodyExt;
+    use crate::model::so3::exp;
+    use crate::scalar::Scalar;
+
+    /// A heavy top with an asymmetric inertia (a free body, G-invariant, with `FREE`).
+    struct Top<const FREE: bool> {
+        gravity: f64,
+    }
+    impl<const FREE: bool> RigidBodyLagrangian for Top<FREE> {
+        const G_INVARIANT: bool = FREE;
+        fn lagrangian<D: Scalar>(&self, r: &Matrix3<D>, w: &Vector3<D>) -> D {
+            let kinetic = (w[0] * w[0] + w[1] * w[1] * 1.7 + w[2] * w[2] * 2.3) * 0.5;
+            kinetic - (r[(2, 0)] * 0.3 + r[(2, 2)]) * self.gravity
+        }
+    }
+
+    /// The step (solved on the group `Rotations`, with dexp_xᵀ) satisfies these SO(3)
+    /// equations (closed-form derivatives, dexp_{−x}): residual zero to round-off at its
+    /// converged nodes, and its increments are R(F − I) and (F − I)ᵀμ + Fᵀg_R.
+    #[test]
+    fn the_step_on_the_group_solves_the_so3_equations() {
+        check::<false>(2, 9.81, Form::Full);
+        check::<false>(4, 9.81, Form::Full);
+        check::<true>(3, 0.0, Form::Reduced);
+    }
+
+    fn check<const FREE: bool>(points: usize, gravity: f64, form: Form) {
+        let model = Top::<FREE> { gravity };
+        let method = LieSvi::new(points).with_form(form);
+        let h = 0.02;
+        let mut workspace = Step::<Top<FREE>, SO3>::workspace(&method, &model, h).unwrap();
+        let r = exp(&Vector3::new(0.4, -0.2, 0.1));
+        let mut state = RigidState {
+            r,
+            momentum: model.momentum(&r, &Vector3::new(1.0, 0.5, 3.0)),
+        };
+        let d = points - 1;
+        let mut worst: f64 = 0.0;
+        for _ in 0..20 {
+            let mut increment = RigidState::zeros();
+            Step::<Top<FREE>, SO3>::step(
+                &method,
+                &model,
+                &mut workspace,
+                0.0,
+                h,
+                &state,
+                &mut increment,
+            )
+            .unwrap();
+            let mut points_buffer = vec![PointDerivatives::zeros(); workspace.group.tables.len()];
+            let mut rates = vec![Matrix3::zeros(); d];
+            let mut jacobian = DMatrix::zeros(3 * d, 3 * d);
+            let mut residual = DVector::zeros(3 * d);
+            let z = workspace.group.unknowns.clone();
+            assemble(
+                &model,
+                &workspace.group.tables,
+                form == Form::Reduced,
+                &mut points_buffer,
+                &mut rates,
+                &state,
+                &z,
+                &mut jacobian,
+                &mut residual,
+            );
+            let scale = state.momentum.amax();
+            worst = worst.max(residual.amax() / scale);
+            let torque = points_buffer
+                .iter()
+                .zip(&workspace.group.tables.weights)
+                .fold(Vector3::zeros(), |sum, (p, w)| {
+                    sum + p.gradient.fixed_rows::<3>(0) * *w
+                });
+            let step = exp(&z.fixed_rows::<3>(3 * (d - 1)).into_owned());
+            let expected_r = state.r * (step - Matrix3::identity());
+            let expected_momentum = (step - Matrix3::identity()).transpose() * state.momentum
+                + step.transpose() * torque;
+            assert!((increment.r - expected_r).amax() < 1e-14);
+            assert!((increment.momentum - expected_momentum).amax() < 1e-13 * scale);
+            state.r += increment.r;
+            state.momentum += increment.momentum;
+        }
+        assert!(
+            worst < 1e-13,
+            "{points} points, {form:?}: residual {worst:e}"
+        );
     }
 }

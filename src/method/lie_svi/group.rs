@@ -15,6 +15,9 @@
 //! discrete momenta. The increments are g_k (F − e) ([`LieGroup::translate_difference`] of
 //! [`LieGroup::exp_minus_identity`]) and (Ad_F − I)ᵀμ_k + Ad_Fᵀ g_R with
 //! Ad_F − I = ad_{ξᵈ} dexp_{ξᵈ} (both power series in ad), so neither cancels for small steps.
+//! The step is solved by the simplified Newton method (parent module, "Solving a step"): a
+//! residual evaluates only the gradient of ℓ ([`super::group_equations`]), the Jacobian's
+//! Hessian blocks only when the kept factors are refreshed.
 //! The discrete Noether theorem holds as on SO(3): for a left-invariant L the spatial momentum
 //! Ad_{g⁻¹}ᵀμ is conserved, since Ad_{g_{k+1}⁻¹}ᵀ Ad_Fᵀ = Ad_{g_k⁻¹}ᵀ.
 
@@ -27,7 +30,7 @@ use crate::method::space::Space;
 use crate::method::step::Step;
 use crate::method::{MethodInfo, StepReport};
 use crate::model::group::{GroupLagrangian, GroupLagrangianExt, LieGroup};
-use crate::nonlinear::Newton;
+use crate::nonlinear::{Jacobian, Newton};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// The largest group dimension N the dense derivatives support: each Gauss point differentiates
@@ -53,13 +56,13 @@ fn check_dimension<const N: usize>() -> Result<(), Error> {
 /// Tables, buffers and warm-start data of a [`LieSvi`] run on a group of dimension `N`.
 #[derive(Debug, Clone)]
 pub struct GroupWorkspace<const N: usize> {
-    tables: StepTables,
-    reduced: bool,
+    pub(super) tables: StepTables,
+    pub(super) reduced: bool,
     /// ξ¹…ξᵈ, stacked.
-    unknowns: DVector<f64>,
+    pub(super) unknowns: DVector<f64>,
     /// The previous step's ξ¹…ξᵈ.
-    previous: DVector<f64>,
-    has_previous: bool,
+    pub(super) previous: DVector<f64>,
+    pub(super) has_previous: bool,
     points: Vec<GroupDerivatives<N>>,
     /// ∂g_R/∂ξʲ, j = 1..d.
     rates: Vec<SMatrix<f64, N, N>>,
@@ -160,6 +163,7 @@ where
         if workspace.tables.h != h {
             workspace.tables.rescale(h);
             workspace.has_previous = false;
+            workspace.newton.invalidate();
         }
         workspace.start(model, h, state);
         let GroupWorkspace {
@@ -181,8 +185,11 @@ where
         if let Some(failure) = outside(unknowns) {
             return Err(failure);
         }
-        let iterations = newton
-            .solve(unknowns, |z, jacobian, residual| {
+        // ξ moves g by g(exp ξ − e): it needs the accuracy of g's entries (rotations' are of
+        // size 1), not of its own (small) size.
+        newton.set_scale_floor(state.g.amax().min(1.0));
+        let solved = newton
+            .iterate(unknowns, Jacobian::Kept, |z, jacobian, residual| {
                 assemble_group(
                     model, tables, *reduced, points, rates, t, state, z, jacobian, residual,
                 )
@@ -210,15 +217,16 @@ where
         workspace.has_previous = true;
         let m = workspace.tables.len();
         Ok(StepReport {
-            iterations,
-            evaluations: m * (iterations + 1),
-            factorizations: iterations,
+            iterations: solved.iterations,
+            evaluations: m * (solved.iterations + 1),
+            factorizations: solved.factorizations,
             analyses: 0,
         })
     }
 
     fn restart(&self, workspace: &mut GroupWorkspace<N>) {
         workspace.has_previous = false;
+        workspace.newton.invalidate();
     }
 
     /// Not yet built on general groups: an [`StepFailure::Unsupported`] error (the exact

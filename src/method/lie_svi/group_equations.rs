@@ -223,6 +223,66 @@ pub(super) fn add_force<L: GroupLagrangian<N, E>, const N: usize, const E: usize
     }
 }
 
+/// The gradient of ℓ at (0, a, b) alone, which is all a residual needs (module docs):
+/// ∂ℓ/∂η = Aᵀλ, ∂ℓ/∂a = Bᵀλ + (∂W/∂a)ᵀν and ∂ℓ/∂b = Bᵀν with λ = ∂L̂/∂ζ and ν = ∂L̂/∂w —
+/// two first-order dual evaluations of L and one of W; with a force f at time `t`, Aᵀf and
+/// Bᵀf join the η- and a-rows (A = I − ad_a B). ∂ℓ/∂η is zero in the reduced form.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn group_gradients<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    model: &L,
+    reduced: bool,
+    t: f64,
+    base: &SVector<f64, E>,
+    a: &SVector<f64, N>,
+    b: &SVector<f64, N>,
+    out: &mut GroupDerivatives<N>,
+) {
+    type D<const N: usize> = DualSVec64<N>;
+    let w0 = L::Group::body_velocity(a, b);
+    let pull = L::Group::dexp(&(-a));
+    let moved = if reduced {
+        L::Group::identity()
+    } else {
+        L::Group::compose(base, &L::Group::exp(a))
+    };
+    let lifted = moved.map(D::<N>::from_re);
+    let (_, nu) = gradient(|w: SVector<D<N>, N>| model.lagrangian(&lifted, &w), &w0);
+    let b_lift = b.map(D::<N>::from_re);
+    let nu_lift = nu.map(D::<N>::from_re);
+    let (_, pulled_nu) = gradient(
+        |x: SVector<D<N>, N>| nu_lift.dot(&L::Group::body_velocity(&x, &b_lift)),
+        a,
+    );
+    out.b = pull.transpose() * nu;
+    out.a = pulled_nu;
+    out.eta = SVector::zeros();
+    if reduced && !L::FORCED {
+        return;
+    }
+    let mut lambda = SVector::zeros();
+    if !reduced {
+        let velocity = w0.map(D::<N>::from_re);
+        lambda = gradient(
+            |z: SVector<D<N>, N>| {
+                model.lagrangian(
+                    &L::Group::compose(&lifted, &L::Group::exp_second_order(&z)),
+                    &velocity,
+                )
+            },
+            &SVector::zeros(),
+        )
+        .1;
+    }
+    if L::FORCED {
+        lambda += model.external_force(t, &moved, &w0);
+    }
+    out.a += pull.transpose() * lambda;
+    if !reduced {
+        let adjoint = SMatrix::identity() - L::Group::ad(a) * pull;
+        out.eta = adjoint.transpose() * lambda;
+    }
+}
+
 /// g_R = Σ_μ W_μ ∂ℓ/∂η from the derivatives of the last assembly.
 fn configuration_sum<const N: usize>(
     tables: &StepTables,
@@ -234,9 +294,8 @@ fn configuration_sum<const N: usize>(
         .fold(SVector::zeros(), |sum, (p, w)| sum + p.eta * *w)
 }
 
-/// g_R = Σ_μ W_μ ∂ℓ/∂η at the nodes `z` (zero in the reduced form): ∂ℓ/∂η = Aᵀ ∂L̂/∂ζ with
-/// A = Ad_{exp(−a)} (module docs), one first-order dual evaluation of L per Gauss point; with a
-/// force, Aᵀ(∂L̂/∂ζ + f).
+/// g_R = Σ_μ W_μ ∂ℓ/∂η at the nodes `z` ([`group_gradients`] at each Gauss point; zero in
+/// the reduced form).
 pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
     tables: &StepTables,
@@ -249,30 +308,18 @@ pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, con
     if reduced {
         return sum;
     }
+    let mut point = GroupDerivatives::zeros();
     for (mu, w) in tables.weights.iter().enumerate() {
         let (a, b) = tables.point::<N>(mu, z);
-        let g = L::Group::compose(base, &L::Group::exp(&a));
-        let xi = L::Group::body_velocity(&a, &b);
-        let (moved, velocity) = (g.map(DualVec::from_re), xi.map(DualVec::from_re));
-        let (_, mut lambda) = gradient(
-            |zeta: SVector<DualSVec64<N>, N>| {
-                model.lagrangian(
-                    &L::Group::compose(&moved, &L::Group::exp_second_order(&zeta)),
-                    &velocity,
-                )
-            },
-            &SVector::zeros(),
-        );
-        if L::FORCED {
-            lambda += model.external_force(tables.time(t, mu), &g, &xi);
-        }
-        sum += L::Group::adjoint(&L::Group::exp(&(-a))).transpose() * lambda * *w;
+        group_gradients(model, reduced, tables.time(t, mu), base, &a, &b, &mut point);
+        sum += point.eta * *w;
     }
     sum
 }
 
-/// Residual and Jacobian in ξ¹…ξᵈ of the internal-stage conditions and of
-/// P − dexp_{ξᵈ}ᵀ(μ_k + g_R), with ∂g_R/∂ξʲ in `rates`.
+/// Residual in ξ¹…ξᵈ of the internal-stage conditions and of P − dexp_{ξᵈ}ᵀ(μ_k + g_R),
+/// and, when `jacobian_out` is given, its Jacobian (with ∂g_R/∂ξʲ in `rates`); without it
+/// only the gradients of ℓ are evaluated ([`group_gradients`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
@@ -283,22 +330,23 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
     t: f64,
     state: &GroupState<N, E>,
     z: &DVector<f64>,
-    jacobian_out: &mut DMatrix<f64>,
+    jacobian_out: Option<&mut DMatrix<f64>>,
     residual: &mut DVector<f64>,
 ) {
     let d = tables.degree;
+    let exact = jacobian_out.is_some();
     for (mu, point) in points.iter_mut().enumerate() {
         let (a, b) = tables.point::<N>(mu, z);
-        *point = group_derivatives(model, reduced, &state.g, &a, &b);
-        if L::FORCED {
-            add_force(model, reduced, tables.time(t, mu), &state.g, &a, &b, point);
+        if exact {
+            *point = group_derivatives(model, reduced, &state.g, &a, &b);
+            if L::FORCED {
+                add_force(model, reduced, tables.time(t, mu), &state.g, &a, &b, point);
+            }
+        } else {
+            group_gradients(model, reduced, tables.time(t, mu), &state.g, &a, &b, point);
         }
     }
     residual.fill(0.0);
-    jacobian_out.fill(0.0);
-    for rate in rates.iter_mut() {
-        *rate = SMatrix::zeros();
-    }
     for (mu, p) in points.iter().enumerate() {
         let w = tables.weights[mu];
         for nu in 1..=d {
@@ -306,6 +354,22 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
             let mut row = residual.fixed_rows_mut::<N>(N * (nu - 1));
             row += (p.a * l + p.b * c) * w;
         }
+    }
+    // Last block: P − dexp_ξᵀ (μ_k + g_R), ξ = ξᵈ.
+    let end = z.fixed_rows::<N>(N * (d - 1)).into_owned();
+    let load = state.momentum + configuration_sum(tables, points);
+    let map = L::Group::dexp(&end).transpose();
+    let mut row = residual.fixed_rows_mut::<N>(N * (d - 1));
+    row -= map * load;
+    let Some(jacobian_out) = jacobian_out else {
+        return;
+    };
+    jacobian_out.fill(0.0);
+    for rate in rates.iter_mut() {
+        *rate = SMatrix::zeros();
+    }
+    for (mu, p) in points.iter().enumerate() {
+        let w = tables.weights[mu];
         for j in 1..=d {
             let (lj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
             let from_a = (p.aa * lj + p.ab * cj) * w;
@@ -320,16 +384,10 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
             }
         }
     }
-    // Last block: P − dexp_ξᵀ (μ_k + g_R), ξ = ξᵈ.
-    let end = z.fixed_rows::<N>(N * (d - 1)).into_owned();
-    let load = state.momentum + configuration_sum(tables, points);
-    let (pulled, pulled_rate) = jacobian(
+    let (_, pulled_rate) = jacobian(
         |x: SVector<DualSVec64<N>, N>| L::Group::dexp(&x).transpose() * load.map(DualVec::from_re),
         &end,
     );
-    let mut row = residual.fixed_rows_mut::<N>(N * (d - 1));
-    row -= pulled;
-    let map = L::Group::dexp(&end).transpose();
     for (j, rate) in rates.iter().enumerate() {
         let mut target = jacobian_out.fixed_view_mut::<N, N>(N * (d - 1), N * j);
         if !reduced {
