@@ -15,6 +15,9 @@
 //! [`svi::lie_group::Rotations`], to set against `lie_step/heavy-top` (the same step, which
 //! SO(3) rigid bodies run too, with the model written for SO(3)).
 //!
+//! `lie_step/spherical-chain-8/<p>cgl_<p>gl`: eight spherical pendulums on SO(3)⁸
+//! (`svi_models::SphericalChain`, derivatives term by term over pairs of links), h = 0.002.
+//!
 //! Run with `cargo bench --bench lie_step`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -28,7 +31,7 @@ use svi::lie_group::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyLagrangian, RigidMotions, RigidState, Rotations, so3,
 };
 use svi::method::lie_svi::GroupWorkspace;
-use svi_models::{FallingBody, FreeRigidBody, HeavyTop, Pendulum3d};
+use svi_models::{FallingBody, FreeRigidBody, HeavyTop, Pendulum3d, SphericalChain};
 
 /// Untimed steps after each (re-)seed.
 const PRE_STEPS: usize = 50;
@@ -212,6 +215,28 @@ fn group_steps(c: &mut Criterion) {
     let h = top.default_step();
     let start = (Rotations::element(&r), omega);
     bench_group(c, "heavy-top-on-rotations", &OnRotations(top), start, h);
+    // Eight spherical pendulums on SO(3)⁸ (dimension 24, derivatives term by term), leaning
+    // and moving, h = 0.002.
+    let chain = SphericalChain::<8, 24, 72>::default();
+    let directions: [Vector3<f64>; 8] = std::array::from_fn(|i| {
+        let (tilt, turn) = (0.3 + 0.05 * i as f64, 0.5 * i as f64);
+        Vector3::new(
+            tilt.sin() * turn.cos(),
+            tilt.sin() * turn.sin(),
+            -tilt.cos(),
+        )
+    });
+    let rates: [Vector3<f64>; 8] = std::array::from_fn(|i| {
+        let v = Vector3::new(0.2, -0.1 * i as f64, 0.05);
+        v - directions[i] * directions[i].dot(&v)
+    });
+    bench_group(
+        c,
+        "spherical-chain-8",
+        &chain,
+        chain.state(&directions, &rates),
+        0.002,
+    );
 }
 
 fn lie_steps(c: &mut Criterion) {

@@ -6,12 +6,15 @@
 
 use nalgebra::SVector;
 use svi::lie_group::{
-    Circle, DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, LieSvi, Power,
-    RigidMotions, Rotations, RotationsAndTranslations, SpatialMomentumError, so3,
+    Circle, DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, GroupLagrangianExt,
+    LieSvi, Power, RigidMotions, Rotations, RotationsAndTranslations, SpatialMomentumError, so3,
 };
+use svi::model::group::LocalDerivatives;
+use svi::model::group::derivatives::{dense_local_gradient, dense_local_hessian};
+use svi::model::group::pair_terms;
 use svi::observer::EnergyError;
 use svi::{Error, Integrator, Scalar};
-use svi_models::{DoubleSphericalPendulum, DualSpin, FallingBody};
+use svi_models::{DoubleSphericalPendulum, DualSpin, FallingBody, SphericalChain};
 
 type Vector3 = SVector<f64, 3>;
 
@@ -446,27 +449,64 @@ fn double_spherical_pendulum_on_so3_squared_matches_the_angles() {
     assert!(observers.2.max < 1e-13);
 }
 
+/// SO(3)⁵ with a dense Lagrangian (five free tops): dimension 15.
+struct FiveTops;
+
+impl GroupLagrangian<15, 45> for FiveTops {
+    type Group = Power<Rotations, 5, 3, 9>;
+    fn lagrangian<D: Scalar>(&self, _g: &SVector<D, 45>, xi: &SVector<D, 15>) -> D {
+        xi.dot(xi) * 0.5
+    }
+}
+
+/// Five tops under a force, claiming structured derivatives.
+struct FiveForcedTops;
+
+impl GroupLagrangian<15, 45> for FiveForcedTops {
+    type Group = Power<Rotations, 5, 3, 9>;
+    const STRUCTURED: bool = true;
+    const FORCED: bool = true;
+    fn lagrangian<D: Scalar>(&self, g: &SVector<D, 45>, xi: &SVector<D, 15>) -> D {
+        FiveTops.lagrangian(g, xi)
+    }
+}
+
+/// The error of a run that must fail at its start.
+fn failure<L, G, const N: usize, const E: usize>(
+    model: L,
+    (g, xi): (SVector<f64, E>, SVector<f64, N>),
+) -> Error
+where
+    L: GroupLagrangian<N, E, Group = G>,
+    G: svi::lie_group::LieGroup<N, E>,
+{
+    let integrator: GroupIntegrator<L, G, N, E> = Integrator::new(model, LieSvi::new(2));
+    integrator
+        .run(0.0, GroupInitial::Velocity { g, xi }, 0.01, 1.0, &mut ())
+        .unwrap_err()
+}
+
 #[test]
-fn a_group_too_large_for_the_dense_derivatives_is_a_typed_error() {
-    let chain = svi_models::SphericalChain::<8, 24, 72>::default();
-    let directions = [-Vector3::z(); 8];
-    let (g0, xi0) = chain.state(&directions, &[Vector3::zeros(); 8]);
-    let integrator: GroupIntegrator<_, Power<Rotations, 8, 3, 9>, 24, 72> =
-        Integrator::new(chain, LieSvi::new(3));
-    let error = integrator
-        .run(
-            0.0,
-            GroupInitial::Velocity { g: g0, xi: xi0 },
-            0.01,
-            1.0,
-            &mut (),
-        )
-        .unwrap_err();
+fn a_group_too_large_for_its_derivatives_is_a_typed_error() {
+    // Dense derivatives stop at dimension 12.
+    let start = (
+        SVector::from_fn(|i, _| if i % 9 % 4 == 0 { 1.0 } else { 0.0 }),
+        SVector::from_fn(|i, _| 0.1 * i as f64),
+    );
+    let error = failure(FiveTops, start);
     assert!(
         matches!(&error, Error::InvalidParameter { name, .. } if name == "group dimension"),
         "{error}"
     );
-    assert!(error.to_string().contains("24"), "{error}");
+    assert!(error.to_string().contains("15 exceeds 12"), "{error}");
+    // A force is differentiated densely, structure or not.
+    let error = failure(FiveForcedTops, start);
+    assert!(error.to_string().contains("FORCED"), "{error}");
+    // Structured derivatives (a chain's terms) at 96: 33 links are one too many.
+    let chain = SphericalChain::<33, 99, 297>::default();
+    let start = chain.state(&[-Vector3::z(); 33], &[Vector3::zeros(); 33]);
+    let error = failure(chain, start);
+    assert!(error.to_string().contains("99 exceeds 96"), "{error}");
 }
 
 /// The falling body with linear air drag F = −k ẋ on the centre of mass (Lagrange–d'Alembert
@@ -670,4 +710,157 @@ fn dual_spin_satellite_on_so3_times_s1_keeps_its_momenta_and_converges() {
     let order = (errors[0] / errors[1]).log2();
     println!("dual-spin satellite, 3 points: errors {errors:?}, order {order:.2}");
     assert!((order - 4.0).abs() < 0.3, "{order}");
+}
+
+/// A chain of `K` links with unequal lengths and masses, leaning and moving (no link
+/// vertical), and its state.
+fn leaning_chain<const K: usize, const N: usize, const E: usize>()
+-> (SphericalChain<K, N, E>, SVector<f64, E>, SVector<f64, N>) {
+    let chain = SphericalChain::<K, N, E> {
+        lengths: std::array::from_fn(|i| 1.0 + 0.1 * (i % 3) as f64),
+        masses: std::array::from_fn(|i| 1.0 + 0.2 * (i % 4) as f64),
+        ..SphericalChain::default()
+    };
+    let directions: [Vector3; K] = std::array::from_fn(|i| {
+        let (tilt, turn) = (0.3 + 0.05 * i as f64, 0.5 * i as f64);
+        Vector3::new(
+            tilt.sin() * turn.cos(),
+            tilt.sin() * turn.sin(),
+            -tilt.cos(),
+        )
+    });
+    let rates: [Vector3; K] = std::array::from_fn(|i| {
+        let v = Vector3::new(0.2, -0.1 * i as f64, 0.05);
+        v - directions[i] * directions[i].dot(&v)
+    });
+    let (g, xi) = chain.state(&directions, &rates);
+    (chain, g, xi)
+}
+
+/// The chain's terms on pairs of links sum to its Lagrangian and give the derivatives that the
+/// dense default takes from the whole of it.
+#[test]
+fn chain_terms_give_the_dense_derivatives() {
+    fn check<const K: usize, const N: usize, const E: usize>() {
+        let (chain, g, xi) = leaning_chain::<K, N, E>();
+        let value = chain.lagrangian(&g, &xi);
+        assert!((pair_terms::lagrangian(&chain, &g, &xi) - value).abs() < 1e-13 * value.abs());
+        for configuration in [false, true] {
+            let (lambda, nu) = chain.local_gradient(&g, &xi, configuration);
+            let (dense_lambda, dense_nu) = dense_local_gradient(&chain, &g, &xi, configuration);
+            let (mut fast, mut dense) = (LocalDerivatives::zeros(), LocalDerivatives::zeros());
+            chain.local_hessian(&g, &xi, configuration, &mut fast);
+            dense_local_hessian(&chain, &g, &xi, configuration, &mut dense);
+            let scale = dense.ww.amax().max(dense.zz.amax());
+            let pairs = [
+                (lambda, dense_lambda),
+                (nu, dense_nu),
+                (fast.lambda, dense.lambda),
+                (fast.nu, dense.nu),
+            ];
+            for (x, y) in pairs {
+                assert!((x - y).amax() < 1e-13 * scale, "K = {K}: {x} vs {y}");
+            }
+            for (x, y) in [
+                (fast.zz, dense.zz),
+                (fast.zw, dense.zw),
+                (fast.ww, dense.ww),
+            ] {
+                assert!((x - y).amax() < 1e-13 * scale, "K = {K}: {x} vs {y}");
+            }
+            assert!(dense.zz.amax() > 0.0 || !configuration);
+        }
+    }
+    check::<2, 6, 18>();
+    check::<3, 9, 27>();
+}
+
+/// A run of the chain of `K` links with Lie-SVI of `points` points: the largest drift of the
+/// vertical angular momentum Σⱼ (Rⱼμⱼ)·e₃ and of the spins μⱼ,₃ over the run (relative to
+/// the momenta), the energy error (relative) and the largest ‖RᵀR − I‖.
+fn chain_run<const K: usize, const N: usize, const E: usize>(
+    points: usize,
+    h: f64,
+    steps: usize,
+) -> (f64, f64, f64, f64) {
+    let (chain, g0, xi0) = leaning_chain::<K, N, E>();
+    let integrator: GroupIntegrator<_, Power<Rotations, K, 3, 9>, N, E> =
+        Integrator::new(chain, LieSvi::new(points));
+    let mut observers = (
+        SpatialMomentumError::<N>::default(),
+        EnergyError::default(),
+        DefectError::default(),
+    );
+    let run = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g: g0, xi: xi0 },
+            h,
+            h * steps as f64,
+            &mut observers,
+        )
+        .unwrap();
+    assert_eq!(run.statistics.steps, steps);
+    let initial = observers.0.initial.unwrap();
+    let last = run.last.spatial_momentum::<Power<Rotations, K, 3, 9>>();
+    let vertical = (0..K)
+        .map(|j| last[3 * j + 2] - initial[3 * j + 2])
+        .sum::<f64>()
+        .abs();
+    let spins = (0..K).fold(0.0_f64, |worst, j| {
+        worst.max(run.last.momentum[3 * j + 2].abs())
+    });
+    let scale = initial.amax();
+    let energy = chain.energy(&g0, &xi0).abs().max(1.0);
+    (
+        vertical.max(spins) / scale,
+        observers.1.max / energy,
+        observers.2.max,
+        scale,
+    )
+}
+
+/// A chain of `K` links over `steps` steps of size `h` with 2 points: the vertical angular
+/// momentum and the spins to round-off, the relative energy error below `energy_bound`, the
+/// links in SO(3).
+fn check_chain<const K: usize, const N: usize, const E: usize>(
+    h: f64,
+    steps: usize,
+    energy_bound: f64,
+) {
+    let (momentum, energy, defect, _) = chain_run::<K, N, E>(2, h, steps);
+    println!(
+        "chain of {K}, lie-svi 2 points, h = {h}, {steps} steps: momentum drift {momentum:e}, \
+         energy {energy:e}, ‖RᵀR − I‖ {defect:e}"
+    );
+    assert!(momentum < 1e-13, "{K} links: {momentum:e}");
+    assert!(energy < energy_bound, "{K} links: {energy:e}");
+    assert!(defect < 1e-13, "{K} links: {defect:e}");
+}
+
+/// Eight links (dimension 24) and thirty-two (dimension 96, in a test thread's stack), with
+/// the structured derivatives of their terms on pairs of links.
+#[test]
+fn chains_of_eight_and_thirty_two_links_keep_their_momenta() {
+    check_chain::<8, 24, 72>(0.002, 2000, 1e-6);
+    check_chain::<32, 96, 288>(0.001, 20, 1e-8);
+}
+
+/// The long run of issue #38: eight links over 10⁶ steps, the energy error's maximum over
+/// the whole run against that over its first 10⁵ steps (bounded: no drift). About half an
+/// hour; run with `cargo test --release -p svi --test integration
+/// chain_of_eight_links_over -- --ignored --nocapture`.
+#[test]
+#[ignore = "10⁶ steps: a measurement for the closing note, not a CI test"]
+fn chain_of_eight_links_over_a_million_steps() {
+    let (_, early, ..) = chain_run::<8, 24, 72>(2, 0.002, 100_000);
+    let (momentum, energy, defect, scale) = chain_run::<8, 24, 72>(2, 0.002, 1_000_000);
+    println!(
+        "chain of 8, lie-svi 2 points, h = 0.002, 10⁶ steps: momentum drift {momentum:e} \
+         (relative to {scale:e}), energy {energy:e} (first 10⁵ steps: {early:e}), \
+         ‖RᵀR − I‖ {defect:e}"
+    );
+    assert!(momentum < 1e-12, "{momentum:e}");
+    assert!(energy < 2.0 * early, "{energy:e} against {early:e}");
+    assert!(defect < 1e-12, "{defect:e}");
 }

@@ -30,6 +30,8 @@
 use nalgebra::{SMatrix, SVector};
 use svi::Scalar;
 use svi::lie_group::{GroupLagrangian, Power, Rotations, so3};
+use svi::model::group::LocalDerivatives;
+use svi::model::group::pair_terms::{self, PairTerms};
 
 type Matrix3 = SMatrix<f64, 3, 3>;
 type Vector3 = SVector<f64, 3>;
@@ -68,6 +70,28 @@ impl<const K: usize, const N: usize, const E: usize> GroupLagrangian<N, E>
     for SphericalChain<K, N, E>
 {
     type Group = Power<Rotations, K, 3, 9>;
+    const STRUCTURED: bool = true;
+
+    /// Term by term ([`PairTerms`]).
+    fn local_gradient(
+        &self,
+        g: &SVector<f64, E>,
+        w: &SVector<f64, N>,
+        configuration: bool,
+    ) -> (SVector<f64, N>, SVector<f64, N>) {
+        pair_terms::local_gradient(self, g, w, configuration)
+    }
+
+    /// Term by term ([`PairTerms`]).
+    fn local_hessian(
+        &self,
+        g: &SVector<f64, E>,
+        w: &SVector<f64, N>,
+        configuration: bool,
+        out: &mut LocalDerivatives<N>,
+    ) {
+        pair_terms::local_hessian(self, g, w, configuration, out);
+    }
 
     #[inline]
     fn lagrangian<D: Scalar>(&self, g: &SVector<D, E>, xi: &SVector<D, N>) -> D {
@@ -86,6 +110,57 @@ impl<const K: usize, const N: usize, const E: usize> GroupLagrangian<N, E>
                 + w[2] * w[2] * (0.5 * self.spin);
         }
         sum
+    }
+}
+
+/// The chain's Lagrangian as terms on pairs of links: with Mⱼ = Σ_{i≥j} mᵢ (the mass at and
+/// below joint j), |ẋᵢ|² = Σ_{j,k≤i} l_j l_k q̇_j·q̇_k and xᵢ·e₃ = Σ_{j≤i} l_j q_j·e₃ give
+///
+/// L = Σ_j [½ M_j l_j² |q̇_j|² + ½ J Ω_{j,3}² − g₀ M_j l_j q_j·e₃] + Σ_{j<k} M_k l_j l_k q̇_j·q̇_k,
+///
+/// K terms on one link (e < K: link e) and K(K − 1)/2 on pairs (j, k), j < k, in the order
+/// (0, 1), (0, 2), …, (1, 2), ….
+impl<const K: usize, const N: usize, const E: usize> PairTerms<3, 9> for SphericalChain<K, N, E> {
+    type Factor = Rotations;
+
+    fn term_count(&self) -> usize {
+        K * (K + 1) / 2
+    }
+
+    fn factors(&self, e: usize) -> [usize; 2] {
+        if e < K {
+            return [e, e];
+        }
+        let mut rest = e - K;
+        for j in 0..K {
+            let row = K - 1 - j;
+            if rest < row {
+                return [j, j + 1 + rest];
+            }
+            rest -= row;
+        }
+        [K - 1, K - 1]
+    }
+
+    #[inline]
+    fn term<D: Scalar>(&self, e: usize, g: [&SVector<D, 9>; 2], xi: [&SVector<D, 3>; 2]) -> D {
+        let [j, k] = self.factors(e);
+        let below = |k: usize| self.masses[k..].iter().sum::<f64>();
+        let rate = |g: &SVector<D, 9>, w: &SVector<D, 3>| {
+            let r = Rotations::matrix(g);
+            r.column(0) * w[1] - r.column(1) * w[0]
+        };
+        if j == k {
+            let (mass, length) = (below(j), self.lengths[j]);
+            let q_rate = rate(g[0], xi[0]);
+            let height = Rotations::matrix(g[0])[(2, 2)];
+            q_rate.dot(&q_rate) * (0.5 * mass * length * length)
+                + xi[0][2] * xi[0][2] * (0.5 * self.spin)
+                - height * (self.gravity * mass * length)
+        } else {
+            rate(g[0], xi[0]).dot(&rate(g[1], xi[1]))
+                * (below(k) * self.lengths[j] * self.lengths[k])
+        }
     }
 }
 

@@ -21,7 +21,9 @@
 //! The discrete Noether theorem holds as on SO(3): for a left-invariant L the spatial momentum
 //! Ad_{g⁻¹}ᵀμ is conserved, since Ad_{g_{k+1}⁻¹}ᵀ Ad_Fᵀ = Ad_{g_k⁻¹}ᵀ.
 
-use super::group_equations::{GroupDerivatives, assemble_group, configuration_sum_at};
+use super::group_equations::{
+    GroupDerivatives, GroupScratch, assemble_group, configuration_sum_at,
+};
 use super::tables::StepTables;
 use super::{Form, LieSvi, ORTHOGONALITY_TOLERANCE, at_time, check_invariance};
 use crate::error::{Error, StepFailure, require_finite_entries, require_positive};
@@ -35,18 +37,42 @@ use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// The largest group dimension N the dense derivatives support: each Gauss point differentiates
 /// L in hyper-dual numbers with N + N directions (N² + 2N + 1 numbers each, on the stack), so
-/// beyond this a group needs derivatives that exploit its structure (chains of links).
+/// beyond this a model must supply structured derivatives ([`GroupLagrangian::STRUCTURED`],
+/// such as the terms on pairs of links of a chain, [`crate::model::group::pair_terms`]).
 pub const MAX_GROUP_DIMENSION: usize = 12;
 
-/// [`MAX_GROUP_DIMENSION`] as a typed error.
-fn check_dimension<const N: usize>() -> Result<(), Error> {
-    if N > MAX_GROUP_DIMENSION {
+/// The largest group dimension N with structured derivatives: chains of 32 links of SO(3)
+/// (the step's N × N blocks still live on the stack).
+pub const MAX_STRUCTURED_GROUP_DIMENSION: usize = 96;
+
+/// [`MAX_GROUP_DIMENSION`] and [`MAX_STRUCTURED_GROUP_DIMENSION`] as typed errors (a forced
+/// model's force is differentiated densely: at most [`MAX_GROUP_DIMENSION`]).
+fn check_dimension<L: GroupLagrangian<N, E>, const N: usize, const E: usize>() -> Result<(), Error>
+{
+    let limit = if L::STRUCTURED {
+        MAX_STRUCTURED_GROUP_DIMENSION
+    } else {
+        MAX_GROUP_DIMENSION
+    };
+    if N > limit {
+        let reason = if L::STRUCTURED {
+            format!("{N} exceeds {limit}, the largest group lie-svi runs")
+        } else {
+            format!(
+                "{N} exceeds {limit}, the largest group lie-svi differentiates densely; a \
+                 larger group (up to {MAX_STRUCTURED_GROUP_DIMENSION}) needs a model with \
+                 structured derivatives (GroupLagrangian::STRUCTURED, as the chains of links \
+                 written with model::group::pair_terms)"
+            )
+        };
+        return Err(Error::invalid("group dimension", reason));
+    }
+    if L::FORCED && N > MAX_GROUP_DIMENSION {
         return Err(Error::invalid(
             "group dimension",
             format!(
-                "{N} exceeds {MAX_GROUP_DIMENSION}, the largest group lie-svi differentiates \
-                 densely (larger groups, such as chains of more than four links on SO(3), are \
-                 not supported yet)"
+                "{N}: a force (FORCED = true) is differentiated densely, on groups up to \
+                 {MAX_GROUP_DIMENSION} only"
             ),
         ));
     }
@@ -66,6 +92,7 @@ pub struct GroupWorkspace<const N: usize> {
     points: Vec<GroupDerivatives<N>>,
     /// ∂g_R/∂ξʲ, j = 1..d.
     rates: Vec<SMatrix<f64, N, N>>,
+    scratch: GroupScratch<N>,
     newton: Newton,
     /// Last body velocity from the inverse Legendre map (its Newton start).
     velocity_guess: SVector<f64, N>,
@@ -120,10 +147,10 @@ where
         LieSvi::info(self)
     }
 
-    /// Validate the options (and the group's dimension, at most [`MAX_GROUP_DIMENSION`]) and
+    /// Validate the options (and the group's dimension, [`check_dimension`]) and
     /// build every table and buffer for steps of size `h`.
     fn workspace(&self, _model: &L, h: f64) -> Result<GroupWorkspace<N>, Error> {
-        check_dimension::<N>()?;
+        check_dimension::<L, N, E>()?;
         self.validate(L::G_INVARIANT)?;
         if self.form == Form::Reduced && L::FORCED {
             return Err(Error::invalid(
@@ -143,6 +170,7 @@ where
             has_previous: false,
             points: vec![GroupDerivatives::zeros(); m],
             rates: vec![SMatrix::zeros(); degree],
+            scratch: GroupScratch::new(),
             newton: Newton::new(N * degree, self.max_iterations),
             velocity_guess: SVector::zeros(),
         })
@@ -172,6 +200,7 @@ where
             unknowns,
             points,
             rates,
+            scratch,
             newton,
             ..
         } = workspace;
@@ -191,7 +220,8 @@ where
         let solved = newton
             .iterate(unknowns, Jacobian::Kept, |z, jacobian, residual| {
                 assemble_group(
-                    model, tables, *reduced, points, rates, t, state, z, jacobian, residual,
+                    model, tables, *reduced, points, rates, scratch, t, state, z, jacobian,
+                    residual,
                 )
             })
             .map_err(|failure| outside(unknowns).unwrap_or(failure))?;
@@ -200,7 +230,13 @@ where
         }
         let end = unknowns.fixed_rows::<N>(last).into_owned();
         // g_R at the converged nodes (the assembly's is one Newton iterate behind).
-        let torque = configuration_sum_at(model, tables, *reduced, t, &state.g, unknowns);
+        let torque = configuration_sum_at(
+            model,
+            (tables, *reduced),
+            (t, &state.g),
+            unknowns,
+            &mut scratch.maps,
+        );
         let adjoint_minus_identity = L::Group::ad(&end) * L::Group::dexp(&end);
         increment.g = L::Group::translate_difference(&state.g, &L::Group::exp_minus_identity(&end));
         increment.momentum = adjoint_minus_identity.transpose() * state.momentum
@@ -245,7 +281,7 @@ where
         })
     }
 
-    /// Checks the group's dimension (at most [`MAX_GROUP_DIMENSION`]) and the initial
+    /// Checks the group's dimension ([`check_dimension`]) and the initial
     /// condition: finite values, a configuration in the group ([`LieGroup::defect`] at most
     /// [`ORTHOGONALITY_TOLERANCE`]) and an invertible Legendre map.
     fn initial_state(
@@ -254,7 +290,7 @@ where
         t0: f64,
         initial: &GroupInitial<N, E>,
     ) -> Result<GroupState<N, E>, Error> {
-        check_dimension::<N>()?;
+        check_dimension::<L, N, E>()?;
         let (g, second, name) = match initial {
             GroupInitial::Velocity { g, xi } => (g, xi, "initial body velocity"),
             GroupInitial::Momentum { g, momentum } => (g, momentum, "initial body momentum"),

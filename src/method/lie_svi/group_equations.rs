@@ -30,15 +30,18 @@
 //! no Lagrangian in it). The bracket term gives ∂²ℓ/∂η∂α its ½ Aᵀ C B with
 //! C_ij = ⟨λ, [e_i, e_j]⟩. The reduced form has λ = 0 and L̂ evaluated at e. The tests check
 //! every block against brute-force hyper-dual differentiation of ℓ.
+//!
+//! L̂'s derivatives come from the model ([`GroupLagrangian::local_hessian`], dense by default,
+//! term by term for chains) and W's from the group ([`LieGroup::velocity_derivatives`], factor
+//! by factor for powers); [`crate::model::group::derivatives`] says how to supply them. The
+//! N × N products of the chain rule are formed in place in heap buffers ([`GroupScratch`]),
+//! so groups of dimension up to 96 fit a thread's stack.
 
 use super::tables::StepTables;
 use crate::method::group_space::GroupState;
-use crate::model::group::{GroupLagrangian, LieGroup};
-use nalgebra::{Const, DMatrix, DVector, SMatrix, SVector};
-use num_dual::{DualSVec64, DualVec, HyperDualVec, gradient, jacobian, partial_hessian};
-
-/// A hyper-dual number with N first-derivative directions on each side.
-type Mixed<const N: usize> = HyperDualVec<f64, Const<N>, Const<N>>;
+use crate::model::group::{GroupLagrangian, LieGroup, LocalDerivatives, VelocityDerivatives};
+use nalgebra::{DMatrix, DVector, SMatrix, SVector};
+use num_dual::{DualSVec64, jacobian};
 
 /// Gradient and Hessian blocks of ℓ(η, a, b) at one quadrature point (η = 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,105 +82,116 @@ impl<const N: usize> GroupDerivatives<N> {
     }
 }
 
-/// The same variable seeded on both sides: x + y − x₀ has x's first directions, y's second
-/// ones and the real part x₀.
-#[inline]
-fn both<const N: usize>(
-    x: &SVector<Mixed<N>, N>,
-    y: &SVector<Mixed<N>, N>,
-    value: &SVector<f64, N>,
-) -> SVector<Mixed<N>, N> {
-    x + y - value.map(Mixed::from_re)
+/// Buffers of [`group_derivatives`] on the heap (a group of dimension N has N × N blocks:
+/// 73 kB each at N = 96, too many for a thread's stack).
+#[derive(Debug, Clone)]
+pub(super) struct GroupScratch<const N: usize> {
+    local: Box<LocalDerivatives<N>>,
+    pub(super) maps: Box<VelocityDerivatives<N>>,
+    pull: Box<SMatrix<f64, N, N>>,
+    left: Box<SMatrix<f64, N, N>>,
+    right: Box<SMatrix<f64, N, N>>,
+    adjoint: Box<SMatrix<f64, N, N>>,
+    bracket: Box<SMatrix<f64, N, N>>,
 }
 
-/// The gradient and Hessian blocks of ℓ at (0, a, b) (the η blocks only in the full form),
-/// by the chain rule through the local Lagrangian L̂(ζ, w) = L(ĝ exp(ζ), w), ĝ = g_k exp(a)
-/// (module docs): three hyper-dual evaluations of the user's L (at ĝ exp(ζ) to second order,
-/// [`LieGroup::exp_second_order`]) and two of the group's body velocity
-/// W(a, b) = dexp_{−a} b.
+impl<const N: usize> GroupScratch<N> {
+    pub(super) fn new() -> Self {
+        let matrix = || Box::new(SMatrix::zeros());
+        GroupScratch {
+            local: Box::new(LocalDerivatives::zeros()),
+            maps: Box::new(VelocityDerivatives::zeros()),
+            pull: matrix(),
+            left: matrix(),
+            right: matrix(),
+            adjoint: matrix(),
+            bracket: matrix(),
+        }
+    }
+}
+
+/// `target += source` for N × N blocks, in place.
+#[inline]
+fn add_transpose<const N: usize>(target: &mut SMatrix<f64, N, N>, source: &SMatrix<f64, N, N>) {
+    for j in 0..N {
+        for i in 0..N {
+            target[(i, j)] += source[(j, i)];
+        }
+    }
+}
+
+/// The gradient and Hessian blocks of ℓ at (0, a, b) (the η blocks only in the full form)
+/// into `out`, by the chain rule (module docs) through the model's local derivatives
+/// ([`GroupLagrangian::local_hessian`] at ĝ = g_k exp(a), or at e in the reduced form) and
+/// the group's derivatives of W ([`LieGroup::velocity_derivatives`]); every N × N product in
+/// place.
 pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
     reduced: bool,
     base: &SVector<f64, E>,
-    a: &SVector<f64, N>,
-    b: &SVector<f64, N>,
-) -> GroupDerivatives<N> {
-    let zero = SVector::<f64, N>::zeros();
-    let lift = |v: &SVector<f64, N>| v.map(Mixed::from_re);
+    (a, b): (&SVector<f64, N>, &SVector<f64, N>),
+    out: &mut GroupDerivatives<N>,
+    scratch: &mut GroupScratch<N>,
+) {
     let w0 = L::Group::body_velocity(a, b);
-    let pull = L::Group::dexp(&(-a));
-    let (_, rate) = jacobian(
-        |x: SVector<DualSVec64<N>, N>| L::Group::body_velocity(&x, &b.map(DualVec::from_re)),
-        a,
-    );
-    // L̂'s derivatives: λ = ∂L̂/∂ζ, ν = ∂L̂/∂w and the blocks ζζ, ζw, ww.
-    let (lambda, zz, zw, nu, ww) = if reduced {
-        let identity = L::Group::identity::<Mixed<N>>();
-        let (_, nu, _, ww) = partial_hessian(
-            |(x, y)| model.lagrangian(&identity, &both(&x, &y, &w0)),
-            (&w0, &w0),
-        );
-        let z = SMatrix::zeros();
-        (zero, z, z, nu, ww)
+    let moved = if reduced {
+        L::Group::identity()
     } else {
-        let base = L::Group::compose(base, &L::Group::exp(a)).map(Mixed::from_re);
-        let local = |z: &SVector<Mixed<N>, N>, w: &SVector<Mixed<N>, N>| {
-            model.lagrangian(&L::Group::compose(&base, &L::Group::exp_second_order(z)), w)
-        };
-        let (_, lambda, _, zz) = partial_hessian(
-            |(x, y)| local(&both(&x, &y, &zero), &lift(&w0)),
-            (&zero, &zero),
-        );
-        let (_, _, _, zw) = partial_hessian(|(x, y)| local(&x, &y), (&zero, &w0));
-        let (_, nu, _, ww) =
-            partial_hessian(|(x, y)| local(&lift(&zero), &both(&x, &y, &w0)), (&w0, &w0));
-        (lambda, zz, zw, nu, ww)
+        L::Group::compose(base, &L::Group::exp(a))
     };
-    // The second-order terms of the maps: ⟨ν, W(a + α, b + β)⟩ in (α, α) and (α, β), and
-    // ½⟨λ, W(a + α, α)⟩ in (α, α) (the α² term of ζ).
-    let (a_lift, b_lift) = (lift(a), lift(b));
-    let (lambda_lift, nu_lift) = (lift(&lambda), lift(&nu));
-    let (_, _, _, curvature) = partial_hessian(
-        |(x, y)| {
-            let alpha = x + y;
-            let moved = a_lift + alpha;
-            nu_lift.dot(&L::Group::body_velocity(&moved, &b_lift))
-                + lambda_lift.dot(&L::Group::body_velocity(&moved, &alpha)) * 0.5
-        },
-        (&zero, &zero),
-    );
-    let (_, _, _, twist) = partial_hessian(
-        |(x, y)| nu_lift.dot(&L::Group::body_velocity(&(a_lift + x), &(b_lift + y))),
-        (&zero, &zero),
-    );
-    let from_b = zw * pull;
-    let mut out = GroupDerivatives {
-        a: pull.transpose() * lambda + rate.transpose() * nu,
-        b: pull.transpose() * nu,
-        aa: pull.transpose() * zz * pull
-            + pull.transpose() * zw * rate
-            + rate.transpose() * zw.transpose() * pull
-            + rate.transpose() * ww * rate
-            + curvature,
-        ab: pull.transpose() * from_b + rate.transpose() * ww * pull + twist,
-        ba: SMatrix::zeros(),
-        bb: pull.transpose() * ww * pull,
-        ..GroupDerivatives::zeros()
-    };
-    if !reduced {
-        // ζ = Aη + Bα + ½[Aη, Bα] + … with A = Ad_{exp(−a)}: the bracket's bilinear form
-        // C_ij = ⟨λ, [e_i, e_j]⟩.
-        let adjoint = L::Group::adjoint(&L::Group::exp(&(-a)));
-        let bracket = SMatrix::<f64, N, N>::from_fn(|i, j| {
-            let unit = SVector::<f64, N>::from_fn(|k, _| if k == i { 1.0 } else { 0.0 });
-            lambda.dot(&L::Group::ad(&unit).column(j))
-        });
-        out.eta = adjoint.transpose() * lambda;
-        out.eta_a = adjoint.transpose() * (zz * pull + zw * rate + bracket * pull * 0.5);
-        out.eta_b = adjoint.transpose() * from_b;
+    let GroupScratch {
+        local,
+        maps,
+        pull,
+        left,
+        right,
+        adjoint,
+        bracket,
+    } = scratch;
+    **pull = L::Group::dexp(&(-a));
+    model.local_hessian(&moved, &w0, !reduced, local);
+    L::Group::velocity_derivatives(a, b, &local.lambda, &local.nu, true, maps);
+    let rate = &maps.rate;
+    out.a = pull.tr_mul(&local.lambda) + maps.pulled;
+    out.b = pull.tr_mul(&local.nu);
+    // aa = Bᵀ ζζ B + S + Sᵀ + Rᵀ ww R + curvature, S = Bᵀ ζw R (B = pull, R = rate).
+    left.gemm(1.0, &local.zz, pull, 0.0);
+    out.aa.gemm_tr(1.0, pull, left, 0.0);
+    left.gemm(1.0, &local.zw, rate, 0.0);
+    right.gemm_tr(1.0, pull, left, 0.0);
+    out.aa += &**right;
+    add_transpose(&mut out.aa, right);
+    left.gemm(1.0, &local.ww, rate, 0.0);
+    out.aa.gemm_tr(1.0, rate, left, 1.0);
+    out.aa += &maps.curvature;
+    // ab = Bᵀ ζw B + Rᵀ ww B + twist, bb = Bᵀ ww B; `right` keeps ζw B for the η block.
+    right.gemm(1.0, &local.zw, pull, 0.0);
+    out.ab.gemm_tr(1.0, pull, right, 0.0);
+    left.gemm(1.0, &local.ww, pull, 0.0);
+    out.ab.gemm_tr(1.0, rate, left, 1.0);
+    out.ab += &maps.twist;
+    out.bb.gemm_tr(1.0, pull, left, 0.0);
+    out.ab.transpose_to(&mut out.ba);
+    if reduced {
+        out.eta.fill(0.0);
+        out.eta_a.fill(0.0);
+        out.eta_b.fill(0.0);
+        return;
     }
-    out.ba = out.ab.transpose();
-    out
+    // ζ = Aη + Bα + ½[Aη, Bα] + … with A = Ad_{exp(−a)}: the bracket's bilinear form
+    // C_ij = ⟨λ, [e_i, e_j]⟩ = (ad_{e_i}ᵀλ)_j.
+    **adjoint = L::Group::adjoint(&L::Group::exp(&(-a)));
+    for i in 0..N {
+        let unit = SVector::<f64, N>::from_fn(|k, _| if k == i { 1.0 } else { 0.0 });
+        let row = L::Group::ad(&unit).tr_mul(&local.lambda);
+        bracket.set_row(i, &row.transpose());
+    }
+    out.eta = adjoint.tr_mul(&local.lambda);
+    left.gemm(1.0, &local.zz, pull, 0.0);
+    left.gemm(1.0, &local.zw, rate, 1.0);
+    left.gemm(0.5, bracket, pull, 1.0);
+    out.eta_a.gemm_tr(1.0, adjoint, left, 0.0);
+    out.eta_b.gemm_tr(1.0, adjoint, right, 0.0);
 }
 
 /// Adds the force's terms at one Gauss point (time `t`): the body variation of
@@ -224,20 +238,17 @@ pub(super) fn add_force<L: GroupLagrangian<N, E>, const N: usize, const E: usize
 }
 
 /// The gradient of ℓ at (0, a, b) alone, which is all a residual needs (module docs):
-/// ∂ℓ/∂η = Aᵀλ, ∂ℓ/∂a = Bᵀλ + (∂W/∂a)ᵀν and ∂ℓ/∂b = Bᵀν with λ = ∂L̂/∂ζ and ν = ∂L̂/∂w —
-/// two first-order dual evaluations of L and one of W; with a force f at time `t`, Aᵀf and
-/// Bᵀf join the η- and a-rows (A = I − ad_a B). ∂ℓ/∂η is zero in the reduced form.
-#[allow(clippy::too_many_arguments)]
+/// ∂ℓ/∂η = Aᵀλ, ∂ℓ/∂a = Bᵀλ + (∂W/∂a)ᵀν and ∂ℓ/∂b = Bᵀν with λ = ∂L̂/∂ζ and ν = ∂L̂/∂w
+/// ([`GroupLagrangian::local_gradient`], [`LieGroup::velocity_derivatives`] without second
+/// derivatives, into `maps`); with a force f at time `t`, Aᵀf and Bᵀf join the η- and a-rows
+/// (A = I − ad_a B). ∂ℓ/∂η is zero in the reduced form. Returns (∂ℓ/∂η, ∂ℓ/∂a, ∂ℓ/∂b).
 pub(super) fn group_gradients<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
     reduced: bool,
-    t: f64,
-    base: &SVector<f64, E>,
-    a: &SVector<f64, N>,
-    b: &SVector<f64, N>,
-    out: &mut GroupDerivatives<N>,
-) {
-    type D<const N: usize> = DualSVec64<N>;
+    (t, base): (f64, &SVector<f64, E>),
+    (a, b): (&SVector<f64, N>, &SVector<f64, N>),
+    maps: &mut VelocityDerivatives<N>,
+) -> [SVector<f64, N>; 3] {
     let w0 = L::Group::body_velocity(a, b);
     let pull = L::Group::dexp(&(-a));
     let moved = if reduced {
@@ -245,42 +256,23 @@ pub(super) fn group_gradients<L: GroupLagrangian<N, E>, const N: usize, const E:
     } else {
         L::Group::compose(base, &L::Group::exp(a))
     };
-    let lifted = moved.map(D::<N>::from_re);
-    let (_, nu) = gradient(|w: SVector<D<N>, N>| model.lagrangian(&lifted, &w), &w0);
-    let b_lift = b.map(D::<N>::from_re);
-    let nu_lift = nu.map(D::<N>::from_re);
-    let (_, pulled_nu) = gradient(
-        |x: SVector<D<N>, N>| nu_lift.dot(&L::Group::body_velocity(&x, &b_lift)),
-        a,
-    );
-    out.b = pull.transpose() * nu;
-    out.a = pulled_nu;
-    out.eta = SVector::zeros();
+    let (mut lambda, nu) = model.local_gradient(&moved, &w0, !reduced);
+    L::Group::velocity_derivatives(a, b, &lambda, &nu, false, maps);
+    let mut row_a = maps.pulled;
+    let row_b = pull.tr_mul(&nu);
     if reduced && !L::FORCED {
-        return;
-    }
-    let mut lambda = SVector::zeros();
-    if !reduced {
-        let velocity = w0.map(D::<N>::from_re);
-        lambda = gradient(
-            |z: SVector<D<N>, N>| {
-                model.lagrangian(
-                    &L::Group::compose(&lifted, &L::Group::exp_second_order(&z)),
-                    &velocity,
-                )
-            },
-            &SVector::zeros(),
-        )
-        .1;
+        return [SVector::zeros(), row_a, row_b];
     }
     if L::FORCED {
         lambda += model.external_force(t, &moved, &w0);
     }
-    out.a += pull.transpose() * lambda;
+    row_a += pull.tr_mul(&lambda);
+    let mut row_eta = SVector::zeros();
     if !reduced {
-        let adjoint = SMatrix::identity() - L::Group::ad(a) * pull;
-        out.eta = adjoint.transpose() * lambda;
+        // Aᵀλ = λ − Bᵀ ad_aᵀ λ.
+        row_eta = lambda - pull.tr_mul(&L::Group::ad(a).tr_mul(&lambda));
     }
+    [row_eta, row_a, row_b]
 }
 
 /// g_R = Σ_μ W_μ ∂ℓ/∂η from the derivatives of the last assembly.
@@ -298,21 +290,19 @@ fn configuration_sum<const N: usize>(
 /// the reduced form).
 pub(super) fn configuration_sum_at<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     model: &L,
-    tables: &StepTables,
-    reduced: bool,
-    t: f64,
-    base: &SVector<f64, E>,
+    (tables, reduced): (&StepTables, bool),
+    (t, base): (f64, &SVector<f64, E>),
     z: &DVector<f64>,
+    maps: &mut VelocityDerivatives<N>,
 ) -> SVector<f64, N> {
     let mut sum = SVector::zeros();
     if reduced {
         return sum;
     }
-    let mut point = GroupDerivatives::zeros();
     for (mu, w) in tables.weights.iter().enumerate() {
         let (a, b) = tables.point::<N>(mu, z);
-        group_gradients(model, reduced, tables.time(t, mu), base, &a, &b, &mut point);
-        sum += point.eta * *w;
+        let [eta, ..] = group_gradients(model, reduced, (tables.time(t, mu), base), (&a, &b), maps);
+        sum += eta * *w;
     }
     sum
 }
@@ -327,6 +317,7 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
     reduced: bool,
     points: &mut [GroupDerivatives<N>],
     rates: &mut [SMatrix<f64, N, N>],
+    scratch: &mut GroupScratch<N>,
     t: f64,
     state: &GroupState<N, E>,
     z: &DVector<f64>,
@@ -338,12 +329,20 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
     for (mu, point) in points.iter_mut().enumerate() {
         let (a, b) = tables.point::<N>(mu, z);
         if exact {
-            *point = group_derivatives(model, reduced, &state.g, &a, &b);
+            group_derivatives(model, reduced, &state.g, (&a, &b), point, scratch);
             if L::FORCED {
                 add_force(model, reduced, tables.time(t, mu), &state.g, &a, &b, point);
             }
         } else {
-            group_gradients(model, reduced, tables.time(t, mu), &state.g, &a, &b, point);
+            let time = tables.time(t, mu);
+            let [eta, row_a, row_b] = group_gradients(
+                model,
+                reduced,
+                (time, &state.g),
+                (&a, &b),
+                &mut scratch.maps,
+            );
+            (point.eta, point.a, point.b) = (eta, row_a, row_b);
         }
     }
     residual.fill(0.0);
@@ -358,9 +357,9 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
     // Last block: P − dexp_ξᵀ (μ_k + g_R), ξ = ξᵈ.
     let end = z.fixed_rows::<N>(N * (d - 1)).into_owned();
     let load = state.momentum + configuration_sum(tables, points);
-    let map = L::Group::dexp(&end).transpose();
+    let map = L::Group::dexp(&end);
     let mut row = residual.fixed_rows_mut::<N>(N * (d - 1));
-    row -= map * load;
+    row -= map.tr_mul(&load);
     let Some(jacobian_out) = jacobian_out else {
         return;
     };
@@ -372,26 +371,32 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
         let w = tables.weights[mu];
         for j in 1..=d {
             let (lj, cj) = (tables.values[(mu, j)], tables.derivatives[(mu, j)]);
-            let from_a = (p.aa * lj + p.ab * cj) * w;
-            let from_b = (p.ba * lj + p.bb * cj) * w;
             for nu in 1..=d {
                 let (l, c) = (tables.values[(mu, nu)], tables.derivatives[(mu, nu)]);
                 let mut target = jacobian_out.fixed_view_mut::<N, N>(N * (nu - 1), N * (j - 1));
-                target += from_a * l + from_b * c;
+                // (l_ν (aa l_j + ab c_j) + c_ν (ba l_j + bb c_j)) W_μ, without N × N temporaries.
+                let blocks = [
+                    (&p.aa, l * lj),
+                    (&p.ab, l * cj),
+                    (&p.ba, c * lj),
+                    (&p.bb, c * cj),
+                ];
+                for (block, factor) in blocks {
+                    target.zip_apply(block, |x, y| *x += factor * w * y);
+                }
             }
             if !reduced {
-                rates[j - 1] += (p.eta_a * lj + p.eta_b * cj) * w;
+                let rate = &mut rates[j - 1];
+                rate.zip_apply(&p.eta_a, |x, y| *x += lj * w * y);
+                rate.zip_apply(&p.eta_b, |x, y| *x += cj * w * y);
             }
         }
     }
-    let (_, pulled_rate) = jacobian(
-        |x: SVector<DualSVec64<N>, N>| L::Group::dexp(&x).transpose() * load.map(DualVec::from_re),
-        &end,
-    );
+    let pulled_rate = L::Group::dexp_transpose_jacobian(&end, &load);
     for (j, rate) in rates.iter().enumerate() {
         let mut target = jacobian_out.fixed_view_mut::<N, N>(N * (d - 1), N * j);
         if !reduced {
-            target -= map * rate;
+            target.gemm_tr(-1.0, &map, rate, 1.0);
         }
         if j + 1 == d {
             target -= pulled_rate;
@@ -402,10 +407,12 @@ pub(super) fn assemble_group<L: GroupLagrangian<N, E>, const N: usize, const E: 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::group::derivatives::{Mixed, both};
     use crate::model::group::product::RotationsAndTranslations;
     use crate::model::group::rigid_motions::RigidMotions;
     use crate::model::group::rotations::Rotations;
     use crate::scalar::Scalar;
+    use num_dual::partial_hessian;
 
     /// ℓ(η, a, b) in hyper-dual numbers; in the reduced form the base point is the identity and
     /// η is not used.
@@ -485,7 +492,9 @@ mod tests {
         for scale in [0.0, 1e-4, 0.5] {
             let a = SVector::<f64, N>::from_fn(|i, _| scale * (0.4 - 0.23 * i as f64));
             let b = SVector::<f64, N>::from_fn(|i, _| 1.0 - 0.31 * i as f64);
-            let fast = group_derivatives(&model, reduced, &base, &a, &b);
+            let mut fast = GroupDerivatives::zeros();
+            let mut scratch = GroupScratch::new();
+            group_derivatives(&model, reduced, &base, (&a, &b), &mut fast, &mut scratch);
             let reference = group_derivatives_reference(&model, reduced, &base, &a, &b);
             let pairs = [
                 (fast.eta, reference.eta),

@@ -119,7 +119,7 @@ use crate::scalar::Scalar;
 use crate::spectral::check_options;
 use derivatives::PointDerivatives;
 use equations::assemble;
-pub use group::{GroupWorkspace, MAX_GROUP_DIMENSION};
+pub use group::{GroupWorkspace, MAX_GROUP_DIMENSION, MAX_STRUCTURED_GROUP_DIMENSION};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 
 /// Largest ‖R₀ᵀR₀ − I‖ accepted for an initial attitude.

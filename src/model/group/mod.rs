@@ -36,6 +36,8 @@
 //! μ·ξ − L and the configuration gradient d/dε L(g exp(εζ), ξ).
 
 pub mod circle;
+pub mod derivatives;
+pub mod pair_terms;
 pub mod product;
 pub mod rigid_motions;
 pub mod rotations;
@@ -44,8 +46,8 @@ pub mod translations;
 use crate::error::Error;
 use crate::linalg::solve_small;
 use crate::scalar::Scalar;
-use nalgebra::{Const, SMatrix, SVector};
-use num_dual::{Dual2Vec, DualSVec64, DualVec, gradient, hessian};
+pub use derivatives::{LocalDerivatives, VelocityDerivatives};
+use nalgebra::{SMatrix, SVector};
 use std::fmt::Debug;
 
 /// A matrix Lie group of dimension `N` whose elements are stored as `E` numbers (see the
@@ -125,6 +127,29 @@ pub trait LieGroup<const N: usize, const E: usize>:
     /// invertible by [`LieGroup::log`] near x (|ω|/π for each rotation part ω, the largest;
     /// 0 for a translation).
     fn chart_reach(x: &SVector<f64, N>) -> f64;
+
+    /// The derivatives of the body velocity W(a, b) = dexp_{−a} b that a step's chain rule
+    /// needs, contracted with λ and ν ([`derivatives`]), into `out`; only (∂W/∂a)ᵀν unless
+    /// `second`.
+    /// The default differentiates [`LieGroup::body_velocity`] densely; override it where the
+    /// group has structure (a power does it factor by factor).
+    #[inline]
+    fn velocity_derivatives(
+        a: &SVector<f64, N>,
+        b: &SVector<f64, N>,
+        lambda: &SVector<f64, N>,
+        nu: &SVector<f64, N>,
+        second: bool,
+        out: &mut VelocityDerivatives<N>,
+    ) {
+        derivatives::dense_velocity_derivatives::<Self, N, E>(a, b, lambda, nu, second, out);
+    }
+
+    /// ∂(dexp_xᵀ v)/∂x. The default differentiates [`LieGroup::dexp`] densely.
+    #[inline]
+    fn dexp_transpose_jacobian(x: &SVector<f64, N>, v: &SVector<f64, N>) -> SMatrix<f64, N, N> {
+        derivatives::dense_dexp_transpose_jacobian::<Self, N, E>(x, v)
+    }
 }
 
 /// A Lagrangian L(g, ξ) on the tangent bundle of a Lie group `G`, left-trivialised: g ∈ G
@@ -156,6 +181,13 @@ pub trait GroupLagrangian<const N: usize, const E: usize> {
     /// always correct; the stepping loop checks a `true` at the initial state.
     const G_INVARIANT: bool = false;
 
+    /// Whether the model supplies its own [`GroupLagrangian::local_gradient`] and
+    /// [`GroupLagrangian::local_hessian`] (and its group its own
+    /// [`LieGroup::velocity_derivatives`] and [`LieGroup::dexp_transpose_jacobian`]) without
+    /// dense dual numbers of the group's dimension, as [`pair_terms`] does: then groups
+    /// beyond [`crate::method::lie_svi::MAX_GROUP_DIMENSION`] run. Default `false`.
+    const STRUCTURED: bool = false;
+
     /// Whether the model has a non-conservative force
     /// ([`GroupLagrangian::external_force`]); `false` (the default) skips it entirely.
     const FORCED: bool = false;
@@ -179,6 +211,36 @@ pub trait GroupLagrangian<const N: usize, const E: usize> {
         let _ = (t, g, xi);
         SVector::zeros()
     }
+
+    /// λ = d/dε L(g exp(εζ), w) (the left-trivialised configuration gradient; zero without
+    /// `configuration`) and ν = ∂L/∂ξ at (g, w) ([`derivatives`]). The default
+    /// differentiates L densely; a Lagrangian with structure (terms on pairs of factors of a
+    /// power, [`pair_terms`]) overrides this and [`GroupLagrangian::local_hessian`].
+    #[inline]
+    fn local_gradient(
+        &self,
+        g: &SVector<f64, E>,
+        w: &SVector<f64, N>,
+        configuration: bool,
+    ) -> (SVector<f64, N>, SVector<f64, N>) {
+        derivatives::dense_local_gradient(self, g, w, configuration)
+    }
+
+    /// The gradient and Hessian blocks of L̂(ζ, w) = L(g exp(ζ), w) at ζ = 0 into `out` (only
+    /// ν and ww without `configuration`, the rest zero). The default differentiates L densely, with N + N dual
+    /// directions per number: groups of dimension above
+    /// [`crate::method::lie_svi::MAX_GROUP_DIMENSION`] need an override
+    /// ([`GroupLagrangian::STRUCTURED`]).
+    #[inline]
+    fn local_hessian(
+        &self,
+        g: &SVector<f64, E>,
+        w: &SVector<f64, N>,
+        configuration: bool,
+        out: &mut LocalDerivatives<N>,
+    ) {
+        derivatives::dense_local_hessian(self, g, w, configuration, out);
+    }
 }
 
 /// Iteration cap of the inverse Legendre map.
@@ -196,38 +258,20 @@ pub trait GroupLagrangianExt<const N: usize, const E: usize>: GroupLagrangian<N,
     /// The left-trivialised momentum μ = ∂L/∂ξ.
     #[inline]
     fn momentum(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> SVector<f64, N> {
-        gradient(
-            |x: SVector<DualSVec64<N>, N>| self.lagrangian(&g.map(DualVec::from_re), &x),
-            xi,
-        )
-        .1
+        self.local_gradient(g, xi, false).1
     }
 
     /// The energy μ·ξ − L.
     #[inline]
     fn energy(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> f64 {
-        let (value, momentum) = gradient(
-            |x: SVector<DualSVec64<N>, N>| self.lagrangian(&g.map(DualVec::from_re), &x),
-            xi,
-        );
-        momentum.dot(xi) - value
+        self.momentum(g, xi).dot(xi) - self.lagrangian(g, xi)
     }
 
     /// The left-trivialised configuration gradient τ with τ·ζ = d/dε L(g exp(εζ), ξ) at
     /// ε = 0 (the generalised force of a potential, in the body frame).
     #[inline]
     fn configuration_gradient(&self, g: &SVector<f64, E>, xi: &SVector<f64, N>) -> SVector<f64, N> {
-        gradient(
-            |z: SVector<DualSVec64<N>, N>| {
-                let moved = <Self::Group as LieGroup<N, E>>::compose(
-                    &g.map(DualVec::from_re),
-                    &<Self::Group as LieGroup<N, E>>::exp(&z),
-                );
-                self.lagrangian(&moved, &xi.map(DualVec::from_re))
-            },
-            &SVector::zeros(),
-        )
-        .1
+        self.local_gradient(g, xi, true).0
     }
 
     /// The inverse Legendre map: ξ with ∂L/∂ξ(g, ξ) = μ, by Newton's method from `guess`
@@ -238,14 +282,10 @@ pub trait GroupLagrangianExt<const N: usize, const E: usize>: GroupLagrangian<N,
         momentum: &SVector<f64, N>,
         guess: &SVector<f64, N>,
     ) -> Result<SVector<f64, N>, Error> {
+        let mut local = LocalDerivatives::zeros();
         invert_momentum(momentum, guess, |xi| {
-            let (_, current, inertia) = hessian(
-                |x: SVector<Dual2Vec<f64, Const<N>>, N>| {
-                    self.lagrangian(&g.map(Dual2Vec::from_re), &x)
-                },
-                xi,
-            );
-            (current, inertia)
+            self.local_hessian(g, xi, false, &mut local);
+            (local.nu, local.ww)
         })
     }
 }

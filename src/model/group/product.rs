@@ -8,9 +8,9 @@
 //! `Product<A, B, NA, EA, NB, EB>` implements `LieGroup<NA + NB, EA + EB>`, and asking it for
 //! any other shape is a compile-time error.
 
-use super::LieGroup;
 use super::rotations::Rotations;
 use super::translations::Translations;
+use super::{LieGroup, VelocityDerivatives};
 use crate::scalar::Scalar;
 use nalgebra::{SMatrix, SVector};
 use std::marker::PhantomData;
@@ -347,6 +347,61 @@ where
             worst.max(G::chart_reach(&factor::<f64, N, NG>(x, k)))
         })
     }
+
+    /// Factor by factor (W acts on each factor alone): the blocks are diagonal.
+    fn velocity_derivatives(
+        a: &SVector<f64, N>,
+        b: &SVector<f64, N>,
+        lambda: &SVector<f64, N>,
+        nu: &SVector<f64, N>,
+        second: bool,
+        out: &mut VelocityDerivatives<N>,
+    ) {
+        if second {
+            out.rate.fill(0.0);
+            out.curvature.fill(0.0);
+            out.twist.fill(0.0);
+        }
+        let mut part = VelocityDerivatives::<NG>::zeros();
+        for k in 0..K {
+            G::velocity_derivatives(
+                &factor::<f64, N, NG>(a, k),
+                &factor::<f64, N, NG>(b, k),
+                &factor::<f64, N, NG>(lambda, k),
+                &factor::<f64, N, NG>(nu, k),
+                second,
+                &mut part,
+            );
+            out.pulled
+                .fixed_rows_mut::<NG>(NG * k)
+                .copy_from(&part.pulled);
+            if second {
+                let at = NG * k;
+                out.rate
+                    .fixed_view_mut::<NG, NG>(at, at)
+                    .copy_from(&part.rate);
+                out.curvature
+                    .fixed_view_mut::<NG, NG>(at, at)
+                    .copy_from(&part.curvature);
+                out.twist
+                    .fixed_view_mut::<NG, NG>(at, at)
+                    .copy_from(&part.twist);
+            }
+        }
+    }
+
+    /// Factor by factor: the Jacobian is block diagonal.
+    fn dexp_transpose_jacobian(x: &SVector<f64, N>, v: &SVector<f64, N>) -> SMatrix<f64, N, N> {
+        let mut m = SMatrix::<f64, N, N>::zeros();
+        for k in 0..K {
+            m.fixed_view_mut::<NG, NG>(NG * k, NG * k)
+                .copy_from(&G::dexp_transpose_jacobian(
+                    &factor::<f64, N, NG>(x, k),
+                    &factor::<f64, N, NG>(v, k),
+                ));
+        }
+        m
+    }
 }
 
 #[cfg(test)]
@@ -370,5 +425,35 @@ mod tests {
         super::super::check_group::<Power<Rotations, 3, 3, 9>, 9, 27>(&[SVector::from([
             0.3, -0.7, 1.1, -0.4, 0.2, 0.9, 0.1, 0.2, -0.3,
         ])]);
+    }
+
+    /// A power's factor-by-factor derivatives of W and of dexpᵀ are the dense ones.
+    #[test]
+    fn power_derivatives_are_the_dense_ones() {
+        use super::super::derivatives::{
+            dense_dexp_transpose_jacobian, dense_velocity_derivatives,
+        };
+        type Squared = Power<RigidMotions, 2, 6, 12>;
+        let vector =
+            |shift: f64| SVector::<f64, 12>::from_fn(|i, _| (0.7 * i as f64 + shift).sin());
+        let (a, b, lambda, nu) = (vector(0.1), vector(1.3), vector(2.2), vector(-0.4));
+        for second in [false, true] {
+            let (mut fast, mut dense) =
+                (VelocityDerivatives::zeros(), VelocityDerivatives::zeros());
+            <Squared as LieGroup<12, 24>>::velocity_derivatives(
+                &a, &b, &lambda, &nu, second, &mut fast,
+            );
+            dense_velocity_derivatives::<Squared, 12, 24>(&a, &b, &lambda, &nu, second, &mut dense);
+            assert!((fast.pulled - dense.pulled).amax() < 1e-14);
+            assert!((fast.rate - dense.rate).amax() < 1e-14);
+            assert!((fast.curvature - dense.curvature).amax() < 1e-13);
+            assert!((fast.twist - dense.twist).amax() < 1e-13);
+        }
+        let mut dense = VelocityDerivatives::zeros();
+        dense_velocity_derivatives::<Squared, 12, 24>(&a, &b, &lambda, &nu, true, &mut dense);
+        assert!(dense.curvature.amax() > 0.1);
+        let difference = <Squared as LieGroup<12, 24>>::dexp_transpose_jacobian(&a, &nu)
+            - dense_dexp_transpose_jacobian::<Squared, 12, 24>(&a, &nu);
+        assert!(difference.amax() < 1e-14);
     }
 }

@@ -33,9 +33,13 @@ impl LieGroup<3, 9> for Rotations {
         Self::element(&Matrix3::identity())
     }
 
+    /// The 3 × 3 product written out (nalgebra's general product is slow on dual numbers).
     #[inline]
     fn compose<D: Scalar>(g: &SVector<D, 9>, h: &SVector<D, 9>) -> SVector<D, 9> {
-        Self::element(&(Self::matrix(g) * Self::matrix(h)))
+        SVector::from_fn(|k, _| {
+            let (i, j) = (k % 3, 3 * (k / 3));
+            g[i] * h[j] + g[i + 3] * h[j + 1] + g[i + 6] * h[j + 2]
+        })
     }
 
     fn inverse(g: &SVector<f64, 9>) -> SVector<f64, 9> {
@@ -47,11 +51,20 @@ impl LieGroup<3, 9> for Rotations {
         Self::element(&so3::exp_minus_identity(x))
     }
 
-    /// I + x̂ + ½x̂².
+    /// I + x̂ + ½x̂², with x̂² = xxᵀ − |x|²I.
     #[inline]
     fn exp_second_order<D: Scalar>(x: &Vector3<D>) -> SVector<D, 9> {
+        let diagonal = D::from(1.0) - x.dot(x) * 0.5;
         let h = so3::hat(x);
-        Self::element(&(Matrix3::identity() + h + h * h * D::from(0.5)))
+        SVector::from_fn(|k, _| {
+            let (i, j) = (k % 3, k / 3);
+            let square = x[i] * x[j] * 0.5;
+            if i == j {
+                diagonal + square
+            } else {
+                h[(i, j)] + square
+            }
+        })
     }
 
     fn log(g: &SVector<f64, 9>) -> Vector3<f64> {
