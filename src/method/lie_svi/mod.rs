@@ -55,8 +55,8 @@
 //! velocity), with the exact Jacobian (the Hessian blocks of ℓ by the chain rule) assembled
 //! and factorised only when the kept factors stop contracting by 1/0.03 — across steps, so
 //! most steps assemble none. Iterations stop when the predicted next increment is below
-//! round-off of the configuration's entries. `lie_step` (criterion): about 4× faster (up to
-//! 11× in the reduced form) than exact Newton with the closed-form SO(3) derivatives that this module keeps for the exact
+//! round-off of the configuration's entries. `lie_step` (criterion): 6.7–11× faster than exact
+//! Newton with the closed-form SO(3) derivatives that this module keeps for the exact
 //! tangent map ([`Step::tangent_map`]); the tests check that the step solves those SO(3)
 //! equations to round-off.
 //!
