@@ -10,10 +10,8 @@
 //!
 //! `lie_step/falling-body-se3/<p>cgl_<p>gl` is the same measurement through the group
 //! interface ([`svi::lie_group::LieGroup`]) on SE(3): the falling rigid body (h = 0.01),
-//! from the state of the tests (the generic Lie-SVI with chain-rule derivatives), and
-//! `lie_step/heavy-top-on-rotations/<p>cgl_<p>gl` the heavy top through the interface on
-//! [`svi::lie_group::Rotations`], to set against `lie_step/heavy-top` (the same step, which
-//! SO(3) rigid bodies run too, with the model written for SO(3)).
+//! from the state of the tests. (SO(3) rigid bodies run the same group step on
+//! [`svi::lie_group::Rotations`], so the rows above measure it too.)
 //!
 //! `lie_step/spherical-chain-8/<p>cgl_<p>gl`: eight spherical pendulums on SO(3)⁸
 //! (`svi_models::SphericalChain`, derivatives term by term over pairs of links), h = 0.002.
@@ -24,11 +22,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{SVector, Vector3};
 use std::hint::black_box;
 use std::time::{Duration, Instant};
-use svi::Scalar;
 use svi::Step;
 use svi::lie_group::{
     Form, GroupLagrangian, GroupLagrangianExt, GroupSpace, GroupState, LieSvi, LieWorkspace,
-    RigidBodyDefaults, RigidBodyExt, RigidBodyLagrangian, RigidMotions, RigidState, Rotations, so3,
+    RigidBodyDefaults, RigidBodyExt, RigidBodyLagrangian, RigidMotions, RigidState, so3,
 };
 use svi::method::lie_svi::GroupWorkspace;
 use svi_models::{FallingBody, FreeRigidBody, HeavyTop, Pendulum3d, SphericalChain};
@@ -60,6 +57,29 @@ fn seed<L: RigidBodyLagrangian + RigidBodyDefaults>(
     (workspace, state)
 }
 
+/// `iterations` timed steps in segments of at most [`SEGMENT`], each from a fresh `seed`
+/// (not timed); `step` advances the state once.
+fn timed_steps<W, S>(
+    iterations: u64,
+    mut seed: impl FnMut() -> (W, S),
+    mut step: impl FnMut(&mut W, &mut S),
+) -> Duration {
+    let mut total = Duration::ZERO;
+    let mut done = 0;
+    while done < iterations {
+        let (mut workspace, mut state) = seed();
+        let count = SEGMENT.min(iterations - done);
+        let clock = Instant::now();
+        for _ in 0..count {
+            step(&mut workspace, &mut state);
+        }
+        total += clock.elapsed();
+        black_box(&state);
+        done += count;
+    }
+    total
+}
+
 fn bench_model<L: RigidBodyLagrangian + RigidBodyDefaults>(
     c: &mut Criterion,
     model: L,
@@ -82,41 +102,23 @@ fn bench_model<L: RigidBodyLagrangian + RigidBodyDefaults>(
         };
         let id = format!("{points}cgl_{quadrature}gl{suffix}");
         group.bench_function(&id, |b| {
+            let mut increment = RigidState::zeros();
             b.iter_custom(|iterations| {
-                let mut total = Duration::ZERO;
-                let mut done = 0;
-                while done < iterations {
-                    let (mut workspace, mut state) = seed(&model, &method, h);
-                    let mut increment = RigidState::zeros();
-                    let count = SEGMENT.min(iterations - done);
-                    let start = Instant::now();
-                    for _ in 0..count {
+                timed_steps(
+                    iterations,
+                    || seed(&model, &method, h),
+                    |workspace, state| {
                         method
-                            .step(&model, &mut workspace, 0.0, h, &state, &mut increment)
+                            .step(&model, workspace, 0.0, h, state, &mut increment)
                             .expect("step converges");
                         state.r += increment.r;
                         state.momentum += increment.momentum;
-                    }
-                    total += start.elapsed();
-                    black_box(&state);
-                    done += count;
-                }
-                total
+                    },
+                )
             })
         });
     }
     group.finish();
-}
-
-/// The heavy top through the group interface.
-struct OnRotations(HeavyTop);
-
-impl GroupLagrangian<3, 9> for OnRotations {
-    type Group = Rotations;
-    #[inline]
-    fn lagrangian<D: Scalar>(&self, g: &SVector<D, 9>, xi: &SVector<D, 3>) -> D {
-        self.0.lagrangian(&Rotations::matrix(g), xi)
-    }
 }
 
 /// A model's workspace and state after [`PRE_STEPS`] steps from (g, ξ).
@@ -166,33 +168,26 @@ fn bench_group<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
     for points in [2, 3, 4] {
         let method = LieSvi::new(points);
         group.bench_function(format!("{points}cgl_{points}gl"), |b| {
+            let mut increment = GroupState::zeros();
             b.iter_custom(|iterations| {
-                let mut total = Duration::ZERO;
-                let mut done = 0;
-                while done < iterations {
-                    let (mut workspace, mut state) = seed_group(model, &method, h, start);
-                    let mut increment = GroupState::zeros();
-                    let count = SEGMENT.min(iterations - done);
-                    let clock = Instant::now();
-                    for _ in 0..count {
+                timed_steps(
+                    iterations,
+                    || seed_group(model, &method, h, start),
+                    |workspace, state| {
                         Step::<L, GroupSpace<L::Group, N, E>>::step(
                             &method,
                             model,
-                            &mut workspace,
+                            workspace,
                             0.0,
                             h,
-                            &state,
+                            state,
                             &mut increment,
                         )
                         .expect("step converges");
                         state.g += increment.g;
                         state.momentum += increment.momentum;
-                    }
-                    total += clock.elapsed();
-                    black_box(&state);
-                    done += count;
-                }
-                total
+                    },
+                )
             })
         });
     }
@@ -210,11 +205,6 @@ fn group_steps(c: &mut Criterion) {
         (g, xi),
         0.01,
     );
-    let top = HeavyTop::default();
-    let (r, omega) = top.initial_state();
-    let h = top.default_step();
-    let start = (Rotations::element(&r), omega);
-    bench_group(c, "heavy-top-on-rotations", &OnRotations(top), start, h);
     // Eight spherical pendulums on SO(3)⁸ (dimension 24, derivatives term by term), leaning
     // and moving, h = 0.002.
     let chain = SphericalChain::<8, 24, 72>::default();

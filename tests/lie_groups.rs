@@ -7,16 +7,46 @@
 use nalgebra::SVector;
 use svi::lie_group::{
     Circle, DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, GroupLagrangianExt,
-    LieSvi, Power, RigidMotions, Rotations, RotationsAndTranslations, SpatialMomentumError, so3,
+    GroupRun, LieSvi, Power, RigidMotions, Rotations, RotationsAndTranslations,
+    SpatialMomentumError, so3,
 };
 use svi::model::group::LocalDerivatives;
 use svi::model::group::derivatives::{dense_local_gradient, dense_local_hessian};
-use svi::model::group::pair_terms;
+use svi::model::group::pair_terms::{self, PairTerms};
 use svi::observer::EnergyError;
 use svi::{Error, Integrator, Scalar};
 use svi_models::{DoubleSphericalPendulum, DualSpin, FallingBody, SphericalChain};
 
 type Vector3 = SVector<f64, 3>;
+
+/// The observers of a group run: spatial momentum, energy and ‖RᵀR − I‖.
+type Watched<const N: usize> = (SpatialMomentumError<N>, EnergyError, DefectError);
+
+/// A run of `model` with `method` from (g₀, ξ₀), steps `h`, to `t_end`, with its observers.
+fn observed_run<L, G, const N: usize, const E: usize>(
+    model: L,
+    method: LieSvi,
+    (g, xi): (SVector<f64, E>, SVector<f64, N>),
+    h: f64,
+    t_end: f64,
+) -> (GroupRun<G, N, E>, Watched<N>)
+where
+    L: GroupLagrangian<N, E, Group = G>,
+    G: svi::lie_group::LieGroup<N, E>,
+{
+    let integrator: GroupIntegrator<L, G, N, E> = Integrator::new(model, method);
+    let mut observers = Watched::<N>::default();
+    let run = integrator
+        .run(
+            0.0,
+            GroupInitial::Velocity { g, xi },
+            h,
+            t_end,
+            &mut observers,
+        )
+        .unwrap();
+    (run, observers)
+}
 
 /// The falling body's initial state: attitude, position, body angular velocity and body
 /// velocity of the centre of mass.
@@ -411,22 +441,7 @@ fn double_spherical_pendulum_on_so3_squared_matches_the_angles() {
         link(angles[2], angles[3], rates[2], rates[3]),
     ];
     let (g0, xi0) = chain.state(&[links[0].0, links[1].0], &[links[0].1, links[1].1]);
-    let integrator: GroupIntegrator<_, Power<Rotations, 2, 3, 9>, 6, 18> =
-        Integrator::new(chain, LieSvi::new(5));
-    let mut observers = (
-        SpatialMomentumError::<6>::default(),
-        EnergyError::default(),
-        DefectError::default(),
-    );
-    let run = integrator
-        .run(
-            0.0,
-            GroupInitial::Velocity { g: g0, xi: xi0 },
-            0.01,
-            5.0,
-            &mut observers,
-        )
-        .unwrap();
+    let (run, observers) = observed_run(chain, LieSvi::new(5), (g0, xi0), 0.01, 5.0);
     let positions = chain.positions(&run.last.g);
     let error = (0..2)
         .map(|i| (positions[i] - exact[i]).amax())
@@ -660,22 +675,9 @@ fn dual_spin_run(
         .copy_from(&Rotations::element(&r0));
     g0.fixed_rows_mut::<2>(9).copy_from(&Circle::element(0.4));
     let xi0 = SVector::from([0.05, 1.0, 0.1, 5.0]);
-    let integrator: GroupIntegrator<_, Satellite, 4, 11> =
-        Integrator::new(DualSpin::default(), LieSvi::new(points).with_form(form));
-    let mut observers = (
-        SpatialMomentumError::<4>::default(),
-        EnergyError::default(),
-        DefectError::default(),
-    );
-    let run = integrator
-        .run(
-            0.0,
-            GroupInitial::Velocity { g: g0, xi: xi0 },
-            h,
-            20.0,
-            &mut observers,
-        )
-        .unwrap();
+    let method = LieSvi::new(points).with_form(form);
+    let (run, observers): (GroupRun<Satellite, 4, 11>, _) =
+        observed_run(DualSpin::default(), method, (g0, xi0), h, 20.0);
     (run.last, observers.0, observers.1.max, observers.2.max)
 }
 
@@ -784,22 +786,7 @@ fn chain_run<const K: usize, const N: usize, const E: usize>(
     steps: usize,
 ) -> (f64, f64, f64, f64) {
     let (chain, g0, xi0) = leaning_chain::<K, N, E>();
-    let integrator: GroupIntegrator<_, Power<Rotations, K, 3, 9>, N, E> =
-        Integrator::new(chain, LieSvi::new(points));
-    let mut observers = (
-        SpatialMomentumError::<N>::default(),
-        EnergyError::default(),
-        DefectError::default(),
-    );
-    let run = integrator
-        .run(
-            0.0,
-            GroupInitial::Velocity { g: g0, xi: xi0 },
-            h,
-            h * steps as f64,
-            &mut observers,
-        )
-        .unwrap();
+    let (run, observers) = observed_run(chain, LieSvi::new(points), (g0, xi0), h, h * steps as f64);
     assert_eq!(run.statistics.steps, steps);
     let initial = observers.0.initial.unwrap();
     let last = run.last.spatial_momentum::<Power<Rotations, K, 3, 9>>();
@@ -863,4 +850,47 @@ fn chain_of_eight_links_over_a_million_steps() {
     assert!(momentum < 1e-12, "{momentum:e}");
     assert!(energy < 2.0 * early, "{energy:e} against {early:e}");
     assert!(defect < 1e-12, "{defect:e}");
+}
+
+/// A chain of two links whose one coupling term names a third link that does not exist.
+struct MisnumberedChain(DoubleSphericalPendulum);
+
+impl PairTerms<3, 9> for MisnumberedChain {
+    type Factor = Rotations;
+    fn term_count(&self) -> usize {
+        self.0.term_count()
+    }
+    fn factors(&self, e: usize) -> [usize; 2] {
+        let [i, j] = self.0.factors(e);
+        if i == j { [i, j] } else { [i, 2] }
+    }
+    fn term<D: Scalar>(&self, e: usize, g: [&SVector<D, 9>; 2], xi: [&SVector<D, 3>; 2]) -> D {
+        self.0.term(e, g, xi)
+    }
+}
+
+impl GroupLagrangian<6, 18> for MisnumberedChain {
+    type Group = Power<Rotations, 2, 3, 9>;
+    const STRUCTURED: bool = true;
+    fn lagrangian<D: Scalar>(&self, g: &SVector<D, 18>, xi: &SVector<D, 6>) -> D {
+        self.0.lagrangian(g, xi)
+    }
+    fn check_structure(&self) -> Result<(), Error> {
+        pair_terms::check_factors::<_, 3, 9, 6>(self)
+    }
+}
+
+#[test]
+fn a_pair_term_reading_a_missing_factor_is_a_typed_error() {
+    let chain = DoubleSphericalPendulum::default();
+    let start = chain.state(&[-Vector3::z(); 2], &[Vector3::x(); 2]);
+    let error = failure(MisnumberedChain(chain), start);
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, .. } if name == "factors"),
+        "{error}"
+    );
+    assert!(
+        error.to_string().contains("term 2 reads factor 2"),
+        "{error}"
+    );
 }

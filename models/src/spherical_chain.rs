@@ -72,6 +72,11 @@ impl<const K: usize, const N: usize, const E: usize> GroupLagrangian<N, E>
     type Group = Power<Rotations, K, 3, 9>;
     const STRUCTURED: bool = true;
 
+    /// Its terms' factor indices ([`PairTerms`]).
+    fn check_structure(&self) -> Result<(), svi::Error> {
+        pair_terms::check_factors::<_, 3, 9, N>(self)
+    }
+
     /// Term by term ([`PairTerms`]).
     fn local_gradient(
         &self,

@@ -42,7 +42,7 @@ use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 pub const MAX_GROUP_DIMENSION: usize = 12;
 
 /// The largest group dimension N with structured derivatives: chains of 32 links of SO(3)
-/// (the step's N × N blocks still live on the stack).
+/// (a step still forms a few N × N matrices on the stack, and its Newton matrix is dense).
 pub const MAX_STRUCTURED_GROUP_DIMENSION: usize = 96;
 
 /// [`MAX_GROUP_DIMENSION`] and [`MAX_STRUCTURED_GROUP_DIMENSION`] as typed errors (a forced
@@ -147,10 +147,12 @@ where
         LieSvi::info(self)
     }
 
-    /// Validate the options (and the group's dimension, [`check_dimension`]) and
+    /// Validate the options (and the group's dimension, [`check_dimension`], and the model's
+    /// structure, [`GroupLagrangian::check_structure`]) and
     /// build every table and buffer for steps of size `h`.
-    fn workspace(&self, _model: &L, h: f64) -> Result<GroupWorkspace<N>, Error> {
+    fn workspace(&self, model: &L, h: f64) -> Result<GroupWorkspace<N>, Error> {
         check_dimension::<L, N, E>()?;
+        model.check_structure()?;
         self.validate(L::G_INVARIANT)?;
         if self.form == Form::Reduced && L::FORCED {
             return Err(Error::invalid(

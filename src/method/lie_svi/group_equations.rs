@@ -110,7 +110,7 @@ impl<const N: usize> GroupScratch<N> {
     }
 }
 
-/// `target += source` for N × N blocks, in place.
+/// `target += sourceᵀ` for N × N blocks, in place.
 #[inline]
 fn add_transpose<const N: usize>(target: &mut SMatrix<f64, N, N>, source: &SMatrix<f64, N, N>) {
     for j in 0..N {
@@ -118,6 +118,23 @@ fn add_transpose<const N: usize>(target: &mut SMatrix<f64, N, N>, source: &SMatr
             target[(i, j)] += source[(j, i)];
         }
     }
+}
+
+/// The point of L̂ at a Gauss point: ĝ = g_k exp(a) (e in the reduced form) and the body
+/// velocity W(a, b).
+#[inline]
+fn gauss_point<L: GroupLagrangian<N, E>, const N: usize, const E: usize>(
+    reduced: bool,
+    base: &SVector<f64, E>,
+    a: &SVector<f64, N>,
+    b: &SVector<f64, N>,
+) -> (SVector<f64, E>, SVector<f64, N>) {
+    let moved = if reduced {
+        L::Group::identity()
+    } else {
+        L::Group::compose(base, &L::Group::exp(a))
+    };
+    (moved, L::Group::body_velocity(a, b))
 }
 
 /// The gradient and Hessian blocks of ℓ at (0, a, b) (the η blocks only in the full form)
@@ -133,12 +150,7 @@ pub(super) fn group_derivatives<L: GroupLagrangian<N, E>, const N: usize, const 
     out: &mut GroupDerivatives<N>,
     scratch: &mut GroupScratch<N>,
 ) {
-    let w0 = L::Group::body_velocity(a, b);
-    let moved = if reduced {
-        L::Group::identity()
-    } else {
-        L::Group::compose(base, &L::Group::exp(a))
-    };
+    let (moved, w0) = gauss_point::<L, N, E>(reduced, base, a, b);
     let GroupScratch {
         local,
         maps,
@@ -249,13 +261,8 @@ pub(super) fn group_gradients<L: GroupLagrangian<N, E>, const N: usize, const E:
     (a, b): (&SVector<f64, N>, &SVector<f64, N>),
     maps: &mut VelocityDerivatives<N>,
 ) -> [SVector<f64, N>; 3] {
-    let w0 = L::Group::body_velocity(a, b);
+    let (moved, w0) = gauss_point::<L, N, E>(reduced, base, a, b);
     let pull = L::Group::dexp(&(-a));
-    let moved = if reduced {
-        L::Group::identity()
-    } else {
-        L::Group::compose(base, &L::Group::exp(a))
-    };
     let (mut lambda, nu) = model.local_gradient(&moved, &w0, !reduced);
     L::Group::velocity_derivatives(a, b, &lambda, &nu, false, maps);
     let mut row_a = maps.pulled;

@@ -212,6 +212,13 @@ pub trait GroupLagrangian<const N: usize, const E: usize> {
         SVector::zeros()
     }
 
+    /// Checks the model's structure before a run (a [`pair_terms`] model's factor indices,
+    /// [`pair_terms::check_factors`]); a wrong one is a typed error, not a panic in the
+    /// step. The default has nothing to check.
+    fn check_structure(&self) -> Result<(), Error> {
+        Ok(())
+    }
+
     /// λ = d/dε L(g exp(εζ), w) (the left-trivialised configuration gradient; zero without
     /// `configuration`) and ν = ∂L/∂ξ at (g, w) ([`derivatives`]). The default
     /// differentiates L densely; a Lagrangian with structure (terms on pairs of factors of a

@@ -9,12 +9,15 @@
 //! 16 entries instead of (3K + 1)², so the cost is O(terms) small evaluations and the stack
 //! use does not grow with K. A model implements [`PairTerms`], writes
 //! [`super::GroupLagrangian::lagrangian`] (the same L, for values and checks), sets
-//! [`super::GroupLagrangian::STRUCTURED`] and forwards [`super::GroupLagrangian::local_gradient`] and
-//! [`super::GroupLagrangian::local_hessian`] to [`local_gradient`] and [`local_hessian`] here
+//! [`super::GroupLagrangian::STRUCTURED`] and forwards
+//! [`super::GroupLagrangian::local_gradient`], [`super::GroupLagrangian::local_hessian`] and
+//! [`super::GroupLagrangian::check_structure`] to [`local_gradient`], [`local_hessian`] and
+//! [`check_factors`] here
 //! (see `svi_models::SphericalChain`).
 
 use super::LieGroup;
 use super::derivatives::{LocalDerivatives, Mixed, both};
+use crate::error::Error;
 use crate::scalar::Scalar;
 use nalgebra::{SMatrix, SVector};
 use num_dual::{DualSVec64, gradient, partial_hessian};
@@ -35,6 +38,29 @@ pub trait PairTerms<const NG: usize, const EG: usize> {
     /// The term ℓₑ of the configurations and body velocities of its two factors. Generic over
     /// the scalar: the integrator differentiates it.
     fn term<D: Scalar>(&self, e: usize, g: [&SVector<D, EG>; 2], xi: [&SVector<D, NG>; 2]) -> D;
+}
+
+/// Checks that every term reads factors of the power (indices below K = N / NG), for
+/// [`super::GroupLagrangian::check_structure`].
+///
+/// # Errors
+/// [`Error::InvalidParameter`] `factors`, naming the term and the index.
+pub fn check_factors<T, const NG: usize, const EG: usize, const N: usize>(
+    model: &T,
+) -> Result<(), Error>
+where
+    T: PairTerms<NG, EG> + ?Sized,
+{
+    let count = N / NG;
+    for e in 0..model.term_count() {
+        if let Some(k) = model.factors(e).into_iter().find(|&k| k >= count) {
+            return Err(Error::invalid(
+                "factors",
+                format!("term {e} reads factor {k}, but the power has {count} factors"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Σₑ ℓₑ: L(g, ξ) of a [`PairTerms`] model on Gᴷ (N = K·NG, E = K·EG).
