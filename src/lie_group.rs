@@ -54,13 +54,16 @@ pub use crate::model::group::circle::Circle;
 pub use crate::model::group::product::{Power, Product, RotationsAndTranslations};
 pub use crate::model::group::rigid_motions::RigidMotions;
 pub use crate::model::group::rotations::Rotations;
+pub use crate::model::group::symmetries::{check_generators, symmetry_defect};
 pub use crate::model::group::translations::Translations;
-pub use crate::model::group::{GroupLagrangian, GroupLagrangianExt, LieGroup};
+pub use crate::model::group::{
+    GroupDefaults, GroupLagrangian, GroupLagrangianExt, GroupSymmetries, LieGroup,
+};
 pub use crate::model::rigid_body::{
     RigidBodyDefaults, RigidBodyExt, RigidBodyInvariants, RigidBodyLagrangian, RigidBodySymmetries,
 };
 pub use crate::model::so3::{self, quaternion, rotation};
-pub use crate::stepping::group_observer::{DefectError, SpatialMomentumError};
+pub use crate::stepping::group_observer::{DefectError, GroupSolutionError, SpatialMomentumError};
 pub use crate::stepping::rigid_observer::{AngularMomentumError, OrthogonalityError};
 
 /// A rigid-body model and a [`LieSvi`] method, ready to run: the one

@@ -837,7 +837,7 @@ fn one_method_grammar_on_the_command_line_and_in_scenes() {
         (&["--method", "svi:1"], "1 CGL points"),
         (
             &["--method", "lie-svi"],
-            "'lie-svi' integrates rigid bodies on SO(3), not models on ℝᴺ",
+            "'lie-svi' integrates models on Lie groups, not models on ℝᴺ",
         ),
         (&["--method", "lie-svi", "--points", "3"], "'lie-svi'"),
         (
@@ -856,7 +856,7 @@ fn one_method_grammar_on_the_command_line_and_in_scenes() {
     );
     let stderr = failure(&["run", &scene.path]);
     assert!(
-        stderr.contains("'lie-svi:3/3' integrates rigid bodies"),
+        stderr.contains("'lie-svi:3/3' integrates models on Lie groups"),
         "{stderr}"
     );
     let scene = scene_file(
@@ -918,7 +918,7 @@ fn stability_and_bench_take_the_same_grammar() {
     for (methods, needle) in [
         ("svi:7/6,rk45", "unknown method 'rk45'"),
         ("midpoint:3", "midpoint takes no options"),
-        ("lie-svi", "'lie-svi' integrates rigid bodies"),
+        ("lie-svi", "'lie-svi' integrates models on Lie groups"),
     ] {
         let stderr = failure(&[
             "bench",
@@ -1026,7 +1026,7 @@ fn options_the_scene_cannot_use_are_errors_with_status_2() {
         ),
         (
             &["--form", "full"],
-            "--form: applies to rigid-body scenes only",
+            "--form: applies to scenes on Lie groups only",
         ),
         (
             &["--method", "verlet", "--points", "4"],

@@ -7,9 +7,9 @@ use serde::Serialize;
 use svi::Dimension;
 use svi::method::registry::SpaceKind;
 use svi_models::{
-    LOCAL_MODEL_NAMES, LocalModelVisitor, LocalZooModel, MODEL_NAMES, ModelVisitor,
-    RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel, ZooModel, visit_local_model, visit_model,
-    visit_rigid_model,
+    GROUP_MODEL_NAMES, GroupModelVisitor, GroupZooModel, LOCAL_MODEL_NAMES, LocalModelVisitor,
+    LocalZooModel, MODEL_NAMES, ModelVisitor, RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel,
+    ZooModel, visit_group_model, visit_local_model, visit_model, visit_rigid_model,
 };
 
 use crate::report::csv::Float;
@@ -176,9 +176,9 @@ pub fn listing() -> String {
     out.push('\n');
     push_line(
         &mut out,
-        format_args!("Rigid-body scenes on SO(3) (svi run NAME; method lie-svi):"),
+        format_args!("Scenes on Lie groups (svi run NAME; method lie-svi):"),
     );
-    for (name, description) in scenes(SpaceKind::Rotation, false) {
+    for (name, description) in scenes(SpaceKind::Group, false) {
         push_line(
             &mut out,
             format_args!("  {name:<NAME_COLUMN$}{description}"),
@@ -191,6 +191,19 @@ pub fn listing() -> String {
     );
     for name in RIGID_MODEL_NAMES {
         if let Some(line) = visit_rigid_model(name, DescribeRigid) {
+            push_line(&mut out, format_args!("{line}"));
+        }
+    }
+    out.push('\n');
+    push_line(
+        &mut out,
+        format_args!(
+            "Models on other Lie groups (model = \"NAME\"; [initial] g or log, xi or momentum; \
+         parameters, default step and horizon):"
+        ),
+    );
+    for name in GROUP_MODEL_NAMES {
+        if let Some(line) = visit_group_model(name, DescribeGroup) {
             push_line(&mut out, format_args!("{line}"));
         }
     }
@@ -263,11 +276,6 @@ struct DescribeRigid;
 impl RigidModelVisitor for DescribeRigid {
     type Output = String;
     fn visit<M: RigidZooModel>(self, model: M) -> String {
-        let parameters: Vec<String> = model
-            .parameters()
-            .iter()
-            .map(|(name, value)| format!("{name} = {}", Float(*value)))
-            .collect();
         let mut facts = Vec::new();
         if M::G_INVARIANT {
             facts.push("G-invariant".to_string());
@@ -278,13 +286,61 @@ impl RigidModelVisitor for DescribeRigid {
         if !momenta.is_empty() {
             facts.push(format!("conserves {}", momenta.join(", ")));
         }
-        format!(
-            "  {:<NAME_COLUMN$}{}; h = {}, t_end = {}; {}",
+        group_line(
             model.name(),
-            parameters.join(", "),
-            Float(model.default_step()),
-            Float(model.default_horizon()),
-            facts.join(", ")
+            &model.parameters(),
+            (model.default_step(), model.default_horizon()),
+            facts,
         )
     }
+}
+
+/// Describes a model on another Lie group in one line.
+struct DescribeGroup;
+
+impl GroupModelVisitor for DescribeGroup {
+    type Output = String;
+    fn visit<M: GroupZooModel<N, E>, const N: usize, const E: usize>(self, model: M) -> String {
+        let mut facts = vec![format!("group dimension {N}, stored as {E} numbers")];
+        if M::G_INVARIANT {
+            facts.push("G-invariant".to_string());
+        }
+        let momenta: Vec<&str> = (0..model.generator_count())
+            .map(|i| model.momentum_name(i))
+            .collect();
+        if !momenta.is_empty() {
+            facts.push(format!("conserves {}", momenta.join(", ")));
+        }
+        let (g0, xi0) = model.initial_state();
+        if model.exact_solution(&g0, &xi0, 0.0).is_some() {
+            facts.push("exact solution".into());
+        }
+        group_line(
+            model.name(),
+            &model.parameters(),
+            (model.default_step(), model.default_horizon()),
+            facts,
+        )
+    }
+}
+
+/// One line of a model on a Lie group: name, parameters, default step and horizon, facts.
+fn group_line(
+    name: &str,
+    parameters: &[(&'static str, f64)],
+    (h, t_end): (f64, f64),
+    facts: Vec<String>,
+) -> String {
+    let parameters: Vec<String> = parameters
+        .iter()
+        .map(|(name, value)| format!("{name} = {}", Float(*value)))
+        .collect();
+    format!(
+        "  {:<NAME_COLUMN$}{}; h = {}, t_end = {}; {}",
+        name,
+        parameters.join(", "),
+        Float(h),
+        Float(t_end),
+        facts.join(", ")
+    )
 }

@@ -28,10 +28,11 @@
 //! differences.
 
 use crate::elliptic::{amplitude, complete_first_kind, first_kind};
+use crate::params;
 use nalgebra::{SMatrix, SVector};
-use svi::Scalar;
-use svi::lie_group::{GroupLagrangian, RigidMotions, so3};
+use svi::lie_group::{GroupDefaults, GroupLagrangian, GroupSymmetries, RigidMotions, so3};
 use svi::spectral::quadrature::GaussLegendre;
+use svi::{Error, Scalar};
 
 type Matrix3 = SMatrix<f64, 3, 3>;
 type Vector3 = SVector<f64, 3>;
@@ -67,6 +68,100 @@ impl GroupLagrangian<6, 12> for FallingBody {
         let rotation = (xi[0] * xi[0] * i1 + xi[1] * xi[1] * i2 + xi[2] * xi[2] * i3) * 0.5;
         let translation = (xi[3] * xi[3] + xi[4] * xi[4] + xi[5] * xi[5]) * (0.5 * self.mass);
         rotation + translation - RigidMotions::position(g)[2] * (self.mass * self.gravity)
+    }
+}
+
+impl FallingBody {
+    /// The model's name.
+    pub const NAME: &'static str = "falling-body";
+    /// The parameter names.
+    pub const PARAMETERS: [&'static str; 5] = ["m", "i1", "i2", "i3", "g"];
+}
+
+/// Gravity along −z leaves the rotations about the vertical through the origin, ζ = (e₃, 0),
+/// and the horizontal translations, ζ = (0, e₁) and (0, e₂), as symmetries: the vertical
+/// angular momentum (orbital and spin) and the horizontal linear momenta are conserved.
+impl GroupSymmetries<6, 12> for FallingBody {
+    fn generator_count(&self) -> usize {
+        3
+    }
+
+    fn momentum_name(&self, index: usize) -> &'static str {
+        match index {
+            0 => "L_z",
+            1 => "p_x",
+            2 => "p_y",
+            _ => params::no_such_index("symmetry generator", Self::NAME, index),
+        }
+    }
+
+    fn generator(&self, index: usize) -> SVector<f64, 6> {
+        match index {
+            0 => SVector::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]),
+            1 => SVector::from([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]),
+            2 => SVector::from([0.0, 0.0, 0.0, 0.0, 1.0, 0.0]),
+            _ => params::no_such_index("symmetry generator", Self::NAME, index),
+        }
+    }
+}
+
+impl GroupDefaults<6, 12> for FallingBody {
+    fn name(&self) -> &'static str {
+        Self::NAME
+    }
+
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        let [i1, i2, i3] = self.inertia;
+        vec![
+            ("m", self.mass),
+            ("i1", i1),
+            ("i2", i2),
+            ("i3", i3),
+            ("g", self.gravity),
+        ]
+    }
+
+    /// `m`, `i1`, `i2`, `i3` finite and positive; `g` finite and non-negative.
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        match name {
+            "m" => self.mass = params::positive(name, value)?,
+            "i1" => self.inertia[0] = params::positive(name, value)?,
+            "i2" => self.inertia[1] = params::positive(name, value)?,
+            "i3" => self.inertia[2] = params::positive(name, value)?,
+            "g" => self.gravity = params::non_negative(name, value)?,
+            _ => return Err(params::unknown(Self::NAME, name, &Self::PARAMETERS)),
+        }
+        Ok(())
+    }
+
+    /// R₀ = exp(0.1, −0.2, 0.3), x₀ = (1, −2, 3), ω₀ = (1, 0.2, 0.8), v₀ = (0.5, 0, 2): a
+    /// tumble about the axis of largest inertia while the body is thrown upwards.
+    fn initial_state(&self) -> (SVector<f64, 12>, SVector<f64, 6>) {
+        let r0 = so3::exp(&Vector3::new(0.1, -0.2, 0.3));
+        (
+            RigidMotions::element(&r0, &Vector3::new(1.0, -2.0, 3.0)),
+            SVector::from([1.0, 0.2, 0.8, 0.5, 0.0, 2.0]),
+        )
+    }
+
+    /// h = 0.01.
+    fn default_step(&self) -> f64 {
+        0.01
+    }
+
+    /// T = 10.
+    fn default_horizon(&self) -> f64 {
+        10.0
+    }
+
+    /// [`FallingBody::exact`].
+    fn exact_solution(
+        &self,
+        g0: &SVector<f64, 12>,
+        xi0: &SVector<f64, 6>,
+        t: f64,
+    ) -> Option<(SVector<f64, 12>, SVector<f64, 6>)> {
+        self.exact(g0, xi0, t)
     }
 }
 

@@ -179,7 +179,7 @@ pub use relativistic_chain::{RelativisticChain, RelativisticChainH};
 pub use restricted_three_body::RestrictedThreeBody;
 pub use schrodinger::{NlsSoliton, SchrodingerPacket};
 pub use sine_gordon_chain::SineGordonChain;
-pub use spherical_chain::{DoubleSphericalPendulum, SphericalChain};
+pub use spherical_chain::{DoubleSphericalPendulum, SphericalChain, SphericalChain8};
 pub use spring_pendulum::SpringPendulum;
 pub use toda::Toda;
 
@@ -441,6 +441,67 @@ pub fn visit_rigid_model<V: RigidModelVisitor>(name: &str, visitor: V) -> Option
         FreeRigidBody::NAME => Some(visitor.visit(FreeRigidBody::default())),
         HeavyTop::NAME => Some(visitor.visit(HeavyTop::default())),
         Pendulum3d::NAME => Some(visitor.visit(Pendulum3d::default())),
+        _ => None,
+    }
+}
+
+/// Everything a zoo model on a Lie group implements (blanket impl for any type with all the
+/// bounds): the models on a group G of dimension `N` stored as `E` numbers, integrated by
+/// [`svi::lie_group::LieSvi`] ([`svi::lie_group::GroupIntegrator`]).
+pub trait GroupZooModel<const N: usize, const E: usize>:
+    svi::lie_group::GroupLagrangian<N, E>
+    + svi::lie_group::GroupSymmetries<N, E>
+    + svi::lie_group::GroupDefaults<N, E>
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
+{
+}
+
+impl<T, const N: usize, const E: usize> GroupZooModel<N, E> for T where
+    T: svi::lie_group::GroupLagrangian<N, E>
+        + svi::lie_group::GroupSymmetries<N, E>
+        + svi::lie_group::GroupDefaults<N, E>
+        + Clone
+        + Send
+        + Sync
+        + std::fmt::Debug
+        + 'static
+{
+}
+
+/// Receives a concrete model on a Lie group chosen by name at run time (see
+/// [`visit_group_model`]).
+pub trait GroupModelVisitor {
+    /// What the visit produces.
+    type Output;
+
+    /// Called once with the model, as its concrete type.
+    fn visit<M: GroupZooModel<N, E>, const N: usize, const E: usize>(
+        self,
+        model: M,
+    ) -> Self::Output;
+}
+
+/// Names of the models on Lie groups other than SO(3), in a stable order (each equals the
+/// model's [`svi::lie_group::GroupDefaults::name`]).
+///
+/// | name | model | group | G-invariant | conserved momenta | exact solution |
+/// | --- | --- | --- | --- | --- | --- |
+/// | `falling-body` | [`FallingBody`] | SE(3) | no | `L_z`, `p_x`, `p_y` | yes |
+/// | `dual-spin` | [`DualSpin`] | SO(3) × S¹ | yes | `L_x`, `L_y`, `L_z`, `p_rotor` | no |
+/// | `spherical-chain` | [`SphericalChain8`] (8 links) | SO(3)⁸ | no | `L_z` | no |
+pub const GROUP_MODEL_NAMES: &[&str] = &[FallingBody::NAME, DualSpin::NAME, SphericalChain8::NAME];
+
+/// Build the named model on a group with its defaults and hand it to the visitor; `None` if
+/// `name` is not one of [`GROUP_MODEL_NAMES`]. One line per model.
+pub fn visit_group_model<V: GroupModelVisitor>(name: &str, visitor: V) -> Option<V::Output> {
+    match name {
+        FallingBody::NAME => Some(visitor.visit(FallingBody::default())),
+        DualSpin::NAME => Some(visitor.visit(DualSpin::default())),
+        SphericalChain8::NAME => Some(visitor.visit(SphericalChain8::default())),
         _ => None,
     }
 }

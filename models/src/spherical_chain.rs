@@ -27,11 +27,12 @@
 //! Conserved: the energy, the vertical angular momentum Σ_j (R_j μ_j)·e₃ (rotations of the
 //! whole chain about the vertical, a left action of the diagonal) and each spin μ_{j,3}.
 
+use crate::params;
 use nalgebra::{SMatrix, SVector};
-use svi::Scalar;
-use svi::lie_group::{GroupLagrangian, Power, Rotations, so3};
+use svi::lie_group::{GroupDefaults, GroupLagrangian, GroupSymmetries, Power, Rotations, so3};
 use svi::model::group::LocalDerivatives;
 use svi::model::group::pair_terms::{self, PairTerms};
+use svi::{Error, Scalar};
 
 type Matrix3 = SMatrix<f64, 3, 3>;
 type Vector3 = SVector<f64, 3>;
@@ -53,6 +54,23 @@ pub struct SphericalChain<const K: usize, const N: usize, const E: usize> {
 
 /// Two spherical pendulums, one hanging from the other.
 pub type DoubleSphericalPendulum = SphericalChain<2, 6, 18>;
+
+/// The chain of eight links that the command line runs as `spherical-chain`.
+pub type SphericalChain8 = SphericalChain<8, 24, 72>;
+
+/// The names of the link lengths, `l1` to `l32` (a chain has at most 32 links).
+const LENGTH_NAMES: [&str; 32] = [
+    "l1", "l2", "l3", "l4", "l5", "l6", "l7", "l8", "l9", "l10", "l11", "l12", "l13", "l14", "l15",
+    "l16", "l17", "l18", "l19", "l20", "l21", "l22", "l23", "l24", "l25", "l26", "l27", "l28",
+    "l29", "l30", "l31", "l32",
+];
+
+/// The names of the masses, `m1` to `m32`.
+const MASS_NAMES: [&str; 32] = [
+    "m1", "m2", "m3", "m4", "m5", "m6", "m7", "m8", "m9", "m10", "m11", "m12", "m13", "m14", "m15",
+    "m16", "m17", "m18", "m19", "m20", "m21", "m22", "m23", "m24", "m25", "m26", "m27", "m28",
+    "m29", "m30", "m31", "m32",
+];
 
 impl<const K: usize, const N: usize, const E: usize> Default for SphericalChain<K, N, E> {
     /// Unit lengths and masses, g₀ = 9.81, J = 1.
@@ -169,7 +187,99 @@ impl<const K: usize, const N: usize, const E: usize> PairTerms<3, 9> for Spheric
     }
 }
 
+/// The rotations of the whole chain about the vertical, ζ = (e₃, …, e₃): the vertical
+/// angular momentum Σ_j (R_j μ_j)·e₃ is conserved.
+impl<const K: usize, const N: usize, const E: usize> GroupSymmetries<N, E>
+    for SphericalChain<K, N, E>
+{
+    fn generator_count(&self) -> usize {
+        1
+    }
+
+    fn momentum_name(&self, index: usize) -> &'static str {
+        match index {
+            0 => "L_z",
+            _ => params::no_such_index("symmetry generator", Self::NAME, index),
+        }
+    }
+
+    fn generator(&self, index: usize) -> SVector<f64, N> {
+        match index {
+            0 => SVector::from_fn(|i, _| if i % 3 == 2 { 1.0 } else { 0.0 }),
+            _ => params::no_such_index("symmetry generator", Self::NAME, index),
+        }
+    }
+}
+
+impl<const K: usize, const N: usize, const E: usize> GroupDefaults<N, E>
+    for SphericalChain<K, N, E>
+{
+    fn name(&self) -> &'static str {
+        Self::NAME
+    }
+
+    /// `l1` … `lK`, `m1` … `mK`, `g`, `j`.
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        let lengths = LENGTH_NAMES.iter().zip(&self.lengths);
+        let masses = MASS_NAMES.iter().zip(&self.masses);
+        lengths
+            .chain(masses)
+            .map(|(name, value)| (*name, *value))
+            .chain([("g", self.gravity), ("j", self.spin)])
+            .collect()
+    }
+
+    /// Lengths, masses and `j` finite and positive; `g` finite and non-negative.
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        if let Some(i) = LENGTH_NAMES.iter().take(K).position(|n| *n == name) {
+            self.lengths[i] = params::positive(name, value)?;
+        } else if let Some(i) = MASS_NAMES.iter().take(K).position(|n| *n == name) {
+            self.masses[i] = params::positive(name, value)?;
+        } else if name == "g" {
+            self.gravity = params::non_negative(name, value)?;
+        } else if name == "j" {
+            self.spin = params::positive(name, value)?;
+        } else {
+            let known: Vec<&str> = self.parameters().iter().map(|(n, _)| *n).collect();
+            return Err(params::unknown(Self::NAME, name, &known));
+        }
+        Ok(())
+    }
+
+    /// Link i (from 0) leans by 0.3 + 0.05 i from the downward vertical, turned by 0.5 i
+    /// about it, with rate (0.2, −0.1 i, 0.05) less its component along the link; no spin.
+    fn initial_state(&self) -> (SVector<f64, E>, SVector<f64, N>) {
+        let directions: [Vector3; K] = std::array::from_fn(|i| {
+            let (tilt, turn) = (0.3 + 0.05 * i as f64, 0.5 * i as f64);
+            Vector3::new(
+                tilt.sin() * turn.cos(),
+                tilt.sin() * turn.sin(),
+                -tilt.cos(),
+            )
+        });
+        let rates: [Vector3; K] = std::array::from_fn(|i| {
+            let v = Vector3::new(0.2, -0.1 * i as f64, 0.05);
+            v - directions[i] * directions[i].dot(&v)
+        });
+        self.state(&directions, &rates)
+    }
+
+    /// h = 0.002.
+    fn default_step(&self) -> f64 {
+        0.002
+    }
+
+    /// T = 2.
+    fn default_horizon(&self) -> f64 {
+        2.0
+    }
+}
+
 impl<const K: usize, const N: usize, const E: usize> SphericalChain<K, N, E> {
+    /// The model's name (for every number of links; the command line runs
+    /// [`SphericalChain8`]).
+    pub const NAME: &'static str = "spherical-chain";
+
     /// The configuration and body velocity (spin zero) of link directions qᵢ (unit vectors)
     /// and their rates q̇ᵢ (perpendicular to qᵢ): Rᵢ is the rotation about e₃ × qᵢ taking e₃
     /// to qᵢ, and Ωᵢ = Rᵢᵀ(qᵢ × q̇ᵢ).

@@ -450,8 +450,8 @@ fn run<'py>(
 
 /// The scene `name`: a built-in scene or an existing scene file (as `svi run` loads it), else
 /// the text of a scene (TOML: it has a line break or `=`), else a zoo model with its
-/// defaults. A field or pseudospectral scene is named as such: the package runs the ODE and
-/// rigid-body scenes.
+/// defaults. A field or pseudospectral scene is named as such: the package runs the ODE
+/// scenes and those on Lie groups.
 fn load(name: &str) -> PyResult<Scene> {
     let is_file = std::path::Path::new(name).is_file();
     if !is_file && name.contains(['\n', '=']) {
@@ -461,8 +461,8 @@ fn load(name: &str) -> PyResult<Scene> {
         return Err(failure(SceneError::NotApplicable {
             option: "scene",
             reason: format!(
-                "'{name}' is a field or pseudospectral scene; the Python package runs the ODE and \
-                 rigid-body scenes (run it with `svi run {name}`)"
+                "'{name}' is a field or pseudospectral scene; the Python package runs the ODE \
+                 scenes and those on Lie groups (run it with `svi run {name}`)"
             ),
         }));
     }
@@ -470,7 +470,8 @@ fn load(name: &str) -> PyResult<Scene> {
         Err(SceneError::UnknownScene { .. })
             if svi_models::MODEL_NAMES.contains(&name)
                 || svi_models::LOCAL_MODEL_NAMES.contains(&name)
-                || svi_models::RIGID_MODEL_NAMES.contains(&name) =>
+                || svi_models::RIGID_MODEL_NAMES.contains(&name)
+                || svi_models::GROUP_MODEL_NAMES.contains(&name) =>
         {
             Scene::parse(&format!("model = \"{name}\"\n"), "a model name").map_err(failure)
         }

@@ -76,9 +76,11 @@ pub enum Options {
 pub enum SpaceKind {
     /// Models on ℝᴺ ([`crate::Lagrangian`]), run by [`crate::Integrator`].
     Vector,
-    /// Rigid bodies on SO(3) ([`crate::lie_group::RigidBodyLagrangian`]), run by
-    /// [`crate::lie_group::RigidBodyIntegrator`].
-    Rotation,
+    /// Models on Lie groups: rigid bodies on SO(3)
+    /// ([`crate::lie_group::RigidBodyLagrangian`], run by
+    /// [`crate::lie_group::RigidBodyIntegrator`]) and models on any group
+    /// ([`crate::lie_group::GroupLagrangian`], run by [`crate::lie_group::GroupIntegrator`]).
+    Group,
 }
 
 /// One method of the registry.
@@ -272,7 +274,7 @@ pub const METHODS: &[Entry] = &[
             default_points: || LieSvi::default().points,
             default_quadrature: |points| LieSvi::new(points).quadrature_points(),
         },
-        space: SpaceKind::Rotation,
+        space: SpaceKind::Group,
         summary: "Lie-group spectral variational integrator on SO(3): CGL points P, Gauss points \
                   M (default P)",
     },
@@ -282,7 +284,7 @@ pub const METHODS: &[Entry] = &[
             default_points: || LieSvi::default().points,
             default_quadrature: |points| LieSvi::new(points).quadrature_points(),
         },
-        space: SpaceKind::Rotation,
+        space: SpaceKind::Group,
         summary: "lie-svi in the reduced Euler–Poincaré form, for G-invariant rigid bodies: CGL \
                   points P, Gauss points M (default P)",
     },
@@ -530,8 +532,8 @@ impl MethodSpec {
             return Ok(());
         }
         let (what, instead, other) = match self.entry.space {
-            SpaceKind::Vector => ("models on ℝᴺ", "rigid bodies on SO(3)", SpaceKind::Rotation),
-            SpaceKind::Rotation => ("rigid bodies on SO(3)", "models on ℝᴺ", SpaceKind::Vector),
+            SpaceKind::Vector => ("models on ℝᴺ", "models on Lie groups", SpaceKind::Group),
+            SpaceKind::Group => ("models on Lie groups", "models on ℝᴺ", SpaceKind::Vector),
         };
         let names: Vec<&str> = METHODS
             .iter()
@@ -620,7 +622,7 @@ impl MethodSpec {
             "lie-svi" => Form::Full,
             "lie-svi-reduced" => Form::Reduced,
             _ => {
-                self.check_space(SpaceKind::Rotation)?;
+                self.check_space(SpaceKind::Group)?;
                 return Err(Error::invalid(
                     "method",
                     format!("'{self}' has no dispatch arm for rigid bodies"),
@@ -639,7 +641,7 @@ impl MethodSpec {
     pub fn info(&self) -> Result<MethodInfo, Error> {
         match self.entry.space {
             SpaceKind::Vector => self.visit_vector(InfoOf),
-            SpaceKind::Rotation => Ok(self.lie_svi()?.info()),
+            SpaceKind::Group => Ok(self.lie_svi()?.info()),
         }
     }
 }
@@ -1051,7 +1053,7 @@ mod tests {
                     let error = spec.lie_svi().unwrap_err().to_string();
                     assert!(error.contains(entry.name), "{error}");
                 }
-                SpaceKind::Rotation => {
+                SpaceKind::Group => {
                     let method = spec.lie_svi().unwrap();
                     crate::lie_group::RigidBodyIntegrator::new(Sphere, method)
                         .run(

@@ -79,7 +79,7 @@ use svi_models::visit_model;
 pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, SceneError> {
     options.check()?;
     scene.check()?;
-    if scene.space() == SpaceKind::Rotation {
+    if scene.space() == SpaceKind::Group {
         return Err(SceneError::NotApplicable {
             option: "svi bench SCENE",
             reason: format!(

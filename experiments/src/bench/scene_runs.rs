@@ -75,7 +75,9 @@ pub(super) fn sweep_runs(
     };
     let final_q = |summary: &Summary| match &summary.state {
         StateSummary::Vector { q, .. } => DVector::from_column_slice(q),
-        StateSummary::Rigid { .. } => unreachable!("a chain or a text model lives on ℝᴺ"),
+        StateSummary::Rigid { .. } | StateSummary::Group { .. } => {
+            unreachable!("a chain or a text model lives on ℝᴺ")
+        }
     };
     // The reference: svi:7/6 at the scene's step halved until two runs agree.
     let reference_spec: MethodSpec = "svi:7/6".parse()?;

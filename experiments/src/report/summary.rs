@@ -177,6 +177,17 @@ pub enum StateSummary {
         /// Spatial angular momentum π = RΠ.
         spatial_momentum: Vec<f64>,
     },
+    /// On a Lie group other than SO(3).
+    Group {
+        /// Configuration g, its stored entries (E numbers).
+        g: Vec<f64>,
+        /// Body velocity ξ.
+        xi: Vec<f64>,
+        /// Body momentum μ = ∂L/∂ξ.
+        momentum: Vec<f64>,
+        /// Spatial momentum Ad_{g⁻¹}ᵀμ.
+        spatial_momentum: Vec<f64>,
+    },
 }
 
 impl StateSummary {
@@ -185,6 +196,7 @@ impl StateSummary {
         match self {
             StateSummary::Vector { q, .. } => q,
             StateSummary::Rigid { attitude, .. } => attitude,
+            StateSummary::Group { g, .. } => g,
         }
     }
 
@@ -199,6 +211,7 @@ impl StateSummary {
                 vector(quaternion),
                 vector(omega)
             ),
+            StateSummary::Group { g, xi, .. } => format!("g = {}, xi = {}", vector(g), vector(xi)),
         }
     }
 
@@ -222,6 +235,17 @@ impl StateSummary {
                 ("final Pi (body)", vector(momentum)),
                 ("final pi (space)", vector(spatial_momentum)),
             ],
+            StateSummary::Group {
+                g,
+                xi,
+                momentum,
+                spatial_momentum,
+            } => vec![
+                ("final g", vector(g)),
+                ("final xi", vector(xi)),
+                ("final mu (body)", vector(momentum)),
+                ("final mu (space)", vector(spatial_momentum)),
+            ],
         }
     }
 
@@ -242,6 +266,9 @@ impl StateSummary {
                 vector(omega),
                 vector(momentum)
             ),
+            StateSummary::Group {
+                g, xi, momentum, ..
+            } => format!("g {} xi {} mu {}", vector(g), vector(xi), vector(momentum)),
         }
     }
 
@@ -249,7 +276,7 @@ impl StateSummary {
     fn iterations(&self) -> &'static str {
         match self {
             StateSummary::Vector { .. } => "nonlinear",
-            StateSummary::Rigid { .. } => "Newton",
+            StateSummary::Rigid { .. } | StateSummary::Group { .. } => "Newton",
         }
     }
 }
@@ -324,6 +351,25 @@ pub enum Conservation {
         /// ‖RᵀR − I‖_F at the end.
         orthogonality_error_final: f64,
     },
+    /// On a Lie group other than SO(3).
+    Group {
+        /// Names of the Noether momenta of the model's symmetry generators.
+        momentum_names: Vec<&'static str>,
+        /// Largest deviation of those momenta (`None` if the model has none).
+        momentum_error_max: Option<f64>,
+        /// `momentum_error_max` relative to the size of the initial spatial momentum.
+        momentum_error_relative: Option<f64>,
+        /// Largest ‖g − g_exact‖ over the step points (`None` without an exact solution or
+        /// the `solution` diagnostic).
+        solution_error_max: Option<f64>,
+        /// ‖g − g_exact‖ at the end (`None` without an exact solution).
+        solution_error_final: Option<f64>,
+        /// Largest distance of the configuration from the group over the step points
+        /// (‖RᵀR − I‖_F of each rotation factor, never re-projected).
+        group_defect_max: Option<f64>,
+        /// That distance at the end.
+        group_defect_final: f64,
+    },
 }
 
 impl Conservation {
@@ -341,6 +387,9 @@ impl Conservation {
                 momentum_error_max, ..
             }
             | Conservation::Rigid {
+                momentum_error_max, ..
+            }
+            | Conservation::Group {
                 momentum_error_max, ..
             } => *momentum_error_max,
         }
@@ -389,6 +438,16 @@ impl Conservation {
                     Some(*orthogonality_error_final),
                 ),
             ]),
+            Conservation::Group {
+                momentum_error_relative,
+                group_defect_max,
+                group_defect_final,
+                ..
+            } => numbers.extend([
+                ("momentum_error_relative", *momentum_error_relative),
+                ("group_defect_max", *group_defect_max),
+                ("group_defect_final", Some(*group_defect_final)),
+            ]),
         }
         numbers
     }
@@ -403,6 +462,9 @@ impl Conservation {
                 solution_error_max, ..
             }
             | Conservation::Constrained {
+                solution_error_max, ..
+            }
+            | Conservation::Group {
                 solution_error_max, ..
             } => *solution_error_max,
             Conservation::Rigid { .. } => None,
@@ -421,6 +483,10 @@ impl Conservation {
                 ..
             }
             | Conservation::Constrained {
+                solution_error_final,
+                ..
+            }
+            | Conservation::Group {
                 solution_error_final,
                 ..
             } => *solution_error_final,
@@ -446,11 +512,7 @@ impl Conservation {
                 ("momentum error", error(*momentum_error_max)),
                 (
                     "solution error",
-                    match (solution_error_max, solution_error_final) {
-                        (Some(max), Some(last)) => format!("{max:.3e} max, {last:.3e} at the end"),
-                        (None, Some(last)) => format!("{last:.3e} at the end"),
-                        (max, None) => error(*max),
-                    },
+                    solution_row(*solution_error_max, *solution_error_final),
                 ),
             ],
             Conservation::Local {
@@ -508,7 +570,39 @@ impl Conservation {
                     ),
                 ),
             ],
+            Conservation::Group {
+                momentum_names,
+                momentum_error_max,
+                solution_error_max,
+                solution_error_final,
+                group_defect_max,
+                group_defect_final,
+                ..
+            } => vec![
+                ("momentum error", named(*momentum_error_max, momentum_names)),
+                (
+                    "solution error",
+                    solution_row(*solution_error_max, *solution_error_final),
+                ),
+                (
+                    "group defect",
+                    format!(
+                        "{} (max), {:.3e} (final)",
+                        error(*group_defect_max),
+                        group_defect_final
+                    ),
+                ),
+            ],
         }
+    }
+}
+
+/// The text summary's solution error: its largest value and its value at the end, as known.
+fn solution_row(max: Option<f64>, last: Option<f64>) -> String {
+    match (max, last) {
+        (Some(max), Some(last)) => format!("{max:.3e} max, {last:.3e} at the end"),
+        (None, Some(last)) => format!("{last:.3e} at the end"),
+        (max, None) => error(max),
     }
 }
 
@@ -734,7 +828,7 @@ impl Versioned for Summary {
     fn kind(&self) -> Kind {
         match self.state {
             StateSummary::Vector { .. } => Kind::Ode,
-            StateSummary::Rigid { .. } => Kind::LieGroup,
+            StateSummary::Rigid { .. } | StateSummary::Group { .. } => Kind::LieGroup,
         }
     }
 }

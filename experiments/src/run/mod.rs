@@ -6,11 +6,12 @@
 //! 2. [`Scene::run`] hands the scene's model, chosen by name at run time, to a visitor as its
 //!    concrete type: [`svi_models::visit_model`] on ℝᴺ, [`svi_models::visit_local_model`] on
 //!    runtime-sized ℝⁿ (chains, lattices; [`svi_models::visit_text_chain`] for a chain
-//!    written as text), [`svi_models::visit_rigid_model`] on SO(3). The visitor resolves the
+//!    written as text), [`svi_models::visit_rigid_model`] on SO(3),
+//!    [`svi_models::visit_group_model`] on the other Lie groups. The visitor resolves the
 //!    initial state, the step and the horizon, builds the
 //!    method (on ℝᴺ one [`svi::method::any::AnyMethod`] through
-//!    [`svi::MethodSpec::vector_method`], so the run is compiled once per model; on SO(3) the
-//!    Lie-group integrator) and pairs both in an [`Integrator`].
+//!    [`svi::MethodSpec::vector_method`], so the run is compiled once per model; on a group
+//!    the Lie-group integrator) and pairs both in an [`Integrator`].
 //! 3. `run_scene`, generic over the space ([`RunSpace`]), builds the observers the scene
 //!    asks for, runs [`Integrator::try_solve`] (fixed steps, step or degree adaptivity,
 //!    output times, recovery, divergence limit: one call for all), writes the trajectory and
@@ -41,7 +42,7 @@ use std::path::Path;
 use std::time::Instant;
 use svi::Dimension;
 
-use svi::lie_group::RigidBodyIntegrator;
+use svi::lie_group::{GroupIntegrator, RigidBodyIntegrator};
 use svi::method::registry::{SpaceKind, VectorMethodVisitor};
 use svi::model::local::Terms;
 use svi::observer::Every;
@@ -50,8 +51,9 @@ use svi::stepping::event::EventPoint;
 use svi::stepping::run::RunFailure;
 use svi::{Integrator, LagrangianExt, Method, Statistics};
 use svi_models::{
-    LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
-    visit_local_model, visit_model, visit_rigid_model, visit_text_chain, visit_text_model,
+    GroupModelVisitor, GroupZooModel, LocalModelVisitor, LocalZooModel, ModelVisitor,
+    RigidModelVisitor, RigidZooModel, ZooModel, visit_group_model, visit_local_model, visit_model,
+    visit_rigid_model, visit_text_chain, visit_text_model,
 };
 
 use crate::report::csv::Float;
@@ -102,7 +104,9 @@ impl CheckedScene<'_> {
                     .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
                 None => visit_model(&self.model, run)?,
             },
-            SpaceKind::Rotation => visit_rigid_model(&self.model, run)
+            SpaceKind::Group if self.is_rigid() => visit_rigid_model(&self.model, run)
+                .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
+            SpaceKind::Group => visit_group_model(&self.model, run)
                 .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
         }
     }
@@ -313,6 +317,27 @@ impl RigidModelVisitor for SceneRun<'_> {
         };
         let plan = self.plan(resolved, method);
         let integrator = RigidBodyIntegrator::new(model, lie_svi);
+        run_scene(&plan, &integrator)
+    }
+}
+
+impl GroupModelVisitor for SceneRun<'_> {
+    type Output = Result<Summary, SceneError>;
+
+    fn visit<M: GroupZooModel<N, E>, const N: usize, const E: usize>(
+        self,
+        mut model: M,
+    ) -> Self::Output {
+        let resolved = self.scene.resolve_group(&mut model)?;
+        let lie_svi = self.scene.lie_svi()?;
+        let method = MethodFields {
+            name: METHOD_NAME.into(),
+            form: Some(form_name(lie_svi.form).into()),
+            points: Some(lie_svi.points),
+            quadrature: Some(lie_svi.quadrature_points()),
+        };
+        let plan = self.plan(resolved, method);
+        let integrator: GroupIntegrator<M, M::Group, N, E> = Integrator::new(model, lie_svi);
         run_scene(&plan, &integrator)
     }
 }

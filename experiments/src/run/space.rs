@@ -1,5 +1,5 @@
 //! What a scene's run does differently on each space, ℝᴺ (fixed N, and runtime-sized ℝⁿ for
-//! chains and lattices, [`Chain`]) and SO(3): the command line's side
+//! chains and lattices, [`Chain`]), SO(3) and the other Lie groups: the command line's side
 //! of svi's [`Space`]. The one run path ([`crate::run`]) is written once over
 //! [`RunSpace`]; everything particular to a space is here.
 
@@ -7,15 +7,16 @@ use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OVector, SVector};
 use svi::lie_group::so3::orthogonality_error;
 use svi::lie_group::{
-    AngularMomentumError, OrthogonalityError, RigidBodyDefaults, RigidBodyExt, RigidInitial,
-    RigidPoint, SO3,
+    AngularMomentumError, DefectError, GroupDefaults, GroupInitial, GroupLagrangian,
+    GroupLagrangianExt, GroupPoint, GroupSolutionError, GroupSpace, LieGroup, OrthogonalityError,
+    RigidBodyDefaults, RigidBodyExt, RigidInitial, RigidPoint, SO3,
 };
 use svi::method::space::Space;
 use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
 use svi::{Defaults, Euclidean, Initial, LagrangianExt, PhasePoint};
 use svi::{Dimension, Dyn};
-use svi_models::{LocalZooModel, RigidZooModel, ZooModel};
+use svi_models::{GroupZooModel, LocalZooModel, RigidZooModel, ZooModel};
 
 use crate::report::csv::{RIGID_CSV_HEADER, csv_header};
 use crate::report::summary::{Conservation, StateSummary};
@@ -297,6 +298,130 @@ impl<L: RigidZooModel> RunSpace<L> for SO3 {
         row.extend(point.omega.iter().chain(point.momentum.iter()));
         row.push(RigidBodyExt::energy(model, &point.r, &point.omega));
         row.push(orthogonality_error(&point.r));
+    }
+}
+
+impl<L, G, const N: usize, const E: usize> RunSpace<L> for GroupSpace<G, N, E>
+where
+    L: GroupZooModel<N, E, Group = G>,
+    G: LieGroup<N, E>,
+{
+    const LISTS_RUN_FIELDS: bool = false;
+
+    /// Energy, the Noether momenta of the model's symmetry generators (for models with
+    /// some), the distance from the exact solution (asked for, and known) and the group
+    /// defect.
+    type Diagnostics = (
+        Option<EnergyError>,
+        Option<MomentumError>,
+        Option<GroupSolutionError<N, E>>,
+        Option<DefectError>,
+    );
+
+    /// The group defect is measured unless the scene asks for no diagnostic.
+    fn diagnostics(model: &L, scene: &Scene) -> Self::Diagnostics {
+        (
+            scene.wants(Diagnostic::Energy).then(EnergyError::default),
+            (scene.wants(Diagnostic::Momentum) && model.generator_count() > 0)
+                .then(MomentumError::default),
+            scene
+                .wants(Diagnostic::Solution)
+                .then(GroupSolutionError::default),
+            scene.measures().then(DefectError::default),
+        )
+    }
+
+    fn measured(
+        model: &L,
+        (energy, momentum, solution, defect): Self::Diagnostics,
+        first: &GroupPoint<N, E>,
+        last: &GroupPoint<N, E>,
+    ) -> (Option<f64>, Conservation) {
+        let scale = first.spatial_momentum::<G>().norm();
+        let exact = model.exact_solution(&first.g, &first.xi, last.t - first.t);
+        (
+            energy.map(|e| e.max),
+            Conservation::Group {
+                momentum_names: (0..model.generator_count())
+                    .map(|i| model.momentum_name(i))
+                    .collect(),
+                momentum_error_max: momentum.as_ref().map(|m| m.max),
+                momentum_error_relative: momentum
+                    .as_ref()
+                    .map(|m| if scale > 0.0 { m.max / scale } else { m.max }),
+                solution_error_max: solution.and_then(|s| s.max),
+                solution_error_final: exact.map(|(g, _)| (last.g - g).norm()),
+                group_defect_max: defect.map(|d| d.max),
+                group_defect_final: G::defect(&last.g),
+            },
+        )
+    }
+
+    fn model_name(model: &L) -> &'static str {
+        GroupDefaults::name(model)
+    }
+
+    fn parameters(model: &L) -> Vec<(&'static str, f64)> {
+        GroupDefaults::parameters(model)
+    }
+
+    fn coordinates(_: &L) -> Option<Vec<String>> {
+        None
+    }
+
+    fn energy(model: &L, point: &GroupPoint<N, E>) -> f64 {
+        point.momentum.dot(&point.xi) - model.value(&point.g, &point.xi)
+    }
+
+    /// An unforced model on a group is autonomous: it conserves energy.
+    fn conserves_energy(_: &L) -> bool {
+        !<L as GroupLagrangian<N, E>>::FORCED
+    }
+
+    fn energy_scale(model: &L, point: &GroupPoint<N, E>) -> f64 {
+        let energy = <Self as RunSpace<L>>::energy(model, point).abs();
+        energy.max(0.5 * point.momentum.dot(&point.xi).abs())
+    }
+
+    fn extent(_: &GroupPoint<N, E>) -> Option<f64> {
+        None
+    }
+
+    fn state(point: &GroupPoint<N, E>) -> StateSummary {
+        StateSummary::Group {
+            g: point.g.iter().copied().collect(),
+            xi: point.xi.iter().copied().collect(),
+            momentum: point.momentum.iter().copied().collect(),
+            spatial_momentum: point.spatial_momentum::<G>().iter().copied().collect(),
+        }
+    }
+
+    fn initial_guess_at_rest(_: &GroupInitial<N, E>) -> SVector<f64, N> {
+        SVector::zeros()
+    }
+
+    fn coordinate_count(_: &GroupInitial<N, E>) -> usize {
+        N
+    }
+
+    /// `t,g_1,…,g_E,xi_1,…,xi_N,mu_1,…,mu_N,energy,defect`.
+    fn csv_header(_: &L) -> String {
+        let mut header = String::from("t");
+        for (prefix, count) in [("g", E), ("xi", N), ("mu", N)] {
+            for i in 1..=count {
+                header.push_str(&format!(",{prefix}_{i}"));
+            }
+        }
+        header.push_str(",energy,defect\n");
+        header
+    }
+
+    /// t, g, ξ, μ, the energy μ·ξ − L and the group defect.
+    fn csv_row(model: &L, point: &GroupPoint<N, E>, row: &mut Vec<f64>) {
+        row.push(point.t);
+        row.extend(point.g.iter().chain(&point.xi).chain(&point.momentum));
+        row.push(<Self as RunSpace<L>>::energy(model, point));
+        row.push(G::defect(&point.g));
     }
 }
 

@@ -2,10 +2,10 @@
 //!
 //! To add one: write `cli/scenes/NAME.toml` (its first line, a `#` comment, is what `svi
 //! list` shows) and add `("NAME", include_str!(...))` to [`BUILTIN_SCENES`]. Whether it runs
-//! on ℝᴺ or SO(3) follows from its model.
+//! on ℝᴺ or a Lie group follows from its model.
 
 /// The built-in scenes, as (name, TOML text): the scenes on ℝᴺ, the chains of runtime
-/// dimension, then the rigid bodies on SO(3).
+/// dimension, then the rigid bodies on SO(3) and the models on the other Lie groups.
 pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ("oscillator", include_str!("../../scenes/oscillator.toml")),
     ("kepler", include_str!("../../scenes/kepler.toml")),
@@ -114,6 +114,15 @@ pub const BUILTIN_SCENES: &[(&str, &str)] = &[
     ("rigid-body", include_str!("../../scenes/rigid-body.toml")),
     ("heavy-top", include_str!("../../scenes/heavy-top.toml")),
     ("pendulum-3d", include_str!("../../scenes/pendulum-3d.toml")),
+    (
+        "falling-body",
+        include_str!("../../scenes/falling-body.toml"),
+    ),
+    ("dual-spin", include_str!("../../scenes/dual-spin.toml")),
+    (
+        "spherical-chain",
+        include_str!("../../scenes/spherical-chain.toml"),
+    ),
 ];
 
 /// The scene `svi run` runs when none is named.

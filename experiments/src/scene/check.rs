@@ -9,7 +9,7 @@ use svi::method::registry::{self, SpaceKind};
 
 use crate::scene::error::methods_with;
 use crate::scene::schema::{AdaptMode, Diagnostic, RecoveryKind};
-use crate::scene::{Scene, SceneError, limits, rigid};
+use crate::scene::{Scene, SceneError, group, limits, rigid};
 
 /// A scene that passed [`Scene::check`], borrowed so that it stays as checked: its runs
 /// ([`CheckedScene::run`]) do not check it again.
@@ -133,11 +133,18 @@ impl Scene {
                     self.check_local(spec)?;
                 }
             }
-            SpaceKind::Rotation => {
+            SpaceKind::Group if !self.is_rigid() => {
+                group::check_initial(initial, &self.model)?;
+                rigid::method(spec, self.method.form)?;
+            }
+            SpaceKind::Group => {
                 let vector = [
                     (initial.q.is_some(), "initial.q"),
                     (initial.v.is_some(), "initial.v"),
                     (initial.p.is_some(), "initial.p"),
+                    (initial.g.is_some(), "initial.g"),
+                    (initial.log.is_some(), "initial.log"),
+                    (initial.xi.is_some(), "initial.xi"),
                 ];
                 if let Some((_, option)) = vector.into_iter().find(|(given, _)| *given) {
                     return Err(SceneError::NotApplicable {
@@ -175,13 +182,16 @@ impl Scene {
             (initial.quaternion.is_some(), "initial.quaternion"),
             (initial.omega.is_some(), "initial.omega"),
             (initial.momentum.is_some(), "initial.momentum"),
+            (initial.g.is_some(), "initial.g"),
+            (initial.log.is_some(), "initial.log"),
+            (initial.xi.is_some(), "initial.xi"),
             (self.method.form.is_some(), "--form (method.form)"),
         ];
         if let Some((_, option)) = rigid.into_iter().find(|(given, _)| *given) {
             return Err(SceneError::NotApplicable {
                 option,
                 reason: format!(
-                    "applies to rigid-body scenes only (see svi list); '{}' is a model on ℝᴺ",
+                    "applies to scenes on Lie groups only (see svi list); '{}' is a model on ℝᴺ",
                     self.model_name()
                 ),
             });
@@ -330,7 +340,7 @@ impl Scene {
         if self.is_constrained() {
             return refuse("events are not located in constrained runs yet");
         }
-        if self.space() == SpaceKind::Rotation {
+        if self.space() == SpaceKind::Group {
             return refuse("events are located on ℝᴺ: rigid-body scenes have none");
         }
         if self.run.adapt == Some(AdaptMode::Reparam) {
@@ -362,7 +372,7 @@ impl Scene {
         if self.is_constrained() {
             return refuse("constrained runs have no tangent map yet");
         }
-        if self.space() == SpaceKind::Rotation {
+        if self.space() == SpaceKind::Group {
             return refuse("computed on ℝᴺ from the tangent maps: not for rigid-body scenes");
         }
         if !matches!(self.run.adapt, None | Some(AdaptMode::None)) {
@@ -518,7 +528,7 @@ mod tests {
         let top = "model = \"heavy-top\"\n[initial]\nrotation = [0.1, 0, 0]\nomega = [0, 0, 5]\n";
         assert_eq!(
             Scene::from_toml(top, "t").unwrap().space(),
-            SpaceKind::Rotation
+            SpaceKind::Group
         );
         let error = Scene::from_toml("model = \"heavy-top\"\n[initial]\nv = [1, 0, 0]\n", "t");
         assert!(

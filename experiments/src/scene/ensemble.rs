@@ -662,8 +662,19 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
                 .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
             None => svi_models::visit_model(&scene.model, ModelNamesOf)?,
         },
-        SpaceKind::Rotation => svi_models::visit_rigid_model(&scene.model, ModelNamesOf)
-            .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
+        SpaceKind::Group if scene.is_rigid() => {
+            svi_models::visit_rigid_model(&scene.model, ModelNamesOf)
+                .unwrap_or_else(|| unreachable!("the space of a scene is its model's"))
+        }
+        SpaceKind::Group => {
+            return Err(SceneError::NotApplicable {
+                option: "svi ensemble SCENE",
+                reason: format!(
+                    "'{}' lives on a Lie group other than SO(3); ensembles run the models on ℝᴺ                      and the rigid bodies on SO(3) (run it with svi run)",
+                    scene.model
+                ),
+            });
+        }
     };
     // The components varied so far, as (field, index) and as written.
     let mut varied: Vec<((InitialField, usize), String)> = Vec::new();

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use svi::MethodSpec;
 use svi::method::registry::{self, SpaceKind};
-use svi_models::{LOCAL_MODEL_NAMES, MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel};
+use svi_models::{
+    GROUP_MODEL_NAMES, LOCAL_MODEL_NAMES, MODEL_NAMES, RIGID_MODEL_NAMES, UnknownModel,
+};
 
 use crate::report::csv::Float;
 use crate::report::output::OutputError;
@@ -70,12 +72,13 @@ pub enum SceneError {
         source: std::io::Error,
     },
     /// A model name that is not in the zoo (the message lists the models on ℝᴺ, the rigid
-    /// bodies and the chains of runtime dimension).
+    /// bodies, the models on other Lie groups and the chains of runtime dimension).
     #[error(
-        "unknown model '{}' (known: {}; rigid bodies: {}; chains of any size: {})",
+        "unknown model '{}' (known: {}; rigid bodies: {}; on Lie groups: {}; chains of any          size: {})",
         .0.name,
         MODEL_NAMES.join(", "),
         RIGID_MODEL_NAMES.join(", "),
+        GROUP_MODEL_NAMES.join(", "),
         LOCAL_MODEL_NAMES.join(", ")
     )]
     UnknownModel(UnknownModel),

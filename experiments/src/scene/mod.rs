@@ -8,8 +8,9 @@
 //! ([`SceneError::NotApplicable`]) rather than silently ignored ([`Scene::check`]). The model
 //! decides the space: a zoo model on ℝᴺ (`svi_models::MODEL_NAMES`), a chain or lattice on
 //! ℝⁿ with n a parameter (`svi_models::LOCAL_MODEL_NAMES`: `[initial]` vectors of n
-//! components, methods svi, svi-newton and verlet) or a rigid body on SO(3)
-//! (`svi_models::RIGID_MODEL_NAMES`, see [`rigid`] for its `[initial]` and `form`).
+//! components, methods svi, svi-newton and verlet), a rigid body on SO(3)
+//! (`svi_models::RIGID_MODEL_NAMES`, see [`rigid`] for its `[initial]` and `form`) or a model
+//! on another Lie group (`svi_models::GROUP_MODEL_NAMES`, see [`group`]).
 //!
 //! ```toml
 //! model = "kepler"
@@ -112,6 +113,7 @@ pub mod ensemble;
 pub mod error;
 pub mod events;
 pub mod field;
+pub mod group;
 pub mod limits;
 pub mod method;
 pub mod overrides;
@@ -133,7 +135,7 @@ use svi::lie_group::LieSvi;
 use svi::method::registry::{self, SpaceKind};
 use svi::model::reparametrized::MonitorSpec;
 use svi::model::text::{TextChainModel, TextModel, TextSpec};
-use svi_models::{LOCAL_MODEL_NAMES, RIGID_MODEL_NAMES};
+use svi_models::{GROUP_MODEL_NAMES, LOCAL_MODEL_NAMES, RIGID_MODEL_NAMES};
 
 use builtin::builtin_scene;
 use method::SceneMethod;
@@ -337,14 +339,22 @@ impl Scene {
         self.text_spec().is_some_and(|spec| spec.is_indexed())
     }
 
-    /// The space the scene's model lives on: SO(3) for a rigid-body model, else ℝᴺ (an
-    /// unknown model name is reported when the scene runs).
+    /// The space the scene's model lives on: a Lie group for a rigid body on SO(3) or a
+    /// model on another group, else ℝᴺ (an unknown model name is reported when the scene
+    /// runs).
     pub fn space(&self) -> SpaceKind {
-        if RIGID_MODEL_NAMES.contains(&self.model.as_str()) {
-            SpaceKind::Rotation
+        if self.is_rigid() || GROUP_MODEL_NAMES.contains(&self.model.as_str()) {
+            SpaceKind::Group
         } else {
             SpaceKind::Vector
         }
+    }
+
+    /// Whether the scene's model is a rigid body on SO(3) (`svi_models::RIGID_MODEL_NAMES`),
+    /// with its own `[initial]` fields ([`rigid`]); the other models on groups take those of
+    /// [`group`].
+    pub fn is_rigid(&self) -> bool {
+        RIGID_MODEL_NAMES.contains(&self.model.as_str())
     }
 
     /// The monitor of `adapt = "reparam"`: `run.monitor` parsed, or the default
@@ -420,7 +430,7 @@ impl Scene {
                 if method.quadrature().is_some() {
                     self.method.quadrature = None;
                 }
-                if space == SpaceKind::Rotation
+                if space == SpaceKind::Group
                     && method.lie_svi()?.form == svi::lie_group::Form::Reduced
                 {
                     self.method.form = None;
@@ -451,7 +461,7 @@ impl Scene {
         if form.is_some() && space == SpaceKind::Vector {
             return Err(SceneError::NotApplicable {
                 option: "--form",
-                reason: "applies to rigid-body scenes only (see svi list)".into(),
+                reason: "applies to scenes on Lie groups only (see svi list)".into(),
             });
         }
         set(&mut self.method.points, points);

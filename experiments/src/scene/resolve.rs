@@ -4,13 +4,13 @@
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use svi::lie_group::RigidInitial;
+use svi::lie_group::{GroupInitial, RigidInitial, check_generators};
 use svi::model::text::site_values;
 use svi::{Dimension, Dyn, Initial, LagrangianExt};
-use svi_models::{LocalZooModel, RigidZooModel, ZooModel};
+use svi_models::{GroupZooModel, LocalZooModel, RigidZooModel, ZooModel};
 
 use crate::scene::schema::Diagnostic;
-use crate::scene::{Scene, SceneError, limits, rigid, vector};
+use crate::scene::{Scene, SceneError, group, limits, rigid, vector};
 
 impl Scene {
     /// Apply the scene's parameters to a model on ℝᴺ and resolve the initial time and state,
@@ -133,6 +133,45 @@ impl Scene {
             return Err(self.not_measurable(
                 "--diagnostics momentum (output.diagnostics)",
                 "has no symmetry axis, hence no conserved angular momentum to measure",
+            ));
+        }
+        let t0 = self.initial.t0.unwrap_or(0.0);
+        Ok((
+            t0,
+            initial,
+            self.run.h.unwrap_or_else(|| model.default_step()),
+            self.run
+                .t_end
+                .unwrap_or_else(|| t0 + model.default_horizon()),
+        ))
+    }
+
+    /// [`Scene::resolve`] for a model on a Lie group other than SO(3) ([`group`]; t0
+    /// defaults to 0, the horizon to t0 plus the model's default duration). A symmetry
+    /// generator of zero length is an error ([`check_generators`]), as are momentum or
+    /// solution diagnostics the model cannot give.
+    pub fn resolve_group<M: GroupZooModel<N, E>, const N: usize, const E: usize>(
+        &self,
+        model: &mut M,
+    ) -> Result<(f64, GroupInitial<N, E>, f64, f64), SceneError> {
+        for (name, value) in &self.parameters {
+            model.set_parameter(name, *value)?;
+        }
+        check_generators(model)?;
+        let (default_g, default_xi) = model.initial_state();
+        let initial = group::initial::<M::Group, N, E>(&self.initial, default_g, default_xi)?;
+        if self.wants_explicitly(Diagnostic::Momentum) && model.generator_count() == 0 {
+            return Err(self.not_measurable(
+                "--diagnostics momentum (output.diagnostics)",
+                "has no symmetry generator, hence no conserved momentum to measure",
+            ));
+        }
+        if self.wants_explicitly(Diagnostic::Solution)
+            && model.exact_solution(&default_g, &default_xi, 0.0).is_none()
+        {
+            return Err(self.not_measurable(
+                "--diagnostics solution (output.diagnostics)",
+                "has no exact solution to measure against",
             ));
         }
         let t0 = self.initial.t0.unwrap_or(0.0);

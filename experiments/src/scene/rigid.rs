@@ -129,8 +129,11 @@ pub fn check_initial(section: &InitialSection) -> Result<(), SceneError> {
     Ok(())
 }
 
-/// Read a fixed-length vector from a scene field.
-fn fixed<const K: usize>(field: &str, values: &[f64]) -> Result<SVector<f64, K>, SceneError> {
+/// Read a fixed-length vector from a scene field (an error names the field and the length).
+pub(crate) fn fixed<const K: usize>(
+    field: &str,
+    values: &[f64],
+) -> Result<SVector<f64, K>, SceneError> {
     if values.len() != K {
         return Err(svi::Error::invalid(
             format!("initial.{field}"),

@@ -125,8 +125,15 @@ pub struct InitialSection {
     pub quaternion: Option<Vec<f64>>,
     /// Body angular velocity Ω₀ (SO(3); excludes `momentum`).
     pub omega: Option<Vec<f64>>,
-    /// Body angular momentum Π₀ (SO(3); excludes `omega`).
+    /// Body angular momentum Π₀ (SO(3); excludes `omega`), or body momentum μ₀ on another
+    /// group (excludes `xi`).
     pub momentum: Option<Vec<f64>>,
+    /// g₀ as its stored entries (a group other than SO(3); excludes `log`).
+    pub g: Option<Vec<f64>>,
+    /// g₀ = exp(log) (a group other than SO(3); excludes `g`).
+    pub log: Option<Vec<f64>>,
+    /// Body velocity ξ₀ (a group other than SO(3); excludes `momentum`).
+    pub xi: Option<Vec<f64>>,
 }
 
 /// `[method]`: name and options.

@@ -36,19 +36,23 @@
 //! μ·ξ − L and the configuration gradient d/dε L(g exp(εζ), ξ).
 
 pub mod circle;
+pub mod defaults;
 pub mod derivatives;
 pub mod pair_terms;
 pub mod product;
 pub mod rigid_motions;
 pub mod rotations;
+pub mod symmetries;
 pub mod translations;
 
 use crate::error::Error;
 use crate::linalg::solve_small;
 use crate::scalar::Scalar;
+pub use defaults::GroupDefaults;
 pub use derivatives::{LocalDerivatives, VelocityDerivatives};
 use nalgebra::{SMatrix, SVector};
 use std::fmt::Debug;
+pub use symmetries::GroupSymmetries;
 
 /// A matrix Lie group of dimension `N` whose elements are stored as `E` numbers (see the
 /// module docs for the conventions). Implemented by marker types; every function is an
