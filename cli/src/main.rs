@@ -37,7 +37,7 @@ enum Command {
     /// Run a scene: a built-in name or a TOML scene file (a field scene, see `svi list`, runs
     /// the multisymplectic integrator).
     Run(RunArgs),
-    /// List the built-in scenes and the models with their parameters.
+    /// List the built-in scenes, the models with their parameters and the Lie groups.
     List,
     /// Work–precision sweep: run time and evaluations against error, per method.
     Bench(BenchArgs),

@@ -207,12 +207,24 @@ fn bad_rigid_scenes_fail_with_messages() {
 }
 
 #[test]
-fn list_shows_the_rigid_scenes_and_models() {
+fn list_shows_the_rigid_scenes_models_and_groups() {
     let output = svi(&["list"]);
     assert!(output.status.success());
     let text = String::from_utf8_lossy(&output.stdout);
     for name in ["rigid-body", "heavy-top", "pendulum-3d"] {
         assert!(text.matches(name).count() >= 2, "{name} missing:\n{text}");
+    }
+    // The registered Lie groups, with their dimension and stored size.
+    assert!(
+        text.contains("Lie groups for models written in Rust"),
+        "{text}"
+    );
+    for (name, shape) in [("SE(3)", "N = 6, E = 12"), ("SO(3)^8", "N = 24, E = 72")] {
+        assert!(
+            text.lines()
+                .any(|line| line.trim_start().starts_with(name) && line.contains(shape)),
+            "{name}: {text}"
+        );
     }
     // The text summary prints the orthogonality diagnostic.
     let output = svi(&["run", "pendulum-3d", "--t-end", "0.5"]);

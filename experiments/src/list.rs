@@ -1,11 +1,13 @@
 //! `svi list`: the built-in scenes and the models with their parameters, on ℝᴺ (fixed N and
-//! runtime dimension) and on SO(3).
+//! runtime dimension) and on SO(3), and the Lie groups of the registry
+//! ([`svi::model::group::registry::GROUPS`]).
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
 use serde::Serialize;
 use svi::Dimension;
 use svi::method::registry::SpaceKind;
+use svi::model::group::registry::GROUPS;
 use svi_models::{
     GROUP_MODEL_NAMES, GroupModelVisitor, GroupZooModel, LOCAL_MODEL_NAMES, LocalModelVisitor,
     LocalZooModel, MODEL_NAMES, ModelVisitor, RIGID_MODEL_NAMES, RigidModelVisitor, RigidZooModel,
@@ -96,7 +98,7 @@ fn description(text: &str) -> &str {
 const NAME_COLUMN: usize = 23;
 
 /// The listing of `svi list`: the built-in scenes and the models (on ℝᴺ, chains of runtime
-/// dimension and rigid bodies) with their parameters.
+/// dimension and rigid bodies) with their parameters, and the registered Lie groups.
 pub fn listing() -> String {
     let mut out = String::new();
     push_line(&mut out, format_args!("Built-in scenes (svi run NAME):"));
@@ -206,6 +208,23 @@ pub fn listing() -> String {
         if let Some(line) = visit_group_model(name, DescribeGroup) {
             push_line(&mut out, format_args!("{line}"));
         }
+    }
+    out.push('\n');
+    push_line(
+        &mut out,
+        format_args!(
+            "Lie groups for models written in Rust (svi::model::group::registry::GROUPS; \
+         dimension N, stored numbers E):"
+        ),
+    );
+    for group in GROUPS {
+        push_line(
+            &mut out,
+            format_args!(
+                "  {:<NAME_COLUMN$}N = {}, E = {}; {}",
+                group.name, group.dimension, group.stored, group.summary
+            ),
+        );
     }
     out.push('\n');
     push_line(
@@ -343,4 +362,29 @@ fn group_line(
         Float(t_end),
         facts.join(", ")
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_listing_shows_every_registered_group() {
+        let text = listing();
+        assert!(
+            text.contains("Lie groups for models written in Rust"),
+            "{text}"
+        );
+        for group in GROUPS {
+            let line = format!(
+                "  {:<NAME_COLUMN$}N = {}, E = {}; {}\n",
+                group.name, group.dimension, group.stored, group.summary
+            );
+            assert!(text.contains(&line), "{line}: {text}");
+        }
+        assert!(
+            text.contains("SE(3)") && text.contains("N = 6, E = 12"),
+            "{text}"
+        );
+    }
 }

@@ -94,11 +94,12 @@ mod tests {
 
     #[test]
     fn the_circle_satisfies_the_group_identities() {
-        super::super::check_group::<Circle, 1, 2>(&[
+        super::super::check::check_group::<Circle, 1, 2>(&[
             SVector::zeros(),
             SVector::from([1e-5]),
             SVector::from([2.5]),
             SVector::from([-1.2]),
-        ]);
+        ])
+        .unwrap();
     }
 }

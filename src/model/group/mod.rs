@@ -29,17 +29,27 @@
 //! [`circle::Circle`] (SO(2) ≅ S¹), [`product::Product`] (G₁ × G₂ of any two groups, so
 //! SO(3) × ℝ³ and SO(3) × S¹) and [`product::Power`] (Gᴷ, so SO(3)ᴷ).
 //!
+//! # Adding a group
+//! Implement [`LieGroup`] for a marker type in one file (as [`rigid_motions`] does for SE(3);
+//! a product or power of existing groups needs no file at all), and add one line to
+//! [`registry::GROUPS`] (`entry::<RigidMotions, 6, 12>("…")`, or `named::<…>("SO(3) x S^1",
+//! "…")` for a product). The registry's test then runs [`check::check_group`] on it, every
+//! identity of the interface at [`check::sample_points`], and `svi list` shows it; a group of
+//! one's own outside the crate is checked by calling [`check::check_group`] directly.
+//!
 //! # Lagrangians on a group
 //! A [`GroupLagrangian`] is one function L(g, ξ) of the configuration g ∈ G and the body
 //! velocity ξ = (g⁻¹ġ)^∨ ∈ 𝔤, generic over [`Scalar`]; [`GroupLagrangianExt`] derives the
 //! momentum μ = ∂L/∂ξ (left-trivialised), its inverse (the Legendre map), the energy
 //! μ·ξ − L and the configuration gradient d/dε L(g exp(εζ), ξ).
 
+pub mod check;
 pub mod circle;
 pub mod defaults;
 pub mod derivatives;
 pub mod pair_terms;
 pub mod product;
+pub mod registry;
 pub mod rigid_motions;
 pub mod rotations;
 pub mod symmetries;
@@ -340,100 +350,4 @@ pub(crate) fn invert_momentum<const N: usize>(
 impl<const N: usize, const E: usize, T: GroupLagrangian<N, E> + ?Sized> GroupLagrangianExt<N, E>
     for T
 {
-}
-
-/// Checks every identity of the interface numerically on one group, at the algebra elements
-/// `xs` (the tests of each group call it).
-#[cfg(test)]
-pub(crate) fn check_group<G: LieGroup<N, E>, const N: usize, const E: usize>(
-    xs: &[SVector<f64, N>],
-) {
-    let close = |a: f64, b: f64, what: &str| assert!(a <= b, "{}: {what}: {a:e}", G::NAME);
-    let e = G::identity::<f64>();
-    for x in xs {
-        let g = G::exp(x);
-        let y = -x * 0.7 + SVector::from_fn(|i, _| 0.1 * (i as f64 + 1.0).sin());
-        let h = G::exp(&y);
-        // Group axioms and the exponential.
-        close(
-            (G::compose(&g, &G::inverse(&g)) - e).amax(),
-            1e-14,
-            "g g⁻¹ = e",
-        );
-        close(
-            (G::exp(&(-x)) - G::inverse(&g)).amax(),
-            1e-14,
-            "exp(−x) = exp(x)⁻¹",
-        );
-        close((G::log(&g) - x).amax(), 1e-12, "log exp x = x");
-        close(G::defect(&g), 1e-14, "exp(x) in G");
-        close(
-            (G::translate_difference(&g, &(h - e)) - (G::compose(&g, &h) - g)).amax(),
-            1e-14,
-            "translate_difference",
-        );
-        let third = G::exp(&(x * 0.3 + y));
-        close(
-            (G::compose(&G::compose(&g, &h), &third) - G::compose(&g, &G::compose(&h, &third)))
-                .amax(),
-            1e-13,
-            "associativity",
-        );
-        // dexp against the series Σ adⁿ/(n + 1)!, its inverse, and central differences of exp.
-        let ad = G::ad(x);
-        let mut term = SMatrix::<f64, N, N>::identity();
-        let mut series = term;
-        let mut adjoint_series = term;
-        for n in 1..40 {
-            term = term * ad / n as f64;
-            adjoint_series += term;
-            series += term / (n + 1) as f64;
-        }
-        close(
-            (G::dexp(x) - series).amax(),
-            1e-13,
-            &format!("dexp = Σ adⁿ/(n + 1)! at {x:?}"),
-        );
-        close(
-            (G::dexp_inverse(x) * G::dexp(x) - SMatrix::identity()).amax(),
-            1e-12,
-            "dexp⁻¹ dexp = I",
-        );
-        close(
-            (G::adjoint(&g) - adjoint_series).amax(),
-            1e-12,
-            "Ad_exp x = exp(ad_x)",
-        );
-        let step = 1e-5;
-        for j in 0..N {
-            let unit = SVector::<f64, N>::from_fn(|i, _| if i == j { step } else { 0.0 });
-            let derivative = (G::exp(&(x + unit)) - G::exp(&(x - unit))) / (2.0 * step);
-            // d/ds exp(x + s e_j) = (dexp_x e_j)^ exp(x) = g (dexp_{−x} e_j)^.
-            let body = G::dexp(&(-x)).column(j).into_owned();
-            let expected = G::translate_difference(&g, &G::hat(&body));
-            close(
-                (derivative - expected).amax(),
-                1e-8,
-                "d exp = g (dexp_{−x} ẋ)^",
-            );
-            close(
-                (G::body_velocity(x, &(unit / step)) - body).amax(),
-                1e-14,
-                "body_velocity = dexp_{−x} ẋ",
-            );
-        }
-        // exp_second_order agrees with exp to second order: the difference is O(s³).
-        let s = 1e-2;
-        close(
-            (G::exp_second_order(&(x * s)) - G::exp(&(x * s))).amax(),
-            (1.0 + x.amax()).powi(3) * s.powi(3),
-            "exp_second_order = exp + O(x³)",
-        );
-        // Ad is a homomorphism.
-        close(
-            (G::adjoint(&G::compose(&g, &h)) - G::adjoint(&g) * G::adjoint(&h)).amax(),
-            1e-12,
-            "Ad_gh = Ad_g Ad_h",
-        );
-    }
 }

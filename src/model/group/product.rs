@@ -411,20 +411,23 @@ mod tests {
 
     #[test]
     fn products_satisfy_the_group_identities() {
-        super::super::check_group::<RotationsAndTranslations, 6, 12>(&[
+        super::super::check::check_group::<RotationsAndTranslations, 6, 12>(&[
             SVector::zeros(),
             SVector::from([0.3, -0.7, 1.1, -0.4, 0.2, 0.9]),
-        ]);
+        ])
+        .unwrap();
         // Nested: SE(3) × SO(3) × ℝ².
         type Nested =
             Product<RigidMotions, Product<Rotations, Translations<2>, 3, 9, 2, 2>, 6, 12, 5, 11>;
-        super::super::check_group::<Nested, 11, 23>(&[SVector::from([
+        super::super::check::check_group::<Nested, 11, 23>(&[SVector::from([
             0.3, -0.7, 1.1, -0.4, 0.2, 0.9, 0.1, 0.2, -0.3, 1.0, -2.0,
-        ])]);
+        ])])
+        .unwrap();
         // SO(3)³.
-        super::super::check_group::<Power<Rotations, 3, 3, 9>, 9, 27>(&[SVector::from([
+        super::super::check::check_group::<Power<Rotations, 3, 3, 9>, 9, 27>(&[SVector::from([
             0.3, -0.7, 1.1, -0.4, 0.2, 0.9, 0.1, 0.2, -0.3,
-        ])]);
+        ])])
+        .unwrap();
     }
 
     /// A power's factor-by-factor derivatives of W and of dexpᵀ are the dense ones.

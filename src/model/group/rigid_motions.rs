@@ -268,12 +268,13 @@ mod tests {
 
     #[test]
     fn rigid_motions_satisfy_the_group_identities() {
-        super::super::check_group::<RigidMotions, 6, 12>(&[
+        super::super::check::check_group::<RigidMotions, 6, 12>(&[
             SVector::zeros(),
             SVector::from([1e-4, -2e-4, 3e-5, 0.5, -1.0, 2.0]),
             SVector::from([0.2, -0.1, 0.3, 0.5, -1.0, 2.0]),
             SVector::from([0.3, -0.7, 1.1, -0.4, 0.2, 0.9]),
             SVector::from([-2.0, 1.0, 0.5, 3.0, 0.0, -1.0]),
-        ]);
+        ])
+        .unwrap();
     }
 }

@@ -121,11 +121,12 @@ mod tests {
 
     #[test]
     fn rotations_satisfy_the_group_identities() {
-        super::super::check_group::<Rotations, 3, 9>(&[
+        super::super::check::check_group::<Rotations, 3, 9>(&[
             Vector3::zeros(),
             Vector3::new(1e-4, -2e-4, 3e-5),
             Vector3::new(0.3, -0.7, 1.1),
             Vector3::new(-2.0, 1.0, 0.5),
-        ]);
+        ])
+        .unwrap();
     }
 }

@@ -82,9 +82,10 @@ mod tests {
 
     #[test]
     fn translations_satisfy_the_group_identities() {
-        super::super::check_group::<Translations<2>, 2, 2>(&[
+        super::super::check::check_group::<Translations<2>, 2, 2>(&[
             SVector::zeros(),
             SVector::from([0.3, -4.0]),
-        ]);
+        ])
+        .unwrap();
     }
 }
