@@ -5,6 +5,7 @@
 //! dual-spin satellite on SO(3) × S¹, and typed errors for bad input.
 
 use nalgebra::SVector;
+use svi::lie_group::GroupDefaults;
 use svi::lie_group::{
     Circle, DefectError, Form, GroupInitial, GroupIntegrator, GroupLagrangian, GroupLagrangianExt,
     GroupRun, LieSvi, Power, RigidMotions, Rotations, RotationsAndTranslations,
@@ -715,7 +716,7 @@ fn dual_spin_satellite_on_so3_times_s1_keeps_its_momenta_and_converges() {
 }
 
 /// A chain of `K` links with unequal lengths and masses, leaning and moving (no link
-/// vertical), and its state.
+/// vertical): the default state of [`GroupDefaults::initial_state`].
 fn leaning_chain<const K: usize, const N: usize, const E: usize>()
 -> (SphericalChain<K, N, E>, SVector<f64, E>, SVector<f64, N>) {
     let chain = SphericalChain::<K, N, E> {
@@ -723,19 +724,7 @@ fn leaning_chain<const K: usize, const N: usize, const E: usize>()
         masses: std::array::from_fn(|i| 1.0 + 0.2 * (i % 4) as f64),
         ..SphericalChain::default()
     };
-    let directions: [Vector3; K] = std::array::from_fn(|i| {
-        let (tilt, turn) = (0.3 + 0.05 * i as f64, 0.5 * i as f64);
-        Vector3::new(
-            tilt.sin() * turn.cos(),
-            tilt.sin() * turn.sin(),
-            -tilt.cos(),
-        )
-    });
-    let rates: [Vector3; K] = std::array::from_fn(|i| {
-        let v = Vector3::new(0.2, -0.1 * i as f64, 0.05);
-        v - directions[i] * directions[i].dot(&v)
-    });
-    let (g, xi) = chain.state(&directions, &rates);
+    let (g, xi) = chain.initial_state();
     (chain, g, xi)
 }
 

@@ -38,12 +38,14 @@ use hostile_support::*;
 
 // ---- scene files --------------------------------------------------------------------------
 
-/// A scene: the fields of the format on ℝᴺ and on SO(3), each mostly valid, some hostile,
+/// A scene: the fields of the format on ℝᴺ and on Lie groups, each mostly valid, some hostile,
 /// some misspelt or of the other space.
 fn scene_text() -> impl Strategy<Value = String> {
     let model = prop_oneof![
         6 => select(svi_models::MODEL_NAMES.to_vec()).prop_map(String::from),
         2 => select(svi_models::RIGID_MODEL_NAMES.to_vec()).prop_map(String::from),
+        // The models on other groups whose runs take milliseconds (not the 8-link chain).
+        1 => select(vec!["falling-body", "dual-spin"]).prop_map(String::from),
         1 => select(svi_models::LOCAL_MODEL_NAMES.to_vec()).prop_map(String::from),
         1 => "[a-z-]{0,12}",
     ];
@@ -97,6 +99,9 @@ fn scene_text() -> impl Strategy<Value = String> {
                 "quaternion",
                 "omega",
                 "momentum",
+                "g",
+                "log",
+                "xi",
             ]),
             vector(0..5),
         )),

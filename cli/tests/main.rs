@@ -19,6 +19,7 @@ mod ensemble;
 mod events;
 mod field;
 mod front_doors;
+mod groups;
 mod help;
 mod honesty;
 mod hostile;

@@ -6,6 +6,7 @@
 
 mod exact_solutions;
 mod forced_models;
+mod group_models;
 mod hamiltonian_models;
 mod registry;
 mod restricted_three_body;

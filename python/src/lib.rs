@@ -149,7 +149,7 @@ fn overrides(
 }
 
 /// Put the fields of `initial` (`t0`, `q`, `v`, `p`, `rotation`, `quaternion`, `omega`,
-/// `momentum`) into the scene's `[initial]` (a velocity replaces the scene's momentum and so
+/// `momentum`, `g`, `log`, `xi`) into the scene's `[initial]` (a velocity replaces the scene's momentum and so
 /// on); the run checks the scene.
 fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResult<()> {
     // A field given replaces the scene's exclusive partner (v for p, omega for momentum, ...)
@@ -160,16 +160,18 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
             *partner = None;
         }
     }
-    for (given, partner) in [
-        ("rotation", &mut section.quaternion),
-        ("quaternion", &mut section.rotation),
-        ("omega", &mut section.momentum),
-        ("momentum", &mut section.omega),
-    ] {
-        if initial.contains_key(given) {
-            *partner = None;
+    let clear = |slot: &mut Option<Vec<f64>>, given: &[&str]| {
+        if given.iter().any(|name| initial.contains_key(*name)) {
+            *slot = None;
         }
-    }
+    };
+    clear(&mut section.quaternion, &["rotation"]);
+    clear(&mut section.rotation, &["quaternion"]);
+    clear(&mut section.momentum, &["omega", "xi"]);
+    clear(&mut section.omega, &["momentum"]);
+    clear(&mut section.xi, &["momentum"]);
+    clear(&mut section.log, &["g"]);
+    clear(&mut section.g, &["log"]);
     for (name, values) in initial {
         let section = &mut scene.initial;
         let slot = match name.as_str() {
@@ -193,12 +195,15 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
             "quaternion" => &mut section.quaternion,
             "omega" => &mut section.omega,
             "momentum" => &mut section.momentum,
+            "g" => &mut section.g,
+            "log" => &mut section.log,
+            "xi" => &mut section.xi,
             other => {
                 return Err(invalid(
                     "initial",
                     format!(
                         "unknown field '{other}' (known: t0, q, v, p, rotation, quaternion, \
-                         omega, momentum)"
+                         omega, momentum, g, log, xi)"
                     ),
                 ));
             }

@@ -311,7 +311,8 @@ class Result:
         multipliers: a constrained run's Lagrange multipliers at those times, an array of shape
             (points, m) for m constraints, with ``multipliers=True``; else ``None``.
         trajectory: every column of the trajectory by name (``t``, ``q_q1``, ..., on SO(3)
-            ``qw``, ..., ``omega_1``, ...).
+            ``qw``, ..., ``omega_1``, ..., on the other Lie groups ``g_1``, ..., ``xi_1``, ...,
+            ``mu_1``, ..., ``defect``).
     """
 
     def __init__(self, summary: Dict[str, Any], trajectory: Optional[Tuple[List[str], np.ndarray]]) -> None:
@@ -402,7 +403,8 @@ def run(
         h: the step.  t_end: the final time.
         params: model parameters, ``{"e": 0.9}``.
         initial: initial-state fields, ``{"q": [...], "v": [...]}`` (or ``p``; ``t0``; on SO(3)
-            ``rotation``/``quaternion`` and ``omega``/``momentum``).
+            ``rotation``/``quaternion`` and ``omega``/``momentum``; on the other Lie groups
+            ``g``/``log`` and ``xi``/``momentum``).
         diagnostics: any of ``"energy"``, ``"momentum"``, ``"solution"``, or ``["none"]``.
         output_times: report (and record in the trajectory) the states at these times.
         points, quadrature, adapt, monitor, tol, recovery, divergence_limit, max_steps, form: as the flags

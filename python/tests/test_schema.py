@@ -72,6 +72,7 @@ COMMANDS = [
     ("run", "spherical-pendulum", "--h", "100", "--t-end", "1000", "--json"),
     ("run", "fput", "--t-end", "5", "--json"),
     ("run", "heavy-top", "--t-end", "1", "--json"),
+    ("run", "falling-body", "--t-end", "1", "--json"),
     ("run", "wave", "--t-end", "0.5", "--json"),
     ("run", "nls-soliton", "--t-end", "0.1", "--json"),
     ("run", "kepler", "--h", "2", "--method", "svi:3", "--divergence-limit", "2", "--json"),

@@ -169,14 +169,16 @@ pub const FINITE_FIELDS: [&str; 7] = [
     "seconds",
 ];
 
-/// The JSON array fields of a final state, on ℝᴺ and on SO(3).
-pub const STATE_FIELDS: [&str; 8] = [
+/// The JSON array fields of a final state, on ℝᴺ, on SO(3) and on the other Lie groups.
+pub const STATE_FIELDS: [&str; 10] = [
     "q",
     "v",
     "p",
     "attitude",
     "quaternion",
     "omega",
+    "g",
+    "xi",
     "momentum",
     "spatial_momentum",
 ];
@@ -252,8 +254,8 @@ pub fn check_summary_json(json: &Value, context: &str) -> Result<(), TestCaseErr
     Ok(())
 }
 
-/// Whether the named model conserves energy: a rigid body, or a model on ℝᴺ that is
-/// neither forced nor time-dependent.
+/// Whether the named model conserves energy: a model on a Lie group (none is forced), or a
+/// model on ℝᴺ that is neither forced nor time-dependent.
 pub fn conserves_energy(model: &str) -> bool {
     struct Conserves;
     impl svi_models::ModelVisitor for Conserves {
@@ -267,6 +269,7 @@ pub fn conserves_energy(model: &str) -> bool {
         }
     }
     svi_models::RIGID_MODEL_NAMES.contains(&model)
+        || svi_models::GROUP_MODEL_NAMES.contains(&model)
         || svi_models::visit_model(model, Conserves).unwrap_or(false)
 }
 

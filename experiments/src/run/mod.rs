@@ -135,7 +135,19 @@ struct MethodFields {
     quadrature: Option<usize>,
 }
 
-/// Receives the model of a scene, on ℝᴺ or SO(3), and runs it with the scene's method.
+impl MethodFields {
+    /// The fields of the Lie-group integrator `lie_svi`, on every group.
+    fn lie_svi(lie_svi: &svi::lie_group::LieSvi) -> MethodFields {
+        MethodFields {
+            name: METHOD_NAME.into(),
+            form: Some(form_name(lie_svi.form).into()),
+            points: Some(lie_svi.points),
+            quadrature: Some(lie_svi.quadrature_points()),
+        }
+    }
+}
+
+/// Receives the model of a scene, on ℝᴺ or a Lie group, and runs it with the scene's method.
 #[derive(Clone, Copy)]
 struct SceneRun<'a> {
     scene: &'a Scene,
@@ -309,13 +321,7 @@ impl RigidModelVisitor for SceneRun<'_> {
     fn visit<M: RigidZooModel>(self, mut model: M) -> Self::Output {
         let resolved = self.scene.resolve_rigid(&mut model)?;
         let lie_svi = self.scene.lie_svi()?;
-        let method = MethodFields {
-            name: METHOD_NAME.into(),
-            form: Some(form_name(lie_svi.form).into()),
-            points: Some(lie_svi.points),
-            quadrature: Some(lie_svi.quadrature_points()),
-        };
-        let plan = self.plan(resolved, method);
+        let plan = self.plan(resolved, MethodFields::lie_svi(&lie_svi));
         let integrator = RigidBodyIntegrator::new(model, lie_svi);
         run_scene(&plan, &integrator)
     }
@@ -330,13 +336,7 @@ impl GroupModelVisitor for SceneRun<'_> {
     ) -> Self::Output {
         let resolved = self.scene.resolve_group(&mut model)?;
         let lie_svi = self.scene.lie_svi()?;
-        let method = MethodFields {
-            name: METHOD_NAME.into(),
-            form: Some(form_name(lie_svi.form).into()),
-            points: Some(lie_svi.points),
-            quadrature: Some(lie_svi.quadrature_points()),
-        };
-        let plan = self.plan(resolved, method);
+        let plan = self.plan(resolved, MethodFields::lie_svi(&lie_svi));
         let integrator: GroupIntegrator<M, M::Group, N, E> = Integrator::new(model, lie_svi);
         run_scene(&plan, &integrator)
     }

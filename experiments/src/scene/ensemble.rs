@@ -670,7 +670,8 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
             return Err(SceneError::NotApplicable {
                 option: "svi ensemble SCENE",
                 reason: format!(
-                    "'{}' lives on a Lie group other than SO(3); ensembles run the models on ℝᴺ                      and the rigid bodies on SO(3) (run it with svi run)",
+                    "'{}' lives on a Lie group other than SO(3); ensembles run the models on ℝᴺ \
+                     and the rigid bodies on SO(3) (run it with svi run)",
                     scene.model
                 ),
             });

@@ -701,7 +701,10 @@ pub(crate) mod tests {
                 "sine-gordon-chain",
                 "rigid-body",
                 "heavy-top",
-                "pendulum-3d"
+                "pendulum-3d",
+                "falling-body",
+                "dual-spin",
+                "spherical-chain"
             ]
         );
         for name in builtin_scene_names() {
@@ -710,6 +713,7 @@ pub(crate) mod tests {
             assert!(
                 MODEL_NAMES.contains(&model)
                     || RIGID_MODEL_NAMES.contains(&model)
+                    || GROUP_MODEL_NAMES.contains(&model)
                     || LOCAL_MODEL_NAMES.contains(&model)
                     || scene.is_text(),
                 "{name}"

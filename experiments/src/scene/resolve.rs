@@ -135,15 +135,8 @@ impl Scene {
                 "has no symmetry axis, hence no conserved angular momentum to measure",
             ));
         }
-        let t0 = self.initial.t0.unwrap_or(0.0);
-        Ok((
-            t0,
-            initial,
-            self.run.h.unwrap_or_else(|| model.default_step()),
-            self.run
-                .t_end
-                .unwrap_or_else(|| t0 + model.default_horizon()),
-        ))
+        let (t0, h, t_end) = self.timing(model.default_step(), model.default_horizon());
+        Ok((t0, initial, h, t_end))
     }
 
     /// [`Scene::resolve`] for a model on a Lie group other than SO(3) ([`group`]; t0
@@ -174,14 +167,18 @@ impl Scene {
                 "has no exact solution to measure against",
             ));
         }
+        let (t0, h, t_end) = self.timing(model.default_step(), model.default_horizon());
+        Ok((t0, initial, h, t_end))
+    }
+
+    /// The start time (default 0), the step and the horizon (default: t0 plus the model's
+    /// default duration) of a scene on a Lie group, whose models start at 0.
+    fn timing(&self, default_step: f64, default_duration: f64) -> (f64, f64, f64) {
         let t0 = self.initial.t0.unwrap_or(0.0);
-        Ok((
+        (
             t0,
-            initial,
-            self.run.h.unwrap_or_else(|| model.default_step()),
-            self.run
-                .t_end
-                .unwrap_or_else(|| t0 + model.default_horizon()),
-        ))
+            self.run.h.unwrap_or(default_step),
+            self.run.t_end.unwrap_or(t0 + default_duration),
+        )
     }
 }
