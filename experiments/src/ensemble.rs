@@ -164,10 +164,11 @@ impl Ensemble {
         // Each member keeps its section's points in memory, for the one picture of them all.
         scene.output.record = scene.output.section.is_some();
         let names = check_axes(&scene, &axes)?;
-        let mut schema = match &names.coordinates {
-            Some(coordinates) => Schema::vector(coordinates),
-            None if names.chain => Schema::chain(),
-            None => Schema::rigid(),
+        let mut schema = match (&names.coordinates, names.group) {
+            (Some(coordinates), _) => Schema::vector(coordinates),
+            (None, Some((dimension, stored))) => Schema::group(dimension, stored),
+            (None, None) if names.chain => Schema::chain(),
+            (None, None) => Schema::rigid(),
         };
         if scene.output.section.is_some() {
             schema.add("section_points".into(), "section.points", None);

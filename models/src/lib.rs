@@ -185,7 +185,7 @@ pub use toda::Toda;
 
 pub use dual_spin::DualSpin;
 pub use falling_body::FallingBody;
-pub use heavy_top::HeavyTop;
+pub use heavy_top::{HeavyTop, HeavyTopOnRigidMotions};
 pub use pendulum_3d::Pendulum3d;
 pub use rigid_body::FreeRigidBody;
 

@@ -126,6 +126,22 @@ const RIGID_SCALARS: [&str; 12] = [
     "retries",
 ];
 
+/// The scalar fields of a summary that become columns on the other Lie groups, in order.
+const GROUP_SCALARS: [&str; 12] = [
+    "energy_initial",
+    "energy_final",
+    "energy_error_max",
+    "energy_scale",
+    "momentum_error_max",
+    "momentum_error_relative",
+    "solution_error_final",
+    "group_defect_max",
+    "group_defect_final",
+    "iterations",
+    "evaluations",
+    "retries",
+];
+
 /// The columns of a table's summary fields, fixed by the scene's space and model (not by the
 /// outcomes: every chunk of an ensemble has the same columns, so chunks run apart — on
 /// several machines — concatenate into the table of one run).
@@ -180,6 +196,19 @@ impl Schema {
             }
         }
         fields.extend(RIGID_SCALARS.map(|field| (field.to_string(), field, None)));
+        Schema { fields }
+    }
+
+    /// The columns of a model on a Lie group of dimension `dimension` whose configuration is
+    /// stored as `stored` numbers: g, ξ and μ component by component.
+    pub fn group(dimension: usize, stored: usize) -> Schema {
+        let mut fields = Schema::leading();
+        for (field, size) in [("g", stored), ("xi", dimension), ("momentum", dimension)] {
+            for i in 0..size {
+                fields.push((format!("{field}_{}", i + 1), field, Some(i)));
+            }
+        }
+        fields.extend(GROUP_SCALARS.map(|field| (field.to_string(), field, None)));
         Schema { fields }
     }
 }

@@ -22,7 +22,8 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use svi::method::registry::SpaceKind;
 use svi_models::{
-    LocalModelVisitor, LocalZooModel, ModelVisitor, RigidModelVisitor, RigidZooModel, ZooModel,
+    GroupModelVisitor, GroupZooModel, LocalModelVisitor, LocalZooModel, ModelVisitor,
+    RigidModelVisitor, RigidZooModel, ZooModel,
 };
 
 use crate::report::csv::Float;
@@ -590,6 +591,21 @@ pub struct ModelNames {
     /// Whether the model is a chain of run-time size (zoo or text): its table has no column
     /// per coordinate, and its initial state is given site by site in the scene.
     pub chain: bool,
+    /// For a model on a Lie group other than SO(3): its dimension N and the number E of its
+    /// configuration's stored entries (the table's columns of g, ξ and μ).
+    pub group: Option<(usize, usize)>,
+}
+
+impl GroupModelVisitor for ModelNamesOf {
+    type Output = ModelNames;
+    fn visit<M: GroupZooModel<N, E>, const N: usize, const E: usize>(self, model: M) -> ModelNames {
+        ModelNames {
+            parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
+            coordinates: None,
+            chain: false,
+            group: Some((N, E)),
+        }
+    }
 }
 
 impl ModelVisitor for ModelNamesOf {
@@ -602,6 +618,7 @@ impl ModelVisitor for ModelNamesOf {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
             coordinates: Some(model.coordinate_names()),
             chain: false,
+            group: None,
         }
     }
 }
@@ -620,6 +637,7 @@ impl ModelNames {
             parameters: parameters.iter().map(|(name, _)| *name).collect(),
             coordinates: None,
             chain: true,
+            group: None,
         }
     }
 }
@@ -631,6 +649,7 @@ impl RigidModelVisitor for ModelNamesOf {
             parameters: model.parameters().iter().map(|(name, _)| *name).collect(),
             coordinates: None,
             chain: false,
+            group: None,
         }
     }
 }
@@ -655,6 +674,7 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
                             .collect(),
                     ),
                     chain: false,
+                    group: None,
                 },
                 Text::Chain(chain) => ModelNames::chain(chain.parameters()),
             },
@@ -666,16 +686,8 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
             svi_models::visit_rigid_model(&scene.model, ModelNamesOf)
                 .unwrap_or_else(|| unreachable!("the space of a scene is its model's"))
         }
-        SpaceKind::Group => {
-            return Err(SceneError::NotApplicable {
-                option: "svi ensemble SCENE",
-                reason: format!(
-                    "'{}' lives on a Lie group other than SO(3); ensembles run the models on ℝᴺ \
-                     and the rigid bodies on SO(3) (run it with svi run)",
-                    scene.model
-                ),
-            });
-        }
+        SpaceKind::Group => svi_models::visit_group_model(&scene.model, ModelNamesOf)
+            .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
     };
     // The components varied so far, as (field, index) and as written.
     let mut varied: Vec<((InitialField, usize), String)> = Vec::new();
@@ -702,7 +714,7 @@ pub fn check_axes(scene: &Scene, axes: &[Axis]) -> Result<ModelNames, SceneError
                         )
                     } else {
                         format!(
-                            "varies q, v or p of scenes on ℝᴺ; '{}' is a rigid body",
+                            "varies q, v or p of scenes on ℝᴺ; '{}' lives on a Lie group",
                             scene.model
                         )
                     };
