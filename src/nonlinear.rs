@@ -115,7 +115,7 @@ impl Newton {
     /// final state by 3–6e-13 against Newton's method run to convergence; at ε/4 by up to
     /// 1.6e-13, at ε/16 by 3.3e-14, the size of a 1-ulp change of the initial state; it costs
     /// about 10 % more iterations.
-    pub(crate) fn to_noise(mut self) -> Self {
+    pub(crate) fn until_noise(mut self) -> Self {
         self.stop = 0.0625;
         self
     }

@@ -173,7 +173,7 @@ where
             points: vec![GroupDerivatives::zeros(); m],
             rates: vec![SMatrix::zeros(); degree],
             scratch: GroupScratch::new(),
-            newton: Newton::new(N * degree, self.max_iterations).to_noise(),
+            newton: Newton::new(N * degree, self.max_iterations).until_noise(),
             velocity_guess: SVector::zeros(),
         })
     }
