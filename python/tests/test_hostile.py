@@ -27,6 +27,8 @@ HOSTILE = [
     math.nan, "1", "0.1", "", "kepler", "energy", "svi:6", "svi:1000", [], [1.0], [0.1, 0.2], (0.1, 0.9, 3),
     (0.1, 0.9, 3.0), (0.0, 1.0), {}, {"e": 0.5}, np.float64(0.2), np.int64(3), np.array([0.5, 0.6]),
     np.bool_(True), object(), b"bytes", 1j,
+    # Initial states on a Lie group: wrong lengths, a NaN, entries off the group.
+    {"log": [0.1, 0.2]}, {"xi": [math.nan, 0.0, 0.0, 0.0]}, {"g": [1.0] * 11}, {"momentum": [1e300] * 6},
 ]
 
 #: Keyword arguments of svi.run and svi.ensemble that take numbers, counts or names.
@@ -41,7 +43,7 @@ ENSEMBLE_KEYWORDS = [
 ]
 SCENES = [
     "kepler", "oscillator", "pendulum", "fput", "rigid-body", "wave", "kepler-text", "spherical-pendulum",
-    "four-bar-linkage", "nosuch", "", "/", "a=b",
+    "four-bar-linkage", "falling-body", "dual-spin", "nosuch", "", "/", "a=b",
 ]
 
 
