@@ -154,17 +154,6 @@ fn bad_input_on_a_group_is_a_typed_error() {
         &["--diagnostics", "solution"],
         "no exact solution",
     );
-    // The falling body's closed form needs M² > 2EI₂ (a turn about the axis of largest
-    // inertia): a tumble about the first axis has none.
-    let tumble = scene_file(
-        "group-tumble",
-        "model = \"falling-body\"\n[initial]\nxi = [3, 0.1, 0.1, 0, 0, 0]\n",
-    );
-    bad_input(
-        &["run", &tumble.path],
-        &["--diagnostics", "solution"],
-        "no exact solution for this initial state",
-    );
     bad_input(
         &["run", "falling-body"],
         &["--form", "reduced"],
