@@ -60,7 +60,7 @@ mod test_models;
 
 // Module paths of earlier releases, kept for users' code.
 pub use analysis::chaos;
-pub use analysis::{drift, stability, verify};
+pub use analysis::{drift, sensitivity, stability, verify};
 pub use model::derived;
 pub use spectral::{basis, quadrature};
 pub use stepping::{observer, solve};
@@ -82,6 +82,7 @@ pub use method::{
     Step, TangentMap,
 };
 pub use model::hamiltonian::{Canonical, Hamiltonian, HamiltonianStructure};
+pub use model::parametric::Parametric;
 pub use model::text::{TextError, TextHamiltonian, TextLagrangian, TextModel, TextSpec};
 pub use model::{Defaults, ExactSolution, Invariants, Lagrangian, Structure, Symmetries};
 pub use scalar::Scalar;

@@ -34,6 +34,7 @@ mod polymer;
 mod pseudospectral;
 mod reparam;
 mod sem;
+mod sensitivity;
 mod solve;
 mod stability;
 mod step_doubling;

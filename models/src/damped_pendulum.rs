@@ -28,7 +28,10 @@
 //! M. West, *Discrete mechanics and variational integrators*, Acta Numerica (2001), §3.2.
 
 use nalgebra::{SVector, U1};
-use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
+use svi::{
+    Defaults, Error, ExactSolution, Invariants, Lagrangian, Parametric, Scalar, Structure,
+    Symmetries,
+};
 
 use crate::{Pendulum, params};
 
@@ -79,20 +82,60 @@ impl Lagrangian<U1> for DampedPendulum {
     const FORCED: bool = true;
 
     #[inline]
-    fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
-        let (m, l, g) = (self.m, self.l, self.g);
-        v[0] * v[0] * (0.5 * m * l * l) + q[0].cos() * (m * g * l)
+    fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+        self.lagrangian_with(&self.theta(), t, q, v)
     }
 
     /// f_L = −c θ̇.
     #[inline]
     fn external_force<D: Scalar>(
         &self,
+        t: D,
+        q: &SVector<D, 1>,
+        v: &SVector<D, 1>,
+    ) -> SVector<D, 1> {
+        self.external_force_with(&self.theta(), t, q, v)
+    }
+}
+
+impl DampedPendulum {
+    /// θ = (m, l, g, c) as scalars.
+    fn theta<D: Scalar>(&self) -> [D; 4] {
+        [self.m, self.l, self.g, self.c].map(D::from)
+    }
+}
+
+/// θ = (m, l, g, c), the order of [`DampedPendulum::PARAMETERS`].
+impl Parametric<U1> for DampedPendulum {
+    fn parameter_names(&self) -> Vec<String> {
+        Self::PARAMETERS.map(String::from).to_vec()
+    }
+
+    fn parameter_values(&self) -> Vec<f64> {
+        self.theta().to_vec()
+    }
+
+    #[inline]
+    fn lagrangian_with<D: Scalar>(
+        &self,
+        theta: &[D],
+        _t: D,
+        q: &SVector<D, 1>,
+        v: &SVector<D, 1>,
+    ) -> D {
+        let (m, l, g) = (theta[0], theta[1], theta[2]);
+        v[0] * v[0] * (m * l * l * 0.5) + q[0].cos() * (m * g * l)
+    }
+
+    #[inline]
+    fn external_force_with<D: Scalar>(
+        &self,
+        theta: &[D],
         _t: D,
         _q: &SVector<D, 1>,
         v: &SVector<D, 1>,
     ) -> SVector<D, 1> {
-        SVector::from([v[0] * (-self.c)])
+        SVector::from([-(v[0] * theta[3])])
     }
 }
 

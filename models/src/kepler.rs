@@ -33,7 +33,10 @@
 //! Introduction to the Mathematics and Methods of Astrodynamics* (1999), ch. 4–5.
 
 use nalgebra::{SVector, U2};
-use svi::{Defaults, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries};
+use svi::{
+    Defaults, Error, ExactSolution, Invariants, Lagrangian, Parametric, Scalar, Structure,
+    Symmetries,
+};
 
 use crate::params;
 
@@ -106,6 +109,38 @@ impl Lagrangian<U2> for Kepler {
         // `cargo bench --bench derivatives -- kepler/force`).
         let r2 = q.dot(q);
         v.dot(v) * 0.5 + r2.sqrt() * r2.recip()
+    }
+}
+
+/// θ = (e): the eccentricity does not enter L; it moves the model's initial state.
+impl Parametric<U2> for Kepler {
+    fn parameter_names(&self) -> Vec<String> {
+        Self::PARAMETERS.map(String::from).to_vec()
+    }
+
+    fn parameter_values(&self) -> Vec<f64> {
+        vec![self.e]
+    }
+
+    #[inline]
+    fn lagrangian_with<D: Scalar>(
+        &self,
+        _theta: &[D],
+        t: D,
+        q: &SVector<D, 2>,
+        v: &SVector<D, 2>,
+    ) -> D {
+        self.lagrangian(t, q, v)
+    }
+
+    /// The pericentre of [`Defaults::initial_state`] as a function of e.
+    fn initial_state_with<D: Scalar>(&self, theta: &[D]) -> Option<(SVector<D, 2>, SVector<D, 2>)> {
+        let e = theta[0];
+        let one = D::one();
+        Some((
+            SVector::from([one - e, D::zero()]),
+            SVector::from([D::zero(), ((one + e) / (one - e)).sqrt()]),
+        ))
     }
 }
 

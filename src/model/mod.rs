@@ -47,6 +47,7 @@ pub(crate) mod legendre;
 pub mod local;
 pub mod local_hamiltonian;
 pub mod mass_inverse;
+pub mod parametric;
 pub mod reparametrized;
 pub mod rhs;
 pub mod rigid_body;

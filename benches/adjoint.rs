@@ -1,0 +1,95 @@
+//! The cost of a gradient by the discrete adjoint against the forward run it differentiates
+//! (issue #40: at most 4× on a 10⁵-step SVI 7/6 Kepler run, with O(√K) stored states).
+//!
+//! Kepler e = 0.5 from its pericentre, SVI with 7 points and 6 Gauss–Legendre nodes, h = 0.02,
+//! K = 10⁵ steps (T = 2000). Timed, each as the median of [`ROUNDS`] whole runs:
+//! - `forward`: the plain run of the model ([`Integrator::run`], no observer);
+//! - `gradient`: the gradient of J = Σ_j q₁(t_j) over outputs every 1000 steps with respect
+//!   to (q₀, q̇₀) and e ([`Integrator::gradient`], default checkpoints);
+//! - `sensitivities`: the forward sensitivities at the same outputs.
+//!
+//! It prints the times, the ratios to `forward`, the checkpoints and tangent maps held at the
+//! peak and their bytes. Run with `cargo bench --bench adjoint`.
+
+use nalgebra::SVector;
+use std::time::Instant;
+use svi::sensitivity::{Checkpoints, Loss, SensitivityRun, Start};
+use svi::{Initial, Integrator, Scalar, Svi};
+use svi_models::Kepler;
+
+/// Whole runs timed per measurement (the median is reported).
+const ROUNDS: usize = 5;
+const STEPS: usize = 100_000;
+const T_END: f64 = 2000.0;
+
+/// J = Σ_j q₁(t_j).
+struct FirstCoordinate;
+
+impl Loss for FirstCoordinate {
+    fn loss<D: Scalar>(&self, _output: usize, _t: f64, q: &[D], _v: &[D]) -> D {
+        q[0]
+    }
+}
+
+/// The median of `ROUNDS` timings of `run`, in seconds.
+fn median(mut run: impl FnMut()) -> f64 {
+    let mut times: Vec<f64> = (0..ROUNDS)
+        .map(|_| {
+            let start = Instant::now();
+            run();
+            start.elapsed().as_secs_f64()
+        })
+        .collect();
+    times.sort_by(f64::total_cmp);
+    times[ROUNDS / 2]
+}
+
+fn main() {
+    let model = Kepler::new(0.5).unwrap();
+    let integrator = Integrator::new(model, Svi::new(7).with_quadrature(6));
+    let h = T_END / STEPS as f64;
+    let initial = Initial::Velocity {
+        q: SVector::from([0.5, 0.0]),
+        v: SVector::from([0.0, 3.0_f64.sqrt()]),
+    };
+    let forward = median(|| {
+        integrator.run(0.0, initial, h, T_END, &mut ()).unwrap();
+    });
+    let run = SensitivityRun::new(0.0, Start::Model, h, T_END)
+        .with_parameters(&["e"])
+        .with_outputs_every(1000);
+    let mut last = None;
+    let gradient = median(|| {
+        last = Some(
+            integrator
+                .gradient(&run, &FirstCoordinate, Checkpoints::default())
+                .unwrap(),
+        );
+    });
+    let sensitivities = median(|| {
+        integrator.sensitivities(&run).unwrap();
+    });
+    let last = last.unwrap();
+    println!("Kepler e = 0.5, SVI 7/6, {STEPS} steps of h = {h}:");
+    println!("  forward        {:8.2} ms", forward * 1e3);
+    println!(
+        "  gradient       {:8.2} ms  {:5.2}× forward",
+        gradient * 1e3,
+        gradient / forward
+    );
+    println!(
+        "  sensitivities  {:8.2} ms  {:5.2}× forward",
+        sensitivities * 1e3,
+        sensitivities / forward
+    );
+    println!(
+        "  peak stored: {} states and tangent maps, {} bytes (√K = {:.0})",
+        last.peak_stored,
+        last.peak_bytes,
+        (STEPS as f64).sqrt()
+    );
+    println!(
+        "  dJ/de = {:.6e}, dJ/dq0 = {:.6e} {:.6e}",
+        last.parameters[0], last.initial[0], last.initial[1]
+    );
+}

@@ -1,0 +1,114 @@
+//! Forward sensitivities: the product of the steps' tangent maps along the run
+//! (see the [module](super) documentation).
+
+use super::SensitivityRun;
+use super::lifted::{Lifted, Walker};
+use crate::dimension::{Dimension, Dyn};
+use crate::error::Error;
+use crate::method::space::TangentMap;
+use crate::method::{Euclidean, Method};
+use crate::model::parametric::Parametric;
+use crate::stepping::run::{Integrator, Statistics};
+use nalgebra::allocator::Allocator;
+use nalgebra::{DMatrix, DVector, DefaultAllocator};
+
+/// The state and its derivatives at one output of a differentiated run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensitivityPoint {
+    /// The number of steps taken (0: the start).
+    pub step: usize,
+    /// The time.
+    pub t: f64,
+    /// The configuration q.
+    pub q: DVector<f64>,
+    /// The velocity q̇.
+    pub v: DVector<f64>,
+    /// ∂(q, q̇)/∂(q₀, q̇₀ or p₀, θ): 2n rows (q, then q̇), 2n + P columns (q₀, then q̇₀ — or p₀
+    /// for a start given in momenta —, then the parameters in the order asked).
+    pub jacobian: DMatrix<f64>,
+}
+
+/// The forward sensitivities of a run ([`Integrator::sensitivities`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sensitivities {
+    /// The parameters of the last P columns, in order.
+    pub parameters: Vec<String>,
+    /// The outputs: the start, every `every`-th step, and the last step.
+    pub outputs: Vec<SensitivityPoint>,
+    /// The work of the run's steps (taken by their tangent maps).
+    pub statistics: Statistics,
+}
+
+impl<L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension>
+    Integrator<L, M, Euclidean<N>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// The forward sensitivities of `run`: at each output the state and its Jacobian with
+    /// respect to the initial state and the parameters `run.parameters`, the exact
+    /// derivative of the method's discrete map (the product of its steps' tangent maps,
+    /// see [`crate::analysis::sensitivity`]).
+    ///
+    /// # Errors
+    /// A parameter the model does not have, or named twice
+    /// ([`Error::InvalidParameter`] `parameters`); a bad grid or `every` = 0; a start the
+    /// model cannot give ([`super::Start::Model`] without
+    /// [`Parametric::initial_state_with`]); a failed step, as its typed error with its index
+    /// and time; a singular mass matrix where velocities are recovered from momenta.
+    pub fn sensitivities(&self, run: &SensitivityRun<N>) -> Result<Sensitivities, Error> {
+        let lifted = Lifted::new(self.model(), self.method(), run)?;
+        let (m, steps) = (lifted.m, lifted.grid.3);
+        let mut walker = Walker::new(&lifted)?;
+        let mut total = DMatrix::identity(2 * m, 2 * m);
+        let mut next = DMatrix::zeros(2 * m, 2 * m);
+        let mut outputs = Vec::new();
+        outputs.push(output(&lifted, &mut walker, 0, &total)?);
+        for k in 0..steps {
+            let tangent = walker.step_tangent(k)?;
+            compose(&tangent, &total, &mut next);
+            std::mem::swap(&mut total, &mut next);
+            if lifted.is_output(k + 1) {
+                outputs.push(output(&lifted, &mut walker, k + 1, &total)?);
+            }
+        }
+        Ok(Sensitivities {
+            parameters: lifted.names.clone(),
+            outputs,
+            statistics: walker.statistics,
+        })
+    }
+}
+
+/// The output after `step` steps: the point, and G Φ C with Φ = `total`.
+fn output<L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension>(
+    lifted: &Lifted<'_, L, M, N>,
+    walker: &mut Walker<'_, '_, L, M, N>,
+    step: usize,
+    total: &DMatrix<f64>,
+) -> Result<SensitivityPoint, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let point = walker.point(step)?;
+    let end = lifted.end(&point)?;
+    let n = lifted.n;
+    Ok(SensitivityPoint {
+        step,
+        t: point.t,
+        q: point.q.rows(0, n).into_owned(),
+        v: point.v.rows(0, n).into_owned(),
+        jacobian: end * total * &lifted.start,
+    })
+}
+
+/// `out` = Φ · `total` for a step's tangent map Φ in blocks [[qq, qy], [yq, yy]].
+pub(super) fn compose(tangent: &TangentMap<Dyn>, total: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+    let m = tangent.qq.nrows();
+    let (top, bottom) = (total.rows(0, m), total.rows(m, m));
+    let mut upper = out.rows_mut(0, m);
+    upper.gemm(1.0, &tangent.qq, &top, 0.0);
+    upper.gemm(1.0, &tangent.qy, &bottom, 1.0);
+    let mut lower = out.rows_mut(m, m);
+    lower.gemm(1.0, &tangent.yq, &top, 0.0);
+    lower.gemm(1.0, &tangent.yy, &bottom, 1.0);
+}
