@@ -126,6 +126,7 @@ guide_doctests! {
     GuideChaosDoctests: "chaos.md",
     GuideHamiltonianDoctests: "hamiltonian.md",
     GuideRigidBodiesDoctests: "rigid-bodies.md",
+    GuideSensitivitiesDoctests: "sensitivities.md",
 }
 
 #[cfg(test)]

@@ -28,6 +28,7 @@ mod in_process;
 mod limits;
 mod local;
 mod rigid;
+mod sensitivity;
 mod spectral;
 mod stress;
 mod text;

@@ -298,6 +298,40 @@ vector_zoo!(
     MagneticBottle,
 );
 
+/// Receives a zoo model whose parameters can be differentiated ([`svi::Parametric`]), as its
+/// concrete type and dimension.
+pub trait ParametricModelVisitor {
+    /// What the visit returns.
+    type Output;
+
+    /// Called once with the model, as its concrete type and dimension.
+    fn visit<M: ZooModel<N> + svi::Parametric<N>, N: Dimension>(self, model: M) -> Self::Output
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>;
+}
+
+/// Names of the zoo models whose parameters can be differentiated ([`svi::Parametric`]): the
+/// models of `svi run --sensitivity`, with the parameters each offers.
+///
+/// | name | parameters | the start moves with |
+/// | --- | --- | --- |
+/// | `kepler` | `e` | `e` (the pericentre of the orbit of eccentricity e) |
+/// | `damped-pendulum` | `m`, `l`, `g`, `c` | — |
+pub const PARAMETRIC_MODEL_NAMES: &[&str] = &[Kepler::NAME, DampedPendulum::NAME];
+
+/// Build the named parametric model with its defaults and hand it to the visitor; `None` if
+/// `name` is not one of [`PARAMETRIC_MODEL_NAMES`].
+pub fn visit_parametric_model<V: ParametricModelVisitor>(
+    name: &str,
+    visitor: V,
+) -> Option<V::Output> {
+    match name {
+        Kepler::NAME => Some(visitor.visit(Kepler::default())),
+        DampedPendulum::NAME => Some(visitor.visit(DampedPendulum::default())),
+        _ => None,
+    }
+}
+
 /// Hand a text model to the visitor as a [`TextLagrangian`] of run-time dimension ([`Dyn`]:
 /// any number of coordinates), with the tightest declarations it allows among three:
 /// autonomous, unforced and constant-mass (`TextLagrangian<Dyn, false, false, true>`: the

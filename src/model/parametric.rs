@@ -173,7 +173,7 @@ where
         let dim = N::from_usize(self.n);
         let q = OVector::<D, N>::from_iterator_generic(dim, U1, z.iter().take(self.n).copied());
         let v = OVector::<D, N>::from_iterator_generic(dim, U1, zdot.iter().take(self.n).copied());
-        let mut theta: Vec<D> = self.values.iter().map(|&x| D::from(x)).collect();
+        let mut theta = Theta::new(self.values.iter().map(|&x| D::from(x)));
         for (k, &i) in self.chosen.iter().enumerate() {
             theta[i] = z[self.n + k];
         }
@@ -182,7 +182,54 @@ where
 }
 
 /// (q, q̇, θ) of [`WithParameters::split`].
-type Split<D, N> = (OVector<D, N>, OVector<D, N>, Vec<D>);
+type Split<D, N> = (OVector<D, N>, OVector<D, N>, Theta<D>);
+
+/// The most parameters [`Theta`] holds on the stack.
+const INLINE: usize = 8;
+
+/// Parameters θ, held on the stack up to [`INLINE`] of them (L̂ is evaluated many times per
+/// step: no heap vector each time).
+enum Theta<D> {
+    /// The first `len` entries.
+    Inline([D; INLINE], usize),
+    /// More than [`INLINE`].
+    Heap(Vec<D>),
+}
+
+impl<D: Scalar> Theta<D> {
+    /// θ from its entries.
+    fn new(values: impl ExactSizeIterator<Item = D>) -> Self {
+        let len = values.len();
+        if len <= INLINE {
+            let mut inline = [D::zero(); INLINE];
+            for (slot, value) in inline.iter_mut().zip(values) {
+                *slot = value;
+            }
+            Theta::Inline(inline, len)
+        } else {
+            Theta::Heap(values.collect())
+        }
+    }
+}
+
+impl<D> std::ops::Deref for Theta<D> {
+    type Target = [D];
+    fn deref(&self) -> &[D] {
+        match self {
+            Theta::Inline(values, len) => &values[..*len],
+            Theta::Heap(values) => values,
+        }
+    }
+}
+
+impl<D> std::ops::DerefMut for Theta<D> {
+    fn deref_mut(&mut self) -> &mut [D] {
+        match self {
+            Theta::Inline(values, len) => &mut values[..*len],
+            Theta::Heap(values) => values,
+        }
+    }
+}
 
 impl<L: Parametric<N>, N: Dimension> Lagrangian<Dyn> for WithParameters<'_, L, N>
 where
@@ -215,7 +262,7 @@ where
             force.rows_mut(0, self.n).copy_from(&f.rows(0, self.n));
         }
         let (lift_q, lift_v) = (q.map(Dual::from_re), v.map(Dual::from_re));
-        let mut lifted: Vec<Dual<D>> = theta.iter().map(|&x| Dual::from_re(x)).collect();
+        let mut lifted = Theta::new(theta.iter().map(|&x| Dual::from_re(x)));
         for (k, &i) in self.chosen.iter().enumerate() {
             lifted[i] = Dual::new(theta[i], D::one());
             let value = self
@@ -296,7 +343,7 @@ mod tests {
         let z = DVector::from_vec(vec![0.7, 3.0, 2.0]);
         let zdot = DVector::from_vec(vec![-0.4, 0.0, 0.0]);
         let gradient = LagrangianExt::<Dyn>::first_derivatives(&hat, 0.0, &z, &zdot);
-        let force = LagrangianExt::<Dyn>::force(&hat, 0.0, &z, &zdot);
+        let force = Lagrangian::<Dyn>::external_force(&hat, 0.0, &z, &zdot);
         // ∂L/∂k = −q²/2, ∂L/∂m = q̇²/2; the force is their negative.
         assert!((gradient.q[1] - (-0.5 * 0.49)).abs() < 1e-15);
         assert!((gradient.q[2] - 0.5 * 0.16).abs() < 1e-15);

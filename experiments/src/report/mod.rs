@@ -11,6 +11,7 @@ pub mod output;
 pub mod plot;
 pub mod progress;
 pub mod schema;
+pub mod sensitivity;
 pub mod spectral;
 pub mod summary;
 pub mod table;

@@ -17,6 +17,7 @@ use crate::report::csv::{Float, Recorded, brief_vector as vector};
 use crate::report::events::EventsSummary;
 use crate::report::health::Warning;
 use crate::report::schema::{Kind, Versioned};
+use crate::report::sensitivity::SensitivitySummary;
 
 /// The result of running a scene (`svi run --json` prints it as one JSON object).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -110,6 +111,10 @@ pub struct Summary {
     /// `lyapunov`, `sali`, `gali`.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub indicators: Option<IndicatorSummary>,
+    /// The Jacobians of the state with respect to the initial state and parameters
+    /// (`--sensitivity`): `sensitivity`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sensitivity: Option<SensitivitySummary>,
 }
 
 /// Whether a run ended well.
@@ -799,6 +804,8 @@ impl fmt::Display for Summary {
         rows.extend(events.into_iter().flatten());
         let indicators = self.indicators.as_ref().map(IndicatorSummary::rows);
         rows.extend(indicators.into_iter().flatten());
+        let sensitivity = self.sensitivity.as_ref().map(SensitivitySummary::rows);
+        rows.extend(sensitivity.into_iter().flatten());
         let width = rows.iter().map(|(label, _)| label.len()).max().unwrap_or(0) + 2;
         for (label, value) in rows {
             writeln!(f, "{label:<width$}{value}")?;

@@ -248,6 +248,7 @@ pub(super) fn run(
         dense: None,
         events: None,
         indicators: None,
+        sensitivity: None,
     };
     super::ended(summary, failure)
 }

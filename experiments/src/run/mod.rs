@@ -26,6 +26,7 @@ mod control;
 mod events;
 pub mod field;
 pub(crate) mod outcome;
+mod sensitivity;
 mod solver;
 pub mod space;
 pub mod spectral;
@@ -102,7 +103,7 @@ impl CheckedScene<'_> {
                 },
                 None if self.is_local() => visit_local_model(&self.model, run)
                     .unwrap_or_else(|| unreachable!("is_local: a runtime-dimension model")),
-                None => visit_model(&self.model, run)?,
+                None => sensitivity::with_sensitivity(&self, visit_model(&self.model, run)?),
             },
             SpaceKind::Group if self.is_rigid() => visit_rigid_model(&self.model, run)
                 .unwrap_or_else(|| unreachable!("the space of a scene is its model's")),
@@ -598,6 +599,7 @@ fn run_scene<L, S: RunSpace<L>>(
         dense: outcome.dense,
         events: events_summary,
         indicators: solver.indicators(),
+        sensitivity: None,
     };
     ended(summary, failure)
 }

@@ -10,6 +10,7 @@ use svi::method::registry::{self, SpaceKind};
 use crate::scene::error::methods_with;
 use crate::scene::schema::{AdaptMode, Diagnostic, RecoveryKind};
 use crate::scene::{Scene, SceneError, group, limits, rigid};
+use svi_models::PARAMETRIC_MODEL_NAMES;
 
 /// A scene that passed [`Scene::check`], borrowed so that it stays as checked: its runs
 /// ([`CheckedScene::run`]) do not check it again.
@@ -323,6 +324,7 @@ impl Scene {
     fn check_events(&self) -> Result<(), SceneError> {
         let section = self.output.section.is_some();
         self.check_indicators()?;
+        self.check_sensitivity()?;
         if !self.has_events() && !section {
             return Ok(());
         }
@@ -389,6 +391,66 @@ impl Scene {
         }
         if self.has_events() || self.output.section.is_some() {
             return refuse("a tangent run locates no events: leave out --event and --section");
+        }
+        Ok(())
+    }
+
+    /// Sensitivities: the tangent maps of fixed steps of a zoo model whose parameters can be
+    /// differentiated, without what a fixed-step run does not serve.
+    fn check_sensitivity(&self) -> Result<(), SceneError> {
+        let refuse = |reason: String| {
+            Err(SceneError::NotApplicable {
+                option: "--sensitivity (run.sensitivity)",
+                reason,
+            })
+        };
+        let Some(names) = &self.run.sensitivity else {
+            if self.run.sensitivity_every.is_some() {
+                return Err(SceneError::NotApplicable {
+                    option: "--sensitivity-every (run.sensitivity_every)",
+                    reason: "sets the outputs of --sensitivity, which is not given".into(),
+                });
+            }
+            return Ok(());
+        };
+        if names.is_empty() {
+            return refuse("names nothing to differentiate with respect to".into());
+        }
+        if self.run.sensitivity_every == Some(0) {
+            return Err(SceneError::InvalidOption {
+                option: "--sensitivity-every (run.sensitivity_every)",
+                reason: "0 steps between outputs (at least 1)".into(),
+            });
+        }
+        if self.is_text()
+            || self.space() != SpaceKind::Vector
+            || !PARAMETRIC_MODEL_NAMES.contains(&self.model.as_str())
+        {
+            return refuse(format!(
+                "model '{}' has no parameters that can be differentiated (models that do: {})",
+                self.model,
+                PARAMETRIC_MODEL_NAMES.join(", ")
+            ));
+        }
+        if !matches!(self.run.adapt, None | Some(AdaptMode::None)) {
+            return refuse("differentiates fixed steps: leave out --adapt".into());
+        }
+        if self.run.recovery == Some(RecoveryKind::HalveStep) {
+            return refuse(
+                "a halved step would change the map that is differentiated: leave out --recovery"
+                    .into(),
+            );
+        }
+        if self.output.output_times.is_some() {
+            return refuse(
+                "reports at the grid's steps (--sensitivity-every): leave out --output-times"
+                    .into(),
+            );
+        }
+        if self.has_events() || self.output.section.is_some() {
+            return refuse(
+                "differentiates the run to its horizon: leave out --event and --section".into(),
+            );
         }
         Ok(())
     }

@@ -407,6 +407,8 @@ impl Scene {
                     max_steps,
                     form,
                     indicators,
+                    sensitivity,
+                    sensitivity_every,
                 },
             parameters,
             every,
@@ -509,6 +511,8 @@ impl Scene {
         set(&mut self.run.divergence_limit, divergence_limit);
         set(&mut self.run.max_steps, max_steps);
         set(&mut self.run.indicators, indicators);
+        set(&mut self.run.sensitivity, sensitivity);
+        set(&mut self.run.sensitivity_every, sensitivity_every);
         if h.is_some() && self.run.adapt == Some(AdaptMode::Step) {
             return Err(SceneError::NotApplicable {
                 option: "--h",
@@ -809,6 +813,8 @@ pub(crate) mod tests {
                     max_steps: Some(500),
                     form: None,
                     indicators: None,
+                    sensitivity: None,
+                    sensitivity_every: None,
                 },
                 parameters: vec![("e".into(), 0.9)],
                 every: Some(10),

@@ -149,6 +149,14 @@ pub struct RunFlags {
     /// ℝᴺ): megno, lyapunov (maximal exponent), spectrum (all 2N exponents), sali, gali (GALI_N).
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub indicators: Option<Vec<crate::scene::schema::Indicator>>,
+    /// Derivatives of the state with respect to the initial state and parameters,
+    /// comma-separated: q0, v0 (p0 for a start given in momenta) and parameter names; the
+    /// exact derivatives of the method's fixed steps (models: kepler, damped-pendulum).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub sensitivity: Option<Vec<String>>,
+    /// Report the sensitivities every K steps besides the start and the end.
+    #[arg(long, value_name = "K")]
+    pub sensitivity_every: Option<usize>,
 }
 
 /// Scene fields set from the command line: the [`RunFlags`], and the model's parameters and

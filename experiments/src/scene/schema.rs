@@ -203,6 +203,14 @@ pub struct RunSection {
     /// ([`svi::analysis::chaos`]; fixed steps on ℝᴺ): the summary's `megno`, `lyapunov_max`,
     /// `lyapunov`, `sali` and `gali`.
     pub indicators: Option<Vec<Indicator>>,
+    /// Derivatives of the state with respect to the initial state and the model's parameters
+    /// ([`svi::analysis::sensitivity`]; fixed steps, models of
+    /// [`svi_models::PARAMETRIC_MODEL_NAMES`]): `q0`, `v0` (`p0` for a start given in
+    /// momenta) and parameter names, in the order of the summary's `sensitivity.columns`.
+    pub sensitivity: Option<Vec<String>>,
+    /// Every how many steps the sensitivities are reported besides the start and the end
+    /// (default: only those two).
+    pub sensitivity_every: Option<usize>,
 }
 
 /// A chaos indicator of a run, as named in scenes and on the command line.
