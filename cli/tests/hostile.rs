@@ -584,6 +584,7 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         "pendulum",
         "double-pendulum",
         "damped-oscillator",
+        "damped-pendulum",
         "rigid-body",
         "heavy-top",
         "pendulum-3d",
@@ -688,6 +689,20 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
             ])
             .prop_map(String::from)
             .boxed(),
+        ),
+        flag(
+            "--sensitivity",
+            select(vec![
+                "e", "q0,v0", "p0", "l,c,q0", "e,e", "", "nan", "q0,mass",
+            ])
+            .prop_map(String::from)
+            .boxed(),
+        ),
+        flag(
+            "--sensitivity-every",
+            select(vec!["1", "7", "0", "-3", "1e9"])
+                .prop_map(String::from)
+                .boxed(),
         ),
     ];
     if mode == Mode::Binary {

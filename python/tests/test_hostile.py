@@ -29,21 +29,23 @@ HOSTILE = [
     np.bool_(True), object(), b"bytes", 1j,
     # Initial states on a Lie group: wrong lengths, a NaN, entries off the group.
     {"log": [0.1, 0.2]}, {"xi": [math.nan, 0.0, 0.0, 0.0]}, {"g": [1.0] * 11}, {"momentum": [1e300] * 6},
+    # Derivatives of a run: names the models have, and names they do not.
+    ["e", "q0"], ["l", "c", "v0"], ["p0", "nosuch"],
 ]
 
 #: Keyword arguments of svi.run and svi.ensemble that take numbers, counts or names.
 RUN_KEYWORDS = [
     "method", "h", "t_end", "params", "initial", "diagnostics", "output_times", "points", "quadrature",
     "adapt", "monitor", "tol", "recovery", "divergence_limit", "max_steps", "form", "every", "trajectory",
-    "multipliers",
+    "multipliers", "sensitivity", "sensitivity_every",
 ]
 ENSEMBLE_KEYWORDS = [
     "params", "initial", "random", "seed", "threads", "method", "h", "t_end", "diagnostics", "points",
     "adapt", "tol", "max_steps",
 ]
 SCENES = [
-    "kepler", "oscillator", "pendulum", "fput", "rigid-body", "wave", "kepler-text", "spherical-pendulum",
-    "four-bar-linkage", "falling-body", "dual-spin", "nosuch", "", "/", "a=b",
+    "kepler", "oscillator", "pendulum", "damped-pendulum", "fput", "rigid-body", "wave", "kepler-text",
+    "spherical-pendulum", "four-bar-linkage", "falling-body", "dual-spin", "nosuch", "", "/", "a=b",
 ]
 
 
