@@ -6,6 +6,7 @@
 use super::{SensitivityRun, Start};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::Error;
+use crate::linalg::invert_small;
 use crate::method::space::{Initial, PhasePoint, State, StepState, TangentMap};
 use crate::method::step::Step;
 use crate::method::{Coordinates, Euclidean, Method};
@@ -199,9 +200,7 @@ where
 
 /// The inverse of a mass matrix, or a typed error naming `what`.
 fn invert(matrix: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>, Error> {
-    matrix
-        .clone()
-        .try_inverse()
+    invert_small(matrix)
         .filter(|inverse| inverse.iter().all(|x| x.is_finite()))
         .ok_or_else(|| Error::invalid("model", format!("the {what} of L̂ is singular")))
 }
