@@ -192,7 +192,7 @@ impl ModelVisitor for SceneRun<'_> {
         };
         let mut plan = self.plan(resolved, method);
         plan.warnings = symmetry_warnings(&model, plan.t0, &plan.initial);
-        VectorMethod { model, plan }.visit(spec.vector_method()?)
+        VectorMethod::<_, _, true> { model, plan }.visit(spec.vector_method()?)
     }
 }
 
@@ -253,8 +253,11 @@ where
         .collect()
 }
 
-/// Runs a scene's model on ℝᴺ with the visited method.
-struct VectorMethod<'a, M, N: Dimension>
+/// Runs a scene's model on ℝᴺ with the visited method. `IN_TAU`: whether the model may run in
+/// computational time τ (`adapt = "reparam"`, models of fixed dimension): chains, which the
+/// scene's checks refuse it, are compiled without that path (a copy of every method on the
+/// reparametrised model, a twelfth of the command line's code).
+struct VectorMethod<'a, M, N: Dimension, const IN_TAU: bool>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
@@ -262,7 +265,8 @@ where
     plan: Plan<'a, svi::Euclidean<N>>,
 }
 
-impl<M: svi::Lagrangian<N>, N: Dimension> VectorMethodVisitor<N> for VectorMethod<'_, M, N>
+impl<M: svi::Lagrangian<N>, N: Dimension, const IN_TAU: bool> VectorMethodVisitor<N>
+    for VectorMethod<'_, M, N, IN_TAU>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
     svi::Euclidean<N>: RunSpace<M>,
@@ -279,7 +283,7 @@ where
                 found: RefCell::new(None),
             };
             run_scene(&self.plan, &solver)
-        } else if self.plan.scene.run.adapt == Some(AdaptMode::Reparam) {
+        } else if IN_TAU && self.plan.scene.run.adapt == Some(AdaptMode::Reparam) {
             let monitor = self.plan.scene.monitor()?;
             let solver = InTau {
                 integrator: &integrator,
@@ -308,7 +312,7 @@ impl LocalModelVisitor for SceneRun<'_> {
             quadrature: spec.quadrature_in_use(),
         };
         let plan = self.plan(resolved, method);
-        VectorMethod {
+        VectorMethod::<_, _, false> {
             model: Chain(Terms(model)),
             plan,
         }
