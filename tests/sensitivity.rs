@@ -8,8 +8,8 @@ use nalgebra::{Const, DVector, SVector};
 use svi::observer::{Every, Trajectory};
 use svi::sensitivity::{Checkpoints, Loss, SensitivityRun, Start};
 use svi::{
-    Composition, Dyn, Error, Initial, Integrator, Method, Midpoint, Parametric, Scalar, Scheme,
-    SpectralCollocation, StormerVerlet, Svi, VariationalIntegrator,
+    Composition, Defaults, Dyn, Error, Initial, Integrator, Method, Midpoint, Parametric, Scalar,
+    Scheme, SpectralCollocation, StormerVerlet, Svi, VariationalIntegrator,
 };
 use svi_models::{DampedPendulum, Kepler};
 
@@ -134,19 +134,25 @@ fn check<L, M, const N: usize>(
     );
 }
 
-/// Kepler, e = 0.5, from its pericentre: with respect to q₀, q̇₀ and e (which moves q₀, q̇₀).
+/// Kepler, e = 0.5, from mean anomaly 0.4: with respect to q₀, q̇₀, e and the phase (which
+/// move q₀, q̇₀).
 fn check_kepler<M: Method<Const<2>> + Method<Dyn> + Clone>(method: M, h: f64, what: &str) {
-    let e = 0.5;
-    let integrator = Integrator::new(Kepler::new(e).unwrap(), method);
+    let (e, phase) = (0.5, 0.4);
+    let model = |e: f64, phase: f64| {
+        let mut model = Kepler::new(e).unwrap();
+        model.set_parameter("phase", phase).unwrap();
+        model
+    };
+    let integrator = Integrator::new(model(e, phase), method);
     let run = SensitivityRun::new(0.0, Start::Model, h, 4.0)
-        .with_parameters(&["e"])
+        .with_parameters(&["e", "phase"])
         .with_outputs_every(10);
     let perturbed = |k: usize, delta: f64| {
-        let model = Kepler::new(if k == 4 { e + delta } else { e }).unwrap();
-        let (mut q, mut v) = (
-            SVector::from([1.0 - model.e, 0.0]),
-            SVector::from([0.0, ((1.0 + model.e) / (1.0 - model.e)).sqrt()]),
+        let model = model(
+            if k == 4 { e + delta } else { e },
+            if k == 5 { phase + delta } else { phase },
         );
+        let (_, mut q, mut v) = model.initial_state();
         match k {
             0 | 1 => q[k] += delta,
             2 | 3 => v[k - 2] += delta,
@@ -156,7 +162,7 @@ fn check_kepler<M: Method<Const<2>> + Method<Dyn> + Clone>(method: M, h: f64, wh
     };
     // δ = 2e-6: the differences' truncation error δ²f'''/6 is about 2e-9 of the gradient
     // (6e-8 at δ = 1e-5, which scales as δ²), their round-off about 1e-10.
-    check(&integrator, &run, perturbed, &[2e-6; 5], what);
+    check(&integrator, &run, perturbed, &[2e-6; 6], what);
 }
 
 /// The damped pendulum (m = g = 1, l = 1.3, c = 0.2) from θ₀ = 1 at rest: with respect to

@@ -258,3 +258,35 @@ fn help_texts_state_the_defaults_and_caps_the_binary_has() {
         bad_input(&["scale", "--min-run", bad], &[], "--min-run");
     }
 }
+
+/// The models and parameters `svi run --help` states for `--sensitivity` are those the binary
+/// differentiates: each stated parameter of each stated model gives its column, and a model
+/// not stated is refused.
+#[test]
+fn sensitivity_help_lists_the_models_the_binary_differentiates() {
+    let stated = stated(
+        &["run"],
+        "--sensitivity",
+        "models and their parameters: ",
+        ")",
+    );
+    let stated = stated.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut models = Vec::new();
+    for entry in stated.split("; ") {
+        let (model, parameters) = entry
+            .split_once(": ")
+            .unwrap_or_else(|| panic!("'{entry}' is not MODEL: PARAMETERS"));
+        for parameter in parameters.split(", ") {
+            let args = ["run", model, "--t-end", "0.2", "--sensitivity", parameter];
+            let summary = json(&[&args[..], &["--json"]].concat());
+            assert_eq!(summary["sensitivity"]["columns"][0], parameter, "{args:?}");
+        }
+        models.push(model);
+    }
+    assert_eq!(models, svi_models::PARAMETRIC_MODEL_NAMES);
+    bad_input(
+        &["run"],
+        &["pendulum", "--sensitivity", "q0"],
+        "models that do: kepler",
+    );
+}

@@ -47,19 +47,22 @@ const TAU_LOW: f64 = 2.449_293_598_294_706_4e-16;
 /// Iteration cap of the Kepler-equation solver (bisection alone would converge in 60).
 const MAX_NEWTON_ITERATIONS: usize = 100;
 
-/// The planar Kepler problem L = |v|²/2 + 1/|q|; the eccentricity `e` only selects the
-/// default initial state.
+/// The planar Kepler problem L = |v|²/2 + 1/|q|; the eccentricity `e` and the `phase` only
+/// select the default initial state.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Kepler {
     /// Eccentricity of the default orbit, 0 ≤ e < 1.
     pub e: f64,
+    /// Mean anomaly of the default initial state, in radians: 0 (the default) starts at the
+    /// pericentre, π at the apocentre; the orbit reaches the pericentre at t = −phase.
+    pub phase: f64,
 }
 
 impl Kepler {
     /// Registry name of the model.
     pub const NAME: &'static str = "kepler";
     /// Parameter names, in the order of [`Defaults::parameters`].
-    pub const PARAMETERS: [&'static str; 1] = ["e"];
+    pub const PARAMETERS: [&'static str; 2] = ["e", "phase"];
 
     /// A Kepler model whose default orbit has eccentricity `e` ∈ [0, 1).
     pub fn new(e: f64) -> Result<Self, Error> {
@@ -91,9 +94,9 @@ impl Kepler {
 }
 
 impl Default for Kepler {
-    /// e = 0.5 (Li, Wu, Leok 2018, Figs. 13–15).
+    /// e = 0.5 (Li, Wu, Leok 2018, Figs. 13–15), starting at the pericentre (phase 0).
     fn default() -> Self {
-        Self { e: 0.5 }
+        Self { e: 0.5, phase: 0.0 }
     }
 }
 
@@ -112,14 +115,42 @@ impl Lagrangian<U2> for Kepler {
     }
 }
 
-/// θ = (e): the eccentricity does not enter L; it moves the model's initial state.
+/// The state at mean anomaly M (`phase`) on the orbit of eccentricity e, semi-major axis 1
+/// and pericentre on the positive q₁ axis, moving counter-clockwise: with E the eccentric
+/// anomaly (E − e sin E = M),
+///
+/// q = (cos E − e, β sin E),  q̇ = (−sin E, β cos E)/(1 − e cos E) = s (−sin E/β, cos E),
+///
+/// β = √(1 − e²), s = k (1 − e)/(1 − e cos E) with k = √((1 + e)/(1 − e)) the speed at the
+/// pericentre (β = k (1 − e)): written so that M = 0 gives [`Defaults::initial_state`]'s
+/// pericentre bit for bit, q̇ = (0, k).
+///
+/// M is reduced modulo 2π; E is solved in `f64` ([`solve_kepler_equation`]) and corrected by one Newton step in the
+/// scalar D, E = E₀ + (M − E₀ + e sin E₀)/(1 − e cos E₀): with E₀ the root, the step changes
+/// no value and gives dual numbers the derivatives of the implicit function, ∂E/∂M =
+/// 1/(1 − e cos E) and ∂E/∂e = sin E/(1 − e cos E).
+fn orbit_start<D: Scalar>(e: D, phase: D) -> (SVector<D, 2>, SVector<D, 2>) {
+    let one = D::one();
+    let root = D::from(solve_kepler_equation(e.re(), 1.0 - e.re(), phase.re()));
+    let slope = one - e * root.cos();
+    let anomaly = root + (phase - root + e * root.sin()) / slope;
+    let (sin, cos) = (anomaly.sin(), anomaly.cos());
+    let beta = (one - e * e).sqrt();
+    let speed = ((one + e) / (one - e)).sqrt() * ((one - e) / (one - e * cos));
+    (
+        SVector::from([cos - e, beta * sin]),
+        SVector::from([D::zero() - sin * speed / beta, cos * speed]),
+    )
+}
+
+/// θ = (e, phase): neither enters L; they move the model's initial state ([`orbit_start`]).
 impl Parametric<U2> for Kepler {
     fn parameter_names(&self) -> Vec<String> {
         Self::PARAMETERS.map(String::from).to_vec()
     }
 
     fn parameter_values(&self) -> Vec<f64> {
-        vec![self.e]
+        vec![self.e, self.phase]
     }
 
     #[inline]
@@ -133,14 +164,9 @@ impl Parametric<U2> for Kepler {
         self.lagrangian(t, q, v)
     }
 
-    /// The pericentre of [`Defaults::initial_state`] as a function of e.
+    /// [`Defaults::initial_state`] as a function of e and the phase.
     fn initial_state_with<D: Scalar>(&self, theta: &[D]) -> Option<(SVector<D, 2>, SVector<D, 2>)> {
-        let e = theta[0];
-        let one = D::one();
-        Some((
-            SVector::from([one - e, D::zero()]),
-            SVector::from([D::zero(), ((one + e) / (one - e)).sqrt()]),
-        ))
+        Some(orbit_start(theta[0], theta[1]))
     }
 }
 
@@ -234,10 +260,10 @@ impl Defaults<U2> for Kepler {
     }
 
     fn parameters(&self) -> Vec<(&'static str, f64)> {
-        vec![("e", self.e)]
+        vec![("e", self.e), ("phase", self.phase)]
     }
 
-    /// `e` must be finite and in [0, 1).
+    /// `e` must be finite and in [0, 1); `phase` finite.
     fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
         match name {
             "e" => {
@@ -250,20 +276,21 @@ impl Defaults<U2> for Kepler {
                 }
                 self.e = value;
             }
+            "phase" => {
+                params::finite(name, value)?;
+                self.phase = value;
+            }
             _ => return Err(params::unknown(Self::NAME, name, &Self::PARAMETERS)),
         }
         Ok(())
     }
 
-    /// t₀ = 0, q₀ = (1 − e, 0), v₀ = (0, √((1 + e)/(1 − e))): the pericentre of an orbit
-    /// with semi-major axis 1 (period 2π, E = −1/2, M = √(1 − e²)).
+    /// t₀ = 0 and the state at mean anomaly `phase` ([`orbit_start`]) of an orbit with
+    /// semi-major axis 1 (period 2π, E = −1/2, M = √(1 − e²)); at phase 0 the pericentre
+    /// q₀ = (1 − e, 0), v₀ = (0, √((1 + e)/(1 − e))).
     fn initial_state(&self) -> (f64, SVector<f64, 2>, SVector<f64, 2>) {
-        let e = self.e;
-        (
-            0.0,
-            SVector::from([1.0 - e, 0.0]),
-            SVector::from([0.0, ((1.0 + e) / (1.0 - e)).sqrt()]),
-        )
+        let (q, v) = orbit_start(self.e, self.phase);
+        (0.0, q, v)
     }
 
     /// h = 0.2 (Figs. 13–15).
@@ -383,37 +410,11 @@ impl KeplerOrbit {
 
     /// The eccentric anomaly E solving E − e sin E = `mean_anomaly`.
     pub fn eccentric_anomaly(&self, mean_anomaly: f64) -> f64 {
-        let e = self.eccentricity;
-        if e == 0.0 {
-            return mean_anomaly;
-        }
-        let one_minus_e = self.one_minus_eccentricity();
-        // E − M = e sin E, so E lies in [M − e, M + e].
-        let (mut low, mut high) = (mean_anomaly - e, mean_anomaly + e);
-        let mut anomaly = (mean_anomaly + e * mean_anomaly.sin()).clamp(low, high);
-        for _ in 0..MAX_NEWTON_ITERATIONS {
-            let residual = anomaly - e * anomaly.sin() - mean_anomaly;
-            if residual == 0.0 {
-                return anomaly;
-            }
-            if residual > 0.0 {
-                high = anomaly;
-            } else {
-                low = anomaly;
-            }
-            // 1 − e cos E = (1 − e) + 2e sin²(E/2) > 0.
-            let slope = one_minus_e + 2.0 * e * (0.5 * anomaly).sin().powi(2);
-            let mut next = anomaly - residual / slope;
-            if !(next > low && next < high) {
-                next = 0.5 * (low + high);
-            }
-            let converged = (next - anomaly).abs() <= 2.0 * f64::EPSILON * next.abs().max(1.0);
-            anomaly = next;
-            if converged || low >= high {
-                break;
-            }
-        }
-        anomaly
+        solve_kepler_equation(
+            self.eccentricity,
+            self.one_minus_eccentricity(),
+            mean_anomaly,
+        )
     }
 
     /// The state (q, v) at `elapsed` time after the epoch.
@@ -433,4 +434,39 @@ impl KeplerOrbit {
         let v = (self.periapsis * (-sin) + self.normal * (beta * cos)) * (a.sqrt() / radius);
         (q, v)
     }
+}
+
+/// The eccentric anomaly E solving Kepler's equation E − e sin E = `mean_anomaly` for
+/// 0 ≤ e < 1 (`one_minus_e` = 1 − e, passed without cancellation for e → 1): Newton's
+/// method safeguarded by bisection on [M − e, M + e], to round-off.
+fn solve_kepler_equation(e: f64, one_minus_e: f64, mean_anomaly: f64) -> f64 {
+    if e == 0.0 {
+        return mean_anomaly;
+    }
+    // E − M = e sin E, so E lies in [M − e, M + e].
+    let (mut low, mut high) = (mean_anomaly - e, mean_anomaly + e);
+    let mut anomaly = (mean_anomaly + e * mean_anomaly.sin()).clamp(low, high);
+    for _ in 0..MAX_NEWTON_ITERATIONS {
+        let residual = anomaly - e * anomaly.sin() - mean_anomaly;
+        if residual == 0.0 {
+            return anomaly;
+        }
+        if residual > 0.0 {
+            high = anomaly;
+        } else {
+            low = anomaly;
+        }
+        // 1 − e cos E = (1 − e) + 2e sin²(E/2) > 0.
+        let slope = one_minus_e + 2.0 * e * (0.5 * anomaly).sin().powi(2);
+        let mut next = anomaly - residual / slope;
+        if !(next > low && next < high) {
+            next = 0.5 * (low + high);
+        }
+        let converged = (next - anomaly).abs() <= 2.0 * f64::EPSILON * next.abs().max(1.0);
+        anomaly = next;
+        if converged || low >= high {
+            break;
+        }
+    }
+    anomaly
 }

@@ -261,6 +261,81 @@ fn kepler_solution_starts_at_the_initial_state() {
     }
 }
 
+/// The start at mean anomaly `phase` is the pericentre's state a time `phase` later (n = 1),
+/// by the closed form from the pericentre; its derivative with respect to the phase is the
+/// vector field there, (q̇, −q/|q|³), and with respect to e the central difference.
+#[test]
+fn kepler_phase_starts_on_the_orbit_at_that_mean_anomaly() {
+    use num_dual::Dual64;
+    use svi::Parametric;
+    for e in ECCENTRICITIES {
+        for phase in [0.0, 0.3, -1.2, 2.9, 7.0] {
+            let mut model = Kepler::new(e).unwrap();
+            let (_, q_peri, v_peri) = model.initial_state();
+            model.set_parameter("phase", phase).unwrap();
+            let (t0, q0, v0) = model.initial_state();
+            assert_eq!(t0, 0.0);
+            let (q, v) = model.exact_solution(0.0, &q_peri, &v_peri, phase).unwrap();
+            // The reference's elements, from the pericentre's rounded state, lose accuracy as
+            // 1/(1 − e)² (at e = 0.99 and phase 2.9 it is 5e-13 off; see below).
+            let tolerance = 1e-14_f64.max(5e-16 / (1.0 - e).powi(2));
+            assert!(
+                distance(&q, &q0, 0.0) < tolerance,
+                "e = {e}, phase {phase}: {q:?} vs {q0:?}"
+            );
+            assert!(
+                distance(&v, &v0, 0.0) < tolerance,
+                "e = {e}, phase {phase}: {v:?} vs {v0:?}"
+            );
+            // ∂/∂phase by a dual number.
+            let theta = [Dual64::from(e), Dual64::from(phase).derivative()];
+            let (q_d, v_d) = model.initial_state_with(&theta).unwrap();
+            let dq = q_d.map(|x| x.eps);
+            let dv = v_d.map(|x| x.eps);
+            assert!(
+                distance(&dq, &v0, 0.0) < 1e-14,
+                "e = {e}, phase {phase}: {dq:?}"
+            );
+            let acceleration = kepler_acceleration(&q0);
+            assert!(
+                distance(&dv, &acceleration, 0.0) < 1e-13,
+                "e = {e}, phase {phase}: {dv:?} vs {acceleration:?}"
+            );
+            // ∂/∂e against a central difference (inside [0, 1)).
+            if e > 0.0 && e < 0.95 {
+                let delta = 1e-6;
+                let state = |e: f64| {
+                    let mut model = Kepler::new(e).unwrap();
+                    model.set_parameter("phase", phase).unwrap();
+                    let (_, q, v) = model.initial_state();
+                    (q, v)
+                };
+                let ((q_plus, v_plus), (q_minus, v_minus)) = (state(e + delta), state(e - delta));
+                let theta = [Dual64::from(e).derivative(), Dual64::from(phase)];
+                let (q_d, v_d) = model.initial_state_with(&theta).unwrap();
+                let fd_q = (q_plus - q_minus) / (2.0 * delta);
+                let fd_v = (v_plus - v_minus) / (2.0 * delta);
+                assert!(distance(&q_d.map(|x| x.eps), &fd_q, 1.0) < 1e-8);
+                assert!(distance(&v_d.map(|x| x.eps), &fd_v, 1.0) < 1e-8);
+            }
+        }
+    }
+    // e = 0.99 near the apocentre against 40-digit values rounded to double (mpmath: E − e sin E = 2.9 by
+    // findroot, then the formulas of `KeplerOrbit`).
+    let mut model = Kepler::new(0.99).unwrap();
+    model.set_parameter("phase", 2.9).unwrap();
+    let (_, q, v) = model.initial_state();
+    let q_exact = SVector::from([-1.9826216297006298, 0.017104846534952194]);
+    let v_exact = SVector::from([-0.0611556578040622, -0.07062431860804383]);
+    assert!(distance(&q, &q_exact, 0.0) < 4e-16, "{q:?}");
+    assert!(distance(&v, &v_exact, 0.0) < 4e-15, "{v:?}");
+    // A phase that is not finite is refused, naming it.
+    let error = Kepler::default()
+        .set_parameter("phase", f64::NAN)
+        .unwrap_err();
+    assert!(error.to_string().contains("phase"), "{error}");
+}
+
 #[test]
 fn kepler_default_orbit_is_two_pi_periodic() {
     for e in ECCENTRICITIES {

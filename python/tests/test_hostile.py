@@ -142,8 +142,8 @@ def test_scenes_are_named_for_what_they_are(tmp_path):
     # A path with '=' in its name is the file it names, not TOML text.
     path = tmp_path / "e=0.3.toml"
     path.write_text('model = "kepler"\n[parameters]\ne = 0.3\n[run]\nt_end = 1.0\n')
-    assert svi.run(str(path), trajectory=False).summary["parameters"] == {"e": 0.3}
-    assert svi.run(path, trajectory=False).summary["parameters"] == {"e": 0.3}
+    assert svi.run(str(path), trajectory=False).summary["parameters"] == {"e": 0.3, "phase": 0.0}
+    assert svi.run(path, trajectory=False).summary["parameters"] == {"e": 0.3, "phase": 0.0}
     # A chain's trajectory has no coordinates, and asking for them says where the state is.
     chain = svi.run("fput", params={"n": 8}, t_end=1.0)
     with pytest.raises(AttributeError, match="summary\\['q'\\]"):

@@ -63,7 +63,7 @@ def test_overrides_method_params_initial_and_output_times():
         "--diagnostics", "energy", "--json",
     )
     assert result.q[-1].tolist() == reference["q"]
-    assert (result.points, result.quadrature, result.parameters) == (7, 6, {"e": 0.6})
+    assert (result.points, result.quadrature, result.parameters) == (7, 6, {"e": 0.6, "phase": 0.0})
     assert result.momentum_error_max is None
     # The oscillator from q0 = 0, v0 = 1: q(t) = sin t.
     result = svi.run("oscillator", initial={"q": [0.0], "v": [1.0]}, output_times=[1.0, 2.5], t_end=3.0)

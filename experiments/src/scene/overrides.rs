@@ -86,6 +86,39 @@ pub fn max_steps_help() -> String {
     )
 }
 
+/// The help of `--sensitivity`, with the models whose parameters can be differentiated and
+/// their parameters ([`svi_models::PARAMETRIC_MODEL_NAMES`]).
+pub fn sensitivity_help() -> String {
+    /// The parameter names of a visited model.
+    struct Names;
+    impl svi_models::ParametricModelVisitor for Names {
+        type Output = Vec<String>;
+        fn visit<M: svi_models::ZooModel<N> + svi::Parametric<N>, N: svi::Dimension>(
+            self,
+            model: M,
+        ) -> Vec<String>
+        where
+            nalgebra::DefaultAllocator:
+                nalgebra::allocator::Allocator<N> + nalgebra::allocator::Allocator<N, N>,
+        {
+            model.parameter_names()
+        }
+    }
+    let models = svi_models::PARAMETRIC_MODEL_NAMES
+        .iter()
+        .map(|&name| {
+            let names = svi_models::visit_parametric_model(name, Names).unwrap_or_default();
+            format!("{name}: {}", names.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    format!(
+        "Derivatives of the state with respect to the initial state and parameters, \
+         comma-separated: q0, v0 (p0 for a start given in momenta) and parameter names; the \
+         exact derivatives of the method's fixed steps (models and their parameters: {models})"
+    )
+}
+
 /// The flags of every command that runs a scene (`svi run`, `svi ensemble`): the method, the
 /// step and horizon, the diagnostics and the run's options. A field here is a flag of both
 /// commands and a keyword of the Python package's `svi.run`, `svi.solve` and `svi.ensemble`.
@@ -150,9 +183,8 @@ pub struct RunFlags {
     #[arg(long, value_enum, value_name = "LIST", value_delimiter = ',')]
     pub indicators: Option<Vec<crate::scene::schema::Indicator>>,
     /// Derivatives of the state with respect to the initial state and parameters,
-    /// comma-separated: q0, v0 (p0 for a start given in momenta) and parameter names; the
-    /// exact derivatives of the method's fixed steps (models: kepler, damped-pendulum).
-    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    /// comma-separated: q0, v0 (p0 for a start given in momenta) and parameter names.
+    #[arg(long, value_name = "LIST", value_delimiter = ',', help = sensitivity_help())]
     pub sensitivity: Option<Vec<String>>,
     /// Report the sensitivities every K steps besides the start and the end.
     #[arg(long, value_name = "K")]
