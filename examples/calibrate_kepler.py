@@ -1,6 +1,7 @@
 # Fit a Kepler orbit's eccentricity e and phase (the mean anomaly of the start) to 50 noisy
 # positions with scipy.optimize.least_squares, driven by svi's exact derivatives of the run
 # (--sensitivity e,phase): the residuals' Jacobian is ∂q(t_j)/∂(e, phase) of the discrete map.
+import functools
 import matplotlib.pyplot as plt, numpy as np, svi
 from scipy.optimize import least_squares
 
@@ -25,13 +26,12 @@ rng = np.random.default_rng(20261206)
 exact, _ = positions_and_jacobian([truth["e"], truth["phase"]])
 data = exact + sigma * rng.standard_normal(exact.shape)
 
-cache = {}
+@functools.lru_cache(maxsize=1)   # least_squares asks for the residuals, then the Jacobian
+def run_at(x):
+    return positions_and_jacobian(x)
+
 def run(x):
-    key = tuple(x)
-    if key not in cache:
-        cache.clear()
-        cache[key] = positions_and_jacobian(x)
-    return cache[key]
+    return run_at(tuple(x))
 
 # A start far from the truth: a rounder orbit, a third of a radian behind.
 fit = least_squares(lambda x: run(x)[0] - data, x0=[0.3, 0.5], jac=lambda x: run(x)[1],

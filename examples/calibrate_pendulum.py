@@ -1,6 +1,7 @@
 # Fit the damped pendulum's length l, friction c and initial angle θ0 to 200 noisy samples of
 # its angle with scipy.optimize.least_squares, driven by svi's exact derivatives of the run
 # (--sensitivity): the residuals' Jacobian is ∂θ(t_j)/∂(l, c, θ0) of the discrete map itself.
+import functools
 import matplotlib.pyplot as plt, numpy as np, svi
 from scipy.optimize import least_squares
 
@@ -26,13 +27,12 @@ exact, _ = angle_and_jacobian([truth["l"], truth["c"], truth["theta0"]])
 data = exact + sigma * rng.standard_normal(samples)
 t = h * every * np.arange(1, samples + 1)
 
-cache = {}
+@functools.lru_cache(maxsize=1)   # least_squares asks for the residuals, then the Jacobian
+def run_at(x):
+    return angle_and_jacobian(x)
+
 def run(x):
-    key = tuple(x)
-    if key not in cache:
-        cache.clear()
-        cache[key] = angle_and_jacobian(x)
-    return cache[key]
+    return run_at(tuple(x))
 
 fit = least_squares(lambda x: run(x)[0] - data, x0=[1.0, 0.1, 1.0], jac=lambda x: run(x)[1],
                     x_scale="jac", xtol=1e-12, ftol=1e-12)
