@@ -326,3 +326,69 @@ fn bad_derivative_requests_are_typed_errors_naming_them() {
         "{no_start}"
     );
 }
+
+/// A parameter declared not to enter L ([`Parametric::enters_lagrangian`]) that does is
+/// refused at the start, naming it; the same model with the honest default differentiates.
+#[test]
+fn a_parameter_that_enters_l_against_its_declaration_is_refused() {
+    /// L = ½ q̇² − ½ k q², with k in L; `honest` says so.
+    struct Spring {
+        honest: bool,
+    }
+    impl svi::Lagrangian<nalgebra::U1> for Spring {
+        fn lagrangian<D: Scalar>(&self, t: D, q: &SVector<D, 1>, v: &SVector<D, 1>) -> D {
+            self.lagrangian_with(&[D::from(2.0)], t, q, v)
+        }
+    }
+    impl Parametric<nalgebra::U1> for Spring {
+        fn parameter_names(&self) -> Vec<String> {
+            vec!["k".into()]
+        }
+        fn parameter_values(&self) -> Vec<f64> {
+            vec![2.0]
+        }
+        fn lagrangian_with<D: Scalar>(
+            &self,
+            theta: &[D],
+            _t: D,
+            q: &SVector<D, 1>,
+            v: &SVector<D, 1>,
+        ) -> D {
+            (v[0] * v[0] - theta[0] * q[0] * q[0]) * 0.5
+        }
+        fn enters_lagrangian(&self, _index: usize) -> bool {
+            self.honest
+        }
+    }
+    let start = Initial::Velocity {
+        q: SVector::from([1.0]),
+        v: SVector::from([0.0]),
+    };
+    let run = SensitivityRun::new(0.0, Start::Given(start), 0.1, 1.0).with_parameters(&["k"]);
+    let error = Integrator::new(
+        Spring { honest: false },
+        VariationalIntegrator::new(Midpoint),
+    )
+    .sensitivities(&run)
+    .unwrap_err();
+    assert!(
+        matches!(&error, Error::InvalidParameter { name, reason }
+            if name == "parameters" && reason.contains("'k'")),
+        "{error}"
+    );
+    // ∂q(1)/∂k of q = cos(√k t) is −t sin(√k t)/(2√k), to the midpoint rule's O(h²).
+    let sensitivities = Integrator::new(
+        Spring { honest: true },
+        VariationalIntegrator::new(Midpoint),
+    )
+    .sensitivities(&run)
+    .unwrap();
+    let last = sensitivities.outputs.last().unwrap();
+    let root = 2.0_f64.sqrt();
+    let exact = -root.sin() / (2.0 * root);
+    assert!(
+        (last.jacobian[(0, 2)] - exact).abs() < 1e-2,
+        "{} vs {exact}",
+        last.jacobian
+    );
+}

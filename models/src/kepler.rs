@@ -168,6 +168,11 @@ impl Parametric<U2> for Kepler {
     fn initial_state_with<D: Scalar>(&self, theta: &[D]) -> Option<(SVector<D, 2>, SVector<D, 2>)> {
         Some(orbit_start(theta[0], theta[1]))
     }
+
+    /// Neither e nor the phase enters L: their derivatives run on Kepler itself.
+    fn enters_lagrangian(&self, _index: usize) -> bool {
+        false
+    }
 }
 
 impl Symmetries<U2> for Kepler {

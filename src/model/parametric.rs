@@ -77,6 +77,17 @@ where
         let _ = theta;
         None
     }
+
+    /// Whether parameter number `index` enters L or the force (the default, `true`, is
+    /// always correct). A parameter that only chooses the initial state (Kepler's e and
+    /// phase) answers `false`: derivatives with respect to such parameters alone then run on
+    /// the model itself, in its own dimension and with its own [`Lagrangian::STRUCTURE`],
+    /// instead of on [`WithParameters`]. The declaration is checked at the initial state of
+    /// every differentiated run (∂L/∂θ and ∂f/∂θ must vanish there).
+    fn enters_lagrangian(&self, index: usize) -> bool {
+        let _ = index;
+        true
+    }
 }
 
 /// The index of each of `names` among the parameters of `model`.

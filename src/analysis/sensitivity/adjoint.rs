@@ -3,11 +3,12 @@
 //! [module](super) documentation).
 
 use super::SensitivityRun;
-use super::lifted::{Lifted, Walker};
+use super::lifted::{Lifted, Walker, chosen_parameters, lift, view};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::Error;
 use crate::method::space::{PhasePoint, TangentMap};
 use crate::method::{Euclidean, Method};
+use crate::model::Lagrangian;
 use crate::model::parametric::Parametric;
 use crate::scalar::Scalar;
 use crate::stepping::run::{Integrator, Statistics};
@@ -92,91 +93,115 @@ where
         loss: &F,
         checkpoints: Checkpoints,
     ) -> Result<Gradient, Error> {
-        let lifted = Lifted::new(self.model(), self.method(), run)?;
-        let (m, steps) = (lifted.m, lifted.grid.3);
-        let segment = checkpoints.segment(steps)?;
-        let mut walker = Walker::new(&lifted)?;
-        // The forward run, keeping the state at the start of every segment; the output
-        // numbers j count the outputs from the start.
-        let mut stored = Vec::with_capacity(steps.div_ceil(segment));
-        let mut output_number = vec![0usize; steps + 1];
-        let mut outputs = 0;
-        for (k, number) in output_number.iter_mut().enumerate() {
-            if lifted.is_output(k) {
-                *number = outputs;
-                outputs += 1;
-            }
+        let (chosen, lifts) = chosen_parameters(self.model(), run)?;
+        if lifts {
+            let hat = lift(self, &chosen);
+            adjoint::<_, _, _, Dyn>(
+                &Lifted::<_, _, Dyn>::new(&hat, self.model(), &chosen, run)?,
+                loss,
+                checkpoints,
+            )
+        } else {
+            adjoint::<_, _, _, N>(
+                &Lifted::<_, _, N>::new(self, self.model(), &chosen, run)?,
+                loss,
+                checkpoints,
+            )
         }
-        let start_cursor = walker.cursor.clone();
-        for k in 0..steps {
-            if k.is_multiple_of(segment) {
-                stored.push((k, walker.cursor.clone()));
-            }
-            walker.step(k)?;
-        }
-        // Backwards, segment by segment: the segment's tangent maps from its checkpoint,
-        // then λ_k = Φ_kᵀ λ_{k+1} + G_kᵀ∇ℓ_k through it.
-        let mut lambda = DVector::zeros(2 * m);
-        let mut scratch = DVector::zeros(2 * m);
-        let mut value = 0.0;
-        let mut maps: Vec<TangentMap<Dyn>> = Vec::with_capacity(segment);
-        let mut terms: Vec<Option<DVector<f64>>> = Vec::with_capacity(segment);
-        for (a, cursor) in stored.iter().rev() {
-            let b = (a + segment).min(steps);
-            walker.restart_at(cursor.clone());
-            maps.clear();
-            terms.clear();
-            for k in *a..b {
-                maps.push(walker.step_tangent(k)?);
-                terms.push(if lifted.is_output(k + 1) {
-                    let point = walker.point(k + 1)?;
-                    let (ell, term) =
-                        loss_term(&lifted, loss, output_number[k + 1], &point, k + 1)?;
-                    value += ell;
-                    Some(term)
-                } else {
-                    None
-                });
-            }
-            for (tangent, term) in maps.iter().zip(&terms).rev() {
-                if let Some(term) = term {
-                    lambda += term;
-                }
-                transpose_apply(tangent, &lambda, &mut scratch);
-                std::mem::swap(&mut lambda, &mut scratch);
-            }
-        }
-        walker.restart_at(start_cursor);
-        let point = walker.point(0)?;
-        let (ell, term) = loss_term(&lifted, loss, 0, &point, 0)?;
-        value += ell;
-        lambda += term;
-        let gradient = lifted.start.tr_mul(&lambda);
-        let n = lifted.n;
-        let state_bytes = 2 * (2 * m) * std::mem::size_of::<f64>();
-        let map_bytes = 4 * m * m * std::mem::size_of::<f64>();
-        Ok(Gradient {
-            value,
-            initial: gradient.rows(0, 2 * n).into_owned(),
-            parameters: gradient.rows(2 * n, gradient.len() - 2 * n).into_owned(),
-            names: lifted.names.clone(),
-            peak_stored: stored.len() + segment,
-            peak_bytes: stored.len() * state_bytes + segment * map_bytes,
-            statistics: walker.statistics,
-        })
     }
 }
 
+/// The gradient of `loss` over the run `lifted` by the discrete adjoint.
+fn adjoint<F: Loss, R: Lagrangian<D>, M: Method<D> + Clone, D: Dimension>(
+    lifted: &Lifted<'_, R, M, D>,
+    loss: &F,
+    checkpoints: Checkpoints,
+) -> Result<Gradient, Error>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    let (m, steps) = (lifted.m, lifted.grid.3);
+    let segment = checkpoints.segment(steps)?;
+    let mut walker = Walker::new(lifted)?;
+    // The forward run, keeping the state at the start of every segment; the output
+    // numbers j count the outputs from the start.
+    let mut stored = Vec::with_capacity(steps.div_ceil(segment));
+    let mut output_number = vec![0usize; steps + 1];
+    let mut outputs = 0;
+    for (k, number) in output_number.iter_mut().enumerate() {
+        if lifted.is_output(k) {
+            *number = outputs;
+            outputs += 1;
+        }
+    }
+    let start_cursor = walker.cursor.clone();
+    for k in 0..steps {
+        if k.is_multiple_of(segment) {
+            stored.push((k, walker.cursor.clone()));
+        }
+        walker.step(k)?;
+    }
+    // Backwards, segment by segment: the segment's tangent maps from its checkpoint,
+    // then λ_k = Φ_kᵀ λ_{k+1} + G_kᵀ∇ℓ_k through it.
+    let mut lambda = DVector::zeros(2 * m);
+    let mut scratch = DVector::zeros(2 * m);
+    let mut value = 0.0;
+    let mut maps: Vec<TangentMap<D>> = Vec::with_capacity(segment);
+    let mut terms: Vec<Option<DVector<f64>>> = Vec::with_capacity(segment);
+    for (a, cursor) in stored.iter().rev() {
+        let b = (a + segment).min(steps);
+        walker.restart_at(cursor.clone());
+        maps.clear();
+        terms.clear();
+        for k in *a..b {
+            maps.push(walker.step_tangent(k)?);
+            terms.push(if lifted.is_output(k + 1) {
+                let point = walker.point(k + 1)?;
+                let (ell, term) = loss_term(lifted, loss, output_number[k + 1], &point, k + 1)?;
+                value += ell;
+                Some(term)
+            } else {
+                None
+            });
+        }
+        for (tangent, term) in maps.iter().zip(&terms).rev() {
+            if let Some(term) = term {
+                lambda += term;
+            }
+            transpose_apply(tangent, &lambda, &mut scratch);
+            std::mem::swap(&mut lambda, &mut scratch);
+        }
+    }
+    walker.restart_at(start_cursor);
+    let point = walker.point(0)?;
+    let (ell, term) = loss_term(lifted, loss, 0, &point, 0)?;
+    value += ell;
+    lambda += term;
+    let gradient = lifted.start.tr_mul(&lambda);
+    let n = lifted.n;
+    let state_bytes = 2 * (2 * m) * std::mem::size_of::<f64>();
+    let map_bytes = 4 * m * m * std::mem::size_of::<f64>();
+    Ok(Gradient {
+        value,
+        initial: gradient.rows(0, 2 * n).into_owned(),
+        parameters: gradient.rows(2 * n, gradient.len() - 2 * n).into_owned(),
+        names: lifted.names.clone(),
+        peak_stored: stored.len() + segment,
+        peak_bytes: stored.len() * state_bytes + segment * map_bytes,
+        statistics: walker.statistics,
+    })
+}
+
 /// ℓ_j at `point` and its gradient G_kᵀ∇ℓ_j in the lifted state's coordinates.
-fn loss_term<F: Loss, L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension>(
-    lifted: &Lifted<'_, L, M, N>,
+fn loss_term<F: Loss, R: Lagrangian<D>, M: Method<D> + Clone, D: Dimension>(
+    lifted: &Lifted<'_, R, M, D>,
     loss: &F,
     output: usize,
-    point: &PhasePoint<Dyn>,
+    point: &PhasePoint<D>,
     step: usize,
 ) -> Result<(f64, DVector<f64>), Error>
 where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
     let n = lifted.n;
     let (q, v) = (&point.q.as_slice()[..n], &point.v.as_slice()[..n]);
@@ -210,13 +235,19 @@ where
 }
 
 /// `out` = Φᵀ `lambda` for a step's tangent map Φ in blocks [[qq, qy], [yq, yy]].
-fn transpose_apply(tangent: &TangentMap<Dyn>, lambda: &DVector<f64>, out: &mut DVector<f64>) {
+fn transpose_apply<D: Dimension>(
+    tangent: &TangentMap<D>,
+    lambda: &DVector<f64>,
+    out: &mut DVector<f64>,
+) where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     let m = tangent.qq.nrows();
     let (top, bottom) = (lambda.rows(0, m), lambda.rows(m, m));
     let mut upper = out.rows_mut(0, m);
-    upper.gemv_tr(1.0, &tangent.qq, &top, 0.0);
-    upper.gemv_tr(1.0, &tangent.yq, &bottom, 1.0);
+    upper.gemv_tr(1.0, &view(&tangent.qq), &top, 0.0);
+    upper.gemv_tr(1.0, &view(&tangent.yq), &bottom, 1.0);
     let mut lower = out.rows_mut(m, m);
-    lower.gemv_tr(1.0, &tangent.qy, &top, 0.0);
-    lower.gemv_tr(1.0, &tangent.yy, &bottom, 1.0);
+    lower.gemv_tr(1.0, &view(&tangent.qy), &top, 0.0);
+    lower.gemv_tr(1.0, &view(&tangent.yy), &bottom, 1.0);
 }

@@ -2,11 +2,12 @@
 //! (see the [module](super) documentation).
 
 use super::SensitivityRun;
-use super::lifted::{Lifted, Walker};
+use super::lifted::{Lifted, Walker, chosen_parameters, lift, view};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::Error;
 use crate::method::space::TangentMap;
 use crate::method::{Euclidean, Method};
+use crate::model::Lagrangian;
 use crate::model::parametric::Parametric;
 use crate::stepping::run::{Integrator, Statistics};
 use nalgebra::allocator::Allocator;
@@ -56,38 +57,53 @@ where
     /// [`Parametric::initial_state_with`]); a failed step, as its typed error with its index
     /// and time; a singular mass matrix where velocities are recovered from momenta.
     pub fn sensitivities(&self, run: &SensitivityRun<N>) -> Result<Sensitivities, Error> {
-        let lifted = Lifted::new(self.model(), self.method(), run)?;
-        let (m, steps) = (lifted.m, lifted.grid.3);
-        let mut walker = Walker::new(&lifted)?;
-        let mut total = DMatrix::identity(2 * m, 2 * m);
-        let mut next = DMatrix::zeros(2 * m, 2 * m);
-        let mut outputs = Vec::new();
-        outputs.push(output(&lifted, &mut walker, 0, &total)?);
-        for k in 0..steps {
-            let tangent = walker.step_tangent(k)?;
-            compose(&tangent, &total, &mut next);
-            std::mem::swap(&mut total, &mut next);
-            if lifted.is_output(k + 1) {
-                outputs.push(output(&lifted, &mut walker, k + 1, &total)?);
-            }
+        let (chosen, lifts) = chosen_parameters(self.model(), run)?;
+        if lifts {
+            let hat = lift(self, &chosen);
+            forward::<_, _, Dyn>(&Lifted::<_, _, Dyn>::new(&hat, self.model(), &chosen, run)?)
+        } else {
+            forward::<_, _, N>(&Lifted::<_, _, N>::new(self, self.model(), &chosen, run)?)
         }
-        Ok(Sensitivities {
-            parameters: lifted.names.clone(),
-            outputs,
-            statistics: walker.statistics,
-        })
     }
 }
 
+/// The forward sensitivities of the run `lifted`.
+fn forward<R: Lagrangian<D>, M: Method<D> + Clone, D: Dimension>(
+    lifted: &Lifted<'_, R, M, D>,
+) -> Result<Sensitivities, Error>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    let (m, steps) = (lifted.m, lifted.grid.3);
+    let mut walker = Walker::new(lifted)?;
+    let mut total = DMatrix::identity(2 * m, 2 * m);
+    let mut next = DMatrix::zeros(2 * m, 2 * m);
+    let mut outputs = Vec::new();
+    outputs.push(output(lifted, &mut walker, 0, &total)?);
+    for k in 0..steps {
+        let tangent = walker.step_tangent(k)?;
+        compose(&tangent, &total, &mut next);
+        std::mem::swap(&mut total, &mut next);
+        if lifted.is_output(k + 1) {
+            outputs.push(output(lifted, &mut walker, k + 1, &total)?);
+        }
+    }
+    Ok(Sensitivities {
+        parameters: lifted.names.clone(),
+        outputs,
+        statistics: walker.statistics,
+    })
+}
+
 /// The output after `step` steps: the point, and G Φ C with Φ = `total`.
-fn output<L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension>(
-    lifted: &Lifted<'_, L, M, N>,
-    walker: &mut Walker<'_, '_, L, M, N>,
+fn output<R: Lagrangian<D>, M: Method<D> + Clone, D: Dimension>(
+    lifted: &Lifted<'_, R, M, D>,
+    walker: &mut Walker<'_, '_, R, M, D>,
     step: usize,
     total: &DMatrix<f64>,
 ) -> Result<SensitivityPoint, Error>
 where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
     let point = walker.point(step)?;
     let end = lifted.end(&point)?;
@@ -95,20 +111,23 @@ where
     Ok(SensitivityPoint {
         step,
         t: point.t,
-        q: point.q.rows(0, n).into_owned(),
-        v: point.v.rows(0, n).into_owned(),
+        q: DVector::from_column_slice(&point.q.as_slice()[..n]),
+        v: DVector::from_column_slice(&point.v.as_slice()[..n]),
         jacobian: end * total * &lifted.start,
     })
 }
 
 /// `out` = Φ · `total` for a step's tangent map Φ in blocks [[qq, qy], [yq, yy]].
-pub(super) fn compose(tangent: &TangentMap<Dyn>, total: &DMatrix<f64>, out: &mut DMatrix<f64>) {
+fn compose<D: Dimension>(tangent: &TangentMap<D>, total: &DMatrix<f64>, out: &mut DMatrix<f64>)
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
     let m = tangent.qq.nrows();
     let (top, bottom) = (total.rows(0, m), total.rows(m, m));
     let mut upper = out.rows_mut(0, m);
-    upper.gemm(1.0, &tangent.qq, &top, 0.0);
-    upper.gemm(1.0, &tangent.qy, &bottom, 1.0);
+    upper.gemm(1.0, &view(&tangent.qq), &top, 0.0);
+    upper.gemm(1.0, &view(&tangent.qy), &bottom, 1.0);
     let mut lower = out.rows_mut(m, m);
-    lower.gemm(1.0, &tangent.yq, &top, 0.0);
-    lower.gemm(1.0, &tangent.yy, &bottom, 1.0);
+    lower.gemm(1.0, &view(&tangent.yq), &top, 0.0);
+    lower.gemm(1.0, &view(&tangent.yy), &bottom, 1.0);
 }

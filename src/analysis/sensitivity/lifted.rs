@@ -1,7 +1,7 @@
-//! The run behind the derivatives: the lifted Lagrangian L̂ of the chosen parameters
-//! ([`WithParameters`]), its start X_0 with C = ∂X_0/∂(q₀, q̇₀ or p₀, θ), the end maps
-//! G = ∂(q, q̇)/∂X, and a walker that takes the grid's steps one at a time, plain or with
-//! their tangent maps.
+//! The run behind the derivatives: the model itself, or, when a parameter differentiated
+//! enters L, the lifted Lagrangian L̂ of the chosen parameters ([`WithParameters`]); its
+//! start X_0 with C = ∂X_0/∂(q₀, q̇₀ or p₀, θ), the end maps G = ∂(q, q̇)/∂X, and a walker
+//! that takes the grid's steps one at a time, plain or with their tangent maps.
 
 use super::{SensitivityRun, Start};
 use crate::dimension::{Dimension, Dyn};
@@ -10,26 +10,76 @@ use crate::linalg::invert_small;
 use crate::method::space::{Initial, PhasePoint, State, StepState, TangentMap};
 use crate::method::step::Step;
 use crate::method::{Coordinates, Euclidean, Method};
+use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::model::parametric::{Parametric, WithParameters, parameter_indices};
 use crate::stepping::grid::{grid_step, grid_steps};
 use crate::stepping::run::{Cursor, Integrator, Statistics};
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DVector, DefaultAllocator};
+use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, OMatrix, OVector, U1};
 use num_dual::Dual;
 
-/// The lifted run of a [`SensitivityRun`] (see the [module](self) documentation).
-pub(super) struct Lifted<'a, L, M, N> {
-    /// The integrator of L̂ with the run's method.
-    pub(super) integrator: Integrator<WithParameters<'a, L, N>, M, Euclidean<Dyn>>,
+/// The parameters of `run` among the model's, and whether any of them enters L or the force
+/// (then the run is lifted to [`WithParameters`]; else it runs on the model itself).
+pub(super) fn chosen_parameters<L: Parametric<N>, N: Dimension>(
+    model: &L,
+    run: &SensitivityRun<N>,
+) -> Result<(Vec<usize>, bool), Error>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    let names: Vec<&str> = run.parameters.iter().map(String::as_str).collect();
+    let chosen = parameter_indices(model, &names)?;
+    let lift = chosen.iter().any(|&index| model.enters_lagrangian(index));
+    Ok((chosen, lift))
+}
+
+/// The integrator of L̂ for the `chosen` parameters of `integrator`'s model.
+pub(super) fn lift<'a, L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension>(
+    integrator: &'a Integrator<L, M, Euclidean<N>>,
+    chosen: &[usize],
+) -> Integrator<WithParameters<'a, L, N>, M, Euclidean<Dyn>>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let model = integrator.model();
+    let hat = WithParameters::new(model, model.dimension(), chosen.to_vec());
+    Integrator::new(hat, integrator.method().clone())
+}
+
+/// A `rows` × `columns` view of an owned matrix's entries.
+pub(super) fn view<R: Dimension, C: Dimension>(matrix: &OMatrix<f64, R, C>) -> DMatrixView<'_, f64>
+where
+    DefaultAllocator: Allocator<R, C>,
+{
+    DMatrixView::from_slice(matrix.as_slice(), matrix.nrows(), matrix.ncols())
+}
+
+/// A vector of dimension `D` with the entries of `values`.
+fn vector<D: Dimension>(values: &DVector<f64>) -> OVector<f64, D>
+where
+    DefaultAllocator: Allocator<D>,
+{
+    OVector::from_column_slice_generic(D::from_usize(values.len()), U1, values.as_slice())
+}
+
+/// The run of a [`SensitivityRun`] (see the [module](self) documentation): on the model
+/// itself (R = L, D = N, m = n) or on L̂ (R = [`WithParameters`], D = [`Dyn`], m = n + P,
+/// z = (q, θ)).
+pub(super) struct Lifted<'i, R, M, D: Dimension>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    /// The integrator of the run's model with the run's method.
+    pub(super) integrator: &'i Integrator<R, M, Euclidean<D>>,
     /// n, the model's coordinates.
     pub(super) n: usize,
-    /// m = n + P, the lifted coordinates.
+    /// m, the run's coordinates: n, or n + P on L̂.
     pub(super) m: usize,
     /// The method's second coordinate (p or q̇).
     coordinates: Coordinates,
     /// (z₀, ż₀).
-    pub(super) initial: Initial<Dyn>,
+    pub(super) initial: Initial<D>,
     /// C = ∂X_0/∂(q₀, q̇₀ or p₀, θ): 2m × (2n + P).
     pub(super) start: DMatrix<f64>,
     /// The names of the parameters differentiated.
@@ -40,12 +90,21 @@ pub(super) struct Lifted<'a, L, M, N> {
     every: usize,
 }
 
-impl<'a, L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension> Lifted<'a, L, M, N>
+impl<'i, R: Lagrangian<D>, M: Method<D> + Clone, D: Dimension> Lifted<'i, R, M, D>
 where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
-    /// The lifted run of `run` for `model` by `method`.
-    pub(super) fn new(model: &'a L, method: &M, run: &SensitivityRun<N>) -> Result<Self, Error> {
+    /// The run of `run` for `model`, whose parameters `chosen` are differentiated, by
+    /// `integrator`: of `model` itself, or of its L̂ when its dimension is n + P.
+    pub(super) fn new<L: Parametric<N>, N: Dimension>(
+        integrator: &'i Integrator<R, M, Euclidean<D>>,
+        model: &L,
+        chosen: &[usize],
+        run: &SensitivityRun<N>,
+    ) -> Result<Self, Error>
+    where
+        DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    {
         let steps = grid_steps(run.t0, run.t_end, run.h)?;
         if run.every == 0 {
             return Err(Error::invalid(
@@ -53,21 +112,20 @@ where
                 "0 steps between outputs (at least 1)",
             ));
         }
-        let names: Vec<&str> = run.parameters.iter().map(String::as_str).collect();
-        let chosen = parameter_indices(model, &names)?;
         let n = model.dimension();
-        let hat = WithParameters::new(model, n, chosen.clone());
-        let p = hat.parameter_count();
-        let m = n + p;
-        let theta = hat.chosen_values();
+        let p = chosen.len();
+        let m = integrator.model().dimension();
+        // On L̂ the θ rows follow q's; on the model itself there are none.
+        let theta_rows = m - n;
+        let values = model.parameter_values();
         let columns = 2 * n + p;
         let t0 = run.t0;
         // z₀ and ż₀ (or p̂₀), and their derivatives with respect to (q₀, q̇₀ or p₀, θ).
         let mut z0 = DVector::zeros(m);
         let mut dz0 = DMatrix::zeros(m, columns);
         let mut dzdot0 = DMatrix::zeros(m, columns);
-        z0.rows_mut(n, p).copy_from_slice(&theta);
-        for k in 0..p {
+        for k in 0..theta_rows {
+            z0[n + k] = values[chosen[k]];
             dz0[(n + k, 2 * n + k)] = 1.0;
         }
         for i in 0..n {
@@ -87,26 +145,18 @@ where
                 Some(p_hat)
             }
             Start::Model => {
-                let (q, v) = model
-                    .initial_state_with(&model.parameter_values())
-                    .ok_or_else(|| {
-                        Error::invalid(
-                            "start",
-                            "the model's parameters do not choose its initial state: give one",
-                        )
-                    })?;
+                let (q, v) = model.initial_state_with(&values).ok_or_else(|| {
+                    Error::invalid(
+                        "start",
+                        "the model's parameters do not choose its initial state: give one",
+                    )
+                })?;
                 z0.rows_mut(0, n).copy_from_slice(q.as_slice());
                 zdot0.rows_mut(0, n).copy_from_slice(v.as_slice());
                 // ∂(q₀, q̇₀)/∂θ: one dual sweep per chosen parameter.
-                let values = model.parameter_values();
                 for (k, &index) in chosen.iter().enumerate() {
-                    let theta: Vec<Dual<f64>> = values
-                        .iter()
-                        .enumerate()
-                        .map(|(i, &x)| Dual::new(x, if i == index { 1.0 } else { 0.0 }))
-                        .collect();
                     let (dq, dv) = model
-                        .initial_state_with(&theta)
+                        .initial_state_with(&seeded(&values, index))
                         .expect("the model chose its initial state at these values");
                     for i in 0..n {
                         dz0[(i, 2 * n + k)] = dq[i].eps;
@@ -116,9 +166,11 @@ where
                 None
             }
         };
-        let guess = zdot0.clone();
+        let (z0, mut zdot0) = (vector::<D>(&z0), vector::<D>(&zdot0));
+        let hat = integrator.model();
         if let Some(p_hat) = &given_momentum {
-            zdot0 = LagrangianExt::<Dyn>::velocity(&hat, t0, &z0, p_hat, &guess)?;
+            let guess = zdot0.clone();
+            zdot0 = hat.velocity(t0, &z0, &vector::<D>(p_hat), &guess)?;
         }
         if !(z0.iter().all(|x| x.is_finite()) && zdot0.iter().all(|x| x.is_finite())) {
             return Err(Error::NonFinite {
@@ -127,18 +179,23 @@ where
                 t: t0,
             });
         }
-        let coordinates = Method::<Dyn>::info(method).coordinates;
+        if theta_rows == 0 {
+            check_outside_lagrangian(model, chosen, t0, &z0, &zdot0)?;
+        }
+        let coordinates = integrator.method().info().coordinates;
         let needs_hessian = given_momentum.is_some() || coordinates == Coordinates::Momentum;
-        let second =
-            needs_hessian.then(|| LagrangianExt::<Dyn>::second_derivatives(&hat, t0, &z0, &zdot0));
+        let second = needs_hessian.then(|| hat.second_derivatives(t0, &z0, &zdot0));
         if let (Some(_), Some(d)) = (&given_momentum, &second) {
             // ż₀ = M̂⁻¹(p̂₀ − …): ∂ż₀ = M̂⁻¹(∂p̂₀ − L̂_{żz} ∂z₀), ∂p̂₀ the columns of p₀.
-            let inverse = invert(&d.vv, "mass matrix at the initial state")?;
+            let inverse = invert(
+                &view(&d.vv).into_owned(),
+                "mass matrix at the initial state",
+            )?;
             let mut dp = DMatrix::zeros(m, columns);
             for i in 0..n {
                 dp[(i, n + i)] = 1.0;
             }
-            dzdot0 = &inverse * (dp - d.qv.transpose() * &dz0);
+            dzdot0 = &inverse * (dp - view(&d.qv).transpose() * &dz0);
         } else {
             // ż₀ = (q̇₀, 0): the columns of q̇₀.
             for i in 0..n {
@@ -146,18 +203,20 @@ where
             }
         }
         let dy0 = match (coordinates, &second) {
-            (Coordinates::Momentum, Some(d)) => d.qv.transpose() * &dz0 + &d.vv * &dzdot0,
+            (Coordinates::Momentum, Some(d)) => {
+                view(&d.qv).transpose() * &dz0 + view(&d.vv) * &dzdot0
+            }
             _ => dzdot0,
         };
         let mut start = DMatrix::zeros(2 * m, columns);
         start.rows_mut(0, m).copy_from(&dz0);
         start.rows_mut(m, m).copy_from(&dy0);
         Ok(Lifted {
-            integrator: Integrator::new(hat, method.clone()),
+            integrator,
             n,
             m,
             coordinates,
-            initial: Initial::<Dyn>::Velocity { q: z0, v: zdot0 },
+            initial: Initial::Velocity { q: z0, v: zdot0 },
             start,
             names: run.parameters.clone(),
             grid: (run.t0, run.h, run.t_end, steps),
@@ -170,8 +229,8 @@ where
         step.is_multiple_of(self.every) || step == self.grid.3
     }
 
-    /// G = ∂(q, q̇)/∂(z, y) at a point of L̂: 2n × 2m.
-    pub(super) fn end(&self, point: &PhasePoint<Dyn>) -> Result<DMatrix<f64>, Error> {
+    /// G = ∂(q, q̇)/∂(z, y) at a point of the run: 2n × 2m.
+    pub(super) fn end(&self, point: &PhasePoint<D>) -> Result<DMatrix<f64>, Error> {
         let (n, m) = (self.n, self.m);
         let mut g = DMatrix::zeros(2 * n, 2 * m);
         for i in 0..n {
@@ -186,10 +245,9 @@ where
             Coordinates::Momentum => {
                 // ż = M̂⁻¹(p̂ − …): ∂ż = M̂⁻¹ ∂p̂ − M̂⁻¹ L̂_{żz} ∂z.
                 let model = self.integrator.model();
-                let d =
-                    LagrangianExt::<Dyn>::second_derivatives(model, point.t, &point.q, &point.v);
-                let inverse = invert(&d.vv, "mass matrix")?;
-                let by_z = -(&inverse * d.qv.transpose());
+                let d = model.second_derivatives(point.t, &point.q, &point.v);
+                let inverse = invert(&view(&d.vv).into_owned(), "mass matrix")?;
+                let by_z = -(&inverse * view(&d.qv).transpose());
                 g.view_mut((n, 0), (n, m)).copy_from(&by_z.rows(0, n));
                 g.view_mut((n, m), (n, m)).copy_from(&inverse.rows(0, n));
             }
@@ -198,38 +256,104 @@ where
     }
 }
 
+/// θ at `values` as dual numbers with the derivative seeded at `index`.
+fn seeded(values: &[f64], index: usize) -> Vec<Dual<f64>> {
+    values
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| Dual::new(x, if i == index { 1.0 } else { 0.0 }))
+        .collect()
+}
+
+/// Largest |∂L/∂θ| and |∂f/∂θ| at the initial state accepted from a parameter declared not to
+/// enter L ([`Parametric::enters_lagrangian`]), relative to the scale of L's terms.
+const OUTSIDE_LAGRANGIAN: f64 = 1e-12;
+
+/// The declaration of [`Parametric::enters_lagrangian`] checked at the initial state
+/// (q₀, q̇₀): ∂L/∂θ and ∂f/∂θ vanish for every chosen parameter, else a typed error naming it.
+fn check_outside_lagrangian<L: Parametric<N>, N: Dimension, D: Dimension>(
+    model: &L,
+    chosen: &[usize],
+    t0: f64,
+    q: &OVector<f64, D>,
+    v: &OVector<f64, D>,
+) -> Result<(), Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<D>,
+{
+    let values = model.parameter_values();
+    let names = model.parameter_names();
+    let n = model.dimension();
+    let lift = |x: &OVector<f64, D>| {
+        OVector::<Dual<f64>, N>::from_iterator_generic(
+            N::from_usize(n),
+            U1,
+            x.iter().map(|&x| Dual::from(x)),
+        )
+    };
+    let (q, v, t) = (lift(q), lift(v), Dual::from(t0));
+    let scale = model.lagrangian_with(&values, t0, &q.map(|x| x.re), &v.map(|x| x.re));
+    for &index in chosen {
+        let theta = seeded(&values, index);
+        let mut moved = model.lagrangian_with(&theta, t, &q, &v).eps.abs();
+        if L::FORCED {
+            let force = model.external_force_with(&theta, t, &q, &v);
+            moved = force.iter().fold(moved, |worst, f| worst.max(f.eps.abs()));
+        }
+        // NaN fails too.
+        if moved.is_nan() || moved > OUTSIDE_LAGRANGIAN * scale.abs().max(1.0) {
+            return Err(Error::invalid(
+                "parameters",
+                format!(
+                    "'{}' is declared not to enter L or the force (Parametric::enters_lagrangian), \
+                     but at the initial state they change with it by {moved:.1e}",
+                    names[index]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The inverse of a mass matrix, or a typed error naming `what`.
 fn invert(matrix: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>, Error> {
     invert_small(matrix)
         .filter(|inverse| inverse.iter().all(|x| x.is_finite()))
-        .ok_or_else(|| Error::invalid("model", format!("the {what} of L̂ is singular")))
+        .ok_or_else(|| {
+            Error::invalid(
+                "model",
+                format!("the {what} of the run's model is singular"),
+            )
+        })
 }
 
-/// Takes the grid's steps of a lifted run one at a time from a cursor.
-pub(super) struct Walker<'l, 'a, L, M: Method<Dyn>, N> {
-    lifted: &'l Lifted<'a, L, M, N>,
-    workspace: <M as Method<Dyn>>::Workspace,
+/// Takes the grid's steps of a run one at a time from a cursor.
+pub(super) struct Walker<'l, 'i, R, M: Method<D>, D: Dimension>
+where
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
+{
+    lifted: &'l Lifted<'i, R, M, D>,
+    workspace: <M as Method<D>>::Workspace,
     /// The state and its compensation.
-    pub(super) cursor: Cursor<Euclidean<Dyn>>,
-    increment: State<Dyn>,
+    pub(super) cursor: Cursor<Euclidean<D>>,
+    increment: State<D>,
     /// The Newton start of the next completion.
-    guess: DVector<f64>,
+    guess: OVector<f64, D>,
     /// The work of every step taken.
     pub(super) statistics: Statistics,
 }
 
-impl<'l, 'a, L: Parametric<N>, M: Method<N> + Method<Dyn> + Clone, N: Dimension>
-    Walker<'l, 'a, L, M, N>
+impl<'l, 'i, R: Lagrangian<D>, M: Method<D> + Clone, D: Dimension> Walker<'l, 'i, R, M, D>
 where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+    DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
     /// A walker at the start of `lifted`.
-    pub(super) fn new(lifted: &'l Lifted<'a, L, M, N>) -> Result<Self, Error> {
-        let integrator = &lifted.integrator;
+    pub(super) fn new(lifted: &'l Lifted<'i, R, M, D>) -> Result<Self, Error> {
+        let integrator = lifted.integrator;
         let (model, method) = (integrator.model(), integrator.method());
-        let workspace = Step::<_, Euclidean<Dyn>>::workspace(method, model, lifted.grid.1)?;
+        let workspace = Step::<_, Euclidean<D>>::workspace(method, model, lifted.grid.1)?;
         let state = integrator.initial_state(lifted.grid.0, &lifted.initial)?;
-        Step::<_, Euclidean<Dyn>>::check_model(method, model, lifted.grid.0, &state)?;
+        Step::<_, Euclidean<D>>::check_model(method, model, lifted.grid.0, &state)?;
         let guess = match &lifted.initial {
             Initial::Velocity { v, .. } => v.clone(),
             Initial::Momentum { p, .. } => p.clone(),
@@ -245,20 +369,17 @@ where
     }
 
     /// Move to `cursor`, forgetting the warm start of the last step.
-    pub(super) fn restart_at(&mut self, cursor: Cursor<Euclidean<Dyn>>) {
+    pub(super) fn restart_at(&mut self, cursor: Cursor<Euclidean<D>>) {
         self.cursor = cursor;
-        Step::<WithParameters<'a, L, N>, Euclidean<Dyn>>::restart(
-            self.lifted.integrator.method(),
-            &mut self.workspace,
-        );
+        Step::<R, Euclidean<D>>::restart(self.lifted.integrator.method(), &mut self.workspace);
     }
 
     /// Take step `k` of the grid.
     pub(super) fn step(&mut self, k: usize) -> Result<(), Error> {
         let (t0, h, t_end, steps) = self.lifted.grid;
         let (t, size, _) = grid_step(t0, t_end, h, steps, k);
-        let integrator = &self.lifted.integrator;
-        let report = Step::<_, Euclidean<Dyn>>::step(
+        let integrator = self.lifted.integrator;
+        let report = Step::<_, Euclidean<D>>::step(
             integrator.method(),
             integrator.model(),
             &mut self.workspace,
@@ -273,11 +394,11 @@ where
     }
 
     /// Take step `k` of the grid by its tangent map, and return the map.
-    pub(super) fn step_tangent(&mut self, k: usize) -> Result<TangentMap<Dyn>, Error> {
+    pub(super) fn step_tangent(&mut self, k: usize) -> Result<TangentMap<D>, Error> {
         let (t0, h, t_end, steps) = self.lifted.grid;
         let (t, size, _) = grid_step(t0, t_end, h, steps, k);
-        let integrator = &self.lifted.integrator;
-        let (increment, tangent, report) = Step::<_, Euclidean<Dyn>>::tangent_map(
+        let integrator = self.lifted.integrator;
+        let (increment, tangent, report) = Step::<_, Euclidean<D>>::tangent_map(
             integrator.method(),
             integrator.model(),
             &mut self.workspace,
@@ -304,15 +425,15 @@ where
     }
 
     /// The state after `step` steps completed to a point (t, z, ż, p̂).
-    pub(super) fn point(&mut self, step: usize) -> Result<PhasePoint<Dyn>, Error> {
+    pub(super) fn point(&mut self, step: usize) -> Result<PhasePoint<D>, Error> {
         let (t0, h, t_end, steps) = self.lifted.grid;
         let t = if step == 0 {
             t0
         } else {
             grid_step(t0, t_end, h, steps, step - 1).2
         };
-        let integrator = &self.lifted.integrator;
-        let point = Step::<_, Euclidean<Dyn>>::complete(
+        let integrator = self.lifted.integrator;
+        let point = Step::<_, Euclidean<D>>::complete(
             integrator.method(),
             integrator.model(),
             Some(&self.workspace),

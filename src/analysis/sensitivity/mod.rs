@@ -9,11 +9,14 @@
 //! ([`crate::method::Method::tangent_map`], the implicit function theorem on each step's
 //! converged equations).
 //!
-//! Parameters θ join the state as coordinates with θ̇ = 0 held by a force
+//! Parameters θ that enter L join the state as coordinates with θ̇ = 0 held by a force
 //! ([`crate::model::parametric::WithParameters`]), so that the same tangent maps carry the
 //! columns ∂x_{k+1}/∂θ, by automatic differentiation of L(t, q, q̇; θ)
 //! ([`crate::model::parametric::Parametric`]). Write X = (z, y) for the state of the
-//! lifted run, z = (q, θ).
+//! lifted run, z = (q, θ). Parameters that only choose the start
+//! ([`crate::model::parametric::Parametric::enters_lagrangian`] `false`, Kepler's e) enter
+//! through C alone: the run is then the model's own, z = q, at its size and with its
+//! structure (a constant-mass model keeps its Hessian-free steps).
 //!
 //! - **Forward sensitivities** ([`crate::Integrator::sensitivities`]):
 //!   ∂(q, q̇)(t_k)/∂(q₀, q̇₀ or p₀, θ) = G_k Φ_{k−1} ⋯ Φ_0 C, where C = ∂X_0/∂(q₀, q̇₀ or p₀, θ)
