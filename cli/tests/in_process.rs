@@ -178,9 +178,12 @@ mod run {
             "{}",
             summary.energy_final
         );
-        assert_eq!(summary.parameters, Parameters(vec![("e", 0.5)]));
+        assert_eq!(
+            summary.parameters,
+            Parameters(vec![("e", 0.5), ("phase", 0.0)])
+        );
         assert_eq!(summary.coordinates, Some(vec!["q1".into(), "q2".into()]));
-        assert!(summary.to_string().contains("kepler (e = 0.5)"));
+        assert!(summary.to_string().contains("kepler (e = 0.5, phase = 0)"));
     }
 }
 
