@@ -33,29 +33,39 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
                 - (concentration(after) - centre * 2.0 + concentration(before))
                     * (kappa * (kappa + 1.0))
         };
-        let slope = |k: usize| {
-            let n = concentration(k);
-            (u(k + 1) - u(k)).map(|v| v * n)
-        };
-        let monitor = |k: usize| -> D {
-            match self.options.monitor {
-                Monitor::Uniform => D::from(1.0),
-                Monitor::ArcLength { scale } => {
-                    let s = slope(k);
-                    (s.dot(&s) * scale + 1.0).sqrt()
-                }
-                Monitor::Curvature { scale, curvature } => {
-                    let s = slope(k);
-                    let (before, after) = (clamp(k as isize - 1), clamp(k as isize + 1));
-                    let centre = |k: usize| (x(k) + x(k + 1)) * 0.5;
-                    let gap = (centre(after) - centre(before)).recip();
-                    let c = (slope(after) - slope(before)).map(|v| v * gap);
-                    (s.dot(&s) * scale + c.dot(&c) * curvature + 1.0).sqrt()
-                }
-            }
-        };
+        let monitor = |k: usize| self.cell_monitor(k, last, x, u);
         let mean = self.domain.length() / last as f64;
         (monitor(i) * smoothed(i - 1) - monitor(i - 1) * smoothed(i)) * mean
+    }
+
+    /// The monitor ω_k of cell k (see [`Monitor`]).
+    pub(super) fn cell_monitor<D: Scalar>(
+        &self,
+        k: usize,
+        last: usize,
+        x: &impl Fn(usize) -> D,
+        u: &impl Fn(usize) -> SVector<D, C>,
+    ) -> D {
+        let clamp = |k: isize| k.clamp(0, last as isize - 1) as usize;
+        let slope = |k: usize| {
+            let n = (x(k + 1) - x(k)).recip();
+            (u(k + 1) - u(k)).map(|v| v * n)
+        };
+        match self.options.monitor {
+            Monitor::Uniform => D::from(1.0),
+            Monitor::ArcLength { scale } => {
+                let s = slope(k);
+                (s.dot(&s) * scale + 1.0).sqrt()
+            }
+            Monitor::Curvature { scale, curvature } => {
+                let s = slope(k);
+                let (before, after) = (clamp(k as isize - 1), clamp(k as isize + 1));
+                let centre = |k: usize| (x(k) + x(k + 1)) * 0.5;
+                let gap = (centre(after) - centre(before)).recip();
+                let c = (slope(after) - slope(before)).map(|v| v * gap);
+                (s.dot(&s) * scale + c.dot(&c) * curvature + 1.0).sqrt()
+            }
+        }
     }
 
     /// g_i(x, u) and its gradient in the free nodes' variables: entry (m − i + 2)(C + 1) + v
@@ -98,10 +108,15 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
         value
     }
 
-    /// The mesh that equidistributes the initial field: de Boor's fixed point x ↦ the solution
-    /// x' of g(u(x), x') = 0 (each by Newton's method in x' with the values u(x) held at the
-    /// nodes), from [`super::RAdaptiveOptions::initial_mesh`] or the uniform mesh, to a change
-    /// below 10⁻¹² of the domain's length.
+    /// The mesh that equidistributes the initial field `field(x)` (nodal values u_i =
+    /// field(x_i)), from [`super::RAdaptiveOptions::initial_mesh`] or the uniform mesh:
+    /// first de Boor's fixed point without smoothing (the piecewise-constant monitor of the
+    /// current mesh equidistributed exactly, a few times), then damped Newton on
+    /// G(x) = g(field(x), x) = 0, smoothing included, to an increment below 10⁻¹³ of the
+    /// domain's length. (Holding the values at the nodes while they move would have no
+    /// solution for a front steeper than the starting mesh.) The Jacobian of G takes
+    /// ∂g/∂u (num-dual) times a central difference of `field`: it only steers the iteration,
+    /// the residual G is exact.
     pub(super) fn initial_mesh(
         &self,
         t0: f64,
@@ -118,6 +133,44 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
         };
         x[0] = a;
         x[last] = self.domain.right();
+        let sample = |x: &[f64]| -> Result<Vec<SVector<f64, C>>, Error> {
+            x.iter().map(|&position| field(position)).collect()
+        };
+        // de Boor: equidistribute the monitor of the current mesh, held as a function of x.
+        for _ in 0..30 {
+            let u = sample(&x)?;
+            let lift = |k: usize| x[k];
+            let values = |k: usize| u[k];
+            let mut cumulative = vec![0.0; nodes];
+            for k in 0..last {
+                let weight = self.cell_monitor(k, last, &lift, &values);
+                cumulative[k + 1] = cumulative[k] + weight * (x[k + 1] - x[k]);
+            }
+            let total = cumulative[last];
+            let mut fresh = x.clone();
+            let mut k = 0;
+            for (i, position) in fresh.iter_mut().enumerate().take(last).skip(1) {
+                let target = total * i as f64 / last as f64;
+                while cumulative[k + 1] < target && k + 1 < last {
+                    k += 1;
+                }
+                let share = (target - cumulative[k]) / (cumulative[k + 1] - cumulative[k]);
+                *position = x[k] + share.clamp(0.0, 1.0) * (x[k + 1] - x[k]);
+            }
+            let change = fresh
+                .iter()
+                .zip(&x)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if !fresh.windows(2).all(|pair| pair[1] > pair[0]) {
+                break;
+            }
+            x = fresh;
+            if change <= 1e-3 * length / last as f64 {
+                break;
+            }
+        }
+        // Newton on G(x) = g(field(x), x).
         let free = last - 1;
         let mut entries = Vec::with_capacity(free * WINDOW);
         for r in 0..free {
@@ -137,55 +190,55 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
             iterations,
             residual,
         };
-        let cap = 20 * self.options.max_iterations;
-        let mut change = f64::INFINITY;
+        let cap = 4 * self.options.max_iterations;
+        let delta = 1e-6 * length / last as f64;
+        let mut increment = f64::INFINITY;
         for _ in 0..cap {
-            let mut u = Vec::with_capacity(nodes);
-            for &position in &x {
-                u.push(field(position)?);
+            let u = sample(&x)?;
+            let mut slope = vec![SVector::<f64, C>::zeros(); nodes];
+            for i in 1..last {
+                slope[i] = (field(x[i] + delta)? - field(x[i] - delta)?) / (2.0 * delta);
             }
-            let start = x.clone();
-            let mut converged = false;
-            for _ in 0..self.options.max_iterations {
-                values.iter_mut().for_each(|v| *v = 0.0);
-                for i in 1..last {
-                    rhs[i - 1] = self.constraint_gradient(i, &x, &u, &mut gradient);
-                    for offset in 0..WINDOW {
-                        let Some(m) = (i + offset).checked_sub(2).filter(|&m| m >= 1 && m < last)
-                        else {
-                            continue;
-                        };
-                        if let Some(slot) = pattern.slot(i - 1, m - 1) {
-                            values[slot] = gradient[offset * (C + 1) + C];
-                        }
+            values.iter_mut().for_each(|v| *v = 0.0);
+            for i in 1..last {
+                rhs[i - 1] = self.constraint_gradient(i, &x, &u, &mut gradient);
+                for offset in 0..WINDOW {
+                    let Some(m) = (i + offset).checked_sub(2).filter(|&m| m >= 1 && m < last)
+                    else {
+                        continue;
+                    };
+                    let mut d = gradient[offset * (C + 1) + C];
+                    for c in 0..C {
+                        d += gradient[offset * (C + 1) + c] * slope[m][c];
+                    }
+                    if let Some(slot) = pattern.slot(i - 1, m - 1) {
+                        values[slot] = d;
                     }
                 }
-                solver
-                    .factor(&pattern, &values)
-                    .map_err(|_| failure(0, f64::INFINITY))?;
-                solver
-                    .solve_in_place(&mut rhs)
-                    .map_err(|_| failure(0, f64::INFINITY))?;
-                for i in 1..last {
-                    x[i] -= rhs[i - 1];
-                }
-                if rhs.amax() <= 1e-14 * length {
-                    converged = true;
-                    break;
+            }
+            solver
+                .factor(&pattern, &values)
+                .map_err(|_| failure(0, f64::INFINITY))?;
+            solver
+                .solve_in_place(&mut rhs)
+                .map_err(|_| failure(0, f64::INFINITY))?;
+            // Damped: no cell shrinks below half its width in one iteration.
+            let mut theta = 1.0f64;
+            let shift = |i: usize| if i == 0 || i == last { 0.0 } else { rhs[i - 1] };
+            for k in 0..last {
+                let shrink = shift(k + 1) - shift(k);
+                if shrink > 0.5 * (x[k + 1] - x[k]) {
+                    theta = theta.min(0.5 * (x[k + 1] - x[k]) / shrink);
                 }
             }
-            if !converged || x.windows(2).any(|pair| pair[1] <= pair[0]) {
-                return Err(failure(self.options.max_iterations, rhs.amax()));
+            for i in 1..last {
+                x[i] -= theta * rhs[i - 1];
             }
-            change = x
-                .iter()
-                .zip(&start)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            if change <= 1e-12 * length {
+            increment = rhs.amax();
+            if theta == 1.0 && increment <= 1e-13 * length {
                 return Ok(x);
             }
         }
-        Err(failure(cap, change))
+        Err(failure(cap, increment))
     }
 }

@@ -134,3 +134,16 @@ fn the_fast_kink_on_a_moving_mesh() {
     );
     println!("{:?}", &run.positions.last().unwrap());
 }
+
+#[test]
+fn debug_initial_mesh() {
+    let o = options(21, 0.1, Monitor::ArcLength { scale: 1.0 });
+    let integrator = RAdaptive::new(SineGordon, wide(), held(0.0, 2.0 * PI), o).unwrap();
+    let x: Vec<f64> = (0..21).map(|i| -20.0 + 2.0 * i as f64).collect();
+    let u: Vec<SVector<f64, 1>> = x.iter().map(|&x| SVector::from([kink(0.99, -10.0, x, 0.0).0])).collect();
+    let mut g = vec![0.0; 10];
+    for i in 1..20 {
+        let value = integrator.constraint_gradient(i, &x, &u, &mut g);
+        println!("{i} {value:e} {g:?}");
+    }
+}
