@@ -80,5 +80,5 @@
 pub mod fourier;
 pub mod mesh;
 pub mod multisymplectic;
-pub mod r_adaptive;
 pub mod pseudospectral;
+pub mod r_adaptive;

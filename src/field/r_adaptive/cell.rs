@@ -111,13 +111,9 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
         for point in &self.points {
             let jet = point.jet(u, x, dt);
             // ℒ does not depend on x explicitly (checked by `run`): its real part is passed.
-            let density = self.density.density(
-                jet.x.re(),
-                t + point.tau * dt,
-                &jet.u,
-                &jet.u_t,
-                &jet.u_x,
-            );
+            let density =
+                self.density
+                    .density(jet.x.re(), t + point.tau * dt, &jet.u, &jet.u_t, &jet.u_x);
             total += density * jet.x_xi * (point.weight * dt);
         }
         total
@@ -179,9 +175,7 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
                 u_t: jet.u_t,
                 u_x: jet.u_x,
             };
-            let g = self
-                .density
-                .gradient(jet.x, t + point.tau * dt, &physical);
+            let g = self.density.gradient(jet.x, t + point.tau * dt, &physical);
             energy += point.weight * jet.x_xi * g.energy(&physical);
             momentum += point.weight * jet.x_xi * g.momentum(&physical);
         }

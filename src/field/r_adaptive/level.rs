@@ -102,9 +102,7 @@ impl<const C: usize> LevelSolver<C> {
     ) -> Result<(f64, f64), Error> {
         let nodes = state.x.len();
         let last = nodes - 1;
-        let block = C + 2;
         let width = WINDOW * (C + 1);
-        let options = integrator.options();
         for m in 1..last {
             let (x, u) = (&state.x, &state.u);
             integrator.constraint_gradient(
@@ -114,24 +112,117 @@ impl<const C: usize> LevelSolver<C> {
                 &mut self.old_gradients[m * width..(m + 1) * width],
             );
         }
-        // Start: q^{j+1} extrapolated from q^j and q^{j−1}; λ^j from λ^{j−1}.
-        match previous.as_ref() {
-            Some((x, u)) => {
-                for i in 0..nodes {
-                    self.next_x[i] = 2.0 * state.x[i] - x[i];
-                    self.next_u[i] = state.u[i] * 2.0 - u[i];
+        // Start from q^{j+1} extrapolated from q^j and q^{j−1} (λ^j from λ^{j−1}); should
+        // Newton's iteration fail from there (a front that turns within a step, the first
+        // level of a steep front), once more from q^{j+1} = q^j, λ^j = 0.
+        let mut multipliers = state.multipliers.clone();
+        let mut outcome = Ok(());
+        for attempt in 0..2 {
+            if attempt == 1 {
+                if outcome.is_ok() {
+                    break;
                 }
-            }
-            None => {
                 self.next_x.copy_from_slice(&state.x);
                 self.next_u.copy_from_slice(&state.u);
+                multipliers.iter_mut().for_each(|m| *m = 0.0);
             }
+            outcome = self.newton(
+                integrator,
+                level,
+                t,
+                state,
+                previous.as_ref(),
+                attempt,
+                &mut multipliers,
+            );
         }
-        self.next_x[0] = state.x[0];
-        self.next_x[last] = state.x[last];
-        self.next_u[0] = state.u[0];
-        self.next_u[last] = state.u[last];
-        let mut multipliers = state.multipliers.clone();
+        outcome?;
+        // The momenta p^{j+1} = Σ D_{2|3} L_d, and the slab's energy and momentum.
+        let (mut energy, mut momentum) = (0.0, 0.0);
+        state
+            .momentum_u
+            .iter_mut()
+            .for_each(|p| *p = SVector::zeros());
+        state.momentum_x.iter_mut().for_each(|p| *p = 0.0);
+        for k in 0..last {
+            let corners = Corners {
+                u: [
+                    state.u[k],
+                    state.u[k + 1],
+                    self.next_u[k],
+                    self.next_u[k + 1],
+                ],
+                x: [
+                    state.x[k],
+                    state.x[k + 1],
+                    self.next_x[k],
+                    self.next_x[k + 1],
+                ],
+            };
+            integrator.cell_gradient(t, &corners, &mut self.gradient);
+            for (corner, node) in [(2, k), (3, k + 1)] {
+                for c in 0..C {
+                    state.momentum_u[node][c] += self.gradient[corner * (C + 1) + c];
+                }
+                state.momentum_x[node] += self.gradient[corner * (C + 1) + C];
+            }
+            let (e, p) = integrator.cell_energy(t, &corners);
+            energy += e;
+            momentum += p;
+        }
+        if !energy.is_finite() || self.next_u.iter().any(|u| !u.iter().all(|v| v.is_finite())) {
+            return Err(Error::NonFinite {
+                what: "field".into(),
+                step: level,
+                t,
+            });
+        }
+        let old = previous.get_or_insert_with(|| (Vec::new(), Vec::new()));
+        old.0.clone_from(&state.x);
+        old.1.clone_from(&state.u);
+        state.x.copy_from_slice(&self.next_x);
+        state.u.copy_from_slice(&self.next_u);
+        state.multipliers = multipliers;
+        Ok((energy, momentum))
+    }
+
+    /// Newton's iteration of one level from the start of `attempt` (0: extrapolated, 1: the
+    /// caller's), leaving q^{j+1} in `next_x`, `next_u` and λ^j in `multipliers`.
+    #[allow(clippy::too_many_arguments)]
+    fn newton<F: LagrangianDensity<C>>(
+        &mut self,
+        integrator: &RAdaptive<F, C>,
+        level: usize,
+        t: f64,
+        state: &State<C>,
+        previous: Option<&(Vec<f64>, Vec<SVector<f64, C>>)>,
+        attempt: usize,
+        multipliers: &mut [f64],
+    ) -> Result<(), Error> {
+        let nodes = state.x.len();
+        let last = nodes - 1;
+        let block = C + 2;
+        let width = WINDOW * (C + 1);
+        let options = integrator.options();
+        if attempt == 0 {
+            // Start: q^{j+1} extrapolated from q^j and q^{j−1}; λ^j from λ^{j−1}.
+            match previous {
+                Some((x, u)) => {
+                    for i in 0..nodes {
+                        self.next_x[i] = 2.0 * state.x[i] - x[i];
+                        self.next_u[i] = state.u[i] * 2.0 - u[i];
+                    }
+                }
+                None => {
+                    self.next_x.copy_from_slice(&state.x);
+                    self.next_u.copy_from_slice(&state.u);
+                }
+            }
+            self.next_x[0] = state.x[0];
+            self.next_x[last] = state.x[last];
+            self.next_u[0] = state.u[0];
+            self.next_u[last] = state.u[last];
+        }
         let mut refresh = true;
         let mut last_increment = f64::INFINITY;
         let mut converged = false;
@@ -147,8 +238,18 @@ impl<const C: usize> LevelSolver<C> {
             let half = 2 * (C + 1);
             for k in 0..last {
                 let corners = Corners {
-                    u: [state.u[k], state.u[k + 1], self.next_u[k], self.next_u[k + 1]],
-                    x: [state.x[k], state.x[k + 1], self.next_x[k], self.next_x[k + 1]],
+                    u: [
+                        state.u[k],
+                        state.u[k + 1],
+                        self.next_u[k],
+                        self.next_u[k + 1],
+                    ],
+                    x: [
+                        state.x[k],
+                        state.x[k + 1],
+                        self.next_x[k],
+                        self.next_x[k + 1],
+                    ],
                 };
                 integrator.cell_gradient(t, &corners, &mut self.gradient);
                 for (corner, node) in [(0, k), (1, k + 1)] {
@@ -228,14 +329,31 @@ impl<const C: usize> LevelSolver<C> {
             self.solver
                 .solve_in_place(&mut self.rhs)
                 .map_err(|_| self.failure(level, t))?;
+            // Damped: no cell shrinks below half its width in one iteration (a far start, a
+            // fast front, would otherwise throw the iterate across a fold).
+            let mut theta = 1.0f64;
+            let shift = |i: usize| {
+                if i == 0 || i == last {
+                    0.0
+                } else {
+                    self.rhs[(i - 1) * block + C]
+                }
+            };
+            for k in 0..last {
+                let (shrink, width) =
+                    (shift(k + 1) - shift(k), self.next_x[k + 1] - self.next_x[k]);
+                if shrink > 0.5 * width {
+                    theta = theta.min(0.5 * width / shrink);
+                }
+            }
             let mut size = 0.0f64;
             for i in 1..last {
                 let row = (i - 1) * block;
                 for c in 0..C {
-                    self.next_u[i][c] -= self.rhs[row + c];
+                    self.next_u[i][c] -= theta * self.rhs[row + c];
                 }
-                self.next_x[i] -= self.rhs[row + C];
-                multipliers[i] -= self.rhs[row + C + 1];
+                self.next_x[i] -= theta * self.rhs[row + C];
+                multipliers[i] -= theta * self.rhs[row + C + 1];
                 size = size
                     .max(self.next_u[i].amax())
                     .max(self.next_x[i].abs())
@@ -245,11 +363,11 @@ impl<const C: usize> LevelSolver<C> {
             if !increment.is_finite() {
                 return Err(self.failure(level, t));
             }
-            if increment <= options.tolerance * (1.0 + size) {
+            if theta == 1.0 && increment <= options.tolerance * (1.0 + size) {
                 converged = true;
                 break;
             }
-            if increment > REFACTOR_CONTRACTION * last_increment {
+            if theta < 1.0 || increment > REFACTOR_CONTRACTION * last_increment {
                 refresh = true;
             }
             last_increment = increment;
@@ -265,51 +383,12 @@ impl<const C: usize> LevelSolver<C> {
                 residual: increment,
             });
         }
-        // The momenta p^{j+1} = Σ D_{2|3} L_d, and the slab's energy and momentum.
-        let (mut energy, mut momentum) = (0.0, 0.0);
-        state.momentum_u.iter_mut().for_each(|p| *p = SVector::zeros());
-        state.momentum_x.iter_mut().for_each(|p| *p = 0.0);
-        for k in 0..last {
-            let corners = Corners {
-                u: [state.u[k], state.u[k + 1], self.next_u[k], self.next_u[k + 1]],
-                x: [state.x[k], state.x[k + 1], self.next_x[k], self.next_x[k + 1]],
-            };
-            integrator.cell_gradient(t, &corners, &mut self.gradient);
-            for (corner, node) in [(2, k), (3, k + 1)] {
-                for c in 0..C {
-                    state.momentum_u[node][c] += self.gradient[corner * (C + 1) + c];
-                }
-                state.momentum_x[node] += self.gradient[corner * (C + 1) + C];
-            }
-            let (e, p) = integrator.cell_energy(t, &corners);
-            energy += e;
-            momentum += p;
-        }
-        if !energy.is_finite() || self.next_u.iter().any(|u| !u.iter().all(|v| v.is_finite())) {
-            return Err(Error::NonFinite {
-                what: "field".into(),
-                step: level,
-                t,
-            });
-        }
-        let old = previous.get_or_insert_with(|| (Vec::new(), Vec::new()));
-        old.0.clone_from(&state.x);
-        old.1.clone_from(&state.u);
-        state.x.copy_from_slice(&self.next_x);
-        state.u.copy_from_slice(&self.next_u);
-        state.multipliers = multipliers;
-        Ok((energy, momentum))
+        Ok(())
     }
 
     /// A fold of the current iterate as an error, if it has one.
     fn fold(&self, level: usize, t: f64) -> Option<Error> {
-        let (cell, width) = super::smallest_width(&self.next_x);
-        (width.is_nan() || width <= 0.0).then_some(Error::MeshFold {
-            step: level,
-            t,
-            cell,
-            width,
-        })
+        super::check_fold(level, t, &self.next_x).err()
     }
 
     /// A failed linear solve or a non-finite increment: a fold if the iterate has folded,

@@ -102,9 +102,9 @@ mod level;
 #[cfg(test)]
 mod tests;
 
-pub use crate::field::multisymplectic::CellQuadrature;
 use crate::error::{Error, require_finite};
 use crate::field::mesh::MAX_POINTS;
+pub use crate::field::multisymplectic::CellQuadrature;
 use crate::model::density::{Boundary, Domain, Jet, LagrangianDensity, LagrangianDensityExt};
 use cell::QuadraturePoint;
 use nalgebra::SVector;
@@ -289,7 +289,10 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
             ));
         };
         if !left.iter().chain(right.iter()).all(|v| v.is_finite()) {
-            return Err(Error::invalid("boundary", "a Dirichlet value is not finite"));
+            return Err(Error::invalid(
+                "boundary",
+                "a Dirichlet value is not finite",
+            ));
         }
         if let Some(mesh) = &options.initial_mesh {
             check_initial_mesh(mesh, nodes, domain)?;
@@ -378,6 +381,19 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
             momentum_u,
             momentum_x,
         };
+        // A virtual level at t0 − Δt, the mesh that equidistributes u⁰ − Δt u_t⁰ and that
+        // field on it, starts the first Newton iteration (extrapolated through level 0).
+        // (Taking p⁰ = Σ D_{2|3} L_d of the slab below level 0 instead of the Legendre
+        // transform made the kink at v = 0.99 less accurate: 0.35 against 0.20 on 101 nodes.)
+        let behind_x = self.initial_mesh(t0, &|x| sample(x).map(|(u, v)| u - v * dt))?;
+        let mut behind_u = Vec::with_capacity(last + 1);
+        for &position in &behind_x {
+            let (value, rate) = sample(position)?;
+            behind_u.push(value - rate * dt);
+        }
+        behind_u[0] = self.left;
+        behind_u[last] = self.right;
+        let mut previous = Some((behind_x, behind_u));
         let mut run = AdaptiveRun {
             levels: Vec::new(),
             times: Vec::new(),
@@ -398,21 +414,12 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
         observe(0, t0, &state.x, &state.u);
         record(&mut run, 0, t0, &state);
         let mut solver = level::LevelSolver::new(self, last + 1)?;
-        let mut previous: Option<(Vec<f64>, Vec<SVector<f64, C>>)> = None;
         for j in 0..levels {
             let t = t0 + j as f64 * dt;
             let (energy, momentum) = solver.step(self, j, t, &mut state, &mut previous)?;
             run.energy.push(energy);
             run.momentum.push(momentum);
-            let (cell, width) = smallest_width(&state.x);
-            if width.is_nan() || width <= 0.0 {
-                return Err(Error::MeshFold {
-                    step: j,
-                    t,
-                    cell,
-                    width,
-                });
-            }
+            let width = check_fold(j, t, &state.x)?;
             run.smallest_width = run.smallest_width.min(width);
             let t_next = t0 + (j + 1) as f64 * dt;
             observe(j + 1, t_next, &state.x, &state.u);
@@ -467,6 +474,21 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
         }
         Ok((momentum_u, momentum_x))
     }
+}
+
+/// The smallest cell width of mesh `x` after step `step` (from t), or [`Error::MeshFold`] when
+/// a cell has width ≤ 0 (or NaN).
+fn check_fold(step: usize, t: f64, x: &[f64]) -> Result<f64, Error> {
+    let (cell, width) = smallest_width(x);
+    if width.is_nan() || width <= 0.0 {
+        return Err(Error::MeshFold {
+            step,
+            t,
+            cell,
+            width,
+        });
+    }
+    Ok(width)
 }
 
 /// The first cell of smallest width and that width.
