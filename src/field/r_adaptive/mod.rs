@@ -515,7 +515,12 @@ fn check_initial_mesh(mesh: &[f64], nodes: usize, domain: Domain) -> Result<(), 
             format!("{} positions for {nodes} nodes", mesh.len()),
         ));
     }
-    crate::error::require_finite_entries("initial_mesh", mesh.iter())?;
+    if let Some((i, x)) = mesh.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(Error::invalid(
+            "initial_mesh",
+            format!("x[{i}] = {x:?} is not finite"),
+        ));
+    }
     let slack = 1e-9 * domain.length();
     let (first, last) = (mesh[0], mesh[nodes - 1]);
     if (first - domain.left()).abs() > slack || (last - domain.right()).abs() > slack {

@@ -381,3 +381,227 @@ fn measure_the_fast_kink_to_t_20() {
         println!("uniform {nodes} nodes, dt {dt:.5}: error {error:.3e}, {time:.3} s");
     }
 }
+
+/// The name an error carries, or a panic if there is none.
+fn error_name<T: std::fmt::Debug>(result: Result<T, Error>) -> String {
+    match result {
+        Err(Error::InvalidParameter { name, .. }) => name,
+        other => panic!("expected an invalid parameter, got {other:?}"),
+    }
+}
+
+#[test]
+fn bad_options_are_errors_naming_the_field() {
+    let build = |o: RAdaptiveOptions| RAdaptive::new(SineGordon, wide(), held(0.0, 2.0 * PI), o);
+    let base = options(41, 0.1, Monitor::default());
+    let cases: Vec<(RAdaptiveOptions, &str)> = vec![
+        (
+            RAdaptiveOptions {
+                nodes: 0,
+                ..base.clone()
+            },
+            "nodes",
+        ),
+        (
+            RAdaptiveOptions {
+                nodes: 3,
+                ..base.clone()
+            },
+            "nodes",
+        ),
+        (
+            RAdaptiveOptions {
+                nodes: MAX_POINTS + 1,
+                ..base.clone()
+            },
+            "nodes",
+        ),
+        (
+            RAdaptiveOptions {
+                dt: 0.0,
+                ..base.clone()
+            },
+            "dt",
+        ),
+        (
+            RAdaptiveOptions {
+                dt: -0.1,
+                ..base.clone()
+            },
+            "dt",
+        ),
+        (
+            RAdaptiveOptions {
+                dt: f64::NAN,
+                ..base.clone()
+            },
+            "dt",
+        ),
+        (
+            RAdaptiveOptions {
+                dt: f64::INFINITY,
+                ..base.clone()
+            },
+            "dt",
+        ),
+        (
+            RAdaptiveOptions {
+                monitor: Monitor::ArcLength { scale: f64::NAN },
+                ..base.clone()
+            },
+            "monitor.scale",
+        ),
+        (
+            RAdaptiveOptions {
+                monitor: Monitor::ArcLength { scale: -1.0 },
+                ..base.clone()
+            },
+            "monitor.scale",
+        ),
+        (
+            RAdaptiveOptions {
+                monitor: Monitor::Curvature {
+                    scale: 1.0,
+                    curvature: f64::INFINITY,
+                },
+                ..base.clone()
+            },
+            "monitor.curvature",
+        ),
+        (
+            RAdaptiveOptions {
+                smoothing: -0.5,
+                ..base.clone()
+            },
+            "smoothing",
+        ),
+        (
+            RAdaptiveOptions {
+                smoothing: f64::NAN,
+                ..base.clone()
+            },
+            "smoothing",
+        ),
+        (
+            RAdaptiveOptions {
+                max_iterations: 0,
+                ..base.clone()
+            },
+            "max_iterations",
+        ),
+        (
+            RAdaptiveOptions {
+                tolerance: 0.0,
+                ..base.clone()
+            },
+            "tolerance",
+        ),
+        (
+            RAdaptiveOptions {
+                record_every: 0,
+                ..base.clone()
+            },
+            "record_every",
+        ),
+    ];
+    for (o, name) in cases {
+        assert_eq!(error_name(build(o)), name);
+    }
+    let uniform: Vec<f64> = (0..41).map(|i| -20.0 + i as f64).collect();
+    let mut crossed = uniform.clone();
+    crossed.swap(10, 11);
+    let mut repeated = uniform.clone();
+    repeated[7] = repeated[6];
+    let mut short = uniform.clone();
+    short[40] = 19.0;
+    let mut not_finite = uniform.clone();
+    not_finite[3] = f64::NAN;
+    for mesh in [crossed, repeated, short, not_finite, uniform[..40].to_vec()] {
+        let o = RAdaptiveOptions {
+            initial_mesh: Some(mesh),
+            ..base.clone()
+        };
+        assert_eq!(error_name(build(o)), "initial_mesh");
+    }
+    let o = RAdaptiveOptions {
+        initial_mesh: Some(uniform),
+        ..base.clone()
+    };
+    assert!(build(o).is_ok());
+    let periodic = RAdaptive::new(SineGordon, wide(), Boundary::Periodic, base.clone());
+    assert_eq!(error_name(periodic), "boundary");
+    let nan_end = RAdaptive::new(SineGordon, wide(), held(f64::NAN, 0.0), base);
+    assert_eq!(error_name(nan_end), "boundary");
+}
+
+/// ℒ = ½u_t² − ½u_x² − ½x²u²: depends on x explicitly.
+struct Trapped;
+
+impl LagrangianDensity<1> for Trapped {
+    fn density<D: Scalar>(
+        &self,
+        x: f64,
+        _t: f64,
+        u: &SVector<D, 1>,
+        u_t: &SVector<D, 1>,
+        u_x: &SVector<D, 1>,
+    ) -> D {
+        (u_t[0] * u_t[0] - u_x[0] * u_x[0] - u[0] * u[0] * (x * x)) * 0.5
+    }
+}
+
+#[test]
+fn bad_initial_data_and_an_x_dependent_density_are_errors_naming_the_field() {
+    let o = options(41, 0.1, Monitor::default());
+    let integrator = RAdaptive::new(SineGordon, wide(), held(0.0, 2.0 * PI), o.clone()).unwrap();
+    let kink0 = |x: f64| {
+        let (u, u_t) = kink(0.5, 0.0, x, 0.0);
+        (SVector::from([u]), SVector::from([u_t]))
+    };
+    assert_eq!(
+        error_name(integrator.run(f64::NAN, kink0, 5, |_, _, _, _| {})),
+        "t0"
+    );
+    let hole = |x: f64| {
+        let (u, v) = kink0(x);
+        (if x.abs() < 3.0 { u * f64::NAN } else { u }, v)
+    };
+    assert_eq!(
+        error_name(integrator.run(0.0, hole, 5, |_, _, _, _| {})),
+        "initial"
+    );
+    let wrong_end = |x: f64| (SVector::from([x]), SVector::from([0.0]));
+    assert_eq!(
+        error_name(integrator.run(0.0, wrong_end, 5, |_, _, _, _| {})),
+        "boundary"
+    );
+    let trapped = RAdaptive::new(Trapped, wide(), held(0.0, 0.0), o).unwrap();
+    let bump = |x: f64| (SVector::from([(-x * x).exp()]), SVector::from([0.0]));
+    assert_eq!(
+        error_name(trapped.run(0.0, bump, 5, |_, _, _, _| {})),
+        "density"
+    );
+}
+
+#[test]
+fn a_folded_mesh_is_a_typed_error_with_its_step_and_time() {
+    assert_eq!(check_fold(3, 0.3, &[0.0, 1.0, 2.0]), Ok(1.0));
+    let error = check_fold(7, 1.4, &[0.0, 1.0, 0.5, 2.0]).unwrap_err();
+    assert_eq!(
+        error,
+        Error::MeshFold {
+            step: 7,
+            t: 1.4,
+            cell: 1,
+            width: -0.5
+        }
+    );
+    assert_eq!(
+        (error.kind(), error.step(), error.time()),
+        ("mesh_fold", Some(7), Some(1.4))
+    );
+    let touching = check_fold(0, 0.0, &[0.0, 1.0, 1.0, 2.0]).unwrap_err();
+    assert!(matches!(touching, Error::MeshFold { cell: 1, width, .. } if width == 0.0));
+    let nan = check_fold(0, 0.0, &[0.0, f64::NAN, 2.0]).unwrap_err();
+    assert!(matches!(nan, Error::MeshFold { cell: 0, .. }));
+}
