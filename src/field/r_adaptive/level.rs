@@ -188,7 +188,8 @@ impl<const C: usize> LevelSolver<C> {
 
     /// Newton's iteration of one level from the start of `attempt` (0: extrapolated, 1: the
     /// caller's), leaving q^{j+1} in `next_x`, `next_u` and λ^j in `multipliers`.
-    #[allow(clippy::too_many_arguments)]
+    // Nodes index several parallel arrays (positions, values, multipliers, rows).
+    #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
     fn newton<F: LagrangianDensity<C>>(
         &mut self,
         integrator: &RAdaptive<F, C>,

@@ -96,8 +96,10 @@ fn a_uniform_monitor_reduces_to_the_uniform_integrator() {
             })
             .unwrap();
         let mesh = Mesh::new(wide(), nodes, dt, held(0.0, 2.0 * PI)).unwrap();
-        let mut uniform_options = MultisymplecticOptions::default();
-        uniform_options.quadrature = quadrature;
+        let uniform_options = MultisymplecticOptions {
+            quadrature,
+            ..MultisymplecticOptions::default()
+        };
         let uniform = Multisymplectic::new(SineGordon, mesh.clone(), uniform_options).unwrap();
         let mut gap = 0.0f64;
         let mut drift = 0.0f64;
@@ -234,22 +236,18 @@ fn kink_antikink(v: f64, x: f64, t: f64) -> (f64, f64) {
 /// t = 0 to t = 10, on 201 nodes: no fold, and the error against the exact pair.
 ///
 /// KNOWN FAILURE (2026-12-06): every configuration tried (101/201 nodes, Δt 0.025–0.1,
-/// α = 1 or 4) stops with a typed `NonConvergence` at t ≈ −1 … −0.8, just before the
-/// collision, where u → 0 everywhere and the equidistributed mesh must unwind from two
-/// clusters to a uniform mesh within about one time unit. Never a fold or a silent field.
+/// α = 0.25, 1 or 4, smoothing κ = 2 or 5, up to 300 iterations) stops with a typed
+/// `NonConvergence` at t ≈ −1 … −0.4, before the collision at t = 0. The multipliers stay
+/// small (|λ| ≤ 5·10⁻³ at α = 1) up to the failing level, so the constraint forces are not
+/// the cause; the level's Newton iteration stops contracting from both starts. Never a fold
+/// or a silent field.
 #[test]
 #[ignore = "known failure: Newton stalls just before the collision (see the doc comment)"]
 fn the_kink_antikink_collision_runs_through_without_folding() {
     let v = 0.9;
     let o = RAdaptiveOptions {
         record_every: 20,
-        ..options(
-            env("RA_NODES", 201.0) as usize,
-            env("RA_DT", 0.05),
-            Monitor::ArcLength {
-                scale: env("RA_SCALE", 4.0),
-            },
-        )
+        ..options(201, 0.05, Monitor::ArcLength { scale: 1.0 })
     };
     let integrator = RAdaptive::new(SineGordon, wide(), held(0.0, 0.0), o).unwrap();
     let mut error = 0.0f64;
@@ -260,7 +258,7 @@ fn the_kink_antikink_collision_runs_through_without_folding() {
                 let (u, u_t) = kink_antikink(v, x, -10.0);
                 (SVector::from([u]), SVector::from([u_t]))
             },
-            (20.0 / env("RA_DT", 0.05)).round() as usize,
+            400,
             |_, t, x, u| {
                 for (x, u) in x.iter().zip(u) {
                     error = error.max((u[0] - kink_antikink(v, *x, t).0).abs());
