@@ -240,7 +240,9 @@ fn kink_antikink(v: f64, x: f64, t: f64) -> (f64, f64) {
 /// `NonConvergence` at t ≈ −1 … −0.4, before the collision at t = 0. The multipliers stay
 /// small (|λ| ≤ 5·10⁻³ at α = 1) up to the failing level, so the constraint forces are not
 /// the cause; the level's Newton iteration stops contracting from both starts. Never a fold
-/// or a silent field.
+/// or a silent field. With the trapezoid quadrature (Δt = 0.01 or 0.005) the run does pass
+/// the collision without a fold or a Newton failure, but ends 6 to 10 away from the exact
+/// pair (the leapfrog scheme's CFL limit, relative to the fast-moving mesh, is broken).
 #[test]
 #[ignore = "known failure: Newton stalls just before the collision (see the doc comment)"]
 fn the_kink_antikink_collision_runs_through_without_folding() {
