@@ -88,6 +88,15 @@
 //! folds (a cell of width ≤ 0 after a level) is an [`Error::MeshFold`] with the step and time.
 //! Order 2 in (Δξ, Δt) for a smooth map φ.
 //!
+//! # Measured (2026-12-06, release build, one job, 2-core machine)
+//! Sine-Gordon kink at v = 0.99 (γ = 7.09) from x₀ = −10 on [−20, 20] to T = 20, largest
+//! nodal error against the exact kink over all levels: the r-adaptive VI (midpoint, arc
+//! length α = 4, κ = 2, Δt = 0.05) 7.7·10⁻² on 101 nodes in 0.41 s; the uniform VI
+//! (trapezoid, Δt = Δx/2) 8.6·10⁻² on 3201 nodes in 1.9 s, 0.16 on 2401 nodes. The
+//! breather's discrete energy over 10⁴ levels varies by 2.9·10⁻² (0.2 % of E = 13.95) with
+//! no drift. The kink–antikink collision does *not* yet run through: the level's Newton
+//! iteration stops converging shortly before the collision (a typed `NonConvergence`).
+//!
 //! # Which quadrature
 //! [`CellQuadrature::Midpoint`] (the default here) is the box scheme in computational
 //! variables, stable for every Δt on the wave equation: the mesh follows a fast kink, so
