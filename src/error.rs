@@ -122,6 +122,22 @@ pub enum Error {
         /// The step's [`crate::model::group::LieGroup::chart_reach`] (≥ 1).
         reach: f64,
     },
+    /// A moving mesh folded: after the step, two nodes crossed or met (a cell of width ≤ 0),
+    /// so the field on it would be meaningless ([`crate::field::r_adaptive`]).
+    #[error(
+        "the moving mesh folded at step {step} (t = {t:?}): cell {cell} has width {width:e}; take a smaller step or more smoothing"
+    )]
+    MeshFold {
+        /// Index of the step.
+        step: usize,
+        /// Start time of the step.
+        t: f64,
+        /// Index of the first cell of non-positive width (between nodes `cell` and
+        /// `cell + 1`).
+        cell: usize,
+        /// Its width x_{cell+1} − x_cell.
+        width: f64,
+    },
 }
 
 impl Error {
@@ -135,7 +151,8 @@ impl Error {
 
     /// The kind of error as a stable snake-case name (for machine-readable reports):
     /// `invalid_parameter`, `non_convergence`, `singular_matrix`, `legendre_map`,
-    /// `step_size_too_small`, `non_finite`, `diverged`, `too_many_steps` or `outside_chart`.
+    /// `step_size_too_small`, `non_finite`, `diverged`, `too_many_steps`, `outside_chart` or
+    /// `mesh_fold`.
     pub fn kind(&self) -> &'static str {
         match self {
             Error::InvalidParameter { .. } => "invalid_parameter",
@@ -147,6 +164,7 @@ impl Error {
             Error::Diverged { .. } => "diverged",
             Error::TooManySteps { .. } => "too_many_steps",
             Error::OutsideChart { .. } => "outside_chart",
+            Error::MeshFold { .. } => "mesh_fold",
         }
     }
 
@@ -158,7 +176,8 @@ impl Error {
             | Error::NonFinite { step, .. }
             | Error::Diverged { step, .. }
             | Error::TooManySteps { step, .. }
-            | Error::OutsideChart { step, .. } => Some(step),
+            | Error::OutsideChart { step, .. }
+            | Error::MeshFold { step, .. } => Some(step),
             _ => None,
         }
     }
@@ -174,7 +193,8 @@ impl Error {
             | Error::LegendreMap { t, .. }
             | Error::StepSizeTooSmall { t, .. }
             | Error::TooManySteps { t, .. }
-            | Error::OutsideChart { t, .. } => Some(t),
+            | Error::OutsideChart { t, .. }
+            | Error::MeshFold { t, .. } => Some(t),
             Error::InvalidParameter { .. } => None,
         }
     }

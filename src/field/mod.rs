@@ -71,6 +71,12 @@
 //! their initial values with no drift (the scheme is multisymplectic).
 
 //!
+//! # Moving meshes (§5.6)
+//! [`r_adaptive`] pulls the action back to a regular computational mesh mapped to x by node
+//! positions that are unknowns too, fixed by an equidistribution principle imposed as
+//! constraints with multipliers in the discrete action: the r-adaptive multisymplectic
+//! integrator, with nodes that cluster where the field is steep.
+//!
 //! # Pseudospectral integrators (§5.8)
 //! A complex field ψ = a + ib on a periodic domain with a density first order in time,
 //! ℒ = c(b a_t − a b_t) − W(x, t, u, u_x) (Schrödinger, cubic NLS): a discrete Fourier series
@@ -81,3 +87,4 @@ pub mod fourier;
 pub mod mesh;
 pub mod multisymplectic;
 pub mod pseudospectral;
+pub mod r_adaptive;
