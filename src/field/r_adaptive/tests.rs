@@ -125,13 +125,6 @@ fn a_uniform_monitor_reduces_to_the_uniform_integrator() {
     }
 }
 
-fn env(name: &str, default: f64) -> f64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
-
 /// The uniform VI's largest nodal error on the kink over all levels, and its run time.
 fn uniform_kink_error(v: f64, x0: f64, nodes: usize, dt: f64, levels: usize) -> (f64, f64) {
     let mesh = Mesh::new(wide(), nodes, dt, held(0.0, 2.0 * PI)).unwrap();
@@ -156,49 +149,6 @@ fn uniform_kink_error(v: f64, x0: f64, nodes: usize, dt: f64, levels: usize) -> 
         )
         .unwrap();
     (error, start.elapsed().as_secs_f64())
-}
-
-#[test]
-#[ignore = "exploration: RA_* environment variables"]
-fn explore_the_fast_kink() {
-    let horizon = env("RA_T", 20.0);
-    let nodes = env("RA_NODES", 201.0) as usize;
-    let dt = env("RA_DT", 0.05);
-    let mut o = options(
-        nodes,
-        dt,
-        Monitor::ArcLength {
-            scale: env("RA_SCALE", 1.0),
-        },
-    );
-    if env("RA_CURV", 0.0) > 0.0 {
-        o.monitor = Monitor::Curvature {
-            scale: env("RA_SCALE", 1.0),
-            curvature: env("RA_CURV", 0.0),
-        };
-    }
-    o.smoothing = env("RA_SMOOTH", 2.0);
-    if env("RA_TRAP", 0.0) > 0.0 {
-        o.quadrature = CellQuadrature::Trapezoid;
-    }
-    let levels = (horizon / dt).round() as usize;
-    let start = std::time::Instant::now();
-    let result = kink_error(0.99, -10.0, o, levels);
-    let elapsed = start.elapsed().as_secs_f64();
-    match result {
-        Ok((run, error)) => println!(
-            "r-adaptive nodes {nodes} dt {dt}: error {error:.3e}, time {elapsed:.3} s, smallest width {:.3e}, iterations {}, factorizations {}",
-            run.smallest_width, run.newton_iterations, run.factorizations
-        ),
-        Err(e) => println!("r-adaptive nodes {nodes} dt {dt}: {e}"),
-    }
-    let uniform = env("RA_UNIFORM", 0.0) as usize;
-    if uniform > 0 {
-        let dt = 40.0 / (uniform - 1) as f64 * env("RA_CFL", 0.5);
-        let (error, time) =
-            uniform_kink_error(0.99, -10.0, uniform, dt, (horizon / dt).round() as usize);
-        println!("uniform nodes {uniform} dt {dt:.4}: error {error:.3e}, time {time:.3} s");
-    }
 }
 
 /// The kink at v = 0.99 (γ = 7.09) from x₀ = −10 to t = 5: the r-adaptive VI on 101 nodes
@@ -294,13 +244,7 @@ fn on_the_breather_the_moving_mesh_is_no_less_accurate_at_equal_nodes() {
     };
     for (nodes, dt) in [(101, 0.1), (201, 0.05), (401, 0.025)] {
         let levels = (4.0 * PI / omega / dt).round() as usize;
-        let o = options(
-            nodes,
-            dt,
-            Monitor::ArcLength {
-                scale: env("RA_SCALE", 1.0),
-            },
-        );
+        let o = options(nodes, dt, Monitor::ArcLength { scale: 1.0 });
         let integrator = RAdaptive::new(SineGordon, wide(), held(0.0, 0.0), o).unwrap();
         let mut adaptive = 0.0f64;
         integrator
