@@ -117,6 +117,21 @@ pub struct Multisymplectic<F, const C: usize> {
     nodes: Vec<Node>,
 }
 
+/// The options of a level's Newton iteration: at least one iteration and a finite positive
+/// tolerance, else [`Error::InvalidParameter`] `max_iterations` or `tolerance`.
+pub(crate) fn check_newton(max_iterations: usize, tolerance: f64) -> Result<(), Error> {
+    if max_iterations == 0 {
+        return Err(Error::invalid("max_iterations", "must be at least 1"));
+    }
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        return Err(Error::invalid(
+            "tolerance",
+            format!("{tolerance:?} must be finite and positive"),
+        ));
+    }
+    Ok(())
+}
+
 impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
     /// The integrator of `density` on `mesh`.
     ///
@@ -124,15 +139,7 @@ impl<F: LagrangianDensity<C>, const C: usize> Multisymplectic<F, C> {
     /// [`Error::InvalidParameter`] `max_iterations` (zero) or `tolerance` (not finite and
     /// positive).
     pub fn new(density: F, mesh: Mesh<C>, options: MultisymplecticOptions) -> Result<Self, Error> {
-        if options.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", "must be at least 1"));
-        }
-        if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
-            return Err(Error::invalid(
-                "tolerance",
-                format!("{:?} must be finite and positive", options.tolerance),
-            ));
-        }
+        check_newton(options.max_iterations, options.tolerance)?;
         let (dx, dt) = (mesh.dx(), mesh.dt());
         let nodes = match options.quadrature {
             CellQuadrature::Trapezoid => [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)]

@@ -145,20 +145,7 @@ impl<const C: usize> LevelSolver<C> {
             .for_each(|p| *p = SVector::zeros());
         state.momentum_x.iter_mut().for_each(|p| *p = 0.0);
         for k in 0..last {
-            let corners = Corners {
-                u: [
-                    state.u[k],
-                    state.u[k + 1],
-                    self.next_u[k],
-                    self.next_u[k + 1],
-                ],
-                x: [
-                    state.x[k],
-                    state.x[k + 1],
-                    self.next_x[k],
-                    self.next_x[k + 1],
-                ],
-            };
+            let corners = self.corners(state, k);
             integrator.cell_gradient(t, &corners, &mut self.gradient);
             for (corner, node) in [(2, k), (3, k + 1)] {
                 for c in 0..C {
@@ -238,20 +225,7 @@ impl<const C: usize> LevelSolver<C> {
             // Jacobian.
             let half = 2 * (C + 1);
             for k in 0..last {
-                let corners = Corners {
-                    u: [
-                        state.u[k],
-                        state.u[k + 1],
-                        self.next_u[k],
-                        self.next_u[k + 1],
-                    ],
-                    x: [
-                        state.x[k],
-                        state.x[k + 1],
-                        self.next_x[k],
-                        self.next_x[k + 1],
-                    ],
-                };
+                let corners = self.corners(state, k);
                 integrator.cell_gradient(t, &corners, &mut self.gradient);
                 for (corner, node) in [(0, k), (1, k + 1)] {
                     if node == 0 || node == last {
@@ -388,6 +362,24 @@ impl<const C: usize> LevelSolver<C> {
     }
 
     /// A fold of the current iterate as an error, if it has one.
+    /// Cell k of the slab between level j (`state`) and the candidate level j + 1.
+    fn corners(&self, state: &State<C>, k: usize) -> Corners<C> {
+        Corners {
+            u: [
+                state.u[k],
+                state.u[k + 1],
+                self.next_u[k],
+                self.next_u[k + 1],
+            ],
+            x: [
+                state.x[k],
+                state.x[k + 1],
+                self.next_x[k],
+                self.next_x[k + 1],
+            ],
+        }
+    }
+
     fn fold(&self, level: usize, t: f64) -> Option<Error> {
         super::check_fold(level, t, &self.next_x).err()
     }

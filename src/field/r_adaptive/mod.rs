@@ -114,6 +114,7 @@ mod tests;
 use crate::error::{Error, require_finite};
 use crate::field::mesh::MAX_POINTS;
 pub use crate::field::multisymplectic::CellQuadrature;
+use crate::field::multisymplectic::check_newton;
 use crate::model::density::{Boundary, Domain, Jet, LagrangianDensity, LagrangianDensityExt};
 use cell::QuadraturePoint;
 use nalgebra::SVector;
@@ -279,15 +280,7 @@ impl<F: LagrangianDensity<C>, const C: usize> RAdaptive<F, C> {
             }
         }
         non_negative("smoothing", options.smoothing)?;
-        if options.max_iterations == 0 {
-            return Err(Error::invalid("max_iterations", "must be at least 1"));
-        }
-        if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
-            return Err(Error::invalid(
-                "tolerance",
-                format!("{:?} must be finite and positive", options.tolerance),
-            ));
-        }
+        check_newton(options.max_iterations, options.tolerance)?;
         if options.record_every == 0 {
             return Err(Error::invalid("record_every", "must be at least 1"));
         }
