@@ -616,7 +616,9 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         flag(
             "--param",
             (
-                select(vec!["e", "sigma", "g", "k", "m", "i1", "zeta", "bogus"]),
+                select(vec![
+                    "e", "phase", "sigma", "g", "k", "m", "i1", "zeta", "bogus",
+                ]),
                 mode.hostile(),
             )
                 .prop_map(|(name, value)| format!("{name}={value}"))
@@ -693,7 +695,7 @@ fn run_arguments(mode: Mode) -> impl Strategy<Value = Vec<String>> {
         flag(
             "--sensitivity",
             select(vec![
-                "e", "q0,v0", "p0", "l,c,q0", "e,e", "", "nan", "q0,mass",
+                "e", "e,phase", "q0,v0", "p0", "l,c,q0", "e,e", "", "nan", "q0,mass",
             ])
             .prop_map(String::from)
             .boxed(),

@@ -30,7 +30,7 @@ HOSTILE = [
     # Initial states on a Lie group: wrong lengths, a NaN, entries off the group.
     {"log": [0.1, 0.2]}, {"xi": [math.nan, 0.0, 0.0, 0.0]}, {"g": [1.0] * 11}, {"momentum": [1e300] * 6},
     # Derivatives of a run: names the models have, and names they do not.
-    ["e", "q0"], ["l", "c", "v0"], ["p0", "nosuch"],
+    ["e", "q0"], ["e", "phase"], ["l", "c", "v0"], ["p0", "nosuch"], {"phase": 1e300}, {"phase": math.nan},
 ]
 
 #: Keyword arguments of svi.run and svi.ensemble that take numbers, counts or names.
