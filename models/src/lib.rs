@@ -123,6 +123,7 @@
 //! They implement [`SpectralZooModel`] and are handed to a [`SpectralModelVisitor`] by
 //! [`visit_spectral_model`] (names: [`SPECTRAL_MODEL_NAMES`]).
 
+mod any_chain;
 mod chain;
 mod elliptic;
 mod params;
@@ -158,6 +159,7 @@ pub mod heavy_top;
 pub mod pendulum_3d;
 pub mod rigid_body;
 
+pub use any_chain::{AnyChain, ChainView};
 pub use damped_oscillator::DampedOscillator;
 pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
@@ -554,6 +556,10 @@ pub trait LocalZooModel:
     /// The observables at (t, q, q̇), appended to `out` (as many as
     /// [`LocalZooModel::observable_names`]; O(n) each).
     fn observables_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>);
+
+    /// The model as an [`AnyChain`]: one type for every chain, so that a program running a
+    /// chain chosen at run time compiles its methods once per declaration, not per chain.
+    fn into_any(self) -> AnyChain;
 }
 
 /// The number of normal-mode energies an FPUT trajectory writes (at most n).
@@ -570,6 +576,10 @@ impl LocalZooModel for Fput {
     /// The harmonic energies of the first modes ([`Fput::mode_energies`]).
     fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
         out.extend(self.mode_energies(q, v, FPUT_OBSERVED_MODES));
+    }
+
+    fn into_any(self) -> AnyChain {
+        self.into()
     }
 }
 
@@ -594,6 +604,10 @@ impl LocalZooModel for FputStiff {
         out.extend(energies.iter().take(FPUT_STIFF_OBSERVED_SPRINGS));
         out.push(energies.iter().sum());
     }
+
+    fn into_any(self) -> AnyChain {
+        self.into()
+    }
 }
 
 impl LocalZooModel for Toda {
@@ -608,6 +622,10 @@ impl LocalZooModel for Toda {
     fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
         out.extend(self.lax_traces(q, v, self.invariant_count()));
     }
+
+    fn into_any(self) -> AnyChain {
+        self.into()
+    }
 }
 
 impl LocalZooModel for RelativisticChain {
@@ -619,6 +637,10 @@ impl LocalZooModel for RelativisticChain {
     /// The largest speed as a fraction of c, max ∣q̇ᵢ∣/c (below 1 on every valid state).
     fn observables_into(&self, _: f64, _: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
         out.push(v.amax() / self.c);
+    }
+
+    fn into_any(self) -> AnyChain {
+        self.into()
     }
 }
 
@@ -633,6 +655,10 @@ impl LocalZooModel for SineGordonChain {
     fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
         out.push(self.kink_position(q));
     }
+
+    fn into_any(self) -> AnyChain {
+        self.into()
+    }
 }
 
 impl LocalZooModel for Polymer {
@@ -646,18 +672,37 @@ impl LocalZooModel for Polymer {
     fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
         out.extend([self.end_to_end(q), self.gyration_radius(q)]);
     }
-}
 
-impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> LocalZooModel
-    for TextChain<WIDTH, TIME_DEPENDENT, CONSTANT_MASS>
-{
-    /// None: a chain written as text names no summary of its state.
-    fn observable_names(&self) -> Vec<String> {
-        Vec::new()
+    fn into_any(self) -> AnyChain {
+        self.into()
     }
-
-    fn observables_into(&self, _: f64, _: &DVector<f64>, _: &DVector<f64>, _: &mut Vec<f64>) {}
 }
+
+/// A chain written as text, in each of the declarations [`visit_text_chain`] hands out.
+macro_rules! text_chain_zoo {
+    ($($width:literal),+) => {
+        $(
+            text_chain_zoo!(@one TextChain<$width, false, true>);
+            text_chain_zoo!(@one TextChain<$width>);
+        )+
+    };
+    (@one $chain:ty) => {
+        impl LocalZooModel for $chain {
+            /// None: a chain written as text names no summary of its state.
+            fn observable_names(&self) -> Vec<String> {
+                Vec::new()
+            }
+
+            fn observables_into(&self, _: f64, _: &DVector<f64>, _: &DVector<f64>, _: &mut Vec<f64>) {}
+
+            fn into_any(self) -> AnyChain {
+                self.into()
+            }
+        }
+    };
+}
+
+text_chain_zoo!(1, 2, 3, 4);
 
 /// Receives a concrete runtime-dimension model chosen by name at run time (see
 /// [`visit_local_model`]).

@@ -302,155 +302,12 @@ where
     }
 
     fn initial_state(&self, model: &L, t0: f64, initial: &Initial<N>) -> Result<State<N>, Error> {
-        let (q, second, name) = match initial {
-            Initial::Velocity { q, v } => (q, v, "initial velocity"),
-            Initial::Momentum { q, p } => (q, p, "initial momentum"),
-        };
-        let size = model.dimension();
-        dimension_of::<N>(size).map_err(|reason| Error::invalid("model", reason))?;
-        if let Some(terms) = model.terms() {
-            terms.check_indices(size)?;
-        }
-        for (what, x) in [("initial position", q), (name, second)] {
-            if x.len() != size {
-                return Err(Error::invalid(
-                    "initial state",
-                    format!(
-                        "the {what} has {} entries, the model {size} coordinates",
-                        x.len()
-                    ),
-                ));
-            }
-        }
-        require_finite_entries("initial position", q)?;
-        require_finite_entries(name, second)?;
-        let y = match (Method::info(self).coordinates, initial) {
-            (Coordinates::Momentum, Initial::Momentum { p, .. }) => p.clone(),
-            (Coordinates::Velocity, Initial::Velocity { v, .. }) => v.clone(),
-            (Coordinates::Momentum, Initial::Velocity { q, v }) => match model.hamiltonian_form() {
-                Some(form) if form.without_lagrangian() => field_momentum(form, t0, q, v, v)
-                    .ok_or_else(|| {
-                        Error::invalid(
-                            "initial state",
-                            "no momentum p with ∂H/∂p = the initial velocity was found: give \
-                             the initial momentum",
-                        )
-                    })?,
-                _ => model.momentum(t0, q, v),
-            },
-            (Coordinates::Velocity, Initial::Momentum { q, p }) => model.velocity(t0, q, p, p)?,
-        };
-        let state = State { q: q.clone(), y };
-        if !state.is_finite() {
-            return Err(Error::NonFinite {
-                what: format!(
-                    "{} of the model from the given initial state (its Lagrangian or \
-                     derivatives are singular or overflow there)",
-                    match initial {
-                        Initial::Velocity { .. } => "momentum ∂L/∂q̇",
-                        Initial::Momentum { .. } => "velocity (inverse Legendre map)",
-                    }
-                ),
-                step: 0,
-                t: t0,
-            });
-        }
-        Ok(state)
+        euclidean_initial_state(model, Method::info(self).coordinates, t0, initial)
     }
 
-    /// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
-    /// L_vv must not change with q̇, and ∂L/∂q̇ must vanish at q̇ = 0 (no term linear in q̇:
-    /// p = Mq̇ exactly, which the fixed-point iteration and the cached q̇ = M⁻¹p rely on).
-    /// Necessary conditions, checked at the initial state of the integrator's first run. A
-    /// model written as a Hamiltonian is checked by
-    /// [`crate::model::hamiltonian::HamiltonianForm::check`] instead.
+    /// [`check_euclidean_model`] under the method's equations and coordinates.
     fn check_model(&self, model: &L, t: f64, state: &State<N>) -> Result<(), Error> {
-        // A model written as H: H finite, ∂²H/∂p² regular and its declared structure, at
-        // (q, p) (its Lagrangian's constant mass is ½ q̇ᵀMq̇ by construction).
-        if let Some(form) = model.hamiltonian_form() {
-            let info = Method::info(self);
-            if form.without_lagrangian() && info.equations != Equations::Hamilton {
-                return Err(Error::invalid(
-                    "method",
-                    format!(
-                        "{} discretises the Euler–Lagrange equations, and the model (a \
-                         right-hand side of Hamilton's equations, or an H of local terms) has no \
-                         Lagrangian: run it with \
-                         a method on Hamilton's equations (the methods whose names end in -h, \
-                         svi-h the first)",
-                        info.name,
-                    ),
-                ));
-            }
-            let p = match info.coordinates {
-                Coordinates::Momentum => state.y.clone(),
-                Coordinates::Velocity => model.momentum(t, &state.q, &state.y),
-            };
-            return form.check(t, &state.q, &p);
-        }
-        if L::STRUCTURE != Structure::ConstantMass {
-            return Ok(());
-        }
-        let shifted = state.y.map(|y| 2.0 * y + 1.0);
-        let (scale, coupling, change) = match model.terms() {
-            // Term by term, in O(n): no n × n matrix. A term's blocks at q̇ and at the
-            // shifted q̇ (a sum whose terms' dependences on q̇ cancel would be refused; no
-            // model is written that way).
-            Some(terms) => {
-                let layout = TermDerivatives {
-                    width: terms.width(),
-                };
-                let k = layout.width;
-                let mut indices = vec![0; k];
-                let mut local = [vec![0.0; k], vec![0.0; k], vec![0.0; k]];
-                let mut blocks = [vec![0.0; layout.len()], vec![0.0; layout.len()]];
-                let (mut mass, mut stiffness) = (0.0_f64, 0.0_f64);
-                let (mut coupling, mut change) = (0.0_f64, 0.0_f64);
-                for e in 0..terms.term_count() {
-                    terms.term_indices(e, &mut indices);
-                    let [q, v, w] = &mut local;
-                    for (a, &i) in indices.iter().enumerate() {
-                        (q[a], v[a], w[a]) = (state.q[i], state.y[i], shifted[i]);
-                    }
-                    terms.term_derivatives(e, t, q, v, true, &mut blocks[0]);
-                    terms.term_derivatives(e, t, q, w, true, &mut blocks[1]);
-                    let [first, second] = &blocks;
-                    for a in 0..k {
-                        for b in 0..k {
-                            mass = mass.max(layout.vv(first, a, b).abs());
-                            stiffness = stiffness.max(layout.qq(first, a, b).abs());
-                            coupling = coupling
-                                .max(layout.qv(first, a, b).abs())
-                                .max(layout.qv(second, a, b).abs());
-                            change = change
-                                .max((layout.vv(first, a, b) - layout.vv(second, a, b)).abs());
-                        }
-                    }
-                }
-                (1.0 + mass + stiffness, coupling, change)
-            }
-            None => {
-                let first = model.second_derivatives(t, &state.q, &state.y);
-                let second = model.second_derivatives(t, &state.q, &shifted);
-                (
-                    1.0 + first.vv.amax() + first.qq.amax(),
-                    first.qv.amax().max(second.qv.amax()),
-                    (&first.vv - &second.vv).amax(),
-                )
-            }
-        };
-        let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
-        if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
-            return Err(Error::invalid(
-                "structure",
-                format!(
-                    "the model declares a constant mass matrix (L = ½ q̇ᵀMq̇ − V), but \
-                     ∂²L/∂q∂q̇ = {coupling:e}, ∂²L/∂q̇² changes by {change:e} with q̇ and \
-                     ∂L/∂q̇ = {linear:e} at q̇ = 0"
-                ),
-            ));
-        }
-        Ok(())
+        check_euclidean_model(model, &Method::info(self), t, state)
     }
 
     fn complete(
@@ -626,3 +483,177 @@ where
 
 /// Most Newton iterations of [`field_momentum`].
 const FIELD_MOMENTUM_ITERATIONS: usize = 20;
+
+/// The state of a method on ℝᴺ from an initial condition, in the method's `coordinates`
+/// (the Legendre map or its inverse where the condition is in the others), after checking the
+/// model's size and index sets and that every number is finite. Generic in the model only, so
+/// that it is compiled once per model, not once per model and method.
+fn euclidean_initial_state<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    coordinates: Coordinates,
+    t0: f64,
+    initial: &Initial<N>,
+) -> Result<State<N>, Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let (q, second, name) = match initial {
+        Initial::Velocity { q, v } => (q, v, "initial velocity"),
+        Initial::Momentum { q, p } => (q, p, "initial momentum"),
+    };
+    let size = model.dimension();
+    dimension_of::<N>(size).map_err(|reason| Error::invalid("model", reason))?;
+    if let Some(terms) = model.terms() {
+        terms.check_indices(size)?;
+    }
+    for (what, x) in [("initial position", q), (name, second)] {
+        if x.len() != size {
+            return Err(Error::invalid(
+                "initial state",
+                format!(
+                    "the {what} has {} entries, the model {size} coordinates",
+                    x.len()
+                ),
+            ));
+        }
+    }
+    require_finite_entries("initial position", q)?;
+    require_finite_entries(name, second)?;
+    let y = match (coordinates, initial) {
+        (Coordinates::Momentum, Initial::Momentum { p, .. }) => p.clone(),
+        (Coordinates::Velocity, Initial::Velocity { v, .. }) => v.clone(),
+        (Coordinates::Momentum, Initial::Velocity { q, v }) => match model.hamiltonian_form() {
+            Some(form) if form.without_lagrangian() => field_momentum(form, t0, q, v, v)
+                .ok_or_else(|| {
+                    Error::invalid(
+                        "initial state",
+                        "no momentum p with ∂H/∂p = the initial velocity was found: give \
+                         the initial momentum",
+                    )
+                })?,
+            _ => model.momentum(t0, q, v),
+        },
+        (Coordinates::Velocity, Initial::Momentum { q, p }) => model.velocity(t0, q, p, p)?,
+    };
+    let state = State { q: q.clone(), y };
+    if !state.is_finite() {
+        return Err(Error::NonFinite {
+            what: format!(
+                "{} of the model from the given initial state (its Lagrangian or \
+                 derivatives are singular or overflow there)",
+                match initial {
+                    Initial::Velocity { .. } => "momentum ∂L/∂q̇",
+                    Initial::Momentum { .. } => "velocity (inverse Legendre map)",
+                }
+            ),
+            step: 0,
+            t: t0,
+        });
+    }
+    Ok(state)
+}
+
+/// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
+/// L_vv must not change with q̇, and ∂L/∂q̇ must vanish at q̇ = 0 (no term linear in q̇:
+/// p = Mq̇ exactly, which the fixed-point iteration and the cached q̇ = M⁻¹p rely on).
+/// Necessary conditions, checked at the initial state of the integrator's first run. A
+/// model written as a Hamiltonian is checked by
+/// [`crate::model::hamiltonian::HamiltonianForm::check`] instead.
+///
+/// Generic in the model only, so that it is compiled once per model, not once per model and
+/// method.
+fn check_euclidean_model<L: Lagrangian<N>, N: Dimension>(
+    model: &L,
+    info: &MethodInfo,
+    t: f64,
+    state: &State<N>,
+) -> Result<(), Error>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    // A model written as H: H finite, ∂²H/∂p² regular and its declared structure, at
+    // (q, p) (its Lagrangian's constant mass is ½ q̇ᵀMq̇ by construction).
+    if let Some(form) = model.hamiltonian_form() {
+        if form.without_lagrangian() && info.equations != Equations::Hamilton {
+            return Err(Error::invalid(
+                "method",
+                format!(
+                    "{} discretises the Euler–Lagrange equations, and the model (a \
+                     right-hand side of Hamilton's equations, or an H of local terms) has no \
+                     Lagrangian: run it with \
+                     a method on Hamilton's equations (the methods whose names end in -h, \
+                     svi-h the first)",
+                    info.name,
+                ),
+            ));
+        }
+        let p = match info.coordinates {
+            Coordinates::Momentum => state.y.clone(),
+            Coordinates::Velocity => model.momentum(t, &state.q, &state.y),
+        };
+        return form.check(t, &state.q, &p);
+    }
+    if L::STRUCTURE != Structure::ConstantMass {
+        return Ok(());
+    }
+    let shifted = state.y.map(|y| 2.0 * y + 1.0);
+    let (scale, coupling, change) = match model.terms() {
+        // Term by term, in O(n): no n × n matrix. A term's blocks at q̇ and at the
+        // shifted q̇ (a sum whose terms' dependences on q̇ cancel would be refused; no
+        // model is written that way).
+        Some(terms) => {
+            let layout = TermDerivatives {
+                width: terms.width(),
+            };
+            let k = layout.width;
+            let mut indices = vec![0; k];
+            let mut local = [vec![0.0; k], vec![0.0; k], vec![0.0; k]];
+            let mut blocks = [vec![0.0; layout.len()], vec![0.0; layout.len()]];
+            let (mut mass, mut stiffness) = (0.0_f64, 0.0_f64);
+            let (mut coupling, mut change) = (0.0_f64, 0.0_f64);
+            for e in 0..terms.term_count() {
+                terms.term_indices(e, &mut indices);
+                let [q, v, w] = &mut local;
+                for (a, &i) in indices.iter().enumerate() {
+                    (q[a], v[a], w[a]) = (state.q[i], state.y[i], shifted[i]);
+                }
+                terms.term_derivatives(e, t, q, v, true, &mut blocks[0]);
+                terms.term_derivatives(e, t, q, w, true, &mut blocks[1]);
+                let [first, second] = &blocks;
+                for a in 0..k {
+                    for b in 0..k {
+                        mass = mass.max(layout.vv(first, a, b).abs());
+                        stiffness = stiffness.max(layout.qq(first, a, b).abs());
+                        coupling = coupling
+                            .max(layout.qv(first, a, b).abs())
+                            .max(layout.qv(second, a, b).abs());
+                        change =
+                            change.max((layout.vv(first, a, b) - layout.vv(second, a, b)).abs());
+                    }
+                }
+            }
+            (1.0 + mass + stiffness, coupling, change)
+        }
+        None => {
+            let first = model.second_derivatives(t, &state.q, &state.y);
+            let second = model.second_derivatives(t, &state.q, &shifted);
+            (
+                1.0 + first.vv.amax() + first.qq.amax(),
+                first.qv.amax().max(second.qv.amax()),
+                (&first.vv - &second.vv).amax(),
+            )
+        }
+    };
+    let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
+    if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
+        return Err(Error::invalid(
+            "structure",
+            format!(
+                "the model declares a constant mass matrix (L = ½ q̇ᵀMq̇ − V), but \
+                 ∂²L/∂q∂q̇ = {coupling:e}, ∂²L/∂q̇² changes by {change:e} with q̇ and \
+                 ∂L/∂q̇ = {linear:e} at q̇ = 0"
+            ),
+        ));
+    }
+    Ok(())
+}

@@ -9,7 +9,8 @@ use svi_models::ZooModel;
 use crate::bench::method::BenchMethod;
 use crate::bench::options::BenchOptions;
 use crate::bench::peers::{
-    FirstOrder, PeerRun, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5, split, wired_for,
+    FirstOrder, PeerRun, PeerSystem, RADAU5_TOLERANCE_FLOOR, dop853, dopri5, radau5, split,
+    wired_for,
 };
 use crate::bench::problem::Problem;
 use crate::bench::record::Record;
@@ -46,9 +47,10 @@ where
             })
         }};
     }
+    let system = PeerSystem::from(&system);
     match spec {
         BenchMethod::Dop853 => go!(dop853(system, t0, t_end, y0, tol)),
-        BenchMethod::Radau5 => radau5(&system, t0, t_end, y0.into(), tol),
+        BenchMethod::Radau5 => radau5(system, t0, t_end, y0.into(), tol),
         _ => go!(dopri5(system, t0, t_end, y0, tol)),
     }
 }

@@ -81,32 +81,26 @@ where
     }
 }
 
-impl<M: ZooModel<N>, N: Dimension, const S: usize> System<f64, ode_solvers::SVector<f64, S>>
-    for FirstOrder<'_, M, N, S>
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    fn system(
-        &self,
-        t: f64,
-        y: &ode_solvers::SVector<f64, S>,
-        dy: &mut ode_solvers::SVector<f64, S>,
-    ) {
-        self.rates(t, y.as_slice(), dy.as_mut_slice());
-    }
+/// The first-order form as the peers see it: its rates and the Jacobian of its rates at a
+/// state of `y.len()` numbers.
+trait FirstOrderForm {
+    /// (q̇, q̈) at y = (q, q̇), into `dy`.
+    fn rates(&self, t: f64, y: &[f64], dy: &mut [f64]);
+    /// [[0, I], [∂q̈/∂q, ∂q̈/∂q̇]] at y = (q, q̇), into `j`.
+    fn jacobian(&self, t: f64, y: &[f64], j: &mut Matrix<f64>);
 }
 
-impl<M: ZooModel<N>, N: Dimension, const S: usize> ODE<f64, [f64; S]> for FirstOrder<'_, M, N, S>
+impl<M: ZooModel<N>, N: Dimension, const S: usize> FirstOrderForm for FirstOrder<'_, M, N, S>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    fn diff(&self, t: f64, y: &[f64; S], dydt: &mut [f64; S]) {
-        self.rates(t, y, dydt);
+    fn rates(&self, t: f64, y: &[f64], dy: &mut [f64]) {
+        FirstOrder::rates(self, t, y, dy);
     }
 
-    /// [[0, I], [∂q̈/∂q, ∂q̈/∂q̇]], the acceleration's Jacobian by automatic differentiation
-    /// (NaN where the mass matrix is singular).
-    fn jacobian(&self, t: f64, y: &[f64; S], j: &mut Matrix<f64>) {
+    /// The acceleration's Jacobian by automatic differentiation (NaN where the mass matrix is
+    /// singular).
+    fn jacobian(&self, t: f64, y: &[f64], j: &mut Matrix<f64>) {
         let (q, v) = self.split(y);
         let derivative = self.model.acceleration_jacobian(t, &q, &v);
         let n = self.n.value();
@@ -121,6 +115,44 @@ where
                 j[(n + r, n + c)] = dv;
             }
         }
+    }
+}
+
+/// A [`FirstOrder`] behind a trait object, the system the peers integrate: each peer is
+/// compiled once per state size S, not once per model (a sixteenth of the command line's
+/// code), for one indirect call per evaluation of the rates (an automatic-differentiation
+/// acceleration each).
+#[derive(Clone, Copy)]
+pub(crate) struct PeerSystem<'a, const S: usize>(&'a dyn FirstOrderForm);
+
+impl<'a, M: ZooModel<N>, N: Dimension, const S: usize> From<&'a FirstOrder<'a, M, N, S>>
+    for PeerSystem<'a, S>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    fn from(system: &'a FirstOrder<'a, M, N, S>) -> Self {
+        PeerSystem(system)
+    }
+}
+
+impl<const S: usize> System<f64, ode_solvers::SVector<f64, S>> for PeerSystem<'_, S> {
+    fn system(
+        &self,
+        t: f64,
+        y: &ode_solvers::SVector<f64, S>,
+        dy: &mut ode_solvers::SVector<f64, S>,
+    ) {
+        self.0.rates(t, y.as_slice(), dy.as_mut_slice());
+    }
+}
+
+impl<const S: usize> ODE<f64, [f64; S]> for PeerSystem<'_, S> {
+    fn diff(&self, t: f64, y: &[f64; S], dydt: &mut [f64; S]) {
+        self.0.rates(t, y, dydt);
+    }
+
+    fn jacobian(&self, t: f64, y: &[f64; S], j: &mut Matrix<f64>) {
+        self.0.jacobian(t, y, j);
     }
 }
 
@@ -170,17 +202,14 @@ pub(crate) struct PeerRun<const S: usize> {
 /// Jacobian of the first-order form, output at every accepted step and a high step cap (as the
 /// `ode_solvers` peers); `None` if it fails (also for `tol` ≤ [`RADAU5_TOLERANCE_FLOOR`]) or
 /// stops short.
-pub(crate) fn radau5<M: ZooModel<N>, N: Dimension, const S: usize>(
-    system: &FirstOrder<'_, M, N, S>,
+pub(crate) fn radau5<const S: usize>(
+    system: PeerSystem<'_, S>,
     t0: f64,
     t_end: f64,
     y0: [f64; S],
     tol: f64,
-) -> Option<PeerRun<S>>
-where
-    DefaultAllocator: Allocator<N> + Allocator<N, N>,
-{
-    let solution = IVP::ode(system, t0, t_end, y0)
+) -> Option<PeerRun<S>> {
+    let solution = IVP::ode(&system, t0, t_end, y0)
         .method(
             ImplicitRungeKutta::radau5()
                 .rtol(tol)

@@ -44,15 +44,15 @@ use std::time::Instant;
 use svi::Dimension;
 
 use svi::lie_group::{GroupIntegrator, RigidBodyIntegrator};
+use svi::method::any::AnyMethod;
 use svi::method::registry::{SpaceKind, VectorMethodVisitor};
-use svi::model::local::Terms;
 use svi::observer::Every;
 use svi::solve::{SolveOptions, Span};
 use svi::stepping::event::EventPoint;
 use svi::stepping::run::RunFailure;
-use svi::{Integrator, LagrangianExt, Method, Statistics};
+use svi::{Dyn, Integrator, LagrangianExt, Method, Statistics, Structure};
 use svi_models::{
-    GroupModelVisitor, GroupZooModel, LocalModelVisitor, LocalZooModel, ModelVisitor,
+    AnyChain, GroupModelVisitor, GroupZooModel, LocalModelVisitor, LocalZooModel, ModelVisitor,
     RigidModelVisitor, RigidZooModel, ZooModel, visit_group_model, visit_local_model, visit_model,
     visit_rigid_model, visit_text_chain, visit_text_model,
 };
@@ -312,11 +312,36 @@ impl LocalModelVisitor for SceneRun<'_> {
             quadrature: spec.quadrature_in_use(),
         };
         let plan = self.plan(resolved, method);
-        VectorMethod::<_, _, false> {
-            model: Chain(Terms(model)),
+        run_chain(plan, model.into_any(), spec.vector_method()?)
+    }
+}
+
+/// Runs a chain with `method` under the tightest declarations it allows, of three: the
+/// methods are compiled once per declaration, not once per chain ([`Chain`]). A
+/// time-dependent chain runs as general (correct for every chain; no chain of the zoo or
+/// written as text is both time-dependent and constant-mass).
+fn run_chain(
+    plan: Plan<'_, svi::Euclidean<Dyn>>,
+    chain: AnyChain,
+    method: AnyMethod,
+) -> Result<Summary, SceneError> {
+    let view = chain.view();
+    match (view.time_dependent(), view.structure()) {
+        (false, Structure::ConstantMass) => VectorMethod::<_, _, false> {
+            model: Chain::<false, true>(chain),
             plan,
         }
-        .visit(spec.vector_method()?)
+        .visit(method),
+        (false, Structure::General) => VectorMethod::<_, _, false> {
+            model: Chain::<false, false>(chain),
+            plan,
+        }
+        .visit(method),
+        (true, _) => VectorMethod::<_, _, false> {
+            model: Chain::<true, false>(chain),
+            plan,
+        }
+        .visit(method),
     }
 }
 

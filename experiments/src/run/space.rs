@@ -12,11 +12,10 @@ use svi::lie_group::{
     RigidBodyDefaults, RigidBodyExt, RigidInitial, RigidPoint, SO3,
 };
 use svi::method::space::Space;
-use svi::model::local::{LocalDefaults, LocalLagrangian, Terms};
 use svi::observer::{EnergyError, InvariantError, MomentumError, Observer, SolutionError};
 use svi::{Defaults, Euclidean, Initial, LagrangianExt, PhasePoint};
 use svi::{Dimension, Dyn};
-use svi_models::{GroupZooModel, LocalZooModel, RigidZooModel, ZooModel};
+use svi_models::{AnyChain, ChainView, GroupZooModel, RigidZooModel, ZooModel};
 
 use crate::report::csv::{RIGID_CSV_HEADER, csv_header};
 use crate::report::summary::{Conservation, StateSummary};
@@ -426,25 +425,38 @@ where
 }
 
 /// A chain or lattice of the zoo (or written as text) as the run-time-size Lagrangian the
-/// methods of ℝⁿ run ([`Terms`]: derivatives assembled term by term), with the run's parts of
-/// a chain: its few observables in the trajectory, not its n coordinates.
+/// methods of ℝⁿ run (its [`Terms`](svi::model::local::Terms): derivatives assembled term by
+/// term), with the run's parts of a chain: its few observables in the trajectory, not its n
+/// coordinates.
+///
+/// The chain is an [`AnyChain`], and its declarations are the type's: `TIME_DEPENDENT` and
+/// `CONSTANT_MASS` ([`Structure::ConstantMass`](svi::Structure)). The methods are compiled
+/// once per declaration, not once per chain ([`AnyChain`]); whoever makes one declares no
+/// more than the chain allows (autonomous only where L does not depend on t, constant-mass
+/// only where it is).
 #[derive(Debug, Clone)]
-pub struct Chain<M>(pub Terms<M>);
+pub struct Chain<const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool>(pub(crate) AnyChain);
 
-impl<M: LocalZooModel> Chain<M> {
-    /// The chain's own model.
-    pub fn model(&self) -> &M {
-        &self.0.0
+impl<const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> Chain<TIME_DEPENDENT, CONSTANT_MASS> {
+    /// The chain's object-safe parts.
+    pub fn model(&self) -> &dyn ChainView {
+        self.0.view()
     }
 }
 
-impl<M: LocalZooModel> svi::Lagrangian<Dyn> for Chain<M> {
-    const TIME_DEPENDENT: bool = <M as LocalLagrangian>::TIME_DEPENDENT;
-    const STRUCTURE: svi::Structure = <M as LocalLagrangian>::STRUCTURE;
+impl<const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> svi::Lagrangian<Dyn>
+    for Chain<TIME_DEPENDENT, CONSTANT_MASS>
+{
+    const TIME_DEPENDENT: bool = TIME_DEPENDENT;
+    const STRUCTURE: svi::Structure = if CONSTANT_MASS {
+        svi::Structure::ConstantMass
+    } else {
+        svi::Structure::General
+    };
 
     #[inline]
     fn dimension(&self) -> usize {
-        self.0.dimension()
+        self.model().dimension()
     }
 
     #[inline]
@@ -454,32 +466,39 @@ impl<M: LocalZooModel> svi::Lagrangian<Dyn> for Chain<M> {
 
     #[inline]
     fn terms(&self) -> Option<&dyn svi::model::TermSum<Dyn>> {
-        self.0.terms()
+        Some(self.model().terms())
     }
 }
 
-impl<M: LocalZooModel> svi::Invariants<Dyn> for Chain<M> {
+impl<const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> svi::Invariants<Dyn>
+    for Chain<TIME_DEPENDENT, CONSTANT_MASS>
+{
     fn invariant_count(&self) -> usize {
-        self.0.invariant_count()
+        self.model().invariant_count()
     }
 
     fn invariant_name(&self, index: usize) -> &'static str {
-        self.0.invariant_name(index)
+        self.model().invariant_name(index)
     }
 
     fn invariant(&self, index: usize, t: f64, q: &DVector<f64>, v: &DVector<f64>) -> f64 {
-        self.0.invariant(index, t, q, v)
+        self.model().invariant(index, t, q, v)
     }
 }
 
-impl<M: LocalZooModel> RunSpace<Chain<M>> for Euclidean<Dyn> {
+impl<const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool>
+    RunSpace<Chain<TIME_DEPENDENT, CONSTANT_MASS>> for Euclidean<Dyn>
+{
     const LISTS_RUN_FIELDS: bool = true;
 
     /// Energy and the model's invariants (for models with some), each O(n) per step.
     type Diagnostics = (Option<EnergyError>, Option<InvariantError>);
 
     /// The invariants are measured unless the scene asks for no diagnostic (as on SO(3)).
-    fn diagnostics(model: &Chain<M>, scene: &Scene) -> Self::Diagnostics {
+    fn diagnostics(
+        model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>,
+        scene: &Scene,
+    ) -> Self::Diagnostics {
         (
             scene.wants(Diagnostic::Energy).then(EnergyError::default),
             (scene.measures() && model.model().invariant_count() > 0).then(InvariantError::default),
@@ -487,7 +506,7 @@ impl<M: LocalZooModel> RunSpace<Chain<M>> for Euclidean<Dyn> {
     }
 
     fn measured(
-        model: &Chain<M>,
+        model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>,
         (energy, invariants): Self::Diagnostics,
         _: &PhasePoint<Dyn>,
         _: &PhasePoint<Dyn>,
@@ -507,30 +526,31 @@ impl<M: LocalZooModel> RunSpace<Chain<M>> for Euclidean<Dyn> {
         )
     }
 
-    fn model_name(model: &Chain<M>) -> &'static str {
-        LocalDefaults::name(model.model())
+    fn model_name(model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>) -> &'static str {
+        model.model().name()
     }
 
-    fn parameters(model: &Chain<M>) -> Vec<(&'static str, f64)> {
-        LocalDefaults::parameters(model.model())
+    fn parameters(model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>) -> Vec<(&'static str, f64)> {
+        model.model().parameters()
     }
 
     /// None: the n coordinates of a chain are numbered, not named.
-    fn coordinates(_: &Chain<M>) -> Option<Vec<String>> {
+    fn coordinates(_: &Chain<TIME_DEPENDENT, CONSTANT_MASS>) -> Option<Vec<String>> {
         None
     }
 
-    fn energy(model: &Chain<M>, point: &PhasePoint<Dyn>) -> f64 {
-        point.p.dot(&point.v) - model.model().value(point.t, &point.q, &point.v)
+    fn energy(model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>, point: &PhasePoint<Dyn>) -> f64 {
+        point.p.dot(&point.v) - model.model().terms().value(point.t, &point.q, &point.v)
     }
 
     /// Chains have no external force: autonomous ones conserve energy.
-    fn conserves_energy(_: &Chain<M>) -> bool {
-        !<M as LocalLagrangian>::TIME_DEPENDENT
+    fn conserves_energy(_: &Chain<TIME_DEPENDENT, CONSTANT_MASS>) -> bool {
+        !TIME_DEPENDENT
     }
 
-    fn energy_scale(model: &Chain<M>, point: &PhasePoint<Dyn>) -> f64 {
-        let energy = <Self as RunSpace<Chain<M>>>::energy(model, point).abs();
+    fn energy_scale(model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>, point: &PhasePoint<Dyn>) -> f64 {
+        let energy =
+            <Self as RunSpace<Chain<TIME_DEPENDENT, CONSTANT_MASS>>>::energy(model, point).abs();
         energy.max(0.5 * point.p.dot(&point.v).abs())
     }
 
@@ -556,7 +576,7 @@ impl<M: LocalZooModel> RunSpace<Chain<M>> for Euclidean<Dyn> {
 
     /// `t,energy,<observables>`: the model's few observables (FPUT: the mode energies
     /// `mode_1`, …; Toda: the Lax traces), not the n coordinates.
-    fn csv_header(model: &Chain<M>) -> String {
+    fn csv_header(model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>) -> String {
         let mut header = String::from("t,energy");
         for name in model.model().observable_names() {
             header.push(',');
@@ -567,9 +587,13 @@ impl<M: LocalZooModel> RunSpace<Chain<M>> for Euclidean<Dyn> {
     }
 
     /// t, the energy p·v − L and the observables.
-    fn csv_row(model: &Chain<M>, point: &PhasePoint<Dyn>, row: &mut Vec<f64>) {
+    fn csv_row(
+        model: &Chain<TIME_DEPENDENT, CONSTANT_MASS>,
+        point: &PhasePoint<Dyn>,
+        row: &mut Vec<f64>,
+    ) {
         row.push(point.t);
-        row.push(<Self as RunSpace<Chain<M>>>::energy(model, point));
+        row.push(<Self as RunSpace<Chain<TIME_DEPENDENT, CONSTANT_MASS>>>::energy(model, point));
         model
             .model()
             .observables_into(point.t, &point.q, &point.v, row);

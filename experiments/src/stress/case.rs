@@ -11,7 +11,7 @@ use svi::{Dimension, Error, Initial, Integrator, LagrangianExt, Method, RunOptio
 use svi_models::{ModelVisitor, ZooModel, visit_model};
 
 use crate::bench::method::{BenchMethod, Mode, run_mode};
-use crate::bench::peers::{FirstOrder, dop853, split, wired_for};
+use crate::bench::peers::{FirstOrder, PeerSystem, dop853, split, wired_for};
 use crate::scene::{Scene, SceneError};
 use crate::stress::drift::{Drift, SAMPLES, WINDOWS, drift};
 use crate::stress::options::{CASES, StressCase, StressOptions, peer_not_applicable};
@@ -304,7 +304,7 @@ where
     // The energy at the accepted step points, as for svi's methods (the dense output's
     // interpolation error would swamp the energy error); ode_solvers stores them all, about
     // 40 bytes per step for N = 2.
-    let mut stepper = dop853(system, setup.t0, t_end, y0, tol);
+    let mut stepper = dop853(PeerSystem::from(&system), setup.t0, t_end, y0, tol);
     let start = Instant::now();
     let stats = stepper.integrate().map_err(|e| format!("fails: {e:?}"))?;
     let seconds = start.elapsed().as_secs_f64();
