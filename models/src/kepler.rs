@@ -143,7 +143,7 @@ fn orbit_start<D: Scalar>(e: D, phase: D) -> (SVector<D, 2>, SVector<D, 2>) {
     )
 }
 
-/// θ = (e, phase): neither enters L; they move the model's initial state ([`orbit_start`]).
+/// θ = (e, phase): neither enters L; they move the model's initial state (`orbit_start`).
 impl Parametric<U2> for Kepler {
     fn parameter_names(&self) -> Vec<String> {
         Self::PARAMETERS.map(String::from).to_vec()
@@ -290,7 +290,7 @@ impl Defaults<U2> for Kepler {
         Ok(())
     }
 
-    /// t₀ = 0 and the state at mean anomaly `phase` ([`orbit_start`]) of an orbit with
+    /// t₀ = 0 and the state at mean anomaly `phase` (`orbit_start`) of an orbit with
     /// semi-major axis 1 (period 2π, E = −1/2, M = √(1 − e²)); at phase 0 the pericentre
     /// q₀ = (1 − e, 0), v₀ = (0, √((1 + e)/(1 − e))).
     fn initial_state(&self) -> (f64, SVector<f64, 2>, SVector<f64, 2>) {
