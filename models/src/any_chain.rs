@@ -96,7 +96,7 @@ impl<M: LocalZooModel> ChainView for Terms<M> {
 macro_rules! any_chain {
     ($($variant:ident($model:ty)),+ $(,)?) => {
         /// A chain of the zoo or written as text, whichever it is (see the module
-        /// documentation); made by [`LocalZooModel::into_any`].
+        /// documentation); every [`LocalZooModel`] converts into one.
         #[derive(Debug, Clone)]
         pub enum AnyChain {
             $(

@@ -546,8 +546,20 @@ pub fn visit_group_model<V: GroupModelVisitor>(name: &str, visitor: V) -> Option
 /// of local terms with its defaults and invariants, plus the named *observables* that a
 /// trajectory writes besides time and energy (n coordinates per row would make a file of
 /// 10⁵ columns; a few quantities that summarise the state are written instead).
+///
+/// Every one is also an [`AnyChain`] (`Into<AnyChain>`): one type for every chain, so that a
+/// program running a chain chosen at run time compiles its methods once per declaration, not
+/// per chain.
 pub trait LocalZooModel:
-    LocalLagrangian + LocalDefaults + LocalInvariants + Clone + Send + Sync + std::fmt::Debug + 'static
+    LocalLagrangian
+    + LocalDefaults
+    + LocalInvariants
+    + Into<AnyChain>
+    + Clone
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + 'static
 {
     /// The names of the observables, in the order of [`LocalZooModel::observables_into`]
     /// (CSV column names: letters, digits and `_`).
@@ -556,10 +568,6 @@ pub trait LocalZooModel:
     /// The observables at (t, q, q̇), appended to `out` (as many as
     /// [`LocalZooModel::observable_names`]; O(n) each).
     fn observables_into(&self, t: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>);
-
-    /// The model as an [`AnyChain`]: one type for every chain, so that a program running a
-    /// chain chosen at run time compiles its methods once per declaration, not per chain.
-    fn into_any(self) -> AnyChain;
 }
 
 /// The number of normal-mode energies an FPUT trajectory writes (at most n).
@@ -576,10 +584,6 @@ impl LocalZooModel for Fput {
     /// The harmonic energies of the first modes ([`Fput::mode_energies`]).
     fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
         out.extend(self.mode_energies(q, v, FPUT_OBSERVED_MODES));
-    }
-
-    fn into_any(self) -> AnyChain {
-        self.into()
     }
 }
 
@@ -604,10 +608,6 @@ impl LocalZooModel for FputStiff {
         out.extend(energies.iter().take(FPUT_STIFF_OBSERVED_SPRINGS));
         out.push(energies.iter().sum());
     }
-
-    fn into_any(self) -> AnyChain {
-        self.into()
-    }
 }
 
 impl LocalZooModel for Toda {
@@ -622,10 +622,6 @@ impl LocalZooModel for Toda {
     fn observables_into(&self, _: f64, q: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
         out.extend(self.lax_traces(q, v, self.invariant_count()));
     }
-
-    fn into_any(self) -> AnyChain {
-        self.into()
-    }
 }
 
 impl LocalZooModel for RelativisticChain {
@@ -637,10 +633,6 @@ impl LocalZooModel for RelativisticChain {
     /// The largest speed as a fraction of c, max ∣q̇ᵢ∣/c (below 1 on every valid state).
     fn observables_into(&self, _: f64, _: &DVector<f64>, v: &DVector<f64>, out: &mut Vec<f64>) {
         out.push(v.amax() / self.c);
-    }
-
-    fn into_any(self) -> AnyChain {
-        self.into()
     }
 }
 
@@ -655,10 +647,6 @@ impl LocalZooModel for SineGordonChain {
     fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
         out.push(self.kink_position(q));
     }
-
-    fn into_any(self) -> AnyChain {
-        self.into()
-    }
 }
 
 impl LocalZooModel for Polymer {
@@ -672,37 +660,22 @@ impl LocalZooModel for Polymer {
     fn observables_into(&self, _: f64, q: &DVector<f64>, _: &DVector<f64>, out: &mut Vec<f64>) {
         out.extend([self.end_to_end(q), self.gyration_radius(q)]);
     }
+}
 
-    fn into_any(self) -> AnyChain {
-        self.into()
+/// A chain written as text, in the declarations [`visit_text_chain`] hands out (those an
+/// [`AnyChain`] holds).
+impl<const WIDTH: usize, const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool> LocalZooModel
+    for TextChain<WIDTH, TIME_DEPENDENT, CONSTANT_MASS>
+where
+    TextChain<WIDTH, TIME_DEPENDENT, CONSTANT_MASS>: Into<AnyChain>,
+{
+    /// None: a chain written as text names no summary of its state.
+    fn observable_names(&self) -> Vec<String> {
+        Vec::new()
     }
+
+    fn observables_into(&self, _: f64, _: &DVector<f64>, _: &DVector<f64>, _: &mut Vec<f64>) {}
 }
-
-/// A chain written as text, in each of the declarations [`visit_text_chain`] hands out.
-macro_rules! text_chain_zoo {
-    ($($width:literal),+) => {
-        $(
-            text_chain_zoo!(@one TextChain<$width, false, true>);
-            text_chain_zoo!(@one TextChain<$width>);
-        )+
-    };
-    (@one $chain:ty) => {
-        impl LocalZooModel for $chain {
-            /// None: a chain written as text names no summary of its state.
-            fn observable_names(&self) -> Vec<String> {
-                Vec::new()
-            }
-
-            fn observables_into(&self, _: f64, _: &DVector<f64>, _: &DVector<f64>, _: &mut Vec<f64>) {}
-
-            fn into_any(self) -> AnyChain {
-                self.into()
-            }
-        }
-    };
-}
-
-text_chain_zoo!(1, 2, 3, 4);
 
 /// Receives a concrete runtime-dimension model chosen by name at run time (see
 /// [`visit_local_model`]).

@@ -312,7 +312,7 @@ impl LocalModelVisitor for SceneRun<'_> {
             quadrature: spec.quadrature_in_use(),
         };
         let plan = self.plan(resolved, method);
-        run_chain(plan, model.into_any(), spec.vector_method()?)
+        run_chain(plan, model.into(), spec.vector_method()?)
     }
 }
 
@@ -327,22 +327,23 @@ fn run_chain(
 ) -> Result<Summary, SceneError> {
     let view = chain.view();
     match (view.time_dependent(), view.structure()) {
-        (false, Structure::ConstantMass) => VectorMethod::<_, _, false> {
-            model: Chain::<false, true>(chain),
-            plan,
-        }
-        .visit(method),
-        (false, Structure::General) => VectorMethod::<_, _, false> {
-            model: Chain::<false, false>(chain),
-            plan,
-        }
-        .visit(method),
-        (true, _) => VectorMethod::<_, _, false> {
-            model: Chain::<true, false>(chain),
-            plan,
-        }
-        .visit(method),
+        (false, Structure::ConstantMass) => run_declared::<false, true>(plan, chain, method),
+        (false, Structure::General) => run_declared::<false, false>(plan, chain, method),
+        (true, _) => run_declared::<true, false>(plan, chain, method),
     }
+}
+
+/// Runs a chain with `method` as a [`Chain`] of the declarations given.
+fn run_declared<const TIME_DEPENDENT: bool, const CONSTANT_MASS: bool>(
+    plan: Plan<'_, svi::Euclidean<Dyn>>,
+    chain: AnyChain,
+    method: AnyMethod,
+) -> Result<Summary, SceneError> {
+    VectorMethod::<_, _, false> {
+        model: Chain::<TIME_DEPENDENT, CONSTANT_MASS>(chain),
+        plan,
+    }
+    .visit(method)
 }
 
 impl RigidModelVisitor for SceneRun<'_> {
