@@ -109,7 +109,7 @@ fn a_twelve_link_pendulum_chain_written_as_text_runs_as_the_rust_one() {
         .energy(0.0, &q0, &DVector::zeros(LINKS))
         .abs();
     let h = 0.005;
-    let steps = 40;
+    let steps = 20;
     for name in ["svi", "svi-newton", "sc", "midpoint", "trapezoid"] {
         let spec = svi::method::registry::find(name).unwrap().spec();
         let method = spec.vector_method().unwrap();
