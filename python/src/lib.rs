@@ -453,6 +453,58 @@ fn run<'py>(
     Ok((json, rows, dense))
 }
 
+/// The gradient of a loss over a scene's fixed-step run (`svi.gradient`), by the discrete
+/// adjoint ([`Scene::gradient`]): with respect to the `sensitivity` names of `options`, at the
+/// outputs of its `sensitivity_every`. `loss(j, t, q, v)` returns (ℓ_j, ∂ℓ_j/∂q, ∂ℓ_j/∂v) as a
+/// float and two lists (the package checks what the user's function returns); an exception it
+/// raises is raised again when the gradient ends. Returns the gradient's JSON.
+#[pyfunction]
+#[pyo3(signature = (scene, loss, *, params=None, initial=None, options=None, checkpoints=None))]
+fn gradient(
+    py: Python<'_>,
+    scene: &str,
+    loss: Py<PyAny>,
+    params: Option<BTreeMap<String, f64>>,
+    initial: Option<BTreeMap<String, Vec<f64>>>,
+    options: Option<BTreeMap<String, Value>>,
+    checkpoints: Option<usize>,
+) -> PyResult<String> {
+    let overrides = overrides(options, params)?;
+    let mut loaded = load(scene)?;
+    if let Some(initial) = initial {
+        set_initial(&mut loaded, initial)?;
+    }
+    loaded.overlay(&overrides).map_err(failure)?;
+    let raised = Raised::default();
+    let kept = std::sync::Arc::clone(&raised);
+    // An exception is kept and the output's loss is NaN, which fails the gradient.
+    let call = move |j: usize, t: f64, q: &[f64], v: &[f64]| -> (f64, Vec<f64>, Vec<f64>) {
+        Python::attach(|py| {
+            loss.call1(
+                py,
+                (
+                    j,
+                    t,
+                    PyArray1::from_slice(py, q),
+                    PyArray1::from_slice(py, v),
+                ),
+            )
+            .and_then(|value| value.extract::<(f64, Vec<f64>, Vec<f64>)>(py))
+            .unwrap_or_else(|error| {
+                let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
+                kept.get_or_insert(error);
+                (f64::NAN, Vec::new(), Vec::new())
+            })
+        })
+    };
+    let result = interruptible(py, |_stop| loaded.gradient(&call, checkpoints))?;
+    if let Some(error) = raised.lock().unwrap_or_else(|e| e.into_inner()).take() {
+        return Err(error);
+    }
+    let summary = result.map_err(failure)?;
+    serde_json::to_string(&summary).map_err(|error| invalid("gradient", error.to_string()))
+}
+
 /// The scene `name`: a built-in scene or an existing scene file (as `svi run` loads it), else
 /// the text of a scene (TOML: it has a line break or `=`), else a zoo model with its
 /// defaults. A field or pseudospectral scene is named as such: the package runs the ODE
@@ -853,6 +905,7 @@ fn _svi(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Failure", m.py().get_type::<Failure>())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(solve_rhs, m)?)?;
+    m.add_function(wrap_pyfunction!(gradient, m)?)?;
     m.add_function(wrap_pyfunction!(options, m)?)?;
     m.add_class::<Dense>()?;
     m.add_function(wrap_pyfunction!(ensemble, m)?)?;

@@ -39,6 +39,7 @@ __all__ = [
     "ArgumentTypeError",
     "DivergedError",
     "Event",
+    "Gradient",
     "Hamiltonian",
     "HealthError",
     "InvalidInputError",
@@ -58,6 +59,7 @@ __all__ = [
     "SviWarning",
     "bench",
     "ensemble",
+    "gradient",
     "models",
     "options",
     "run",
@@ -438,6 +440,108 @@ def run(
         progress=_stderr_is_terminal() if progress is None else _flag("progress", progress),
     )
     return Result(json.loads(summary), rows)
+
+
+class Gradient:
+    """The gradient of a loss over a run (:func:`gradient`).
+
+    Attributes:
+        value: J, the loss summed over the outputs.
+        gradient: ∂J/∂(column), a NumPy array in the order of ``columns``.
+        columns: what each entry differentiates with respect to, in the order of ``wrt``: the
+            blocks ``q0`` and ``v0`` (``p0`` for a start in momenta) as ``q0_NAME`` and
+            ``v0_NAME`` per coordinate, then the parameters by name; ``result["e"]`` picks
+            one entry.
+        peak_stored: the most forward states (checkpoints) and tangent maps held at once.
+        peak_bytes: the memory they took, in bytes.
+    """
+
+    def __init__(self, fields: Dict[str, Any]) -> None:
+        self.value: float = fields["value"]
+        self.columns: List[str] = fields["columns"]
+        self.gradient: np.ndarray = _exact(np.array(fields["gradient"], dtype=float))
+        self.peak_stored: int = fields["peak_stored"]
+        self.peak_bytes: int = fields["peak_bytes"]
+
+    def __getitem__(self, column: str) -> float:
+        """∂J/∂``column``."""
+        return float(self.gradient[self.columns.index(column)])
+
+    def __repr__(self) -> str:
+        entries = ", ".join(f"{name}={float(x)!r}" for name, x in zip(self.columns, self.gradient))
+        return f"Gradient(value={self.value!r}, {entries})"
+
+
+def gradient(
+    scene: str,
+    loss: Callable[[int, float, np.ndarray, np.ndarray], Tuple[Any, Any, Any]],
+    wrt: Union[str, Sequence[str]],
+    method: Optional[str] = None,
+    *,
+    h: Optional[float] = None,
+    t_end: Optional[float] = None,
+    every: Optional[int] = None,
+    checkpoints: Optional[int] = None,
+    params: Optional[Mapping[str, float]] = None,
+    initial: Optional[Mapping[str, Union[float, Sequence[float]]]] = None,
+) -> Gradient:
+    """The gradient of a loss of a run, J = Σ_j ℓ_j(t_j, q(t_j), q̇(t_j)), with respect to the
+    initial state and the model's parameters, by the discrete adjoint: the exact gradient of
+    the method's discrete map (as ``svi run --sensitivity``, whose Jacobians give the same
+    numbers one output at a time), the forward states kept at ``checkpoints``.
+
+    Args:
+        scene: a scene or zoo model whose parameters can be differentiated (``"kepler"``,
+            ``"damped-pendulum"``), run with fixed steps.
+        loss: ``loss(j, t, q, v)`` at output ``j`` (0: the start; then every ``every``-th step
+            and the last step) returns ``(ℓ_j, ∂ℓ_j/∂q, ∂ℓ_j/∂q̇)``: a number and two arrays of
+            the model's dimension. A least-squares loss ½Σ|q(t_j) − d_j|² returns
+            ``(0.5 * r @ r, r, 0 * v)`` with ``r = q - d[j]``.
+        wrt: what to differentiate with respect to: parameter names and the initial-state
+            blocks ``"q0"`` and ``"v0"`` (or ``"p0"``), as a list or ``"e,q0"``.
+        method, h, t_end, params, initial: as :func:`run`.
+        every: an output every ``every`` steps (default: the start and the last step only).
+        checkpoints: how many forward states are kept (at least 1; default ⌈√K⌉ for K steps).
+
+    Raises:
+        SviError: an unknown name in ``wrt``, a scene that cannot be differentiated, a loss
+            whose value or gradient is not finite (:class:`NonFiniteError`, naming the output),
+            ``checkpoints=0``; ``loss``'s own exceptions are raised as they are.
+    """
+
+    def native(j: int, t: float, q: np.ndarray, v: np.ndarray) -> Tuple[float, List[float], List[float]]:
+        returned = loss(j, t, q, v)
+        try:
+            value, dq, dv = returned
+            dq = np.asarray(dq, dtype=float).ravel()
+            dv = np.asarray(dv, dtype=float).ravel()
+        except (TypeError, ValueError):
+            raise _wrong_type("loss", "a tuple (value, dl_dq, dl_dv) of a number and two arrays", returned) from None
+        if dq.size != len(q) or dv.size != len(v):
+            message = f"invalid loss: its gradient at output {j} has {dq.size} and {dv.size} entries, not {len(q)} each"
+            raise ArgumentTypeError("invalid_input", message, bad_input=True)
+        return _real("loss", value), dq.tolist(), dv.tolist()
+
+    initial_lists = None
+    if initial is not None:
+        initial_lists = {
+            _text("initial", name): _reals(f"initial[{name!r}]", [value] if _is_number(value) else value)
+            for name, value in _mapping("initial", initial).items()
+        }
+    if not callable(loss):
+        raise _wrong_type("loss", "a function", loss)
+    named = {"method": method, "h": h, "t_end": t_end, "sensitivity": wrt, "sensitivity_every": every}
+    checked = _shared_options(named, {}, "gradient")
+    fields = _call(
+        _svi.gradient,
+        _text("scene", scene),
+        native,
+        params=_parameters(params),
+        initial=initial_lists,
+        options=checked,
+        checkpoints=_count("checkpoints", checkpoints),
+    )
+    return Gradient(json.loads(fields))
 
 
 #: The checks of the kinds of option values (``_svi.options()`` names each option's kind).

@@ -43,6 +43,19 @@ def run(
     trajectory's columns and numbers (row by row), with ``dense`` every step's polynomial;
     ``events`` are events given as callables (name, direction, terminal, g(t, q, v))."""
 
+def gradient(
+    scene: str,
+    loss: Callable[[int, float, np.ndarray, np.ndarray], Tuple[float, List[float], List[float]]],
+    *,
+    params: Optional[Dict[str, float]] = None,
+    initial: Optional[Dict[str, List[float]]] = None,
+    options: Optional[Dict[str, OptionValue]] = None,
+    checkpoints: Optional[int] = None,
+) -> str:
+    """The gradient of a loss over a scene's fixed-step run by the discrete adjoint, with
+    respect to the ``sensitivity`` names of ``options``: its JSON (``value``, ``columns``,
+    ``gradient``, ``peak_stored``, ``peak_bytes``)."""
+
 def solve_rhs(
     odefun: Callable[[float, np.ndarray], object],
     times: List[float],

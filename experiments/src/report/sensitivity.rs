@@ -53,3 +53,19 @@ impl SensitivitySummary {
         lines
     }
 }
+
+/// The gradient of a loss of a run ([`crate::Scene::gradient`]): ∂J/∂(column) for the columns
+/// of the scene's `sensitivity` names, by the discrete adjoint ([`svi::Integrator::gradient`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GradientSummary {
+    /// J, the loss summed over the outputs.
+    pub value: f64,
+    /// What the entries differentiate with respect to, as [`SensitivitySummary::columns`].
+    pub columns: Vec<String>,
+    /// ∂J/∂(column), in the order of `columns`.
+    pub gradient: Vec<f64>,
+    /// The most forward states (checkpoints) and tangent maps held at once.
+    pub peak_stored: usize,
+    /// The memory they took at the peak, in bytes.
+    pub peak_bytes: usize,
+}

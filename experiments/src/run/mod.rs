@@ -35,6 +35,7 @@ mod trajectory;
 
 pub use control::{Control, STOP_STRIDE};
 pub use outcome::{AnySummary, RunSummary, error_report, failure_object};
+pub use sensitivity::{LossAt, NativeLoss};
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;

@@ -1,14 +1,18 @@
 //! Runs with sensitivities (`--sensitivity`): after the scene's run, the forward
 //! sensitivities of the same fixed-step run ([`svi::Integrator::sensitivities`]) for the
-//! summary, with respect to the initial state (`q0`, `v0` or `p0`) and the parameters named.
+//! summary, with respect to the initial state (`q0`, `v0` or `p0`) and the parameters named;
+//! and the gradient of a loss given natively (the Python package's `svi.gradient`) by the
+//! discrete adjoint ([`Scene::gradient`], [`svi::Integrator::gradient`]).
+
+use std::cell::RefCell;
 
 use nalgebra::DefaultAllocator;
 use nalgebra::allocator::Allocator;
-use svi::sensitivity::{SensitivityRun, Start};
-use svi::{Dimension, Initial, Integrator, Parametric};
+use svi::sensitivity::{Checkpoints, Loss, SensitivityRun, Start};
+use svi::{Dimension, Initial, Integrator, Parametric, Scalar};
 use svi_models::{ParametricModelVisitor, ZooModel, visit_parametric_model};
 
-use crate::report::sensitivity::{SensitivityOutput, SensitivitySummary};
+use crate::report::sensitivity::{GradientSummary, SensitivityOutput, SensitivitySummary};
 use crate::report::summary::{Status, Summary};
 use crate::scene::{Scene, SceneError};
 
@@ -25,25 +29,148 @@ pub(super) fn with_sensitivity(
     if summary.status != Status::Ok {
         return Ok(summary);
     }
-    let differentiate = Differentiate { scene, names };
-    summary.sensitivity = Some(
-        visit_parametric_model(&scene.model, differentiate)
-            .unwrap_or_else(|| unreachable!("the scene's check admits parametric models only"))?,
-    );
+    let differentiate = Differentiate {
+        scene,
+        names,
+        loss: None,
+    };
+    match visit_parametric_model(&scene.model, differentiate)
+        .unwrap_or_else(|| unreachable!("the scene's check admits parametric models only"))?
+    {
+        Differentiated::Sensitivities(sensitivities) => summary.sensitivity = Some(sensitivities),
+        Differentiated::Gradient(_) => unreachable!("no loss was given"),
+    }
     Ok(summary)
+}
+
+/// A loss of a run given natively, J = Σ_j ℓ_j(t, q, q̇) over the outputs of the scene's
+/// `sensitivity_every`: `loss(j, t, q, v)` returns ℓ_j and its gradient (∂ℓ_j/∂q, ∂ℓ_j/∂q̇),
+/// n entries each. A value or gradient that is not finite fails the gradient naming the output.
+pub type NativeLoss = dyn Fn(usize, f64, &[f64], &[f64]) -> LossAt + Send + Sync;
+
+/// What a [`NativeLoss`] returns at an output: ℓ_j, ∂ℓ_j/∂q and ∂ℓ_j/∂q̇.
+pub type LossAt = (f64, Vec<f64>, Vec<f64>);
+
+impl Scene {
+    /// The gradient of `loss` over the scene's fixed-step run with respect to the initial-state
+    /// blocks and parameters of its `sensitivity` names, in their order, by the discrete
+    /// adjoint with `checkpoints` forward states kept (default ⌈√K⌉ for K steps). The scene is
+    /// checked as for `--sensitivity`; only the differentiated run is taken.
+    ///
+    /// # Errors
+    /// [`SceneError::NotApplicable`] without `sensitivity` names; those of the scene's check;
+    /// those of [`svi::Integrator::gradient`] (a loss that is not finite, a budget of 0
+    /// checkpoints).
+    pub fn gradient(
+        &self,
+        loss: &NativeLoss,
+        checkpoints: Option<usize>,
+    ) -> Result<GradientSummary, SceneError> {
+        let scene = self.checked()?;
+        let Some(names) = &scene.run.sensitivity else {
+            return Err(SceneError::NotApplicable {
+                option: "gradient",
+                reason: "names nothing to differentiate with respect to: give the parameters \
+                         and initial-state blocks (run.sensitivity)"
+                    .into(),
+            });
+        };
+        let checkpoints = checkpoints.map_or(Checkpoints::Sqrt, Checkpoints::Budget);
+        let differentiate = Differentiate {
+            scene: &scene,
+            names,
+            loss: Some((loss, checkpoints)),
+        };
+        match visit_parametric_model(&scene.model, differentiate)
+            .unwrap_or_else(|| unreachable!("the scene's check admits parametric models only"))?
+        {
+            Differentiated::Gradient(gradient) => Ok(gradient),
+            Differentiated::Sensitivities(_) => unreachable!("a loss was given"),
+        }
+    }
+}
+
+/// A [`NativeLoss`] as a [`Loss`] of any scalar: ℓ at the real parts of (q, q̇) plus its
+/// gradient times their dual parts, ℓ(x) + ∇ℓ(x)·δx, which is all the adjoint's first
+/// derivatives take. The native loss is called once per output: the real parts' evaluation
+/// and the gradient's sweeps at the same point share it.
+struct Linearised<'a> {
+    loss: &'a NativeLoss,
+    /// The last call.
+    last: RefCell<Option<Call>>,
+}
+
+/// A call of a [`NativeLoss`]: its arguments and what it returned.
+struct Call {
+    output: usize,
+    t: f64,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    returned: LossAt,
+}
+
+impl Loss for Linearised<'_> {
+    fn loss<D: Scalar>(&self, output: usize, t: f64, q: &[D], v: &[D]) -> D {
+        let real = |x: &[D]| x.iter().map(|x| x.re()).collect::<Vec<f64>>();
+        let (q_re, v_re) = (real(q), real(v));
+        let mut last = self.last.borrow_mut();
+        let same = matches!(&*last, Some(call)
+            if call.output == output && call.t == t && call.q == q_re && call.v == v_re);
+        if !same {
+            let returned = (self.loss)(output, t, &q_re, &v_re);
+            *last = Some(Call {
+                output,
+                t,
+                q: q_re.clone(),
+                v: v_re.clone(),
+                returned,
+            });
+        }
+        let Some(Call {
+            returned: (value, dq, dv),
+            ..
+        }) = &*last
+        else {
+            unreachable!("set above")
+        };
+        // A gradient of the wrong length is not finite: the adjoint names the output.
+        if dq.len() != q.len() || dv.len() != v.len() {
+            return D::from(f64::NAN);
+        }
+        let mut result = D::from(*value);
+        for ((x, x_re), g) in q
+            .iter()
+            .zip(&q_re)
+            .zip(dq)
+            .chain(v.iter().zip(&v_re).zip(dv))
+        {
+            result += (*x - D::from(*x_re)) * *g;
+        }
+        result
+    }
+}
+
+/// What [`Differentiate`] computed.
+enum Differentiated {
+    /// The forward sensitivities (`--sensitivity`).
+    Sensitivities(SensitivitySummary),
+    /// The gradient of a native loss.
+    Gradient(GradientSummary),
 }
 
 /// The blocks of the initial state a scene may name in `--sensitivity`.
 const INITIAL_BLOCKS: [&str; 3] = ["q0", "v0", "p0"];
 
-/// Differentiates a scene's run of its (parametric) model.
+/// Differentiates a scene's run of its (parametric) model: its forward sensitivities, or with
+/// a loss the loss's gradient.
 struct Differentiate<'a> {
     scene: &'a Scene,
     names: &'a [String],
+    loss: Option<(&'a NativeLoss, Checkpoints)>,
 }
 
 impl ParametricModelVisitor for Differentiate<'_> {
-    type Output = Result<SensitivitySummary, SceneError>;
+    type Output = Result<Differentiated, SceneError>;
 
     fn visit<M: ZooModel<N> + Parametric<N>, N: Dimension>(self, mut model: M) -> Self::Output
     where
@@ -93,7 +220,7 @@ impl ParametricModelVisitor for Differentiate<'_> {
             .with_parameters(&parameters)
             .with_outputs_every(scene.run.sensitivity_every.unwrap_or(usize::MAX));
         let method = scene.method_spec()?.vector_method()?;
-        let sensitivities = Integrator::new(model, method).sensitivities(&run)?;
+        let integrator = Integrator::new(model, method);
         // The columns asked for, in order: blocks of n, then each parameter.
         let n = coordinates.len();
         let mut columns = Vec::new();
@@ -117,6 +244,29 @@ impl ParametricModelVisitor for Differentiate<'_> {
                 }
             }
         }
+        if let Some((loss, checkpoints)) = self.loss {
+            let linearised = Linearised {
+                loss,
+                last: RefCell::new(None),
+            };
+            let gradient = integrator.gradient(&run, &linearised, checkpoints)?;
+            // The initial state's entries (2n), then the parameters': the Jacobian's columns.
+            let entry = |c: usize| {
+                if c < 2 * n {
+                    gradient.initial[c]
+                } else {
+                    gradient.parameters[c - 2 * n]
+                }
+            };
+            return Ok(Differentiated::Gradient(GradientSummary {
+                value: gradient.value,
+                columns,
+                gradient: indices.iter().map(|&c| entry(c)).collect(),
+                peak_stored: gradient.peak_stored,
+                peak_bytes: gradient.peak_bytes,
+            }));
+        }
+        let sensitivities = integrator.sensitivities(&run)?;
         let rows = (coordinates.iter().map(|c| format!("q_{c}")))
             .chain(coordinates.iter().map(|c| format!("v_{c}")))
             .collect();
@@ -132,10 +282,92 @@ impl ParametricModelVisitor for Differentiate<'_> {
                     .collect(),
             })
             .collect();
-        Ok(SensitivitySummary {
+        Ok(Differentiated::Sensitivities(SensitivitySummary {
             columns,
             rows,
             outputs,
-        })
+        }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::Control;
+    use crate::scene::method::SceneMethod;
+    use crate::scene::tests::{method, scene};
+    use crate::scene::{Scene, SceneError};
+
+    /// ℓ_j = (j + 1) q₁ + ½ q̇₂²: a weight per output, q and q̇ both in it.
+    fn loss(j: usize, _t: f64, q: &[f64], v: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+        let weight = (j + 1) as f64;
+        let value = weight * q[0] + 0.5 * v[1] * v[1];
+        (value, vec![weight, 0.0], vec![0.0, v[1]])
+    }
+
+    /// Kepler by the midpoint rule, differentiated with respect to e, the phase and q0.
+    fn kepler() -> Scene {
+        let mut kepler = scene("kepler");
+        kepler.method.name = Some(SceneMethod::Registry(method("midpoint")));
+        kepler.run.h = Some(0.05);
+        kepler.run.t_end = Some(2.0);
+        kepler.run.sensitivity = Some(vec!["e".into(), "phase".into(), "q0".into()]);
+        kepler.run.sensitivity_every = Some(8);
+        kepler
+    }
+
+    #[test]
+    fn a_native_loss_has_the_gradient_of_the_sensitivities_chain_rule() {
+        let scene = kepler();
+        let summary = scene.run(Control::default()).unwrap();
+        let block = summary.sensitivity.unwrap();
+        // Σ_j ∇ℓ_j · ∂(q, q̇)(t_j)/∂(column), through the Jacobians of every output.
+        let mut chained = vec![0.0; block.columns.len()];
+        let mut value = 0.0;
+        for (j, output) in block.outputs.iter().enumerate() {
+            let (ell, dq, dv) = loss(j, output.t, &output.q, &output.v);
+            value += ell;
+            let nabla: Vec<f64> = dq.into_iter().chain(dv).collect();
+            for (c, total) in chained.iter_mut().enumerate() {
+                *total += (0..4)
+                    .map(|r| nabla[r] * output.jacobian[r][c])
+                    .sum::<f64>();
+            }
+        }
+        let gradient = scene.gradient(&loss, Some(2)).unwrap();
+        assert_eq!(gradient.columns, ["e", "phase", "q0_q1", "q0_q2"]);
+        assert!((gradient.value - value).abs() <= 1e-13 * value.abs());
+        let largest = chained.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for (adjoint, forward) in gradient.gradient.iter().zip(&chained) {
+            assert!(
+                (adjoint - forward).abs() <= 1e-11 * largest,
+                "{adjoint} {forward}"
+            );
+        }
+        assert!(gradient.peak_stored >= 2);
+    }
+
+    #[test]
+    fn a_loss_that_is_not_finite_or_a_gradient_without_names_is_refused() {
+        let nan = |j: usize, _t: f64, q: &[f64], v: &[f64]| {
+            let value = if j == 2 { f64::NAN } else { q[0] };
+            (value, vec![0.0; q.len()], vec![0.0; v.len()])
+        };
+        let error = kepler().gradient(&nan, None).unwrap_err().to_string();
+        assert!(error.contains("loss at output 2"), "{error}");
+        let short = |_j: usize, _t: f64, q: &[f64], _v: &[f64]| (q[0], vec![1.0], vec![]);
+        let error = kepler().gradient(&short, None).unwrap_err().to_string();
+        assert!(error.contains("loss at output"), "{error}");
+        let mut unnamed = kepler();
+        unnamed.run.sensitivity = None;
+        unnamed.run.sensitivity_every = None;
+        assert!(matches!(
+            unnamed.gradient(&loss, None),
+            Err(SceneError::NotApplicable {
+                option: "gradient",
+                ..
+            })
+        ));
+        let error = kepler().gradient(&loss, Some(0)).unwrap_err().to_string();
+        assert!(error.contains("checkpoints"), "{error}");
     }
 }
