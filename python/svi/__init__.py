@@ -530,7 +530,11 @@ def gradient(
         }
     if not callable(loss):
         raise _wrong_type("loss", "a function", loss)
-    named = {"method": method, "h": h, "t_end": t_end, "sensitivity": wrt, "sensitivity_every": every}
+    names = _names("wrt", wrt)
+    if not names or not all(names):
+        message = f"invalid wrt: {wrt!r} names nothing to differentiate with respect to"
+        raise InvalidInputError("invalid_input", message, bad_input=True)
+    named = {"method": method, "h": h, "t_end": t_end, "sensitivity": names, "sensitivity_every": every}
     checked = _shared_options(named, {}, "gradient")
     fields = _call(
         _svi.gradient,

@@ -99,6 +99,12 @@ def test_bad_losses_names_and_budgets_are_typed_errors():
         svi.gradient("kepler", loss, ["mass"], **run)
     with pytest.raises(svi.SviError, match="kepler, damped-pendulum"):
         svi.gradient("pendulum", loss, ["q0"], **run)
+    with pytest.raises(svi.InvalidInputError, match="wrt"):
+        svi.gradient("kepler", loss, [], **run)
+    with pytest.raises(svi.InvalidInputError, match="wrt"):
+        svi.gradient("kepler", loss, "e,,q0", **run)
+    with pytest.raises(svi.ArgumentTypeError, match="wrt"):
+        svi.gradient("kepler", loss, [3], **run)
     with pytest.raises(svi.InvalidParameterError, match="checkpoints"):
         svi.gradient("kepler", loss, ["e"], checkpoints=0, **run)
 
