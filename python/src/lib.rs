@@ -27,7 +27,7 @@ use svi::stepping::dense::DenseOutput;
 use svi_experiments::ensemble::Ensemble;
 use svi_experiments::report::schema;
 use svi_experiments::report::table::Cell;
-use svi_experiments::run::error_report;
+use svi_experiments::run::{LossAt, error_report};
 use svi_experiments::scene::ensemble::{Random, parse_initial_axis, parse_parameter_axis};
 use svi_experiments::scene::events::NativeEvent;
 use svi_experiments::scene::field::FieldScene;
@@ -211,6 +211,19 @@ fn set_initial(scene: &mut Scene, initial: BTreeMap<String, Vec<f64>>) -> PyResu
         *slot = Some(values);
     }
     Ok(())
+}
+
+/// Put `initial` into the scene's `[initial]` ([`set_initial`]) and lay `overrides` over it:
+/// a scene as `svi run` with these flags has it.
+fn configure(
+    scene: &mut Scene,
+    initial: Option<BTreeMap<String, Vec<f64>>>,
+    overrides: &Overrides,
+) -> PyResult<()> {
+    if let Some(initial) = initial {
+        set_initial(scene, initial)?;
+    }
+    scene.overlay(overrides).map_err(failure)
 }
 
 /// How often the calling thread looks for signals while a run goes on.
@@ -421,10 +434,7 @@ fn run<'py>(
         }
         None => load(scene)?,
     };
-    if let Some(initial) = initial {
-        set_initial(&mut loaded, initial)?;
-    }
-    loaded.overlay(&overrides).map_err(failure)?;
+    configure(&mut loaded, initial, &overrides)?;
     let raised = Raised::default();
     loaded.native_events = native_events(events, &raised)?;
     // The trajectory is the rows the run path writes, kept in memory: no file is written.
@@ -469,16 +479,12 @@ fn gradient(
     options: Option<BTreeMap<String, Value>>,
     checkpoints: Option<usize>,
 ) -> PyResult<String> {
-    let overrides = overrides(options, params)?;
     let mut loaded = load(scene)?;
-    if let Some(initial) = initial {
-        set_initial(&mut loaded, initial)?;
-    }
-    loaded.overlay(&overrides).map_err(failure)?;
+    configure(&mut loaded, initial, &overrides(options, params)?)?;
     let raised = Raised::default();
     let kept = std::sync::Arc::clone(&raised);
     // An exception is kept and the output's loss is NaN, which fails the gradient.
-    let call = move |j: usize, t: f64, q: &[f64], v: &[f64]| -> (f64, Vec<f64>, Vec<f64>) {
+    let call = move |j: usize, t: f64, q: &[f64], v: &[f64]| -> LossAt {
         Python::attach(|py| {
             loss.call1(
                 py,
@@ -489,7 +495,7 @@ fn gradient(
                     PyArray1::from_slice(py, v),
                 ),
             )
-            .and_then(|value| value.extract::<(f64, Vec<f64>, Vec<f64>)>(py))
+            .and_then(|value| value.extract::<LossAt>(py))
             .unwrap_or_else(|error| {
                 let mut kept = kept.lock().unwrap_or_else(|e| e.into_inner());
                 kept.get_or_insert(error);

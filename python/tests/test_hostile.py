@@ -104,6 +104,37 @@ def test_hostile_arguments_raise_svi_errors_only(tmp_path, monkeypatch):
     assert outcomes["result"] > 0 and outcomes["error"] > 0, outcomes
 
 
+#: Keyword arguments of svi.gradient.
+GRADIENT_KEYWORDS = ["method", "h", "t_end", "every", "checkpoints", "params", "initial"]
+
+
+def test_hostile_gradients_raise_svi_errors_only():
+    # svi.gradient's arguments and what its loss returns, of every type; a loss's own
+    # exceptions are raised as they are (documented), so these losses return, never raise.
+    rng = random.Random(SEED + 1)
+    outcomes = {"result": 0, "error": 0}
+    for _ in range(150 * FACTOR):
+        scene = rng.choice(["kepler", "kepler", "damped-pendulum", "damped-pendulum", "pendulum", "nosuch"])
+        valid = {"kepler": [["e"], ["q0", "v0"], "e,phase"], "damped-pendulum": [["l", "c"], "l,c,q0"]}
+        if scene in valid and rng.random() < 0.9:
+            wrt = rng.choice(valid[scene])
+        else:
+            wrt = rng.choice(HOSTILE + [["nosuch"], ["e", "e"], "p0"])
+        returned = rng.choice(HOSTILE)
+        good = rng.random() < 0.5
+
+        def loss(j, t, q, v, returned=returned, good=good):
+            return (q[0], np.eye(len(q))[0], v) if good else returned
+
+        keywords = {name: rng.choice(HOSTILE) for name in rng.sample(GRADIENT_KEYWORDS, rng.randint(0, 2))}
+        keywords["t_end"] = short(keywords)["t_end"]
+        outcome = call(svi.gradient, scene, loss, wrt, **keywords)
+        if isinstance(outcome, svi.Gradient):
+            assert math.isfinite(outcome.value) and np.isfinite(outcome.gradient).all(), outcome
+        outcomes["error" if isinstance(outcome, svi.SviError) else "result"] += 1
+    assert outcomes["result"] > 0 and outcomes["error"] > 0, outcomes
+
+
 def test_wrong_types_are_named_not_converted():
     for keywords, name in [
         ({"h": True}, "h"),
