@@ -8,7 +8,7 @@
 //!   to (q₀, q̇₀) and e ([`Integrator::gradient`], default checkpoints);
 //! - `sensitivities`: the forward sensitivities at the same outputs.
 //!
-//! It prints the times, the ratios to `forward`, the checkpoints and tangent maps held at the
+//! It prints the times, the ratios to `forward`, the checkpoints and steps' adjoints held at the
 //! peak and their bytes. Run with `cargo bench --bench adjoint`.
 
 use nalgebra::SVector;
@@ -83,7 +83,7 @@ fn main() {
         sensitivities / forward
     );
     println!(
-        "  peak stored: {} states and tangent maps, {} bytes (√K = {:.0})",
+        "  peak stored: {} states and steps' adjoints, {} bytes (√K = {:.0})",
         last.peak_stored,
         last.peak_bytes,
         (STEPS as f64).sqrt()

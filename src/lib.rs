@@ -79,7 +79,7 @@ pub use method::variational::svi::{Solver, Svi};
 pub use method::variational::variational_integrator::VariationalIntegrator;
 pub use method::{
     Coordinates, Equations, Euclidean, Initial, Method, MethodInfo, PhasePoint, SO3, Space, State,
-    Step, TangentMap,
+    Step, StepAdjoint, TangentMap,
 };
 pub use model::hamiltonian::{Canonical, Hamiltonian, HamiltonianStructure};
 pub use model::parametric::Parametric;

@@ -26,10 +26,10 @@ use crate::method::variational::discrete_lagrangian::{
 use crate::method::variational::stormer_verlet::StormerVerlet;
 use crate::method::variational::svi::Svi;
 use crate::method::variational::variational_integrator::VariationalIntegrator;
-use crate::method::{Method, MethodInfo, StepReport};
+use crate::method::{Method, MethodInfo, StepAdjoint, StepReport};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, OVector};
+use nalgebra::{DVector, DefaultAllocator, OVector};
 
 /// Receives a method on ℝᴺ as its concrete type ([`AnyMethod::visit`],
 /// [`crate::MethodSpec::visit_vector`]); N is fixed (`Const<N>`) or chosen at run time
@@ -266,6 +266,41 @@ macro_rules! any_method {
                 match (self, workspace) {
                     $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
                         method.tangent_map(model, workspace, t, h, state)
+                    })+
+                    #[allow(unreachable_patterns)]
+                    _ => Err(FOREIGN_WORKSPACE),
+                }
+            }
+
+            fn adjoint_step<L: Lagrangian<N>>(
+                &self,
+                model: &L,
+                workspace: &mut AnyWorkspace<N>,
+                t: f64,
+                h: f64,
+                state: &State<N>,
+                increment: &mut State<N>,
+                adjoint: &mut StepAdjoint<N>,
+            ) -> Result<StepReport, StepFailure> {
+                match (self, workspace) {
+                    $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
+                        method.adjoint_step(model, workspace, t, h, state, increment, adjoint)
+                    })+
+                    #[allow(unreachable_patterns)]
+                    _ => Err(FOREIGN_WORKSPACE),
+                }
+            }
+
+            fn adjoint_apply(
+                &self,
+                workspace: &mut AnyWorkspace<N>,
+                adjoint: &StepAdjoint<N>,
+                lambda: &mut DVector<f64>,
+                scratch: &mut DVector<f64>,
+            ) -> Result<(), StepFailure> {
+                match (self, workspace) {
+                    $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
+                        method.adjoint_apply(workspace, adjoint, lambda, scratch)
                     })+
                     #[allow(unreachable_patterns)]
                     _ => Err(FOREIGN_WORKSPACE),

@@ -21,6 +21,7 @@
 //! of freedom and beyond) the methods that keep its sparsity ([`Method::keeps_sparsity`])
 //! run in O(n) per step.
 
+pub mod adjoint;
 pub mod any;
 pub(crate) mod block_newton;
 pub mod collocation;
@@ -35,6 +36,7 @@ pub mod space;
 pub mod step;
 pub mod variational;
 
+pub use adjoint::StepAdjoint;
 pub use space::{
     Euclidean, Initial, PhasePoint, RigidInitial, RigidPoint, RigidState, SO3, Space, State,
     StepState, TangentMap,
@@ -45,7 +47,7 @@ use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DefaultAllocator, OVector};
+use nalgebra::{DVector, DefaultAllocator, OVector};
 
 /// Which second coordinate a method carries besides q.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -270,4 +272,40 @@ where
         h: f64,
         state: &State<N>,
     ) -> Result<(State<N>, TangentMap<N>, StepReport), StepFailure>;
+
+    /// Perform the step like [`Method::step`], writing the increment into `increment`, and
+    /// keep in `adjoint` what [`Method::adjoint_apply`] needs to apply the transpose of the
+    /// step's tangent map (`adjoint`'s storage is reused where it can be). By default the
+    /// tangent map itself ([`adjoint::adjoint_by_tangent_map`]).
+    #[allow(clippy::too_many_arguments)]
+    fn adjoint_step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut Self::Workspace,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+        adjoint: &mut StepAdjoint<N>,
+    ) -> Result<StepReport, StepFailure> {
+        adjoint::adjoint_by_tangent_map(self, model, workspace, t, h, state, increment, adjoint)
+    }
+
+    /// λ ← Φᵀλ for the step `adjoint` was kept for ([`Method::adjoint_step`]): `lambda` holds
+    /// (λ_q, λ_y), 2N entries, and `scratch` as many. By default from the tangent map
+    /// ([`adjoint::apply_tangent_map`]).
+    ///
+    /// # Errors
+    /// [`StepFailure::Unsupported`] for an `adjoint` another method kept; a method that
+    /// iterates fails as its iteration does.
+    fn adjoint_apply(
+        &self,
+        workspace: &mut Self::Workspace,
+        adjoint: &StepAdjoint<N>,
+        lambda: &mut DVector<f64>,
+        scratch: &mut DVector<f64>,
+    ) -> Result<(), StepFailure> {
+        let _ = workspace;
+        adjoint::apply_tangent_map(adjoint, lambda, scratch)
+    }
 }

@@ -298,6 +298,21 @@ where
         gradient_into(self, t, q, v, Wrt::Position, out);
     }
 
+    /// The Jacobian of the generalised force, ∂²L/∂q² (only the position block of the
+    /// Hessian: one second-order sweep in N directions).
+    #[inline]
+    fn force_jacobian(
+        &self,
+        t: f64,
+        q: &OVector<f64, N>,
+        v: &OVector<f64, N>,
+    ) -> OMatrix<f64, N, N> {
+        if let Some(terms) = self.terms() {
+            return assembled_second_derivatives(terms, t, q, v).qq;
+        }
+        N::hessian(&Action(self), t, q, v, Wrt::Position).2
+    }
+
     /// ∂L/∂q at the points (`times[μ]`, `positions[μ]`, `v`) into `forces[μ]`: all at once
     /// where the model offers it ([`Lagrangian::batch_force`]), else one by one.
     #[inline]

@@ -3,10 +3,11 @@
 //! [module](super) documentation).
 
 use super::SensitivityRun;
-use super::lifted::{Lifted, Walker, chosen_parameters, lift, view};
+use super::lifted::{Lifted, Walker, chosen_parameters, lift};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::Error;
-use crate::method::space::{PhasePoint, TangentMap};
+use crate::method::StepAdjoint;
+use crate::method::space::PhasePoint;
 use crate::method::{Euclidean, Method};
 use crate::model::Lagrangian;
 use crate::model::parametric::Parametric;
@@ -28,7 +29,7 @@ pub trait Loss {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Checkpoints {
     /// ⌈√K⌉ checkpoints for K steps: every segment between two is run again once, and at
-    /// most about 2√K states and tangent maps are held at once (the default).
+    /// most about 2√K states and steps' adjoints are held at once (the default).
     #[default]
     Sqrt,
     /// This many checkpoints (at least 1, the start; at most K): fewer keep less and hold
@@ -64,7 +65,8 @@ pub struct Gradient {
     pub parameters: DVector<f64>,
     /// The parameters' names, in order.
     pub names: Vec<String>,
-    /// The most forward states (checkpoints) and tangent maps (of one segment) held at once.
+    /// The most forward states (checkpoints) and steps' adjoints (of one segment,
+    /// [`crate::StepAdjoint`]) held at once.
     pub peak_stored: usize,
     /// The memory they took at the peak, in bytes.
     pub peak_bytes: usize,
@@ -141,20 +143,23 @@ where
         }
         walker.step(k)?;
     }
-    // Backwards, segment by segment: the segment's tangent maps from its checkpoint,
+    // Backwards, segment by segment: the segment's steps' adjoints from its checkpoint,
     // then λ_k = Φ_kᵀ λ_{k+1} + G_kᵀ∇ℓ_k through it.
     let mut lambda = DVector::zeros(2 * m);
     let mut scratch = DVector::zeros(2 * m);
     let mut value = 0.0;
-    let mut maps: Vec<TangentMap<D>> = Vec::with_capacity(segment);
+    // One slot per step of a segment, reused from segment to segment.
+    let mut kept: Vec<StepAdjoint<D>> = (0..segment.min(steps))
+        .map(|_| StepAdjoint::empty())
+        .collect();
     let mut terms: Vec<Option<DVector<f64>>> = Vec::with_capacity(segment);
+    let mut peak_bytes = 0;
     for (a, cursor) in stored.iter().rev() {
         let b = (a + segment).min(steps);
         walker.restart_at(cursor.clone());
-        maps.clear();
         terms.clear();
-        for k in *a..b {
-            maps.push(walker.step_tangent(k)?);
+        for (k, slot) in (*a..b).zip(&mut kept) {
+            walker.step_adjoint(k, slot)?;
             terms.push(if lifted.is_output(k + 1) {
                 let point = walker.point(k + 1)?;
                 let (ell, term) = loss_term(lifted, loss, output_number[k + 1], &point, k + 1)?;
@@ -164,12 +169,12 @@ where
                 None
             });
         }
-        for (tangent, term) in maps.iter().zip(&terms).rev() {
+        peak_bytes = peak_bytes.max(kept[..b - a].iter().map(StepAdjoint::bytes).sum());
+        for ((k, slot), term) in (*a..b).zip(&kept).zip(&terms).rev() {
             if let Some(term) = term {
                 lambda += term;
             }
-            transpose_apply(tangent, &lambda, &mut scratch);
-            std::mem::swap(&mut lambda, &mut scratch);
+            walker.apply_adjoint(k, slot, &mut lambda, &mut scratch)?;
         }
     }
     walker.restart_at(start_cursor);
@@ -180,14 +185,13 @@ where
     let gradient = lifted.start.tr_mul(&lambda);
     let n = lifted.n;
     let state_bytes = 2 * (2 * m) * std::mem::size_of::<f64>();
-    let map_bytes = 4 * m * m * std::mem::size_of::<f64>();
     Ok(Gradient {
         value,
         initial: gradient.rows(0, 2 * n).into_owned(),
         parameters: gradient.rows(2 * n, gradient.len() - 2 * n).into_owned(),
         names: lifted.names.clone(),
         peak_stored: stored.len() + segment,
-        peak_bytes: stored.len() * state_bytes + segment * map_bytes,
+        peak_bytes: stored.len() * state_bytes + peak_bytes,
         statistics: walker.statistics,
     })
 }
@@ -232,22 +236,4 @@ where
         });
     }
     Ok((value, lifted.end(point)?.tr_mul(&nabla)))
-}
-
-/// `out` = Φᵀ `lambda` for a step's tangent map Φ in blocks [[qq, qy], [yq, yy]].
-fn transpose_apply<D: Dimension>(
-    tangent: &TangentMap<D>,
-    lambda: &DVector<f64>,
-    out: &mut DVector<f64>,
-) where
-    DefaultAllocator: Allocator<D> + Allocator<D, D>,
-{
-    let m = tangent.qq.nrows();
-    let (top, bottom) = (lambda.rows(0, m), lambda.rows(m, m));
-    let mut upper = out.rows_mut(0, m);
-    upper.gemv_tr(1.0, &view(&tangent.qq), &top, 0.0);
-    upper.gemv_tr(1.0, &view(&tangent.yq), &bottom, 1.0);
-    let mut lower = out.rows_mut(m, m);
-    lower.gemv_tr(1.0, &view(&tangent.qy), &top, 0.0);
-    lower.gemv_tr(1.0, &view(&tangent.yy), &bottom, 1.0);
 }

@@ -1,7 +1,8 @@
 //! The run behind the derivatives: the model itself, or, when a parameter differentiated
 //! enters L, the lifted Lagrangian L̂ of the chosen parameters ([`WithParameters`]); its
 //! start X_0 with C = ∂X_0/∂(q₀, q̇₀ or p₀, θ), the end maps G = ∂(q, q̇)/∂X, and a walker
-//! that takes the grid's steps one at a time, plain or with their tangent maps.
+//! that takes the grid's steps one at a time, plain, with their tangent maps or with their
+//! adjoints.
 
 use super::{SensitivityRun, Start};
 use crate::dimension::{Dimension, Dyn};
@@ -9,7 +10,7 @@ use crate::error::Error;
 use crate::linalg::invert_small;
 use crate::method::space::{Initial, PhasePoint, State, StepState, TangentMap};
 use crate::method::step::Step;
-use crate::method::{Coordinates, Euclidean, Method};
+use crate::method::{Coordinates, Euclidean, Method, StepAdjoint};
 use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::model::parametric::{Parametric, WithParameters, parameter_indices};
@@ -411,6 +412,52 @@ where
         self.statistics.record(report);
         self.add(k, t)?;
         Ok(tangent)
+    }
+
+    /// Take step `k` of the grid keeping what its adjoint needs in `adjoint`
+    /// ([`Method::adjoint_step`]).
+    pub(super) fn step_adjoint(
+        &mut self,
+        k: usize,
+        adjoint: &mut StepAdjoint<D>,
+    ) -> Result<(), Error> {
+        let (t0, h, t_end, steps) = self.lifted.grid;
+        let (t, size, _) = grid_step(t0, t_end, h, steps, k);
+        let integrator = self.lifted.integrator;
+        let report = Method::adjoint_step(
+            integrator.method(),
+            integrator.model(),
+            &mut self.workspace,
+            t,
+            size,
+            &self.cursor.state,
+            &mut self.increment,
+            adjoint,
+        )
+        .map_err(|failure| failure.at(k, t))?;
+        self.statistics.record(report);
+        self.add(k, t)
+    }
+
+    /// λ ← Φ_kᵀλ for step `k`, kept in `adjoint` ([`Method::adjoint_apply`]).
+    pub(super) fn apply_adjoint(
+        &mut self,
+        k: usize,
+        adjoint: &StepAdjoint<D>,
+        lambda: &mut DVector<f64>,
+        scratch: &mut DVector<f64>,
+    ) -> Result<(), Error> {
+        Method::adjoint_apply(
+            self.lifted.integrator.method(),
+            &mut self.workspace,
+            adjoint,
+            lambda,
+            scratch,
+        )
+        .map_err(|failure| {
+            let (t0, h, t_end, steps) = self.lifted.grid;
+            failure.at(k, grid_step(t0, t_end, h, steps, k).0)
+        })
     }
 
     /// Add the last increment to the state (compensated, checked finite).

@@ -30,8 +30,10 @@
 //!   of the discrete J, and for a symplectic method the adjoint recursion is itself the
 //!   method's symplectic partner (Sanz-Serna, SIAM Review 58, 2016). The states of the
 //!   forward run are kept at checkpoints ([`Checkpoints`], default ⌈√K⌉ of them); each
-//!   segment between two is run again, by tangent maps, and swept back, so at most about
-//!   2√K states and maps are held at once.
+//!   segment between two is run again, keeping what each step's adjoint needs
+//!   ([`crate::Method::adjoint_step`]: its tangent map, or for constant-mass SVI the force
+//!   Jacobians at its quadrature points, whose Φᵀλ is a transposed fixed point), and swept
+//!   back, so at most about 2√K states and steps' adjoints are held at once.
 //!
 //! Outputs are the grid steps k with k mod `every` = 0 and the last step (the grid of
 //! [`crate::Integrator::try_run`]: t_k = t₀ + k h, the last step shortened to end at t_end).

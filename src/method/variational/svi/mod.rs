@@ -43,6 +43,19 @@
 //! energy error random-walking 5–10 times faster than the fixed point's: Kepler, T = 2000,
 //! median final errors 4e-11 to 1e-10 against 6e-12.)
 //!
+//! # Adjoint
+//! The discrete adjoint ([`crate::Integrator::gradient`]) applies the transpose of each
+//! step's tangent map Φ to a covector λ. On a constant-mass unforced model a step keeps only
+//! P_μ = (h/2) w_μ ∂²L/∂q² at its quadrature points and hM⁻¹P_μ
+//! ([`crate::StepAdjoint::Stages`]). The step's fixed-point form on the positions at the
+//! quadrature points is Q_μ = q + c'_μ hM⁻¹p + Σ_ν K_μν hM⁻¹P̃_ν with P̃_ν = (h/2) w_ν ∂L/∂q(Q_ν),
+//! p' = p + Σ_ν P̃_ν and q' = q + hM⁻¹p + Σ_ν d_ν hM⁻¹P̃_ν (Nyström coefficients c', d, K);
+//! linearised,
+//! Φᵀλ = (λ_q + Σ_μ z_μ, λ_p + hM⁻¹λ_q + hM⁻¹ Σ_μ c'_μ z_μ), where z solves
+//! z_ν = P_νᵀ(λ_p + d_ν hM⁻¹λ_q) + (hM⁻¹P_ν)ᵀ Σ_μ K_μν z_μ, the transpose of the step's own
+//! iteration, solved the same way. No Jacobian is assembled or factorised; every other model
+//! keeps the tangent map.
+//!
 //! # Properties
 //! - order min(2s, 2m) (Galerkin variational error analysis; with m = s Gauss points the SVI
 //!   is the s-stage Gauss–Legendre collocation method, order 2s);
@@ -59,6 +72,7 @@
 //! mechanics and variational integrators*, Acta Numerica (2001), §3.2 (discrete
 //! Lagrange–d'Alembert principle), Porcù & Penati (OctConf 2013), "Forced mechanics".
 
+mod adjoint;
 mod constant_mass;
 mod fixed_point;
 mod newton;
@@ -72,6 +86,7 @@ use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
+use crate::method::adjoint::{StepAdjoint, adjoint_by_tangent_map, apply_tangent_map};
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, Equations, MethodInfo, State, StepReport, TangentMap};
@@ -243,6 +258,7 @@ where
             constant_mass,
             newton_only: false,
             tangent: None,
+            adjoint: None,
         })
     }
 
@@ -560,6 +576,45 @@ where
             yy: OMatrix::from_fn_generic(n, n, |i, j| momentum[(i, w + j)]),
         };
         Ok((increment, tangent, report))
+    }
+
+    /// On a constant-mass unforced model the weighted force Jacobians at the quadrature
+    /// points, whose adjoint is the transposed fixed point of the Nyström form (see the
+    /// module documentation, *Adjoint*); else the tangent map.
+    fn adjoint_step<L: Lagrangian<N>>(
+        &self,
+        model: &L,
+        workspace: &mut SviWorkspace<N>,
+        t: f64,
+        h: f64,
+        state: &State<N>,
+        increment: &mut State<N>,
+        adjoint: &mut StepAdjoint<N>,
+    ) -> Result<StepReport, StepFailure> {
+        let step = |workspace: &mut SviWorkspace<N>, increment: &mut State<N>| {
+            self.step(model, workspace, t, h, state, increment)
+        };
+        if let Some(result) =
+            adjoint::adjoint_step(step, model, workspace, t, h, state, increment, adjoint)
+        {
+            return result;
+        }
+        adjoint_by_tangent_map(self, model, workspace, t, h, state, increment, adjoint)
+    }
+
+    fn adjoint_apply(
+        &self,
+        workspace: &mut SviWorkspace<N>,
+        adjoint: &StepAdjoint<N>,
+        lambda: &mut DVector<f64>,
+        scratch: &mut DVector<f64>,
+    ) -> Result<(), StepFailure> {
+        match adjoint {
+            StepAdjoint::Stages { .. } => {
+                adjoint::adjoint_apply(workspace, self.max_iterations, adjoint, lambda)
+            }
+            StepAdjoint::Map(_) => apply_tangent_map(adjoint, lambda, scratch),
+        }
     }
 }
 

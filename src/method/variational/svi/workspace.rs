@@ -2,6 +2,7 @@
 //! previous step's polynomial extrapolated to the new nodes, or at the first step the Taylor
 //! polynomial.
 
+use super::adjoint::StageCovectors;
 use super::constant_mass::ConstantMass;
 use crate::dimension::Dimension;
 use crate::linalg::DenseLu;
@@ -43,6 +44,8 @@ where
     pub(super) newton_only: bool,
     /// Buffers of the tangent map, made at its first use.
     pub(super) tangent: Option<TangentBuffers>,
+    /// Buffers of the adjoint by the Nyström form, made at its first use.
+    pub(super) adjoint: Option<StageCovectors<N>>,
 }
 
 /// Buffers of [`crate::method::Method::tangent_map`] for SVI: the block Hessian of the
