@@ -33,18 +33,20 @@ use crate::nonlinear::FixedPoint;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
 
-/// The covectors of the transposed iteration, made at the first adjoint step.
+/// The covectors of the transposed iteration, made at the first adjoint step. The stage
+/// covectors are stored by component (entry i of stage ν at i·m + ν), so that the sums over
+/// the stages run along contiguous memory.
 #[derive(Debug, Clone)]
 pub(super) struct StageCovectors<N: Dimension>
 where
     DefaultAllocator: Allocator<N>,
 {
-    /// r_ν.
-    right: Vec<OVector<f64, N>>,
-    /// z_ν.
-    z: Vec<OVector<f64, N>>,
-    /// The next iterate of z.
-    next: Vec<OVector<f64, N>>,
+    /// r.
+    right: Vec<f64>,
+    /// z.
+    z: Vec<f64>,
+    /// Σ_μ K_μν z_μ.
+    mixed: Vec<f64>,
     /// λ_q, λ_p, g = hG λ_q and one more N-vector.
     lambda_q: OVector<f64, N>,
     lambda_p: OVector<f64, N>,
@@ -59,9 +61,9 @@ where
     fn new(n: N, m: usize) -> Self {
         let zero = OVector::zeros_generic(n, U1);
         StageCovectors {
-            right: vec![zero.clone(); m],
-            z: vec![zero.clone(); m],
-            next: vec![zero.clone(); m],
+            right: vec![0.0; n.value() * m],
+            z: vec![0.0; n.value() * m],
+            mixed: vec![0.0; n.value() * m],
             lambda_q: zero.clone(),
             lambda_p: zero.clone(),
             g: zero.clone(),
@@ -182,7 +184,7 @@ where
     let StageCovectors {
         right,
         z,
-        next,
+        mixed,
         lambda_q,
         lambda_p,
         g,
@@ -195,50 +197,56 @@ where
     kick_inverse.apply_into(lambda_q, g);
     // r_ν = P_νᵀ λ_p + d_ν C_νᵀ λ_q (Pᵀ g = (hG P)ᵀ λ_q), and z = r to start.
     let mut scale: f64 = 0.0;
-    for (nu, r) in right.iter_mut().enumerate() {
-        let r = r.as_mut_slice();
-        r.fill(0.0);
-        transpose_apply(&matrices[2 * nu], lambda_p.as_slice(), 1.0, r);
-        transpose_apply(
-            &matrices[2 * nu + 1],
-            lambda_q.as_slice(),
-            nystrom.end_fractions[nu],
-            r,
-        );
-        z[nu].as_mut_slice().copy_from_slice(r);
-        scale = r.iter().fold(scale, |largest, x| largest.max(x.abs()));
+    for nu in 0..m {
+        let (weighted, kicked) = (&matrices[2 * nu], &matrices[2 * nu + 1]);
+        let d = nystrom.end_fractions[nu];
+        for j in 0..width {
+            let r = column_dot(weighted, j, lambda_p.as_slice())
+                + d * column_dot(kicked, j, lambda_q.as_slice());
+            right[j * m + nu] = r;
+            scale = scale.max(r.abs());
+        }
     }
+    z.copy_from_slice(right);
     let mut control = FixedPoint::to_noise(max_iterations);
     loop {
+        // Σ_μ K_μν z_μ for every ν, component by component, then
         // z_ν ← r_ν + C_νᵀ Σ_μ K_μν z_μ.
-        let mut change: f64 = 0.0;
-        for nu in 0..m {
-            let sum = work.as_mut_slice();
-            sum.fill(0.0);
-            for (mu, z_mu) in z.iter().enumerate() {
-                let k = nystrom.kick_matrix[mu * m + nu];
-                for (x, y) in sum.iter_mut().zip(z_mu.as_slice()) {
-                    *x += k * y;
+        mixed.fill(0.0);
+        for (sums, z_i) in mixed.chunks_exact_mut(m).zip(z.chunks_exact(m)) {
+            for (row, &z_mu) in nystrom.kick_matrix.chunks_exact(m).zip(z_i) {
+                for (sum, k) in sums.iter_mut().zip(row) {
+                    *sum += k * z_mu;
                 }
             }
-            let updated = next[nu].as_mut_slice();
-            updated.copy_from_slice(right[nu].as_slice());
-            transpose_apply(&matrices[2 * nu + 1], sum, 1.0, updated);
-            for (x, y) in updated.iter().zip(z[nu].as_slice()) {
-                change = change.max((x - y).abs());
-                scale = scale.max(x.abs());
+        }
+        let mut change: f64 = 0.0;
+        for nu in 0..m {
+            let kicked = matrices[2 * nu + 1].as_slice();
+            for j in 0..width {
+                let column = &kicked[j * width..(j + 1) * width];
+                let mut updated = right[j * m + nu];
+                for (i, c) in column.iter().enumerate() {
+                    updated += c * mixed[i * m + nu];
+                }
+                let old = &mut z[j * m + nu];
+                change = change.max((updated - *old).abs());
+                scale = scale.max(updated.abs());
+                *old = updated;
             }
         }
-        std::mem::swap(z, next);
         if control.converged(change, scale)? {
             break;
         }
     }
     // λ_q + Σ_μ z_μ and λ_p + g + hG Σ_μ c'_μ z_μ.
-    work.fill(0.0);
-    for (mu, z_mu) in z.iter().enumerate() {
-        *lambda_q += z_mu;
-        work.axpy(nystrom.stage_velocity[mu], z_mu, 1.0);
+    for (j, z_j) in z.chunks_exact(m).enumerate() {
+        lambda_q[j] += z_j.iter().sum::<f64>();
+        work[j] = z_j
+            .iter()
+            .zip(&nystrom.stage_velocity)
+            .map(|(z, c)| z * c)
+            .sum();
     }
     *lambda_p += &*g;
     kick_inverse.apply_into(work, g);
@@ -248,16 +256,18 @@ where
     Ok(())
 }
 
-/// `out += a Mᵀx` for a square matrix M (column-major: entry i of Mᵀx is column i · x).
+/// Column `j` of the square matrix M · x (entry j of Mᵀx; M column-major).
 #[inline]
-fn transpose_apply<N: Dimension>(matrix: &OMatrix<f64, N, N>, x: &[f64], a: f64, out: &mut [f64])
+fn column_dot<N: Dimension>(matrix: &OMatrix<f64, N, N>, j: usize, x: &[f64]) -> f64
 where
     DefaultAllocator: Allocator<N, N>,
 {
-    for (column, y) in matrix.as_slice().chunks_exact(x.len()).zip(out) {
-        let dot: f64 = column.iter().zip(x).map(|(c, x)| c * x).sum();
-        *y += a * dot;
-    }
+    let n = x.len();
+    matrix.as_slice()[j * n..(j + 1) * n]
+        .iter()
+        .zip(x)
+        .map(|(c, x)| c * x)
+        .sum()
 }
 
 #[cfg(test)]
