@@ -22,7 +22,7 @@
 //! iterations of O(m²N + mN²) each, with nothing factorised (the tangent map assembles the
 //! (s + 1)N block Hessian, factorises its sN interior block and solves 2N columns).
 
-use super::workspace::SviWorkspace;
+use super::workspace::{StageCovectors, SviWorkspace};
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
 use crate::method::adjoint::{FOREIGN_ADJOINT, StepAdjoint};
@@ -32,45 +32,6 @@ use crate::model::derived::LagrangianExt;
 use crate::nonlinear::FixedPoint;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DVector, DefaultAllocator, OMatrix, OVector, U1};
-
-/// The covectors of the transposed iteration, made at the first adjoint step. The stage
-/// covectors are stored by component (entry i of stage ν at i·m + ν), so that the sums over
-/// the stages run along contiguous memory.
-#[derive(Debug, Clone)]
-pub(super) struct StageCovectors<N: Dimension>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    /// r.
-    right: Vec<f64>,
-    /// z.
-    z: Vec<f64>,
-    /// Σ_μ K_μν z_μ.
-    mixed: Vec<f64>,
-    /// λ_q, λ_p, g = hG λ_q and one more N-vector.
-    lambda_q: OVector<f64, N>,
-    lambda_p: OVector<f64, N>,
-    g: OVector<f64, N>,
-    work: OVector<f64, N>,
-}
-
-impl<N: Dimension> StageCovectors<N>
-where
-    DefaultAllocator: Allocator<N>,
-{
-    fn new(n: N, m: usize) -> Self {
-        let zero = OVector::zeros_generic(n, U1);
-        StageCovectors {
-            right: vec![0.0; n.value() * m],
-            z: vec![0.0; n.value() * m],
-            mixed: vec![0.0; n.value() * m],
-            lambda_q: zero.clone(),
-            lambda_p: zero.clone(),
-            g: zero.clone(),
-            work: zero,
-        }
-    }
-}
 
 /// The step, keeping the force Jacobians at its quadrature points in `adjoint`; `None` where
 /// the Nyström form does not hold (a forced model, no fixed-point tables), and the caller
@@ -256,7 +217,7 @@ where
     Ok(())
 }
 
-/// Column `j` of the square matrix M · x (entry j of Mᵀx; M column-major).
+/// Column `j` of the square matrix M dotted with x (entry j of Mᵀx; M column-major).
 #[inline]
 fn column_dot<N: Dimension>(matrix: &OMatrix<f64, N, N>, j: usize, x: &[f64]) -> f64
 where
@@ -272,7 +233,7 @@ where
 
 #[cfg(test)]
 mod tests {
-    use super::super::Svi;
+    use super::super::{Svi, SviWorkspace};
     use crate::method::adjoint::apply_tangent_map;
     use crate::method::{Method, State, StepAdjoint};
     use crate::model::{Lagrangian, Structure};
@@ -291,21 +252,19 @@ mod tests {
         }
     }
 
-    /// Φᵀλ by the kept stage Jacobians against the transpose of the tangent map (an
-    /// independent computation: the block Hessian of the discrete action, factorised), for
-    /// a few covectors, relative to their size.
-    fn stages_against_map<L: Lagrangian<N>, N: crate::dimension::Dimension>(
+    /// One step of `method` from `start`: what it keeps for its adjoint, the workspace that
+    /// applies it and the increment.
+    fn kept<L: Lagrangian<N>, N: crate::dimension::Dimension>(
         method: &Svi,
         model: &L,
         start: &State<N>,
         t: f64,
         h: f64,
-    ) -> f64
+    ) -> (StepAdjoint<N>, SviWorkspace<N>, State<N>)
     where
         nalgebra::DefaultAllocator:
             nalgebra::allocator::Allocator<N> + nalgebra::allocator::Allocator<N, N>,
     {
-        let n = start.dimension().value();
         let mut workspace = method.workspace(model, h).unwrap();
         let mut increment = State::zeros(start.dimension());
         let mut kept = StepAdjoint::empty();
@@ -320,6 +279,25 @@ mod tests {
                 &mut kept,
             )
             .unwrap();
+        (kept, workspace, increment)
+    }
+
+    /// Φᵀλ by the kept stage matrices against the transpose of the tangent map (an
+    /// independent computation: the block Hessian of the discrete action, factorised), for
+    /// a few covectors, relative to their size.
+    fn stages_against_map<L: Lagrangian<N>, N: crate::dimension::Dimension>(
+        method: &Svi,
+        model: &L,
+        start: &State<N>,
+        t: f64,
+        h: f64,
+    ) -> f64
+    where
+        nalgebra::DefaultAllocator:
+            nalgebra::allocator::Allocator<N> + nalgebra::allocator::Allocator<N, N>,
+    {
+        let n = start.dimension().value();
+        let (kept, mut workspace, increment) = kept(method, model, start, t, h);
         assert!(matches!(kept, StepAdjoint::Stages { .. }), "{method:?}");
         let mut other = method.workspace(model, h).unwrap();
         let (step, map, _) = method.tangent_map(model, &mut other, t, h, start).unwrap();
@@ -377,45 +355,19 @@ mod tests {
     #[test]
     fn forced_and_general_models_keep_the_tangent_map() {
         let method = Svi::new(5);
-        let mut kept = StepAdjoint::empty();
         let start = State {
             q: SVector::from([1.0]),
             y: SVector::from([-0.5]),
         };
-        let model = Damped::<true> { c: 0.7 };
-        let mut workspace = method.workspace(&model, 0.1).unwrap();
-        let mut increment = State::zeros(start.dimension());
-        method
-            .adjoint_step(
-                &model,
-                &mut workspace,
-                0.0,
-                0.1,
-                &start,
-                &mut increment,
-                &mut kept,
-            )
-            .unwrap();
-        assert!(matches!(kept, StepAdjoint::Map(_)));
+        let (forced, ..) = kept(&method, &Damped::<true> { c: 0.7 }, &start, 0.0, 0.1);
+        assert!(matches!(forced, StepAdjoint::Map(_)));
         let start = State {
             q: SVector::from([0.5, -0.3]),
             y: SVector::from([0.4, 0.6]),
         };
-        let model = HenonHeiles::<false>;
-        let mut workspace = method.workspace(&model, 0.1).unwrap();
-        let mut kept = StepAdjoint::empty();
-        let mut increment = State::zeros(start.dimension());
-        method
-            .adjoint_step(
-                &model,
-                &mut workspace,
-                0.0,
-                0.1,
-                &start,
-                &mut increment,
-                &mut kept,
-            )
-            .unwrap();
-        assert!(matches!(kept, StepAdjoint::Map(_)));
+        let (general, ..) = kept(&method, &HenonHeiles::<false>, &start, 0.0, 0.1);
+        assert!(matches!(general, StepAdjoint::Map(_)));
+        let (constant, ..) = kept(&method, &HenonHeiles::<true>, &start, 0.0, 0.1);
+        assert!(matches!(constant, StepAdjoint::Stages { .. }));
     }
 }

@@ -2,7 +2,6 @@
 //! previous step's polynomial extrapolated to the new nodes, or at the first step the Taylor
 //! polynomial.
 
-use super::adjoint::StageCovectors;
 use super::constant_mass::ConstantMass;
 use crate::dimension::Dimension;
 use crate::linalg::DenseLu;
@@ -71,6 +70,47 @@ impl TangentBuffers {
             lu: DenseLu::new(inner),
             sensitivity: DMatrix::zeros(inner, 2 * width),
             momentum: DMatrix::zeros(width, 2 * width),
+        }
+    }
+}
+
+/// The covectors of the adjoint's transposed iteration (`super::adjoint`), made at its first
+/// use. The stage
+/// covectors are stored by component (entry i of stage ν at i·m + ν), so that the sums over
+/// the stages run along contiguous memory.
+#[derive(Debug, Clone)]
+pub(super) struct StageCovectors<N: Dimension>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// r.
+    pub(super) right: Vec<f64>,
+    /// z.
+    pub(super) z: Vec<f64>,
+    /// Σ_μ K_μν z_μ.
+    pub(super) mixed: Vec<f64>,
+    /// λ_q, λ_p, g = hG λ_q and one more N-vector.
+    pub(super) lambda_q: OVector<f64, N>,
+    pub(super) lambda_p: OVector<f64, N>,
+    pub(super) g: OVector<f64, N>,
+    pub(super) work: OVector<f64, N>,
+}
+
+impl<N: Dimension> StageCovectors<N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    /// Buffers for N coordinates and m quadrature points.
+    pub(super) fn new(n: N, m: usize) -> Self {
+        let zero = OVector::zeros_generic(n, U1);
+        StageCovectors {
+            right: vec![0.0; n.value() * m],
+            z: vec![0.0; n.value() * m],
+            mixed: vec![0.0; n.value() * m],
+            lambda_q: zero.clone(),
+            lambda_p: zero.clone(),
+            g: zero.clone(),
+            work: zero,
         }
     }
 }
