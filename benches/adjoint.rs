@@ -2,7 +2,9 @@
 //! (issue #40: at most 4× on a 10⁵-step SVI 7/6 Kepler run, with O(√K) stored states).
 //!
 //! Kepler e = 0.5 from its pericentre, SVI with 7 points and 6 Gauss–Legendre nodes, h = 0.02,
-//! K = 10⁵ steps (T = 2000). Timed, each as the median of [`ROUNDS`] whole runs:
+//! K = 10⁵ steps (T = 2000). Timed as [`ROUNDS`] rounds of a forward run then the run
+//! measured, each figure the median over the rounds, each ratio the median of the rounds'
+//! ratios:
 //! - `forward`: the plain run of the model ([`Integrator::run`], no observer);
 //! - `gradient`: the gradient of J = Σ_j q₁(t_j) over outputs every 1000 steps with respect
 //!   to (q₀, q̇₀) and e ([`Integrator::gradient`], default checkpoints);
@@ -18,7 +20,7 @@ use svi::{Initial, Integrator, Scalar, Svi};
 use svi_models::Kepler;
 
 /// Whole runs timed per measurement (the median is reported).
-const ROUNDS: usize = 5;
+const ROUNDS: usize = 9;
 const STEPS: usize = 100_000;
 const T_END: f64 = 2000.0;
 
@@ -31,17 +33,31 @@ impl Loss for FirstCoordinate {
     }
 }
 
-/// The median of `ROUNDS` timings of `run`, in seconds.
-fn median(mut run: impl FnMut()) -> f64 {
-    let mut times: Vec<f64> = (0..ROUNDS)
-        .map(|_| {
-            let start = Instant::now();
-            run();
-            start.elapsed().as_secs_f64()
-        })
+/// The seconds `run` takes.
+fn seconds(run: &mut impl FnMut()) -> f64 {
+    let start = Instant::now();
+    run();
+    start.elapsed().as_secs_f64()
+}
+
+/// The median of a list of numbers.
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// `ROUNDS` rounds of `forward` then `other`, one after the other: the median times of both
+/// and the median of the rounds' ratios (pairs keep the ratio meaningful when the machine's
+/// speed drifts during the bench).
+fn paired(mut forward: impl FnMut(), mut other: impl FnMut()) -> (f64, f64, f64) {
+    let rounds: Vec<(f64, f64)> = (0..ROUNDS)
+        .map(|_| (seconds(&mut forward), seconds(&mut other)))
         .collect();
-    times.sort_by(f64::total_cmp);
-    times[ROUNDS / 2]
+    (
+        median(rounds.iter().map(|r| r.0).collect()),
+        median(rounds.iter().map(|r| r.1).collect()),
+        median(rounds.iter().map(|r| r.1 / r.0).collect()),
+    )
 }
 
 fn main() {
@@ -52,35 +68,35 @@ fn main() {
         q: SVector::from([0.5, 0.0]),
         v: SVector::from([0.0, 3.0_f64.sqrt()]),
     };
-    let forward = median(|| {
+    let forward = || {
         integrator.run(0.0, initial, h, T_END, &mut ()).unwrap();
-    });
+    };
     let run = SensitivityRun::new(0.0, Start::Model, h, T_END)
         .with_parameters(&["e"])
         .with_outputs_every(1000);
     let mut last = None;
-    let gradient = median(|| {
+    let (forward_time, gradient, gradient_ratio) = paired(forward, || {
         last = Some(
             integrator
                 .gradient(&run, &FirstCoordinate, Checkpoints::default())
                 .unwrap(),
         );
     });
-    let sensitivities = median(|| {
+    let (_, sensitivities, sensitivities_ratio) = paired(forward, || {
         integrator.sensitivities(&run).unwrap();
     });
     let last = last.unwrap();
     println!("Kepler e = 0.5, SVI 7/6, {STEPS} steps of h = {h}:");
-    println!("  forward        {:8.2} ms", forward * 1e3);
+    println!("  forward        {:8.2} ms", forward_time * 1e3);
     println!(
         "  gradient       {:8.2} ms  {:5.2}× forward",
         gradient * 1e3,
-        gradient / forward
+        gradient_ratio
     );
     println!(
         "  sensitivities  {:8.2} ms  {:5.2}× forward",
         sensitivities * 1e3,
-        sensitivities / forward
+        sensitivities_ratio
     );
     println!(
         "  peak stored: {} states and steps' adjoints, {} bytes (√K = {:.0})",
