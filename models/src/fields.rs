@@ -305,6 +305,109 @@ impl ExactField<1> for SineGordonBreather {
     }
 }
 
+/// The sine-Gordon kink–antikink pair approaching each other with speed v, colliding at
+/// x = 0 at t = t_c, on [−20, 20] held at 0.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SineGordonKinkAntikink {
+    /// The speed v of each, 0 < v < 1.
+    pub speed: f64,
+    /// The time t_c of the collision.
+    pub collision: f64,
+}
+
+impl Default for SineGordonKinkAntikink {
+    fn default() -> Self {
+        SineGordonKinkAntikink {
+            speed: 0.4,
+            collision: 10.0,
+        }
+    }
+}
+
+impl SineGordonKinkAntikink {
+    /// (u, u_t) of the pair at (x, t).
+    fn state(&self, x: f64, t: f64) -> (f64, f64) {
+        let v = self.speed;
+        let gamma = 1.0 / (1.0 - v * v).sqrt();
+        let phase = gamma * v * (t - self.collision);
+        let a = phase.sinh() / (v * (gamma * x).cosh());
+        let a_t = gamma * phase.cosh() / (gamma * x).cosh();
+        (4.0 * a.atan(), 4.0 * a_t / (1.0 + a * a))
+    }
+}
+
+impl LagrangianDensity<1> for SineGordonKinkAntikink {
+    const STRUCTURE: DensityStructure = DensityStructure::ConstantMass;
+
+    #[inline]
+    fn density<D: Scalar>(
+        &self,
+        _x: f64,
+        _t: f64,
+        u: &SVector<D, 1>,
+        u_t: &SVector<D, 1>,
+        u_x: &SVector<D, 1>,
+    ) -> D {
+        sine_gordon(u, u_t, u_x)
+    }
+}
+
+impl FieldDefaults<1> for SineGordonKinkAntikink {
+    fn name(&self) -> &'static str {
+        "sine-gordon-kink-antikink"
+    }
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        vec![("speed", self.speed), ("collision", self.collision)]
+    }
+    fn set_parameter(&mut self, name: &str, value: f64) -> Result<(), Error> {
+        match name {
+            "speed" => {
+                if subluminal(name, value)? <= 0.0 {
+                    return Err(Error::invalid(
+                        name,
+                        format!("{value:?} must lie in (0, 1)"),
+                    ));
+                }
+                self.speed = value;
+            }
+            "collision" => self.collision = finite(name, value)?,
+            _ => {
+                return Err(unknown(
+                    "sine-gordon-kink-antikink",
+                    name,
+                    &["speed", "collision"],
+                ));
+            }
+        }
+        Ok(())
+    }
+    fn domain(&self) -> Domain {
+        wide()
+    }
+    fn boundary(&self) -> Boundary<1> {
+        held(0.0, 0.0)
+    }
+    fn initial_field(&self, x: f64) -> (SVector<f64, 1>, SVector<f64, 1>) {
+        let (u, u_t) = self.state(x, 0.0);
+        (SVector::from([u]), SVector::from([u_t]))
+    }
+    fn default_points(&self) -> usize {
+        401
+    }
+    fn default_step(&self) -> f64 {
+        0.05
+    }
+    fn default_horizon(&self) -> f64 {
+        2.0 * self.collision
+    }
+}
+
+impl ExactField<1> for SineGordonKinkAntikink {
+    fn exact_field(&self, x: f64, t: f64) -> SVector<f64, 1> {
+        SVector::from([self.state(x, t).0])
+    }
+}
+
 /// The φ⁴ kink ℒ = ½u_t² − ½u_x² − ¼(u² − 1)², moving with speed v from x₀, on [−20, 20]
 /// held at −1 and 1.
 #[derive(Debug, Clone, PartialEq)]
@@ -422,8 +525,16 @@ mod tests {
         let kink = SineGordonKink::default();
         let breather = SineGordonBreather::default();
         let phi4 = Phi4Kink::default();
-        for (x, t) in [(-4.0, 0.3), (-5.2, 1.1), (0.4, 2.0), (1.3, 5.0)] {
+        let pair = SineGordonKinkAntikink::default();
+        for (x, t) in [
+            (-4.0, 0.3),
+            (-5.2, 1.1),
+            (0.4, 2.0),
+            (1.3, 5.0),
+            (0.2, 10.1),
+        ] {
             assert!(field_equation_residual(&kink, x, t).abs() < 1e-5);
+            assert!(field_equation_residual(&pair, x, t).abs() < 1e-5);
             assert!(field_equation_residual(&breather, x, t).abs() < 1e-5);
             assert!(field_equation_residual(&phi4, x, t).abs() < 1e-5);
         }
@@ -442,8 +553,10 @@ mod tests {
         let kink = SineGordonKink::default();
         let breather = SineGordonBreather::default();
         let phi4 = Phi4Kink::default();
+        let pair = SineGordonKinkAntikink::default();
         for x in [-6.0, -4.5, 0.0, 2.5] {
             let d = |u: &dyn Fn(f64) -> f64| (u(h) - u(-h)) / (2.0 * h);
+            assert!((pair.initial_field(x).1[0] - d(&|t| pair.exact_field(x, t)[0])).abs() < 1e-8);
             assert!((kink.initial_field(x).1[0] - d(&|t| kink.exact_field(x, t)[0])).abs() < 1e-8);
             assert!(
                 (breather.initial_field(x).1[0] - d(&|t| breather.exact_field(x, t)[0])).abs()
@@ -483,6 +596,11 @@ mod tests {
                 .is_err()
         );
         assert!(Phi4Kink::default().set_parameter("speed", -1.5).is_err());
+        assert!(
+            SineGordonKinkAntikink::default()
+                .set_parameter("speed", 0.0)
+                .is_err()
+        );
         assert!(
             SineGordonBreather::default()
                 .set_parameter("omega", 1.0)

@@ -107,6 +107,7 @@
 //! | `wave` | [`Wave`] | ½u_t² − ½c²u_x² | [0, 2π], periodic | d'Alembert |
 //! | `sine-gordon-kink` | [`SineGordonKink`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0, 2π | moving kink |
 //! | `sine-gordon-breather` | [`SineGordonBreather`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0 | breather |
+//! | `sine-gordon-kink-antikink` | [`SineGordonKinkAntikink`] | ½u_t² − ½u_x² − (1 − cos u) | [−20, 20], u = 0 | kink–antikink collision |
 //! | `phi4-kink` | [`Phi4Kink`] | ½u_t² − ½u_x² − ¼(u² − 1)² | [−20, 20], u = ∓1 | boosted kink |
 //!
 //! They implement [`FieldZooModel`] and are handed to a [`FieldModelVisitor`] by
@@ -164,7 +165,7 @@ pub use damped_oscillator::DampedOscillator;
 pub use damped_pendulum::DampedPendulum;
 pub use double_pendulum::DoublePendulum;
 pub use driven_oscillator::DrivenOscillator;
-pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, Wave};
+pub use fields::{Phi4Kink, SineGordonBreather, SineGordonKink, SineGordonKinkAntikink, Wave};
 pub use fput::Fput;
 pub use fput_stiff::FputStiff;
 pub use henon_heiles::HenonHeiles;
@@ -771,6 +772,7 @@ field_zoo!(
     "wave" => Wave,
     "sine-gordon-kink" => SineGordonKink,
     "sine-gordon-breather" => SineGordonBreather,
+    "sine-gordon-kink-antikink" => SineGordonKinkAntikink,
     "phi4-kink" => Phi4Kink,
 );
 
