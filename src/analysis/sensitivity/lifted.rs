@@ -6,11 +6,11 @@
 
 use super::{SensitivityRun, Start};
 use crate::dimension::{Dimension, Dyn};
-use crate::error::Error;
+use crate::error::{Error, StepFailure};
 use crate::linalg::invert_small;
 use crate::method::space::{Initial, PhasePoint, State, StepState, TangentMap};
 use crate::method::step::Step;
-use crate::method::{Coordinates, Euclidean, Method, StepAdjoint};
+use crate::method::{Coordinates, Euclidean, Method, StepAdjoint, StepReport};
 use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::model::parametric::{Parametric, WithParameters, parameter_indices};
@@ -377,12 +377,36 @@ where
 
     /// Take step `k` of the grid.
     pub(super) fn step(&mut self, k: usize) -> Result<(), Error> {
+        let integrator = self.lifted.integrator;
+        self.advance(k, |workspace, t, size, state, increment| {
+            Step::<_, Euclidean<D>>::step(
+                integrator.method(),
+                integrator.model(),
+                workspace,
+                t,
+                size,
+                state,
+                increment,
+            )
+        })
+    }
+
+    /// Take step `k` of the grid by `take(workspace, t, h, state, increment)`, record its
+    /// report and add its increment to the state.
+    fn advance(
+        &mut self,
+        k: usize,
+        take: impl FnOnce(
+            &mut <M as Method<D>>::Workspace,
+            f64,
+            f64,
+            &State<D>,
+            &mut State<D>,
+        ) -> Result<StepReport, StepFailure>,
+    ) -> Result<(), Error> {
         let (t0, h, t_end, steps) = self.lifted.grid;
         let (t, size, _) = grid_step(t0, t_end, h, steps, k);
-        let integrator = self.lifted.integrator;
-        let report = Step::<_, Euclidean<D>>::step(
-            integrator.method(),
-            integrator.model(),
+        let report = take(
             &mut self.workspace,
             t,
             size,
@@ -421,22 +445,19 @@ where
         k: usize,
         adjoint: &mut StepAdjoint<D>,
     ) -> Result<(), Error> {
-        let (t0, h, t_end, steps) = self.lifted.grid;
-        let (t, size, _) = grid_step(t0, t_end, h, steps, k);
         let integrator = self.lifted.integrator;
-        let report = Method::adjoint_step(
-            integrator.method(),
-            integrator.model(),
-            &mut self.workspace,
-            t,
-            size,
-            &self.cursor.state,
-            &mut self.increment,
-            adjoint,
-        )
-        .map_err(|failure| failure.at(k, t))?;
-        self.statistics.record(report);
-        self.add(k, t)
+        self.advance(k, |workspace, t, size, state, increment| {
+            Method::adjoint_step(
+                integrator.method(),
+                integrator.model(),
+                workspace,
+                t,
+                size,
+                state,
+                increment,
+                adjoint,
+            )
+        })
     }
 
     /// λ ← Φ_kᵀλ for step `k`, kept in `adjoint` ([`Method::adjoint_apply`]).

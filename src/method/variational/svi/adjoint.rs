@@ -69,7 +69,9 @@ where
         constant_mass,
         ..
     } = workspace;
-    let data = constant_mass.as_mut()?;
+    let Some(data) = constant_mass.as_mut() else {
+        unreachable!("checked before the step");
+    };
     if data.mass_inverse.is_none() {
         match model.mass_inverse(t, &state.q, &state.y) {
             Ok(inverse) => data.mass_inverse = Some(inverse),
@@ -83,12 +85,17 @@ where
         unreachable!("made a Stages above");
     };
     *size = h;
-    matrices.clear();
     let Some(inverse) = data.mass_inverse.as_ref() else {
         unreachable!("made above");
     };
     let kick_inverse = inverse.scaled(h);
     let n = state.q.shape_generic().0;
+    let m = tables.weights.len();
+    // The slots of the previous step are written over (P_μ at 2μ, C_μ at 2μ + 1).
+    if matrices.len() != 2 * m || matrices[0].shape_generic().0 != n {
+        matrices.clear();
+        matrices.resize(2 * m, OMatrix::zeros_generic(n, n));
+    }
     let mut column = OVector::zeros_generic(n, U1);
     let mut image = OVector::zeros_generic(n, U1);
     for (mu, weight) in tables.weights.iter().enumerate() {
@@ -98,14 +105,15 @@ where
         if !weighted.iter().all(|x| x.is_finite()) {
             return Some(Err(StepFailure::NonFinite));
         }
-        let mut kicked = weighted.clone();
+        let [kept, kicked] = &mut matrices[2 * mu..2 * mu + 2] else {
+            unreachable!("2m slots");
+        };
         for j in 0..n.value() {
             column.copy_from(&weighted.column(j));
             kick_inverse.apply_into(&column, &mut image);
             kicked.set_column(j, &image);
         }
-        matrices.push(weighted);
-        matrices.push(kicked);
+        *kept = weighted;
     }
     Some(Ok(report))
 }
