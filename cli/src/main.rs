@@ -35,7 +35,7 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Run a scene: a built-in name or a TOML scene file (a field scene, see `svi list`, runs
-    /// the multisymplectic integrator).
+    /// the multisymplectic integrator, on a moving mesh the r-adaptive one).
     Run(RunArgs),
     /// List the built-in scenes, the models with their parameters and the Lie groups.
     List,

@@ -119,6 +119,9 @@ fn list_shows_the_field_scenes_and_run_prints_a_text_summary() {
         "sine-gordon-kink",
         "sine-gordon-breather",
         "phi4-kink",
+        "sine-gordon-kink-fast",
+        "phi4-kink-moving-mesh",
+        "sine-gordon-kink-antikink",
     ] {
         assert!(fields.contains(name), "{name} missing:\n{text}");
     }
@@ -156,4 +159,82 @@ fn plot_draws_the_field_over_space_and_time_and_needs_the_trajectory_file() {
         &["--plot", svg.to_str().unwrap()],
         "--plot",
     );
+}
+
+#[test]
+fn a_moving_mesh_scene_runs_the_r_adaptive_integrator_and_fails_as_a_run() {
+    let scratch = Scratch::new("moving-mesh");
+    let csv = scratch.join("kink.csv");
+    // The kink at v = 0.99 to t = 2 on 61 moving nodes: error 0.0708, measured.
+    let summary = json(&[
+        "run",
+        "sine-gordon-kink-fast",
+        "--param",
+        "points=61",
+        "--t-end",
+        "2",
+        "--out",
+        csv.to_str().unwrap(),
+        "--json",
+    ]);
+    assert_eq!(summary["method"], "r-adaptive");
+    assert_eq!(summary["monitor"], "arc-length");
+    assert!(summary["dx"].is_null(), "{summary}");
+    assert!(number(&summary, "smallest_width") > 0.0);
+    assert!(number(&summary, "solution_error_max") < 0.09, "{summary}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.starts_with("t,x,u,node\n"), "{text}");
+    assert_eq!(text.lines().count(), 1 + 61 * 41);
+    // Each level's nodes in order, from −20 to 20, strictly increasing: the node paths.
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|line| line.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    for level in rows.chunks(61) {
+        assert!(level.iter().all(|row| row[0] == level[0][0]), "{level:?}");
+        assert!(level.iter().enumerate().all(|(i, row)| row[3] == i as f64));
+        assert_eq!((level[0][1], level[60][1]), (-20.0, 20.0));
+        assert!(
+            level.windows(2).all(|pair| pair[1][1] > pair[0][1]),
+            "{level:?}"
+        );
+    }
+    // Keys of a moving mesh on a uniform one, β with the arc length: bad input.
+    let run = ["run"];
+    bad_input(
+        &run,
+        &["sine-gordon-kink", "--param", "smoothing=1"],
+        "smoothing",
+    );
+    bad_input(
+        &run,
+        &["sine-gordon-kink-fast", "--param", "monitor_curvature=1"],
+        "monitor_curvature",
+    );
+    bad_input(
+        &run,
+        &["sine-gordon-kink-fast", "--param", "smoothing=-1"],
+        "smoothing",
+    );
+    // Steps far too long for the fast kink (h = 2: it moves 14 times its width in one step):
+    // the run fails after it started, exit status 1.
+    let output = svi(&[
+        "run",
+        "sine-gordon-kink-fast",
+        "--param",
+        "points=41",
+        "--h",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(output.status.code(), Some(1));
+    let failure: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(failure["status"], "failed");
+    let kind = failure["error"]["kind"].as_str().unwrap();
+    assert!(
+        ["mesh_fold", "non_convergence"].contains(&kind),
+        "{failure}"
+    );
+    assert!(failure["error"]["step"].is_number(), "{failure}");
 }

@@ -231,7 +231,8 @@ pub fn listing() -> String {
         &mut out,
         format_args!(
             "Field scenes in 1 + 1 dimensions (svi run NAME --param points=N; the multisymplectic \
-         integrator; the models of the same names, with their parameters):"
+         integrator, on a moving mesh where the scene names a monitor; each runs the model its \
+         name begins with):"
         ),
     );
     for (name, text) in FIELD_SCENES {

@@ -1,12 +1,15 @@
 //! The summary of a field run (`svi run` on a field scene), as text or one JSON object.
 //!
 //! The JSON fields are an interface (`docs/schema/result.schema.json`, kind `field`): `model`,
-//! `parameters`, `method` (`multisymplectic`), `mesh_points`, `dx`, `h`, `steps` (time
-//! levels), `t_end`, `cell_rule`, `explicit`, `energy_initial`, `energy_error_max` (largest
-//! |E^{j+½} − E^{½}| of the discrete energy), `momentum_initial`, `momentum_error_max`,
-//! `multisymplectic_residual_max` (null when not measured), `solution_error_max` (largest
-//! |u − u_exact| over all nodes and levels), `iterations` (Newton's), `seconds`,
-//! `trajectory`, `status`, `warnings` and, for a failed run, `error`. The names before schema
+//! `parameters`, `method` (`multisymplectic`, or `r-adaptive` on a moving mesh),
+//! `mesh_points`, `dx` (null on a moving mesh), `h`, `steps` (time levels), `t_end`,
+//! `cell_rule`, on a moving mesh only `monitor` (`arc-length` or `curvature`), `smoothing`
+//! and `smallest_width` (the smallest cell width over the run), `explicit`,
+//! `energy_initial`, `energy_error_max` (largest |E^{j+½} − E^{½}| of the discrete energy),
+//! `momentum_initial`, `momentum_error_max`, `multisymplectic_residual_max` (null when not
+//! measured, always on a moving mesh), `solution_error_max` (largest |u − u_exact| over all
+//! nodes and levels), `iterations` (Newton's), `seconds`, `trajectory`, `status`, `warnings`
+//! and, for a failed run, `error`. The names before schema
 //! version 1 (`points`, `levels`, `quadrature`, `error_max`, `newton_iterations`) are printed
 //! too, for one release.
 
@@ -26,12 +29,12 @@ pub struct FieldSummary {
     pub model: String,
     /// Model parameters in effect.
     pub parameters: Parameters,
-    /// `multisymplectic`.
+    /// `multisymplectic` (a uniform mesh) or `r-adaptive` (a moving mesh).
     pub method: &'static str,
     /// Nodes in space.
     pub mesh_points: usize,
-    /// Δx.
-    pub dx: f64,
+    /// Δx of a uniform mesh (`None` for a moving mesh).
+    pub dx: Option<f64>,
     /// The time step Δt.
     pub h: f64,
     /// Time levels computed (steps).
@@ -40,6 +43,9 @@ pub struct FieldSummary {
     pub t_end: f64,
     /// The rule of the action on a cell: `trapezoid` or `midpoint`.
     pub cell_rule: &'static str,
+    /// The moving mesh's monitor, smoothing and smallest width (absent for a uniform mesh).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub moving: Option<MovingMeshSummary>,
     /// Whether the levels were solved explicitly.
     pub explicit: bool,
     /// The discrete energy of the first slab.
@@ -69,28 +75,50 @@ pub struct FieldSummary {
     pub error: Option<ErrorReport>,
 }
 
+/// The part of a [`FieldSummary`] particular to a moving mesh.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MovingMeshSummary {
+    /// The monitor: `arc-length` or `curvature`.
+    pub monitor: &'static str,
+    /// The smoothing κ of the mesh concentration.
+    pub smoothing: f64,
+    /// The smallest cell width over the run.
+    pub smallest_width: f64,
+}
+
 impl fmt::Display for FieldSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let optional = |value: Option<f64>| value.map_or("n/a".into(), |v| format!("{v:.3e}"));
-        let mut rows = vec![
-            ("model", format!("{} ({})", self.model, self.parameters)),
-            (
-                "method",
+        let solver = if self.explicit { "explicit" } else { "Newton" };
+        let (method, mesh) = match (&self.moving, self.dx) {
+            (Some(moving), _) => (
                 format!(
-                    "multisymplectic, {} cells ({})",
-                    self.cell_rule,
-                    if self.explicit { "explicit" } else { "Newton" }
+                    "r-adaptive, {} monitor, smoothing {}, {} cells ({solver})",
+                    moving.monitor,
+                    Float(moving.smoothing),
+                    self.cell_rule
                 ),
-            ),
-            (
-                "mesh",
                 format!(
-                    "{} points, dx = {}, h = {}",
+                    "{} moving nodes, smallest width {:.3e}, h = {}",
                     self.mesh_points,
-                    Float(self.dx),
+                    moving.smallest_width,
                     Float(self.h)
                 ),
             ),
+            (None, dx) => (
+                format!("{}, {} cells ({solver})", self.method, self.cell_rule),
+                format!(
+                    "{} points, dx = {}, h = {}",
+                    self.mesh_points,
+                    dx.map_or("n/a".into(), |dx| Float(dx).to_string()),
+                    Float(self.h)
+                ),
+            ),
+        };
+        let mut rows = vec![
+            ("model", format!("{} ({})", self.model, self.parameters)),
+            ("method", method),
+            ("mesh", mesh),
             (
                 "time",
                 format!("0 to {} in {} levels", Float(self.t_end), self.steps),

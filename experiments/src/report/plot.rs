@@ -217,6 +217,28 @@ pub fn plot_csv(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
 /// sampled down to them, so the SVG stays small).
 const SPACE_TIME_CELLS: (usize, usize) = (160, 120);
 
+/// A moving mesh of at most this many nodes has every node's path drawn; a finer one every
+/// k-th node's, about [`NODE_PATHS`] of them.
+const ALL_NODE_PATHS: usize = 101;
+/// About how many node paths a space-time picture of a fine moving mesh draws.
+const NODE_PATHS: usize = 50;
+/// Largest number of points of one drawn node path (its levels are sampled down to them).
+const NODE_PATH_POINTS: usize = 400;
+
+/// The nodes whose paths a space-time picture of a moving mesh of `nodes` nodes draws: all
+/// of them up to [`ALL_NODE_PATHS`], else every k-th (about [`NODE_PATHS`]) and the last.
+fn drawn_node_paths(nodes: usize) -> Vec<usize> {
+    if nodes <= ALL_NODE_PATHS {
+        return (0..nodes).collect();
+    }
+    let k = ((nodes - 1) / NODE_PATHS).max(1);
+    let mut drawn: Vec<usize> = (0..nodes).step_by(k).collect();
+    if drawn.last() != Some(&(nodes - 1)) {
+        drawn.push(nodes - 1);
+    }
+    drawn
+}
+
 /// Draw the Poincaré section points of the trajectory files `csvs` (one series per file: an
 /// orbit each) as a scatter of their two columns `axes` to `svg`.
 ///
@@ -266,7 +288,10 @@ pub fn plot_section(
 /// after another, as `svi run --out` writes a field scene; further columns are ignored, e.g.
 /// the real and imaginary parts after |ψ|) as an SVG picture at `svg`: u coloured
 /// over the (x, t) plane (blue lowest, white middle, red highest), titled `title` and named
-/// by its column (`abs` is drawn as |ψ|).
+/// by its column (`abs` is drawn as |ψ|). A moving mesh (rows `t,x,u,node`, the node's
+/// positions changing from level to level) is coloured cell by cell of the mesh, and the
+/// paths x_i(t) of its nodes are drawn over it as thin lines (every node's up to 101 nodes,
+/// else about 50 evenly spaced in the node index).
 pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotError> {
     let error = |reason: String| PlotError {
         path: svg.display().to_string(),
@@ -285,6 +310,7 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
         )));
     }
     let levels = rows.len() / width;
+    let moving = header.get(3).is_some_and(|name| name == "node");
     let stride = |count: usize, cells: usize| count.div_ceil(cells).max(1);
     let (x_stride, t_stride) = (
         stride(width, SPACE_TIME_CELLS.0),
@@ -331,7 +357,8 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
             "abs" => "|ψ|",
             other => other,
         };
-        let caption = format!("{title}: {name} from {low:.3} (blue) to {high:.3} (red)");
+        let paths = if moving { "; lines: node paths" } else { "" };
+        let caption = format!("{title}: {name} from {low:.3} (blue) to {high:.3} (red){paths}");
         let mut chart = ChartBuilder::on(&root)
             .caption(caption, ("sans-serif", 18))
             .margin(12)
@@ -349,19 +376,57 @@ pub fn plot_space_time(csv: &Path, svg: &Path, title: &str) -> Result<(), PlotEr
         let cells = (0..levels)
             .step_by(t_stride)
             .flat_map(|level| (0..width).step_by(x_stride).map(move |node| (level, node)));
-        chart
-            .draw_series(cells.map(|(level, node)| {
-                let (right, top) = (
-                    (node + x_stride).min(width - 1),
-                    (level + t_stride).min(levels - 1),
-                );
-                let corner = |l: usize, n: usize| (rows[n + l * width][1], rows[l * width][0]);
-                Rectangle::new(
-                    [corner(level, node), corner(top, right)],
-                    colour(value(level, node)).filled(),
-                )
-            }))
-            .map_err(|e| e.to_string())?;
+        let corner = |l: usize, n: usize| (rows[n + l * width][1], rows[l * width][0]);
+        if moving {
+            // The cells of the moving mesh: quadrilaterals between the nodes' positions at
+            // the two levels (they tile the plane, the nodes being ordered at every level).
+            chart
+                .draw_series(cells.map(|(level, node)| {
+                    let (right, top) = (
+                        (node + x_stride).min(width - 1),
+                        (level + t_stride).min(levels - 1),
+                    );
+                    Polygon::new(
+                        vec![
+                            corner(level, node),
+                            corner(level, right),
+                            corner(top, right),
+                            corner(top, node),
+                        ],
+                        colour(value(level, node)).filled(),
+                    )
+                }))
+                .map_err(|e| e.to_string())?;
+            let path_stride = stride(levels, NODE_PATH_POINTS);
+            let mut path_levels: Vec<usize> = (0..levels).step_by(path_stride).collect();
+            if path_levels.last() != Some(&(levels - 1)) {
+                path_levels.push(levels - 1);
+            }
+            for node in drawn_node_paths(width) {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        path_levels
+                            .iter()
+                            .map(|&level| corner(level, node))
+                            .collect::<Vec<_>>(),
+                        BLACK.mix(0.45).stroke_width(1),
+                    )))
+                    .map_err(|e| e.to_string())?;
+            }
+        } else {
+            chart
+                .draw_series(cells.map(|(level, node)| {
+                    let (right, top) = (
+                        (node + x_stride).min(width - 1),
+                        (level + t_stride).min(levels - 1),
+                    );
+                    Rectangle::new(
+                        [corner(level, node), corner(top, right)],
+                        colour(value(level, node)).filled(),
+                    )
+                }))
+                .map_err(|e| e.to_string())?;
+        }
         root.present().map_err(|e| e.to_string())
     };
     draw(&mut picture).map_err(error)?;

@@ -1,7 +1,8 @@
 //! Field scenes: a 1 + 1 field theory of the zoo ([`svi_models::FIELD_MODEL_NAMES`]) run by
-//! the multisymplectic integrator ([`svi::field`]). They have their own, smaller format and
-//! their own run path (`run/field.rs`): a field has a mesh instead of an initial state
-//! and a method.
+//! the multisymplectic integrator ([`svi::field`]) on a uniform mesh, or by the r-adaptive
+//! (moving-mesh) one ([`svi::field::r_adaptive`]) when `[mesh]` names a `monitor`. They have
+//! their own, smaller format and their own run path (`run/field.rs`): a field has a mesh
+//! instead of an initial state and a method.
 //!
 //! ```toml
 //! # The sine-Gordon breather (the first line, a comment, describes the scene)
@@ -26,9 +27,30 @@
 //! multisymplectic_check = true  # measure the discrete multisymplectic law (default true)
 //! ```
 //!
+//! # Moving meshes
+//! A `monitor` in `[mesh]` makes the nodes move with the field (the r-adaptive integrator;
+//! Dirichlet models only, whose density does not depend on x explicitly):
+//!
+//! ```toml
+//! [mesh]
+//! points = 101              # nodes, the ends held at the domain's ends
+//! monitor = "arc-length"    # ω = √(1 + α|u_x|²); or "curvature": √(1 + α|u_x|² + β|u_xx|²)
+//! monitor_scale = 4.0       # α ≥ 0 (default 1)
+//! # monitor_curvature = 1.0 # β ≥ 0, only with "curvature" (default 1)
+//! smoothing = 2.0           # κ ≥ 0: neighbouring cells within the ratio (κ + 1)/κ (default 2)
+//! quadrature = "midpoint"   # the default on a moving mesh; "trapezoid" is the leapfrog
+//! ```
+//!
+//! `monitor_scale`, `monitor_curvature` or `smoothing` without `monitor`, and
+//! `monitor_curvature` with `"arc-length"`, are errors ([`SceneError::NotApplicable`]). The
+//! field CSV of a moving mesh has rows `t,x,u,node` (the node's index: its path x_i(t)), its
+//! plot draws the node paths over the field, and `output.multisymplectic_check` is an error
+//! there (the law holds in computational variables; it is not measured).
+//!
 //! From the command line, `--h`, `--t-end`, `--param NAME=VALUE` (`--param points=N` sets
-//! the mesh), `--out`, `--every` and `--plot` apply; every other run flag is an error
-//! ([`SceneError::NotApplicable`]).
+//! the mesh; on a moving mesh also `smoothing=K`, `monitor_scale=A` and
+//! `monitor_curvature=B`), `--out`, `--every` and `--plot` apply; every other run flag is an
+//! error ([`SceneError::NotApplicable`]).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -36,6 +58,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 use serde::de::DeserializeOwned;
 use svi::field::multisymplectic::CellQuadrature;
+use svi::field::r_adaptive::Monitor;
 use svi_models::FIELD_MODEL_NAMES;
 
 use crate::scene::error::SceneError;
@@ -55,6 +78,18 @@ pub const FIELD_SCENES: &[(&str, &str)] = &[
         include_str!("../../scenes/sine-gordon-breather.toml"),
     ),
     ("phi4-kink", include_str!("../../scenes/phi4-kink.toml")),
+    (
+        "sine-gordon-kink-fast",
+        include_str!("../../scenes/sine-gordon-kink-fast.toml"),
+    ),
+    (
+        "phi4-kink-moving-mesh",
+        include_str!("../../scenes/phi4-kink-moving-mesh.toml"),
+    ),
+    (
+        "sine-gordon-kink-antikink",
+        include_str!("../../scenes/sine-gordon-kink-antikink.toml"),
+    ),
 ];
 
 /// A field scene (see the module documentation).
@@ -89,6 +124,125 @@ pub struct MeshSection {
     pub points: Option<usize>,
     /// The cell quadrature.
     pub quadrature: Option<QuadratureName>,
+    /// The monitor of a moving mesh; absent: the uniform mesh.
+    pub monitor: Option<MonitorName>,
+    /// α of the monitor (moving mesh only).
+    pub monitor_scale: Option<f64>,
+    /// β of the curvature monitor (`monitor = "curvature"` only).
+    pub monitor_curvature: Option<f64>,
+    /// The smoothing κ of the mesh concentration (moving mesh only).
+    pub smoothing: Option<f64>,
+}
+
+/// The monitor of a moving mesh as a scene names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MonitorName {
+    /// [`Monitor::ArcLength`].
+    ArcLength,
+    /// [`Monitor::Curvature`].
+    Curvature,
+}
+
+impl MonitorName {
+    /// The name in a scene and in the summary: `arc-length` or `curvature`.
+    pub fn name(self) -> &'static str {
+        match self {
+            MonitorName::ArcLength => "arc-length",
+            MonitorName::Curvature => "curvature",
+        }
+    }
+}
+
+/// The moving mesh of a scene's `[mesh]`, its defaults filled in (see
+/// [`MeshSection::moving`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MovingMesh {
+    /// The monitor as the scene names it.
+    pub name: MonitorName,
+    /// The library's monitor, with α (and β).
+    pub monitor: Monitor,
+    /// The smoothing κ.
+    pub smoothing: f64,
+}
+
+/// The default α of a moving mesh's monitor.
+pub const DEFAULT_MONITOR_SCALE: f64 = 1.0;
+/// The default β of the curvature monitor.
+pub const DEFAULT_MONITOR_CURVATURE: f64 = 1.0;
+
+/// The `[mesh]` keys of a moving mesh only, as the options an error names them by (also set
+/// by `--param NAME=VALUE`).
+const MOVING_MESH_KEYS: [&str; 3] = [
+    "--param monitor_scale (mesh.monitor_scale)",
+    "--param monitor_curvature (mesh.monitor_curvature)",
+    "--param smoothing (mesh.smoothing)",
+];
+
+impl MeshSection {
+    /// The moving mesh the section asks for (`None`: the uniform mesh), with the defaults
+    /// α = [`DEFAULT_MONITOR_SCALE`], β = [`DEFAULT_MONITOR_CURVATURE`] and the library's κ.
+    /// Their values are checked by the integrator ([`svi::Error::InvalidParameter`]).
+    ///
+    /// # Errors
+    /// [`SceneError::NotApplicable`] naming `monitor_scale`, `monitor_curvature` or
+    /// `smoothing` given without `monitor`, or `monitor_curvature` with `"arc-length"`.
+    pub fn moving(&self) -> Result<Option<MovingMesh>, SceneError> {
+        let given = [
+            self.monitor_scale.is_some(),
+            self.monitor_curvature.is_some(),
+            self.smoothing.is_some(),
+        ];
+        let Some(name) = self.monitor else {
+            return match given.iter().position(|given| *given) {
+                Some(k) => Err(SceneError::NotApplicable {
+                    option: MOVING_MESH_KEYS[k],
+                    reason: "sets the moving mesh, and this scene's mesh is uniform: give \
+                             [mesh] monitor = \"arc-length\" or \"curvature\" to move it"
+                        .into(),
+                }),
+                None => Ok(None),
+            };
+        };
+        let scale = self.monitor_scale.unwrap_or(DEFAULT_MONITOR_SCALE);
+        let monitor = match name {
+            MonitorName::ArcLength => {
+                if self.monitor_curvature.is_some() {
+                    return Err(SceneError::NotApplicable {
+                        option: MOVING_MESH_KEYS[1],
+                        reason: "weighs u_xx in the curvature monitor, and this scene's monitor \
+                                 is \"arc-length\": give monitor = \"curvature\" to use it"
+                            .into(),
+                    });
+                }
+                Monitor::ArcLength { scale }
+            }
+            MonitorName::Curvature => Monitor::Curvature {
+                scale,
+                curvature: self.monitor_curvature.unwrap_or(DEFAULT_MONITOR_CURVATURE),
+            },
+        };
+        Ok(Some(MovingMesh {
+            name,
+            monitor,
+            smoothing: self
+                .smoothing
+                .unwrap_or(svi::field::r_adaptive::RAdaptiveOptions::default().smoothing),
+        }))
+    }
+
+    /// Set the moving-mesh key `name` (one of `monitor_scale`, `monitor_curvature`,
+    /// `smoothing`) to `value`; `false` for any other name.
+    fn set_moving(&mut self, name: &str, value: f64) -> bool {
+        let field = match name {
+            "monitor_scale" => &mut self.monitor_scale,
+            "monitor_curvature" => &mut self.monitor_curvature,
+            "smoothing" => &mut self.smoothing,
+            _ => return false,
+        };
+        *field = Some(value);
+        true
+    }
 }
 
 /// The cell quadrature as a scene names it.
@@ -125,13 +279,14 @@ pub struct FieldRunSection {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FieldOutputSection {
-    /// The CSV file of the field (rows `t,x,u`).
+    /// The CSV file of the field (rows `t,x,u`; `t,x,u,node` on a moving mesh).
     pub trajectory: Option<PathBuf>,
     /// Write every k-th time level.
     pub every: Option<usize>,
     /// An SVG space-time picture of the field written to `trajectory` (needs it).
     pub plot: Option<PathBuf>,
-    /// Measure the discrete multisymplectic conservation law (default true).
+    /// Measure the discrete multisymplectic conservation law (default true; uniform mesh
+    /// only).
     pub multisymplectic_check: Option<bool>,
 }
 
@@ -141,20 +296,57 @@ impl FieldScene {
     /// are no readable file: the scene loader reports those).
     pub fn load(name_or_path: &str) -> Option<Result<FieldScene, SceneError>> {
         let loaded = load_space_time(name_or_path, FIELD_SCENES, FIELD_MODEL_NAMES)?;
-        Some(loaded.map(|(scene, source)| FieldScene { source, ..scene }))
+        Some(loaded.and_then(|(scene, source)| {
+            let scene = FieldScene { source, ..scene };
+            scene.moving()?;
+            Ok(scene)
+        }))
+    }
+
+    /// The moving mesh of the scene, if it has one ([`MeshSection::moving`]).
+    ///
+    /// # Errors
+    /// Those of [`MeshSection::moving`], and [`SceneError::NotApplicable`] for
+    /// `output.multisymplectic_check` on a moving mesh (the scheme is multisymplectic in the
+    /// computational variables, not on the physical mesh: there is no law to measure).
+    pub fn moving(&self) -> Result<Option<MovingMesh>, SceneError> {
+        let moving = self.mesh.moving()?;
+        if moving.is_some() && self.output.multisymplectic_check.is_some() {
+            return Err(SceneError::NotApplicable {
+                option: "output.multisymplectic_check",
+                reason: "measures the discrete multisymplectic law of the uniform mesh; a \
+                         moving mesh (mesh.monitor) keeps it in computational variables only, \
+                         and it is not measured"
+                    .into(),
+            });
+        }
+        Ok(moving)
     }
 
     /// Put the command-line flags on top: `--h`, `--t-end`, `--param` (`points` sets
-    /// `mesh.points`), `--out`, `--every` and `--plot`; any other run flag is
-    /// [`SceneError::NotApplicable`].
+    /// `mesh.points`; `smoothing`, `monitor_scale` and `monitor_curvature` set those of a
+    /// moving mesh), `--out`, `--every` and `--plot`; any other run flag is
+    /// [`SceneError::NotApplicable`], and so is a moving-mesh `--param` on a uniform mesh.
     pub fn apply(&mut self, overrides: &Overrides) -> Result<(), SceneError> {
         reject_other_flags(overrides, false, || {
             format!(
                 "'{}' is a field scene (the multisymplectic integrator): it takes --h, \
-                 --t-end, --param (points=N for the mesh), --out, --every and --plot",
+                 --t-end, --param (points=N for the mesh; smoothing=K, monitor_scale=A and \
+                 monitor_curvature=B for a moving mesh), --out, --every and --plot",
                 self.model
             )
         })?;
+        let mut parameters = Vec::with_capacity(overrides.parameters.len());
+        for (name, value) in &overrides.parameters {
+            if !self.mesh.set_moving(name, *value) {
+                parameters.push((name.clone(), *value));
+            }
+        }
+        self.moving()?;
+        let overrides = Overrides {
+            parameters,
+            ..overrides.clone()
+        };
         SpaceTimeFields {
             parameters: &mut self.parameters,
             points: &mut self.mesh.points,
@@ -164,7 +356,7 @@ impl FieldScene {
             plot: &mut self.output.plot,
             source: self.source.as_deref(),
         }
-        .apply(overrides, "mesh points")
+        .apply(&overrides, "mesh points")
     }
 }
 
@@ -346,5 +538,119 @@ mod tests {
             ..Overrides::default()
         };
         assert!(scene.apply(&overrides).is_err());
+    }
+
+    /// The field scene of `text`, parsed and its moving mesh checked.
+    fn parsed(text: &str) -> Result<FieldScene, SceneError> {
+        let scene: FieldScene = from_toml(text, "test scene")?;
+        scene.moving()?;
+        Ok(scene)
+    }
+
+    #[test]
+    fn a_monitor_makes_the_mesh_move_with_its_keys_or_their_defaults() {
+        let uniform = parsed("model = \"phi4-kink\"\n[mesh]\npoints = 81\n").unwrap();
+        assert_eq!(uniform.moving().unwrap(), None);
+        let plain = parsed("model = \"phi4-kink\"\n[mesh]\nmonitor = \"arc-length\"\n").unwrap();
+        assert_eq!(
+            plain.moving().unwrap(),
+            Some(MovingMesh {
+                name: MonitorName::ArcLength,
+                monitor: Monitor::ArcLength { scale: 1.0 },
+                smoothing: 2.0,
+            })
+        );
+        let curvature = parsed(
+            "model = \"sine-gordon-kink\"\n[mesh]\nmonitor = \"curvature\"\n\
+             monitor_scale = 3.5\nmonitor_curvature = 0.25\nsmoothing = 0.5\n",
+        )
+        .unwrap();
+        assert_eq!(
+            curvature.moving().unwrap(),
+            Some(MovingMesh {
+                name: MonitorName::Curvature,
+                monitor: Monitor::Curvature {
+                    scale: 3.5,
+                    curvature: 0.25,
+                },
+                smoothing: 0.5,
+            })
+        );
+        assert_eq!(MonitorName::Curvature.name(), "curvature");
+        let fast = FieldScene::load("sine-gordon-kink-fast").unwrap().unwrap();
+        assert_eq!(
+            fast.moving().unwrap(),
+            Some(MovingMesh {
+                name: MonitorName::ArcLength,
+                monitor: Monitor::ArcLength { scale: 4.0 },
+                smoothing: 2.0,
+            })
+        );
+        assert_eq!(fast.mesh.points, Some(101));
+        assert_eq!(fast.parameters.get("speed"), Some(&0.99));
+    }
+
+    #[test]
+    fn moving_mesh_keys_that_would_be_ignored_are_errors_naming_them() {
+        let refused = |text: &str, key: &str| match parsed(text) {
+            Err(SceneError::NotApplicable { option, .. }) => {
+                assert!(option.contains(key), "{option} for {text}");
+            }
+            other => panic!("{text}: {other:?}"),
+        };
+        for key in ["monitor_scale", "monitor_curvature", "smoothing"] {
+            refused(
+                &format!("model = \"phi4-kink\"\n[mesh]\n{key} = 1.0\n"),
+                key,
+            );
+        }
+        refused(
+            "model = \"phi4-kink\"\n[mesh]\nmonitor = \"arc-length\"\nmonitor_curvature = 1.0\n",
+            "monitor_curvature",
+        );
+        refused(
+            "model = \"phi4-kink\"\n[mesh]\nmonitor = \"curvature\"\n\
+             [output]\nmultisymplectic_check = false\n",
+            "multisymplectic_check",
+        );
+        assert!(matches!(
+            parsed("model = \"phi4-kink\"\n[mesh]\nmonitor = \"uniform\"\n"),
+            Err(SceneError::Parse { .. })
+        ));
+    }
+
+    #[test]
+    fn moving_mesh_parameters_on_the_command_line() {
+        let with = |pairs: &[(&str, f64)]| Overrides {
+            parameters: pairs.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
+            ..Overrides::default()
+        };
+        let mut fast = FieldScene::load("sine-gordon-kink-fast").unwrap().unwrap();
+        fast.apply(&with(&[
+            ("smoothing", 0.5),
+            ("monitor_scale", 9.0),
+            ("points", 41.0),
+            ("speed", 0.9),
+        ]))
+        .unwrap();
+        assert_eq!(fast.mesh.smoothing, Some(0.5));
+        assert_eq!(fast.mesh.monitor_scale, Some(9.0));
+        assert_eq!(fast.mesh.points, Some(41));
+        assert_eq!(fast.parameters.get("speed"), Some(&0.9));
+        assert!(!fast.parameters.contains_key("smoothing"));
+        // β only with the curvature monitor; none of them on a uniform mesh.
+        assert!(matches!(
+            fast.apply(&with(&[("monitor_curvature", 1.0)])),
+            Err(SceneError::NotApplicable { option, .. }) if option.contains("monitor_curvature")
+        ));
+        for key in ["smoothing", "monitor_scale", "monitor_curvature"] {
+            let mut uniform = FieldScene::load("sine-gordon-kink").unwrap().unwrap();
+            let refused = uniform.apply(&with(&[(key, 1.0)]));
+            assert!(
+                matches!(&refused, Err(SceneError::NotApplicable { option, .. }) if option.contains(key)),
+                "{key}: {refused:?}"
+            );
+            assert!(refused.unwrap_err().is_bad_input());
+        }
     }
 }
