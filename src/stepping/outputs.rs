@@ -113,7 +113,43 @@ impl<L, M: Step<L, S> + Clone, S: Space> Integrator<L, M, S> {
     /// [`Error::NonFinite`] in this step (index `steps_taken − 1`, starting at `t`), never a
     /// silent NaN.
     #[allow(clippy::too_many_arguments)]
+    #[inline]
     pub(super) fn emit(
+        &self,
+        method: &M,
+        workspace: &M::Workspace,
+        outputs: &mut Outputs<'_, S>,
+        steps_taken: usize,
+        t: f64,
+        h: f64,
+        start: &S::State,
+        end: &S::State,
+        end_time: f64,
+    ) -> Result<(), Error> {
+        // Most steps serve nothing, and the serving is kept out of line: inlined here, the
+        // model evaluations of its points were hoisted above these checks into every step
+        // (15 ns of a 62 ns Störmer–Verlet step on Kepler).
+        let due = outputs.next().is_some_and(|time| time <= end_time);
+        if !due && outputs.events.is_none() && outputs.dense.is_none() {
+            return Ok(());
+        }
+        self.serve(
+            method,
+            workspace,
+            outputs,
+            steps_taken,
+            t,
+            h,
+            start,
+            end,
+            end_time,
+        )
+    }
+
+    /// [`Integrator::emit`] of a step that has an output time, events or dense output.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    fn serve(
         &self,
         method: &M,
         workspace: &M::Workspace,
