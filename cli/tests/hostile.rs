@@ -332,13 +332,23 @@ fn space_time_scene_text() -> impl Strategy<Value = (String, Vec<String>)> {
         "sine-gordon-kink",
         "sine-gordon-breather",
         "phi4-kink",
+        "sine-gordon-kink-antikink",
         "schrodinger-packet",
         "nls-soliton",
         "kepler",
     ]);
     let parameter = (
         select(vec![
-            "c", "speed", "position", "omega", "sigma", "k0", "x0", "eta", "mass",
+            "c",
+            "speed",
+            "position",
+            "omega",
+            "sigma",
+            "k0",
+            "x0",
+            "eta",
+            "mass",
+            "collision",
         ]),
         mostly(select(vec!["0.5", "1.0", "-0.3", "2.0"]).prop_map(String::from)),
     );
@@ -357,29 +367,53 @@ fn space_time_scene_text() -> impl Strategy<Value = (String, Vec<String>)> {
         1 => mostly(select(vec!["\"trapezoid\"", "\"midpoint\""]).prop_map(String::from))
             .prop_map(Some),
     ];
+    // A moving mesh: its monitor and the keys that go with it (or, hostile, without it).
+    let moving = prop_oneof![
+        3 => Just(Vec::new()),
+        1 => few((
+            select(vec!["monitor", "monitor_scale", "monitor_curvature", "smoothing"]),
+            mostly(
+                select(vec!["\"arc-length\"", "\"curvature\"", "1.0", "4.0", "0.0"])
+                    .prop_map(String::from),
+            ),
+        )),
+    ];
     let h = mostly(select(vec!["0.01", "0.02", "0.05"]).prop_map(String::from));
     let t_end = mostly(select(vec!["0.1", "0.5", "1.0"]).prop_map(String::from));
-    let text = (model, few(parameter), method, points, quadrature, h, t_end).prop_map(
-        |(model, parameters, method, points, quadrature, h, t_end)| {
-            let mut text = format!("model = \"{model}\"\n");
-            if let Some(method) = method {
-                text.push_str(&format!("method = {method}\n"));
-            }
-            text.push_str("[parameters]\n");
-            for (name, value) in parameters {
-                text.push_str(&format!("{name} = {value}\n"));
-            }
-            text.push_str("[mesh]\n");
-            if let Some(points) = points {
-                text.push_str(&format!("points = {points}\n"));
-            }
-            if let Some(quadrature) = quadrature {
-                text.push_str(&format!("quadrature = {quadrature}\n"));
-            }
-            text.push_str(&format!("[run]\nh = {h}\nt_end = {t_end}\n"));
-            text
-        },
-    );
+    let text = (
+        model,
+        few(parameter),
+        method,
+        points,
+        quadrature,
+        moving,
+        h,
+        t_end,
+    )
+        .prop_map(
+            |(model, parameters, method, points, quadrature, moving, h, t_end)| {
+                let mut text = format!("model = \"{model}\"\n");
+                if let Some(method) = method {
+                    text.push_str(&format!("method = {method}\n"));
+                }
+                text.push_str("[parameters]\n");
+                for (name, value) in parameters {
+                    text.push_str(&format!("{name} = {value}\n"));
+                }
+                text.push_str("[mesh]\n");
+                if let Some(points) = points {
+                    text.push_str(&format!("points = {points}\n"));
+                }
+                if let Some(quadrature) = quadrature {
+                    text.push_str(&format!("quadrature = {quadrature}\n"));
+                }
+                for (key, value) in moving {
+                    text.push_str(&format!("{key} = {value}\n"));
+                }
+                text.push_str(&format!("[run]\nh = {h}\nt_end = {t_end}\n"));
+                text
+            },
+        );
     // `svi run`'s flags on top: --param (the mesh points too), --h, --t-end, --every, and
     // --method (on a field scene an error naming it).
     let mode = Mode::InProcess;
@@ -389,7 +423,17 @@ fn space_time_scene_text() -> impl Strategy<Value = (String, Vec<String>)> {
             flag(
                 "--param",
                 (
-                    select(vec!["points", "eta", "c", "speed", "omega", "sigma"]),
+                    select(vec![
+                        "points",
+                        "eta",
+                        "c",
+                        "speed",
+                        "omega",
+                        "sigma",
+                        "smoothing",
+                        "monitor_scale",
+                        "monitor_curvature",
+                    ]),
                     mode.number_or(&["16", "64", "0.5"]),
                 )
                     .prop_map(|(name, value)| format!("{name}={value}"))
@@ -529,13 +573,15 @@ fn load_and_maybe_run_space_time(
     match outcome {
         Ok(json) => {
             // Every number a successful run reports is finite: serde prints NaN and ±∞ as
-            // null, so null is allowed only where a field is optional.
+            // null, so null is allowed only where a field is optional (`dx` on a moving mesh).
             const OPTIONAL: [&str; 3] = ["multisymplectic_residual_max", "trajectory", "error"];
+            let moving = json["method"] == "r-adaptive";
             for (key, value) in json.as_object().into_iter().flatten() {
                 prop_assert!(
                     value.as_f64().is_some_and(f64::is_finite)
                         || !(value.is_number() || value.is_null())
-                        || (value.is_null() && OPTIONAL.contains(&key.as_str())),
+                        || (value.is_null() && OPTIONAL.contains(&key.as_str()))
+                        || (value.is_null() && moving && key == "dx"),
                     "{}: {} = {}",
                     text,
                     key,
