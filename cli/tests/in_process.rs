@@ -610,6 +610,56 @@ mod bench {
             assert!(message.contains("needs a model of fixed size"), "{message}");
         }
     }
+
+    #[test]
+    fn the_default_methods_on_a_chain_are_the_ones_a_chain_runs() {
+        // The default list names peers and adaptive modes, which need a model of fixed size:
+        // on a chain it keeps the library's fixed-step methods, so `svi bench fput` runs, and
+        // `--tolerances` (the peers' option) is the option blamed, not the `--methods` nobody
+        // gave.
+        let mut scene = Scene::builtin("fput").unwrap().unwrap();
+        scene
+            .apply(&svi_experiments::Overrides {
+                run: svi_experiments::scene::overrides::RunFlags {
+                    t_end: Some(5.0),
+                    ..Default::default()
+                },
+                ..Default::default()
+            })
+            .unwrap();
+        let options = BenchOptions {
+            batches: 1,
+            min_batch: 0.0,
+            steps: vec![50],
+            ..BenchOptions::default()
+        };
+        let sweeps = work_precision(&scene, &options).unwrap();
+        let labels: Vec<&str> = (sweeps.records.iter())
+            .map(|record| record.method.as_str())
+            .collect();
+        assert_eq!(
+            labels,
+            ["svi:7/6", "svi:6/5", "svi:9/8", "svi:6/12", "sc:9"]
+        );
+        let error = work_precision(
+            &scene,
+            &BenchOptions {
+                tolerances: vec![1e-3],
+                ..options
+            },
+        )
+        .unwrap_err();
+        assert!(
+            matches!(
+                error,
+                SceneError::NotApplicable {
+                    option: "--tolerances",
+                    ..
+                }
+            ),
+            "{error}"
+        );
+    }
 }
 
 mod stability {

@@ -75,8 +75,24 @@ use svi_models::visit_model;
 /// [`Sweeps::failures`] (and as a warning on stderr) while the others go on; the sweep is an
 /// error when the input is bad or when no method measured any point (the first method's
 /// error). With `verbose`, every point is printed to stderr under a progress bar over the
-/// methods (drawn only on a terminal).
+/// methods (drawn only on a terminal). On a chain or a text model the default method list
+/// ([`DEFAULT_METHODS`]) is narrowed to its fixed-step methods of the library, the ones such a
+/// model runs.
 pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, SceneError> {
+    let runs_whole_scenes = scene.is_local() || scene.is_text();
+    let narrowed;
+    let options = if runs_whole_scenes && options.methods == BenchOptions::default().methods {
+        narrowed = BenchOptions {
+            methods: (options.methods.iter())
+                .filter(|method| matches!(method, BenchMethod::Library(_)))
+                .cloned()
+                .collect(),
+            ..options.clone()
+        };
+        &narrowed
+    } else {
+        options
+    };
     options.check()?;
     scene.check()?;
     if scene.space() == SpaceKind::Group {
@@ -101,7 +117,7 @@ pub fn work_precision(scene: &Scene, options: &BenchOptions) -> Result<Sweeps, S
     } else {
         ProgressBar::hidden()
     };
-    let records = if scene.is_local() || scene.is_text() {
+    let records = if runs_whole_scenes {
         sweep_runs(scene, options, &progress)
     } else {
         let bench = Bench {

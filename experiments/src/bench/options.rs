@@ -31,7 +31,8 @@ pub struct BenchArgs {
              the stiff solver, with the exact Jacobian by automatic differentiation), and \
              molly (the mollified impulse method of García-Archilla, Sanz-Serna & Skeel, a \
              trigonometric integrator with fixed steps over the fast spring, order 2; the \
-             spring pendulum only)."
+             spring pendulum only). On a chain or a text model the default list keeps only \
+             the library's methods without an adaptive mode, the ones such a model runs."
         )
     )]
     pub methods: String,
