@@ -11,9 +11,10 @@
 //! - `sensitivities`: the forward sensitivities at the same outputs.
 //!
 //! It prints the times, the ratios to `forward`, the checkpoints and steps' adjoints held at the
-//! peak and their bytes. Run with `cargo bench --bench adjoint`.
+//! peak and their bytes, and how far the gradient is from the forward sensitivities' (J's
+//! gradient by the chain rule through them). Run with `cargo bench --bench adjoint`.
 
-use nalgebra::SVector;
+use nalgebra::{DVector, SVector};
 use std::time::Instant;
 use svi::sensitivity::{Checkpoints, Loss, SensitivityRun, Start};
 use svi::{Initial, Integrator, Scalar, Svi};
@@ -82,9 +83,19 @@ fn main() {
                 .unwrap(),
         );
     });
+    let mut forward_sensitivities = None;
     let (_, sensitivities, sensitivities_ratio) = paired(forward, || {
-        integrator.sensitivities(&run).unwrap();
+        forward_sensitivities = Some(integrator.sensitivities(&run).unwrap());
     });
+    // dJ/d(q₀, q̇₀, e) by the chain rule through the forward sensitivities: the sum of the
+    // q₁ rows of the outputs' Jacobians.
+    let by_sensitivities = forward_sensitivities
+        .unwrap()
+        .outputs
+        .iter()
+        .fold(DVector::zeros(5), |sum, point| {
+            sum + point.jacobian.row(0).transpose()
+        });
     let last = last.unwrap();
     println!("Kepler e = 0.5, SVI 7/6, {STEPS} steps of h = {h}:");
     println!("  forward        {:8.2} ms", forward_time * 1e3);
@@ -107,5 +118,12 @@ fn main() {
     println!(
         "  dJ/de = {:.6e}, dJ/dq0 = {:.6e} {:.6e}",
         last.parameters[0], last.initial[0], last.initial[1]
+    );
+    let by_adjoint =
+        DVector::from_iterator(5, last.initial.iter().chain(&last.parameters).copied());
+    println!(
+        "  gradient against the forward sensitivities' chain rule: {:.1e} relative to its \
+         largest entry",
+        (&by_adjoint - &by_sensitivities).amax() / by_sensitivities.amax()
     );
 }

@@ -258,6 +258,8 @@ pub(crate) struct FixedPoint {
     max_iterations: usize,
     /// Whether the iteration runs to its noise (`FixedPoint::to_noise`).
     to_noise: bool,
+    /// Whether the iteration stops on its predicted error (`FixedPoint::predicting`).
+    predicting: bool,
 }
 
 impl FixedPoint {
@@ -269,6 +271,21 @@ impl FixedPoint {
             iterations: 0,
             max_iterations,
             to_noise: false,
+            predicting: false,
+        }
+    }
+
+    /// Converged, as [`FixedPoint::new`], at an increment within 2ε of the unknowns' size, or
+    /// once the error the contraction predicts for the current iterate, ρ/(1 − ρ) times the
+    /// increment with ρ the ratio of the last two increments, is: one iteration fewer than
+    /// waiting for the increment itself, for linear iterations (whose ratio is the
+    /// contraction's) whose error may follow the starting values from step to step (the
+    /// adjoint's transposed stage equations: their error feeds a gradient, not a
+    /// trajectory's energy).
+    pub(crate) fn predicting(max_iterations: usize) -> Self {
+        FixedPoint {
+            predicting: true,
+            ..FixedPoint::new(max_iterations)
         }
     }
 
@@ -300,8 +317,14 @@ impl FixedPoint {
         if !size.is_finite() {
             return Err(StepFailure::NonFinite);
         }
-        let threshold = if self.to_noise { 0.25 } else { 2.0 };
-        if size <= threshold * f64::EPSILON * scale
+        let threshold = if self.to_noise { 0.25 } else { 2.0 } * f64::EPSILON * scale;
+        // (The first increment has no ratio: `previous` is infinite.)
+        let rate = size / self.previous;
+        if size <= threshold
+            || (self.predicting
+                && self.previous.is_finite()
+                && rate < 0.5
+                && size * rate <= threshold * (1.0 - rate))
             || stalled(size, self.previous, FIXED_POINT_NOISE, scale)
         {
             return Ok(true);
@@ -436,6 +459,20 @@ mod tests {
         assert_eq!(control.converged(f64::EPSILON, 1.0), Ok(false));
         assert_eq!(control.converged(f64::EPSILON / 8.0, 1.0), Ok(true));
         assert_eq!(FixedPoint::new(50).converged(f64::EPSILON, 1.0), Ok(true));
+        // Predicting: after increments 1e-6 and 1e-11 (ratio 1e-5) the iterate's error is
+        // about 1e-16, within 2ε of size 1: converged an iteration before the increment itself
+        // falls that low; the first increment alone, with no ratio, never predicts.
+        let mut control = FixedPoint::predicting(50);
+        assert_eq!(control.converged(1e-6, 1.0), Ok(false));
+        assert_eq!(control.converged(1e-11, 1.0), Ok(true));
+        let mut plain = FixedPoint::new(50);
+        assert_eq!(plain.converged(1e-6, 1.0), Ok(false));
+        assert_eq!(plain.converged(1e-11, 1.0), Ok(false));
+        assert_eq!(FixedPoint::predicting(50).converged(1e-300, 1.0), Ok(true));
+        let mut slow = FixedPoint::predicting(50);
+        assert_eq!(slow.converged(1e-9, 1.0), Ok(false));
+        // Ratio 0.6: no prediction trusted however small the increment's product.
+        assert_eq!(slow.converged(6e-10, 1.0), Ok(false));
         // A stalled increment above the floor in a problem of size 1e-17 is no convergence.
         let mut control = FixedPoint::new(2);
         assert_eq!(control.converged(2e-12, 1e-17), Ok(false));

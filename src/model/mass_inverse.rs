@@ -290,6 +290,23 @@ where
         }
     }
 
+    /// `out` = factor · M⁻¹ `matrix`, column by column (one product for a dense inverse).
+    pub fn apply_columns_into(&self, matrix: &OMatrix<f64, N, N>, out: &mut OMatrix<f64, N, N>) {
+        match self {
+            Scaled::Dense(inverse) => inverse.mul_to(matrix, out),
+            Scaled::Diagonal(..) | Scaled::Lazy(..) => {
+                let (n, _) = matrix.shape_generic();
+                let (mut column, mut image) =
+                    (OVector::zeros_generic(n, U1), OVector::zeros_generic(n, U1));
+                for j in 0..n.value() {
+                    column.copy_from(&matrix.column(j));
+                    self.apply_into(&column, &mut image);
+                    out.set_column(j, &image);
+                }
+            }
+        }
+    }
+
     /// `outs[μ]` = factor · M⁻¹ `ps[μ]` for every μ: one call for all of SVI's quadrature
     /// points (at run-time size a call per point cost a tenth of Kepler written as text).
     #[inline]

@@ -75,20 +75,18 @@ impl TangentBuffers {
 }
 
 /// The covectors of the adjoint's transposed iteration (`super::adjoint`), made at its first
-/// use. The stage
-/// covectors are stored by component (entry i of stage ν at i·m + ν), so that the sums over
-/// the stages run along contiguous memory.
+/// use: one N-vector per quadrature point.
 #[derive(Debug, Clone)]
 pub(super) struct StageCovectors<N: Dimension>
 where
     DefaultAllocator: Allocator<N>,
 {
-    /// r.
-    pub(super) right: Vec<f64>,
-    /// z.
-    pub(super) z: Vec<f64>,
+    /// r_ν.
+    pub(super) right: Vec<OVector<f64, N>>,
+    /// z_ν.
+    pub(super) z: Vec<OVector<f64, N>>,
     /// Σ_μ K_μν z_μ.
-    pub(super) mixed: Vec<f64>,
+    pub(super) mixed: Vec<OVector<f64, N>>,
     /// λ_q, λ_p, g = hG λ_q and one more N-vector.
     pub(super) lambda_q: OVector<f64, N>,
     pub(super) lambda_p: OVector<f64, N>,
@@ -104,9 +102,9 @@ where
     pub(super) fn new(n: N, m: usize) -> Self {
         let zero = OVector::zeros_generic(n, U1);
         StageCovectors {
-            right: vec![0.0; n.value() * m],
-            z: vec![0.0; n.value() * m],
-            mixed: vec![0.0; n.value() * m],
+            right: vec![zero.clone(); m],
+            z: vec![zero.clone(); m],
+            mixed: vec![zero.clone(); m],
             lambda_q: zero.clone(),
             lambda_p: zero.clone(),
             g: zero.clone(),
