@@ -6,7 +6,8 @@
 //! its factorisation and 2N solves. A method whose step equations have more structure may keep
 //! less and apply Φᵀ from it: constant-mass SVI keeps the force Jacobians at its quadrature
 //! points and applies Φᵀ by the transposed fixed-point iteration of its Nyström form
-//! ([`StepAdjoint::Stages`]), with no factorisation at all.
+//! ([`StepAdjoint::Stages`]), with no factorisation at all. What a step keeps serves the
+//! forward sensitivities as well: X ↦ ΦX ([`crate::Method::tangent_apply`]).
 
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
@@ -14,7 +15,7 @@ use crate::method::space::{State, TangentMap};
 use crate::method::{Method, StepReport};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrixView, DVector, DefaultAllocator, OMatrix};
+use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, OMatrix};
 
 /// What a step keeps for the adjoint sweep ([`Method::adjoint_step`]), applied by the method
 /// that made it ([`Method::adjoint_apply`]).
@@ -102,12 +103,6 @@ where
         return Err(FOREIGN_ADJOINT);
     };
     let m = tangent.qq.nrows();
-    fn view<N: Dimension>(matrix: &OMatrix<f64, N, N>) -> DMatrixView<'_, f64>
-    where
-        DefaultAllocator: Allocator<N, N>,
-    {
-        DMatrixView::from_slice(matrix.as_slice(), matrix.nrows(), matrix.ncols())
-    }
     let (top, bottom) = (lambda.rows(0, m), lambda.rows(m, m));
     let mut upper = scratch.rows_mut(0, m);
     upper.gemv_tr(1.0, &view(&tangent.qq), &top, 0.0);
@@ -117,6 +112,42 @@ where
     lower.gemv_tr(1.0, &view(&tangent.yy), &bottom, 1.0);
     std::mem::swap(lambda, scratch);
     Ok(())
+}
+
+/// X ← ΦX for a kept tangent map ([`StepAdjoint::Map`]; the default of
+/// [`Method::tangent_apply`]), with `scratch` of X's shape.
+///
+/// # Errors
+/// [`StepFailure::Unsupported`] for stage Jacobians (another method's).
+pub fn compose_tangent_map<N: Dimension>(
+    adjoint: &StepAdjoint<N>,
+    columns: &mut DMatrix<f64>,
+    scratch: &mut DMatrix<f64>,
+) -> Result<(), StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let StepAdjoint::Map(tangent) = adjoint else {
+        return Err(FOREIGN_ADJOINT);
+    };
+    let m = tangent.qq.nrows();
+    let (top, bottom) = (columns.rows(0, m), columns.rows(m, m));
+    let mut upper = scratch.rows_mut(0, m);
+    upper.gemm(1.0, &view(&tangent.qq), &top, 0.0);
+    upper.gemm(1.0, &view(&tangent.qy), &bottom, 1.0);
+    let mut lower = scratch.rows_mut(m, m);
+    lower.gemm(1.0, &view(&tangent.yq), &top, 0.0);
+    lower.gemm(1.0, &view(&tangent.yy), &bottom, 1.0);
+    std::mem::swap(columns, scratch);
+    Ok(())
+}
+
+/// A square matrix of any dimension as a view of run-time size.
+fn view<N: Dimension>(matrix: &OMatrix<f64, N, N>) -> DMatrixView<'_, f64>
+where
+    DefaultAllocator: Allocator<N, N>,
+{
+    DMatrixView::from_slice(matrix.as_slice(), matrix.nrows(), matrix.ncols())
 }
 
 /// The failure of an adjoint applied by a method that did not keep it.

@@ -29,7 +29,7 @@ use crate::method::variational::variational_integrator::VariationalIntegrator;
 use crate::method::{Method, MethodInfo, StepAdjoint, StepReport};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator, OVector};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OVector};
 
 /// Receives a method on ℝᴺ as its concrete type ([`AnyMethod::visit`],
 /// [`crate::MethodSpec::visit_vector`]); N is fixed (`Const<N>`) or chosen at run time
@@ -301,6 +301,22 @@ macro_rules! any_method {
                 match (self, workspace) {
                     $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
                         method.adjoint_apply(workspace, adjoint, lambda, scratch)
+                    })+
+                    #[allow(unreachable_patterns)]
+                    _ => Err(FOREIGN_WORKSPACE),
+                }
+            }
+
+            fn tangent_apply(
+                &self,
+                workspace: &mut AnyWorkspace<N>,
+                adjoint: &StepAdjoint<N>,
+                columns: &mut DMatrix<f64>,
+                scratch: &mut DMatrix<f64>,
+            ) -> Result<(), StepFailure> {
+                match (self, workspace) {
+                    $((AnyMethod::$variant(method), AnyWorkspace::$variant(workspace)) => {
+                        method.tangent_apply(workspace, adjoint, columns, scratch)
                     })+
                     #[allow(unreachable_patterns)]
                     _ => Err(FOREIGN_WORKSPACE),

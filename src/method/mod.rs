@@ -47,7 +47,7 @@ use crate::dimension::Dimension;
 use crate::error::{Error, StepFailure};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator, OVector};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OVector};
 
 /// Which second coordinate a method carries besides q.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -307,5 +307,23 @@ where
     ) -> Result<(), StepFailure> {
         let _ = workspace;
         adjoint::apply_tangent_map(adjoint, lambda, scratch)
+    }
+
+    /// X ← ΦX for the step `adjoint` was kept for ([`Method::adjoint_step`]): the columns of
+    /// `columns` are tangent vectors (δq, δy), 2N rows, and `scratch` has its shape. By
+    /// default from the tangent map ([`adjoint::compose_tangent_map`]).
+    ///
+    /// # Errors
+    /// [`StepFailure::Unsupported`] for an `adjoint` another method kept; a method that
+    /// iterates fails as its iteration does.
+    fn tangent_apply(
+        &self,
+        workspace: &mut Self::Workspace,
+        adjoint: &StepAdjoint<N>,
+        columns: &mut DMatrix<f64>,
+        scratch: &mut DMatrix<f64>,
+    ) -> Result<(), StepFailure> {
+        let _ = workspace;
+        adjoint::compose_tangent_map(adjoint, columns, scratch)
     }
 }

@@ -2,11 +2,10 @@
 //! (see the [module](super) documentation).
 
 use super::SensitivityRun;
-use super::lifted::{Lifted, Walker, chosen_parameters, lift, view};
+use super::lifted::{Lifted, Walker, chosen_parameters, lift};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::Error;
-use crate::method::space::TangentMap;
-use crate::method::{Euclidean, Method};
+use crate::method::{Euclidean, Method, StepAdjoint};
 use crate::model::Lagrangian;
 use crate::model::parametric::Parametric;
 use crate::stepping::run::{Integrator, Statistics};
@@ -80,10 +79,12 @@ where
     let mut next = DMatrix::zeros(2 * m, 2 * m);
     let mut outputs = Vec::new();
     outputs.push(output(lifted, &mut walker, 0, &total)?);
+    // What each step keeps for its tangent (its tangent map, or less: constant-mass SVI's
+    // stage matrices), applied to the product so far.
+    let mut kept = StepAdjoint::empty();
     for k in 0..steps {
-        let tangent = walker.step_tangent(k)?;
-        compose(&tangent, &total, &mut next);
-        std::mem::swap(&mut total, &mut next);
+        walker.step_adjoint(k, &mut kept)?;
+        walker.apply_tangent(k, &kept, &mut total, &mut next)?;
         if lifted.is_output(k + 1) {
             outputs.push(output(lifted, &mut walker, k + 1, &total)?);
         }
@@ -115,19 +116,4 @@ where
         v: DVector::from_column_slice(&point.v.as_slice()[..n]),
         jacobian: end * total * &lifted.start,
     })
-}
-
-/// `out` = Φ · `total` for a step's tangent map Φ in blocks [[qq, qy], [yq, yy]].
-fn compose<D: Dimension>(tangent: &TangentMap<D>, total: &DMatrix<f64>, out: &mut DMatrix<f64>)
-where
-    DefaultAllocator: Allocator<D> + Allocator<D, D>,
-{
-    let m = tangent.qq.nrows();
-    let (top, bottom) = (total.rows(0, m), total.rows(m, m));
-    let mut upper = out.rows_mut(0, m);
-    upper.gemm(1.0, &view(&tangent.qq), &top, 0.0);
-    upper.gemm(1.0, &view(&tangent.qy), &bottom, 1.0);
-    let mut lower = out.rows_mut(m, m);
-    lower.gemm(1.0, &view(&tangent.yq), &top, 0.0);
-    lower.gemm(1.0, &view(&tangent.yy), &bottom, 1.0);
 }

@@ -8,7 +8,7 @@ use super::{SensitivityRun, Start};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::{Error, StepFailure};
 use crate::linalg::invert_small;
-use crate::method::space::{Initial, PhasePoint, State, StepState, TangentMap};
+use crate::method::space::{Initial, PhasePoint, State, StepState};
 use crate::method::step::Step;
 use crate::method::{Coordinates, Euclidean, Method, StepAdjoint, StepReport};
 use crate::model::Lagrangian;
@@ -418,26 +418,6 @@ where
         self.add(k, t)
     }
 
-    /// Take step `k` of the grid by its tangent map, and return the map.
-    pub(super) fn step_tangent(&mut self, k: usize) -> Result<TangentMap<D>, Error> {
-        let (t0, h, t_end, steps) = self.lifted.grid;
-        let (t, size, _) = grid_step(t0, t_end, h, steps, k);
-        let integrator = self.lifted.integrator;
-        let (increment, tangent, report) = Step::<_, Euclidean<D>>::tangent_map(
-            integrator.method(),
-            integrator.model(),
-            &mut self.workspace,
-            t,
-            size,
-            &self.cursor.state,
-        )
-        .map_err(|failure| failure.at(k, t))?;
-        self.increment = increment;
-        self.statistics.record(report);
-        self.add(k, t)?;
-        Ok(tangent)
-    }
-
     /// Take step `k` of the grid keeping what its adjoint needs in `adjoint`
     /// ([`Method::adjoint_step`]).
     pub(super) fn step_adjoint(
@@ -457,6 +437,28 @@ where
                 increment,
                 adjoint,
             )
+        })
+    }
+
+    /// X ← Φ_k X for step `k`, kept in `adjoint` ([`Method::tangent_apply`]), with `scratch`
+    /// of X's shape.
+    pub(super) fn apply_tangent(
+        &mut self,
+        k: usize,
+        adjoint: &StepAdjoint<D>,
+        columns: &mut DMatrix<f64>,
+        scratch: &mut DMatrix<f64>,
+    ) -> Result<(), Error> {
+        Method::tangent_apply(
+            self.lifted.integrator.method(),
+            &mut self.workspace,
+            adjoint,
+            columns,
+            scratch,
+        )
+        .map_err(|failure| {
+            let (t0, h, t_end, steps) = self.lifted.grid;
+            failure.at(k, grid_step(t0, t_end, h, steps, k).0)
         })
     }
 

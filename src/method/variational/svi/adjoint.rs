@@ -31,7 +31,7 @@ use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
 use crate::nonlinear::FixedPoint;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DVector, DefaultAllocator, OMatrix};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix};
 
 /// The step, keeping the force Jacobians at its quadrature points in `adjoint`; `None` where
 /// the Nyström form does not hold (a forced model, no fixed-point tables), and the caller
@@ -166,6 +166,7 @@ where
         lambda_p,
         g,
         work,
+        ..
     } = buffers;
     let kick_inverse = mass_inverse.scaled(*h);
     let (top, bottom) = lambda.as_slice().split_at(width);
@@ -222,15 +223,121 @@ where
     Ok(())
 }
 
+/// X ← ΦX from the stage matrices `adjoint` keeps: for each column (δq, δp) of `columns`,
+///
+/// δQ_μ = δq + c'_μ hG δp + Σ_ν K_μν C_ν δQ_ν
+///
+/// by the step's own fixed-point iteration, linearised (from δQ_μ = δq + c'_μ hG δp), then
+/// δq' = δq + hG δp + Σ_ν d_ν C_ν δQ_ν and δp' = δp + Σ_ν P_ν δQ_ν (see the
+/// [module](self) documentation).
+pub(super) fn tangent_apply<N: Dimension>(
+    workspace: &mut SviWorkspace<N>,
+    max_iterations: usize,
+    adjoint: &StepAdjoint<N>,
+    columns: &mut DMatrix<f64>,
+) -> Result<(), StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let StepAdjoint::Stages { h, matrices } = adjoint else {
+        return Err(FOREIGN_ADJOINT);
+    };
+    let SviWorkspace {
+        constant_mass,
+        adjoint: buffers,
+        ..
+    } = workspace;
+    let (Some(data), Some(first)) = (constant_mass.as_ref(), matrices.first()) else {
+        return Err(FOREIGN_ADJOINT);
+    };
+    let Some(mass_inverse) = data.mass_inverse.as_ref() else {
+        return Err(FOREIGN_ADJOINT);
+    };
+    let nystrom = &data.nystrom;
+    let m = nystrom.end_fractions.len();
+    let n = first.shape_generic().0;
+    let width = n.value();
+    if matrices.len() != 2 * m || columns.nrows() != 2 * width {
+        return Err(FOREIGN_ADJOINT);
+    }
+    let buffers = buffers.get_or_insert_with(|| StageCovectors::new(n, m));
+    let StageCovectors {
+        right: bases,
+        z: stages,
+        mixed,
+        images,
+        lambda_q: dq,
+        lambda_p: dp,
+        g,
+        work,
+    } = buffers;
+    let kick_inverse = mass_inverse.scaled(*h);
+    for column in columns.as_mut_slice().chunks_exact_mut(2 * width) {
+        let (top, bottom) = column.split_at_mut(width);
+        dq.as_mut_slice().copy_from_slice(top);
+        dp.as_mut_slice().copy_from_slice(bottom);
+        kick_inverse.apply_into(dp, g);
+        let mut scale: f64 = 0.0;
+        for ((base, stage), c) in bases
+            .iter_mut()
+            .zip(stages.iter_mut())
+            .zip(&nystrom.stage_velocity)
+        {
+            base.copy_from(dq);
+            base.axpy(*c, g, 1.0);
+            scale = scale.max(base.amax());
+            stage.copy_from(base);
+        }
+        let mut control = FixedPoint::predicting(max_iterations);
+        loop {
+            // δQ_μ ← base_μ + Σ_ν K_μν C_ν δQ_ν, the sums accumulated stage after stage.
+            for (nu, (image, stage)) in images.iter_mut().zip(stages.iter()).enumerate() {
+                matrices[2 * nu + 1].mul_to(stage, image);
+            }
+            for sum in mixed.iter_mut() {
+                sum.fill(0.0);
+            }
+            for (nu, image) in images.iter().enumerate() {
+                for (mu, sum) in mixed.iter_mut().enumerate() {
+                    sum.axpy(nystrom.kick_matrix[mu * m + nu], image, 1.0);
+                }
+            }
+            let mut change: f64 = 0.0;
+            for (stage, (base, sum)) in stages.iter_mut().zip(bases.iter().zip(mixed.iter())) {
+                for ((old, base), sum) in stage.iter_mut().zip(base.iter()).zip(sum.iter()) {
+                    let new = base + sum;
+                    change = change.max((new - *old).abs());
+                    scale = scale.max(new.abs());
+                    *old = new;
+                }
+            }
+            if control.converged(change, scale)? {
+                break;
+            }
+        }
+        // δp' = δp + Σ_ν P_ν δQ_ν and δq' = δq + hG δp + Σ_ν d_ν C_ν δQ_ν.
+        for (nu, stage) in stages.iter().enumerate() {
+            matrices[2 * nu].mul_to(stage, work);
+            *dp += &*work;
+            matrices[2 * nu + 1].mul_to(stage, work);
+            dq.axpy(nystrom.end_fractions[nu], work, 1.0);
+        }
+        *dq += &*g;
+        top.copy_from_slice(dq.as_slice());
+        bottom.copy_from_slice(dp.as_slice());
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::{Solver, Svi, SviWorkspace};
-    use crate::method::adjoint::apply_tangent_map;
+    use crate::method::adjoint::{apply_tangent_map, compose_tangent_map};
     use crate::method::{Method, State, StepAdjoint};
     use crate::model::{Lagrangian, Structure};
     use crate::scalar::Scalar;
     use crate::test_models::{AsDyn, Damped, HenonHeiles};
-    use nalgebra::{DVector, Dyn, SVector, U2};
+    use nalgebra::{DMatrix, DVector, Dyn, SVector, U2};
 
     /// A constant-mass model with a time-dependent anharmonic potential:
     /// L = ½|q̇|² − ½(1 + ½ sin t)|q|² − q₀³q₁/4.
@@ -275,7 +382,7 @@ mod tests {
 
     /// Φᵀλ by the kept stage matrices against the transpose of the tangent map (an
     /// independent computation: the block Hessian of the discrete action, factorised), for
-    /// a few covectors, relative to their size.
+    /// a few covectors, and ΦX for a few tangent vectors, relative to their size.
     fn stages_against_map<L: Lagrangian<N>, N: crate::dimension::Dimension>(
         method: &Svi,
         model: &L,
@@ -305,7 +412,15 @@ mod tests {
             apply_tangent_map(&map, &mut by_map, &mut scratch).unwrap();
             worst = worst.max((&by_stages - &by_map).amax() / by_map.amax());
         }
-        worst
+        // And forwards, X ← ΦX, for three tangent vectors at once.
+        let columns = DMatrix::from_fn(2 * n, 3, |i, j| ((i + 2) as f64 * (0.7 + j as f64)).cos());
+        let (mut by_stages, mut by_map) = (columns.clone(), columns);
+        let mut scratch = DMatrix::zeros(2 * n, 3);
+        method
+            .tangent_apply(&mut workspace, &kept, &mut by_stages, &mut scratch)
+            .unwrap();
+        compose_tangent_map(&map, &mut by_map, &mut scratch).unwrap();
+        worst.max((&by_stages - &by_map).amax() / by_map.amax())
     }
 
     #[test]

@@ -86,7 +86,9 @@ use crate::error::Error;
 use crate::error::StepFailure;
 use crate::linalg::sparse::LinearSolverKind;
 use crate::method::Method;
-use crate::method::adjoint::{StepAdjoint, adjoint_by_tangent_map, apply_tangent_map};
+use crate::method::adjoint::{
+    StepAdjoint, adjoint_by_tangent_map, apply_tangent_map, compose_tangent_map,
+};
 use crate::method::variational::stage_newton::LazyStageNewton;
 use crate::method::variational::tables::Tables;
 use crate::method::{Coordinates, Equations, MethodInfo, State, StepReport, TangentMap};
@@ -614,6 +616,21 @@ where
                 adjoint::adjoint_apply(workspace, self.max_iterations, adjoint, lambda)
             }
             StepAdjoint::Map(_) => apply_tangent_map(adjoint, lambda, scratch),
+        }
+    }
+
+    fn tangent_apply(
+        &self,
+        workspace: &mut SviWorkspace<N>,
+        adjoint: &StepAdjoint<N>,
+        columns: &mut DMatrix<f64>,
+        scratch: &mut DMatrix<f64>,
+    ) -> Result<(), StepFailure> {
+        match adjoint {
+            StepAdjoint::Stages { .. } => {
+                adjoint::tangent_apply(workspace, self.max_iterations, adjoint, columns)
+            }
+            StepAdjoint::Map(_) => compose_tangent_map(adjoint, columns, scratch),
         }
     }
 }

@@ -74,20 +74,22 @@ impl TangentBuffers {
     }
 }
 
-/// The covectors of the adjoint's transposed iteration (`super::adjoint`), made at its first
-/// use: one N-vector per quadrature point.
+/// The covectors of the adjoint's transposed iteration, and the tangent vectors of the
+/// forward one (`super::adjoint`), made at their first use: N-vectors per quadrature point.
 #[derive(Debug, Clone)]
 pub(super) struct StageCovectors<N: Dimension>
 where
     DefaultAllocator: Allocator<N>,
 {
-    /// r_ν.
+    /// r_ν (forward: the force-free part of δQ_ν).
     pub(super) right: Vec<OVector<f64, N>>,
-    /// z_ν.
+    /// z_ν (forward: δQ_ν).
     pub(super) z: Vec<OVector<f64, N>>,
-    /// Σ_μ K_μν z_μ.
+    /// Σ_μ K_μν z_μ (forward: Σ_ν K_μν C_ν δQ_ν).
     pub(super) mixed: Vec<OVector<f64, N>>,
-    /// λ_q, λ_p, g = hG λ_q and one more N-vector.
+    /// C_ν δQ_ν (forward only).
+    pub(super) images: Vec<OVector<f64, N>>,
+    /// λ_q, λ_p, g = hG λ_q and one more N-vector (forward: δq, δp, hG δp and one more).
     pub(super) lambda_q: OVector<f64, N>,
     pub(super) lambda_p: OVector<f64, N>,
     pub(super) g: OVector<f64, N>,
@@ -105,6 +107,7 @@ where
             right: vec![zero.clone(); m],
             z: vec![zero.clone(); m],
             mixed: vec![zero.clone(); m],
+            images: vec![zero.clone(); m],
             lambda_q: zero.clone(),
             lambda_p: zero.clone(),
             g: zero.clone(),
