@@ -22,6 +22,7 @@
 //! iterations of O(m²N + mN²) each, with nothing factorised (the tangent map assembles the
 //! (s + 1)N block Hessian, factorises its sN interior block and solves 2N columns).
 
+use super::constant_mass::NystromTables;
 use super::workspace::{StageCovectors, SviWorkspace};
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
@@ -29,6 +30,7 @@ use crate::method::adjoint::{FOREIGN_ADJOINT, StepAdjoint};
 use crate::method::{State, StepReport};
 use crate::model::Lagrangian;
 use crate::model::derived::LagrangianExt;
+use crate::model::mass_inverse::Scaled;
 use crate::nonlinear::FixedPoint;
 use nalgebra::allocator::Allocator;
 use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix};
@@ -126,13 +128,29 @@ where
     Some(Ok(report))
 }
 
-/// λ ← Φᵀλ from the stage matrices `adjoint` keeps (see the [module](self) documentation).
-pub(super) fn adjoint_apply<N: Dimension>(
-    workspace: &mut SviWorkspace<N>,
-    max_iterations: usize,
-    adjoint: &StepAdjoint<N>,
-    lambda: &mut DVector<f64>,
-) -> Result<(), StepFailure>
+/// What applying kept stage matrices needs, from the workspace.
+struct Stages<'a, N: Dimension>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    /// P_μ at 2μ, C_μ at 2μ + 1.
+    matrices: &'a [OMatrix<f64, N, N>],
+    nystrom: &'a NystromTables,
+    /// hM⁻¹ of the step.
+    kick_inverse: Scaled<'a, N>,
+    /// N.
+    width: usize,
+    buffers: &'a mut StageCovectors<N>,
+}
+
+/// The parts of `workspace` that apply the stage matrices `adjoint` keeps to vectors of
+/// `rows` entries, with the buffers made at their first use; [`FOREIGN_ADJOINT`] where
+/// `adjoint` is not this workspace's (a tangent map, another size, no M⁻¹).
+fn stages<'a, N: Dimension>(
+    workspace: &'a mut SviWorkspace<N>,
+    adjoint: &'a StepAdjoint<N>,
+    rows: usize,
+) -> Result<Stages<'a, N>, StepFailure>
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
@@ -150,14 +168,38 @@ where
     let Some(mass_inverse) = data.mass_inverse.as_ref() else {
         return Err(FOREIGN_ADJOINT);
     };
-    let nystrom = &data.nystrom;
-    let m = nystrom.end_fractions.len();
+    let m = data.nystrom.end_fractions.len();
     let n = first.shape_generic().0;
-    let width = n.value();
-    if matrices.len() != 2 * m || lambda.len() != 2 * width {
+    if matrices.len() != 2 * m || rows != 2 * n.value() {
         return Err(FOREIGN_ADJOINT);
     }
-    let buffers = buffers.get_or_insert_with(|| StageCovectors::new(n, m));
+    Ok(Stages {
+        matrices,
+        nystrom: &data.nystrom,
+        kick_inverse: mass_inverse.scaled(*h),
+        width: n.value(),
+        buffers: buffers.get_or_insert_with(|| StageCovectors::new(n, m)),
+    })
+}
+
+/// λ ← Φᵀλ from the stage matrices `adjoint` keeps (see the [module](self) documentation).
+pub(super) fn adjoint_apply<N: Dimension>(
+    workspace: &mut SviWorkspace<N>,
+    max_iterations: usize,
+    adjoint: &StepAdjoint<N>,
+    lambda: &mut DVector<f64>,
+) -> Result<(), StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N>,
+{
+    let Stages {
+        matrices,
+        nystrom,
+        kick_inverse,
+        width,
+        buffers,
+    } = stages(workspace, adjoint, lambda.len())?;
+    let m = nystrom.end_fractions.len();
     let StageCovectors {
         right,
         z,
@@ -168,7 +210,6 @@ where
         work,
         ..
     } = buffers;
-    let kick_inverse = mass_inverse.scaled(*h);
     let (top, bottom) = lambda.as_slice().split_at(width);
     lambda_q.as_mut_slice().copy_from_slice(top);
     lambda_p.as_mut_slice().copy_from_slice(bottom);
@@ -239,28 +280,14 @@ pub(super) fn tangent_apply<N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let StepAdjoint::Stages { h, matrices } = adjoint else {
-        return Err(FOREIGN_ADJOINT);
-    };
-    let SviWorkspace {
-        constant_mass,
-        adjoint: buffers,
-        ..
-    } = workspace;
-    let (Some(data), Some(first)) = (constant_mass.as_ref(), matrices.first()) else {
-        return Err(FOREIGN_ADJOINT);
-    };
-    let Some(mass_inverse) = data.mass_inverse.as_ref() else {
-        return Err(FOREIGN_ADJOINT);
-    };
-    let nystrom = &data.nystrom;
+    let Stages {
+        matrices,
+        nystrom,
+        kick_inverse,
+        width,
+        buffers,
+    } = stages(workspace, adjoint, columns.nrows())?;
     let m = nystrom.end_fractions.len();
-    let n = first.shape_generic().0;
-    let width = n.value();
-    if matrices.len() != 2 * m || columns.nrows() != 2 * width {
-        return Err(FOREIGN_ADJOINT);
-    }
-    let buffers = buffers.get_or_insert_with(|| StageCovectors::new(n, m));
     let StageCovectors {
         right: bases,
         z: stages,
@@ -271,7 +298,6 @@ where
         g,
         work,
     } = buffers;
-    let kick_inverse = mass_inverse.scaled(*h);
     for column in columns.as_mut_slice().chunks_exact_mut(2 * width) {
         let (top, bottom) = column.split_at_mut(width);
         dq.as_mut_slice().copy_from_slice(top);
