@@ -15,7 +15,7 @@ use crate::method::space::{State, TangentMap};
 use crate::method::{Method, StepReport};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, OMatrix};
+use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, Dim, Dyn, OMatrix};
 
 /// What a step keeps for the adjoint sweep ([`Method::adjoint_step`]), applied by the method
 /// that made it ([`Method::adjoint_apply`]).
@@ -99,19 +99,7 @@ pub fn apply_tangent_map<N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
-    let StepAdjoint::Map(tangent) = adjoint else {
-        return Err(FOREIGN_ADJOINT);
-    };
-    let m = tangent.qq.nrows();
-    let (top, bottom) = (lambda.rows(0, m), lambda.rows(m, m));
-    let mut upper = scratch.rows_mut(0, m);
-    upper.gemv_tr(1.0, &view(&tangent.qq), &top, 0.0);
-    upper.gemv_tr(1.0, &view(&tangent.yq), &bottom, 1.0);
-    let mut lower = scratch.rows_mut(m, m);
-    lower.gemv_tr(1.0, &view(&tangent.qy), &top, 0.0);
-    lower.gemv_tr(1.0, &view(&tangent.yy), &bottom, 1.0);
-    std::mem::swap(lambda, scratch);
-    Ok(())
+    multiply(adjoint, true, lambda, scratch)
 }
 
 /// X ← ΦX for a kept tangent map ([`StepAdjoint::Map`]; the default of
@@ -127,18 +115,42 @@ pub fn compose_tangent_map<N: Dimension>(
 where
     DefaultAllocator: Allocator<N> + Allocator<N, N>,
 {
+    multiply(adjoint, false, columns, scratch)
+}
+
+/// X ← ΦX, or ΦᵀX with `transpose`, for a kept tangent map Φ in blocks
+/// [[qq, qy], [yq, yy]], through `scratch` of X's shape.
+fn multiply<N: Dimension, C: Dim>(
+    adjoint: &StepAdjoint<N>,
+    transpose: bool,
+    x: &mut OMatrix<f64, Dyn, C>,
+    scratch: &mut OMatrix<f64, Dyn, C>,
+) -> Result<(), StepFailure>
+where
+    DefaultAllocator: Allocator<N> + Allocator<N, N> + Allocator<Dyn, C>,
+{
     let StepAdjoint::Map(tangent) = adjoint else {
         return Err(FOREIGN_ADJOINT);
     };
     let m = tangent.qq.nrows();
-    let (top, bottom) = (columns.rows(0, m), columns.rows(m, m));
-    let mut upper = scratch.rows_mut(0, m);
-    upper.gemm(1.0, &view(&tangent.qq), &top, 0.0);
-    upper.gemm(1.0, &view(&tangent.qy), &bottom, 1.0);
-    let mut lower = scratch.rows_mut(m, m);
-    lower.gemm(1.0, &view(&tangent.yq), &top, 0.0);
-    lower.gemm(1.0, &view(&tangent.yy), &bottom, 1.0);
-    std::mem::swap(columns, scratch);
+    // Row blocks of the result: (upper-left, upper-right) and (lower-left, lower-right).
+    let (upper, lower) = if transpose {
+        ([&tangent.qq, &tangent.yq], [&tangent.qy, &tangent.yy])
+    } else {
+        ([&tangent.qq, &tangent.qy], [&tangent.yq, &tangent.yy])
+    };
+    let (top, bottom) = (x.rows(0, m), x.rows(m, m));
+    for (row, blocks) in [(0, upper), (m, lower)] {
+        let mut out = scratch.rows_mut(row, m);
+        for (input, block, beta) in [(&top, blocks[0], 0.0), (&bottom, blocks[1], 1.0)] {
+            if transpose {
+                out.gemm_tr(1.0, &view(block), input, beta);
+            } else {
+                out.gemm(1.0, &view(block), input, beta);
+            }
+        }
+    }
+    std::mem::swap(x, scratch);
     Ok(())
 }
 

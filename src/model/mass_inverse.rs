@@ -290,11 +290,19 @@ where
         }
     }
 
-    /// `out` = factor · M⁻¹ `matrix`, column by column (one product for a dense inverse).
+    /// `out` = factor · M⁻¹ `matrix`: one product for a dense inverse, row scaling for a
+    /// diagonal one, column by column for a coupled one.
     pub fn apply_columns_into(&self, matrix: &OMatrix<f64, N, N>, out: &mut OMatrix<f64, N, N>) {
         match self {
             Scaled::Dense(inverse) => inverse.mul_to(matrix, out),
-            Scaled::Diagonal(..) | Scaled::Lazy(..) => {
+            Scaled::Diagonal(inverse, factor) => {
+                for (mut target, column) in out.column_iter_mut().zip(matrix.column_iter()) {
+                    for ((o, m), d) in target.iter_mut().zip(column.iter()).zip(inverse.iter()) {
+                        *o = m * (d * factor);
+                    }
+                }
+            }
+            Scaled::Lazy(..) => {
                 let (n, _) = matrix.shape_generic();
                 let (mut column, mut image) =
                     (OVector::zeros_generic(n, U1), OVector::zeros_generic(n, U1));
@@ -399,6 +407,12 @@ mod tests {
             let mut out = DVector::zeros(7);
             inverse.scaled(2.0).apply_into(&p, &mut out);
             assert!((&out - &expected).amax() < 1e-14, "{out} vs {expected}");
+            // A matrix, column by column.
+            let columns = DMatrix::from_fn(7, 7, |i, j| (i as f64 - 0.5 * j as f64).sin());
+            let mut image = DMatrix::zeros(7, 7);
+            inverse.scaled(2.0).apply_columns_into(&columns, &mut image);
+            let by_dense = &dense * &columns * 2.0;
+            assert!((&image - &by_dense).amax() < 1e-14, "{image} vs {by_dense}");
             // A clone factors again on first use and gives the same numbers.
             let copy = inverse.clone();
             let mut second = DVector::zeros(7);
@@ -419,6 +433,13 @@ mod tests {
         let mut out = DVector::zeros(3);
         inverse.scaled(3.0).apply_into(&p, &mut out);
         assert_eq!(out.as_slice(), [1.5, -36.0, 0.1875]);
+        let columns = DMatrix::from_fn(3, 3, |i, j| p[i] * (j + 1) as f64);
+        let mut image = DMatrix::zeros(3, 3);
+        inverse.scaled(3.0).apply_columns_into(&columns, &mut image);
+        assert_eq!(
+            image,
+            DMatrix::from_fn(3, 3, |i, j| out[i] * (j + 1) as f64)
+        );
         assert_eq!(inverse.to_dense(), invert_small(&diagonal).unwrap());
         let fixed = SMatrix::<f64, 3, 3>::from_column_slice(diagonal.as_slice());
         let inverse = MassInverse::of_dense(&fixed).unwrap();

@@ -278,7 +278,8 @@ impl BenchOptions {
             return not_applicable(
                 "--tolerances",
                 "sets the tolerances of dop853, dopri5 and radau5 (and of METHOD@step), and \
-                 --methods lists none of them",
+                 the methods swept include none of them (--methods, or on a chain or a text \
+                 model the default list, which keeps only the fixed-step methods)",
             );
         }
         let sweeps = (fixed && self.steps.is_empty()) || (peers && self.tolerances.is_empty());

@@ -456,10 +456,7 @@ where
             columns,
             scratch,
         )
-        .map_err(|failure| {
-            let (t0, h, t_end, steps) = self.lifted.grid;
-            failure.at(k, grid_step(t0, t_end, h, steps, k).0)
-        })
+        .map_err(|failure| self.failed(k, failure))
     }
 
     /// λ ← Φ_kᵀλ for step `k`, kept in `adjoint` ([`Method::adjoint_apply`]).
@@ -477,10 +474,13 @@ where
             lambda,
             scratch,
         )
-        .map_err(|failure| {
-            let (t0, h, t_end, steps) = self.lifted.grid;
-            failure.at(k, grid_step(t0, t_end, h, steps, k).0)
-        })
+        .map_err(|failure| self.failed(k, failure))
+    }
+
+    /// The run's error for a failure of step `k`, with its index and start time.
+    fn failed(&self, k: usize, failure: StepFailure) -> Error {
+        let (t0, h, t_end, steps) = self.lifted.grid;
+        failure.at(k, grid_step(t0, t_end, h, steps, k).0)
     }
 
     /// Add the last increment to the state (compensated, checked finite).

@@ -31,7 +31,7 @@
 //! to 7·10⁻⁶ of the gradient, the stage form to 10⁻¹⁰ (`cargo bench --bench adjoint`).
 
 use super::constant_mass::NystromTables;
-use super::workspace::{StageCovectors, SviWorkspace};
+use super::workspace::{StageVectors, SviWorkspace};
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
 use crate::method::adjoint::{FOREIGN_ADJOINT, StepAdjoint};
@@ -41,7 +41,7 @@ use crate::model::derived::LagrangianExt;
 use crate::model::mass_inverse::Scaled;
 use crate::nonlinear::FixedPoint;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OMatrix, OVector};
 
 /// The step, keeping the force Jacobians at its quadrature points in `adjoint`; `None` where
 /// the Nyström form does not hold (a forced model, no fixed-point tables), and the caller
@@ -148,7 +148,7 @@ where
     kick_inverse: Scaled<'a, N>,
     /// N.
     width: usize,
-    buffers: &'a mut StageCovectors<N>,
+    buffers: &'a mut StageVectors<N>,
 }
 
 /// The parts of `workspace` that apply the stage matrices `adjoint` keeps to vectors of
@@ -186,7 +186,7 @@ where
         nystrom: &data.nystrom,
         kick_inverse: mass_inverse.scaled(*h),
         width: n.value(),
-        buffers: buffers.get_or_insert_with(|| StageCovectors::new(n, m)),
+        buffers: buffers.get_or_insert_with(|| StageVectors::new(n, m)),
     })
 }
 
@@ -208,13 +208,13 @@ where
         buffers,
     } = stages(workspace, adjoint, lambda.len())?;
     let m = nystrom.end_fractions.len();
-    let StageCovectors {
-        right,
-        z,
-        mixed,
-        lambda_q,
-        lambda_p,
-        g,
+    let StageVectors {
+        fixed: right,
+        iterate: z,
+        sums,
+        upper: lambda_q,
+        lower: lambda_p,
+        kicked: g,
         work,
         ..
     } = buffers;
@@ -236,23 +236,19 @@ where
     loop {
         // z_ν ← r_ν + C_νᵀ Σ_μ K_μν z_μ, the sums accumulated stage after stage (each sum's
         // additions are then not a chain of dependent ones in a row).
-        for sum in mixed.iter_mut() {
+        for sum in sums.iter_mut() {
             sum.fill(0.0);
         }
         for (row, z_mu) in nystrom.kick_matrix.chunks_exact(m).zip(&*z) {
-            for (sum, k) in mixed.iter_mut().zip(row) {
+            for (sum, k) in sums.iter_mut().zip(row) {
                 sum.axpy(*k, z_mu, 1.0);
             }
         }
         let mut change: f64 = 0.0;
-        for (nu, ((z_nu, r), sum)) in z.iter_mut().zip(&*right).zip(&*mixed).enumerate() {
+        for (nu, ((z_nu, r), sum)) in z.iter_mut().zip(&*right).zip(&*sums).enumerate() {
             matrices[2 * nu + 1].tr_mul_to(sum, work);
             *work += r;
-            for (old, new) in z_nu.iter_mut().zip(work.iter()) {
-                change = change.max((new - *old).abs());
-                scale = scale.max(new.abs());
-                *old = *new;
-            }
+            replace(z_nu, work, &mut change, &mut scale);
         }
         if control.converged(change, scale)? {
             break;
@@ -296,14 +292,14 @@ where
         buffers,
     } = stages(workspace, adjoint, columns.nrows())?;
     let m = nystrom.end_fractions.len();
-    let StageCovectors {
-        right: bases,
-        z: stages,
-        mixed,
+    let StageVectors {
+        fixed: bases,
+        iterate: stages,
+        sums,
         images,
-        lambda_q: dq,
-        lambda_p: dp,
-        g,
+        upper: dq,
+        lower: dp,
+        kicked: g,
         work,
     } = buffers;
     for column in columns.as_mut_slice().chunks_exact_mut(2 * width) {
@@ -328,22 +324,19 @@ where
             for (nu, (image, stage)) in images.iter_mut().zip(stages.iter()).enumerate() {
                 matrices[2 * nu + 1].mul_to(stage, image);
             }
-            for sum in mixed.iter_mut() {
+            for sum in sums.iter_mut() {
                 sum.fill(0.0);
             }
             for (nu, image) in images.iter().enumerate() {
-                for (mu, sum) in mixed.iter_mut().enumerate() {
+                for (mu, sum) in sums.iter_mut().enumerate() {
                     sum.axpy(nystrom.kick_matrix[mu * m + nu], image, 1.0);
                 }
             }
             let mut change: f64 = 0.0;
-            for (stage, (base, sum)) in stages.iter_mut().zip(bases.iter().zip(mixed.iter())) {
-                for ((old, base), sum) in stage.iter_mut().zip(base.iter()).zip(sum.iter()) {
-                    let new = base + sum;
-                    change = change.max((new - *old).abs());
-                    scale = scale.max(new.abs());
-                    *old = new;
-                }
+            for (stage, (base, sum)) in stages.iter_mut().zip(bases.iter().zip(sums.iter())) {
+                work.copy_from(base);
+                *work += sum;
+                replace(stage, work, &mut change, &mut scale);
             }
             if control.converged(change, scale)? {
                 break;
@@ -361,6 +354,24 @@ where
         bottom.copy_from_slice(dp.as_slice());
     }
     Ok(())
+}
+
+/// `old` ← `new`, raising `change` to the largest change of an entry and `scale` to the
+/// largest new entry (a NaN is dropped by the maxima: the kept matrices are checked finite).
+#[inline]
+fn replace<N: Dimension>(
+    old: &mut OVector<f64, N>,
+    new: &OVector<f64, N>,
+    change: &mut f64,
+    scale: &mut f64,
+) where
+    DefaultAllocator: Allocator<N>,
+{
+    for (old, new) in old.iter_mut().zip(new.iter()) {
+        *change = change.max((new - *old).abs());
+        *scale = scale.max(new.abs());
+        *old = *new;
+    }
 }
 
 #[cfg(test)]

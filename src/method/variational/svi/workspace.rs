@@ -44,7 +44,7 @@ where
     /// Buffers of the tangent map, made at its first use.
     pub(super) tangent: Option<TangentBuffers>,
     /// Buffers of the adjoint by the Nyström form, made at its first use.
-    pub(super) adjoint: Option<StageCovectors<N>>,
+    pub(super) adjoint: Option<StageVectors<N>>,
 }
 
 /// Buffers of [`crate::method::Method::tangent_map`] for SVI: the block Hessian of the
@@ -74,43 +74,47 @@ impl TangentBuffers {
     }
 }
 
-/// The covectors of the adjoint's transposed iteration, and the tangent vectors of the
-/// forward one (`super::adjoint`), made at their first use: N-vectors per quadrature point.
+/// The vectors of the stage iterations of kept stage matrices (`super::adjoint`): the
+/// adjoint's transposed one on covectors and the forward one on tangent vectors, made at
+/// their first use, N entries each.
 #[derive(Debug, Clone)]
-pub(super) struct StageCovectors<N: Dimension>
+pub(super) struct StageVectors<N: Dimension>
 where
     DefaultAllocator: Allocator<N>,
 {
-    /// r_ν (forward: the force-free part of δQ_ν).
-    pub(super) right: Vec<OVector<f64, N>>,
-    /// z_ν (forward: δQ_ν).
-    pub(super) z: Vec<OVector<f64, N>>,
-    /// Σ_μ K_μν z_μ (forward: Σ_ν K_μν C_ν δQ_ν).
-    pub(super) mixed: Vec<OVector<f64, N>>,
-    /// C_ν δQ_ν (forward only).
+    /// The iteration's constant part at each quadrature point: r_ν (adjoint), the force-free
+    /// part of δQ_μ (forward).
+    pub(super) fixed: Vec<OVector<f64, N>>,
+    /// The iterate at each quadrature point: z_ν (adjoint), δQ_μ (forward).
+    pub(super) iterate: Vec<OVector<f64, N>>,
+    /// The sums over the stages: Σ_μ K_μν z_μ (adjoint), Σ_ν K_μν C_ν δQ_ν (forward).
+    pub(super) sums: Vec<OVector<f64, N>>,
+    /// C_ν δQ_ν (forward).
     pub(super) images: Vec<OVector<f64, N>>,
-    /// λ_q, λ_p, g = hG λ_q and one more N-vector (forward: δq, δp, hG δp and one more).
-    pub(super) lambda_q: OVector<f64, N>,
-    pub(super) lambda_p: OVector<f64, N>,
-    pub(super) g: OVector<f64, N>,
+    /// The vector's q and p halves: (λ_q, λ_p) or (δq, δp).
+    pub(super) upper: OVector<f64, N>,
+    pub(super) lower: OVector<f64, N>,
+    /// hM⁻¹ applied: g = hG λ_q (adjoint), hG δp (forward).
+    pub(super) kicked: OVector<f64, N>,
+    /// One more N-vector.
     pub(super) work: OVector<f64, N>,
 }
 
-impl<N: Dimension> StageCovectors<N>
+impl<N: Dimension> StageVectors<N>
 where
     DefaultAllocator: Allocator<N>,
 {
     /// Buffers for N coordinates and m quadrature points.
     pub(super) fn new(n: N, m: usize) -> Self {
         let zero = OVector::zeros_generic(n, U1);
-        StageCovectors {
-            right: vec![zero.clone(); m],
-            z: vec![zero.clone(); m],
-            mixed: vec![zero.clone(); m],
+        StageVectors {
+            fixed: vec![zero.clone(); m],
+            iterate: vec![zero.clone(); m],
+            sums: vec![zero.clone(); m],
             images: vec![zero.clone(); m],
-            lambda_q: zero.clone(),
-            lambda_p: zero.clone(),
-            g: zero.clone(),
+            upper: zero.clone(),
+            lower: zero.clone(),
+            kicked: zero.clone(),
             work: zero,
         }
     }
