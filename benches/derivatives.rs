@@ -8,6 +8,7 @@
 //! | --- | --- | --- |
 //! | `value` | L itself | `f64` (the baseline) |
 //! | `force_ad` | ∂L/∂q: N sweeps for N ≤ 3, else one | `Dual64`, else `DualSVec64<N>` |
+//! | `force_jacobian` | L_qq alone (the adjoint's stage matrices): one sweep per entry for N ≤ 2, else one | `HyperDual64`, else `Dual2Vec` |
 //! | `first_derivatives` | L, ∂L/∂q, ∂L/∂q̇: 2N sweeps for N ≤ 3, else two | `Dual64`, else `DualSVec64<N>` |
 //! | `second_derivatives` | L, gradients, L_qq, L_qv, L_vv: one sweep per Hessian entry in (q, q̇) for N ≤ 2, else three | `HyperDual64`, else `HyperDualVec`, 2 × `Dual2Vec` |
 //! | `acceleration` | q̈ = L_vv⁻¹(L_q − L_vq q̇): second derivatives + a small solve | as above |
@@ -16,7 +17,7 @@
 //! For Kepler (L = |v|²/2 + 1/|q|) the same quantities are also written by hand, so the ratio
 //! `force_ad / force_hand` is the price of never writing a derivative:
 //! `force_hand` (−q/|q|³), `force_vector_dual` (one `DualSVec64<2>` sweep, the alternative to
-//! N scalar sweeps that [`svi::derived::SCALAR_SWEEPS_UP_TO`] decides against for N ≤ 3),
+//! N scalar sweeps that [`svi::dimension::SCALAR_SWEEPS_UP_TO`] decides against for N ≤ 3),
 //! `second_derivatives_hand` (the same [`SecondDerivatives`] struct,
 //! with L_qq = −I/|q|³ + 3qqᵀ/|q|⁵) and `acceleration_jacobian_hand` (q̈ = −q/|q|³ with
 //! ∂q̈/∂q = L_qq, ∂q̈/∂q̇ = 0). The hand-written results are checked against AD before timing.
@@ -57,6 +58,9 @@ fn model_group<'a, L: Lagrangian<Const<N>>, const N: usize>(
     });
     group.bench_function("force_ad", |b| {
         b.iter(|| black_box(&model).force(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("force_jacobian", |b| {
+        b.iter(|| black_box(&model).force_jacobian(black_box(T), black_box(&q), black_box(&v)))
     });
     group.bench_function("first_derivatives", |b| {
         b.iter(|| black_box(&model).first_derivatives(black_box(T), black_box(&q), black_box(&v)))
@@ -196,7 +200,7 @@ fn derivatives(c: &mut Criterion) {
     model_group(c, "double-pendulum", DoublePendulum::default(), q2, v2).finish();
 
     // Coupled chains of N = 3, 4, 6 pendulums: where scalar sweeps stop paying
-    // (`svi::derived::SCALAR_SWEEPS_UP_TO`, `svi::derived::SCALAR_HESSIAN_UP_TO`).
+    // (`svi::dimension::SCALAR_SWEEPS_UP_TO`, `svi::dimension::SCALAR_HESSIAN_SWEEPS_UP_TO`, `svi::derived::SCALAR_HESSIAN_UP_TO`).
     model_group(
         c,
         "chain-3",

@@ -58,6 +58,13 @@ pub enum Wrt {
 /// with one `DualSVec64<2>` sweep (`cargo bench --bench derivatives -- kepler/force`).
 pub const SCALAR_SWEEPS_UP_TO: usize = 3;
 
+/// Largest fixed dimension whose N × N Hessians (in q or in q̇) are taken as N(N + 1)/2 sweeps
+/// of the scalar `HyperDual<D>`, one per entry, rather than one `Dual2Vec` sweep
+/// (`cargo bench --bench derivatives -- force_jacobian`, L_qq with this constant at 0 and 4:
+/// Kepler 17 ns against 52 ns, the double pendulum 50 ns against 119 ns, but the coupled
+/// chain of pendulums 404 ns against 190 ns at N = 3 and 947 ns against 629 ns at N = 4).
+pub const SCALAR_HESSIAN_SWEEPS_UP_TO: usize = 2;
+
 /// The dimension of a configuration space: `Const<N>` or [`Dyn`]. Implemented for exactly
 /// these; it chooses the dual numbers of every derivative in `svi` (and, through a
 /// crate-internal supertrait, how SVI's stage sums run at each size).
@@ -410,6 +417,9 @@ impl<const K: usize> Dimension for Const<K> {
         v: &OVector<D, Self>,
         wrt: Wrt,
     ) -> (D, OVector<D, Self>, OMatrix<D, Self, Self>) {
+        if K <= SCALAR_HESSIAN_SWEEPS_UP_TO {
+            return scalar_hessian(f, t, q, v, wrt);
+        }
         match wrt {
             Wrt::Position => num_dual::hessian(
                 |x: OVector<Dual2Vec<D, Self>, Self>| {

@@ -16,9 +16,11 @@
 //! λ_q + Σ_μ z_μ,  λ_p + g + hG Σ_μ c'_μ z_μ,  where Tᵀz = r:
 //! z_ν = r_ν + W_ν J_ν hG Σ_μ K_μν z_μ.
 //!
-//! The last equation is solved by fixed-point iteration from z = r, run to round-off as the
-//! step's own iteration is: its iteration matrix is the transpose of the step's
-//! (h² K hG W J, of the same spectral radius), so it contracts where the step's did. A step
+//! The last equation is solved by fixed-point iteration from z = r, in the sums
+//! s_ν = Σ_μ K_μν z_μ: s ← Kᵀr + Kᵀ(Cᵀs) with C_ν = hG W_ν J_ν, the step's own stage sums
+//! with Kᵀ for K, then z_ν = r_ν + C_νᵀ s_ν. Its iteration matrix is the transpose of the
+//! step's (of the same spectral radius), so it contracts where the step's did; it stops at
+//! the error its contraction predicts below round-off. A step
 //! costs the forward step, N-direction Hessians at the m quadrature points and a few
 //! iterations of O(m²N + mN²) each, with nothing factorised (the tangent map assembles the
 //! (s + 1)N block Hessian, factorises its sN interior block and solves 2N columns).
@@ -34,6 +36,7 @@ use super::constant_mass::NystromTables;
 use super::workspace::{StageVectors, SviWorkspace};
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
+use crate::linalg::combination::{Rows, Start};
 use crate::method::adjoint::{FOREIGN_ADJOINT, StepAdjoint};
 use crate::method::{State, StepReport};
 use crate::model::Lagrangian;
@@ -207,58 +210,60 @@ where
         width,
         buffers,
     } = stages(workspace, adjoint, lambda.len())?;
-    let m = nystrom.end_fractions.len();
     let StageVectors {
         fixed: right,
-        iterate: z,
-        sums,
+        iterate: sums,
+        constant,
+        images,
         upper: lambda_q,
         lower: lambda_p,
         kicked: g,
         work,
-        ..
     } = buffers;
     let (top, bottom) = lambda.as_slice().split_at(width);
     lambda_q.as_mut_slice().copy_from_slice(top);
     lambda_p.as_mut_slice().copy_from_slice(bottom);
     kick_inverse.apply_into(lambda_q, g);
-    // r_ν = P_νᵀ λ_p + d_ν C_νᵀ λ_q (Pᵀ g = (hG P)ᵀ λ_q), and z = r to start.
-    let mut scale: f64 = 0.0;
-    for (nu, (r, z)) in right.iter_mut().zip(z.iter_mut()).enumerate() {
+    // r_ν = P_νᵀ λ_p + d_ν C_νᵀ λ_q (Pᵀ g = (hG P)ᵀ λ_q).
+    for (nu, r) in right.iter_mut().enumerate() {
         let (weighted, kicked) = (&matrices[2 * nu], &matrices[2 * nu + 1]);
         weighted.tr_mul_to(lambda_p, r);
         kicked.tr_mul_to(lambda_q, work);
         r.axpy(nystrom.end_fractions[nu], work, 1.0);
-        scale = scale.max(r.amax());
-        z.copy_from(r);
+    }
+    // The iteration runs on the sums s_ν = Σ_μ K_μν z_μ, in which it is the step's own
+    // (s ← Kᵀr + Kᵀ(Cᵀs), the stage sums of the fixed point with Kᵀ for K): from z = r,
+    // s⁰ = Kᵀr, and z_ν = r_ν + C_νᵀ s_ν at the end.
+    N::combine_rows(constant, transposed_rows(nystrom, Start::Zero, right));
+    let scale = largest_entry(constant);
+    for (sum, first) in sums.iter_mut().zip(&*constant) {
+        sum.copy_from(first);
     }
     let mut control = FixedPoint::predicting(max_iterations);
     loop {
-        // z_ν ← r_ν + C_νᵀ Σ_μ K_μν z_μ, the sums accumulated stage after stage (each sum's
-        // additions are then not a chain of dependent ones in a row).
-        for sum in sums.iter_mut() {
-            sum.fill(0.0);
+        for (nu, (image, sum)) in images.iter_mut().zip(&*sums).enumerate() {
+            matrices[2 * nu + 1].tr_mul_to(sum, image);
         }
-        for (row, z_mu) in nystrom.kick_matrix.chunks_exact(m).zip(&*z) {
-            for (sum, k) in sums.iter_mut().zip(row) {
-                sum.axpy(*k, z_mu, 1.0);
-            }
-        }
-        let mut change: f64 = 0.0;
-        for (nu, ((z_nu, r), sum)) in z.iter_mut().zip(&*right).zip(&*sums).enumerate() {
-            matrices[2 * nu + 1].tr_mul_to(sum, work);
-            *work += r;
-            replace(z_nu, work, &mut change, &mut scale);
-        }
-        if control.converged(change, scale)? {
+        let change = N::combine_rows(
+            sums,
+            transposed_rows(nystrom, Start::Rows(constant), images),
+        );
+        if control.converged(change.largest, scale)? {
             break;
         }
     }
-    // λ_q + Σ_μ z_μ and λ_p + g + hG Σ_μ c'_μ z_μ.
+    // z_ν, then λ_q + Σ_μ z_μ and λ_p + g + hG Σ_μ c'_μ z_μ.
     work.fill(0.0);
-    for (z_mu, c) in z.iter().zip(&nystrom.stage_velocity) {
-        *lambda_q += z_mu;
-        work.axpy(*c, z_mu, 1.0);
+    for (nu, ((z, sum), c)) in images
+        .iter_mut()
+        .zip(&*sums)
+        .zip(&nystrom.stage_velocity)
+        .enumerate()
+    {
+        matrices[2 * nu + 1].tr_mul_to(sum, z);
+        *z += &right[nu];
+        *lambda_q += &*z;
+        work.axpy(*c, z, 1.0);
     }
     *lambda_p += &*g;
     kick_inverse.apply_into(work, g);
@@ -266,6 +271,49 @@ where
     lambda.as_mut_slice()[..width].copy_from_slice(lambda_q.as_slice());
     lambda.as_mut_slice()[width..].copy_from_slice(lambda_p.as_slice());
     Ok(())
+}
+
+/// The rows `start`_ν + Σ_μ K_μν `inputs`[μ] (Kᵀ's rows) of the adjoint's iteration.
+fn transposed_rows<'a, N: Dimension>(
+    nystrom: &'a NystromTables,
+    start: Start<'a, N>,
+    inputs: &'a [OVector<f64, N>],
+) -> Rows<'a, N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    Rows {
+        start,
+        lead: None,
+        matrix: &nystrom.transposed_kick_matrix,
+        inputs,
+    }
+}
+
+/// The rows δq + c'_μ `g` + Σ_ν K_μν `images`[ν] of the forward iteration.
+fn stage_rows<'a, N: Dimension>(
+    nystrom: &'a NystromTables,
+    dq: &'a OVector<f64, N>,
+    g: &'a OVector<f64, N>,
+    images: &'a [OVector<f64, N>],
+) -> Rows<'a, N>
+where
+    DefaultAllocator: Allocator<N>,
+{
+    Rows {
+        start: Start::Common(dq),
+        lead: Some((&nystrom.stage_velocity, g)),
+        matrix: &nystrom.kick_matrix,
+        inputs: images,
+    }
+}
+
+/// The largest entry of any of `vectors`, in size.
+fn largest_entry<N: Dimension>(vectors: &[OVector<f64, N>]) -> f64
+where
+    DefaultAllocator: Allocator<N>,
+{
+    vectors.iter().map(|x| x.amax()).fold(0.0, f64::max)
 }
 
 /// X ← ΦX from the stage matrices `adjoint` keeps: for each column (δq, δp) of `columns`,
@@ -291,54 +339,33 @@ where
         width,
         buffers,
     } = stages(workspace, adjoint, columns.nrows())?;
-    let m = nystrom.end_fractions.len();
     let StageVectors {
-        fixed: bases,
         iterate: stages,
-        sums,
         images,
         upper: dq,
         lower: dp,
         kicked: g,
         work,
+        ..
     } = buffers;
     for column in columns.as_mut_slice().chunks_exact_mut(2 * width) {
         let (top, bottom) = column.split_at_mut(width);
         dq.as_mut_slice().copy_from_slice(top);
         dp.as_mut_slice().copy_from_slice(bottom);
         kick_inverse.apply_into(dp, g);
-        let mut scale: f64 = 0.0;
-        for ((base, stage), c) in bases
-            .iter_mut()
-            .zip(stages.iter_mut())
-            .zip(&nystrom.stage_velocity)
-        {
-            base.copy_from(dq);
-            base.axpy(*c, g, 1.0);
-            scale = scale.max(base.amax());
-            stage.copy_from(base);
+        // δQ_μ ← δq + c'_μ hG δp + Σ_ν K_μν C_ν δQ_ν, the step's stage sums, from C δQ = 0.
+        for image in images.iter_mut() {
+            image.fill(0.0);
         }
+        N::combine_rows(stages, stage_rows(nystrom, dq, g, images));
+        let scale = largest_entry(stages);
         let mut control = FixedPoint::predicting(max_iterations);
         loop {
-            // δQ_μ ← base_μ + Σ_ν K_μν C_ν δQ_ν, the sums accumulated stage after stage.
-            for (nu, (image, stage)) in images.iter_mut().zip(stages.iter()).enumerate() {
+            for (nu, (image, stage)) in images.iter_mut().zip(&*stages).enumerate() {
                 matrices[2 * nu + 1].mul_to(stage, image);
             }
-            for sum in sums.iter_mut() {
-                sum.fill(0.0);
-            }
-            for (nu, image) in images.iter().enumerate() {
-                for (mu, sum) in sums.iter_mut().enumerate() {
-                    sum.axpy(nystrom.kick_matrix[mu * m + nu], image, 1.0);
-                }
-            }
-            let mut change: f64 = 0.0;
-            for (stage, (base, sum)) in stages.iter_mut().zip(bases.iter().zip(sums.iter())) {
-                work.copy_from(base);
-                *work += sum;
-                replace(stage, work, &mut change, &mut scale);
-            }
-            if control.converged(change, scale)? {
+            let change = N::combine_rows(stages, stage_rows(nystrom, dq, g, images));
+            if control.converged(change.largest, scale)? {
                 break;
             }
         }
@@ -354,24 +381,6 @@ where
         bottom.copy_from_slice(dp.as_slice());
     }
     Ok(())
-}
-
-/// `old` ← `new`, raising `change` to the largest change of an entry and `scale` to the
-/// largest new entry (a NaN is dropped by the maxima: the kept matrices are checked finite).
-#[inline]
-fn replace<N: Dimension>(
-    old: &mut OVector<f64, N>,
-    new: &OVector<f64, N>,
-    change: &mut f64,
-    scale: &mut f64,
-) where
-    DefaultAllocator: Allocator<N>,
-{
-    for (old, new) in old.iter_mut().zip(new.iter()) {
-        *change = change.max((new - *old).abs());
-        *scale = scale.max(new.abs());
-        *old = *new;
-    }
 }
 
 #[cfg(test)]

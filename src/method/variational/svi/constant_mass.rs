@@ -68,6 +68,8 @@ use nalgebra::{DMatrix, DefaultAllocator, OVector, U1};
 pub(crate) struct NystromTables {
     /// K_μν = d_ν − G_μν, row-major m × m: the stage map on the kicks (see [`ConstantMass`]).
     pub(crate) kick_matrix: Vec<f64>,
+    /// Kᵀ, row-major: the adjoint's stage sums (`super::adjoint`).
+    pub(crate) transposed_kick_matrix: Vec<f64>,
     /// d_μ = 1 − c'_μ, with c'_μ + d_μ = 1 exactly: the end point's weights on the kicks.
     pub(crate) end_fractions: Vec<f64>,
     /// c_j, j = 1..s.
@@ -218,6 +220,9 @@ impl NystromTables {
         let kick_matrix: Vec<f64> = (0..m * m)
             .map(|k| end_fractions[k % m] - symmetric[k])
             .collect();
+        let transposed_kick_matrix = (0..m * m)
+            .map(|k| kick_matrix[(k % m) * m + k / m])
+            .collect();
         let rate = |mu: usize, j: usize| 2.0 * d[(mu, j + 1)];
         let stage_rate = (0..m)
             .map(|mu| (0..s).map(|j| rate(mu, j) * velocity_coefficients[j]).sum())
@@ -235,6 +240,7 @@ impl NystromTables {
             .collect();
         Some(NystromTables {
             kick_matrix,
+            transposed_kick_matrix,
             end_fractions,
             velocity_coefficients,
             end_weights,

@@ -82,14 +82,14 @@ pub(super) struct StageVectors<N: Dimension>
 where
     DefaultAllocator: Allocator<N>,
 {
-    /// The iteration's constant part at each quadrature point: r_ν (adjoint), the force-free
-    /// part of δQ_μ (forward).
+    /// r_ν (adjoint).
     pub(super) fixed: Vec<OVector<f64, N>>,
-    /// The iterate at each quadrature point: z_ν (adjoint), δQ_μ (forward).
+    /// The iterate at each quadrature point: the sums s_ν = Σ_μ K_μν z_μ (adjoint), δQ_μ
+    /// (forward).
     pub(super) iterate: Vec<OVector<f64, N>>,
-    /// The sums over the stages: Σ_μ K_μν z_μ (adjoint), Σ_ν K_μν C_ν δQ_ν (forward).
-    pub(super) sums: Vec<OVector<f64, N>>,
-    /// C_ν δQ_ν (forward).
+    /// The sums' constant part s⁰ = Kᵀr (adjoint).
+    pub(super) constant: Vec<OVector<f64, N>>,
+    /// The iterate's images: C_νᵀ s_ν, then z_ν (adjoint); C_ν δQ_ν (forward).
     pub(super) images: Vec<OVector<f64, N>>,
     /// The vector's q and p halves: (λ_q, λ_p) or (δq, δp).
     pub(super) upper: OVector<f64, N>,
@@ -110,7 +110,7 @@ where
         StageVectors {
             fixed: vec![zero.clone(); m],
             iterate: vec![zero.clone(); m],
-            sums: vec![zero.clone(); m],
+            constant: vec![zero.clone(); m],
             images: vec![zero.clone(); m],
             upper: zero.clone(),
             lower: zero.clone(),
