@@ -210,6 +210,44 @@ fn runtime_dimension_paths_do_not_allocate_per_step_or_per_observed_point() {
     );
 }
 
+/// The Noether momenta and the energy observed at every step of a run-time-size N-body run
+/// add no allocation per step to the run's own (each momentum is p·ξᵢ(q) entry by entry,
+/// [`svi::Symmetries::generator_momentum`]; before, one vector ξᵢ per generator and step).
+/// The run's own are the derivatives of a model of run-time size that is not a sum of terms:
+/// its dual-number vectors are made per evaluation.
+#[test]
+fn observed_momenta_of_a_run_time_size_model_add_no_allocation_per_step() {
+    let model = svi_models::NBody::outer_solar_system();
+    let (t0, q, v) = svi::Defaults::initial_state(&model);
+    let integrator = Integrator::new(model, StormerVerlet::default());
+    let run = |steps: usize, observed: bool| {
+        let mut observers = (
+            svi::observer::MomentumError::default(),
+            svi::observer::EnergyError::default(),
+        );
+        let start = svi::Initial::Velocity {
+            q: q.clone(),
+            v: v.clone(),
+        };
+        let t_end = t0 + 10.0 * steps as f64;
+        let before = allocations::count();
+        if observed {
+            integrator.run(t0, start, 10.0, t_end, &mut observers)
+        } else {
+            integrator.run(t0, start, 10.0, t_end, &mut ())
+        }
+        .unwrap();
+        let count = allocations::count() - before;
+        if observed {
+            assert!(observers.0.max > 0.0 && observers.1.max > 0.0);
+        }
+        count
+    };
+    run(5, true);
+    let per_steps = |observed: bool| run(2000, observed) - run(20, observed);
+    assert_eq!(per_steps(true), per_steps(false));
+}
+
 /// Allocations of an unobserved run of `steps` steps of size 0.01 of a sum of local terms from
 /// its default state, by the one implementation of ℝᴺ (`Terms`).
 fn terms_allocations<L, M>(model: &L, method: &M, steps: usize) -> usize

@@ -216,29 +216,52 @@ impl Symmetries<Dyn> for NBody {
     /// # Panics
     /// If `index >= generator_count()`.
     fn generator(&self, index: usize, q: &DVector<f64>) -> DVector<f64> {
-        let d = self.space;
+        self.check_generator(index);
+        DVector::from_fn(q.len(), |row, _| self.generator_entry(index, q, row))
+    }
+
+    /// p·ξᵢ(q) entry by entry, without the vector ξᵢ (observed at every step).
+    ///
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn generator_momentum(&self, index: usize, q: &DVector<f64>, p: &DVector<f64>) -> f64 {
+        self.check_generator(index);
+        p.iter()
+            .enumerate()
+            .map(|(row, p)| p * self.generator_entry(index, q, row))
+            .sum()
+    }
+}
+
+impl NBody {
+    /// Panics unless `index < generator_count()`.
+    fn check_generator(&self, index: usize) {
         assert!(
             index < self.generator_count(),
             "no symmetry generator with index {index}"
         );
-        DVector::from_fn(q.len(), |row, _| {
-            let (body, k) = (row / d, row % d);
-            let x = |axis: usize| q[d * body + axis];
-            if index < d {
-                return f64::from(k == index);
-            }
-            // ω × x with ω the unit vector of the rotation axis (the plane: ω = e_z).
-            let axis = if d == 2 { 2 } else { index - d };
-            match (axis, k) {
-                (0, 1) => -x(2),
-                (0, 2) => x(1),
-                (1, 0) => x(2),
-                (1, 2) => -x(0),
-                (2, 0) => -x(1),
-                (2, 1) => x(0),
-                _ => 0.0,
-            }
-        })
+    }
+
+    /// Entry `row` of the generator ξ_index(q) (see [`Symmetries::generator`]).
+    #[inline]
+    fn generator_entry(&self, index: usize, q: &DVector<f64>, row: usize) -> f64 {
+        let d = self.space;
+        let (body, k) = (row / d, row % d);
+        let x = |axis: usize| q[d * body + axis];
+        if index < d {
+            return f64::from(k == index);
+        }
+        // ω × x with ω the unit vector of the rotation axis (the plane: ω = e_z).
+        let axis = if d == 2 { 2 } else { index - d };
+        match (axis, k) {
+            (0, 1) => -x(2),
+            (0, 2) => x(1),
+            (1, 0) => x(2),
+            (1, 2) => -x(0),
+            (2, 0) => -x(1),
+            (2, 1) => x(0),
+            _ => 0.0,
+        }
     }
 }
 
@@ -349,6 +372,7 @@ mod tests {
                 "{index}"
             );
         }
+        assert_momenta_are_generators(&model, &q, &v);
         assert_eq!(model.coordinate_names(), ["a_x", "a_y", "b_x", "b_y"]);
         assert!(NBody::new(2.0, 4, model.bodies().to_vec()).is_err());
         assert!(NBody::new(-2.0, 2, model.bodies().to_vec()).is_err());
@@ -363,6 +387,21 @@ mod tests {
             assert!(
                 model.symmetry_defect(index, 0.0, &q, &v) <= 1e-10,
                 "{index}"
+            );
+        }
+        assert_momenta_are_generators(&model, &q, &v);
+    }
+
+    /// The momenta the observer takes, p·ξᵢ(q) without the vector ξᵢ, are those of the
+    /// generators, at p = M q̇ (masses on the diagonal).
+    fn assert_momenta_are_generators(model: &NBody, q: &DVector<f64>, v: &DVector<f64>) {
+        let p = model.momentum(0.0, q, v);
+        for index in 0..model.generator_count() {
+            let by_vector = p.dot(&model.generator(index, q));
+            let entrywise = model.generator_momentum(index, q, &p);
+            assert!(
+                (entrywise - by_vector).abs() <= 1e-15 * (1.0 + by_vector.abs()),
+                "{index}: {entrywise} against {by_vector}"
             );
         }
     }

@@ -435,6 +435,15 @@ where
         let _ = q;
         panic!("no symmetry generator with index {index}")
     }
+    /// The Noether momentum Jᵢ = p·ξᵢ(q) of generator `index` at (q, p), as the momentum
+    /// observer takes it at every step. The default forms ξᵢ(q), which allocates at run-time
+    /// size: a model of run-time size computes it without the vector.
+    ///
+    /// # Panics
+    /// If `index >= generator_count()`.
+    fn generator_momentum(&self, index: usize, q: &OVector<f64, N>, p: &OVector<f64, N>) -> f64 {
+        p.dot(&self.generator(index, q))
+    }
 }
 
 /// Other known conserved quantities of a model (besides energy and Noether momenta).

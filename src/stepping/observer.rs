@@ -197,7 +197,7 @@ where
         let count = model.generator_count();
         let first = self.initial.is_empty();
         for i in 0..count {
-            let momentum = point.p.dot(&model.generator(i, &point.q));
+            let momentum = model.generator_momentum(i, &point.q, &point.p);
             if first {
                 self.initial.push(momentum);
             } else {
