@@ -16,7 +16,7 @@ pub mod sparse;
 
 use crate::scalar::Scalar;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, OMatrix, OVector, U1};
+use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 /// Solve A x = b for a small system (of fixed or run-time size); `None` if A is singular (a
 /// zero pivot) or the result is not finite.
@@ -196,6 +196,15 @@ impl DenseLu {
             b.set_column(j, &column);
         }
     }
+}
+
+/// An owned matrix of any dimensions as a view of run-time size (for products with dynamic
+/// matrices without copying it).
+pub fn dynamic_view<R: Dim, C: Dim>(matrix: &OMatrix<f64, R, C>) -> DMatrixView<'_, f64>
+where
+    DefaultAllocator: Allocator<R, C>,
+{
+    DMatrixView::from_slice(matrix.as_slice(), matrix.nrows(), matrix.ncols())
 }
 
 /// Kahan-compensated `sum += increment`, entry by entry.

@@ -11,11 +11,12 @@
 
 use crate::dimension::Dimension;
 use crate::error::StepFailure;
+use crate::linalg::dynamic_view;
 use crate::method::space::{State, TangentMap};
 use crate::method::{Method, StepReport};
 use crate::model::Lagrangian;
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, Dim, Dyn, OMatrix};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, Dim, Dyn, OMatrix};
 
 /// What a step keeps for the adjoint sweep ([`Method::adjoint_step`]), applied by the method
 /// that made it ([`Method::adjoint_apply`]).
@@ -144,22 +145,14 @@ where
         let mut out = scratch.rows_mut(row, m);
         for (input, block, beta) in [(&top, blocks[0], 0.0), (&bottom, blocks[1], 1.0)] {
             if transpose {
-                out.gemm_tr(1.0, &view(block), input, beta);
+                out.gemm_tr(1.0, &dynamic_view(block), input, beta);
             } else {
-                out.gemm(1.0, &view(block), input, beta);
+                out.gemm(1.0, &dynamic_view(block), input, beta);
             }
         }
     }
     std::mem::swap(x, scratch);
     Ok(())
-}
-
-/// A square matrix of any dimension as a view of run-time size.
-fn view<N: Dimension>(matrix: &OMatrix<f64, N, N>) -> DMatrixView<'_, f64>
-where
-    DefaultAllocator: Allocator<N, N>,
-{
-    DMatrixView::from_slice(matrix.as_slice(), matrix.nrows(), matrix.ncols())
 }
 
 /// The failure of an adjoint applied by a method that did not keep it.

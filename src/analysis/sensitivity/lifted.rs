@@ -7,7 +7,7 @@
 use super::{SensitivityRun, Start};
 use crate::dimension::{Dimension, Dyn};
 use crate::error::{Error, StepFailure};
-use crate::linalg::invert_small;
+use crate::linalg::{dynamic_view, invert_small};
 use crate::method::space::{Initial, PhasePoint, State, StepState};
 use crate::method::step::Step;
 use crate::method::{Coordinates, Euclidean, Method, StepAdjoint, StepReport};
@@ -17,7 +17,7 @@ use crate::model::parametric::{Parametric, WithParameters, parameter_indices};
 use crate::stepping::grid::{grid_step, grid_steps};
 use crate::stepping::run::{Cursor, Integrator, Statistics};
 use nalgebra::allocator::Allocator;
-use nalgebra::{DMatrix, DMatrixView, DVector, DefaultAllocator, OMatrix, OVector, U1};
+use nalgebra::{DMatrix, DVector, DefaultAllocator, OVector, U1};
 use num_dual::Dual;
 
 /// The parameters of `run` among the model's, and whether any of them enters L or the force
@@ -46,14 +46,6 @@ where
     let model = integrator.model();
     let hat = WithParameters::new(model, model.dimension(), chosen.to_vec());
     Integrator::new(hat, integrator.method().clone())
-}
-
-/// A `rows` × `columns` view of an owned matrix's entries.
-pub(super) fn view<R: Dimension, C: Dimension>(matrix: &OMatrix<f64, R, C>) -> DMatrixView<'_, f64>
-where
-    DefaultAllocator: Allocator<R, C>,
-{
-    DMatrixView::from_slice(matrix.as_slice(), matrix.nrows(), matrix.ncols())
 }
 
 /// A vector of dimension `D` with the entries of `values`.
@@ -189,14 +181,14 @@ where
         if let (Some(_), Some(d)) = (&given_momentum, &second) {
             // ż₀ = M̂⁻¹(p̂₀ − …): ∂ż₀ = M̂⁻¹(∂p̂₀ − L̂_{żz} ∂z₀), ∂p̂₀ the columns of p₀.
             let inverse = invert(
-                &view(&d.vv).into_owned(),
+                &dynamic_view(&d.vv).into_owned(),
                 "mass matrix at the initial state",
             )?;
             let mut dp = DMatrix::zeros(m, columns);
             for i in 0..n {
                 dp[(i, n + i)] = 1.0;
             }
-            dzdot0 = &inverse * (dp - view(&d.qv).transpose() * &dz0);
+            dzdot0 = &inverse * (dp - dynamic_view(&d.qv).transpose() * &dz0);
         } else {
             // ż₀ = (q̇₀, 0): the columns of q̇₀.
             for i in 0..n {
@@ -205,7 +197,7 @@ where
         }
         let dy0 = match (coordinates, &second) {
             (Coordinates::Momentum, Some(d)) => {
-                view(&d.qv).transpose() * &dz0 + view(&d.vv) * &dzdot0
+                dynamic_view(&d.qv).transpose() * &dz0 + dynamic_view(&d.vv) * &dzdot0
             }
             _ => dzdot0,
         };
@@ -247,8 +239,8 @@ where
                 // ż = M̂⁻¹(p̂ − …): ∂ż = M̂⁻¹ ∂p̂ − M̂⁻¹ L̂_{żz} ∂z.
                 let model = self.integrator.model();
                 let d = model.second_derivatives(point.t, &point.q, &point.v);
-                let inverse = invert(&view(&d.vv).into_owned(), "mass matrix")?;
-                let by_z = -(&inverse * view(&d.qv).transpose());
+                let inverse = invert(&dynamic_view(&d.vv).into_owned(), "mass matrix")?;
+                let by_z = -(&inverse * dynamic_view(&d.qv).transpose());
                 g.view_mut((n, 0), (n, m)).copy_from(&by_z.rows(0, n));
                 g.view_mut((n, m), (n, m)).copy_from(&inverse.rows(0, n));
             }
