@@ -67,6 +67,7 @@ impl DualSpin {
 /// G-invariant: every generator is a symmetry. The three spatial rotations give the spatial
 /// angular momentum, the rotor's turn its momentum p_φ.
 impl GroupSymmetries<4, 11> for DualSpin {
+    #[inline]
     fn generator_count(&self) -> usize {
         4
     }
@@ -81,6 +82,7 @@ impl GroupSymmetries<4, 11> for DualSpin {
         }
     }
 
+    #[inline]
     fn generator(&self, index: usize) -> SVector<f64, 4> {
         if index >= 4 {
             params::no_such_index("symmetry generator", Self::NAME, index)

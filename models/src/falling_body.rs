@@ -82,6 +82,7 @@ impl FallingBody {
 /// and the horizontal translations, ζ = (0, e₁) and (0, e₂), as symmetries: the vertical
 /// angular momentum (orbital and spin) and the horizontal linear momenta are conserved.
 impl GroupSymmetries<6, 12> for FallingBody {
+    #[inline]
     fn generator_count(&self) -> usize {
         3
     }
@@ -95,6 +96,7 @@ impl GroupSymmetries<6, 12> for FallingBody {
         }
     }
 
+    #[inline]
     fn generator(&self, index: usize) -> SVector<f64, 6> {
         match index {
             0 => SVector::from([0.0, 0.0, 1.0, 0.0, 0.0, 0.0]),

@@ -177,6 +177,7 @@ impl Parametric<U2> for Kepler {
 
 impl Symmetries<U2> for Kepler {
     /// One: rotations about the origin.
+    #[inline]
     fn generator_count(&self) -> usize {
         1
     }
@@ -196,6 +197,7 @@ impl Symmetries<U2> for Kepler {
     ///
     /// # Panics
     /// If `index > 0`.
+    #[inline]
     fn generator(&self, index: usize, q: &SVector<f64, 2>) -> SVector<f64, 2> {
         match index {
             0 => SVector::from([-q[1], q[0]]),

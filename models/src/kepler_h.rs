@@ -51,12 +51,14 @@ impl Hamiltonian<U2> for KeplerH {
 
 /// Rotations about the origin: the angular momentum q₁p₂ − q₂p₁ ([`Kepler`]'s generator).
 impl HamiltonianSymmetries<U2> for KeplerH {
+    #[inline]
     fn generator_count(&self) -> usize {
         self.0.generator_count()
     }
     fn momentum_name(&self, index: usize) -> &'static str {
         self.0.momentum_name(index)
     }
+    #[inline]
     fn generator(&self, index: usize, q: &SVector<f64, 2>) -> SVector<f64, 2> {
         self.0.generator(index, q)
     }

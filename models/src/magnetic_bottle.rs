@@ -190,6 +190,7 @@ impl Hamiltonian<U3> for MagneticBottle {
 
 impl HamiltonianSymmetries<U3> for MagneticBottle {
     /// One: rotations about the axis.
+    #[inline]
     fn generator_count(&self) -> usize {
         1
     }
@@ -209,6 +210,7 @@ impl HamiltonianSymmetries<U3> for MagneticBottle {
     ///
     /// # Panics
     /// If `index > 0`.
+    #[inline]
     fn generator(&self, index: usize, x: &SVector<f64, 3>) -> SVector<f64, 3> {
         match index {
             0 => SVector::from([-x[1], x[0], 0.0]),

@@ -194,6 +194,7 @@ impl Lagrangian<Dyn> for NBody {
 }
 
 impl Symmetries<Dyn> for NBody {
+    #[inline]
     fn generator_count(&self) -> usize {
         if self.space == 2 { 3 } else { 6 }
     }
@@ -215,6 +216,7 @@ impl Symmetries<Dyn> for NBody {
     ///
     /// # Panics
     /// If `index >= generator_count()`.
+    #[inline]
     fn generator(&self, index: usize, q: &DVector<f64>) -> DVector<f64> {
         self.check_generator(index);
         DVector::from_fn(q.len(), |row, _| self.generator_entry(index, q, row))

@@ -192,6 +192,7 @@ impl<const K: usize, const N: usize, const E: usize> PairTerms<3, 9> for Spheric
 impl<const K: usize, const N: usize, const E: usize> GroupSymmetries<N, E>
     for SphericalChain<K, N, E>
 {
+    #[inline]
     fn generator_count(&self) -> usize {
         1
     }
@@ -203,6 +204,7 @@ impl<const K: usize, const N: usize, const E: usize> GroupSymmetries<N, E>
         }
     }
 
+    #[inline]
     fn generator(&self, index: usize) -> SVector<f64, N> {
         match index {
             0 => SVector::from_fn(|i, _| if i % 3 == 2 { 1.0 } else { 0.0 }),

@@ -463,20 +463,28 @@ impl<L, M: Step<L, S>, S: Space> Integrator<L, M, S> {
         progress: &mut Progress<S>,
         observer: &mut O,
     ) -> Result<bool, RunFailure<S>> {
-        let (t, state, guess) = (progress.t, &progress.cursor.state, &progress.guess);
-        // The last observed point's memory is reused (moved out and back: no copy).
-        let completed = match progress.point.take() {
-            Some(mut point) => self
-                .complete_into(workspace, step, t, state, guess, &mut point)
+        let Progress {
+            t,
+            cursor,
+            guess,
+            point: kept,
+            ..
+        } = progress;
+        // The last observed point's memory is reused, completed where it lies: a point moved
+        // out and back is copied in pieces and read whole, which stalls the loads of a cheap
+        // step's observers on the stores.
+        let completed = match kept {
+            Some(point) => self
+                .complete_into(workspace, step, *t, &cursor.state, guess, point)
                 .map(|()| point),
-            None => self.complete(workspace, step, t, state, guess),
+            None => self
+                .complete(workspace, step, *t, &cursor.state, guess)
+                .map(|point| kept.insert(point)),
         };
         match completed {
             Ok(point) => {
-                S::assign_velocity(&mut progress.guess, &point);
-                let stop = observer.observe(&self.model, step, &point).is_break();
-                progress.point = Some(point);
-                Ok(stop)
+                S::assign_velocity(guess, point);
+                Ok(observer.observe(&self.model, step, point).is_break())
             }
             Err(error) => Err(self.failure(error, progress, false)),
         }
