@@ -22,6 +22,11 @@
 //! with L_qq = −I/|q|³ + 3qqᵀ/|q|⁵) and `acceleration_jacobian_hand` (q̈ = −q/|q|³ with
 //! ∂q̈/∂q = L_qq, ∂q̈/∂q̇ = 0). The hand-written results are checked against AD before timing.
 //!
+//! A model of run-time size that is not a sum of local terms (`derivatives/run-time-size`,
+//! the outer Solar System as [`svi_models::NBody`], n = 18): `nbody_force_ad` (∂L/∂q as the
+//! integrators take it: n scalar sweeps, each evaluating all pairs) against `nbody_force_hand`
+//! (Σ G mᵢmⱼ (qⱼ − qᵢ)/|qⱼ − qᵢ|³, checked against AD before timing).
+//!
 //! Every input goes through [`std::hint::black_box`], and so does every output.
 //! Benchmark ids are `derivatives/<model>/<quantity>`.
 //!
@@ -31,14 +36,14 @@
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
-use nalgebra::{Const, SMatrix, SVector, U2};
+use nalgebra::{Const, DVector, SMatrix, SVector, U2};
 use num_dual::{DualSVec64, DualVec};
 use std::hint::black_box;
 use std::time::Duration;
 use svi::derived::{AccelerationJacobian, SecondDerivatives};
 use svi::scalar::Scalar;
 use svi::{Lagrangian, LagrangianExt};
-use svi_models::{DoublePendulum, HarmonicOscillator, Kepler, Pendulum, SpringPendulum};
+use svi_models::{DoublePendulum, HarmonicOscillator, Kepler, NBody, Pendulum, SpringPendulum};
 
 /// Time of the fixed evaluation point (no model here depends on it).
 const T: f64 = 0.3;
@@ -186,6 +191,49 @@ fn check_kepler_hand(model: &Kepler, q: &SVector<f64, 2>, v: &SVector<f64, 2>) {
     }
 }
 
+/// ∂L/∂q of an N-body model written by hand: Σⱼ G mᵢmⱼ (qⱼ − qᵢ)/|qⱼ − qᵢ|³.
+fn nbody_force_hand(model: &NBody, q: &DVector<f64>) -> DVector<f64> {
+    let d = model.space();
+    let bodies = model.bodies();
+    let mut force = DVector::zeros(q.len());
+    for (i, a) in bodies.iter().enumerate() {
+        for (j, b) in bodies.iter().enumerate().skip(i + 1) {
+            let mut r2 = 0.0;
+            for k in 0..d {
+                let x = q[d * j + k] - q[d * i + k];
+                r2 += x * x;
+            }
+            let scale = model.g * a.mass * b.mass / (r2 * r2.sqrt());
+            for k in 0..d {
+                let f = scale * (q[d * j + k] - q[d * i + k]);
+                force[d * i + k] += f;
+                force[d * j + k] -= f;
+            }
+        }
+    }
+    force
+}
+
+/// The outer Solar System's force by AD and by hand.
+fn run_time_size(c: &mut Criterion) {
+    let model = NBody::outer_solar_system();
+    let (_, q, v) = svi::Defaults::initial_state(&model);
+    let hand = nbody_force_hand(&model, &q);
+    let gap = (model.force(T, &q, &v) - &hand).amax();
+    assert!(
+        gap <= 1e-12 * hand.amax(),
+        "AD force off the hand-written by {gap:e}"
+    );
+    let mut group = c.benchmark_group("derivatives/run-time-size");
+    group.bench_function("nbody_force_ad", |b| {
+        b.iter(|| black_box(&model).force(black_box(T), black_box(&q), black_box(&v)))
+    });
+    group.bench_function("nbody_force_hand", |b| {
+        b.iter(|| nbody_force_hand(black_box(&model), black_box(&q)))
+    });
+    group.finish();
+}
+
 fn derivatives(c: &mut Criterion) {
     // One-dimensional models: a generic angle and rate.
     let q1 = SVector::from([0.6]);
@@ -257,6 +305,6 @@ criterion_group! {
         .measurement_time(Duration::from_secs(2))
         .warm_up_time(Duration::from_millis(500))
         .sample_size(20);
-    targets = derivatives
+    targets = derivatives, run_time_size
 }
 criterion_main!(benches);
