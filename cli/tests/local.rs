@@ -460,3 +460,47 @@ fn plot_draws_the_trajectory_columns_and_needs_the_trajectory_file() {
         "--plot",
     );
 }
+
+/// `svi list`'s "methods at any n" of a chain are the methods that run it beyond the size of
+/// dense matrices: on the FPUT chain (constant mass) and the relativistic chain (a kinetic
+/// energy that is not quadratic) at n = 6000 (a dense 2n × 2n matrix is past the limit),
+/// each listed method takes a step, and every other method on ℝⁿ of the registry is refused
+/// naming the dense matrix it would hold.
+#[test]
+fn the_methods_listed_for_any_size_are_the_ones_that_run_any_size() {
+    let output = svi(&["list"]);
+    assert!(output.status.success());
+    let text = String::from_utf8_lossy(&output.stdout);
+    for model in ["fput", "relativistic-chain"] {
+        let line = text
+            .lines()
+            .find(|line| line.split_whitespace().next() == Some(model) && line.contains("; h = "))
+            .unwrap_or_else(|| panic!("no model line for {model}:\n{text}"));
+        let listed: Vec<&str> = line
+            .split("methods at any n: ")
+            .nth(1)
+            .unwrap_or_else(|| panic!("no methods in {line}"))
+            .split(", ")
+            .collect();
+        assert!(
+            listed.contains(&"verlet") && listed.contains(&"svi-newton"),
+            "{line}"
+        );
+        for entry in svi::method::registry::METHODS
+            .iter()
+            .filter(|entry| entry.space == svi::method::registry::SpaceKind::Vector)
+        {
+            let args = [
+                "run", model, "--param", "n=6000", "--t-end", "0.1", "--method", entry.name,
+            ];
+            let output = svi(&args);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            if listed.contains(&entry.name) {
+                assert!(output.status.success(), "{args:?}: {stderr}");
+            } else {
+                assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+                assert!(stderr.contains("would hold a dense"), "{args:?}: {stderr}");
+            }
+        }
+    }
+}

@@ -16,6 +16,7 @@ use svi_models::{
 
 use crate::report::csv::Float;
 use crate::report::summary::Parameters;
+use crate::run::methods_of_any_size;
 use crate::scene::Scene;
 use crate::scene::builtin::BUILTIN_SCENES;
 use crate::scene::field::FIELD_SCENES;
@@ -152,8 +153,8 @@ pub fn listing() -> String {
     push_line(
         &mut out,
         format_args!(
-            "Chains and lattices of any size n (svi run NAME --param n=N; methods svi, svi-newton, \
-         verlet):"
+            "Chains and lattices of any size n (svi run NAME --param n=N; every method while its \
+         dense matrices fit, at any n those each model below lists):"
         ),
     );
     for (name, description) in scenes(SpaceKind::Vector, true) {
@@ -279,12 +280,17 @@ impl LocalModelVisitor for DescribeLocal {
         if !invariants.is_empty() {
             facts.push(format!("conserves {}", invariants.join(", ")));
         }
+        let (name, h, t_end) = (model.name(), model.default_step(), model.default_horizon());
+        facts.push(format!(
+            "methods at any n: {}",
+            methods_of_any_size(model.into()).join(", ")
+        ));
         format!(
             "  {:<NAME_COLUMN$}{}; h = {}, t_end = {}; {}",
-            model.name(),
+            name,
             parameters.join(", "),
-            Float(model.default_step()),
-            Float(model.default_horizon()),
+            Float(h),
+            Float(t_end),
             facts.join("; ")
         )
     }

@@ -46,7 +46,7 @@ use svi::Dimension;
 
 use svi::lie_group::{GroupIntegrator, RigidBodyIntegrator};
 use svi::method::any::AnyMethod;
-use svi::method::registry::{SpaceKind, VectorMethodVisitor};
+use svi::method::registry::{METHODS, SpaceKind, VectorMethodVisitor};
 use svi::observer::Every;
 use svi::solve::{SolveOptions, Span};
 use svi::stepping::event::EventPoint;
@@ -332,6 +332,35 @@ fn run_chain(
         (false, Structure::General) => run_declared::<false, false>(plan, chain, method),
         (true, _) => run_declared::<true, false>(plan, chain, method),
     }
+}
+
+/// The library's methods on ℝⁿ that run `chain` at any size: those that keep its sparsity
+/// ([`Method::keeps_sparsity`]) under the declarations [`run_chain`] runs it with. The others
+/// hold dense matrices of the chain's size and refuse a chain too large for them
+/// ([`svi::method::step::dense_size`]). In the registry's order.
+pub fn methods_of_any_size(chain: AnyChain) -> Vec<&'static str> {
+    let view = chain.view();
+    let declarations = (view.time_dependent(), view.structure());
+    match declarations {
+        (false, Structure::ConstantMass) => sparse_methods(&Chain::<false, true>(chain)),
+        (false, Structure::General) => sparse_methods(&Chain::<false, false>(chain)),
+        (true, _) => sparse_methods(&Chain::<true, false>(chain)),
+    }
+}
+
+/// The registry's methods on ℝⁿ, with their default options, that keep `model`'s sparsity.
+fn sparse_methods<L: svi::Lagrangian<Dyn>>(model: &L) -> Vec<&'static str> {
+    METHODS
+        .iter()
+        .filter(|entry| entry.space == SpaceKind::Vector)
+        .filter(|entry| {
+            entry
+                .spec()
+                .vector_method()
+                .is_ok_and(|method| Method::<Dyn>::keeps_sparsity(&method, model))
+        })
+        .map(|entry| entry.name)
+        .collect()
 }
 
 /// Runs a chain with `method` as a [`Chain`] of the declarations given.
