@@ -22,9 +22,9 @@
 //! with L_qq = −I/|q|³ + 3qqᵀ/|q|⁵) and `acceleration_jacobian_hand` (q̈ = −q/|q|³ with
 //! ∂q̈/∂q = L_qq, ∂q̈/∂q̇ = 0). The hand-written results are checked against AD before timing.
 //!
-//! A model of run-time size that is not a sum of local terms (`derivatives/run-time-size`,
-//! the outer Solar System as [`svi_models::NBody`], n = 18): `nbody_force_ad` (∂L/∂q as the
-//! integrators take it: n scalar sweeps, each evaluating all pairs) against `nbody_force_hand`
+//! A model of run-time size (`derivatives/run-time-size`, the outer Solar System as
+//! [`svi_models::NBody`], n = 18, a sum of 15 pair terms): `nbody_force_ad` (∂L/∂q as the
+//! integrators take it: one vector-dual sweep per pair term) against `nbody_force_hand`
 //! (Σ G mᵢmⱼ (qⱼ − qᵢ)/|qⱼ − qᵢ|³, checked against AD before timing).
 //!
 //! Every input goes through [`std::hint::black_box`], and so does every output.

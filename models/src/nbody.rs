@@ -10,13 +10,20 @@
 //! angular momentum Σ mᵢ qᵢ × q̇ᵢ are the Noether momenta (d + 1 of them in the plane, d + 3 in
 //! space), and the energy is conserved.
 //!
+//! L is a sum of local terms (`LocalLagrangian`, width 6: one term per pair of bodies, each
+//! body's kinetic energy in one of its pairs), so the integrators differentiate it pair by
+//! pair: ∂L/∂q costs O(pairs) sweeps of one pair each, not n sweeps of all pairs
+//! (`cargo bench --bench derivatives -- run-time-size`).
+//!
 //! The default is the outer Solar System of Hairer, Lubich & Wanner, *Geometric Numerical
 //! Integration*, §I.2.4, Table 2.2: the Sun (with the inner planets' mass added), Jupiter,
 //! Saturn, Uranus, Neptune and Pluto, 18 coordinates, in astronomical units and days
 //! (G = 2.95912208286e-4), initial values of 5 September 1994; h = 10 days over 200 000
 //! days, as in Fig. I.2.4.
 
-use nalgebra::DVector;
+use nalgebra::{Const, DVector, SVector};
+use svi::model::TermSum;
+use svi::model::local::LocalLagrangian;
 use svi::{
     Defaults, Dyn, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
 };
@@ -42,6 +49,15 @@ pub struct NBody {
     /// d = 2 or 3.
     space: usize,
     bodies: Vec<Body>,
+    /// The pairs (i, j), i < j, in the order of the terms.
+    pairs: Vec<(usize, usize)>,
+}
+
+/// The pairs (i, j), i < j, of `count` bodies, row by row.
+fn pairs(count: usize) -> Vec<(usize, usize)> {
+    (0..count)
+        .flat_map(|i| (i + 1..count).map(move |j| (i, j)))
+        .collect()
 }
 
 /// Names of the momenta: linear in x, y (, z), then angular.
@@ -93,7 +109,12 @@ impl NBody {
                 }
             }
         }
-        Ok(NBody { g, space, bodies })
+        Ok(NBody {
+            g,
+            space,
+            pairs: pairs(bodies.len()),
+            bodies,
+        })
     }
 
     /// The outer Solar System of HLW, Table I.2.2 (see the module docs).
@@ -140,6 +161,7 @@ impl NBody {
         NBody {
             g: 2.95912208286e-4,
             space: 3,
+            pairs: pairs(bodies.len()),
             bodies,
         }
     }
@@ -190,6 +212,65 @@ impl Lagrangian<Dyn> for NBody {
             }
         }
         kinetic + potential
+    }
+
+    /// L as the sum of its pair terms (see the module docs).
+    #[inline]
+    fn terms(&self) -> Option<&dyn TermSum<Dyn>> {
+        Some(self)
+    }
+}
+
+/// L = Σ over pairs (i, j) of G mᵢmⱼ/|qᵢ − qⱼ|, with ½mᵢ|q̇ᵢ|² in the pair (i, i + 1) and the
+/// last body's ½m|q̇|² in the last such pair: every body's kinetic energy once.
+impl LocalLagrangian for NBody {
+    type Width = Const<6>;
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: Structure = Structure::ConstantMass;
+    /// The six directions share the pair's square root and reciprocal.
+    const VECTOR_SWEEP: bool = true;
+
+    fn dimension(&self) -> usize {
+        self.bodies.len() * self.space
+    }
+
+    fn term_count(&self) -> usize {
+        self.pairs.len()
+    }
+
+    /// Slots 0..d the coordinates of body i, slots 3..3 + d those of body j; in the plane the
+    /// third slot of each repeats the second (and the term does not read it).
+    #[inline]
+    fn indices(&self, e: usize) -> [usize; 6] {
+        let (i, j) = self.pairs[e];
+        let d = self.space;
+        std::array::from_fn(|slot| {
+            let body = if slot < 3 { i } else { j };
+            d * body + (slot % 3).min(d - 1)
+        })
+    }
+
+    #[inline]
+    fn term<D: Scalar>(&self, e: usize, _t: D, q: &SVector<D, 6>, v: &SVector<D, 6>) -> D {
+        let (i, j) = self.pairs[e];
+        let (a, b) = (&self.bodies[i], &self.bodies[j]);
+        let d = self.space;
+        let squared = |x: &SVector<D, 6>, first: usize| {
+            (0..d).fold(D::from(0.0), |sum, k| sum + x[first + k] * x[first + k])
+        };
+        let mut r2 = D::from(0.0);
+        for k in 0..d {
+            let x = q[k] - q[3 + k];
+            r2 += x * x;
+        }
+        let mut term = r2.sqrt().recip() * (self.g * a.mass * b.mass);
+        if j == i + 1 {
+            term += squared(v, 0) * (0.5 * a.mass);
+            if j + 1 == self.bodies.len() {
+                term += squared(v, 3) * (0.5 * b.mass);
+            }
+        }
+        term
     }
 }
 
@@ -321,7 +402,7 @@ impl Defaults<Dyn> for NBody {
     fn initial_state(&self) -> (f64, DVector<f64>, DVector<f64>) {
         let stack = |part: fn(&Body) -> &Vec<f64>| {
             DVector::from_iterator(
-                self.dimension(),
+                Lagrangian::dimension(self),
                 self.bodies
                     .iter()
                     .flat_map(|body| part(body).iter().copied()),
@@ -392,6 +473,60 @@ mod tests {
             );
         }
         assert_momenta_are_generators(&model, &q, &v);
+    }
+
+    /// L as a whole function of the 18 coordinates, for the AD of the whole (n scalar sweeps).
+    struct Whole<'a>(&'a NBody);
+
+    impl svi::dimension::PhaseFunction<Dyn> for Whole<'_> {
+        fn eval<S: Scalar>(&self, t: S, q: &DVector<S>, v: &DVector<S>) -> S {
+            self.0.lagrangian(t, q, v)
+        }
+    }
+
+    /// The pair terms are L: their sum is L's value, and the term-by-term ∂L/∂q and ∂L/∂q̇
+    /// (what the integrators take) are the derivatives of L as one function of all
+    /// coordinates, in space (the outer Solar System, 15 pairs) and in the plane (three
+    /// bodies, where each pair's third slots are padding).
+    #[test]
+    fn the_pair_terms_are_the_lagrangian() {
+        use svi::dimension::{Wrt, scalar_gradient};
+        let planar = NBody::new(
+            1.5,
+            2,
+            [
+                (1.0, [0.0, 0.1], [0.2, 0.0]),
+                (0.5, [1.0, -0.3], [0.0, 0.7]),
+                (0.25, [-0.4, 0.9], [-0.3, -0.1]),
+            ]
+            .iter()
+            .enumerate()
+            .map(|(k, &(mass, position, velocity))| Body {
+                name: format!("b{k}"),
+                mass,
+                position: position.to_vec(),
+                velocity: velocity.to_vec(),
+            })
+            .collect(),
+        )
+        .unwrap();
+        for model in [NBody::outer_solar_system(), planar] {
+            let (_, q, v) = model.initial_state();
+            let whole = model.lagrangian(0.0, &q, &v);
+            let summed = TermSum::value(&model, 0.0, &q, &v);
+            assert!(
+                (summed - whole).abs() <= 1e-14 * whole.abs(),
+                "{summed} against {whole}"
+            );
+            for (wrt, by_terms) in [
+                (Wrt::Position, model.force(0.0, &q, &v)),
+                (Wrt::Velocity, model.momentum(0.0, &q, &v)),
+            ] {
+                let (_, by_whole) = scalar_gradient(&Whole(&model), 0.0, &q, &v, wrt);
+                let gap = (&by_terms - &by_whole).amax();
+                assert!(gap <= 1e-14 * by_whole.amax(), "{wrt:?}: {gap:e}");
+            }
+        }
     }
 
     /// The momenta the observer takes, p·ξᵢ(q) without the vector ξᵢ, are those of the
