@@ -23,7 +23,7 @@
 
 use nalgebra::{Const, DVector, SVector};
 use svi::model::TermSum;
-use svi::model::local::LocalLagrangian;
+use svi::model::local::{LocalLagrangian, TermWidth};
 use svi::{
     Defaults, Dyn, Error, ExactSolution, Invariants, Lagrangian, Scalar, Structure, Symmetries,
 };
@@ -188,30 +188,15 @@ impl Lagrangian<Dyn> for NBody {
     const STRUCTURE: Structure = Structure::ConstantMass;
 
     fn dimension(&self) -> usize {
-        self.bodies.len() * self.space
+        LocalLagrangian::dimension(self)
     }
 
+    /// The sum of the pair terms ([`LocalLagrangian::term`]).
     #[inline]
-    fn lagrangian<D: Scalar>(&self, _t: D, q: &DVector<D>, v: &DVector<D>) -> D {
-        let d = self.space;
-        let mut kinetic = D::from(0.0);
-        let mut potential = D::from(0.0);
-        for (i, a) in self.bodies.iter().enumerate() {
-            let mut speed = D::from(0.0);
-            for k in 0..d {
-                speed += v[d * i + k] * v[d * i + k];
-            }
-            kinetic += speed * (0.5 * a.mass);
-            for (j, b) in self.bodies.iter().enumerate().skip(i + 1) {
-                let mut r2 = D::from(0.0);
-                for k in 0..d {
-                    let x = q[d * i + k] - q[d * j + k];
-                    r2 += x * x;
-                }
-                potential += r2.sqrt().recip() * (self.g * a.mass * b.mass);
-            }
-        }
-        kinetic + potential
+    fn lagrangian<D: Scalar>(&self, t: D, q: &DVector<D>, v: &DVector<D>) -> D {
+        (0..self.pairs.len()).fold(D::from(0.0), |sum, e| {
+            sum + <Const<6> as TermWidth>::value(self, e, t, q, v)
+        })
     }
 
     /// L as the sum of its pair terms (see the module docs).
@@ -475,7 +460,7 @@ mod tests {
         assert_momenta_are_generators(&model, &q, &v);
     }
 
-    /// L as a whole function of the 18 coordinates, for the AD of the whole (n scalar sweeps).
+    /// L as one function of all coordinates, for the AD of the whole (n scalar sweeps).
     struct Whole<'a>(&'a NBody);
 
     impl svi::dimension::PhaseFunction<Dyn> for Whole<'_> {
@@ -484,9 +469,9 @@ mod tests {
         }
     }
 
-    /// The pair terms are L: their sum is L's value, and the term-by-term ∂L/∂q and ∂L/∂q̇
-    /// (what the integrators take) are the derivatives of L as one function of all
-    /// coordinates, in space (the outer Solar System, 15 pairs) and in the plane (three
+    /// The pair terms are L: their sum is L written out, and the term-by-term ∂L/∂q and ∂L/∂q̇
+    /// (what the integrators take: gathered, one vector sweep per pair, scattered) are the
+    /// derivatives of L as one function of all coordinates, in space (the outer Solar System, 15 pairs) and in the plane (three
     /// bodies, where each pair's third slots are padding).
     #[test]
     fn the_pair_terms_are_the_lagrangian() {
@@ -512,12 +497,26 @@ mod tests {
         .unwrap();
         for model in [NBody::outer_solar_system(), planar] {
             let (_, q, v) = model.initial_state();
-            let whole = model.lagrangian(0.0, &q, &v);
-            let summed = TermSum::value(&model, 0.0, &q, &v);
-            assert!(
-                (summed - whole).abs() <= 1e-14 * whole.abs(),
-                "{summed} against {whole}"
-            );
+            // L written out: Σ ½ mᵢ|q̇ᵢ|² + Σ_{i<j} G mᵢmⱼ/|qᵢ − qⱼ|.
+            let d = model.space();
+            let body = |x: &DVector<f64>, i: usize| x.rows(d * i, d).into_owned();
+            let bodies = model.bodies();
+            let mut written = 0.0;
+            for (i, a) in bodies.iter().enumerate() {
+                written += 0.5 * a.mass * body(&v, i).norm_squared();
+                for (j, b) in bodies.iter().enumerate().skip(i + 1) {
+                    written += model.g * a.mass * b.mass / (body(&q, i) - body(&q, j)).norm();
+                }
+            }
+            for value in [
+                model.lagrangian(0.0, &q, &v),
+                TermSum::value(&model, 0.0, &q, &v),
+            ] {
+                assert!(
+                    (value - written).abs() <= 1e-14 * written.abs(),
+                    "{value} against {written}"
+                );
+            }
             for (wrt, by_terms) in [
                 (Wrt::Position, model.force(0.0, &q, &v)),
                 (Wrt::Velocity, model.momentum(0.0, &q, &v)),

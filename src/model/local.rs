@@ -492,7 +492,7 @@ impl<L: LocalLagrangian + ?Sized> LocalLagrangianExt for L {}
 ///
 /// ```
 /// use svi::model::local::Terms;
-/// # use nalgebra::{Const, DVector, SVector, U1};
+/// # use nalgebra::{Const, DVector, SVector};
 /// # use svi::model::local::LocalLagrangian;
 /// # use svi::{Integrator, Midpoint, Scalar, VariationalIntegrator};
 /// # struct Springs;
