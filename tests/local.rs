@@ -865,3 +865,45 @@ fn chains_started_at_rest_run_with_every_solver() {
     assert_eq!(ground.statistics.steps, 100);
     assert_eq!(ground.last.q.amax(), 0.0);
 }
+
+/// The explicit methods in velocity coordinates hand their observers p = M q̇ from the
+/// constant mass matrix their run keeps (no derivative of L per observed point), and it is
+/// the Lagrangian's ∂L/∂q̇: for a coupled M (the consistent-mass chain, sparse M) and a
+/// diagonal one (the outer Solar System, masses from 1 to 1.7e-8).
+#[test]
+fn velocity_methods_observe_the_lagrangians_momentum_at_any_size() {
+    use svi::method::reference::{ExplicitEuler, RungeKutta4};
+    use svi::{Defaults, LagrangianExt, Method};
+    fn check<L: Lagrangian<svi::Dyn>, M: Method<svi::Dyn>>(
+        model: L,
+        method: M,
+        (q, v): (DVector<f64>, DVector<f64>),
+        h: f64,
+    ) {
+        let mut observed = svi::observer::Points::default();
+        let integrator = Integrator::new(model, method);
+        integrator
+            .run(0.0, Initial::Velocity { q, v }, h, 5.0 * h, &mut observed)
+            .unwrap();
+        assert_eq!(observed.points.len(), 6);
+        for point in &observed.points {
+            let p = integrator.model().momentum(point.t, &point.q, &point.v);
+            let gap = (&point.p - &p).amax();
+            assert!(gap <= 1e-15 * p.amax(), "t = {}: {gap:e}", point.t);
+        }
+    }
+    let n = 40;
+    let wave = DVector::from_fn(n, |i, _| (0.3 * i as f64).sin());
+    let chain = (wave.clone(), wave.map(|x| 0.5 - x));
+    check(
+        Terms(ConsistentChain { n }),
+        ExplicitEuler,
+        chain.clone(),
+        0.01,
+    );
+    check(Terms(ConsistentChain { n }), RungeKutta4, chain, 0.01);
+    let sun = svi_models::NBody::outer_solar_system();
+    let (_, q, v) = sun.initial_state();
+    check(sun.clone(), ExplicitEuler, (q.clone(), v.clone()), 10.0);
+    check(sun, RungeKutta4, (q, v), 10.0);
+}

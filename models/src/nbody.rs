@@ -292,12 +292,24 @@ impl Symmetries<Dyn> for NBody {
     ///
     /// # Panics
     /// If `index >= generator_count()`.
+    /// Body by body: the linear momenta's component along the axis, or the angular
+    /// momenta's xᵢ × pᵢ about it (no division of a row index: this is observed at every step).
     fn generator_momentum(&self, index: usize, q: &DVector<f64>, p: &DVector<f64>) -> f64 {
         self.check_generator(index);
-        p.iter()
-            .enumerate()
-            .map(|(row, p)| p * self.generator_entry(index, q, row))
-            .sum()
+        let d = self.space;
+        let bodies = q
+            .as_slice()
+            .chunks_exact(d)
+            .zip(p.as_slice().chunks_exact(d));
+        if index < d {
+            return bodies.map(|(_, p)| p[index]).sum();
+        }
+        let (i, j) = match if d == 2 { 2 } else { index - d } {
+            0 => (1, 2),
+            1 => (2, 0),
+            _ => (0, 1),
+        };
+        bodies.map(|(x, p)| x[i] * p[j] - x[j] * p[i]).sum()
     }
 }
 

@@ -824,8 +824,8 @@ where
 
 /// M and M⁻¹ of a [`crate::model::Structure::ConstantMass`] Lagrangian, kept by a run of a
 /// method in the coordinates (q, q̇): M⁻¹ for the accelerations, M for the observers'
-/// momentum p = M q̇ (dense models; a sum of terms keeps only its inverse). Both from one
-/// mass matrix at the first step.
+/// momentum p = M q̇ (a sum of terms keeps only its inverse, which holds its diagonal or
+/// sparse M). Both from one mass matrix at the first step.
 #[derive(Debug, Clone)]
 pub(crate) struct KeptMass<N: Dimension>
 where
@@ -869,14 +869,16 @@ where
         cached_mass_inverse(&mut self.inverse, model, t, q, y)
     }
 
-    /// p = M `v` into `p`; `false` before M is kept (or for a sum of terms).
+    /// p = M `v` into `p` (for a sum of terms from the diagonal or sparse M its inverse was
+    /// made of); `false` before M is kept.
     pub(crate) fn momentum_into(&self, v: &OVector<f64, N>, p: &mut OVector<f64, N>) -> bool {
-        match &self.mass {
-            Some(mass) => {
+        match (&self.mass, &self.inverse) {
+            (Some(mass), _) => {
                 mass.mul_to(v, p);
                 true
             }
-            None => false,
+            (None, Some(inverse)) => inverse.mass_times_into(v, p),
+            (None, None) => false,
         }
     }
 }

@@ -198,6 +198,38 @@ where
         }
     }
 
+    /// `out` = M `v`, from the M this inverse was made of, when it holds M: a diagonal M
+    /// (entry by entry, vᵢ / (M⁻¹)ᵢᵢ, to a rounding of mᵢvᵢ) or a coupled sparse one (its
+    /// entries); `false` for a dense inverse, which does not keep M.
+    #[inline]
+    pub(crate) fn mass_times_into(&self, v: &OVector<f64, N>, out: &mut OVector<f64, N>) -> bool {
+        match self {
+            MassInverse::Dense(_) => false,
+            MassInverse::Diagonal(inverse) => {
+                for ((o, v), m) in out
+                    .as_mut_slice()
+                    .iter_mut()
+                    .zip(v.as_slice())
+                    .zip(inverse.as_slice())
+                {
+                    *o = v / m;
+                }
+                true
+            }
+            MassInverse::Coupled(coupled) => {
+                let pattern = &coupled.pattern;
+                out.fill(0.0);
+                for (col, &v) in v.iter().enumerate() {
+                    let start = pattern.column_start(col);
+                    for (row, m) in pattern.column(col).zip(&coupled.values[start..]) {
+                        out[row] += m * v;
+                    }
+                }
+                true
+            }
+        }
+    }
+
     /// M⁻¹ `p`.
     #[inline]
     pub fn apply(&self, p: &OVector<f64, N>) -> OVector<f64, N> {
@@ -382,7 +414,8 @@ mod tests {
         }
     }
 
-    /// M⁻¹p of a sum of terms, diagonal and coupled, equals the dense inverse's.
+    /// M⁻¹p of a sum of terms, diagonal and coupled, equals the dense inverse's, and Mp
+    /// from what it holds the product with M.
     #[test]
     fn term_sums_invert_like_the_dense_matrix() {
         for coupling in [0.0, 0.3] {
@@ -413,6 +446,14 @@ mod tests {
             inverse.scaled(2.0).apply_columns_into(&columns, &mut image);
             let by_dense = &dense * &columns * 2.0;
             assert!((&image - &by_dense).amax() < 1e-14, "{image} vs {by_dense}");
+            // M itself, from what the inverse holds (the observers' p = M q̇).
+            let mut momentum = DVector::zeros(7);
+            assert!(inverse.mass_times_into(&p, &mut momentum));
+            let by_hand = &mass * &p;
+            assert!(
+                (&momentum - &by_hand).amax() < 1e-14,
+                "{momentum} vs {by_hand}"
+            );
             // A clone factors again on first use and gives the same numbers.
             let copy = inverse.clone();
             let mut second = DVector::zeros(7);
@@ -444,6 +485,9 @@ mod tests {
         let fixed = SMatrix::<f64, 3, 3>::from_column_slice(diagonal.as_slice());
         let inverse = MassInverse::of_dense(&fixed).unwrap();
         assert_eq!(inverse.dense(), invert_small(&fixed).as_ref());
+        // A dense inverse does not keep M.
+        let mut unused = SVector::<f64, 3>::zeros();
+        assert!(!inverse.mass_times_into(&SVector::from([1.0, 2.0, 3.0]), &mut unused));
         let mut coupled = diagonal.clone();
         coupled[(0, 2)] = 1.0;
         coupled[(2, 0)] = 1.0;
