@@ -213,9 +213,8 @@ fn runtime_dimension_paths_do_not_allocate_per_step_or_per_observed_point() {
 /// A run-time-size N-body run allocates nothing per step, observed or not: its derivatives
 /// are taken pair term by pair term on the stack (before `NBody` was a sum of pair terms,
 /// its n scalar sweeps made dual-number vectors, three per step), and the Noether momenta
-/// and the energy observed at every step add none (each momentum is p·ξᵢ(q) entry by
-/// entry, [`svi::Symmetries::generator_momentum`]; before, one vector ξᵢ per generator and
-/// step).
+/// and the energy observed at every step add none (each momentum is p·ξᵢ(q) body by body,
+/// [`svi::Symmetries::generator_momentum`]; before, one vector ξᵢ per generator and step).
 #[test]
 fn observed_momenta_of_a_run_time_size_model_add_no_allocation_per_step() {
     let model = svi_models::NBody::outer_solar_system();

@@ -288,12 +288,11 @@ impl Symmetries<Dyn> for NBody {
         DVector::from_fn(q.len(), |row, _| self.generator_entry(index, q, row))
     }
 
-    /// p·ξᵢ(q) entry by entry, without the vector ξᵢ (observed at every step).
+    /// p·ξᵢ(q) body by body, without the vector ξᵢ (observed at every step): the linear
+    /// momenta's component along the axis, or the angular momenta's xᵢ × pᵢ about it.
     ///
     /// # Panics
     /// If `index >= generator_count()`.
-    /// Body by body: the linear momenta's component along the axis, or the angular
-    /// momenta's xᵢ × pᵢ about it (no division of a row index: this is observed at every step).
     fn generator_momentum(&self, index: usize, q: &DVector<f64>, p: &DVector<f64>) -> f64 {
         self.check_generator(index);
         let d = self.space;
@@ -304,7 +303,7 @@ impl Symmetries<Dyn> for NBody {
         if index < d {
             return bodies.map(|(_, p)| p[index]).sum();
         }
-        let (i, j) = match if d == 2 { 2 } else { index - d } {
+        let (i, j) = match self.rotation_axis(index) {
             0 => (1, 2),
             1 => (2, 0),
             _ => (0, 1),
@@ -322,6 +321,15 @@ impl NBody {
         );
     }
 
+    /// The axis (0, 1, 2) of rotation generator `index` (≥ d): e_z in the plane.
+    fn rotation_axis(&self, index: usize) -> usize {
+        if self.space == 2 {
+            2
+        } else {
+            index - self.space
+        }
+    }
+
     /// Entry `row` of the generator ξ_index(q) (see [`Symmetries::generator`]).
     #[inline]
     fn generator_entry(&self, index: usize, q: &DVector<f64>, row: usize) -> f64 {
@@ -331,8 +339,8 @@ impl NBody {
         if index < d {
             return f64::from(k == index);
         }
-        // ω × x with ω the unit vector of the rotation axis (the plane: ω = e_z).
-        let axis = if d == 2 { 2 } else { index - d };
+        // ω × x with ω the unit vector of the rotation axis.
+        let axis = self.rotation_axis(index);
         match (axis, k) {
             (0, 1) => -x(2),
             (0, 2) => x(1),

@@ -83,6 +83,15 @@ impl Pattern {
             .copied()
     }
 
+    /// `out` = A `x` for the matrix A of this pattern whose values are `values`, in slot
+    /// order.
+    pub(crate) fn mul_into(&self, values: &[f64], x: &[f64], out: &mut [f64]) {
+        out.fill(0.0);
+        for (row, col, slot) in self.entries() {
+            out[row] += values[slot] * x[col];
+        }
+    }
+
     /// The entries column by column, as (row, column, slot).
     fn entries(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
         let col_ptr = self.symbolic.col_ptr();

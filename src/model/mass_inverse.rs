@@ -217,14 +217,9 @@ where
                 true
             }
             MassInverse::Coupled(coupled) => {
-                let pattern = &coupled.pattern;
-                out.fill(0.0);
-                for (col, &v) in v.iter().enumerate() {
-                    let start = pattern.column_start(col);
-                    for (row, m) in pattern.column(col).zip(&coupled.values[start..]) {
-                        out[row] += m * v;
-                    }
-                }
+                coupled
+                    .pattern
+                    .mul_into(&coupled.values, v.as_slice(), out.as_mut_slice());
                 true
             }
         }

@@ -255,13 +255,7 @@ impl Schur {
 
     /// `out` = S `x` for the assembled S.
     fn mul_into(&self, x: &[f64], out: &mut [f64]) {
-        out.fill(0.0);
-        for (col, &x) in x.iter().enumerate().take(self.pattern.size()) {
-            let start = self.pattern.column_start(col);
-            for (offset, row) in self.pattern.column(col).enumerate() {
-                out[row] += self.values[start + offset] * x;
-            }
-        }
+        self.pattern.mul_into(&self.values, x, out);
     }
 }
 
