@@ -29,8 +29,19 @@
 //! pivoting searches but never swaps — the same work for every implementation). Every
 //! implementation's solution is checked against a known x before timing.
 //!
-//! Run with `cargo bench --bench linear_solve` (add `-- linear_solve/lu` or
-//! `-- linear_solve/small` for a subset). Timings are short on purpose (2 s measurement,
+//! # `linear_solve/pattern/<implementation>/<case>`
+//!
+//! The seam of the term-sum Newton iterations ([`svi::linalg::sparse`]) on the patterns their
+//! stage Jacobians have: n coordinates, s stages, coordinates i and j coupled when
+//! |i − j| ≤ w (every stage with every stage), so the matrix has size n·s and blocks of s × s.
+//! Case `n<n>s<s>w<w>`: `w1` is a chain of nearest neighbours, w ≥ n − 1 all pairs (an N-body
+//! system). The unit of work is one numeric factorisation and one solve after the symbolic
+//! analysis (what a Newton iteration pays), for `dense` ([`svi::linalg::sparse::DenseSolver`])
+//! and `sparse` ([`svi::linalg::sparse::SparseLu`]). It sets
+//! [`svi::linalg::sparse::LinearSolverKind::Auto`]'s rule.
+//!
+//! Run with `cargo bench --bench linear_solve` (add `-- linear_solve/lu`,
+//! `-- linear_solve/small` or `-- linear_solve/pattern` for a subset). Timings are short on purpose (2 s measurement,
 //! 0.5 s warm-up, 20 samples); medians are in
 //! `target/criterion/linear_solve_lu/<implementation>/<n>/new/estimates.json`.
 
@@ -43,6 +54,7 @@ use faer::{Mat, Par};
 use nalgebra::{DMatrix, DVector, SMatrix, SVector};
 use std::hint::black_box;
 use std::time::Duration;
+use svi::linalg::sparse::{DenseSolver, LinearSolver, Pattern, SparseLu};
 use svi::linalg::{DenseLu, solve_small};
 
 /// Sizes of the runtime-sized comparison.
@@ -205,16 +217,21 @@ fn small_at<const N: usize>(
 
     let mut lu = DenseLu::new(N);
     let mut rhs = DVector::zeros(N);
+    let factor_solve = |lu: &mut DenseLu, rhs: &mut DVector<f64>| {
+        lu.matrix_mut().copy_from(black_box(&a));
+        lu.factor().expect("nonsingular");
+        rhs.copy_from(black_box(&b));
+        lu.solve_in_place(rhs);
+    };
+    // Checked before timing: a filter that skips the timing must not skip the check.
+    factor_solve(&mut lu, &mut rhs);
+    check("svi_dense_lu", N, rhs.iter().copied(), &x);
     group.bench_function(BenchmarkId::new("svi_dense_lu", N), |bencher| {
         bencher.iter(|| {
-            lu.matrix_mut().copy_from(black_box(&a));
-            lu.factor().expect("nonsingular");
-            rhs.copy_from(black_box(&b));
-            lu.solve_in_place(&mut rhs);
+            factor_solve(&mut lu, &mut rhs);
             black_box(&rhs);
         })
     });
-    check("svi_dense_lu", N, rhs.iter().copied(), &x);
 }
 
 fn small(c: &mut Criterion) {
@@ -225,12 +242,87 @@ fn small(c: &mut Criterion) {
     group.finish();
 }
 
+/// The pattern of case (n, s, w) with diagonally dominant values from the LCG, and a
+/// right-hand side.
+fn coupled(n: usize, s: usize, w: usize) -> (Pattern, Vec<f64>, DVector<f64>) {
+    let size = n * s;
+    let mut entries = Vec::new();
+    for i in 0..n {
+        for j in i.saturating_sub(w)..(i + w + 1).min(n) {
+            for a in 0..s {
+                for b in 0..s {
+                    entries.push((i * s + a, j * s + b));
+                }
+            }
+        }
+    }
+    let pattern = Pattern::new(size, &entries).unwrap();
+    let mut lcg = Lcg(7);
+    let mut values = vec![0.0; pattern.len()];
+    for &(row, col) in &entries {
+        let slot = pattern.slot(row, col).unwrap();
+        values[slot] = lcg.next() + if row == col { size as f64 } else { 0.0 };
+    }
+    let b = DVector::from_fn(size, |i, _| (i as f64 * 0.37).sin());
+    (pattern, values, b)
+}
+
+fn pattern(c: &mut Criterion) {
+    let mut group = c.benchmark_group("linear_solve/pattern");
+    for (n, s, w) in [
+        (6, 3, 5),
+        (18, 3, 17),
+        (18, 6, 17),
+        (18, 12, 17),
+        (40, 5, 39),
+        (10, 5, 1),
+        (40, 5, 1),
+        (200, 5, 1),
+        (40, 5, 4),
+        (100, 3, 10),
+        (20, 5, 1),
+        (20, 5, 19),
+        (12, 12, 11),
+        (24, 6, 23),
+        (30, 5, 29),
+        (30, 5, 3),
+        (4, 5, 1),
+    ] {
+        let (pattern, values, b) = coupled(n, s, w);
+        let case = format!("n{n}s{s}w{w}");
+        let mut dense = DenseSolver::default();
+        let mut sparse = SparseLu::default();
+        let mut reference = None;
+        for (name, solver) in [
+            ("dense", &mut dense as &mut dyn LinearSolver),
+            ("sparse", &mut sparse),
+        ] {
+            solver.analyse(&pattern).unwrap();
+            solver.factor(&pattern, &values).unwrap();
+            let mut x = b.clone();
+            solver.solve_in_place(&mut x).unwrap();
+            let reference = reference.get_or_insert_with(|| x.clone());
+            assert!((&x - &*reference).amax() < 1e-12, "{name} on {case}");
+            let mut x = b.clone();
+            group.bench_function(BenchmarkId::new(name, &case), |bencher| {
+                bencher.iter(|| {
+                    solver.factor(&pattern, black_box(&values)).unwrap();
+                    x.copy_from(&b);
+                    solver.solve_in_place(&mut x).unwrap();
+                    black_box(&x);
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .measurement_time(Duration::from_secs(2))
         .warm_up_time(Duration::from_millis(500))
         .sample_size(20);
-    targets = dense, small
+    targets = dense, small, pattern
 }
 criterion_main!(benches);

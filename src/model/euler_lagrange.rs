@@ -80,8 +80,8 @@ impl<'a> TermShare<'a> {
     }
 }
 
-/// The acceleration of one sum of terms and its Jacobian: the pattern, the sparse LU of M and
-/// the buffers, made once per run.
+/// The acceleration of one sum of terms and its Jacobian: the pattern, the LU of M (sparse or
+/// dense by [`LinearSolverKind::resolve`]) and the buffers, made once per run.
 #[derive(Debug)]
 pub(crate) struct Acceleration {
     terms: TermPattern,
@@ -101,7 +101,7 @@ impl Acceleration {
     /// As [`TermPattern::new`], or when the symbolic analysis fails.
     pub(crate) fn new(terms: &dyn TermSum<Dyn>, n: usize) -> Result<Self, Error> {
         let pattern = TermPattern::new(terms, n)?;
-        let solver = AnySolver::analysed(LinearSolverKind::Sparse, &pattern.pattern)?;
+        let solver = AnySolver::analysed(LinearSolverKind::Auto, &pattern.pattern)?;
         let slots = pattern.pattern.len();
         let width = pattern.width();
         Ok(Acceleration {

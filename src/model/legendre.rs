@@ -193,14 +193,15 @@ impl LazyLegendre {
         let mut slot = self.0.borrow_mut();
         let legendre = match &mut *slot {
             Some(legendre) => legendre,
-            empty => empty.insert(Legendre::new(terms, q.len(), LinearSolverKind::Sparse)?),
+            empty => empty.insert(Legendre::new(terms, q.len(), LinearSolverKind::Auto)?),
         };
         legendre.solve(terms, t, q, p, v)
     }
 }
 
-/// The velocity of the momentum `p` at (t, q) by a [`Legendre`] map made for this call (faer's
-/// sparse LU), started from `v`'s value on entry and written into `v`.
+/// The velocity of the momentum `p` at (t, q) by a [`Legendre`] map made for this call (its LU
+/// chosen by [`LinearSolverKind::resolve`]), started from `v`'s value on entry and written into
+/// `v`.
 ///
 /// # Errors
 /// As [`Legendre::new`] and [`Legendre::solve`].
@@ -211,5 +212,5 @@ pub(crate) fn velocity(
     p: &[f64],
     v: &mut [f64],
 ) -> Result<(), Error> {
-    Legendre::new(terms, q.len(), LinearSolverKind::Sparse)?.solve(terms, t, q, p, v)
+    Legendre::new(terms, q.len(), LinearSolverKind::Auto)?.solve(terms, t, q, p, v)
 }

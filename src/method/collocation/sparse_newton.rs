@@ -50,7 +50,7 @@ impl SparseCollocation {
         s: usize,
         max_iterations: usize,
     ) -> Result<Self, Error> {
-        let newton = BlockNewton::new(terms, n, s, LinearSolverKind::Sparse, max_iterations)?;
+        let newton = BlockNewton::new(terms, n, s, LinearSolverKind::Auto, max_iterations)?;
         let width = newton.blocks.terms.width();
         Ok(SparseCollocation {
             newton,

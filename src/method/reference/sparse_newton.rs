@@ -124,9 +124,8 @@ impl LazySparseImplicitEuler {
             Some(solver) => solver,
             empty => {
                 let n = w.len();
-                let newton =
-                    BlockNewton::new(terms, n, 1, LinearSolverKind::Sparse, max_iterations)
-                        .map_err(|_| PATTERN_MISMATCH)?;
+                let newton = BlockNewton::new(terms, n, 1, LinearSolverKind::Auto, max_iterations)
+                    .map_err(|_| PATTERN_MISMATCH)?;
                 let width = newton.blocks.terms.width();
                 empty.insert(Box::new(SparseImplicitEuler {
                     newton,

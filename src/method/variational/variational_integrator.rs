@@ -422,7 +422,7 @@ where
                 offset,
                 (increment.q.as_mut_slice(), increment.y.as_mut_slice()),
                 Jacobian::Kept,
-                (LinearSolverKind::Sparse, self.max_iterations),
+                (LinearSolverKind::Auto, self.max_iterations),
             )?;
             workspace.remember(h, state, &increment.q);
             return Ok(StepReport {

@@ -124,7 +124,8 @@ pub struct Svi {
     pub solver: Solver,
     /// The linear solver of sparse Newton, which solves the stage equations of an unforced sum
     /// of local terms of run-time size ([`Lagrangian::terms`]); every other model takes svi's
-    /// dense LU.
+    /// dense LU. The default, [`LinearSolverKind::Auto`], factors small dense patterns (an
+    /// N-body system) densely and the others by faer's sparse LU.
     pub linear_solver: LinearSolverKind,
 }
 
@@ -150,7 +151,7 @@ impl Default for Svi {
             quadrature: None,
             max_iterations: 50,
             solver: Solver::Auto,
-            linear_solver: LinearSolverKind::Sparse,
+            linear_solver: LinearSolverKind::Auto,
         }
     }
 }
