@@ -12,7 +12,7 @@
 //!   run-time N, one sweep of the scalar `HyperDual64` per Hessian entry in (q, q̇) (three
 //!   times faster for small N), else a Hessian in q, one in q̇ and the mixed block (`2N` is
 //!   not a const expression on stable Rust, so the full second derivative is assembled from
-//!   three N-sized sweeps);
+//!   three N-sized sweeps; two for [`Structure::ConstantMass`], whose mixed block is zero);
 //! - the energy E = p·q̇ − L and the inverse Legendre map q̇(q, p) (Newton with L_vv);
 //! - the Euler–Lagrange acceleration q̈ = L_vv⁻¹ (L_q − L_vq q̇ − L_vt + f_L) (Li–Wu–Leok
 //!   eq. 2 solved for q̈, the right-hand side f of eq. 12; the external force f_L of the
@@ -382,6 +382,20 @@ where
         }
         if N::try_to_usize().is_none_or(|n| n <= SCALAR_HESSIAN_UP_TO) {
             scalar_second_derivatives(self, t, q, v)
+        } else if matches!(Self::STRUCTURE, Structure::ConstantMass) {
+            // L = ½ q̇ᵀMq̇ − V(t, q): the mixed block is zero by the declaration, and the
+            // Hessian in q̇ brings ∂L/∂q̇ along (two sweeps instead of three).
+            let (value, dq, qq) = N::hessian(&Action(self), t, q, v, Wrt::Position);
+            let (_, dv, vv) = N::hessian(&Action(self), t, q, v, Wrt::Velocity);
+            let (dim, _) = q.shape_generic();
+            SecondDerivatives {
+                value,
+                q: dq,
+                v: dv,
+                qq,
+                qv: OMatrix::zeros_generic(dim, dim),
+                vv,
+            }
         } else {
             let (value, dq, dv, qv) = N::mixed(&Action(self), t, q, v);
             let (_, _, qq) = N::hessian(&Action(self), t, q, v, Wrt::Position);
@@ -887,7 +901,7 @@ where
 mod tests {
     use super::*;
     use crate::test_models::{AsDyn, Oscillator, VariableMass};
-    use nalgebra::{Const, DVector, SMatrix, SVector, U2};
+    use nalgebra::{Const, DVector, SMatrix, SVector, U2, U3};
 
     /// The closed forms of [`VariableMass`], derived by hand.
     mod variable_mass {
@@ -1080,6 +1094,47 @@ mod tests {
                 1e-15,
             );
         }
+    }
+
+    /// L = ½ q̇ᵀMq̇ − V(q) on ℝ³ with a coupled M, declared constant-mass or not.
+    struct Coupled3<const CONSTANT: bool>;
+    impl<const CONSTANT: bool> Lagrangian<U3> for Coupled3<CONSTANT> {
+        const STRUCTURE: Structure = if CONSTANT {
+            Structure::ConstantMass
+        } else {
+            Structure::General
+        };
+        fn lagrangian<D: Scalar>(&self, _t: D, q: &SVector<D, 3>, v: &SVector<D, 3>) -> D {
+            let kinetic = v[0] * v[0]
+                + v[1] * v[1] * 1.5
+                + v[2] * v[2] * 0.5
+                + v[0] * v[1]
+                + v[1] * v[2] * 0.5;
+            kinetic - q[0] * q[0] * q[1] - q[2].sin() - q[0] * q[2].powi(3)
+        }
+    }
+
+    /// A constant-mass model of N = 3 takes two Hessian sweeps (no mixed block): the same
+    /// blocks as the general path's three and as the scalar sweeps entry by entry.
+    #[test]
+    fn constant_mass_second_derivatives_skip_the_mixed_block() {
+        let q = SVector::from([0.3, -0.7, 1.1]);
+        let v = SVector::from([0.4, 0.2, -0.9]);
+        let fast = Coupled3::<true>.second_derivatives(0.0, &q, &v);
+        let general = Coupled3::<false>.second_derivatives(0.0, &q, &v);
+        let reference = scalar_second_derivatives(&Coupled3::<true>, 0.0, &q, &v);
+        for other in [&general, &reference] {
+            assert!((fast.value - other.value).abs() <= 1e-15);
+            assert_close(&fast.q, &other.q, 1e-15);
+            assert_close(&fast.v, &other.v, 1e-15);
+            assert_close(&fast.qq, &other.qq, 1e-15);
+            assert_close(&fast.qv, &other.qv, 1e-15);
+            assert_close(&fast.vv, &other.vv, 1e-15);
+        }
+        assert_eq!(fast.qv, SMatrix::<f64, 3, 3>::zeros());
+        let mass = SMatrix::<f64, 3, 3>::new(2.0, 1.0, 0.0, 1.0, 3.0, 0.5, 0.0, 0.5, 1.0);
+        assert_close(&fast.vv, &mass, 1e-15);
+        assert_close(&fast.v, &(mass * v), 1e-15);
     }
 
     #[test]
