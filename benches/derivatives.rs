@@ -1,7 +1,8 @@
 //! The AD tax: what each derived quantity of a Lagrangian costs, per model and per dual type.
 //!
 //! For every zoo model and a coupled chain of N = 3, 4, 6 pendulums (where the scalar sweeps
-//! stop paying), at one fixed generic state (no symmetric or zero components), this
+//! stop paying), and of N = 12 and 20 (the size of a robot arm: how the dense derivatives of a
+//! configuration-dependent mass grow), at one fixed generic state (no symmetric or zero components), this
 //! times the methods of [`LagrangianExt`]:
 //!
 //! | id | work | num-dual type |
@@ -247,7 +248,8 @@ fn derivatives(c: &mut Criterion) {
     model_group(c, "spring-pendulum", SpringPendulum::default(), q2, v2).finish();
     model_group(c, "double-pendulum", DoublePendulum::default(), q2, v2).finish();
 
-    // Coupled chains of N = 3, 4, 6 pendulums: where scalar sweeps stop paying
+    // Coupled chains of N = 3, 4, 6 pendulums: where scalar sweeps stop paying; N = 12 and 20:
+    // how the dense Hessians grow
     // (`svi::dimension::SCALAR_SWEEPS_UP_TO`, `svi::dimension::SCALAR_HESSIAN_SWEEPS_UP_TO`, `svi::derived::SCALAR_HESSIAN_UP_TO`).
     model_group(
         c,
@@ -270,6 +272,23 @@ fn derivatives(c: &mut Criterion) {
         "chain-6",
         CoupledChain,
         SVector::<f64, 6>::from_fn(chain_q),
+        SVector::from_fn(chain_v),
+    )
+    .finish();
+
+    model_group(
+        c,
+        "chain-12",
+        CoupledChain,
+        SVector::<f64, 12>::from_fn(chain_q),
+        SVector::from_fn(chain_v),
+    )
+    .finish();
+    model_group(
+        c,
+        "chain-20",
+        CoupledChain,
+        SVector::<f64, 20>::from_fn(chain_q),
         SVector::from_fn(chain_v),
     )
     .finish();
