@@ -248,50 +248,21 @@ fn derivatives(c: &mut Criterion) {
     model_group(c, "spring-pendulum", SpringPendulum::default(), q2, v2).finish();
     model_group(c, "double-pendulum", DoublePendulum::default(), q2, v2).finish();
 
-    // Coupled chains of N = 3, 4, 6 pendulums: where scalar sweeps stop paying; N = 12 and 20:
-    // how the dense Hessians grow
-    // (`svi::dimension::SCALAR_SWEEPS_UP_TO`, `svi::dimension::SCALAR_HESSIAN_SWEEPS_UP_TO`, `svi::derived::SCALAR_HESSIAN_UP_TO`).
-    model_group(
-        c,
-        "chain-3",
-        CoupledChain,
-        SVector::<f64, 3>::from_fn(chain_q),
-        SVector::from_fn(chain_v),
-    )
-    .finish();
-    model_group(
-        c,
-        "chain-4",
-        CoupledChain,
-        SVector::<f64, 4>::from_fn(chain_q),
-        SVector::from_fn(chain_v),
-    )
-    .finish();
-    model_group(
-        c,
-        "chain-6",
-        CoupledChain,
-        SVector::<f64, 6>::from_fn(chain_q),
-        SVector::from_fn(chain_v),
-    )
-    .finish();
-
-    model_group(
-        c,
-        "chain-12",
-        CoupledChain,
-        SVector::<f64, 12>::from_fn(chain_q),
-        SVector::from_fn(chain_v),
-    )
-    .finish();
-    model_group(
-        c,
-        "chain-20",
-        CoupledChain,
-        SVector::<f64, 20>::from_fn(chain_q),
-        SVector::from_fn(chain_v),
-    )
-    .finish();
+    // Coupled chains of N = 3, 4, 6 pendulums: where scalar sweeps stop paying
+    // (`svi::dimension::SCALAR_SWEEPS_UP_TO`, `svi::dimension::SCALAR_HESSIAN_SWEEPS_UP_TO`,
+    // `svi::derived::SCALAR_HESSIAN_UP_TO`); N = 12 and 20: how the dense Hessians grow.
+    fn chain<const N: usize>(c: &mut Criterion) {
+        let (q, v) = (
+            SVector::<f64, N>::from_fn(chain_q),
+            SVector::from_fn(chain_v),
+        );
+        model_group(c, &format!("chain-{N}"), CoupledChain, q, v).finish();
+    }
+    chain::<3>(c);
+    chain::<4>(c);
+    chain::<6>(c);
+    chain::<12>(c);
+    chain::<20>(c);
 
     let kepler = Kepler::default();
     check_kepler_hand(&kepler, &q2, &v2);
