@@ -1,6 +1,7 @@
 //! Bad input gives typed errors naming the problem, never a panic.
 
-use nalgebra::{SVector, U1};
+use nalgebra::{DVector, SVector, U1, U3};
+use svi::model::local::{LocalLagrangian, Terms};
 use svi::{Error, Integrator, SpectralCollocation, Svi};
 use svi_models::{HarmonicOscillator, Kepler};
 
@@ -179,4 +180,63 @@ fn a_wrong_constant_mass_declaration_is_an_error_not_a_wrong_result() {
             .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
             .is_ok()
     );
+}
+
+/// Three particles declared constant-mass whose first mass grows with q₀²: at N = 3 the
+/// Hessian blocks take vector sweeps that trust the declaration for the mixed block, so the
+/// check has to see M move with q.
+struct Declared3;
+
+impl svi::Lagrangian<U3> for Declared3 {
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: svi::Structure = svi::Structure::ConstantMass;
+    fn lagrangian<D: svi::Scalar>(&self, _t: D, q: &SVector<D, 3>, v: &SVector<D, 3>) -> D {
+        let mass = q[0] * q[0] + 1.0;
+        (mass * v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - q[0] * q[0] - q[1] * q[1]) * 0.5
+    }
+}
+
+/// The same particles as one term of width 3 (a sum of local terms of run-time size).
+struct Declared3Terms;
+
+impl LocalLagrangian for Declared3Terms {
+    type Width = nalgebra::Const<3>;
+    const TIME_DEPENDENT: bool = false;
+    const STRUCTURE: svi::Structure = svi::Structure::ConstantMass;
+    fn dimension(&self) -> usize {
+        3
+    }
+    fn term_count(&self) -> usize {
+        1
+    }
+    fn indices(&self, _: usize) -> [usize; 3] {
+        [0, 1, 2]
+    }
+    fn term<D: svi::Scalar>(&self, _: usize, t: D, q: &SVector<D, 3>, v: &SVector<D, 3>) -> D {
+        svi::Lagrangian::lagrangian(&Declared3, t, q, v)
+    }
+}
+
+#[test]
+fn a_mass_declared_constant_that_moves_with_q_is_refused_at_any_size() {
+    let (q, v) = (
+        SVector::from([0.5, -0.3, 0.2]),
+        SVector::from([0.2, 0.1, -0.4]),
+    );
+    let error = Integrator::new(Declared3, Svi::new(4))
+        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
+    let message = error.to_string();
+    assert_eq!(invalid_name(error), "structure");
+    assert!(message.contains("with q,"), "{message}");
+    let (q, v) = (
+        DVector::from_column_slice(q.as_slice()),
+        DVector::from_column_slice(v.as_slice()),
+    );
+    let error = Integrator::new(Terms(Declared3Terms), Svi::new(4))
+        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+        .unwrap_err();
+    let message = error.to_string();
+    assert_eq!(invalid_name(error), "structure");
+    assert!(message.contains("with q,"), "{message}");
 }

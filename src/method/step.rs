@@ -554,9 +554,10 @@ where
 }
 
 /// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
-/// L_vv must not change with q̇, and ∂L/∂q̇ must vanish at q̇ = 0 (no term linear in q̇:
-/// p = Mq̇ exactly, which the fixed-point iteration and the cached q̇ = M⁻¹p rely on).
-/// Necessary conditions, checked at the initial state of the integrator's first run. A
+/// L_vv must not change with q̇ nor with q (at 2q̇ + 1 and at 2q + 1), and ∂L/∂q̇ must vanish
+/// at q̇ = 0 (no term linear in q̇: p = Mq̇ exactly, which the fixed-point iteration and the
+/// cached q̇ = M⁻¹p rely on). Necessary conditions, checked at the initial state of the
+/// integrator's first run. A
 /// model written as a Hamiltonian is checked by
 /// [`crate::model::hamiltonian::HamiltonianForm::check`] instead.
 ///
@@ -596,8 +597,12 @@ where
     if L::STRUCTURE != Structure::ConstantMass {
         return Ok(());
     }
+    // The blocks at (q, q̇), at a shifted q̇ and at a shifted q: M may change with neither
+    // (the mixed block alone would not show a q-dependent M, since the Hessian blocks of a
+    // model declared constant-mass take it as zero).
     let shifted = state.y.map(|y| 2.0 * y + 1.0);
-    let (scale, coupling, change) = match model.terms() {
+    let moved = state.q.map(|q| 2.0 * q + 1.0);
+    let (scale, coupling, change, drift) = match model.terms() {
         // Term by term, in O(n): no n × n matrix. A term's blocks at q̇ and at the
         // shifted q̇ (a sum whose terms' dependences on q̇ cancel would be refused; no
         // model is written that way).
@@ -607,51 +612,60 @@ where
             };
             let k = layout.width;
             let mut indices = vec![0; k];
-            let mut local = [vec![0.0; k], vec![0.0; k], vec![0.0; k]];
-            let mut blocks = [vec![0.0; layout.len()], vec![0.0; layout.len()]];
+            let mut local = [vec![0.0; k], vec![0.0; k], vec![0.0; k], vec![0.0; k]];
+            let mut blocks = [
+                vec![0.0; layout.len()],
+                vec![0.0; layout.len()],
+                vec![0.0; layout.len()],
+            ];
             let (mut mass, mut stiffness) = (0.0_f64, 0.0_f64);
-            let (mut coupling, mut change) = (0.0_f64, 0.0_f64);
+            let (mut coupling, mut change, mut drift) = (0.0_f64, 0.0_f64, 0.0_f64);
             for e in 0..terms.term_count() {
                 terms.term_indices(e, &mut indices);
-                let [q, v, w] = &mut local;
+                let [q, v, w, r] = &mut local;
                 for (a, &i) in indices.iter().enumerate() {
-                    (q[a], v[a], w[a]) = (state.q[i], state.y[i], shifted[i]);
+                    (q[a], v[a], w[a], r[a]) = (state.q[i], state.y[i], shifted[i], moved[i]);
                 }
                 terms.term_derivatives(e, t, q, v, true, &mut blocks[0]);
                 terms.term_derivatives(e, t, q, w, true, &mut blocks[1]);
-                let [first, second] = &blocks;
+                terms.term_derivatives(e, t, r, v, true, &mut blocks[2]);
+                let [first, second, third] = &blocks;
                 for a in 0..k {
                     for b in 0..k {
-                        mass = mass.max(layout.vv(first, a, b).abs());
+                        let vv = layout.vv(first, a, b);
+                        mass = mass.max(vv.abs());
                         stiffness = stiffness.max(layout.qq(first, a, b).abs());
                         coupling = coupling
                             .max(layout.qv(first, a, b).abs())
                             .max(layout.qv(second, a, b).abs());
-                        change =
-                            change.max((layout.vv(first, a, b) - layout.vv(second, a, b)).abs());
+                        change = change.max((vv - layout.vv(second, a, b)).abs());
+                        drift = drift.max((vv - layout.vv(third, a, b)).abs());
                     }
                 }
             }
-            (1.0 + mass + stiffness, coupling, change)
+            (1.0 + mass + stiffness, coupling, change, drift)
         }
         None => {
             let first = model.second_derivatives(t, &state.q, &state.y);
             let second = model.second_derivatives(t, &state.q, &shifted);
+            let third = model.second_derivatives(t, &moved, &state.y);
             (
                 1.0 + first.vv.amax() + first.qq.amax(),
                 first.qv.amax().max(second.qv.amax()),
                 (&first.vv - &second.vv).amax(),
+                (&first.vv - &third.vv).amax(),
             )
         }
     };
     let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
-    if coupling > 1e-12 * scale || change > 1e-12 * scale || linear > 1e-12 * scale {
+    let tolerance = 1e-12 * scale;
+    if coupling > tolerance || change > tolerance || drift > tolerance || linear > tolerance {
         return Err(Error::invalid(
             "structure",
             format!(
                 "the model declares a constant mass matrix (L = ½ q̇ᵀMq̇ − V), but \
-                 ∂²L/∂q∂q̇ = {coupling:e}, ∂²L/∂q̇² changes by {change:e} with q̇ and \
-                 ∂L/∂q̇ = {linear:e} at q̇ = 0"
+                 ∂²L/∂q∂q̇ = {coupling:e}, ∂²L/∂q̇² changes by {change:e} with q̇ and by \
+                 {drift:e} with q, and ∂L/∂q̇ = {linear:e} at q̇ = 0"
             ),
         ));
     }
