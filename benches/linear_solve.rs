@@ -144,27 +144,40 @@ fn default<T: Default>() -> T {
     T::default()
 }
 
+/// `svi_dense_lu/<n>`: [`DenseLu`] allocated once, then copy A in, factor, copy b in, solve
+/// in place; checked against `x` before timing (a filter that skips the timing must not skip
+/// the check).
+fn svi_dense_lu(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    a: &DMatrix<f64>,
+    x: &DVector<f64>,
+    b: &DVector<f64>,
+) {
+    let n = a.nrows();
+    let mut lu = DenseLu::new(n);
+    let mut rhs = DVector::zeros(n);
+    let factor_solve = |lu: &mut DenseLu, rhs: &mut DVector<f64>| {
+        lu.matrix_mut().copy_from(black_box(a));
+        lu.factor().expect("nonsingular");
+        rhs.copy_from(black_box(b));
+        lu.solve_in_place(rhs);
+    };
+    factor_solve(&mut lu, &mut rhs);
+    check("svi_dense_lu", n, rhs.iter().copied(), x);
+    group.bench_function(BenchmarkId::new("svi_dense_lu", n), |bencher| {
+        bencher.iter(|| {
+            factor_solve(&mut lu, &mut rhs);
+            black_box(&rhs);
+        })
+    });
+}
+
 fn dense(c: &mut Criterion) {
     let mut group = c.benchmark_group("linear_solve/lu");
     for n in SIZES {
         let (a, x, b) = system(n);
 
-        let mut lu = DenseLu::new(n);
-        let mut rhs = DVector::zeros(n);
-        let svi_factor_solve = |lu: &mut DenseLu, rhs: &mut DVector<f64>| {
-            lu.matrix_mut().copy_from(black_box(&a));
-            lu.factor().expect("nonsingular");
-            rhs.copy_from(black_box(&b));
-            lu.solve_in_place(rhs);
-        };
-        svi_factor_solve(&mut lu, &mut rhs);
-        check("svi_dense_lu", n, rhs.iter().copied(), &x);
-        group.bench_function(BenchmarkId::new("svi_dense_lu", n), |bencher| {
-            bencher.iter(|| {
-                svi_factor_solve(&mut lu, &mut rhs);
-                black_box(&rhs);
-            })
-        });
+        svi_dense_lu(&mut group, &a, &x, &b);
 
         let a_faer = Mat::from_fn(n, n, |i, j| a[(i, j)]);
         let b_faer = Mat::from_fn(n, 1, |i, _| b[i]);
@@ -215,23 +228,7 @@ fn small_at<const N: usize>(
         bencher.iter(|| nalgebra_solve(black_box(a_fixed), &black_box(b_fixed)))
     });
 
-    let mut lu = DenseLu::new(N);
-    let mut rhs = DVector::zeros(N);
-    let factor_solve = |lu: &mut DenseLu, rhs: &mut DVector<f64>| {
-        lu.matrix_mut().copy_from(black_box(&a));
-        lu.factor().expect("nonsingular");
-        rhs.copy_from(black_box(&b));
-        lu.solve_in_place(rhs);
-    };
-    // Checked before timing: a filter that skips the timing must not skip the check.
-    factor_solve(&mut lu, &mut rhs);
-    check("svi_dense_lu", N, rhs.iter().copied(), &x);
-    group.bench_function(BenchmarkId::new("svi_dense_lu", N), |bencher| {
-        bencher.iter(|| {
-            factor_solve(&mut lu, &mut rhs);
-            black_box(&rhs);
-        })
-    });
+    svi_dense_lu(group, &a, &x, &b);
 }
 
 fn small(c: &mut Criterion) {

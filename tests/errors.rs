@@ -182,22 +182,28 @@ fn a_wrong_constant_mass_declaration_is_an_error_not_a_wrong_result() {
     );
 }
 
-/// Three particles declared constant-mass whose first mass grows with q₀²: at N = 3 the
-/// Hessian blocks take vector sweeps that trust the declaration for the mixed block, so the
-/// check has to see M move with q.
-struct Declared3;
+/// Three particles declared constant-mass, breaking the declaration with a first mass that
+/// grows with q₀² (`stiffening`) or a term q₀q̇₁ linear in q̇ (`drift`). At N = 3 the Hessian
+/// blocks take vector sweeps that trust the declaration for the mixed block, so the check has
+/// to see M move with q, and ∂L/∂q̇ at q̇ = 0 away from q₀ = 0.
+#[derive(Clone, Copy)]
+struct Declared3 {
+    stiffening: f64,
+    drift: f64,
+}
 
 impl svi::Lagrangian<U3> for Declared3 {
     const TIME_DEPENDENT: bool = false;
     const STRUCTURE: svi::Structure = svi::Structure::ConstantMass;
     fn lagrangian<D: svi::Scalar>(&self, _t: D, q: &SVector<D, 3>, v: &SVector<D, 3>) -> D {
-        let mass = q[0] * q[0] + 1.0;
+        let mass = q[0] * q[0] * self.stiffening + 1.0;
         (mass * v[0] * v[0] + v[1] * v[1] + v[2] * v[2] - q[0] * q[0] - q[1] * q[1]) * 0.5
+            + q[0] * v[1] * self.drift
     }
 }
 
 /// The same particles as one term of width 3 (a sum of local terms of run-time size).
-struct Declared3Terms;
+struct Declared3Terms(Declared3);
 
 impl LocalLagrangian for Declared3Terms {
     type Width = nalgebra::Const<3>;
@@ -213,30 +219,49 @@ impl LocalLagrangian for Declared3Terms {
         [0, 1, 2]
     }
     fn term<D: svi::Scalar>(&self, _: usize, t: D, q: &SVector<D, 3>, v: &SVector<D, 3>) -> D {
-        svi::Lagrangian::lagrangian(&Declared3, t, q, v)
+        svi::Lagrangian::lagrangian(&self.0, t, q, v)
     }
 }
 
 #[test]
 fn a_mass_declared_constant_that_moves_with_q_is_refused_at_any_size() {
+    // Started at q₀ = 0, where the drift term's ∂L/∂q̇₁ = q₀ vanishes.
     let (q, v) = (
-        SVector::from([0.5, -0.3, 0.2]),
+        SVector::from([0.0, -0.3, 0.2]),
         SVector::from([0.2, 0.1, -0.4]),
     );
-    let error = Integrator::new(Declared3, Svi::new(4))
-        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
-        .unwrap_err();
-    let message = error.to_string();
-    assert_eq!(invalid_name(error), "structure");
-    assert!(message.contains("with q,"), "{message}");
-    let (q, v) = (
+    let (qd, vd) = (
         DVector::from_column_slice(q.as_slice()),
         DVector::from_column_slice(v.as_slice()),
     );
-    let error = Integrator::new(Terms(Declared3Terms), Svi::new(4))
-        .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
-        .unwrap_err();
-    let message = error.to_string();
-    assert_eq!(invalid_name(error), "structure");
-    assert!(message.contains("with q,"), "{message}");
+    for (model, named) in [
+        (
+            Declared3 {
+                stiffening: 1.0,
+                drift: 0.0,
+            },
+            "by 1e0 with q,",
+        ),
+        (
+            Declared3 {
+                stiffening: 0.0,
+                drift: 1.0,
+            },
+            "∂L/∂q̇ = 1e0",
+        ),
+    ] {
+        let errors = [
+            Integrator::new(model, Svi::new(4))
+                .run_from_velocity(0.0, q, v, 0.1, 1.0, &mut ())
+                .unwrap_err(),
+            Integrator::new(Terms(Declared3Terms(model)), Svi::new(4))
+                .run_from_velocity(0.0, qd.clone(), vd.clone(), 0.1, 1.0, &mut ())
+                .unwrap_err(),
+        ];
+        for error in errors {
+            let message = error.to_string();
+            assert_eq!(invalid_name(error), "structure");
+            assert!(message.contains(named), "{message}");
+        }
+    }
 }

@@ -555,10 +555,9 @@ where
 
 /// A [`Structure::ConstantMass`] declaration, L = ½ q̇ᵀMq̇ − V(t, q): L_qv must vanish,
 /// L_vv must not change with q̇ nor with q (at 2q̇ + 1 and at 2q + 1), and ∂L/∂q̇ must vanish
-/// at q̇ = 0 (no term linear in q̇: p = Mq̇ exactly, which the fixed-point iteration and the
-/// cached q̇ = M⁻¹p rely on). Necessary conditions, checked at the initial state of the
-/// integrator's first run. A
-/// model written as a Hamiltonian is checked by
+/// at q̇ = 0 at both positions (no term linear in q̇: p = Mq̇ exactly, which the fixed-point
+/// iteration and the cached q̇ = M⁻¹p rely on). Necessary conditions, checked at the initial
+/// state of the integrator's first run. A model written as a Hamiltonian is checked by
 /// [`crate::model::hamiltonian::HamiltonianForm::check`] instead.
 ///
 /// Generic in the model only, so that it is compiled once per model, not once per model and
@@ -657,7 +656,12 @@ where
             )
         }
     };
-    let linear = model.momentum(t, &state.q, &state.y.map(|_| 0.0)).amax();
+    // The Hessian blocks take L_qv as zero, so a term A(q)·q̇ shows only here.
+    let rest = state.y.map(|_| 0.0);
+    let linear = model
+        .momentum(t, &state.q, &rest)
+        .amax()
+        .max(model.momentum(t, &moved, &rest).amax());
     let tolerance = 1e-12 * scale;
     if coupling > tolerance || change > tolerance || drift > tolerance || linear > tolerance {
         return Err(Error::invalid(
