@@ -147,7 +147,11 @@ fn garbage_is_never_silent_and_strict_makes_it_an_error() {
         let mut all = vec!["run"];
         all.extend_from_slice(args);
         let stderr = String::from_utf8_lossy(&svi(&all).stderr).into_owned();
-        assert!(stderr.contains("warning: the energy error"), "{stderr}");
+        // Observed at every step (the default diagnostics): the largest error, named so.
+        assert!(
+            stderr.contains("warning: the largest energy error over the run, "),
+            "{stderr}"
+        );
         // --strict: status 1 and "status": "failed" with the kind "health".
         let mut strict = args.to_vec();
         strict.push("--strict");
@@ -156,6 +160,25 @@ fn garbage_is_never_silent_and_strict_makes_it_an_error() {
         assert_eq!(summary["status"], "failed");
         assert_eq!(summary["error"]["kind"], "health");
     }
+    // Not observed (--diagnostics none): the final point's error, and the warning says it is
+    // not the largest.
+    let unobserved = svi(&[
+        "run",
+        "kepler",
+        "--param",
+        "e=0.999999999",
+        "--t-end",
+        "100",
+        "--diagnostics",
+        "none",
+    ]);
+    let stderr = String::from_utf8_lossy(&unobserved.stderr);
+    assert!(
+        stderr.contains(
+            "warning: the final energy error (the energy was not observed at every step), "
+        ),
+        "{stderr}"
+    );
     let recovered = run_json(&["kepler-recovery"]).1;
     let message = recovered["warnings"][0]["message"].as_str().unwrap();
     assert!(message.contains("recovery kept the run going"), "{message}");

@@ -3,7 +3,7 @@
 //!
 //! - **energy**: for a model whose energy is conserved (autonomous, unforced), the energy
 //!   error (the largest over the step points when measured, otherwise that of the final
-//!   point) above [`ENERGY_TOLERANCE`] of the energy's scale, the largest of |E₀|, ½|p₀·q̇₀|
+//!   point; the warning says which) above [`ENERGY_TOLERANCE`] of the energy's scale, the largest of |E₀|, ½|p₀·q̇₀|
 //!   and ½|p·q̇| at the end (the energy, and the kinetic energy of a quadratic kinetic term at
 //!   both ends, Π·Ω on SO(3): E₀ alone may vanish, as for a double pendulum released from rest
 //!   with its arms horizontal);
@@ -75,18 +75,25 @@ pub fn check(measured: &Measured) -> Vec<Warning> {
         } else {
             f64::INFINITY
         };
+        // Which error it is: the largest over the step points, or (not observed at every
+        // step) that of the final point alone.
+        let what = match measured.energy_error_max {
+            Some(_) => "the largest energy error over the run",
+            None => "the final energy error (the energy was not observed at every step)",
+        };
         let message = if error.is_finite() && scale.is_finite() {
             format!(
-                "the energy error {error:.3e} is {:.3} % of the energy's scale {scale:.3e} (more \
-                 than {} %): the step does not resolve the motion, and the result is not to be \
+                "{what}, {error:.3e}, is {:.3} % of the energy's scale {scale:.3e} (more than \
+                 {} %): the step does not resolve the motion, and the result is not to be \
                  trusted",
                 100.0 * relative,
                 100.0 * ENERGY_TOLERANCE
             )
         } else {
-            "the energy error is not finite (the state overflows the energy): the result is \
-             not to be trusted"
-                .to_string()
+            format!(
+                "{what} is not finite (the state overflows the energy): the result is not to be \
+                 trusted"
+            )
         };
         warnings.push(Warning {
             kind: "energy",
@@ -215,6 +222,27 @@ mod tests {
         assert_eq!(warnings[0].kind, "energy");
         assert!(
             warnings[0].message.contains("1.020 %"),
+            "{}",
+            warnings[0].message
+        );
+        assert!(
+            warnings[0]
+                .message
+                .starts_with("the largest energy error over the run, 5.100e-3, is"),
+            "{}",
+            warnings[0].message
+        );
+        // Not observed at every step: the final point's error, and the message says so.
+        let unobserved = Measured {
+            energy_error_max: None,
+            energy_final: -0.5 - 6e-3,
+            ..measured(0.0, 0.5)
+        };
+        let warnings = check(&unobserved);
+        assert!(
+            warnings[0]
+                .message
+                .starts_with("the final energy error (the energy was not observed at every step), 6.000e-3, is 1.200 %"),
             "{}",
             warnings[0].message
         );
