@@ -230,6 +230,16 @@ fn a_scene_and_its_method_must_agree_about_constraints() {
     );
     // An unknown name lists both kinds.
     bad_input(&["run", "kepler"], &["--method", "shake"], &names);
+    // svi:P/Q out of range is neither kind: the error names the number, with or without
+    // constraints (it said "svi:1/4 is a constrained method" on kepler).
+    for scene in ["kepler", "spherical-pendulum"] {
+        let stderr = bad_input(
+            &["run", scene],
+            &["--method", "svi:1/4"],
+            "invalid points: svi:1/4 needs at least 2 nodes",
+        );
+        assert!(!stderr.contains("constrained method"), "{stderr}");
+    }
     // Every constrained method runs a constrained scene, with its order.
     for name in ConstrainedMethod::names() {
         let summary = constrained("spherical-pendulum", &["--method", &name, "--t-end", "1"]);

@@ -42,12 +42,13 @@ impl FromStr for SceneMethod {
     type Err = svi::Error;
 
     /// A method of the registry (`name`, `name:P` or `name:P/M`), else a constrained method's
-    /// name; an unknown name is an error listing both.
+    /// name (its numbers in range: `svi:1/4` is neither); an unknown name is an error listing
+    /// both.
     fn from_str(text: &str) -> Result<Self, svi::Error> {
         match text.parse::<MethodSpec>() {
             Ok(spec) => Ok(SceneMethod::Registry(spec)),
             Err(error) => match ConstrainedMethod::named(text.trim()) {
-                Some(method) => Ok(SceneMethod::Constrained(method)),
+                Some(method) => method.check().map(|()| SceneMethod::Constrained(method)),
                 None if registry::find(text.trim().split(':').next().unwrap_or("")).is_none() => {
                     Err(svi::Error::invalid(
                         "method",
@@ -129,6 +130,27 @@ mod tests {
         // A known name with bad options keeps the registry's message.
         let bad = "svi:0".parse::<SceneMethod>().unwrap_err().to_string();
         assert!(!bad.contains("rattle"), "{bad}");
+        // svi:P/Q out of range is no method at all, constrained or not: the error names the
+        // number (it was read as a constrained method, and a scene without constraints said
+        // "svi:1/4 is a constrained method").
+        for (text, option, says) in [
+            ("svi:1/4", "points", "at least 2 nodes"),
+            ("svi:300/4", "points", "at most 256"),
+            ("svi:4/0", "quadrature", "at least 1 point"),
+            ("svi:4/1000@nodes", "quadrature", "at most 256"),
+            ("svi:0/0@nodes", "points", "at least 2 nodes"),
+        ] {
+            let error = text.parse::<SceneMethod>().unwrap_err();
+            assert!(
+                matches!(&error, svi::Error::InvalidParameter { name, .. } if *name == option),
+                "{text}: {error:?}"
+            );
+            assert!(error.to_string().contains(says), "{text}: {error}");
+        }
+        assert!(matches!(
+            "svi:4/3@nodes".parse::<SceneMethod>().unwrap(),
+            SceneMethod::Constrained(_)
+        ));
     }
 
     #[test]

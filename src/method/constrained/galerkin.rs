@@ -126,8 +126,18 @@ impl ConstrainedSvi {
         }
     }
 
-    /// The method called `name` (`svi:P/Q`, `svi:P/Q@nodes`); its numbers are checked when
-    /// it runs.
+    /// Whether the method's numbers can run: P from 2 to [`crate::spectral::MAX_POINTS`]
+    /// nodes, Q from 1 to as many Gauss points (the checks of the run itself, which makes its
+    /// tables from them).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `points` or `quadrature`.
+    pub fn check(&self) -> Result<(), Error> {
+        Tables::new(self).map(|_| ())
+    }
+
+    /// The method called `name` (`svi:P/Q`, `svi:P/Q@nodes`); its numbers are checked by
+    /// [`ConstrainedSvi::check`] and when it runs.
     pub fn named(name: &str) -> Option<Self> {
         let rest = name.strip_prefix("svi:")?;
         let (rest, at) = match rest.strip_suffix("@nodes") {

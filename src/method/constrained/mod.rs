@@ -102,6 +102,18 @@ impl ConstrainedMethod {
         }
     }
 
+    /// Whether the method's numbers can run ([`ConstrainedSvi::check`]; the other methods
+    /// have none).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the number out of range.
+    pub fn check(&self) -> Result<(), Error> {
+        match self {
+            ConstrainedMethod::Galerkin(method) => method.check(),
+            ConstrainedMethod::Rattle(_) | ConstrainedMethod::Discrete(_) => Ok(()),
+        }
+    }
+
     /// The order of the method.
     pub fn order(&self) -> usize {
         match self {
