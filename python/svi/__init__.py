@@ -269,6 +269,15 @@ def _names(name: str, values: Any) -> Optional[List[str]]:
     return [_text(name, item) for item in items]
 
 
+def _listed(name: str, values: Optional[List[Any]]) -> Optional[List[Any]]:
+    """``values``, the entries of a flag's comma-separated list, if there is at least one
+    (``None`` kept): an empty list is an error naming the keyword, not the flag's parse error
+    (``saveat=[]`` said "invalid value '' for '--output-times <LIST>'")."""
+    if values is not None and len(values) == 0:
+        raise InvalidParameterError("invalid_parameter", f"invalid {name}: the list is empty; give at least one value", bad_input=True)
+    return values
+
+
 def _call(function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
     """Call a native function, raising its failures as :class:`SviError`."""
     try:
@@ -553,8 +562,8 @@ _CHECKS: Dict[str, Callable[[str, Any], Any]] = {
     "real": _real,
     "count": _count,
     "text": _text,
-    "reals": _reals,
-    "names": _names,
+    "reals": lambda name, value: _listed(name, _reals(name, value)),
+    "names": lambda name, value: _listed(name, _names(name, value)),
     "texts": _events.events,
     "flag": lambda name, value: None if value is None else _flag(name, value),
 }
@@ -854,7 +863,7 @@ def stability(
     """
     args = ["--method", _text("method", method)]
     if z is not None:
-        args += ["--z", ",".join(_number(x) for x in _reals("z", z))]
+        args += ["--z", ",".join(_number(x) for x in _listed("z", _reals("z", z)))]
     for flag, value in (("--z-min", _real("z_min", z_min)), ("--z-max", _real("z_max", z_max))):
         if value is not None:
             args += [flag, _number(value)]
@@ -895,9 +904,9 @@ def bench(
     if methods is not None:
         args += ["--methods", ",".join(_names("methods", methods))]
     if steps is not None:
-        args += ["--steps", ",".join(str(_count("steps", n)) for n in _sequence("steps", steps))]
+        args += ["--steps", ",".join(str(_count("steps", n)) for n in _listed("steps", _sequence("steps", steps)))]
     if tolerances is not None:
-        args += ["--tolerances", ",".join(_number(x) for x in _reals("tolerances", tolerances))]
+        args += ["--tolerances", ",".join(_number(x) for x in _listed("tolerances", _reals("tolerances", tolerances)))]
     if t_end is not None:
         args += ["--t-end", _number(_real("t_end", t_end))]
     for name, value in (_parameters(params) or {}).items():

@@ -18,6 +18,7 @@ from . import (  # noqa: E402
     _call,
     _count,
     _exact,
+    _listed,
     _mapping,
     _real,
     _reals,
@@ -318,7 +319,7 @@ def solve(
             initial[name] = _reals(f"{name}0", np.atleast_1d(value))
     every = _count("every", options.pop("every", None))
     named = dict(method=method, h=h, t_end=t_end, adapt=adapt, tol=tol, diagnostics=diagnostics)
-    named["output_times"] = _reals("saveat", saveat)
+    named["output_times"] = _listed("saveat", _reals("saveat", saveat))
     checked = _shared_options(named, options, "solve")
     callables = _events.split(checked)
     if isinstance(model, _TextModel):

@@ -160,6 +160,20 @@ def test_wrong_types_are_named_not_converted():
         with pytest.raises(svi.ArgumentTypeError) as caught:
             svi.ensemble("kepler", params={"e": [0.1]}, t_end=1.0, as_frame=False, **{name: None})
         assert name in caught.value.message, caught.value.message
+    # An empty list is named by its keyword, not by the flag it becomes (saveat=[] said
+    # "invalid value '' for '--output-times <LIST>'").
+    for call, name in [
+        (lambda: svi.run("kepler", t_end=1.0, output_times=[]), "output_times"),
+        (lambda: svi.run("kepler", t_end=1.0, diagnostics=[]), "diagnostics"),
+        (lambda: svi.solve("kepler", (0.0, 1.0), saveat=[]), "saveat"),
+        (lambda: svi.stability("svi:5/4", z=[]), "z"),
+        (lambda: svi.bench("kepler", methods="svi:7/6", steps=[]), "steps"),
+        (lambda: svi.bench("kepler", methods="svi:7/6", steps=[100], tolerances=[]), "tolerances"),
+    ]:
+        with pytest.raises(svi.InvalidParameterError) as caught:
+            call()
+        assert caught.value.message == f"invalid {name}: the list is empty; give at least one value", caught.value.message
+        assert "--" not in caught.value.message
     # Diagnostics as one comma-separated string, as on the command line.
     result = svi.run("kepler", t_end=1.0, diagnostics="energy,momentum", trajectory=False)
     assert result.momentum_error_max is not None and result.solution_error_max is None
