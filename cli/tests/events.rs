@@ -224,6 +224,11 @@ fn bad_events_sections_and_indicators_are_typed_errors() {
         "rigid-body",
     );
     bad_input(&["run", "rigid-body"], &["--event", "t - 1"], "rigid-body");
+    // A chain: its coordinates have no names (it said "rigid-body scenes have none").
+    for flags in [["--event", "t - 1"], ["--section", "q1=0"]] {
+        let stderr = bad_input(&["run", "fput"], &flags, "a chain of any size");
+        assert!(!stderr.contains("rigid-body"), "{stderr}");
+    }
     bad_input(
         &["run", "spherical-pendulum"],
         &["--event", "t - 1"],

@@ -95,6 +95,27 @@ fn bad_field_input_is_exit_status_two() {
     bad_input(&run, &["wave", "--t-end", "1e12"], "more than");
     bad_input(&run, &["sine-gordon-kink", "--param", "speed=1.5"], "speed");
     bad_input(&run, &["phi4-kink", "--adapt", "step"], "field scene");
+    // The flags of the chaos indicators, sensitivities, events and sections are refused too,
+    // by name (the field scenes ran without them, exit 0).
+    for flags in [
+        &["--indicators", "megno"][..],
+        &["--sensitivity", "q0"],
+        &["--sensitivity-every", "2"],
+        &["--event", "u"],
+        &["--section", "u=0"],
+        &["--events-out", "events.csv"],
+        &["--multipliers"],
+    ] {
+        let stderr = bad_input(
+            &run,
+            &[&["sine-gordon-kink"][..], flags].concat(),
+            "field scene",
+        );
+        assert!(
+            stderr.starts_with(&format!("error: {}: ", flags[0])),
+            "{stderr}"
+        );
+    }
     bad_input(&run, &["wave", "--param", "mass=1"], "mass");
     let file = scene_file("field-unknown", "model = \"wave\"\n[mesh]\nspacing = 0.1\n");
     bad_input(&run, &[&file.path], "spacing");

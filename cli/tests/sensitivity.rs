@@ -179,4 +179,10 @@ fn sensitivity_bad_input_is_refused_naming_it() {
     );
     bad_input(&run, &["kepler", "--sensitivity", "p0"], "name v0");
     bad_input(&run, &["kepler", "--sensitivity", "e,e"], "named twice");
+    // A model written as text is named as one (it said "model '' has no parameters").
+    bad_input(
+        &run,
+        &["kepler-text", "--sensitivity", "q0"],
+        "a model written as text has no parameters that can be differentiated",
+    );
 }

@@ -92,6 +92,11 @@ fn bad_pseudospectral_input_is_exit_status_two() {
     bad_input(&run, &["nls-soliton", "--param", "eta=nan"], "eta");
     bad_input(
         &run,
+        &["nls-soliton", "--indicators", "megno"],
+        "--indicators: 'nls-soliton' is a pseudospectral scene: it takes",
+    );
+    bad_input(
+        &run,
         &["nls-soliton", "--method", "verlet"],
         "pseudospectral scene takes",
     );

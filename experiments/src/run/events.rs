@@ -47,7 +47,11 @@ impl SceneEvents {
         let Some(coordinates) = S::coordinates(model) else {
             return Err(SceneError::NotApplicable {
                 option: "--event, --section (events, output.section)",
-                reason: "events are located on ℝᴺ: rigid-body scenes have none".into(),
+                // Chains reach this (rigid bodies are refused by the scene's check).
+                reason: "an event or section is written in the model's coordinate names, and \
+                         this model has none (a chain of any size: its coordinates are not \
+                         named)"
+                    .into(),
             });
         };
         let parameters: Vec<(String, f64)> = S::parameters(model)

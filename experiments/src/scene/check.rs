@@ -426,9 +426,14 @@ impl Scene {
             || self.space() != SpaceKind::Vector
             || !PARAMETRIC_MODEL_NAMES.contains(&self.model.as_str())
         {
+            // A model written as text has no name ('' said "model '' has no parameters").
+            let model = if self.is_text() {
+                "a model written as text".to_string()
+            } else {
+                format!("model '{}'", self.model)
+            };
             return refuse(format!(
-                "model '{}' has no parameters that can be differentiated (models that do: {})",
-                self.model,
+                "{model} has no parameters that can be differentiated (models that do: {})",
                 PARAMETRIC_MODEL_NAMES.join(", ")
             ));
         }

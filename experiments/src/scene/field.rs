@@ -63,7 +63,7 @@ use svi_models::FIELD_MODEL_NAMES;
 
 use crate::scene::error::SceneError;
 use crate::scene::limits::read_scene_file;
-use crate::scene::overrides::Overrides;
+use crate::scene::overrides::{Overrides, RunFlags};
 use crate::scene::set;
 
 /// The built-in field scenes, as (name, TOML text).
@@ -391,28 +391,65 @@ fn from_toml<S: DeserializeOwned>(text: &str, origin: &str) -> Result<S, SceneEr
 
 /// The first flag of `svi run` that a space–time scene (a field scene, a pseudospectral one)
 /// does not take, as [`SceneError::NotApplicable`] with `reason`: every flag but those
-/// [`SpaceTimeFields::apply`] reads, and `--method` where `takes_method`.
+/// [`SpaceTimeFields::apply`] reads, and `--method` where `takes_method`. The flags are taken
+/// apart without a rest pattern, so a flag added to `svi run` does not compile until it is
+/// placed here (the chaos indicators, sensitivities, events and sections were once ignored
+/// without a word).
 pub fn reject_other_flags(
     overrides: &Overrides,
     takes_method: bool,
     reason: impl FnOnce() -> String,
 ) -> Result<(), SceneError> {
+    let Overrides {
+        run:
+            RunFlags {
+                method,
+                points,
+                quadrature,
+                h: _,
+                t_end: _,
+                diagnostics,
+                adapt,
+                tol,
+                monitor,
+                recovery,
+                divergence_limit,
+                max_steps,
+                form,
+                indicators,
+                sensitivity,
+                sensitivity_every,
+            },
+        parameters: _,
+        every: _,
+        out: _,
+        plot: _,
+        output_times,
+        multipliers,
+        event,
+        section,
+        events_out,
+    } = overrides;
     let unused = [
-        (overrides.run.method.is_some() && !takes_method, "--method"),
-        (overrides.run.points.is_some(), "--points"),
-        (overrides.run.quadrature.is_some(), "--quadrature"),
-        (overrides.run.diagnostics.is_some(), "--diagnostics"),
-        (overrides.run.adapt.is_some(), "--adapt"),
-        (overrides.run.tol.is_some(), "--tol"),
-        (overrides.run.monitor.is_some(), "--monitor"),
-        (overrides.output_times.is_some(), "--output-times"),
-        (overrides.run.recovery.is_some(), "--recovery"),
-        (
-            overrides.run.divergence_limit.is_some(),
-            "--divergence-limit",
-        ),
-        (overrides.run.max_steps.is_some(), "--max-steps"),
-        (overrides.run.form.is_some(), "--form"),
+        (method.is_some() && !takes_method, "--method"),
+        (points.is_some(), "--points"),
+        (quadrature.is_some(), "--quadrature"),
+        (diagnostics.is_some(), "--diagnostics"),
+        (adapt.is_some(), "--adapt"),
+        (tol.is_some(), "--tol"),
+        (monitor.is_some(), "--monitor"),
+        (output_times.is_some(), "--output-times"),
+        (recovery.is_some(), "--recovery"),
+        (divergence_limit.is_some(), "--divergence-limit"),
+        (max_steps.is_some(), "--max-steps"),
+        (form.is_some(), "--form"),
+        (indicators.is_some(), "--indicators"),
+        (sensitivity.is_some(), "--sensitivity"),
+        (sensitivity_every.is_some(), "--sensitivity-every"),
+        (multipliers.is_some(), "--multipliers"),
+        (!event.is_empty(), "--event"),
+        (section.is_some(), "--section"),
+        (events_out.is_some(), "--events-out"),
     ];
     match unused.into_iter().find(|(given, _)| *given) {
         Some((_, option)) => Err(SceneError::NotApplicable {
