@@ -117,6 +117,23 @@ fn bad_field_input_is_exit_status_two() {
         );
     }
     bad_input(&run, &["wave", "--param", "mass=1"], "mass");
+    // The commands that run ODE scenes name a field scene as one (they said "no built-in
+    // scene or scene file named 'wave'").
+    for (command, says) in [
+        (&["bench", "wave"][..], "is a field scene"),
+        (&["ensemble", "sine-gordon-kink"], "is a field scene"),
+        (
+            &["compare", "wave", "--methods", "svi"],
+            "which only `svi run` runs",
+        ),
+        (
+            &["ensemble", "nls-soliton"],
+            "is a pseudospectral scene, which only `svi run` and `svi bench` run",
+        ),
+    ] {
+        let stderr = bad_input(command, &[], says);
+        assert!(!stderr.contains("no built-in scene"), "{stderr}");
+    }
     let file = scene_file("field-unknown", "model = \"wave\"\n[mesh]\nspacing = 0.1\n");
     bad_input(&run, &[&file.path], "spacing");
 }

@@ -275,8 +275,28 @@ impl Scene {
                     && path.extension().is_none()
                     && path.components().count() == 1 =>
             {
-                Err(SceneError::UnknownScene {
-                    name: name_or_path.into(),
+                // A built-in space–time scene is one, with the commands that run it (`svi
+                // ensemble wave` said "no built-in scene named 'wave'").
+                let named =
+                    |scenes: &[(&str, &str)]| scenes.iter().any(|(n, _)| *n == name_or_path);
+                let (kind, commands) = if named(field::FIELD_SCENES) {
+                    (
+                        "a field scene (the multisymplectic integrator)",
+                        "only `svi run` runs",
+                    )
+                } else if named(spectral::SPECTRAL_SCENES) {
+                    (
+                        "a pseudospectral scene",
+                        "only `svi run` and `svi bench` run",
+                    )
+                } else {
+                    return Err(SceneError::UnknownScene {
+                        name: name_or_path.into(),
+                    });
+                };
+                Err(SceneError::NotApplicable {
+                    option: "scene",
+                    reason: format!("'{name_or_path}' is {kind}, which {commands}"),
                 })
             }
             Err(error) => Err(error),
@@ -982,6 +1002,17 @@ pub(crate) mod tests {
     fn a_missing_bare_name_is_an_unknown_scene_and_a_missing_path_a_read_error() {
         let error = Scene::load("keppler").unwrap_err();
         assert!(matches!(error, SceneError::UnknownScene { .. }));
+        // A field or pseudospectral scene is named as one: `Scene` holds neither.
+        for (name, kind) in [
+            ("wave", "a field scene"),
+            ("nls-soliton", "a pseudospectral"),
+        ] {
+            let error = Scene::load(name).unwrap_err().to_string();
+            assert!(
+                error.starts_with(&format!("scene: '{name}' is {kind}")),
+                "{error}"
+            );
+        }
         assert!(error.to_string().contains("oscillator, kepler"), "{error}");
         let path = std::env::temp_dir().join("svi-cli-no-such-dir/scene.toml");
         let error = Scene::load(path.to_str().unwrap()).unwrap_err();
