@@ -115,6 +115,15 @@ pub fn check_file(option: &'static str, path: &Path) -> Result<(), OutputError> 
     if path.as_os_str().is_empty() {
         return Err(unusable(option, path, "the name is empty"));
     }
+    // `-` is standard output to many tools; here it would be a file named `-` (and with
+    // --json standard output holds the summary).
+    if path.as_os_str() == "-" {
+        return Err(unusable(
+            option,
+            path,
+            "'-' would be a file of that name, not standard output: name the file",
+        ));
+    }
     if path.file_name().is_none() || path.as_os_str().to_string_lossy().ends_with('/') {
         return Err(unusable(option, path, "it names a directory, not a file"));
     }
@@ -568,6 +577,7 @@ mod tests {
             (PathBuf::from("/dev/null"), "character device"),
             (dir.path().to_path_buf(), "directory"),
             (PathBuf::from(""), "empty"),
+            (PathBuf::from("-"), "not standard output"),
             (dir.path().join("sub/"), "names a directory"),
         ];
         if made.is_ok_and(|status| status.success()) {
