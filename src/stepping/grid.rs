@@ -75,15 +75,15 @@ pub fn grid_steps(t0: f64, t_end: f64, h: f64) -> Result<usize, Error> {
     if h < finest {
         // Starting the time at 0 helps only where the span itself is resolvable from 0.
         let advice = if h >= resolution(0.0, t_end - t0) {
-            "start the time at 0"
+            "start the time at 0 or take a larger step"
         } else {
-            "take a shorter span"
+            "take a larger step or a shorter span"
         };
         return Err(Error::invalid(
             "h",
             format!(
                 "step {h:e} is below the finest step {finest:e} whose times floating point \
-                 can tell apart near {:e}: {advice} or take a larger step",
+                 can tell apart near {:e}: {advice}",
                 t0.abs().max(t_end.abs())
             ),
         ));
@@ -133,7 +133,10 @@ mod tests {
         let advice = |result: Result<usize, Error>| result.unwrap_err().to_string();
         assert!(advice(grid_steps(1e16, 1e16 + 2e5, 0.4)).contains("start the time at 0"));
         let far = advice(grid_steps(0.0, 1e308, 0.2));
-        assert!(far.contains("near 1e308: take a shorter span"), "{far}");
+        assert!(
+            far.contains("near 1e308: take a larger step or a shorter span"),
+            "{far}"
+        );
         assert!(grid_steps(1e16, 1e16 + 2e5, 1e4).is_ok());
         // Ordinary spans are unaffected: 2.2e-10 is the finest step at t ≈ 1e3.
         assert_eq!(grid_steps(0.0, 1e3, 1e-3).unwrap(), 1_000_000);
