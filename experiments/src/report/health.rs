@@ -3,10 +3,10 @@
 //!
 //! - **energy**: for a model whose energy is conserved (autonomous, unforced), the energy
 //!   error (the largest over the step points when measured, otherwise that of the final
-//!   point; the warning says which) above [`ENERGY_TOLERANCE`] of the energy's scale, the largest of |E₀|, ½|p₀·q̇₀|
-//!   and ½|p·q̇| at the end (the energy, and the kinetic energy of a quadratic kinetic term at
-//!   both ends, Π·Ω on SO(3): E₀ alone may vanish, as for a double pendulum released from rest
-//!   with its arms horizontal);
+//!   point; the warning says which) above [`ENERGY_TOLERANCE`] of the energy's scale, the
+//!   largest of |E₀|, ½|p₀·q̇₀| and ½|p·q̇| at the end (the energy, and the kinetic energy of
+//!   a quadratic kinetic term at both ends, Π·Ω on SO(3): E₀ alone may vanish, as for a
+//!   double pendulum released from rest with its arms horizontal);
 //! - **escape**: the configuration's largest component grown beyond [`ESCAPE_FACTOR`] times
 //!   its initial size (at least 1): a bound motion that flew off (on ℝᴺ).
 //!

@@ -1002,6 +1002,7 @@ pub(crate) mod tests {
     fn a_missing_bare_name_is_an_unknown_scene_and_a_missing_path_a_read_error() {
         let error = Scene::load("keppler").unwrap_err();
         assert!(matches!(error, SceneError::UnknownScene { .. }));
+        assert!(error.to_string().contains("oscillator, kepler"), "{error}");
         // A field or pseudospectral scene is named as one: `Scene` holds neither.
         for (name, kind) in [
             ("wave", "a field scene"),
@@ -1013,7 +1014,6 @@ pub(crate) mod tests {
                 "{error}"
             );
         }
-        assert!(error.to_string().contains("oscillator, kepler"), "{error}");
         let path = std::env::temp_dir().join("svi-cli-no-such-dir/scene.toml");
         let error = Scene::load(path.to_str().unwrap()).unwrap_err();
         assert!(matches!(error, SceneError::Read { .. }), "{error}");
